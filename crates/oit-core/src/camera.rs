@@ -1,0 +1,94 @@
+//! The camera: an orbit around the scene's bounds, perspective with depth in [0, 1].
+
+use glam::{Mat4, Vec3};
+use serde::Serialize;
+
+use crate::{Aabb, OitError};
+
+/// Where the camera sits on its orbit, and how wide it sees.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct View {
+    /// Degrees around the vertical axis; 0 looks down −z from +z.
+    pub azimuth: f32,
+    /// Degrees above the horizontal plane.
+    pub elevation: f32,
+    /// Vertical field of view in degrees.
+    pub fov: f32,
+}
+
+impl Default for View {
+    fn default() -> Self {
+        View { azimuth: 30.0, elevation: 20.0, fov: 45.0 }
+    }
+}
+
+/// A fitted camera: view and projection matrices (right-handed, depth in [0, 1]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Camera {
+    /// World to view.
+    pub view: Mat4,
+    /// View to clip (`Mat4::perspective_rh`).
+    pub proj: Mat4,
+    /// The eye position in world space.
+    pub eye: Vec3,
+    /// The unit viewing direction in world space.
+    pub forward: Vec3,
+    /// Near plane distance.
+    pub near: f32,
+    /// Far plane distance.
+    pub far: f32,
+}
+
+impl Camera {
+    /// Orbits around `bounds` at `view`'s angles, framing the bounding sphere, with near/far fitted
+    /// to it.
+    pub fn orbit(bounds: &Aabb, view: View, aspect: f32) -> Result<Camera, OitError> {
+        if !(view.azimuth.is_finite() && view.elevation.is_finite()) {
+            return Err(OitError::InvalidSettings("azimuth and elevation must be finite".into()));
+        }
+        if !(view.fov > 0.5 && view.fov < 179.0) {
+            return Err(OitError::InvalidSettings(format!(
+                "fov {} is out of range: use a vertical field of view between 0.5 and 179 degrees",
+                view.fov
+            )));
+        }
+        if !(aspect.is_finite() && aspect > 0.0) {
+            return Err(OitError::InvalidSettings("aspect ratio must be positive".into()));
+        }
+        if bounds.is_empty() || !bounds.min.is_finite() || !bounds.max.is_finite() {
+            return Err(OitError::InvalidScene("scene bounds are empty or not finite".into()));
+        }
+        let center = bounds.center();
+        let radius = bounds.radius().max(1e-3 * center.length()).max(1e-6);
+        let vhalf = view.fov.to_radians() * 0.5;
+        let half = vhalf.min((vhalf.tan() * aspect).atan());
+        let distance = radius / half.sin() * 1.05;
+        let (az, el) = (view.azimuth.to_radians(), view.elevation.clamp(-89.0, 89.0).to_radians());
+        let dir = Vec3::new(el.cos() * az.sin(), el.sin(), el.cos() * az.cos());
+        let eye = center + dir * distance;
+        let near = (distance - radius * 1.01).max(distance * 1e-3);
+        let far = distance + radius * 1.01;
+        Ok(Camera::look_at(eye, center, view.fov, aspect, near, far))
+    }
+
+    /// A camera looking from `eye` at `target` (y up), with explicit planes.
+    pub fn look_at(eye: Vec3, target: Vec3, fov_deg: f32, aspect: f32, near: f32, far: f32) -> Camera {
+        let forward = (target - eye).normalize_or(Vec3::NEG_Z);
+        let up = if forward.cross(Vec3::Y).length_squared() < 1e-8 { Vec3::Z } else { Vec3::Y };
+        let view = Mat4::look_at_rh(eye, target, up);
+        let proj = Mat4::perspective_rh(fov_deg.to_radians(), aspect, near, far);
+        Camera { view, proj, eye, forward, near, far }
+    }
+
+    /// World to clip.
+    pub fn view_proj(&self) -> Mat4 {
+        self.proj * self.view
+    }
+
+    /// View-space distance (positive, along the viewing axis) of an NDC depth in [0, 1].
+    pub fn linear_depth(&self, ndc_z: f32) -> f32 {
+        // perspective_rh maps z_view = -n to 0 and -f to 1: ndc = f(z + n) / (z (n - f)) with z < 0.
+        let (n, f) = (self.near, self.far);
+        n * f / (f - ndc_z * (f - n))
+    }
+}

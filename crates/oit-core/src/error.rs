@@ -1,0 +1,85 @@
+//! The one error type of oit: every failure a caller can meet, with a message that says what was
+//! wrong and what to do about it.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong in oit, from a bad scene file to a GPU limit.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum OitError {
+    /// A file could not be read.
+    #[error("cannot read {path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// An OBJ file could not be parsed.
+    #[error("cannot load {path}{}: {message}", line.map(|l| format!(" (line {l})")).unwrap_or_default())]
+    Obj {
+        /// The file.
+        path: PathBuf,
+        /// The line, where the parser gives one.
+        line: Option<usize>,
+        /// What was wrong.
+        message: String,
+    },
+    /// A scene holds data no technique can render (NaN or infinite vertices, bad indices, nothing).
+    #[error("invalid scene: {0}")]
+    InvalidScene(String),
+    /// A scene name that is neither built in nor a file.
+    #[error("unknown scene '{name}': expected a path to an .obj file or one of {known}")]
+    UnknownScene {
+        /// What was asked for.
+        name: String,
+        /// The built-in names.
+        known: &'static str,
+    },
+    /// A technique name that is not in the catalogue.
+    #[error("unknown technique '{name}': {reason}; known techniques: {known}")]
+    UnknownTechnique {
+        /// What was asked for.
+        name: String,
+        /// Why it was rejected.
+        reason: String,
+        /// The catalogue.
+        known: &'static str,
+    },
+    /// A setting out of range (a 0×0 image, a NaN angle, ...).
+    #[error("invalid setting: {0}")]
+    InvalidSettings(String),
+    /// The backend cannot run this technique or path.
+    #[error("backend '{backend}' does not support {what}")]
+    Unsupported {
+        /// The backend.
+        backend: String,
+        /// What it lacks.
+        what: String,
+    },
+    /// The storage a technique needs exceeds a limit.
+    #[error("{what} needs {needed} bytes, over the limit {limit_name} = {limit} bytes; {hint}")]
+    TooLarge {
+        /// What was to be allocated.
+        what: String,
+        /// Bytes needed.
+        needed: u64,
+        /// The limit's name.
+        limit_name: String,
+        /// The limit.
+        limit: u64,
+        /// A setting that fits.
+        hint: String,
+    },
+    /// A device was missing or failed.
+    #[error("device error: {0}")]
+    Device(String),
+    /// Writing an image or report failed.
+    #[error("cannot write {path}: {message}")]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        message: String,
+    },
+}

@@ -1,0 +1,71 @@
+//! What a backend returns: the image and the numbers of how it was made.
+
+use std::path::Path;
+
+use serde::Serialize;
+
+use crate::OitError;
+
+/// Counters every frame carries.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Stats {
+    /// Passes over the geometry (bounds, histogram, capture and peel passes all count).
+    pub geometry_passes: u32,
+    /// Fragments the rasterizer generated for the scene (one geometry pass's worth).
+    pub fragments: u64,
+    /// Fragments that reached the final composite.
+    pub captured: u64,
+    /// Fragments that did not: collisions, overflow, coplanar ties, peel limits.
+    pub lost: u64,
+    /// Bytes of per-pixel storage the technique allocated.
+    pub storage_bytes: u64,
+    /// Wall-clock time of the frame in milliseconds.
+    pub wall_ms: f64,
+    /// Device time from timestamp queries, where the backend has them.
+    pub gpu_ms: Option<f64>,
+    /// Device time per pass, where measured.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub gpu_pass_ms: Vec<(String, f64)>,
+}
+
+/// An 8-bit sRGB image, row-major, top row first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// RGBA8 pixels (alpha 255).
+    pub pixels: Vec<[u8; 4]>,
+}
+
+impl Image {
+    /// A width × height image filled with `fill`.
+    pub fn new(width: u32, height: u32, fill: [u8; 4]) -> Image {
+        Image { width, height, pixels: vec![fill; width as usize * height as usize] }
+    }
+
+    /// The pixel at (x, y).
+    pub fn get(&self, x: u32, y: u32) -> [u8; 4] {
+        self.pixels[(y * self.width + x) as usize]
+    }
+
+    /// Writes a PNG.
+    pub fn save_png(&self, path: &Path) -> Result<(), OitError> {
+        let bytes: Vec<u8> = self.pixels.iter().flatten().copied().collect();
+        image::save_buffer(path, &bytes, self.width, self.height, image::ExtendedColorType::Rgba8)
+            .map_err(|e| OitError::Write { path: path.to_path_buf(), message: e.to_string() })
+    }
+}
+
+/// One rendered frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    /// The picture.
+    pub image: Image,
+    /// Fragments generated per pixel, where the technique counted them (the reference does):
+    /// pixels with none are not *covered* and accuracy metrics skip them.
+    pub layers: Option<Vec<u32>>,
+    /// How it was made.
+    pub stats: Stats,
+}

@@ -1,0 +1,41 @@
+//! oit-core: everything the backends of oit share.
+//!
+//! - [`Scene`], [`Mesh`], [`Camera`]: what is drawn and from where; OBJ loading ([`load_obj`]) and
+//!   built-in procedural scenes ([`builtin_scene`]);
+//! - [`Technique`], [`Settings`], [`Frame`]: the catalogue, what a frame is asked for and what comes
+//!   back;
+//! - [`Backend`] and the capture traits;
+//! - [`rules`]: the one definition of bucket routing, histogram equalization and packing;
+//! - [`composite`]: the compositing equations; [`metrics`]: accuracy against the reference.
+//!
+//! ```
+//! use oit_core::{load_scene, Camera, View};
+//! let scene = load_scene("planes:4").unwrap();
+//! let camera = Camera::orbit(&scene.bounds(), View::default(), 1.0).unwrap();
+//! assert!(camera.near < camera.far);
+//! ```
+
+mod backend;
+mod camera;
+pub mod composite;
+mod error;
+mod frame;
+pub mod metrics;
+mod obj;
+mod procedural;
+pub mod rules;
+mod scene;
+mod settings;
+mod technique;
+
+pub use backend::{AtomicFragmentList, Backend, BucketArray, Capabilities, Compositor, DepthHistogram, Sample};
+pub use camera::{Camera, View};
+pub use error::OitError;
+pub use frame::{Frame, Image, Stats};
+pub use obj::load_obj;
+pub use procedural::{builtin_scene, load_scene, BUILTIN_SCENES, DEFAULT_SCENE};
+pub use scene::{Aabb, Instance, Mesh, Object, Scene};
+pub use settings::{parse_rgb, parse_size, Settings, Shading, MAX_SIZE};
+pub use technique::{BoundsMode, Effect, RasterPath, Technique, TechniqueKind, KNOWN_TECHNIQUES, MAX_PARAMETER};
+
+pub use glam;

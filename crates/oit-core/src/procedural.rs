@@ -1,0 +1,297 @@
+//! Built-in procedural scenes, by name, so that every test and example has geometry without files.
+//!
+//! | name | what | depth complexity |
+//! |---|---|---|
+//! | `planes:N` | N parallel, overlapping quads at distinct depths, distinct colours | N |
+//! | `spheres:N` | N nested concentric spheres | 2N |
+//! | `cluster:N` | N small spheres placed by a fixed seed | varies |
+//! | `knot` | a self-overlapping (2, 3) torus-knot tube | ≈ 8 |
+//! | `coplanar` | two overlapping quads in one plane, different colours | 2 (a tie) |
+//! | `default` | a torus knot inside two glass spheres | ≥ 8 |
+
+use std::f32::consts::TAU;
+use std::path::Path;
+
+use glam::{Mat4, Vec3, Vec4};
+
+use crate::{Instance, Mesh, Object, OitError, Scene};
+
+/// The built-in names, for messages.
+pub const BUILTIN_SCENES: &str = "default, planes:N, spheres:N, cluster:N, knot, coplanar";
+
+/// The scene rendered when none is named.
+pub const DEFAULT_SCENE: &str = "default";
+
+/// Largest N accepted by `planes`, `spheres`, `cluster`.
+const MAX_COUNT: u32 = 100_000;
+
+/// A built-in scene or an OBJ file: names in [`BUILTIN_SCENES`] are built, anything else is read as a
+/// path.
+pub fn load_scene(name: &str) -> Result<Scene, OitError> {
+    match builtin_scene(name) {
+        Some(scene) => scene,
+        None => {
+            let path = Path::new(name);
+            if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) || path.exists() {
+                crate::load_obj(path)
+            } else {
+                Err(OitError::UnknownScene { name: name.to_string(), known: BUILTIN_SCENES })
+            }
+        }
+    }
+}
+
+/// Builds a built-in scene; `None` when the name is not a built-in one, `Some(Err)` when it is but
+/// its parameter is bad.
+pub fn builtin_scene(name: &str) -> Option<Result<Scene, OitError>> {
+    let (base, param) = match name.split_once(':') {
+        Some((b, p)) => (b, Some(p)),
+        None => (name, None),
+    };
+    let count = |default: u32| -> Result<u32, OitError> {
+        match param {
+            None => Ok(default),
+            Some(p) => match p.parse::<u32>() {
+                Ok(n) if (1..=MAX_COUNT).contains(&n) => Ok(n),
+                _ => Err(OitError::InvalidSettings(format!(
+                    "scene '{name}': N must be a whole number from 1 to {MAX_COUNT}"
+                ))),
+            },
+        }
+    };
+    let no_param = |s: Scene| match param {
+        None => Ok(s),
+        Some(_) => Err(OitError::InvalidSettings(format!("scene '{base}' takes no parameter"))),
+    };
+    Some(match base {
+        "planes" => count(8).map(planes),
+        "spheres" => count(4).map(spheres),
+        "cluster" => count(200).map(cluster),
+        "knot" => no_param(knot()),
+        "coplanar" => no_param(coplanar()),
+        "default" => no_param(default_scene()),
+        _ => return None,
+    })
+}
+
+/// Hue `h` in [0, 1) to an RGB colour quantized to multiples of 1/255 (so 8-bit compositing by hand
+/// is exact).
+fn hue(h: f32) -> Vec3 {
+    let h6 = h.rem_euclid(1.0) * 6.0;
+    let x = 1.0 - (h6 % 2.0 - 1.0).abs();
+    let (r, g, b) = match h6 as u32 {
+        0 => (1.0, x, 0.0),
+        1 => (x, 1.0, 0.0),
+        2 => (0.0, 1.0, x),
+        3 => (0.0, x, 1.0),
+        4 => (x, 0.0, 1.0),
+        _ => (1.0, 0.0, x),
+    };
+    // a little white mixed in keeps colours away from pure black channels
+    let c = Vec3::new(r, g, b) * 0.8 + Vec3::splat(0.15);
+    (c * 255.0).round() / 255.0
+}
+
+fn quad(name: &str, min: (f32, f32), max: (f32, f32), z: f32) -> Mesh {
+    let p = vec![
+        Vec3::new(min.0, min.1, z),
+        Vec3::new(max.0, min.1, z),
+        Vec3::new(max.0, max.1, z),
+        Vec3::new(min.0, max.1, z),
+    ];
+    Mesh::new(name, p, vec![[0, 1, 2], [0, 2, 3]])
+}
+
+fn single(name: String, meshes: Vec<Mesh>, colors: Vec<Vec4>) -> Scene {
+    let objects = meshes
+        .iter()
+        .zip(&colors)
+        .enumerate()
+        .map(|(i, (m, &color))| Object { name: m.name.clone(), mesh: i, color, absorption: 1.0 })
+        .collect::<Vec<_>>();
+    let instances = (0..objects.len()).map(|object| Instance { object, transform: Mat4::IDENTITY }).collect();
+    Scene { name, meshes, objects, instances }
+}
+
+/// `planes:N`: N 2×2 quads facing +z, spread over a depth of 1 (z from +0.5 to −0.5), each with its
+/// own colour and alpha 0.4 (102/255).
+pub fn planes(n: u32) -> Scene {
+    let mut meshes = Vec::new();
+    let mut colors = Vec::new();
+    for i in 0..n {
+        let z = if n == 1 { 0.0 } else { 0.5 - i as f32 / (n - 1) as f32 };
+        meshes.push(quad(&format!("plane {i}"), (-1.0, -1.0), (1.0, 1.0), z));
+        colors.push(hue(i as f32 / n as f32 + 0.05).extend(102.0 / 255.0));
+    }
+    single(format!("planes:{n}"), meshes, colors)
+}
+
+/// A UV sphere of radius 1 at the origin.
+pub fn uv_sphere(name: &str, segments: u32, rings: u32) -> Mesh {
+    let mut positions = Vec::new();
+    for r in 0..=rings {
+        let theta = r as f32 / rings as f32 * std::f32::consts::PI;
+        for s in 0..=segments {
+            let phi = s as f32 / segments as f32 * TAU;
+            positions.push(Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin()));
+        }
+    }
+    let stride = segments + 1;
+    let mut indices = Vec::new();
+    for r in 0..rings {
+        for s in 0..segments {
+            let a = r * stride + s;
+            let (b, c, d) = (a + 1, a + stride, a + stride + 1);
+            if r != 0 {
+                indices.push([a, c, b]);
+            }
+            if r != rings - 1 {
+                indices.push([b, c, d]);
+            }
+        }
+    }
+    let mut m = Mesh::new(name, positions, indices);
+    // analytic normals: exact and free of the seam's averaging
+    m.normals = m.positions.iter().map(|p| p.normalize_or(Vec3::Y)).collect();
+    m
+}
+
+/// `spheres:N`: N concentric spheres of radii (i+1)/N, each its own colour, alpha 0.3.
+pub fn spheres(n: u32) -> Scene {
+    let sphere = uv_sphere("sphere", 48, 24);
+    let mut scene = Scene { name: format!("spheres:{n}"), meshes: vec![sphere], ..Default::default() };
+    for i in 0..n {
+        let r = (i + 1) as f32 / n as f32;
+        scene.objects.push(Object {
+            name: format!("sphere {i}"),
+            mesh: 0,
+            color: hue(i as f32 / n as f32 + 0.6).extend(0.3),
+            absorption: 1.5,
+        });
+        scene.instances.push(Instance { object: i as usize, transform: Mat4::from_scale(Vec3::splat(r)) });
+    }
+    scene
+}
+
+/// A small deterministic generator (xorshift*), so scenes do not change between runs or machines.
+struct Rng(u64);
+
+impl Rng {
+    fn next_f32(&mut self) -> f32 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        ((self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32) / (1u64 << 24) as f32
+    }
+}
+
+/// `cluster:N`: N spheres placed by a fixed seed in the unit cube, radii scaled so the cluster stays
+/// about equally dense whatever N.
+pub fn cluster(n: u32) -> Scene {
+    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let sphere = uv_sphere("sphere", 16, 8);
+    let mut scene = Scene { name: format!("cluster:{n}"), meshes: vec![sphere], ..Default::default() };
+    let base = 0.6 / (n as f32).cbrt();
+    for i in 0..n {
+        let c = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - Vec3::ONE;
+        let r = base * (0.6 + 0.8 * rng.next_f32());
+        let color = hue(rng.next_f32()).extend(0.25 + 0.5 * rng.next_f32());
+        scene.objects.push(Object { name: format!("ball {i}"), mesh: 0, color, absorption: 2.0 });
+        scene.instances.push(Instance {
+            object: i as usize,
+            transform: Mat4::from_translation(c) * Mat4::from_scale(Vec3::splat(r)),
+        });
+    }
+    scene
+}
+
+/// A tube of radius `r` around the (p, q) torus knot.
+pub fn torus_knot(p: u32, q: u32, r: f32, segments: u32, sides: u32) -> Mesh {
+    let curve = |t: f32| {
+        let (pt, qt) = (p as f32 * t, q as f32 * t);
+        let rr = 0.6 + 0.3 * qt.cos();
+        Vec3::new(rr * pt.cos(), 0.3 * qt.sin(), rr * pt.sin())
+    };
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    for i in 0..segments {
+        let t = i as f32 / segments as f32 * TAU;
+        let c = curve(t);
+        let tangent = (curve(t + 1e-3) - curve(t - 1e-3)).normalize();
+        let side = tangent.cross(c.normalize_or(Vec3::X)).normalize_or(Vec3::Y);
+        let up = side.cross(tangent);
+        for j in 0..sides {
+            let a = j as f32 / sides as f32 * TAU;
+            let n = side * a.cos() + up * a.sin();
+            positions.push(c + n * r);
+            normals.push(n);
+        }
+    }
+    let mut indices = Vec::new();
+    for i in 0..segments {
+        let i1 = (i + 1) % segments;
+        for j in 0..sides {
+            let j1 = (j + 1) % sides;
+            let (a, b, c, d) = (i * sides + j, i1 * sides + j, i1 * sides + j1, i * sides + j1);
+            indices.push([a, b, c]);
+            indices.push([a, c, d]);
+        }
+    }
+    Mesh { name: "knot".into(), positions, normals, colors: None, indices }
+}
+
+/// `knot`: a (2, 3) torus-knot tube that passes in front of and behind itself.
+pub fn knot() -> Scene {
+    single("knot".into(), vec![torus_knot(2, 3, 0.14, 384, 24)], vec![Vec4::new(1.0, 0.55, 0.15, 0.35)])
+}
+
+/// `coplanar`: two overlapping quads in the plane z = 0, red and blue: where they overlap the
+/// fragments tie in depth.
+pub fn coplanar() -> Scene {
+    single(
+        "coplanar".into(),
+        vec![quad("left", (-1.0, -1.0), (0.5, 0.5), 0.0), quad("right", (-0.5, -0.5), (1.0, 1.0), 0.0)],
+        vec![Vec4::new(0.9, 0.1, 0.1, 0.5), Vec4::new(0.1, 0.2, 0.9, 0.5)],
+    )
+}
+
+/// `default`: a warm torus knot inside two cool glass spheres: most pixels see 4 to 12 layers.
+pub fn default_scene() -> Scene {
+    let mut scene = knot();
+    scene.name = "default".into();
+    scene.meshes.push(uv_sphere("sphere", 64, 32));
+    for (i, (r, color)) in [(1.05f32, Vec4::new(0.3, 0.6, 1.0, 0.18)), (1.25, Vec4::new(0.55, 0.85, 0.9, 0.12))]
+        .into_iter()
+        .enumerate()
+    {
+        scene.objects.push(Object { name: format!("glass {i}"), mesh: 1, color, absorption: 0.5 });
+        scene.instances.push(Instance { object: i + 1, transform: Mat4::from_scale(Vec3::splat(r)) });
+    }
+    scene
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_builtin_validates() {
+        for name in ["default", "planes:1", "planes:8", "spheres:4", "cluster:20", "knot", "coplanar"] {
+            let s = load_scene(name).unwrap();
+            s.validate().unwrap();
+        }
+    }
+
+    #[test]
+    fn bad_names() {
+        assert!(load_scene("planes:0").is_err());
+        assert!(load_scene("planes:x").is_err());
+        assert!(load_scene("knot:3").is_err());
+        assert!(matches!(load_scene("nothing-like-this"), Err(OitError::UnknownScene { .. })));
+    }
+
+    #[test]
+    fn cluster_is_deterministic() {
+        assert_eq!(cluster(50), cluster(50));
+    }
+}

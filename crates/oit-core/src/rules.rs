@@ -1,0 +1,264 @@
+//! The rules every backend shares, defined once: how depth becomes an ordered integer, how a
+//! fragment is routed to a bucket or a histogram bin, how the histogram is equalized, and how
+//! colour, depth and normals are packed into the words the techniques store.
+//!
+//! The CPU backend calls these functions; the GPU backends carry the same functions in WGSL, and a
+//! test runs both on the edge values (d = 0, d = 1, zNear = zFar, alpha 0 and 255).
+//!
+//! Conventions:
+//! - depths are NDC z in [0, 1]; [`depth_bits`] clamps into that range, so a depth is always a
+//!   non-negative float, and for non-negative floats the order of the bit patterns read as `u32`
+//!   is the order of the values (which is why MAX on the bits is MAX on the floats);
+//! - a fragment's colour is linear straight-alpha RGBA8, packed `r | g << 8 | b << 16 | a << 24`
+//!   ([`pack_rgba8`]). Every technique, the reference included, composites these quantized
+//!   colours, so exact techniques can match the reference bit for bit.
+
+use glam::{Vec2, Vec3, Vec4};
+
+/// Number of subintervals in [`bucket_index`]'s depth mode (pairs of min/max buckets).
+pub const BDP_DEPTH_SUBINTERVALS: u32 = 16;
+/// Number of subintervals in bucket depth peeling's colour mode.
+pub const BDP_COLOR_SUBINTERVALS: u32 = 32;
+/// Buckets per pixel per capture pass (8 render targets × 4 channels).
+pub const BUCKETS: usize = 32;
+/// Bins of the adaptive scheme's depth histogram.
+pub const HISTOGRAM_BINS: u32 = 1024;
+/// `u32` words of the depth histogram.
+pub const HISTOGRAM_WORDS: usize = (HISTOGRAM_BINS / 32) as usize;
+
+/// A depth as an order-preserving `u32`: the bits of the depth clamped to [0, 1] (NaN → 1, −0 → 0).
+#[inline]
+pub fn depth_bits(d: f32) -> u32 {
+    let d = if d.is_nan() { 1.0 } else { d.clamp(0.0, 1.0) };
+    // `+ 0.0` turns −0.0 into +0.0, whose bits are 0.
+    (d + 0.0).to_bits()
+}
+
+/// The depth a [`depth_bits`] word holds.
+#[inline]
+pub fn depth_from_bits(bits: u32) -> f32 {
+    f32::from_bits(bits)
+}
+
+/// Quantizes a straight-alpha linear colour to RGBA8 (round to nearest) and packs it.
+#[inline]
+pub fn pack_rgba8(c: Vec4) -> u32 {
+    let q = |x: f32| (x.clamp(0.0, 1.0) * 255.0 + 0.5) as u32;
+    q(c.x) | q(c.y) << 8 | q(c.z) << 16 | q(c.w) << 24
+}
+
+/// Unpacks [`pack_rgba8`] to floats in [0, 1].
+#[inline]
+pub fn unpack_rgba8(p: u32) -> Vec4 {
+    let c = |s: u32| ((p >> s) & 0xff) as f32 / 255.0;
+    Vec4::new(c(0), c(8), c(16), c(24))
+}
+
+/// Unpacks [`pack_rgba8`] to f64 channels in [0, 1] (for the reference).
+#[inline]
+pub fn unpack_rgba8_f64(p: u32) -> [f64; 4] {
+    let c = |s: u32| ((p >> s) & 0xff) as f64 / 255.0;
+    [c(0), c(8), c(16), c(24)]
+}
+
+/// The 64-bit sort key of a fragment: depth bits above the payload, so integer order is depth
+/// order and, among equal depths, payload order (mdts64, dp, ddp, mlp, the depth-mode buckets).
+#[inline]
+pub fn depth_key64(d: f32, payload: u32) -> u64 {
+    (depth_bits(d) as u64) << 32 | payload as u64
+}
+
+/// Splits a [`depth_key64`] into (depth, payload).
+#[inline]
+pub fn split_key64(key: u64) -> (f32, u32) {
+    (depth_from_bits((key >> 32) as u32), key as u32)
+}
+
+/// Maps `d` into `n` uniform subintervals of [z_near, z_far]: `floor(n·(d − zNear)/(zFar − zNear))`
+/// clamped to `0..n` (HPG 2009, eq. 2). An empty or inverted range (zNear ≥ zFar, a pixel with one
+/// layer) puts everything in subinterval 0.
+#[inline]
+pub fn bucket_index(d: f32, z_near: f32, z_far: f32, n: u32) -> u32 {
+    let range = z_far - z_near;
+    if !(range > 0.0) || !d.is_finite() {
+        return 0;
+    }
+    let k = ((d - z_near) / range * n as f32).floor();
+    if k <= 0.0 { 0 } else { (k as u32).min(n - 1) }
+}
+
+/// The adaptive scheme's histogram bin: [`bucket_index`] with 1024 subintervals.
+#[inline]
+pub fn histogram_bin(d: f32, z_near: f32, z_far: f32) -> u32 {
+    bucket_index(d, z_near, z_far, HISTOGRAM_BINS)
+}
+
+/// The upper bound `d_{k+1}` of histogram bin `k` (what the paper's equalization stores).
+#[inline]
+pub fn histogram_upper_bound(k: u32, z_near: f32, z_far: f32) -> f32 {
+    z_near + (k + 1) as f32 / HISTOGRAM_BINS as f32 * (z_far - z_near)
+}
+
+/// Histogram equalization, as a rank: the number of set bins below `bin`. A fragment in `bin` goes
+/// to bucket `rank % 32` of batch `rank / 32`.
+///
+/// The paper stores the upper bounds of the set bins in order and routes a fragment to the k-th
+/// bucket when `EH[k−1] ≤ d < EH[k]`; since both passes compute the bin with the same formula,
+/// that search and this rank give the same bucket, without comparing floats.
+#[inline]
+pub fn histogram_rank(hist: &[u32; HISTOGRAM_WORDS], bin: u32) -> u32 {
+    let word = (bin / 32) as usize;
+    let below: u32 = hist[..word].iter().map(|w| w.count_ones()).sum();
+    let mask = (1u32 << (bin % 32)) - 1;
+    below + (hist[word] & mask).count_ones()
+}
+
+/// Set bins of a histogram (its depth complexity as the adaptive scheme sees it).
+#[inline]
+pub fn histogram_count(hist: &[u32; HISTOGRAM_WORDS]) -> u32 {
+    hist.iter().map(|w| w.count_ones()).sum()
+}
+
+/// The equalized histogram of batch `batch`: the upper bounds of its (at most 32) set bins, in
+/// depth order, as the paper's fullscreen equalization pass writes them.
+pub fn equalize(hist: &[u32; HISTOGRAM_WORDS], batch: u32, z_near: f32, z_far: f32) -> Vec<f32> {
+    (0..HISTOGRAM_BINS)
+        .filter(|&k| hist[(k / 32) as usize] >> (k % 32) & 1 == 1)
+        .skip(batch as usize * BUCKETS)
+        .take(BUCKETS)
+        .map(|k| histogram_upper_bound(k, z_near, z_far))
+        .collect()
+}
+
+/// Packs RGBA8 into a non-negative float's bits, as HPG 2009 section 3.2 does for transparency:
+/// alpha scaled to 0..=127 in bits 24..=30 (bit 31, the sign, stays 0), RGB in bits 0..=23.
+///
+/// MAX on these values keeps the fragment with the largest alpha, then the largest red, green,
+/// blue: a collision keeps one fragment, not a mix. With alpha 127 and red ≥ 128 the exponent bits
+/// are all ones (the pattern of an infinity or NaN): comparing the bits as `u32` orders them
+/// correctly, float MAX blending would not — backends update these buckets with integer MAX.
+#[inline]
+pub fn bdp_pack_color(rgba8: u32) -> u32 {
+    let a = rgba8 >> 24;
+    let a7 = (a * 127 + 127) / 255;
+    a7 << 24 | (rgba8 & 0x00ff_ffff)
+}
+
+/// Inverse of [`bdp_pack_color`]; alpha comes back rounded from 7 bits.
+#[inline]
+pub fn bdp_unpack_color(packed: u32) -> u32 {
+    let a7 = (packed >> 24) & 0x7f;
+    let a = (a7 * 255 + 63) / 127;
+    a << 24 | (packed & 0x00ff_ffff)
+}
+
+/// Depth resolution of [`mdts_pack`]: depths closer than this may swap order (2⁻²⁰ ≈ 9.5e-7).
+pub const MDTS_DEPTH_STEP: f32 = 1.0 / (1u32 << 20) as f32;
+
+/// The 20 depth bits of the mdts packing (Huang et al. 2011, section 3.2): depth remapped into
+/// [0.5, 1), where sign and exponent are the same for every value, and its top 20 mantissa bits
+/// kept, shifted to bits 12..=31.
+#[inline]
+pub fn mdts_depth20(d: f32) -> u32 {
+    let d = depth_from_bits(depth_bits(d));
+    let remapped = (0.5 + 0.5 * d).min(f32::from_bits(0x3f7f_ffff));
+    (remapped.to_bits() << 9) & 0xffff_f000
+}
+
+/// The two words of the mdts packing: the 20 depth bits above the high 12 bits of RGB, and the
+/// same depth bits above the low 12 bits. Both are inserted with atomicMin, one after the other;
+/// alpha is not stored (the paper assumes one alpha for the scene).
+#[inline]
+pub fn mdts_pack(d: f32, rgba8: u32) -> [u32; 2] {
+    let depth = mdts_depth20(d);
+    let rgb = rgba8 & 0x00ff_ffff;
+    [depth | rgb >> 12, depth | (rgb & 0xfff)]
+}
+
+/// Recovers (depth, RGB as `r | g << 8 | b << 16`) from the two mdts words of one slot. The depth
+/// is the lower end of its 2⁻²⁰ step.
+#[inline]
+pub fn mdts_unpack(words: [u32; 2]) -> (f32, u32) {
+    let mantissa = words[0] >> 12; // the 20 kept bits
+    let remapped = f32::from_bits(0x3f00_0000 | mantissa << 3);
+    let d = (remapped - 0.5) * 2.0;
+    let rgb = (words[0] & 0xfff) << 12 | (words[1] & 0xfff);
+    (d, rgb)
+}
+
+/// Packs a unit normal into 32 bits (octahedral, 16 bits per axis), for effects that need it
+/// beside depth (Fresnel).
+#[inline]
+pub fn pack_normal(n: Vec3) -> u32 {
+    let n = n.normalize_or(Vec3::Z);
+    let l1 = n.x.abs() + n.y.abs() + n.z.abs();
+    let mut p = Vec2::new(n.x, n.y) / l1;
+    if n.z < 0.0 {
+        p = (Vec2::ONE - Vec2::new(p.y.abs(), p.x.abs())) * Vec2::new(p.x.signum(), p.y.signum());
+    }
+    let q = |x: f32| ((x.clamp(-1.0, 1.0) * 0.5 + 0.5) * 65535.0 + 0.5) as u32;
+    q(p.x) | q(p.y) << 16
+}
+
+/// Inverse of [`pack_normal`].
+#[inline]
+pub fn unpack_normal(p: u32) -> Vec3 {
+    let f = |v: u32| (v as f32 / 65535.0) * 2.0 - 1.0;
+    let (x, y) = (f(p & 0xffff), f(p >> 16));
+    let mut n = Vec3::new(x, y, 1.0 - x.abs() - y.abs());
+    if n.z < 0.0 {
+        let (ox, oy) = (n.x, n.y);
+        n.x = (1.0 - oy.abs()) * ox.signum();
+        n.y = (1.0 - ox.abs()) * oy.signum();
+    }
+    n.normalize_or(Vec3::Z)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn depth_bits_order_and_edges() {
+        assert_eq!(depth_bits(0.0), 0);
+        assert_eq!(depth_bits(-0.0), 0);
+        assert_eq!(depth_bits(-1.0), 0);
+        assert_eq!(depth_bits(1.0), 1.0f32.to_bits());
+        assert_eq!(depth_bits(2.0), 1.0f32.to_bits());
+        assert_eq!(depth_bits(f32::NAN), 1.0f32.to_bits());
+        let ds = [0.0f32, 1e-30, 1e-7, 0.1, 0.5, 0.9999999, 1.0];
+        for w in ds.windows(2) {
+            assert!(depth_bits(w[0]) < depth_bits(w[1]));
+        }
+    }
+
+    #[test]
+    fn bucket_index_edges() {
+        assert_eq!(bucket_index(0.0, 0.0, 1.0, 16), 0);
+        assert_eq!(bucket_index(1.0, 0.0, 1.0, 16), 15);
+        assert_eq!(bucket_index(0.5, 0.5, 0.5, 16), 0);
+        assert_eq!(bucket_index(0.4, 0.5, 0.6, 16), 0);
+        assert_eq!(bucket_index(0.7, 0.5, 0.6, 16), 15);
+        assert_eq!(bucket_index(0.55, 0.5, 0.6, 16), 8);
+        assert_eq!(histogram_bin(1.0, 0.0, 1.0), 1023);
+    }
+
+    #[test]
+    fn rank_matches_equalized_search() {
+        let mut hist = [0u32; HISTOGRAM_WORDS];
+        for bin in [2u32, 8, 9, 1022, 40, 700] {
+            hist[(bin / 32) as usize] |= 1 << (bin % 32);
+        }
+        let (zn, zf) = (0.2, 0.7);
+        let eh = equalize(&hist, 0, zn, zf);
+        assert_eq!(eh.len(), 6);
+        for bin in [2u32, 8, 9, 40, 700, 1022] {
+            let d = zn + (bin as f32 + 0.5) / 1024.0 * (zf - zn);
+            let b = histogram_bin(d, zn, zf);
+            assert_eq!(b, bin);
+            // the paper's search: the first upper bound above d
+            let search = eh.iter().position(|&ub| d < ub).unwrap() as u32;
+            assert_eq!(histogram_rank(&hist, b), search);
+        }
+    }
+}

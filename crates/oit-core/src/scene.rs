@@ -1,0 +1,294 @@
+//! Scenes: meshes, the objects made of them (colour, absorption) and their instances.
+//!
+//! A [`Scene`] is plain data. Every backend walks it in the same order — instance by instance,
+//! triangle by triangle — and numbers triangles along the way: the *primitive id* of triangle `t`
+//! of instance `i` is `scene.primitive_base(i) + t`. Ties between fragments of equal depth are broken
+//! by that id wherever a technique can.
+
+use glam::{Mat4, Vec3, Vec4};
+
+use crate::OitError;
+
+/// An axis-aligned bounding box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    /// The smallest corner.
+    pub min: Vec3,
+    /// The largest corner.
+    pub max: Vec3,
+}
+
+impl Aabb {
+    /// The empty box (grows to whatever is added).
+    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
+
+    /// Grows the box to hold `p`.
+    pub fn include(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    /// Grows the box to hold `other`.
+    pub fn union(&self, other: &Aabb) -> Aabb {
+        Aabb { min: self.min.min(other.min), max: self.max.max(other.max) }
+    }
+
+    /// True when nothing was added.
+    pub fn is_empty(&self) -> bool {
+        self.min.x > self.max.x
+    }
+
+    /// The centre.
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+
+    /// Radius of the bounding sphere around the centre.
+    pub fn radius(&self) -> f32 {
+        (self.max - self.min).length() * 0.5
+    }
+
+    /// The eight corners.
+    pub fn corners(&self) -> [Vec3; 8] {
+        let (a, b) = (self.min, self.max);
+        [
+            Vec3::new(a.x, a.y, a.z),
+            Vec3::new(b.x, a.y, a.z),
+            Vec3::new(a.x, b.y, a.z),
+            Vec3::new(b.x, b.y, a.z),
+            Vec3::new(a.x, a.y, b.z),
+            Vec3::new(b.x, a.y, b.z),
+            Vec3::new(a.x, b.y, b.z),
+            Vec3::new(b.x, b.y, b.z),
+        ]
+    }
+
+    /// The box transformed by `m` (the bounds of its transformed corners).
+    pub fn transformed(&self, m: &Mat4) -> Aabb {
+        let mut out = Aabb::EMPTY;
+        for c in self.corners() {
+            out.include(m.transform_point3(c));
+        }
+        out
+    }
+
+    /// The 12 triangles of the box's surface, as indices into [`Aabb::corners`].
+    pub const TRIANGLES: [[u32; 3]; 12] = [
+        [0, 2, 1],
+        [1, 2, 3],
+        [4, 5, 6],
+        [5, 7, 6],
+        [0, 1, 4],
+        [1, 5, 4],
+        [2, 6, 3],
+        [3, 6, 7],
+        [0, 4, 2],
+        [2, 4, 6],
+        [1, 3, 5],
+        [3, 7, 5],
+    ];
+}
+
+/// A triangle mesh: positions, normals (one per position), optional per-vertex colours.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    /// A name, for messages.
+    pub name: String,
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Vertex normals, one per position (unit length, or zero where undefined).
+    pub normals: Vec<Vec3>,
+    /// Linear RGB per vertex, where the source had them.
+    pub colors: Option<Vec<Vec3>>,
+    /// Triangles, as indices into `positions`.
+    pub indices: Vec<[u32; 3]>,
+}
+
+impl Mesh {
+    /// A mesh from positions and triangles, with area-weighted vertex normals computed.
+    pub fn new(name: impl Into<String>, positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> Mesh {
+        let mut mesh =
+            Mesh { name: name.into(), positions, normals: Vec::new(), colors: None, indices };
+        mesh.compute_normals();
+        mesh
+    }
+
+    /// Replaces the normals by area-weighted averages of the adjacent faces' normals.
+    pub fn compute_normals(&mut self) {
+        let mut normals = vec![Vec3::ZERO; self.positions.len()];
+        for tri in &self.indices {
+            let [a, b, c] = tri.map(|i| self.positions.get(i as usize).copied().unwrap_or(Vec3::ZERO));
+            let n = (b - a).cross(c - a);
+            if n.is_finite() {
+                for &i in tri {
+                    if let Some(slot) = normals.get_mut(i as usize) {
+                        *slot += n;
+                    }
+                }
+            }
+        }
+        self.normals = normals.into_iter().map(|n| n.normalize_or_zero()).collect();
+    }
+
+    /// The bounds of the positions.
+    pub fn bounds(&self) -> Aabb {
+        let mut b = Aabb::EMPTY;
+        for &p in &self.positions {
+            b.include(p);
+        }
+        b
+    }
+
+    /// Checks that every number is finite and every index in range.
+    pub fn validate(&self) -> Result<(), OitError> {
+        if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
+            return Err(OitError::InvalidScene(format!(
+                "mesh '{}': vertex {} has a NaN or infinite coordinate ({:?})",
+                self.name,
+                i + 1,
+                self.positions[i]
+            )));
+        }
+        if self.normals.len() != self.positions.len() {
+            return Err(OitError::InvalidScene(format!(
+                "mesh '{}': {} normals for {} positions",
+                self.name,
+                self.normals.len(),
+                self.positions.len()
+            )));
+        }
+        if let Some(c) = &self.colors {
+            if c.len() != self.positions.len() || c.iter().any(|c| !c.is_finite()) {
+                return Err(OitError::InvalidScene(format!(
+                    "mesh '{}': vertex colours must be finite, one per position",
+                    self.name
+                )));
+            }
+        }
+        let n = self.positions.len() as u32;
+        if let Some(t) = self.indices.iter().position(|t| t.iter().any(|&i| i >= n)) {
+            return Err(OitError::InvalidScene(format!(
+                "mesh '{}': triangle {} indexes past the {} vertices",
+                self.name,
+                t + 1,
+                n
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// A mesh with a material: straight-alpha linear RGBA colour and an absorption coefficient
+/// (per unit of view-space distance, used by the translucency effect).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Object {
+    /// A name, for messages.
+    pub name: String,
+    /// Index into [`Scene::meshes`].
+    pub mesh: usize,
+    /// Linear RGB and straight alpha.
+    pub color: Vec4,
+    /// Beer–Lambert absorption coefficient σ.
+    pub absorption: f32,
+}
+
+/// One placement of an object.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Instance {
+    /// Index into [`Scene::objects`].
+    pub object: usize,
+    /// Object to world.
+    pub transform: Mat4,
+}
+
+/// Meshes, objects and their instances.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Scene {
+    /// A name, for reports.
+    pub name: String,
+    /// The meshes.
+    pub meshes: Vec<Mesh>,
+    /// The objects (a mesh and its material).
+    pub objects: Vec<Object>,
+    /// The instances, drawn in this order.
+    pub instances: Vec<Instance>,
+}
+
+impl Scene {
+    /// A scene with one instance (identity transform) of each mesh, coloured `color`.
+    pub fn from_meshes(name: impl Into<String>, meshes: Vec<Mesh>, color: Vec4) -> Scene {
+        let objects: Vec<Object> = meshes
+            .iter()
+            .enumerate()
+            .map(|(i, m)| Object { name: m.name.clone(), mesh: i, color, absorption: 1.0 })
+            .collect();
+        let instances =
+            (0..objects.len()).map(|object| Instance { object, transform: Mat4::IDENTITY }).collect();
+        Scene { name: name.into(), meshes, objects, instances }
+    }
+
+    /// The mesh and object an instance draws.
+    pub fn instance_parts(&self, instance: &Instance) -> (&Object, &Mesh) {
+        let object = &self.objects[instance.object];
+        (object, &self.meshes[object.mesh])
+    }
+
+    /// The primitive id of the first triangle of each instance, and the total.
+    pub fn primitive_bases(&self) -> (Vec<u32>, u32) {
+        let mut bases = Vec::with_capacity(self.instances.len());
+        let mut total = 0u32;
+        for inst in &self.instances {
+            bases.push(total);
+            total = total.saturating_add(self.instance_parts(inst).1.indices.len() as u32);
+        }
+        (bases, total)
+    }
+
+    /// Total triangles over all instances.
+    pub fn triangle_count(&self) -> u64 {
+        self.instances.iter().map(|i| self.instance_parts(i).1.indices.len() as u64).sum()
+    }
+
+    /// World-space bounds of one instance.
+    pub fn instance_bounds(&self, instance: &Instance) -> Aabb {
+        self.instance_parts(instance).1.bounds().transformed(&instance.transform)
+    }
+
+    /// World-space bounds of everything.
+    pub fn bounds(&self) -> Aabb {
+        self.instances.iter().fold(Aabb::EMPTY, |b, i| b.union(&self.instance_bounds(i)))
+    }
+
+    /// Checks the scene before any raster: finite data, valid references, something to draw.
+    pub fn validate(&self) -> Result<(), OitError> {
+        for m in &self.meshes {
+            m.validate()?;
+        }
+        for o in &self.objects {
+            if o.mesh >= self.meshes.len() {
+                return Err(OitError::InvalidScene(format!("object '{}' names a missing mesh", o.name)));
+            }
+            if !o.color.is_finite() || !o.absorption.is_finite() || o.absorption < 0.0 {
+                return Err(OitError::InvalidScene(format!(
+                    "object '{}': colour and absorption must be finite, absorption ≥ 0",
+                    o.name
+                )));
+            }
+        }
+        for (i, inst) in self.instances.iter().enumerate() {
+            if inst.object >= self.objects.len() {
+                return Err(OitError::InvalidScene(format!("instance {i} names a missing object")));
+            }
+            if !inst.transform.is_finite() {
+                return Err(OitError::InvalidScene(format!("instance {i} has a non-finite transform")));
+            }
+        }
+        if self.triangle_count() == 0 {
+            return Err(OitError::InvalidScene(format!("scene '{}' has no triangles", self.name)));
+        }
+        if self.triangle_count() >= u64::from(u32::MAX) {
+            return Err(OitError::InvalidScene("more than 2^32 - 1 triangles".into()));
+        }
+        Ok(())
+    }
+}

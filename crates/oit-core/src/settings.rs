@@ -1,0 +1,166 @@
+//! Settings of one frame: size, technique, shading, effect, background.
+
+use std::str::FromStr;
+
+use glam::{Vec3, Vec4};
+use serde::Serialize;
+
+use crate::{BoundsMode, Effect, OitError, RasterPath, Technique};
+
+/// How a fragment's colour is computed, so that the fragments of one mesh differ and order
+/// matters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Shading {
+    /// colour × (0.3 + 0.7·|n·l|), l the camera's forward direction, n the interpolated normal.
+    #[default]
+    Headlight,
+    /// The object's colour alone.
+    Flat,
+    /// The per-vertex colours, interpolated perspective-correct, unlit (object colour where the
+    /// mesh has none); alpha from the object.
+    Vertex,
+    /// The world-space normal mapped to colour: 0.5 + 0.5·n.
+    Normal,
+}
+
+impl FromStr for Shading {
+    type Err = OitError;
+    fn from_str(s: &str) -> Result<Shading, OitError> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "headlight" => Ok(Shading::Headlight),
+            "flat" => Ok(Shading::Flat),
+            "vertex" => Ok(Shading::Vertex),
+            "normal" => Ok(Shading::Normal),
+            other => Err(OitError::InvalidSettings(format!(
+                "unknown shading '{other}': use headlight, flat, vertex or normal"
+            ))),
+        }
+    }
+}
+
+impl Shading {
+    /// The straight-alpha linear colour of a fragment. `normal` is the interpolated (not yet
+    /// normalized) world-space normal, `vertex_color` the interpolated vertex colour if the mesh
+    /// has one, `forward` the camera's viewing direction.
+    pub fn shade(self, base: Vec4, normal: Vec3, vertex_color: Option<Vec3>, forward: Vec3) -> Vec4 {
+        let n = normal.normalize_or_zero();
+        let rgb = match self {
+            Shading::Headlight => base.truncate() * (0.3 + 0.7 * n.dot(forward).abs()),
+            Shading::Flat => base.truncate(),
+            Shading::Vertex => vertex_color.unwrap_or(base.truncate()),
+            Shading::Normal => n * 0.5 + Vec3::splat(0.5),
+        };
+        rgb.clamp(Vec3::ZERO, Vec3::ONE).extend(base.w.clamp(0.0, 1.0))
+    }
+}
+
+/// Everything that shapes one frame besides the scene and the camera.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Settings {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// The technique.
+    pub technique: Technique,
+    /// Linear RGB behind everything.
+    pub background: Vec3,
+    /// Replaces every object's alpha when set.
+    pub alpha: Option<f32>,
+    /// Stops the peeling techniques (dp, ddp, mlp, adp batches) after this many capture passes.
+    pub max_peels: Option<u32>,
+    /// Fragment colours.
+    pub shading: Shading,
+    /// What is made of the sorted fragments.
+    pub effect: Effect,
+    /// How bucket techniques find the depth range.
+    pub bounds: BoundsMode,
+    /// Capture path on GPU backends (`None`: the backend's default for the technique).
+    pub raster: Option<RasterPath>,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            width: 512,
+            height: 512,
+            technique: Technique::Reference,
+            background: Vec3::splat(1.0),
+            alpha: None,
+            max_peels: None,
+            shading: Shading::Headlight,
+            effect: Effect::Transparency,
+            bounds: BoundsMode::Boxes,
+            raster: None,
+        }
+    }
+}
+
+/// Largest width or height accepted.
+pub const MAX_SIZE: u32 = 16_384;
+
+impl Settings {
+    /// Checks every setting; backends call this before allocating anything.
+    pub fn validate(&self) -> Result<(), OitError> {
+        if self.width == 0 || self.height == 0 {
+            return Err(OitError::InvalidSettings(format!(
+                "image size {}x{} is empty: use at least 1x1, e.g. --size 512x512",
+                self.width, self.height
+            )));
+        }
+        if self.width > MAX_SIZE || self.height > MAX_SIZE {
+            return Err(OitError::InvalidSettings(format!(
+                "image size {}x{} is over {MAX_SIZE} pixels on a side",
+                self.width, self.height
+            )));
+        }
+        if let Some(a) = self.alpha {
+            if !(0.0..=1.0).contains(&a) {
+                return Err(OitError::InvalidSettings(format!("alpha {a} is outside [0, 1]")));
+            }
+        }
+        if !self.background.is_finite() || self.background.min_element() < 0.0 || self.background.max_element() > 1.0 {
+            return Err(OitError::InvalidSettings("background channels must lie in [0, 1]".into()));
+        }
+        if self.max_peels == Some(0) {
+            return Err(OitError::InvalidSettings("--max-peels must be at least 1".into()));
+        }
+        Ok(())
+    }
+
+    /// The object's colour with the alpha override applied.
+    pub fn material_color(&self, color: Vec4) -> Vec4 {
+        match self.alpha {
+            Some(a) => color.truncate().extend(a),
+            None => color,
+        }
+    }
+
+    /// Pixels in the image.
+    pub fn pixel_count(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+}
+
+/// Parses `WxH` (e.g. `512x512`).
+pub fn parse_size(text: &str) -> Result<(u32, u32), OitError> {
+    let bad = || OitError::InvalidSettings(format!("size '{text}' is not WIDTHxHEIGHT, e.g. 512x512"));
+    let (w, h) = text.trim().split_once(['x', 'X']).ok_or_else(bad)?;
+    let w: u32 = w.trim().parse().map_err(|_| bad())?;
+    let h: u32 = h.trim().parse().map_err(|_| bad())?;
+    if w == 0 || h == 0 {
+        return Err(OitError::InvalidSettings(format!("size '{text}' is empty: use at least 1x1")));
+    }
+    Ok((w, h))
+}
+
+/// Parses `R,G,B` in [0, 1] (e.g. `1,1,1`).
+pub fn parse_rgb(text: &str) -> Result<Vec3, OitError> {
+    let bad = || OitError::InvalidSettings(format!("colour '{text}' is not R,G,B with each in [0, 1]"));
+    let parts: Vec<f32> = text.split(',').map(|p| p.trim().parse::<f32>()).collect::<Result<_, _>>().map_err(|_| bad())?;
+    match parts[..] {
+        [r, g, b] if [r, g, b].iter().all(|c| (0.0..=1.0).contains(c)) => Ok(Vec3::new(r, g, b)),
+        _ => Err(bad()),
+    }
+}

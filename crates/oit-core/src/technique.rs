@@ -1,0 +1,346 @@
+//! The technique catalogue: every way oit captures and orders the fragments of a pixel, by the
+//! names DESIGN.md gives them, parameters included (`bdp:3`, `fabs:16`, `mlp:4`).
+
+use std::fmt;
+use std::str::FromStr;
+
+use serde::Serialize;
+
+use crate::OitError;
+
+/// A technique and its parameters.
+///
+/// Parameters left out (`fabs`, `mdts`, `mdts64`) are sized from the scene: a counting pass
+/// measures the deepest pixel and the arrays get exactly that many slots.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Technique {
+    /// Every fragment, sorted by (depth, primitive id), composited in f64: the ground truth.
+    Reference,
+    /// Classical depth peeling (Everitt 2001): one layer per geometry pass.
+    Dp,
+    /// Dual depth peeling (Bavoil & Myers 2008): the nearest and farthest layer per pass.
+    Ddp,
+    /// Weighted average (Bavoil & Myers 2008): one pass, order ignored.
+    WeightedAverage,
+    /// Weighted sum (Meshkin 2007, as reported by Bavoil & Myers 2008): one pass, order ignored.
+    WeightedSum,
+    /// Bucket depth peeling (Liu et al., HPG 2009) with `passes` capture passes (`bdp` = 1).
+    Bdp {
+        /// Capture passes (≥ 1).
+        passes: u32,
+    },
+    /// Adaptive bucket depth peeling (Liu et al., HPG 2009, section 3.3).
+    Adp,
+    /// Multi-depth test with atomicMin on 32-bit words, colour in the 20+12-bit packing
+    /// (Liu et al. 2009; Huang et al. 2011).
+    Mdts {
+        /// Words per pixel; `None` sizes them from the scene.
+        k: Option<u32>,
+    },
+    /// The same with 64-bit words (depth bits above packed RGBA): exact for the first K layers.
+    Mdts64 {
+        /// Words per pixel; `None` sizes them from the scene.
+        k: Option<u32>,
+    },
+    /// Fixed A-buffer: atomic counter + K slots per pixel, sorted after capture (Huang et al. 2011).
+    Fabs {
+        /// Slots per pixel; `None` sizes them from the scene.
+        k: Option<u32>,
+    },
+    /// Extended multi-layer peeling: the M nearest remaining layers per pass (Huang et al. 2011).
+    Mlp {
+        /// Layers per pass (≥ 1).
+        m: u32,
+    },
+}
+
+/// The kind of a technique, parameters dropped: what a backend's capabilities list.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+#[expect(missing_docs, reason = "the variants are the techniques' names")]
+pub enum TechniqueKind {
+    Reference,
+    Dp,
+    Ddp,
+    Wavg,
+    Wsum,
+    Bdp,
+    Adp,
+    Mdts,
+    Mdts64,
+    Fabs,
+    Mlp,
+}
+
+impl TechniqueKind {
+    /// Every kind, in catalogue order.
+    pub const ALL: [TechniqueKind; 11] = [
+        TechniqueKind::Reference,
+        TechniqueKind::Dp,
+        TechniqueKind::Ddp,
+        TechniqueKind::Wavg,
+        TechniqueKind::Wsum,
+        TechniqueKind::Bdp,
+        TechniqueKind::Adp,
+        TechniqueKind::Mdts,
+        TechniqueKind::Mdts64,
+        TechniqueKind::Fabs,
+        TechniqueKind::Mlp,
+    ];
+}
+
+/// The names `parse` accepts, for messages.
+pub const KNOWN_TECHNIQUES: &str =
+    "reference, dp, ddp, wavg, wsum, bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K], fabs[:K], mlp:M";
+
+/// Largest K or M accepted (a pixel with this many layers is already far past any real scene).
+pub const MAX_PARAMETER: u32 = 65_536;
+
+impl Technique {
+    /// The techniques `--techniques all` runs, reference excluded, in catalogue order.
+    pub fn all() -> Vec<Technique> {
+        vec![
+            Technique::Dp,
+            Technique::Ddp,
+            Technique::WeightedAverage,
+            Technique::WeightedSum,
+            Technique::Bdp { passes: 1 },
+            Technique::Bdp { passes: 2 },
+            Technique::Adp,
+            Technique::Mdts { k: None },
+            Technique::Mdts64 { k: None },
+            Technique::Fabs { k: None },
+            Technique::Mlp { m: 4 },
+        ]
+    }
+
+    /// Parses a comma-separated list; `all` expands to [`Technique::all`].
+    pub fn parse_list(list: &str) -> Result<Vec<Technique>, OitError> {
+        let mut out = Vec::new();
+        for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+            if item.eq_ignore_ascii_case("all") {
+                out.extend(Technique::all());
+            } else {
+                out.push(item.parse()?);
+            }
+        }
+        if out.is_empty() {
+            return Err(OitError::UnknownTechnique {
+                name: list.to_string(),
+                reason: "the list is empty".into(),
+                known: KNOWN_TECHNIQUES,
+            });
+        }
+        Ok(out)
+    }
+
+    /// The kind, parameters dropped.
+    pub fn kind(&self) -> TechniqueKind {
+        match self {
+            Technique::Reference => TechniqueKind::Reference,
+            Technique::Dp => TechniqueKind::Dp,
+            Technique::Ddp => TechniqueKind::Ddp,
+            Technique::WeightedAverage => TechniqueKind::Wavg,
+            Technique::WeightedSum => TechniqueKind::Wsum,
+            Technique::Bdp { .. } => TechniqueKind::Bdp,
+            Technique::Adp => TechniqueKind::Adp,
+            Technique::Mdts { .. } => TechniqueKind::Mdts,
+            Technique::Mdts64 { .. } => TechniqueKind::Mdts64,
+            Technique::Fabs { .. } => TechniqueKind::Fabs,
+            Technique::Mlp { .. } => TechniqueKind::Mlp,
+        }
+    }
+
+    /// True for techniques that must equal the reference (up to coplanar ties and capacity).
+    pub fn is_exact(&self) -> bool {
+        matches!(
+            self,
+            Technique::Reference
+                | Technique::Dp
+                | Technique::Ddp
+                | Technique::Mdts64 { .. }
+                | Technique::Fabs { .. }
+                | Technique::Mlp { .. }
+        )
+    }
+}
+
+impl fmt::Display for Technique {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let opt = |f: &mut fmt::Formatter<'_>, name: &str, k: &Option<u32>| match k {
+            Some(k) => write!(f, "{name}:{k}"),
+            None => write!(f, "{name}"),
+        };
+        match self {
+            Technique::Reference => write!(f, "reference"),
+            Technique::Dp => write!(f, "dp"),
+            Technique::Ddp => write!(f, "ddp"),
+            Technique::WeightedAverage => write!(f, "wavg"),
+            Technique::WeightedSum => write!(f, "wsum"),
+            Technique::Bdp { passes: 1 } => write!(f, "bdp"),
+            Technique::Bdp { passes: 2 } => write!(f, "bdp2"),
+            Technique::Bdp { passes } => write!(f, "bdp:{passes}"),
+            Technique::Adp => write!(f, "adp"),
+            Technique::Mdts { k } => opt(f, "mdts", k),
+            Technique::Mdts64 { k } => opt(f, "mdts64", k),
+            Technique::Fabs { k } => opt(f, "fabs", k),
+            Technique::Mlp { m } => write!(f, "mlp:{m}"),
+        }
+    }
+}
+
+impl Serialize for Technique {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
+impl FromStr for Technique {
+    type Err = OitError;
+
+    fn from_str(text: &str) -> Result<Technique, OitError> {
+        let err = |reason: String| OitError::UnknownTechnique {
+            name: text.to_string(),
+            reason,
+            known: KNOWN_TECHNIQUES,
+        };
+        let lower = text.trim().to_ascii_lowercase();
+        let (name, param) = match lower.split_once(':') {
+            Some((n, p)) => (n, Some(p)),
+            None => (lower.as_str(), None),
+        };
+        let number = |p: &str| -> Result<u32, OitError> {
+            match p.parse::<u32>() {
+                Ok(v) if (1..=MAX_PARAMETER).contains(&v) => Ok(v),
+                _ => Err(err(format!("parameter '{p}' must be a whole number from 1 to {MAX_PARAMETER}"))),
+            }
+        };
+        let none = |t: Technique| match param {
+            None => Ok(t),
+            Some(_) => Err(err(format!("'{name}' takes no parameter"))),
+        };
+        match name {
+            "reference" | "ref" => none(Technique::Reference),
+            "dp" => none(Technique::Dp),
+            "ddp" => none(Technique::Ddp),
+            "wavg" => none(Technique::WeightedAverage),
+            "wsum" => none(Technique::WeightedSum),
+            "adp" => none(Technique::Adp),
+            "bdp2" => none(Technique::Bdp { passes: 2 }),
+            "bdp" => Ok(Technique::Bdp { passes: param.map(number).transpose()?.unwrap_or(1) }),
+            "mdts" => Ok(Technique::Mdts { k: param.map(number).transpose()? }),
+            "mdts64" => Ok(Technique::Mdts64 { k: param.map(number).transpose()? }),
+            "fabs" => Ok(Technique::Fabs { k: param.map(number).transpose()? }),
+            "mlp" => Ok(Technique::Mlp { m: param.map(number).transpose()?.unwrap_or(4) }),
+            _ => Err(err("not in the catalogue".into())),
+        }
+    }
+}
+
+/// What is computed from each pixel's sorted fragments.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Effect {
+    /// Alpha compositing in depth order.
+    #[default]
+    Transparency,
+    /// Beer–Lambert absorption through the thickness between entry and exit layers.
+    Translucency,
+    /// Schlick Fresnel transmittance multiplied over the layers.
+    Fresnel,
+    /// A heat map of the fragments captured per pixel.
+    Complexity,
+}
+
+impl FromStr for Effect {
+    type Err = OitError;
+    fn from_str(s: &str) -> Result<Effect, OitError> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "transparency" => Ok(Effect::Transparency),
+            "translucency" => Ok(Effect::Translucency),
+            "fresnel" => Ok(Effect::Fresnel),
+            "complexity" => Ok(Effect::Complexity),
+            other => Err(OitError::InvalidSettings(format!(
+                "unknown effect '{other}': use transparency, translucency, fresnel or complexity"
+            ))),
+        }
+    }
+}
+
+/// How the bucket techniques find each pixel's depth range.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BoundsMode {
+    /// The rendered depths of the instances' bounding boxes (the HPG 2009 paper's default).
+    #[default]
+    Boxes,
+    /// The fragments' true min and max, from an extra geometry pass.
+    Exact,
+}
+
+impl FromStr for BoundsMode {
+    type Err = OitError;
+    fn from_str(s: &str) -> Result<BoundsMode, OitError> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "boxes" | "box" => Ok(BoundsMode::Boxes),
+            "exact" => Ok(BoundsMode::Exact),
+            other => Err(OitError::InvalidSettings(format!("unknown bounds '{other}': use boxes or exact"))),
+        }
+    }
+}
+
+/// Which rasterizer a GPU backend captures with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RasterPath {
+    /// The software rasterizer of oit-cpu.
+    Cpu,
+    /// The GPU's graphics pipeline.
+    Hardware,
+    /// A compute-shader rasterizer with oit-cpu's fixed-point rules.
+    Compute,
+}
+
+impl fmt::Display for RasterPath {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            RasterPath::Cpu => "cpu",
+            RasterPath::Hardware => "hardware",
+            RasterPath::Compute => "compute",
+        })
+    }
+}
+
+impl FromStr for RasterPath {
+    type Err = OitError;
+    fn from_str(s: &str) -> Result<RasterPath, OitError> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "cpu" => Ok(RasterPath::Cpu),
+            "hardware" | "hw" => Ok(RasterPath::Hardware),
+            "compute" => Ok(RasterPath::Compute),
+            other => Err(OitError::InvalidSettings(format!("unknown raster path '{other}': use hardware or compute"))),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip() {
+        for name in ["reference", "dp", "ddp", "wavg", "wsum", "bdp", "bdp2", "bdp:3", "adp", "mdts", "mdts:4", "mdts64:8", "fabs", "fabs:16", "mlp:4"] {
+            let t: Technique = name.parse().unwrap();
+            assert_eq!(t.to_string(), name);
+        }
+        assert_eq!("bdp:2".parse::<Technique>().unwrap().to_string(), "bdp2");
+        assert_eq!(Technique::parse_list("all").unwrap().len(), Technique::all().len());
+    }
+
+    #[test]
+    fn bad_names_are_errors() {
+        for bad in ["", "nope", "fabs:0", "fabs:x", "dp:3", "mlp:-1", "bdp:99999999"] {
+            assert!(bad.parse::<Technique>().is_err(), "{bad}");
+        }
+    }
+}
