@@ -27,6 +27,7 @@ pub mod rules;
 mod scene;
 mod settings;
 mod technique;
+pub mod text;
 
 pub use backend::{AtomicFragmentList, Backend, BucketArray, Capabilities, Compositor, DepthHistogram, Sample};
 pub use camera::{Camera, View};
@@ -35,7 +36,7 @@ pub use frame::{Frame, Image, Stats};
 pub use obj::load_obj;
 pub use procedural::{builtin_scene, load_scene, BUILTIN_SCENES, DEFAULT_SCENE};
 pub use scene::{Aabb, Instance, Mesh, Object, Scene};
-pub use settings::{parse_rgb, parse_size, Settings, Shading, MAX_SIZE};
+pub use settings::{parse_rgb, parse_size, BdpMode, Settings, Shading, MAX_SIZE};
 pub use technique::{BoundsMode, Effect, RasterPath, Technique, TechniqueKind, KNOWN_TECHNIQUES, MAX_PARAMETER};
 
 pub use glam;

@@ -261,4 +261,72 @@ mod tests {
             assert_eq!(histogram_rank(&hist, b), search);
         }
     }
+
+    const RGBS: [u32; 8] = [0x000000, 0xffffff, 0x123456, 0xff0000, 0x00ff00, 0x0000ff, 0x80807f, 0xfedcba];
+
+    #[test]
+    fn bdp_color_round_trip_every_alpha() {
+        for a in 0..=255u32 {
+            for rgb in RGBS {
+                let c = rgb | a << 24;
+                let packed = bdp_pack_color(c);
+                assert_eq!(packed >> 31, 0, "sign bit clear: a non-negative float");
+                let back = bdp_unpack_color(packed);
+                assert_eq!(back & 0xffffff, rgb, "RGB exact");
+                // 7-bit alpha: within one 8-bit step
+                assert!((back >> 24).abs_diff(a) <= 1, "alpha {a} -> {}", back >> 24);
+            }
+        }
+        // MAX keeps the most opaque fragment first: packing is monotone in alpha
+        for a in 1..=255u32 {
+            assert!(bdp_pack_color(a << 24) >= bdp_pack_color((a - 1) << 24 | 0xffffff) || (a * 127 + 127) / 255 == ((a - 1) * 127 + 127) / 255);
+        }
+    }
+
+    #[test]
+    fn mdts_round_trip_and_order() {
+        for a in [0u32, 1, 127, 128, 255] {
+            for rgb in RGBS {
+                for d in [0.0f32, 0.25, 0.5, 0.999, 1.0] {
+                    let words = mdts_pack(d, rgb | a << 24);
+                    let (d2, rgb2) = mdts_unpack(words);
+                    assert_eq!(rgb2, rgb, "RGB survives the 12 + 12 split");
+                    assert!(d2 <= d && d - d2 <= MDTS_DEPTH_STEP * 1.0001, "{d} -> {d2}");
+                    assert_eq!(words[0] & 0xffff_f000, words[1] & 0xffff_f000, "both words share the depth bits");
+                }
+            }
+        }
+    }
+
+    /// The smallest depth gap that always keeps order in the 20-bit mdts packing: found by search,
+    /// and it is [`MDTS_DEPTH_STEP`] = 2⁻²⁰ (as the module docs state).
+    #[test]
+    fn mdts_smallest_ordered_gap() {
+        let keeps_order = |gap: f32| {
+            (0..20_000).all(|i| {
+                let d = i as f32 / 20_000.0 * (1.0 - gap);
+                mdts_depth20(d) < mdts_depth20(d + gap)
+            })
+        };
+        let mut gap = 1e-3f32;
+        while keeps_order(gap * 0.5) {
+            gap *= 0.5;
+        }
+        // refine between gap/2 (fails) and gap (holds)
+        let (mut lo, mut hi) = (gap * 0.5, gap);
+        for _ in 0..30 {
+            let mid = 0.5 * (lo + hi);
+            if keeps_order(mid) { hi = mid } else { lo = mid }
+        }
+        assert!(hi <= MDTS_DEPTH_STEP * 1.01 && hi >= MDTS_DEPTH_STEP * 0.99, "smallest gap {hi}");
+        assert!(!keeps_order(MDTS_DEPTH_STEP * 0.5));
+    }
+
+    #[test]
+    fn normals_round_trip() {
+        for n in [Vec3::X, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z, Vec3::new(1.0, -2.0, -0.5).normalize(), Vec3::new(-0.3, 0.2, 0.9).normalize()] {
+            let back = unpack_normal(pack_normal(n));
+            assert!((back - n).length() < 1e-3, "{n} -> {back}");
+        }
+    }
 }

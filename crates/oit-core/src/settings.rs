@@ -78,6 +78,34 @@ pub struct Settings {
     pub bounds: BoundsMode,
     /// Capture path on GPU backends (`None`: the backend's default for the technique).
     pub raster: Option<RasterPath>,
+    /// What single-pass bucket depth peeling stores.
+    pub bdp_mode: BdpMode,
+}
+
+/// What the buckets of `bdp` hold.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BdpMode {
+    /// Colour mode for transparency with one pass, depth mode otherwise (multi-pass `bdp:P` and
+    /// every effect but transparency need depths).
+    #[default]
+    Auto,
+    /// 32 subintervals of packed RGBA8 colours (HPG 2009 section 3.2, for transparency).
+    Color,
+    /// 16 subintervals, each keeping its nearest and farthest fragment (HPG 2009 eq. 2–4).
+    Depth,
+}
+
+impl FromStr for BdpMode {
+    type Err = OitError;
+    fn from_str(s: &str) -> Result<BdpMode, OitError> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "auto" => Ok(BdpMode::Auto),
+            "color" | "colour" => Ok(BdpMode::Color),
+            "depth" => Ok(BdpMode::Depth),
+            other => Err(OitError::InvalidSettings(format!("unknown bdp mode '{other}': use auto, color or depth"))),
+        }
+    }
 }
 
 impl Default for Settings {
@@ -93,6 +121,7 @@ impl Default for Settings {
             effect: Effect::Transparency,
             bounds: BoundsMode::Boxes,
             raster: None,
+            bdp_mode: BdpMode::Auto,
         }
     }
 }

@@ -1,0 +1,68 @@
+//! `adp`: adaptive bucket depth peeling (Liu et al., HPG 2009, section 3.3).
+//!
+//! 1. Bounds pass: each pixel's [zNear, zFar].
+//! 2. Histogram pass: 1024 uniform bins over the range, one presence bit each (32 × u32 per
+//!    pixel, set with atomic OR — the paper's logic-op OR into 8 RGBA32UI targets).
+//! 3. Equalization: the set bins, in depth order, become the subintervals; the fragment in the
+//!    j-th set bin goes to bucket j mod 32 of batch ⌊j/32⌋ ([`histogram_rank`]).
+//! 4. One bucket pass per batch of 32 subintervals, until every set bin was captured: passes =
+//!    2 + ⌈bins/32⌉ for the deepest pixel.
+//!
+//! Two fragments closer than 1/1024 of the range can share a bin: one survives (MAX on the 64-bit
+//! (depth, payload) word), the other is counted in `lost`.
+
+use std::sync::atomic::Ordering::Relaxed;
+
+use oit_core::rules::{
+    depth_key64, histogram_bin, histogram_count, histogram_rank, split_key64, BUCKETS, HISTOGRAM_WORDS,
+};
+use oit_core::{Frame, OitError};
+use rayon::prelude::*;
+
+use super::Ctx;
+
+pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
+    let bounds = ctx.depth_bounds()?;
+    ctx.storage_bytes += ctx.pixels as u64 * 8;
+    let hist = ctx.alloc32(HISTOGRAM_WORDS, 0)?;
+    ctx.pass(|f| {
+        let px = f.pixel as usize;
+        let (zn, zf) = bounds[px];
+        let bin = histogram_bin(f.depth, zn, zf);
+        hist[px * HISTOGRAM_WORDS + (bin / 32) as usize].fetch_or(1 << (bin % 32), Relaxed);
+    });
+    let hist: Vec<[u32; HISTOGRAM_WORDS]> = hist
+        .par_chunks(HISTOGRAM_WORDS)
+        .map(|h| std::array::from_fn(|i| h[i].load(Relaxed)))
+        .collect();
+    let batches = hist.iter().map(|h| histogram_count(h).div_ceil(BUCKETS as u32)).max().unwrap_or(0);
+    let batches = batches.min(ctx.settings.max_peels.unwrap_or(u32::MAX));
+    let buckets = ctx.alloc64(BUCKETS, 0)?;
+    let mut states = ctx.states();
+    for batch in 0..batches {
+        let payload = |f: &crate::raster::Fragment| ctx.payload(f);
+        let hist = &hist;
+        let generated = ctx.raster.for_each_fragment(|f| {
+            let px = f.pixel as usize;
+            let (zn, zf) = bounds[px];
+            let rank = histogram_rank(&hist[px], histogram_bin(f.depth, zn, zf));
+            if rank / BUCKETS as u32 == batch {
+                let slot = px * BUCKETS + (rank % BUCKETS as u32) as usize;
+                buckets[slot].fetch_max(depth_key64(f.depth, payload(f)) | 1 << 63, Relaxed);
+            }
+        });
+        ctx.passes += 1;
+        ctx.fragments.get_or_insert(generated);
+        let resolve = &ctx.resolve;
+        states.par_iter_mut().zip(buckets.par_chunks(BUCKETS)).for_each(|(s, b)| {
+            for bucket in b {
+                let key = bucket.swap(0, Relaxed);
+                if key != 0 {
+                    let (d, p) = split_key64(key & !(1 << 63));
+                    resolve.push(s, d, p);
+                }
+            }
+        });
+    }
+    Ok(super::finish(ctx, states))
+}

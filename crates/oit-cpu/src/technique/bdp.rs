@@ -1,0 +1,128 @@
+//! `bdp` and `bdp:P`: bucket depth peeling (Liu et al., HPG 2009, section 3.2).
+//!
+//! A bounds pass gives each pixel's [zNear, zFar]; a capture pass routes every fragment by its
+//! depth to one of the pixel's buckets, updated with MAX so concurrent fragments never race.
+//!
+//! - **Colour mode** (one pass, transparency): 32 uniform subintervals, each bucket keeping the
+//!   MAX of [`bdp_pack_color`] — a collision keeps one fragment (the most opaque), the rest are
+//!   lost. 32 words per pixel.
+//! - **Depth mode**: 16 uniform subintervals, each a pair of buckets keeping the nearest and the
+//!   farthest fragment (the paper's MAX of (1 − d, d), eq. 2–4). The paper stores the bare depths;
+//!   here each bucket is 64 bits, the depth's bits above the fragment's payload word, so the colour
+//!   (or normal) of the kept fragment travels with it. Pass p of `bdp:P` discards fragments with
+//!   d ≤ dmin or d ≥ dmax of their subinterval in pass p − 1 (eq. 5) and so keeps the next
+//!   nearest and farthest; after P passes subinterval k reads min₁ … min_P, max_P … max₁.
+
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+
+use oit_core::rules::{
+    bdp_pack_color, bdp_unpack_color, bucket_index, depth_bits, depth_key64, split_key64, BDP_COLOR_SUBINTERVALS,
+    BDP_DEPTH_SUBINTERVALS,
+};
+use oit_core::{BdpMode, Effect, Frame, OitError};
+use rayon::prelude::*;
+
+use super::Ctx;
+
+pub(crate) fn render(ctx: &mut Ctx<'_>, passes: u32) -> Result<Frame, OitError> {
+    let color_mode = match ctx.settings.bdp_mode {
+        BdpMode::Color => true,
+        BdpMode::Depth => false,
+        BdpMode::Auto => passes == 1 && ctx.resolve.effect == Effect::Transparency,
+    };
+    if color_mode && (passes != 1 || ctx.resolve.effect != Effect::Transparency) {
+        return Err(OitError::InvalidSettings(
+            "bdp's colour mode holds colours only, in one pass: use --bdp-mode depth for bdp:P or for effects other than transparency".into(),
+        ));
+    }
+    let bounds = ctx.depth_bounds()?;
+    ctx.storage_bytes += ctx.pixels as u64 * 8;
+    if color_mode { color(ctx, &bounds) } else { depth(ctx, &bounds, passes) }
+}
+
+fn color(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
+    let n = BDP_COLOR_SUBINTERVALS as usize;
+    let buckets = ctx.alloc32(n, 0)?;
+    ctx.pass(|f| {
+        let px = f.pixel as usize;
+        let (zn, zf) = bounds[px];
+        let k = bucket_index(f.depth, zn, zf, BDP_COLOR_SUBINTERVALS) as usize;
+        buckets[px * n + k].fetch_max(bdp_pack_color(oit_core::rules::pack_rgba8(f.color)), Relaxed);
+    });
+    let mut states = ctx.states();
+    let resolve = &ctx.resolve;
+    states.par_iter_mut().zip(buckets.par_chunks(n)).zip(bounds.par_iter()).for_each(|((s, b), &(zn, zf))| {
+        for (k, bucket) in b.iter().enumerate() {
+            let v = bucket.load(Relaxed);
+            if v != 0 {
+                // The bucket's subinterval midpoint stands for its depth.
+                let d = zn + (k as f32 + 0.5) / n as f32 * (zf - zn);
+                resolve.push(s, d, bdp_unpack_color(v));
+            }
+        }
+    });
+    Ok(super::finish(ctx, states))
+}
+
+fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)], passes: u32) -> Result<Frame, OitError> {
+    let n = BDP_DEPTH_SUBINTERVALS as usize;
+    const EMPTY_MIN: u64 = u64::MAX;
+    // One bucket array per pass, as the paper allocates new MRTs per pass: [min, max] per subinterval.
+    let mut arrays: Vec<Vec<AtomicU64>> = Vec::new();
+    for p in 0..passes {
+        let array = ctx.alloc64(2 * n, 0)?;
+        for slot in array.iter().step_by(2) {
+            slot.store(EMPTY_MIN, Relaxed);
+        }
+        {
+            let previous = arrays.last();
+            let payload = |f: &crate::raster::Fragment| ctx.payload(f);
+            let generated = ctx.raster.for_each_fragment(|f| {
+                let px = f.pixel as usize;
+                let (zn, zf) = bounds[px];
+                let k = bucket_index(f.depth, zn, zf, BDP_DEPTH_SUBINTERVALS) as usize;
+                let slot = px * 2 * n + 2 * k;
+                if let Some(prev) = previous {
+                    let (lo, hi) = (prev[slot].load(Relaxed), prev[slot + 1].load(Relaxed));
+                    let d = depth_bits(f.depth);
+                    // eq. 5: what the previous pass kept, or anything outside its range, is done
+                    if lo == EMPTY_MIN || d <= (lo >> 32) as u32 || d >= (hi >> 32) as u32 {
+                        return;
+                    }
+                }
+                let key = depth_key64(f.depth, payload(f));
+                array[slot].fetch_min(key, Relaxed);
+                array[slot + 1].fetch_max(key, Relaxed);
+            });
+            ctx.passes += 1;
+            ctx.fragments.get_or_insert(generated);
+        }
+        arrays.push(array);
+        if ctx.settings.max_peels.is_some_and(|m| p + 1 >= m) {
+            break;
+        }
+    }
+    let mut states = ctx.states();
+    let resolve = &ctx.resolve;
+    states.par_iter_mut().enumerate().for_each(|(px, s)| {
+        for k in 0..n {
+            let slot = px * 2 * n + 2 * k;
+            let mut backs = Vec::new();
+            for array in &arrays {
+                let (lo, hi) = (array[slot].load(Relaxed), array[slot + 1].load(Relaxed));
+                if lo == EMPTY_MIN {
+                    break;
+                }
+                let (d, p) = split_key64(lo);
+                resolve.push(s, d, p);
+                if hi != lo {
+                    backs.push(split_key64(hi));
+                }
+            }
+            for (d, p) in backs.into_iter().rev() {
+                resolve.push(s, d, p);
+            }
+        }
+    });
+    Ok(super::finish(ctx, states))
+}

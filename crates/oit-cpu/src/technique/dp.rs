@@ -1,0 +1,64 @@
+//! `dp`: classical depth peeling (Everitt 2001; front-to-back under blending as in Bavoil & Myers
+//! 2008). Each geometry pass keeps, per pixel, the nearest fragment strictly behind the layer the
+//! previous pass peeled — an atomic min on (depth, colour) stands in for the depth test against
+//! the previous depth buffer — and composites it under the layers before. The pass that peels
+//! nothing plays the role of the occlusion query that ends the loop: N + 1 passes for N layers.
+//!
+//! Strictly behind means that of two fragments at one depth, one is peeled and the other never
+//! is: the loss is counted in `lost`.
+
+use std::sync::atomic::Ordering::Relaxed;
+
+use oit_core::rules::{depth_bits, depth_key64, split_key64};
+use oit_core::{Frame, OitError};
+use rayon::prelude::*;
+
+use super::Ctx;
+
+pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
+    const EMPTY: u64 = u64::MAX;
+    let nearest = ctx.alloc64(1, EMPTY)?;
+    // Depth bits of the last peeled layer; u64 so "nothing peeled yet" sits below every depth.
+    let mut previous: Vec<i64> = vec![-1; ctx.pixels];
+    ctx.storage_bytes += ctx.pixels as u64 * 4; // the previous pass's depth buffer
+    let mut states = ctx.states();
+    let limit = ctx.settings.max_peels.unwrap_or(u32::MAX);
+    let mut peels = 0;
+    loop {
+        if peels == limit {
+            break;
+        }
+        let prev = &previous;
+        let payload = |f: &crate::raster::Fragment| ctx.payload(f);
+        let raster = ctx.raster;
+        let generated = raster.for_each_fragment(|f| {
+            let px = f.pixel as usize;
+            if i64::from(depth_bits(f.depth)) > prev[px] {
+                nearest[px].fetch_min(depth_key64(f.depth, payload(f)), Relaxed);
+            }
+        });
+        ctx.passes += 1;
+        ctx.fragments.get_or_insert(generated);
+        let resolve = &ctx.resolve;
+        let peeled: u64 = states
+            .par_iter_mut()
+            .zip(previous.par_iter_mut())
+            .zip(nearest.par_iter())
+            .map(|((s, prev), slot)| {
+                let key = slot.swap(EMPTY, Relaxed);
+                if key == EMPTY {
+                    return 0;
+                }
+                let (d, p) = split_key64(key);
+                resolve.push(s, d, p);
+                *prev = i64::from(depth_bits(d));
+                1
+            })
+            .sum();
+        if peeled == 0 {
+            break;
+        }
+        peels += 1;
+    }
+    Ok(super::finish(ctx, states))
+}

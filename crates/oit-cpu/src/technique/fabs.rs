@@ -1,0 +1,71 @@
+//! `fabs:K`: the fixed A-buffer (Liu et al., SIGGRAPH 2009 talk; Huang et al. 2011, section 4).
+//! A per-pixel counter hands each fragment a slot by atomic increment, in rasterization order; a
+//! resolve sorts each pixel's n ≤ K slots by depth and composites them. Fragments past K are
+//! counted in `lost`.
+
+use std::sync::atomic::Ordering::Relaxed;
+
+use oit_core::rules::{depth_key64, split_key64};
+use oit_core::{Frame, OitError};
+use rayon::prelude::*;
+
+use super::Ctx;
+
+/// Below this many fragments a pixel's list is insertion-sorted; above it, `sort_unstable`
+/// (pattern-defeating quicksort). Measured with `cargo bench -p oit-cpu --bench sort` (random
+/// 64-bit keys, this machine): insertion sort is fastest up to about 16–24 keys, the sorting
+/// network-free `sort_unstable` wins beyond — and its own small-slice path is an insertion sort, so
+/// the threshold only saves its dispatch. See `benches/sort.rs`.
+pub const INSERTION_SORT_MAX: usize = 16;
+
+/// Sorts a pixel's keys in place, choosing the sort by length (see [`INSERTION_SORT_MAX`]).
+pub fn sort_keys(keys: &mut [u64]) {
+    if keys.len() <= INSERTION_SORT_MAX {
+        for i in 1..keys.len() {
+            let v = keys[i];
+            let mut j = i;
+            while j > 0 && keys[j - 1] > v {
+                keys[j] = keys[j - 1];
+                j -= 1;
+            }
+            keys[j] = v;
+        }
+    } else {
+        keys.sort_unstable();
+    }
+}
+
+pub(crate) fn render(ctx: &mut Ctx<'_>, k: Option<u32>) -> Result<Frame, OitError> {
+    let k = match k {
+        Some(k) => k as usize,
+        None => ctx.max_depth_complexity()?.max(1) as usize,
+    };
+    let counters = ctx.alloc32(1, 0)?;
+    let slots = ctx.alloc64(k, 0)?;
+    let payload = |f: &crate::raster::Fragment| ctx.payload(f);
+    let generated = ctx.raster.for_each_fragment(|f| {
+        let px = f.pixel as usize;
+        let i = counters[px].fetch_add(1, Relaxed) as usize;
+        if i < k {
+            slots[px * k + i].store(depth_key64(f.depth, payload(f)), Relaxed);
+        }
+    });
+    ctx.passes += 1;
+    ctx.fragments.get_or_insert(generated);
+    let mut states = ctx.states();
+    let resolve = &ctx.resolve;
+    states.par_iter_mut().zip(slots.par_chunks(k).zip(counters.par_iter())).for_each_init(
+        Vec::new,
+        |keys, (s, (slots, count))| {
+            let n = (count.load(Relaxed) as usize).min(k);
+            keys.clear();
+            keys.extend(slots[..n].iter().map(|x| x.load(Relaxed)));
+            sort_keys(keys);
+            for &key in keys.iter() {
+                let (d, p) = split_key64(key);
+                resolve.push(s, d, p);
+            }
+        },
+    );
+    Ok(super::finish(ctx, states))
+}

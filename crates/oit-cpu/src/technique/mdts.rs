@@ -1,0 +1,90 @@
+//! `mdts:K` and `mdts64:K`: the multi-depth test (Liu et al., SIGGRAPH 2009 talk; Huang et al.
+//! 2011, section 3). K words per pixel start at all ones; each fragment is inserted by repeated
+//! atomic min, carrying the larger value on to the next word, so the array stays sorted while
+//! fragments arrive in any order, and the K nearest survive.
+//!
+//! - `mdts` keeps the paper's 32-bit words: the 20 depth bits of [`mdts_pack`] above 12 bits of
+//!   RGB, in two arrays (high and low colour halves) updated one after the other. Depths closer
+//!   than 2⁻²⁰ may swap or mismatch halves, and alpha is not stored: the scene's alpha is used
+//!   (the `--alpha` override, else the mean of the objects' alphas).
+//! - `mdts64` stores depth bits above the packed RGBA8 in one 64-bit word: exact for the first K.
+
+use std::sync::atomic::Ordering::Relaxed;
+
+use oit_core::rules::{depth_key64, mdts_pack, mdts_unpack, split_key64};
+use oit_core::{Effect, Frame, OitError};
+use rayon::prelude::*;
+
+use super::{insert_min32, insert_min64, Ctx};
+
+fn capacity(ctx: &mut Ctx<'_>, k: Option<u32>) -> Result<usize, OitError> {
+    Ok(match k {
+        Some(k) => k as usize,
+        None => ctx.max_depth_complexity()?.max(1) as usize,
+    })
+}
+
+pub(crate) fn render64(ctx: &mut Ctx<'_>, k: Option<u32>) -> Result<Frame, OitError> {
+    let k = capacity(ctx, k)?;
+    let slots = ctx.alloc64(k, u64::MAX)?;
+    let payload = |f: &crate::raster::Fragment| ctx.payload(f);
+    let generated = ctx.raster.for_each_fragment(|f| {
+        let px = f.pixel as usize;
+        insert_min64(&slots[px * k..(px + 1) * k], depth_key64(f.depth, payload(f)));
+    });
+    ctx.passes += 1;
+    ctx.fragments.get_or_insert(generated);
+    let mut states = ctx.states();
+    let resolve = &ctx.resolve;
+    states.par_iter_mut().zip(slots.par_chunks(k)).for_each(|(s, slots)| {
+        for slot in slots {
+            let key = slot.load(Relaxed);
+            if key == u64::MAX {
+                break;
+            }
+            let (d, p) = split_key64(key);
+            resolve.push(s, d, p);
+        }
+    });
+    Ok(super::finish(ctx, states))
+}
+
+pub(crate) fn render32(ctx: &mut Ctx<'_>, k: Option<u32>) -> Result<Frame, OitError> {
+    if ctx.resolve.effect == Effect::Fresnel {
+        return Err(OitError::Unsupported {
+            backend: "cpu".into(),
+            what: "fresnel with mdts: its 12 + 12 spare bits hold RGB only; use mdts64".into(),
+        });
+    }
+    let k = capacity(ctx, k)?;
+    let alpha = match ctx.settings.alpha {
+        Some(a) => a,
+        None => {
+            let objects = &ctx.scene.objects;
+            objects.iter().map(|o| o.color.w).sum::<f32>() / objects.len().max(1) as f32
+        }
+    };
+    let alpha8 = (alpha.clamp(0.0, 1.0) * 255.0 + 0.5) as u32;
+    let high = ctx.alloc32(k, u32::MAX)?;
+    let low = ctx.alloc32(k, u32::MAX)?;
+    ctx.pass(|f| {
+        let px = f.pixel as usize;
+        // All ones is the empty word: a fragment at d ≈ 1 with that colour gives up its last bit.
+        let [a, b] = mdts_pack(f.depth, oit_core::rules::pack_rgba8(f.color)).map(|w| w.min(u32::MAX - 1));
+        insert_min32(&high[px * k..(px + 1) * k], a);
+        insert_min32(&low[px * k..(px + 1) * k], b);
+    });
+    let mut states = ctx.states();
+    let resolve = &ctx.resolve;
+    states.par_iter_mut().zip(high.par_chunks(k).zip(low.par_chunks(k))).for_each(|(s, (hi, lo))| {
+        for (h, l) in hi.iter().zip(lo) {
+            let (h, l) = (h.load(Relaxed), l.load(Relaxed));
+            if h == u32::MAX || l == u32::MAX {
+                break;
+            }
+            let (d, rgb) = mdts_unpack([h, l]);
+            resolve.push(s, d, rgb | alpha8 << 24);
+        }
+    });
+    Ok(super::finish(ctx, states))
+}

@@ -1,0 +1,55 @@
+//! `mlp:M`: extended multi-layer peeling (Huang et al. 2011, section 3.3). Each geometry pass
+//! captures, per pixel, the M nearest fragments strictly behind the deepest one the previous pass
+//! captured (atomic-min insertion into M 64-bit words, as `mdts64`), composites them, and repeats
+//! while any pixel had more than M left: ⌈N/M⌉ passes for N layers. Fragments that tie in depth
+//! with the deepest of a pass are never captured and are counted in `lost`.
+
+use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
+
+use oit_core::rules::{depth_bits, depth_key64, split_key64};
+use oit_core::{Frame, OitError};
+use rayon::prelude::*;
+
+use super::{insert_min64, Ctx};
+
+pub(crate) fn render(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
+    let m = m as usize;
+    let slots = ctx.alloc64(m, u64::MAX)?;
+    let mut deepest: Vec<i64> = vec![-1; ctx.pixels];
+    ctx.storage_bytes += ctx.pixels as u64 * 4;
+    let mut states = ctx.states();
+    let limit = ctx.settings.max_peels.unwrap_or(u32::MAX);
+    let mut peels = 0;
+    while peels < limit {
+        let more = AtomicBool::new(false);
+        let prev = &deepest;
+        let payload = |f: &crate::raster::Fragment| ctx.payload(f);
+        let generated = ctx.raster.for_each_fragment(|f| {
+            let px = f.pixel as usize;
+            if i64::from(depth_bits(f.depth)) > prev[px]
+                && insert_min64(&slots[px * m..(px + 1) * m], depth_key64(f.depth, payload(f)))
+            {
+                more.store(true, Relaxed);
+            }
+        });
+        ctx.passes += 1;
+        ctx.fragments.get_or_insert(generated);
+        peels += 1;
+        let resolve = &ctx.resolve;
+        states.par_iter_mut().zip(deepest.par_iter_mut()).zip(slots.par_chunks(m)).for_each(|((s, deep), slots)| {
+            for slot in slots {
+                let key = slot.swap(u64::MAX, Relaxed);
+                if key == u64::MAX {
+                    break;
+                }
+                let (d, p) = split_key64(key);
+                resolve.push(s, d, p);
+                *deep = i64::from(depth_bits(d));
+            }
+        });
+        if !more.load(Relaxed) {
+            break;
+        }
+    }
+    Ok(super::finish(ctx, states))
+}

@@ -1,0 +1,199 @@
+//! One file per technique. Each runs its geometry passes through [`Ctx::pass`], keeps its
+//! per-pixel storage in std atomics, and feeds each pixel's captured fragments, nearest first, to
+//! the shared [`Resolve`](crate::resolve::Resolve).
+
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
+
+use oit_core::rules::{depth_bits, pack_normal, pack_rgba8};
+use oit_core::{Camera, Effect, OitError, Scene, Settings};
+
+use crate::raster::{Fragment, Rasterizer};
+use crate::resolve::{PixelState, Resolve};
+
+pub(crate) mod adp;
+pub(crate) mod bdp;
+pub(crate) mod ddp;
+pub(crate) mod dp;
+pub(crate) mod fabs;
+pub(crate) mod mdts;
+pub(crate) mod mlp;
+pub(crate) mod reference;
+pub(crate) mod weighted;
+
+/// Everything a technique needs for one frame, and the counters it updates.
+pub(crate) struct Ctx<'a> {
+    pub scene: &'a Scene,
+    pub camera: &'a Camera,
+    pub settings: &'a Settings,
+    pub raster: &'a Rasterizer,
+    pub resolve: Resolve<'a>,
+    pub pixels: usize,
+    /// Geometry passes run so far.
+    pub passes: u32,
+    /// Fragments one pass over the scene generates (set by the first pass).
+    pub fragments: Option<u64>,
+    /// Bytes of per-pixel storage allocated.
+    pub storage_bytes: u64,
+}
+
+impl<'a> Ctx<'a> {
+    pub fn new(scene: &'a Scene, camera: &'a Camera, settings: &'a Settings, raster: &'a Rasterizer) -> Self {
+        Ctx {
+            scene,
+            camera,
+            settings,
+            raster,
+            resolve: Resolve::new(scene, camera, settings),
+            pixels: settings.pixel_count(),
+            passes: 0,
+            fragments: None,
+            storage_bytes: 0,
+        }
+    }
+
+    /// One geometry pass over the scene: `shader` runs for every fragment, concurrently.
+    pub fn pass<F: Fn(&Fragment) + Sync>(&mut self, shader: F) {
+        let generated = self.raster.for_each_fragment(shader);
+        self.passes += 1;
+        self.fragments.get_or_insert(generated);
+    }
+
+    /// The word a fragment carries for the chosen effect: its RGBA8 colour, or its packed normal.
+    #[inline]
+    pub fn payload(&self, f: &Fragment) -> u32 {
+        match self.resolve.effect {
+            Effect::Fresnel => pack_normal(f.normal),
+            _ => pack_rgba8(f.color),
+        }
+    }
+
+    /// Allocates `per_pixel` zeroed-or-`init` words of 32 bits per pixel, counting the bytes.
+    pub fn alloc32(&mut self, per_pixel: usize, init: u32) -> Result<Vec<AtomicU32>, OitError> {
+        let n = self.checked(per_pixel, 4)?;
+        Ok((0..n).map(|_| AtomicU32::new(init)).collect())
+    }
+
+    /// Allocates `per_pixel` words of 64 bits per pixel, counting the bytes.
+    pub fn alloc64(&mut self, per_pixel: usize, init: u64) -> Result<Vec<AtomicU64>, OitError> {
+        let n = self.checked(per_pixel, 8)?;
+        Ok((0..n).map(|_| AtomicU64::new(init)).collect())
+    }
+
+    fn checked(&mut self, per_pixel: usize, word: u64) -> Result<usize, OitError> {
+        // Keep one allocation under 16 GiB: past that a laptop swaps or dies, so say so instead.
+        const LIMIT: u64 = 16 << 30;
+        let bytes = (self.pixels as u64).saturating_mul(per_pixel as u64).saturating_mul(word);
+        if bytes > LIMIT {
+            return Err(OitError::TooLarge {
+                what: format!("{} per-pixel storage", self.settings.technique),
+                needed: bytes,
+                limit_name: "oit-cpu allocation limit".into(),
+                limit: LIMIT,
+                hint: "use a smaller --size or a smaller K".into(),
+            });
+        }
+        self.storage_bytes += bytes;
+        Ok(self.pixels * per_pixel)
+    }
+
+    /// Per-pixel resolve state.
+    pub fn states(&self) -> Vec<PixelState> {
+        vec![PixelState::default(); self.pixels]
+    }
+
+    /// The deepest pixel's fragment count, from one counting pass (for sizing arrays from the
+    /// scene instead of a worst case).
+    pub fn max_depth_complexity(&mut self) -> Result<u32, OitError> {
+        let counts = self.alloc32(1, 0)?;
+        self.pass(|f| {
+            counts[f.pixel as usize].fetch_add(1, Relaxed);
+        });
+        self.storage_bytes -= self.pixels as u64 * 4;
+        Ok(counts.iter().map(|c| c.load(Relaxed)).max().unwrap_or(0))
+    }
+
+    /// Per-pixel depth range [zNear, zFar] for the bucket techniques, from the instances'
+    /// bounding boxes (HPG 2009's default) or from the fragments themselves; one geometry pass.
+    /// Pixels nothing reached get [0, 1].
+    pub fn depth_bounds(&mut self) -> Result<Vec<(f32, f32)>, OitError> {
+        let lo = self.alloc32(1, u32::MAX)?;
+        let hi = self.alloc32(1, 0)?;
+        let shader = |f: &Fragment| {
+            let b = depth_bits(f.depth);
+            lo[f.pixel as usize].fetch_min(b, Relaxed);
+            hi[f.pixel as usize].fetch_max(b, Relaxed);
+        };
+        match self.settings.bounds {
+            oit_core::BoundsMode::Exact => self.pass(shader),
+            oit_core::BoundsMode::Boxes => {
+                let boxes = Rasterizer::bounding_boxes(self.scene, self.camera, self.settings);
+                boxes.for_each_fragment(shader);
+                self.passes += 1;
+            }
+        }
+        Ok(lo
+            .iter()
+            .zip(&hi)
+            .map(|(l, h)| {
+                let (l, h) = (l.load(Relaxed), h.load(Relaxed));
+                if l > h { (0.0, 1.0) } else { (f32::from_bits(l), f32::from_bits(h)) }
+            })
+            .collect())
+    }
+}
+
+/// Inserts `key` into a sorted array of `slots` by repeated atomic min (Liu et al. 2009; Huang et
+/// al. 2011): each slot keeps the smaller of its value and the carried one, and the larger is
+/// carried to the next slot. Empty slots hold `EMPTY`. Returns true when a key fell off the end
+/// (the array was full): a lost fragment.
+#[inline]
+pub(crate) fn insert_min64(slots: &[AtomicU64], key: u64) -> bool {
+    const EMPTY: u64 = u64::MAX;
+    let mut carry = key;
+    for slot in slots {
+        let old = slot.fetch_min(carry, Relaxed);
+        if old == EMPTY {
+            return false;
+        }
+        carry = carry.max(old);
+    }
+    true
+}
+
+/// [`insert_min64`] on 32-bit words (mdts).
+#[inline]
+pub(crate) fn insert_min32(slots: &[AtomicU32], key: u32) -> bool {
+    const EMPTY: u32 = u32::MAX;
+    let mut carry = key;
+    for slot in slots {
+        let old = slot.fetch_min(carry, Relaxed);
+        if old == EMPTY {
+            return false;
+        }
+        carry = carry.max(old);
+    }
+    true
+}
+
+/// Wraps up a frame: stats from the context; `captured` fragments reached the composite.
+pub(crate) fn frame(ctx: &Ctx<'_>, image: oit_core::Image, captured: u64) -> oit_core::Frame {
+    let fragments = ctx.fragments.unwrap_or(0);
+    oit_core::Frame {
+        image,
+        layers: None,
+        stats: oit_core::Stats {
+            geometry_passes: ctx.passes,
+            fragments,
+            captured,
+            lost: fragments.saturating_sub(captured),
+            storage_bytes: ctx.storage_bytes,
+            ..Default::default()
+        },
+    }
+}
+
+/// Resolves the states into the frame (the common ending).
+pub(crate) fn finish(ctx: &Ctx<'_>, mut states: Vec<PixelState>) -> oit_core::Frame {
+    let (image, captured) = ctx.resolve.image(ctx.settings.width, ctx.settings.height, &mut states);
+    frame(ctx, image, captured)
+}

@@ -1,0 +1,73 @@
+//! `reference`: the exact A-buffer. A counting pass sizes each pixel's list, a second pass fills
+//! it (atomic increment on a per-pixel cursor), then each list is sorted by (depth, primitive id)
+//! and composited in f64. Two geometry passes; memory for every fragment.
+
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
+
+use oit_core::composite::{front_to_back_f64, linear_to_srgb8_f64};
+use oit_core::rules::{depth_bits, unpack_rgba8_f64};
+use oit_core::{Effect, Frame, Image, OitError};
+use rayon::prelude::*;
+
+use super::Ctx;
+use crate::resolve::PixelState;
+
+pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
+    let counts = ctx.alloc32(1, 0)?;
+    ctx.pass(|f| {
+        counts[f.pixel as usize].fetch_add(1, Relaxed);
+    });
+    let counts: Vec<u32> = counts.into_iter().map(AtomicU32::into_inner).collect();
+    let mut offsets = Vec::with_capacity(counts.len() + 1);
+    let mut total = 0usize;
+    for &c in &counts {
+        offsets.push(total);
+        total += c as usize;
+    }
+    offsets.push(total);
+    ctx.storage_bytes += total as u64 * 12 + counts.len() as u64 * 4;
+    let cursor: Vec<AtomicU32> = (0..counts.len()).map(|_| AtomicU32::new(0)).collect();
+    let keys: Vec<AtomicU64> = (0..total).map(|_| AtomicU64::new(0)).collect();
+    let payloads: Vec<AtomicU32> = (0..total).map(|_| AtomicU32::new(0)).collect();
+    let resolve_payload = |f: &crate::raster::Fragment| ctx.payload(f);
+    let raster = ctx.raster;
+    raster.for_each_fragment(|f| {
+        let px = f.pixel as usize;
+        let slot = offsets[px] + cursor[px].fetch_add(1, Relaxed) as usize;
+        keys[slot].store((depth_bits(f.depth) as u64) << 32 | f.prim as u64, Relaxed);
+        payloads[slot].store(resolve_payload(f), Relaxed);
+    });
+    ctx.passes += 1;
+    let keys: Vec<u64> = keys.into_iter().map(AtomicU64::into_inner).collect();
+    let payloads: Vec<u32> = payloads.into_iter().map(AtomicU32::into_inner).collect();
+
+    let (w, h) = (ctx.settings.width, ctx.settings.height);
+    let bg = ctx.settings.background.as_dvec3();
+    let image = if ctx.resolve.effect == Effect::Transparency {
+        // f64 all the way for the ground truth.
+        let pixels: Vec<[u8; 4]> = (0..counts.len())
+            .into_par_iter()
+            .map(|px| {
+                let mut order: Vec<usize> = (offsets[px]..offsets[px + 1]).collect();
+                order.sort_unstable_by_key(|&i| keys[i]);
+                let c = front_to_back_f64(order.iter().map(|&i| unpack_rgba8_f64(payloads[i])), bg);
+                [linear_to_srgb8_f64(c.x), linear_to_srgb8_f64(c.y), linear_to_srgb8_f64(c.z), 255]
+            })
+            .collect();
+        Image { width: w, height: h, pixels }
+    } else {
+        let mut states: Vec<PixelState> = ctx.states();
+        states.par_iter_mut().enumerate().for_each(|(px, s)| {
+            let mut order: Vec<usize> = (offsets[px]..offsets[px + 1]).collect();
+            order.sort_unstable_by_key(|&i| keys[i]);
+            for i in order {
+                ctx.resolve.push(s, f32::from_bits((keys[i] >> 32) as u32), payloads[i]);
+            }
+        });
+        ctx.resolve.image(w, h, &mut states).0
+    };
+    let fragments = total as u64;
+    let mut frame = super::frame(ctx, image, fragments);
+    frame.layers = Some(counts);
+    Ok(frame)
+}
