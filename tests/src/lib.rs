@@ -3,15 +3,17 @@
 //! Each test body takes a `&dyn Backend` and is run for every backend [`backends`] returns, so a
 //! new backend is tested by adding it there.
 
-use oit_core::{load_scene, Backend, Camera, Frame, Scene, Settings, Technique, View};
+use oit_core::{Backend, Camera, Frame, Scene, Settings, Technique, View, load_scene};
 
 /// Every backend compiled in (cargo features `cpu`, later `wgpu`, `vulkan`).
 pub fn backends() -> Vec<Box<dyn Backend>> {
-    #[allow(unused_mut, reason = "empty when no backend feature is on")]
-    let mut out: Vec<Box<dyn Backend>> = Vec::new();
-    #[cfg(feature = "cpu")]
-    out.push(Box::new(oit_cpu::CpuBackend::default()));
-    out
+    let compiled: [Option<Box<dyn Backend>>; 1] = [
+        #[cfg(feature = "cpu")]
+        Some(Box::new(oit_cpu::CpuBackend::default())),
+        #[cfg(not(feature = "cpu"))]
+        None,
+    ];
+    compiled.into_iter().flatten().collect()
 }
 
 /// The CPU backend with a fixed number of threads.
@@ -57,7 +59,8 @@ pub fn with_reference(
     technique: Technique,
 ) -> (Frame, Frame) {
     let cam = camera(scene, base, view);
-    let reference = render(backend, scene, &cam, &Settings { technique: Technique::Reference, ..base.clone() });
+    let reference =
+        render(backend, scene, &cam, &Settings { technique: Technique::Reference, ..base.clone() });
     let frame = render(backend, scene, &cam, &Settings { technique, ..base.clone() });
     (reference, frame)
 }

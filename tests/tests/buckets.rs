@@ -3,13 +3,20 @@
 
 use glam::{Mat4, Vec3, Vec4};
 use oit_core::metrics::accuracy;
-use oit_core::{BdpMode, BoundsMode, Frame, Instance, Mesh, Object, Scene, Settings, Shading, Technique, View};
+use oit_core::{
+    BdpMode, BoundsMode, Frame, Instance, Mesh, Object, Scene, Settings, Shading, Technique, View,
+};
 use oit_tests::*;
 
 fn quads(zs: &[f32]) -> Scene {
     let mut scene = Scene { name: "quads".into(), ..Default::default() };
     for (i, &z) in zs.iter().enumerate() {
-        let p = vec![Vec3::new(-1.0, -1.0, z), Vec3::new(1.0, -1.0, z), Vec3::new(1.0, 1.0, z), Vec3::new(-1.0, 1.0, z)];
+        let p = vec![
+            Vec3::new(-1.0, -1.0, z),
+            Vec3::new(1.0, -1.0, z),
+            Vec3::new(1.0, 1.0, z),
+            Vec3::new(-1.0, 1.0, z),
+        ];
         scene.meshes.push(Mesh::new(format!("q{i}"), p, vec![[0, 1, 2], [0, 2, 3]]));
         let hue = i as f32 / zs.len() as f32;
         let color = Vec4::new(0.2 + 0.7 * hue, 0.9 - 0.6 * hue, 0.3 + 0.5 * (hue * 7.0).fract(), 0.5);
@@ -38,7 +45,9 @@ fn masked_epr(a: &Frame, b: &Frame, mask: impl Fn(usize) -> bool) -> f64 {
 fn exact_schemes_on_separated_layers() {
     for backend in backends() {
         let b = backend.as_ref();
-        for (name, layers) in [("planes:4", 4), ("planes:16", 16), ("planes:32", 32), ("spheres:4", 8), ("spheres:16", 32)] {
+        for (name, layers) in
+            [("planes:4", 4), ("planes:16", 16), ("planes:32", 32), ("spheres:4", 8), ("spheres:16", 32)]
+        {
             let scene = scene(name);
             let s = Settings { shading: Shading::Flat, ..settings(64, "reference") };
             let view = if name.starts_with("planes") { FRONT } else { View::default() };
@@ -111,7 +120,8 @@ fn bdp_collision_keeps_min_and_max() {
         let cam = camera(&full, &s, FRONT);
         let f = render(b, &full, &cam, &s);
         let r = render(b, &full, &cam, &Settings { technique: Technique::Reference, ..s.clone() });
-        let expected = render(b, &expected_scene, &cam, &Settings { technique: Technique::Reference, ..s.clone() });
+        let expected =
+            render(b, &expected_scene, &cam, &Settings { technique: Technique::Reference, ..s.clone() });
         let layers = r.layers.as_ref().unwrap();
         let covered_by_all = layers.iter().filter(|&&l| l == 5).count() as u64;
         assert!(covered_by_all > 100);
@@ -155,8 +165,12 @@ fn capacity_losses_are_counted() {
         let full = layers.iter().filter(|&&l| l == 8).count() as u64;
         let expected_lost: u64 = layers.iter().map(|&l| u64::from(l.saturating_sub(4))).sum();
         assert!(full > 100);
-        let fabs = render(b, &scene, &cam, &Settings { technique: Technique::Fabs { k: Some(4) }, ..s.clone() });
-        assert_eq!(fabs.stats.lost, expected_lost, "fabs:4 loses everything past 4 (4 per fully covered pixel)");
+        let fabs =
+            render(b, &scene, &cam, &Settings { technique: Technique::Fabs { k: Some(4) }, ..s.clone() });
+        assert_eq!(
+            fabs.stats.lost, expected_lost,
+            "fabs:4 loses everything past 4 (4 per fully covered pixel)"
+        );
         // mdts:4 keeps exactly the 4 nearest: equal to the reference of planes 0..4 where all 8 overlap
         let mut nearest4 = scene.clone();
         nearest4.instances.truncate(4);
@@ -175,7 +189,12 @@ fn approximate_bucket_schemes_have_bounded_error_on_meshes() {
         let b = backend.as_ref();
         let scene = scene("knot");
         let s = settings(96, "reference");
-        for t in [Technique::Bdp { passes: 1 }, Technique::Bdp { passes: 2 }, Technique::Adp, Technique::Mdts { k: None }] {
+        for t in [
+            Technique::Bdp { passes: 1 },
+            Technique::Bdp { passes: 2 },
+            Technique::Adp,
+            Technique::Mdts { k: None },
+        ] {
             let (r, f) = with_reference(b, &scene, View::default(), &s, t);
             let a = accuracy(&r, &f.image).unwrap();
             assert_eq!(f.stats.captured + f.stats.lost, f.stats.fragments, "{t}");
@@ -188,7 +207,13 @@ fn approximate_bucket_schemes_have_bounded_error_on_meshes() {
             }
         }
         // more passes never make bdp worse
-        let e1 = epr(b, &scene, View::default(), &Settings { bdp_mode: BdpMode::Depth, ..s.clone() }, Technique::Bdp { passes: 1 });
+        let e1 = epr(
+            b,
+            &scene,
+            View::default(),
+            &Settings { bdp_mode: BdpMode::Depth, ..s.clone() },
+            Technique::Bdp { passes: 1 },
+        );
         let e3 = epr(b, &scene, View::default(), &s, Technique::Bdp { passes: 3 });
         assert!(e3 <= e1, "bdp:3 {e3} vs bdp {e1}");
     }

@@ -8,7 +8,12 @@ use oit_tests::*;
 fn all_techniques() -> Vec<Technique> {
     let mut t = vec![Technique::Reference];
     t.extend(Technique::all());
-    t.extend([Technique::Bdp { passes: 3 }, Technique::Fabs { k: Some(4) }, Technique::Mdts { k: Some(4) }, Technique::Mlp { m: 1 }]);
+    t.extend([
+        Technique::Bdp { passes: 3 },
+        Technique::Fabs { k: Some(4) },
+        Technique::Mdts { k: Some(4) },
+        Technique::Mlp { m: 1 },
+    ]);
     t
 }
 
@@ -90,7 +95,14 @@ fn effects_run_on_sorting_techniques() {
             let base = Settings { effect, ..settings(48, "reference") };
             let cam = camera(&scene, &base, View::default());
             let r = render(backend.as_ref(), &scene, &cam, &base);
-            for t in [Technique::Dp, Technique::Ddp, Technique::Fabs { k: None }, Technique::Mdts64 { k: None }, Technique::Mlp { m: 3 }, Technique::Adp] {
+            for t in [
+                Technique::Dp,
+                Technique::Ddp,
+                Technique::Fabs { k: None },
+                Technique::Mdts64 { k: None },
+                Technique::Mlp { m: 3 },
+                Technique::Adp,
+            ] {
                 let f = render(backend.as_ref(), &scene, &cam, &Settings { technique: t, ..base.clone() });
                 let a = oit_core::metrics::accuracy(&r, &f.image).unwrap();
                 assert_eq!(a.epr, 0.0, "{t} {effect:?}");

@@ -19,14 +19,20 @@ fn reference_equals_hand_composite_on_planes() {
     for backend in backends() {
         for n in 1..=8u32 {
             let scene = scene(&format!("planes:{n}"));
-            let s = Settings { shading: Shading::Flat, background: Vec3::new(0.9, 0.9, 0.9), ..settings(64, "reference") };
+            let s = Settings {
+                shading: Shading::Flat,
+                background: Vec3::new(0.9, 0.9, 0.9),
+                ..settings(64, "reference")
+            };
             let cam = camera(&scene, &s, FRONT);
             let frame = render(backend.as_ref(), &scene, &cam, &s);
             // Plane 0 is nearest (z = +0.5 faces the camera on +z); colours are the 8-bit quantized
             // object colours, composited front to back by hand.
-            let colors: Vec<[f64; 4]> = scene.objects.iter().map(|o| unpack_rgba8_f64(pack_rgba8(o.color))).collect();
+            let colors: Vec<[f64; 4]> =
+                scene.objects.iter().map(|o| unpack_rgba8_f64(pack_rgba8(o.color))).collect();
             let c = front_to_back_f64(colors, DVec3::splat(0.9));
-            let expected = [linear_to_srgb8_f64(c.x), linear_to_srgb8_f64(c.y), linear_to_srgb8_f64(c.z), 255];
+            let expected =
+                [linear_to_srgb8_f64(c.x), linear_to_srgb8_f64(c.y), linear_to_srgb8_f64(c.z), 255];
             let layers = frame.layers.as_ref().expect("reference records layers");
             let full: Vec<usize> = (0..layers.len()).filter(|&i| layers[i] == n).collect();
             assert!(full.len() > 100, "planes:{n}: only {} pixels see every plane", full.len());
@@ -57,7 +63,10 @@ fn peeling_is_exact_and_weighted_is_bounded_on_planes() {
                 let (r, f) = with_reference(b, &scene, FRONT, &s, t);
                 let a = accuracy(&r, &f.image).unwrap();
                 if n >= 2 {
-                    assert!(a.epr > 0.0, "{t} planes:{n} should differ: the colours differ and order matters");
+                    assert!(
+                        a.epr > 0.0,
+                        "{t} planes:{n} should differ: the colours differ and order matters"
+                    );
                 }
                 // The bound. Every plane has alpha a = 0.4, so at a pixel under k planes the reference
                 // is T·bg + Σ wᵢcᵢ with T = (1 − a)^k and Σ wᵢ = 1 − T. Weighted average keeps T and
@@ -74,13 +83,18 @@ fn peeling_is_exact_and_weighted_is_bounded_on_planes() {
                     }
                     let visible = &colors[..]; // every plane covers the pixels of the ones behind it
                     let t_ref = 0.6f64.powi(k as i32);
-                    let weights = if t == Technique::WeightedAverage { 1.0 - t_ref } else { 0.4 * f64::from(k) };
+                    let weights =
+                        if t == Technique::WeightedAverage { 1.0 - t_ref } else { 0.4 * f64::from(k) };
                     for ch in 0..3 {
                         let vals: Vec<f64> = visible.iter().map(|c| f64::from(c[ch])).collect();
                         let (lo, hi) = vals.iter().fold((1.0f64, 0.0f64), |(l, h), &v| (l.min(v), h.max(v)));
                         let bound = (weights - (1.0 - t_ref)).abs() * hi.max(0.9) + (1.0 - t_ref) * (hi - lo);
-                        let diff = (to_linear(r.image.pixels[i][ch]) - to_linear(f.image.pixels[i][ch])).abs();
-                        assert!(diff <= bound + 1.5 / 255.0 * 1.2, "{t} planes:{n} px {i} ch {ch}: {diff} > {bound}");
+                        let diff =
+                            (to_linear(r.image.pixels[i][ch]) - to_linear(f.image.pixels[i][ch])).abs();
+                        assert!(
+                            diff <= bound + 1.5 / 255.0 * 1.2,
+                            "{t} planes:{n} px {i} ch {ch}: {diff} > {bound}"
+                        );
                     }
                 }
             }
@@ -95,7 +109,10 @@ fn order_matters_on_a_lit_mesh() {
         let scene = scene("knot");
         let s = settings(96, "reference"); // headlight shading: colours vary along the tube
         let view = View::default();
-        assert!(epr(b, &scene, view, &s, Technique::WeightedAverage) > 0.01, "wavg must show ordering errors");
+        assert!(
+            epr(b, &scene, view, &s, Technique::WeightedAverage) > 0.01,
+            "wavg must show ordering errors"
+        );
         assert_eq!(epr(b, &scene, view, &s, Technique::Dp), 0.0);
         assert_eq!(epr(b, &scene, view, &s, Technique::Ddp), 0.0);
     }
@@ -137,7 +154,9 @@ fn coplanar_tie_is_counted_lost() {
 #[test]
 fn exact_techniques_do_not_depend_on_thread_count() {
     let scene = scene("cluster:200");
-    for t in ["reference", "dp", "ddp", "wavg", "wsum", "fabs", "mdts64", "mlp:3", "adp", "bdp", "bdp2", "mdts"] {
+    for t in
+        ["reference", "dp", "ddp", "wavg", "wsum", "fabs", "mdts64", "mlp:3", "adp", "bdp", "bdp2", "mdts"]
+    {
         let s = settings(96, t);
         let cam = camera(&scene, &s, View::default());
         let one = render(cpu_with_threads(1).as_ref(), &scene, &cam, &s);

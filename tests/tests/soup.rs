@@ -16,7 +16,12 @@ fn soup(points: &[(f32, f32, f32)], colors: &[(f32, f32, f32, f32)]) -> Scene {
         let p: Vec<Vec3> = points[3 * t..3 * t + 3].iter().map(|&(x, y, z)| Vec3::new(x, y, z)).collect();
         meshes.push(Mesh::new(format!("t{t}"), p, vec![[0, 1, 2]]));
         let (r, g, b, a) = colors[t % colors.len()];
-        scene.objects.push(oit_core::Object { name: format!("t{t}"), mesh: t, color: Vec4::new(r, g, b, a), absorption: 1.0 });
+        scene.objects.push(oit_core::Object {
+            name: format!("t{t}"),
+            mesh: t,
+            color: Vec4::new(r, g, b, a),
+            absorption: 1.0,
+        });
         scene.instances.push(oit_core::Instance { object: t, transform: glam::Mat4::IDENTITY });
     }
     scene.meshes = meshes;
@@ -45,7 +50,8 @@ fn random_soups() {
                 s ^= s << 17;
                 order.swap(i, (s % (i as u64 + 1)) as usize);
             }
-            let shuffled_points: Vec<_> = order.iter().flat_map(|&t| points[3 * t..3 * t + 3].to_vec()).collect();
+            let shuffled_points: Vec<_> =
+                order.iter().flat_map(|&t| points[3 * t..3 * t + 3].to_vec()).collect();
             let shuffled_colors: Vec<_> = order.iter().map(|&t| colors[t % colors.len()]).collect();
             let shuffled = soup(&shuffled_points, &shuffled_colors);
             for backend in backends() {

@@ -174,12 +174,14 @@ mod tests {
 
     #[test]
     fn under_and_over_agree() {
-        let frags = [Vec4::new(1.0, 0.0, 0.0, 0.5), Vec4::new(0.0, 1.0, 0.0, 0.25), Vec4::new(0.0, 0.0, 1.0, 1.0)];
+        let frags =
+            [Vec4::new(1.0, 0.0, 0.0, 0.5), Vec4::new(0.0, 1.0, 0.0, 0.25), Vec4::new(0.0, 0.0, 1.0, 1.0)];
         let bg = Vec3::new(0.2, 0.3, 0.4);
         let a = front_to_back(frags, bg);
         let b = back_to_front(frags.iter().rev().copied(), bg);
         assert!((a - b).abs().max_element() < 1e-6, "{a} {b}");
-        let c = front_to_back_f64(frags.map(|f| [f.x as f64, f.y as f64, f.z as f64, f.w as f64]), bg.as_dvec3());
+        let c =
+            front_to_back_f64(frags.map(|f| [f.x as f64, f.y as f64, f.z as f64, f.w as f64]), bg.as_dvec3());
         assert!((c.as_vec3() - a).abs().max_element() < 1e-6);
     }
 

@@ -29,14 +29,18 @@ mod settings;
 mod technique;
 pub mod text;
 
-pub use backend::{AtomicFragmentList, Backend, BucketArray, Capabilities, Compositor, DepthHistogram, Sample};
+pub use backend::{
+    AtomicFragmentList, Backend, BucketArray, Capabilities, Compositor, DepthHistogram, Sample,
+};
 pub use camera::{Camera, View};
 pub use error::OitError;
 pub use frame::{Frame, Image, Stats};
 pub use obj::load_obj;
-pub use procedural::{builtin_scene, load_scene, BUILTIN_SCENES, DEFAULT_SCENE};
+pub use procedural::{BUILTIN_SCENES, DEFAULT_SCENE, builtin_scene, load_scene};
 pub use scene::{Aabb, Instance, Mesh, Object, Scene};
-pub use settings::{parse_rgb, parse_size, BdpMode, Settings, Shading, MAX_SIZE};
-pub use technique::{BoundsMode, Effect, RasterPath, Technique, TechniqueKind, KNOWN_TECHNIQUES, MAX_PARAMETER};
+pub use settings::{BdpMode, MAX_SIZE, Settings, Shading, parse_rgb, parse_size};
+pub use technique::{
+    BoundsMode, Effect, KNOWN_TECHNIQUES, MAX_PARAMETER, RasterPath, Technique, TechniqueKind,
+};
 
 pub use glam;

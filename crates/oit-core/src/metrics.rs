@@ -71,12 +71,7 @@ pub fn error_image(reference: &Frame, image: &Image) -> Image {
         let worst = (0..3).map(|c| a[c].abs_diff(b[c])).max().unwrap_or(0);
         let t = (f32::from(worst) * 8.0 / 255.0).min(1.0);
         let h = crate::composite::heat(t);
-        out.pixels[i] = [
-            (h.x * 255.0) as u8,
-            (h.y * 255.0) as u8,
-            (h.z * 255.0) as u8,
-            255,
-        ];
+        out.pixels[i] = [(h.x * 255.0) as u8, (h.y * 255.0) as u8, (h.z * 255.0) as u8, 255];
         if worst <= 1 {
             out.pixels[i] = [0, 0, 0, 255];
         }

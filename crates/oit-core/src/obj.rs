@@ -15,8 +15,10 @@ pub const OBJ_COLOR: Vec4 = Vec4::new(0.35, 0.6, 0.95, 0.35);
 /// Errors name the file, and the line for malformed or non-finite vertices (tobj itself reports no
 /// lines, so vertex lines are checked here first).
 pub fn load_obj(path: &Path) -> Result<Scene, OitError> {
-    let text = std::fs::read_to_string(path).map_err(|source| OitError::Io { path: path.to_path_buf(), source })?;
-    let obj_err = |line: Option<usize>, message: String| OitError::Obj { path: path.to_path_buf(), line, message };
+    let text =
+        std::fs::read_to_string(path).map_err(|source| OitError::Io { path: path.to_path_buf(), source })?;
+    let obj_err =
+        |line: Option<usize>, message: String| OitError::Obj { path: path.to_path_buf(), line, message };
     for (i, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
         if words.next() != Some("v") {
@@ -29,7 +31,12 @@ pub fn load_obj(path: &Path) -> Result<Scene, OitError> {
         for v in &values {
             match v.parse::<f32>() {
                 Ok(x) if x.is_finite() => {}
-                Ok(_) => return Err(obj_err(Some(i + 1), format!("vertex has a NaN or infinite value: '{line}'"))),
+                Ok(_) => {
+                    return Err(obj_err(
+                        Some(i + 1),
+                        format!("vertex has a NaN or infinite value: '{line}'"),
+                    ));
+                }
                 Err(_) => return Err(obj_err(Some(i + 1), format!("'{v}' is not a number: '{line}'"))),
             }
         }

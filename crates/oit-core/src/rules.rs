@@ -80,7 +80,7 @@ pub fn split_key64(key: u64) -> (f32, u32) {
 #[inline]
 pub fn bucket_index(d: f32, z_near: f32, z_far: f32, n: u32) -> u32 {
     let range = z_far - z_near;
-    if !(range > 0.0) || !d.is_finite() {
+    if range.is_nan() || range <= 0.0 || !d.is_finite() {
         return 0;
     }
     let k = ((d - z_near) / range * n as f32).floor();
@@ -279,7 +279,10 @@ mod tests {
         }
         // MAX keeps the most opaque fragment first: packing is monotone in alpha
         for a in 1..=255u32 {
-            assert!(bdp_pack_color(a << 24) >= bdp_pack_color((a - 1) << 24 | 0xffffff) || (a * 127 + 127) / 255 == ((a - 1) * 127 + 127) / 255);
+            assert!(
+                bdp_pack_color(a << 24) >= bdp_pack_color((a - 1) << 24 | 0xffffff)
+                    || (a * 127 + 127) / 255 == ((a - 1) * 127 + 127) / 255
+            );
         }
     }
 
@@ -292,7 +295,11 @@ mod tests {
                     let (d2, rgb2) = mdts_unpack(words);
                     assert_eq!(rgb2, rgb, "RGB survives the 12 + 12 split");
                     assert!(d2 <= d && d - d2 <= MDTS_DEPTH_STEP * 1.0001, "{d} -> {d2}");
-                    assert_eq!(words[0] & 0xffff_f000, words[1] & 0xffff_f000, "both words share the depth bits");
+                    assert_eq!(
+                        words[0] & 0xffff_f000,
+                        words[1] & 0xffff_f000,
+                        "both words share the depth bits"
+                    );
                 }
             }
         }
@@ -318,13 +325,20 @@ mod tests {
             let mid = 0.5 * (lo + hi);
             if keeps_order(mid) { hi = mid } else { lo = mid }
         }
-        assert!(hi <= MDTS_DEPTH_STEP * 1.01 && hi >= MDTS_DEPTH_STEP * 0.99, "smallest gap {hi}");
+        assert!((MDTS_DEPTH_STEP * 0.99..=MDTS_DEPTH_STEP * 1.01).contains(&hi), "smallest gap {hi}");
         assert!(!keeps_order(MDTS_DEPTH_STEP * 0.5));
     }
 
     #[test]
     fn normals_round_trip() {
-        for n in [Vec3::X, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z, Vec3::new(1.0, -2.0, -0.5).normalize(), Vec3::new(-0.3, 0.2, 0.9).normalize()] {
+        for n in [
+            Vec3::X,
+            Vec3::NEG_Y,
+            Vec3::Z,
+            Vec3::NEG_Z,
+            Vec3::new(1.0, -2.0, -0.5).normalize(),
+            Vec3::new(-0.3, 0.2, 0.9).normalize(),
+        ] {
             let back = unpack_normal(pack_normal(n));
             assert!((back - n).length() < 1e-3, "{n} -> {back}");
         }

@@ -107,8 +107,7 @@ pub struct Mesh {
 impl Mesh {
     /// A mesh from positions and triangles, with area-weighted vertex normals computed.
     pub fn new(name: impl Into<String>, positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> Mesh {
-        let mut mesh =
-            Mesh { name: name.into(), positions, normals: Vec::new(), colors: None, indices };
+        let mut mesh = Mesh { name: name.into(), positions, normals: Vec::new(), colors: None, indices };
         mesh.compute_normals();
         mesh
     }
@@ -157,13 +156,13 @@ impl Mesh {
                 self.positions.len()
             )));
         }
-        if let Some(c) = &self.colors {
-            if c.len() != self.positions.len() || c.iter().any(|c| !c.is_finite()) {
-                return Err(OitError::InvalidScene(format!(
-                    "mesh '{}': vertex colours must be finite, one per position",
-                    self.name
-                )));
-            }
+        if let Some(c) = &self.colors
+            && (c.len() != self.positions.len() || c.iter().any(|c| !c.is_finite()))
+        {
+            return Err(OitError::InvalidScene(format!(
+                "mesh '{}': vertex colours must be finite, one per position",
+                self.name
+            )));
         }
         let n = self.positions.len() as u32;
         if let Some(t) = self.indices.iter().position(|t| t.iter().any(|&i| i >= n)) {

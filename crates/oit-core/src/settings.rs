@@ -103,7 +103,9 @@ impl FromStr for BdpMode {
             "auto" => Ok(BdpMode::Auto),
             "color" | "colour" => Ok(BdpMode::Color),
             "depth" => Ok(BdpMode::Depth),
-            other => Err(OitError::InvalidSettings(format!("unknown bdp mode '{other}': use auto, color or depth"))),
+            other => Err(OitError::InvalidSettings(format!(
+                "unknown bdp mode '{other}': use auto, color or depth"
+            ))),
         }
     }
 }
@@ -144,12 +146,15 @@ impl Settings {
                 self.width, self.height
             )));
         }
-        if let Some(a) = self.alpha {
-            if !(0.0..=1.0).contains(&a) {
-                return Err(OitError::InvalidSettings(format!("alpha {a} is outside [0, 1]")));
-            }
+        if let Some(a) = self.alpha
+            && !(0.0..=1.0).contains(&a)
+        {
+            return Err(OitError::InvalidSettings(format!("alpha {a} is outside [0, 1]")));
         }
-        if !self.background.is_finite() || self.background.min_element() < 0.0 || self.background.max_element() > 1.0 {
+        if !self.background.is_finite()
+            || self.background.min_element() < 0.0
+            || self.background.max_element() > 1.0
+        {
             return Err(OitError::InvalidSettings("background channels must lie in [0, 1]".into()));
         }
         if self.max_peels == Some(0) {
@@ -187,7 +192,8 @@ pub fn parse_size(text: &str) -> Result<(u32, u32), OitError> {
 /// Parses `R,G,B` in [0, 1] (e.g. `1,1,1`).
 pub fn parse_rgb(text: &str) -> Result<Vec3, OitError> {
     let bad = || OitError::InvalidSettings(format!("colour '{text}' is not R,G,B with each in [0, 1]"));
-    let parts: Vec<f32> = text.split(',').map(|p| p.trim().parse::<f32>()).collect::<Result<_, _>>().map_err(|_| bad())?;
+    let parts: Vec<f32> =
+        text.split(',').map(|p| p.trim().parse::<f32>()).collect::<Result<_, _>>().map_err(|_| bad())?;
     match parts[..] {
         [r, g, b] if [r, g, b].iter().all(|c| (0.0..=1.0).contains(c)) => Ok(Vec3::new(r, g, b)),
         _ => Err(bad()),

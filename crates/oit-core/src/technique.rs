@@ -318,7 +318,9 @@ impl FromStr for RasterPath {
             "cpu" => Ok(RasterPath::Cpu),
             "hardware" | "hw" => Ok(RasterPath::Hardware),
             "compute" => Ok(RasterPath::Compute),
-            other => Err(OitError::InvalidSettings(format!("unknown raster path '{other}': use hardware or compute"))),
+            other => Err(OitError::InvalidSettings(format!(
+                "unknown raster path '{other}': use hardware or compute"
+            ))),
         }
     }
 }
@@ -329,7 +331,23 @@ mod tests {
 
     #[test]
     fn names_round_trip() {
-        for name in ["reference", "dp", "ddp", "wavg", "wsum", "bdp", "bdp2", "bdp:3", "adp", "mdts", "mdts:4", "mdts64:8", "fabs", "fabs:16", "mlp:4"] {
+        for name in [
+            "reference",
+            "dp",
+            "ddp",
+            "wavg",
+            "wsum",
+            "bdp",
+            "bdp2",
+            "bdp:3",
+            "adp",
+            "mdts",
+            "mdts:4",
+            "mdts64:8",
+            "fabs",
+            "fabs:16",
+            "mlp:4",
+        ] {
             let t: Technique = name.parse().unwrap();
             assert_eq!(t.to_string(), name);
         }

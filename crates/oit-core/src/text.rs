@@ -41,10 +41,7 @@ const fn glyph(rows: &[&str]) -> Glyph {
     let mut r = 0;
     while r < rows.len() {
         let bytes = rows[r].as_bytes();
-        assert!(
-            bytes.len() == GLYPH_COLUMNS,
-            "a glyph row is 5 characters wide"
-        );
+        assert!(bytes.len() == GLYPH_COLUMNS, "a glyph row is 5 characters wide");
         let mut c = 0;
         while c < GLYPH_COLUMNS {
             match bytes[c] {
@@ -60,9 +57,7 @@ const fn glyph(rows: &[&str]) -> Glyph {
 }
 
 /// What a character outside the font draws.
-const BOX: Glyph = glyph(&[
-    "#####", "#...#", "#...#", "#...#", "#...#", "#...#", "#####",
-]);
+const BOX: Glyph = glyph(&["#####", "#...#", "#...#", "#...#", "#...#", "#...#", "#####"]);
 
 /// The font. Capitals and digits fill rows 0–6; lower case has its x-height in rows 2–6,
 /// ascenders from row 0 and descenders in row 7.
@@ -176,10 +171,7 @@ fn blend_pixel(image: &mut Image, x: i64, y: i64, color: [u8; 4]) {
         return;
     }
     let index = y as u64 * u64::from(image.width) + x as u64;
-    let Some(px) = usize::try_from(index)
-        .ok()
-        .and_then(|i| image.pixels.get_mut(i))
-    else {
+    let Some(px) = usize::try_from(index).ok().and_then(|i| image.pixels.get_mut(i)) else {
         return;
     };
     let a = u32::from(color[3]);
@@ -194,12 +186,8 @@ fn blend_pixel(image: &mut Image, x: i64, y: i64, color: [u8; 4]) {
 pub fn fill_rect(image: &mut Image, x: i64, y: i64, w: u64, h: u64, color: [u8; 4]) {
     let x0 = x.max(0);
     let y0 = y.max(0);
-    let x1 = x
-        .saturating_add(i64::try_from(w).unwrap_or(i64::MAX))
-        .min(i64::from(image.width));
-    let y1 = y
-        .saturating_add(i64::try_from(h).unwrap_or(i64::MAX))
-        .min(i64::from(image.height));
+    let x1 = x.saturating_add(i64::try_from(w).unwrap_or(i64::MAX)).min(i64::from(image.width));
+    let y1 = y.saturating_add(i64::try_from(h).unwrap_or(i64::MAX)).min(i64::from(image.height));
     for py in y0..y1 {
         for px in x0..x1 {
             blend_pixel(image, px, py, color);
@@ -287,18 +275,9 @@ pub fn draw_heat_legend(image: &mut Image, max: u32) {
     draw_text_at(image, x, y, LEGEND_CAPTION, scale, text);
     y += (line + gap) as i64;
     for i in 0..bar_w {
-        let t = if bar_w > 1 {
-            i as f32 / (bar_w - 1) as f32
-        } else {
-            0.0
-        };
+        let t = if bar_w > 1 { i as f32 / (bar_w - 1) as f32 } else { 0.0 };
         let c = heat(t);
-        let color = [
-            linear_to_srgb8(c.x),
-            linear_to_srgb8(c.y),
-            linear_to_srgb8(c.z),
-            255,
-        ];
+        let color = [linear_to_srgb8(c.x), linear_to_srgb8(c.y), linear_to_srgb8(c.z), 255];
         fill_rect(image, x + i as i64, y, 1, bar_h, color);
     }
     y += bar_h as i64;
@@ -360,14 +339,8 @@ pub fn contact_sheet(rows: &[SheetRow]) -> Image {
     }
     let gap = u64::from(SHEET_GAP);
     let content = |r: &SheetRow| {
-        let (ew, eh) = r
-            .error
-            .as_ref()
-            .map_or((0, 0), |e| (gap + u64::from(e.width), u64::from(e.height)));
-        (
-            u64::from(r.image.width) + ew,
-            u64::from(r.image.height).max(eh),
-        )
+        let (ew, eh) = r.error.as_ref().map_or((0, 0), |e| (gap + u64::from(e.width), u64::from(e.height)));
+        (u64::from(r.image.width) + ew, u64::from(r.image.height).max(eh))
     };
     let inner_w = rows
         .iter()
@@ -377,10 +350,7 @@ pub fn contact_sheet(rows: &[SheetRow]) -> Image {
         })
         .max()
         .unwrap_or(0);
-    let inner_h: u64 = rows
-        .iter()
-        .map(|r| u64::from(SHEET_HEADER_HEIGHT) + content(r).1 + gap)
-        .sum();
+    let inner_h: u64 = rows.iter().map(|r| u64::from(SHEET_HEADER_HEIGHT) + content(r).1 + gap).sum();
     let width = u32::try_from(gap + inner_w + gap).unwrap_or(u32::MAX);
     let height = u32::try_from(gap + inner_h).unwrap_or(u32::MAX);
     let mut sheet = Image::new(width, height, SHEET_BACKGROUND);
@@ -390,23 +360,11 @@ pub fn contact_sheet(rows: &[SheetRow]) -> Image {
     for row in rows {
         let (tx, ty) = (gap as i64, y as i64);
         draw_text_at(&mut sheet, tx, ty, &row.label, 1, label_color);
-        draw_text_at(
-            &mut sheet,
-            tx,
-            ty + i64::from(LINE_HEIGHT) + 2,
-            &row.caption,
-            1,
-            caption_color,
-        );
+        draw_text_at(&mut sheet, tx, ty + i64::from(LINE_HEIGHT) + 2, &row.caption, 1, caption_color);
         let iy = y + u64::from(SHEET_HEADER_HEIGHT);
         blit(&mut sheet, &row.image, gap, iy);
         if let Some(error) = &row.error {
-            blit(
-                &mut sheet,
-                error,
-                gap + u64::from(row.image.width) + gap,
-                iy,
-            );
+            blit(&mut sheet, error, gap + u64::from(row.image.width) + gap, iy);
         }
         y = iy + content(row).1 + gap;
     }
@@ -458,11 +416,7 @@ mod tests {
         for (i, (a, ga)) in glyphs.iter().enumerate() {
             assert!(FONT.iter().any(|(k, _)| k == a), "{a:?} is not in the font");
             assert!(*ga != &BOX, "{a:?} looks like the unknown box");
-            assert_eq!(
-                **ga == [0; GLYPH_ROWS],
-                *a == ' ',
-                "only space is blank, not {a:?}"
-            );
+            assert_eq!(**ga == [0; GLYPH_ROWS], *a == ' ', "only space is blank, not {a:?}");
             for (b, gb) in &glyphs[i + 1..] {
                 assert!(ga != gb, "{a:?} and {b:?} share a glyph");
             }
@@ -480,10 +434,7 @@ mod tests {
             draw_text(&mut after, x, y, text, scale, WHITE);
             let diff = changed(&before, &after);
             assert!(!diff.is_empty(), "scale {scale} drew nothing");
-            let (x1, y1) = (
-                x as u32 + text_width(text, scale),
-                y as u32 + LINE_HEIGHT * scale,
-            );
+            let (x1, y1) = (x as u32 + text_width(text, scale), y as u32 + LINE_HEIGHT * scale);
             for (px, py) in diff {
                 assert!(
                     (x as u32..x1).contains(&px) && (y as u32..y1).contains(&py),
@@ -528,19 +479,11 @@ mod tests {
         draw_text(&mut image, -2, -2, "#", 1, WHITE);
         assert_ne!(image, Image::new(10, 10, BLACK));
         // Empty images, and one whose pixels are fewer than its size claims.
-        for mut image in [
-            Image::new(0, 0, BLACK),
-            Image::new(0, 5, BLACK),
-            Image::new(5, 0, BLACK),
-        ] {
+        for mut image in [Image::new(0, 0, BLACK), Image::new(0, 5, BLACK), Image::new(5, 0, BLACK)] {
             draw_text(&mut image, 0, 0, text, 1, WHITE);
             draw_heat_legend(&mut image, 9);
         }
-        let mut short = Image {
-            width: 300,
-            height: 300,
-            pixels: vec![BLACK; 10],
-        };
+        let mut short = Image { width: 300, height: 300, pixels: vec![BLACK; 10] };
         draw_text(&mut short, 0, 0, text, 1, WHITE);
         draw_heat_legend(&mut short, 9);
         assert_eq!(short.pixels.len(), 10);
@@ -566,20 +509,10 @@ mod tests {
             let mut after = before.clone();
             draw_heat_legend(&mut after, max);
             let diff = changed(&before, &after);
-            assert!(
-                diff.len() > 1000,
-                "{size}: only {} pixels changed",
-                diff.len()
-            );
+            assert!(diff.len() > 1000, "{size}: only {} pixels changed", diff.len());
             for (x, y) in diff {
-                assert!(
-                    x >= size / 2 && y >= size * 3 / 4,
-                    "{size}: ({x}, {y}) is outside the corner"
-                );
-                assert!(
-                    x < size - 4 && y < size - 4,
-                    "{size}: ({x}, {y}) is in the margin"
-                );
+                assert!(x >= size / 2 && y >= size * 3 / 4, "{size}: ({x}, {y}) is outside the corner");
+                assert!(x < size - 4 && y < size - 4, "{size}: ({x}, {y}) is in the margin");
             }
             // The ramp's two ends are there: black at the left and white at the right.
             // The bar's middle row: margin 8, box 37 high, bar 14 to 22 from the box's top; × scale.
@@ -604,10 +537,8 @@ mod tests {
         assert_eq!(contact_sheet(&[]), Image::new(1, 1, SHEET_BACKGROUND));
 
         let caption = "EPR 0.12%  PSNR 41.3 dB";
-        let rows = [
-            row("reference", "", [0, 200, 0, 255], false),
-            row("wboit", caption, [0, 0, 200, 255], true),
-        ];
+        let rows =
+            [row("reference", "", [0, 200, 0, 255], false), row("wboit", caption, [0, 0, 200, 255], true)];
         let sheet = contact_sheet(&rows);
         let gap = SHEET_GAP;
         // Widest of: image + gap + error image (136), and the caption's text (138).
@@ -638,10 +569,7 @@ mod tests {
         let sheet = contact_sheet(&rows);
         let gap = SHEET_GAP;
         assert_eq!(sheet.width, gap + 300 + gap);
-        assert_eq!(
-            sheet.height,
-            gap + (SHEET_HEADER_HEIGHT + 90 + gap) + (SHEET_HEADER_HEIGHT + 10 + gap)
-        );
+        assert_eq!(sheet.height, gap + (SHEET_HEADER_HEIGHT + 90 + gap) + (SHEET_HEADER_HEIGHT + 10 + gap));
         assert_eq!(sheet.pixels.len(), (sheet.width * sheet.height) as usize);
     }
 }

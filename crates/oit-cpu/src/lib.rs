@@ -22,9 +22,11 @@ mod technique;
 
 use std::time::Instant;
 
-use oit_core::{Backend, Camera, Capabilities, Frame, OitError, RasterPath, Scene, Settings, Technique, TechniqueKind};
+use oit_core::{
+    Backend, Camera, Capabilities, Frame, OitError, RasterPath, Scene, Settings, Technique, TechniqueKind,
+};
 
-pub use technique::fabs::{sort_keys, INSERTION_SORT_MAX};
+pub use technique::fabs::{INSERTION_SORT_MAX, sort_keys};
 
 use crate::raster::{RasterMode, Rasterizer};
 use crate::technique::Ctx;

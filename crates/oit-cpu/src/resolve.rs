@@ -2,7 +2,7 @@
 //! chosen effect. Every technique ends here, so the effects work on all of them alike.
 
 use glam::{Vec3, Vec4};
-use oit_core::composite::{heat, linear_to_srgb8, schlick_transmittance, FrontToBack};
+use oit_core::composite::{FrontToBack, heat, linear_to_srgb8, schlick_transmittance};
 use oit_core::rules::{unpack_normal, unpack_rgba8};
 use oit_core::{Camera, Effect, Image, Scene, Settings};
 

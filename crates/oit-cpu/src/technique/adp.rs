@@ -14,7 +14,7 @@
 use std::sync::atomic::Ordering::Relaxed;
 
 use oit_core::rules::{
-    depth_key64, histogram_bin, histogram_count, histogram_rank, split_key64, BUCKETS, HISTOGRAM_WORDS,
+    BUCKETS, HISTOGRAM_WORDS, depth_key64, histogram_bin, histogram_count, histogram_rank, split_key64,
 };
 use oit_core::{Frame, OitError};
 use rayon::prelude::*;
@@ -31,10 +31,8 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         let bin = histogram_bin(f.depth, zn, zf);
         hist[px * HISTOGRAM_WORDS + (bin / 32) as usize].fetch_or(1 << (bin % 32), Relaxed);
     });
-    let hist: Vec<[u32; HISTOGRAM_WORDS]> = hist
-        .par_chunks(HISTOGRAM_WORDS)
-        .map(|h| std::array::from_fn(|i| h[i].load(Relaxed)))
-        .collect();
+    let hist: Vec<[u32; HISTOGRAM_WORDS]> =
+        hist.par_chunks(HISTOGRAM_WORDS).map(|h| std::array::from_fn(|i| h[i].load(Relaxed))).collect();
     let batches = hist.iter().map(|h| histogram_count(h).div_ceil(BUCKETS as u32)).max().unwrap_or(0);
     let batches = batches.min(ctx.settings.max_peels.unwrap_or(u32::MAX));
     let buckets = ctx.alloc64(BUCKETS, 0)?;

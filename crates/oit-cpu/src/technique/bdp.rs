@@ -16,8 +16,8 @@
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 
 use oit_core::rules::{
-    bdp_pack_color, bdp_unpack_color, bucket_index, depth_bits, depth_key64, split_key64, BDP_COLOR_SUBINTERVALS,
-    BDP_DEPTH_SUBINTERVALS,
+    BDP_COLOR_SUBINTERVALS, BDP_DEPTH_SUBINTERVALS, bdp_pack_color, bdp_unpack_color, bucket_index,
+    depth_bits, depth_key64, split_key64,
 };
 use oit_core::{BdpMode, Effect, Frame, OitError};
 use rayon::prelude::*;
@@ -51,16 +51,18 @@ fn color(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
     });
     let mut states = ctx.states();
     let resolve = &ctx.resolve;
-    states.par_iter_mut().zip(buckets.par_chunks(n)).zip(bounds.par_iter()).for_each(|((s, b), &(zn, zf))| {
-        for (k, bucket) in b.iter().enumerate() {
-            let v = bucket.load(Relaxed);
-            if v != 0 {
-                // The bucket's subinterval midpoint stands for its depth.
-                let d = zn + (k as f32 + 0.5) / n as f32 * (zf - zn);
-                resolve.push(s, d, bdp_unpack_color(v));
+    states.par_iter_mut().zip(buckets.par_chunks(n)).zip(bounds.par_iter()).for_each(
+        |((s, b), &(zn, zf))| {
+            for (k, bucket) in b.iter().enumerate() {
+                let v = bucket.load(Relaxed);
+                if v != 0 {
+                    // The bucket's subinterval midpoint stands for its depth.
+                    let d = zn + (k as f32 + 0.5) / n as f32 * (zf - zn);
+                    resolve.push(s, d, bdp_unpack_color(v));
+                }
             }
-        }
-    });
+        },
+    );
     Ok(super::finish(ctx, states))
 }
 

@@ -15,7 +15,7 @@ use oit_core::rules::{depth_key64, mdts_pack, mdts_unpack, split_key64};
 use oit_core::{Effect, Frame, OitError};
 use rayon::prelude::*;
 
-use super::{insert_min32, insert_min64, Ctx};
+use super::{Ctx, insert_min32, insert_min64};
 
 fn capacity(ctx: &mut Ctx<'_>, k: Option<u32>) -> Result<usize, OitError> {
     Ok(match k {

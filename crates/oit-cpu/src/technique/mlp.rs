@@ -10,7 +10,7 @@ use oit_core::rules::{depth_bits, depth_key64, split_key64};
 use oit_core::{Frame, OitError};
 use rayon::prelude::*;
 
-use super::{insert_min64, Ctx};
+use super::{Ctx, insert_min64};
 
 pub(crate) fn render(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
     let m = m as usize;
@@ -36,17 +36,19 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
         ctx.fragments.get_or_insert(generated);
         peels += 1;
         let resolve = &ctx.resolve;
-        states.par_iter_mut().zip(deepest.par_iter_mut()).zip(slots.par_chunks(m)).for_each(|((s, deep), slots)| {
-            for slot in slots {
-                let key = slot.swap(u64::MAX, Relaxed);
-                if key == u64::MAX {
-                    break;
+        states.par_iter_mut().zip(deepest.par_iter_mut()).zip(slots.par_chunks(m)).for_each(
+            |((s, deep), slots)| {
+                for slot in slots {
+                    let key = slot.swap(u64::MAX, Relaxed);
+                    if key == u64::MAX {
+                        break;
+                    }
+                    let (d, p) = split_key64(key);
+                    resolve.push(s, d, p);
+                    *deep = i64::from(depth_bits(d));
                 }
-                let (d, p) = split_key64(key);
-                resolve.push(s, d, p);
-                *deep = i64::from(depth_bits(d));
-            }
-        });
+            },
+        );
         if !more.load(Relaxed) {
             break;
         }

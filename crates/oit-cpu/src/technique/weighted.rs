@@ -5,7 +5,7 @@
 use std::sync::atomic::Ordering::Relaxed;
 
 use glam::Vec3;
-use oit_core::composite::{weighted_average, weighted_sum, WeightedSums};
+use oit_core::composite::{WeightedSums, weighted_average, weighted_sum};
 use oit_core::rules::pack_rgba8;
 use oit_core::{Effect, Frame, OitError};
 use rayon::prelude::*;

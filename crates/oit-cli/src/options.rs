@@ -1,0 +1,159 @@
+//! The scene, camera, shading and backend options `render`, `compare` and `sweep` share, and
+//! their checking: everything is validated here, before any rendering starts.
+
+use std::path::Path;
+
+use clap::Args;
+use oit_core::{
+    Backend, BdpMode, BoundsMode, Camera, Effect, OitError, Scene, Settings, Shading, Technique, View,
+    load_scene, parse_rgb, parse_size,
+};
+
+use crate::backends::{BackendOptions, backends};
+
+/// Options shared by `render`, `compare` and `sweep`.
+#[derive(Args, Clone, Debug)]
+#[command(next_help_heading = "Scene, camera and shading")]
+pub struct SceneArgs {
+    /// The scene: a built-in name (default, planes:N, spheres:N, cluster:N, knot, coplanar) or a
+    /// path to a Wavefront .obj file.
+    #[arg(long, value_name = "NAME|FILE.obj", default_value = oit_core::DEFAULT_SCENE)]
+    pub scene: String,
+
+    /// Image size in pixels, WIDTHxHEIGHT (each from 1 to 16384).
+    #[arg(long, value_name = "WxH", default_value = "512x512")]
+    pub size: String,
+
+    /// Camera angle around the vertical axis in degrees; 0 looks at the scene from +z.
+    #[arg(long, value_name = "DEG", default_value_t = 30.0, allow_negative_numbers = true)]
+    pub azimuth: f32,
+
+    /// Camera angle above the horizontal plane in degrees (clamped to ±89).
+    #[arg(long, value_name = "DEG", default_value_t = 20.0, allow_negative_numbers = true)]
+    pub elevation: f32,
+
+    /// Vertical field of view in degrees (0.5 to 179). The camera is placed so the whole scene
+    /// fits.
+    #[arg(long, value_name = "DEG", default_value_t = 45.0, allow_negative_numbers = true)]
+    pub fov: f32,
+
+    /// Opacity in [0, 1] given to every object instead of its own [default: each object's own].
+    #[arg(long, value_name = "A", allow_negative_numbers = true)]
+    pub alpha: Option<f32>,
+
+    /// How fragments are coloured: headlight (colour × (0.3 + 0.7·|n·l|), light from the eye),
+    /// flat (the object's colour), vertex (per-vertex colours) or normal (the normal as colour).
+    #[arg(long, value_name = "MODE", default_value = "headlight")]
+    pub shading: String,
+
+    /// Background colour as linear R,G,B, each in [0, 1].
+    #[arg(long, value_name = "R,G,B", default_value = "1,1,1")]
+    pub background: String,
+
+    /// What is made of each pixel's sorted fragments: transparency (alpha compositing),
+    /// translucency (Beer–Lambert absorption through the thickness), fresnel (Schlick
+    /// transmittance per layer) or complexity (a heat map of fragments per pixel).
+    #[arg(long, value_name = "EFFECT", default_value = "transparency")]
+    pub effect: String,
+
+    /// How bucket techniques (bdp, adp) find each pixel's depth range: boxes (the rendered depths
+    /// of the objects' bounding boxes) or exact (the fragments' own min and max, one more geometry
+    /// pass).
+    #[arg(long, value_name = "MODE", default_value = "boxes")]
+    pub bounds: String,
+
+    /// What single-pass bdp stores: color (32 packed colours), depth (16 min/max pairs) or auto
+    /// (color for transparency with one pass, depth otherwise).
+    #[arg(long, value_name = "MODE", default_value = "auto")]
+    pub bdp_mode: String,
+
+    /// Stops the peeling techniques (dp, ddp, mlp, adp batches) after N capture passes; deeper
+    /// layers count as lost [default: peel until no layer is left].
+    #[arg(long, value_name = "N")]
+    pub max_peels: Option<u32>,
+
+    /// Backend to render with: a name (cpu; wgpu and vulkan when compiled in), a comma-separated
+    /// list, or all (every backend compiled in whose device is present).
+    #[arg(long, value_name = "NAME|all", default_value = "cpu")]
+    pub backend: String,
+
+    /// Worker threads of the cpu backend [default: one per core].
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+}
+
+/// Everything a command needs to render, checked.
+pub struct Prepared {
+    /// The loaded, validated scene.
+    pub scene: Scene,
+    /// The settings, technique still the default (`reference`).
+    pub settings: Settings,
+    /// The camera's angles; [`Prepared::camera`] turns them into a camera.
+    pub view: View,
+    /// The backends selected.
+    pub backends: Vec<Box<dyn Backend>>,
+}
+
+impl Prepared {
+    /// The camera at `view` (the scene's bounds framed at the image's aspect).
+    pub fn camera(&self, view: View) -> Result<Camera, OitError> {
+        Camera::orbit(&self.scene.bounds(), view, self.settings.width as f32 / self.settings.height as f32)
+    }
+
+    /// `settings` with `technique`.
+    pub fn with_technique(&self, technique: Technique) -> Settings {
+        Settings { technique, ..self.settings.clone() }
+    }
+}
+
+impl SceneArgs {
+    /// Parses and checks every option, loads the scene and builds the backends, cheapest checks
+    /// first so a typo fails before a large scene is read.
+    pub fn prepare(&self) -> Result<Prepared, OitError> {
+        let (width, height) = parse_size(&self.size)?;
+        if self.threads == Some(0) {
+            return Err(OitError::InvalidSettings("--threads must be at least 1".into()));
+        }
+        let settings = Settings {
+            width,
+            height,
+            technique: Technique::Reference,
+            background: parse_rgb(&self.background)?,
+            alpha: self.alpha,
+            max_peels: self.max_peels,
+            shading: self.shading.parse::<Shading>()?,
+            effect: self.effect.parse::<Effect>()?,
+            bounds: self.bounds.parse::<BoundsMode>()?,
+            raster: None,
+            bdp_mode: self.bdp_mode.parse::<BdpMode>()?,
+        };
+        settings.validate()?;
+        let view = View { azimuth: self.azimuth, elevation: self.elevation, fov: self.fov };
+        // Checks the angles before the scene is loaded (the unit box stands in for its bounds).
+        let unit = oit_core::Aabb { min: oit_core::glam::Vec3::ZERO, max: oit_core::glam::Vec3::ONE };
+        Camera::orbit(&unit, view, width as f32 / height as f32)?;
+        let backends = backends(&self.backend, &BackendOptions { threads: self.threads })?;
+        let scene = load_scene(&self.scene)?;
+        scene.validate()?;
+        let prepared = Prepared { scene, settings, view, backends };
+        prepared.camera(view)?;
+        Ok(prepared)
+    }
+}
+
+/// Checks before any work that `path` can be written: its folder exists, it is not a folder, and
+/// its extension is `extension`.
+pub fn check_output(path: &Path, extension: &str, option: &str) -> Result<(), OitError> {
+    let bad = |message: String| OitError::Write { path: path.to_path_buf(), message };
+    if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case(extension)) {
+        return Err(bad(format!("{option} must name a .{extension} file")));
+    }
+    if path.is_dir() {
+        return Err(bad("it is a folder".into()));
+    }
+    let parent = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    if !parent.is_dir() {
+        return Err(bad(format!("folder {} does not exist", parent.display())));
+    }
+    Ok(())
+}

@@ -1,0 +1,346 @@
+//! The `oit` binary as a user runs it: outputs written, JSON shapes, and one `error:` line with
+//! exit code 1 for every bad input.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+/// Small enough that every test renders in well under a second.
+const SIZE: &str = "64x64";
+
+fn oit(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_oit")).args(args).output().expect("the oit binary runs")
+}
+
+fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// A fresh folder of this test's own under cargo's scratch space.
+fn scratch(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("oit-cli").join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch folder");
+    dir
+}
+
+/// Asserts the failure contract: non-zero exit, exactly one `error:` line on stderr, no panic.
+fn assert_one_error(out: &Output, what: &str) {
+    let err = stderr(out);
+    assert!(!out.status.success(), "{what}: should fail, stdout: {}", stdout(out));
+    assert_eq!(out.status.code(), Some(1), "{what}: exit code, stderr: {err}");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "{what}: one line on stderr, got {err:?}");
+    assert!(lines[0].starts_with("error: "), "{what}: {err:?}");
+    assert!(!err.contains("panicked") && !err.contains("backtrace"), "{what}: {err:?}");
+}
+
+fn parse_json(out: &Output, what: &str) -> Value {
+    assert!(out.status.success(), "{what}: {}", stderr(out));
+    serde_json::from_str(&stdout(out))
+        .unwrap_or_else(|e| panic!("{what}: stdout is not JSON ({e}): {}", stdout(out)))
+}
+
+#[test]
+fn render_writes_a_png() {
+    let dir = scratch("render_png");
+    let png = dir.join("out.png");
+    let out = oit(&["render", "--size", SIZE, "--technique", "dp", "-o", png.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let bytes = std::fs::read(&png).expect("the PNG was written");
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    let text = stdout(&out);
+    for word in ["technique", "backend", "passes", "fragments", "captured", "lost", "storage", "time"] {
+        assert!(text.contains(word), "summary lacks {word}: {text}");
+    }
+}
+
+#[test]
+fn render_json_has_the_camera() {
+    let dir = scratch("render_json");
+    let png = dir.join("out.png");
+    let out = oit(&["render", "--size", SIZE, "--json", "-t", "fabs:16", "-o", png.to_str().unwrap()]);
+    let v = parse_json(&out, "render --json");
+    assert_eq!(v["technique"], "fabs:16");
+    assert_eq!(v["backend"], "cpu");
+    assert_eq!(v["raster"], "cpu");
+    assert_eq!(v["width"], 64);
+    assert_eq!(v["height"], 64);
+    for key in ["geometry_passes", "fragments", "captured", "lost", "storage_bytes", "wall_ms"] {
+        assert!(v[key].is_number(), "{key}: {v}");
+    }
+    assert!(v["gpu_ms"].is_null(), "the cpu backend has no device timer");
+    let camera = &v["camera"];
+    for key in ["view", "proj"] {
+        let m = camera[key].as_array().unwrap_or_else(|| panic!("{key} is an array"));
+        assert_eq!(m.len(), 16, "{key}");
+        assert!(m.iter().all(Value::is_f64), "{key}");
+    }
+    assert_eq!(camera["eye"].as_array().map(Vec::len), Some(3));
+    assert_eq!(camera["forward"].as_array().map(Vec::len), Some(3));
+    assert!(camera["near"].as_f64().unwrap() < camera["far"].as_f64().unwrap());
+    assert_eq!(camera["azimuth"], 30.0);
+    assert_eq!(camera["elevation"], 20.0);
+    assert_eq!(camera["fov"], 45.0);
+    assert!(png.exists());
+}
+
+const COMPARE_KEYS: [&str; 15] = [
+    "technique",
+    "backend",
+    "raster",
+    "width",
+    "height",
+    "geometry_passes",
+    "fragments",
+    "captured",
+    "lost",
+    "storage_bytes",
+    "wall_ms",
+    "gpu_ms",
+    "epr",
+    "psnr",
+    "max_error",
+];
+
+#[test]
+fn compare_json_has_exactly_the_keys() {
+    let dir = scratch("compare_json");
+    let sheet = dir.join("sheet.png");
+    let out = oit(&[
+        "compare",
+        "--size",
+        SIZE,
+        "--techniques",
+        "dp,wavg,fabs:16",
+        "--json",
+        "--sheet",
+        sheet.to_str().unwrap(),
+    ]);
+    let v = parse_json(&out, "compare --json");
+    let rows = v.as_array().expect("an array");
+    assert_eq!(rows.len(), 3);
+    let names: Vec<&str> = rows.iter().map(|r| r["technique"].as_str().unwrap()).collect();
+    assert_eq!(names, ["dp", "wavg", "fabs:16"]);
+    for row in rows {
+        let obj = row.as_object().expect("an object");
+        let mut keys: Vec<&str> = obj.keys().map(String::as_str).collect();
+        let mut expected = COMPARE_KEYS.to_vec();
+        keys.sort_unstable();
+        expected.sort_unstable();
+        assert_eq!(keys, expected);
+        assert_eq!(row["raster"], "cpu");
+        assert!(row["gpu_ms"].is_null());
+    }
+    // dp is exact on the default scene: identical images have an infinite PSNR, written as null.
+    assert_eq!(rows[0]["epr"], 0.0);
+    assert!(rows[0]["psnr"].is_null());
+    // The weighted average ignores order: it cannot match everywhere.
+    assert!(rows[1]["epr"].as_f64().unwrap() > 0.0);
+    assert!(rows[1]["psnr"].is_f64());
+    assert_eq!(&std::fs::read(&sheet).expect("the sheet was written")[..4], b"\x89PNG");
+}
+
+#[test]
+fn compare_table_shows_every_technique() {
+    let out = oit(&["compare", "--size", "32x32", "--techniques", "dp,bdp"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stdout(&out);
+    for word in ["technique", "backend", "EPR (%)", "PSNR (dB)", "inf", "dp", "bdp"] {
+        assert!(text.contains(word), "{word}: {text}");
+    }
+}
+
+#[test]
+fn compare_goes_on_past_a_failing_technique() {
+    // The weighted techniques never order fragments, so they cannot absorb through a thickness.
+    let out = oit(&["compare", "--size", "32x32", "--techniques", "wavg,dp", "--effect", "translucency"]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let text = stdout(&out);
+    assert!(text.lines().any(|l| l.starts_with("wavg") && l.contains("error")), "{text}");
+    assert!(text.lines().any(|l| l.starts_with("dp ") && l.contains("inf")), "{text}");
+    assert!(stderr(&out).starts_with("error: "));
+    assert!(!stderr(&out).contains("panicked"));
+}
+
+#[test]
+fn bad_inputs_fail_with_one_error_line() {
+    let dir = scratch("bad_inputs");
+    let malformed = dir.join("malformed.obj");
+    std::fs::write(&malformed, "v 0 0\nv 1 0 0\nf 1 2 3\n").unwrap();
+    let nan = dir.join("nan.obj");
+    std::fs::write(&nan, "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let not_numbers = dir.join("words.obj");
+    std::fs::write(&not_numbers, "v zero 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let missing = dir.join("missing.obj");
+    let png = dir.join("out.png");
+    let (png, malformed, nan, not_numbers, missing) = (
+        png.to_str().unwrap(),
+        malformed.to_str().unwrap(),
+        nan.to_str().unwrap(),
+        not_numbers.to_str().unwrap(),
+        missing.to_str().unwrap(),
+    );
+    let unwritable = dir.join("no-such-folder").join("out.png");
+    let cases: Vec<(&str, Vec<&str>)> = vec![
+        ("missing file", vec!["render", "--scene", missing]),
+        ("malformed obj", vec!["render", "--scene", malformed]),
+        ("nan vertex", vec!["render", "--scene", nan]),
+        ("words for numbers", vec!["render", "--scene", not_numbers]),
+        ("0x0 size", vec!["render", "--size", "0x0"]),
+        ("malformed size", vec!["render", "--size", "64by64"]),
+        ("unknown technique", vec!["render", "--technique", "nope"]),
+        ("bad parameter", vec!["render", "--technique", "fabs:0"]),
+        ("unknown scene", vec!["render", "--scene", "no-such-scene"]),
+        ("nan azimuth", vec!["render", "--azimuth", "nan"]),
+        ("bad fov", vec!["render", "--fov", "0"]),
+        ("alpha out of range", vec!["render", "--alpha", "1.5"]),
+        ("bad background", vec!["render", "--background", "1,1"]),
+        ("unknown shading", vec!["render", "--shading", "phong"]),
+        ("unknown effect", vec!["render", "--effect", "glow"]),
+        ("unknown backend", vec!["render", "--backend", "metal"]),
+        ("zero threads", vec!["render", "--threads", "0"]),
+        ("zero peels", vec!["render", "--max-peels", "0"]),
+        ("unwritable output", vec!["render", "-o", unwritable.to_str().unwrap()]),
+        ("not a png", vec!["render", "-o", "out.jpg"]),
+        ("compare unknown technique", vec!["compare", "--techniques", "dp,nope"]),
+        ("compare unknown scene", vec!["compare", "--scene", "no-such-scene"]),
+        ("sweep zero views", vec!["sweep", "--views", "0"]),
+        ("sweep 0x0 size", vec!["sweep", "--views", "2", "--size", "0x0"]),
+        ("sweep plot not svg", vec!["sweep", "--views", "2", "--plot", "plot.png"]),
+    ];
+    for (what, mut args) in cases {
+        // Outputs go to the scratch folder, and renders stay small, unless the case says otherwise.
+        if args[0] == "render" && !args.contains(&"-o") {
+            args.extend(["-o", png]);
+        }
+        if !args.contains(&"--size") {
+            args.extend(["--size", "16x16"]);
+        }
+        assert_one_error(&oit(&args), what);
+    }
+}
+
+#[test]
+fn usage_errors_keep_clap_exit_code() {
+    let out = oit(&["render", "--azimuth", "north"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(!stderr(&out).contains("panicked"));
+    let out = oit(&["no-such-command"]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn info_json_parses() {
+    let v = parse_json(&oit(&["info", "--json"]), "info --json");
+    let backends = v["backends"].as_array().expect("backends");
+    let cpu =
+        backends.iter().find(|b| b["name"] == "cpu").expect("the cpu backend is compiled in by default");
+    assert_eq!(cpu["available"], true);
+    assert!(cpu["device"].is_string());
+    let techniques = cpu["techniques"].as_array().expect("techniques");
+    assert!(techniques.iter().any(|t| t == "reference"));
+    assert!(techniques.iter().any(|t| t == "adp"));
+    let text = stdout(&oit(&["info"]));
+    assert!(text.contains("backend cpu") && text.contains("techniques"), "{text}");
+}
+
+#[test]
+fn sweep_json_has_a_record_per_view_and_technique() {
+    let dir = scratch("sweep");
+    let svg = dir.join("epr.svg");
+    let out = oit(&[
+        "sweep",
+        "--size",
+        "32x32",
+        "--views",
+        "3",
+        "--techniques",
+        "dp,wavg,bdp",
+        "--json",
+        "--plot",
+        svg.to_str().unwrap(),
+    ]);
+    let v = parse_json(&out, "sweep --json");
+    let records = v.as_array().expect("an array");
+    assert_eq!(records.len(), 3 * 3);
+    let mut azimuths: Vec<f64> = records.iter().map(|r| r["azimuth"].as_f64().unwrap()).collect();
+    azimuths.dedup();
+    assert_eq!(azimuths, [0.0, 120.0, 240.0]);
+    for r in records {
+        let mut keys: Vec<&str> = r.as_object().unwrap().keys().map(String::as_str).collect();
+        keys.sort_unstable();
+        assert_eq!(keys, ["azimuth", "backend", "epr", "lost", "technique", "wall_ms"]);
+    }
+    let plot = std::fs::read_to_string(&svg).expect("the plot was written");
+    assert!(plot.starts_with("<svg"));
+    for label in ["dp", "wavg", "bdp", "azimuth", "1e-5"] {
+        assert!(plot.contains(label), "plot lacks {label}");
+    }
+}
+
+#[test]
+fn sweep_all_gives_views_times_techniques() {
+    let out = oit(&["sweep", "--size", "16x16", "--views", "3", "--json"]);
+    let v = parse_json(&out, "sweep --json");
+    let techniques = oit_core::Technique::all().len();
+    assert_eq!(v.as_array().expect("an array").len(), 3 * techniques);
+}
+
+#[test]
+fn sweep_summary_table() {
+    let out = oit(&["sweep", "--size", "16x16", "--views", "2", "--techniques", "dp,wsum"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stdout(&out);
+    for word in ["mean EPR", "max EPR", "mean lost", "mean ms", "dp", "wsum"] {
+        assert!(text.contains(word), "{word}: {text}");
+    }
+}
+
+#[test]
+fn help_mentions_every_option() {
+    let shared = [
+        "--scene",
+        "--size",
+        "--azimuth",
+        "--elevation",
+        "--fov",
+        "--alpha",
+        "--shading",
+        "--background",
+        "--effect",
+        "--bounds",
+        "--bdp-mode",
+        "--max-peels",
+        "--backend",
+        "--threads",
+    ];
+    let own: [(&str, &[&str]); 4] = [
+        ("render", &["--technique", "--output", "--json"]),
+        ("compare", &["--techniques", "--json", "--sheet"]),
+        ("sweep", &["--techniques", "--views", "--json", "--plot"]),
+        ("info", &["--json"]),
+    ];
+    for (command, options) in own {
+        let out = oit(&[command, "--help"]);
+        assert!(out.status.success());
+        let text = stdout(&out);
+        let expected: Vec<&str> = options
+            .iter()
+            .copied()
+            .chain(if command == "info" { &[][..] } else { &shared[..] }.iter().copied())
+            .collect();
+        for option in expected {
+            assert!(text.contains(option), "`oit {command} --help` lacks {option}");
+        }
+    }
+    let text = stdout(&oit(&["--help"]));
+    for command in ["render", "compare", "sweep", "info"] {
+        assert!(text.contains(command), "`oit --help` lacks {command}");
+    }
+}
