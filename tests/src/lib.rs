@@ -40,7 +40,7 @@ pub fn settings(size: u32, technique: &str) -> Settings {
 /// The camera of a view of `scene` for `settings`' aspect ratio.
 pub fn camera(scene: &Scene, settings: &Settings, view: View) -> Camera {
     let aspect = settings.width as f32 / settings.height as f32;
-    Camera::orbit(&scene.bounds(), view, aspect).expect("camera")
+    Camera::orbit_scene(scene, view, aspect).expect("camera")
 }
 
 /// Renders, panicking with the backend's message on error.

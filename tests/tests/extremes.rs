@@ -65,7 +65,8 @@ fn alpha_zero_and_one() {
                 if alpha == 0.0 {
                     // nothing is visible: every technique must give the background exactly
                     assert_eq!(f.image, r.image, "{t} alpha 0");
-                    assert!(f.image.pixels.iter().all(|p| *p == [255, 255, 255, 255]), "{t}");
+                    let bg = base.background.to_array().map(oit_core::composite::linear_to_srgb8);
+                    assert!(f.image.pixels.iter().all(|p| p[..3] == bg), "{t}");
                 }
             }
         }
@@ -105,7 +106,19 @@ fn effects_run_on_sorting_techniques() {
             ] {
                 let f = render(backend.as_ref(), &scene, &cam, &Settings { technique: t, ..base.clone() });
                 let a = oit_core::metrics::accuracy(&r, &f.image).unwrap();
-                assert_eq!(a.epr, 0.0, "{t} {effect:?}");
+                if t == Technique::Adp {
+                    // adp is exact but for fragments sharing a 1/1024 bin (at the spheres'
+                    // silhouettes, where front and back meet): each lost fragment spoils at most
+                    // its own pixel
+                    assert!(
+                        a.error_pixels <= f.stats.lost,
+                        "{t} {effect:?}: {} errors, {} lost",
+                        a.error_pixels,
+                        f.stats.lost
+                    );
+                } else {
+                    assert_eq!(a.epr, 0.0, "{t} {effect:?}");
+                }
             }
             // the effect changes the picture
             let plain = render(backend.as_ref(), &scene, &cam, &settings(48, "reference"));

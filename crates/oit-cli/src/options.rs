@@ -47,7 +47,7 @@ pub struct SceneArgs {
     pub shading: String,
 
     /// Background colour as linear R,G,B, each in [0, 1].
-    #[arg(long, value_name = "R,G,B", default_value = "1,1,1")]
+    #[arg(long, value_name = "R,G,B", default_value = "0.06,0.07,0.09")]
     pub background: String,
 
     /// What is made of each pixel's sorted fragments: transparency (alpha compositing),
@@ -97,7 +97,7 @@ pub struct Prepared {
 impl Prepared {
     /// The camera at `view` (the scene's bounds framed at the image's aspect).
     pub fn camera(&self, view: View) -> Result<Camera, OitError> {
-        Camera::orbit(&self.scene.bounds(), view, self.settings.width as f32 / self.settings.height as f32)
+        Camera::orbit_scene(&self.scene, view, self.settings.width as f32 / self.settings.height as f32)
     }
 
     /// `settings` with `technique`.

@@ -3,7 +3,7 @@
 use glam::{Mat4, Vec3};
 use serde::Serialize;
 
-use crate::{Aabb, OitError};
+use crate::{Aabb, OitError, Scene};
 
 /// Where the camera sits on its orbit, and how wide it sees.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -43,6 +43,41 @@ impl Camera {
     /// Orbits around `bounds` at `view`'s angles, framing the bounding sphere, with near/far fitted
     /// to it.
     pub fn orbit(bounds: &Aabb, view: View, aspect: f32) -> Result<Camera, OitError> {
+        if bounds.is_empty() || !bounds.min.is_finite() || !bounds.max.is_finite() {
+            return Err(OitError::InvalidScene("scene bounds are empty or not finite".into()));
+        }
+        Camera::orbit_sphere(bounds.center(), bounds.radius(), bounds.radius(), view, aspect)
+    }
+
+    /// Orbits around `scene`, framing the tightest sphere about its bounds' centre that holds every
+    /// vertex (tighter than the box's corners, so the scene fills the frame and depth precision is
+    /// not spent on empty space).
+    pub fn orbit_scene(scene: &Scene, view: View, aspect: f32) -> Result<Camera, OitError> {
+        let bounds = scene.bounds();
+        if bounds.is_empty() || !bounds.min.is_finite() || !bounds.max.is_finite() {
+            return Err(OitError::InvalidScene("scene bounds are empty or not finite".into()));
+        }
+        let center = bounds.center();
+        let mut radius2 = 0.0f32;
+        for inst in &scene.instances {
+            let mesh = scene.instance_parts(inst).1;
+            for &p in &mesh.positions {
+                radius2 = radius2.max(inst.transform.transform_point3(p).distance_squared(center));
+            }
+        }
+        Camera::orbit_sphere(center, radius2.sqrt(), bounds.radius(), view, aspect)
+    }
+
+    /// Orbits around a sphere, framing the sphere of `radius`, with near/far holding the larger
+    /// sphere of `depth_radius` (the box's corners: so every bounding box the bucket techniques
+    /// rasterize for their depth range lies between near and far, never clipped by far).
+    pub fn orbit_sphere(
+        center: Vec3,
+        radius: f32,
+        depth_radius: f32,
+        view: View,
+        aspect: f32,
+    ) -> Result<Camera, OitError> {
         if !(view.azimuth.is_finite() && view.elevation.is_finite()) {
             return Err(OitError::InvalidSettings("azimuth and elevation must be finite".into()));
         }
@@ -55,19 +90,19 @@ impl Camera {
         if !(aspect.is_finite() && aspect > 0.0) {
             return Err(OitError::InvalidSettings("aspect ratio must be positive".into()));
         }
-        if bounds.is_empty() || !bounds.min.is_finite() || !bounds.max.is_finite() {
-            return Err(OitError::InvalidScene("scene bounds are empty or not finite".into()));
+        if !center.is_finite() || !radius.is_finite() || !depth_radius.is_finite() {
+            return Err(OitError::InvalidScene("scene bounds are not finite".into()));
         }
-        let center = bounds.center();
-        let radius = bounds.radius().max(1e-3 * center.length()).max(1e-6);
+        let radius = radius.max(1e-3 * center.length()).max(1e-6);
         let vhalf = view.fov.to_radians() * 0.5;
         let half = vhalf.min((vhalf.tan() * aspect).atan());
         let distance = radius / half.sin() * 1.05;
         let (az, el) = (view.azimuth.to_radians(), view.elevation.clamp(-89.0, 89.0).to_radians());
         let dir = Vec3::new(el.cos() * az.sin(), el.sin(), el.cos() * az.cos());
         let eye = center + dir * distance;
-        let near = (distance - radius * 1.01).max(distance * 1e-3);
-        let far = distance + radius * 1.01;
+        let depth_radius = depth_radius.max(radius);
+        let near = (distance - depth_radius * 1.01).max(distance * 1e-3);
+        let far = distance + depth_radius * 1.01;
         Ok(Camera::look_at(eye, center, view.fov, aspect, near, far))
     }
 

@@ -259,11 +259,11 @@ pub fn coplanar() -> Scene {
 pub fn default_scene() -> Scene {
     let mut scene = knot();
     scene.name = "default".into();
+    scene.objects[0].color = Vec4::new(1.0, 0.35, 0.05, 0.6);
     scene.meshes.push(uv_sphere("sphere", 64, 32));
-    for (i, (r, color)) in
-        [(1.05f32, Vec4::new(0.3, 0.6, 1.0, 0.18)), (1.25, Vec4::new(0.55, 0.85, 0.9, 0.12))]
-            .into_iter()
-            .enumerate()
+    for (i, (r, color)) in [(1.05f32, Vec4::new(0.2, 0.5, 1.0, 0.14)), (1.25, Vec4::new(0.45, 0.9, 0.8, 0.1))]
+        .into_iter()
+        .enumerate()
     {
         scene.objects.push(Object { name: format!("glass {i}"), mesh: 1, color, absorption: 0.5 });
         scene.instances.push(Instance { object: i + 1, transform: Mat4::from_scale(Vec3::splat(r)) });

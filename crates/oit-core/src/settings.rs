@@ -116,7 +116,7 @@ impl Default for Settings {
             width: 512,
             height: 512,
             technique: Technique::Reference,
-            background: Vec3::splat(1.0),
+            background: Vec3::new(0.06, 0.07, 0.09),
             alpha: None,
             max_peels: None,
             shading: Shading::Headlight,

@@ -10,7 +10,7 @@
 //! use oit_core::{load_scene, Backend, Camera, Settings, Technique, View};
 //! let scene = load_scene("planes:4").unwrap();
 //! let settings = Settings { width: 64, height: 64, technique: Technique::Dp, ..Settings::default() };
-//! let camera = Camera::orbit(&scene.bounds(), View::default(), 1.0).unwrap();
+//! let camera = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();
 //! let frame = oit_cpu::CpuBackend::default().render(&scene, &camera, &settings).unwrap();
 //! assert_eq!(frame.stats.lost, 0);
 //! assert_eq!(frame.stats.geometry_passes, 5); // 4 layers + the pass that finds none left
