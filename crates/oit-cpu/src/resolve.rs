@@ -42,7 +42,8 @@ pub(crate) struct Resolve<'a> {
     pub effect: Effect,
     pub camera: &'a Camera,
     pub background: Vec3,
-    /// Translucency: absorption per unit of scene radius.
+    /// Translucency: absorption σ per unit of length, the unit being 1/8 of the scene radius (so
+    /// an object of a scene of any scale absorbs alike).
     sigma: f32,
     radius: f32,
 }
@@ -59,7 +60,7 @@ impl<'a> Resolve<'a> {
             camera,
             background: settings.background,
             sigma,
-            radius: scene.bounds().radius().max(1e-6),
+            radius: scene.bounds().radius().max(1e-6) / 8.0,
         }
     }
 
