@@ -42,6 +42,8 @@ pub const SUBPIXEL_BITS: u32 = 8;
 pub const GUARD_BAND: f32 = 64.0;
 /// Side of a screen tile of [`RasterMode::Tiled`], in pixels.
 pub const TILE_SIZE: u32 = 32;
+/// 32-bit words per triangle in [`Rasterizer::triangle_words`].
+pub const TRIANGLE_WORDS: usize = 44;
 
 const SUBPIXEL: i64 = 1 << SUBPIXEL_BITS;
 const HALF_PIXEL: i64 = SUBPIXEL / 2;
@@ -622,6 +624,50 @@ impl Rasterizer {
     /// Viewport height in pixels.
     pub fn height(&self) -> u32 {
         self.height
+    }
+
+    /// The set-up triangles as 32-bit words, [`TRIANGLE_WORDS`] per triangle, for a GPU rasterizer
+    /// that walks and interpolates them with the same rules (oit-wgpu's compute path), so both
+    /// produce the same fragments. Layout per triangle: x[3] (i32, 1/256 px), y[3] (i32), z[3]
+    /// (f32), inv_w[3] (f32), normal[3][3] (f32), color[3][3] (f32), inv_area (f32), base[4]
+    /// (f32), has_color (u32), prim (u32), bbox[4] (u32, inclusive x0 y0 x1 y1), 3 words of
+    /// padding.
+    pub fn triangle_words(&self) -> Vec<u32> {
+        let mut out = Vec::with_capacity(self.triangles.len() * TRIANGLE_WORDS);
+        for t in &self.triangles {
+            out.extend(t.x.map(|v| v as u32));
+            out.extend(t.y.map(|v| v as u32));
+            out.extend(t.z.map(f32::to_bits));
+            out.extend(t.inv_w.map(f32::to_bits));
+            for n in t.normal {
+                out.extend(n.to_array().map(f32::to_bits));
+            }
+            for c in t.color {
+                out.extend(c.to_array().map(f32::to_bits));
+            }
+            out.push(t.inv_area.to_bits());
+            out.extend(t.base.to_array().map(f32::to_bits));
+            out.push(u32::from(t.has_color));
+            out.push(t.prim);
+            out.extend(t.bbox);
+            out.extend([0; 3]);
+        }
+        out
+    }
+
+    /// The inclusive pixel boxes of the set-up triangles (x0, y0, x1, y1), in order.
+    pub fn triangle_boxes(&self) -> impl Iterator<Item = [u32; 4]> + '_ {
+        self.triangles.iter().map(|t| t.bbox)
+    }
+
+    /// The shading the fragments get.
+    pub fn shading(&self) -> Shading {
+        self.shading
+    }
+
+    /// The camera's viewing direction (headlight shading).
+    pub fn forward(&self) -> Vec3 {
+        self.forward
     }
 }
 

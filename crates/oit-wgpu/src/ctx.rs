@@ -1,0 +1,442 @@
+//! One frame on the GPU: the frame uniform, the per-pixel resolve state, storage buffers checked
+//! against the limits, geometry passes through a [`Driver`] (compute or hardware rasterizer),
+//! per-pixel kernels, GPU timestamps, and the final image — the GPU twin of oit-cpu's `Ctx`.
+
+use bytemuck::{Pod, Zeroable};
+use oit_core::{Camera, Effect, Frame, Image, OitError, Scene, Settings, Stats};
+
+use crate::gpu::Gpu;
+
+/// WGSL every technique module starts with (after `COMMON_WGSL`): bindings 0 and 1 of group 0 and
+/// the resolve functions.
+pub const TECHNIQUE_PRELUDE: &str =
+    concat!(include_str!("shaders/resolve.wgsl"), "\n", include_str!("shaders/prelude.wgsl"), "\n");
+
+const FINISH_WGSL: &str = include_str!("shaders/finish.wgsl");
+const FILL_WGSL: &str = include_str!("shaders/fill.wgsl");
+
+/// Words of one `PixelState`.
+const STATE_WORDS: u64 = 16;
+
+/// The frame uniform (`FrameUniform` in fragment.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct FrameUniform {
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Which pass of the technique this is.
+    pub pass_index: u32,
+    /// A technique parameter (K, M, a batch, a fill value...).
+    pub param: u32,
+    /// The effect, as `EFFECT_*` in fragment.wgsl.
+    pub effect: u32,
+    /// width × height.
+    pub pixel_count: u32,
+    /// Padding.
+    pub pad: [u32; 2],
+    /// Camera forward (xyz).
+    pub forward: [f32; 4],
+    /// Background (rgb).
+    pub background: [f32; 4],
+    /// near, far, translucency σ per unit, unused.
+    pub lens: [f32; 4],
+}
+
+/// A rasterizer that runs one geometry pass: every fragment of the scene calls the technique's
+/// `capture` function (WGSL in `source`, which starts with [`TECHNIQUE_PRELUDE`]'s bindings).
+pub trait Driver {
+    /// Which path this is.
+    fn path(&self) -> oit_core::RasterPath;
+    /// Runs one geometry pass, returns the fragments generated.
+    fn geometry_pass(
+        &self,
+        ctx: &mut GpuCtx<'_>,
+        source: &str,
+        layout0: &wgpu::BindGroupLayout,
+        group0: &wgpu::BindGroup,
+    ) -> Result<u64, OitError>;
+}
+
+/// Initial contents of a storage buffer.
+#[derive(Clone, Copy, Debug)]
+pub enum Init {
+    /// All zero bits.
+    Zero,
+    /// Every 32-bit word set to this.
+    Fill(u32),
+}
+
+/// Everything a technique needs for one frame on the GPU.
+pub struct GpuCtx<'a> {
+    /// The device.
+    pub gpu: &'a Gpu,
+    /// The scene.
+    pub scene: &'a Scene,
+    /// The camera.
+    pub camera: &'a Camera,
+    /// The settings.
+    pub settings: &'a Settings,
+    /// Pixels in the image.
+    pub pixels: u32,
+    /// Geometry passes so far.
+    pub passes: u32,
+    /// Fragments one pass generates (set by the first).
+    pub fragments: Option<u64>,
+    /// Bytes of per-pixel storage allocated (state excluded, as oit-cpu's count excludes its own).
+    pub storage_bytes: u64,
+    uniform_buffer: wgpu::Buffer,
+    uniform: FrameUniform,
+    /// The per-pixel resolve state.
+    pub state: wgpu::Buffer,
+    timestamps: Option<(wgpu::QuerySet, wgpu::Buffer)>,
+    image: wgpu::Buffer,
+    totals: wgpu::Buffer,
+    gpu_ms: f64,
+    pass_ms: Vec<(String, f64)>,
+}
+
+impl<'a> GpuCtx<'a> {
+    /// Sets up the frame: uniform and resolve state (initialized).
+    pub fn new(
+        gpu: &'a Gpu,
+        scene: &'a Scene,
+        camera: &'a Camera,
+        settings: &'a Settings,
+    ) -> Result<Self, OitError> {
+        let pixels = settings.width * settings.height;
+        let state_bytes = u64::from(pixels) * STATE_WORDS * 4;
+        gpu.check_storage("the per-pixel resolve state", state_bytes)?;
+        let radius = scene.bounds().radius().max(1e-6) / 8.0;
+        let sigma = if scene.objects.is_empty() {
+            1.0
+        } else {
+            scene.objects.iter().map(|o| o.absorption).sum::<f32>() / scene.objects.len() as f32
+        };
+        let uniform = FrameUniform {
+            width: settings.width,
+            height: settings.height,
+            pass_index: 0,
+            param: 0,
+            effect: match settings.effect {
+                Effect::Transparency => 0,
+                Effect::Translucency => 1,
+                Effect::Fresnel => 2,
+                Effect::Complexity => 3,
+            },
+            pixel_count: pixels,
+            pad: [0; 2],
+            forward: camera.forward.extend(0.0).to_array(),
+            background: settings.background.extend(1.0).to_array(),
+            lens: [camera.near, camera.far, sigma / radius, 0.0],
+        };
+        let uniform_buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame uniform"),
+            size: std::mem::size_of::<FrameUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let state = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("resolve state"),
+            size: state_bytes.max(4),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let timestamps = gpu.has_timestamps().then(|| {
+            let set = gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            });
+            let resolve = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps"),
+                size: 16,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            (set, resolve)
+        });
+        let image = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("image"),
+            size: u64::from(pixels).max(1) * 4,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let totals = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("totals"),
+            size: 8,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut ctx = GpuCtx {
+            gpu,
+            scene,
+            camera,
+            settings,
+            pixels,
+            passes: 0,
+            fragments: None,
+            storage_bytes: 0,
+            uniform_buffer,
+            uniform,
+            state,
+            timestamps,
+            image,
+            totals,
+            gpu_ms: 0.0,
+            pass_ms: Vec::new(),
+        };
+        let (image, totals) = (ctx.image.clone(), ctx.totals.clone());
+        ctx.kernel_over(FINISH_WGSL, "init_main", &[&image, &totals], u64::from(pixels), 0, 0, "init")?;
+        Ok(ctx)
+    }
+
+    /// A storage buffer of `words` 32-bit words for the technique, checked against the limits and
+    /// counted in `storage_bytes`.
+    pub fn buffer(&mut self, label: &str, words: u64, init: Init) -> Result<wgpu::Buffer, OitError> {
+        let bytes = words.max(1) * 4;
+        self.gpu.check_storage(label, bytes)?;
+        self.storage_bytes += words * 4;
+        let buffer = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        if let Init::Fill(v) = init {
+            self.fill(&buffer, v)?;
+        }
+        Ok(buffer)
+    }
+
+    /// Sets every word of `buffer` to `value` (a kernel; zero is a plain clear).
+    pub fn fill(&mut self, buffer: &wgpu::Buffer, value: u32) -> Result<(), OitError> {
+        if value == 0 {
+            let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+            encoder.clear_buffer(buffer, 0, None);
+            self.gpu.queue.submit([encoder.finish()]);
+            return Ok(());
+        }
+        self.kernel_over(FILL_WGSL, "fill_main", &[buffer], buffer.size() / 4, 0, value, "fill")
+    }
+
+    /// The layout of group 0 with `n` technique buffers after the uniform and the state.
+    pub fn layout0(&self, n: usize) -> wgpu::BindGroupLayout {
+        let visibility = wgpu::ShaderStages::COMPUTE | wgpu::ShaderStages::FRAGMENT;
+        let mut entries = vec![wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        }];
+        for b in 1..=(n as u32 + 1) {
+            entries.push(wgpu::BindGroupLayoutEntry {
+                binding: b,
+                visibility,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only: false },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            });
+        }
+        self.gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("group 0"),
+            entries: &entries,
+        })
+    }
+
+    /// Group 0 for `buffers` (bound from binding 2), after writing the uniform with this pass's
+    /// index and parameter.
+    pub fn group0(
+        &mut self,
+        buffers: &[&wgpu::Buffer],
+        pass_index: u32,
+        param: u32,
+    ) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
+        self.uniform.pass_index = pass_index;
+        self.uniform.param = param;
+        self.gpu.queue.write_buffer(&self.uniform_buffer, 0, bytemuck::bytes_of(&self.uniform));
+        let layout = self.layout0(buffers.len());
+        let mut entries = vec![
+            wgpu::BindGroupEntry { binding: 0, resource: self.uniform_buffer.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 1, resource: self.state.as_entire_binding() },
+        ];
+        for (i, b) in buffers.iter().enumerate() {
+            entries.push(wgpu::BindGroupEntry { binding: i as u32 + 2, resource: b.as_entire_binding() });
+        }
+        let group = self.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout: &layout,
+            entries: &entries,
+        });
+        (layout, group)
+    }
+
+    /// One geometry pass of `source` (the technique's capture, after [`TECHNIQUE_PRELUDE`]).
+    pub fn geometry_pass(
+        &mut self,
+        driver: &dyn Driver,
+        source: &str,
+        buffers: &[&wgpu::Buffer],
+        pass_index: u32,
+        param: u32,
+    ) -> Result<u64, OitError> {
+        let (layout, group) = self.group0(buffers, pass_index, param);
+        let full = format!("{TECHNIQUE_PRELUDE}{source}");
+        let generated = driver.geometry_pass(self, &full, &layout, &group)?;
+        self.passes += 1;
+        self.fragments.get_or_insert(generated);
+        Ok(generated)
+    }
+
+    /// Runs compute `entry` of `source` (after [`TECHNIQUE_PRELUDE`]) once per pixel.
+    pub fn pixel_kernel(
+        &mut self,
+        source: &str,
+        entry: &str,
+        buffers: &[&wgpu::Buffer],
+        pass_index: u32,
+        param: u32,
+    ) -> Result<(), OitError> {
+        self.kernel_over(source, entry, buffers, u64::from(self.pixels), pass_index, param, entry)
+    }
+
+    /// Runs compute `entry` over `invocations` (in 2D rows of 64 × 65535 when needed).
+    #[expect(clippy::too_many_arguments, reason = "a dispatch is that many things")]
+    pub fn kernel_over(
+        &mut self,
+        source: &str,
+        entry: &str,
+        buffers: &[&wgpu::Buffer],
+        invocations: u64,
+        pass_index: u32,
+        param: u32,
+        label: &str,
+    ) -> Result<(), OitError> {
+        let (layout, group) = self.group0(buffers, pass_index, param);
+        let full = format!("{TECHNIQUE_PRELUDE}{source}");
+        let pipeline = self.gpu.compute_pipeline(&full, entry, &[&layout])?;
+        let (x, y) = dispatch_size(invocations);
+        self.timed(label, |encoder, timestamps| {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(label),
+                timestamp_writes: timestamps,
+            });
+            pass.set_pipeline(&pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            if x > 0 {
+                pass.dispatch_workgroups(x, y, 1);
+            }
+        })
+    }
+
+    /// Records one compute pass with `record`, submits it, and adds its GPU time.
+    pub fn timed(
+        &mut self,
+        label: &str,
+        record: impl FnOnce(&mut wgpu::CommandEncoder, Option<wgpu::ComputePassTimestampWrites<'_>>),
+    ) -> Result<(), OitError> {
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        let writes = self.timestamps.as_ref().map(|(set, _)| wgpu::ComputePassTimestampWrites {
+            query_set: set,
+            beginning_of_pass_write_index: Some(0),
+            end_of_pass_write_index: Some(1),
+        });
+        record(&mut encoder, writes);
+        self.finish_timed(label, encoder)
+    }
+
+    /// Submits `encoder`, whose one pass wrote timestamps 0 and 1 of the frame's query set, and
+    /// adds its GPU time.
+    pub fn finish_timed(&mut self, label: &str, mut encoder: wgpu::CommandEncoder) -> Result<(), OitError> {
+        if let Some((set, resolve)) = &self.timestamps {
+            encoder.resolve_query_set(set, 0..2, resolve, 0);
+            self.gpu.queue.submit([encoder.finish()]);
+            let t = self.gpu.read_u32(resolve)?;
+            let ticks = (u64::from(t[3]) << 32 | u64::from(t[2]))
+                .saturating_sub(u64::from(t[1]) << 32 | u64::from(t[0]));
+            let ms = ticks as f64 * f64::from(self.gpu.queue.get_timestamp_period()) * 1e-6;
+            self.gpu_ms += ms;
+            match self.pass_ms.iter_mut().find(|(l, _)| l == label) {
+                Some((_, total)) => *total += ms,
+                None => self.pass_ms.push((label.to_string(), ms)),
+            }
+        } else {
+            self.gpu.queue.submit([encoder.finish()]);
+        }
+        Ok(())
+    }
+
+    /// Timestamp writes for a render pass (hardware driver), or none.
+    pub fn render_timestamps(&self) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
+        self.timestamps.as_ref().map(|(set, _)| wgpu::RenderPassTimestampWrites {
+            query_set: set,
+            beginning_of_pass_write_index: Some(0),
+            end_of_pass_write_index: Some(1),
+        })
+    }
+
+    /// Resolves the state into the frame and its stats.
+    pub fn finish(mut self, path: oit_core::RasterPath) -> Result<Frame, OitError> {
+        let (image_buf, totals) = (self.image.clone(), self.totals.clone());
+        self.fill(&totals, 0)?;
+        self.kernel_over(
+            FINISH_WGSL,
+            "totals_main",
+            &[&image_buf, &totals],
+            u64::from(self.pixels),
+            0,
+            0,
+            "resolve",
+        )?;
+        self.kernel_over(
+            FINISH_WGSL,
+            "finish_main",
+            &[&image_buf, &totals],
+            u64::from(self.pixels),
+            0,
+            0,
+            "resolve",
+        )?;
+        let words = self.gpu.read_u32(&image_buf)?;
+        let t = self.gpu.read_u32(&totals)?;
+        let mut image = Image {
+            width: self.settings.width,
+            height: self.settings.height,
+            pixels: words[..self.pixels as usize].iter().map(|w| w.to_le_bytes()).collect(),
+        };
+        if self.settings.effect == Effect::Complexity {
+            oit_core::text::draw_heat_legend(&mut image, t[1].max(1));
+        }
+        let fragments = self.fragments.unwrap_or(0);
+        let captured = u64::from(t[0]);
+        let _ = path;
+        Ok(Frame {
+            image,
+            layers: None,
+            stats: Stats {
+                geometry_passes: self.passes,
+                fragments,
+                captured,
+                lost: fragments.saturating_sub(captured),
+                storage_bytes: self.storage_bytes,
+                wall_ms: 0.0,
+                gpu_ms: self.timestamps.is_some().then_some(self.gpu_ms),
+                gpu_pass_ms: self.pass_ms,
+            },
+        })
+    }
+}
+
+/// Workgroups of 64 for `invocations`, as (x, y) with x ≤ 65535.
+pub fn dispatch_size(invocations: u64) -> (u32, u32) {
+    let groups = invocations.div_ceil(64);
+    if groups <= 65_535 { (groups as u32, 1) } else { (65_535, groups.div_ceil(65_535) as u32) }
+}

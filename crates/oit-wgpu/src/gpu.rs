@@ -1,0 +1,200 @@
+//! The device: adapter choice, the features and limits oit asks for, and small helpers (shader
+//! modules with the shared WGSL prepended, storage buffers checked against the limits, blocking
+//! readback, a pipeline cache).
+
+use std::collections::HashMap;
+use std::hash::{Hash, Hasher};
+use std::sync::{Arc, Mutex};
+
+use oit_core::OitError;
+
+/// The WGSL every module starts with: oit-core's rules and the fragment contract.
+pub const COMMON_WGSL: &str =
+    concat!(include_str!("shaders/common.wgsl"), "\n", include_str!("shaders/fragment.wgsl"));
+
+/// Features oit needs on every adapter.
+pub fn required_features() -> wgpu::Features {
+    wgpu::Features::SHADER_INT64
+        | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX
+        | wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS
+}
+
+/// Features used when the adapter has them.
+pub fn optional_features() -> wgpu::Features {
+    wgpu::Features::TIMESTAMP_QUERY
+        | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
+        | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES
+        | wgpu::Features::FLOAT32_BLENDABLE
+}
+
+/// An open device with what oit learned about it.
+pub struct Gpu {
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// What the adapter says about itself.
+    pub info: wgpu::AdapterInfo,
+    /// Features enabled on the device.
+    pub features: wgpu::Features,
+    /// Limits of the device (the adapter's own, requested in full).
+    pub limits: wgpu::Limits,
+    pipelines: Mutex<HashMap<u64, Arc<wgpu::ComputePipeline>>>,
+}
+
+fn instance() -> wgpu::Instance {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+    desc.backends = wgpu::Backends::VULKAN;
+    wgpu::Instance::new(desc)
+}
+
+/// Every Vulkan adapter wgpu finds.
+pub fn adapters() -> Vec<wgpu::Adapter> {
+    pollster::block_on(instance().enumerate_adapters(wgpu::Backends::VULKAN))
+}
+
+impl Gpu {
+    /// Opens an adapter: the first whose name contains `filter` (case-insensitive), else the one
+    /// `OIT_ADAPTER` names, else the first discrete GPU, else any.
+    pub fn new(filter: Option<&str>) -> Result<Gpu, OitError> {
+        let env = std::env::var("OIT_ADAPTER").ok();
+        let filter = filter.map(str::to_owned).or(env);
+        let all = adapters();
+        if all.is_empty() {
+            return Err(OitError::Device(
+                "no Vulkan adapter found: install a Vulkan driver (e.g. `apt-get install mesa-vulkan-drivers` for lavapipe)".into(),
+            ));
+        }
+        let names: Vec<String> = all.iter().map(|a| a.get_info().name).collect();
+        let adapter = match &filter {
+            Some(f) => {
+                let f = f.to_lowercase();
+                all.into_iter().find(|a| a.get_info().name.to_lowercase().contains(&f)).ok_or_else(|| {
+                    OitError::Device(format!(
+                        "no adapter matches '{f}'; adapters found: {}",
+                        names.join(", ")
+                    ))
+                })?
+            }
+            None => {
+                let discrete =
+                    all.iter().position(|a| a.get_info().device_type == wgpu::DeviceType::DiscreteGpu);
+                all.into_iter().nth(discrete.unwrap_or(0)).expect("non-empty")
+            }
+        };
+        let info = adapter.get_info();
+        let missing = required_features() - adapter.features();
+        if !missing.is_empty() {
+            return Err(OitError::Device(format!(
+                "adapter '{}' lacks {missing:?}, which oit-wgpu needs",
+                info.name
+            )));
+        }
+        let features = required_features() | (optional_features() & adapter.features());
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("oit"),
+            required_features: features,
+            required_limits: limits.clone(),
+            ..Default::default()
+        }))
+        .map_err(|e| OitError::Device(format!("cannot open '{}': {e}", info.name)))?;
+        Ok(Gpu { device, queue, info, features, limits, pipelines: Mutex::new(HashMap::new()) })
+    }
+
+    /// True when GPU timestamps can be taken.
+    pub fn has_timestamps(&self) -> bool {
+        self.features.contains(wgpu::Features::TIMESTAMP_QUERY)
+    }
+
+    /// A compute pipeline for `entry` of `COMMON_WGSL + source`, cached by source and entry.
+    pub fn compute_pipeline(
+        &self,
+        source: &str,
+        entry: &str,
+        layouts: &[&wgpu::BindGroupLayout],
+    ) -> Result<Arc<wgpu::ComputePipeline>, OitError> {
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        source.hash(&mut h);
+        entry.hash(&mut h);
+        layouts.len().hash(&mut h);
+        let key = h.finish();
+        if let Some(p) =
+            self.pipelines.lock().map_err(|_| OitError::Device("pipeline cache poisoned".into()))?.get(&key)
+        {
+            return Ok(p.clone());
+        }
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(entry),
+            source: wgpu::ShaderSource::Wgsl(format!("{COMMON_WGSL}\n{source}").into()),
+        });
+        let layout = self.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(entry),
+            bind_group_layouts: &layouts.iter().map(|l| Some(*l)).collect::<Vec<_>>(),
+            immediate_size: 0,
+        });
+        let pipeline = self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: Some(&layout),
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(OitError::Device(format!("shader '{entry}' failed to build: {e}")));
+        }
+        let p = Arc::new(pipeline);
+        self.pipelines
+            .lock()
+            .map_err(|_| OitError::Device("pipeline cache poisoned".into()))?
+            .insert(key, p.clone());
+        Ok(p)
+    }
+
+    /// Checks a storage buffer of `bytes` against the device's limits before allocating it.
+    pub fn check_storage(&self, what: &str, bytes: u64) -> Result<(), OitError> {
+        let binding = u64::from(self.limits.max_storage_buffer_binding_size);
+        let buffer = self.limits.max_buffer_size;
+        let (limit_name, limit) = if binding < buffer {
+            ("max_storage_buffer_binding_size", binding)
+        } else {
+            ("max_buffer_size", buffer)
+        };
+        if bytes > limit {
+            return Err(OitError::TooLarge {
+                what: what.into(),
+                needed: bytes,
+                limit_name: format!("{limit_name} of '{}'", self.info.name),
+                limit,
+                hint: format!(
+                    "use a smaller --size (storage grows with pixels), a smaller K, or the cpu backend; {:.0}% of this would fit",
+                    100.0 * limit as f64 / bytes as f64
+                ),
+            });
+        }
+        Ok(())
+    }
+
+    /// Reads a buffer back as u32 words (blocking).
+    pub fn read_u32(&self, buffer: &wgpu::Buffer) -> Result<Vec<u32>, OitError> {
+        let size = buffer.size();
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+        self.queue.submit([encoder.finish()]);
+        let slice = staging.slice(..);
+        slice.map_async(wgpu::MapMode::Read, |_| {});
+        self.device
+            .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
+            .map_err(|e| OitError::Device(format!("waiting for the GPU failed: {e}")))?;
+        let data = slice.get_mapped_range().map_err(|e| OitError::Device(format!("readback failed: {e}")))?;
+        Ok(bytemuck::cast_slice(&data).to_vec())
+    }
+}

@@ -1,0 +1,138 @@
+//! oit-wgpu: oit's techniques on wgpu, headless, on two capture paths:
+//!
+//! - **compute** (`RasterPath::Compute`): the papers' CUDA rasterizer as a compute shader, with
+//!   oit-cpu's fixed-point setup and rules, so its fragments equal oit-cpu's;
+//! - **hardware** (`RasterPath::Hardware`): the GPU's own rasterizer.
+//!
+//! Each technique's WGSL sits next to its Rust in `src/technique/`; the rules shared with oit-core
+//! are in `src/shaders/common.wgsl`.
+
+mod ctx;
+mod gpu;
+mod raster;
+mod technique;
+
+use std::sync::OnceLock;
+use std::time::Instant;
+
+use oit_core::{
+    Backend, Camera, Capabilities, Frame, OitError, RasterPath, Scene, Settings, Technique, TechniqueKind,
+};
+
+pub use crate::ctx::{Driver, FrameUniform, GpuCtx, Init, TECHNIQUE_PRELUDE};
+pub use crate::gpu::{COMMON_WGSL, Gpu, adapters};
+pub use crate::raster::ComputeRaster;
+
+/// The rasterizers of one frame: the scene's, and (made on demand) one for the instances'
+/// bounding boxes, on the same path (bdp and adp render boxes for each pixel's depth range).
+pub struct Drivers<'a> {
+    /// Rasterizes the scene.
+    pub scene: Box<dyn Driver + 'a>,
+    /// Makes a rasterizer of the instances' bounding boxes.
+    pub boxes: Box<dyn Fn() -> Result<Box<dyn Driver + 'a>, OitError> + 'a>,
+}
+
+/// The wgpu backend. The device opens on first use.
+#[derive(Default)]
+pub struct WgpuBackend {
+    /// Adapter name filter (substring); `None` reads `OIT_ADAPTER`, else prefers a discrete GPU.
+    pub adapter: Option<String>,
+    gpu: OnceLock<Result<Gpu, String>>,
+}
+
+impl WgpuBackend {
+    /// A backend for the adapter whose name contains `filter`.
+    pub fn new(adapter: Option<String>) -> Self {
+        WgpuBackend { adapter, gpu: OnceLock::new() }
+    }
+
+    /// The device, opened on first use.
+    pub fn gpu(&self) -> Result<&Gpu, OitError> {
+        self.gpu
+            .get_or_init(|| Gpu::new(self.adapter.as_deref()).map_err(|e| e.to_string()))
+            .as_ref()
+            .map_err(|e| OitError::Device(e.clone()))
+    }
+
+    /// The raster path a technique runs on when the settings name none: the graphics pipeline for
+    /// the techniques the papers wrote for it, the compute rasterizer for the CUDA-rasterizer ones.
+    pub fn default_path(technique: Technique) -> RasterPath {
+        match technique.kind() {
+            TechniqueKind::Mdts | TechniqueKind::Mdts64 | TechniqueKind::Fabs | TechniqueKind::Mlp => {
+                RasterPath::Compute
+            }
+            _ => RasterPath::Hardware,
+        }
+    }
+}
+
+impl Backend for WgpuBackend {
+    fn name(&self) -> &str {
+        "wgpu"
+    }
+
+    fn capabilities(&self) -> Capabilities {
+        match self.gpu() {
+            Ok(gpu) => Capabilities {
+                device: format!("{} ({:?}, {})", gpu.info.name, gpu.info.device_type, gpu.info.driver),
+                techniques: vec![TechniqueKind::Reference, TechniqueKind::Fabs],
+                raster_paths: vec![RasterPath::Compute],
+                limits: vec![
+                    ("max_buffer_size".into(), gpu.limits.max_buffer_size.to_string()),
+                    (
+                        "max_storage_buffer_binding_size".into(),
+                        gpu.limits.max_storage_buffer_binding_size.to_string(),
+                    ),
+                    ("max_texture_dimension_2d".into(), gpu.limits.max_texture_dimension_2d.to_string()),
+                    ("timestamps".into(), gpu.has_timestamps().to_string()),
+                    (
+                        "FLOAT32_BLENDABLE".into(),
+                        gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE).to_string(),
+                    ),
+                ],
+            },
+            Err(e) => Capabilities { device: format!("none: {e}"), ..Default::default() },
+        }
+    }
+
+    fn render(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
+        settings.validate()?;
+        scene.validate()?;
+        let gpu = self.gpu()?;
+        let start = Instant::now();
+        let path = settings.raster.unwrap_or(RasterPath::Compute);
+        let drivers = match path {
+            RasterPath::Compute => Drivers {
+                scene: Box::new(ComputeRaster::new(gpu, scene, camera, settings, false)?),
+                boxes: Box::new(move || {
+                    Ok(Box::new(ComputeRaster::new(gpu, scene, camera, settings, true)?) as Box<dyn Driver>)
+                }),
+            },
+            other => {
+                return Err(OitError::Unsupported {
+                    backend: "wgpu".into(),
+                    what: format!("the {other} raster path"),
+                });
+            }
+        };
+        let mut ctx = GpuCtx::new(gpu, scene, camera, settings)?;
+        let mut layers = None;
+        match settings.technique {
+            Technique::Reference => layers = Some(technique::reference::render(&mut ctx, &drivers)?),
+            Technique::Fabs { k } => technique::fabs::render(&mut ctx, &drivers, k)?,
+            Technique::Dp => technique::dp::render(&mut ctx, &drivers)?,
+            Technique::Ddp => technique::ddp::render(&mut ctx, &drivers)?,
+            Technique::WeightedAverage | Technique::WeightedSum => {
+                technique::weighted::render(&mut ctx, &drivers)?
+            }
+            Technique::Bdp { .. } => technique::bdp::render(&mut ctx, &drivers)?,
+            Technique::Adp => technique::adp::render(&mut ctx, &drivers)?,
+            Technique::Mdts { .. } | Technique::Mdts64 { .. } => technique::mdts::render(&mut ctx, &drivers)?,
+            Technique::Mlp { .. } => technique::mlp::render(&mut ctx, &drivers)?,
+        }
+        let mut frame = ctx.finish(path)?;
+        frame.layers = layers;
+        frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok(frame)
+    }
+}

@@ -1,0 +1,35 @@
+// The last kernels of every frame: the state becomes sRGB8 pixels; totals for the stats.
+@group(0) @binding(2) var<storage, read_write> image: array<u32>;
+// [captured total, max captured]
+@group(0) @binding(3) var<storage, read_write> totals: array<atomic<u32>>;
+
+@compute @workgroup_size(64)
+fn totals_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let px = kernel_pixel(gid, groups);
+    if (px >= fu.pixel_count) {
+        return;
+    }
+    let c = state[px].captured;
+    if (c > 0u) {
+        atomicAdd(&totals[0], c);
+        atomicMax(&totals[1], c);
+    }
+}
+
+@compute @workgroup_size(64)
+fn finish_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let px = kernel_pixel(gid, groups);
+    if (px >= fu.pixel_count) {
+        return;
+    }
+    image[px] = srgb_pixel(finish_color(px, atomicLoad(&totals[1])));
+}
+
+@compute @workgroup_size(64)
+fn init_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let px = kernel_pixel(gid, groups);
+    if (px >= fu.pixel_count) {
+        return;
+    }
+    state_init(px);
+}

@@ -1,0 +1,37 @@
+// What a capture function receives: one fragment, after raster and shading.
+struct Fragment {
+    pixel: u32,
+    depth: f32,
+    prim: u32,
+    color: vec4<f32>,
+    normal: vec3<f32>,
+}
+
+// Every technique's group 0, binding 0: what the pass needs to know.
+struct FrameUniform {
+    width: u32,
+    height: u32,
+    pass_index: u32,
+    param: u32,
+    effect: u32,
+    pixel_count: u32,
+    pad0: u32,
+    pad1: u32,
+    forward: vec4<f32>,
+    background: vec4<f32>,
+    // near, far, sigma / unit, unused
+    lens: vec4<f32>,
+}
+
+const EFFECT_TRANSPARENCY: u32 = 0u;
+const EFFECT_TRANSLUCENCY: u32 = 1u;
+const EFFECT_FRESNEL: u32 = 2u;
+const EFFECT_COMPLEXITY: u32 = 3u;
+
+// The payload word a fragment carries for the effect: RGBA8, or the packed normal for Fresnel.
+fn payload(f: Fragment, effect: u32) -> u32 {
+    if (effect == EFFECT_FRESNEL) {
+        return pack_normal(f.normal);
+    }
+    return pack_rgba8(f.color);
+}

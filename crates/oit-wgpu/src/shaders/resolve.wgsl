@@ -1,0 +1,126 @@
+// The per-pixel resolve of oit-cpu (crates/oit-cpu/src/resolve.rs) in WGSL: captured fragments
+// are pushed nearest first (and, for dual depth peeling, farthest first from the back); `finish`
+// turns the state into an sRGB8 pixel. Needs `fu: FrameUniform` and `state` bound by the includer.
+
+struct PixelState {
+    fr: f32,
+    fg: f32,
+    fb: f32,
+    transmittance: f32,
+    br: f32,
+    bg: f32,
+    bb: f32,
+    has_back: u32,
+    captured: u32,
+    fresnel: f32,
+    or: f32,
+    og: f32,
+    ob: f32,
+    entry_dist: f32,
+    entry_rgba: u32,
+    has_entry: u32,
+}
+
+fn state_init(px: u32) {
+    var s: PixelState;
+    s.transmittance = 1.0;
+    s.fresnel = 1.0;
+    state[px] = s;
+}
+
+fn linear_depth(d: f32) -> f32 {
+    let n = fu.lens.x;
+    let f = fu.lens.y;
+    return n * f / (f - d * (f - n));
+}
+
+fn push(px: u32, depth: f32, payload: u32) {
+    var s = state[px];
+    s.captured += 1u;
+    if (fu.effect == EFFECT_TRANSPARENCY) {
+        let c = unpack_rgba8(payload);
+        let add = s.transmittance * c.w * c.xyz;
+        s.fr += add.x;
+        s.fg += add.y;
+        s.fb += add.z;
+        s.transmittance *= 1.0 - c.w;
+    } else if (fu.effect == EFFECT_FRESNEL) {
+        let n = unpack_normal(payload);
+        s.fresnel *= schlick_transmittance(dot(n, fu.forward.xyz));
+    } else if (fu.effect == EFFECT_TRANSLUCENCY) {
+        let dist = linear_depth(depth);
+        if (s.has_entry == 0u) {
+            s.has_entry = 1u;
+            s.entry_dist = dist;
+            s.entry_rgba = payload;
+        } else {
+            s.has_entry = 0u;
+            let c = unpack_rgba8(s.entry_rgba);
+            let absorb = (vec3<f32>(1.0) - c.xyz) * fu.lens.z;
+            let o = absorb * max(dist - s.entry_dist, 0.0);
+            s.or += o.x;
+            s.og += o.y;
+            s.ob += o.z;
+        }
+    }
+    state[px] = s;
+}
+
+// Dual depth peeling's back half (transparency only): over-blend in front of what is behind.
+fn push_back(px: u32, payload: u32) {
+    var s = state[px];
+    s.captured += 1u;
+    let c = unpack_rgba8(payload);
+    var back = fu.background.xyz;
+    if (s.has_back != 0u) {
+        back = vec3<f32>(s.br, s.bg, s.bb);
+    }
+    back = c.w * c.xyz + (1.0 - c.w) * back;
+    s.br = back.x;
+    s.bg = back.y;
+    s.bb = back.z;
+    s.has_back = 1u;
+    state[px] = s;
+}
+
+fn heat(t_in: f32) -> vec3<f32> {
+    var stops = array<vec3<f32>, 5>(
+        vec3<f32>(0.0, 0.0, 0.0),
+        vec3<f32>(0.05, 0.1, 0.6),
+        vec3<f32>(0.6, 0.05, 0.5),
+        vec3<f32>(1.0, 0.5, 0.05),
+        vec3<f32>(1.0, 1.0, 1.0),
+    );
+    var t = t_in;
+    if (!(t >= 0.0)) {
+        t = 0.0;
+    }
+    t = min(t, 1.0) * 4.0;
+    let i = min(u32(floor(t)), 3u);
+    return mix(stops[i], stops[i + 1u], t - f32(i));
+}
+
+// The final linear colour; `max_captured` scales the heat map.
+fn finish_color(px: u32, max_captured: u32) -> vec3<f32> {
+    let s = state[px];
+    let bg = fu.background.xyz;
+    if (fu.effect == EFFECT_TRANSPARENCY) {
+        var back = bg;
+        if (s.has_back != 0u) {
+            back = vec3<f32>(s.br, s.bg, s.bb);
+        }
+        return vec3<f32>(s.fr, s.fg, s.fb) + s.transmittance * back;
+    } else if (fu.effect == EFFECT_FRESNEL) {
+        return bg * s.fresnel;
+    } else if (fu.effect == EFFECT_TRANSLUCENCY) {
+        return bg * exp(-vec3<f32>(s.or, s.og, s.ob));
+    }
+    if (s.captured == 0u) {
+        return bg;
+    }
+    return heat(f32(s.captured) / f32(max(max_captured, 1u)));
+}
+
+fn srgb_pixel(c: vec3<f32>) -> u32 {
+    return linear_to_srgb8(c.x) | (linear_to_srgb8(c.y) << 8u) | (linear_to_srgb8(c.z) << 16u) | (255u << 24u);
+}

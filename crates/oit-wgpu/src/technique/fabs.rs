@@ -1,0 +1,20 @@
+//! `fabs:K` on the GPU (see oit-cpu's `technique/fabs.rs` and `fabs.wgsl`).
+
+use oit_core::OitError;
+
+use crate::Drivers;
+use crate::ctx::{GpuCtx, Init};
+
+const WGSL: &str = include_str!("fabs.wgsl");
+
+pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>, k: Option<u32>) -> Result<(), OitError> {
+    let k = match k {
+        Some(k) => k,
+        None => super::count(ctx, drivers.scene.as_ref())?.1.max(1),
+    };
+    let px = u64::from(ctx.pixels);
+    let counters = ctx.buffer("fabs counters", px, Init::Zero)?;
+    let slots = ctx.buffer("fabs slots", px * u64::from(k) * 2, Init::Zero)?;
+    ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &[&counters, &slots], 0, k)?;
+    ctx.pixel_kernel(WGSL, "resolve_main", &[&counters, &slots], 0, k)
+}

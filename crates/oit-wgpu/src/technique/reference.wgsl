@@ -1,0 +1,38 @@
+// reference: every fragment in a per-pixel list (offsets from a counting pass and a prefix sum),
+// sorted by (depth, primitive id), composited front to back (in f32 on the GPU; oit-cpu's
+// reference composites in f64).
+@group(0) @binding(2) var<storage, read_write> offsets: array<u32>;
+@group(0) @binding(3) var<storage, read_write> cursor: array<atomic<u32>>;
+@group(0) @binding(4) var<storage, read_write> keys: array<u64>;
+@group(0) @binding(5) var<storage, read_write> payloads: array<u32>;
+
+fn capture(f: Fragment) {
+    let slot = offsets[f.pixel] + atomicAdd(&cursor[f.pixel], 1u);
+    keys[slot] = (u64(depth_bits(f.depth)) << 32u) | u64(f.prim);
+    payloads[slot] = payload(f, fu.effect);
+}
+
+@compute @workgroup_size(64)
+fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let px = kernel_pixel(gid, groups);
+    if (px >= fu.pixel_count) {
+        return;
+    }
+    let lo = offsets[px];
+    let hi = offsets[px + 1u];
+    for (var i = lo + 1u; i < hi; i++) {
+        let k = keys[i];
+        let p = payloads[i];
+        var j = i;
+        while (j > lo && keys[j - 1u] > k) {
+            keys[j] = keys[j - 1u];
+            payloads[j] = payloads[j - 1u];
+            j -= 1u;
+        }
+        keys[j] = k;
+        payloads[j] = p;
+    }
+    for (var i = lo; i < hi; i++) {
+        push(px, bitcast<f32>(u32(keys[i] >> 32u)), payloads[i]);
+    }
+}
