@@ -3,14 +3,87 @@
 //! Adding a backend is one line in [`COMPILED`] (behind its cargo feature); its name is already in
 //! [`KNOWN`], so asking for it in a build without it says which feature to turn on.
 
-use oit_core::{Backend, OitError};
+use oit_core::{Backend, OitError, OnPath, RasterPath};
 
 /// Options that shape how a backend is built.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub struct BackendOptions {
     /// Worker threads of the CPU backend (`None`: one per core).
     #[cfg_attr(not(feature = "cpu"), expect(dead_code, reason = "only the cpu backend has threads"))]
     pub threads: Option<usize>,
+    /// GPU adapter name filter.
+    #[cfg_attr(not(feature = "wgpu"), expect(dead_code, reason = "only GPU backends have adapters"))]
+    pub adapter: Option<String>,
+}
+
+/// Which raster paths to run each backend on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RasterChoice {
+    /// The backend's own choice per technique.
+    Default,
+    /// Every path the backend has: one row each.
+    All,
+    /// This one (backends without it are skipped with a note).
+    One(RasterPath),
+}
+
+/// Pins each backend to the raster paths `choice` asks for.
+pub fn with_paths(
+    list: Vec<Box<dyn Backend>>,
+    choice: RasterChoice,
+) -> Result<Vec<Box<dyn Backend>>, OitError> {
+    let mut out: Vec<Box<dyn Backend>> = Vec::new();
+    for backend in list {
+        match choice {
+            RasterChoice::Default => out.push(backend),
+            RasterChoice::All => {
+                let paths = backend.capabilities().raster_paths;
+                if paths.len() <= 1 {
+                    out.push(backend);
+                    continue;
+                }
+                let name = backend.name().to_string();
+                let shared: std::sync::Arc<dyn Backend> = std::sync::Arc::from(backend);
+                for path in paths {
+                    out.push(Box::new(OnPath { backend: Box::new(Shared(shared.clone())), path }));
+                }
+                let _ = name;
+            }
+            RasterChoice::One(path) => {
+                if backend.capabilities().raster_paths.contains(&path) {
+                    out.push(Box::new(OnPath { backend, path }));
+                } else {
+                    eprintln!("note: backend {} has no {path} raster path; skipped", backend.name());
+                }
+            }
+        }
+    }
+    if out.is_empty() {
+        return Err(OitError::InvalidSettings(
+            "no selected backend has the raster path asked for (see `oit info`)".into(),
+        ));
+    }
+    Ok(out)
+}
+
+/// One backend behind several [`OnPath`]s (one device opened once).
+struct Shared(std::sync::Arc<dyn Backend>);
+
+impl Backend for Shared {
+    fn name(&self) -> &str {
+        self.0.name()
+    }
+    fn capabilities(&self) -> oit_core::Capabilities {
+        self.0.capabilities()
+    }
+    fn render(
+        &self,
+        scene: &oit_core::Scene,
+        camera: &oit_core::Camera,
+        settings: &oit_core::Settings,
+    ) -> Result<oit_core::Frame, OitError> {
+        self.0.render(scene, camera, settings)
+    }
 }
 
 /// Builds a backend, or says why its device is not there.
@@ -23,6 +96,8 @@ pub type Probe = (&'static str, Result<Box<dyn Backend>, OitError>);
 const COMPILED: &[(&str, Constructor)] = &[
     #[cfg(feature = "cpu")]
     ("cpu", cpu),
+    #[cfg(feature = "wgpu")]
+    ("wgpu", wgpu),
 ];
 
 /// Every backend oit has, and the cargo feature that compiles it in.
@@ -31,6 +106,14 @@ const KNOWN: &[(&str, &str)] = &[("cpu", "cpu"), ("wgpu", "wgpu"), ("vulkan", "v
 #[cfg(feature = "cpu")]
 fn cpu(options: &BackendOptions) -> Result<Box<dyn Backend>, OitError> {
     Ok(Box::new(oit_cpu::CpuBackend { threads: options.threads, ..Default::default() }))
+}
+
+#[cfg(feature = "wgpu")]
+fn wgpu(options: &BackendOptions) -> Result<Box<dyn Backend>, OitError> {
+    let backend = oit_wgpu::WgpuBackend::new(options.adapter.clone());
+    // open the device now, so a missing one is reported (and skipped by `all`) up front
+    backend.gpu()?;
+    Ok(Box::new(backend))
 }
 
 /// The names of the backends compiled in.

@@ -66,14 +66,16 @@ struct CompareJson {
     max_error: f64,
 }
 
-const HEADERS: [(&str, usize); 9] = [
+const HEADERS: [(&str, usize); 11] = [
     ("technique", 10),
     ("backend", 7),
+    ("raster", 8),
     ("passes", 6),
     ("fragments", 10),
     ("lost", 8),
     ("storage", 10),
     ("time (ms)", 9),
+    ("GPU (ms)", 8),
     ("EPR (%)", 8),
     ("PSNR (dB)", 9),
 ];
@@ -180,11 +182,13 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
                 output::print(&table.row(&[
                     label.clone(),
                     name.to_string(),
+                    output::raster_name(backend.as_ref(), &settings),
                     s.geometry_passes.to_string(),
                     s.fragments.to_string(),
                     s.lost.to_string(),
                     output::bytes(s.storage_bytes),
                     format!("{:.2}", s.wall_ms),
+                    s.gpu_ms.map_or_else(|| "-".to_string(), |g| format!("{g:.2}")),
                     output::percent(acc.epr),
                     output::psnr(acc.psnr),
                 ]))?;

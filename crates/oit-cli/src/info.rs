@@ -60,7 +60,7 @@ pub fn run(args: &InfoArgs) -> Result<Outcome, OitError> {
     if args.threads == Some(0) {
         return Err(OitError::InvalidSettings("--threads must be at least 1".into()));
     }
-    let backends: Vec<BackendInfo> = probe_all(&BackendOptions { threads: args.threads })
+    let backends: Vec<BackendInfo> = probe_all(&BackendOptions { threads: args.threads, adapter: None })
         .into_iter()
         .map(|(name, result)| match result {
             Ok(backend) => {

@@ -5,11 +5,11 @@ use std::path::Path;
 
 use clap::Args;
 use oit_core::{
-    Backend, BdpMode, BoundsMode, Camera, Effect, OitError, Scene, Settings, Shading, Technique, View,
-    load_scene, parse_rgb, parse_size,
+    Backend, BdpMode, BoundsMode, Camera, Effect, OitError, RasterPath, Scene, Settings, Shading, Technique,
+    View, load_scene, parse_rgb, parse_size,
 };
 
-use crate::backends::{BackendOptions, backends};
+use crate::backends::{BackendOptions, RasterChoice, backends, with_paths};
 
 /// Options shared by `render`, `compare` and `sweep`.
 #[derive(Args, Clone, Debug)]
@@ -80,6 +80,17 @@ pub struct SceneArgs {
     /// Worker threads of the cpu backend [default: one per core].
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
+
+    /// Capture path of the GPU backends: hardware (the graphics pipeline), compute (a compute-shader
+    /// rasterizer with oit-cpu's rules), or all (one row per path). The cpu backend has one path,
+    /// cpu [default: the backend's choice per technique; all when --backend all].
+    #[arg(long, value_name = "PATH")]
+    pub raster: Option<String>,
+
+    /// GPU adapter to use: a substring of its name (see `oit info`); also read from OIT_ADAPTER
+    /// [default: the first discrete GPU, else any].
+    #[arg(long, value_name = "NAME")]
+    pub adapter: Option<String>,
 }
 
 /// Everything a command needs to render, checked.
@@ -132,7 +143,19 @@ impl SceneArgs {
         // Checks the angles before the scene is loaded (the unit box stands in for its bounds).
         let unit = oit_core::Aabb { min: oit_core::glam::Vec3::ZERO, max: oit_core::glam::Vec3::ONE };
         Camera::orbit(&unit, view, width as f32 / height as f32)?;
-        let backends = backends(&self.backend, &BackendOptions { threads: self.threads })?;
+        let raster = match self.raster.as_deref().map(str::to_ascii_lowercase).as_deref() {
+            None => {
+                if self.backend.split(',').any(|b| b.trim().eq_ignore_ascii_case("all")) {
+                    RasterChoice::All
+                } else {
+                    RasterChoice::Default
+                }
+            }
+            Some("all") => RasterChoice::All,
+            Some(p) => RasterChoice::One(p.parse::<RasterPath>()?),
+        };
+        let options = BackendOptions { threads: self.threads, adapter: self.adapter.clone() };
+        let backends = with_paths(backends(&self.backend, &options)?, raster)?;
         let scene = load_scene(&self.scene)?;
         scene.validate()?;
         let prepared = Prepared { scene, settings, view, backends };

@@ -3,7 +3,7 @@
 
 use std::io::Write;
 
-use oit_core::{Backend, Camera, RasterPath, Settings, Stats, View};
+use oit_core::{Backend, Camera, Settings, Stats, View};
 use serde::Serialize;
 
 use oit_core::OitError;
@@ -32,11 +32,7 @@ pub fn error_line(message: &str) {
 
 /// The raster path a frame was captured with: the one asked for, or the backend's first.
 pub fn raster_name(backend: &dyn Backend, settings: &Settings) -> String {
-    settings
-        .raster
-        .or_else(|| backend.capabilities().raster_paths.first().copied())
-        .unwrap_or(RasterPath::Cpu)
-        .to_string()
+    backend.raster_path(settings).to_string()
 }
 
 /// Bytes in KiB/MiB/GiB.

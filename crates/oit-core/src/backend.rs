@@ -38,6 +38,38 @@ pub trait Backend {
     fn capabilities(&self) -> Capabilities;
     /// Renders one frame. Bad input is an error, never a panic.
     fn render(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<Frame, OitError>;
+    /// The raster path `render` takes with these settings (the one they name, else the
+    /// backend's default for the technique).
+    fn raster_path(&self, settings: &Settings) -> RasterPath {
+        settings
+            .raster
+            .or_else(|| self.capabilities().raster_paths.first().copied())
+            .unwrap_or(RasterPath::Cpu)
+    }
+}
+
+/// A backend pinned to one raster path: `render` runs with `settings.raster` set to it. This is
+/// how a front end lists one row per backend × path.
+pub struct OnPath {
+    /// The backend.
+    pub backend: Box<dyn Backend>,
+    /// Its path.
+    pub path: RasterPath,
+}
+
+impl Backend for OnPath {
+    fn name(&self) -> &str {
+        self.backend.name()
+    }
+    fn capabilities(&self) -> Capabilities {
+        self.backend.capabilities()
+    }
+    fn render(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
+        self.backend.render(scene, camera, &Settings { raster: Some(self.path), ..settings.clone() })
+    }
+    fn raster_path(&self, _settings: &Settings) -> RasterPath {
+        self.path
+    }
 }
 
 /// K one-fragment buckets per pixel, each updated concurrently with MAX on a 32-bit word (the

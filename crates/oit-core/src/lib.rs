@@ -30,7 +30,7 @@ mod technique;
 pub mod text;
 
 pub use backend::{
-    AtomicFragmentList, Backend, BucketArray, Capabilities, Compositor, DepthHistogram, Sample,
+    AtomicFragmentList, Backend, BucketArray, Capabilities, Compositor, DepthHistogram, OnPath, Sample,
 };
 pub use camera::{Camera, View};
 pub use error::OitError;

@@ -1,14 +1,33 @@
-//! `adp` on the GPU — being ported from oit-cpu's `technique/adp.rs`.
+//! `adp` on the GPU: adaptive bucket depth peeling (Liu et al., HPG 2009, section 3.3), the same
+//! passes, storage and resolve as oit-cpu's `technique/adp.rs` (see its docs), in `adp.wgsl`:
+//! bounds pass, histogram pass (atomicOr), the deepest pixel's set-bin count (one readback) for the
+//! number of batches, then one bucket pass and one resolve per batch of 32.
 
 use oit_core::OitError;
+use oit_core::rules::{BUCKETS, HISTOGRAM_WORDS};
 
 use crate::Drivers;
-use crate::ctx::GpuCtx;
+use crate::ctx::{GpuCtx, Init};
+
+const WGSL: &str = include_str!("adp.wgsl");
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
-    let _ = drivers;
-    Err(OitError::Unsupported {
-        backend: "wgpu".into(),
-        what: format!("{} (not ported yet)", ctx.settings.technique),
-    })
+    let bounds = super::bdp::depth_bounds(ctx, drivers)?;
+    let px = u64::from(ctx.pixels);
+    let hist = ctx.buffer("adp histogram", px * HISTOGRAM_WORDS as u64, Init::Zero)?;
+    let max_bins = ctx.buffer("adp deepest pixel", 1, Init::Zero)?;
+    // sizing the batches is not per-pixel storage: oit-cpu does not count it either
+    ctx.storage_bytes -= 4;
+    // oit-cpu allocates the buckets after the histogram pass; the bytes are the same
+    let buckets = ctx.buffer("adp buckets", px * BUCKETS as u64 * 2, Init::Zero)?;
+    let buffers = [&bounds, &hist, &buckets, &max_bins];
+    ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, 0, 0)?;
+    ctx.pixel_kernel(WGSL, "count_main", &buffers, 0, 0)?;
+    let bins = ctx.gpu.read_u32(&max_bins)?[0];
+    let batches = bins.div_ceil(BUCKETS as u32).min(ctx.settings.max_peels.unwrap_or(u32::MAX));
+    for batch in 0..batches {
+        ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, 1, batch)?;
+        ctx.pixel_kernel(WGSL, "resolve_main", &buffers, 1, batch)?;
+    }
+    Ok(())
 }

@@ -1,0 +1,72 @@
+// adp (Liu et al., HPG 2009, section 3.3), as oit-cpu's `technique/adp.rs`.
+// pass_index 0: histogram pass; pass_index 1: bucket pass of batch `param`.
+@group(0) @binding(2) var<storage, read_write> bounds: array<u32>;
+// 32 u32 words (1024 presence bits) per pixel, set with atomicOr.
+@group(0) @binding(3) var<storage, read_write> hist: array<atomic<u32>>;
+// 32 u64 buckets per pixel: MAX of (depth key | 1 << 63); 0 is empty.
+@group(0) @binding(4) var<storage, read_write> buckets: array<atomic<u64>>;
+// The deepest pixel's set-bin count.
+@group(0) @binding(5) var<storage, read_write> max_bins: array<atomic<u32>>;
+
+const ADP_FILLED: u64 = 0x8000000000000000lu;
+
+fn adp_bin(f: Fragment) -> u32 {
+    let zn = bitcast<f32>(bounds[2u * f.pixel]);
+    let zf = bitcast<f32>(bounds[2u * f.pixel + 1u]);
+    return histogram_bin(f.depth, zn, zf);
+}
+
+// oit_core::rules::histogram_rank: the set bins of the pixel's histogram below `bin`.
+fn adp_rank(px: u32, bin: u32) -> u32 {
+    let word = bin / 32u;
+    var below = 0u;
+    for (var w = 0u; w < word; w++) {
+        below += countOneBits(atomicLoad(&hist[px * HISTOGRAM_WORDS + w]));
+    }
+    let mask = (1u << (bin % 32u)) - 1u;
+    return below + countOneBits(atomicLoad(&hist[px * HISTOGRAM_WORDS + word]) & mask);
+}
+
+fn capture(f: Fragment) {
+    let px = f.pixel;
+    let bin = adp_bin(f);
+    if (fu.pass_index == 0u) {
+        atomicOr(&hist[px * HISTOGRAM_WORDS + bin / 32u], 1u << (bin % 32u));
+        return;
+    }
+    let rank = adp_rank(px, bin);
+    if (rank / BUCKETS == fu.param) {
+        let key = (u64(depth_bits(f.depth)) << 32u) | u64(payload(f, fu.effect));
+        atomicMax(&buckets[px * BUCKETS + rank % BUCKETS], key | ADP_FILLED);
+    }
+}
+
+// The deepest pixel's set-bin count (sizes the number of batches).
+@compute @workgroup_size(64)
+fn count_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let px = kernel_pixel(gid, groups);
+    if (px >= fu.pixel_count) {
+        return;
+    }
+    var n = 0u;
+    for (var w = 0u; w < HISTOGRAM_WORDS; w++) {
+        n += countOneBits(atomicLoad(&hist[px * HISTOGRAM_WORDS + w]));
+    }
+    atomicMax(&max_bins[0], n);
+}
+
+// One batch's resolve: the filled buckets in rank order (nearest first), emptied for the next.
+@compute @workgroup_size(64)
+fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let px = kernel_pixel(gid, groups);
+    if (px >= fu.pixel_count) {
+        return;
+    }
+    for (var b = 0u; b < BUCKETS; b++) {
+        let key = atomicExchange(&buckets[px * BUCKETS + b], 0lu);
+        if (key != 0lu) {
+            let k = key & ~ADP_FILLED;
+            push(px, bitcast<f32>(u32(k >> 32u)), u32(k & 0xfffffffflu));
+        }
+    }
+}

@@ -1,0 +1,115 @@
+// bdp and bdp:P (Liu et al., HPG 2009, section 3.2), as oit-cpu's `technique/bdp.rs`.
+// bounds: [zNear, zFar] bits per pixel (bounds.wgsl). pass_index 0 with param 0: colour mode;
+// otherwise depth mode, pass `pass_index` of `bdp:P` (see bdp.rs).
+@group(0) @binding(2) var<storage, read_write> bounds: array<u32>;
+// Colour mode: 32 u32 buckets per pixel, integer MAX of bdp_pack_color.
+@group(0) @binding(3) var<storage, read_write> colors: array<atomic<u32>>;
+// Depth mode: one array per pass, each 16 × (min, max) u64 keys per pixel, arrays back to back.
+@group(0) @binding(4) var<storage, read_write> arrays: array<atomic<u64>>;
+
+const BDP_EMPTY_MIN: u64 = 0xfffffffffffffffflu;
+const MODE_COLOR: u32 = 0u;
+const MODE_DEPTH: u32 = 1u;
+
+fn bdp_z_near(px: u32) -> f32 {
+    return bitcast<f32>(bounds[2u * px]);
+}
+
+fn bdp_z_far(px: u32) -> f32 {
+    return bitcast<f32>(bounds[2u * px + 1u]);
+}
+
+// u64 words of one pass's array
+fn bdp_stride() -> u32 {
+    return fu.pixel_count * 2u * BDP_DEPTH_SUBINTERVALS;
+}
+
+// param: MODE_COLOR or MODE_DEPTH; pass_index: the pass of bdp:P (depth mode)
+fn capture(f: Fragment) {
+    let px = f.pixel;
+    let zn = bdp_z_near(px);
+    let zf = bdp_z_far(px);
+    if (fu.param == MODE_COLOR) {
+        let k = bucket_index(f.depth, zn, zf, BDP_COLOR_SUBINTERVALS);
+        atomicMax(&colors[px * BDP_COLOR_SUBINTERVALS + k], bdp_pack_color(pack_rgba8(f.color)));
+        return;
+    }
+    let k = bucket_index(f.depth, zn, zf, BDP_DEPTH_SUBINTERVALS);
+    let slot = px * 2u * BDP_DEPTH_SUBINTERVALS + 2u * k;
+    let p = fu.pass_index;
+    let d = depth_bits(f.depth);
+    if (p > 0u) {
+        let prev = (p - 1u) * bdp_stride() + slot;
+        let lo = atomicLoad(&arrays[prev]);
+        let hi = atomicLoad(&arrays[prev + 1u]);
+        // eq. 5: what the previous pass kept, or anything outside its range, is done
+        if (lo == BDP_EMPTY_MIN || d <= u32(lo >> 32u) || d >= u32(hi >> 32u)) {
+            return;
+        }
+    }
+    let key = (u64(d) << 32u) | u64(payload(f, fu.effect));
+    let at = p * bdp_stride() + slot;
+    atomicMin(&arrays[at], key);
+    atomicMax(&arrays[at + 1u], key);
+}
+
+// Empties the depth-mode arrays: min slots EMPTY, max slots 0. One invocation per (min, max) pair.
+@compute @workgroup_size(64)
+fn depth_init_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = kernel_pixel(gid, groups);
+    if (2u * i + 1u >= arrayLength(&arrays)) {
+        return;
+    }
+    atomicStore(&arrays[2u * i], BDP_EMPTY_MIN);
+    atomicStore(&arrays[2u * i + 1u], 0lu);
+}
+
+// Colour mode's resolve: non-empty buckets in order, each at its subinterval's midpoint.
+@compute @workgroup_size(64)
+fn color_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let px = kernel_pixel(gid, groups);
+    if (px >= fu.pixel_count) {
+        return;
+    }
+    let zn = bdp_z_near(px);
+    let zf = bdp_z_far(px);
+    let n = BDP_COLOR_SUBINTERVALS;
+    for (var k = 0u; k < n; k++) {
+        let v = atomicLoad(&colors[px * n + k]);
+        if (v != 0u) {
+            let d = zn + (f32(k) + 0.5) / f32(n) * (zf - zn);
+            push(px, d, bdp_unpack_color(v));
+        }
+    }
+}
+
+// Depth mode's resolve; param = arrays captured. Subinterval k reads min₁ … min_P, max_P … max₁
+// (a max equal to its min is the same fragment; an empty min ends the subinterval).
+@compute @workgroup_size(64)
+fn depth_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let px = kernel_pixel(gid, groups);
+    if (px >= fu.pixel_count) {
+        return;
+    }
+    let arrays_used = fu.param;
+    for (var k = 0u; k < BDP_DEPTH_SUBINTERVALS; k++) {
+        let slot = px * 2u * BDP_DEPTH_SUBINTERVALS + 2u * k;
+        var filled = 0u;
+        for (var a = 0u; a < arrays_used; a++) {
+            let lo = atomicLoad(&arrays[a * bdp_stride() + slot]);
+            if (lo == BDP_EMPTY_MIN) {
+                break;
+            }
+            push(px, bitcast<f32>(u32(lo >> 32u)), u32(lo & 0xfffffffflu));
+            filled += 1u;
+        }
+        for (var a = filled; a > 0u; a--) {
+            let at = (a - 1u) * bdp_stride() + slot;
+            let lo = atomicLoad(&arrays[at]);
+            let hi = atomicLoad(&arrays[at + 1u]);
+            if (hi != lo) {
+                push(px, bitcast<f32>(u32(hi >> 32u)), u32(hi & 0xfffffffflu));
+            }
+        }
+    }
+}
