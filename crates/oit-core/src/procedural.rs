@@ -17,7 +17,7 @@ use glam::{Mat4, Vec3, Vec4};
 use crate::{Instance, Mesh, Object, OitError, Scene};
 
 /// The built-in names, for messages.
-pub const BUILTIN_SCENES: &str = "default, planes:N, spheres:N, cluster:N, knot, coplanar";
+pub const BUILTIN_SCENES: &str = "default, planes:N, spheres:N, cluster:N, knot, coplanar, grid:RxC:MESH";
 
 /// The scene rendered when none is named.
 pub const DEFAULT_SCENE: &str = "default";
@@ -44,6 +44,9 @@ pub fn load_scene(name: &str) -> Result<Scene, OitError> {
 /// Builds a built-in scene; `None` when the name is not a built-in one, `Some(Err)` when it is but
 /// its parameter is bad.
 pub fn builtin_scene(name: &str) -> Option<Result<Scene, OitError>> {
+    if let Some(rest) = name.strip_prefix("grid:") {
+        return Some(grid(rest));
+    }
     let (base, param) = match name.split_once(':') {
         Some((b, p)) => (b, Some(p)),
         None => (name, None),
@@ -72,6 +75,75 @@ pub fn builtin_scene(name: &str) -> Option<Result<Scene, OitError>> {
         "default" => no_param(default_scene()),
         _ => return None,
     })
+}
+
+/// Where a bare mesh name (`bunny`) of `grid:RxC:bunny` is looked for, as `<name>.obj`, in order:
+/// `$OIT_MODELS`, `models/`, `../shared/models/`, `.gpu/models/`.
+fn find_model(name: &str) -> Option<std::path::PathBuf> {
+    let file = format!("{name}.obj");
+    let mut dirs: Vec<std::path::PathBuf> = Vec::new();
+    if let Ok(d) = std::env::var("OIT_MODELS") {
+        dirs.push(d.into());
+    }
+    dirs.extend(["models", "../shared/models", ".gpu/models"].map(std::path::PathBuf::from));
+    dirs.into_iter().map(|d| d.join(&file)).find(|p| p.is_file())
+}
+
+/// `grid:RxC:MESH`: R×C copies of MESH (a built-in scene, an OBJ path, or a bare name looked up by
+/// [`find_model`]) on a grid whose cells overlap by 30 % on screen and step back in depth, so
+/// triangle count and depth complexity both grow with R×C. Each copy gets its own hue.
+fn grid(spec: &str) -> Result<Scene, OitError> {
+    let bad = || {
+        OitError::InvalidSettings(format!(
+            "scene 'grid:{spec}': expected grid:RxC:MESH, e.g. grid:4x4:bunny or grid:2x3:knot"
+        ))
+    };
+    let (dims, mesh) = spec.split_once(':').ok_or_else(bad)?;
+    let (r, c) = dims.split_once(['x', 'X']).ok_or_else(bad)?;
+    let (rows, cols): (u32, u32) = (r.parse().map_err(|_| bad())?, c.parse().map_err(|_| bad())?);
+    if rows == 0 || cols == 0 || rows.saturating_mul(cols) > 4096 {
+        return Err(OitError::InvalidSettings(format!(
+            "scene 'grid:{spec}': R and C from 1, R×C at most 4096"
+        )));
+    }
+    let base = match builtin_scene(mesh) {
+        Some(s) => s?,
+        None => match find_model(mesh) {
+            Some(path) if Path::new(mesh).extension().is_none() => crate::load_obj(&path)?,
+            _ => load_scene(mesh)?,
+        },
+    };
+    let bounds = base.bounds();
+    if bounds.is_empty() {
+        return Err(OitError::InvalidScene(format!("grid mesh '{mesh}' is empty")));
+    }
+    let size = bounds.max - bounds.min;
+    let step = size * 0.7;
+    let mut scene = Scene { name: format!("grid:{spec}"), meshes: base.meshes.clone(), ..Default::default() };
+    for i in 0..rows * cols {
+        let (row, col) = (i / cols, i % cols);
+        let offset = Vec3::new(
+            (col as f32 - (cols - 1) as f32 * 0.5) * step.x,
+            (row as f32 - (rows - 1) as f32 * 0.5) * step.y,
+            -(((row + col) % 3) as f32) * 0.35 * size.z,
+        ) - bounds.center();
+        let tint = hue(i as f32 / (rows * cols) as f32);
+        for inst in &base.instances {
+            let object = &base.objects[inst.object];
+            let color = (tint * 0.5 + object.color.truncate() * 0.5).extend(object.color.w);
+            scene.objects.push(Object {
+                name: format!("{} {i}", object.name),
+                mesh: object.mesh,
+                color,
+                absorption: object.absorption,
+            });
+            scene.instances.push(Instance {
+                object: scene.objects.len() - 1,
+                transform: Mat4::from_translation(offset) * inst.transform,
+            });
+        }
+    }
+    Ok(scene)
 }
 
 /// Hue `h` in [0, 1) to an RGB colour quantized to multiples of 1/255 (so 8-bit compositing by hand
@@ -289,6 +361,17 @@ mod tests {
         assert!(load_scene("planes:x").is_err());
         assert!(load_scene("knot:3").is_err());
         assert!(matches!(load_scene("nothing-like-this"), Err(OitError::UnknownScene { .. })));
+    }
+
+    #[test]
+    fn grids() {
+        let g = load_scene("grid:2x3:knot").unwrap();
+        g.validate().unwrap();
+        assert_eq!(g.instances.len(), 6);
+        assert_eq!(g.triangle_count(), 6 * knot().triangle_count());
+        for bad in ["grid:0x3:knot", "grid:2:knot", "grid:2x3", "grid:2x3:nope-nothing", "grid:axb:knot"] {
+            assert!(load_scene(bad).is_err(), "{bad}");
+        }
     }
 
     #[test]

@@ -40,6 +40,7 @@ pub struct Gpu {
     /// Limits of the device (the adapter's own, requested in full).
     pub limits: wgpu::Limits,
     pipelines: Mutex<HashMap<u64, Arc<wgpu::ComputePipeline>>>,
+    render_pipelines: Mutex<HashMap<u64, Arc<wgpu::RenderPipeline>>>,
 }
 
 fn instance() -> wgpu::Instance {
@@ -99,7 +100,62 @@ impl Gpu {
             ..Default::default()
         }))
         .map_err(|e| OitError::Device(format!("cannot open '{}': {e}", info.name)))?;
-        Ok(Gpu { device, queue, info, features, limits, pipelines: Mutex::new(HashMap::new()) })
+        Ok(Gpu {
+            device,
+            queue,
+            info,
+            features,
+            limits,
+            pipelines: Mutex::new(HashMap::new()),
+            render_pipelines: Mutex::new(HashMap::new()),
+        })
+    }
+
+    /// Wraps a device the caller opened (the embedded pass, `crate::embed`). It must have
+    /// [`required_features`]; its limits are whatever the caller requested.
+    pub fn from_device(device: wgpu::Device, queue: wgpu::Queue) -> Result<Gpu, OitError> {
+        let info = device.adapter_info();
+        let features = device.features();
+        let missing = required_features() - features;
+        if !missing.is_empty() {
+            return Err(OitError::Device(format!(
+                "the device on '{}' lacks {missing:?}: request `oit_wgpu::required_features()` when opening it",
+                info.name
+            )));
+        }
+        let limits = device.limits();
+        Ok(Gpu {
+            device,
+            queue,
+            info,
+            features,
+            limits,
+            pipelines: Mutex::new(HashMap::new()),
+            render_pipelines: Mutex::new(HashMap::new()),
+        })
+    }
+
+    /// The render pipeline cached under `key` (a hash of everything it is built from), else the
+    /// one `build` makes, built inside a validation error scope so a bad shader is an error.
+    pub fn render_pipeline(
+        &self,
+        key: u64,
+        what: &str,
+        build: impl FnOnce() -> wgpu::RenderPipeline,
+    ) -> Result<Arc<wgpu::RenderPipeline>, OitError> {
+        let cache =
+            || self.render_pipelines.lock().map_err(|_| OitError::Device("pipeline cache poisoned".into()));
+        if let Some(p) = cache()?.get(&key) {
+            return Ok(p.clone());
+        }
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let pipeline = build();
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(OitError::Device(format!("render pipeline '{what}' failed to build: {e}")));
+        }
+        let p = Arc::new(pipeline);
+        cache()?.insert(key, p.clone());
+        Ok(p)
     }
 
     /// True when GPU timestamps can be taken.
@@ -155,7 +211,7 @@ impl Gpu {
 
     /// Checks a storage buffer of `bytes` against the device's limits before allocating it.
     pub fn check_storage(&self, what: &str, bytes: u64) -> Result<(), OitError> {
-        let binding = u64::from(self.limits.max_storage_buffer_binding_size);
+        let binding = self.limits.max_storage_buffer_binding_size;
         let buffer = self.limits.max_buffer_size;
         let (limit_name, limit) = if binding < buffer {
             ("max_storage_buffer_binding_size", binding)

@@ -8,7 +8,9 @@
 //! are in `src/shaders/common.wgsl`.
 
 mod ctx;
+pub mod embed;
 mod gpu;
+mod hardware;
 mod raster;
 mod technique;
 
@@ -20,7 +22,9 @@ use oit_core::{
 };
 
 pub use crate::ctx::{Driver, FrameUniform, GpuCtx, Init, TECHNIQUE_PRELUDE};
-pub use crate::gpu::{COMMON_WGSL, Gpu, adapters};
+pub use crate::embed::{CaptureShader, GeometryPass, OitPass};
+pub use crate::gpu::{COMMON_WGSL, Gpu, adapters, required_features};
+pub use crate::hardware::HardwareRaster;
 pub use crate::raster::ComputeRaster;
 
 /// The rasterizers of one frame: the scene's, and (made on demand) one for the instances'
@@ -75,8 +79,8 @@ impl Backend for WgpuBackend {
         match self.gpu() {
             Ok(gpu) => Capabilities {
                 device: format!("{} ({:?}, {})", gpu.info.name, gpu.info.device_type, gpu.info.driver),
-                techniques: vec![TechniqueKind::Reference, TechniqueKind::Fabs],
-                raster_paths: vec![RasterPath::Compute],
+                techniques: TechniqueKind::ALL.to_vec(),
+                raster_paths: vec![RasterPath::Hardware, RasterPath::Compute],
                 limits: vec![
                     ("max_buffer_size".into(), gpu.limits.max_buffer_size.to_string()),
                     (
@@ -100,12 +104,18 @@ impl Backend for WgpuBackend {
         scene.validate()?;
         let gpu = self.gpu()?;
         let start = Instant::now();
-        let path = settings.raster.unwrap_or(RasterPath::Compute);
+        let path = settings.raster.unwrap_or(WgpuBackend::default_path(settings.technique));
         let drivers = match path {
             RasterPath::Compute => Drivers {
                 scene: Box::new(ComputeRaster::new(gpu, scene, camera, settings, false)?),
                 boxes: Box::new(move || {
                     Ok(Box::new(ComputeRaster::new(gpu, scene, camera, settings, true)?) as Box<dyn Driver>)
+                }),
+            },
+            RasterPath::Hardware => Drivers {
+                scene: Box::new(HardwareRaster::new(gpu, scene, camera, settings)?),
+                boxes: Box::new(move || {
+                    Ok(Box::new(HardwareRaster::boxes(gpu, scene, camera, settings)?) as Box<dyn Driver>)
                 }),
             },
             other => {
@@ -116,23 +126,32 @@ impl Backend for WgpuBackend {
             }
         };
         let mut ctx = GpuCtx::new(gpu, scene, camera, settings)?;
-        let mut layers = None;
-        match settings.technique {
-            Technique::Reference => layers = Some(technique::reference::render(&mut ctx, &drivers)?),
-            Technique::Fabs { k } => technique::fabs::render(&mut ctx, &drivers, k)?,
-            Technique::Dp => technique::dp::render(&mut ctx, &drivers)?,
-            Technique::Ddp => technique::ddp::render(&mut ctx, &drivers)?,
-            Technique::WeightedAverage | Technique::WeightedSum => {
-                technique::weighted::render(&mut ctx, &drivers)?
-            }
-            Technique::Bdp { .. } => technique::bdp::render(&mut ctx, &drivers)?,
-            Technique::Adp => technique::adp::render(&mut ctx, &drivers)?,
-            Technique::Mdts { .. } | Technique::Mdts64 { .. } => technique::mdts::render(&mut ctx, &drivers)?,
-            Technique::Mlp { .. } => technique::mlp::render(&mut ctx, &drivers)?,
-        }
+        let layers = run_technique(&mut ctx, &drivers)?;
         let mut frame = ctx.finish(path)?;
         frame.layers = layers;
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(frame)
     }
+}
+
+/// Runs the frame's technique (geometry passes through `drivers`, kernels, resolve into the
+/// state); the reference returns its per-pixel fragment counts. `Backend::render` and the
+/// embedded pass (`embed::OitPass::frame`) both run this.
+pub(crate) fn run_technique(
+    ctx: &mut GpuCtx<'_>,
+    drivers: &Drivers<'_>,
+) -> Result<Option<Vec<u32>>, OitError> {
+    let mut layers = None;
+    match ctx.settings.technique {
+        Technique::Reference => layers = Some(technique::reference::render(ctx, drivers)?),
+        Technique::Fabs { k } => technique::fabs::render(ctx, drivers, k)?,
+        Technique::Dp => technique::dp::render(ctx, drivers)?,
+        Technique::Ddp => technique::ddp::render(ctx, drivers)?,
+        Technique::WeightedAverage | Technique::WeightedSum => technique::weighted::render(ctx, drivers)?,
+        Technique::Bdp { .. } => technique::bdp::render(ctx, drivers)?,
+        Technique::Adp => technique::adp::render(ctx, drivers)?,
+        Technique::Mdts { .. } | Technique::Mdts64 { .. } => technique::mdts::render(ctx, drivers)?,
+        Technique::Mlp { .. } => technique::mlp::render(ctx, drivers)?,
+    }
+    Ok(layers)
 }

@@ -1,14 +1,50 @@
-//! `ddp` on the GPU — being ported from oit-cpu's `technique/ddp.rs`.
+//! `ddp` on the GPU: dual depth peeling, the same passes, storage and loss accounting as oit-cpu's
+//! `technique/ddp.rs` (see its docs), in `ddp.wgsl`: per peel a geometry pass (u64 atomicMin and
+//! atomicMax strictly inside each pixel's open range) and a resolve kernel that counts the pixels
+//! it peeled; the loop ends after the pass that peels nothing (⌈N/2⌉ + 1 passes) or after
+//! `settings.max_peels` peels.
+//!
+//! Effects: transparency (the far layer is over-blended into the back colour) and complexity
+//! (both layers counted). oit-cpu replays the back layers of the other effects from a per-pixel
+//! stack at the end; the GPU resolve state has no stack, so translucency and Fresnel are refused.
 
-use oit_core::OitError;
+use oit_core::{Effect, OitError};
 
 use crate::Drivers;
-use crate::ctx::GpuCtx;
+use crate::ctx::{GpuCtx, Init};
+
+const WGSL: &str = include_str!("ddp.wgsl");
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
-    let _ = drivers;
-    Err(OitError::Unsupported {
-        backend: "wgpu".into(),
-        what: format!("{} (not ported yet)", ctx.settings.technique),
-    })
+    let effect = ctx.settings.effect;
+    if !matches!(effect, Effect::Transparency | Effect::Complexity) {
+        return Err(OitError::Unsupported {
+            backend: "wgpu".into(),
+            what: format!(
+                "the {effect:?} effect with ddp: the far layers it peels would have to be replayed nearest first from a per-pixel stack, which the GPU resolve does not keep; use dp, fabs, mlp or adp (or the cpu backend)"
+            ),
+        });
+    }
+    let px = u64::from(ctx.pixels);
+    let near = ctx.buffer("ddp near", px * 2, Init::Fill(u32::MAX))?;
+    let far = ctx.buffer("ddp far", px * 2, Init::Zero)?;
+    // the open depth range left by the previous pass (oit-cpu counts 8 bytes a pixel too)
+    let range = ctx.buffer("ddp range", px * 2, Init::Zero)?;
+    let peeled = ctx.buffer("ddp peeled count", 1, Init::Zero)?;
+    // the loop's counter is not per-pixel storage
+    ctx.storage_bytes -= 4;
+    let buffers = [&near, &far, &range, &peeled];
+    ctx.pixel_kernel(WGSL, "ddp_init_main", &buffers, 0, 0)?;
+    let limit = ctx.settings.max_peels.unwrap_or(u32::MAX);
+    let mut peels = 0;
+    while peels < limit {
+        ctx.fill(&peeled, 0)?;
+        ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, peels, 0)?;
+        ctx.pixel_kernel(WGSL, "resolve_main", &buffers, peels, 0)?;
+        if ctx.gpu.read_u32(&peeled)?[0] == 0 {
+            break;
+        }
+        peels += 1;
+    }
+    Ok(())
 }

@@ -1,0 +1,235 @@
+//! A wgpu user's own scene through oit's embeddable pass: the user opens the device, owns the
+//! vertex buffer, the vertex shader (world → clip on the GPU with their own uniform) and the draw
+//! call; oit supplies the capture module, its storage, and the resolve into the user's texture.
+//!
+//! `cargo run -p oit-wgpu --example embed -- [technique] [out.png]` (default `fabs`, `embed.png`).
+
+use glam::{Mat4, Vec3, Vec4};
+use oit_core::{Camera, Frame, Image, OitError, Settings, Technique};
+use oit_wgpu::OitPass;
+use wgpu::util::DeviceExt;
+
+/// Image side.
+pub const SIZE: u32 = 128;
+
+/// The user's scene: three translucent quads (corners, colour), two of them cutting through each
+/// other, so the order of the fragments changes across each pixel row.
+pub fn quads() -> Vec<([Vec3; 4], Vec4)> {
+    let quad = |m: Mat4, color: Vec4| {
+        let c = [
+            Vec3::new(-1.0, -0.8, 0.0),
+            Vec3::new(1.0, -0.8, 0.0),
+            Vec3::new(1.0, 0.8, 0.0),
+            Vec3::new(-1.0, 0.8, 0.0),
+        ];
+        (c.map(|p| m.transform_point3(p)), color)
+    };
+    vec![
+        quad(Mat4::from_rotation_y(0.6), Vec4::new(0.9, 0.15, 0.1, 0.5)),
+        quad(Mat4::from_rotation_y(-0.6), Vec4::new(0.1, 0.8, 0.2, 0.5)),
+        quad(
+            Mat4::from_translation(Vec3::new(0.3, 0.2, -0.7)) * Mat4::from_scale(Vec3::splat(0.8)),
+            Vec4::new(0.15, 0.3, 0.95, 0.6),
+        ),
+    ]
+}
+
+/// Each quad's two triangles, as indices into its corners (triangle `t` of quad `q` is
+/// primitive `2q + t`).
+pub const QUAD_TRIANGLES: [[u32; 3]; 2] = [[0, 1, 2], [0, 2, 3]];
+
+/// The user's camera.
+pub fn camera() -> Camera {
+    Camera::look_at(Vec3::new(0.4, 0.5, 3.5), Vec3::ZERO, 45.0, 1.0, 1.0, 8.0)
+}
+
+/// The user's shader: their vertex stage, and a fragment stage that hands the fragment to oit.
+const USER_WGSL: &str = r#"
+struct UserUniform { view_proj: mat4x4<f32> }
+@group(1) @binding(0) var<uniform> user: UserUniform;
+
+struct UserOut {
+    @builtin(position) position: vec4<f32>,
+    @location(0) color: vec4<f32>,
+    @location(1) @interpolate(flat) prim: u32,
+}
+
+@vertex
+fn user_vs(@location(0) p: vec3<f32>, @location(1) c: vec4<f32>, @builtin(vertex_index) i: u32) -> UserOut {
+    return UserOut(user.view_proj * vec4<f32>(p, 1.0), c, i / 3u);
+}
+
+@fragment
+fn user_fs(v: UserOut) -> @location(0) vec4<f32> {
+    return oit_capture(v.position.xy, v.position.z, v.color, v.prim);
+}
+"#;
+
+/// Renders the user's scene with `technique` through [`OitPass`]: returns oit's frame and the
+/// image read back from the user's target texture, and the adapter's name.
+pub fn render(technique: Technique) -> Result<(Frame, Image, String), OitError> {
+    // The user's device, opened their way, with the features oit needs.
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+    desc.backends = wgpu::Backends::VULKAN;
+    let instance = wgpu::Instance::new(desc);
+    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+        power_preference: wgpu::PowerPreference::HighPerformance,
+        ..Default::default()
+    }))
+    .map_err(|e| OitError::Device(format!("no adapter: {e}")))?;
+    let features = oit_wgpu::required_features() | (adapter.features() & wgpu::Features::FLOAT32_BLENDABLE);
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("user"),
+        required_features: features,
+        ..Default::default()
+    }))
+    .map_err(|e| OitError::Device(format!("cannot open the device: {e}")))?;
+
+    // The user's vertex buffer (position, RGBA), uniform and target.
+    let mut vertices: Vec<f32> = Vec::new();
+    for (corners, color) in quads() {
+        for i in QUAD_TRIANGLES.iter().flatten() {
+            vertices.extend(corners[*i as usize].to_array());
+            vertices.extend(color.to_array());
+        }
+    }
+    let vertex_count = (vertices.len() / 7) as u32;
+    let vertex_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("user vertices"),
+        contents: bytemuck::cast_slice(&vertices),
+        usage: wgpu::BufferUsages::VERTEX,
+    });
+    let camera = camera();
+    let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("user uniform"),
+        contents: bytemuck::cast_slice(&camera.view_proj().to_cols_array()),
+        usage: wgpu::BufferUsages::UNIFORM,
+    });
+    let user_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("user"),
+        entries: &[wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::VERTEX,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        }],
+    });
+    let user_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("user"),
+        layout: &user_layout,
+        entries: &[wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() }],
+    });
+    let target = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("user target"),
+        size: wgpu::Extent3d { width: SIZE, height: SIZE, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8Unorm,
+        usage: wgpu::TextureUsages::COPY_DST
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    });
+    let target_view = target.create_view(&Default::default());
+
+    // oit's pass, and one frame: the user builds a pipeline per capture module and draws.
+    let settings = Settings { width: SIZE, height: SIZE, technique, ..Settings::default() };
+    let pass = OitPass::new(&device, &queue, settings, camera)?;
+    let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4];
+    let frame = pass.frame(
+        Some(&target_view),
+        |capture| {
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("user + oit"),
+                source: wgpu::ShaderSource::Wgsl(format!("{}\n{USER_WGSL}", capture.wgsl).into()),
+            });
+            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("user"),
+                bind_group_layouts: &[Some(capture.bind_group_layout), Some(&user_layout)],
+                immediate_size: 0,
+            });
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("user"),
+                layout: Some(&layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("user_vs"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: 7 * 4,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &attributes,
+                    })],
+                },
+                // no culling: the back faces are seen through the front ones
+                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("user_fs"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(capture.count_target.clone())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        },
+        |rpass, _pass| {
+            rpass.set_bind_group(1, &user_group, &[]);
+            rpass.set_vertex_buffer(0, vertex_buf.slice(..));
+            rpass.draw(0..vertex_count, 0..1);
+        },
+    )?;
+
+    // What the user would sample: read the target back.
+    let readback = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("user readback"),
+        size: u64::from(SIZE * SIZE * 4),
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    encoder.copy_texture_to_buffer(
+        target.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &readback,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(SIZE * 4),
+                rows_per_image: None,
+            },
+        },
+        target.size(),
+    );
+    queue.submit([encoder.finish()]);
+    readback.slice(..).map_async(wgpu::MapMode::Read, |_| {});
+    device
+        .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
+        .map_err(|e| OitError::Device(format!("waiting for the GPU failed: {e}")))?;
+    let data = readback.slice(..).get_mapped_range().map_err(|e| OitError::Device(e.to_string()))?;
+    let image = Image {
+        width: SIZE,
+        height: SIZE,
+        pixels: data.chunks_exact(4).map(|p| [p[0], p[1], p[2], p[3]]).collect(),
+    };
+    Ok((frame, image, adapter.get_info().name))
+}
+
+fn main() -> Result<(), OitError> {
+    let mut args = std::env::args().skip(1);
+    let technique: Technique = args.next().as_deref().unwrap_or("fabs").parse()?;
+    let out = args.next().unwrap_or_else(|| "embed.png".into());
+    let (frame, image, adapter) = render(technique)?;
+    image.save_png(std::path::Path::new(&out))?;
+    println!(
+        "{technique} on {adapter}: {} fragments, {} geometry passes, gpu {:?} ms, wrote {out}",
+        frame.stats.fragments, frame.stats.geometry_passes, frame.stats.gpu_ms
+    );
+    Ok(())
+}

@@ -1,0 +1,228 @@
+//! The hardware-raster path: the GPU's own rasterizer, through the embeddable pass
+//! ([`crate::embed`]) with oit as its user. The host transforms every instance's vertices to clip
+//! space with oit-cpu's matrices (`camera.view_proj() * instance.transform`, normals by the
+//! inverse transpose, `settings.material_color`), so the triangles are the same bits as oit-cpu's
+//! before raster; the vertex stage (`shaders/raster_hardware.wgsl`) pulls them from storage by
+//! vertex index, so triangle `t` of the one draw is primitive `t` (the layout follows
+//! `scene.primitive_bases()`), and the fragment stage shades like `Shading::shade` and calls the
+//! shared `oit_capture_full`.
+//!
+//! The GPU's rasterizer has its own sub-pixel precision and clipping, so against oit-cpu (and the
+//! compute path) only pixels on triangle edges may differ; no culling, no depth test, wgpu's
+//! viewport (row 0 at the top, depth in [0, 1]).
+
+use glam::{Mat3, Mat4, Vec3, Vec4};
+use oit_core::{Aabb, Camera, OitError, RasterPath, Scene, Settings, Shading};
+use wgpu::util::DeviceExt;
+
+use crate::ctx::{Driver, GpuCtx};
+use crate::embed::{CaptureShader, GeometryPass, RenderDriver};
+use crate::gpu::Gpu;
+
+const RASTER_WGSL: &str = include_str!("shaders/raster_hardware.wgsl");
+
+/// One vertex as `HwVertex` in raster_hardware.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct HwVertex {
+    clip: [f32; 4],
+    /// xyz: world normal; w: 1 when the mesh has vertex colours.
+    normal: [f32; 4],
+    color: [f32; 4],
+    base: [f32; 4],
+}
+
+/// The scene (or its instances' bounding boxes) on the GPU's rasterizer.
+pub struct HardwareRaster {
+    driver: RenderDriver<'static>,
+}
+
+/// The normal matrix of `transform`: its inverse transpose (the matrix itself when singular), as
+/// oit-cpu's raster.
+fn normal_matrix(transform: &Mat4) -> Mat3 {
+    let m = Mat3::from_mat4(*transform);
+    let inv = m.inverse();
+    if inv.is_finite() { inv.transpose() } else { m }
+}
+
+impl HardwareRaster {
+    /// Sets up the scene's triangles for the hardware rasterizer.
+    pub fn new(gpu: &Gpu, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<Self, OitError> {
+        let view_proj = camera.view_proj();
+        let mut vertices = Vec::new();
+        let mut indices: Vec<u32> = Vec::new();
+        for inst in &scene.instances {
+            let (object, mesh) = scene.instance_parts(inst);
+            let mvp = view_proj * inst.transform;
+            let nm = normal_matrix(&inst.transform);
+            let base = settings.material_color(object.color).to_array();
+            let first = vertices.len() as u32;
+            let has_color = if mesh.colors.is_some() { 1.0 } else { 0.0 };
+            for (i, p) in mesh.positions.iter().enumerate() {
+                let n = nm * mesh.normals.get(i).copied().unwrap_or(Vec3::ZERO);
+                let c = mesh.colors.as_ref().and_then(|c| c.get(i).copied()).unwrap_or(Vec3::ZERO);
+                vertices.push(HwVertex {
+                    clip: (mvp * p.extend(1.0)).to_array(),
+                    normal: n.extend(has_color).to_array(),
+                    color: c.extend(0.0).to_array(),
+                    base,
+                });
+            }
+            indices.extend(mesh.indices.iter().flatten().map(|&i| first + i));
+        }
+        Self::upload(gpu, &vertices, &indices, camera, settings)
+    }
+
+    /// The 12 triangles of each instance's world bounding box (`Aabb::TRIANGLES` over the corners
+    /// of `scene.instance_bounds`), triangle `t` of instance `i` primitive `12·i + t`, as oit-cpu's
+    /// `Rasterizer::bounding_boxes`: for the bounds passes of bdp and adp.
+    pub fn boxes(gpu: &Gpu, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<Self, OitError> {
+        let view_proj = camera.view_proj();
+        let mut vertices = Vec::new();
+        let mut indices: Vec<u32> = Vec::new();
+        for inst in &scene.instances {
+            let (object, _) = scene.instance_parts(inst);
+            let bounds: Aabb = scene.instance_bounds(inst);
+            let base = settings.material_color(object.color).to_array();
+            let first = vertices.len() as u32;
+            for c in bounds.corners() {
+                vertices.push(HwVertex {
+                    clip: (view_proj * c.extend(1.0)).to_array(),
+                    normal: (c - bounds.center()).normalize_or_zero().extend(0.0).to_array(),
+                    color: [0.0; 4],
+                    base,
+                });
+            }
+            indices.extend(Aabb::TRIANGLES.iter().flatten().map(|&i| first + i));
+        }
+        Self::upload(gpu, &vertices, &indices, camera, settings)
+    }
+
+    fn upload(
+        gpu: &Gpu,
+        vertices: &[HwVertex],
+        indices: &[u32],
+        camera: &Camera,
+        settings: &Settings,
+    ) -> Result<Self, OitError> {
+        gpu.check_storage("the clip-space vertices", std::mem::size_of_val(vertices) as u64)?;
+        gpu.check_storage("the triangle indices", std::mem::size_of_val(indices) as u64)?;
+        let device = &gpu.device;
+        let storage = |label: &str, bytes: &[u8]| {
+            let padded: Vec<u8> = if bytes.is_empty() { vec![0; 64] } else { bytes.to_vec() };
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: &padded,
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+        };
+        let vertex_buf = storage("clip-space vertices", bytemuck::cast_slice(vertices));
+        let index_buf = storage("triangle indices", bytemuck::cast_slice(indices));
+        let shading = match settings.shading {
+            Shading::Headlight => 0u32,
+            Shading::Flat => 1,
+            Shading::Vertex => 2,
+            Shading::Normal => 3,
+        };
+        let f: Vec4 = camera.forward.extend(0.0);
+        let uniform: [u32; 8] =
+            [shading, 0, 0, 0, f.x.to_bits(), f.y.to_bits(), f.z.to_bits(), f.w.to_bits()];
+        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("hardware raster uniform"),
+            contents: bytemuck::cast_slice(&uniform),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let entry = |binding: u32, visibility: wgpu::ShaderStages, ty: wgpu::BufferBindingType| {
+            wgpu::BindGroupLayoutEntry {
+                binding,
+                visibility,
+                ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
+                count: None,
+            }
+        };
+        let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("hardware raster"),
+            entries: &[
+                entry(0, wgpu::ShaderStages::VERTEX, wgpu::BufferBindingType::Storage { read_only: true }),
+                entry(1, wgpu::ShaderStages::VERTEX, wgpu::BufferBindingType::Storage { read_only: true }),
+                entry(2, wgpu::ShaderStages::VERTEX_FRAGMENT, wgpu::BufferBindingType::Uniform),
+            ],
+        });
+        let group1 = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("hardware raster"),
+            layout: &layout1,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: vertex_buf.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: index_buf.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: uniform.as_entire_binding() },
+            ],
+        });
+        let vertex_count = u32::try_from(indices.len())
+            .map_err(|_| OitError::Device("over 2^32 vertices in one draw".into()))?;
+        let pipeline_device = device.clone();
+        let pipeline = move |capture: &CaptureShader<'_>| {
+            let device = &pipeline_device;
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("hardware raster"),
+                source: wgpu::ShaderSource::Wgsl(format!("{}\n{RASTER_WGSL}", capture.wgsl).into()),
+            });
+            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("hardware raster"),
+                bind_group_layouts: &[Some(capture.bind_group_layout), Some(&layout1)],
+                immediate_size: 0,
+            });
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("hardware raster"),
+                layout: Some(&layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("hw_vs"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("hw_fs"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(capture.count_target.clone())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let draw = move |rpass: &mut wgpu::RenderPass<'_>, _: &GeometryPass<'_>| {
+            rpass.set_bind_group(1, &group1, &[]);
+            if vertex_count > 0 {
+                rpass.draw(0..vertex_count, 0..1);
+            }
+        };
+        let driver = RenderDriver::new(
+            gpu,
+            settings.width,
+            settings.height,
+            "hardware",
+            Box::new(pipeline),
+            Box::new(draw),
+        );
+        Ok(HardwareRaster { driver })
+    }
+}
+
+impl Driver for HardwareRaster {
+    fn path(&self) -> RasterPath {
+        RasterPath::Hardware
+    }
+
+    fn geometry_pass(
+        &self,
+        ctx: &mut GpuCtx<'_>,
+        source: &str,
+        layout0: &wgpu::BindGroupLayout,
+        group0: &wgpu::BindGroup,
+    ) -> Result<u64, OitError> {
+        self.driver.geometry_pass(ctx, source, layout0, group0)
+    }
+}

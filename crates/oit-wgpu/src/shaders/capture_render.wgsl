@@ -1,0 +1,31 @@
+// The fragment side of a geometry pass on a render pipeline: oit's hardware rasterizer
+// (raster_hardware.wgsl) and a user's own pipeline embedding oit (embed.rs) both call these from
+// their fragment shader. Comes after the technique's source, which defines `capture`.
+//
+// The value returned is what the fragment writes to oit's one-channel count target, which adds it
+// up (additive blending): fragments per pixel, summed after the pass into the generated count.
+// Blending counts without atomics, so counting costs a pass next to nothing and needs no binding
+// in the user's layout.
+
+// One fragment of a triangle: `pixel_xy` from `@builtin(position)` (pixel centres at .5), depth
+// its `position.z` (NDC z in [0, 1]), colour straight-alpha linear RGBA, the world normal (zero
+// when there is none; used by the Fresnel effect), `prim` the primitive id (ties between equal
+// depths are broken by it).
+fn oit_capture_full(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: vec3<f32>, prim: u32) -> vec4<f32> {
+    let xy = vec2<u32>(max(floor(pixel_xy), vec2<f32>(0.0)));
+    if (xy.x < fu.width && xy.y < fu.height) {
+        var f: Fragment;
+        f.pixel = xy.y * fu.width + xy.x;
+        f.depth = clamp(depth, 0.0, 1.0);
+        f.prim = prim;
+        f.color = clamp(color, vec4<f32>(0.0), vec4<f32>(1.0));
+        f.normal = normalize_or_zero(normal);
+        capture(f);
+    }
+    return vec4<f32>(1.0, 0.0, 0.0, 0.0);
+}
+
+// The same without a normal.
+fn oit_capture(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, prim: u32) -> vec4<f32> {
+    return oit_capture_full(pixel_xy, depth, color, vec3<f32>(0.0), prim);
+}

@@ -1,0 +1,96 @@
+// mdts:K and mdts64:K (Liu et al. 2009; Huang et al. 2011, section 3), as oit-cpu's
+// `technique/mdts.rs`: K words per pixel start at all ones; each fragment is inserted by repeated
+// atomicMin carrying the larger value on to the next word, so each array stays sorted whatever the
+// arrival order and ends as the K smallest values inserted.
+//
+// param = K. pass_index = mode | alpha8 << 8, the mode MDTS_32 (two u32 arrays of mdts_pack's
+// 20 + 12-bit words, high then low colour halves; alpha is not stored, the resolve uses alpha8,
+// the scene's alpha as oit-cpu computes it) or MDTS_64 (one u64 array of depth bits << 32 |
+// payload, exact). The mode's unused arrays are bound to small placeholders.
+@group(0) @binding(2) var<storage, read_write> mdts_high: array<atomic<u32>>;
+@group(0) @binding(3) var<storage, read_write> mdts_low: array<atomic<u32>>;
+@group(0) @binding(4) var<storage, read_write> mdts_slots: array<atomic<u64>>;
+
+const MDTS_EMPTY32: u32 = 0xffffffffu;
+const MDTS_EMPTY64: u64 = 0xfffffffffffffffflu;
+const MDTS_32: u32 = 0u;
+const MDTS_64: u32 = 1u;
+
+// insert_min32 into the high array at `base` (K words); true when a word fell off the end
+fn mdts_insert_high(base: u32, key: u32) -> bool {
+    var carry = key;
+    for (var i = 0u; i < fu.param; i++) {
+        let old = atomicMin(&mdts_high[base + i], carry);
+        if (old == MDTS_EMPTY32) {
+            return false;
+        }
+        carry = max(carry, old);
+    }
+    return true;
+}
+
+fn mdts_insert_low(base: u32, key: u32) -> bool {
+    var carry = key;
+    for (var i = 0u; i < fu.param; i++) {
+        let old = atomicMin(&mdts_low[base + i], carry);
+        if (old == MDTS_EMPTY32) {
+            return false;
+        }
+        carry = max(carry, old);
+    }
+    return true;
+}
+
+fn mdts_insert64(base: u32, key: u64) -> bool {
+    var carry = key;
+    for (var i = 0u; i < fu.param; i++) {
+        let old = atomicMin(&mdts_slots[base + i], carry);
+        if (old == MDTS_EMPTY64) {
+            return false;
+        }
+        carry = max(carry, old);
+    }
+    return true;
+}
+
+fn capture(f: Fragment) {
+    let base = f.pixel * fu.param;
+    if ((fu.pass_index & 0xffu) == MDTS_64) {
+        mdts_insert64(base, (u64(depth_bits(f.depth)) << 32u) | u64(payload(f, fu.effect)));
+        return;
+    }
+    // All ones is the empty word: a fragment at d ≈ 1 with that colour gives up its last bit.
+    let w = min(mdts_pack(f.depth, pack_rgba8(f.color)), vec2<u32>(MDTS_EMPTY32 - 1u));
+    mdts_insert_high(base, w.x);
+    mdts_insert_low(base, w.y);
+}
+
+@compute @workgroup_size(64)
+fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let px = kernel_pixel(gid, groups);
+    if (px >= fu.pixel_count) {
+        return;
+    }
+    let base = px * fu.param;
+    let mode = fu.pass_index & 0xffu;
+    if (mode == MDTS_64) {
+        for (var i = 0u; i < fu.param; i++) {
+            let key = atomicLoad(&mdts_slots[base + i]);
+            if (key == MDTS_EMPTY64) {
+                break;
+            }
+            push(px, bitcast<f32>(u32(key >> 32u)), u32(key & 0xfffffffflu));
+        }
+        return;
+    }
+    let alpha8 = (fu.pass_index >> 8u) & 0xffu;
+    for (var i = 0u; i < fu.param; i++) {
+        let h = atomicLoad(&mdts_high[base + i]);
+        let l = atomicLoad(&mdts_low[base + i]);
+        if (h == MDTS_EMPTY32 || l == MDTS_EMPTY32) {
+            break;
+        }
+        let u = mdts_unpack(vec2<u32>(h, l));
+        push(px, bitcast<f32>(u.x), u.y | (alpha8 << 24u));
+    }
+}

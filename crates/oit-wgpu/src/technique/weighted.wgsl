@@ -1,0 +1,74 @@
+// wavg and wsum (Bavoil & Myers 2008; Meshkin 2007), as oit-cpu's `technique/weighted.rs`: one
+// geometry pass adds, per pixel, Σα·r, Σα·g, Σα·b (in units of 1/255²), Σα (in units of 1/255) and
+// the count, as u64 integers of the RGBA8 colour, so the sums do not depend on arrival order; the
+// composite kernel writes the final linear colour into the resolve state (front colour, zero
+// transmittance, captured = count) for the common finish. param: 1 = weighted average, 0 = sum.
+@group(0) @binding(2) var<storage, read_write> sums: array<atomic<u64>>;
+
+fn capture(f: Fragment) {
+    let c = pack_rgba8(f.color);
+    let a = u64(c >> 24u);
+    let base = f.pixel * 5u;
+    atomicAdd(&sums[base], a * u64(c & 0xffu));
+    atomicAdd(&sums[base + 1u], a * u64((c >> 8u) & 0xffu));
+    atomicAdd(&sums[base + 2u], a * u64((c >> 16u) & 0xffu));
+    atomicAdd(&sums[base + 3u], a);
+    atomicAdd(&sums[base + 4u], 1lu);
+}
+
+// f32::powi as Rust's compiler-builtins computes it (square and multiply), n ≥ 0.
+fn weighted_powi(x_in: f32, n_in: u32) -> f32 {
+    var x = x_in;
+    var n = n_in;
+    var r = 1.0;
+    loop {
+        if ((n & 1u) != 0u) {
+            r *= x;
+        }
+        n = n >> 1u;
+        if (n == 0u) {
+            break;
+        }
+        x *= x;
+    }
+    return r;
+}
+
+@compute @workgroup_size(64)
+fn composite_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let px = kernel_pixel(gid, groups);
+    if (px >= fu.pixel_count) {
+        return;
+    }
+    let base = px * 5u;
+    let premultiplied = vec3<f32>(
+        f32(atomicLoad(&sums[base])),
+        f32(atomicLoad(&sums[base + 1u])),
+        f32(atomicLoad(&sums[base + 2u])),
+    ) / (255.0 * 255.0);
+    let alpha = f32(atomicLoad(&sums[base + 3u])) / 255.0;
+    let count = u32(atomicLoad(&sums[base + 4u]));
+    let bg = fu.background.xyz;
+    var c: vec3<f32>;
+    if (fu.param == 1u) {
+        // composite::weighted_average
+        if (count == 0u || alpha <= 0.0) {
+            c = bg;
+        } else {
+            let mean_color = premultiplied / alpha;
+            let mean_alpha = min(alpha / f32(count), 1.0);
+            let t = weighted_powi(1.0 - mean_alpha, count);
+            c = mean_color * (1.0 - t) + bg * t;
+        }
+    } else {
+        // composite::weighted_sum
+        c = clamp(premultiplied + bg * (1.0 - alpha), vec3<f32>(0.0), vec3<f32>(1.0));
+    }
+    var s = state[px];
+    s.fr = c.x;
+    s.fg = c.y;
+    s.fb = c.z;
+    s.transmittance = 0.0;
+    s.captured = count;
+    state[px] = s;
+}

@@ -1,0 +1,152 @@
+//! oit-core's rules and their WGSL twins (src/shaders/common.wgsl) on the same edge values:
+//! d = 0, d = 1, −0, NaN, beyond [0, 1], zNear = zFar, alpha 0 and 255, every alpha for the bdp
+//! packing. Integer results must be equal; sRGB encoding may differ by one step (pow differs).
+
+use oit_core::composite::linear_to_srgb8;
+use oit_core::rules::*;
+
+const KERNEL: &str = r#"
+@group(0) @binding(0) var<storage, read> cases: array<vec4<u32>>;
+@group(0) @binding(1) var<storage, read_write> results: array<vec2<u32>>;
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= arrayLength(&cases)) {
+        return;
+    }
+    let c = cases[i];
+    let a = bitcast<f32>(c.y);
+    let b = bitcast<f32>(c.z);
+    let d = bitcast<f32>(c.w);
+    var r = vec2<u32>(0u, 0u);
+    switch c.x {
+        case 0u: { r.x = depth_bits(a); }
+        case 1u: { r.x = bucket_index(a, b, d, 16u); r.y = bucket_index(a, b, d, 32u); }
+        case 2u: { r.x = histogram_bin(a, b, d); }
+        case 3u: { r.x = bdp_pack_color(c.y); r.y = bdp_unpack_color(bdp_pack_color(c.y)); }
+        case 4u: { r = mdts_pack(a, c.z); }
+        case 5u: { r.x = pack_rgba8(vec4<f32>(a, b, d, a)); }
+        case 6u: { r.x = pack_normal(vec3<f32>(a, b, d)); }
+        case 7u: { r.x = linear_to_srgb8(a); }
+        case 8u: { r = mdts_unpack(vec2<u32>(c.y, c.z)); }
+        default: {}
+    }
+    results[i] = r;
+}
+"#;
+
+fn f(x: f32) -> u32 {
+    x.to_bits()
+}
+
+#[test]
+fn wgsl_rules_equal_rust_rules() {
+    let backend = oit_wgpu::WgpuBackend::default();
+    let gpu = backend.gpu().expect("CI has lavapipe: a Vulkan adapter must be found");
+    let depths =
+        [0.0f32, -0.0, 1.0, 1.000_000_1, -1.0, f32::NAN, 0.5, 1e-30, f32::INFINITY, 0.999_999_9, 0.3];
+    let mut cases: Vec<[u32; 4]> = Vec::new();
+    let mut expected: Vec<[u32; 2]> = Vec::new();
+    for &d in &depths {
+        cases.push([0, f(d), 0, 0]);
+        expected.push([depth_bits(d), 0]);
+        for (zn, zf) in [(0.0f32, 1.0f32), (0.25, 0.75), (0.5, 0.5), (0.6, 0.4), (0.0, 0.0), (1.0, 1.0)] {
+            cases.push([1, f(d), f(zn), f(zf)]);
+            expected.push([bucket_index(d, zn, zf, 16), bucket_index(d, zn, zf, 32)]);
+            cases.push([2, f(d), f(zn), f(zf)]);
+            expected.push([histogram_bin(d, zn, zf), 0]);
+        }
+        for rgba in [0u32, 0xffff_ffff, 0x7f12_3456, 0x00ff_ffff, 0xff00_0000] {
+            cases.push([4, f(d), rgba, 0]);
+            expected.push(mdts_pack(d, rgba));
+            let words = mdts_pack(d, rgba);
+            cases.push([8, words[0], words[1], 0]);
+            let (dd, rgb) = mdts_unpack(words);
+            expected.push([dd.to_bits(), rgb]);
+        }
+    }
+    for a in 0..=255u32 {
+        for rgb in [0u32, 0xffffff, 0x80_7f01] {
+            let c = a << 24 | rgb;
+            cases.push([3, c, 0, 0]);
+            expected.push([bdp_pack_color(c), bdp_unpack_color(bdp_pack_color(c))]);
+        }
+    }
+    for x in [0.0f32, 1.0, 0.5, 1.0 / 255.0, 0.5 / 255.0, 254.5 / 255.0, -0.2, 1.7] {
+        for y in [0.0f32, 0.25, 1.0] {
+            cases.push([5, f(x), f(y), f(1.0 - x)]);
+            expected.push([pack_rgba8(glam::Vec4::new(x, y, 1.0 - x, x)), 0]);
+        }
+    }
+    for n in [(0.0f32, 0.0f32, 1.0f32), (0.0, 0.0, -1.0), (1.0, 0.0, 0.0), (0.3, -0.5, -0.8), (0.0, 0.0, 0.0)]
+    {
+        cases.push([6, f(n.0), f(n.1), f(n.2)]);
+        expected.push([pack_normal(glam::Vec3::new(n.0, n.1, n.2)), 0]);
+    }
+    let srgb_start = cases.len();
+    for x in [0.0f32, 1.0, 0.5, 0.003_130_8, 0.2, -1.0, f32::NAN, 2.0] {
+        cases.push([7, f(x), 0, 0]);
+        expected.push([u32::from(linear_to_srgb8(x)), 0]);
+    }
+
+    let device = &gpu.device;
+    use wgpu::util::DeviceExt;
+    let input = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("cases"),
+        contents: bytemuck::cast_slice(&cases),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
+    let output = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("results"),
+        size: (cases.len() * 8) as u64,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let entry = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: None,
+        entries: &[entry(0, true), entry(1, false)],
+    });
+    let pipeline = gpu.compute_pipeline(KERNEL, "main", &[&layout]).expect("kernel builds");
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &layout,
+        entries: &[
+            wgpu::BindGroupEntry { binding: 0, resource: input.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 1, resource: output.as_entire_binding() },
+        ],
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups((cases.len() as u32).div_ceil(64), 1, 1);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    let got = gpu.read_u32(&output).unwrap();
+    for (i, (case, want)) in cases.iter().zip(&expected).enumerate() {
+        let have = [got[2 * i], got[2 * i + 1]];
+        if i >= srgb_start {
+            assert!(
+                have[0].abs_diff(want[0]) <= 1,
+                "sRGB of {}: wgsl {} rust {}",
+                f32::from_bits(case[1]),
+                have[0],
+                want[0]
+            );
+        } else {
+            assert_eq!(have, *want, "case {i}: kind {} inputs {:?}", case[0], &case[1..]);
+        }
+    }
+}
