@@ -84,6 +84,14 @@ impl Backend for Shared {
     ) -> Result<oit_core::Frame, OitError> {
         self.0.render(scene, camera, settings)
     }
+    fn plain_pass_ms(
+        &self,
+        scene: &oit_core::Scene,
+        camera: &oit_core::Camera,
+        settings: &oit_core::Settings,
+    ) -> Result<f64, OitError> {
+        self.0.plain_pass_ms(scene, camera, settings)
+    }
 }
 
 /// Builds a backend, or says why its device is not there.

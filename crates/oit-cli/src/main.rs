@@ -1,5 +1,6 @@
 //! `oit`: the command line of oit — render one technique, compare techniques with the exact
-//! reference, sweep the camera around the scene, and list the backends compiled in.
+//! reference, sweep the camera around the scene, write the bench report, and list the backends
+//! compiled in.
 //!
 //! Contract: every failure prints one line `error: <message>` on stderr and exits with code 1
 //! (clap's own usage errors keep clap's format and exit code 2). Reports go to stdout — a table,
@@ -9,6 +10,7 @@
 //! `render`, `compare` and `sweep`; backends are chosen by name in one place ([`backends`]).
 
 mod backends;
+mod bench;
 mod compare;
 mod info;
 mod options;
@@ -48,6 +50,7 @@ enum Command {
     Compare(compare::CompareArgs),
     Sweep(sweep::SweepArgs),
     Info(info::InfoArgs),
+    Bench(bench::BenchArgs),
 }
 
 /// How a command ended when it did not fail outright.
@@ -65,6 +68,7 @@ fn run(cli: Cli) -> Result<Outcome, OitError> {
         Command::Compare(args) => compare::run(&args),
         Command::Sweep(args) => sweep::run(&args),
         Command::Info(args) => info::run(&args),
+        Command::Bench(args) => bench::run(&args),
     }
 }
 

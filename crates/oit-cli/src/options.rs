@@ -5,8 +5,8 @@ use std::path::Path;
 
 use clap::Args;
 use oit_core::{
-    Backend, BdpMode, BoundsMode, Camera, Effect, OitError, RasterPath, Scene, Settings, Shading, Technique,
-    View, load_scene, parse_rgb, parse_size,
+    Backend, BdpMode, BoundsMode, Camera, Effect, HardwareCapture, OitError, RasterPath, Scene, Settings,
+    Shading, Technique, View, load_scene, parse_rgb, parse_size,
 };
 
 use crate::backends::{BackendOptions, RasterChoice, backends, with_paths};
@@ -66,6 +66,13 @@ pub struct SceneArgs {
     /// (color for transparency with one pass, depth otherwise).
     #[arg(long, value_name = "MODE", default_value = "auto")]
     pub bdp_mode: String,
+
+    /// How bdp and dp capture on the hardware raster path of GPU backends: atomics
+    /// (fragment-stage storage-buffer atomics, the same capture as the compute path; faster on
+    /// the GPUs measured) or blend (the papers' graphics pipeline: MAX blending into 8 RGBA32F
+    /// targets for bdp's colour mode, depth textures and occlusion queries for dp).
+    #[arg(long, value_name = "atomics|blend", default_value = "atomics")]
+    pub hardware_capture: String,
 
     /// Stops the peeling techniques (dp, ddp, mlp, adp batches) after N capture passes; deeper
     /// layers count as lost [default: peel until no layer is left].
@@ -137,6 +144,7 @@ impl SceneArgs {
             bounds: self.bounds.parse::<BoundsMode>()?,
             raster: None,
             bdp_mode: self.bdp_mode.parse::<BdpMode>()?,
+            hardware_capture: self.hardware_capture.parse::<HardwareCapture>()?,
         };
         settings.validate()?;
         let view = View { azimuth: self.azimuth, elevation: self.elevation, fov: self.fov };

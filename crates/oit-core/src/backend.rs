@@ -46,6 +46,18 @@ pub trait Backend {
             .or_else(|| self.capabilities().raster_paths.first().copied())
             .unwrap_or(RasterPath::Cpu)
     }
+    /// Milliseconds of one plain geometry pass over `scene` (every fragment counted into a
+    /// per-pixel atomic counter, nothing else) on the raster path `settings` select: the `Tv` of
+    /// DESIGN.md's speedup model `K = N·Tv / (Tv + Tf)`. Device time where the backend measures
+    /// it, else wall time; per-frame setup (vertex transform, binning, pipeline creation) is not
+    /// counted. The default says the backend cannot.
+    fn plain_pass_ms(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<f64, OitError> {
+        let _ = (scene, camera, settings);
+        Err(OitError::Unsupported {
+            backend: self.name().into(),
+            what: "timing a plain geometry pass".into(),
+        })
+    }
 }
 
 /// A backend pinned to one raster path: `render` runs with `settings.raster` set to it. This is
@@ -69,6 +81,9 @@ impl Backend for OnPath {
     }
     fn raster_path(&self, _settings: &Settings) -> RasterPath {
         self.path
+    }
+    fn plain_pass_ms(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<f64, OitError> {
+        self.backend.plain_pass_ms(scene, camera, &Settings { raster: Some(self.path), ..settings.clone() })
     }
 }
 

@@ -20,6 +20,7 @@ pub mod raster;
 mod resolve;
 mod technique;
 
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Instant;
 
 use oit_core::{
@@ -93,6 +94,38 @@ impl Backend for CpuBackend {
                 .build()
                 .map_err(|e| OitError::Device(format!("cannot start {n} rayon threads: {e}")))?
                 .install(|| self.render_inner(scene, camera, settings)),
+        }
+    }
+
+    /// Wall time of one [`Rasterizer::for_each_fragment`] pass that adds 1 to an atomic per-pixel
+    /// counter per fragment. The pass runs twice and the second is timed, so the tile binning
+    /// the first pass of a frame does (once per frame, whatever the passes) is not counted.
+    fn plain_pass_ms(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<f64, OitError> {
+        settings.validate()?;
+        scene.validate()?;
+        let time = || {
+            let mut raster = Rasterizer::new(scene, camera, settings);
+            if let Some(mode) = self.mode {
+                raster = raster.with_mode(mode);
+            }
+            let counts: Vec<AtomicU32> = (0..settings.pixel_count()).map(|_| AtomicU32::new(0)).collect();
+            let pass = || {
+                raster.for_each_fragment(|f| {
+                    counts[f.pixel as usize].fetch_add(1, Ordering::Relaxed);
+                })
+            };
+            pass();
+            let start = Instant::now();
+            std::hint::black_box(pass());
+            start.elapsed().as_secs_f64() * 1e3
+        };
+        match self.threads {
+            None => Ok(time()),
+            Some(n) => Ok(rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .map_err(|e| OitError::Device(format!("cannot start {n} rayon threads: {e}")))?
+                .install(time)),
         }
     }
 }

@@ -57,6 +57,13 @@ pub trait Driver {
         layout0: &wgpu::BindGroupLayout,
         group0: &wgpu::BindGroup,
     ) -> Result<u64, OitError>;
+
+    /// oit's own vertex stage of the scene, for techniques with their own render pipelines
+    /// (`--hardware-capture blend`); `None` where the draws are not oit's (the compute
+    /// rasterizer, the embedded pass).
+    fn scene_stage(&self) -> Option<&crate::hardware::SceneStage> {
+        None
+    }
 }
 
 /// Initial contents of a storage buffer.

@@ -35,6 +35,38 @@ struct HwVertex {
 /// The scene (or its instances' bounding boxes) on the GPU's rasterizer.
 pub struct HardwareRaster {
     driver: RenderDriver<'static>,
+    stage: SceneStage,
+}
+
+/// The vertex stage of [`HardwareRaster`] for techniques that build their own render pipelines
+/// (`technique::{bdp_blend, dp_depth}`): put [`SceneStage::wgsl`] after the technique's group 0
+/// declarations, add [`SceneStage::layout`] as group 1, use `hw_vs` as the vertex entry point
+/// (its output `HwOut`, and `shade`, serve the fragment stage), and call [`SceneStage::draw`].
+pub struct SceneStage {
+    layout: wgpu::BindGroupLayout,
+    group: wgpu::BindGroup,
+    vertex_count: u32,
+}
+
+impl SceneStage {
+    /// raster_hardware.wgsl without its fragment entry point (`hw_fs`, which calls the atomics
+    /// capture): the group 1 bindings, `HwOut` and `hw_vs`.
+    pub(crate) fn wgsl(&self) -> &'static str {
+        RASTER_WGSL.split_once("@fragment").map_or(RASTER_WGSL, |(vertex, _)| vertex)
+    }
+
+    /// The layout of group 1 (the clip-space vertices, indices and the shading uniform).
+    pub(crate) fn layout(&self) -> &wgpu::BindGroupLayout {
+        &self.layout
+    }
+
+    /// Sets group 1 and draws every triangle (primitive `t` of the draw is the scene's `t`).
+    pub(crate) fn draw(&self, rpass: &mut wgpu::RenderPass<'_>) {
+        rpass.set_bind_group(1, &self.group, &[]);
+        if self.vertex_count > 0 {
+            rpass.draw(0..self.vertex_count, 0..1);
+        }
+    }
 }
 
 /// The normal matrix of `transform`: its inverse transpose (the matrix itself when singular), as
@@ -159,6 +191,7 @@ impl HardwareRaster {
         });
         let vertex_count = u32::try_from(indices.len())
             .map_err(|_| OitError::Device("over 2^32 vertices in one draw".into()))?;
+        let stage = SceneStage { layout: layout1.clone(), group: group1.clone(), vertex_count };
         let pipeline_device = device.clone();
         let pipeline = move |capture: &CaptureShader<'_>| {
             let device = &pipeline_device;
@@ -207,7 +240,7 @@ impl HardwareRaster {
             Box::new(pipeline),
             Box::new(draw),
         );
-        Ok(HardwareRaster { driver })
+        Ok(HardwareRaster { driver, stage })
     }
 }
 
@@ -224,5 +257,9 @@ impl Driver for HardwareRaster {
         group0: &wgpu::BindGroup,
     ) -> Result<u64, OitError> {
         self.driver.geometry_pass(ctx, source, layout0, group0)
+    }
+
+    fn scene_stage(&self) -> Option<&SceneStage> {
+        Some(&self.stage)
     }
 }

@@ -18,7 +18,8 @@ use std::sync::OnceLock;
 use std::time::Instant;
 
 use oit_core::{
-    Backend, Camera, Capabilities, Frame, OitError, RasterPath, Scene, Settings, Technique, TechniqueKind,
+    Backend, Camera, Capabilities, Frame, HardwareCapture, OitError, RasterPath, Scene, Settings, Technique,
+    TechniqueKind,
 };
 
 pub use crate::ctx::{Driver, FrameUniform, GpuCtx, Init, TECHNIQUE_PRELUDE};
@@ -132,6 +133,37 @@ impl Backend for WgpuBackend {
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(frame)
     }
+
+    /// One counting geometry pass (`technique::count`'s) on the settings' raster path, timed with
+    /// the GPU timestamps of its geometry pass (wall time of the pass and its readback where the
+    /// device has no timestamps). Two passes run: their device
+    /// time halved, or the second's wall time (the first creates the pipelines).
+    fn plain_pass_ms(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<f64, OitError> {
+        settings.validate()?;
+        scene.validate()?;
+        let gpu = self.gpu()?;
+        let path = settings.raster.unwrap_or(WgpuBackend::default_path(settings.technique));
+        let driver: Box<dyn Driver> = match path {
+            RasterPath::Compute => Box::new(ComputeRaster::new(gpu, scene, camera, settings, false)?),
+            RasterPath::Hardware => Box::new(HardwareRaster::new(gpu, scene, camera, settings)?),
+            other => {
+                return Err(OitError::Unsupported {
+                    backend: "wgpu".into(),
+                    what: format!("the {other} raster path"),
+                });
+            }
+        };
+        let mut ctx = GpuCtx::new(gpu, scene, camera, settings)?;
+        technique::count(&mut ctx, driver.as_ref())?;
+        let start = Instant::now();
+        technique::count(&mut ctx, driver.as_ref())?;
+        let wall = start.elapsed().as_secs_f64() * 1e3;
+        let frame = ctx.finish(path)?;
+        // the timestamps add up both passes under one label; pipelines are made before the
+        // first pass's timestamps, so both passes are device time of the same work
+        let geometry = frame.stats.gpu_pass_ms.iter().find(|(label, _)| label == "geometry");
+        Ok(geometry.map_or(wall, |(_, total)| total / 2.0))
+    }
 }
 
 /// Runs the frame's technique (geometry passes through `drivers`, kernels, resolve into the
@@ -142,7 +174,12 @@ pub(crate) fn run_technique(
     drivers: &Drivers<'_>,
 ) -> Result<Option<Vec<u32>>, OitError> {
     let mut layers = None;
+    // the papers' graphics-pipeline capture of bdp and dp, when asked for on the hardware path
+    let blend = drivers.scene.path() == RasterPath::Hardware
+        && ctx.settings.hardware_capture == HardwareCapture::Blend;
     match ctx.settings.technique {
+        Technique::Dp if blend => technique::dp_depth::render(ctx, drivers)?,
+        Technique::Bdp { .. } if blend => technique::bdp_blend::render(ctx, drivers)?,
         Technique::Reference => layers = Some(technique::reference::render(ctx, drivers)?),
         Technique::Fabs { k } => technique::fabs::render(ctx, drivers, k)?,
         Technique::Dp => technique::dp::render(ctx, drivers)?,

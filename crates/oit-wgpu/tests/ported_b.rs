@@ -2,7 +2,7 @@
 //! fragments, losses, geometry passes and storage, and the same image (±1 per channel).
 
 use oit_core::{
-    Backend, BdpMode, BoundsMode, Camera, Effect, OitError, Settings, Technique, View, load_scene,
+    Backend, BdpMode, BoundsMode, Camera, Effect, OitError, RasterPath, Settings, Technique, View, load_scene,
 };
 
 const SCENES: [&str; 4] = ["planes:8", "spheres:4", "knot", "cluster:200"];
@@ -14,6 +14,7 @@ fn settings(technique: &str, bdp_mode: BdpMode, bounds: BoundsMode) -> Settings 
         technique: technique.parse::<Technique>().unwrap(),
         bdp_mode,
         bounds,
+        raster: Some(RasterPath::Compute),
         ..Settings::default()
     }
 }

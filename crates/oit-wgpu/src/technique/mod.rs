@@ -3,8 +3,10 @@
 
 pub(crate) mod adp;
 pub(crate) mod bdp;
+pub(crate) mod bdp_blend;
 pub(crate) mod ddp;
 pub(crate) mod dp;
+pub(crate) mod dp_depth;
 pub(crate) mod fabs;
 pub(crate) mod mdts;
 pub(crate) mod mlp;

@@ -1,0 +1,720 @@
+//! oit-bench: the speed/accuracy report of oit, and the criterion benches (`benches/`).
+//!
+//! Contract: [`run_bench`] renders, for every scene × backend (× raster path, one
+//! [`oit_core::OnPath`] each) × technique, `warmup` untimed frames and then `frames` timed ones,
+//! and returns a [`Report`] holding
+//!
+//! - one [`Row`] per run: passes, fragments, lost, storage, the median and spread (min, max,
+//!   quartiles) of wall and GPU milliseconds, Gfrag/s, and EPR and PSNR against the reference of
+//!   the same backend and path;
+//! - the speedup model ([`ModelRow`]): `Tv` ([`oit_core::Backend::plain_pass_ms`]), each
+//!   technique's `Tf`, the predicted `K = N·Tv/(Tv+Tf)` beside the measured speedup over `dp`;
+//! - the cross-backend matrix ([`MatrixEntry`]): per technique, the largest 8-bit difference and
+//!   the EPR between the images of every pair of backend/paths;
+//! - the two curves ([`CurvePoint`]): time against depth complexity (`planes:N`) and against
+//!   triangle count (`grid:RxC:MESH`).
+//!
+//! A run that fails is a [`Failure`] in the report, never the end of the bench. [`write_report`]
+//! then writes `report.md`, `report.json` and the plots (SVG and PNG) into a folder.
+//!
+//! "Time" in the model, the plots and Gfrag/s is the median GPU time where the backend measures it
+//! (timestamps), else the median wall time; [`Row::time_source`] says which.
+
+pub mod model;
+pub mod plot;
+mod report;
+
+use std::collections::HashMap;
+use std::time::Instant;
+
+use oit_core::metrics::accuracy;
+use oit_core::{Backend, Camera, Frame, Image, OitError, Scene, Settings, Technique, View, load_scene};
+use serde::Serialize;
+
+pub use model::{pareto_front, predicted_speedup};
+pub use report::write_report;
+
+/// What to measure.
+pub struct Config {
+    /// Scenes by name (anything [`oit_core::load_scene`] takes).
+    pub scenes: Vec<String>,
+    /// Backends, each pinned to a raster path or on its own default.
+    pub backends: Vec<Box<dyn Backend>>,
+    /// Image size, shading and the rest (the technique is set per run).
+    pub settings: Settings,
+    /// The camera's angles; each scene is framed from them.
+    pub view: View,
+    /// Techniques to time (the reference is rendered anyway, for accuracy).
+    pub techniques: Vec<Technique>,
+    /// Untimed frames before the timed ones.
+    pub warmup: u32,
+    /// Timed frames (at least 1; the report asks for 10 or more).
+    pub frames: u32,
+    /// The two curves, or none.
+    pub curves: Option<CurveConfig>,
+    /// The command line, recorded in the report.
+    pub command_line: String,
+}
+
+/// The scenes and runs of the two curves.
+#[derive(Clone, Debug)]
+pub struct CurveConfig {
+    /// The mesh of `grid:RxC:MESH`.
+    pub mesh: String,
+    /// Techniques drawn.
+    pub techniques: Vec<Technique>,
+    /// The N of `planes:N`.
+    pub depths: Vec<u32>,
+    /// The R×C of `grid:RxC:MESH`.
+    pub grids: Vec<(u32, u32)>,
+    /// Image width of the curves' frames.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Timed frames per point (after one untimed).
+    pub frames: u32,
+}
+
+impl CurveConfig {
+    /// The defaults: dp, bdp, adp, fabs, mdts64; depths 1, 2, 4, …, 256; grids 1×1 to 4×4 of
+    /// `mesh`; 128×128 frames; 3 timed frames per point.
+    pub fn new(mesh: &str) -> CurveConfig {
+        CurveConfig {
+            mesh: mesh.to_string(),
+            techniques: Technique::parse_list("dp,bdp,adp,fabs,mdts64").unwrap_or_default(),
+            depths: (0..=8).map(|i| 1 << i).collect(),
+            grids: vec![(1, 1), (1, 2), (2, 2), (2, 4), (4, 4)],
+            width: 128,
+            height: 128,
+            frames: 3,
+        }
+    }
+}
+
+/// Median, extremes and quartiles of a set of times.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Spread {
+    /// The median.
+    pub median: f64,
+    /// The smallest.
+    pub min: f64,
+    /// The largest.
+    pub max: f64,
+    /// The first quartile (linear interpolation).
+    pub q1: f64,
+    /// The third quartile.
+    pub q3: f64,
+    /// How many values.
+    pub samples: usize,
+}
+
+impl Spread {
+    /// The spread of `values` (none when empty).
+    pub fn of(values: &[f64]) -> Option<Spread> {
+        if values.is_empty() {
+            return None;
+        }
+        let mut v = values.to_vec();
+        v.sort_by(f64::total_cmp);
+        let at = |q: f64| {
+            let pos = q * (v.len() - 1) as f64;
+            let (lo, hi) = (pos.floor() as usize, pos.ceil() as usize);
+            v[lo] + (v[hi] - v[lo]) * (pos - lo as f64)
+        };
+        Some(Spread {
+            median: at(0.5),
+            min: v[0],
+            max: v[v.len() - 1],
+            q1: at(0.25),
+            q3: at(0.75),
+            samples: v.len(),
+        })
+    }
+}
+
+/// One technique on one backend/path and scene.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    /// The scene.
+    pub scene: String,
+    /// The backend.
+    pub backend: String,
+    /// The raster path.
+    pub raster: String,
+    /// The technique, parameters included.
+    pub technique: String,
+    /// Geometry passes per frame.
+    pub passes: u32,
+    /// Fragments one geometry pass generates.
+    pub fragments: u64,
+    /// Fragments that reached the composite.
+    pub captured: u64,
+    /// Fragments that did not.
+    pub lost: u64,
+    /// Bytes of per-pixel storage.
+    pub storage_bytes: u64,
+    /// Wall milliseconds per frame.
+    pub wall_ms: Spread,
+    /// GPU milliseconds per frame (timestamps), where measured.
+    pub gpu_ms: Option<Spread>,
+    /// The time used for the model, the plots and Gfrag/s: `gpu_ms.median`, else
+    /// `wall_ms.median`.
+    pub time_ms: f64,
+    /// `gpu` or `wall`: where `time_ms` comes from.
+    pub time_source: String,
+    /// Scene fragments resolved per second: `fragments / time_ms`, in 10⁹ per second.
+    pub gfrag_per_s: f64,
+    /// Error pixel rate against the same backend/path's reference, a fraction.
+    pub epr: f64,
+    /// PSNR in dB against it; null when identical.
+    pub psnr: Option<f64>,
+    /// The largest channel difference from it, 8-bit steps.
+    pub max_diff: u32,
+}
+
+/// A run that failed.
+#[derive(Clone, Debug, Serialize)]
+pub struct Failure {
+    /// What was run (`bench`, `plain pass`, `depth curve`, `triangle curve`).
+    pub stage: String,
+    /// The scene.
+    pub scene: String,
+    /// The backend/path.
+    pub backend: String,
+    /// The technique.
+    pub technique: String,
+    /// Why.
+    pub error: String,
+}
+
+/// The speedup model for one technique on one backend/path and scene.
+#[derive(Clone, Debug, Serialize)]
+pub struct ModelRow {
+    /// The scene.
+    pub scene: String,
+    /// The backend/path label.
+    pub backend: String,
+    /// The technique.
+    pub technique: String,
+    /// The scene's deepest pixel (the reference's count; else dp's passes − 1).
+    pub n: u32,
+    /// One plain geometry pass, milliseconds (median).
+    pub tv_ms: f64,
+    /// The technique's time (median).
+    pub time_ms: f64,
+    /// Its extra fragment cost over one plain pass: `time_ms − tv_ms` (all its passes included).
+    pub tf_ms: f64,
+    /// `N·Tv / (Tv + Tf)`.
+    pub predicted_k: f64,
+    /// dp's time over the technique's on the same backend/path, where dp ran.
+    pub measured: Option<f64>,
+    /// `measured / predicted_k`.
+    pub ratio: Option<f64>,
+}
+
+/// One pair of backend/paths for one technique.
+#[derive(Clone, Debug, Serialize)]
+pub struct MatrixEntry {
+    /// The scene.
+    pub scene: String,
+    /// The technique.
+    pub technique: String,
+    /// The first backend/path (its reference's coverage selects the pixels).
+    pub a: String,
+    /// The second.
+    pub b: String,
+    /// The largest channel difference between the two images, 8-bit steps.
+    pub max_diff: u32,
+    /// The share of covered pixels that differ by more than 1 step.
+    pub epr: f64,
+}
+
+/// One point of a curve.
+#[derive(Clone, Debug, Serialize)]
+pub struct CurvePoint {
+    /// `depth` (x: N of planes:N) or `triangles` (x: the grid scene's triangle count).
+    pub curve: String,
+    /// The scene.
+    pub scene: String,
+    /// The backend/path label.
+    pub backend: String,
+    /// The technique.
+    pub technique: String,
+    /// The x value.
+    pub x: f64,
+    /// Time, milliseconds (median, as [`Row::time_ms`]).
+    pub time_ms: f64,
+    /// Geometry passes.
+    pub passes: u32,
+    /// Fragments per pass.
+    pub fragments: u64,
+}
+
+/// A backend/path that was measured.
+#[derive(Clone, Debug, Serialize)]
+pub struct BackendInfo {
+    /// `name` or `name/path`.
+    pub label: String,
+    /// The device, in words.
+    pub device: String,
+}
+
+/// A scene that was measured.
+#[derive(Clone, Debug, Serialize)]
+pub struct SceneInfo {
+    /// Its name.
+    pub name: String,
+    /// Triangles.
+    pub triangles: u64,
+    /// Fragments of one pass (the first reference's), if one rendered.
+    pub fragments: Option<u64>,
+    /// The deepest pixel, if a reference rendered.
+    pub max_depth: Option<u32>,
+}
+
+/// Everything measured.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    /// The command line.
+    pub command_line: String,
+    /// The host: CPU model and cores.
+    pub host: String,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// The camera's angles.
+    pub view: View,
+    /// Untimed frames per run.
+    pub warmup: u32,
+    /// Timed frames per run.
+    pub frames: u32,
+    /// The backend/paths.
+    pub backends: Vec<BackendInfo>,
+    /// The scenes.
+    pub scenes: Vec<SceneInfo>,
+    /// The table.
+    pub rows: Vec<Row>,
+    /// The speedup model.
+    pub model: Vec<ModelRow>,
+    /// The cross-backend matrix.
+    pub matrix: Vec<MatrixEntry>,
+    /// The curves' points.
+    pub curves: Vec<CurvePoint>,
+    /// The mesh of the triangle curve, if the curves ran.
+    pub curve_mesh: Option<String>,
+    /// The curves' image size, if they ran.
+    pub curve_size: Option<(u32, u32)>,
+    /// Runs that failed.
+    pub failures: Vec<Failure>,
+    /// Files written next to the report (filled by [`write_report`]).
+    pub files: Vec<String>,
+}
+
+/// `name` or `name/path`: how a backend pinned to a path (or on its default for these settings)
+/// is labelled.
+pub fn label(backend: &dyn Backend, settings: &Settings) -> String {
+    let path = backend.raster_path(settings).to_string();
+    if path == backend.name() { path } else { format!("{}/{path}", backend.name()) }
+}
+
+impl Config {
+    /// How many steps [`run_bench_with`] reports: per scene and backend the reference, the plain
+    /// pass and each technique; per curve point and backend each curve technique.
+    pub fn steps(&self) -> u64 {
+        let b = self.backends.len() as u64;
+        let main = self.scenes.len() as u64 * b * (self.techniques.len() as u64 + 2);
+        let curves = self
+            .curves
+            .as_ref()
+            .map_or(0, |c| (c.depths.len() + c.grids.len()) as u64 * b * c.techniques.len() as u64);
+        main + curves
+    }
+}
+
+/// Runs the bench with no progress report.
+pub fn run_bench(config: &Config) -> Result<Report, OitError> {
+    run_bench_with(config, &mut |_| {})
+}
+
+/// The frames of one run: the last frame and the wall and GPU times of the timed ones.
+struct Timed {
+    frame: Frame,
+    wall: Vec<f64>,
+    gpu: Vec<f64>,
+}
+
+impl Timed {
+    fn wall_spread(&self) -> Spread {
+        Spread::of(&self.wall).unwrap_or_default()
+    }
+    fn gpu_spread(&self) -> Option<Spread> {
+        (self.gpu.len() == self.wall.len()).then(|| Spread::of(&self.gpu)).flatten()
+    }
+    /// (time, source) as [`Row::time_ms`].
+    fn time(&self) -> (f64, &'static str) {
+        match self.gpu_spread() {
+            Some(g) => (g.median, "gpu"),
+            None => (self.wall_spread().median, "wall"),
+        }
+    }
+}
+
+fn measure(
+    backend: &dyn Backend,
+    scene: &Scene,
+    camera: &Camera,
+    settings: &Settings,
+    warmup: u32,
+    frames: u32,
+) -> Result<Timed, OitError> {
+    for _ in 0..warmup {
+        backend.render(scene, camera, settings)?;
+    }
+    let (mut wall, mut gpu) = (Vec::new(), Vec::new());
+    let mut last = None;
+    for _ in 0..frames.max(1) {
+        let start = Instant::now();
+        let frame = backend.render(scene, camera, settings)?;
+        // the backend's own wall time where it keeps one, else ours around the call
+        let ms =
+            if frame.stats.wall_ms > 0.0 { frame.stats.wall_ms } else { start.elapsed().as_secs_f64() * 1e3 };
+        wall.push(ms);
+        if let Some(g) = frame.stats.gpu_ms {
+            gpu.push(g);
+        }
+        last = Some(frame);
+    }
+    let frame = last.ok_or_else(|| OitError::InvalidSettings("no frame was timed".into()))?;
+    Ok(Timed { frame, wall, gpu })
+}
+
+/// The host in words: CPU model (from /proc/cpuinfo where there is one) and cores.
+pub fn host() -> String {
+    let model = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string());
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    format!("{model}, {cores} cores, {}", std::env::consts::OS)
+}
+
+/// Runs the bench, calling `on_step` with a description before each of [`Config::steps`] steps.
+pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<Report, OitError> {
+    if config.frames == 0 {
+        return Err(OitError::InvalidSettings("the bench needs at least 1 timed frame".into()));
+    }
+    if config.backends.is_empty() {
+        return Err(OitError::InvalidSettings("the bench needs at least one backend".into()));
+    }
+    let base = Settings { technique: Technique::Reference, ..config.settings.clone() };
+    base.validate()?;
+    let aspect = base.width as f32 / base.height as f32;
+    let mut report = Report {
+        command_line: config.command_line.clone(),
+        host: host(),
+        width: base.width,
+        height: base.height,
+        view: config.view,
+        warmup: config.warmup,
+        frames: config.frames,
+        backends: config
+            .backends
+            .iter()
+            .map(|b| BackendInfo { label: label(b.as_ref(), &base), device: b.capabilities().device })
+            .collect(),
+        scenes: Vec::new(),
+        rows: Vec::new(),
+        model: Vec::new(),
+        matrix: Vec::new(),
+        curves: Vec::new(),
+        curve_mesh: config.curves.as_ref().map(|c| c.mesh.clone()),
+        curve_size: config.curves.as_ref().map(|c| (c.width, c.height)),
+        failures: Vec::new(),
+        files: Vec::new(),
+    };
+    let fail =
+        |report: &mut Report, stage: &str, scene: &str, backend: &str, technique: &str, e: &OitError| {
+            report.failures.push(Failure {
+                stage: stage.into(),
+                scene: scene.into(),
+                backend: backend.into(),
+                technique: technique.into(),
+                error: e.to_string(),
+            });
+        };
+
+    for scene_name in &config.scenes {
+        let scene = load_scene(scene_name)?;
+        scene.validate()?;
+        let camera = Camera::orbit_scene(&scene, config.view, aspect)?;
+        let mut info = SceneInfo {
+            name: scene_name.clone(),
+            triangles: scene.triangle_count(),
+            fragments: None,
+            max_depth: None,
+        };
+        // per technique: (label, image, the coverage of that backend's reference)
+        let mut images: HashMap<String, Vec<Rendered>> = HashMap::new();
+        for backend in &config.backends {
+            let backend = backend.as_ref();
+            let ref_label = label(backend, &base);
+            on_step(&format!("{scene_name}: reference on {ref_label}"));
+            let reference = match backend.render(&scene, &camera, &base) {
+                Ok(frame) => frame,
+                Err(e) => {
+                    fail(&mut report, "reference", scene_name, &ref_label, "reference", &e);
+                    for _ in 0..config.techniques.len() + 1 {
+                        on_step(&format!("{scene_name}: skipped on {ref_label}"));
+                    }
+                    continue;
+                }
+            };
+            let max_depth = reference.layers.as_ref().and_then(|l| l.iter().copied().max());
+            info.fragments.get_or_insert(reference.stats.fragments);
+            if info.max_depth.is_none() {
+                info.max_depth = max_depth;
+            }
+            images.entry("reference".into()).or_default().push((
+                ref_label.clone(),
+                reference.image.clone(),
+                reference.layers.clone(),
+            ));
+
+            on_step(&format!("{scene_name}: plain pass on {ref_label}"));
+            let mut tv = Vec::new();
+            let mut tv_error = None;
+            for i in 0..config.frames + 1 {
+                match backend.plain_pass_ms(&scene, &camera, &base) {
+                    Ok(ms) if i > 0 => tv.push(ms),
+                    Ok(_) => {}
+                    Err(e) => {
+                        tv_error = Some(e);
+                        break;
+                    }
+                }
+            }
+            if let Some(e) = &tv_error {
+                fail(&mut report, "plain pass", scene_name, &ref_label, "-", e);
+            }
+            let tv = Spread::of(&tv).map(|s| s.median);
+
+            let mut measured: Vec<(Technique, Row)> = Vec::new();
+            for &technique in &config.techniques {
+                let settings = Settings { technique, ..base.clone() };
+                let row_label = label(backend, &settings);
+                on_step(&format!("{scene_name}: {technique} on {row_label}"));
+                let result = measure(backend, &scene, &camera, &settings, config.warmup, config.frames)
+                    .and_then(|t| Ok((accuracy(&reference, &t.frame.image)?, t)));
+                let (acc, timed) = match result {
+                    Ok(r) => r,
+                    Err(e) => {
+                        fail(&mut report, "bench", scene_name, &row_label, &technique.to_string(), &e);
+                        continue;
+                    }
+                };
+                let s = &timed.frame.stats;
+                let (time_ms, source) = timed.time();
+                let row = Row {
+                    scene: scene_name.clone(),
+                    backend: backend.name().to_string(),
+                    raster: backend.raster_path(&settings).to_string(),
+                    technique: technique.to_string(),
+                    passes: s.geometry_passes,
+                    fragments: s.fragments,
+                    captured: s.captured,
+                    lost: s.lost,
+                    storage_bytes: s.storage_bytes,
+                    wall_ms: timed.wall_spread(),
+                    gpu_ms: timed.gpu_spread(),
+                    time_ms,
+                    time_source: source.into(),
+                    gfrag_per_s: if time_ms > 0.0 {
+                        s.fragments as f64 / (time_ms * 1e-3) / 1e9
+                    } else {
+                        0.0
+                    },
+                    epr: acc.epr,
+                    psnr: acc.psnr.is_finite().then_some(acc.psnr),
+                    max_diff: (acc.max_error * 255.0).round() as u32,
+                };
+                images.entry(technique.to_string()).or_default().push((
+                    row_label,
+                    timed.frame.image,
+                    reference.layers.clone(),
+                ));
+                measured.push((technique, row));
+            }
+
+            // the model, on this backend
+            let dp = measured.iter().find(|(t, _)| *t == Technique::Dp).map(|(_, r)| r);
+            let n = max_depth.or(dp.map(|r| r.passes.saturating_sub(1)));
+            if let (Some(tv), Some(n)) = (tv, n) {
+                for (_, row) in &measured {
+                    let tf = row.time_ms - tv;
+                    let k = predicted_speedup(f64::from(n), tv, tf);
+                    let speedup = dp.map(|d| d.time_ms / row.time_ms);
+                    report.model.push(ModelRow {
+                        scene: scene_name.clone(),
+                        backend: format!("{}/{}", row.backend, row.raster).replace("cpu/cpu", "cpu"),
+                        technique: row.technique.clone(),
+                        n,
+                        tv_ms: tv,
+                        time_ms: row.time_ms,
+                        tf_ms: tf,
+                        predicted_k: k,
+                        measured: speedup,
+                        ratio: speedup.map(|m| m / k),
+                    });
+                }
+            }
+            report.rows.extend(measured.into_iter().map(|(_, r)| r));
+        }
+
+        // the matrix: every pair of backend/paths, per technique
+        let mut names: Vec<String> = vec!["reference".into()];
+        names.extend(config.techniques.iter().map(ToString::to_string));
+        for technique in names {
+            let Some(list) = images.get(&technique) else { continue };
+            for i in 0..list.len() {
+                for j in i + 1..list.len() {
+                    let (a, img_a, cover) = &list[i];
+                    let (b, img_b, _) = &list[j];
+                    let frame_a =
+                        Frame { image: img_a.clone(), layers: cover.clone(), stats: Default::default() };
+                    match accuracy(&frame_a, img_b) {
+                        Ok(acc) => report.matrix.push(MatrixEntry {
+                            scene: scene_name.clone(),
+                            technique: technique.clone(),
+                            a: a.clone(),
+                            b: b.clone(),
+                            max_diff: (acc.max_error * 255.0).round() as u32,
+                            epr: acc.epr,
+                        }),
+                        Err(e) => {
+                            fail(&mut report, "matrix", scene_name, &format!("{a} vs {b}"), &technique, &e)
+                        }
+                    }
+                }
+            }
+        }
+        report.scenes.push(info);
+    }
+
+    if let Some(curves) = &config.curves {
+        run_curves(config, curves, &mut report, on_step, fail)?;
+    }
+    Ok(report)
+}
+
+/// A technique's image on one backend/path: (label, image, the coverage of that backend's
+/// reference).
+type Rendered = (String, Image, Option<Vec<u32>>);
+
+type FailFn = fn(&mut Report, &str, &str, &str, &str, &OitError);
+
+fn run_curves(
+    config: &Config,
+    curves: &CurveConfig,
+    report: &mut Report,
+    on_step: &mut dyn FnMut(&str),
+    fail: FailFn,
+) -> Result<(), OitError> {
+    let settings = Settings { width: curves.width, height: curves.height, ..config.settings.clone() };
+    settings.validate()?;
+    let aspect = curves.width as f32 / curves.height as f32;
+    let mut scenes: Vec<(&str, String, Option<f64>)> =
+        curves.depths.iter().map(|&n| ("depth", format!("planes:{n}"), Some(f64::from(n)))).collect();
+    scenes.extend(
+        curves.grids.iter().map(|&(r, c)| ("triangles", format!("grid:{r}x{c}:{}", curves.mesh), None)),
+    );
+    for (curve, name, x) in scenes {
+        let steps = config.backends.len() * curves.techniques.len();
+        let loaded = load_scene(&name)
+            .and_then(|s| s.validate().map(|()| s))
+            .and_then(|s| Camera::orbit_scene(&s, config.view, aspect).map(|c| (s, c)));
+        let (scene, camera) = match loaded {
+            Ok(sc) => sc,
+            Err(e) => {
+                fail(report, &format!("{curve} curve"), &name, "-", "-", &e);
+                for _ in 0..steps {
+                    on_step(&format!("{name}: skipped"));
+                }
+                continue;
+            }
+        };
+        let x = x.unwrap_or(scene.triangle_count() as f64);
+        for backend in &config.backends {
+            for &technique in &curves.techniques {
+                let s = Settings { technique, ..settings.clone() };
+                let l = label(backend.as_ref(), &s);
+                on_step(&format!("{curve} curve: {name}, {technique} on {l}"));
+                match measure(backend.as_ref(), &scene, &camera, &s, 1, curves.frames) {
+                    Ok(t) => report.curves.push(CurvePoint {
+                        curve: curve.into(),
+                        scene: name.clone(),
+                        backend: l,
+                        technique: technique.to_string(),
+                        x,
+                        time_ms: t.time().0,
+                        passes: t.frame.stats.geometry_passes,
+                        fragments: t.frame.stats.fragments,
+                    }),
+                    Err(e) => fail(report, &format!("{curve} curve"), &name, &l, &technique.to_string(), &e),
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Every backend compiled into oit-bench whose device is present, one per raster path, with a
+/// note on stderr for each that is not (for the benches and tests; the CLI chooses its own).
+#[allow(unused_mut, clippy::vec_init_then_push, reason = "what is pushed depends on the features")]
+pub fn available_backends() -> Vec<Box<dyn Backend>> {
+    let mut out: Vec<Box<dyn Backend>> = Vec::new();
+    #[cfg(feature = "cpu")]
+    out.push(Box::new(oit_cpu::CpuBackend::default()));
+    #[cfg(feature = "wgpu")]
+    {
+        let backend = oit_wgpu::WgpuBackend::new(None);
+        match backend.gpu() {
+            Ok(_) => {
+                let shared = std::sync::Arc::new(backend);
+                for path in shared.capabilities().raster_paths {
+                    out.push(Box::new(oit_core::OnPath {
+                        backend: Box::new(SharedBackend(shared.clone())),
+                        path,
+                    }));
+                }
+            }
+            Err(e) => eprintln!("note: wgpu skipped: no adapter ({e})"),
+        }
+    }
+    out
+}
+
+/// One backend behind several [`oit_core::OnPath`]s, so one device serves every path.
+#[cfg(feature = "wgpu")]
+struct SharedBackend(std::sync::Arc<oit_wgpu::WgpuBackend>);
+
+#[cfg(feature = "wgpu")]
+impl Backend for SharedBackend {
+    fn name(&self) -> &str {
+        self.0.name()
+    }
+    fn capabilities(&self) -> oit_core::Capabilities {
+        self.0.capabilities()
+    }
+    fn render(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
+        self.0.render(scene, camera, settings)
+    }
+    fn plain_pass_ms(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<f64, OitError> {
+        self.0.plain_pass_ms(scene, camera, settings)
+    }
+}

@@ -1,0 +1,344 @@
+//! One chart description, drawn twice: as SVG with plotters (text by the SVG viewer, no fonts
+//! needed) and as PNG with plotters' bitmap backend for lines and points and
+//! [`oit_core::text::draw_text`] for every label (plotters has no font here without system
+//! libraries), placed through the chart's own coordinate mapping.
+
+use std::path::Path;
+
+use oit_core::text::{LINE_HEIGHT, draw_text, fill_rect, text_width};
+use oit_core::{Image, OitError};
+use plotters::prelude::*;
+
+/// A set of points drawn in one colour.
+#[derive(Clone, Debug)]
+pub struct Series {
+    /// Its name in the legend.
+    pub name: String,
+    /// The points, in data coordinates.
+    pub points: Vec<(f64, f64)>,
+    /// A label beside each point (empty: none).
+    pub labels: Vec<String>,
+    /// Join the points with a line.
+    pub line: bool,
+    /// Mark each point.
+    pub markers: bool,
+    /// Colour; `None` picks from plotters' palette by index.
+    pub color: Option<(u8, u8, u8)>,
+}
+
+/// A chart: axes (each linear or log), series, title.
+#[derive(Clone, Debug)]
+pub struct Chart {
+    /// Title.
+    pub title: String,
+    /// x axis description.
+    pub x_desc: String,
+    /// y axis description.
+    pub y_desc: String,
+    /// Log x axis.
+    pub x_log: bool,
+    /// Log y axis.
+    pub y_log: bool,
+    /// The series, drawn in order.
+    pub series: Vec<Series>,
+}
+
+const WIDTH: u32 = 1200;
+const HEIGHT: u32 = 720;
+/// Room on the right of the PNG for its legend.
+const LEGEND_WIDTH: u32 = 230;
+
+fn write_err(path: &Path) -> impl Fn(&dyn std::fmt::Display) -> OitError + '_ {
+    move |e| OitError::Write { path: path.to_path_buf(), message: e.to_string() }
+}
+
+/// The axis range holding `values`: whole decades on a log axis, 5 % padding on a linear one.
+fn range(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values.filter(|v| v.is_finite() && (!log || *v > 0.0)) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        return if log { (0.1, 10.0) } else { (0.0, 1.0) };
+    }
+    if log {
+        let (a, b) = (lo.log10().floor(), hi.log10().ceil());
+        let b = if b <= a { a + 1.0 } else { b };
+        (10f64.powf(a), 10f64.powf(b))
+    } else {
+        let pad = ((hi - lo) * 0.05).max(hi.abs() * 0.05).max(1e-9);
+        (lo - pad, hi + pad)
+    }
+}
+
+/// Tick values: every decade (and 2, 5 between when there are few) on a log axis, about 6 round
+/// numbers on a linear one.
+fn ticks((lo, hi): (f64, f64), log: bool) -> Vec<f64> {
+    let mut out = Vec::new();
+    if log {
+        let (a, b) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+        let steps: &[f64] = if b - a <= 3 { &[1.0, 2.0, 5.0] } else { &[1.0] };
+        for e in a..=b {
+            for m in steps {
+                let v = m * 10f64.powi(e);
+                if v >= lo * 0.999 && v <= hi * 1.001 {
+                    out.push(v);
+                }
+            }
+        }
+    } else {
+        let raw = (hi - lo) / 6.0;
+        let mag = 10f64.powf(raw.log10().floor());
+        let step = [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * mag).find(|s| *s >= raw).unwrap_or(raw);
+        let mut v = (lo / step).ceil() * step;
+        while v <= hi + step * 1e-6 {
+            out.push(v);
+            v += step;
+        }
+    }
+    out
+}
+
+/// A tick label: plain for 0.01 to 99999, else `1e-3` style.
+fn tick_label(v: f64) -> String {
+    if v == 0.0 {
+        "0".into()
+    } else if (0.01..100_000.0).contains(&v.abs()) {
+        let s = format!("{v:.2}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        format!("{v:e}")
+    }
+}
+
+impl Series {
+    fn rgb(&self, index: usize) -> RGBColor {
+        match self.color {
+            Some((r, g, b)) => RGBColor(r, g, b),
+            None => {
+                let c = Palette99::pick(index).to_rgba();
+                RGBColor(c.0, c.1, c.2)
+            }
+        }
+    }
+}
+
+impl Chart {
+    fn ranges(&self) -> ((f64, f64), (f64, f64)) {
+        let pts = || self.series.iter().flat_map(|s| s.points.iter().copied());
+        (range(pts().map(|p| p.0), self.x_log), range(pts().map(|p| p.1), self.y_log))
+    }
+
+    /// Draws the chart into an SVG file.
+    pub fn svg(&self, path: &Path) -> Result<(), OitError> {
+        let err = write_err(path);
+        let root = SVGBackend::new(path, (WIDTH, HEIGHT)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| err(&e))?;
+        let ((x0, x1), (y0, y1)) = self.ranges();
+        let mut builder = ChartBuilder::on(&root);
+        builder
+            .caption(&self.title, ("sans-serif", 22))
+            .margin(14)
+            .x_label_area_size(50)
+            .y_label_area_size(90);
+        // four axis kinds, one body
+        macro_rules! body {
+            ($xr:expr, $yr:expr) => {{
+                let mut chart = builder.build_cartesian_2d($xr, $yr).map_err(|e| err(&e))?;
+                chart
+                    .configure_mesh()
+                    .x_desc(&self.x_desc)
+                    .y_desc(&self.y_desc)
+                    .x_label_formatter(&|v| tick_label(*v))
+                    .y_label_formatter(&|v| tick_label(*v))
+                    .draw()
+                    .map_err(|e| err(&e))?;
+                for (i, s) in self.series.iter().enumerate() {
+                    let color = s.rgb(i);
+                    let style = color.stroke_width(2);
+                    if s.line {
+                        let drawn = chart
+                            .draw_series(LineSeries::new(s.points.clone(), style))
+                            .map_err(|e| err(&e))?;
+                        if !s.name.is_empty() {
+                            drawn.label(&s.name).legend(move |(x, y)| {
+                                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                            });
+                        }
+                    }
+                    if s.markers {
+                        let labels = s.labels.clone();
+                        let drawn = chart
+                            .draw_series(s.points.iter().enumerate().map(|(k, &p)| {
+                                EmptyElement::at(p)
+                                    + Circle::new((0, 0), 5, color.filled())
+                                    + Text::new(
+                                        labels.get(k).cloned().unwrap_or_default(),
+                                        (7, -14),
+                                        ("sans-serif", 13),
+                                    )
+                            }))
+                            .map_err(|e| err(&e))?;
+                        if !s.line && !s.name.is_empty() {
+                            drawn
+                                .label(&s.name)
+                                .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
+                        }
+                    }
+                }
+                chart
+                    .configure_series_labels()
+                    .background_style(WHITE.mix(0.85))
+                    .border_style(BLACK)
+                    .position(SeriesLabelPosition::UpperRight)
+                    .draw()
+                    .map_err(|e| err(&e))?;
+            }};
+        }
+        match (self.x_log, self.y_log) {
+            (true, true) => body!((x0..x1).log_scale(), (y0..y1).log_scale()),
+            (true, false) => body!((x0..x1).log_scale(), y0..y1),
+            (false, true) => body!(x0..x1, (y0..y1).log_scale()),
+            (false, false) => body!(x0..x1, y0..y1),
+        }
+        root.present().map_err(|e| err(&e))?;
+        Ok(())
+    }
+
+    /// Draws the chart into a PNG file: plotters' bitmap backend draws the grid, lines and
+    /// points; oit-core's bitmap font the text, at pixels from the chart's coordinate mapping.
+    pub fn png(&self, path: &Path) -> Result<(), OitError> {
+        let err = write_err(path);
+        let mut buf = vec![0u8; (WIDTH * HEIGHT * 3) as usize];
+        let ((x0, x1), (y0, y1)) = self.ranges();
+        let (xt, yt) = (ticks((x0, x1), self.x_log), ticks((y0, y1), self.y_log));
+        // (x, y, text, scale, centred) to draw once plotters is done with the buffer
+        let mut texts: Vec<(i32, i32, String, u32, bool)> = Vec::new();
+        {
+            let root = BitMapBackend::with_buffer(&mut buf, (WIDTH, HEIGHT)).into_drawing_area();
+            root.fill(&WHITE).map_err(|e| err(&e))?;
+            let (area, _) = root.split_horizontally(WIDTH - LEGEND_WIDTH);
+            let mut builder = ChartBuilder::on(&area);
+            builder.margin(14).margin_top(44).x_label_area_size(60).y_label_area_size(90);
+            macro_rules! body {
+                ($xr:expr, $yr:expr) => {{
+                    let chart = builder.build_cartesian_2d($xr, $yr).map_err(|e| err(&e))?;
+                    self.png_body(chart, &xt, &yt, (x0, x1), (y0, y1), &mut texts).map_err(|e| err(&e))?;
+                }};
+            }
+            match (self.x_log, self.y_log) {
+                (true, true) => body!((x0..x1).log_scale(), (y0..y1).log_scale()),
+                (true, false) => body!((x0..x1).log_scale(), y0..y1),
+                (false, true) => body!(x0..x1, (y0..y1).log_scale()),
+                (false, false) => body!(x0..x1, y0..y1),
+            }
+            root.present().map_err(|e| err(&e))?;
+        }
+        let mut image = Image {
+            width: WIDTH,
+            height: HEIGHT,
+            pixels: buf.chunks_exact(3).map(|p| [p[0], p[1], p[2], 255]).collect(),
+        };
+        texts.push(((WIDTH - LEGEND_WIDTH) as i32 / 2, 12, self.title.clone(), 2, true));
+        for (x, y, text, scale, centred) in texts {
+            let x = if centred { x - text_width(&text, scale) as i32 / 2 } else { x };
+            draw_text(&mut image, x, y, &text, scale, [0, 0, 0, 255]);
+        }
+        // the legend, right of the chart
+        let lx = (WIDTH - LEGEND_WIDTH + 8) as i32;
+        let mut ly = 60i32;
+        for (i, s) in self.series.iter().enumerate().filter(|(_, s)| !s.name.is_empty()) {
+            let c = s.rgb(i);
+            fill_rect(&mut image, lx.into(), (ly + 2).into(), 18, 10, [c.0, c.1, c.2, 255]);
+            draw_text(&mut image, lx + 24, ly, &ascii(&s.name), 2, [0, 0, 0, 255]);
+            ly += (LINE_HEIGHT * 2 + 8) as i32;
+        }
+        image.save_png(path)
+    }
+
+    fn png_body<X, Y>(
+        &self,
+        mut chart: ChartContext<'_, BitMapBackend<'_>, Cartesian2d<X, Y>>,
+        xt: &[f64],
+        yt: &[f64],
+        (x0, x1): (f64, f64),
+        (y0, y1): (f64, f64),
+        texts: &mut Vec<(i32, i32, String, u32, bool)>,
+    ) -> Result<(), String>
+    where
+        X: Ranged<ValueType = f64>,
+        Y: Ranged<ValueType = f64>,
+    {
+        let e = |e: &dyn std::fmt::Display| e.to_string();
+        let grid = RGBColor(225, 225, 225);
+        for &x in xt {
+            chart.draw_series(LineSeries::new([(x, y0), (x, y1)], grid)).map_err(|x| e(&x))?;
+            let (px, py) = chart.backend_coord(&(x, y0));
+            texts.push((px, py + 8, tick_label(x), 2, true));
+        }
+        for &y in yt {
+            chart.draw_series(LineSeries::new([(x0, y), (x1, y)], grid)).map_err(|x| e(&x))?;
+            let (px, py) = chart.backend_coord(&(x0, y));
+            let label = tick_label(y);
+            texts.push((px - 8 - text_width(&label, 2) as i32, py - 8, label, 2, false));
+        }
+        chart
+            .draw_series([PathElement::new(vec![(x0, y0), (x1, y0), (x1, y1), (x0, y1), (x0, y0)], BLACK)])
+            .map_err(|x| e(&x))?;
+        for (i, s) in self.series.iter().enumerate() {
+            let color = s.rgb(i);
+            if s.line {
+                chart
+                    .draw_series(LineSeries::new(s.points.clone(), color.stroke_width(2)))
+                    .map_err(|x| e(&x))?;
+            }
+            if s.markers {
+                chart
+                    .draw_series(s.points.iter().map(|&p| Circle::new(p, 5, color.filled())))
+                    .map_err(|x| e(&x))?;
+                for (p, label) in s.points.iter().zip(&s.labels) {
+                    let (px, py) = chart.backend_coord(p);
+                    texts.push((px + 7, py - 12, ascii(label), 1, false));
+                }
+            }
+        }
+        let (bx, by) = chart.backend_coord(&(x0, y0));
+        let (tx, ty) = chart.backend_coord(&(x1, y1));
+        texts.push(((bx + tx) / 2, by + 34, ascii(&self.x_desc), 2, true));
+        texts.push((8, ty - 30, ascii(&self.y_desc), 2, false));
+        Ok(())
+    }
+}
+
+/// `text` with the characters the bitmap font lacks replaced (`·` by `*`, others by `?`).
+fn ascii(text: &str) -> String {
+    text.chars()
+        .map(|c| match c {
+            '·' | '×' => '*',
+            '²' => '2',
+            '≤' => '<',
+            c if c.is_ascii() => c,
+            _ => '?',
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_and_ticks() {
+        assert_eq!(range([0.003, 0.2].into_iter(), true), (0.001, 1.0));
+        assert_eq!(
+            ticks((0.001, 1.0), true),
+            vec![0.001, 0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0]
+        );
+        let t = ticks((0.0, 10.0), false);
+        assert_eq!(t.first(), Some(&0.0));
+        assert_eq!(t.last(), Some(&10.0));
+        assert_eq!(tick_label(0.5), "0.5");
+        assert_eq!(tick_label(1e-5), "1e-5");
+    }
+}

@@ -1,0 +1,430 @@
+//! Writing a [`Report`]: the plots, `report.json` (everything) and `report.md` (tables, plots,
+//! the model, the matrix, and what each number means).
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use oit_core::OitError;
+
+use crate::plot::{Chart, Series};
+use crate::{CurvePoint, Report, Row, pareto_front};
+
+/// Where an EPR of 0 is drawn on the trade plot's log axis at most (lower when a real EPR is
+/// lower): a log axis has no 0.
+const EPR_FLOOR: f64 = 1e-5;
+
+/// A file-name-safe form of a scene name: path folders and `.obj` dropped, the rest
+/// alphanumerics and `-`.
+fn slug(name: &str) -> String {
+    let parts: Vec<String> = name
+        .split(':')
+        .map(|p| {
+            let last = p.rsplit(['/', '\\']).next().unwrap_or(p);
+            let last = last.strip_suffix(".obj").unwrap_or(last);
+            last.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '-' }).collect()
+        })
+        .collect();
+    parts.join("-")
+}
+
+fn bytes(n: u64) -> String {
+    const UNITS: [&str; 4] = ["B", "KiB", "MiB", "GiB"];
+    let mut v = n as f64;
+    let mut unit = 0;
+    while v >= 1024.0 && unit + 1 < UNITS.len() {
+        v /= 1024.0;
+        unit += 1;
+    }
+    if unit == 0 { format!("{n} B") } else { format!("{v:.1} {}", UNITS[unit]) }
+}
+
+fn percent(f: f64) -> String {
+    if f == 0.0 { "0".into() } else { format!("{:.3} %", f * 100.0) }
+}
+
+fn ms(v: f64) -> String {
+    if v >= 100.0 {
+        format!("{v:.0}")
+    } else if v >= 1.0 {
+        format!("{v:.2}")
+    } else {
+        format!("{v:.3}")
+    }
+}
+
+fn row_label(r: &Row) -> String {
+    if r.raster == r.backend { r.backend.clone() } else { format!("{}/{}", r.backend, r.raster) }
+}
+
+/// Writes `report.json`, `report.md` and the plots into `dir` (made if missing), and records the
+/// files written in `report.files`.
+pub fn write_report(report: &mut Report, dir: &Path) -> Result<(), OitError> {
+    let err = |path: &Path, e: &dyn std::fmt::Display| OitError::Write {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
+    std::fs::create_dir_all(dir).map_err(|e| err(dir, &e))?;
+    let mut files = Vec::new();
+    let mut draw = |chart: &Chart, stem: &str| -> Result<(), OitError> {
+        for ext in ["svg", "png"] {
+            let name = format!("{stem}.{ext}");
+            let path = dir.join(&name);
+            if ext == "svg" {
+                chart.svg(&path)?
+            } else {
+                chart.png(&path)?
+            }
+            files.push(name);
+        }
+        Ok(())
+    };
+
+    // trade plots, one per scene
+    let mut trade_plots = Vec::new();
+    for (i, scene) in report.scenes.iter().enumerate() {
+        let rows: Vec<&Row> = report.rows.iter().filter(|r| r.scene == scene.name).collect();
+        if rows.is_empty() {
+            continue;
+        }
+        let min_epr = rows.iter().map(|r| r.epr).filter(|e| *e > 0.0).fold(f64::INFINITY, f64::min);
+        let floor = if min_epr.is_finite() {
+            EPR_FLOOR.min(10f64.powf((min_epr / 3.0).log10().floor()))
+        } else {
+            EPR_FLOOR
+        };
+        let mut labels: Vec<String> = Vec::new();
+        for r in &rows {
+            if !labels.contains(&row_label(r)) {
+                labels.push(row_label(r));
+            }
+        }
+        let mut series: Vec<Series> = labels
+            .iter()
+            .map(|l| {
+                let mine: Vec<&&Row> = rows.iter().filter(|r| row_label(r) == *l).collect();
+                Series {
+                    name: l.clone(),
+                    points: mine.iter().map(|r| (r.time_ms.max(1e-6), r.epr.max(floor))).collect(),
+                    labels: mine.iter().map(|r| r.technique.clone()).collect(),
+                    line: false,
+                    markers: true,
+                    color: None,
+                }
+            })
+            .collect();
+        let all: Vec<(f64, f64)> = rows.iter().map(|r| (r.time_ms.max(1e-6), r.epr.max(floor))).collect();
+        let front: Vec<(f64, f64)> = pareto_front(&all).into_iter().map(|k| all[k]).collect();
+        // a staircase: each front point holds its error until the next, faster-to-slower
+        let mut stairs = Vec::new();
+        for (k, p) in front.iter().enumerate() {
+            if k > 0 {
+                stairs.push((p.0, front[k - 1].1));
+            }
+            stairs.push(*p);
+        }
+        series.push(Series {
+            name: "Pareto front".into(),
+            points: stairs,
+            labels: Vec::new(),
+            line: true,
+            markers: false,
+            color: Some((0, 0, 0)),
+        });
+        let chart = Chart {
+            title: format!("time vs error on {} ({}x{})", scene.name, report.width, report.height),
+            x_desc: "time per frame (ms, log)".into(),
+            y_desc: format!("error pixel rate (log; EPR 0 drawn at {floor:e})"),
+            x_log: true,
+            y_log: true,
+            series,
+        };
+        let stem = format!("trade-{i}-{}", slug(&scene.name));
+        draw(&chart, &stem)?;
+        trade_plots.push((scene.name.clone(), stem, floor));
+    }
+
+    // the curves
+    let mut curve_plots = Vec::new();
+    for (curve, x_desc) in
+        [("depth", "depth complexity N of planes:N (log)"), ("triangles", "triangles (log)")]
+    {
+        let points: Vec<&CurvePoint> = report.curves.iter().filter(|p| p.curve == curve).collect();
+        if points.is_empty() {
+            continue;
+        }
+        let mut keys: Vec<(String, String)> = Vec::new();
+        for p in &points {
+            let k = (p.technique.clone(), p.backend.clone());
+            if !keys.contains(&k) {
+                keys.push(k);
+            }
+        }
+        let several = keys.iter().any(|(_, b)| *b != keys[0].1);
+        let series = keys
+            .iter()
+            .map(|(t, b)| {
+                let mut pts: Vec<(f64, f64)> = points
+                    .iter()
+                    .filter(|p| p.technique == *t && p.backend == *b)
+                    .map(|p| (p.x, p.time_ms.max(1e-6)))
+                    .collect();
+                pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+                Series {
+                    name: if several { format!("{t} ({b})") } else { t.clone() },
+                    labels: Vec::new(),
+                    points: pts,
+                    line: true,
+                    markers: true,
+                    color: None,
+                }
+            })
+            .collect();
+        let size = report.curve_size.unwrap_or((report.width, report.height));
+        let title = match curve {
+            "depth" => format!("time vs depth complexity (planes:N, {}x{})", size.0, size.1),
+            _ => format!(
+                "time vs triangles (grid:RxC:{}, {}x{})",
+                report.curve_mesh.as_deref().unwrap_or("?"),
+                size.0,
+                size.1
+            ),
+        };
+        let chart = Chart {
+            title,
+            x_desc: x_desc.into(),
+            y_desc: "time per frame (ms, log)".into(),
+            x_log: true,
+            y_log: true,
+            series,
+        };
+        let stem = format!("curve-{curve}");
+        draw(&chart, &stem)?;
+        curve_plots.push((curve, stem));
+    }
+    report.files = files;
+    report.files.push("report.json".into());
+    report.files.push("report.md".into());
+
+    let json = serde_json::to_string_pretty(&report).map_err(|e| err(&dir.join("report.json"), &e))?;
+    std::fs::write(dir.join("report.json"), json + "\n").map_err(|e| err(&dir.join("report.json"), &e))?;
+    let md = markdown(report, &trade_plots, &curve_plots);
+    std::fs::write(dir.join("report.md"), md).map_err(|e| err(&dir.join("report.md"), &e))?;
+    Ok(())
+}
+
+fn markdown(report: &Report, trade: &[(String, String, f64)], curves: &[(&str, String)]) -> String {
+    let mut md = String::new();
+    let w = &mut md;
+    let _ = writeln!(w, "# oit bench\n");
+    let _ = writeln!(w, "```sh\n{}\n```\n", report.command_line);
+    let _ = writeln!(w, "- host: {}", report.host);
+    for b in &report.backends {
+        let _ = writeln!(w, "- backend `{}`: {}", b.label, b.device);
+    }
+    let _ = writeln!(
+        w,
+        "- {}×{} pixels, camera azimuth {}°, elevation {}°, field of view {}°",
+        report.width, report.height, report.view.azimuth, report.view.elevation, report.view.fov
+    );
+    let _ = writeln!(
+        w,
+        "- per run: {} untimed warm-up frames, then {} timed frames",
+        report.warmup, report.frames
+    );
+    if report.frames < 10 {
+        let _ = writeln!(w, "- **fewer than 10 timed frames: medians and spreads are rough**");
+    }
+    let _ = writeln!(w, "\n## What the numbers mean\n");
+    let _ = writeln!(
+        w,
+        "- **passes**: geometry passes per frame (bounds, histogram, sizing and peel passes all count).\n\
+         - **fragments**: fragments one geometry pass generates for the scene; **lost**: those that \
+         did not reach the composite (collisions, overflow, coplanar ties); **storage**: per-pixel \
+         storage the technique allocated.\n\
+         - **wall ms**: time of `Backend::render` per frame (median of the timed frames, then \
+         min–max); **GPU ms**: the sum of the frame's GPU timestamp intervals (device time, no \
+         readbacks or pipeline creation), where the backend has timestamps.\n\
+         - **time**: GPU ms where measured, else wall ms. It is what the plots, Gfrag/s and the model use.\n\
+         - **Gfrag/s**: scene fragments resolved per second, `fragments / time` (one pass's \
+         fragments, whatever the passes: the rate at which the technique turns the scene into a picture).\n\
+         - **EPR**: error pixel rate, the share of covered pixels whose 8-bit colour differs from \
+         the same backend/path's `reference` by more than 1 in any channel; **PSNR** over covered \
+         pixels (`inf` when identical); **max diff**: the largest channel difference in 8-bit steps."
+    );
+
+    for scene in &report.scenes {
+        let _ = writeln!(w, "\n## {}\n", scene.name);
+        let _ = writeln!(
+            w,
+            "{} triangles, {} fragments per pass, deepest pixel {} layers.\n",
+            scene.triangles,
+            scene.fragments.map_or("?".into(), |f| f.to_string()),
+            scene.max_depth.map_or("?".into(), |f| f.to_string())
+        );
+        let _ = writeln!(
+            w,
+            "| technique | backend | raster | passes | fragments | lost | storage | wall ms (min–max) | GPU ms (min–max) | Gfrag/s | EPR | PSNR (dB) |"
+        );
+        let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|---|---|");
+        for r in report.rows.iter().filter(|r| r.scene == scene.name) {
+            let gpu = r
+                .gpu_ms
+                .as_ref()
+                .map_or("-".into(), |g| format!("{} ({}–{})", ms(g.median), ms(g.min), ms(g.max)));
+            let _ = writeln!(
+                w,
+                "| {} | {} | {} | {} | {} | {} | {} | {} ({}–{}) | {} | {:.3} | {} | {} |",
+                r.technique,
+                r.backend,
+                r.raster,
+                r.passes,
+                r.fragments,
+                r.lost,
+                bytes(r.storage_bytes),
+                ms(r.wall_ms.median),
+                ms(r.wall_ms.min),
+                ms(r.wall_ms.max),
+                gpu,
+                r.gfrag_per_s,
+                percent(r.epr),
+                r.psnr.map_or("inf".into(), |p| format!("{p:.1}")),
+            );
+        }
+        if let Some((_, stem, floor)) = trade.iter().find(|(s, _, _)| *s == scene.name) {
+            let _ = writeln!(
+                w,
+                "\nTime against error, both log axes, one point per technique and backend/path; the \
+                 black staircase is the Pareto front (no other point is both faster and more \
+                 accurate). EPR 0 is drawn at {floor:e}. ([SVG]({stem}.svg), [PNG]({stem}.png))\n\n![trade plot]({stem}.svg)"
+            );
+        }
+    }
+
+    let _ = writeln!(w, "\n## The speedup model\n");
+    let _ = writeln!(
+        w,
+        "DESIGN.md's model: depth peeling spends N plain geometry passes, a technique one pass and \
+         its extra fragment cost, so its speedup over `dp` is `K = N·Tv / (Tv + Tf)`. **N**: the \
+         scene's deepest pixel (the reference's count); **Tv**: one plain geometry pass \
+         (`Backend::plain_pass_ms`: every fragment added to a per-pixel counter; GPU time where \
+         measured), median of the timed frames; **Tf** = the technique's time − Tv (all its passes \
+         and kernels: what it costs beyond one plain pass). **measured** = dp's time / the \
+         technique's time on the same backend; **ratio** = measured / K (the model holds at 1; \
+         dp's own fragment cost and setup push it below).\n"
+    );
+    let _ = writeln!(
+        w,
+        "| scene | backend | technique | N | Tv ms | time ms | Tf ms | predicted K | measured | ratio |"
+    );
+    let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|");
+    for m in &report.model {
+        let _ = writeln!(
+            w,
+            "| {} | {} | {} | {} | {} | {} | {} | {:.2} | {} | {} |",
+            m.scene,
+            m.backend,
+            m.technique,
+            m.n,
+            ms(m.tv_ms),
+            ms(m.time_ms),
+            ms(m.tf_ms),
+            m.predicted_k,
+            m.measured.map_or("-".into(), |v| format!("{v:.2}")),
+            m.ratio.map_or("-".into(), |v| format!("{v:.2}")),
+        );
+    }
+    if report.model.is_empty() {
+        let _ = writeln!(w, "(no backend measured a plain pass; see the failures)");
+    }
+
+    let _ = writeln!(w, "\n## Cross-backend matrix\n");
+    let _ = writeln!(
+        w,
+        "Per technique, every pair of backend/paths on the same scene and view: the largest 8-bit \
+         channel difference between their images and the share of pixels (covered by the first's \
+         reference) that differ by more than 1.\n"
+    );
+    if report.matrix.is_empty() {
+        let _ = writeln!(w, "(one backend/path only: nothing to compare)");
+    } else {
+        let _ = writeln!(w, "| scene | technique | a | b | max diff | EPR |");
+        let _ = writeln!(w, "|---|---|---|---|---|---|");
+        for m in &report.matrix {
+            let _ = writeln!(
+                w,
+                "| {} | {} | {} | {} | {} | {} |",
+                m.scene,
+                m.technique,
+                m.a,
+                m.b,
+                m.max_diff,
+                percent(m.epr)
+            );
+        }
+    }
+
+    if !curves.is_empty() {
+        let (cw, ch) = report.curve_size.unwrap_or((report.width, report.height));
+        let _ = writeln!(w, "\n## Curves\n");
+        let _ = writeln!(
+            w,
+            "Time per frame ({cw}×{ch}, median of the timed frames after one untimed) against depth \
+             complexity (`planes:N`: N overlapping quads, N layers everywhere) and against triangle \
+             count (`grid:RxC:{}`: R×C overlapping copies of the mesh).\n",
+            report.curve_mesh.as_deref().unwrap_or("?")
+        );
+        for (curve, stem) in curves {
+            let _ = writeln!(w, "![{curve} curve]({stem}.svg) ([SVG]({stem}.svg), [PNG]({stem}.png))\n");
+            let _ = writeln!(w, "| scene | x | technique | backend | passes | fragments | time ms |");
+            let _ = writeln!(w, "|---|---|---|---|---|---|---|");
+            for p in report.curves.iter().filter(|p| p.curve == *curve) {
+                let _ = writeln!(
+                    w,
+                    "| {} | {} | {} | {} | {} | {} | {} |",
+                    p.scene,
+                    p.x,
+                    p.technique,
+                    p.backend,
+                    p.passes,
+                    p.fragments,
+                    ms(p.time_ms)
+                );
+            }
+            let _ = writeln!(w);
+        }
+    }
+
+    if !report.failures.is_empty() {
+        let _ = writeln!(w, "\n## Failures\n");
+        let _ = writeln!(w, "| stage | scene | backend | technique | error |");
+        let _ = writeln!(w, "|---|---|---|---|---|");
+        for f in &report.failures {
+            let _ = writeln!(
+                w,
+                "| {} | {} | {} | {} | {} |",
+                f.stage,
+                f.scene,
+                f.backend,
+                f.technique,
+                f.error.replace('|', "\\|").replace('\n', " ")
+            );
+        }
+    }
+    let _ = writeln!(
+        w,
+        "\nEverything above, and more (quartiles, captured counts), is in [report.json](report.json)."
+    );
+    md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::slug;
+
+    #[test]
+    fn slugs() {
+        assert_eq!(slug("grid:4x4:bunny"), "grid-4x4-bunny");
+        assert_eq!(slug("../shared/models/bunny.obj"), "bunny");
+        assert_eq!(slug("grid:2x2:../m/armadillo.obj"), "grid-2x2-armadillo");
+    }
+}

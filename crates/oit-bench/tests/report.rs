@@ -1,0 +1,66 @@
+//! `run_bench` end to end at 32×32 with 2 frames on planes:4, on every backend compiled in (wgpu
+//! when an adapter is found): report.json parses and holds every technique, the plots exist.
+
+use oit_bench::{Config, CurveConfig, available_backends, run_bench, write_report};
+use oit_core::{Settings, Technique, View};
+
+#[test]
+fn report_holds_every_technique() {
+    let backends = available_backends();
+    let labels: Vec<String> =
+        backends.iter().map(|b| oit_bench::label(b.as_ref(), &Settings::default())).collect();
+    let techniques = Technique::all();
+    let mut curves = CurveConfig::new("knot");
+    curves.depths = vec![1, 2];
+    curves.grids = vec![(1, 1)];
+    curves.techniques = vec![Technique::Dp, Technique::Fabs { k: None }];
+    curves.width = 32;
+    curves.height = 32;
+    curves.frames = 1;
+    let config = Config {
+        scenes: vec!["planes:4".into()],
+        backends,
+        settings: Settings { width: 32, height: 32, ..Settings::default() },
+        view: View::default(),
+        techniques: techniques.clone(),
+        warmup: 1,
+        frames: 2,
+        curves: Some(curves),
+        command_line: "report test".into(),
+    };
+    let mut report = run_bench(&config).unwrap();
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    let dir = std::env::temp_dir().join(format!("oit-bench-test-{}", std::process::id()));
+    write_report(&mut report, &dir).unwrap();
+
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    let rows = json["rows"].as_array().unwrap();
+    for label in &labels {
+        for t in &techniques {
+            let name = t.to_string();
+            assert!(
+                rows.iter().any(|r| r["technique"] == name.as_str()
+                    && label.starts_with(r["backend"].as_str().unwrap())
+                    && r["time_ms"].as_f64().unwrap() > 0.0),
+                "no row for {name} on {label}"
+            );
+        }
+    }
+    // planes:4 is 4 layers deep: dp peels 4 and finds none left
+    let dp = rows.iter().find(|r| r["technique"] == "dp").unwrap();
+    assert_eq!(dp["passes"], 5);
+    assert_eq!(dp["epr"], 0.0);
+    assert!(!json["model"].as_array().unwrap().is_empty());
+    assert_eq!(json["curves"].as_array().unwrap().len(), 3 * labels.len() * 2);
+    for file in [
+        "report.md",
+        "trade-0-planes-4.svg",
+        "trade-0-planes-4.png",
+        "curve-depth.png",
+        "curve-triangles.svg",
+    ] {
+        assert!(dir.join(file).is_file(), "{file} missing");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -1,0 +1,263 @@
+//! `bdp` on the hardware path with `--hardware-capture blend`: the HPG 2009 capture itself, MAX
+//! blending into 8 `Rgba32Float` render targets (32 buckets = 8 targets × 4 channels), in
+//! `bdp_blend.wgsl`. The same buckets, resolve and storage as the atomics capture (`bdp.rs`,
+//! integer `atomicMax` into a storage buffer), so the image and the losses are the same wherever
+//! float MAX orders the packed colours as integer MAX does (see `bdp_blend.wgsl`: alpha ≥ 254
+//! with blue ≥ 128 packs to an Inf or NaN, alpha ≤ 1 to a denormal; blending those is not exact).
+//!
+//! Passes: the depth bounds (`bdp::depth_bounds`, shared with the atomics capture), one geometry
+//! pass on a render pipeline of oit's scene vertex stage (`hardware::SceneStage`) and the
+//! `bdp_blend_fs` fragment stage, then a compute resolve reading the targets. The 8 targets take
+//! 128 bytes a sample, every colour attachment byte there is: no room for the fragment counter
+//! the other hardware passes blend into, so with `--bounds boxes` (where the bounds pass draws
+//! boxes, not the scene) the fragments generated are counted by one extra count-only draw of the
+//! scene (additive blending into one channel, no capture; not counted as a geometry pass).
+//!
+//! Only the colour mode: the depth mode (`bdp:P`, or any effect but transparency) keeps
+//! (depth, payload) per subinterval, which float blending cannot carry in one channel; the paper's
+//! form (16 pairs (1 − d, d) in 8 targets, MAX-blended) gives depths only, and fetching each
+//! subinterval's colours takes a second geometry pass per array matching those depths, which is
+//! not built: it is reported as unsupported (the atomics capture runs it).
+
+use oit_core::{BdpMode, Effect, OitError};
+
+use crate::Drivers;
+use crate::ctx::{GpuCtx, TECHNIQUE_PRELUDE};
+use crate::gpu::COMMON_WGSL;
+use crate::hardware::SceneStage;
+use crate::technique::bdp::depth_bounds;
+
+const WGSL: &str = include_str!("bdp_blend.wgsl");
+const TARGETS: u32 = 8;
+const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
+    let oit_core::Technique::Bdp { passes } = ctx.settings.technique else {
+        return Err(OitError::InvalidSettings(format!("{} is not bdp", ctx.settings.technique)));
+    };
+    let color_mode = match ctx.settings.bdp_mode {
+        BdpMode::Color => true,
+        BdpMode::Depth => false,
+        BdpMode::Auto => passes == 1 && ctx.settings.effect == Effect::Transparency,
+    };
+    if color_mode && (passes != 1 || ctx.settings.effect != Effect::Transparency) {
+        return Err(OitError::InvalidSettings(
+            "bdp's colour mode holds colours only, in one pass: use --bdp-mode depth for bdp:P or for effects other than transparency".into(),
+        ));
+    }
+    if !color_mode {
+        return Err(unsupported(
+            "bdp's depth mode with --hardware-capture blend (float blending holds depths, not the (depth, colour) pairs): use --hardware-capture atomics",
+        ));
+    }
+    let stage = scene_stage(drivers)?;
+    if !ctx.gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
+        return Err(unsupported("MAX blending into Rgba32Float targets: the device lacks FLOAT32_BLENDABLE"));
+    }
+    let per_sample = TARGETS * 16;
+    if ctx.gpu.limits.max_color_attachment_bytes_per_sample < per_sample {
+        return Err(unsupported(&format!(
+            "8 Rgba32Float targets: max_color_attachment_bytes_per_sample is {}, they need {per_sample}",
+            ctx.gpu.limits.max_color_attachment_bytes_per_sample
+        )));
+    }
+    check_texture_size(ctx, "the bdp bucket targets")?;
+    let bounds = depth_bounds(ctx, drivers)?;
+    if ctx.fragments.is_none() {
+        count_fragments(ctx, drivers)?;
+    }
+
+    let device = &ctx.gpu.device;
+    let (w, h) = (ctx.settings.width, ctx.settings.height);
+    let targets: Vec<wgpu::Texture> = (0..TARGETS)
+        .map(|i| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(&format!("bdp bucket target {i}")),
+                size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: FORMAT,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+        })
+        .collect();
+    ctx.storage_bytes += u64::from(ctx.pixels) * u64::from(per_sample);
+    let views: Vec<wgpu::TextureView> = targets.iter().map(|t| t.create_view(&Default::default())).collect();
+
+    // the geometry pass
+    let (layout0, group0) = ctx.group0(&[&bounds], 0, 0);
+    let module_source = format!("{COMMON_WGSL}\n{TECHNIQUE_PRELUDE}{WGSL}\n{}", stage.wgsl());
+    let max = wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Max,
+    };
+    let target = wgpu::ColorTargetState {
+        format: FORMAT,
+        blend: Some(wgpu::BlendState { color: max, alpha: max }),
+        write_mask: wgpu::ColorWrites::ALL,
+    };
+    let pipeline = ctx.gpu.render_pipeline(key(&module_source, "bdp blend"), "bdp blend", || {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("bdp blend"),
+            source: wgpu::ShaderSource::Wgsl(module_source.as_str().into()),
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("bdp blend"),
+            bind_group_layouts: &[Some(&layout0), Some(stage.layout())],
+            immediate_size: 0,
+        });
+        let targets: Vec<Option<wgpu::ColorTargetState>> =
+            (0..TARGETS).map(|_| Some(target.clone())).collect();
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("bdp blend"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("hw_vs"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("bdp_blend_fs"),
+                compilation_options: Default::default(),
+                targets: &targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    })?;
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let attachments: Vec<Option<wgpu::RenderPassColorAttachment<'_>>> = views
+            .iter()
+            .map(|view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            })
+            .collect();
+        let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("bdp blend"),
+            color_attachments: &attachments,
+            depth_stencil_attachment: None,
+            timestamp_writes: ctx.render_timestamps(),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        rpass.set_pipeline(&pipeline);
+        rpass.set_bind_group(0, &group0, &[]);
+        stage.draw(&mut rpass);
+    }
+    ctx.finish_timed("geometry", encoder)?;
+    ctx.passes += 1;
+
+    // the resolve, reading the targets
+    let texture_entry = |binding: u32| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    };
+    let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("bdp bucket targets"),
+        entries: &(0..TARGETS).map(|i| texture_entry(3 + i)).collect::<Vec<_>>(),
+    });
+    let group1 = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("bdp bucket targets"),
+        layout: &layout1,
+        entries: &views
+            .iter()
+            .enumerate()
+            .map(|(i, view)| wgpu::BindGroupEntry {
+                binding: 3 + i as u32,
+                resource: wgpu::BindingResource::TextureView(view),
+            })
+            .collect::<Vec<_>>(),
+    });
+    let (layout0, group0) = ctx.group0(&[&bounds], 0, 0);
+    let source = format!("{TECHNIQUE_PRELUDE}{WGSL}\n{}", stage.wgsl());
+    let pipeline = ctx.gpu.compute_pipeline(&source, "bdp_blend_resolve_main", &[&layout0, &layout1])?;
+    let (x, y) = crate::ctx::dispatch_size(u64::from(ctx.pixels));
+    ctx.timed("bdp_blend_resolve_main", |encoder, timestamps| {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("bdp blend resolve"),
+            timestamp_writes: timestamps,
+        });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group0, &[]);
+        pass.set_bind_group(1, &group1, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+    })
+}
+
+/// The error for what the blend capture does not do.
+pub(crate) fn unsupported(what: &str) -> OitError {
+    OitError::Unsupported { backend: "wgpu".into(), what: what.into() }
+}
+
+/// oit's own vertex stage of the scene, which the blend capture's pipelines need.
+pub(crate) fn scene_stage<'d>(drivers: &'d Drivers<'_>) -> Result<&'d SceneStage, OitError> {
+    drivers.scene.scene_stage().ok_or_else(|| {
+        unsupported(
+            "--hardware-capture blend without oit's own vertex stage (the embedded pass): its pipelines are oit's; use atomics",
+        )
+    })
+}
+
+/// Checks the image size against the texture limit before render targets are made.
+pub(crate) fn check_texture_size(ctx: &GpuCtx<'_>, what: &str) -> Result<(), OitError> {
+    let limit = ctx.gpu.limits.max_texture_dimension_2d;
+    let side = ctx.settings.width.max(ctx.settings.height);
+    if side > limit {
+        return Err(OitError::TooLarge {
+            what: format!(
+                "{what} ({}×{} texels; the side counted as bytes)",
+                ctx.settings.width, ctx.settings.height
+            ),
+            needed: u64::from(side),
+            limit_name: format!("max_texture_dimension_2d of '{}'", ctx.gpu.info.name),
+            limit: u64::from(limit),
+            hint: format!(
+                "use --size with sides up to {limit}, or --hardware-capture atomics (storage buffers, no textures)"
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// Counts the scene's fragments with one count-only draw of the hardware driver (its additive
+/// fragment counter; the capture does nothing), for passes that cannot count themselves. Not a
+/// geometry pass of the technique.
+pub(crate) fn count_fragments(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
+    let (layout, group) = ctx.group0(&[], 0, 0);
+    let source = format!("{TECHNIQUE_PRELUDE}fn capture(f: Fragment) {{}}\n");
+    let generated = drivers.scene.geometry_pass(ctx, &source, &layout, &group)?;
+    ctx.fragments = Some(generated);
+    Ok(())
+}
+
+/// A pipeline cache key from the module's source and a name.
+pub(crate) fn key(source: &str, name: &str) -> u64 {
+    use std::hash::{DefaultHasher, Hash, Hasher};
+    let mut h = DefaultHasher::new();
+    source.hash(&mut h);
+    name.hash(&mut h);
+    h.finish()
+}

@@ -1,0 +1,243 @@
+//! `dp` on the hardware path with `--hardware-capture blend`: Everitt's depth peeling (2001) with
+//! the graphics pipeline's own means, in `dp_depth.wgsl`: per peel, a render pass with a depth
+//! test (LESS_EQUAL against a fresh Depth32Float attachment cleared to 1) whose fragment stage
+//! discards what lies at or in front of the previous peel's depth (two depth textures,
+//! ping-ponged: one is this peel's attachment, the other the previous peel's, read by pixel),
+//! writing the surviving fragment's payload to an Rg32Uint target; an occlusion query over the
+//! pass, read back after it, ends the loop at the first peel that draws nothing (N + 1 passes as
+//! oit-cpu, or `settings.max_peels`); a compute step composites each peeled layer under the
+//! layers before (`push`, depth from the attachment).
+//!
+//! The same layers, passes and losses as the atomics capture (`dp.rs`); equal depths within a
+//! pixel keep the last drawn fragment here and the smallest payload there (the other is lost in
+//! both). The depth test kills the fragments behind before any colour write, so the pass cannot
+//! count the fragments generated: one count-only draw of the scene (the hardware driver's
+//! additive counter, no capture, not a geometry pass) counts them first.
+//!
+//! Storage per pixel: two Depth32Float textures and the Rg32Uint layer, 16 bytes (the atomics
+//! capture and oit-cpu count 12: an 8-byte nearest key and a 4-byte previous depth).
+
+use oit_core::OitError;
+
+use crate::Drivers;
+use crate::ctx::{GpuCtx, TECHNIQUE_PRELUDE};
+use crate::gpu::COMMON_WGSL;
+use crate::technique::bdp_blend::{check_texture_size, count_fragments, key, scene_stage};
+
+const WGSL: &str = include_str!("dp_depth.wgsl");
+const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+const LAYER: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
+
+pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
+    let stage = scene_stage(drivers)?;
+    check_texture_size(ctx, "the dp depth and layer textures")?;
+    if ctx.fragments.is_none() {
+        count_fragments(ctx, drivers)?;
+    }
+    let device = ctx.gpu.device.clone();
+    let (w, h) = (ctx.settings.width, ctx.settings.height);
+    let texture = |label: &str, format| {
+        device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        })
+    };
+    let depths = [texture("dp depth 0", DEPTH), texture("dp depth 1", DEPTH)];
+    let layer = texture("dp layer", LAYER);
+    ctx.storage_bytes += u64::from(ctx.pixels) * (4 + 4 + 8);
+    let depth_views: Vec<wgpu::TextureView> =
+        depths.iter().map(|t| t.create_view(&Default::default())).collect();
+    let layer_view = layer.create_view(&Default::default());
+    let occlusion = device.create_query_set(&wgpu::QuerySetDescriptor {
+        label: Some("dp peel occlusion"),
+        ty: wgpu::QueryType::Occlusion,
+        count: 1,
+    });
+    let occlusion_buf = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("dp peel occlusion"),
+        size: 8,
+        usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+
+    let depth_entry = |binding: u32, visibility| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Depth,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    };
+    // group 2 of the peel: the previous depth; peel p renders into depths[p % 2] and reads the other
+    let previous_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("dp previous depth"),
+        entries: &[depth_entry(0, wgpu::ShaderStages::FRAGMENT)],
+    });
+    let previous_groups: Vec<wgpu::BindGroup> = (0..2)
+        .map(|p| {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("dp previous depth"),
+                layout: &previous_layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&depth_views[(p + 1) % 2]),
+                }],
+            })
+        })
+        .collect();
+    // group 1 of the composite: the layer and this peel's depth
+    let composite_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("dp composite"),
+        entries: &[
+            wgpu::BindGroupLayoutEntry {
+                binding: 3,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Uint,
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            },
+            depth_entry(4, wgpu::ShaderStages::COMPUTE),
+        ],
+    });
+    let composite_groups: Vec<wgpu::BindGroup> = (0..2)
+        .map(|p| {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("dp composite"),
+                layout: &composite_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: wgpu::BindingResource::TextureView(&layer_view),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 4,
+                        resource: wgpu::BindingResource::TextureView(&depth_views[p]),
+                    },
+                ],
+            })
+        })
+        .collect();
+
+    let module_source = format!("{COMMON_WGSL}\n{TECHNIQUE_PRELUDE}{WGSL}\n{}", stage.wgsl());
+    let composite_source = format!("{TECHNIQUE_PRELUDE}{WGSL}\n{}", stage.wgsl());
+    let (x, y) = crate::ctx::dispatch_size(u64::from(ctx.pixels));
+    let limit = ctx.settings.max_peels.unwrap_or(u32::MAX);
+    let mut peels = 0;
+    while peels < limit {
+        let slot = (peels % 2) as usize;
+        let (layout0, group0) = ctx.group0(&[], peels, 0);
+        let pipeline =
+            ctx.gpu.render_pipeline(key(&module_source, "dp depth peel"), "dp depth peel", || {
+                let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some("dp depth peel"),
+                    source: wgpu::ShaderSource::Wgsl(module_source.as_str().into()),
+                });
+                let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some("dp depth peel"),
+                    bind_group_layouts: &[Some(&layout0), Some(stage.layout()), Some(&previous_layout)],
+                    immediate_size: 0,
+                });
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("dp depth peel"),
+                    layout: Some(&layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("hw_vs"),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: DEPTH,
+                        depth_write_enabled: Some(true),
+                        depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some("dp_peel_fs"),
+                        compilation_options: Default::default(),
+                        targets: &[Some(wgpu::ColorTargetState {
+                            format: LAYER,
+                            blend: None,
+                            write_mask: wgpu::ColorWrites::ALL,
+                        })],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+            })?;
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("dp depth peel"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &layer_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &depth_views[slot],
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: ctx.render_timestamps(),
+                occlusion_query_set: Some(&occlusion),
+                multiview_mask: None,
+            });
+            rpass.set_pipeline(&pipeline);
+            rpass.set_bind_group(0, &group0, &[]);
+            rpass.set_bind_group(2, &previous_groups[slot], &[]);
+            rpass.begin_occlusion_query(0);
+            stage.draw(&mut rpass);
+            rpass.end_occlusion_query();
+        }
+        encoder.resolve_query_set(&occlusion, 0..1, &occlusion_buf, 0);
+        ctx.finish_timed("geometry", encoder)?;
+        ctx.passes += 1;
+        // zero or not is all the occlusion query promises on every backend
+        let samples = ctx.gpu.read_u32(&occlusion_buf)?;
+        if samples.iter().all(|&s| s == 0) {
+            break;
+        }
+        let (layout0, group0) = ctx.group0(&[], peels, 0);
+        let composite = ctx.gpu.compute_pipeline(
+            &composite_source,
+            "dp_composite_main",
+            &[&layout0, &composite_layout],
+        )?;
+        let group1 = &composite_groups[slot];
+        ctx.timed("dp_composite_main", |encoder, timestamps| {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("dp composite"),
+                timestamp_writes: timestamps,
+            });
+            pass.set_pipeline(&composite);
+            pass.set_bind_group(0, &group0, &[]);
+            pass.set_bind_group(1, group1, &[]);
+            pass.dispatch_workgroups(x, y, 1);
+        })?;
+        peels += 1;
+    }
+    Ok(())
+}
