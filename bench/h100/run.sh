@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# The H100 runs behind bench/results/h100/ (issues 4 and 5), as one script so they can be redone.
+# On the GPU machine (see DEVELOPERS.md / the device tool), after `../shared/gpu/stage.sh` and
+# `cargo build --release -p oit-cli --features wgpu` here:
+#   source .gpu/prelude.sh; bench/h100/run.sh compare|bench-512|bench-1024|curves
+# Writes into $OUT (default bench/results/h100). OIT_MODELS points the bare mesh names of
+# grid:RxC:MESH at the staged meshes.
+set -u
+OIT=${OIT:-./target/release/oit}
+export OIT_MODELS=${OIT_MODELS:-.gpu/models}
+OUT=${OUT:-bench/results/h100}
+mkdir -p "$OUT"
+run() { echo "+ $*" >&2; "$@"; }
+case "${1:-compare}" in
+compare)
+    run "$OIT" info --json > "$OUT/info.json"
+    for m in bunny armadillo; do
+        # the table, then the same runs as JSON (one process each: both print gpu_ms)
+        run "$OIT" compare --backend wgpu --raster all --scene "$OIT_MODELS/$m.obj" --size 1024x1024 \
+            --techniques all > "$OUT/compare-$m-1024.txt"
+        run "$OIT" compare --backend wgpu --raster all --scene "$OIT_MODELS/$m.obj" --size 1024x1024 \
+            --techniques all --json > "$OUT/compare-$m-1024.json"
+        # the papers' graphics-pipeline capture (MAX blending, depth textures) against atomics
+        run "$OIT" compare --backend wgpu --raster hardware --hardware-capture blend \
+            --scene "$OIT_MODELS/$m.obj" --size 1024x1024 --techniques dp,bdp --json \
+            > "$OUT/compare-$m-1024-blend.json"
+    done
+    # the Gfrag/s target: a 1024² frame of >= 10M fragments (planes:64, 64 layers over ~30 %)
+    run "$OIT" bench --backend wgpu --raster all --scenes planes:64 --size 1024x1024 \
+        --techniques dp,bdp,adp,mdts64,fabs --frames 10 --warmup 2 --no-curves --out "$OUT/deep-1024"
+    ;;
+bench-512 | bench-1024)
+    size=${1#bench-}
+    run "$OIT" bench --backend wgpu --raster all --size "${size}x${size}" --frames 10 --warmup 2 \
+        --scenes "$OIT_MODELS/bunny.obj,$OIT_MODELS/armadillo.obj,grid:4x4:bunny" --no-curves \
+        --out "$OUT/bench-$size"
+    ;;
+curves)
+    run "$OIT" bench --backend wgpu --raster all --size 512x512 --frames 10 --warmup 2 \
+        --scenes grid:4x4:bunny --curves bunny --curve-size 512x512 --out "$OUT/curves"
+    ;;
+*)
+    echo "usage: $0 compare|bench-512|bench-1024|curves" >&2
+    exit 2
+    ;;
+esac
