@@ -27,16 +27,16 @@ compare)
     done
     # the Gfrag/s target: a 1024² frame of >= 10M fragments (planes:64, 64 layers over ~30 %)
     run "$OIT" bench --backend wgpu --raster all --scenes planes:64 --size 1024x1024 \
-        --techniques dp,bdp,adp,mdts64,fabs --frames 10 --warmup 2 --no-curves --out "$OUT/deep-1024"
+        --techniques dp,bdp,adp,mdts64,fabs --frames 10 --warmup 1 --no-curves --out "$OUT/deep-1024"
     ;;
 bench-512 | bench-1024)
     size=${1#bench-}
-    run "$OIT" bench --backend wgpu --raster all --size "${size}x${size}" --frames 10 --warmup 2 \
+    run "$OIT" bench --backend wgpu --raster all --size "${size}x${size}" --frames 10 --warmup 1 \
         --scenes "$OIT_MODELS/bunny.obj,$OIT_MODELS/armadillo.obj,grid:4x4:bunny" --no-curves \
         --out "$OUT/bench-$size"
     ;;
 curves)
-    run "$OIT" bench --backend wgpu --raster all --size 512x512 --frames 10 --warmup 2 \
+    run "$OIT" bench --backend wgpu --raster all --size 512x512 --frames 10 --warmup 1 \
         --scenes grid:4x4:bunny --curves bunny --curve-size 512x512 --out "$OUT/curves"
     ;;
 *)

@@ -170,6 +170,9 @@ pub struct Row {
     pub psnr: Option<f64>,
     /// The largest channel difference from it, 8-bit steps.
     pub max_diff: u32,
+    /// Device milliseconds per pass label of the last timed frame (geometry passes, kernels),
+    /// where measured: where a technique's time goes.
+    pub gpu_pass_ms: Vec<(String, f64)>,
 }
 
 /// A run that failed.
@@ -542,6 +545,7 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
                     epr: acc.epr,
                     psnr: acc.psnr.is_finite().then_some(acc.psnr),
                     max_diff: (acc.max_error * 255.0).round() as u32,
+                    gpu_pass_ms: s.gpu_pass_ms.clone(),
                 };
                 images.entry(technique.to_string()).or_default().push((
                     row_label,

@@ -50,6 +50,9 @@ struct RenderJson<'a> {
     height: u32,
     #[serde(flatten)]
     stats: StatsJson,
+    /// Device milliseconds per pass label (geometry, and each kernel), where measured.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    gpu_pass_ms: Vec<(String, f64)>,
     output: &'a Path,
     camera: CameraJson,
 }
@@ -87,6 +90,7 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
                 width: settings.width,
                 height: settings.height,
                 stats: StatsJson::from(s),
+                gpu_pass_ms: s.gpu_pass_ms.clone(),
                 output: &path,
                 camera: CameraJson::new(&camera, prepared.view),
             };

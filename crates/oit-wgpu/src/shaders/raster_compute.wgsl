@@ -2,7 +2,9 @@
 // on the GPU. Triangles come set up (clipped, snapped) by the same code as oit-cpu's, so the
 // covered pixels are the same by construction; this kernel tests coverage with the same integer
 // edge functions and interpolates with the same f32 formula, then calls the technique's
-// `capture`. One invocation per (triangle, 16×16 tile of its box).
+// `capture`. Work items are (triangle, 8×8 tile of its box): `raster_main` runs one
+// workgroup per item and one invocation per pixel (GPUs), `raster_loop_main` one invocation per
+// item walking its tile (CPU devices).
 
 struct Tri {
     x: array<i32, 3>,
@@ -34,14 +36,97 @@ struct RasterUniform {
 @group(1) @binding(2) var<uniform> ru: RasterUniform;
 @group(1) @binding(3) var<storage, read_write> generated: array<atomic<u32>>;
 
-const TILE: u32 = 16u;
+const TILE: u32 = 8u;
 const SUBPIXEL: i64 = 256li;
 const HALF_PIXEL: i64 = 128li;
 
+// The fragment of `t` at pixel (x, y), captured if the pixel's centre is inside; returns 1 then.
+fn raster_pixel(t: Tri, x: u32, y: u32) -> u32 {
+    if (x < t.bbox[0] || x > t.bbox[2] || y < t.bbox[1] || y > t.bbox[3]) {
+        return 0u;
+    }
+    let py = i64(y) * SUBPIXEL + HALF_PIXEL;
+    let px = i64(x) * SUBPIXEL + HALF_PIXEL;
+    // edge k runs from vertex k+1 to k+2
+    var e: array<i64, 3>;
+    var inside = true;
+    for (var k = 0u; k < 3u; k++) {
+        let a = (k + 1u) % 3u;
+        let b = (k + 2u) % 3u;
+        let ax = i64(t.x[a]);
+        let ay = i64(t.y[a]);
+        let dx = i64(t.x[b]) - ax;
+        let dy = i64(t.y[b]) - ay;
+        let top_left = dy < 0li || (dy == 0li && dx > 0li);
+        e[k] = dx * (py - ay) - dy * (px - ax);
+        inside = inside && e[k] > select(0li, -1li, top_left);
+    }
+    if (!inside) {
+        return 0u;
+    }
+    let b = vec3<f32>(f32(e[0]) * t.inv_area, f32(e[1]) * t.inv_area, f32(e[2]) * t.inv_area);
+    let depth = clamp(t.z[0] + b.y * (t.z[1] - t.z[0]) + b.z * (t.z[2] - t.z[0]), 0.0, 1.0);
+    let q = vec3<f32>(b.x * t.inv_w[0], b.y * t.inv_w[1], b.z * t.inv_w[2]);
+    let inv_q = 1.0 / (q.x + q.y + q.z);
+    let p = q * inv_q;
+    let n0 = vec3<f32>(t.n[0], t.n[1], t.n[2]);
+    let n1 = vec3<f32>(t.n[3], t.n[4], t.n[5]);
+    let n2 = vec3<f32>(t.n[6], t.n[7], t.n[8]);
+    let normal = n0 * p.x + n1 * p.y + n2 * p.z;
+    let c0 = vec3<f32>(t.c[0], t.c[1], t.c[2]);
+    let c1 = vec3<f32>(t.c[3], t.c[4], t.c[5]);
+    let c2 = vec3<f32>(t.c[6], t.c[7], t.c[8]);
+    let vcolor = c0 * p.x + c1 * p.y + c2 * p.z;
+    let base = vec4<f32>(t.base[0], t.base[1], t.base[2], t.base[3]);
+    let color = shade(ru.shading, base, normal, vcolor, t.has_color != 0u, ru.forward.xyz);
+    var f: Fragment;
+    f.pixel = y * ru.width + x;
+    f.depth = depth;
+    f.prim = t.prim;
+    f.color = color;
+    f.normal = normalize_or_zero(normal);
+    capture(f);
+    return 1u;
+}
+
 var<workgroup> wg_count: atomic<u32>;
 
+// Adds the workgroup's fragment count to `generated` (called in uniform control flow).
+fn count_fragments(lid: u32, count: u32) {
+    atomicAdd(&wg_count, count);
+    workgroupBarrier();
+    if (lid == 0u) {
+        atomicAdd(&generated[0], atomicLoad(&wg_count));
+    }
+}
+
+// GPUs: one workgroup per work item (a triangle and one 8×8 tile of its box), one invocation per
+// pixel, so a large triangle spreads over many workgroups.
 @compute @workgroup_size(64)
 fn raster_main(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    if (lid == 0u) {
+        atomicStore(&wg_count, 0u);
+    }
+    workgroupBarrier();
+    let i = wid.x + wid.y * groups.x;
+    var count = 0u;
+    if (i < ru.item_count) {
+        let item = items[i];
+        let x = (item.y & 0xffffu) * TILE + lid % TILE;
+        let y = (item.y >> 16u) * TILE + lid / TILE;
+        count = raster_pixel(tris[item.x], x, y);
+    }
+    count_fragments(lid, count);
+}
+
+// CPU devices (lavapipe): one invocation per work item, walking its tile; a workgroup of 64
+// pixels of one small triangle would mostly test pixels outside it.
+@compute @workgroup_size(64)
+fn raster_loop_main(
     @builtin(global_invocation_id) gid: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
@@ -55,69 +140,15 @@ fn raster_main(
     if (i < ru.item_count) {
         let item = items[i];
         let t = tris[item.x];
-        let tx = item.y & 0xffffu;
-        let ty = item.y >> 16u;
-        let x0 = max(t.bbox[0], tx * TILE);
-        let y0 = max(t.bbox[1], ty * TILE);
-        let x1 = min(t.bbox[2], tx * TILE + TILE - 1u);
-        let y1 = min(t.bbox[3], ty * TILE + TILE - 1u);
-        // edge k runs from vertex k+1 to k+2
-        var ax: array<i64, 3>;
-        var ay: array<i64, 3>;
-        var dx: array<i64, 3>;
-        var dy: array<i64, 3>;
-        var above: array<i64, 3>;
-        for (var k = 0u; k < 3u; k++) {
-            let a = (k + 1u) % 3u;
-            let b = (k + 2u) % 3u;
-            ax[k] = i64(t.x[a]);
-            ay[k] = i64(t.y[a]);
-            dx[k] = i64(t.x[b]) - ax[k];
-            dy[k] = i64(t.y[b]) - ay[k];
-            let top_left = dy[k] < 0li || (dy[k] == 0li && dx[k] > 0li);
-            above[k] = select(0li, -1li, top_left);
-        }
+        let x0 = max(t.bbox[0], (item.y & 0xffffu) * TILE);
+        let y0 = max(t.bbox[1], (item.y >> 16u) * TILE);
+        let x1 = min(t.bbox[2], (item.y & 0xffffu) * TILE + TILE - 1u);
+        let y1 = min(t.bbox[3], (item.y >> 16u) * TILE + TILE - 1u);
         for (var y = y0; y <= y1; y++) {
-            let py = i64(y) * SUBPIXEL + HALF_PIXEL;
             for (var x = x0; x <= x1; x++) {
-                let px = i64(x) * SUBPIXEL + HALF_PIXEL;
-                var e: array<i64, 3>;
-                var inside = true;
-                for (var k = 0u; k < 3u; k++) {
-                    e[k] = dx[k] * (py - ay[k]) - dy[k] * (px - ax[k]);
-                    inside = inside && e[k] > above[k];
-                }
-                if (inside) {
-                    count += 1u;
-                    let b = vec3<f32>(f32(e[0]) * t.inv_area, f32(e[1]) * t.inv_area, f32(e[2]) * t.inv_area);
-                    let depth = clamp(t.z[0] + b.y * (t.z[1] - t.z[0]) + b.z * (t.z[2] - t.z[0]), 0.0, 1.0);
-                    let q = vec3<f32>(b.x * t.inv_w[0], b.y * t.inv_w[1], b.z * t.inv_w[2]);
-                    let inv_q = 1.0 / (q.x + q.y + q.z);
-                    let p = q * inv_q;
-                    let n0 = vec3<f32>(t.n[0], t.n[1], t.n[2]);
-                    let n1 = vec3<f32>(t.n[3], t.n[4], t.n[5]);
-                    let n2 = vec3<f32>(t.n[6], t.n[7], t.n[8]);
-                    let normal = n0 * p.x + n1 * p.y + n2 * p.z;
-                    let c0 = vec3<f32>(t.c[0], t.c[1], t.c[2]);
-                    let c1 = vec3<f32>(t.c[3], t.c[4], t.c[5]);
-                    let c2 = vec3<f32>(t.c[6], t.c[7], t.c[8]);
-                    let vcolor = c0 * p.x + c1 * p.y + c2 * p.z;
-                    let base = vec4<f32>(t.base[0], t.base[1], t.base[2], t.base[3]);
-                    let color = shade(ru.shading, base, normal, vcolor, t.has_color != 0u, ru.forward.xyz);
-                    var f: Fragment;
-                    f.pixel = y * ru.width + x;
-                    f.depth = depth;
-                    f.prim = t.prim;
-                    f.color = color;
-                    f.normal = normalize_or_zero(normal);
-                    capture(f);
-                }
+                count += raster_pixel(t, x, y);
             }
         }
     }
-    atomicAdd(&wg_count, count);
-    workgroupBarrier();
-    if (lid == 0u) {
-        atomicAdd(&generated[0], atomicLoad(&wg_count));
-    }
+    count_fragments(lid, count);
 }
