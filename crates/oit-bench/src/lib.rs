@@ -29,10 +29,10 @@ use std::time::Instant;
 
 use oit_core::metrics::accuracy;
 use oit_core::{Backend, Camera, Frame, Image, OitError, Scene, Settings, Technique, View, load_scene};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 pub use model::{pareto_front, predicted_speedup};
-pub use report::write_report;
+pub use report::{read_report, write_report};
 
 /// What to measure.
 pub struct Config {
@@ -92,7 +92,7 @@ impl CurveConfig {
 }
 
 /// Median, extremes and quartiles of a set of times.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Spread {
     /// The median.
     pub median: f64,
@@ -133,7 +133,7 @@ impl Spread {
 }
 
 /// One technique on one backend/path and scene.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Row {
     /// The scene.
     pub scene: String,
@@ -172,11 +172,12 @@ pub struct Row {
     pub max_diff: u32,
     /// Device milliseconds per pass label of the last timed frame (geometry passes, kernels),
     /// where measured: where a technique's time goes.
+    #[serde(default)]
     pub gpu_pass_ms: Vec<(String, f64)>,
 }
 
 /// A run that failed.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Failure {
     /// What was run (`bench`, `plain pass`, `depth curve`, `triangle curve`).
     pub stage: String,
@@ -191,7 +192,7 @@ pub struct Failure {
 }
 
 /// The speedup model for one technique on one backend/path and scene.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct ModelRow {
     /// The scene.
     pub scene: String,
@@ -216,7 +217,7 @@ pub struct ModelRow {
 }
 
 /// One pair of backend/paths for one technique.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct MatrixEntry {
     /// The scene.
     pub scene: String,
@@ -233,7 +234,7 @@ pub struct MatrixEntry {
 }
 
 /// One point of a curve.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct CurvePoint {
     /// `depth` (x: N of planes:N) or `triangles` (x: the grid scene's triangle count).
     pub curve: String,
@@ -254,7 +255,7 @@ pub struct CurvePoint {
 }
 
 /// A backend/path that was measured.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct BackendInfo {
     /// `name` or `name/path`.
     pub label: String,
@@ -263,7 +264,7 @@ pub struct BackendInfo {
 }
 
 /// A scene that was measured.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct SceneInfo {
     /// Its name.
     pub name: String,
@@ -276,7 +277,7 @@ pub struct SceneInfo {
 }
 
 /// Everything measured.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Report {
     /// The command line.
     pub command_line: String,

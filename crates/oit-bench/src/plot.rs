@@ -220,7 +220,7 @@ impl Chart {
             root.fill(&WHITE).map_err(|e| err(&e))?;
             let (area, _) = root.split_horizontally(WIDTH - LEGEND_WIDTH);
             let mut builder = ChartBuilder::on(&area);
-            builder.margin(14).margin_top(44).x_label_area_size(60).y_label_area_size(90);
+            builder.margin(14).margin_top(72).x_label_area_size(60).y_label_area_size(90);
             macro_rules! body {
                 ($xr:expr, $yr:expr) => {{
                     let chart = builder.build_cartesian_2d($xr, $yr).map_err(|e| err(&e))?;
@@ -240,7 +240,7 @@ impl Chart {
             height: HEIGHT,
             pixels: buf.chunks_exact(3).map(|p| [p[0], p[1], p[2], 255]).collect(),
         };
-        texts.push(((WIDTH - LEGEND_WIDTH) as i32 / 2, 12, self.title.clone(), 2, true));
+        texts.push(((WIDTH - LEGEND_WIDTH) as i32 / 2, 10, self.title.clone(), 2, true));
         for (x, y, text, scale, centred) in texts {
             let x = if centred { x - text_width(&text, scale) as i32 / 2 } else { x };
             draw_text(&mut image, x, y, &text, scale, [0, 0, 0, 255]);
@@ -306,7 +306,7 @@ impl Chart {
         let (bx, by) = chart.backend_coord(&(x0, y0));
         let (tx, ty) = chart.backend_coord(&(x1, y1));
         texts.push(((bx + tx) / 2, by + 34, ascii(&self.x_desc), 2, true));
-        texts.push((8, ty - 30, ascii(&self.y_desc), 2, false));
+        texts.push((8, ty - 28, ascii(&self.y_desc), 2, false));
         Ok(())
     }
 }

@@ -56,6 +56,16 @@ fn row_label(r: &Row) -> String {
     if r.raster == r.backend { r.backend.clone() } else { format!("{}/{}", r.backend, r.raster) }
 }
 
+/// Reads the `report.json` that [`write_report`] wrote into `dir`, to draw it again (`oit bench
+/// --replot DIR`) without measuring again.
+pub fn read_report(dir: &Path) -> Result<Report, OitError> {
+    let path = dir.join("report.json");
+    let text =
+        std::fs::read_to_string(&path).map_err(|source| OitError::Io { path: path.clone(), source })?;
+    serde_json::from_str(&text)
+        .map_err(|e| OitError::InvalidSettings(format!("{} is not an oit bench report: {e}", path.display())))
+}
+
 /// Writes `report.json`, `report.md` and the plots into `dir` (made if missing), and records the
 /// files written in `report.files`.
 pub fn write_report(report: &mut Report, dir: &Path) -> Result<(), OitError> {

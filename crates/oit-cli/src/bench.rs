@@ -54,6 +54,11 @@ pub struct BenchArgs {
     #[arg(long, value_name = "MESH", default_value = "knot")]
     pub curves: String,
 
+    /// Draw an earlier run again: read DIR/report.json and rewrite report.md and the plots in
+    /// DIR, measuring nothing (the other options are ignored).
+    #[arg(long, value_name = "DIR")]
+    pub replot: Option<PathBuf>,
+
     /// Skip the two curves.
     #[arg(long)]
     pub no_curves: bool,
@@ -84,6 +89,17 @@ pub struct BenchArgs {
 
 /// Runs `oit bench`.
 pub fn run(args: &BenchArgs) -> Result<Outcome, OitError> {
+    if let Some(dir) = &args.replot {
+        let mut report = oit_bench::read_report(dir)?;
+        report.files.clear();
+        oit_bench::write_report(&mut report, dir)?;
+        output::print(&format!(
+            "redrew {} ({} files)\n",
+            dir.join("report.md").display(),
+            report.files.len()
+        ))?;
+        return Ok(Outcome::Success);
+    }
     let techniques = Technique::parse_list(&args.techniques)?;
     if args.frames == 0 || args.curve_frames == 0 {
         return Err(OitError::InvalidSettings("--frames and --curve-frames must be at least 1".into()));

@@ -67,10 +67,11 @@ pub struct SceneArgs {
     #[arg(long, value_name = "MODE", default_value = "auto")]
     pub bdp_mode: String,
 
-    /// How bdp and dp capture on the hardware raster path of GPU backends: atomics
+    /// How bdp, dp and ddp capture on the hardware raster path of GPU backends: atomics
     /// (fragment-stage storage-buffer atomics, the same capture as the compute path; faster on
     /// the GPUs measured) or blend (the papers' graphics pipeline: MAX blending into 8 RGBA32F
-    /// targets for bdp's colour mode, depth textures and occlusion queries for dp).
+    /// targets for bdp's colour mode, depth textures and occlusion queries for dp, MAX blending
+    /// of (-d, d) into an RG32F target for ddp).
     #[arg(long, value_name = "atomics|blend", default_value = "atomics")]
     pub hardware_capture: String,
 

@@ -6,7 +6,7 @@ use serde::Serialize;
 use crate::{Aabb, OitError, Scene};
 
 /// Where the camera sits on its orbit, and how wide it sees.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct View {
     /// Degrees around the vertical axis; 0 looks down −z from +z.
     pub azimuth: f32,

@@ -80,12 +80,12 @@ pub struct Settings {
     pub raster: Option<RasterPath>,
     /// What single-pass bucket depth peeling stores.
     pub bdp_mode: BdpMode,
-    /// How the hardware raster path of GPU backends captures for `bdp` and `dp`.
+    /// How the hardware raster path of GPU backends captures for `bdp`, `dp` and `ddp`.
     pub hardware_capture: HardwareCapture,
 }
 
-/// How `bdp` and `dp` capture fragments on a GPU backend's hardware raster path (other techniques
-/// and the compute path ignore it).
+/// How `bdp`, `dp` and `ddp` capture fragments on a GPU backend's hardware raster path (other
+/// techniques and the compute path ignore it).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum HardwareCapture {
@@ -97,7 +97,8 @@ pub enum HardwareCapture {
     Atomics,
     /// The papers' graphics-pipeline mechanisms: MAX blending into 8 `Rgba32Float` targets for
     /// bdp's colour mode (HPG 2009), a depth test against a fresh depth attachment, the previous
-    /// layer read from a depth texture and an occlusion query per peel for dp (Everitt 2001).
+    /// layer read from a depth texture and an occlusion query per peel for dp (Everitt 2001), MAX
+    /// blending of (−d, d) into an `Rg32Float` target per pass for ddp (Bavoil & Myers 2008).
     Blend,
 }
 

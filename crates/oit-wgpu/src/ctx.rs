@@ -344,6 +344,11 @@ impl<'a> GpuCtx<'a> {
         })
     }
 
+    /// Device milliseconds so far under `label` (0 where none, or without timestamps).
+    pub fn pass_ms(&self, label: &str) -> f64 {
+        self.pass_ms.iter().find(|(l, _)| l == label).map_or(0.0, |(_, ms)| *ms)
+    }
+
     /// Records one compute pass with `record`, submits it, and adds its GPU time.
     pub fn timed(
         &mut self,

@@ -1,10 +1,10 @@
 //! The hardware path's graphics-pipeline capture (`hardware_capture: Blend`) against its atomics
-//! capture and the reference: dp by depth textures and occlusion queries, bdp's colour mode by MAX
-//! blending into 8 Rgba32Float targets.
+//! capture and the reference: dp by depth textures and occlusion queries, ddp by MAX blending
+//! (−d, d) into an Rg32Float target, bdp's colour mode by MAX blending into 8 Rgba32Float targets.
 
 use oit_core::{
-    Backend, BdpMode, BoundsMode, Camera, Frame, HardwareCapture, OitError, RasterPath, Settings, Technique,
-    View, load_scene,
+    Backend, BdpMode, BoundsMode, Camera, Effect, Frame, HardwareCapture, OitError, RasterPath, Settings,
+    Technique, View, load_scene,
 };
 
 const SCENES: [&str; 3] = ["planes:8", "spheres:4", "knot"];
@@ -75,6 +75,57 @@ fn dp_by_depth_peeling_stops_at_max_peels() {
             assert_eq!(blend.stats.geometry_passes, atomics.stats.geometry_passes, "{scene_name} {peels}");
             assert_eq!(blend.stats.lost, atomics.stats.lost, "{scene_name} {peels}: lost");
             assert_eq!(blend.image.pixels, atomics.image.pixels, "{scene_name} {peels}: image");
+        }
+    }
+}
+
+#[test]
+fn ddp_by_max_blending_equals_atomics() {
+    let gpu = oit_wgpu::WgpuBackend::default();
+    for scene_name in SCENES.iter().copied().chain(["coplanar", "cluster:200"]) {
+        let reference = render(&gpu, scene_name, &settings("reference", HardwareCapture::Atomics));
+        for effect in [Effect::Transparency, Effect::Complexity] {
+            let s = |c| Settings { effect, ..settings("ddp", c) };
+            let blend = render(&gpu, scene_name, &s(HardwareCapture::Blend));
+            let atomics = render(&gpu, scene_name, &s(HardwareCapture::Atomics));
+            let what = format!("{scene_name} {effect:?}");
+            println!(
+                "{what} ddp blend: passes {} (atomics {}), lost {} (atomics {}), storage {} (atomics {})",
+                blend.stats.geometry_passes,
+                atomics.stats.geometry_passes,
+                blend.stats.lost,
+                atomics.stats.lost,
+                blend.stats.storage_bytes,
+                atomics.stats.storage_bytes,
+            );
+            assert_eq!(blend.image.pixels, atomics.image.pixels, "{what}: image");
+            assert_eq!(blend.stats.fragments, atomics.stats.fragments, "{what}: fragments");
+            assert_eq!(blend.stats.lost, atomics.stats.lost, "{what}: lost");
+            assert_eq!(blend.stats.geometry_passes, atomics.stats.geometry_passes, "{what}: passes");
+            assert_eq!(
+                blend.stats.storage_bytes,
+                atomics.stats.storage_bytes + 16 * 64 * 64,
+                "{what}: storage"
+            );
+            if effect == Effect::Transparency && scene_name != "coplanar" {
+                let epr = oit_core::metrics::accuracy(&reference, &blend.image).unwrap().epr;
+                assert_eq!(epr, 0.0, "{what}: EPR against the reference");
+                let n = depth_complexity(&reference);
+                assert_eq!(blend.stats.geometry_passes, n.div_ceil(2) + 1, "{what}: ⌈N/2⌉ + 1 passes");
+            }
+        }
+        // stopped early: the same pairs, one pass more (their payloads arrive a pass later);
+        // where peeling ends before the limit, the same passes
+        let pairs = depth_complexity(&reference).div_ceil(2);
+        for peels in [1, 2] {
+            let s = |c| Settings { max_peels: Some(peels), ..settings("ddp", c) };
+            let blend = render(&gpu, scene_name, &s(HardwareCapture::Blend));
+            let atomics = render(&gpu, scene_name, &s(HardwareCapture::Atomics));
+            let what = format!("{scene_name} max_peels {peels}");
+            assert_eq!(blend.image.pixels, atomics.image.pixels, "{what}: image");
+            assert_eq!(blend.stats.lost, atomics.stats.lost, "{what}: lost");
+            let extra = u32::from(pairs + 1 > peels);
+            assert_eq!(blend.stats.geometry_passes, atomics.stats.geometry_passes + extra, "{what}: passes");
         }
     }
 }

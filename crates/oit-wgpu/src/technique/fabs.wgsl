@@ -1,14 +1,21 @@
 // fabs:K (Huang et al. 2011, section 4): counter + K slots per pixel by atomic increment; the
 // resolve sorts each pixel's n ≤ K slots (insertion sort, as oit-cpu does for short lists) and
 // composites them. param = K.
+//
+// Slot i of pixel px is slots[i · pixels + px] (slot-major), so the neighbouring pixels of one
+// workgroup read and write neighbouring words in the resolve; lists of up to LOCAL_SLOTS are sorted
+// in a private array, longer ones in place. Measured on the H100 (planes:64 at 1024², 64 layers a
+// pixel): the resolve took 4.4 ms with pixel-major slots sorted in place.
 @group(0) @binding(2) var<storage, read_write> counters: array<atomic<u32>>;
 @group(0) @binding(3) var<storage, read_write> slots: array<u64>;
+
+const LOCAL_SLOTS: u32 = 64u;
 
 fn capture(f: Fragment) {
     let k = fu.param;
     let i = atomicAdd(&counters[f.pixel], 1u);
     if (i < k) {
-        slots[f.pixel * k + i] = (u64(depth_bits(f.depth)) << 32u) | u64(payload(f, fu.effect));
+        slots[i * fu.pixel_count + f.pixel] = (u64(depth_bits(f.depth)) << 32u) | u64(payload(f, fu.effect));
     }
 }
 
@@ -18,20 +25,35 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if (px >= fu.pixel_count) {
         return;
     }
-    let k = fu.param;
-    let n = min(atomicLoad(&counters[px]), k);
-    let base = px * k;
+    let n = min(atomicLoad(&counters[px]), fu.param);
+    let stride = fu.pixel_count;
+    if (n <= LOCAL_SLOTS) {
+        var list: array<u64, LOCAL_SLOTS>;
+        for (var i = 0u; i < n; i++) {
+            let v = slots[i * stride + px];
+            var j = i;
+            while (j > 0u && list[j - 1u] > v) {
+                list[j] = list[j - 1u];
+                j -= 1u;
+            }
+            list[j] = v;
+        }
+        for (var i = 0u; i < n; i++) {
+            push(px, bitcast<f32>(u32(list[i] >> 32u)), u32(list[i] & 0xfffffffflu));
+        }
+        return;
+    }
     for (var i = 1u; i < n; i++) {
-        let v = slots[base + i];
+        let v = slots[i * stride + px];
         var j = i;
-        while (j > 0u && slots[base + j - 1u] > v) {
-            slots[base + j] = slots[base + j - 1u];
+        while (j > 0u && slots[(j - 1u) * stride + px] > v) {
+            slots[j * stride + px] = slots[(j - 1u) * stride + px];
             j -= 1u;
         }
-        slots[base + j] = v;
+        slots[j * stride + px] = v;
     }
     for (var i = 0u; i < n; i++) {
-        let key = slots[base + i];
+        let key = slots[i * stride + px];
         push(px, bitcast<f32>(u32(key >> 32u)), u32(key & 0xfffffffflu));
     }
 }

@@ -5,6 +5,7 @@ pub(crate) mod adp;
 pub(crate) mod bdp;
 pub(crate) mod bdp_blend;
 pub(crate) mod ddp;
+pub(crate) mod ddp_blend;
 pub(crate) mod dp;
 pub(crate) mod dp_depth;
 pub(crate) mod fabs;
