@@ -22,7 +22,7 @@ compare)
             --techniques all --json > "$OUT/compare-$m-1024.json"
         # the papers' graphics-pipeline capture (MAX blending, depth textures) against atomics
         run "$OIT" compare --backend wgpu --raster hardware --hardware-capture blend \
-            --scene "$OIT_MODELS/$m.obj" --size 1024x1024 --techniques dp,bdp --json \
+            --scene "$OIT_MODELS/$m.obj" --size 1024x1024 --techniques dp,ddp,bdp --json \
             > "$OUT/compare-$m-1024-blend.json"
     done
     # the Gfrag/s target: a 1024² frame of >= 10M fragments (planes:64, 64 layers over ~30 %)

@@ -5,7 +5,9 @@
 // Slot i of pixel px is slots[i · pixels + px] (slot-major), so the neighbouring pixels of one
 // workgroup read and write neighbouring words in the resolve; lists of up to LOCAL_SLOTS are sorted
 // in a private array, longer ones in place. Measured on the H100 (planes:64 at 1024², 64 layers a
-// pixel): the resolve took 4.4 ms with pixel-major slots sorted in place.
+// pixel): with pixel-major slots sorted in place the capture pass and its sizing pass took 2.8 ms
+// and the resolve 4.4; with this layout 1.65 and 4.0. The resolve's remaining cost is the
+// composite (`push` reads and writes the pixel's state once per layer), not the sort.
 @group(0) @binding(2) var<storage, read_write> counters: array<atomic<u32>>;
 @group(0) @binding(3) var<storage, read_write> slots: array<u64>;
 
