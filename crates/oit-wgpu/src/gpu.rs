@@ -215,6 +215,24 @@ impl Gpu {
 
     /// Checks a storage buffer of `bytes` against the device's limits before allocating it.
     pub fn check_storage(&self, what: &str, bytes: u64) -> Result<(), OitError> {
+        self.check_storage_hint(
+            what,
+            bytes,
+            "use a smaller --size (storage grows with pixels), a smaller K, or the cpu backend",
+        )
+    }
+
+    /// [`Gpu::check_storage`] for a buffer that grows with the scene, not the image (the compute
+    /// rasterizer's triangles).
+    pub fn check_scene_storage(&self, what: &str, bytes: u64) -> Result<(), OitError> {
+        self.check_storage_hint(
+            what,
+            bytes,
+            "use --raster hardware (it keeps no per-triangle buffer), fewer triangles or instances, or the cpu backend",
+        )
+    }
+
+    fn check_storage_hint(&self, what: &str, bytes: u64, hint: &str) -> Result<(), OitError> {
         let binding = self.limits.max_storage_buffer_binding_size;
         let buffer = self.limits.max_buffer_size;
         let (limit_name, limit) = if binding < buffer {
@@ -228,10 +246,7 @@ impl Gpu {
                 needed: bytes,
                 limit_name: format!("{limit_name} of '{}'", self.info.name),
                 limit,
-                hint: format!(
-                    "use a smaller --size (storage grows with pixels), a smaller K, or the cpu backend; {:.0}% of this would fit",
-                    100.0 * limit as f64 / bytes as f64
-                ),
+                hint: format!("{hint}; {:.0}% of this would fit", 100.0 * limit as f64 / bytes as f64),
             });
         }
         Ok(())

@@ -45,7 +45,7 @@ impl ComputeRaster {
                 }
             }
         }
-        gpu.check_storage("the triangles", words.len() as u64 * 4)?;
+        gpu.check_scene_storage("the triangles", words.len() as u64 * 4)?;
         gpu.check_storage("the raster work list", items.len() as u64 * 8)?;
         let device = &gpu.device;
         let storage = |label: &str, bytes: &[u8]| {
