@@ -34,35 +34,41 @@ fn linear_depth(d: f32) -> f32 {
     return n * f / (f - d * (f - n));
 }
 
-fn push(px: u32, depth: f32, payload: u32) {
-    var s = state[px];
-    s.captured += 1u;
+// Pushes one layer into the state a caller keeps in a local (one load and one store for a whole
+// list: `fabs`'s resolve).
+fn push_local(s: ptr<function, PixelState>, depth: f32, payload: u32) {
+    (*s).captured += 1u;
     if (fu.effect == EFFECT_TRANSPARENCY) {
         let c = unpack_rgba8(payload);
-        let add = s.transmittance * c.w * c.xyz;
-        s.fr += add.x;
-        s.fg += add.y;
-        s.fb += add.z;
-        s.transmittance *= 1.0 - c.w;
+        let add = (*s).transmittance * c.w * c.xyz;
+        (*s).fr += add.x;
+        (*s).fg += add.y;
+        (*s).fb += add.z;
+        (*s).transmittance *= 1.0 - c.w;
     } else if (fu.effect == EFFECT_FRESNEL) {
         let n = unpack_normal(payload);
-        s.fresnel *= schlick_transmittance(dot(n, fu.forward.xyz));
+        (*s).fresnel *= schlick_transmittance(dot(n, fu.forward.xyz));
     } else if (fu.effect == EFFECT_TRANSLUCENCY) {
         let dist = linear_depth(depth);
-        if (s.has_entry == 0u) {
-            s.has_entry = 1u;
-            s.entry_dist = dist;
-            s.entry_rgba = payload;
+        if ((*s).has_entry == 0u) {
+            (*s).has_entry = 1u;
+            (*s).entry_dist = dist;
+            (*s).entry_rgba = payload;
         } else {
-            s.has_entry = 0u;
-            let c = unpack_rgba8(s.entry_rgba);
+            (*s).has_entry = 0u;
+            let c = unpack_rgba8((*s).entry_rgba);
             let absorb = (vec3<f32>(1.0) - c.xyz) * fu.lens.z;
-            let o = absorb * max(dist - s.entry_dist, 0.0);
-            s.or += o.x;
-            s.og += o.y;
-            s.ob += o.z;
+            let o = absorb * max(dist - (*s).entry_dist, 0.0);
+            (*s).or += o.x;
+            (*s).og += o.y;
+            (*s).ob += o.z;
         }
     }
+}
+
+fn push(px: u32, depth: f32, payload: u32) {
+    var s = state[px];
+    push_local(&s, depth, payload);
     state[px] = s;
 }
 

@@ -62,11 +62,13 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if (px >= fu.pixel_count) {
         return;
     }
+    var s = state[px];
     for (var b = 0u; b < BUCKETS; b++) {
         let key = atomicExchange(&buckets[px * BUCKETS + b], 0lu);
         if (key != 0lu) {
             let k = key & ~ADP_FILLED;
-            push(px, bitcast<f32>(u32(k >> 32u)), u32(k & 0xfffffffflu));
+            push_local(&s, bitcast<f32>(u32(k >> 32u)), u32(k & 0xfffffffflu));
         }
     }
+    state[px] = s;
 }

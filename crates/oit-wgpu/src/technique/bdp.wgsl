@@ -71,6 +71,7 @@ fn color_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
     if (px >= fu.pixel_count) {
         return;
     }
+    var s = state[px];
     let zn = bdp_z_near(px);
     let zf = bdp_z_far(px);
     let n = BDP_COLOR_SUBINTERVALS;
@@ -78,9 +79,10 @@ fn color_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
         let v = atomicLoad(&colors[px * n + k]);
         if (v != 0u) {
             let d = zn + (f32(k) + 0.5) / f32(n) * (zf - zn);
-            push(px, d, bdp_unpack_color(v));
+            push_local(&s, d, bdp_unpack_color(v));
         }
     }
+    state[px] = s;
 }
 
 // Depth mode's resolve; param = arrays captured. Subinterval k reads min₁ … min_P, max_P … max₁
@@ -91,6 +93,7 @@ fn depth_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
     if (px >= fu.pixel_count) {
         return;
     }
+    var s = state[px];
     let arrays_used = fu.param;
     for (var k = 0u; k < BDP_DEPTH_SUBINTERVALS; k++) {
         let slot = px * 2u * BDP_DEPTH_SUBINTERVALS + 2u * k;
@@ -100,7 +103,7 @@ fn depth_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
             if (lo == BDP_EMPTY_MIN) {
                 break;
             }
-            push(px, bitcast<f32>(u32(lo >> 32u)), u32(lo & 0xfffffffflu));
+            push_local(&s, bitcast<f32>(u32(lo >> 32u)), u32(lo & 0xfffffffflu));
             filled += 1u;
         }
         for (var a = filled; a > 0u; a--) {
@@ -108,8 +111,9 @@ fn depth_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
             let lo = atomicLoad(&arrays[at]);
             let hi = atomicLoad(&arrays[at + 1u]);
             if (hi != lo) {
-                push(px, bitcast<f32>(u32(hi >> 32u)), u32(hi & 0xfffffffflu));
+                push_local(&s, bitcast<f32>(u32(hi >> 32u)), u32(hi & 0xfffffffflu));
             }
         }
     }
+    state[px] = s;
 }

@@ -96,6 +96,7 @@ fn bdp_blend_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
     if (px >= fu.pixel_count) {
         return;
     }
+    var s = state[px];
     let xy = vec2<i32>(i32(px % fu.width), i32(px / fu.width));
     let zn = bitcast<f32>(bounds[2u * px]);
     let zf = bitcast<f32>(bounds[2u * px + 1u]);
@@ -104,7 +105,8 @@ fn bdp_blend_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
         let v = bdp_blend_bucket(k, xy);
         if (v != 0u) {
             let d = zn + (f32(k) + 0.5) / f32(n) * (zf - zn);
-            push(px, d, bdp_unpack_color(v));
+            push_local(&s, d, bdp_unpack_color(v));
         }
     }
+    state[px] = s;
 }

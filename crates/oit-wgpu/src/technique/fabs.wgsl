@@ -6,8 +6,9 @@
 // workgroup read and write neighbouring words in the resolve; lists of up to LOCAL_SLOTS are sorted
 // in a private array, longer ones in place. Measured on the H100 (planes:64 at 1024², 64 layers a
 // pixel): with pixel-major slots sorted in place the capture pass and its sizing pass took 2.8 ms
-// and the resolve 4.4; with this layout 1.65 and 4.0. The resolve's remaining cost is the
-// composite (`push` reads and writes the pixel's state once per layer), not the sort.
+// and the resolve 4.4; with this layout 1.65 and 4.0; and with the pixel's resolve state kept in
+// a local across the list (`push_local`, one load and one store instead of one per layer) the
+// resolve takes 0.46 ms. Every resolve that walks a list does the same.
 @group(0) @binding(2) var<storage, read_write> counters: array<atomic<u32>>;
 @group(0) @binding(3) var<storage, read_write> slots: array<u64>;
 
@@ -27,6 +28,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if (px >= fu.pixel_count) {
         return;
     }
+    var s = state[px];
     let n = min(atomicLoad(&counters[px]), fu.param);
     let stride = fu.pixel_count;
     if (n <= LOCAL_SLOTS) {
@@ -41,8 +43,9 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
             list[j] = v;
         }
         for (var i = 0u; i < n; i++) {
-            push(px, bitcast<f32>(u32(list[i] >> 32u)), u32(list[i] & 0xfffffffflu));
+            push_local(&s, bitcast<f32>(u32(list[i] >> 32u)), u32(list[i] & 0xfffffffflu));
         }
+        state[px] = s;
         return;
     }
     for (var i = 1u; i < n; i++) {
@@ -56,6 +59,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     }
     for (var i = 0u; i < n; i++) {
         let key = slots[i * stride + px];
-        push(px, bitcast<f32>(u32(key >> 32u)), u32(key & 0xfffffffflu));
+        push_local(&s, bitcast<f32>(u32(key >> 32u)), u32(key & 0xfffffffflu));
     }
+    state[px] = s;
 }

@@ -71,6 +71,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if (px >= fu.pixel_count) {
         return;
     }
+    var s = state[px];
     let base = px * fu.param;
     let mode = fu.pass_index & 0xffu;
     if (mode == MDTS_64) {
@@ -79,8 +80,9 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
             if (key == MDTS_EMPTY64) {
                 break;
             }
-            push(px, bitcast<f32>(u32(key >> 32u)), u32(key & 0xfffffffflu));
+            push_local(&s, bitcast<f32>(u32(key >> 32u)), u32(key & 0xfffffffflu));
         }
+        state[px] = s;
         return;
     }
     let alpha8 = (fu.pass_index >> 8u) & 0xffu;
@@ -91,6 +93,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
             break;
         }
         let u = mdts_unpack(vec2<u32>(h, l));
-        push(px, bitcast<f32>(u.x), u.y | (alpha8 << 24u));
+        push_local(&s, bitcast<f32>(u.x), u.y | (alpha8 << 24u));
     }
+    state[px] = s;
 }

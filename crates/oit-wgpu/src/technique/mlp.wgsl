@@ -37,6 +37,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if (px >= fu.pixel_count) {
         return;
     }
+    var s = state[px];
     let base = px * fu.param;
     for (var i = 0u; i < fu.param; i++) {
         let key = atomicExchange(&mlp_slots[base + i], MLP_EMPTY);
@@ -44,7 +45,8 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
             break;
         }
         let d = u32(key >> 32u);
-        push(px, bitcast<f32>(d), u32(key & 0xfffffffflu));
+        push_local(&s, bitcast<f32>(d), u32(key & 0xfffffffflu));
         mlp_deepest[px] = d + 1u;
     }
+    state[px] = s;
 }

@@ -18,6 +18,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if (px >= fu.pixel_count) {
         return;
     }
+    var s = state[px];
     let lo = offsets[px];
     let hi = offsets[px + 1u];
     for (var i = lo + 1u; i < hi; i++) {
@@ -33,6 +34,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         payloads[j] = p;
     }
     for (var i = lo; i < hi; i++) {
-        push(px, bitcast<f32>(u32(keys[i] >> 32u)), payloads[i]);
+        push_local(&s, bitcast<f32>(u32(keys[i] >> 32u)), payloads[i]);
     }
+    state[px] = s;
 }
