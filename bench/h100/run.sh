@@ -28,6 +28,9 @@ compare)
     # the Gfrag/s target: a 1024² frame of >= 10M fragments (planes:64, 64 layers over ~30 %)
     run "$OIT" bench --backend wgpu --raster all --scenes planes:64 --size 1024x1024 \
         --techniques dp,bdp,adp,mdts64,fabs --frames 10 --warmup 1 --no-curves --out "$OUT/deep-1024"
+    # the same with K given (no sizing pass): the exact techniques' best rate
+    run "$OIT" bench --backend wgpu --raster compute --scenes planes:64 --size 1024x1024 \
+        --techniques fabs:64,mdts64:64,fabs --frames 10 --warmup 1 --no-curves --out "$OUT/deep-1024-k64"
     ;;
 bench-512 | bench-1024)
     size=${1#bench-}

@@ -1,7 +1,7 @@
 //! `run_bench` end to end at 32×32 with 2 frames on planes:4, on every backend compiled in (wgpu
 //! when an adapter is found): report.json parses and holds every technique, the plots exist.
 
-use oit_bench::{Config, CurveConfig, available_backends, run_bench, write_report};
+use oit_bench::{Config, CurveConfig, available_backends, read_report, run_bench, write_report};
 use oit_core::{Settings, Technique, View};
 
 #[test]
@@ -32,6 +32,12 @@ fn report_holds_every_technique() {
     assert!(report.failures.is_empty(), "{:?}", report.failures);
     let dir = std::env::temp_dir().join(format!("oit-bench-test-{}", std::process::id()));
     write_report(&mut report, &dir).unwrap();
+
+    // `oit bench --replot` reads back what was written
+    let again = read_report(&dir).unwrap();
+    assert_eq!(again.rows.len(), report.rows.len());
+    assert_eq!(again.curves.len(), report.curves.len());
+    assert_eq!(again.rows[0].wall_ms, report.rows[0].wall_ms);
 
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();

@@ -166,6 +166,22 @@ impl Default for Settings {
 pub const MAX_SIZE: u32 = 16_384;
 
 impl Settings {
+    /// Whether `bdp:passes` runs in colour mode (packed colours in 32 buckets, transparency only,
+    /// one pass) under these settings, or in depth mode; `bdp_mode: Auto` picks colour mode
+    /// where it can. Colour mode asked for where it cannot run is an error. The one rule every
+    /// backend follows.
+    pub fn bdp_color_mode(&self, passes: u32) -> Result<bool, OitError> {
+        let fits = passes == 1 && self.effect == Effect::Transparency;
+        match self.bdp_mode {
+            BdpMode::Depth => Ok(false),
+            BdpMode::Auto => Ok(fits),
+            BdpMode::Color if fits => Ok(true),
+            BdpMode::Color => Err(OitError::InvalidSettings(
+                "bdp's colour mode holds colours only, in one pass: use --bdp-mode depth for bdp:P or for effects other than transparency".into(),
+            )),
+        }
+    }
+
     /// Checks every setting; backends call this before allocating anything.
     pub fn validate(&self) -> Result<(), OitError> {
         if self.width == 0 || self.height == 0 {

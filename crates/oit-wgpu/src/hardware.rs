@@ -69,6 +69,90 @@ impl SceneStage {
     }
 }
 
+/// Where one pass of a blend capture draws: a colour target cleared to `clear`, and a depth
+/// attachment cleared to 1 where the pass tests depth.
+pub(crate) struct PassTarget<'a> {
+    pub label: &'a str,
+    pub color: &'a wgpu::TextureView,
+    pub clear: wgpu::Color,
+    pub depth: Option<&'a wgpu::TextureView>,
+}
+
+/// An occlusion query over one pass, and the buffer its result resolves into.
+pub(crate) struct Occlusion {
+    set: wgpu::QuerySet,
+    buffer: wgpu::Buffer,
+}
+
+impl Occlusion {
+    pub(crate) fn new(device: &wgpu::Device, label: &str) -> Occlusion {
+        let set = device.create_query_set(&wgpu::QuerySetDescriptor {
+            label: Some(label),
+            ty: wgpu::QueryType::Occlusion,
+            count: 1,
+        });
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: 8,
+            usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        Occlusion { set, buffer }
+    }
+}
+
+impl SceneStage {
+    /// One geometry pass of a blend capture (`technique::{dp_depth, ddp_blend}`): `pipeline`
+    /// draws the scene into `target` with `groups` set as groups 0 and 2, inside `occlusion`'s
+    /// query; it is timed and counted as a geometry pass. Returns whether any sample passed: zero
+    /// or not is all an occlusion query promises on every backend.
+    pub(crate) fn occlusion_pass(
+        &self,
+        ctx: &mut GpuCtx<'_>,
+        pipeline: &wgpu::RenderPipeline,
+        groups: (&wgpu::BindGroup, &wgpu::BindGroup),
+        target: PassTarget<'_>,
+        occlusion: &Occlusion,
+    ) -> Result<bool, OitError> {
+        let mut encoder = ctx.gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some(target.label),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: target.color,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(target.clear),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: target.depth.map(|view| wgpu::RenderPassDepthStencilAttachment {
+                    view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: ctx.render_timestamps(),
+                occlusion_query_set: Some(&occlusion.set),
+                multiview_mask: None,
+            });
+            rpass.set_pipeline(pipeline);
+            rpass.set_bind_group(0, groups.0, &[]);
+            rpass.set_bind_group(2, groups.1, &[]);
+            rpass.begin_occlusion_query(0);
+            self.draw(&mut rpass);
+            rpass.end_occlusion_query();
+        }
+        encoder.resolve_query_set(&occlusion.set, 0..1, &occlusion.buffer, 0);
+        ctx.finish_timed("geometry", encoder)?;
+        ctx.passes += 1;
+        Ok(ctx.gpu.read_u32(&occlusion.buffer)?.iter().any(|&s| s != 0))
+    }
+}
+
 /// The normal matrix of `transform`: its inverse transpose (the matrix itself when singular), as
 /// oit-cpu's raster.
 fn normal_matrix(transform: &Mat4) -> Mat3 {
@@ -195,36 +279,15 @@ impl HardwareRaster {
         let pipeline_device = device.clone();
         let pipeline = move |capture: &CaptureShader<'_>| {
             let device = &pipeline_device;
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("hardware raster"),
-                source: wgpu::ShaderSource::Wgsl(format!("{}\n{RASTER_WGSL}", capture.wgsl).into()),
-            });
-            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("hardware raster"),
-                bind_group_layouts: &[Some(capture.bind_group_layout), Some(&layout1)],
-                immediate_size: 0,
-            });
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("hardware raster"),
-                layout: Some(&layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("hw_vs"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("hw_fs"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(capture.count_target.clone())],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+            scene_pipeline(
+                device,
+                "hardware raster",
+                &format!("{}\n{RASTER_WGSL}", capture.wgsl),
+                &[capture.bind_group_layout, &layout1],
+                "hw_fs",
+                &[Some(capture.count_target.clone())],
+                None,
+            )
         };
         let draw = move |rpass: &mut wgpu::RenderPass<'_>, _: &GeometryPass<'_>| {
             rpass.set_bind_group(1, &group1, &[]);
@@ -262,4 +325,50 @@ impl Driver for HardwareRaster {
     fn scene_stage(&self) -> Option<&SceneStage> {
         Some(&self.stage)
     }
+}
+
+/// A render pipeline over oit's scene vertex stage: `hw_vs` of `source` as the vertex stage (no
+/// vertex buffers, no culling), `fs_entry` of it as the fragment stage, `layouts` as its bind
+/// groups. The hardware raster and the blend captures (`technique::{bdp_blend, dp_depth,
+/// ddp_blend}`) build theirs with it.
+pub(crate) fn scene_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    source: &str,
+    layouts: &[&wgpu::BindGroupLayout],
+    fs_entry: &str,
+    targets: &[Option<wgpu::ColorTargetState>],
+    depth_stencil: Option<wgpu::DepthStencilState>,
+) -> wgpu::RenderPipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    let layouts: Vec<Option<&wgpu::BindGroupLayout>> = layouts.iter().map(|l| Some(*l)).collect();
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &layouts,
+        immediate_size: 0,
+    });
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(&layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("hw_vs"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+        depth_stencil,
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some(fs_entry),
+            compilation_options: Default::default(),
+            targets,
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
 }

@@ -6,9 +6,11 @@
 //! sorted whatever the order, and the weighted sums are integers. So everything is compared, on
 //! every scene.
 
+mod common;
+
+use common::{SCENES, compare};
 use oit_core::{Backend, Camera, Effect, OitError, RasterPath, Settings, Technique, View, load_scene};
 
-const SCENES: [&str; 4] = ["planes:8", "spheres:4", "knot", "cluster:200"];
 const TECHNIQUES: [&str; 11] =
     ["dp", "ddp", "wavg", "wsum", "mdts", "mdts:4", "mdts64", "mdts64:3", "mlp", "mlp:1", "mlp:3"];
 
@@ -21,31 +23,6 @@ fn settings(technique: &str) -> Settings {
         raster: Some(RasterPath::Compute),
         ..Settings::default()
     }
-}
-
-fn compare(gpu: &oit_wgpu::WgpuBackend, cpu: &oit_cpu::CpuBackend, scene_name: &str, s: &Settings) {
-    let scene = load_scene(scene_name).unwrap();
-    let cam = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();
-    let what = format!("{scene_name} {} {:?} max_peels {:?}", s.technique, s.effect, s.max_peels);
-    let g = gpu.render(&scene, &cam, s).unwrap_or_else(|e| panic!("{what}: {e}"));
-    let c = cpu.render(&scene, &cam, s).unwrap();
-    assert_eq!(g.stats.fragments, c.stats.fragments, "{what}: fragments");
-    assert_eq!(g.stats.lost, c.stats.lost, "{what}: lost");
-    assert_eq!(g.stats.geometry_passes, c.stats.geometry_passes, "{what}: geometry passes");
-    assert_eq!(g.stats.storage_bytes, c.stats.storage_bytes, "{what}: storage");
-    let worst = g
-        .image
-        .pixels
-        .iter()
-        .zip(&c.image.pixels)
-        .map(|(a, b)| (0..4).map(|i| a[i].abs_diff(b[i])).max().unwrap())
-        .max()
-        .unwrap();
-    assert!(worst <= 1, "{what}: a channel off by {worst}");
-    println!(
-        "{what}: fragments {} lost {} passes {} worst {worst}",
-        g.stats.fragments, g.stats.lost, g.stats.geometry_passes
-    );
 }
 
 #[test]

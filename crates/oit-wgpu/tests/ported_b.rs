@@ -1,11 +1,12 @@
 //! bdp (colour and depth modes, bdp:P) and adp on the compute path against oit-cpu: the same
 //! fragments, losses, geometry passes and storage, and the same image (±1 per channel).
 
+mod common;
+
+use common::{SCENES, compare};
 use oit_core::{
     Backend, BdpMode, BoundsMode, Camera, Effect, OitError, RasterPath, Settings, Technique, View, load_scene,
 };
-
-const SCENES: [&str; 4] = ["planes:8", "spheres:4", "knot", "cluster:200"];
 
 fn settings(technique: &str, bdp_mode: BdpMode, bounds: BoundsMode) -> Settings {
     Settings {
@@ -17,31 +18,6 @@ fn settings(technique: &str, bdp_mode: BdpMode, bounds: BoundsMode) -> Settings 
         raster: Some(RasterPath::Compute),
         ..Settings::default()
     }
-}
-
-fn compare(gpu: &oit_wgpu::WgpuBackend, cpu: &oit_cpu::CpuBackend, scene_name: &str, s: &Settings) {
-    let scene = load_scene(scene_name).unwrap();
-    let cam = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();
-    let what = format!("{scene_name} {} {:?} {:?} {:?}", s.technique, s.bdp_mode, s.bounds, s.effect);
-    let g = gpu.render(&scene, &cam, s).unwrap_or_else(|e| panic!("{what}: {e}"));
-    let c = cpu.render(&scene, &cam, s).unwrap();
-    assert_eq!(g.stats.fragments, c.stats.fragments, "{what}: fragments");
-    assert_eq!(g.stats.lost, c.stats.lost, "{what}: lost");
-    assert_eq!(g.stats.geometry_passes, c.stats.geometry_passes, "{what}: geometry passes");
-    assert_eq!(g.stats.storage_bytes, c.stats.storage_bytes, "{what}: storage");
-    let worst = g
-        .image
-        .pixels
-        .iter()
-        .zip(&c.image.pixels)
-        .map(|(a, b)| (0..4).map(|i| a[i].abs_diff(b[i])).max().unwrap())
-        .max()
-        .unwrap();
-    assert!(worst <= 1, "{what}: a channel off by {worst}");
-    println!(
-        "{what}: fragments {} lost {} passes {} worst {worst}",
-        g.stats.fragments, g.stats.lost, g.stats.geometry_passes
-    );
 }
 
 #[test]

@@ -19,22 +19,13 @@ use oit_core::rules::{
     BDP_COLOR_SUBINTERVALS, BDP_DEPTH_SUBINTERVALS, bdp_pack_color, bdp_unpack_color, bucket_index,
     depth_bits, depth_key64, split_key64,
 };
-use oit_core::{BdpMode, Effect, Frame, OitError};
+use oit_core::{Frame, OitError};
 use rayon::prelude::*;
 
 use super::Ctx;
 
 pub(crate) fn render(ctx: &mut Ctx<'_>, passes: u32) -> Result<Frame, OitError> {
-    let color_mode = match ctx.settings.bdp_mode {
-        BdpMode::Color => true,
-        BdpMode::Depth => false,
-        BdpMode::Auto => passes == 1 && ctx.resolve.effect == Effect::Transparency,
-    };
-    if color_mode && (passes != 1 || ctx.resolve.effect != Effect::Transparency) {
-        return Err(OitError::InvalidSettings(
-            "bdp's colour mode holds colours only, in one pass: use --bdp-mode depth for bdp:P or for effects other than transparency".into(),
-        ));
-    }
+    let color_mode = ctx.settings.bdp_color_mode(passes)?;
     let bounds = ctx.depth_bounds()?;
     ctx.storage_bytes += ctx.pixels as u64 * 8;
     if color_mode { color(ctx, &bounds) } else { depth(ctx, &bounds, passes) }

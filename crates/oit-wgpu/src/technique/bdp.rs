@@ -5,7 +5,7 @@
 //! One difference in layout, not in result: the depth mode's per-pass arrays sit back to back in
 //! one buffer (so one binding serves any P, and pass p reads pass p − 1's array from it).
 
-use oit_core::{BdpMode, BoundsMode, Effect, OitError};
+use oit_core::{BoundsMode, OitError};
 
 use crate::Drivers;
 use crate::ctx::{GpuCtx, Init};
@@ -21,16 +21,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     let oit_core::Technique::Bdp { passes } = ctx.settings.technique else {
         return Err(OitError::InvalidSettings(format!("{} is not bdp", ctx.settings.technique)));
     };
-    let color_mode = match ctx.settings.bdp_mode {
-        BdpMode::Color => true,
-        BdpMode::Depth => false,
-        BdpMode::Auto => passes == 1 && ctx.settings.effect == Effect::Transparency,
-    };
-    if color_mode && (passes != 1 || ctx.settings.effect != Effect::Transparency) {
-        return Err(OitError::InvalidSettings(
-            "bdp's colour mode holds colours only, in one pass: use --bdp-mode depth for bdp:P or for effects other than transparency".into(),
-        ));
-    }
+    let color_mode = ctx.settings.bdp_color_mode(passes)?;
     let bounds = depth_bounds(ctx, drivers)?;
     if color_mode { color(ctx, drivers, &bounds) } else { depth(ctx, drivers, &bounds, passes) }
 }

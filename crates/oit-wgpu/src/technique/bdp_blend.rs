@@ -19,12 +19,13 @@
 //! subinterval's colours takes a second geometry pass per array matching those depths, which is
 //! not built: it is reported as unsupported (the atomics capture runs it).
 
-use oit_core::{BdpMode, Effect, OitError};
+use oit_core::OitError;
 
 use crate::Drivers;
 use crate::ctx::{GpuCtx, TECHNIQUE_PRELUDE};
 use crate::gpu::COMMON_WGSL;
 use crate::hardware::SceneStage;
+use crate::hardware::scene_pipeline;
 use crate::technique::bdp::depth_bounds;
 
 const WGSL: &str = include_str!("bdp_blend.wgsl");
@@ -35,16 +36,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     let oit_core::Technique::Bdp { passes } = ctx.settings.technique else {
         return Err(OitError::InvalidSettings(format!("{} is not bdp", ctx.settings.technique)));
     };
-    let color_mode = match ctx.settings.bdp_mode {
-        BdpMode::Color => true,
-        BdpMode::Depth => false,
-        BdpMode::Auto => passes == 1 && ctx.settings.effect == Effect::Transparency,
-    };
-    if color_mode && (passes != 1 || ctx.settings.effect != Effect::Transparency) {
-        return Err(OitError::InvalidSettings(
-            "bdp's colour mode holds colours only, in one pass: use --bdp-mode depth for bdp:P or for effects other than transparency".into(),
-        ));
-    }
+    let color_mode = ctx.settings.bdp_color_mode(passes)?;
     if !color_mode {
         return Err(unsupported(
             "bdp's depth mode with --hardware-capture blend (float blending holds depths, not the (depth, colour) pairs): use --hardware-capture atomics",
@@ -100,38 +92,17 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         write_mask: wgpu::ColorWrites::ALL,
     };
     let pipeline = ctx.gpu.render_pipeline(key(&module_source, "bdp blend"), "bdp blend", || {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("bdp blend"),
-            source: wgpu::ShaderSource::Wgsl(module_source.as_str().into()),
-        });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("bdp blend"),
-            bind_group_layouts: &[Some(&layout0), Some(stage.layout())],
-            immediate_size: 0,
-        });
         let targets: Vec<Option<wgpu::ColorTargetState>> =
             (0..TARGETS).map(|_| Some(target.clone())).collect();
-        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("bdp blend"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("hw_vs"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("bdp_blend_fs"),
-                compilation_options: Default::default(),
-                targets: &targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        })
+        scene_pipeline(
+            device,
+            "bdp blend",
+            &module_source,
+            &[&layout0, stage.layout()],
+            "bdp_blend_fs",
+            &targets,
+            None,
+        )
     })?;
     let mut encoder = device.create_command_encoder(&Default::default());
     {

@@ -13,38 +13,66 @@ use oit_core::{Effect, OitError};
 use crate::Drivers;
 use crate::ctx::{GpuCtx, Init};
 
-const WGSL: &str = include_str!("ddp.wgsl");
+pub(crate) const WGSL: &str = include_str!("ddp.wgsl");
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
-    let effect = ctx.settings.effect;
-    if !matches!(effect, Effect::Transparency | Effect::Complexity) {
-        return Err(OitError::Unsupported {
-            backend: "wgpu".into(),
-            what: format!(
-                "the {effect:?} effect with ddp: the far layers it peels would have to be replayed nearest first from a per-pixel stack, which the GPU resolve does not keep; use dp, fabs, mlp or adp (or the cpu backend)"
-            ),
-        });
-    }
-    let px = u64::from(ctx.pixels);
-    let near = ctx.buffer("ddp near", px * 2, Init::Fill(u32::MAX))?;
-    let far = ctx.buffer("ddp far", px * 2, Init::Zero)?;
-    // the open depth range left by the previous pass (oit-cpu counts 8 bytes a pixel too)
-    let range = ctx.buffer("ddp range", px * 2, Init::Zero)?;
-    let peeled = ctx.buffer("ddp peeled count", 1, Init::Zero)?;
-    // the loop's counter is not per-pixel storage
-    ctx.storage_bytes -= 4;
-    let buffers = [&near, &far, &range, &peeled];
-    ctx.pixel_kernel(WGSL, "ddp_init_main", &buffers, 0, 0)?;
+    check_effect(ctx)?;
+    let state = Peel::new(ctx)?;
+    let buffers = state.buffers();
     let limit = ctx.settings.max_peels.unwrap_or(u32::MAX);
     let mut peels = 0;
     while peels < limit {
-        ctx.fill(&peeled, 0)?;
+        ctx.fill(&state.peeled, 0)?;
         ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, peels, 0)?;
         ctx.pixel_kernel(WGSL, "resolve_main", &buffers, peels, 0)?;
-        if ctx.gpu.read_u32(&peeled)?[0] == 0 {
+        if ctx.gpu.read_u32(&state.peeled)?[0] == 0 {
             break;
         }
         peels += 1;
     }
     Ok(())
+}
+
+/// The effects ddp resolves on the GPU (for both captures, atomics and blend).
+pub(crate) fn check_effect(ctx: &GpuCtx<'_>) -> Result<(), OitError> {
+    let effect = ctx.settings.effect;
+    if matches!(effect, Effect::Transparency | Effect::Complexity) {
+        return Ok(());
+    }
+    Err(OitError::Unsupported {
+        backend: "wgpu".into(),
+        what: format!(
+            "the {effect:?} effect with ddp: the far layers it peels would have to be replayed nearest first from a per-pixel stack, which the GPU resolve does not keep; use dp, fabs, mlp or adp (or the cpu backend)"
+        ),
+    })
+}
+
+/// ddp.wgsl's storage (group 0, bindings 2 to 5), allocated and initialised.
+pub(crate) struct Peel {
+    near: wgpu::Buffer,
+    far: wgpu::Buffer,
+    /// The open depth range left by the previous pass (oit-cpu counts 8 bytes a pixel too).
+    range: wgpu::Buffer,
+    /// Pixels that peeled a layer in the last pass.
+    pub(crate) peeled: wgpu::Buffer,
+}
+
+impl Peel {
+    pub(crate) fn new(ctx: &mut GpuCtx<'_>) -> Result<Peel, OitError> {
+        let px = u64::from(ctx.pixels);
+        let near = ctx.buffer("ddp near", px * 2, Init::Fill(u32::MAX))?;
+        let far = ctx.buffer("ddp far", px * 2, Init::Zero)?;
+        let range = ctx.buffer("ddp range", px * 2, Init::Zero)?;
+        let peeled = ctx.buffer("ddp peeled count", 1, Init::Zero)?;
+        // the loop's counter is not per-pixel storage
+        ctx.storage_bytes -= 4;
+        let state = Peel { near, far, range, peeled };
+        ctx.pixel_kernel(WGSL, "ddp_init_main", &state.buffers(), 0, 0)?;
+        Ok(state)
+    }
+
+    /// The buffers in binding order.
+    pub(crate) fn buffers(&self) -> [&wgpu::Buffer; 4] {
+        [&self.near, &self.far, &self.range, &self.peeled]
+    }
 }

@@ -15,24 +15,20 @@
 //! Storage per pixel: the atomics capture's 24 bytes (near and far keys, range) and the two
 //! Rg32Float targets, 16 bytes.
 
-use oit_core::{Effect, OitError};
+use oit_core::OitError;
 
 use crate::Drivers;
-use crate::ctx::{GpuCtx, Init, TECHNIQUE_PRELUDE};
+use crate::ctx::{GpuCtx, TECHNIQUE_PRELUDE};
 use crate::gpu::COMMON_WGSL;
+use crate::hardware::{Occlusion, PassTarget, scene_pipeline};
 use crate::technique::bdp_blend::{check_texture_size, count_fragments, key, scene_stage, unsupported};
+use crate::technique::ddp;
 
 const WGSL: &str = include_str!("ddp_blend.wgsl");
-const DDP_WGSL: &str = include_str!("ddp.wgsl");
 const RANGE: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
-    let effect = ctx.settings.effect;
-    if !matches!(effect, Effect::Transparency | Effect::Complexity) {
-        return Err(unsupported(&format!(
-            "the {effect:?} effect with ddp: the far layers it peels would have to be replayed nearest first from a per-pixel stack, which the GPU resolve does not keep; use dp, fabs, mlp or adp (or the cpu backend)"
-        )));
-    }
+    ddp::check_effect(ctx)?;
     let stage = scene_stage(drivers)?;
     if !ctx.gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
         return Err(unsupported("MAX blending into an Rg32Float target: the device lacks FLOAT32_BLENDABLE"));
@@ -41,14 +37,9 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     if ctx.fragments.is_none() {
         count_fragments(ctx, drivers)?;
     }
+    let state = ddp::Peel::new(ctx)?;
+    let buffers = state.buffers();
     let px = u64::from(ctx.pixels);
-    let near = ctx.buffer("ddp near", px * 2, Init::Fill(u32::MAX))?;
-    let far = ctx.buffer("ddp far", px * 2, Init::Zero)?;
-    let range = ctx.buffer("ddp range", px * 2, Init::Zero)?;
-    let peeled = ctx.buffer("ddp peeled count", 1, Init::Zero)?;
-    ctx.storage_bytes -= 4;
-    let buffers = [&near, &far, &range, &peeled];
-    ctx.pixel_kernel(DDP_WGSL, "ddp_init_main", &buffers, 0, 0)?;
 
     let device = ctx.gpu.device.clone();
     let (w, h) = (ctx.settings.width, ctx.settings.height);
@@ -68,17 +59,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         .collect();
     ctx.storage_bytes += px * 16;
     let views: Vec<wgpu::TextureView> = targets.iter().map(|t| t.create_view(&Default::default())).collect();
-    let occlusion = device.create_query_set(&wgpu::QuerySetDescriptor {
-        label: Some("ddp pass occlusion"),
-        ty: wgpu::QueryType::Occlusion,
-        count: 1,
-    });
-    let occlusion_buf = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("ddp pass occlusion"),
-        size: 8,
-        usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
+    let occlusion = Occlusion::new(&device, "ddp pass occlusion");
     // group 2: the previous pass's range; pass p renders into views[p % 2] and reads the other
     let previous_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("ddp previous range"),
@@ -118,76 +99,37 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         let slot = (pass % 2) as usize;
         let (layout0, group0) = ctx.group0(&buffers, pass, 0);
         let pipeline = ctx.gpu.render_pipeline(key(&module_source, "ddp blend"), "ddp blend", || {
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("ddp blend"),
-                source: wgpu::ShaderSource::Wgsl(module_source.as_str().into()),
-            });
-            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("ddp blend"),
-                bind_group_layouts: &[Some(&layout0), Some(stage.layout()), Some(&previous_layout)],
-                immediate_size: 0,
-            });
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("ddp blend"),
-                layout: Some(&layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("hw_vs"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("ddp_peel_fs"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: RANGE,
-                        blend: Some(wgpu::BlendState { color: max, alpha: max }),
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        })?;
-        let mut encoder = device.create_command_encoder(&Default::default());
-        {
-            let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("ddp blend pass"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &views[slot],
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color { r: -2.0, g: -2.0, b: 0.0, a: 0.0 }),
-                        store: wgpu::StoreOp::Store,
-                    },
+            scene_pipeline(
+                &device,
+                "ddp blend",
+                &module_source,
+                &[&layout0, stage.layout(), &previous_layout],
+                "ddp_peel_fs",
+                &[Some(wgpu::ColorTargetState {
+                    format: RANGE,
+                    blend: Some(wgpu::BlendState { color: max, alpha: max }),
+                    write_mask: wgpu::ColorWrites::ALL,
                 })],
-                depth_stencil_attachment: None,
-                timestamp_writes: ctx.render_timestamps(),
-                occlusion_query_set: Some(&occlusion),
-                multiview_mask: None,
-            });
-            rpass.set_pipeline(&pipeline);
-            rpass.set_bind_group(0, &group0, &[]);
-            rpass.set_bind_group(2, &previous_groups[slot], &[]);
-            rpass.begin_occlusion_query(0);
-            stage.draw(&mut rpass);
-            rpass.end_occlusion_query();
-        }
-        encoder.resolve_query_set(&occlusion, 0..1, &occlusion_buf, 0);
-        ctx.finish_timed("geometry", encoder)?;
-        ctx.passes += 1;
+                None,
+            )
+        })?;
+        let left = stage.occlusion_pass(
+            ctx,
+            &pipeline,
+            (&group0, &previous_groups[slot]),
+            PassTarget {
+                label: "ddp blend pass",
+                color: &views[slot],
+                clear: wgpu::Color { r: -2.0, g: -2.0, b: 0.0, a: 0.0 },
+                depth: None,
+            },
+            &occlusion,
+        )?;
         if pass > 0 {
             // the pair the previous pass found, handed over in this one
-            ctx.pixel_kernel(DDP_WGSL, "resolve_main", &buffers, pass, 0)?;
+            ctx.pixel_kernel(ddp::WGSL, "resolve_main", &buffers, pass, 0)?;
         }
-        // zero or not is all the occlusion query promises on every backend
-        let left = ctx.gpu.read_u32(&occlusion_buf)?;
-        if left.iter().all(|&s| s == 0) || pass >= limit {
+        if !left || pass >= limit {
             break;
         }
         pass += 1;

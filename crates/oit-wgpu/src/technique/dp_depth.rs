@@ -22,6 +22,7 @@ use oit_core::OitError;
 use crate::Drivers;
 use crate::ctx::{GpuCtx, TECHNIQUE_PRELUDE};
 use crate::gpu::COMMON_WGSL;
+use crate::hardware::{Occlusion, PassTarget, scene_pipeline};
 use crate::technique::bdp_blend::{check_texture_size, count_fragments, key, scene_stage};
 
 const WGSL: &str = include_str!("dp_depth.wgsl");
@@ -54,17 +55,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     let depth_views: Vec<wgpu::TextureView> =
         depths.iter().map(|t| t.create_view(&Default::default())).collect();
     let layer_view = layer.create_view(&Default::default());
-    let occlusion = device.create_query_set(&wgpu::QuerySetDescriptor {
-        label: Some("dp peel occlusion"),
-        ty: wgpu::QueryType::Occlusion,
-        count: 1,
-    });
-    let occlusion_buf = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("dp peel occlusion"),
-        size: 8,
-        usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
+    let occlusion = Occlusion::new(&device, "dp peel occlusion");
 
     let depth_entry = |binding: u32, visibility| wgpu::BindGroupLayoutEntry {
         binding,
@@ -139,85 +130,39 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         let (layout0, group0) = ctx.group0(&[], peels, 0);
         let pipeline =
             ctx.gpu.render_pipeline(key(&module_source, "dp depth peel"), "dp depth peel", || {
-                let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                    label: Some("dp depth peel"),
-                    source: wgpu::ShaderSource::Wgsl(module_source.as_str().into()),
-                });
-                let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                    label: Some("dp depth peel"),
-                    bind_group_layouts: &[Some(&layout0), Some(stage.layout()), Some(&previous_layout)],
-                    immediate_size: 0,
-                });
-                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some("dp depth peel"),
-                    layout: Some(&layout),
-                    vertex: wgpu::VertexState {
-                        module: &module,
-                        entry_point: Some("hw_vs"),
-                        compilation_options: Default::default(),
-                        buffers: &[],
-                    },
-                    primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-                    depth_stencil: Some(wgpu::DepthStencilState {
+                scene_pipeline(
+                    &device,
+                    "dp depth peel",
+                    &module_source,
+                    &[&layout0, stage.layout(), &previous_layout],
+                    "dp_peel_fs",
+                    &[Some(wgpu::ColorTargetState {
+                        format: LAYER,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                    Some(wgpu::DepthStencilState {
                         format: DEPTH,
                         depth_write_enabled: Some(true),
                         depth_compare: Some(wgpu::CompareFunction::LessEqual),
                         stencil: Default::default(),
                         bias: Default::default(),
                     }),
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &module,
-                        entry_point: Some("dp_peel_fs"),
-                        compilation_options: Default::default(),
-                        targets: &[Some(wgpu::ColorTargetState {
-                            format: LAYER,
-                            blend: None,
-                            write_mask: wgpu::ColorWrites::ALL,
-                        })],
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                })
+                )
             })?;
-        let mut encoder = device.create_command_encoder(&Default::default());
-        {
-            let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("dp depth peel"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &layer_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth_views[slot],
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: ctx.render_timestamps(),
-                occlusion_query_set: Some(&occlusion),
-                multiview_mask: None,
-            });
-            rpass.set_pipeline(&pipeline);
-            rpass.set_bind_group(0, &group0, &[]);
-            rpass.set_bind_group(2, &previous_groups[slot], &[]);
-            rpass.begin_occlusion_query(0);
-            stage.draw(&mut rpass);
-            rpass.end_occlusion_query();
-        }
-        encoder.resolve_query_set(&occlusion, 0..1, &occlusion_buf, 0);
-        ctx.finish_timed("geometry", encoder)?;
-        ctx.passes += 1;
-        // zero or not is all the occlusion query promises on every backend
-        let samples = ctx.gpu.read_u32(&occlusion_buf)?;
-        if samples.iter().all(|&s| s == 0) {
+        let drew = stage.occlusion_pass(
+            ctx,
+            &pipeline,
+            (&group0, &previous_groups[slot]),
+            PassTarget {
+                label: "dp depth peel",
+                color: &layer_view,
+                clear: wgpu::Color::TRANSPARENT,
+                depth: Some(&depth_views[slot]),
+            },
+            &occlusion,
+        )?;
+        if !drew {
             break;
         }
         let (layout0, group0) = ctx.group0(&[], peels, 0);
