@@ -22,7 +22,7 @@ const SIZE: u32 = 64;
 
 fn scenes() -> Vec<(String, Scene)> {
     let mut names: Vec<String> = ["planes:8", "spheres:4", "knot"].iter().map(|s| (*s).to_string()).collect();
-    let bunny = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/models/bunny.obj");
+    let bunny = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/models/bunny.obj");
     if bunny.is_file() {
         names.push(bunny.to_string_lossy().into_owned());
     } else {
