@@ -30,14 +30,48 @@ pub struct Capabilities {
     pub limits: Vec<(String, String)>,
 }
 
+/// A scene made ready for many frames on one backend: geometry uploaded and per-scene data built
+/// once; per-pixel storage kept between frames of the same size and reused; pipelines cached per
+/// device. Made by [`Backend::prepare`].
+///
+/// ```
+/// use oit_core::{Backend, Camera, Frame, OitError, Scene, Settings, View};
+///
+/// /// A turntable of `steps` frames: the scene is prepared once, each frame reuses its storage.
+/// fn turntable(backend: &dyn Backend, scene: &Scene, settings: &Settings, steps: u32) -> Result<Vec<Frame>, OitError> {
+///     let mut prepared = backend.prepare(scene)?;
+///     let aspect = settings.width as f32 / settings.height as f32;
+///     (0..steps)
+///         .map(|i| {
+///             let view = View { azimuth: 360.0 * i as f32 / steps as f32, ..View::default() };
+///             prepared.frame(&Camera::orbit_scene(scene, view, aspect)?, settings)
+///         })
+///         .collect()
+/// }
+/// ```
+pub trait Prepared {
+    /// Renders one frame of the prepared scene. Bad input is an error, never a panic.
+    fn frame(&mut self, camera: &Camera, settings: &Settings) -> Result<Frame, OitError>;
+    /// How many per-pixel storage allocations (buffers, arrays, resolve state) this prepared
+    /// scene has made so far: the backend's own counter. A frame that reuses what an earlier
+    /// frame of the same size made adds nothing.
+    fn storage_allocations(&self) -> u64;
+}
+
 /// A renderer of every technique in its capabilities.
 pub trait Backend {
     /// A short name (`cpu`, `wgpu`, `vulkan`).
     fn name(&self) -> &str;
     /// What it can run.
     fn capabilities(&self) -> Capabilities;
-    /// Renders one frame. Bad input is an error, never a panic.
-    fn render(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<Frame, OitError>;
+    /// Prepares `scene` for any number of frames ([`Prepared`]): checks it and builds what does
+    /// not depend on the camera once.
+    fn prepare<'s>(&'s self, scene: &'s Scene) -> Result<Box<dyn Prepared + 's>, OitError>;
+    /// Renders one frame: the one-shot convenience over [`Backend::prepare`] and
+    /// [`Prepared::frame`]. Bad input is an error, never a panic.
+    fn render(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
+        self.prepare(scene)?.frame(camera, settings)
+    }
     /// The raster path `render` takes with these settings (the one they name, else the
     /// backend's default for the technique).
     fn raster_path(&self, settings: &Settings) -> RasterPath {
@@ -76,6 +110,9 @@ impl Backend for OnPath {
     fn capabilities(&self) -> Capabilities {
         self.backend.capabilities()
     }
+    fn prepare<'s>(&'s self, scene: &'s Scene) -> Result<Box<dyn Prepared + 's>, OitError> {
+        Ok(Box::new(PreparedOnPath { inner: self.backend.prepare(scene)?, path: self.path }))
+    }
     fn render(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
         self.backend.render(scene, camera, &Settings { raster: Some(self.path), ..settings.clone() })
     }
@@ -84,6 +121,21 @@ impl Backend for OnPath {
     }
     fn plain_pass_ms(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<f64, OitError> {
         self.backend.plain_pass_ms(scene, camera, &Settings { raster: Some(self.path), ..settings.clone() })
+    }
+}
+
+/// [`OnPath`]'s prepared scene: every frame on its path.
+struct PreparedOnPath<'s> {
+    inner: Box<dyn Prepared + 's>,
+    path: RasterPath,
+}
+
+impl Prepared for PreparedOnPath<'_> {
+    fn frame(&mut self, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
+        self.inner.frame(camera, &Settings { raster: Some(self.path), ..settings.clone() })
+    }
+    fn storage_allocations(&self) -> u64 {
+        self.inner.storage_allocations()
     }
 }
 

@@ -5,6 +5,9 @@
 //! - [`Technique`], [`Settings`], [`Frame`]: the catalogue, what a frame is asked for and what comes
 //!   back;
 //! - [`Backend`] and the capture traits;
+//! - [`plan`]: each technique's refusals, sizing and stop rules, executed by every backend;
+//! - [`setup`]: triangle setup (clipping, fixed-point snapping, the upload format) every backend
+//!   shares;
 //! - [`rules`]: the one definition of bucket routing, histogram equalization and packing;
 //! - [`composite`]: the compositing equations; [`metrics`]: accuracy against the reference.
 //!
@@ -22,15 +25,18 @@ mod error;
 mod frame;
 pub mod metrics;
 mod obj;
+pub mod plan;
 mod procedural;
 pub mod rules;
 mod scene;
 mod settings;
+pub mod setup;
 mod technique;
 pub mod text;
 
 pub use backend::{
-    AtomicFragmentList, Backend, BucketArray, Capabilities, Compositor, DepthHistogram, OnPath, Sample,
+    AtomicFragmentList, Backend, BucketArray, Capabilities, Compositor, DepthHistogram, OnPath, Prepared,
+    Sample,
 };
 pub use camera::{Camera, View};
 pub use error::OitError;

@@ -24,6 +24,19 @@ pub enum Shading {
     Normal,
 }
 
+impl Shading {
+    /// The code GPU shaders switch on (`shade` in oit-wgpu's `common.wgsl`): 0 headlight, 1 flat,
+    /// 2 vertex, 3 normal.
+    pub fn code(self) -> u32 {
+        match self {
+            Shading::Headlight => 0,
+            Shading::Flat => 1,
+            Shading::Vertex => 2,
+            Shading::Normal => 3,
+        }
+    }
+}
+
 impl FromStr for Shading {
     type Err = OitError;
     fn from_str(s: &str) -> Result<Shading, OitError> {

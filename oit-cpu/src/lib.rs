@@ -16,6 +16,7 @@
 //! assert_eq!(frame.stats.geometry_passes, 5); // 4 layers + the pass that finds none left
 //! ```
 
+mod pool;
 pub mod raster;
 mod resolve;
 mod technique;
@@ -24,11 +25,13 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Instant;
 
 use oit_core::{
-    Backend, Camera, Capabilities, Frame, OitError, RasterPath, Scene, Settings, Technique, TechniqueKind,
+    Backend, Camera, Capabilities, Frame, OitError, Prepared, RasterPath, Scene, Settings, Technique,
+    TechniqueKind,
 };
 
 pub use technique::fabs::{INSERTION_SORT_MAX, sort_keys};
 
+use crate::pool::Pool;
 use crate::raster::{RasterMode, Rasterizer};
 use crate::technique::Ctx;
 
@@ -42,33 +45,69 @@ pub struct CpuBackend {
 }
 
 impl CpuBackend {
-    fn render_inner(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
+    /// The rayon pool of `threads`, made once per prepared scene (none: rayon's global pool).
+    fn thread_pool(&self) -> Result<Option<rayon::ThreadPool>, OitError> {
+        self.threads
+            .map(|n| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .build()
+                    .map_err(|e| OitError::Device(format!("cannot start {n} rayon threads: {e}")))
+            })
+            .transpose()
+    }
+}
+
+/// A scene prepared on the CPU backend: checked once, with its thread pool and the per-pixel
+/// storage of earlier frames kept for the next ones.
+pub struct CpuPrepared<'s> {
+    backend: &'s CpuBackend,
+    scene: &'s Scene,
+    threads: Option<rayon::ThreadPool>,
+    pool: Pool,
+}
+
+impl CpuPrepared<'_> {
+    fn frame_inner(&self, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
         settings.validate()?;
-        scene.validate()?;
         if !(camera.view_proj().is_finite()) {
             return Err(OitError::InvalidSettings("camera matrices are not finite".into()));
         }
+        let plan = oit_core::plan::Plan::new("cpu", self.scene, settings)?;
         let start = Instant::now();
-        let mut raster = Rasterizer::new(scene, camera, settings);
-        if let Some(mode) = self.mode {
+        let mut raster = Rasterizer::new(self.scene, camera, settings);
+        if let Some(mode) = self.backend.mode {
             raster = raster.with_mode(mode);
         }
-        let mut ctx = Ctx::new(scene, camera, settings, &raster);
+        let mut ctx = Ctx::new(self.scene, camera, settings, &raster, &self.pool, plan);
         let mut frame = match settings.technique {
             Technique::Reference => technique::reference::render(&mut ctx),
             Technique::Dp => technique::dp::render(&mut ctx),
             Technique::Ddp => technique::ddp::render(&mut ctx),
             Technique::WeightedAverage => technique::weighted::render(&mut ctx, true),
             Technique::WeightedSum => technique::weighted::render(&mut ctx, false),
-            Technique::Bdp { passes } => technique::bdp::render(&mut ctx, passes),
+            Technique::Bdp { .. } => technique::bdp::render(&mut ctx),
             Technique::Adp => technique::adp::render(&mut ctx),
-            Technique::Mdts { k } => technique::mdts::render32(&mut ctx, k),
-            Technique::Mdts64 { k } => technique::mdts::render64(&mut ctx, k),
-            Technique::Fabs { k } => technique::fabs::render(&mut ctx, k),
+            Technique::Mdts { .. } => technique::mdts::render32(&mut ctx),
+            Technique::Mdts64 { .. } => technique::mdts::render64(&mut ctx),
+            Technique::Fabs { .. } => technique::fabs::render(&mut ctx),
             Technique::Mlp { m } => technique::mlp::render(&mut ctx, m),
         }?;
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(frame)
+    }
+}
+
+impl Prepared for CpuPrepared<'_> {
+    fn frame(&mut self, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
+        match &self.threads {
+            None => self.frame_inner(camera, settings),
+            Some(pool) => pool.install(|| self.frame_inner(camera, settings)),
+        }
+    }
+
+    fn storage_allocations(&self) -> u64 {
+        self.pool.allocations()
     }
 }
 
@@ -86,15 +125,14 @@ impl Backend for CpuBackend {
         }
     }
 
-    fn render(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
-        match self.threads {
-            None => self.render_inner(scene, camera, settings),
-            Some(n) => rayon::ThreadPoolBuilder::new()
-                .num_threads(n)
-                .build()
-                .map_err(|e| OitError::Device(format!("cannot start {n} rayon threads: {e}")))?
-                .install(|| self.render_inner(scene, camera, settings)),
-        }
+    fn prepare<'s>(&'s self, scene: &'s Scene) -> Result<Box<dyn Prepared + 's>, OitError> {
+        scene.validate()?;
+        Ok(Box::new(CpuPrepared {
+            backend: self,
+            scene,
+            threads: self.thread_pool()?,
+            pool: Pool::default(),
+        }))
     }
 
     /// Wall time of one [`Rasterizer::for_each_fragment`] pass that adds 1 to an atomic per-pixel

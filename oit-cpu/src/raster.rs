@@ -1,74 +1,35 @@
-//! The software rasterizer: a scene, seen by a camera, turned into fragments.
+//! The software rasterizer's traversal: the triangles oit-core's [`TriangleSetup`] made, turned
+//! into fragments.
 //!
 //! Contract:
-//! - [`Rasterizer::new`] does the per-frame setup once (vertex transform, clipping, snapping);
-//!   [`Rasterizer::for_each_fragment`] is then one geometry pass, run as often as a technique needs,
-//!   calling its closure exactly once per covered (pixel, triangle) pair, from several threads.
+//! - [`Rasterizer::new`] does the per-frame setup once ([`TriangleSetup::new`]: vertex transform,
+//!   clipping, snapping; the rules are oit-core's, shared with the GPU backends);
+//!   [`Rasterizer::for_each_fragment`] is then one geometry pass, run as often as a technique
+//!   needs, calling its closure exactly once per covered (pixel, triangle) pair, from several
+//!   threads.
 //! - Every [`Fragment`] depends only on its triangle and its pixel, so the set of fragments is the
 //!   same whatever the [`RasterMode`] and the number of rayon threads; only the order of the calls
 //!   varies.
-//! - The rules are Vulkan's, written so the compute rasterizer of the GPU backends can copy them
-//!   line for line:
-//!   - clipping in homogeneous space against near (`z ≥ 0`), far (`z ≤ w`) and a guard band
-//!     (`|x|, |y| ≤ GUARD_BAND·w`) that keeps the fixed-point coordinates in range; a clipped
-//!     polygon is fan-triangulated and every piece keeps the original primitive id;
-//!   - viewport `x = (ndc.x·0.5 + 0.5)·width`, `y = (1 − (ndc.y·0.5 + 0.5))·height` (row 0 at the
-//!     top, as in wgpu), snapped to [`SUBPIXEL_BITS`] fractional bits by `floor(v·256 + 0.5)`;
-//!   - coverage at pixel centres by 64-bit integer edge functions with the top-left fill rule, so
-//!     triangles sharing an edge cover each pixel on it exactly once; no back-face culling;
-//!     zero-area triangles cover nothing;
-//!   - depth: NDC z interpolated linearly in screen space with barycentrics from the edge functions,
-//!     clamped to [0, 1]; normal and vertex colour perspective-correct (barycentrics weighted by
-//!     1/w); colour from [`Shading::shade`].
 //!
-//! How: setup keeps the triangles that survive clipping and touch the viewport, in primitive order,
-//! with their pixel bounding boxes. [`RasterMode::Scatter`] runs them in parallel chunks, each
-//! walking its box; [`RasterMode::Tiled`] bins them into [`TILE_SIZE`]-pixel tiles once and runs
-//! the tiles in parallel, each tile its triangles in primitive order. A walk visits, row by row,
-//! the exact span of covered pixels, found by integer division of the edge functions rather than
-//! by testing every pixel of the box.
+//! How: [`RasterMode::Scatter`] runs the set-up triangles in parallel chunks, each walking its
+//! box; [`RasterMode::Tiled`] bins them into [`TILE_SIZE`]-pixel tiles once and runs the tiles in
+//! parallel, each tile its triangles in primitive order. A walk visits, row by row, the exact
+//! span of covered pixels ([`oit_core::setup::covers`]), found by integer division of the edge
+//! functions rather than by testing every pixel of the box.
 
 use std::sync::OnceLock;
 
-use glam::{Mat3, Mat4, Vec3, Vec4};
-use oit_core::{Aabb, Camera, MAX_SIZE, Scene, Settings, Shading};
+use glam::Vec3;
+use oit_core::setup::{HALF_PIXEL, SUBPIXEL, Triangle, TriangleSetup, edge};
+use oit_core::{Camera, Scene, Settings, Shading};
 use rayon::prelude::*;
 
-/// Fractional bits of the snapped screen coordinates (Vulkan's minimum, and what GPUs use).
-pub const SUBPIXEL_BITS: u32 = 8;
-/// Guard band, in units of w: geometry beyond `|x|, |y| = GUARD_BAND·w` is clipped. At
-/// [`MAX_SIZE`] pixels a side this keeps snapped coordinates within ±2^28, so edge functions (a
-/// difference of products of coordinate differences) stay below 2^60 in an `i64`.
-pub const GUARD_BAND: f32 = 64.0;
+pub use oit_core::setup::{Fragment, GUARD_BAND, SUBPIXEL_BITS, TRIANGLE_WORDS};
+
 /// Side of a screen tile of [`RasterMode::Tiled`], in pixels.
 pub const TILE_SIZE: u32 = 32;
-/// 32-bit words per triangle in [`Rasterizer::triangle_words`].
-pub const TRIANGLE_WORDS: usize = 44;
-
-const SUBPIXEL: i64 = 1 << SUBPIXEL_BITS;
-const HALF_PIXEL: i64 = SUBPIXEL / 2;
-/// Snapped coordinates beyond this are rejected (never reached within the guard band; a guard
-/// against overflow should the float math go astray).
-const COORD_LIMIT: f32 = (1u32 << 29) as f32;
 /// Triangles per task of [`RasterMode::Scatter`].
 const SCATTER_CHUNK: usize = 64;
-/// Triangles per task of the setup.
-const SETUP_CHUNK: usize = 1024;
-
-/// One covered (pixel, triangle) pair.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Fragment {
-    /// `y·width + x`, row `y = 0` at the top.
-    pub pixel: u32,
-    /// NDC z in [0, 1].
-    pub depth: f32,
-    /// Primitive id: `scene.primitive_bases().0[instance] + triangle index`.
-    pub prim: u32,
-    /// Shaded colour, straight-alpha linear RGBA.
-    pub color: Vec4,
-    /// Interpolated world-space normal, normalized (zero where the mesh has none).
-    pub normal: Vec3,
-}
 
 /// How a geometry pass spreads its work over threads. Both give the same fragments.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -100,32 +61,6 @@ pub enum RasterMode {
 /// Re-measure on a many-core host before changing this: that is where Tiled could win.
 pub const DEFAULT_MODE: RasterMode = RasterMode::Scatter;
 
-/// A triangle after setup: snapped screen coordinates (positive orientation), what its fragments
-/// interpolate, and the pixels it may cover.
-#[derive(Clone, Copy, Debug)]
-struct Triangle {
-    /// Snapped x, in 1/256 pixel.
-    x: [i32; 3],
-    /// Snapped y, in 1/256 pixel.
-    y: [i32; 3],
-    /// NDC z of each vertex.
-    z: [f32; 3],
-    /// 1/w of each vertex.
-    inv_w: [f32; 3],
-    /// World normal of each vertex.
-    normal: [Vec3; 3],
-    /// Vertex colour of each vertex (meaningful when `has_color`).
-    color: [Vec3; 3],
-    /// 1 / (twice the area in 1/256² pixel units), for the barycentrics.
-    inv_area: f32,
-    /// Material colour (alpha override applied).
-    base: Vec4,
-    has_color: bool,
-    prim: u32,
-    /// Inclusive pixel box clamped to the viewport: x0, y0, x1, y1.
-    bbox: [u32; 4],
-}
-
 /// The tiles' triangle lists, compressed: tile `t` holds `tris[start[t]..start[t + 1]]`.
 struct Bins {
     tiles_x: u32,
@@ -135,341 +70,34 @@ struct Bins {
 
 /// The triangles of one frame, ready for any number of geometry passes.
 pub struct Rasterizer {
-    triangles: Vec<Triangle>,
-    width: u32,
-    height: u32,
-    shading: Shading,
-    forward: Vec3,
+    setup: TriangleSetup,
     mode: RasterMode,
     bins: OnceLock<Bins>,
     fragments: OnceLock<u64>,
 }
 
-/// A vertex on its way through clipping: clip-space position and the attributes, which are linear
-/// in clip space (that is what makes them perspective-correct after the divide).
-#[derive(Clone, Copy, Debug, Default)]
-struct ClipVertex {
-    pos: Vec4,
-    normal: Vec3,
-    color: Vec3,
-}
-
-impl ClipVertex {
-    fn toward(self, other: ClipVertex, t: f32) -> ClipVertex {
-        ClipVertex {
-            pos: self.pos + (other.pos - self.pos) * t,
-            normal: self.normal + (other.normal - self.normal) * t,
-            color: self.color + (other.color - self.color) * t,
-        }
-    }
-}
-
-const CLIP_PLANES: usize = 6;
-/// Each plane adds at most one vertex to a convex polygon.
-const MAX_POLYGON: usize = 3 + CLIP_PLANES;
-
-/// Signed distance of `p` to clip plane `plane` (inside when ≥ 0): near, far, then the guard band.
-fn plane_distance(p: Vec4, plane: usize) -> f32 {
-    match plane {
-        0 => p.z,
-        1 => p.w - p.z,
-        2 => GUARD_BAND * p.w - p.x,
-        3 => GUARD_BAND * p.w + p.x,
-        4 => GUARD_BAND * p.w - p.y,
-        _ => GUARD_BAND * p.w + p.y,
-    }
-}
-
-/// A convex polygon of at most [`MAX_POLYGON`] vertices.
-#[derive(Clone, Copy)]
-struct Polygon {
-    v: [ClipVertex; MAX_POLYGON],
-    n: usize,
-}
-
-impl Polygon {
-    fn push(&mut self, v: ClipVertex) {
-        if self.n < MAX_POLYGON {
-            self.v[self.n] = v;
-            self.n += 1;
-        }
-    }
-}
-
-/// Sutherland–Hodgman against the planes in `planes` (a bit mask).
-fn clip(tri: [ClipVertex; 3], planes: u32) -> Polygon {
-    let mut poly = Polygon { v: [ClipVertex::default(); MAX_POLYGON], n: 3 };
-    poly.v[..3].copy_from_slice(&tri);
-    for plane in 0..CLIP_PLANES {
-        if planes & (1 << plane) == 0 {
-            continue;
-        }
-        let mut out = Polygon { v: [ClipVertex::default(); MAX_POLYGON], n: 0 };
-        for i in 0..poly.n {
-            let a = poly.v[i];
-            let b = poly.v[(i + 1) % poly.n];
-            let (da, db) = (plane_distance(a.pos, plane), plane_distance(b.pos, plane));
-            if da >= 0.0 {
-                out.push(a);
-            }
-            if (da >= 0.0) != (db >= 0.0) {
-                // Cut from the inside end, so an edge shared by two triangles is cut at the same
-                // point whichever way round each walks it (no crack at the near plane).
-                let (inside, outside, di, dout) = if da >= 0.0 { (a, b, da, db) } else { (b, a, db, da) };
-                out.push(inside.toward(outside, di / (di - dout)));
-            }
-        }
-        poly = out;
-        if poly.n < 3 {
-            return poly;
-        }
-    }
-    poly
-}
-
-/// A vertex in screen space.
-#[derive(Clone, Copy)]
-struct Projected {
-    x: i32,
-    y: i32,
-    z: f32,
-    inv_w: f32,
-}
-
-/// What setup needs besides the geometry.
-struct Setup {
-    width: u32,
-    height: u32,
-}
-
-impl Setup {
-    /// Perspective divide, viewport, snap. `None` for a point that cannot be placed.
-    fn project(&self, p: Vec4) -> Option<Projected> {
-        if p.w.is_nan() || p.w <= 0.0 {
-            return None;
-        }
-        let inv_w = 1.0 / p.w;
-        let (nx, ny, nz) = (p.x * inv_w, p.y * inv_w, p.z * inv_w);
-        let fx = (nx * 0.5 + 0.5) * self.width as f32;
-        let fy = (1.0 - (ny * 0.5 + 0.5)) * self.height as f32;
-        // Round half up, spelled out: `f32::round` rounds half away from zero and WGSL's `round`
-        // half to even; this form is the same everywhere.
-        let sx = (fx * SUBPIXEL as f32 + 0.5).floor();
-        let sy = (fy * SUBPIXEL as f32 + 0.5).floor();
-        let in_range = sx.abs() <= COORD_LIMIT && sy.abs() <= COORD_LIMIT;
-        if !(in_range && nz.is_finite() && inv_w.is_finite()) {
-            return None;
-        }
-        Some(Projected { x: sx as i32, y: sy as i32, z: nz, inv_w })
-    }
-
-    /// Clips one triangle and appends the pieces that touch the viewport.
-    fn triangle(&self, out: &mut Vec<Triangle>, v: [ClipVertex; 3], base: Vec4, has_color: bool, prim: u32) {
-        if v.iter().any(|v| !v.pos.is_finite()) {
-            return;
-        }
-        let mut outside_any = 0u32;
-        for plane in 0..CLIP_PLANES {
-            let d = v.map(|v| plane_distance(v.pos, plane));
-            if d.iter().all(|&d| d < 0.0) {
-                return;
-            }
-            if d.iter().any(|&d| d < 0.0) {
-                outside_any |= 1 << plane;
-            }
-        }
-        if outside_any == 0 {
-            self.piece(out, v, base, has_color, prim);
-            return;
-        }
-        let poly = clip(v, outside_any);
-        for i in 1..poly.n.saturating_sub(1) {
-            self.piece(out, [poly.v[0], poly.v[i], poly.v[i + 1]], base, has_color, prim);
-        }
-    }
-
-    /// Projects and snaps one (clipped) triangle; keeps it if it has area and touches the viewport.
-    fn piece(&self, out: &mut Vec<Triangle>, mut v: [ClipVertex; 3], base: Vec4, has_color: bool, prim: u32) {
-        let (Some(p0), Some(p1), Some(p2)) =
-            (self.project(v[0].pos), self.project(v[1].pos), self.project(v[2].pos))
-        else {
-            return;
-        };
-        let mut p = [p0, p1, p2];
-        let (x0, y0) = (i64::from(p[0].x), i64::from(p[0].y));
-        let area = (i64::from(p[1].x) - x0) * (i64::from(p[2].y) - y0)
-            - (i64::from(p[1].y) - y0) * (i64::from(p[2].x) - x0);
-        if area == 0 {
-            return;
-        }
-        // No culling: a clockwise triangle is turned round so every edge function is positive
-        // inside, which is what the fill rule below assumes.
-        if area < 0 {
-            p.swap(1, 2);
-            v.swap(1, 2);
-        }
-        let area = area.abs();
-        let pixel_range = |lo: i32, hi: i32, size: u32| -> Option<(u32, u32)> {
-            // Pixel k's centre is at 256k + 128: the first centre at or after `lo`, the last at or
-            // before `hi`.
-            let first = (i64::from(lo) - HALF_PIXEL + SUBPIXEL - 1).div_euclid(SUBPIXEL).max(0);
-            let last = (i64::from(hi) - HALF_PIXEL).div_euclid(SUBPIXEL).min(i64::from(size) - 1);
-            (first <= last).then_some((first as u32, last as u32))
-        };
-        let xs = p.map(|p| p.x);
-        let ys = p.map(|p| p.y);
-        let (Some((bx0, bx1)), Some((by0, by1))) = (
-            pixel_range(
-                xs.iter().copied().min().unwrap_or(0),
-                xs.iter().copied().max().unwrap_or(-1),
-                self.width,
-            ),
-            pixel_range(
-                ys.iter().copied().min().unwrap_or(0),
-                ys.iter().copied().max().unwrap_or(-1),
-                self.height,
-            ),
-        ) else {
-            return;
-        };
-        out.push(Triangle {
-            x: xs,
-            y: ys,
-            z: p.map(|p| p.z),
-            inv_w: p.map(|p| p.inv_w),
-            normal: v.map(|v| v.normal),
-            color: v.map(|v| v.color),
-            inv_area: 1.0 / area as f32,
-            base,
-            has_color,
-            prim,
-            bbox: [bx0, by0, bx1, by1],
-        });
-    }
-
-    /// Sets up the triangles of one instance, in order, in parallel.
-    fn instance(&self, clip_pos: &[Vec4], mesh: MeshView<'_>, base: Vec4, prim_base: u32) -> Vec<Triangle> {
-        let chunks: Vec<Vec<Triangle>> = mesh
-            .indices
-            .par_chunks(SETUP_CHUNK)
-            .enumerate()
-            .map(|(c, chunk)| {
-                let mut out = Vec::with_capacity(chunk.len());
-                for (j, tri) in chunk.iter().enumerate() {
-                    let t = c * SETUP_CHUNK + j;
-                    let vertex = |i: u32| -> Option<ClipVertex> {
-                        let i = i as usize;
-                        Some(ClipVertex {
-                            pos: *clip_pos.get(i)?,
-                            normal: mesh.normals.get(i).copied().unwrap_or(Vec3::ZERO),
-                            color: mesh.colors.and_then(|c| c.get(i).copied()).unwrap_or(Vec3::ZERO),
-                        })
-                    };
-                    let (Some(a), Some(b), Some(c)) = (vertex(tri[0]), vertex(tri[1]), vertex(tri[2])) else {
-                        continue;
-                    };
-                    let prim = prim_base.saturating_add(u32::try_from(t).unwrap_or(u32::MAX));
-                    self.triangle(&mut out, [a, b, c], base, mesh.colors.is_some(), prim);
-                }
-                out
-            })
-            .collect();
-        chunks.concat()
-    }
-}
-
-/// The parts of a mesh setup reads, with normals already in world space.
-#[derive(Clone, Copy)]
-struct MeshView<'a> {
-    normals: &'a [Vec3],
-    colors: Option<&'a [Vec3]>,
-    indices: &'a [[u32; 3]],
-}
-
-/// The normal matrix of `transform`: its inverse transpose (the matrix itself when singular).
-fn normal_matrix(transform: &Mat4) -> Mat3 {
-    let m = Mat3::from_mat4(*transform);
-    let inv = m.inverse();
-    if inv.is_finite() { inv.transpose() } else { m }
-}
-
 impl Rasterizer {
-    fn empty(camera: &Camera, settings: &Settings) -> Rasterizer {
-        Rasterizer {
-            triangles: Vec::new(),
-            // Settings::validate rejects larger sizes; clamping keeps the fixed point in range
-            // for callers that skipped it.
-            width: settings.width.min(MAX_SIZE),
-            height: settings.height.min(MAX_SIZE),
-            shading: settings.shading,
-            forward: camera.forward,
-            mode: DEFAULT_MODE,
-            bins: OnceLock::new(),
-            fragments: OnceLock::new(),
-        }
+    /// A rasterizer over triangles already set up (a persistent renderer keeps its setup).
+    pub fn from_setup(setup: TriangleSetup) -> Rasterizer {
+        let r = Rasterizer { setup, mode: DEFAULT_MODE, bins: OnceLock::new(), fragments: OnceLock::new() };
+        r.warm_bins();
+        r
     }
 
-    fn setup(&self) -> Setup {
-        Setup { width: self.width, height: self.height }
-    }
-
-    /// Sets up every instance's triangles: clip space (`view_proj · transform · p`), clipping,
-    /// snapping. Triangle `t` of instance `i` gets primitive id `scene.primitive_bases().0[i] + t`,
-    /// every piece of it after clipping the same. Instances or triangles that reference missing
-    /// data are skipped (Scene::validate rejects them earlier).
+    /// Sets up every instance's triangles ([`TriangleSetup::new`]).
     pub fn new(scene: &Scene, camera: &Camera, settings: &Settings) -> Rasterizer {
-        let mut r = Rasterizer::empty(camera, settings);
-        let setup = r.setup();
-        let view_proj = camera.view_proj();
-        let mut prim_base = 0u32;
-        for inst in &scene.instances {
-            let Some(object) = scene.objects.get(inst.object) else {
-                continue;
-            };
-            let Some(mesh) = scene.meshes.get(object.mesh) else {
-                continue;
-            };
-            let base_id = prim_base;
-            prim_base = prim_base.saturating_add(u32::try_from(mesh.indices.len()).unwrap_or(u32::MAX));
-            let mvp = view_proj * inst.transform;
-            let clip_pos: Vec<Vec4> = mesh.positions.par_iter().map(|p| mvp * p.extend(1.0)).collect();
-            let nm = normal_matrix(&inst.transform);
-            let normals: Vec<Vec3> = mesh.normals.par_iter().map(|n| nm * *n).collect();
-            let view = MeshView { normals: &normals, colors: mesh.colors.as_deref(), indices: &mesh.indices };
-            let base = settings.material_color(object.color);
-            r.triangles.extend(setup.instance(&clip_pos, view, base, base_id));
-        }
-        r.warm_bins();
-        r
+        Rasterizer::from_setup(TriangleSetup::new(scene, camera, settings))
     }
 
-    /// The 12 triangles of each instance's world bounding box (`Aabb::TRIANGLES` over
-    /// `Aabb::corners`), triangle `t` of instance `i` with primitive id `12·i + t`. For the bounds
-    /// passes of the bucket techniques; colours and normals are not meaningful.
+    /// The triangles of each instance's bounding box ([`TriangleSetup::bounding_boxes`]).
     pub fn bounding_boxes(scene: &Scene, camera: &Camera, settings: &Settings) -> Rasterizer {
-        let mut r = Rasterizer::empty(camera, settings);
-        let setup = r.setup();
-        let view_proj = camera.view_proj();
-        for (i, inst) in scene.instances.iter().enumerate() {
-            let Some(object) = scene.objects.get(inst.object) else {
-                continue;
-            };
-            let Some(mesh) = scene.meshes.get(object.mesh) else {
-                continue;
-            };
-            let bounds: Aabb = mesh.bounds().transformed(&inst.transform);
-            let corners = bounds.corners();
-            let clip_pos = corners.map(|c| view_proj * c.extend(1.0));
-            let normals = corners.map(|c| (c - bounds.center()).normalize_or_zero());
-            let view = MeshView { normals: &normals, colors: None, indices: &Aabb::TRIANGLES };
-            let base_id = u32::try_from(i).unwrap_or(u32::MAX).saturating_mul(12);
-            let base = settings.material_color(object.color);
-            r.triangles.extend(setup.instance(&clip_pos, view, base, base_id));
-        }
-        r.warm_bins();
-        r
+        Rasterizer::from_setup(TriangleSetup::bounding_boxes(scene, camera, settings))
     }
 
+    /// The set-up triangles.
+    pub fn setup(&self) -> &TriangleSetup {
+        &self.setup
+    }
     /// The same triangles, passes run in `mode`.
     pub fn with_mode(mut self, mode: RasterMode) -> Self {
         self.mode = mode;
@@ -491,15 +119,15 @@ impl Rasterizer {
 
     fn bins(&self) -> &Bins {
         self.bins.get_or_init(|| {
-            let tiles_x = self.width.div_ceil(TILE_SIZE);
-            let tiles_y = self.height.div_ceil(TILE_SIZE);
+            let tiles_x = self.setup.width.div_ceil(TILE_SIZE);
+            let tiles_y = self.setup.height.div_ceil(TILE_SIZE);
             let tiles = (tiles_x * tiles_y) as usize;
             let tile_range = |t: &Triangle| {
                 let [x0, y0, x1, y1] = t.bbox;
                 (x0 / TILE_SIZE..=x1 / TILE_SIZE, y0 / TILE_SIZE..=y1 / TILE_SIZE)
             };
             let mut count = vec![0u32; tiles + 1];
-            for t in &self.triangles {
+            for t in &self.setup.triangles {
                 let (xr, yr) = tile_range(t);
                 for ty in yr {
                     for tx in xr.clone() {
@@ -514,7 +142,7 @@ impl Rasterizer {
             let mut fill = start.clone();
             let mut tris = vec![0u32; start[tiles] as usize];
             // Triangles are stored in primitive order, so each tile's list is too.
-            for (i, t) in self.triangles.iter().enumerate() {
+            for (i, t) in self.setup.triangles.iter().enumerate() {
                 let (xr, yr) = tile_range(t);
                 for ty in yr {
                     for tx in xr.clone() {
@@ -532,7 +160,7 @@ impl Rasterizer {
     /// rayon's threads, in no particular order (in [`RasterMode::Tiled`] a pixel's fragments come
     /// in primitive order from one thread). Returns the number of fragments, i.e. of calls.
     pub fn for_each_fragment<F: Fn(&Fragment) + Sync>(&self, f: F) -> u64 {
-        let n = self.for_each_covered(|t, x, y, e| f(&self.fragment(t, x, y, e)));
+        let n = self.for_each_covered(|t, x, y, e| f(&self.setup.fragment(t, x, y, e)));
         self.fragments.get_or_init(|| n);
         n
     }
@@ -542,6 +170,7 @@ impl Rasterizer {
     fn for_each_covered<F: Fn(&Triangle, u32, u32, [i64; 3]) + Sync>(&self, f: F) -> u64 {
         match self.mode {
             RasterMode::Scatter => self
+                .setup
                 .triangles
                 .par_chunks(SCATTER_CHUNK)
                 .map(|chunk| {
@@ -564,11 +193,11 @@ impl Rasterizer {
                         let tx = tile as u32 % bins.tiles_x;
                         let ty = tile as u32 / bins.tiles_x;
                         let (x0, y0) = (tx * TILE_SIZE, ty * TILE_SIZE);
-                        let x1 = (x0 + TILE_SIZE - 1).min(self.width - 1);
-                        let y1 = (y0 + TILE_SIZE - 1).min(self.height - 1);
+                        let x1 = (x0 + TILE_SIZE - 1).min(self.setup.width - 1);
+                        let y1 = (y0 + TILE_SIZE - 1).min(self.setup.height - 1);
                         let mut n = 0u64;
                         for &i in &bins.tris[bins.start[tile] as usize..bins.start[tile + 1] as usize] {
-                            let t = &self.triangles[i as usize];
+                            let t = &self.setup.triangles[i as usize];
                             let [bx0, by0, bx1, by1] = t.bbox;
                             let rect = [bx0.max(x0), by0.max(y0), bx1.min(x1), by1.min(y1)];
                             walk(t, rect, |x, y, e| {
@@ -583,28 +212,6 @@ impl Rasterizer {
         }
     }
 
-    /// Interpolates and shades the fragment of `t` at pixel (x, y), whose edge functions are `e`.
-    /// The formula is fixed (no fused multiply-add), so a port gets the same bits.
-    fn fragment(&self, t: &Triangle, x: u32, y: u32, e: [i64; 3]) -> Fragment {
-        let b = e.map(|e| e as f32 * t.inv_area);
-        // Anchored at vertex 0, so a triangle of constant depth (a quad facing the camera, a plane
-        // at exactly d = 0 or 1) gives exactly that depth at every pixel: coplanar fragments of
-        // different triangles then tie exactly, as the rules for ties assume.
-        let depth = (t.z[0] + b[1] * (t.z[1] - t.z[0]) + b[2] * (t.z[2] - t.z[0])).clamp(0.0, 1.0);
-        let q = [b[0] * t.inv_w[0], b[1] * t.inv_w[1], b[2] * t.inv_w[2]];
-        let inv_q = 1.0 / (q[0] + q[1] + q[2]);
-        let p = q.map(|q| q * inv_q);
-        let normal = t.normal[0] * p[0] + t.normal[1] * p[1] + t.normal[2] * p[2];
-        let vertex_color = t.has_color.then(|| t.color[0] * p[0] + t.color[1] * p[1] + t.color[2] * p[2]);
-        Fragment {
-            pixel: y * self.width + x,
-            depth,
-            prim: t.prim,
-            color: self.shading.shade(t.base, normal, vertex_color, self.forward),
-            normal: normal.normalize_or_zero(),
-        }
-    }
-
     /// Fragments one pass generates (counted by a coverage-only pass unless a pass ran already).
     pub fn fragment_count(&self) -> u64 {
         *self.fragments.get_or_init(|| self.for_each_covered(|_, _, _, _| {}))
@@ -613,93 +220,43 @@ impl Rasterizer {
     /// Triangles after setup: the pieces of clipped triangles counted apiece, triangles that cover
     /// no part of the viewport or have no area not counted.
     pub fn triangle_count(&self) -> usize {
-        self.triangles.len()
+        self.setup.triangles.len()
     }
 
     /// Viewport width in pixels.
     pub fn width(&self) -> u32 {
-        self.width
+        self.setup.width
     }
 
     /// Viewport height in pixels.
     pub fn height(&self) -> u32 {
-        self.height
-    }
-
-    /// The set-up triangles as 32-bit words, [`TRIANGLE_WORDS`] per triangle, for a GPU rasterizer
-    /// that walks and interpolates them with the same rules (oit-wgpu's compute path), so both
-    /// produce the same fragments. Layout per triangle: x[3] (i32, 1/256 px), y[3] (i32), z[3]
-    /// (f32), inv_w[3] (f32), normal[3][3] (f32), color[3][3] (f32), inv_area (f32), base[4]
-    /// (f32), has_color (u32), prim (u32), bbox[4] (u32, inclusive x0 y0 x1 y1), 3 words of
-    /// padding.
-    pub fn triangle_words(&self) -> Vec<u32> {
-        let mut out = Vec::with_capacity(self.triangles.len() * TRIANGLE_WORDS);
-        for t in &self.triangles {
-            out.extend(t.x.map(|v| v as u32));
-            out.extend(t.y.map(|v| v as u32));
-            out.extend(t.z.map(f32::to_bits));
-            out.extend(t.inv_w.map(f32::to_bits));
-            for n in t.normal {
-                out.extend(n.to_array().map(f32::to_bits));
-            }
-            for c in t.color {
-                out.extend(c.to_array().map(f32::to_bits));
-            }
-            out.push(t.inv_area.to_bits());
-            out.extend(t.base.to_array().map(f32::to_bits));
-            out.push(u32::from(t.has_color));
-            out.push(t.prim);
-            out.extend(t.bbox);
-            out.extend([0; 3]);
-        }
-        out
-    }
-
-    /// The inclusive pixel boxes of the set-up triangles (x0, y0, x1, y1), in order.
-    pub fn triangle_boxes(&self) -> impl Iterator<Item = [u32; 4]> + '_ {
-        self.triangles.iter().map(|t| t.bbox)
+        self.setup.height
     }
 
     /// The shading the fragments get.
     pub fn shading(&self) -> Shading {
-        self.shading
+        self.setup.shading
     }
 
     /// The camera's viewing direction (headlight shading).
     pub fn forward(&self) -> Vec3 {
-        self.forward
+        self.setup.forward
+    }
+
+    /// The set-up triangles as 32-bit words ([`TriangleSetup::triangle_words`]).
+    pub fn triangle_words(&self) -> Vec<u32> {
+        self.setup.triangle_words()
+    }
+
+    /// The inclusive pixel boxes of the set-up triangles (x0, y0, x1, y1), in order.
+    pub fn triangle_boxes(&self) -> impl Iterator<Item = [u32; 4]> + '_ {
+        self.setup.triangle_boxes()
     }
 }
 
 /// Edge function `k` (the edge opposite vertex `k`, from vertex k+1 to k+2) at the sub-pixel point
 /// (px, py): twice the signed area of (a, b, p), positive inside; with `inside_above`, the value a
-/// covered pixel's edge function must exceed (−1 on a top or left edge, so 0 is covered; 0
-/// elsewhere).
-fn edge(t: &Triangle, k: usize, px: i64, py: i64) -> (i64, i64, i64, i64) {
-    let (a, b) = ((k + 1) % 3, (k + 2) % 3);
-    let (ax, ay) = (i64::from(t.x[a]), i64::from(t.y[a]));
-    let dx = i64::from(t.x[b]) - ax;
-    let dy = i64::from(t.y[b]) - ay;
-    let value = dx * (py - ay) - dy * (px - ax);
-    // y points down and the inside is on the positive side: a top edge runs +x, a left edge −y.
-    let top_left = dy < 0 || (dy == 0 && dx > 0);
-    let inside_above = if top_left { -1 } else { 0 };
-    // Per-pixel steps in x and y.
-    (value, -dy * SUBPIXEL, dx * SUBPIXEL, inside_above)
-}
 
-/// The rule in its plainest form: the edge functions of `t` at the centre of pixel (x, y) when
-/// the pixel is covered. [`walk`] visits exactly these pixels, faster.
-#[cfg(test)]
-fn covers(t: &Triangle, x: u32, y: u32) -> Option<[i64; 3]> {
-    let (px, py) = (i64::from(x) * SUBPIXEL + HALF_PIXEL, i64::from(y) * SUBPIXEL + HALF_PIXEL);
-    let e = [0, 1, 2].map(|k| edge(t, k, px, py));
-    e.iter().all(|&(v, _, _, above)| v > above).then(|| e.map(|e| e.0))
-}
-
-/// Visits the covered pixels of `t` inside the inclusive pixel rectangle `rect`, row by row, with
-/// the three edge functions at each pixel centre. Each row's covered span is found exactly by
-/// integer division: edge k is covered at column offset n when `e + step·n > inside_above`.
 fn walk(t: &Triangle, rect: [u32; 4], mut visit: impl FnMut(u32, u32, [i64; 3])) {
     let [x0, y0, x1, y1] = rect;
     if x0 > x1 || y0 > y1 {
@@ -743,6 +300,8 @@ mod tests {
 
     use glam::{Mat4, Vec3, Vec4};
     use oit_core::{Camera, Instance, Mesh, Object, Scene, Settings, Shading};
+
+    use oit_core::setup::covers;
 
     use super::*;
 
@@ -1099,7 +658,7 @@ mod tests {
         let scene = random_scene();
         let cam = Camera::look_at(Vec3::new(0.0, 0.0, 2.5), Vec3::ZERO, 70.0, 1.0, 0.3, 8.0);
         let r = Rasterizer::new(&scene, &cam, &settings(70, 70));
-        for t in &r.triangles {
+        for t in &r.setup().triangles {
             let mut walked = Vec::new();
             walk(t, [0, 0, 69, 69], |x, y, e| walked.push((x, y, e)));
             let mut expected = Vec::new();

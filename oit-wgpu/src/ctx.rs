@@ -3,9 +3,25 @@
 //! per-pixel kernels, GPU timestamps, and the final image — the GPU twin of oit-cpu's `Ctx`.
 
 use bytemuck::{Pod, Zeroable};
+use oit_core::plan::Plan;
 use oit_core::{Camera, Effect, Frame, Image, OitError, Scene, Settings, Stats};
 
 use crate::gpu::Gpu;
+use crate::pool::BufferPool;
+
+/// The buffers a frame took from a pool, given back when the frame's context goes.
+struct Lent<'a> {
+    pool: Option<&'a BufferPool>,
+    buffers: Vec<wgpu::Buffer>,
+}
+
+impl Drop for Lent<'_> {
+    fn drop(&mut self) {
+        if let Some(pool) = self.pool {
+            pool.give_back(self.buffers.drain(..));
+        }
+    }
+}
 
 /// WGSL every technique module starts with (after `COMMON_WGSL`): bindings 0 and 1 of group 0 and
 /// the resolve functions.
@@ -85,6 +101,8 @@ pub struct GpuCtx<'a> {
     pub camera: &'a Camera,
     /// The settings.
     pub settings: &'a Settings,
+    /// The frame's plan: refusals, sizing and stop rules, oit-core's.
+    pub plan: Plan,
     /// Pixels in the image.
     pub pixels: u32,
     /// Geometry passes so far.
@@ -102,16 +120,44 @@ pub struct GpuCtx<'a> {
     totals: wgpu::Buffer,
     gpu_ms: f64,
     pass_ms: Vec<(String, f64)>,
+    lent: Lent<'a>,
 }
 
 impl<'a> GpuCtx<'a> {
-    /// Sets up the frame: uniform and resolve state (initialized).
+    /// Sets up the frame: uniform and resolve state (initialized). Every buffer is new.
     pub fn new(
         gpu: &'a Gpu,
         scene: &'a Scene,
         camera: &'a Camera,
         settings: &'a Settings,
     ) -> Result<Self, OitError> {
+        GpuCtx::with_pool(gpu, scene, camera, settings, None)
+    }
+
+    /// A buffer from the pool (or new without one), given back when the frame ends.
+    fn make(&mut self, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+        let buffer = match self.lent.pool {
+            Some(pool) => pool.take(&self.gpu.device, label, size, usage),
+            None => self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage,
+                mapped_at_creation: false,
+            }),
+        };
+        self.lent.buffers.push(buffer.clone());
+        buffer
+    }
+
+    /// [`GpuCtx::new`] taking its buffers from `pool` (a prepared scene's), where there is one.
+    pub fn with_pool(
+        gpu: &'a Gpu,
+        scene: &'a Scene,
+        camera: &'a Camera,
+        settings: &'a Settings,
+        pool: Option<&'a BufferPool>,
+    ) -> Result<Self, OitError> {
+        let plan = Plan::new("wgpu", scene, settings)?;
         let pixels = settings.width * settings.height;
         let state_bytes = u64::from(pixels) * STATE_WORDS * 4;
         gpu.check_storage("the per-pixel resolve state", state_bytes)?;
@@ -138,49 +184,57 @@ impl<'a> GpuCtx<'a> {
             background: settings.background.extend(1.0).to_array(),
             lens: [camera.near, camera.far, sigma / radius, 0.0],
         };
-        let uniform_buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("frame uniform"),
-            size: std::mem::size_of::<FrameUniform>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let state = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("resolve state"),
-            size: state_bytes.max(4),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let mut lent = Lent { pool, buffers: Vec::new() };
+        let mut make = |label: &str, size: u64, usage: wgpu::BufferUsages| {
+            let buffer = match pool {
+                Some(pool) => pool.take(&gpu.device, label, size, usage),
+                None => gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size,
+                    usage,
+                    mapped_at_creation: false,
+                }),
+            };
+            lent.buffers.push(buffer.clone());
+            buffer
+        };
+        let uniform_buffer = make(
+            "frame uniform",
+            std::mem::size_of::<FrameUniform>() as u64,
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
+        // the resolve state is initialized by `init_main` below, pooled or not
+        let state = make(
+            "resolve state",
+            state_bytes.max(4),
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        );
         let timestamps = gpu.has_timestamps().then(|| {
             let set = gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("timestamps"),
                 ty: wgpu::QueryType::Timestamp,
                 count: 2,
             });
-            let resolve = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamps"),
-                size: 16,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
+            let resolve =
+                make("timestamps", 16, wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC);
             (set, resolve)
         });
-        let image = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("image"),
-            size: u64::from(pixels).max(1) * 4,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        let totals = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("totals"),
-            size: 8,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let image = make(
+            "image",
+            u64::from(pixels).max(1) * 4,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        );
+        let totals = make(
+            "totals",
+            8,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        );
         let mut ctx = GpuCtx {
             gpu,
             scene,
             camera,
             settings,
+            plan,
             pixels,
             passes: 0,
             fragments: None,
@@ -193,6 +247,7 @@ impl<'a> GpuCtx<'a> {
             totals,
             gpu_ms: 0.0,
             pass_ms: Vec::new(),
+            lent,
         };
         let (image, totals) = (ctx.image.clone(), ctx.totals.clone());
         ctx.kernel_over(FINISH_WGSL, "init_main", &[&image, &totals], u64::from(pixels), 0, 0, "init")?;
@@ -205,14 +260,17 @@ impl<'a> GpuCtx<'a> {
         let bytes = words.max(1) * 4;
         self.gpu.check_storage(label, bytes)?;
         self.storage_bytes += words * 4;
-        let buffer = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size: bytes,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        if let Init::Fill(v) = init {
-            self.fill(&buffer, v)?;
+        let pooled = self.lent.pool.is_some();
+        let buffer = self.make(
+            label,
+            bytes,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        );
+        match init {
+            Init::Fill(v) => self.fill(&buffer, v)?,
+            // a new buffer is zeroed; one from the pool holds the last frame's words
+            Init::Zero if pooled => self.fill(&buffer, 0)?,
+            Init::Zero => {}
         }
         Ok(buffer)
     }

@@ -11,8 +11,8 @@
 //! compute path) only pixels on triangle edges may differ; no culling, no depth test, wgpu's
 //! viewport (row 0 at the top, depth in [0, 1]).
 
-use glam::{Mat3, Mat4, Vec3, Vec4};
-use oit_core::{Aabb, Camera, OitError, RasterPath, Scene, Settings, Shading};
+use glam::{Vec3, Vec4};
+use oit_core::{Aabb, Camera, OitError, RasterPath, Scene, Settings};
 use wgpu::util::DeviceExt;
 
 use crate::ctx::{Driver, GpuCtx};
@@ -153,14 +153,6 @@ impl SceneStage {
     }
 }
 
-/// The normal matrix of `transform`: its inverse transpose (the matrix itself when singular), as
-/// oit-cpu's raster.
-fn normal_matrix(transform: &Mat4) -> Mat3 {
-    let m = Mat3::from_mat4(*transform);
-    let inv = m.inverse();
-    if inv.is_finite() { inv.transpose() } else { m }
-}
-
 impl HardwareRaster {
     /// Sets up the scene's triangles for the hardware rasterizer.
     pub fn new(gpu: &Gpu, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<Self, OitError> {
@@ -170,7 +162,7 @@ impl HardwareRaster {
         for inst in &scene.instances {
             let (object, mesh) = scene.instance_parts(inst);
             let mvp = view_proj * inst.transform;
-            let nm = normal_matrix(&inst.transform);
+            let nm = oit_core::setup::normal_matrix(&inst.transform);
             let base = settings.material_color(object.color).to_array();
             let first = vertices.len() as u32;
             let has_color = if mesh.colors.is_some() { 1.0 } else { 0.0 };
@@ -191,7 +183,7 @@ impl HardwareRaster {
 
     /// The 12 triangles of each instance's world bounding box (`Aabb::TRIANGLES` over the corners
     /// of `scene.instance_bounds`), triangle `t` of instance `i` primitive `12·i + t`, as oit-cpu's
-    /// `Rasterizer::bounding_boxes`: for the bounds passes of bdp and adp.
+    /// `TriangleSetup::bounding_boxes`: for the bounds passes of bdp and adp.
     pub fn boxes(gpu: &Gpu, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<Self, OitError> {
         let view_proj = camera.view_proj();
         let mut vertices = Vec::new();
@@ -234,12 +226,7 @@ impl HardwareRaster {
         };
         let vertex_buf = storage("clip-space vertices", bytemuck::cast_slice(vertices));
         let index_buf = storage("triangle indices", bytemuck::cast_slice(indices));
-        let shading = match settings.shading {
-            Shading::Headlight => 0u32,
-            Shading::Flat => 1,
-            Shading::Vertex => 2,
-            Shading::Normal => 3,
-        };
+        let shading = settings.shading.code();
         let f: Vec4 = camera.forward.extend(0.0);
         let uniform: [u32; 8] =
             [shading, 0, 0, 0, f.x.to_bits(), f.y.to_bits(), f.z.to_bits(), f.w.to_bits()];

@@ -11,6 +11,7 @@ mod ctx;
 pub mod embed;
 mod gpu;
 mod hardware;
+mod pool;
 mod raster;
 mod technique;
 
@@ -18,14 +19,15 @@ use std::sync::OnceLock;
 use std::time::Instant;
 
 use oit_core::{
-    Backend, Camera, Capabilities, Frame, HardwareCapture, OitError, RasterPath, Scene, Settings, Technique,
-    TechniqueKind,
+    Backend, Camera, Capabilities, Frame, HardwareCapture, OitError, Prepared, RasterPath, Scene, Settings,
+    Technique, TechniqueKind,
 };
 
 pub use crate::ctx::{Driver, FrameUniform, GpuCtx, Init, TECHNIQUE_PRELUDE};
 pub use crate::embed::{CaptureShader, GeometryPass, OitPass};
 pub use crate::gpu::{COMMON_WGSL, Gpu, adapters, required_features};
 pub use crate::hardware::HardwareRaster;
+pub use crate::pool::BufferPool;
 pub use crate::raster::ComputeRaster;
 
 /// The rasterizers of one frame: the scene's, and (made on demand) one for the instances'
@@ -54,7 +56,13 @@ impl WgpuBackend {
     /// The device, opened on first use.
     pub fn gpu(&self) -> Result<&Gpu, OitError> {
         self.gpu
-            .get_or_init(|| Gpu::new(self.adapter.as_deref()).map_err(|e| e.to_string()))
+            .get_or_init(|| {
+                Gpu::new(self.adapter.as_deref()).map_err(|e| match e {
+                    // keep the bare message: it is wrapped in `Device` again below
+                    OitError::Device(message) => message,
+                    other => other.to_string(),
+                })
+            })
             .as_ref()
             .map_err(|e| OitError::Device(e.clone()))
     }
@@ -100,38 +108,10 @@ impl Backend for WgpuBackend {
         }
     }
 
-    fn render(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
-        settings.validate()?;
+    fn prepare<'s>(&'s self, scene: &'s Scene) -> Result<Box<dyn Prepared + 's>, OitError> {
         scene.validate()?;
         let gpu = self.gpu()?;
-        let start = Instant::now();
-        let path = settings.raster.unwrap_or(WgpuBackend::default_path(settings.technique));
-        let drivers = match path {
-            RasterPath::Compute => Drivers {
-                scene: Box::new(ComputeRaster::new(gpu, scene, camera, settings, false)?),
-                boxes: Box::new(move || {
-                    Ok(Box::new(ComputeRaster::new(gpu, scene, camera, settings, true)?) as Box<dyn Driver>)
-                }),
-            },
-            RasterPath::Hardware => Drivers {
-                scene: Box::new(HardwareRaster::new(gpu, scene, camera, settings)?),
-                boxes: Box::new(move || {
-                    Ok(Box::new(HardwareRaster::boxes(gpu, scene, camera, settings)?) as Box<dyn Driver>)
-                }),
-            },
-            other => {
-                return Err(OitError::Unsupported {
-                    backend: "wgpu".into(),
-                    what: format!("the {other} raster path"),
-                });
-            }
-        };
-        let mut ctx = GpuCtx::new(gpu, scene, camera, settings)?;
-        let layers = run_technique(&mut ctx, &drivers)?;
-        let mut frame = ctx.finish(path)?;
-        frame.layers = layers;
-        frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
-        Ok(frame)
+        Ok(Box::new(WgpuPrepared { gpu, scene, pool: BufferPool::default() }))
     }
 
     /// One counting geometry pass (`technique::count`'s) on the settings' raster path, timed with
@@ -168,6 +148,55 @@ impl Backend for WgpuBackend {
     }
 }
 
+/// A scene prepared on the wgpu backend: checked once; the per-pixel storage, resolve state and
+/// image buffers of one frame are kept and reused by the next of the same size; pipelines are
+/// cached on the device. (The scene's vertices are still transformed and uploaded per frame, on
+/// both raster paths: that moves to the GPU with GPU-resident setup.)
+pub struct WgpuPrepared<'s> {
+    gpu: &'s Gpu,
+    scene: &'s Scene,
+    pool: BufferPool,
+}
+
+impl Prepared for WgpuPrepared<'_> {
+    fn frame(&mut self, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
+        settings.validate()?;
+        let (gpu, scene) = (self.gpu, self.scene);
+        let start = Instant::now();
+        let path = settings.raster.unwrap_or(WgpuBackend::default_path(settings.technique));
+        let drivers = match path {
+            RasterPath::Compute => Drivers {
+                scene: Box::new(ComputeRaster::new(gpu, scene, camera, settings, false)?),
+                boxes: Box::new(move || {
+                    Ok(Box::new(ComputeRaster::new(gpu, scene, camera, settings, true)?) as Box<dyn Driver>)
+                }),
+            },
+            RasterPath::Hardware => Drivers {
+                scene: Box::new(HardwareRaster::new(gpu, scene, camera, settings)?),
+                boxes: Box::new(move || {
+                    Ok(Box::new(HardwareRaster::boxes(gpu, scene, camera, settings)?) as Box<dyn Driver>)
+                }),
+            },
+            other => {
+                return Err(OitError::Unsupported {
+                    backend: "wgpu".into(),
+                    what: format!("the {other} raster path"),
+                });
+            }
+        };
+        let mut ctx = GpuCtx::with_pool(gpu, scene, camera, settings, Some(&self.pool))?;
+        let layers = run_technique(&mut ctx, &drivers)?;
+        let mut frame = ctx.finish(path)?;
+        frame.layers = layers;
+        frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok(frame)
+    }
+
+    fn storage_allocations(&self) -> u64 {
+        self.pool.allocations()
+    }
+}
+
 /// Runs the frame's technique (geometry passes through `drivers`, kernels, resolve into the
 /// state); the reference returns its per-pixel fragment counts. `Backend::render` and the
 /// embedded pass (`embed::OitPass::frame`) both run this.
@@ -184,7 +213,7 @@ pub(crate) fn run_technique(
         Technique::Ddp if blend => technique::ddp_blend::render(ctx, drivers)?,
         Technique::Bdp { .. } if blend => technique::bdp_blend::render(ctx, drivers)?,
         Technique::Reference => layers = Some(technique::reference::render(ctx, drivers)?),
-        Technique::Fabs { k } => technique::fabs::render(ctx, drivers, k)?,
+        Technique::Fabs { .. } => technique::fabs::render(ctx, drivers)?,
         Technique::Dp => technique::dp::render(ctx, drivers)?,
         Technique::Ddp => technique::ddp::render(ctx, drivers)?,
         Technique::WeightedAverage | Technique::WeightedSum => technique::weighted::render(ctx, drivers)?,
@@ -194,4 +223,34 @@ pub(crate) fn run_technique(
         Technique::Mlp { .. } => technique::mlp::render(ctx, drivers)?,
     }
     Ok(layers)
+}
+
+/// For test suites and examples: the backend when a Vulkan adapter can be opened, else `None`
+/// after one line on stderr (past the test harness's capture) naming the test and what to install.
+///
+/// With `OIT_REQUIRE_GPU=1` in the environment (CI sets it after installing lavapipe) a missing
+/// adapter is a panic instead: there, a skip would hide a broken GPU backend.
+pub fn backend_or_skip(test: &str) -> Option<WgpuBackend> {
+    let backend = WgpuBackend::default();
+    match backend.gpu() {
+        Ok(_) => Some(backend),
+        Err(e) if gpu_required() => {
+            panic!("{test}: OIT_REQUIRE_GPU=1 but no Vulkan adapter could be opened: {e}")
+        }
+        Err(e) => {
+            // Written to the stream itself, not through `eprintln!`, which the test harness
+            // captures: a skip must be seen in a passing run.
+            use std::io::Write as _;
+            let _ = writeln!(
+                std::io::stderr(),
+                "skipped {test}: {e} (set OIT_REQUIRE_GPU=1 to make this a failure)"
+            );
+            None
+        }
+    }
+}
+
+/// True when `OIT_REQUIRE_GPU` is set to `1` (or `true`): GPU tests must not skip.
+pub fn gpu_required() -> bool {
+    std::env::var("OIT_REQUIRE_GPU").is_ok_and(|v| v == "1" || v.eq_ignore_ascii_case("true"))
 }

@@ -1,10 +1,10 @@
 //! The compute-raster path: the papers' "CUDA rasterizer" as a compute shader. Setup (vertex
-//! transform, clipping, snapping) is oit-cpu's own code, so the triangles are the same bits; the
+//! transform, clipping, snapping) is oit-core's `setup`, shared with oit-cpu, so the triangles are the same bits; the
 //! kernel in `shaders/raster_compute.wgsl` walks each triangle's pixels with the same integer edge
 //! functions and f32 interpolation, which makes the fragment sets equal oit-cpu's by construction.
 
+use oit_core::setup::{TRIANGLE_WORDS, TriangleSetup};
 use oit_core::{Camera, OitError, RasterPath, Scene, Settings};
-use oit_cpu::raster::{Rasterizer, TRIANGLE_WORDS};
 use wgpu::util::DeviceExt;
 
 use crate::ctx::{Driver, GpuCtx, dispatch_size};
@@ -32,9 +32,9 @@ impl ComputeRaster {
         boxes: bool,
     ) -> Result<Self, OitError> {
         let r = if boxes {
-            Rasterizer::bounding_boxes(scene, camera, settings)
+            TriangleSetup::bounding_boxes(scene, camera, settings)
         } else {
-            Rasterizer::new(scene, camera, settings)
+            TriangleSetup::new(scene, camera, settings)
         };
         let words = r.triangle_words();
         let mut items: Vec<[u32; 2]> = Vec::new();
@@ -59,12 +59,7 @@ impl ComputeRaster {
         let tris = storage("triangles", bytemuck::cast_slice(&words));
         let item_buf = storage("raster items", bytemuck::cast_slice(&items));
         let forward = camera.forward;
-        let shading = match settings.shading {
-            oit_core::Shading::Headlight => 0u32,
-            oit_core::Shading::Flat => 1,
-            oit_core::Shading::Vertex => 2,
-            oit_core::Shading::Normal => 3,
-        };
+        let shading = settings.shading.code();
         let uniform: [u32; 8] = [
             items.len() as u32,
             settings.width,

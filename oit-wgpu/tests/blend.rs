@@ -34,7 +34,7 @@ fn depth_complexity(reference: &Frame) -> u32 {
 
 #[test]
 fn dp_by_depth_peeling_is_exact() {
-    let gpu = oit_wgpu::WgpuBackend::default();
+    let Some(gpu) = oit_wgpu::backend_or_skip("dp_by_depth_peeling_is_exact") else { return };
     for scene_name in SCENES {
         let reference = render(&gpu, scene_name, &settings("reference", HardwareCapture::Atomics));
         let n = depth_complexity(&reference);
@@ -66,7 +66,7 @@ fn dp_by_depth_peeling_is_exact() {
 
 #[test]
 fn dp_by_depth_peeling_stops_at_max_peels() {
-    let gpu = oit_wgpu::WgpuBackend::default();
+    let Some(gpu) = oit_wgpu::backend_or_skip("dp_by_depth_peeling_stops_at_max_peels") else { return };
     for scene_name in SCENES {
         for peels in [1, 2] {
             let s = |c| Settings { max_peels: Some(peels), ..settings("dp", c) };
@@ -81,7 +81,7 @@ fn dp_by_depth_peeling_stops_at_max_peels() {
 
 #[test]
 fn ddp_by_max_blending_equals_atomics() {
-    let gpu = oit_wgpu::WgpuBackend::default();
+    let Some(gpu) = oit_wgpu::backend_or_skip("ddp_by_max_blending_equals_atomics") else { return };
     for scene_name in SCENES.iter().copied().chain(["coplanar", "cluster:200"]) {
         let reference = render(&gpu, scene_name, &settings("reference", HardwareCapture::Atomics));
         for effect in [Effect::Transparency, Effect::Complexity] {
@@ -132,7 +132,7 @@ fn ddp_by_max_blending_equals_atomics() {
 
 #[test]
 fn bdp_by_max_blending_equals_atomics() {
-    let gpu = oit_wgpu::WgpuBackend::default();
+    let Some(gpu) = oit_wgpu::backend_or_skip("bdp_by_max_blending_equals_atomics") else { return };
     for scene_name in SCENES {
         for bounds in [BoundsMode::Boxes, BoundsMode::Exact] {
             let s = |c| Settings { bounds, bdp_mode: BdpMode::Color, ..settings("bdp", c) };
@@ -163,7 +163,7 @@ fn bdp_by_max_blending_equals_atomics() {
 
 #[test]
 fn blend_capture_refuses_what_it_does_not_do() {
-    let gpu = oit_wgpu::WgpuBackend::default();
+    let Some(gpu) = oit_wgpu::backend_or_skip("blend_capture_refuses_what_it_does_not_do") else { return };
     // bdp's depth mode needs (depth, colour) pairs
     let scene = load_scene("planes:8").unwrap();
     let cam = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();

@@ -80,6 +80,9 @@ fn compare_off_edges(a: &Image, b: &Image, mask: &[bool]) -> (u8, usize) {
 
 #[test]
 fn embedded_pass_matches_backend_render() {
+    if oit_wgpu::backend_or_skip("embedded_pass_matches_backend_render").is_none() {
+        return;
+    }
     let scene = scene();
     let mask = edge_mask(&scene, 1.0);
     let edges = mask.iter().filter(|&&e| e).count();

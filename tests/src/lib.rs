@@ -1,19 +1,54 @@
 //! Helpers of the conformance suite: the backends compiled in, and one-call renders.
 //!
-//! Each test body takes a `&dyn Backend` and is run for every backend [`backends`] returns, so a
-//! new backend is tested by adding it there.
+//! Each test body takes a `&dyn Backend` and is run for every backend × raster path [`backends`]
+//! returns, so a new backend is tested by adding it there. What a backend or path is expected to
+//! do differently lives in one table, [`expectations`], never inside a test.
+
+pub mod expectations;
 
 use oit_core::{Backend, Camera, Frame, Scene, Settings, Technique, View, load_scene};
 
-/// Every backend compiled in (cargo features `cpu`, later `wgpu`, `vulkan`).
+/// Every backend compiled in (cargo features `cpu`, `wgpu`), once per raster path it has, each
+/// pinned to its path ([`oit_core::OnPath`]). A GPU backend without a device is left out with one
+/// line on stderr, unless `OIT_REQUIRE_GPU=1` (set by CI), where that is a panic.
 pub fn backends() -> Vec<Box<dyn Backend>> {
-    let compiled: [Option<Box<dyn Backend>>; 1] = [
-        #[cfg(feature = "cpu")]
-        Some(Box::new(oit_cpu::CpuBackend::default())),
-        #[cfg(not(feature = "cpu"))]
-        None,
-    ];
-    compiled.into_iter().flatten().collect()
+    #[cfg_attr(not(feature = "wgpu"), expect(unused_mut, reason = "only GPU backends add paths"))]
+    let mut out: Vec<Box<dyn Backend>> = Vec::new();
+    #[cfg(feature = "cpu")]
+    out.push(Box::new(oit_cpu::CpuBackend::default()));
+    #[cfg(feature = "wgpu")]
+    if oit_wgpu::backend_or_skip("the wgpu rows of the conformance suite").is_some() {
+        for path in [oit_core::RasterPath::Hardware, oit_core::RasterPath::Compute] {
+            out.push(Box::new(oit_core::OnPath {
+                backend: Box::new(oit_wgpu::WgpuBackend::default()),
+                path,
+            }));
+        }
+    }
+    out
+}
+
+/// [`backends`] less those [`expectations::EXPECTED`] excludes from `test` (each exclusion printed
+/// with its reason).
+pub fn backends_for(test: &str) -> Vec<Box<dyn Backend>> {
+    backends()
+        .into_iter()
+        .filter(|b| {
+            let path = b.raster_path(&Settings::default());
+            match expectations::expected(test, b.name(), path) {
+                Some(why) => {
+                    eprintln!("{test}: not run on {}/{path}: {why}", b.name());
+                    false
+                }
+                None => true,
+            }
+        })
+        .collect()
+}
+
+/// `backend`'s name and raster path, as tests print them (`wgpu/hardware`).
+pub fn label(backend: &dyn Backend) -> String {
+    format!("{}/{}", backend.name(), backend.raster_path(&Settings::default()))
 }
 
 /// The CPU backend with a fixed number of threads.

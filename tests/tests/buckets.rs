@@ -43,7 +43,8 @@ fn masked_epr(a: &Frame, b: &Frame, mask: impl Fn(usize) -> bool) -> f64 {
 
 #[test]
 fn exact_schemes_on_separated_layers() {
-    for backend in backends() {
+    for backend in backends_for("exact_schemes_on_separated_layers") {
+        eprintln!("on {}", label(backend.as_ref()));
         let b = backend.as_ref();
         for (name, layers) in
             [("planes:4", 4), ("planes:16", 16), ("planes:32", 32), ("spheres:4", 8), ("spheres:16", 32)]
@@ -83,7 +84,8 @@ fn mlp_passes_are_ceil_n_over_m() {
 
 #[test]
 fn bdp_depth_mode_captures_up_to_two_per_subinterval() {
-    for backend in backends() {
+    for backend in backends_for("bdp_depth_mode_captures_up_to_two_per_subinterval") {
+        eprintln!("on {}", label(backend.as_ref()));
         let b = backend.as_ref();
         // 16 subintervals over the exact range; planes placed so each holds at most two.
         for name in ["planes:2", "planes:8", "planes:16"] {
@@ -103,7 +105,8 @@ fn bdp_depth_mode_captures_up_to_two_per_subinterval() {
 
 #[test]
 fn bdp_collision_keeps_min_and_max() {
-    for backend in backends() {
+    for backend in backends_for("bdp_collision_keeps_min_and_max") {
+        eprintln!("on {}", label(backend.as_ref()));
         let b = backend.as_ref();
         // The nearest plane and the farthest fix the range; the farthest three lie within its last
         // 1/16 (0.01 apart in world z, about 0.0046 in NDC at this distance, against a 1/16 of the
@@ -135,7 +138,8 @@ fn bdp_collision_keeps_min_and_max() {
 
 #[test]
 fn adp_shared_bin_loses_one() {
-    for backend in backends() {
+    for backend in backends_for("adp_shared_bin_loses_one") {
+        eprintln!("on {}", label(backend.as_ref()));
         let b = backend.as_ref();
         // range ≈ the two outer planes; two middle planes far closer than range/1024
         let scene = quads(&[0.5, 0.0, -0.00001, -0.5]);
@@ -155,7 +159,8 @@ fn adp_shared_bin_loses_one() {
 
 #[test]
 fn capacity_losses_are_counted() {
-    for backend in backends() {
+    for backend in backends_for("capacity_losses_are_counted") {
+        eprintln!("on {}", label(backend.as_ref()));
         let b = backend.as_ref();
         let scene = scene("planes:8");
         let s = Settings { shading: Shading::Flat, ..settings(48, "reference") };
@@ -185,7 +190,8 @@ fn capacity_losses_are_counted() {
 
 #[test]
 fn approximate_bucket_schemes_have_bounded_error_on_meshes() {
-    for backend in backends() {
+    for backend in backends_for("approximate_bucket_schemes_have_bounded_error_on_meshes") {
+        eprintln!("on {}", label(backend.as_ref()));
         let b = backend.as_ref();
         let scene = scene("knot");
         let s = settings(96, "reference");

@@ -25,7 +25,8 @@ fn check(frame: &oit_core::Frame, what: &str) {
 
 #[test]
 fn single_layer_pixels() {
-    for backend in backends() {
+    for backend in backends_for("single_layer_pixels") {
+        eprintln!("on {}", label(backend.as_ref()));
         let scene = scene("planes:1");
         for t in all_techniques() {
             let s = Settings { technique: t, ..settings(32, "dp") };
@@ -38,7 +39,8 @@ fn single_layer_pixels() {
 
 #[test]
 fn depths_at_zero_and_one() {
-    for backend in backends() {
+    for backend in backends_for("depths_at_zero_and_one") {
+        eprintln!("on {}", label(backend.as_ref()));
         // planes:2 puts quads at z = +0.5 and −0.5; near and far placed exactly on them
         let scene = scene("planes:2");
         let eye = Vec3::new(0.0, 0.0, 3.0);
@@ -53,7 +55,8 @@ fn depths_at_zero_and_one() {
 
 #[test]
 fn alpha_zero_and_one() {
-    for backend in backends() {
+    for backend in backends_for("alpha_zero_and_one") {
+        eprintln!("on {}", label(backend.as_ref()));
         let scene = scene("spheres:3");
         for alpha in [0.0f32, 1.0] {
             let base = Settings { alpha: Some(alpha), ..settings(48, "reference") };
@@ -75,7 +78,8 @@ fn alpha_zero_and_one() {
 
 #[test]
 fn a_thousand_layers() {
-    for backend in backends() {
+    for backend in backends_for("a_thousand_layers") {
+        eprintln!("on {}", label(backend.as_ref()));
         let scene = scene("planes:1000");
         for t in all_techniques() {
             let s = Settings { technique: t, max_peels: None, ..settings(8, "dp") };
@@ -90,7 +94,8 @@ fn a_thousand_layers() {
 
 #[test]
 fn effects_run_on_sorting_techniques() {
-    for backend in backends() {
+    for backend in backends_for("effects_run_on_sorting_techniques") {
+        eprintln!("on {}", label(backend.as_ref()));
         let scene = scene("spheres:4");
         for effect in [Effect::Translucency, Effect::Fresnel, Effect::Complexity] {
             let base = Settings { effect, ..settings(48, "reference") };

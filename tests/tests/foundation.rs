@@ -16,7 +16,8 @@ fn to_linear(c: u8) -> f64 {
 
 #[test]
 fn reference_equals_hand_composite_on_planes() {
-    for backend in backends() {
+    for backend in backends_for("reference_equals_hand_composite_on_planes") {
+        eprintln!("on {}", label(backend.as_ref()));
         for n in 1..=8u32 {
             let scene = scene(&format!("planes:{n}"));
             let s = Settings {
@@ -47,7 +48,8 @@ fn reference_equals_hand_composite_on_planes() {
 
 #[test]
 fn peeling_is_exact_and_weighted_is_bounded_on_planes() {
-    for backend in backends() {
+    for backend in backends_for("peeling_is_exact_and_weighted_is_bounded_on_planes") {
+        eprintln!("on {}", label(backend.as_ref()));
         let b = backend.as_ref();
         for n in 1..=8u32 {
             let scene = scene(&format!("planes:{n}"));
@@ -104,7 +106,8 @@ fn peeling_is_exact_and_weighted_is_bounded_on_planes() {
 
 #[test]
 fn order_matters_on_a_lit_mesh() {
-    for backend in backends() {
+    for backend in backends_for("order_matters_on_a_lit_mesh") {
+        eprintln!("on {}", label(backend.as_ref()));
         let b = backend.as_ref();
         let scene = scene("knot");
         let s = settings(96, "reference"); // headlight shading: colours vary along the tube
@@ -120,7 +123,8 @@ fn order_matters_on_a_lit_mesh() {
 
 #[test]
 fn peeling_matches_reference_on_meshes() {
-    for backend in backends() {
+    for backend in backends_for("peeling_matches_reference_on_meshes") {
+        eprintln!("on {}", label(backend.as_ref()));
         let b = backend.as_ref();
         for name in ["spheres:8", "knot", "cluster:200"] {
             let scene = scene(name);
@@ -138,7 +142,8 @@ fn peeling_matches_reference_on_meshes() {
 
 #[test]
 fn coplanar_tie_is_counted_lost() {
-    for backend in backends() {
+    for backend in backends_for("coplanar_tie_is_counted_lost") {
+        eprintln!("on {}", label(backend.as_ref()));
         let b = backend.as_ref();
         let scene = scene("coplanar");
         let s = settings(64, "reference");

@@ -54,7 +54,8 @@ fn random_soups() {
                 order.iter().flat_map(|&t| points[3 * t..3 * t + 3].to_vec()).collect();
             let shuffled_colors: Vec<_> = order.iter().map(|&t| colors[t % colors.len()]).collect();
             let shuffled = soup(&shuffled_points, &shuffled_colors);
-            for backend in backends() {
+            for backend in backends_for("random_soups") {
+                eprintln!("on {}", label(backend.as_ref()));
                 let b = backend.as_ref();
                 let base = Settings { ..settings(48, "reference") };
                 let view = View { azimuth: 10.0, elevation: 15.0, fov: 50.0 };

@@ -33,8 +33,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     });
     let hist: Vec<[u32; HISTOGRAM_WORDS]> =
         hist.par_chunks(HISTOGRAM_WORDS).map(|h| std::array::from_fn(|i| h[i].load(Relaxed))).collect();
-    let batches = hist.iter().map(|h| histogram_count(h).div_ceil(BUCKETS as u32)).max().unwrap_or(0);
-    let batches = batches.min(ctx.settings.max_peels.unwrap_or(u32::MAX));
+    let batches = ctx.plan.adp_batches(hist.iter().map(histogram_count).max().unwrap_or(0));
     let buckets = ctx.alloc64(BUCKETS, 0)?;
     let mut states = ctx.states();
     for batch in 0..batches {

@@ -24,11 +24,11 @@ use rayon::prelude::*;
 
 use super::Ctx;
 
-pub(crate) fn render(ctx: &mut Ctx<'_>, passes: u32) -> Result<Frame, OitError> {
-    let color_mode = ctx.settings.bdp_color_mode(passes)?;
+pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
+    let color_mode = ctx.plan.bdp_color;
     let bounds = ctx.depth_bounds()?;
     ctx.storage_bytes += ctx.pixels as u64 * 8;
-    if color_mode { color(ctx, &bounds) } else { depth(ctx, &bounds, passes) }
+    if color_mode { color(ctx, &bounds) } else { depth(ctx, &bounds) }
 }
 
 fn color(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
@@ -57,12 +57,13 @@ fn color(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
     Ok(super::finish(ctx, states))
 }
 
-fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)], passes: u32) -> Result<Frame, OitError> {
+fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
     let n = BDP_DEPTH_SUBINTERVALS as usize;
     const EMPTY_MIN: u64 = u64::MAX;
     // One bucket array per pass, as the paper allocates new MRTs per pass: [min, max] per subinterval.
-    let mut arrays: Vec<Vec<AtomicU64>> = Vec::new();
-    for p in 0..passes {
+    let mut arrays: Vec<crate::pool::Pooled<'_, AtomicU64>> = Vec::new();
+    // P passes, or fewer under --max-peels: the plan's stop rule
+    for _ in 0..ctx.plan.bdp_capture_passes() {
         let array = ctx.alloc64(2 * n, 0)?;
         for slot in array.iter().step_by(2) {
             slot.store(EMPTY_MIN, Relaxed);
@@ -91,9 +92,6 @@ fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)], passes: u32) -> Result<Frame,
             ctx.fragments.get_or_insert(generated);
         }
         arrays.push(array);
-        if ctx.settings.max_peels.is_some_and(|m| p + 1 >= m) {
-            break;
-        }
     }
     let mut states = ctx.states();
     let resolve = &ctx.resolve;

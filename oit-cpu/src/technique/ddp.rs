@@ -22,7 +22,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let mut range: Vec<(i64, i64)> = vec![(-1, i64::MAX); ctx.pixels];
     ctx.storage_bytes += ctx.pixels as u64 * 8;
     let mut states = ctx.states();
-    let limit = ctx.settings.max_peels.unwrap_or(u32::MAX);
+    let limit = ctx.plan.peel_limit;
     let mut peels = 0;
     while peels < limit {
         let r = &range;

@@ -22,7 +22,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let mut previous: Vec<i64> = vec![-1; ctx.pixels];
     ctx.storage_bytes += ctx.pixels as u64 * 4; // the previous pass's depth buffer
     let mut states = ctx.states();
-    let limit = ctx.settings.max_peels.unwrap_or(u32::MAX);
+    let limit = ctx.plan.peel_limit;
     let mut peels = 0;
     loop {
         if peels == limit {

@@ -45,11 +45,9 @@ pub fn sort_keys(keys: &mut [u64]) {
     }
 }
 
-pub(crate) fn render(ctx: &mut Ctx<'_>, k: Option<u32>) -> Result<Frame, OitError> {
-    let k = match k {
-        Some(k) => k as usize,
-        None => ctx.max_depth_complexity()?.max(1) as usize,
-    };
+pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
+    let deepest = if ctx.plan.needs_count() { ctx.max_depth_complexity()? } else { 0 };
+    let k = ctx.plan.slots(deepest) as usize;
     let counters = ctx.alloc32(1, 0)?;
     let slots = ctx.alloc64(k, 0)?;
     let payload = |f: &crate::raster::Fragment| ctx.payload(f);

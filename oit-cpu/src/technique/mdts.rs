@@ -12,20 +12,19 @@
 use std::sync::atomic::Ordering::Relaxed;
 
 use oit_core::rules::{depth_key64, mdts_pack, mdts_unpack, split_key64};
-use oit_core::{Effect, Frame, OitError};
+use oit_core::{Frame, OitError};
 use rayon::prelude::*;
 
 use super::{Ctx, insert_min32, insert_min64};
 
-fn capacity(ctx: &mut Ctx<'_>, k: Option<u32>) -> Result<usize, OitError> {
-    Ok(match k {
-        Some(k) => k as usize,
-        None => ctx.max_depth_complexity()?.max(1) as usize,
-    })
+/// Slots per pixel, by the plan (a counting pass first where it sizes from the scene).
+fn capacity(ctx: &mut Ctx<'_>) -> Result<usize, OitError> {
+    let deepest = if ctx.plan.needs_count() { ctx.max_depth_complexity()? } else { 0 };
+    Ok(ctx.plan.slots(deepest) as usize)
 }
 
-pub(crate) fn render64(ctx: &mut Ctx<'_>, k: Option<u32>) -> Result<Frame, OitError> {
-    let k = capacity(ctx, k)?;
+pub(crate) fn render64(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
+    let k = capacity(ctx)?;
     let slots = ctx.alloc64(k, u64::MAX)?;
     let payload = |f: &crate::raster::Fragment| ctx.payload(f);
     let generated = ctx.raster.for_each_fragment(|f| {
@@ -49,22 +48,10 @@ pub(crate) fn render64(ctx: &mut Ctx<'_>, k: Option<u32>) -> Result<Frame, OitEr
     Ok(super::finish(ctx, states))
 }
 
-pub(crate) fn render32(ctx: &mut Ctx<'_>, k: Option<u32>) -> Result<Frame, OitError> {
-    if ctx.resolve.effect == Effect::Fresnel {
-        return Err(OitError::Unsupported {
-            backend: "cpu".into(),
-            what: "fresnel with mdts: its 12 + 12 spare bits hold RGB only; use mdts64".into(),
-        });
-    }
-    let k = capacity(ctx, k)?;
-    let alpha = match ctx.settings.alpha {
-        Some(a) => a,
-        None => {
-            let objects = &ctx.scene.objects;
-            objects.iter().map(|o| o.color.w).sum::<f32>() / objects.len().max(1) as f32
-        }
-    };
-    let alpha8 = (alpha.clamp(0.0, 1.0) * 255.0 + 0.5) as u32;
+/// The 32-bit words; the plan refuses Fresnel (no room for a normal) and gives the alpha.
+pub(crate) fn render32(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
+    let k = capacity(ctx)?;
+    let alpha8 = ctx.plan.mdts_alpha8;
     let high = ctx.alloc32(k, u32::MAX)?;
     let low = ctx.alloc32(k, u32::MAX)?;
     ctx.pass(|f| {

@@ -18,7 +18,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
     let mut deepest: Vec<i64> = vec![-1; ctx.pixels];
     ctx.storage_bytes += ctx.pixels as u64 * 4;
     let mut states = ctx.states();
-    let limit = ctx.settings.max_peels.unwrap_or(u32::MAX);
+    let limit = ctx.plan.peel_limit;
     let mut peels = 0;
     while peels < limit {
         let more = AtomicBool::new(false);

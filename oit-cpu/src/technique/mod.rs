@@ -4,9 +4,11 @@
 
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
 
+use oit_core::plan::Plan;
 use oit_core::rules::{depth_bits, pack_normal, pack_rgba8};
 use oit_core::{Camera, Effect, OitError, Scene, Settings};
 
+use crate::pool::{Pool, Pooled};
 use crate::raster::{Fragment, Rasterizer};
 use crate::resolve::{PixelState, Resolve};
 
@@ -34,10 +36,21 @@ pub(crate) struct Ctx<'a> {
     pub fragments: Option<u64>,
     /// Bytes of per-pixel storage allocated.
     pub storage_bytes: u64,
+    /// Where per-pixel storage comes from, and goes back to after the frame.
+    pub pool: &'a Pool,
+    /// The frame's plan: refusals, sizing and stop rules, oit-core's.
+    pub plan: Plan,
 }
 
 impl<'a> Ctx<'a> {
-    pub fn new(scene: &'a Scene, camera: &'a Camera, settings: &'a Settings, raster: &'a Rasterizer) -> Self {
+    pub fn new(
+        scene: &'a Scene,
+        camera: &'a Camera,
+        settings: &'a Settings,
+        raster: &'a Rasterizer,
+        pool: &'a Pool,
+        plan: Plan,
+    ) -> Self {
         Ctx {
             scene,
             camera,
@@ -48,6 +61,8 @@ impl<'a> Ctx<'a> {
             passes: 0,
             fragments: None,
             storage_bytes: 0,
+            pool,
+            plan,
         }
     }
 
@@ -68,15 +83,15 @@ impl<'a> Ctx<'a> {
     }
 
     /// Allocates `per_pixel` zeroed-or-`init` words of 32 bits per pixel, counting the bytes.
-    pub fn alloc32(&mut self, per_pixel: usize, init: u32) -> Result<Vec<AtomicU32>, OitError> {
+    pub fn alloc32(&mut self, per_pixel: usize, init: u32) -> Result<Pooled<'a, AtomicU32>, OitError> {
         let n = self.checked(per_pixel, 4)?;
-        Ok((0..n).map(|_| AtomicU32::new(init)).collect())
+        Ok(self.pool.u32s(n, init))
     }
 
     /// Allocates `per_pixel` words of 64 bits per pixel, counting the bytes.
-    pub fn alloc64(&mut self, per_pixel: usize, init: u64) -> Result<Vec<AtomicU64>, OitError> {
+    pub fn alloc64(&mut self, per_pixel: usize, init: u64) -> Result<Pooled<'a, AtomicU64>, OitError> {
         let n = self.checked(per_pixel, 8)?;
-        Ok((0..n).map(|_| AtomicU64::new(init)).collect())
+        Ok(self.pool.u64s(n, init))
     }
 
     fn checked(&mut self, per_pixel: usize, word: u64) -> Result<usize, OitError> {
@@ -97,8 +112,8 @@ impl<'a> Ctx<'a> {
     }
 
     /// Per-pixel resolve state.
-    pub fn states(&self) -> Vec<PixelState> {
-        vec![PixelState::default(); self.pixels]
+    pub fn states(&self) -> Pooled<'a, PixelState> {
+        self.pool.states(self.pixels)
     }
 
     /// The deepest pixel's fragment count, from one counting pass (for sizing arrays from the
@@ -133,7 +148,7 @@ impl<'a> Ctx<'a> {
         }
         Ok(lo
             .iter()
-            .zip(&hi)
+            .zip(hi.iter())
             .map(|(l, h)| {
                 let (l, h) = (l.load(Relaxed), h.load(Relaxed));
                 if l > h { (0.0, 1.0) } else { (f32::from_bits(l), f32::from_bits(h)) }
@@ -193,7 +208,7 @@ pub(crate) fn frame(ctx: &Ctx<'_>, image: oit_core::Image, captured: u64) -> oit
 }
 
 /// Resolves the states into the frame (the common ending).
-pub(crate) fn finish(ctx: &Ctx<'_>, mut states: Vec<PixelState>) -> oit_core::Frame {
+pub(crate) fn finish(ctx: &Ctx<'_>, mut states: Pooled<'_, PixelState>) -> oit_core::Frame {
     let (image, captured) = ctx.resolve.image(ctx.settings.width, ctx.settings.height, &mut states);
     frame(ctx, image, captured)
 }

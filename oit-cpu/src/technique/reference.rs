@@ -10,14 +10,13 @@ use oit_core::{Effect, Frame, Image, OitError};
 use rayon::prelude::*;
 
 use super::Ctx;
-use crate::resolve::PixelState;
 
 pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let counts = ctx.alloc32(1, 0)?;
     ctx.pass(|f| {
         counts[f.pixel as usize].fetch_add(1, Relaxed);
     });
-    let counts: Vec<u32> = counts.into_iter().map(AtomicU32::into_inner).collect();
+    let counts: Vec<u32> = counts.iter().map(|c| c.load(Relaxed)).collect();
     let mut offsets = Vec::with_capacity(counts.len() + 1);
     let mut total = 0usize;
     for &c in &counts {
@@ -56,7 +55,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
             .collect();
         Image { width: w, height: h, pixels }
     } else {
-        let mut states: Vec<PixelState> = ctx.states();
+        let mut states = ctx.states();
         states.par_iter_mut().enumerate().for_each(|(px, s)| {
             let mut order: Vec<usize> = (offsets[px]..offsets[px + 1]).collect();
             order.sort_unstable_by_key(|&i| keys[i]);

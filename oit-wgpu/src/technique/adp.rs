@@ -24,7 +24,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, 0, 0)?;
     ctx.pixel_kernel(WGSL, "count_main", &buffers, 0, 0)?;
     let bins = ctx.gpu.read_u32(&max_bins)?[0];
-    let batches = bins.div_ceil(BUCKETS as u32).min(ctx.settings.max_peels.unwrap_or(u32::MAX));
+    let batches = ctx.plan.adp_batches(bins);
     for batch in 0..batches {
         ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, 1, batch)?;
         ctx.pixel_kernel(WGSL, "resolve_main", &buffers, 1, batch)?;

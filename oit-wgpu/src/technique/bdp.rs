@@ -18,12 +18,9 @@ const MODE_COLOR: u32 = 0;
 const MODE_DEPTH: u32 = 1;
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
-    let oit_core::Technique::Bdp { passes } = ctx.settings.technique else {
-        return Err(OitError::InvalidSettings(format!("{} is not bdp", ctx.settings.technique)));
-    };
-    let color_mode = ctx.settings.bdp_color_mode(passes)?;
+    let color_mode = ctx.plan.bdp_color;
     let bounds = depth_bounds(ctx, drivers)?;
-    if color_mode { color(ctx, drivers, &bounds) } else { depth(ctx, drivers, &bounds, passes) }
+    if color_mode { color(ctx, drivers, &bounds) } else { depth(ctx, drivers, &bounds) }
 }
 
 /// Per-pixel [zNear, zFar] (two words of depth bits per pixel) from one geometry pass over the
@@ -69,17 +66,9 @@ fn color(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>, bounds: &wgpu::Buffer) -> 
     ctx.pixel_kernel(WGSL, "color_resolve_main", &buffers, 0, 0)
 }
 
-fn depth(
-    ctx: &mut GpuCtx<'_>,
-    drivers: &Drivers<'_>,
-    bounds: &wgpu::Buffer,
-    passes: u32,
-) -> Result<(), OitError> {
-    // oit-cpu allocates one array per pass run, and stops after max_peels passes
-    let run = match ctx.settings.max_peels {
-        Some(m) => passes.min(m.max(1)),
-        None => passes,
-    };
+fn depth(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>, bounds: &wgpu::Buffer) -> Result<(), OitError> {
+    // one array per capture pass run: P, or fewer under --max-peels (the plan's stop rule)
+    let run = ctx.plan.bdp_capture_passes();
     // 16 × (min, max) u64 per pixel per pass
     let words = u64::from(ctx.pixels) * 2 * u64::from(oit_core::rules::BDP_DEPTH_SUBINTERVALS) * 2;
     let arrays = ctx.buffer("bdp depth buckets", words * u64::from(run), Init::Zero)?;

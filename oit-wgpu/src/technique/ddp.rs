@@ -19,7 +19,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     check_effect(ctx)?;
     let state = Peel::new(ctx)?;
     let buffers = state.buffers();
-    let limit = ctx.settings.max_peels.unwrap_or(u32::MAX);
+    let limit = ctx.plan.peel_limit;
     let mut peels = 0;
     while peels < limit {
         ctx.fill(&state.peeled, 0)?;

@@ -93,7 +93,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         dst_factor: wgpu::BlendFactor::One,
         operation: wgpu::BlendOperation::Max,
     };
-    let limit = ctx.settings.max_peels.unwrap_or(u32::MAX);
+    let limit = ctx.plan.peel_limit;
     let mut pass = 0u32;
     loop {
         let slot = (pass % 2) as usize;

@@ -20,7 +20,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     // the loop's counter is not per-pixel storage
     ctx.storage_bytes -= 4;
     let buffers = [&nearest, &previous, &peeled];
-    let limit = ctx.settings.max_peels.unwrap_or(u32::MAX);
+    let limit = ctx.plan.peel_limit;
     let mut peels = 0;
     while peels < limit {
         ctx.fill(&peeled, 0)?;

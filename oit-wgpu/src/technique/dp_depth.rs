@@ -123,7 +123,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     let module_source = format!("{COMMON_WGSL}\n{TECHNIQUE_PRELUDE}{WGSL}\n{}", stage.wgsl());
     let composite_source = format!("{TECHNIQUE_PRELUDE}{WGSL}\n{}", stage.wgsl());
     let (x, y) = crate::ctx::dispatch_size(u64::from(ctx.pixels));
-    let limit = ctx.settings.max_peels.unwrap_or(u32::MAX);
+    let limit = ctx.plan.peel_limit;
     let mut peels = 0;
     while peels < limit {
         let slot = (peels % 2) as usize;

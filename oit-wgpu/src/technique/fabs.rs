@@ -7,11 +7,10 @@ use crate::ctx::{GpuCtx, Init};
 
 const WGSL: &str = include_str!("fabs.wgsl");
 
-pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>, k: Option<u32>) -> Result<(), OitError> {
-    let k = match k {
-        Some(k) => k,
-        None => super::count(ctx, drivers.scene.as_ref())?.1.max(1),
-    };
+pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
+    // slots per pixel by the plan: K, or the deepest pixel's count from a counting pass
+    let deepest = if ctx.plan.needs_count() { super::count(ctx, drivers.scene.as_ref())?.1 } else { 0 };
+    let k = ctx.plan.slots(deepest);
     let px = u64::from(ctx.pixels);
     let counters = ctx.buffer("fabs counters", px, Init::Zero)?;
     let slots = ctx.buffer("fabs slots", px * u64::from(k) * 2, Init::Zero)?;

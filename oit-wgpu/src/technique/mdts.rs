@@ -7,7 +7,7 @@
 //! The arrays end as the K smallest words inserted, sorted, whatever the arrival order, so the
 //! result equals oit-cpu's exactly (mdts's packing losses included).
 
-use oit_core::{Effect, OitError, Technique};
+use oit_core::{OitError, Technique};
 
 use crate::Drivers;
 use crate::ctx::{GpuCtx, Init};
@@ -29,21 +29,14 @@ fn placeholder(ctx: &GpuCtx<'_>) -> wgpu::Buffer {
 }
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
-    let (k, wide) = match ctx.settings.technique {
-        Technique::Mdts { k } => (k, false),
-        Technique::Mdts64 { k } => (k, true),
+    let wide = match ctx.settings.technique {
+        Technique::Mdts { .. } => false,
+        Technique::Mdts64 { .. } => true,
         other => return Err(OitError::InvalidSettings(format!("{other} is not mdts or mdts64"))),
     };
-    if !wide && ctx.settings.effect == Effect::Fresnel {
-        return Err(OitError::Unsupported {
-            backend: "wgpu".into(),
-            what: "fresnel with mdts: its 12 + 12 spare bits hold RGB only; use mdts64".into(),
-        });
-    }
-    let k = match k {
-        Some(k) => k,
-        None => super::count(ctx, drivers.scene.as_ref())?.1.max(1),
-    };
+    // the plan refuses Fresnel with the 32-bit words (no room for a normal)
+    let deepest = if ctx.plan.needs_count() { super::count(ctx, drivers.scene.as_ref())?.1 } else { 0 };
+    let k = ctx.plan.slots(deepest);
     let words = u64::from(ctx.pixels) * u64::from(k);
     if wide {
         let (high, low) = (placeholder(ctx), placeholder(ctx));
@@ -52,15 +45,8 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, MDTS_64, k)?;
         return ctx.pixel_kernel(WGSL, "resolve_main", &buffers, MDTS_64, k);
     }
-    // alpha is not stored: the scene's (the override, else the mean of the objects' alphas)
-    let alpha = match ctx.settings.alpha {
-        Some(a) => a,
-        None => {
-            let objects = &ctx.scene.objects;
-            objects.iter().map(|o| o.color.w).sum::<f32>() / objects.len().max(1) as f32
-        }
-    };
-    let alpha8 = (alpha.clamp(0.0, 1.0) * 255.0 + 0.5) as u32;
+    // alpha is not stored: the plan's (the override, else the mean of the objects' alphas)
+    let alpha8 = ctx.plan.mdts_alpha8;
     let high = ctx.buffer("mdts high words", words, Init::Fill(u32::MAX))?;
     let low = ctx.buffer("mdts low words", words, Init::Fill(u32::MAX))?;
     let slots = placeholder(ctx);

@@ -28,7 +28,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     // the loop's flag is not per-pixel storage
     ctx.storage_bytes -= 4;
     let buffers = [&slots, &deepest, &overflowed];
-    let limit = ctx.settings.max_peels.unwrap_or(u32::MAX);
+    let limit = ctx.plan.peel_limit;
     let mut peels = 0;
     while peels < limit {
         ctx.fill(&overflowed, 0)?;

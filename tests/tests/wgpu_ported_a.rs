@@ -1,3 +1,4 @@
+#![cfg(feature = "wgpu")]
 //! dp, ddp, wavg, wsum, mdts, mdts64 and mlp on the compute path against oit-cpu: the same
 //! fragments, losses, geometry passes and storage, and the same image (±1 per channel).
 //!
@@ -27,7 +28,7 @@ fn settings(technique: &str) -> Settings {
 
 #[test]
 fn ported_techniques_match_cpu() {
-    let gpu = oit_wgpu::WgpuBackend::default();
+    let Some(gpu) = oit_wgpu::backend_or_skip("ported_techniques_match_cpu") else { return };
     let cpu = oit_cpu::CpuBackend::default();
     for scene_name in SCENES {
         for t in TECHNIQUES {
@@ -38,7 +39,7 @@ fn ported_techniques_match_cpu() {
 
 #[test]
 fn max_peels_and_other_effects_match_cpu() {
-    let gpu = oit_wgpu::WgpuBackend::default();
+    let Some(gpu) = oit_wgpu::backend_or_skip("max_peels_and_other_effects_match_cpu") else { return };
     let cpu = oit_cpu::CpuBackend::default();
     for scene_name in ["knot", "cluster:200"] {
         for t in ["dp", "ddp", "mlp:2"] {
@@ -64,7 +65,7 @@ fn max_peels_and_other_effects_match_cpu() {
 
 #[test]
 fn unsupported_effects_are_refused() {
-    let gpu = oit_wgpu::WgpuBackend::default();
+    let Some(gpu) = oit_wgpu::backend_or_skip("unsupported_effects_are_refused") else { return };
     let scene = load_scene("planes:4").unwrap();
     let cam = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();
     let cases = [

@@ -1,3 +1,4 @@
+#![cfg(feature = "wgpu")]
 //! bdp (colour and depth modes, bdp:P) and adp on the compute path against oit-cpu: the same
 //! fragments, losses, geometry passes and storage, and the same image (±1 per channel).
 
@@ -22,7 +23,7 @@ fn settings(technique: &str, bdp_mode: BdpMode, bounds: BoundsMode) -> Settings 
 
 #[test]
 fn bdp_and_adp_match_cpu() {
-    let gpu = oit_wgpu::WgpuBackend::default();
+    let Some(gpu) = oit_wgpu::backend_or_skip("bdp_and_adp_match_cpu") else { return };
     let cpu = oit_cpu::CpuBackend::default();
     let cases = [
         ("bdp", BdpMode::Auto),
@@ -43,7 +44,7 @@ fn bdp_and_adp_match_cpu() {
 
 #[test]
 fn max_peels_and_other_effects_match_cpu() {
-    let gpu = oit_wgpu::WgpuBackend::default();
+    let Some(gpu) = oit_wgpu::backend_or_skip("max_peels_and_other_effects_match_cpu") else { return };
     let cpu = oit_cpu::CpuBackend::default();
     for scene_name in ["knot", "cluster:200"] {
         for t in ["bdp:3", "adp"] {
@@ -62,7 +63,7 @@ fn max_peels_and_other_effects_match_cpu() {
 /// More than 32 layers: adp runs several batches (and `max_peels` caps them); bdp:P collides.
 #[test]
 fn deep_scenes_match_cpu() {
-    let gpu = oit_wgpu::WgpuBackend::default();
+    let Some(gpu) = oit_wgpu::backend_or_skip("deep_scenes_match_cpu") else { return };
     let cpu = oit_cpu::CpuBackend::default();
     for scene_name in ["planes:70", "coplanar"] {
         for (t, max_peels) in [("adp", None), ("adp", Some(2)), ("bdp:3", None), ("bdp", None)] {
@@ -76,7 +77,7 @@ fn deep_scenes_match_cpu() {
 
 #[test]
 fn colour_mode_rejects_what_cpu_rejects() {
-    let gpu = oit_wgpu::WgpuBackend::default();
+    let Some(gpu) = oit_wgpu::backend_or_skip("colour_mode_rejects_what_cpu_rejects") else { return };
     let cpu = oit_cpu::CpuBackend::default();
     let scene = load_scene("planes:8").unwrap();
     let cam = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();

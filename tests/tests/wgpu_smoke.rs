@@ -1,10 +1,11 @@
+#![cfg(feature = "wgpu")]
 //! Quick checks while the backend grows: compute path against oit-cpu.
 
 use oit_core::{Backend, Camera, Settings, Technique, View, load_scene};
 
 #[test]
 fn compute_path_matches_cpu() {
-    let gpu = oit_wgpu::WgpuBackend::default();
+    let Some(gpu) = oit_wgpu::backend_or_skip("compute_path_matches_cpu") else { return };
     let cpu = oit_cpu::CpuBackend::default();
     for scene_name in ["planes:4", "knot"] {
         let scene = load_scene(scene_name).unwrap();

@@ -1,0 +1,157 @@
+//! A technique's plan for one frame: the rules every backend executes and none restates — what
+//! the combination of technique and settings refuses, how many capture passes run, when peeling
+//! stops, how scene-sized arrays are sized, what the 32-bit `mdts` stores for alpha.
+//!
+//! Backends build one [`Plan`] per frame ([`Plan::new`], before allocating anything) and ask it;
+//! the WGSL mirrors of the per-fragment rules (bucket index, eq. 5, packing) live in
+//! [`crate::rules`] and are parity-tested against the shaders.
+
+use crate::{Effect, OitError, Scene, Settings, Technique};
+
+/// How a technique's per-pixel arrays are sized.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sizing {
+    /// A fixed number of slots (`fabs:K`, `mdts:K`, `mlp:M`'s M).
+    Fixed(u32),
+    /// From the scene: a counting pass measures the deepest pixel ([`Plan::slots`]).
+    FromCount,
+    /// The technique has no per-pixel array whose size follows the scene.
+    None,
+}
+
+/// The plan of one frame: see the module docs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plan {
+    /// The technique.
+    pub technique: Technique,
+    /// Whether a bounds pass gives each pixel's depth range first (bdp, adp).
+    pub bounds_pass: bool,
+    /// bdp only: the one-pass colour mode (32 packed colours) instead of the depth mode.
+    pub bdp_color: bool,
+    /// How the per-pixel arrays are sized.
+    pub sizing: Sizing,
+    /// Peels, capture passes or batches at most (`--max-peels`; unbounded when not set).
+    pub peel_limit: u32,
+    /// `mdts` (32-bit) only: the 8-bit alpha every fragment gets, since its words hold RGB.
+    pub mdts_alpha8: u32,
+}
+
+impl Plan {
+    /// The plan for `settings` on `scene`, or the reason the combination is refused (the same on
+    /// every backend; `backend` names the one asking, for the message).
+    pub fn new(backend: &str, scene: &Scene, settings: &Settings) -> Result<Plan, OitError> {
+        let technique = settings.technique;
+        if matches!(technique, Technique::Mdts { .. }) && settings.effect == Effect::Fresnel {
+            return Err(OitError::Unsupported {
+                backend: backend.into(),
+                what: "fresnel with mdts: its 12 + 12 spare bits hold RGB only; use mdts64".into(),
+            });
+        }
+        let bdp_color = match technique {
+            Technique::Bdp { passes } => settings.bdp_color_mode(passes)?,
+            _ => false,
+        };
+        let sizing = match technique {
+            Technique::Fabs { k } | Technique::Mdts { k } | Technique::Mdts64 { k } => {
+                k.map_or(Sizing::FromCount, Sizing::Fixed)
+            }
+            Technique::Mlp { m } => Sizing::Fixed(m),
+            _ => Sizing::None,
+        };
+        // alpha is not stored by mdts: the override, else the mean of the objects' alphas
+        let alpha = match settings.alpha {
+            Some(a) => a,
+            None => {
+                let objects = &scene.objects;
+                objects.iter().map(|o| o.color.w).sum::<f32>() / objects.len().max(1) as f32
+            }
+        };
+        Ok(Plan {
+            technique,
+            bounds_pass: matches!(technique, Technique::Bdp { .. } | Technique::Adp),
+            bdp_color,
+            sizing,
+            peel_limit: settings.max_peels.unwrap_or(u32::MAX),
+            mdts_alpha8: (alpha.clamp(0.0, 1.0) * 255.0 + 0.5) as u32,
+        })
+    }
+
+    /// Slots per pixel for a scene whose deepest pixel holds `deepest` fragments (from the
+    /// counting pass; ignored for fixed sizes): never zero, so an empty frame still has a shape.
+    pub fn slots(&self, deepest: u32) -> u32 {
+        match self.sizing {
+            Sizing::Fixed(k) => k,
+            Sizing::FromCount | Sizing::None => deepest.max(1),
+        }
+    }
+
+    /// True when the technique needs the counting pass before it can size its arrays.
+    pub fn needs_count(&self) -> bool {
+        self.sizing == Sizing::FromCount
+    }
+
+    /// The stop rule of peeling and batching: after `done` peels (or capture passes, or adp
+    /// batches), may another run? Peeling also stops when a pass finds nothing (the occlusion
+    /// query, or a per-pixel flag), which the backend observes.
+    pub fn may_peel(&self, done: u32) -> bool {
+        done < self.peel_limit
+    }
+
+    /// Capture passes `bdp:P` runs: P, or fewer under `--max-peels` (at least one).
+    pub fn bdp_capture_passes(&self) -> u32 {
+        match self.technique {
+            Technique::Bdp { passes } => passes.min(self.peel_limit.max(1)),
+            _ => 0,
+        }
+    }
+
+    /// adp batches for a pixel set whose histograms hold at most `bins` occupied bins.
+    pub fn adp_batches(&self, bins: u32) -> u32 {
+        bins.div_ceil(crate::rules::BUCKETS as u32).min(self.peel_limit)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::load_scene;
+
+    fn plan(technique: &str, f: impl FnOnce(&mut Settings)) -> Result<Plan, OitError> {
+        let mut s = Settings { technique: technique.parse().unwrap(), ..Settings::default() };
+        f(&mut s);
+        Plan::new("test", &load_scene("planes:4").unwrap(), &s)
+    }
+
+    #[test]
+    fn refusals_are_the_same_for_every_backend() {
+        assert!(plan("mdts", |s| s.effect = Effect::Fresnel).is_err());
+        assert!(plan("mdts64", |s| s.effect = Effect::Fresnel).is_ok());
+        assert!(plan("bdp2", |s| s.bdp_mode = crate::BdpMode::Color).is_err());
+        assert!(plan("bdp", |s| s.bdp_mode = crate::BdpMode::Color).unwrap().bdp_color);
+        assert!(!plan("bdp", |s| s.effect = Effect::Fresnel).unwrap().bdp_color);
+    }
+
+    #[test]
+    fn stop_rules() {
+        let p = plan("bdp:5", |s| s.max_peels = Some(2)).unwrap();
+        assert_eq!(p.bdp_capture_passes(), 2);
+        assert!(p.may_peel(1) && !p.may_peel(2));
+        assert_eq!(plan("bdp:5", |s| s.max_peels = Some(0)).unwrap().bdp_capture_passes(), 1);
+        assert_eq!(plan("bdp:3", |_| {}).unwrap().bdp_capture_passes(), 3);
+        assert!(plan("dp", |_| {}).unwrap().may_peel(u32::MAX - 1));
+        let adp = plan("adp", |s| s.max_peels = Some(2)).unwrap();
+        assert_eq!((adp.adp_batches(0), adp.adp_batches(33), adp.adp_batches(1000)), (0, 2, 2));
+        assert_eq!(plan("adp", |_| {}).unwrap().adp_batches(65), 3);
+    }
+
+    #[test]
+    fn sizing_and_alpha() {
+        assert_eq!(plan("fabs", |_| {}).unwrap().slots(0), 1);
+        assert_eq!(plan("fabs", |_| {}).unwrap().slots(7), 7);
+        assert_eq!(plan("fabs:3", |_| {}).unwrap().slots(7), 3);
+        assert!(plan("mdts", |_| {}).unwrap().needs_count());
+        assert_eq!(plan("mdts", |s| s.alpha = Some(1.0)).unwrap().mdts_alpha8, 255);
+        assert_eq!(plan("mdts", |s| s.alpha = Some(0.5)).unwrap().mdts_alpha8, 128);
+        assert_eq!(plan("mdts", |s| s.alpha = Some(-3.0)).unwrap().mdts_alpha8, 0);
+    }
+}

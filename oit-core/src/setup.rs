@@ -1,0 +1,524 @@
+//! Triangle setup, the part of rasterization every backend shares: vertex transform, clipping,
+//! perspective divide, viewport, fixed-point snapping, bounding boxes, and the formulas that turn
+//! a covered pixel's edge functions into a [`Fragment`].
+//!
+//! Contract (Vulkan's rules, written so a GPU compute rasterizer can copy them line for line, as
+//! oit-wgpu's does from [`TriangleSetup::triangle_words`]; the traversal that visits covered
+//! pixels is each backend's own):
+//! - clipping in homogeneous space against near (`z ≥ 0`), far (`z ≤ w`) and a guard band
+//!   (`|x|, |y| ≤ GUARD_BAND·w`) that keeps the fixed-point coordinates in range; a clipped
+//!   polygon is fan-triangulated and every piece keeps the original primitive id;
+//! - viewport `x = (ndc.x·0.5 + 0.5)·width`, `y = (1 − (ndc.y·0.5 + 0.5))·height` (row 0 at the
+//!   top, as in wgpu), snapped to [`SUBPIXEL_BITS`] fractional bits by `floor(v·256 + 0.5)`;
+//! - coverage at pixel centres by 64-bit integer edge functions ([`edge`]) with the top-left fill
+//!   rule; no back-face culling; zero-area triangles are dropped here;
+//! - depth: NDC z interpolated linearly in screen space with barycentrics from the edge functions,
+//!   clamped to [0, 1]; normal and vertex colour perspective-correct (barycentrics weighted by
+//!   1/w); colour from [`Shading::shade`] ([`TriangleSetup::fragment`]).
+//!
+//! Setup runs in parallel over chunks of triangles with the `rayon` feature, serially without;
+//! the triangles come out in primitive order either way.
+
+use glam::{Mat3, Mat4, Vec3, Vec4};
+#[cfg(feature = "rayon")]
+use rayon::prelude::*;
+
+use crate::{Aabb, Camera, MAX_SIZE, Scene, Settings, Shading};
+
+/// Fractional bits of the snapped screen coordinates (Vulkan's minimum, and what GPUs use).
+pub const SUBPIXEL_BITS: u32 = 8;
+/// Guard band, in units of w: geometry beyond `|x|, |y| = GUARD_BAND·w` is clipped. At
+/// [`MAX_SIZE`] pixels a side this keeps snapped coordinates within ±2^28, so edge functions (a
+/// difference of products of coordinate differences) stay below 2^60 in an `i64`.
+pub const GUARD_BAND: f32 = 64.0;
+/// 32-bit words per triangle in [`TriangleSetup::triangle_words`].
+pub const TRIANGLE_WORDS: usize = 44;
+
+/// One pixel in sub-pixel units.
+pub const SUBPIXEL: i64 = 1 << SUBPIXEL_BITS;
+/// Half a pixel in sub-pixel units: pixel k's centre is at `k·SUBPIXEL + HALF_PIXEL`.
+pub const HALF_PIXEL: i64 = SUBPIXEL / 2;
+/// Snapped coordinates beyond this are rejected (never reached within the guard band; a guard
+/// against overflow should the float math go astray).
+const COORD_LIMIT: f32 = (1u32 << 29) as f32;
+/// Triangles per task of the setup.
+const SETUP_CHUNK: usize = 1024;
+
+/// One covered (pixel, triangle) pair.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Fragment {
+    /// `y·width + x`, row `y = 0` at the top.
+    pub pixel: u32,
+    /// NDC z in [0, 1].
+    pub depth: f32,
+    /// Primitive id: `scene.primitive_bases().0[instance] + triangle index`.
+    pub prim: u32,
+    /// Shaded colour, straight-alpha linear RGBA.
+    pub color: Vec4,
+    /// Interpolated world-space normal, normalized (zero where the mesh has none).
+    pub normal: Vec3,
+}
+
+/// A triangle after setup: snapped screen coordinates (positive orientation), what its fragments
+/// interpolate, and the pixels it may cover.
+#[derive(Clone, Copy, Debug)]
+pub struct Triangle {
+    /// Snapped x, in 1/256 pixel.
+    pub x: [i32; 3],
+    /// Snapped y, in 1/256 pixel.
+    pub y: [i32; 3],
+    /// NDC z of each vertex.
+    pub z: [f32; 3],
+    /// 1/w of each vertex.
+    pub inv_w: [f32; 3],
+    /// World normal of each vertex.
+    pub normal: [Vec3; 3],
+    /// Vertex colour of each vertex (meaningful when `has_color`).
+    pub color: [Vec3; 3],
+    /// 1 / (twice the area in 1/256² pixel units), for the barycentrics.
+    pub inv_area: f32,
+    /// Material colour (alpha override applied).
+    pub base: Vec4,
+    /// Whether the mesh has vertex colours.
+    pub has_color: bool,
+    /// Primitive id.
+    pub prim: u32,
+    /// Inclusive pixel box clamped to the viewport: x0, y0, x1, y1.
+    pub bbox: [u32; 4],
+}
+
+/// The triangles of one frame after setup, in primitive order, ready for any number of geometry
+/// passes on any backend.
+#[derive(Clone, Debug)]
+pub struct TriangleSetup {
+    /// The set-up triangles.
+    pub triangles: Vec<Triangle>,
+    /// Viewport width in pixels.
+    pub width: u32,
+    /// Viewport height in pixels.
+    pub height: u32,
+    /// The shading the fragments get.
+    pub shading: Shading,
+    /// The camera's viewing direction (headlight shading).
+    pub forward: Vec3,
+}
+
+/// A vertex on its way through clipping: clip-space position and the attributes, which are linear
+/// in clip space (that is what makes them perspective-correct after the divide).
+#[derive(Clone, Copy, Debug, Default)]
+struct ClipVertex {
+    pos: Vec4,
+    normal: Vec3,
+    color: Vec3,
+}
+
+impl ClipVertex {
+    fn toward(self, other: ClipVertex, t: f32) -> ClipVertex {
+        ClipVertex {
+            pos: self.pos + (other.pos - self.pos) * t,
+            normal: self.normal + (other.normal - self.normal) * t,
+            color: self.color + (other.color - self.color) * t,
+        }
+    }
+}
+
+const CLIP_PLANES: usize = 6;
+/// Each plane adds at most one vertex to a convex polygon.
+const MAX_POLYGON: usize = 3 + CLIP_PLANES;
+
+/// Signed distance of `p` to clip plane `plane` (inside when ≥ 0): near, far, then the guard band.
+fn plane_distance(p: Vec4, plane: usize) -> f32 {
+    match plane {
+        0 => p.z,
+        1 => p.w - p.z,
+        2 => GUARD_BAND * p.w - p.x,
+        3 => GUARD_BAND * p.w + p.x,
+        4 => GUARD_BAND * p.w - p.y,
+        _ => GUARD_BAND * p.w + p.y,
+    }
+}
+
+/// A convex polygon of at most [`MAX_POLYGON`] vertices.
+#[derive(Clone, Copy)]
+struct Polygon {
+    v: [ClipVertex; MAX_POLYGON],
+    n: usize,
+}
+
+impl Polygon {
+    fn push(&mut self, v: ClipVertex) {
+        if self.n < MAX_POLYGON {
+            self.v[self.n] = v;
+            self.n += 1;
+        }
+    }
+}
+
+/// Sutherland–Hodgman against the planes in `planes` (a bit mask).
+fn clip(tri: [ClipVertex; 3], planes: u32) -> Polygon {
+    let mut poly = Polygon { v: [ClipVertex::default(); MAX_POLYGON], n: 3 };
+    poly.v[..3].copy_from_slice(&tri);
+    for plane in 0..CLIP_PLANES {
+        if planes & (1 << plane) == 0 {
+            continue;
+        }
+        let mut out = Polygon { v: [ClipVertex::default(); MAX_POLYGON], n: 0 };
+        for i in 0..poly.n {
+            let a = poly.v[i];
+            let b = poly.v[(i + 1) % poly.n];
+            let (da, db) = (plane_distance(a.pos, plane), plane_distance(b.pos, plane));
+            if da >= 0.0 {
+                out.push(a);
+            }
+            if (da >= 0.0) != (db >= 0.0) {
+                // Cut from the inside end, so an edge shared by two triangles is cut at the same
+                // point whichever way round each walks it (no crack at the near plane).
+                let (inside, outside, di, dout) = if da >= 0.0 { (a, b, da, db) } else { (b, a, db, da) };
+                out.push(inside.toward(outside, di / (di - dout)));
+            }
+        }
+        poly = out;
+        if poly.n < 3 {
+            return poly;
+        }
+    }
+    poly
+}
+
+/// A vertex in screen space.
+#[derive(Clone, Copy)]
+struct Projected {
+    x: i32,
+    y: i32,
+    z: f32,
+    inv_w: f32,
+}
+
+/// What setup needs besides the geometry.
+struct Snap {
+    width: u32,
+    height: u32,
+}
+
+impl Snap {
+    /// Perspective divide, viewport, snap. `None` for a point that cannot be placed.
+    fn project(&self, p: Vec4) -> Option<Projected> {
+        if p.w.is_nan() || p.w <= 0.0 {
+            return None;
+        }
+        let inv_w = 1.0 / p.w;
+        let (nx, ny, nz) = (p.x * inv_w, p.y * inv_w, p.z * inv_w);
+        let fx = (nx * 0.5 + 0.5) * self.width as f32;
+        let fy = (1.0 - (ny * 0.5 + 0.5)) * self.height as f32;
+        // Round half up, spelled out: `f32::round` rounds half away from zero and WGSL's `round`
+        // half to even; this form is the same everywhere.
+        let sx = (fx * SUBPIXEL as f32 + 0.5).floor();
+        let sy = (fy * SUBPIXEL as f32 + 0.5).floor();
+        let in_range = sx.abs() <= COORD_LIMIT && sy.abs() <= COORD_LIMIT;
+        if !(in_range && nz.is_finite() && inv_w.is_finite()) {
+            return None;
+        }
+        Some(Projected { x: sx as i32, y: sy as i32, z: nz, inv_w })
+    }
+
+    /// Clips one triangle and appends the pieces that touch the viewport.
+    fn triangle(&self, out: &mut Vec<Triangle>, v: [ClipVertex; 3], base: Vec4, has_color: bool, prim: u32) {
+        if v.iter().any(|v| !v.pos.is_finite()) {
+            return;
+        }
+        let mut outside_any = 0u32;
+        for plane in 0..CLIP_PLANES {
+            let d = v.map(|v| plane_distance(v.pos, plane));
+            if d.iter().all(|&d| d < 0.0) {
+                return;
+            }
+            if d.iter().any(|&d| d < 0.0) {
+                outside_any |= 1 << plane;
+            }
+        }
+        if outside_any == 0 {
+            self.piece(out, v, base, has_color, prim);
+            return;
+        }
+        let poly = clip(v, outside_any);
+        for i in 1..poly.n.saturating_sub(1) {
+            self.piece(out, [poly.v[0], poly.v[i], poly.v[i + 1]], base, has_color, prim);
+        }
+    }
+
+    /// Projects and snaps one (clipped) triangle; keeps it if it has area and touches the viewport.
+    fn piece(&self, out: &mut Vec<Triangle>, mut v: [ClipVertex; 3], base: Vec4, has_color: bool, prim: u32) {
+        let (Some(p0), Some(p1), Some(p2)) =
+            (self.project(v[0].pos), self.project(v[1].pos), self.project(v[2].pos))
+        else {
+            return;
+        };
+        let mut p = [p0, p1, p2];
+        let (x0, y0) = (i64::from(p[0].x), i64::from(p[0].y));
+        let area = (i64::from(p[1].x) - x0) * (i64::from(p[2].y) - y0)
+            - (i64::from(p[1].y) - y0) * (i64::from(p[2].x) - x0);
+        if area == 0 {
+            return;
+        }
+        // No culling: a clockwise triangle is turned round so every edge function is positive
+        // inside, which is what the fill rule below assumes.
+        if area < 0 {
+            p.swap(1, 2);
+            v.swap(1, 2);
+        }
+        let area = area.abs();
+        let pixel_range = |lo: i32, hi: i32, size: u32| -> Option<(u32, u32)> {
+            // Pixel k's centre is at 256k + 128: the first centre at or after `lo`, the last at or
+            // before `hi`.
+            let first = (i64::from(lo) - HALF_PIXEL + SUBPIXEL - 1).div_euclid(SUBPIXEL).max(0);
+            let last = (i64::from(hi) - HALF_PIXEL).div_euclid(SUBPIXEL).min(i64::from(size) - 1);
+            (first <= last).then_some((first as u32, last as u32))
+        };
+        let xs = p.map(|p| p.x);
+        let ys = p.map(|p| p.y);
+        let (Some((bx0, bx1)), Some((by0, by1))) = (
+            pixel_range(
+                xs.iter().copied().min().unwrap_or(0),
+                xs.iter().copied().max().unwrap_or(-1),
+                self.width,
+            ),
+            pixel_range(
+                ys.iter().copied().min().unwrap_or(0),
+                ys.iter().copied().max().unwrap_or(-1),
+                self.height,
+            ),
+        ) else {
+            return;
+        };
+        out.push(Triangle {
+            x: xs,
+            y: ys,
+            z: p.map(|p| p.z),
+            inv_w: p.map(|p| p.inv_w),
+            normal: v.map(|v| v.normal),
+            color: v.map(|v| v.color),
+            inv_area: 1.0 / area as f32,
+            base,
+            has_color,
+            prim,
+            bbox: [bx0, by0, bx1, by1],
+        });
+    }
+
+    /// Sets up the triangles of one instance, in order, in parallel.
+    fn instance(&self, clip_pos: &[Vec4], mesh: MeshView<'_>, base: Vec4, prim_base: u32) -> Vec<Triangle> {
+        let chunks: Vec<Vec<Triangle>> = map_chunks(mesh.indices, SETUP_CHUNK, |c, chunk| {
+            let mut out = Vec::with_capacity(chunk.len());
+            for (j, tri) in chunk.iter().enumerate() {
+                let t = c * SETUP_CHUNK + j;
+                let vertex = |i: u32| -> Option<ClipVertex> {
+                    let i = i as usize;
+                    Some(ClipVertex {
+                        pos: *clip_pos.get(i)?,
+                        normal: mesh.normals.get(i).copied().unwrap_or(Vec3::ZERO),
+                        color: mesh.colors.and_then(|c| c.get(i).copied()).unwrap_or(Vec3::ZERO),
+                    })
+                };
+                let (Some(a), Some(b), Some(c)) = (vertex(tri[0]), vertex(tri[1]), vertex(tri[2])) else {
+                    continue;
+                };
+                let prim = prim_base.saturating_add(u32::try_from(t).unwrap_or(u32::MAX));
+                self.triangle(&mut out, [a, b, c], base, mesh.colors.is_some(), prim);
+            }
+            out
+        });
+        chunks.concat()
+    }
+}
+
+/// The parts of a mesh setup reads, with normals already in world space.
+#[derive(Clone, Copy)]
+struct MeshView<'a> {
+    normals: &'a [Vec3],
+    colors: Option<&'a [Vec3]>,
+    indices: &'a [[u32; 3]],
+}
+
+/// The normal matrix of `transform`: its inverse transpose (the matrix itself when singular).
+pub fn normal_matrix(transform: &Mat4) -> Mat3 {
+    let m = Mat3::from_mat4(*transform);
+    let inv = m.inverse();
+    if inv.is_finite() { inv.transpose() } else { m }
+}
+
+/// `f` over the chunks of `items` (chunk index, chunk), results in chunk order: in parallel with
+/// the `rayon` feature.
+fn map_chunks<T: Sync, R: Send>(
+    items: &[T],
+    size: usize,
+    f: impl Fn(usize, &[T]) -> R + Sync + Send,
+) -> Vec<R> {
+    #[cfg(feature = "rayon")]
+    return items.par_chunks(size).enumerate().map(|(c, chunk)| f(c, chunk)).collect();
+    #[cfg(not(feature = "rayon"))]
+    return items.chunks(size).enumerate().map(|(c, chunk)| f(c, chunk)).collect();
+}
+
+/// `f` over `items`, in order: in parallel with the `rayon` feature.
+fn map_all<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync + Send) -> Vec<R> {
+    #[cfg(feature = "rayon")]
+    return items.par_iter().map(f).collect();
+    #[cfg(not(feature = "rayon"))]
+    return items.iter().map(f).collect();
+}
+
+impl TriangleSetup {
+    fn empty(camera: &Camera, settings: &Settings) -> TriangleSetup {
+        TriangleSetup {
+            triangles: Vec::new(),
+            // Settings::validate rejects larger sizes; clamping keeps the fixed point in range
+            // for callers that skipped it.
+            width: settings.width.min(MAX_SIZE),
+            height: settings.height.min(MAX_SIZE),
+            shading: settings.shading,
+            forward: camera.forward,
+        }
+    }
+
+    fn snap(&self) -> Snap {
+        Snap { width: self.width, height: self.height }
+    }
+
+    /// Sets up every instance's triangles: clip space (`view_proj · transform · p`), clipping,
+    /// snapping. Triangle `t` of instance `i` gets primitive id `scene.primitive_bases().0[i] + t`,
+    /// every piece of it after clipping the same. Instances or triangles that reference missing
+    /// data are skipped (Scene::validate rejects them earlier).
+    pub fn new(scene: &Scene, camera: &Camera, settings: &Settings) -> TriangleSetup {
+        let mut r = TriangleSetup::empty(camera, settings);
+        let snap = r.snap();
+        let view_proj = camera.view_proj();
+        let mut prim_base = 0u32;
+        for inst in &scene.instances {
+            let Some(object) = scene.objects.get(inst.object) else {
+                continue;
+            };
+            let Some(mesh) = scene.meshes.get(object.mesh) else {
+                continue;
+            };
+            let base_id = prim_base;
+            prim_base = prim_base.saturating_add(u32::try_from(mesh.indices.len()).unwrap_or(u32::MAX));
+            let mvp = view_proj * inst.transform;
+            let clip_pos: Vec<Vec4> = map_all(&mesh.positions, |p| mvp * p.extend(1.0));
+            let nm = normal_matrix(&inst.transform);
+            let normals: Vec<Vec3> = map_all(&mesh.normals, |n| nm * *n);
+            let view = MeshView { normals: &normals, colors: mesh.colors.as_deref(), indices: &mesh.indices };
+            let base = settings.material_color(object.color);
+            r.triangles.extend(snap.instance(&clip_pos, view, base, base_id));
+        }
+        r
+    }
+
+    /// The 12 triangles of each instance's world bounding box (`Aabb::TRIANGLES` over
+    /// `Aabb::corners`), triangle `t` of instance `i` with primitive id `12·i + t`. For the bounds
+    /// passes of the bucket techniques; colours and normals are not meaningful.
+    pub fn bounding_boxes(scene: &Scene, camera: &Camera, settings: &Settings) -> TriangleSetup {
+        let mut r = TriangleSetup::empty(camera, settings);
+        let snap = r.snap();
+        let view_proj = camera.view_proj();
+        for (i, inst) in scene.instances.iter().enumerate() {
+            let Some(object) = scene.objects.get(inst.object) else {
+                continue;
+            };
+            let Some(mesh) = scene.meshes.get(object.mesh) else {
+                continue;
+            };
+            let bounds: Aabb = mesh.bounds().transformed(&inst.transform);
+            let corners = bounds.corners();
+            let clip_pos = corners.map(|c| view_proj * c.extend(1.0));
+            let normals = corners.map(|c| (c - bounds.center()).normalize_or_zero());
+            let view = MeshView { normals: &normals, colors: None, indices: &Aabb::TRIANGLES };
+            let base_id = u32::try_from(i).unwrap_or(u32::MAX).saturating_mul(12);
+            let base = settings.material_color(object.color);
+            r.triangles.extend(snap.instance(&clip_pos, view, base, base_id));
+        }
+        r
+    }
+
+    /// Interpolates and shades the fragment of `t` at pixel (x, y), whose edge functions
+    /// ([`edge`]) are `e`. The formula is fixed (no fused multiply-add), so a port gets the same
+    /// bits.
+    #[inline]
+    pub fn fragment(&self, t: &Triangle, x: u32, y: u32, e: [i64; 3]) -> Fragment {
+        let b = e.map(|e| e as f32 * t.inv_area);
+        // Anchored at vertex 0, so a triangle of constant depth (a quad facing the camera, a plane
+        // at exactly d = 0 or 1) gives exactly that depth at every pixel: coplanar fragments of
+        // different triangles then tie exactly, as the rules for ties assume.
+        let depth = (t.z[0] + b[1] * (t.z[1] - t.z[0]) + b[2] * (t.z[2] - t.z[0])).clamp(0.0, 1.0);
+        let q = [b[0] * t.inv_w[0], b[1] * t.inv_w[1], b[2] * t.inv_w[2]];
+        let inv_q = 1.0 / (q[0] + q[1] + q[2]);
+        let p = q.map(|q| q * inv_q);
+        let normal = t.normal[0] * p[0] + t.normal[1] * p[1] + t.normal[2] * p[2];
+        let vertex_color = t.has_color.then(|| t.color[0] * p[0] + t.color[1] * p[1] + t.color[2] * p[2]);
+        Fragment {
+            pixel: y * self.width + x,
+            depth,
+            prim: t.prim,
+            color: self.shading.shade(t.base, normal, vertex_color, self.forward),
+            normal: normal.normalize_or_zero(),
+        }
+    }
+
+    /// The set-up triangles as 32-bit words, [`TRIANGLE_WORDS`] per triangle, for a GPU rasterizer
+    /// that walks and interpolates them with the same rules (oit-wgpu's compute path), so both
+    /// produce the same fragments. Layout per triangle: x[3] (i32, 1/256 px), y[3] (i32), z[3]
+    /// (f32), inv_w[3] (f32), normal[3][3] (f32), color[3][3] (f32), inv_area (f32), base[4]
+    /// (f32), has_color (u32), prim (u32), bbox[4] (u32, inclusive x0 y0 x1 y1), 3 words of
+    /// padding.
+    pub fn triangle_words(&self) -> Vec<u32> {
+        let mut out = Vec::with_capacity(self.triangles.len() * TRIANGLE_WORDS);
+        for t in &self.triangles {
+            out.extend(t.x.map(|v| v as u32));
+            out.extend(t.y.map(|v| v as u32));
+            out.extend(t.z.map(f32::to_bits));
+            out.extend(t.inv_w.map(f32::to_bits));
+            for n in t.normal {
+                out.extend(n.to_array().map(f32::to_bits));
+            }
+            for c in t.color {
+                out.extend(c.to_array().map(f32::to_bits));
+            }
+            out.push(t.inv_area.to_bits());
+            out.extend(t.base.to_array().map(f32::to_bits));
+            out.push(u32::from(t.has_color));
+            out.push(t.prim);
+            out.extend(t.bbox);
+            out.extend([0; 3]);
+        }
+        out
+    }
+
+    /// The inclusive pixel boxes of the set-up triangles (x0, y0, x1, y1), in order.
+    pub fn triangle_boxes(&self) -> impl Iterator<Item = [u32; 4]> + '_ {
+        self.triangles.iter().map(|t| t.bbox)
+    }
+}
+
+/// covered pixel's edge function must exceed (−1 on a top or left edge, so 0 is covered; 0
+/// elsewhere).
+pub fn edge(t: &Triangle, k: usize, px: i64, py: i64) -> (i64, i64, i64, i64) {
+    let (a, b) = ((k + 1) % 3, (k + 2) % 3);
+    let (ax, ay) = (i64::from(t.x[a]), i64::from(t.y[a]));
+    let dx = i64::from(t.x[b]) - ax;
+    let dy = i64::from(t.y[b]) - ay;
+    let value = dx * (py - ay) - dy * (px - ax);
+    // y points down and the inside is on the positive side: a top edge runs +x, a left edge −y.
+    let top_left = dy < 0 || (dy == 0 && dx > 0);
+    let inside_above = if top_left { -1 } else { 0 };
+    // Per-pixel steps in x and y.
+    (value, -dy * SUBPIXEL, dx * SUBPIXEL, inside_above)
+}
+
+/// The rule in its plainest form: the edge functions of `t` at the centre of pixel (x, y) when
+
+/// The rule in its plainest form: the edge functions of `t` at the centre of pixel (x, y) when
+/// the pixel is covered. A backend's traversal must visit exactly these pixels.
+pub fn covers(t: &Triangle, x: u32, y: u32) -> Option<[i64; 3]> {
+    let (px, py) = (i64::from(x) * SUBPIXEL + HALF_PIXEL, i64::from(y) * SUBPIXEL + HALF_PIXEL);
+    let e = [0, 1, 2].map(|k| edge(t, k, px, py));
+    e.iter().all(|&(v, _, _, above)| v > above).then(|| e.map(|e| e.0))
+}
