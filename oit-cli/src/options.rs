@@ -16,7 +16,7 @@ use crate::backends::{BackendOptions, RasterChoice, backends, with_paths};
 #[command(next_help_heading = "Scene, camera and shading")]
 pub struct SceneArgs {
     /// The scene: a built-in name (default, planes:N, spheres:N, cluster:N, knot, coplanar) or a
-    /// path to a Wavefront .obj file.
+    /// path to a Wavefront .obj file (at most 1 GiB; OIT_MAX_MODEL_BYTES raises the limit).
     #[arg(long, value_name = "NAME|FILE.obj", default_value = oit_core::DEFAULT_SCENE)]
     pub scene: String,
 
@@ -166,6 +166,9 @@ impl SceneArgs {
         let options = BackendOptions { threads: self.threads, adapter: self.adapter.clone() };
         let backends = with_paths(backends(&self.backend, &options)?, raster)?;
         let scene = load_scene(&self.scene)?;
+        for warning in &scene.warnings {
+            eprintln!("warning: {warning}");
+        }
         scene.validate()?;
         let prepared = Prepared { scene, settings, view, backends };
         prepared.camera(view)?;

@@ -81,17 +81,24 @@ impl Camera {
         if !(view.azimuth.is_finite() && view.elevation.is_finite()) {
             return Err(OitError::InvalidSettings("azimuth and elevation must be finite".into()));
         }
-        if !(view.fov > 0.5 && view.fov < 179.0) {
+        if !(0.5..=179.0).contains(&view.fov) {
             return Err(OitError::InvalidSettings(format!(
-                "fov {} is out of range: use a vertical field of view between 0.5 and 179 degrees",
+                "fov {} is out of range: use a vertical field of view from 0.5 to 179 degrees",
                 view.fov
             )));
         }
         if !(aspect.is_finite() && aspect > 0.0) {
             return Err(OitError::InvalidSettings("aspect ratio must be positive".into()));
         }
+        let too_large = || {
+            OitError::InvalidScene(format!(
+                "the scene is too large to frame: its bounding sphere (centre {center}, radius {radius:e}) \
+                 puts the camera beyond f32's range; keep coordinates within ±{:e}",
+                crate::Mesh::MAX_COORDINATE
+            ))
+        };
         if !center.is_finite() || !radius.is_finite() || !depth_radius.is_finite() {
-            return Err(OitError::InvalidScene("scene bounds are not finite".into()));
+            return Err(too_large());
         }
         let radius = radius.max(1e-3 * center.length()).max(1e-6);
         let vhalf = view.fov.to_radians() * 0.5;
@@ -103,7 +110,11 @@ impl Camera {
         let depth_radius = depth_radius.max(radius);
         let near = (distance - depth_radius * 1.01).max(distance * 1e-3);
         let far = distance + depth_radius * 1.01;
-        Ok(Camera::look_at(eye, center, view.fov, aspect, near, far))
+        let camera = Camera::look_at(eye, center, view.fov, aspect, near, far);
+        if !(camera.view_proj().is_finite() && (eye - center).length_squared().is_finite()) {
+            return Err(too_large());
+        }
+        Ok(camera)
     }
 
     /// A camera looking from `eye` at `target` (y up), with explicit planes.
@@ -125,5 +136,40 @@ impl Camera {
         // perspective_rh maps z_view = -n to 0 and -f to 1: ndc = f(z + n) / (z (n - f)) with z < 0.
         let (n, f) = (self.near, self.far);
         n * f / (f - ndc_z * (f - n))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fov_range_is_inclusive_as_documented() {
+        // `--fov` help: "0.5 to 179"; both ends were refused by a strict comparison
+        let unit = Aabb { min: Vec3::ZERO, max: Vec3::ONE };
+        for fov in [0.5, 45.0, 179.0] {
+            let c = Camera::orbit(&unit, View { fov, ..View::default() }, 1.0).unwrap();
+            assert!(c.view_proj().is_finite() && c.near > 0.0 && c.near < c.far, "fov {fov}");
+        }
+        for fov in [0.499, 179.001, 0.0, -45.0, f32::NAN, f32::INFINITY] {
+            let e = Camera::orbit(&unit, View { fov, ..View::default() }, 1.0).unwrap_err().to_string();
+            assert!(e.contains("from 0.5 to 179"), "{fov}: {e}");
+        }
+    }
+
+    #[test]
+    fn largest_scene_frames_finitely_and_larger_is_named_too_large() {
+        // at the narrowest fov the eye stands ~240 radii away: still finite at MAX_COORDINATE
+        let m = crate::Mesh::MAX_COORDINATE;
+        let big = Aabb { min: Vec3::splat(-m), max: Vec3::splat(m) };
+        let c = Camera::orbit(&big, View { fov: 0.5, ..View::default() }, 1.0).unwrap();
+        assert!(c.view_proj().is_finite() && c.eye.is_finite());
+        // finite boxes whose radius, or the eye's distance, overflows: "too large", not "not
+        // finite"
+        for max in [Vec3::new(1e37, 1e37, 0.0), Vec3::new(1e36, 0.0, 0.0)] {
+            let huge = Aabb { min: Vec3::ZERO, max };
+            let e = Camera::orbit(&huge, View { fov: 0.5, ..View::default() }, 1.0).unwrap_err().to_string();
+            assert!(e.contains("too large") && !e.contains("not finite"), "{e}");
+        }
     }
 }

@@ -25,7 +25,8 @@ pub enum OitError {
         /// What was wrong.
         message: String,
     },
-    /// A scene holds data no technique can render (NaN or infinite vertices, bad indices, nothing).
+    /// A scene holds data no technique can render (NaN, infinite or out-of-range vertices, bad
+    /// indices, nothing, too many triangles).
     #[error("invalid scene: {0}")]
     InvalidScene(String),
     /// A scene name that is neither built in nor a file.
@@ -72,7 +73,7 @@ pub enum OitError {
         hint: String,
     },
     /// A device was missing or failed.
-    #[error("device error: {0}")]
+    #[error("device error: {}", device_message(.0))]
     Device(String),
     /// Writing an image or report failed.
     #[error("cannot write {path}: {message}")]
@@ -82,4 +83,31 @@ pub enum OitError {
         /// Why.
         message: String,
     },
+}
+
+/// A [`OitError::Device`] message without the "device error: " its source may already carry (a
+/// backend that keeps a failed device's error as text, `e.to_string()`, and wraps it again), so
+/// the prefix is printed once.
+fn device_message(message: &str) -> &str {
+    let mut m = message;
+    while let Some(rest) = m.strip_prefix("device error: ") {
+        m = rest;
+    }
+    m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn device_prefix_is_printed_once() {
+        let inner = OitError::Device("no adapter matches 'h100'".into());
+        let wrapped = OitError::Device(inner.to_string());
+        assert_eq!(wrapped.to_string(), "device error: no adapter matches 'h100'");
+        assert_eq!(inner.to_string(), wrapped.to_string());
+        // other messages keep their text, even where it mentions a device error later on
+        let other = OitError::Device("cannot open: device error: lost".into());
+        assert_eq!(other.to_string(), "device error: cannot open: device error: lost");
+    }
 }

@@ -1,27 +1,57 @@
 //! Accuracy against the reference: error pixel rate, PSNR, max error.
+//!
+//! The pixels compared are those *covered* by either image: where the reference counted a fragment,
+//! and where the image differs from the reference although the reference counted none (there the
+//! reference shows the background, so a difference is something the image drew that should not be
+//! there). A frame with no such pixel has nothing to measure: its EPR and PSNR are NaN and
+//! `covered` is 0, never a perfect score.
 
 use serde::Serialize;
 
 use crate::{Frame, Image, OitError};
 
-/// How far an image is from the reference, over covered pixels.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+/// How far an image is from the reference, over the pixels either covers.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Accuracy {
     /// Error pixel rate (HPG 2009 section 5.2): the share of covered pixels whose 8-bit colour
-    /// differs from the reference by more than 1 in any channel.
+    /// differs from the reference by more than 1 in any channel. NaN when nothing is covered
+    /// (`covered == 0`; serialized as null).
     pub epr: f64,
-    /// Peak signal-to-noise ratio in dB over covered pixels (infinite when identical).
+    /// Peak signal-to-noise ratio in dB over covered pixels (infinite when identical; NaN when
+    /// nothing is covered).
     pub psnr: f64,
-    /// The largest channel difference, in [0, 1] (8-bit difference / 255).
+    /// The largest channel difference, in [0, 1] (8-bit difference / 255), over every pixel.
     pub max_error: f64,
-    /// Covered pixels counted.
+    /// Pixels counted: covered by the reference, or drawn by the image where the reference is
+    /// empty (all pixels when the reference recorded no coverage).
     pub covered: u64,
     /// Of those, pixels counted as errors.
     pub error_pixels: u64,
+    /// Of `covered`, pixels the reference leaves empty but the image draws on.
+    pub covered_by_image_only: u64,
 }
 
-/// Compares `image` with the reference frame, over the pixels the reference covers (all pixels if
-/// it did not record coverage).
+impl Accuracy {
+    /// Whether any pixel was compared; when not, [`Accuracy::epr`] and [`Accuracy::psnr`] are
+    /// NaN, not a perfect score.
+    pub fn is_measured(&self) -> bool {
+        self.covered > 0
+    }
+}
+
+/// Largest difference over the colour channels of two pixels.
+fn worst(a: &[u8; 4], b: &[u8; 4]) -> u8 {
+    (0..3).map(|c| a[c].abs_diff(b[c])).max().unwrap_or(0)
+}
+
+/// Whether pixel `i` is compared: the reference covers it (or recorded no coverage), or the image
+/// differs from the reference there.
+fn counted(reference: &Frame, i: usize, worst: u8) -> bool {
+    reference.layers.as_ref().is_none_or(|l| l[i] > 0) || worst > 0
+}
+
+/// Compares `image` with the reference frame, over the pixels either covers (see the module
+/// docs).
 pub fn accuracy(reference: &Frame, image: &Image) -> Result<Accuracy, OitError> {
     let r = &reference.image;
     if r.width != image.width || r.height != image.height {
@@ -30,22 +60,37 @@ pub fn accuracy(reference: &Frame, image: &Image) -> Result<Accuracy, OitError> 
             image.width, image.height, r.width, r.height
         )));
     }
-    let mut acc = Accuracy::default();
+    if let Some(layers) = &reference.layers
+        && layers.len() != r.pixels.len()
+    {
+        return Err(OitError::InvalidSettings(format!(
+            "the reference's coverage has {} entries for {} pixels",
+            layers.len(),
+            r.pixels.len()
+        )));
+    }
+    let mut acc = Accuracy {
+        epr: f64::NAN,
+        psnr: f64::NAN,
+        max_error: 0.0,
+        covered: 0,
+        error_pixels: 0,
+        covered_by_image_only: 0,
+    };
     let mut squared = 0.0f64;
     let mut max = 0u8;
     for (i, (a, b)) in r.pixels.iter().zip(&image.pixels).enumerate() {
-        if reference.layers.as_ref().is_some_and(|l| l[i] == 0) {
+        let w = worst(a, b);
+        max = max.max(w);
+        if !counted(reference, i, w) {
             continue;
         }
         acc.covered += 1;
-        let mut worst = 0u8;
-        for c in 0..3 {
-            let d = a[c].abs_diff(b[c]);
-            worst = worst.max(d);
-            squared += f64::from(d) * f64::from(d);
+        if reference.layers.as_ref().is_some_and(|l| l[i] == 0) {
+            acc.covered_by_image_only += 1;
         }
-        max = max.max(worst);
-        if worst > 1 {
+        squared += (0..3).map(|c| f64::from(a[c].abs_diff(b[c])).powi(2)).sum::<f64>();
+        if w > 1 {
             acc.error_pixels += 1;
         }
     }
@@ -53,28 +98,124 @@ pub fn accuracy(reference: &Frame, image: &Image) -> Result<Accuracy, OitError> 
         acc.epr = acc.error_pixels as f64 / acc.covered as f64;
         let mse = squared / (acc.covered as f64 * 3.0);
         acc.psnr = if mse == 0.0 { f64::INFINITY } else { 10.0 * (255.0f64 * 255.0 / mse).log10() };
-    } else {
-        acc.psnr = f64::INFINITY;
     }
     acc.max_error = f64::from(max) / 255.0;
     Ok(acc)
 }
 
-/// An image of the per-pixel error, amplified ×8 (covered pixels only; uncovered are dark grey).
+/// An image of the per-pixel error, amplified ×8, over the pixels [`accuracy`] compares (the rest
+/// are dark grey; pixels within 1/255 are black).
 pub fn error_image(reference: &Frame, image: &Image) -> Image {
     let r = &reference.image;
     let mut out = Image::new(r.width, r.height, [40, 40, 40, 255]);
     for (i, (a, b)) in r.pixels.iter().zip(&image.pixels).enumerate() {
-        if reference.layers.as_ref().is_some_and(|l| l[i] == 0) {
+        let w = worst(a, b);
+        if !counted(reference, i, w) {
             continue;
         }
-        let worst = (0..3).map(|c| a[c].abs_diff(b[c])).max().unwrap_or(0);
-        let t = (f32::from(worst) * 8.0 / 255.0).min(1.0);
+        let t = (f32::from(w) * 8.0 / 255.0).min(1.0);
         let h = crate::composite::heat(t);
         out.pixels[i] = [(h.x * 255.0) as u8, (h.y * 255.0) as u8, (h.z * 255.0) as u8, 255];
-        if worst <= 1 {
+        if w <= 1 {
             out.pixels[i] = [0, 0, 0, 255];
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Stats;
+
+    const BG: [u8; 4] = [20, 30, 40, 255];
+
+    /// A 4×4 reference: background everywhere, a 2×2 covered block of distinct colours in the
+    /// top-left corner.
+    fn reference() -> Frame {
+        let mut image = Image::new(4, 4, BG);
+        let mut layers = vec![0u32; 16];
+        for (k, i) in [0usize, 1, 4, 5].into_iter().enumerate() {
+            image.pixels[i] = [100 + k as u8 * 30, 50, 200 - k as u8 * 40, 255];
+            layers[i] = 2;
+        }
+        Frame { image, layers: Some(layers), stats: Stats::default() }
+    }
+
+    #[test]
+    fn identical_is_exact() {
+        let r = reference();
+        let a = accuracy(&r, &r.image).unwrap();
+        assert_eq!((a.epr, a.psnr, a.max_error, a.covered, a.error_pixels), (0.0, f64::INFINITY, 0.0, 4, 0));
+        assert!(a.is_measured());
+    }
+
+    #[test]
+    fn one_pixel_off_by_two_is_an_error_and_by_one_is_not() {
+        let r = reference();
+        let mut img = r.image.clone();
+        img.pixels[5][1] += 2;
+        let a = accuracy(&r, &img).unwrap();
+        assert_eq!((a.covered, a.error_pixels), (4, 1));
+        assert_eq!(a.epr, 0.25);
+        assert_eq!(a.max_error, 2.0 / 255.0);
+        // MSE = 2² / (4 pixels × 3 channels)
+        assert!((a.psnr - 10.0 * (255.0f64 * 255.0 * 12.0 / 4.0).log10()).abs() < 1e-12, "{}", a.psnr);
+        img.pixels[5][1] -= 1;
+        let a = accuracy(&r, &img).unwrap();
+        assert_eq!(a.epr, 0.0, "1/255 is within tolerance");
+        assert!(a.psnr.is_finite(), "but PSNR sees it");
+    }
+
+    #[test]
+    fn garbage_where_the_reference_is_empty_is_counted() {
+        let r = reference();
+        let mut img = r.image.clone();
+        // drawn on 3 pixels the reference leaves to the background
+        for i in [10, 11, 15] {
+            img.pixels[i] = [255, 0, 255, 255];
+        }
+        let a = accuracy(&r, &img).unwrap();
+        assert_eq!((a.covered, a.covered_by_image_only, a.error_pixels), (7, 3, 3));
+        assert_eq!(a.epr, 3.0 / 7.0);
+        assert!(a.psnr.is_finite());
+        let e = error_image(&r, &img);
+        assert_ne!(e.pixels[10], [40, 40, 40, 255], "shown in the error image");
+        assert_eq!(e.pixels[12], [40, 40, 40, 255], "untouched background stays grey");
+        assert_eq!(e.pixels[0], [0, 0, 0, 255], "a matching covered pixel is black");
+    }
+
+    #[test]
+    fn nothing_covered_is_not_a_perfect_score() {
+        let mut r = reference();
+        r.image = Image::new(4, 4, BG);
+        r.layers = Some(vec![0; 16]);
+        let a = accuracy(&r, &r.image).unwrap();
+        assert_eq!(a.covered, 0);
+        assert!(!a.is_measured());
+        assert!(a.epr.is_nan() && a.psnr.is_nan(), "{a:?}");
+        assert_eq!(a.max_error, 0.0);
+        // and drawing anything into that empty frame is all error
+        let mut img = r.image.clone();
+        img.pixels[3] = [0, 0, 0, 255];
+        let a = accuracy(&r, &img).unwrap();
+        assert_eq!((a.covered, a.epr), (1, 1.0));
+    }
+
+    #[test]
+    fn no_recorded_coverage_compares_every_pixel() {
+        let mut r = reference();
+        r.layers = None;
+        let a = accuracy(&r, &r.image).unwrap();
+        assert_eq!((a.covered, a.epr), (16, 0.0));
+    }
+
+    #[test]
+    fn mismatched_sizes_are_an_error() {
+        let r = reference();
+        assert!(accuracy(&r, &Image::new(4, 5, BG)).unwrap_err().to_string().contains("4x5"));
+        let mut short = reference();
+        short.layers = Some(vec![1; 3]);
+        assert!(accuracy(&short, &short.image).is_err());
+    }
 }

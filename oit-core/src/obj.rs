@@ -1,48 +1,97 @@
-//! OBJ loading with tobj: several objects per file, faces triangulated, missing normals computed,
-//! vertex colours (`v x y z r g b`) kept.
+//! OBJ loading with tobj: several objects per file, missing normals computed, vertex colours
+//! (`v x y z r g b`) kept.
+//!
+//! Reading is bounded: only regular files, at most [`DEFAULT_MAX_MODEL_BYTES`] unless
+//! `OIT_MAX_MODEL_BYTES` says otherwise. Before tobj sees the text, a first pass here checks every
+//! vertex (with its line number), drops line (`l`) and point (`p`) elements, which have no area and
+//! are reported in [`Scene::warnings`], and triangulates every face of more than three vertices by
+//! ear clipping in the face's dominant plane: tobj's own triangulation is a fan, which covers a
+//! concave polygon many times over.
 
+use std::io::Read;
 use std::path::Path;
 
-use glam::{Vec3, Vec4};
+use glam::{DVec2, DVec3, Vec3, Vec4};
 
 use crate::{Mesh, OitError, Scene};
 
 /// The colour OBJ objects get (linear, straight alpha): a light blue glass.
 pub const OBJ_COLOR: Vec4 = Vec4::new(0.35, 0.6, 0.95, 0.35);
 
+/// The largest model file read when `OIT_MAX_MODEL_BYTES` is not set: 1 GiB.
+pub const DEFAULT_MAX_MODEL_BYTES: u64 = 1 << 30;
+
+/// The environment variable that raises (or lowers) the model file size limit, in bytes.
+pub const MAX_MODEL_BYTES_VAR: &str = "OIT_MAX_MODEL_BYTES";
+
+/// The model size limit: `OIT_MAX_MODEL_BYTES` when set (a whole number of bytes), else
+/// [`DEFAULT_MAX_MODEL_BYTES`].
+fn max_model_bytes(var: Option<&str>) -> Result<u64, OitError> {
+    match var {
+        None => Ok(DEFAULT_MAX_MODEL_BYTES),
+        Some(v) => v.trim().parse::<u64>().map_err(|_| {
+            OitError::InvalidSettings(format!(
+                "{MAX_MODEL_BYTES_VAR}='{v}' is not a whole number of bytes (e.g. {MAX_MODEL_BYTES_VAR}=4294967296 for 4 GiB)"
+            ))
+        }),
+    }
+}
+
 /// Loads every object of an OBJ file as one mesh and one instance each.
 ///
-/// Errors name the file, and the line for malformed or non-finite vertices (tobj itself reports no
-/// lines, so vertex lines are checked here first).
+/// Errors name the file, and the line for malformed, non-finite or out-of-range vertices and for
+/// faces that cannot be triangulated (tobj itself reports no lines, so those are checked here
+/// first). Files that are not regular files (devices, pipes, folders) and files over
+/// `OIT_MAX_MODEL_BYTES` (default 1 GiB) are refused before anything is read.
 pub fn load_obj(path: &Path) -> Result<Scene, OitError> {
-    let text =
-        std::fs::read_to_string(path).map_err(|source| OitError::Io { path: path.to_path_buf(), source })?;
+    let limit = max_model_bytes(std::env::var(MAX_MODEL_BYTES_VAR).ok().as_deref())?;
+    load_obj_limited(path, limit)
+}
+
+/// Reads `path` as UTF-8 text, refusing anything but a regular file of at most `limit` bytes.
+fn read_bounded(path: &Path, limit: u64) -> Result<String, OitError> {
+    let io = |source| OitError::Io { path: path.to_path_buf(), source };
+    let too_large = |needed: u64| OitError::TooLarge {
+        what: format!("model file {}", path.display()),
+        needed,
+        limit_name: MAX_MODEL_BYTES_VAR.into(),
+        limit,
+        hint: format!("set {MAX_MODEL_BYTES_VAR} to a larger number of bytes to read it"),
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let meta = file.metadata().map_err(io)?;
+    if !meta.is_file() {
+        return Err(OitError::Obj {
+            path: path.to_path_buf(),
+            line: None,
+            message: "not a regular file (a device, pipe or folder): models are read from .obj files only"
+                .into(),
+        });
+    }
+    if meta.len() > limit {
+        return Err(too_large(meta.len()));
+    }
+    // The file may grow between the check and the read: read one byte past the limit at most.
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    file.take(limit.saturating_add(1)).read_to_end(&mut bytes).map_err(io)?;
+    if bytes.len() as u64 > limit {
+        return Err(too_large(bytes.len() as u64));
+    }
+    String::from_utf8(bytes).map_err(|e| OitError::Obj {
+        path: path.to_path_buf(),
+        line: None,
+        message: format!("not UTF-8 text (byte {}): is this an .obj file?", e.utf8_error().valid_up_to()),
+    })
+}
+
+/// [`load_obj`] with an explicit size limit.
+fn load_obj_limited(path: &Path, limit: u64) -> Result<Scene, OitError> {
+    let text = read_bounded(path, limit)?;
     let obj_err =
         |line: Option<usize>, message: String| OitError::Obj { path: path.to_path_buf(), line, message };
-    for (i, line) in text.lines().enumerate() {
-        let mut words = line.split_whitespace();
-        if words.next() != Some("v") {
-            continue;
-        }
-        let values: Vec<&str> = words.collect();
-        if values.len() < 3 {
-            return Err(obj_err(Some(i + 1), format!("vertex needs at least 3 coordinates: '{line}'")));
-        }
-        for v in &values {
-            match v.parse::<f32>() {
-                Ok(x) if x.is_finite() => {}
-                Ok(_) => {
-                    return Err(obj_err(
-                        Some(i + 1),
-                        format!("vertex has a NaN or infinite value: '{line}'"),
-                    ));
-                }
-                Err(_) => return Err(obj_err(Some(i + 1), format!("'{v}' is not a number: '{line}'"))),
-            }
-        }
-    }
+    let prepared = prepare(&text).map_err(|(line, message)| obj_err(Some(line), message))?;
     let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
-    let mut reader = std::io::BufReader::new(text.as_bytes());
+    let mut reader = std::io::BufReader::new(prepared.text.as_bytes());
     let (models, _materials) = tobj::load_obj_buf(&mut reader, &options, |_| Ok(Default::default()))
         .map_err(|e| obj_err(None, e.to_string()))?;
     let mut meshes = Vec::new();
@@ -71,12 +120,258 @@ pub fn load_obj(path: &Path) -> Result<Scene, OitError> {
         meshes.push(mesh);
     }
     if meshes.is_empty() {
-        return Err(obj_err(None, "no faces".into()));
+        let skipped = if prepared.warnings.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", prepared.warnings.join("; "))
+        };
+        return Err(obj_err(None, format!("no faces{skipped}")));
     }
     let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    let scene = Scene::from_meshes(name, meshes, OBJ_COLOR);
+    let mut scene = Scene::from_meshes(name, meshes, OBJ_COLOR);
+    scene.warnings = prepared.warnings.iter().map(|w| format!("{}: {w}", path.display())).collect();
     scene.validate().map_err(|e| obj_err(None, e.to_string()))?;
     Ok(scene)
+}
+
+/// The OBJ text as tobj gets it, and what was left out of it.
+struct Prepared<'a> {
+    text: std::borrow::Cow<'a, str>,
+    warnings: Vec<String>,
+}
+
+/// Element kinds skipped, counted for one warning each.
+#[derive(Default)]
+struct Skipped {
+    count: usize,
+    first_line: usize,
+}
+
+impl Skipped {
+    fn add(&mut self, line: usize) {
+        if self.count == 0 {
+            self.first_line = line;
+        }
+        self.count += 1;
+    }
+
+    fn warning(&self, what: &str) -> Option<String> {
+        (self.count > 0).then(|| format!("skipped {} {what} (first at line {})", self.count, self.first_line))
+    }
+}
+
+/// The first pass over the text: checks vertices, drops `l` and `p` elements and faces of fewer
+/// than three vertices, and rewrites faces of four or more vertices as ear-clipped triangles
+/// (keeping each corner's `v/vt/vn` token, so tobj still resolves texture coordinates and
+/// normals). Errors carry the 1-based line.
+fn prepare(text: &str) -> Result<Prepared<'_>, (usize, String)> {
+    let mut positions: Vec<DVec3> = Vec::new();
+    let mut out: Option<String> = None;
+    let (mut lines, mut points, mut short, mut flat) =
+        (Skipped::default(), Skipped::default(), Skipped::default(), Skipped::default());
+    let mut offset = 0;
+    for (i, raw) in text.split_inclusive('\n').enumerate() {
+        let number = i + 1;
+        let start = offset;
+        offset += raw.len();
+        let line = raw.trim_end_matches(['\n', '\r']);
+        let mut words = line.split_whitespace();
+        // What replaces this line in tobj's text (None: the line as it is).
+        let replacement: Option<String> = match words.next() {
+            Some("v") => {
+                positions.push(parse_vertex(line, words).map_err(|m| (number, m))?);
+                None
+            }
+            Some("l") => {
+                lines.add(number);
+                Some(String::new())
+            }
+            Some("p") => {
+                points.add(number);
+                Some(String::new())
+            }
+            Some("f") => {
+                let corners: Vec<&str> = words.collect();
+                if corners.len() < 3 {
+                    short.add(number);
+                    Some(String::new())
+                } else if corners.len() == 3 {
+                    for c in &corners {
+                        resolve(c, positions.len()).map_err(|m| (number, m))?;
+                    }
+                    None
+                } else {
+                    let polygon = corners
+                        .iter()
+                        .map(|c| resolve(c, positions.len()).map(|ix| positions[ix]))
+                        .collect::<Result<Vec<_>, _>>()
+                        .map_err(|m| (number, m))?;
+                    let triangles = triangulate(&polygon).map_err(|m| {
+                        (number, format!("face of {} vertices {m}; split it into triangles", corners.len()))
+                    })?;
+                    if triangles.is_empty() {
+                        flat.add(number);
+                    }
+                    let mut s = String::new();
+                    for t in triangles {
+                        s.push_str(&format!("f {} {} {}\n", corners[t[0]], corners[t[1]], corners[t[2]]));
+                    }
+                    Some(s)
+                }
+            }
+            _ => None,
+        };
+        match (replacement, &mut out) {
+            (Some(r), Some(o)) => o.push_str(&r),
+            (Some(r), None) => out = Some(format!("{}{r}", &text[..start])),
+            (None, Some(o)) => o.push_str(raw),
+            (None, None) => {}
+        }
+    }
+    let warnings = [
+        lines.warning("line elements ('l'): they have no area"),
+        points.warning("point elements ('p'): they have no area"),
+        short.warning("faces of fewer than 3 vertices"),
+        flat.warning("polygons of no area"),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    let text = match out {
+        Some(o) => std::borrow::Cow::Owned(o),
+        None => std::borrow::Cow::Borrowed(text),
+    };
+    Ok(Prepared { text, warnings })
+}
+
+/// Parses a `v` line's values (after the `v`): x y z, optionally w (which divides them, as tobj
+/// does) or r g b. Every value must be a finite number and every coordinate within
+/// ±[`Mesh::MAX_COORDINATE`].
+fn parse_vertex<'a>(line: &str, words: impl Iterator<Item = &'a str>) -> Result<DVec3, String> {
+    let mut values = Vec::with_capacity(6);
+    for v in words {
+        match v.parse::<f32>() {
+            Ok(x) if x.is_finite() => values.push(x),
+            Ok(_) => return Err(format!("vertex has a NaN or infinite value: '{line}'")),
+            Err(_) => return Err(format!("'{v}' is not a number: '{line}'")),
+        }
+    }
+    if values.len() < 3 {
+        return Err(format!("vertex needs at least 3 coordinates: '{line}'"));
+    }
+    let mut p = Vec3::new(values[0], values[1], values[2]);
+    if values.len() == 4 {
+        if values[3] == 0.0 {
+            return Err(format!("vertex has w = 0: '{line}'"));
+        }
+        p /= values[3];
+    }
+    let max = Mesh::MAX_COORDINATE;
+    if !p.is_finite() || p.abs().max_element() > max {
+        return Err(format!(
+            "vertex coordinate out of range: '{line}' (oit takes coordinates within ±{max:e}; scale the model down)"
+        ));
+    }
+    Ok(p.as_dvec3())
+}
+
+/// The 0-based position a face corner (`v`, `v/vt`, `v//vn`, `v/vt/vn`; negative counts back from
+/// the last vertex so far) refers to.
+fn resolve(corner: &str, count: usize) -> Result<usize, String> {
+    let v = corner.split('/').next().unwrap_or_default();
+    let bad = || format!("face corner '{corner}' refers to no vertex ({count} defined so far)");
+    let i: i64 = v.parse().map_err(|_| bad())?;
+    let ix = if i > 0 { i - 1 } else { count as i64 + i };
+    if i == 0 || ix < 0 || ix >= count as i64 {
+        return Err(bad());
+    }
+    Ok(ix as usize)
+}
+
+/// Triangulates a simple polygon (any winding, convex or not, roughly planar) by ear clipping in
+/// the plane its Newell normal is most aligned with. Triangles keep the polygon's winding (each is
+/// three corners in the polygon's own order); a
+/// polygon of no area gives none. Fails when no ear is left (a polygon that crosses itself).
+///
+/// Only reflex vertices can lie inside an ear, so each candidate ear is tested against those
+/// alone: O(n·r) for n vertices of which r are reflex.
+fn triangulate(polygon: &[DVec3]) -> Result<Vec<[usize; 3]>, String> {
+    let n = polygon.len();
+    let mut normal = DVec3::ZERO;
+    for i in 0..n {
+        let (a, b) = (polygon[i], polygon[(i + 1) % n]);
+        normal += DVec3::new((a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y));
+    }
+    let axis = normal.abs().max_position();
+    if normal[axis] == 0.0 {
+        return Ok(Vec::new());
+    }
+    // Drop the dominant axis; order the other two so the polygon winds counter-clockwise.
+    let (u, v) = [(1, 2), (2, 0), (0, 1)][axis];
+    let flip = normal[axis] < 0.0;
+    let p: Vec<DVec2> =
+        polygon.iter().map(|q| if flip { DVec2::new(q[v], q[u]) } else { DVec2::new(q[u], q[v]) }).collect();
+    let cross = |a: usize, b: usize, c: usize| (p[b] - p[a]).perp_dot(p[c] - p[a]);
+    let mut prev: Vec<usize> = (0..n).map(|i| (i + n - 1) % n).collect();
+    let mut next: Vec<usize> = (0..n).map(|i| (i + 1) % n).collect();
+    // Not strictly convex: reflex or collinear; only these can lie in or on an ear.
+    let mut reflex: Vec<bool> = (0..n).map(|i| cross(prev[i], i, next[i]) <= 0.0).collect();
+    let mut reflex_list: Vec<usize> = (0..n).filter(|&i| reflex[i]).collect();
+    let mut removed = vec![false; n];
+    let mut triangles = Vec::with_capacity(n - 2);
+    let (mut left, mut current, mut misses) = (n, 0usize, 0usize);
+    let inside = |a: usize, b: usize, c: usize, r: usize| {
+        // in the closed triangle (a, b, c), counter-clockwise, unless it is one of its corners
+        let q = p[r];
+        q != p[a]
+            && q != p[b]
+            && q != p[c]
+            && (p[b] - p[a]).perp_dot(q - p[a]) >= 0.0
+            && (p[c] - p[b]).perp_dot(q - p[b]) >= 0.0
+            && (p[a] - p[c]).perp_dot(q - p[c]) >= 0.0
+    };
+    while left > 3 {
+        if misses > left {
+            return Err("crosses itself or folds back on itself: no ear left to clip".into());
+        }
+        let (a, b, c) = (prev[current], current, next[current]);
+        let turn = cross(a, b, c);
+        let ear = if turn == 0.0 {
+            // a straight or back-tracking vertex: dropping it loses no area
+            true
+        } else if turn < 0.0 {
+            false
+        } else {
+            !reflex_list.iter().any(|&r| reflex[r] && !removed[r] && r != a && r != c && inside(a, b, c, r))
+        };
+        if !ear {
+            current = c;
+            misses += 1;
+            continue;
+        }
+        if turn != 0.0 {
+            triangles.push([a, b, c]);
+        }
+        removed[b] = true;
+        next[a] = c;
+        prev[c] = a;
+        left -= 1;
+        misses = 0;
+        for x in [a, c] {
+            if reflex[x] && cross(prev[x], x, next[x]) > 0.0 {
+                reflex[x] = false;
+            }
+        }
+        if reflex_list.len() > 64 && reflex_list.len() > 2 * left {
+            reflex_list.retain(|&r| reflex[r] && !removed[r]);
+        }
+        current = a;
+    }
+    let (a, b, c) = (prev[current], current, next[current]);
+    if cross(a, b, c) != 0.0 {
+        triangles.push([a, b, c]);
+    }
+    Ok(triangles)
 }
 
 #[cfg(test)]
@@ -91,6 +386,41 @@ mod tests {
         p
     }
 
+    /// Σ |area| of a scene's triangles (f64): equals the polygon's area only if the triangles
+    /// neither overlap nor spill out of it.
+    fn unsigned_area(scene: &Scene) -> f64 {
+        let m = &scene.meshes[0];
+        m.indices
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| m.positions[i as usize].as_dvec3());
+                (b - a).cross(c - a).length() * 0.5
+            })
+            .sum()
+    }
+
+    /// Shoelace area of a polygon in the z = 0 plane.
+    fn shoelace(points: &[(f32, f32)]) -> f64 {
+        let n = points.len();
+        (0..n)
+            .map(|i| {
+                let (a, b) = (points[i], points[(i + 1) % n]);
+                f64::from(a.0) * f64::from(b.1) - f64::from(b.0) * f64::from(a.1)
+            })
+            .sum::<f64>()
+            * 0.5
+    }
+
+    fn polygon_obj(points: &[(f32, f32)]) -> String {
+        let mut s: String = points.iter().map(|(x, y)| format!("v {x} {y} 0\n")).collect();
+        s.push('f');
+        for i in 1..=points.len() {
+            s.push_str(&format!(" {i}"));
+        }
+        s.push('\n');
+        s
+    }
+
     #[test]
     fn loads_objects_quads_and_colors() {
         let p = write(
@@ -103,6 +433,7 @@ mod tests {
         assert_eq!(s.meshes[1].indices.len(), 1);
         assert!(s.meshes[0].colors.is_some());
         assert!(s.meshes[0].normals.iter().all(|n| (n.z.abs() - 1.0).abs() < 1e-6), "normals computed");
+        assert!(s.warnings.is_empty());
     }
 
     #[test]
@@ -117,6 +448,109 @@ mod tests {
         let missing = std::env::temp_dir().join("definitely-missing-oit.obj");
         assert!(load_obj(&missing).unwrap_err().to_string().contains("definitely-missing-oit.obj"));
         let p = write("badidx.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
-        assert!(load_obj(&p).is_err());
+        let e = load_obj(&p).unwrap_err().to_string();
+        assert!(e.contains("line 4") && e.contains("'9'"), "{e}");
+    }
+
+    #[test]
+    fn huge_finite_vertex_is_out_of_range_not_non_finite() {
+        // 1e37 is a finite f32, but its bounding sphere overflows f32: the message must say what
+        // is wrong (the range), not call it NaN or infinite
+        let p = write("huge.obj", "v 0 0 0\nv 1e37 0 0\nv 0 1 0\nf 1 2 3\n");
+        let e = load_obj(&p).unwrap_err().to_string();
+        assert!(e.contains("line 2") && e.contains("out of range"), "{e}");
+        assert!(!e.contains("NaN") && !e.contains("finite"), "{e}");
+        // the largest allowed coordinate loads
+        let p = write("big.obj", "v 0 0 0\nv 1e15 0 0\nv 0 1e15 0\nf 1 2 3\n");
+        load_obj(&p).unwrap();
+    }
+
+    #[test]
+    fn concave_quad_is_ear_clipped() {
+        // A dart: the reflex vertex (2, 1) is the second, so tobj's fan from the first vertex
+        // makes one clockwise triangle spilling outside (|areas| 2 + 6 = 8 for a true area of 4).
+        let dart = [(0.0, 0.0), (2.0, 1.0), (4.0, 0.0), (2.0, 3.0)];
+        let s = load_obj(&write("dart.obj", &polygon_obj(&dart))).unwrap();
+        assert_eq!(s.meshes[0].indices.len(), 2);
+        assert_eq!(shoelace(&dart), 4.0);
+        assert!((unsigned_area(&s) - 4.0).abs() < 1e-9, "{}", unsigned_area(&s));
+        // the same dart in the x–z plane, wound the other way (its normal is −y), is still exact
+        let text = "v 0 0 0\nv 2 0 1\nv 4 0 0\nv 2 0 3\nf 4 3 2 1\n";
+        let s = load_obj(&write("dart-xz.obj", text)).unwrap();
+        assert!((unsigned_area(&s) - 4.0).abs() < 1e-9, "{}", unsigned_area(&s));
+    }
+
+    #[test]
+    fn concave_10000_gon_area_is_exact() {
+        // A star of 5,000 spikes (radii 1 and 0.5 alternating): fan triangulation covers most of
+        // it thousands of times; ear clipping covers it exactly once.
+        let n = 10_000;
+        let star: Vec<(f32, f32)> = (0..n)
+            .map(|i| {
+                let a = i as f64 / n as f64 * std::f64::consts::TAU;
+                let r = if i % 2 == 0 { 1.0 } else { 0.5 };
+                ((r * a.cos()) as f32, (r * a.sin()) as f32)
+            })
+            .collect();
+        let s = load_obj(&write("star.obj", &polygon_obj(&star))).unwrap();
+        let m = &s.meshes[0];
+        assert_eq!(m.indices.len(), n - 2);
+        let truth = shoelace(&star);
+        let got = unsigned_area(&s);
+        assert!((got - truth).abs() < 1e-6 * truth, "triangulated {got}, polygon {truth}");
+        // every triangle keeps the polygon's (counter-clockwise) winding
+        for t in &m.indices {
+            let [a, b, c] = t.map(|i| m.positions[i as usize].as_dvec3());
+            assert!((b - a).cross(c - a).z >= 0.0);
+        }
+    }
+
+    #[test]
+    fn lines_and_points_are_skipped_with_a_warning() {
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nl 1 2 3\nl 2 4\np 4\nf 2 4\n";
+        let s = load_obj(&write("lines.obj", text)).unwrap();
+        assert_eq!(s.triangle_count(), 1, "only the face is drawn");
+        let w = s.warnings.join("\n");
+        assert!(w.contains("2 line elements") && w.contains("line 6"), "{w}");
+        assert!(w.contains("1 point elements") && w.contains("line 8"), "{w}");
+        assert!(w.contains("1 faces of fewer than 3") && w.contains("line 9"), "{w}");
+        let e = load_obj(&write("only-lines.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2 3\n"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("no faces") && e.contains("line elements"), "{e}");
+    }
+
+    #[test]
+    fn non_regular_files_are_refused_before_reading() {
+        // /dev/zero would otherwise be read until memory runs out
+        let e = load_obj(Path::new("/dev/zero")).unwrap_err().to_string();
+        assert!(e.contains("not a regular file"), "{e}");
+        let dir = std::env::temp_dir();
+        assert!(load_obj(&dir).unwrap_err().to_string().contains("not a regular file"));
+    }
+
+    #[test]
+    fn model_size_is_capped() {
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+        let p = write("small.obj", text);
+        let e = load_obj_limited(&p, 10).unwrap_err().to_string();
+        assert!(e.contains("OIT_MAX_MODEL_BYTES") && e.contains(&text.len().to_string()), "{e}");
+        load_obj_limited(&p, text.len() as u64).unwrap();
+        assert_eq!(max_model_bytes(None).unwrap(), 1 << 30);
+        assert_eq!(max_model_bytes(Some("4096")).unwrap(), 4096);
+        assert!(max_model_bytes(Some("1G")).unwrap_err().to_string().contains("OIT_MAX_MODEL_BYTES"));
+    }
+
+    #[test]
+    fn ear_clipping_edges() {
+        let v = |x: f64, y: f64| DVec3::new(x, y, 0.0);
+        // collinear corners add no triangles of their own
+        let square = [v(0.0, 0.0), v(1.0, 0.0), v(2.0, 0.0), v(2.0, 2.0), v(0.0, 2.0)];
+        let t = triangulate(&square).unwrap();
+        let area: f64 =
+            t.iter().map(|t| (square[t[1]] - square[t[0]]).cross(square[t[2]] - square[t[0]]).z * 0.5).sum();
+        assert!((area - 4.0).abs() < 1e-12 && t.len() <= 3, "{t:?}");
+        // all on one line: nothing to draw
+        assert!(triangulate(&[v(0.0, 0.0), v(1.0, 0.0), v(2.0, 0.0), v(3.0, 0.0)]).unwrap().is_empty());
     }
 }

@@ -43,7 +43,17 @@ pub fn load_scene(name: &str) -> Result<Scene, OitError> {
 
 /// Builds a built-in scene; `None` when the name is not a built-in one, `Some(Err)` when it is but
 /// its parameter is bad.
+///
+/// Every scene built here holds at most [`Scene::MAX_TRIANGLES`] triangles in at most
+/// [`Scene::MAX_INSTANCES`] instances; a nested grid is refused before its copies are made.
 pub fn builtin_scene(name: &str) -> Option<Result<Scene, OitError>> {
+    let scene = builtin_unchecked(name)?;
+    Some(
+        scene.and_then(|s| Scene::check_size(name, s.triangle_count(), s.instances.len() as u64).map(|()| s)),
+    )
+}
+
+fn builtin_unchecked(name: &str) -> Option<Result<Scene, OitError>> {
     if let Some(rest) = name.strip_prefix("grid:") {
         return Some(grid(rest));
     }
@@ -113,13 +123,25 @@ fn grid(spec: &str) -> Result<Scene, OitError> {
             _ => load_scene(mesh)?,
         },
     };
+    // R×C ≤ 4096 bounds one grid, not a grid of grids: count before copying
+    let copies = u64::from(rows * cols);
+    Scene::check_size(
+        &format!("grid:{spec}"),
+        copies.saturating_mul(base.triangle_count()),
+        copies.saturating_mul(base.instances.len() as u64),
+    )?;
     let bounds = base.bounds();
     if bounds.is_empty() {
         return Err(OitError::InvalidScene(format!("grid mesh '{mesh}' is empty")));
     }
     let size = bounds.max - bounds.min;
     let step = size * 0.7;
-    let mut scene = Scene { name: format!("grid:{spec}"), meshes: base.meshes.clone(), ..Default::default() };
+    let mut scene = Scene {
+        name: format!("grid:{spec}"),
+        meshes: base.meshes.clone(),
+        warnings: base.warnings.clone(),
+        ..Default::default()
+    };
     for i in 0..rows * cols {
         let (row, col) = (i / cols, i % cols);
         let offset = Vec3::new(
@@ -182,7 +204,7 @@ fn single(name: String, meshes: Vec<Mesh>, colors: Vec<Vec4>) -> Scene {
         .map(|(i, (m, &color))| Object { name: m.name.clone(), mesh: i, color, absorption: 1.0 })
         .collect::<Vec<_>>();
     let instances = (0..objects.len()).map(|object| Instance { object, transform: Mat4::IDENTITY }).collect();
-    Scene { name, meshes, objects, instances }
+    Scene { name, meshes, objects, instances, warnings: Vec::new() }
 }
 
 /// `planes:N`: N 2×2 quads facing +z, spread over a depth of 1 (z from +0.5 to −0.5), each with its
@@ -372,6 +394,22 @@ mod tests {
         for bad in ["grid:0x3:knot", "grid:2:knot", "grid:2x3", "grid:2x3:nope-nothing", "grid:axb:knot"] {
             assert!(load_scene(bad).is_err(), "{bad}");
         }
+    }
+
+    #[test]
+    fn nested_grids_are_capped() {
+        // each level passes the R×C ≤ 4096 cap; the product is what must be bounded, and before
+        // the copies are made (4096 × 4096 knots: 309G triangles)
+        let e = load_scene("grid:64x64:grid:64x64:knot").unwrap_err().to_string();
+        assert!(e.contains("triangles") && e.contains("over the limit of 50000000"), "{e}");
+        // 4096² planes:1 copies are only 33.5M triangles, but 16.7M instances
+        let e = load_scene("grid:64x64:grid:64x64:planes:1").unwrap_err().to_string();
+        assert!(e.contains("16777216 instances") && e.contains("over the limit"), "{e}");
+        let g = load_scene("grid:2x2:grid:2x2:planes:2").unwrap();
+        assert_eq!(g.triangle_count(), 4 * 4 * 2 * 2);
+        // a flat built-in over the cap is refused too (spheres:N has 2,208 triangles per sphere)
+        let e = load_scene("spheres:100000").unwrap_err().to_string();
+        assert!(e.contains("220800000 triangles"), "{e}");
     }
 
     #[test]

@@ -105,6 +105,12 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// The largest coordinate magnitude a vertex may have. Far beyond any real model (f32 keeps 7
+    /// digits), and far below where a camera framing the scene overflows f32: at the narrowest
+    /// field of view (0.5°) the eye stands about 240 bounding radii away and its squared distance
+    /// must stay under f32::MAX ≈ 3.4e38, which allows radii up to about 4e16.
+    pub const MAX_COORDINATE: f32 = 1e15;
+
     /// A mesh from positions and triangles, with area-weighted vertex normals computed.
     pub fn new(name: impl Into<String>, positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> Mesh {
         let mut mesh = Mesh { name: name.into(), positions, normals: Vec::new(), colors: None, indices };
@@ -138,7 +144,8 @@ impl Mesh {
         b
     }
 
-    /// Checks that every number is finite and every index in range.
+    /// Checks that every number is finite, every coordinate within ±[`Mesh::MAX_COORDINATE`] and
+    /// every index in range.
     pub fn validate(&self) -> Result<(), OitError> {
         if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
             return Err(OitError::InvalidScene(format!(
@@ -146,6 +153,15 @@ impl Mesh {
                 self.name,
                 i + 1,
                 self.positions[i]
+            )));
+        }
+        if let Some(i) = self.positions.iter().position(|p| p.abs().max_element() > Mesh::MAX_COORDINATE) {
+            return Err(OitError::InvalidScene(format!(
+                "mesh '{}': vertex {} is out of range ({:?}): coordinates must lie within ±{:e}; scale the model down",
+                self.name,
+                i + 1,
+                self.positions[i],
+                Mesh::MAX_COORDINATE
             )));
         }
         if self.normals.len() != self.positions.len() {
@@ -211,9 +227,40 @@ pub struct Scene {
     pub objects: Vec<Object>,
     /// The instances, drawn in this order.
     pub instances: Vec<Instance>,
+    /// What loading left out (an OBJ file's line and point elements, ...), one message each, for
+    /// the front end to print.
+    pub warnings: Vec<String>,
 }
 
 impl Scene {
+    /// The most triangles a scene may draw (over all instances): 50 million, about 1.8 GB of
+    /// vertex data at the 36 bytes a triangle's positions take, and far more than any model oit
+    /// ships with (the bunny has 70 thousand).
+    pub const MAX_TRIANGLES: u64 = 50_000_000;
+
+    /// The most instances a scene may place: a million, about 170 MB of objects and transforms
+    /// (`grid:RxC:MESH` copies every instance of MESH R×C times, so nesting multiplies them).
+    pub const MAX_INSTANCES: u64 = 1_000_000;
+
+    /// Refuses a scene called `name` of `triangles` triangles in `instances` instances when
+    /// either is over its limit ([`Scene::MAX_TRIANGLES`], [`Scene::MAX_INSTANCES`]), so a
+    /// scene expression can be checked before it is built.
+    pub fn check_size(name: &str, triangles: u64, instances: u64) -> Result<(), OitError> {
+        if triangles > Scene::MAX_TRIANGLES {
+            return Err(OitError::InvalidScene(format!(
+                "scene '{name}' has {triangles} triangles, over the limit of {}: use fewer copies or a smaller mesh",
+                Scene::MAX_TRIANGLES
+            )));
+        }
+        if instances > Scene::MAX_INSTANCES {
+            return Err(OitError::InvalidScene(format!(
+                "scene '{name}' has {instances} instances, over the limit of {}: use fewer copies",
+                Scene::MAX_INSTANCES
+            )));
+        }
+        Ok(())
+    }
+
     /// A scene with one instance (identity transform) of each mesh, coloured `color`.
     pub fn from_meshes(name: impl Into<String>, meshes: Vec<Mesh>, color: Vec4) -> Scene {
         let objects: Vec<Object> = meshes
@@ -223,7 +270,7 @@ impl Scene {
             .collect();
         let instances =
             (0..objects.len()).map(|object| Instance { object, transform: Mat4::IDENTITY }).collect();
-        Scene { name: name.into(), meshes, objects, instances }
+        Scene { name: name.into(), meshes, objects, instances, warnings: Vec::new() }
     }
 
     /// The mesh and object an instance draws.
@@ -285,8 +332,15 @@ impl Scene {
         if self.triangle_count() == 0 {
             return Err(OitError::InvalidScene(format!("scene '{}' has no triangles", self.name)));
         }
-        if self.triangle_count() >= u64::from(u32::MAX) {
-            return Err(OitError::InvalidScene("more than 2^32 - 1 triangles".into()));
+        Scene::check_size(&self.name, self.triangle_count(), self.instances.len() as u64)?;
+        let bounds = self.bounds();
+        let extent = bounds.min.abs().max(bounds.max.abs()).max_element();
+        if extent.is_nan() || extent > Mesh::MAX_COORDINATE {
+            return Err(OitError::InvalidScene(format!(
+                "scene '{}' reaches {extent:e} from the origin once placed: world coordinates must lie within ±{:e}",
+                self.name,
+                Mesh::MAX_COORDINATE
+            )));
         }
         Ok(())
     }

@@ -2,16 +2,60 @@
 //! against the reference, weighted blending's error bounded, losses counted, bad input refused.
 
 use glam::{DVec3, Vec3};
-use oit_core::composite::{front_to_back_f64, linear_to_srgb8_f64};
 use oit_core::metrics::accuracy;
-use oit_core::rules::{pack_rgba8, unpack_rgba8_f64};
-use oit_core::{Backend, Settings, Shading, Technique, View};
+use oit_core::{Backend, Image, Scene, Settings, Shading, Technique, View};
 use oit_tests::*;
 
-/// 8-bit sRGB back to linear.
-fn to_linear(c: u8) -> f64 {
-    let s = f64::from(c) / 255.0;
-    if s <= 0.04045 { s / 12.92 } else { ((s + 0.055) / 1.055).powf(2.4) }
+// The planes scene (oit-core/src/procedural.rs, `planes`): N 2×2 quads facing +z at z = 0.5 − i/(N−1),
+// plane 0 nearest the FRONT camera (which looks down −z from +z), each its own colour (multiples
+// of 1/255) and alpha 102/255. Seen from the axis every plane's footprint holds the footprints of
+// those behind it, so a pixel where the reference counts k layers sees exactly planes 0..k.
+
+/// 8-bit quantization, as fragments are stored (round half up).
+fn q8(x: f64) -> f64 {
+    (x.clamp(0.0, 1.0) * 255.0 + 0.5).floor() / 255.0
+}
+
+/// Linear [0, 1] to 8-bit sRGB (IEC 61966-2-1), written out here rather than borrowed from the
+/// code under test.
+fn srgb8(x: f64) -> u8 {
+    let x = x.clamp(0.0, 1.0);
+    let s = if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 };
+    (s * 255.0 + 0.5).floor() as u8
+}
+
+/// Each plane's fragment colour and alpha, nearest first: the object's colour times the shading
+/// factor, quantized to 8 bits. Headlight is colour × (0.3 + 0.7·|n·l|) (DESIGN.md); the planes'
+/// normal is +z and the FRONT camera's forward −z, so the factor is exactly 1.
+fn plane_fragments(scene: &Scene, shading: Shading, forward: Vec3) -> Vec<([f64; 3], f64)> {
+    let factor = match shading {
+        Shading::Flat => 1.0,
+        Shading::Headlight => 0.3 + 0.7 * f64::from(Vec3::Z.dot(forward)).abs(),
+        other => panic!("{other:?}: not modelled"),
+    };
+    scene
+        .objects
+        .iter()
+        .map(|o| {
+            let c = o.color.as_dvec4();
+            ([q8(c.x * factor), q8(c.y * factor), q8(c.z * factor)], q8(c.w))
+        })
+        .collect()
+}
+
+/// The closed form of front-to-back compositing of `layers` over `bg`:
+/// C = Σᵢ cᵢ·aᵢ·Πⱼ<ᵢ(1 − aⱼ) + bg·Πⱼ(1 − aⱼ).
+fn closed_form(layers: &[([f64; 3], f64)], bg: DVec3) -> DVec3 {
+    let mut c = DVec3::ZERO;
+    for (i, (ci, ai)) in layers.iter().enumerate() {
+        let t: f64 = layers[..i].iter().map(|(_, a)| 1.0 - a).product();
+        c += DVec3::from_array(*ci) * *ai * t;
+    }
+    c + bg * layers.iter().map(|(_, a)| 1.0 - a).product::<f64>()
+}
+
+fn srgb_pixel(c: DVec3) -> [u8; 4] {
+    [srgb8(c.x), srgb8(c.y), srgb8(c.z), 255]
 }
 
 #[test]
@@ -20,30 +64,91 @@ fn reference_equals_hand_composite_on_planes() {
         eprintln!("on {}", label(backend.as_ref()));
         for n in 1..=8u32 {
             let scene = scene(&format!("planes:{n}"));
-            let s = Settings {
-                shading: Shading::Flat,
-                background: Vec3::new(0.9, 0.9, 0.9),
-                ..settings(64, "reference")
-            };
-            let cam = camera(&scene, &s, FRONT);
-            let frame = render(backend.as_ref(), &scene, &cam, &s);
-            // Plane 0 is nearest (z = +0.5 faces the camera on +z); colours are the 8-bit quantized
-            // object colours, composited front to back by hand.
-            let colors: Vec<[f64; 4]> =
-                scene.objects.iter().map(|o| unpack_rgba8_f64(pack_rgba8(o.color))).collect();
-            let c = front_to_back_f64(colors, DVec3::splat(0.9));
-            let expected =
-                [linear_to_srgb8_f64(c.x), linear_to_srgb8_f64(c.y), linear_to_srgb8_f64(c.z), 255];
-            let layers = frame.layers.as_ref().expect("reference records layers");
-            let full: Vec<usize> = (0..layers.len()).filter(|&i| layers[i] == n).collect();
-            assert!(full.len() > 100, "planes:{n}: only {} pixels see every plane", full.len());
-            for &i in &full {
-                assert_eq!(frame.image.pixels[i], expected, "planes:{n} pixel {i}");
+            for background in [Settings::default().background, Vec3::splat(0.9)] {
+                // the default shading (headlight), so its factor is part of what is checked
+                let s = Settings { background, ..settings(64, "reference") };
+                assert_eq!(s.shading, Shading::Headlight);
+                let cam = camera(&scene, &s, FRONT);
+                assert!((cam.forward - Vec3::NEG_Z).length() < 1e-6, "{}", cam.forward);
+                let frame = render(backend.as_ref(), &scene, &cam, &s);
+                let fragments = plane_fragments(&scene, s.shading, cam.forward);
+                let bg = background.as_dvec3();
+                let layers = frame.layers.as_ref().expect("reference records layers");
+                let full = layers.iter().filter(|&&l| l == n).count();
+                assert!(full > 100, "planes:{n}: only {full} pixels see every plane");
+                for (i, &k) in layers.iter().enumerate() {
+                    assert!(k <= n, "planes:{n} pixel {i}: {k} layers");
+                    let expected = srgb_pixel(closed_form(&fragments[..k as usize], bg));
+                    assert_eq!(frame.image.pixels[i], expected, "planes:{n} pixel {i} ({k} layers)");
+                }
+                // the check tells orders apart: planes composited back to front would fail it
+                if n >= 2 {
+                    let reversed: Vec<_> = fragments.iter().rev().copied().collect();
+                    let wrong = srgb_pixel(closed_form(&reversed, bg));
+                    let i = layers.iter().position(|&l| l == n).unwrap();
+                    assert_ne!(frame.image.pixels[i], wrong, "planes:{n}: order must show");
+                }
             }
-            // where fewer planes overlap (the far planes are smaller on screen) the count is right
-            assert!(layers.iter().all(|&l| l <= n));
         }
     }
+}
+
+/// The bytes a `wavg` or `wsum` pixel of the planes scene may take in channel `ch`, from that
+/// pixel's own k layers (planes 0..k). All planes have the same alpha a, so the reference's
+/// weights are wᵢ = a(1 − a)ⁱ, Σwᵢ = 1 − T with T = (1 − a)ᵏ, and R = Σwᵢcᵢ + T·bg (the closed
+/// form above). Both techniques are then linear in the colours, and their error D has a closed
+/// form:
+///
+/// - `wavg` (Bavoil & Myers): the mean colour c̄ = Σa·cᵢ / (k·a) under the mean alpha a applied k
+///   times, W = c̄(1 − T) + T·bg = Σw̄cᵢ + T·bg with w̄ = (1 − T)/k, so D = W − R = Σ(w̄ − wᵢ)cᵢ.
+///   (As Σ(w̄ − wᵢ) = 0, |D| ≤ (max cᵢ − min cᵢ)/2 · Σ|w̄ − wᵢ|: the spread of the pixel's own
+///   colours, not of every plane's, sets the size.)
+/// - `wsum` (Meshkin): S = Σa·cᵢ + (1 − k·a)·bg. As 1 − k·a − T = −Σ(a − wᵢ),
+///   D = S − R = Σ(a − wᵢ)(cᵢ − bg), each a − wᵢ ≥ 0; the image clamps S to [0, 1], which moves it
+///   towards R ∈ [0, 1].
+///
+/// The bound: the pixel lies between R and R + D (clamped), i.e. its error is at most the
+/// method's own and in its direction. With one layer D = 0 (w̄ = w₀ = a, a − w₀ = 0): a
+/// single-layer pixel must equal the reference. The image is 8-bit sRGB of an f32 computation, so
+/// the bytes are [srgb8(low − ε), srgb8(high + ε)] (the encoding is monotone), ε = 1e-5 covering
+/// f32 rounding of sums of at most 8 terms ≤ 1 (≈ 1e-6).
+fn weighted_bytes(t: Technique, own: &[([f64; 3], f64)], bg: DVec3, ch: usize) -> (u8, u8) {
+    const EPS: f64 = 1e-5;
+    let a = own[0].1;
+    assert!(own.iter().all(|f| f.1 == a), "the closed forms assume one alpha");
+    let k = own.len();
+    let r = closed_form(own, bg)[ch];
+    let w: Vec<f64> = (0..k as i32).map(|i| a * (1.0 - a).powi(i)).collect();
+    let c: Vec<f64> = own.iter().map(|f| f.0[ch]).collect();
+    let d = if t == Technique::WeightedAverage {
+        let mean_w = (1.0 - (1.0 - a).powi(k as i32)) / k as f64;
+        w.iter().zip(&c).map(|(wi, ci)| (mean_w - wi) * ci).sum::<f64>()
+    } else {
+        w.iter().zip(&c).map(|(wi, ci)| (a - wi) * (ci - bg[ch])).sum::<f64>()
+    };
+    let other = (r + d).clamp(0.0, 1.0);
+    (srgb8(r.min(other) - EPS), srgb8(r.max(other) + EPS))
+}
+
+/// Pixels of a `wavg`/`wsum` image outside [`weighted_bytes`], as messages.
+fn weighted_violations(
+    t: Technique,
+    layers: &[u32],
+    image: &Image,
+    fragments: &[([f64; 3], f64)],
+    bg: DVec3,
+) -> Vec<String> {
+    let mut out = Vec::new();
+    for (i, &k) in layers.iter().enumerate().filter(|&(_, &k)| k > 0) {
+        for ch in 0..3 {
+            let (lo, hi) = weighted_bytes(t, &fragments[..k as usize], bg, ch);
+            let got = image.pixels[i][ch];
+            if !(lo..=hi).contains(&got) {
+                out.push(format!("px {i} ({k} layers) ch {ch}: {got} outside {lo}..={hi}"));
+            }
+        }
+    }
+    out
 }
 
 #[test]
@@ -61,6 +166,8 @@ fn peeling_is_exact_and_weighted_is_bounded_on_planes() {
                 assert_eq!(a.epr, 0.0, "{t} planes:{n}");
                 assert_eq!(f.stats.lost, 0, "{t} planes:{n}");
             }
+            let fragments = plane_fragments(&scene, Shading::Flat, Vec3::NEG_Z);
+            let bg = bg.as_dvec3();
             for t in [Technique::WeightedAverage, Technique::WeightedSum] {
                 let (r, f) = with_reference(b, &scene, FRONT, &s, t);
                 let a = accuracy(&r, &f.image).unwrap();
@@ -70,32 +177,29 @@ fn peeling_is_exact_and_weighted_is_bounded_on_planes() {
                         "{t} planes:{n} should differ: the colours differ and order matters"
                     );
                 }
-                // The bound. Every plane has alpha a = 0.4, so at a pixel under k planes the reference
-                // is T·bg + Σ wᵢcᵢ with T = (1 − a)^k and Σ wᵢ = 1 − T. Weighted average keeps T and
-                // spreads 1 − T by alpha over the same colours; weighted sum uses weights a each,
-                // Σ = k·a, then clamps. Per channel, both therefore lie within
-                //   |Σ weights − (1 − T)|·max(cᵢ, bg) + (1 − T)·(max cᵢ − min cᵢ)
-                // of the reference in linear space; 8-bit quantization adds at most 1.5/255 (half a
-                // step each way, sRGB's slope ≤ 12.92 near black handled by going back to linear).
                 let layers = r.layers.as_ref().unwrap();
-                let colors: Vec<Vec3> = scene.objects.iter().map(|o| o.color.truncate()).collect();
-                for (i, &k) in layers.iter().enumerate() {
-                    if k == 0 {
-                        continue;
-                    }
-                    let visible = &colors[..]; // every plane covers the pixels of the ones behind it
-                    let t_ref = 0.6f64.powi(k as i32);
-                    let weights =
-                        if t == Technique::WeightedAverage { 1.0 - t_ref } else { 0.4 * f64::from(k) };
+                let bad = weighted_violations(t, layers, &f.image, &fragments, bg);
+                assert!(bad.is_empty(), "{t} planes:{n}: {}", bad.join("\n"));
+                // The bound can fail at every layer count: a pixel moved 2 steps past the edge of
+                // its accepted bytes is caught; a single-layer pixel accepts at most its
+                // reference byte and a neighbour (R on a rounding boundary), so 2/255 off fails.
+                for k in 1..=n {
+                    let Some(i) = layers.iter().position(|&l| l == k) else { continue };
                     for ch in 0..3 {
-                        let vals: Vec<f64> = visible.iter().map(|c| f64::from(c[ch])).collect();
-                        let (lo, hi) = vals.iter().fold((1.0f64, 0.0f64), |(l, h), &v| (l.min(v), h.max(v)));
-                        let bound = (weights - (1.0 - t_ref)).abs() * hi.max(0.9) + (1.0 - t_ref) * (hi - lo);
-                        let diff =
-                            (to_linear(r.image.pixels[i][ch]) - to_linear(f.image.pixels[i][ch])).abs();
+                        let (lo, hi) = weighted_bytes(t, &fragments[..k as usize], bg, ch);
+                        if k == 1 {
+                            assert!(hi - lo <= 1, "{t} planes:{n}: single layer accepts {lo}..={hi}");
+                            assert!((lo..=hi).contains(&r.image.pixels[i][ch]), "{t}: reference byte");
+                        }
+                        let mut broken = f.image.clone();
+                        broken.pixels[i][ch] = match (hi.checked_add(2), lo.checked_sub(2)) {
+                            (Some(up), _) => up,
+                            (None, Some(down)) => down,
+                            (None, None) => panic!("{t} planes:{n}: {k} layers accept every byte"),
+                        };
                         assert!(
-                            diff <= bound + 1.5 / 255.0 * 1.2,
-                            "{t} planes:{n} px {i} ch {ch}: {diff} > {bound}"
+                            !weighted_violations(t, layers, &broken, &fragments, bg).is_empty(),
+                            "{t} planes:{n}: {k}-layer pixel {i} ch {ch} moved past {lo}..={hi} passed"
                         );
                     }
                 }
@@ -186,4 +290,37 @@ fn bad_input_is_an_error() {
     assert!(oit_core::load_scene("/no/such/file.obj").unwrap_err().to_string().contains("/no/such/file.obj"));
     let bad_view = View { azimuth: f32::NAN, ..View::default() };
     assert!(oit_core::Camera::orbit(&scene.bounds(), bad_view, 1.0).is_err());
+}
+
+#[test]
+fn inputs_are_bounded_with_clear_messages() {
+    // issue 13.10: a device file is refused before it is read (it would grow without end)
+    let e = oit_core::load_scene("/dev/zero").unwrap_err().to_string();
+    assert!(e.contains("/dev/zero") && e.contains("not a regular file"), "{e}");
+    // issue 13.12: each grid level passes R×C ≤ 4096; their product is capped before building
+    let e = oit_core::load_scene("grid:64x64:grid:64x64:grid:64x64:planes:1").unwrap_err().to_string();
+    assert!(e.contains("over the limit"), "{e}");
+    // issue 13.15: --fov's documented range 0.5 to 179 includes both ends
+    let scene = scene("planes:2");
+    for fov in [0.5, 179.0] {
+        let view = View { fov, ..FRONT };
+        let cam = oit_core::Camera::orbit_scene(&scene, view, 1.0).unwrap();
+        assert!(cam.view_proj().is_finite(), "fov {fov}");
+        let f = render(&oit_cpu::CpuBackend::default(), &scene, &cam, &settings(16, "dp"));
+        // at 179° the 2×2 planes shrink below a pixel: it renders, nothing more to ask
+        assert!(fov > 1.0 || f.stats.fragments > 0, "fov {fov}: the scene is in view");
+    }
+    for fov in [0.49, 179.5] {
+        assert!(oit_core::Camera::orbit_scene(&scene, View { fov, ..FRONT }, 1.0).is_err(), "{fov}");
+    }
+    // a finite but huge vertex is out of range, not "NaN or infinite"
+    let mut huge = scene.clone();
+    huge.meshes[0].positions[0].x = 1e37;
+    let e = huge.validate().unwrap_err().to_string();
+    assert!(e.contains("out of range") && !e.contains("NaN"), "{e}");
+    let e = oit_cpu::CpuBackend::default()
+        .render(&huge, &oit_core::Camera::orbit_scene(&scene, FRONT, 1.0).unwrap(), &settings(8, "dp"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("out of range"), "{e}");
 }
