@@ -27,7 +27,6 @@ pub mod rules;
 mod scene;
 mod settings;
 mod technique;
-pub mod text;
 
 pub use backend::{
     AtomicFragmentList, Backend, BucketArray, Capabilities, Compositor, DepthHistogram, OnPath, Sample,
