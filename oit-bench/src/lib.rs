@@ -17,11 +17,15 @@
 //! A run that fails is a [`Failure`] in the report, never the end of the bench. [`write_report`]
 //! then writes `report.md`, `report.json` and the plots (SVG and PNG) into a folder.
 //!
+//! [`present`] is the presentation shared with the CLI: text in the embedded font, the heat
+//! map's legend and contact sheets, drawn on top of what the backends return.
+//!
 //! "Time" in the model, the plots and Gfrag/s is the median GPU time where the backend measures it
 //! (timestamps), else the median wall time; [`Row::time_source`] says which.
 
 pub mod model;
 pub mod plot;
+pub mod present;
 mod report;
 
 use std::collections::HashMap;

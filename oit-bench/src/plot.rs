@@ -1,13 +1,15 @@
 //! One chart description, drawn twice: as SVG with plotters (text by the SVG viewer, no fonts
 //! needed) and as PNG with plotters' bitmap backend for lines and points and
-//! [`oit_core::text::draw_text`] for every label (plotters has no font here without system
-//! libraries), placed through the chart's own coordinate mapping.
+//! [`crate::present::draw_text`] (the embedded font) for every label, since plotters' bitmap text
+//! would need system font libraries; labels are placed through the chart's own coordinate
+//! mapping.
 
 use std::path::Path;
 
-use oit_core::text::{LINE_HEIGHT, draw_text, fill_rect, text_width};
 use oit_core::{Image, OitError};
 use plotters::prelude::*;
+
+use crate::present::{draw_text, fill_rect, line_height, text_width};
 
 /// A set of points drawn in one colour.
 #[derive(Clone, Debug)]
@@ -47,6 +49,15 @@ const WIDTH: u32 = 1200;
 const HEIGHT: u32 = 720;
 /// Room on the right of the PNG for its legend.
 const LEGEND_WIDTH: u32 = 230;
+/// Text sizes of the PNG (line heights in pixels): title, axis descriptions, tick labels, legend
+/// entries, labels beside points.
+const TITLE_PX: f32 = 24.0;
+const DESC_PX: f32 = 17.0;
+const TICK_PX: f32 = 16.0;
+const LEGEND_PX: f32 = 16.0;
+const POINT_PX: f32 = 13.0;
+/// A label to draw once plotters is done with the buffer: x, y, text, size, centred on x.
+type Label = (i32, i32, String, f32, bool);
 
 fn write_err(path: &Path) -> impl Fn(&dyn std::fmt::Display) -> OitError + '_ {
     move |e| OitError::Write { path: path.to_path_buf(), message: e.to_string() }
@@ -207,14 +218,13 @@ impl Chart {
     }
 
     /// Draws the chart into a PNG file: plotters' bitmap backend draws the grid, lines and
-    /// points; oit-core's bitmap font the text, at pixels from the chart's coordinate mapping.
+    /// points; [`crate::present`] the text, at pixels from the chart's coordinate mapping.
     pub fn png(&self, path: &Path) -> Result<(), OitError> {
         let err = write_err(path);
         let mut buf = vec![0u8; (WIDTH * HEIGHT * 3) as usize];
         let ((x0, x1), (y0, y1)) = self.ranges();
         let (xt, yt) = (ticks((x0, x1), self.x_log), ticks((y0, y1), self.y_log));
-        // (x, y, text, scale, centred) to draw once plotters is done with the buffer
-        let mut texts: Vec<(i32, i32, String, u32, bool)> = Vec::new();
+        let mut texts: Vec<Label> = Vec::new();
         {
             let root = BitMapBackend::with_buffer(&mut buf, (WIDTH, HEIGHT)).into_drawing_area();
             root.fill(&WHITE).map_err(|e| err(&e))?;
@@ -240,19 +250,19 @@ impl Chart {
             height: HEIGHT,
             pixels: buf.chunks_exact(3).map(|p| [p[0], p[1], p[2], 255]).collect(),
         };
-        texts.push(((WIDTH - LEGEND_WIDTH) as i32 / 2, 10, self.title.clone(), 2, true));
-        for (x, y, text, scale, centred) in texts {
-            let x = if centred { x - text_width(&text, scale) as i32 / 2 } else { x };
-            draw_text(&mut image, x, y, &text, scale, [0, 0, 0, 255]);
+        texts.push(((WIDTH - LEGEND_WIDTH) as i32 / 2, 14, self.title.clone(), TITLE_PX, true));
+        for (x, y, text, px, centred) in texts {
+            let x = if centred { x - text_width(&text, px) as i32 / 2 } else { x };
+            draw_text(&mut image, x.into(), y.into(), &text, px, [0, 0, 0, 255]);
         }
         // the legend, right of the chart
         let lx = (WIDTH - LEGEND_WIDTH + 8) as i32;
         let mut ly = 60i32;
         for (i, s) in self.series.iter().enumerate().filter(|(_, s)| !s.name.is_empty()) {
             let c = s.rgb(i);
-            fill_rect(&mut image, lx.into(), (ly + 2).into(), 18, 10, [c.0, c.1, c.2, 255]);
-            draw_text(&mut image, lx + 24, ly, &ascii(&s.name), 2, [0, 0, 0, 255]);
-            ly += (LINE_HEIGHT * 2 + 8) as i32;
+            fill_rect(&mut image, lx.into(), (ly + 3).into(), 18, 10, [c.0, c.1, c.2, 255]);
+            draw_text(&mut image, (lx + 24).into(), ly.into(), &s.name, LEGEND_PX, [0, 0, 0, 255]);
+            ly += line_height(LEGEND_PX) as i32 + 8;
         }
         image.save_png(path)
     }
@@ -264,7 +274,7 @@ impl Chart {
         yt: &[f64],
         (x0, x1): (f64, f64),
         (y0, y1): (f64, f64),
-        texts: &mut Vec<(i32, i32, String, u32, bool)>,
+        texts: &mut Vec<Label>,
     ) -> Result<(), String>
     where
         X: Ranged<ValueType = f64>,
@@ -275,13 +285,14 @@ impl Chart {
         for &x in xt {
             chart.draw_series(LineSeries::new([(x, y0), (x, y1)], grid)).map_err(|x| e(&x))?;
             let (px, py) = chart.backend_coord(&(x, y0));
-            texts.push((px, py + 8, tick_label(x), 2, true));
+            texts.push((px, py + 8, tick_label(x), TICK_PX, true));
         }
         for &y in yt {
             chart.draw_series(LineSeries::new([(x0, y), (x1, y)], grid)).map_err(|x| e(&x))?;
             let (px, py) = chart.backend_coord(&(x0, y));
             let label = tick_label(y);
-            texts.push((px - 8 - text_width(&label, 2) as i32, py - 8, label, 2, false));
+            let (w, h) = (text_width(&label, TICK_PX) as i32, line_height(TICK_PX) as i32);
+            texts.push((px - 8 - w, py - h / 2, label, TICK_PX, false));
         }
         chart
             .draw_series([PathElement::new(vec![(x0, y0), (x1, y0), (x1, y1), (x0, y1), (x0, y0)], BLACK)])
@@ -299,29 +310,16 @@ impl Chart {
                     .map_err(|x| e(&x))?;
                 for (p, label) in s.points.iter().zip(&s.labels) {
                     let (px, py) = chart.backend_coord(p);
-                    texts.push((px + 7, py - 12, ascii(label), 1, false));
+                    texts.push((px + 7, py - 15, label.clone(), POINT_PX, false));
                 }
             }
         }
         let (bx, by) = chart.backend_coord(&(x0, y0));
         let (tx, ty) = chart.backend_coord(&(x1, y1));
-        texts.push(((bx + tx) / 2, by + 34, ascii(&self.x_desc), 2, true));
-        texts.push((8, ty - 28, ascii(&self.y_desc), 2, false));
+        texts.push(((bx + tx) / 2, by + 34, self.x_desc.clone(), DESC_PX, true));
+        texts.push((8, ty - 30, self.y_desc.clone(), DESC_PX, false));
         Ok(())
     }
-}
-
-/// `text` with the characters the bitmap font lacks replaced (`·` by `*`, others by `?`).
-fn ascii(text: &str) -> String {
-    text.chars()
-        .map(|c| match c {
-            '·' | '×' => '*',
-            '²' => '2',
-            '≤' => '<',
-            c if c.is_ascii() => c,
-            _ => '?',
-        })
-        .collect()
 }
 
 #[cfg(test)]

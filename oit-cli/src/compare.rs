@@ -3,8 +3,8 @@
 use std::path::PathBuf;
 
 use clap::Args;
+use oit_bench::present::{SheetEntry, annotate_frame, contact_sheet};
 use oit_core::metrics::{accuracy, error_image};
-use oit_core::text::{SheetRow, contact_sheet};
 use oit_core::{Frame, Image, OitError, Technique};
 use serde::Serialize;
 
@@ -37,8 +37,9 @@ pub struct CompareArgs {
     #[arg(long)]
     pub json: bool,
 
-    /// Also write a contact sheet: the reference, then each technique beside its error image
-    /// (×8, black where within 1/255), captioned with EPR, PSNR and fragments lost [default: none].
+    /// Also write a contact sheet: a grid of the reference, then each technique beside its error
+    /// image (×8, black where within 1/255), captioned above with EPR, PSNR and fragments lost
+    /// [default: none].
     #[arg(long, value_name = "FILE.png")]
     pub sheet: Option<PathBuf>,
 
@@ -80,9 +81,9 @@ const HEADERS: [(&str, usize); 11] = [
     ("PSNR (dB)", 9),
 ];
 
-/// A sheet row for something that failed: its label, a dark image and the error.
-fn failed_row(label: String, message: &str, width: u32, height: u32) -> SheetRow {
-    SheetRow {
+/// A sheet cell for something that failed: its label, a dark image and the error.
+fn failed_entry(label: String, message: &str, width: u32, height: u32) -> SheetEntry {
+    SheetEntry {
         label,
         image: Image::new(width, height, [20, 20, 20, 255]),
         error: None,
@@ -128,16 +129,18 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
                 fail("reference", name, &e)?;
                 failures += techniques.len();
                 if args.sheet.is_some() {
-                    sheet.push(failed_row(format!("reference ({name})"), &e.to_string(), width, height));
+                    sheet.push(failed_entry(format!("reference ({name})"), &e.to_string(), width, height));
                 }
                 continue;
             }
         };
         if args.sheet.is_some() {
             let s = &reference.stats;
-            sheet.push(SheetRow {
+            let mut image = reference.image.clone();
+            annotate_frame(&mut image, ref_settings.effect, s);
+            sheet.push(SheetEntry {
                 label: format!("reference ({name})"),
-                image: reference.image.clone(),
+                image,
                 error: None,
                 caption: format!("{} fragments, {:.1} ms", s.fragments, s.wall_ms),
             });
@@ -154,7 +157,7 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
                     failures += 1;
                     fail(&label, name, &e)?;
                     if args.sheet.is_some() {
-                        sheet.push(failed_row(format!("{label} ({name})"), &e.to_string(), width, height));
+                        sheet.push(failed_entry(format!("{label} ({name})"), &e.to_string(), width, height));
                     }
                     continue;
                 }
@@ -194,16 +197,19 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
                 ]))?;
             }
             if args.sheet.is_some() {
-                sheet.push(SheetRow {
+                let error = Some(error_image(&reference, &frame.image));
+                let mut image = frame.image;
+                annotate_frame(&mut image, settings.effect, &frame.stats);
+                sheet.push(SheetEntry {
                     label: format!("{label} ({name})"),
-                    error: Some(error_image(&reference, &frame.image)),
+                    error,
                     caption: format!(
                         "EPR {}%  PSNR {} dB  lost {}",
                         output::percent(acc.epr),
                         output::psnr(acc.psnr),
                         s.lost
                     ),
-                    image: frame.image,
+                    image,
                 });
             }
         }

@@ -163,6 +163,8 @@ pub struct StatsJson {
     pub wall_ms: f64,
     /// Device milliseconds, null where not measured.
     pub gpu_ms: Option<f64>,
+    /// The most fragments captured at one pixel (the heat legend's top label).
+    pub max_layers: u32,
 }
 
 impl From<&Stats> for StatsJson {
@@ -175,6 +177,7 @@ impl From<&Stats> for StatsJson {
             storage_bytes: s.storage_bytes,
             wall_ms: s.wall_ms,
             gpu_ms: s.gpu_ms,
+            max_layers: s.max_layers,
         }
     }
 }

@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use clap::Args;
+use oit_bench::present::annotate_frame;
 use oit_core::{OitError, Technique};
 use serde::Serialize;
 
@@ -16,7 +17,8 @@ use crate::output::{self, CameraJson, StatsJson};
     about = "Render the scene with one technique and write a PNG",
     long_about = "Render the scene with one technique and write a PNG.\n\n\
         Prints the frame's numbers: geometry passes, fragments generated, captured and lost, \
-        per-pixel storage and time. With --json, prints one JSON object with those numbers, the \
+        per-pixel storage and time. With --effect complexity the heat map gets its legend \
+        (fragments per pixel, from 1 to the frame's most) in the bottom-right corner. With --json, prints one JSON object with those numbers, the \
         image size and the camera (view and projection matrices, eye, planes, angles), so another \
         renderer can reproduce the view. With several backends (--backend all), each writes its \
         own PNG, named FILE-BACKEND.png, and --json prints one object per line."
@@ -76,8 +78,9 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
     let settings = prepared.with_technique(technique);
     let several = prepared.backends.len() > 1;
     for backend in &prepared.backends {
-        let frame = backend.render(&prepared.scene, &camera, &settings)?;
+        let mut frame = backend.render(&prepared.scene, &camera, &settings)?;
         let path = output_path(&args.output, backend.name(), several);
+        annotate_frame(&mut frame.image, settings.effect, &frame.stats);
         frame.image.save_png(&path)?;
         let raster = output::raster_name(backend.as_ref(), &settings);
         let s = &frame.stats;

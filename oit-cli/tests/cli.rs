@@ -90,6 +90,51 @@ fn render_json_has_the_camera() {
     assert!(png.exists());
 }
 
+/// `oit render --effect complexity` writes the backend's heat map with the legend drawn over its
+/// bottom-right corner, scaled to the frame's `max_layers`, and every other pixel as rendered.
+#[cfg(feature = "cpu")]
+#[test]
+fn render_complexity_draws_the_legend_on_the_heat_map() {
+    use oit_bench::present::heat_legend_rect;
+    use oit_core::{Backend, Camera, Effect, Settings, View, load_scene, parse_rgb};
+
+    let dir = scratch("render_complexity");
+    let png = dir.join("c.png");
+    let (scene_name, background) = ("spheres:6", "0.2,0.2,0.25");
+    let args = ["--scene", scene_name, "-t", "fabs", "--effect", "complexity", "--size", "256x256"];
+    let args = [&args[..], &["--background", background, "--json", "-o", png.to_str().unwrap()]].concat();
+    let v = parse_json(&oit(&["render"].into_iter().chain(args).collect::<Vec<_>>()), "render complexity");
+    let max = u32::try_from(v["max_layers"].as_u64().expect("max_layers in the JSON")).unwrap();
+    let written = image::open(&png).expect("a PNG").to_rgba8();
+
+    // The same frame from the library, without a legend.
+    let scene = load_scene(scene_name).unwrap();
+    let camera =
+        Camera::orbit_scene(&scene, View { azimuth: 30.0, elevation: 20.0, fov: 45.0 }, 1.0).unwrap();
+    let settings = Settings {
+        width: 256,
+        height: 256,
+        technique: "fabs".parse().unwrap(),
+        effect: Effect::Complexity,
+        background: parse_rgb(background).unwrap(),
+        ..Settings::default()
+    };
+    let frame = oit_cpu::CpuBackend::default().render(&scene, &camera, &settings).unwrap();
+    assert_eq!(frame.stats.max_layers, max);
+    assert_eq!(max, 12, "six nested spheres: 12 surfaces through the middle");
+
+    let rect = heat_legend_rect(256, 256, max).expect("room for the legend");
+    let mut legend_pixels = 0;
+    for (x, y, p) in written.enumerate_pixels() {
+        if rect.contains(x, y) {
+            legend_pixels += usize::from(p.0 != frame.image.get(x, y));
+        } else {
+            assert_eq!(p.0, frame.image.get(x, y), "({x}, {y}) outside the legend {rect:?}");
+        }
+    }
+    assert!(legend_pixels * 2 > (rect.width * rect.height) as usize, "no legend in {rect:?}");
+}
+
 const COMPARE_KEYS: [&str; 15] = [
     "technique",
     "backend",
@@ -143,7 +188,19 @@ fn compare_json_has_exactly_the_keys() {
     // The weighted average ignores order: it cannot match everywhere.
     assert!(rows[1]["epr"].as_f64().unwrap() > 0.0);
     assert!(rows[1]["psnr"].is_f64());
-    assert_eq!(&std::fs::read(&sheet).expect("the sheet was written")[..4], b"\x89PNG");
+    // The sheet is a grid: the reference and three techniques, two cells (each 64 + gap + 64
+    // pixels of image and error at least) side by side, no taller than wide.
+    let sheet = image::open(&sheet).expect("the sheet was written as a PNG");
+    assert!(
+        sheet.width() > 2 * (64 + 8 + 64) && sheet.width() >= sheet.height(),
+        "{:?}",
+        (sheet.width(), sheet.height())
+    );
+    assert!(
+        sheet.height() > 2 * 64 && sheet.height() < 3 * 64 + 3 * 60,
+        "two rows: {:?}",
+        (sheet.width(), sheet.height())
+    );
 }
 
 #[test]

@@ -23,6 +23,10 @@ pub struct Stats {
     pub wall_ms: f64,
     /// Device time from timestamp queries, where the backend has them.
     pub gpu_ms: Option<f64>,
+    /// The most fragments captured at one pixel (0 when none was covered): the count the white
+    /// end of the depth-complexity heat map stands for, which a front end needs to draw the
+    /// map's key. Backends return the map without one; every backend fills this, for every effect.
+    pub max_layers: u32,
     /// Device time per pass, where measured.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub gpu_pass_ms: Vec<(String, f64)>,

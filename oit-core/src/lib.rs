@@ -32,7 +32,6 @@ mod scene;
 mod settings;
 pub mod setup;
 mod technique;
-pub mod text;
 
 pub use backend::{
     AtomicFragmentList, Backend, BucketArray, Capabilities, Compositor, DepthHistogram, OnPath, Prepared,

@@ -128,7 +128,6 @@ impl<'a> Resolve<'a> {
                 let c = if s.captured == 0 { self.background } else { heat(s.captured as f32 / max as f32) };
                 *px = srgb(c);
             }
-            oit_core::text::draw_heat_legend(&mut image, max);
         } else {
             for (px, c) in image.pixels.iter_mut().zip(colors) {
                 *px = srgb(c);

@@ -477,14 +477,11 @@ impl<'a> GpuCtx<'a> {
         )?;
         let words = self.gpu.read_u32(&image_buf)?;
         let t = self.gpu.read_u32(&totals)?;
-        let mut image = Image {
+        let image = Image {
             width: self.settings.width,
             height: self.settings.height,
             pixels: words[..self.pixels as usize].iter().map(|w| w.to_le_bytes()).collect(),
         };
-        if self.settings.effect == Effect::Complexity {
-            oit_core::text::draw_heat_legend(&mut image, t[1].max(1));
-        }
         let fragments = self.fragments.unwrap_or(0);
         let captured = u64::from(t[0]);
         let _ = path;
@@ -499,6 +496,7 @@ impl<'a> GpuCtx<'a> {
                 storage_bytes: self.storage_bytes,
                 wall_ms: 0.0,
                 gpu_ms: self.timestamps.is_some().then_some(self.gpu_ms),
+                max_layers: t[1],
                 gpu_pass_ms: self.pass_ms,
             },
         })

@@ -210,5 +210,7 @@ pub(crate) fn frame(ctx: &Ctx<'_>, image: oit_core::Image, captured: u64) -> oit
 /// Resolves the states into the frame (the common ending).
 pub(crate) fn finish(ctx: &Ctx<'_>, mut states: Pooled<'_, PixelState>) -> oit_core::Frame {
     let (image, captured) = ctx.resolve.image(ctx.settings.width, ctx.settings.height, &mut states);
-    frame(ctx, image, captured)
+    let mut frame = frame(ctx, image, captured);
+    frame.stats.max_layers = states.iter().map(|s| s.captured).max().unwrap_or(0);
+    frame
 }

@@ -67,6 +67,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     };
     let fragments = total as u64;
     let mut frame = super::frame(ctx, image, fragments);
+    frame.stats.max_layers = counts.iter().copied().max().unwrap_or(0);
     frame.layers = Some(counts);
     Ok(frame)
 }

@@ -59,5 +59,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, average: bool) -> Result<Frame, OitError
     for (px, c) in image.pixels.iter_mut().zip(colors) {
         *px = crate::resolve::srgb(c);
     }
-    Ok(super::frame(ctx, image, captured))
+    let mut frame = super::frame(ctx, image, captured);
+    frame.stats.max_layers = states.iter().map(|s| s.captured).max().unwrap_or(0);
+    Ok(frame)
 }
