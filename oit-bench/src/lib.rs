@@ -22,19 +22,26 @@
 //!
 //! "Time" in the model, the plots and Gfrag/s is the median GPU time where the backend measures it
 //! (timestamps), else the median wall time; [`Row::time_source`] says which.
+//!
+//! Every input is checked before anything is rendered ([`Config::validate`]). The runs themselves
+//! are [`experiment::Experiment`]'s reference-versus-techniques loop, the one `oit compare` and
+//! `oit sweep` run too, and the backends come from the one registry, [`backends`].
 
+pub mod backends;
+pub mod experiment;
 pub mod model;
 pub mod plot;
 pub mod present;
 mod report;
 
 use std::collections::HashMap;
-use std::time::Instant;
 
+use experiment::{Experiment, Measurement, Step, label_of, measure};
 use oit_core::metrics::accuracy;
-use oit_core::{Backend, Camera, Frame, Image, OitError, Scene, Settings, Technique, View, load_scene};
+use oit_core::{Backend, Camera, Frame, Image, OitError, Settings, Technique, View, load_scene};
 use serde::{Deserialize, Serialize};
 
+pub use backends::available_backends;
 pub use model::{pareto_front, predicted_speedup};
 pub use report::{read_report, write_report};
 
@@ -322,11 +329,95 @@ pub struct Report {
 /// `name` or `name/path`: how a backend pinned to a path (or on its default for these settings)
 /// is labelled.
 pub fn label(backend: &dyn Backend, settings: &Settings) -> String {
-    let path = backend.raster_path(settings).to_string();
-    if path == backend.name() { path } else { format!("{}/{path}", backend.name()) }
+    label_of(backend.name(), backend.raster_path(settings))
+}
+
+/// Most frames (timed or warm-up) one run takes.
+pub const MAX_FRAMES: u32 = 100_000;
+
+/// Largest N of the depth curve's `planes:N`.
+pub const MAX_CURVE_DEPTH: u32 = 1 << 16;
+
+/// Checks that `name` loads as a valid scene and that `view` frames it at `settings`' aspect.
+pub fn check_scene(name: &str, view: View, settings: &Settings) -> Result<(), OitError> {
+    let scene = load_scene(name)?;
+    scene.validate()?;
+    Camera::orbit_scene(&scene, view, settings.width as f32 / settings.height as f32)?;
+    Ok(())
+}
+
+/// Checks a frame count (`what` names it in the message).
+fn check_frames(n: u32, least: u32, what: &str) -> Result<(), OitError> {
+    if (least..=MAX_FRAMES).contains(&n) {
+        Ok(())
+    } else {
+        Err(OitError::InvalidSettings(format!("{what} {n} is out of range: use {least} to {MAX_FRAMES}")))
+    }
+}
+
+impl CurveConfig {
+    /// The scenes of the two curves: (curve, scene name, x where the name sets it).
+    fn scenes(&self) -> Vec<(&'static str, String, Option<f64>)> {
+        let mut scenes: Vec<(&str, String, Option<f64>)> =
+            self.depths.iter().map(|&n| ("depth", format!("planes:{n}"), Some(f64::from(n)))).collect();
+        scenes.extend(
+            self.grids.iter().map(|&(r, c)| ("triangles", format!("grid:{r}x{c}:{}", self.mesh), None)),
+        );
+        scenes
+    }
+
+    /// Checks everything before any work: techniques, depths, grids, size and frames, and that
+    /// every curve scene (the mesh included) loads and is framed by `view`. `settings` gives the
+    /// shading and the rest; the curves' own size replaces its size.
+    pub fn validate(&self, view: View, settings: &Settings) -> Result<(), OitError> {
+        let bad = |m: String| Err(OitError::InvalidSettings(m));
+        if self.techniques.is_empty() {
+            return bad("the curves name no technique".into());
+        }
+        if self.depths.is_empty() || self.grids.is_empty() {
+            return bad("the curves need at least one depth and one grid".into());
+        }
+        if let Some(n) = self.depths.iter().find(|&&n| !(1..=MAX_CURVE_DEPTH).contains(&n)) {
+            return bad(format!(
+                "depth curve: planes:{n} is out of range: use N from 1 to {MAX_CURVE_DEPTH}"
+            ));
+        }
+        check_frames(self.frames, 1, "curve frames")?;
+        let settings = Settings { width: self.width, height: self.height, ..settings.clone() };
+        settings.validate().map_err(|e| OitError::InvalidSettings(format!("the curves' frames: {e}")))?;
+        for (curve, name, _) in self.scenes() {
+            check_scene(&name, view, &settings)
+                .map_err(|e| OitError::InvalidSettings(format!("{curve} curve, scene {name}: {e}")))?;
+        }
+        Ok(())
+    }
 }
 
 impl Config {
+    /// Checks every input before any work: frame counts, backends, techniques, settings, that
+    /// every scene loads and is framed, and the curves ([`CurveConfig::validate`]).
+    pub fn validate(&self) -> Result<(), OitError> {
+        check_frames(self.frames, 1, "timed frames")?;
+        check_frames(self.warmup, 0, "warm-up frames")?;
+        if self.backends.is_empty() {
+            return Err(OitError::InvalidSettings("the bench needs at least one backend".into()));
+        }
+        if self.techniques.is_empty() {
+            return Err(OitError::InvalidSettings("the bench names no technique".into()));
+        }
+        if self.scenes.is_empty() {
+            return Err(OitError::InvalidSettings("the bench names no scene".into()));
+        }
+        self.settings.validate()?;
+        for name in &self.scenes {
+            check_scene(name, self.view, &self.settings)?;
+        }
+        if let Some(curves) = &self.curves {
+            curves.validate(self.view, &self.settings)?;
+        }
+        Ok(())
+    }
+
     /// How many steps [`run_bench_with`] reports: per scene and backend the reference, the plain
     /// pass and each technique; per curve point and backend each curve technique.
     pub fn steps(&self) -> u64 {
@@ -345,56 +436,22 @@ pub fn run_bench(config: &Config) -> Result<Report, OitError> {
     run_bench_with(config, &mut |_| {})
 }
 
-/// The frames of one run: the last frame and the wall and GPU times of the timed ones.
-struct Timed {
-    frame: Frame,
-    wall: Vec<f64>,
-    gpu: Vec<f64>,
+/// The wall-time spread of timed frames.
+fn wall_spread(wall: &[f64]) -> Spread {
+    Spread::of(wall).unwrap_or_default()
 }
 
-impl Timed {
-    fn wall_spread(&self) -> Spread {
-        Spread::of(&self.wall).unwrap_or_default()
-    }
-    fn gpu_spread(&self) -> Option<Spread> {
-        (self.gpu.len() == self.wall.len()).then(|| Spread::of(&self.gpu)).flatten()
-    }
-    /// (time, source) as [`Row::time_ms`].
-    fn time(&self) -> (f64, &'static str) {
-        match self.gpu_spread() {
-            Some(g) => (g.median, "gpu"),
-            None => (self.wall_spread().median, "wall"),
-        }
-    }
+/// The GPU-time spread, where every timed frame measured one.
+fn gpu_spread(wall: &[f64], gpu: &[f64]) -> Option<Spread> {
+    (gpu.len() == wall.len()).then(|| Spread::of(gpu)).flatten()
 }
 
-fn measure(
-    backend: &dyn Backend,
-    scene: &Scene,
-    camera: &Camera,
-    settings: &Settings,
-    warmup: u32,
-    frames: u32,
-) -> Result<Timed, OitError> {
-    for _ in 0..warmup {
-        backend.render(scene, camera, settings)?;
+/// (time, source) as [`Row::time_ms`].
+fn time_of(wall: &[f64], gpu: &[f64]) -> (f64, &'static str) {
+    match gpu_spread(wall, gpu) {
+        Some(g) => (g.median, "gpu"),
+        None => (wall_spread(wall).median, "wall"),
     }
-    let (mut wall, mut gpu) = (Vec::new(), Vec::new());
-    let mut last = None;
-    for _ in 0..frames.max(1) {
-        let start = Instant::now();
-        let frame = backend.render(scene, camera, settings)?;
-        // the backend's own wall time where it keeps one, else ours around the call
-        let ms =
-            if frame.stats.wall_ms > 0.0 { frame.stats.wall_ms } else { start.elapsed().as_secs_f64() * 1e3 };
-        wall.push(ms);
-        if let Some(g) = frame.stats.gpu_ms {
-            gpu.push(g);
-        }
-        last = Some(frame);
-    }
-    let frame = last.ok_or_else(|| OitError::InvalidSettings("no frame was timed".into()))?;
-    Ok(Timed { frame, wall, gpu })
 }
 
 /// The host in words: CPU model (from /proc/cpuinfo where there is one) and cores.
@@ -413,16 +470,10 @@ pub fn host() -> String {
 }
 
 /// Runs the bench, calling `on_step` with a description before each of [`Config::steps`] steps.
+/// Every input is checked first ([`Config::validate`]): a bad one fails before any rendering.
 pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<Report, OitError> {
-    if config.frames == 0 {
-        return Err(OitError::InvalidSettings("the bench needs at least 1 timed frame".into()));
-    }
-    if config.backends.is_empty() {
-        return Err(OitError::InvalidSettings("the bench needs at least one backend".into()));
-    }
+    config.validate()?;
     let base = Settings { technique: Technique::Reference, ..config.settings.clone() };
-    base.validate()?;
-    let aspect = base.width as f32 / base.height as f32;
     let mut report = Report {
         command_line: config.command_line.clone(),
         host: host(),
@@ -446,100 +497,111 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
         failures: Vec::new(),
         files: Vec::new(),
     };
-    let fail =
-        |report: &mut Report, stage: &str, scene: &str, backend: &str, technique: &str, e: &OitError| {
-            report.failures.push(Failure {
-                stage: stage.into(),
-                scene: scene.into(),
-                backend: backend.into(),
-                technique: technique.into(),
-                error: e.to_string(),
-            });
-        };
+    let fail = |report: &mut Report, stage: &str, scene: &str, backend: &str, technique: &str, e: &str| {
+        report.failures.push(Failure {
+            stage: stage.into(),
+            scene: scene.into(),
+            backend: backend.into(),
+            technique: technique.into(),
+            error: e.to_string(),
+        });
+    };
+    let experiment = Experiment {
+        backends: &config.backends,
+        settings: &base,
+        techniques: &config.techniques,
+        warmup: config.warmup,
+        frames: config.frames,
+        keep_images: true,
+    };
 
     for scene_name in &config.scenes {
         let scene = load_scene(scene_name)?;
-        scene.validate()?;
-        let camera = Camera::orbit_scene(&scene, config.view, aspect)?;
+        let camera = Camera::orbit_scene(&scene, config.view, base.width as f32 / base.height as f32)?;
         let mut info = SceneInfo {
             name: scene_name.clone(),
             triangles: scene.triangle_count(),
             fragments: None,
             max_depth: None,
         };
+        let measurements = experiment.run(scene_name, &scene, &[config.view], &mut |step| match step {
+            Step::Rendering(what) => on_step(&format!("{scene_name}: {what}")),
+            // nothing is measured on a backend whose reference failed
+            Step::Measured(m) if m.baseline && m.result.is_err() => {
+                for _ in &config.techniques {
+                    on_step(&format!("{scene_name}: skipped on {}", m.label()));
+                }
+            }
+            Step::Measured(_) => {}
+        })?;
+
         // per technique: (label, image, the coverage of that backend's reference)
         let mut images: HashMap<String, Vec<Rendered>> = HashMap::new();
-        for backend in &config.backends {
+        for (index, backend) in config.backends.iter().enumerate() {
             let backend = backend.as_ref();
-            let ref_label = label(backend, &base);
-            on_step(&format!("{scene_name}: reference on {ref_label}"));
-            let reference = match backend.render(&scene, &camera, &base) {
-                Ok(frame) => frame,
+            let mine: Vec<&Measurement> = measurements.iter().filter(|m| m.backend_index == index).collect();
+            let Some(reference) = mine.iter().find(|m| m.baseline) else { continue };
+            let ref_label = reference.label();
+            let reference = match &reference.result {
+                Ok(r) => r,
                 Err(e) => {
-                    fail(&mut report, "reference", scene_name, &ref_label, "reference", &e);
-                    for _ in 0..config.techniques.len() + 1 {
-                        on_step(&format!("{scene_name}: skipped on {ref_label}"));
-                    }
+                    fail(&mut report, "reference", scene_name, &ref_label, "reference", e);
+                    on_step(&format!("{scene_name}: skipped on {ref_label}"));
                     continue;
                 }
             };
-            let max_depth = reference.layers.as_ref().and_then(|l| l.iter().copied().max());
             info.fragments.get_or_insert(reference.stats.fragments);
             if info.max_depth.is_none() {
-                info.max_depth = max_depth;
+                info.max_depth = reference.max_depth;
             }
-            images.entry("reference".into()).or_default().push((
-                ref_label.clone(),
-                reference.image.clone(),
-                reference.layers.clone(),
-            ));
+            if let Some(image) = &reference.image {
+                images.entry("reference".into()).or_default().push((
+                    ref_label.clone(),
+                    image.clone(),
+                    reference.layers.clone(),
+                ));
+            }
 
             on_step(&format!("{scene_name}: plain pass on {ref_label}"));
             let mut tv = Vec::new();
-            let mut tv_error = None;
             for i in 0..config.frames + 1 {
                 match backend.plain_pass_ms(&scene, &camera, &base) {
                     Ok(ms) if i > 0 => tv.push(ms),
                     Ok(_) => {}
                     Err(e) => {
-                        tv_error = Some(e);
+                        fail(&mut report, "plain pass", scene_name, &ref_label, "-", &e.to_string());
                         break;
                     }
                 }
             }
-            if let Some(e) = &tv_error {
-                fail(&mut report, "plain pass", scene_name, &ref_label, "-", e);
-            }
             let tv = Spread::of(&tv).map(|s| s.median);
 
             let mut measured: Vec<(Technique, Row)> = Vec::new();
-            for &technique in &config.techniques {
-                let settings = Settings { technique, ..base.clone() };
-                let row_label = label(backend, &settings);
-                on_step(&format!("{scene_name}: {technique} on {row_label}"));
-                let result = measure(backend, &scene, &camera, &settings, config.warmup, config.frames)
-                    .and_then(|t| Ok((accuracy(&reference, &t.frame.image)?, t)));
-                let (acc, timed) = match result {
+            for m in mine.iter().filter(|m| !m.baseline) {
+                let technique = m.technique.to_string();
+                let r = match &m.result {
                     Ok(r) => r,
                     Err(e) => {
-                        fail(&mut report, "bench", scene_name, &row_label, &technique.to_string(), &e);
+                        fail(&mut report, "bench", scene_name, &m.label(), &technique, e);
                         continue;
                     }
                 };
-                let s = &timed.frame.stats;
-                let (time_ms, source) = timed.time();
+                let s = &r.stats;
+                // no accuracy (nothing covered, or no reference): NaN, never a perfect score
+                let acc = r.accuracy.unwrap_or_else(oit_core::metrics::Accuracy::unmeasured);
+                let (time_ms, source) = time_of(&r.wall_ms, &r.gpu_ms);
                 let row = Row {
                     scene: scene_name.clone(),
-                    backend: backend.name().to_string(),
-                    raster: backend.raster_path(&settings).to_string(),
-                    technique: technique.to_string(),
+                    backend: m.backend.clone(),
+                    raster: m.raster.to_string(),
+                    technique: technique.clone(),
                     passes: s.geometry_passes,
                     fragments: s.fragments,
                     captured: s.captured,
                     lost: s.lost,
                     storage_bytes: s.storage_bytes,
-                    wall_ms: timed.wall_spread(),
-                    gpu_ms: timed.gpu_spread(),
+                    wall_ms: wall_spread(&r.wall_ms),
+                    gpu_ms: gpu_spread(&r.wall_ms, &r.gpu_ms),
                     time_ms,
                     time_source: source.into(),
                     gfrag_per_s: if time_ms > 0.0 {
@@ -552,17 +614,19 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
                     max_diff: (acc.max_error * 255.0).round() as u32,
                     gpu_pass_ms: s.gpu_pass_ms.clone(),
                 };
-                images.entry(technique.to_string()).or_default().push((
-                    row_label,
-                    timed.frame.image,
-                    reference.layers.clone(),
-                ));
-                measured.push((technique, row));
+                if let Some(image) = &r.image {
+                    images.entry(technique).or_default().push((
+                        m.label(),
+                        image.clone(),
+                        reference.layers.clone(),
+                    ));
+                }
+                measured.push((m.technique, row));
             }
 
             // the model, on this backend
             let dp = measured.iter().find(|(t, _)| *t == Technique::Dp).map(|(_, r)| r);
-            let n = max_depth.or(dp.map(|r| r.passes.saturating_sub(1)));
+            let n = reference.max_depth.or(dp.map(|r| r.passes.saturating_sub(1)));
             if let (Some(tv), Some(n)) = (tv, n) {
                 for (_, row) in &measured {
                     let tf = row.time_ms - tv;
@@ -605,9 +669,14 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
                             max_diff: (acc.max_error * 255.0).round() as u32,
                             epr: acc.epr,
                         }),
-                        Err(e) => {
-                            fail(&mut report, "matrix", scene_name, &format!("{a} vs {b}"), &technique, &e)
-                        }
+                        Err(e) => fail(
+                            &mut report,
+                            "matrix",
+                            scene_name,
+                            &format!("{a} vs {b}"),
+                            &technique,
+                            &e.to_string(),
+                        ),
                     }
                 }
             }
@@ -625,7 +694,7 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
 /// reference).
 type Rendered = (String, Image, Option<Vec<u32>>);
 
-type FailFn = fn(&mut Report, &str, &str, &str, &str, &OitError);
+type FailFn = fn(&mut Report, &str, &str, &str, &str, &str);
 
 fn run_curves(
     config: &Config,
@@ -637,12 +706,7 @@ fn run_curves(
     let settings = Settings { width: curves.width, height: curves.height, ..config.settings.clone() };
     settings.validate()?;
     let aspect = curves.width as f32 / curves.height as f32;
-    let mut scenes: Vec<(&str, String, Option<f64>)> =
-        curves.depths.iter().map(|&n| ("depth", format!("planes:{n}"), Some(f64::from(n)))).collect();
-    scenes.extend(
-        curves.grids.iter().map(|&(r, c)| ("triangles", format!("grid:{r}x{c}:{}", curves.mesh), None)),
-    );
-    for (curve, name, x) in scenes {
+    for (curve, name, x) in curves.scenes() {
         let steps = config.backends.len() * curves.techniques.len();
         let loaded = load_scene(&name)
             .and_then(|s| s.validate().map(|()| s))
@@ -650,7 +714,7 @@ fn run_curves(
         let (scene, camera) = match loaded {
             Ok(sc) => sc,
             Err(e) => {
-                fail(report, &format!("{curve} curve"), &name, "-", "-", &e);
+                fail(report, &format!("{curve} curve"), &name, "-", "-", &e.to_string());
                 for _ in 0..steps {
                     on_step(&format!("{name}: skipped"));
                 }
@@ -670,60 +734,21 @@ fn run_curves(
                         backend: l,
                         technique: technique.to_string(),
                         x,
-                        time_ms: t.time().0,
+                        time_ms: time_of(&t.wall, &t.gpu).0,
                         passes: t.frame.stats.geometry_passes,
                         fragments: t.frame.stats.fragments,
                     }),
-                    Err(e) => fail(report, &format!("{curve} curve"), &name, &l, &technique.to_string(), &e),
+                    Err(e) => fail(
+                        report,
+                        &format!("{curve} curve"),
+                        &name,
+                        &l,
+                        &technique.to_string(),
+                        &e.to_string(),
+                    ),
                 }
             }
         }
     }
     Ok(())
-}
-
-/// Every backend compiled into oit-bench whose device is present, one per raster path, with a
-/// note on stderr for each that is not (for the benches and tests; the CLI chooses its own).
-#[allow(unused_mut, clippy::vec_init_then_push, reason = "what is pushed depends on the features")]
-pub fn available_backends() -> Vec<Box<dyn Backend>> {
-    let mut out: Vec<Box<dyn Backend>> = Vec::new();
-    #[cfg(feature = "cpu")]
-    out.push(Box::new(oit_cpu::CpuBackend::default()));
-    #[cfg(feature = "wgpu")]
-    {
-        let backend = oit_wgpu::WgpuBackend::new(None);
-        match backend.gpu() {
-            Ok(_) => {
-                let shared = std::sync::Arc::new(backend);
-                for path in shared.capabilities().raster_paths {
-                    out.push(Box::new(oit_core::OnPath {
-                        backend: Box::new(SharedBackend(shared.clone())),
-                        path,
-                    }));
-                }
-            }
-            Err(e) => eprintln!("note: wgpu skipped: no adapter ({e})"),
-        }
-    }
-    out
-}
-
-/// One backend behind several [`oit_core::OnPath`]s, so one device serves every path.
-#[cfg(feature = "wgpu")]
-struct SharedBackend(std::sync::Arc<oit_wgpu::WgpuBackend>);
-
-#[cfg(feature = "wgpu")]
-impl Backend for SharedBackend {
-    fn name(&self) -> &str {
-        self.0.name()
-    }
-    fn capabilities(&self) -> oit_core::Capabilities {
-        self.0.capabilities()
-    }
-    fn render(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
-        self.0.render(scene, camera, settings)
-    }
-    fn plain_pass_ms(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<f64, OitError> {
-        self.0.plain_pass_ms(scene, camera, settings)
-    }
 }

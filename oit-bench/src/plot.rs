@@ -63,10 +63,26 @@ fn write_err(path: &Path) -> impl Fn(&dyn std::fmt::Display) -> OitError + '_ {
     move |e| OitError::Write { path: path.to_path_buf(), message: e.to_string() }
 }
 
-/// The axis range holding `values`: whole decades on a log axis, 5 % padding on a linear one.
+/// The largest magnitude an axis reaches: values beyond are drawn at the edge, so that one absurd
+/// number cannot stretch an axis over hundreds of decades (which plotters takes forever to draw).
+const AXIS_LIMIT: f64 = 1e15;
+
+/// The smallest value a log axis reaches.
+const LOG_FLOOR: f64 = 1e-15;
+
+/// Most ticks on one axis.
+const MAX_TICKS: usize = 64;
+
+/// `v` within the values an axis can show.
+fn clamp_axis(v: f64, log: bool) -> f64 {
+    if log { v.clamp(LOG_FLOOR, AXIS_LIMIT) } else { v.clamp(-AXIS_LIMIT, AXIS_LIMIT) }
+}
+
+/// The axis range holding `values`: whole decades on a log axis, 5 % padding on a linear one;
+/// values are clamped to ±[`AXIS_LIMIT`] (and at least [`LOG_FLOOR`] on a log axis) first.
 fn range(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for v in values.filter(|v| v.is_finite() && (!log || *v > 0.0)) {
+    for v in values.filter(|v| v.is_finite() && (!log || *v > 0.0)).map(|v| clamp_axis(v, log)) {
         lo = lo.min(v);
         hi = hi.max(v);
     }
@@ -93,7 +109,7 @@ fn ticks((lo, hi): (f64, f64), log: bool) -> Vec<f64> {
         for e in a..=b {
             for m in steps {
                 let v = m * 10f64.powi(e);
-                if v >= lo * 0.999 && v <= hi * 1.001 {
+                if v >= lo * 0.999 && v <= hi * 1.001 && out.len() < MAX_TICKS {
                     out.push(v);
                 }
             }
@@ -103,7 +119,7 @@ fn ticks((lo, hi): (f64, f64), log: bool) -> Vec<f64> {
         let mag = 10f64.powf(raw.log10().floor());
         let step = [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * mag).find(|s| *s >= raw).unwrap_or(raw);
         let mut v = (lo / step).ceil() * step;
-        while v <= hi + step * 1e-6 {
+        while v <= hi + step * 1e-6 && out.len() < MAX_TICKS {
             out.push(v);
             v += step;
         }
@@ -141,8 +157,43 @@ impl Chart {
         (range(pts().map(|p| p.0), self.x_log), range(pts().map(|p| p.1), self.y_log))
     }
 
+    /// The chart with every point inside its axes' ranges (points that are not finite, or not
+    /// positive on a log axis, dropped), so that drawing never meets an absurd coordinate.
+    fn clamped(&self) -> Chart {
+        let ((x0, x1), (y0, y1)) = self.ranges();
+        let keep = |v: f64, log: bool| v.is_finite() && (!log || v > 0.0);
+        let series = self
+            .series
+            .iter()
+            .map(|s| {
+                let (points, labels): (Vec<(f64, f64)>, Vec<String>) = s
+                    .points
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, p)| keep(p.0, self.x_log) && keep(p.1, self.y_log))
+                    .map(|(k, p)| {
+                        ((p.0.clamp(x0, x1), p.1.clamp(y0, y1)), s.labels.get(k).cloned().unwrap_or_default())
+                    })
+                    .unzip();
+                let labels = if s.labels.is_empty() { Vec::new() } else { labels };
+                Series { points, labels, ..s.clone() }
+            })
+            .collect();
+        Chart { series, ..self.clone() }
+    }
+
     /// Draws the chart into an SVG file.
     pub fn svg(&self, path: &Path) -> Result<(), OitError> {
+        self.clamped().draw_svg(path)
+    }
+
+    /// Draws the chart into a PNG file: plotters' bitmap backend draws the grid, lines and
+    /// points; [`crate::present`] the text, at pixels from the chart's coordinate mapping.
+    pub fn png(&self, path: &Path) -> Result<(), OitError> {
+        self.clamped().draw_png(path)
+    }
+
+    fn draw_svg(&self, path: &Path) -> Result<(), OitError> {
         let err = write_err(path);
         let root = SVGBackend::new(path, (WIDTH, HEIGHT)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| err(&e))?;
@@ -217,9 +268,7 @@ impl Chart {
         Ok(())
     }
 
-    /// Draws the chart into a PNG file: plotters' bitmap backend draws the grid, lines and
-    /// points; [`crate::present`] the text, at pixels from the chart's coordinate mapping.
-    pub fn png(&self, path: &Path) -> Result<(), OitError> {
+    fn draw_png(&self, path: &Path) -> Result<(), OitError> {
         let err = write_err(path);
         let mut buf = vec![0u8; (WIDTH * HEIGHT * 3) as usize];
         let ((x0, x1), (y0, y1)) = self.ranges();
@@ -338,5 +387,37 @@ mod tests {
         assert_eq!(t.last(), Some(&10.0));
         assert_eq!(tick_label(0.5), "0.5");
         assert_eq!(tick_label(1e-5), "1e-5");
+    }
+
+    #[test]
+    fn absurd_values_are_drawn_at_the_edge() {
+        assert_eq!(range([1e-308, 1e308].into_iter(), true), (LOG_FLOOR, AXIS_LIMIT));
+        let (lo, hi) = range([-1e308, 1e308].into_iter(), false);
+        assert!(lo >= -AXIS_LIMIT * 1.1 && hi <= AXIS_LIMIT * 1.1);
+        assert!(ticks((LOG_FLOOR, AXIS_LIMIT), true).len() <= MAX_TICKS);
+        let chart = Chart {
+            title: "extremes".into(),
+            x_desc: "x".into(),
+            y_desc: "y".into(),
+            x_log: true,
+            y_log: true,
+            series: vec![Series {
+                name: "s".into(),
+                points: vec![(1e-308, 1e308), (1.0, f64::NAN), (2.0, 0.5), (f64::INFINITY, 1.0)],
+                labels: vec!["a".into(), "b".into(), "c".into(), "d".into()],
+                line: true,
+                markers: true,
+                color: None,
+            }],
+        };
+        let clamped = chart.clamped();
+        let s = &clamped.series[0];
+        assert_eq!(s.points, [(LOG_FLOOR, AXIS_LIMIT), (2.0, 0.5)]);
+        assert_eq!(s.labels, ["a", "c"]);
+        let dir = std::env::temp_dir().join(format!("oit-plot-extremes-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        chart.svg(&dir.join("x.svg")).unwrap();
+        chart.png(&dir.join("x.png")).unwrap();
+        std::fs::remove_dir_all(&dir).ok();
     }
 }

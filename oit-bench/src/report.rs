@@ -7,7 +7,7 @@ use std::path::Path;
 use oit_core::OitError;
 
 use crate::plot::{Chart, Series};
-use crate::{CurvePoint, Report, Row, pareto_front};
+use crate::{CurvePoint, Report, Row, Spread, pareto_front};
 
 /// Where an EPR of 0 is drawn on the trade plot's log axis at most (lower when a real EPR is
 /// lower): a log axis has no 0.
@@ -62,8 +62,102 @@ pub fn read_report(dir: &Path) -> Result<Report, OitError> {
     let path = dir.join("report.json");
     let text =
         std::fs::read_to_string(&path).map_err(|source| OitError::Io { path: path.clone(), source })?;
-    serde_json::from_str(&text)
-        .map_err(|e| OitError::InvalidSettings(format!("{} is not an oit bench report: {e}", path.display())))
+    let report: Report = serde_json::from_str(&text).map_err(|e| {
+        OitError::InvalidSettings(format!("{} is not an oit bench report: {e}", path.display()))
+    })?;
+    check_numbers(&report).map_err(|e| {
+        OitError::InvalidSettings(format!(
+            "{}: {e}; the file is damaged or was not written by oit bench (run the bench again)",
+            path.display()
+        ))
+    })?;
+    Ok(report)
+}
+
+/// Longest time any report holds, in milliseconds: a day per frame is absurd already.
+const MAX_MS: f64 = 86_400_000.0;
+
+/// Largest count, rate or ratio a report holds (speedups, Gfrag/s, triangles).
+const MAX_VALUE: f64 = 1e12;
+
+/// Checks that `value` (at `at`) is finite and within `lo..=hi`, saying what it should be.
+fn check(at: &str, value: f64, lo: f64, hi: f64, meaning: &str) -> Result<(), String> {
+    if value.is_finite() && (lo..=hi).contains(&value) {
+        Ok(())
+    } else {
+        Err(format!("{at} is {value:e}: {meaning} from {lo} to {hi:e}"))
+    }
+}
+
+fn check_ms(at: &str, value: f64) -> Result<(), String> {
+    check(at, value, 0.0, MAX_MS, "a time is milliseconds")
+}
+
+fn check_spread(at: &str, s: &Spread) -> Result<(), String> {
+    for (name, v) in [("median", s.median), ("min", s.min), ("max", s.max), ("q1", s.q1), ("q3", s.q3)] {
+        check_ms(&format!("{at}.{name}"), v)?;
+    }
+    Ok(())
+}
+
+/// Every number of a report read back, checked: finite and within what a measurement can give,
+/// so that a damaged file is a clear error instead of a plot with no end.
+fn check_numbers(report: &Report) -> Result<(), String> {
+    let size = f64::from(oit_core::MAX_SIZE);
+    check("width", f64::from(report.width), 1.0, size, "an image side is pixels")?;
+    check("height", f64::from(report.height), 1.0, size, "an image side is pixels")?;
+    if let Some((w, h)) = report.curve_size {
+        check("curve_size", f64::from(w.min(h)), 1.0, size, "an image side is pixels")?;
+        check("curve_size", f64::from(w.max(h)), 1.0, size, "an image side is pixels")?;
+    }
+    let v = report.view;
+    for (at, value) in [("view.azimuth", v.azimuth), ("view.elevation", v.elevation), ("view.fov", v.fov)] {
+        check(at, f64::from(value), -1e6, 1e6, "an angle is degrees")?;
+    }
+    for (i, r) in report.rows.iter().enumerate() {
+        let at = |field: &str| format!("rows[{i}].{field}");
+        check_spread(&at("wall_ms"), &r.wall_ms)?;
+        if let Some(g) = &r.gpu_ms {
+            check_spread(&at("gpu_ms"), g)?;
+        }
+        check_ms(&at("time_ms"), r.time_ms)?;
+        check(&at("gfrag_per_s"), r.gfrag_per_s, 0.0, MAX_VALUE, "a rate is")?;
+        check(&at("epr"), r.epr, 0.0, 1.0, "an error pixel rate is a fraction")?;
+        if let Some(p) = r.psnr {
+            check(&at("psnr"), p, -1000.0, 1000.0, "a PSNR is decibels")?;
+        }
+        check(&at("max_diff"), f64::from(r.max_diff), 0.0, 255.0, "a difference is 8-bit steps")?;
+        for (k, (_, ms)) in r.gpu_pass_ms.iter().enumerate() {
+            check_ms(&at(&format!("gpu_pass_ms[{k}]")), *ms)?;
+        }
+    }
+    for (i, m) in report.model.iter().enumerate() {
+        let at = |field: &str| format!("model[{i}].{field}");
+        check_ms(&at("tv_ms"), m.tv_ms)?;
+        check_ms(&at("time_ms"), m.time_ms)?;
+        check(&at("tf_ms"), m.tf_ms, -MAX_MS, MAX_MS, "a time difference is milliseconds")?;
+        check(&at("predicted_k"), m.predicted_k, -MAX_VALUE, MAX_VALUE, "a speedup is")?;
+        for (name, value) in [("measured", m.measured), ("ratio", m.ratio)] {
+            if let Some(value) = value {
+                check(&at(name), value, -MAX_VALUE, MAX_VALUE, "a speedup is")?;
+            }
+        }
+    }
+    for (i, m) in report.matrix.iter().enumerate() {
+        check(&format!("matrix[{i}].epr"), m.epr, 0.0, 1.0, "an error pixel rate is a fraction")?;
+        check(
+            &format!("matrix[{i}].max_diff"),
+            f64::from(m.max_diff),
+            0.0,
+            255.0,
+            "a difference is 8-bit steps",
+        )?;
+    }
+    for (i, p) in report.curves.iter().enumerate() {
+        check(&format!("curves[{i}].x"), p.x, 1.0, MAX_VALUE, "a depth or triangle count is")?;
+        check_ms(&format!("curves[{i}].time_ms"), p.time_ms)?;
+    }
+    Ok(())
 }
 
 /// Writes `report.json`, `report.md` and the plots into `dir` (made if missing), and records the

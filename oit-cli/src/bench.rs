@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use oit_bench::{Config, CurveConfig};
+use oit_bench::{Config, CurveConfig, MAX_CURVE_DEPTH, MAX_FRAMES};
 use oit_core::{OitError, Technique};
 
 use crate::Outcome;
@@ -24,7 +24,9 @@ use crate::output;
         curves: time vs depth complexity (planes:N, N = 1, 2, 4, ..., 256) and time vs triangles \
         (grid:RxC:MESH). Writes report.md, report.json and the plots (SVG and PNG) into --out. \
         A progress bar goes to stderr; a run that fails is listed in the report and the exit \
-        code is then 1. Use --backend all (or --raster all) for one row per backend and raster path."
+        code is then 1. Use --backend all (or --raster all) for one row per backend and raster path. \
+        Every option (scenes, technique lists, sizes, the curves' mesh) is checked before anything \
+        is measured."
 )]
 pub struct BenchArgs {
     /// Comma-separated scenes (built-in names, grid:RxC:MESH, or .obj paths) [default: the
@@ -71,7 +73,7 @@ pub struct BenchArgs {
     #[arg(long, value_name = "WxH", default_value = "128x128")]
     pub curve_size: String,
 
-    /// Largest N of the depth curve's planes:N (N = 1, 2, 4, ... up to it).
+    /// Largest N of the depth curve's planes:N (N = 1, 2, 4, ... up to it; 1 to 65536).
     #[arg(long, value_name = "N", default_value_t = 256)]
     pub curve_depth: u32,
 
@@ -100,10 +102,21 @@ pub fn run(args: &BenchArgs) -> Result<Outcome, OitError> {
         ))?;
         return Ok(Outcome::Success);
     }
+    // Every option is checked before any work: the cheap ones first, then (once the settings are
+    // parsed and the backends open) every scene and the curves, then the output folder.
     let techniques = Technique::parse_list(&args.techniques)?;
-    if args.frames == 0 || args.curve_frames == 0 {
-        return Err(OitError::InvalidSettings("--frames and --curve-frames must be at least 1".into()));
-    }
+    let frames = |n: u32, least: u32, option: &str| {
+        if (least..=MAX_FRAMES).contains(&n) {
+            Ok(())
+        } else {
+            Err(OitError::InvalidSettings(format!(
+                "{option} {n} is out of range: use {least} to {MAX_FRAMES}"
+            )))
+        }
+    };
+    frames(args.frames, 1, "--frames")?;
+    frames(args.warmup, 0, "--warmup")?;
+    frames(args.curve_frames, 1, "--curve-frames")?;
     let scenes: Vec<String> = match &args.scenes {
         Some(list) => list.split(',').map(str::trim).filter(|s| !s.is_empty()).map(String::from).collect(),
         None => vec![args.scene.scene.clone()],
@@ -111,10 +124,21 @@ pub fn run(args: &BenchArgs) -> Result<Outcome, OitError> {
     let Some(first) = scenes.first() else {
         return Err(OitError::InvalidSettings("--scenes names no scene".into()));
     };
+    if args.out.exists() && !args.out.is_dir() {
+        return Err(OitError::Write { path: args.out.clone(), message: "--out must name a folder".into() });
+    }
     let curves = if args.no_curves {
         None
     } else {
-        let (width, height) = oit_core::parse_size(&args.curve_size)?;
+        if !(1..=MAX_CURVE_DEPTH).contains(&args.curve_depth) {
+            return Err(OitError::InvalidSettings(format!(
+                "--curve-depth {} is out of range: the depth curve renders planes:N for N = 1, 2, 4, ... \
+                 up to it, so use 1 to {MAX_CURVE_DEPTH} (or --no-curves to skip the curves)",
+                args.curve_depth
+            )));
+        }
+        let (width, height) = oit_core::parse_size(&args.curve_size)
+            .map_err(|e| OitError::InvalidSettings(format!("--curve-size: {e}")))?;
         let grids = args
             .curve_grids
             .split(',')
@@ -124,10 +148,12 @@ pub fn run(args: &BenchArgs) -> Result<Outcome, OitError> {
                 })
             })
             .collect::<Result<Vec<_>, _>>()?;
-        let depths = (0..=16).map(|i| 1u32 << i).take_while(|&n| n <= args.curve_depth.max(1)).collect();
+        let depths = (0..=16).map(|i| 1u32 << i).take_while(|&n| n <= args.curve_depth).collect();
+        let techniques = Technique::parse_list(&args.curve_techniques)
+            .map_err(|e| OitError::InvalidSettings(format!("--curve-techniques: {e}")))?;
         Some(CurveConfig {
             mesh: args.curves.clone(),
-            techniques: Technique::parse_list(&args.curve_techniques)?,
+            techniques,
             depths,
             grids,
             width,
@@ -150,6 +176,9 @@ pub fn run(args: &BenchArgs) -> Result<Outcome, OitError> {
         curves,
         command_line: std::env::args().collect::<Vec<_>>().join(" "),
     };
+    config.validate()?;
+    std::fs::create_dir_all(&args.out)
+        .map_err(|e| OitError::Write { path: args.out.clone(), message: e.to_string() })?;
     let bar = ProgressBar::new(config.steps());
     bar.set_style(
         ProgressStyle::with_template(

@@ -3,9 +3,10 @@
 use std::path::PathBuf;
 
 use clap::Args;
+use oit_bench::experiment::{Experiment, Measured, Measurement, Step};
+use oit_core::metrics::error_image;
 use oit_bench::present::{SheetEntry, annotate_frame, contact_sheet};
-use oit_core::metrics::{accuracy, error_image};
-use oit_core::{Frame, Image, OitError, Technique};
+use oit_core::{Effect, Frame, Image, OitError, Stats, Technique};
 use serde::Serialize;
 
 use crate::Outcome;
@@ -37,9 +38,8 @@ pub struct CompareArgs {
     #[arg(long)]
     pub json: bool,
 
-    /// Also write a contact sheet: a grid of the reference, then each technique beside its error
-    /// image (×8, black where within 1/255), captioned above with EPR, PSNR and fragments lost
-    /// [default: none].
+    /// Also write a contact sheet: the reference, then each technique beside its error image
+    /// (×8, black where within 1/255), captioned with EPR, PSNR and fragments lost [default: none].
     #[arg(long, value_name = "FILE.png")]
     pub sheet: Option<PathBuf>,
 
@@ -47,21 +47,17 @@ pub struct CompareArgs {
     pub scene: SceneArgs,
 }
 
-/// One row of `oit compare --json`: exactly these keys.
+/// One row of `oit compare --json`: exactly these keys (and `gpu_pass_ms` where measured).
 #[derive(Serialize)]
-struct CompareJson {
+struct CompareJson<'a> {
     technique: String,
-    backend: String,
+    backend: &'a str,
     raster: String,
     width: u32,
     height: u32,
-    geometry_passes: u32,
-    fragments: u64,
-    captured: u64,
-    lost: u64,
-    storage_bytes: u64,
-    wall_ms: f64,
-    gpu_ms: Option<f64>,
+    /// `geometry_passes`, `fragments`, `captured`, `lost`, `storage_bytes`, `wall_ms`, `gpu_ms`.
+    #[serde(flatten)]
+    stats: &'a Stats,
     epr: f64,
     psnr: Option<f64>,
     max_error: f64,
@@ -81,8 +77,8 @@ const HEADERS: [(&str, usize); 11] = [
     ("PSNR (dB)", 9),
 ];
 
-/// A sheet cell for something that failed: its label, a dark image and the error.
-fn failed_entry(label: String, message: &str, width: u32, height: u32) -> SheetEntry {
+/// A sheet row for something that failed: its label, a dark image and the error.
+fn failed_row(label: String, message: &str, width: u32, height: u32) -> SheetEntry {
     SheetEntry {
         label,
         image: Image::new(width, height, [20, 20, 20, 255]),
@@ -98,127 +94,85 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
         check_output(sheet, "png", "--sheet")?;
     }
     let prepared = args.scene.prepare()?;
-    let camera = prepared.camera(prepared.view)?;
     let (width, height) = (prepared.settings.width, prepared.settings.height);
+    let experiment = Experiment {
+        backends: &prepared.backends,
+        settings: &prepared.settings,
+        techniques: &techniques,
+        warmup: 0,
+        frames: 1,
+        keep_images: args.sheet.is_some(),
+    };
 
     let (table, header) = Table::new(&HEADERS, 2);
     if !args.json {
         output::print(&header)?;
     }
-    let mut rows_json = Vec::new();
-    let mut sheet = Vec::new();
     let (mut failures, mut attempts) = (0usize, 0usize);
-    // Reports a failed technique: in its table row, or on stderr under --json.
-    let fail = |technique: &str, backend: &str, e: &OitError| -> Result<(), OitError> {
-        if args.json {
-            output::error_line(&format!("{technique} on {backend}: {e}"));
-            Ok(())
-        } else {
-            output::print(&table.note(&[technique.to_string(), backend.to_string()], &format!("error: {e}")))
+    let mut printed = Ok(());
+    let measurements = experiment.run(&args.scene.scene, &prepared.scene, &[prepared.view], &mut |step| {
+        let Step::Measured(m) = step else { return };
+        if m.baseline {
+            attempts += techniques.len();
         }
-    };
-
-    for backend in &prepared.backends {
-        let name = backend.name();
-        let ref_settings = prepared.with_technique(Technique::Reference);
-        attempts += techniques.len();
-        let reference: Frame = match backend.render(&prepared.scene, &camera, &ref_settings) {
-            Ok(frame) => frame,
+        let technique = m.technique.to_string();
+        let result = match &m.result {
+            Ok(r) => r,
             Err(e) => {
                 // Without a reference nothing on this backend can be measured.
-                fail("reference", name, &e)?;
-                failures += techniques.len();
-                if args.sheet.is_some() {
-                    sheet.push(failed_entry(format!("reference ({name})"), &e.to_string(), width, height));
+                failures += if m.baseline { techniques.len() } else { 1 };
+                let shown = if m.baseline { "reference".to_string() } else { technique };
+                if args.json {
+                    output::error_line(&format!("{shown} on {}: {e}", m.backend));
+                } else if printed.is_ok() {
+                    printed = output::print(&table.note(&[shown, m.backend.clone()], &format!("error: {e}")));
                 }
-                continue;
+                return;
             }
         };
-        if args.sheet.is_some() {
-            let s = &reference.stats;
-            let mut image = reference.image.clone();
-            annotate_frame(&mut image, ref_settings.effect, s);
-            sheet.push(SheetEntry {
-                label: format!("reference ({name})"),
-                image,
-                error: None,
-                caption: format!("{} fragments, {:.1} ms", s.fragments, s.wall_ms),
-            });
+        let Some(acc) = result.accuracy else { return };
+        let s = &result.stats;
+        if !args.json && printed.is_ok() {
+            printed = output::print(&table.row(&[
+                technique,
+                m.backend.clone(),
+                m.raster.to_string(),
+                s.geometry_passes.to_string(),
+                s.fragments.to_string(),
+                s.lost.to_string(),
+                output::bytes(s.storage_bytes),
+                format!("{:.2}", s.wall_ms),
+                s.gpu_ms.map_or_else(|| "-".to_string(), |g| format!("{g:.2}")),
+                output::percent(acc.epr),
+                output::psnr(acc.psnr),
+            ]));
         }
-        for &technique in &techniques {
-            let label = technique.to_string();
-            let settings = prepared.with_technique(technique);
-            let result = backend
-                .render(&prepared.scene, &camera, &settings)
-                .and_then(|frame| Ok((accuracy(&reference, &frame.image)?, frame)));
-            let (acc, frame) = match result {
-                Ok(r) => r,
-                Err(e) => {
-                    failures += 1;
-                    fail(&label, name, &e)?;
-                    if args.sheet.is_some() {
-                        sheet.push(failed_entry(format!("{label} ({name})"), &e.to_string(), width, height));
-                    }
-                    continue;
-                }
-            };
-            let s = &frame.stats;
-            if args.json {
-                rows_json.push(CompareJson {
-                    technique: label.clone(),
-                    backend: name.to_string(),
-                    raster: output::raster_name(backend.as_ref(), &settings),
+    })?;
+    printed?;
+    if args.json {
+        let rows: Vec<CompareJson<'_>> = measurements
+            .iter()
+            .filter(|m| !m.baseline)
+            .filter_map(|m| {
+                let r = m.result.as_ref().ok()?;
+                let acc = r.accuracy?;
+                Some(CompareJson {
+                    technique: m.technique.to_string(),
+                    backend: &m.backend,
+                    raster: m.raster.to_string(),
                     width,
                     height,
-                    geometry_passes: s.geometry_passes,
-                    fragments: s.fragments,
-                    captured: s.captured,
-                    lost: s.lost,
-                    storage_bytes: s.storage_bytes,
-                    wall_ms: s.wall_ms,
-                    gpu_ms: s.gpu_ms,
+                    stats: &r.stats,
                     epr: acc.epr,
                     psnr: acc.psnr.is_finite().then_some(acc.psnr),
                     max_error: acc.max_error,
-                });
-            } else {
-                output::print(&table.row(&[
-                    label.clone(),
-                    name.to_string(),
-                    output::raster_name(backend.as_ref(), &settings),
-                    s.geometry_passes.to_string(),
-                    s.fragments.to_string(),
-                    s.lost.to_string(),
-                    output::bytes(s.storage_bytes),
-                    format!("{:.2}", s.wall_ms),
-                    s.gpu_ms.map_or_else(|| "-".to_string(), |g| format!("{g:.2}")),
-                    output::percent(acc.epr),
-                    output::psnr(acc.psnr),
-                ]))?;
-            }
-            if args.sheet.is_some() {
-                let error = Some(error_image(&reference, &frame.image));
-                let mut image = frame.image;
-                annotate_frame(&mut image, settings.effect, &frame.stats);
-                sheet.push(SheetEntry {
-                    label: format!("{label} ({name})"),
-                    error,
-                    caption: format!(
-                        "EPR {}%  PSNR {} dB  lost {}",
-                        output::percent(acc.epr),
-                        output::psnr(acc.psnr),
-                        s.lost
-                    ),
-                    image,
-                });
-            }
-        }
-    }
-    if args.json {
-        output::print_json(&rows_json)?;
+                })
+            })
+            .collect();
+        output::print_json(&rows)?;
     }
     if let Some(path) = &args.sheet {
-        contact_sheet(&sheet).save_png(path)?;
+        contact_sheet(&sheet_rows(&measurements, width, height, prepared.settings.effect)).save_png(path)?;
         if !args.json {
             output::print(&format!("wrote {}\n", path.display()))?;
         }
@@ -228,4 +182,53 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
         return Ok(Outcome::Failed);
     }
     Ok(Outcome::Success)
+}
+
+/// The contact sheet's rows: per backend, its reference, then each technique beside its error
+/// image (a failure as a dark image with its message).
+fn sheet_rows(measurements: &[Measurement], width: u32, height: u32, effect: Effect) -> Vec<SheetEntry> {
+    let mut rows = Vec::new();
+    let mut reference: Option<Frame> = None;
+    for m in measurements {
+        let name = &m.backend;
+        let label =
+            if m.baseline { format!("reference ({name})") } else { format!("{} ({name})", m.technique) };
+        let (r, frame) = match (&m.result, m.result.as_ref().ok().and_then(Measured::frame)) {
+            (Ok(r), Some(frame)) => (r, frame),
+            (result, _) => {
+                let message = result.as_ref().err().map_or("no image kept", String::as_str);
+                if m.baseline {
+                    reference = None;
+                }
+                rows.push(failed_row(label, message, width, height));
+                continue;
+            }
+        };
+        let s = &r.stats;
+        let mut image = frame.image.clone();
+        annotate_frame(&mut image, effect, s);
+        if m.baseline {
+            rows.push(SheetEntry {
+                label,
+                image,
+                error: None,
+                caption: format!("{} fragments, {:.1} ms", s.fragments, s.wall_ms),
+            });
+            reference = Some(frame);
+            continue;
+        }
+        let (Some(reference), Some(acc)) = (&reference, r.accuracy) else { continue };
+        rows.push(SheetEntry {
+            label,
+            error: Some(error_image(reference, &frame.image)),
+            caption: format!(
+                "EPR {}%  PSNR {} dB  lost {}",
+                output::percent(acc.epr),
+                output::psnr(acc.psnr),
+                s.lost
+            ),
+            image,
+        });
+    }
+    rows
 }

@@ -1,11 +1,11 @@
 //! `oit info`: the backends compiled in, their devices, and what each runs.
 
 use clap::Args;
+use oit_bench::backends::{BackendOptions, probe_all};
 use oit_core::{BUILTIN_SCENES, KNOWN_TECHNIQUES, OitError, RasterPath, TechniqueKind};
 use serde::Serialize;
 
 use crate::Outcome;
-use crate::backends::{BackendOptions, probe_all};
 use crate::output;
 
 /// Arguments of `oit info`.

@@ -4,12 +4,11 @@
 use std::path::Path;
 
 use clap::Args;
+use oit_bench::backends::{BackendOptions, RasterChoice, select, with_paths};
 use oit_core::{
-    Backend, BdpMode, BoundsMode, Camera, Effect, HardwareCapture, OitError, RasterPath, Scene, Settings,
-    Shading, Technique, View, load_scene, parse_rgb, parse_size,
+    Backend, BdpMode, BoundsMode, Camera, Effect, HardwareCapture, OitError, Scene, Settings, Shading,
+    Technique, View, load_scene, parse_rgb, parse_size,
 };
-
-use crate::backends::{BackendOptions, RasterChoice, backends, with_paths};
 
 /// Options shared by `render`, `compare` and `sweep`.
 #[derive(Args, Clone, Debug)]
@@ -152,19 +151,9 @@ impl SceneArgs {
         // Checks the angles before the scene is loaded (the unit box stands in for its bounds).
         let unit = oit_core::Aabb { min: oit_core::glam::Vec3::ZERO, max: oit_core::glam::Vec3::ONE };
         Camera::orbit(&unit, view, width as f32 / height as f32)?;
-        let raster = match self.raster.as_deref().map(str::to_ascii_lowercase).as_deref() {
-            None => {
-                if self.backend.split(',').any(|b| b.trim().eq_ignore_ascii_case("all")) {
-                    RasterChoice::All
-                } else {
-                    RasterChoice::Default
-                }
-            }
-            Some("all") => RasterChoice::All,
-            Some(p) => RasterChoice::One(p.parse::<RasterPath>()?),
-        };
+        let raster = RasterChoice::parse(self.raster.as_deref(), &self.backend)?;
         let options = BackendOptions { threads: self.threads, adapter: self.adapter.clone() };
-        let backends = with_paths(backends(&self.backend, &options)?, raster)?;
+        let backends = with_paths(select(&self.backend, &options)?, raster)?;
         let scene = load_scene(&self.scene)?;
         for warning in &scene.warnings {
             eprintln!("warning: {warning}");

@@ -3,7 +3,7 @@
 
 use std::io::Write;
 
-use oit_core::{Backend, Camera, Settings, Stats, View};
+use oit_core::{Camera, View};
 use serde::Serialize;
 
 use oit_core::OitError;
@@ -28,11 +28,6 @@ pub fn print_json<T: Serialize + ?Sized>(value: &T) -> Result<(), OitError> {
 /// The one line a failure prints on stderr (newlines in `message` folded to spaces).
 pub fn error_line(message: &str) {
     eprintln!("error: {}", message.replace('\n', " "));
-}
-
-/// The raster path a frame was captured with: the one asked for, or the backend's first.
-pub fn raster_name(backend: &dyn Backend, settings: &Settings) -> String {
-    backend.raster_path(settings).to_string()
 }
 
 /// Bytes in KiB/MiB/GiB.
@@ -142,42 +137,6 @@ impl CameraJson {
             azimuth: view.azimuth,
             elevation: view.elevation,
             fov: view.fov,
-        }
-    }
-}
-
-/// The counters of [`Stats`] that every report carries, flattened into its JSON object.
-#[derive(Serialize)]
-pub struct StatsJson {
-    /// Passes over the geometry.
-    pub geometry_passes: u32,
-    /// Fragments generated.
-    pub fragments: u64,
-    /// Fragments that reached the composite.
-    pub captured: u64,
-    /// Fragments that did not.
-    pub lost: u64,
-    /// Bytes of per-pixel storage.
-    pub storage_bytes: u64,
-    /// Wall-clock milliseconds.
-    pub wall_ms: f64,
-    /// Device milliseconds, null where not measured.
-    pub gpu_ms: Option<f64>,
-    /// The most fragments captured at one pixel (the heat legend's top label).
-    pub max_layers: u32,
-}
-
-impl From<&Stats> for StatsJson {
-    fn from(s: &Stats) -> StatsJson {
-        StatsJson {
-            geometry_passes: s.geometry_passes,
-            fragments: s.fragments,
-            captured: s.captured,
-            lost: s.lost,
-            storage_bytes: s.storage_bytes,
-            wall_ms: s.wall_ms,
-            gpu_ms: s.gpu_ms,
-            max_layers: s.max_layers,
         }
     }
 }

@@ -7,14 +7,14 @@ use plotters::prelude::*;
 
 use crate::sweep::Record;
 
-/// One line of the plot: (technique, backend, (azimuth, EPR) points).
+/// One line of the plot: (technique, backend/raster path, (azimuth, EPR) points).
 type Series = (String, String, Vec<(f64, f64)>);
 
 /// Where an EPR of 0 is drawn: a log axis has no 0, and no real image has 1 error pixel in 10⁵.
 const FLOOR: f64 = 1e-5;
 
-/// Draws `records` as one line per technique (and backend, when there are several) against the
-/// azimuth, into `path`.
+/// Draws `records` as one line per technique (and backend/raster path, when there are several)
+/// against the azimuth, into `path`.
 pub fn epr_plot(path: &Path, records: &[Record], scene: &str, elevation: f32) -> Result<(), OitError> {
     let err =
         |e: &dyn std::fmt::Display| OitError::Write { path: path.to_path_buf(), message: e.to_string() };
@@ -23,9 +23,10 @@ pub fn epr_plot(path: &Path, records: &[Record], scene: &str, elevation: f32) ->
     let mut series: Vec<Series> = Vec::new();
     for r in records {
         let point = (f64::from(r.azimuth), r.epr.max(FLOOR));
-        match series.iter_mut().find(|(t, b, _)| *t == r.technique && *b == r.backend) {
+        let label = r.label();
+        match series.iter_mut().find(|(t, b, _)| *t == r.technique && *b == label) {
             Some((_, _, points)) => points.push(point),
-            None => series.push((r.technique.clone(), r.backend.clone(), vec![point])),
+            None => series.push((r.technique.clone(), label, vec![point])),
         }
     }
     let several_backends = series.iter().any(|(_, b, _)| series.first().is_some_and(|(_, b0, _)| b0 != b));

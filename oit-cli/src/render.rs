@@ -4,12 +4,12 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use oit_bench::present::annotate_frame;
-use oit_core::{OitError, Technique};
+use oit_core::{OitError, Stats, Technique};
 use serde::Serialize;
 
 use crate::Outcome;
 use crate::options::{SceneArgs, check_output};
-use crate::output::{self, CameraJson, StatsJson};
+use crate::output::{self, CameraJson};
 
 /// Arguments of `oit render`.
 #[derive(Args, Debug)]
@@ -17,11 +17,12 @@ use crate::output::{self, CameraJson, StatsJson};
     about = "Render the scene with one technique and write a PNG",
     long_about = "Render the scene with one technique and write a PNG.\n\n\
         Prints the frame's numbers: geometry passes, fragments generated, captured and lost, \
-        per-pixel storage and time. With --effect complexity the heat map gets its legend \
-        (fragments per pixel, from 1 to the frame's most) in the bottom-right corner. With --json, prints one JSON object with those numbers, the \
+        per-pixel storage and time. With --json, prints one JSON object with those numbers, the \
         image size and the camera (view and projection matrices, eye, planes, angles), so another \
-        renderer can reproduce the view. With several backends (--backend all), each writes its \
-        own PNG, named FILE-BACKEND.png, and --json prints one object per line."
+        renderer can reproduce the view. With several backends or raster paths (--backend all, \
+        --raster all), each writes its own PNG, named FILE-BACKEND.png or FILE-BACKEND-PATH.png \
+        (e.g. out-cpu.png, out-wgpu-hardware.png, out-wgpu-compute.png; a note on stderr lists \
+        them), and --json prints one object per line."
 )]
 pub struct RenderArgs {
     /// The technique: reference, dp, ddp, wavg, wsum, bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K],
@@ -50,23 +51,36 @@ struct RenderJson<'a> {
     scene: &'a str,
     width: u32,
     height: u32,
+    /// The frame's counters, under their own names (`geometry_passes`, `fragments`, ...,
+    /// `gpu_pass_ms` where measured).
     #[serde(flatten)]
-    stats: StatsJson,
-    /// Device milliseconds per pass label (geometry, and each kernel), where measured.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    gpu_pass_ms: Vec<(String, f64)>,
+    stats: &'a Stats,
     output: &'a Path,
     camera: CameraJson,
 }
 
-/// `FILE.png` for one backend, `FILE-BACKEND.png` for each of several.
-fn output_path(base: &Path, backend: &str, several: bool) -> PathBuf {
-    if !several {
-        return base.to_path_buf();
+/// Where each image goes: `FILE.png` when there is one; `FILE-LABEL.png` for each of several,
+/// LABEL the backend and its raster path (`cpu`, `wgpu-hardware`, `wgpu-compute`), so that no
+/// image overwrites another (a label met twice gets `-2`, `-3`, ...).
+fn output_paths(base: &Path, labels: &[String]) -> Vec<PathBuf> {
+    if labels.len() <= 1 {
+        return vec![base.to_path_buf(); labels.len()];
     }
     let stem = base.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "oit".into());
     let ext = base.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_else(|| "png".into());
-    base.with_file_name(format!("{stem}-{backend}.{ext}"))
+    let mut out: Vec<PathBuf> = Vec::new();
+    for label in labels {
+        let slug: String =
+            label.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '-' }).collect();
+        let mut path = base.with_file_name(format!("{stem}-{slug}.{ext}"));
+        let mut n = 2;
+        while out.contains(&path) {
+            path = base.with_file_name(format!("{stem}-{slug}-{n}.{ext}"));
+            n += 1;
+        }
+        out.push(path);
+    }
+    out
 }
 
 /// Runs `oit render`.
@@ -76,13 +90,18 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
     let prepared = args.scene.prepare()?;
     let camera = prepared.camera(prepared.view)?;
     let settings = prepared.with_technique(technique);
-    let several = prepared.backends.len() > 1;
-    for backend in &prepared.backends {
+    let labels: Vec<String> =
+        prepared.backends.iter().map(|b| oit_bench::label(b.as_ref(), &settings)).collect();
+    let paths = output_paths(&args.output, &labels);
+    if paths.len() > 1 {
+        let names: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+        eprintln!("note: {} images, one per backend and raster path: {}", paths.len(), names.join(", "));
+    }
+    for (backend, path) in prepared.backends.iter().zip(&paths) {
         let mut frame = backend.render(&prepared.scene, &camera, &settings)?;
-        let path = output_path(&args.output, backend.name(), several);
         annotate_frame(&mut frame.image, settings.effect, &frame.stats);
-        frame.image.save_png(&path)?;
-        let raster = output::raster_name(backend.as_ref(), &settings);
+        frame.image.save_png(path)?;
+        let raster = backend.raster_path(&settings).to_string();
         let s = &frame.stats;
         if args.json {
             let json = RenderJson {
@@ -92,9 +111,8 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
                 scene: &args.scene.scene,
                 width: settings.width,
                 height: settings.height,
-                stats: StatsJson::from(s),
-                gpu_pass_ms: s.gpu_pass_ms.clone(),
-                output: &path,
+                stats: s,
+                output: path,
                 camera: CameraJson::new(&camera, prepared.view),
             };
             let text = serde_json::to_string(&json)
@@ -133,4 +151,28 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
         }
     }
     Ok(Outcome::Success)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn several_images_get_distinct_names() {
+        let base = Path::new("dir/b.png");
+        assert_eq!(output_paths(base, &["wgpu/compute".into()]), [PathBuf::from("dir/b.png")]);
+        let labels: Vec<String> =
+            ["cpu", "wgpu/hardware", "wgpu/compute", "wgpu/compute"].map(String::from).into();
+        let names: Vec<PathBuf> = output_paths(base, &labels);
+        assert_eq!(
+            names,
+            [
+                "dir/b-cpu.png",
+                "dir/b-wgpu-hardware.png",
+                "dir/b-wgpu-compute.png",
+                "dir/b-wgpu-compute-2.png"
+            ]
+            .map(PathBuf::from)
+        );
+    }
 }

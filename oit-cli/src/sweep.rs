@@ -5,8 +5,8 @@ use std::path::PathBuf;
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use oit_core::metrics::accuracy;
-use oit_core::{OitError, Technique, View};
+use oit_bench::experiment::{Experiment, Step};
+use oit_core::{OitError, Stats, Technique, View};
 use serde::Serialize;
 
 use crate::Outcome;
@@ -24,10 +24,11 @@ const MAX_VIEWS: u32 = 36_000;
     long_about = "Orbit the camera around the scene and measure techniques at every view.\n\n\
         Takes N views at evenly spaced azimuths from 0 to 360 degrees (the elevation stays at \
         --elevation; --azimuth is not used). At each view renders the reference and every \
-        technique on every backend, and records the error pixel rate (EPR), fragments lost and \
-        time. Prints a summary per technique (mean and max EPR, mean lost, mean time), or with \
-        --json a JSON array of every record ({azimuth, technique, backend, epr, lost, wall_ms}) \
-        and nothing else. A progress bar goes to stderr. A technique that fails is reported once \
+        technique on every backend (and raster path), and records the error pixel rate (EPR), \
+        PSNR, fragments lost and time. Prints a summary per technique, backend and raster path \
+        (mean and max EPR, mean lost, mean time), or with --json a JSON array of every record \
+        ({azimuth, technique, backend, raster, geometry_passes, fragments, captured, lost, \
+        storage_bytes, wall_ms, gpu_ms, epr, psnr, max_error}) and nothing else. A progress bar goes to stderr. A technique that fails is reported once \
         on stderr and left out of the results; the exit code is then 1."
 )]
 pub struct SweepArgs {
@@ -52,7 +53,7 @@ pub struct SweepArgs {
     pub scene: SceneArgs,
 }
 
-/// One technique at one view.
+/// One technique at one view: a row of `oit sweep --json`.
 #[derive(Clone, Debug, Serialize)]
 pub struct Record {
     /// Camera azimuth in degrees.
@@ -61,12 +62,29 @@ pub struct Record {
     pub technique: String,
     /// The backend.
     pub backend: String,
+    /// The raster path it took.
+    pub raster: String,
+    /// The frame's counters (`geometry_passes`, `fragments`, `captured`, `lost`,
+    /// `storage_bytes`, `wall_ms`, `gpu_ms`, and `gpu_pass_ms` where measured).
+    #[serde(flatten)]
+    pub stats: Stats,
     /// Error pixel rate, a fraction.
     pub epr: f64,
-    /// Fragments lost.
-    pub lost: u64,
-    /// Wall-clock milliseconds.
-    pub wall_ms: f64,
+    /// PSNR in dB against the reference; null when identical.
+    pub psnr: Option<f64>,
+    /// The largest channel difference from the reference, in [0, 1].
+    pub max_error: f64,
+}
+
+impl Record {
+    /// `backend` or `backend/path`.
+    pub fn label(&self) -> String {
+        if self.raster == self.backend {
+            self.raster.clone()
+        } else {
+            format!("{}/{}", self.backend, self.raster)
+        }
+    }
 }
 
 /// Runs `oit sweep`.
@@ -82,16 +100,19 @@ pub fn run(args: &SweepArgs) -> Result<Outcome, OitError> {
         check_output(path, "svg", "--plot")?;
     }
     let prepared = args.scene.prepare()?;
-    let views: Vec<f32> =
-        (0..args.views).map(|i| (f64::from(i) * 360.0 / f64::from(args.views)) as f32).collect();
-    // Every camera first, so a view that cannot be framed fails before any work.
-    let cameras = views
-        .iter()
-        .map(|&azimuth| prepared.camera(View { azimuth, ..prepared.view }))
-        .collect::<Result<Vec<_>, _>>()?;
+    let views: Vec<View> = (0..args.views)
+        .map(|i| View { azimuth: (f64::from(i) * 360.0 / f64::from(args.views)) as f32, ..prepared.view })
+        .collect();
+    let experiment = Experiment {
+        backends: &prepared.backends,
+        settings: &prepared.settings,
+        techniques: &techniques,
+        warmup: 0,
+        frames: 1,
+        keep_images: false,
+    };
 
-    let per_view = (techniques.len() as u64 + 1) * prepared.backends.len() as u64;
-    let bar = ProgressBar::new(per_view * u64::from(args.views));
+    let bar = ProgressBar::new(experiment.renders_per_view() * u64::from(args.views));
     bar.set_style(
         ProgressStyle::with_template(
             "{spinner} sweep [{bar:30}] {pos}/{len} renders, {elapsed} (eta {eta}) {msg}",
@@ -99,53 +120,44 @@ pub fn run(args: &SweepArgs) -> Result<Outcome, OitError> {
         .unwrap_or_else(|_| ProgressStyle::default_bar())
         .progress_chars("=> "),
     );
-
-    let mut records = Vec::new();
-    // (technique, backend) pairs that have failed, reported once each.
+    // (technique, backend/path) pairs that have failed, reported once each.
     let mut failed: Vec<(String, String)> = Vec::new();
-    let mut report = |bar: &ProgressBar, technique: &str, backend: &str, e: &OitError| {
-        if !failed.iter().any(|(t, b)| t == technique && b == backend) {
-            failed.push((technique.to_string(), backend.to_string()));
-            bar.suspend(|| output::error_line(&format!("{technique} on {backend}: {e}")));
-        }
-    };
-    for (&azimuth, camera) in views.iter().zip(&cameras) {
-        for backend in &prepared.backends {
-            let name = backend.name();
-            bar.set_message(format!("{azimuth:.1}° reference on {name}"));
-            let reference =
-                match backend.render(&prepared.scene, camera, &prepared.with_technique(Technique::Reference))
-                {
-                    Ok(frame) => frame,
-                    Err(e) => {
-                        report(&bar, "reference", name, &e);
-                        bar.inc(per_view / prepared.backends.len() as u64);
-                        continue;
-                    }
-                };
+    let measurements = experiment.run(&args.scene.scene, &prepared.scene, &views, &mut |step| match step {
+        Step::Rendering(what) => bar.set_message(what.to_string()),
+        Step::Measured(m) => {
             bar.inc(1);
-            for &technique in &techniques {
-                let label = technique.to_string();
-                bar.set_message(format!("{azimuth:.1}° {label} on {name}"));
-                let result = backend
-                    .render(&prepared.scene, camera, &prepared.with_technique(technique))
-                    .and_then(|frame| Ok((accuracy(&reference, &frame.image)?, frame)));
-                bar.inc(1);
-                match result {
-                    Ok((acc, frame)) => records.push(Record {
-                        azimuth,
-                        technique: label,
-                        backend: name.to_string(),
-                        epr: acc.epr,
-                        lost: frame.stats.lost,
-                        wall_ms: frame.stats.wall_ms,
-                    }),
-                    Err(e) => report(&bar, &label, name, &e),
-                }
+            let Err(e) = &m.result else { return };
+            if m.baseline {
+                // the techniques of this view and backend are not rendered
+                bar.inc(techniques.len() as u64);
+            }
+            let technique = if m.baseline { "reference".to_string() } else { m.technique.to_string() };
+            let label = m.label();
+            if !failed.iter().any(|(t, b)| *t == technique && *b == label) {
+                bar.suspend(|| output::error_line(&format!("{technique} on {label}: {e}")));
+                failed.push((technique, label));
             }
         }
-    }
+    });
     bar.finish_and_clear();
+    let records: Vec<Record> = measurements?
+        .into_iter()
+        .filter(|m| !m.baseline)
+        .filter_map(|m| {
+            let r = m.result.ok()?;
+            let acc = r.accuracy?;
+            Some(Record {
+                azimuth: m.view.azimuth,
+                technique: m.technique.to_string(),
+                backend: m.backend,
+                raster: m.raster.to_string(),
+                stats: r.stats,
+                epr: acc.epr,
+                psnr: acc.psnr.is_finite().then_some(acc.psnr),
+                max_error: acc.max_error,
+            })
+        })
+        .collect();
 
     if let Some(path) = &args.plot {
         plot::epr_plot(path, &records, &args.scene.scene, prepared.view.elevation)?;
@@ -153,11 +165,7 @@ pub fn run(args: &SweepArgs) -> Result<Outcome, OitError> {
     if args.json {
         output::print_json(&records)?;
     } else {
-        output::print(&summary(
-            &records,
-            &techniques,
-            &prepared.backends.iter().map(|b| b.name()).collect::<Vec<_>>(),
-        ))?;
+        output::print(&summary(&records, &techniques))?;
         if let Some(path) = &args.plot {
             output::print(&format!("wrote {}\n", path.display()))?;
         }
@@ -169,44 +177,47 @@ pub fn run(args: &SweepArgs) -> Result<Outcome, OitError> {
     Ok(Outcome::Success)
 }
 
-/// The summary table: one row per technique and backend that has records.
-fn summary(records: &[Record], techniques: &[Technique], backends: &[&str]) -> String {
+/// The summary table: one row per technique and backend/raster path that has records, in the
+/// order of `techniques`, then of the backends and paths as first measured.
+fn summary(records: &[Record], techniques: &[Technique]) -> String {
     let (table, mut text) = Table::new(
         &[
             ("technique", 10),
             ("backend", 7),
+            ("raster", 8),
             ("views", 5),
             ("mean EPR (%)", 8),
             ("max EPR (%)", 8),
             ("mean lost", 9),
             ("mean ms", 8),
         ],
-        2,
+        3,
     );
-    let mut seen = Vec::new();
+    let mut seen: Vec<(String, String, String)> = Vec::new();
     for technique in techniques.iter().map(ToString::to_string) {
-        for &backend in backends {
-            if seen.contains(&(technique.clone(), backend)) {
+        for r in records.iter().filter(|r| r.technique == technique) {
+            let key = (technique.clone(), r.backend.clone(), r.raster.clone());
+            if seen.contains(&key) {
                 continue;
             }
-            seen.push((technique.clone(), backend));
-            let rows: Vec<&Record> =
-                records.iter().filter(|r| r.technique == technique && r.backend == backend).collect();
-            if rows.is_empty() {
-                continue;
-            }
+            let rows: Vec<&Record> = records
+                .iter()
+                .filter(|o| o.technique == key.0 && o.backend == key.1 && o.raster == key.2)
+                .collect();
             let n = rows.len() as f64;
             let mean = |f: fn(&Record) -> f64| rows.iter().map(|r| f(r)).sum::<f64>() / n;
             let max_epr = rows.iter().map(|r| r.epr).fold(0.0, f64::max);
             text.push_str(&table.row(&[
-                technique.clone(),
-                backend.to_string(),
+                key.0.clone(),
+                key.1.clone(),
+                key.2.clone(),
                 rows.len().to_string(),
                 output::percent(mean(|r| r.epr)),
                 output::percent(max_epr),
-                format!("{:.1}", mean(|r| r.lost as f64)),
-                format!("{:.2}", mean(|r| r.wall_ms)),
+                format!("{:.1}", mean(|r| r.stats.lost as f64)),
+                format!("{:.2}", mean(|r| r.stats.wall_ms)),
             ]));
+            seen.push(key);
         }
     }
     text

@@ -307,6 +307,25 @@ fn info_json_parses() {
     assert!(text.contains("backend cpu") && text.contains("techniques"), "{text}");
 }
 
+/// The keys of every `oit sweep --json` record: where and what (backend and raster path
+/// included), the frame's counters as `oit compare --json` names them, and the accuracy.
+const SWEEP_KEYS: [&str; 14] = [
+    "azimuth",
+    "technique",
+    "backend",
+    "raster",
+    "geometry_passes",
+    "fragments",
+    "captured",
+    "lost",
+    "storage_bytes",
+    "wall_ms",
+    "gpu_ms",
+    "epr",
+    "psnr",
+    "max_error",
+];
+
 #[test]
 fn sweep_json_has_a_record_per_view_and_technique() {
     let dir = scratch("sweep");
@@ -332,7 +351,11 @@ fn sweep_json_has_a_record_per_view_and_technique() {
     for r in records {
         let mut keys: Vec<&str> = r.as_object().unwrap().keys().map(String::as_str).collect();
         keys.sort_unstable();
-        assert_eq!(keys, ["azimuth", "backend", "epr", "lost", "technique", "wall_ms"]);
+        let mut expected = SWEEP_KEYS.to_vec();
+        expected.sort_unstable();
+        assert_eq!(keys, expected);
+        assert_eq!(r["raster"], "cpu");
+        assert!(r["geometry_passes"].as_u64().unwrap() >= 1);
     }
     let plot = std::fs::read_to_string(&svg).expect("the plot was written");
     assert!(plot.starts_with("<svg"));
@@ -354,7 +377,7 @@ fn sweep_summary_table() {
     let out = oit(&["sweep", "--size", "16x16", "--views", "2", "--techniques", "dp,wsum"]);
     assert!(out.status.success(), "{}", stderr(&out));
     let text = stdout(&out);
-    for word in ["mean EPR", "max EPR", "mean lost", "mean ms", "dp", "wsum"] {
+    for word in ["raster", "mean EPR", "max EPR", "mean lost", "mean ms", "dp", "wsum"] {
         assert!(text.contains(word), "{word}: {text}");
     }
 }
@@ -400,4 +423,140 @@ fn help_mentions_every_option() {
     for command in ["render", "compare", "sweep", "info"] {
         assert!(text.contains(command), "`oit --help` lacks {command}");
     }
+}
+
+/// The GPU backend on both raster paths, where this build has it and finds an adapter (lavapipe
+/// counts): `None` (and a note) where it does not.
+#[cfg(feature = "wgpu")]
+fn wgpu_paths() -> Option<()> {
+    let v = parse_json(&oit(&["info", "--json"]), "info --json");
+    let found = v["backends"].as_array()?.iter().any(|b| b["name"] == "wgpu" && b["available"] == true);
+    if !found {
+        eprintln!("note: no wgpu adapter; the two-path test is skipped");
+    }
+    found.then_some(())
+}
+
+#[cfg(feature = "wgpu")]
+#[test]
+fn render_all_writes_one_image_per_backend_and_path() {
+    if wgpu_paths().is_none() {
+        return;
+    }
+    let dir = scratch("render_all");
+    let png = dir.join("b.png");
+    let out = oit(&["render", "--size", "16x16", "--backend", "all", "--json", "-o", png.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let lines: Vec<Value> =
+        stdout(&out).lines().map(|l| serde_json::from_str(l).expect("a JSON line")).collect();
+    assert_eq!(lines.len(), 3, "cpu, wgpu/hardware, wgpu/compute");
+    let mut outputs: Vec<&str> = lines.iter().map(|l| l["output"].as_str().unwrap()).collect();
+    outputs.sort_unstable();
+    outputs.dedup();
+    assert_eq!(outputs.len(), 3, "one name each: {outputs:?}");
+    for name in ["b-cpu.png", "b-wgpu-hardware.png", "b-wgpu-compute.png"] {
+        assert!(dir.join(name).is_file(), "{name} missing");
+        assert!(stderr(&out).contains(name), "the note names {name}: {}", stderr(&out));
+    }
+    assert!(!png.exists(), "no image under the bare name");
+}
+
+#[cfg(feature = "wgpu")]
+#[test]
+fn sweep_rows_keep_their_raster_path() {
+    if wgpu_paths().is_none() {
+        return;
+    }
+    let out = oit(&[
+        "sweep",
+        "--size",
+        "16x16",
+        "--views",
+        "2",
+        "--techniques",
+        "dp",
+        "--backend",
+        "all",
+        "--json",
+    ]);
+    let v = parse_json(&out, "sweep --backend all --json");
+    let mut paths: Vec<(String, String)> = v
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| (r["backend"].as_str().unwrap().to_string(), r["raster"].as_str().unwrap().to_string()))
+        .collect();
+    assert_eq!(paths.len(), 2 * 3);
+    paths.sort();
+    paths.dedup();
+    assert_eq!(paths.len(), 3, "{paths:?}");
+    let table =
+        stdout(&oit(&["sweep", "--size", "16x16", "--views", "2", "--techniques", "dp", "--backend", "all"]));
+    for path in ["hardware", "compute"] {
+        assert!(
+            table.lines().any(|l| l.starts_with("dp") && l.contains("wgpu") && l.contains(path)),
+            "{table}"
+        );
+    }
+}
+
+#[test]
+fn bench_checks_every_option_before_measuring() {
+    let dir = scratch("bench_checks");
+    let out_dir = dir.join("report");
+    let out_dir = out_dir.to_str().unwrap();
+    let cases: [(&str, &[&str], &str); 9] = [
+        ("unknown curve mesh", &["--curves", "nosuchmesh"], "nosuchmesh"),
+        ("curve depth 0", &["--curve-depth", "0"], "--curve-depth"),
+        ("curve depth too deep", &["--curve-depth", "100000"], "--curve-depth"),
+        ("unknown scene in the list", &["--scenes", "planes:2,no-such-scene"], "no-such-scene"),
+        ("empty curve grid", &["--curve-grids", "1x1,0x2"], "0x2"),
+        ("bad curve technique", &["--curve-techniques", "dp,nope"], "nope"),
+        ("bad curve size", &["--curve-size", "0x0"], "--curve-size"),
+        ("huge curve size", &["--curve-size", "20000x2"], "20000"),
+        ("zero frames", &["--frames", "0"], "--frames"),
+    ];
+    for (what, extra, named) in cases {
+        let mut args = vec!["bench", "--size", "16x16", "--techniques", "dp", "--out", out_dir];
+        args.extend_from_slice(extra);
+        let start = std::time::Instant::now();
+        let out = oit(&args);
+        assert_one_error(&out, what);
+        assert!(stderr(&out).contains(named), "{what}: the message names {named}: {}", stderr(&out));
+        // nothing was measured: no report, and no time spent (the full run takes minutes here)
+        assert!(!std::path::Path::new(out_dir).join("report.json").exists(), "{what}");
+        assert!(start.elapsed().as_secs() < 30, "{what}: took {:?}", start.elapsed());
+    }
+}
+
+#[test]
+fn replot_rejects_absurd_numbers() {
+    let dir = scratch("replot");
+    let report = dir.join("report");
+    let r = report.to_str().unwrap();
+    let args = ["bench", "--size", "16x16", "--techniques", "dp,wavg", "--frames", "1", "--warmup", "0"];
+    let out = oit(&[&args[..], &["--no-curves", "--out", r]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json = report.join("report.json");
+    let good = std::fs::read_to_string(&json).unwrap();
+    let out = oit(&["bench", "--replot", r]);
+    assert!(out.status.success(), "a report oit wrote draws again: {}", stderr(&out));
+
+    // an EPR of 1e308 once made the plot's log axis span 300 decades, and the replot never ended
+    let mut v: Value = serde_json::from_str(&good).unwrap();
+    v["rows"][1]["epr"] = 1e308.into();
+    std::fs::write(&json, v.to_string()).unwrap();
+    let out = oit(&["bench", "--replot", r]);
+    assert_one_error(&out, "epr 1e308");
+    assert!(stderr(&out).contains("rows[1].epr"), "{}", stderr(&out));
+
+    let mut v: Value = serde_json::from_str(&good).unwrap();
+    v["rows"][0]["time_ms"] = (-1.0).into();
+    std::fs::write(&json, v.to_string()).unwrap();
+    assert_one_error(&oit(&["bench", "--replot", r]), "negative time");
+
+    let damaged = good.replacen("\"epr\": 0.0", "\"epr\": 1e999", 1);
+    assert_ne!(damaged, good, "dp is exact here");
+    std::fs::write(&json, damaged).unwrap();
+    assert_one_error(&oit(&["bench", "--replot", r]), "a number past f64");
 }

@@ -32,6 +32,18 @@ pub struct Accuracy {
 }
 
 impl Accuracy {
+    /// Nothing compared (no reference, or nothing covered): EPR and PSNR NaN, counts zero.
+    pub fn unmeasured() -> Accuracy {
+        Accuracy {
+            epr: f64::NAN,
+            psnr: f64::NAN,
+            max_error: f64::NAN,
+            covered: 0,
+            error_pixels: 0,
+            covered_by_image_only: 0,
+        }
+    }
+
     /// Whether any pixel was compared; when not, [`Accuracy::epr`] and [`Accuracy::psnr`] are
     /// NaN, not a perfect score.
     pub fn is_measured(&self) -> bool {

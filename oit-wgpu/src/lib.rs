@@ -108,6 +108,10 @@ impl Backend for WgpuBackend {
         }
     }
 
+    fn raster_path(&self, settings: &Settings) -> RasterPath {
+        settings.raster.unwrap_or(WgpuBackend::default_path(settings.technique))
+    }
+
     fn prepare<'s>(&'s self, scene: &'s Scene) -> Result<Box<dyn Prepared + 's>, OitError> {
         scene.validate()?;
         let gpu = self.gpu()?;

@@ -1,18 +1,26 @@
-//! Backends by name: the one place that knows which are compiled in.
+//! Backends by name: the one registry of oit, shared by the CLI (`render`, `compare`, `sweep`,
+//! `bench`, `info`), the bench report and the criterion benches.
 //!
-//! Adding a backend is one line in [`COMPILED`] (behind its cargo feature); its name is already in
-//! [`KNOWN`], so asking for it in a build without it says which feature to turn on.
+//! Contract: [`select`] turns a name (`cpu`, `wgpu`, a comma-separated list, or `all`) into built
+//! backends, each compiled in by its cargo feature of this crate (`cpu`, `wgpu`); a backend that
+//! is known but not compiled in is an error naming the feature to turn on, and one whose device is
+//! missing is an error (or, under `all`, skipped with a note on stderr). [`with_paths`] then pins
+//! each backend to the raster paths a [`RasterChoice`] asks for, one [`OnPath`] per path, all
+//! paths of one backend sharing one device.
+//!
+//! Adding a backend is one line in `COMPILED` (behind its cargo feature); its name is already in
+//! `KNOWN`, so asking for it in a build without it says which feature to turn on.
 
-use oit_core::{Backend, OitError, OnPath, RasterPath};
+use std::sync::Arc;
+
+use oit_core::{Backend, Camera, Capabilities, Frame, OitError, OnPath, Prepared, RasterPath, Scene, Settings};
 
 /// Options that shape how a backend is built.
 #[derive(Clone, Debug, Default)]
 pub struct BackendOptions {
     /// Worker threads of the CPU backend (`None`: one per core).
-    #[cfg_attr(not(feature = "cpu"), expect(dead_code, reason = "only the cpu backend has threads"))]
     pub threads: Option<usize>,
     /// GPU adapter name filter.
-    #[cfg_attr(not(feature = "wgpu"), expect(dead_code, reason = "only GPU backends have adapters"))]
     pub adapter: Option<String>,
 }
 
@@ -25,6 +33,19 @@ pub enum RasterChoice {
     All,
     /// This one (backends without it are skipped with a note).
     One(RasterPath),
+}
+
+impl RasterChoice {
+    /// The choice a `--raster` value makes: a path, `all`, or (left out) the backends' own choice,
+    /// except under `--backend all`, which means every backend on every path.
+    pub fn parse(raster: Option<&str>, backend: &str) -> Result<RasterChoice, OitError> {
+        match raster.map(str::trim) {
+            None if backend.split(',').any(|b| b.trim().eq_ignore_ascii_case("all")) => Ok(RasterChoice::All),
+            None => Ok(RasterChoice::Default),
+            Some(p) if p.eq_ignore_ascii_case("all") => Ok(RasterChoice::All),
+            Some(p) => Ok(RasterChoice::One(p.parse::<RasterPath>()?)),
+        }
+    }
 }
 
 /// Pins each backend to the raster paths `choice` asks for.
@@ -42,12 +63,10 @@ pub fn with_paths(
                     out.push(backend);
                     continue;
                 }
-                let name = backend.name().to_string();
-                let shared: std::sync::Arc<dyn Backend> = std::sync::Arc::from(backend);
+                let shared: Arc<dyn Backend> = Arc::from(backend);
                 for path in paths {
                     out.push(Box::new(OnPath { backend: Box::new(Shared(shared.clone())), path }));
                 }
-                let _ = name;
             }
             RasterChoice::One(path) => {
                 if backend.capabilities().raster_paths.contains(&path) {
@@ -66,30 +85,26 @@ pub fn with_paths(
     Ok(out)
 }
 
-/// One backend behind several [`OnPath`]s (one device opened once).
-struct Shared(std::sync::Arc<dyn Backend>);
+/// One backend behind several [`OnPath`]s: one device opened once serves every path.
+struct Shared(Arc<dyn Backend>);
 
 impl Backend for Shared {
     fn name(&self) -> &str {
         self.0.name()
     }
-    fn capabilities(&self) -> oit_core::Capabilities {
+    fn capabilities(&self) -> Capabilities {
         self.0.capabilities()
     }
-    fn render(
-        &self,
-        scene: &oit_core::Scene,
-        camera: &oit_core::Camera,
-        settings: &oit_core::Settings,
-    ) -> Result<oit_core::Frame, OitError> {
+    fn prepare<'s>(&'s self, scene: &'s Scene) -> Result<Box<dyn Prepared + 's>, OitError> {
+        self.0.prepare(scene)
+    }
+    fn render(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
         self.0.render(scene, camera, settings)
     }
-    fn plain_pass_ms(
-        &self,
-        scene: &oit_core::Scene,
-        camera: &oit_core::Camera,
-        settings: &oit_core::Settings,
-    ) -> Result<f64, OitError> {
+    fn raster_path(&self, settings: &Settings) -> RasterPath {
+        self.0.raster_path(settings)
+    }
+    fn plain_pass_ms(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<f64, OitError> {
         self.0.plain_pass_ms(scene, camera, settings)
     }
 }
@@ -137,7 +152,7 @@ pub fn probe_all(options: &BackendOptions) -> Vec<Probe> {
 
 /// The backends `name` selects: one name, a comma-separated list, or `all` (every backend compiled
 /// in whose device is present; the others are skipped with a note on stderr).
-pub fn backends(name: &str, options: &BackendOptions) -> Result<Vec<Box<dyn Backend>>, OitError> {
+pub fn select(name: &str, options: &BackendOptions) -> Result<Vec<Box<dyn Backend>>, OitError> {
     let compiled = compiled_names().join(", ");
     if COMPILED.is_empty() {
         return Err(OitError::InvalidSettings(
@@ -189,6 +204,22 @@ pub fn backends(name: &str, options: &BackendOptions) -> Result<Vec<Box<dyn Back
     Ok(out)
 }
 
+/// Every backend compiled in whose device is present, on every raster path it has, with a note on
+/// stderr for each that is not (`--backend all`; what the benches and tests run).
+pub fn available_backends() -> Vec<Box<dyn Backend>> {
+    let mut found: Vec<Box<dyn Backend>> = Vec::new();
+    for (name, result) in probe_all(&BackendOptions::default()) {
+        match result {
+            Ok(backend) => found.push(backend),
+            Err(e) => eprintln!("note: backend {name} skipped: {e}"),
+        }
+    }
+    if found.is_empty() {
+        return found;
+    }
+    with_paths(found, RasterChoice::All).unwrap_or_default()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -197,11 +228,34 @@ mod tests {
     fn names_resolve() {
         let opts = BackendOptions::default();
         if !COMPILED.is_empty() {
-            assert_eq!(backends("all", &opts).unwrap().len(), COMPILED.len());
-            assert_eq!(backends(&format!("{},all", COMPILED[0].0), &opts).unwrap().len(), COMPILED.len());
+            assert_eq!(select("all", &opts).unwrap().len(), COMPILED.len());
+            assert_eq!(select(&format!("{},all", COMPILED[0].0), &opts).unwrap().len(), COMPILED.len());
         }
-        assert!(backends("wgpu,vulkan,cpu", &opts).is_err() || COMPILED.len() == 3);
-        assert!(backends("nope", &opts).is_err());
-        assert!(backends("", &opts).is_err());
+        assert!(select("wgpu,vulkan,cpu", &opts).is_err() || COMPILED.len() == 3);
+        assert!(select("nope", &opts).is_err());
+        assert!(select("", &opts).is_err());
+    }
+
+    #[test]
+    fn raster_choices_parse() {
+        assert_eq!(RasterChoice::parse(None, "cpu").unwrap(), RasterChoice::Default);
+        assert_eq!(RasterChoice::parse(None, "cpu, ALL").unwrap(), RasterChoice::All);
+        assert_eq!(RasterChoice::parse(Some("all"), "cpu").unwrap(), RasterChoice::All);
+        assert_eq!(
+            RasterChoice::parse(Some("compute"), "wgpu").unwrap(),
+            RasterChoice::One(RasterPath::Compute)
+        );
+        assert!(RasterChoice::parse(Some("nope"), "cpu").is_err());
+    }
+
+    #[cfg(feature = "cpu")]
+    #[test]
+    fn one_path_backends_stay_bare() {
+        let list = select("cpu", &BackendOptions::default()).unwrap();
+        let pinned = with_paths(list, RasterChoice::All).unwrap();
+        assert_eq!(pinned.len(), 1);
+        assert_eq!(pinned[0].raster_path(&Settings::default()), RasterPath::Cpu);
+        let list = select("cpu", &BackendOptions::default()).unwrap();
+        assert!(with_paths(list, RasterChoice::One(RasterPath::Compute)).is_err());
     }
 }
