@@ -135,7 +135,7 @@ fn render_complexity_draws_the_legend_on_the_heat_map() {
     assert!(legend_pixels * 2 > (rect.width * rect.height) as usize, "no legend in {rect:?}");
 }
 
-const COMPARE_KEYS: [&str; 15] = [
+const COMPARE_KEYS: [&str; 16] = [
     "technique",
     "backend",
     "raster",
@@ -151,6 +151,7 @@ const COMPARE_KEYS: [&str; 15] = [
     "epr",
     "psnr",
     "max_error",
+    "max_layers",
 ];
 
 #[test]
@@ -309,7 +310,7 @@ fn info_json_parses() {
 
 /// The keys of every `oit sweep --json` record: where and what (backend and raster path
 /// included), the frame's counters as `oit compare --json` names them, and the accuracy.
-const SWEEP_KEYS: [&str; 14] = [
+const SWEEP_KEYS: [&str; 15] = [
     "azimuth",
     "technique",
     "backend",
@@ -324,6 +325,7 @@ const SWEEP_KEYS: [&str; 14] = [
     "epr",
     "psnr",
     "max_error",
+    "max_layers",
 ];
 
 #[test]
