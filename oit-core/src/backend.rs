@@ -139,18 +139,28 @@ impl Prepared for PreparedOnPath<'_> {
     }
 }
 
-/// K one-fragment buckets per pixel, each updated concurrently with MAX on a 32-bit word (the
-/// bits of a non-negative float, or a packed colour).
+/// K one-fragment buckets per pixel, each updated concurrently with MAX: the bucket capture of
+/// bdp (Liu et al., HPG 2009: MAX blending into 8 RGBA32F targets) and adp's batches.
+///
+/// The word is 32 bits (the bits of a non-negative float, which order as the float does, or a
+/// packed colour) or 64 bits (depth bits above a payload). Zero is the empty bucket.
 pub trait BucketArray: Sync {
+    /// The bucket word.
+    type Word: Copy + Eq + Default;
     /// Buckets per pixel.
     fn buckets(&self) -> usize;
-    /// `bucket[pixel][k] = max(bucket[pixel][k], value)`.
-    fn update_max(&self, pixel: usize, k: usize, value: u32);
+    /// `bucket[pixel][k] = max(bucket[pixel][k], value)`; returns the bucket's previous word, so
+    /// a capture can count the collision it just resolved (previous ≠ empty: one fragment of the
+    /// two is gone).
+    fn update_max(&self, pixel: usize, k: usize, value: Self::Word) -> Self::Word;
+    /// Reads bucket `k` of `pixel` and empties it (adp reuses its buckets batch after batch).
+    fn take(&self, pixel: usize, k: usize) -> Self::Word;
     /// The buckets of one pixel.
-    fn read(&self, pixel: usize, out: &mut [u32]);
+    fn read(&self, pixel: usize, out: &mut [Self::Word]);
 }
 
-/// A 1024-bit presence histogram per pixel, updated concurrently with OR.
+/// A 1024-bit presence histogram per pixel, updated concurrently with OR: adp's first pass
+/// (Liu et al., HPG 2009: logic-op OR into 8 RGBA32UI targets).
 pub trait DepthHistogram: Sync {
     /// Sets bit `bin` of `pixel`'s histogram.
     fn set(&self, pixel: usize, bin: u32);
@@ -158,14 +168,16 @@ pub trait DepthHistogram: Sync {
     fn read(&self, pixel: usize) -> [u32; HISTOGRAM_WORDS];
 }
 
-/// A fixed array of `capacity` fragment words per pixel, filled concurrently.
+/// A fixed array of `capacity` 64-bit fragment keys per pixel, filled concurrently: by atomic
+/// increment of a per-pixel counter, sorted after (fabs), or kept sorted by repeated atomic min
+/// (mdts64; Liu et al. 2009, Huang et al. 2011).
 pub trait AtomicFragmentList: Sync {
     /// Slots per pixel.
     fn capacity(&self) -> usize;
-    /// Offers a fragment key; returns the key that fell off the end, if any (atomic-min insertion
-    /// keeps the array sorted and drops the largest; atomic-increment appends and drops overflow).
+    /// Offers a fragment key; returns the key that did not fit, if any (atomic-min insertion
+    /// keeps the array sorted and drops the largest; atomic increment drops the newcomer).
     fn insert(&self, pixel: usize, key: u64) -> Option<u64>;
-    /// The captured keys of one pixel, in depth order.
+    /// The captured keys of one pixel, in key (depth) order.
     fn sorted(&self, pixel: usize, out: &mut Vec<u64>);
 }
 

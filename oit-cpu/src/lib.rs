@@ -19,6 +19,7 @@
 mod pool;
 pub mod raster;
 mod resolve;
+mod storage;
 mod technique;
 
 use std::sync::atomic::{AtomicU32, Ordering};

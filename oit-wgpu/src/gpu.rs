@@ -263,12 +263,29 @@ impl Gpu {
         });
         let mut encoder = self.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
-        self.queue.submit([encoder.finish()]);
+        let index = self.queue.submit([encoder.finish()]);
         let slice = staging.slice(..);
-        slice.map_async(wgpu::MapMode::Read, |_| {});
-        self.device
-            .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
-            .map_err(|e| OitError::Device(format!("waiting for the GPU failed: {e}")))?;
+        // The words are read only once the map callback has said they are there (and has not
+        // failed), not merely after a wait on the queue.
+        let mapped = std::sync::Arc::new(std::sync::Mutex::new(None));
+        let signal = mapped.clone();
+        slice.map_async(wgpu::MapMode::Read, move |result| {
+            if let Ok(mut slot) = signal.lock() {
+                *slot = Some(result);
+            }
+        });
+        let mut index = Some(index);
+        loop {
+            self.device
+                .poll(wgpu::PollType::Wait { submission_index: index.take(), timeout: None })
+                .map_err(|e| OitError::Device(format!("waiting for the GPU failed: {e}")))?;
+            let done = mapped.lock().map_err(|_| OitError::Device("readback flag poisoned".into()))?.take();
+            match done {
+                Some(Ok(())) => break,
+                Some(Err(e)) => return Err(OitError::Device(format!("reading a buffer back failed: {e}"))),
+                None => std::thread::yield_now(),
+            }
+        }
         let data = slice.get_mapped_range().map_err(|e| OitError::Device(format!("readback failed: {e}")))?;
         Ok(bytemuck::cast_slice(&data).to_vec())
     }

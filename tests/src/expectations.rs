@@ -43,6 +43,17 @@ pub const EXPECTED: &[Expected] = &[
               rasterizer (the compute path, with oit's fixed-point depths, is exact); not yet \
               explained, reported in the architecture issue's closing note",
     },
+    Expected {
+        test: "a_thousand_layers",
+        backend: "wgpu",
+        path: RasterPath::Compute,
+        why: "KNOWN BUG, not a tolerance: on lavapipe the compute path's reference with 1,000 layers \
+              per pixel sometimes composites only part of the deepest pixels (planes:1000 at 8x8, \
+              default view: 1,552 of 17,347 fragments about one run in five, the per-pixel counts \
+              and offsets correct; also on the commit before the conformance suite ran on wgpu). \
+              The loss is reported in `lost`, not hidden; the cause is open (the architecture \
+              issue's closing note)",
+    },
 ];
 
 /// The reason `test` does not run on `backend`/`path`, if the table has one.

@@ -11,30 +11,27 @@
 //! Two fragments closer than 1/1024 of the range can share a bin: one survives (MAX on the 64-bit
 //! (depth, payload) word), the other is counted in `lost`.
 
-use std::sync::atomic::Ordering::Relaxed;
-
 use oit_core::rules::{
     BUCKETS, HISTOGRAM_WORDS, depth_key64, histogram_bin, histogram_count, histogram_rank, split_key64,
 };
-use oit_core::{Frame, OitError};
+use oit_core::{BucketArray, DepthHistogram, Frame, OitError};
 use rayon::prelude::*;
 
 use super::Ctx;
+use crate::storage::{Buckets, Histogram};
 
 pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let bounds = ctx.depth_bounds()?;
     ctx.storage_bytes += ctx.pixels as u64 * 8;
-    let hist = ctx.alloc32(HISTOGRAM_WORDS, 0)?;
+    let histogram = Histogram::new(ctx.alloc32(HISTOGRAM_WORDS, 0)?);
     ctx.pass(|f| {
         let px = f.pixel as usize;
         let (zn, zf) = bounds[px];
-        let bin = histogram_bin(f.depth, zn, zf);
-        hist[px * HISTOGRAM_WORDS + (bin / 32) as usize].fetch_or(1 << (bin % 32), Relaxed);
+        histogram.set(px, histogram_bin(f.depth, zn, zf));
     });
-    let hist: Vec<[u32; HISTOGRAM_WORDS]> =
-        hist.par_chunks(HISTOGRAM_WORDS).map(|h| std::array::from_fn(|i| h[i].load(Relaxed))).collect();
+    let hist: Vec<[u32; HISTOGRAM_WORDS]> = (0..ctx.pixels).into_par_iter().map(|px| histogram.read(px)).collect();
     let batches = ctx.plan.adp_batches(hist.iter().map(histogram_count).max().unwrap_or(0));
-    let buckets = ctx.alloc64(BUCKETS, 0)?;
+    let buckets = Buckets::new(ctx.alloc64(BUCKETS, 0)?, BUCKETS);
     let mut states = ctx.states();
     for batch in 0..batches {
         let payload = |f: &crate::raster::Fragment| ctx.payload(f);
@@ -44,16 +41,17 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
             let (zn, zf) = bounds[px];
             let rank = histogram_rank(&hist[px], histogram_bin(f.depth, zn, zf));
             if rank / BUCKETS as u32 == batch {
-                let slot = px * BUCKETS + (rank % BUCKETS as u32) as usize;
-                buckets[slot].fetch_max(depth_key64(f.depth, payload(f)) | 1 << 63, Relaxed);
+                // bit 63 marks a full bucket, so a fragment at depth 0 with payload 0 is not empty
+                buckets.update_max(px, (rank % BUCKETS as u32) as usize, depth_key64(f.depth, payload(f)) | 1 << 63);
             }
         });
         ctx.passes += 1;
         ctx.fragments.get_or_insert(generated);
         let resolve = &ctx.resolve;
-        states.par_iter_mut().zip(buckets.par_chunks(BUCKETS)).for_each(|(s, b)| {
-            for bucket in b {
-                let key = bucket.swap(0, Relaxed);
+        let buckets = &buckets;
+        states.par_iter_mut().enumerate().for_each(|(px, s)| {
+            for k in 0..buckets.buckets() {
+                let key = buckets.take(px, k);
                 if key != 0 {
                     let (d, p) = split_key64(key & !(1 << 63));
                     resolve.push(s, d, p);

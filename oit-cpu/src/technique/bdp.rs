@@ -19,10 +19,11 @@ use oit_core::rules::{
     BDP_COLOR_SUBINTERVALS, BDP_DEPTH_SUBINTERVALS, bdp_pack_color, bdp_unpack_color, bucket_index,
     depth_bits, depth_key64, split_key64,
 };
-use oit_core::{Frame, OitError};
+use oit_core::{BucketArray, Frame, OitError};
 use rayon::prelude::*;
 
 use super::Ctx;
+use crate::storage::Buckets;
 
 pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let color_mode = ctx.plan.bdp_color;
@@ -33,19 +34,21 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
 
 fn color(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
     let n = BDP_COLOR_SUBINTERVALS as usize;
-    let buckets = ctx.alloc32(n, 0)?;
+    let buckets = Buckets::new(ctx.alloc32(n, 0)?, n);
     ctx.pass(|f| {
         let px = f.pixel as usize;
         let (zn, zf) = bounds[px];
         let k = bucket_index(f.depth, zn, zf, BDP_COLOR_SUBINTERVALS) as usize;
-        buckets[px * n + k].fetch_max(bdp_pack_color(oit_core::rules::pack_rgba8(f.color)), Relaxed);
+        buckets.update_max(px, k, bdp_pack_color(oit_core::rules::pack_rgba8(f.color)));
     });
     let mut states = ctx.states();
     let resolve = &ctx.resolve;
-    states.par_iter_mut().zip(buckets.par_chunks(n)).zip(bounds.par_iter()).for_each(
-        |((s, b), &(zn, zf))| {
-            for (k, bucket) in b.iter().enumerate() {
-                let v = bucket.load(Relaxed);
+    let buckets = &buckets;
+    states.par_iter_mut().zip(bounds.par_iter()).enumerate().for_each_init(
+        || vec![0u32; n],
+        |words, (px, (s, &(zn, zf)))| {
+            buckets.read(px, words);
+            for (k, &v) in words.iter().enumerate() {
                 if v != 0 {
                     // The bucket's subinterval midpoint stands for its depth.
                     let d = zn + (k as f32 + 0.5) / n as f32 * (zf - zn);

@@ -12,10 +12,11 @@
 use std::sync::atomic::Ordering::Relaxed;
 
 use oit_core::rules::{depth_key64, mdts_pack, mdts_unpack, split_key64};
-use oit_core::{Frame, OitError};
+use oit_core::{AtomicFragmentList, Frame, OitError};
 use rayon::prelude::*;
 
-use super::{Ctx, insert_min32, insert_min64};
+use super::{Ctx, insert_min32};
+use crate::storage::MinList;
 
 /// Slots per pixel, by the plan (a counting pass first where it sizes from the scene).
 fn capacity(ctx: &mut Ctx<'_>) -> Result<usize, OitError> {
@@ -25,22 +26,19 @@ fn capacity(ctx: &mut Ctx<'_>) -> Result<usize, OitError> {
 
 pub(crate) fn render64(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let k = capacity(ctx)?;
-    let slots = ctx.alloc64(k, u64::MAX)?;
+    let list = MinList::new(ctx.alloc64(k, MinList::EMPTY)?, k);
     let payload = |f: &crate::raster::Fragment| ctx.payload(f);
     let generated = ctx.raster.for_each_fragment(|f| {
-        let px = f.pixel as usize;
-        insert_min64(&slots[px * k..(px + 1) * k], depth_key64(f.depth, payload(f)));
+        list.insert(f.pixel as usize, depth_key64(f.depth, payload(f)));
     });
     ctx.passes += 1;
     ctx.fragments.get_or_insert(generated);
     let mut states = ctx.states();
     let resolve = &ctx.resolve;
-    states.par_iter_mut().zip(slots.par_chunks(k)).for_each(|(s, slots)| {
-        for slot in slots {
-            let key = slot.load(Relaxed);
-            if key == u64::MAX {
-                break;
-            }
+    let list = &list;
+    states.par_iter_mut().enumerate().for_each_init(Vec::new, |keys, (px, s)| {
+        list.sorted(px, keys);
+        for &key in keys.iter() {
             let (d, p) = split_key64(key);
             resolve.push(s, d, p);
         }

@@ -7,14 +7,15 @@
 use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
 
 use oit_core::rules::{depth_bits, depth_key64, split_key64};
-use oit_core::{Frame, OitError};
+use oit_core::{AtomicFragmentList, Frame, OitError};
 use rayon::prelude::*;
 
-use super::{Ctx, insert_min64};
+use super::Ctx;
+use crate::storage::MinList;
 
 pub(crate) fn render(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
     let m = m as usize;
-    let slots = ctx.alloc64(m, u64::MAX)?;
+    let list = MinList::new(ctx.alloc64(m, MinList::EMPTY)?, m);
     let mut deepest: Vec<i64> = vec![-1; ctx.pixels];
     ctx.storage_bytes += ctx.pixels as u64 * 4;
     let mut states = ctx.states();
@@ -27,7 +28,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
         let generated = ctx.raster.for_each_fragment(|f| {
             let px = f.pixel as usize;
             if i64::from(depth_bits(f.depth)) > prev[px]
-                && insert_min64(&slots[px * m..(px + 1) * m], depth_key64(f.depth, payload(f)))
+                && list.insert(px, depth_key64(f.depth, payload(f))).is_some()
             {
                 more.store(true, Relaxed);
             }
@@ -36,13 +37,12 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
         ctx.fragments.get_or_insert(generated);
         peels += 1;
         let resolve = &ctx.resolve;
-        states.par_iter_mut().zip(deepest.par_iter_mut()).zip(slots.par_chunks(m)).for_each(
-            |((s, deep), slots)| {
-                for slot in slots {
-                    let key = slot.swap(u64::MAX, Relaxed);
-                    if key == u64::MAX {
-                        break;
-                    }
+        let list = &list;
+        states.par_iter_mut().zip(deepest.par_iter_mut()).enumerate().for_each_init(
+            Vec::new,
+            |keys, (px, (s, deep))| {
+                list.take_sorted(px, keys);
+                for &key in keys.iter() {
                     let (d, p) = split_key64(key);
                     resolve.push(s, d, p);
                     *deep = i64::from(depth_bits(d));

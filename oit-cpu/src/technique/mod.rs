@@ -157,25 +157,9 @@ impl<'a> Ctx<'a> {
     }
 }
 
-/// Inserts `key` into a sorted array of `slots` by repeated atomic min (Liu et al. 2009; Huang et
-/// al. 2011): each slot keeps the smaller of its value and the carried one, and the larger is
-/// carried to the next slot. Empty slots hold `EMPTY`. Returns true when a key fell off the end
-/// (the array was full): a lost fragment.
-#[inline]
-pub(crate) fn insert_min64(slots: &[AtomicU64], key: u64) -> bool {
-    const EMPTY: u64 = u64::MAX;
-    let mut carry = key;
-    for slot in slots {
-        let old = slot.fetch_min(carry, Relaxed);
-        if old == EMPTY {
-            return false;
-        }
-        carry = carry.max(old);
-    }
-    true
-}
-
-/// [`insert_min64`] on 32-bit words (mdts).
+/// Inserts `key` into a sorted array of 32-bit `slots` by repeated atomic min (mdts's words; the
+/// 64-bit form is [`crate::storage::MinList`]). Empty slots hold `u32::MAX`. Returns true when a
+/// key fell off the end (the array was full): a lost fragment.
 #[inline]
 pub(crate) fn insert_min32(slots: &[AtomicU32], key: u32) -> bool {
     const EMPTY: u32 = u32::MAX;

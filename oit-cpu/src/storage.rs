@@ -1,0 +1,181 @@
+//! oit-core's capture traits on std atomics: the CPU's bucket arrays, depth histograms and
+//! per-pixel fragment lists. The techniques are written against the traits; the atomics here are
+//! the CPU's stand-ins for the GPU's blend units (MAX), logic ops (OR) and atomics.
+
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
+
+use oit_core::rules::HISTOGRAM_WORDS;
+use oit_core::{AtomicFragmentList, BucketArray, DepthHistogram};
+
+use crate::pool::Pooled;
+
+/// K buckets of `W` per pixel, row after row.
+pub(crate) struct Buckets<'p, A> {
+    words: Pooled<'p, A>,
+    k: usize,
+}
+
+impl<'p, A> Buckets<'p, A> {
+    /// Buckets over `words` (pixels × `k`, all empty).
+    pub fn new(words: Pooled<'p, A>, k: usize) -> Self {
+        Buckets { words, k }
+    }
+}
+
+macro_rules! buckets {
+    ($atomic:ty, $word:ty) => {
+        impl BucketArray for Buckets<'_, $atomic> {
+            type Word = $word;
+            fn buckets(&self) -> usize {
+                self.k
+            }
+            #[inline]
+            fn update_max(&self, pixel: usize, k: usize, value: $word) -> $word {
+                self.words[pixel * self.k + k].fetch_max(value, Relaxed)
+            }
+            #[inline]
+            fn take(&self, pixel: usize, k: usize) -> $word {
+                self.words[pixel * self.k + k].swap(0, Relaxed)
+            }
+            fn read(&self, pixel: usize, out: &mut [$word]) {
+                for (o, w) in out.iter_mut().zip(&self.words[pixel * self.k..(pixel + 1) * self.k]) {
+                    *o = w.load(Relaxed);
+                }
+            }
+        }
+    };
+}
+buckets!(AtomicU32, u32);
+buckets!(AtomicU64, u64);
+
+/// 1024 bits per pixel.
+pub(crate) struct Histogram<'p> {
+    words: Pooled<'p, AtomicU32>,
+}
+
+impl<'p> Histogram<'p> {
+    /// A histogram over `words` (pixels × [`HISTOGRAM_WORDS`], all zero).
+    pub fn new(words: Pooled<'p, AtomicU32>) -> Self {
+        Histogram { words }
+    }
+}
+
+impl DepthHistogram for Histogram<'_> {
+    #[inline]
+    fn set(&self, pixel: usize, bin: u32) {
+        self.words[pixel * HISTOGRAM_WORDS + (bin / 32) as usize].fetch_or(1 << (bin % 32), Relaxed);
+    }
+    fn read(&self, pixel: usize) -> [u32; HISTOGRAM_WORDS] {
+        std::array::from_fn(|i| self.words[pixel * HISTOGRAM_WORDS + i].load(Relaxed))
+    }
+}
+
+/// K keys per pixel kept sorted by repeated atomic min; `u64::MAX` is an empty slot.
+pub(crate) struct MinList<'p> {
+    slots: Pooled<'p, AtomicU64>,
+    k: usize,
+}
+
+impl<'p> MinList<'p> {
+    /// The empty slot.
+    pub const EMPTY: u64 = u64::MAX;
+
+    /// A list over `slots` (pixels × `k`, all [`MinList::EMPTY`]).
+    pub fn new(slots: Pooled<'p, AtomicU64>, k: usize) -> Self {
+        MinList { slots, k }
+    }
+}
+
+impl MinList<'_> {
+    /// [`AtomicFragmentList::sorted`], leaving the pixel's slots empty for the next pass (mlp).
+    pub fn take_sorted(&self, pixel: usize, out: &mut Vec<u64>) {
+        out.clear();
+        for slot in &self.slots[pixel * self.k..(pixel + 1) * self.k] {
+            let key = slot.swap(Self::EMPTY, Relaxed);
+            if key == Self::EMPTY {
+                break;
+            }
+            out.push(key);
+        }
+    }
+}
+
+impl AtomicFragmentList for MinList<'_> {
+    fn capacity(&self) -> usize {
+        self.k
+    }
+
+    /// Each slot keeps the smaller of its key and the carried one, and the larger is carried on
+    /// to the next slot (Liu et al. 2009; Huang et al. 2011), so the array stays sorted whatever
+    /// order fragments arrive in; what is carried off the end is returned.
+    #[inline]
+    fn insert(&self, pixel: usize, key: u64) -> Option<u64> {
+        let mut carry = key;
+        for slot in &self.slots[pixel * self.k..(pixel + 1) * self.k] {
+            let old = slot.fetch_min(carry, Relaxed);
+            if old == Self::EMPTY {
+                return None;
+            }
+            carry = carry.max(old);
+        }
+        Some(carry)
+    }
+
+    fn sorted(&self, pixel: usize, out: &mut Vec<u64>) {
+        out.clear();
+        out.extend(
+            self.slots[pixel * self.k..(pixel + 1) * self.k]
+                .iter()
+                .map(|s| s.load(Relaxed))
+                .take_while(|&key| key != Self::EMPTY),
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pool::Pool;
+
+    #[test]
+    fn min_list_keeps_the_k_smallest_sorted_and_returns_the_rest() {
+        let pool = Pool::default();
+        let list = MinList::new(pool.u64s(2 * 3, MinList::EMPTY), 3);
+        let mut dropped = Vec::new();
+        for key in [50, 10, 40, 30, 20] {
+            dropped.extend(list.insert(1, key));
+        }
+        let mut out = Vec::new();
+        list.sorted(1, &mut out);
+        assert_eq!(out, [10, 20, 30]);
+        dropped.sort_unstable();
+        assert_eq!(dropped, [40, 50]);
+        list.sorted(0, &mut out);
+        assert!(out.is_empty(), "pixel 0 untouched");
+    }
+
+    #[test]
+    fn buckets_report_collisions_and_empty_on_take() {
+        let pool = Pool::default();
+        let b = Buckets::new(pool.u32s(2 * 4, 0), 4);
+        assert_eq!(b.update_max(1, 2, 7), 0, "first fragment: no collision");
+        assert_eq!(b.update_max(1, 2, 5), 7, "second: the previous word comes back");
+        let mut out = [0u32; 4];
+        b.read(1, &mut out);
+        assert_eq!(out, [0, 0, 7, 0]);
+        assert_eq!(b.take(1, 2), 7);
+        assert_eq!(b.take(1, 2), 0);
+    }
+
+    #[test]
+    fn histogram_sets_bits() {
+        let pool = Pool::default();
+        let h = Histogram::new(pool.u32s(2 * HISTOGRAM_WORDS, 0));
+        for bin in [0, 31, 32, 1023] {
+            h.set(1, bin);
+        }
+        let words = h.read(1);
+        assert_eq!((words[0], words[1], words[31]), (1 | 1 << 31, 1, 1 << 31));
+        assert_eq!(h.read(0), [0; HISTOGRAM_WORDS]);
+    }
+}
