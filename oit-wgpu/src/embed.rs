@@ -145,6 +145,10 @@ pub(crate) struct RenderDriver<'a> {
 }
 
 impl<'a> RenderDriver<'a> {
+    /// The buffers and textures [`RenderDriver::new`] creates (the count target and the
+    /// counter it is summed into), for the counters of prepared scenes.
+    pub(crate) const CREATES: u64 = 2;
+
     /// A driver for `width × height`; `salt` keeps its pipelines apart in the device's cache.
     pub(crate) fn new(
         gpu: &Gpu,

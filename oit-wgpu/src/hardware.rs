@@ -1,17 +1,30 @@
 //! The hardware-raster path: the GPU's own rasterizer, through the embeddable pass
-//! ([`crate::embed`]) with oit as its user. The host transforms every instance's vertices to clip
-//! space with oit-cpu's matrices (`camera.view_proj() * instance.transform`, normals by the
-//! inverse transpose, `settings.material_color`), so the triangles are the same bits as oit-cpu's
-//! before raster; the vertex stage (`shaders/raster_hardware.wgsl`) pulls them from storage by
-//! vertex index, so triangle `t` of the one draw is primitive `t` (the layout follows
-//! `scene.primitive_bases()`), and the fragment stage shades like `Shading::shade` and calls the
-//! shared `oit_capture_full`.
+//! ([`crate::embed`]) with oit as its user.
 //!
-//! The GPU's rasterizer has its own sub-pixel precision and clipping, so against oit-cpu (and the
-//! compute path) only pixels on triangle edges may differ; no culling, no depth test, wgpu's
-//! viewport (row 0 at the top, depth in [0, 1]).
+//! What is uploaded once, and what per frame: [`HwGeometry`] holds the scene's geometry in its own
+//! spaces, uploaded when a prepared scene first draws on this path — each mesh's positions,
+//! normals and vertex colours once however many instances place it, and per triangle its three
+//! vertex indices and its instance, laid out in primitive order (`scene.primitive_bases()`), so
+//! triangle `t` of the one draw is primitive `t`. Per frame only the instances' data is written:
+//! `camera.view_proj() * instance.transform`, the normal matrix (`oit_core::setup::normal_matrix`)
+//! and the material's base colour (`settings.material_color`), with the shading uniform. The
+//! vertex stage (`shaders/raster_hardware.wgsl`) pulls a vertex by vertex index and transforms it
+//! with the same matrices, in the same order of operations, as oit-cpu's setup; the fragment
+//! stage shades like `Shading::shade` and calls the shared `oit_capture_full`. The instances'
+//! bounding boxes (12 triangles each, for the bounds passes of bdp and adp) are a second
+//! [`HwGeometry`] of world-space corners, uploaded on first use, whose per-frame matrix is the
+//! view-projection itself. A prepared scene keeps one [`HardwareRaster`] (count target and
+//! counter) per image size.
+//!
+//! The GPU's rasterizer has its own sub-pixel precision and clipping, and the GPU may round the
+//! vertex transform differently (a fused multiply-add), so against oit-cpu (and the compute path)
+//! only pixels on triangle edges may differ; no culling, no depth test, wgpu's viewport (row 0 at
+//! the top, depth in [0, 1]).
 
-use glam::{Vec3, Vec4};
+use std::cell::{Cell, OnceCell, RefCell};
+use std::rc::Rc;
+
+use glam::{Mat3, Vec3, Vec4};
 use oit_core::{Aabb, Camera, OitError, RasterPath, Scene, Settings};
 use wgpu::util::DeviceExt;
 
@@ -20,21 +33,36 @@ use crate::embed::{CaptureShader, GeometryPass, RenderDriver};
 use crate::gpu::Gpu;
 
 const RASTER_WGSL: &str = include_str!("shaders/raster_hardware.wgsl");
+/// What to try when the geometry does not fit in one storage binding.
+const GEOMETRY_HINT: &str = "use fewer triangles or instances, or the cpu backend";
 
-/// One vertex as `HwVertex` in raster_hardware.wgsl.
+/// One vertex of a mesh, in the mesh's own space, as `HwVertex` in raster_hardware.wgsl.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct HwVertex {
-    clip: [f32; 4],
-    /// xyz: world normal; w: 1 when the mesh has vertex colours.
+    /// xyz: position; w: 1 when the mesh has vertex colours.
+    position: [f32; 4],
     normal: [f32; 4],
     color: [f32; 4],
+}
+
+/// One instance's data of one frame, as `HwInstance` in raster_hardware.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct HwInstance {
+    /// Object to clip space (`view_proj · transform`), column-major.
+    mvp: [f32; 16],
+    /// The normal matrix's columns (w unused).
+    normal: [[f32; 4]; 3],
+    /// The material's base colour.
     base: [f32; 4],
 }
 
-/// The scene (or its instances' bounding boxes) on the GPU's rasterizer.
+/// The scene (or its instances' bounding boxes) on the GPU's rasterizer, for one frame: handles
+/// to an `HwGeometry`'s buffers and a count target of the frame's size.
+#[derive(Clone)]
 pub struct HardwareRaster {
-    driver: RenderDriver<'static>,
+    driver: Rc<RenderDriver<'static>>,
     stage: SceneStage,
 }
 
@@ -42,6 +70,7 @@ pub struct HardwareRaster {
 /// (`technique::{bdp_blend, dp_depth}`): put [`SceneStage::wgsl`] after the technique's group 0
 /// declarations, add [`SceneStage::layout`] as group 1, use `hw_vs` as the vertex entry point
 /// (its output `HwOut`, and `shade`, serve the fragment stage), and call [`SceneStage::draw`].
+#[derive(Clone)]
 pub struct SceneStage {
     layout: wgpu::BindGroupLayout,
     group: wgpu::BindGroup,
@@ -55,7 +84,7 @@ impl SceneStage {
         RASTER_WGSL.split_once("@fragment").map_or(RASTER_WGSL, |(vertex, _)| vertex)
     }
 
-    /// The layout of group 1 (the clip-space vertices, indices and the shading uniform).
+    /// The layout of group 1 (the vertices, triangles, shading uniform and instances).
     pub(crate) fn layout(&self) -> &wgpu::BindGroupLayout {
         &self.layout
     }
@@ -154,86 +183,134 @@ impl SceneStage {
 }
 
 impl HardwareRaster {
-    /// Sets up the scene's triangles for the hardware rasterizer.
+    /// Uploads the scene's geometry and sets it up for one frame at `camera` and `settings`, in
+    /// buffers of its own (a prepared scene keeps its `HwGeometry` instead).
     pub fn new(gpu: &Gpu, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<Self, OitError> {
-        let view_proj = camera.view_proj();
-        let mut vertices = Vec::new();
-        let mut indices: Vec<u32> = Vec::new();
-        for inst in &scene.instances {
-            let (object, mesh) = scene.instance_parts(inst);
-            let mvp = view_proj * inst.transform;
-            let nm = oit_core::setup::normal_matrix(&inst.transform);
-            let base = settings.material_color(object.color).to_array();
-            let first = vertices.len() as u32;
-            let has_color = if mesh.colors.is_some() { 1.0 } else { 0.0 };
-            for (i, p) in mesh.positions.iter().enumerate() {
-                let n = nm * mesh.normals.get(i).copied().unwrap_or(Vec3::ZERO);
-                let c = mesh.colors.as_ref().and_then(|c| c.get(i).copied()).unwrap_or(Vec3::ZERO);
-                vertices.push(HwVertex {
-                    clip: (mvp * p.extend(1.0)).to_array(),
-                    normal: n.extend(has_color).to_array(),
-                    color: c.extend(0.0).to_array(),
-                    base,
-                });
-            }
-            indices.extend(mesh.indices.iter().flatten().map(|&i| first + i));
-        }
-        Self::upload(gpu, &vertices, &indices, camera, settings)
+        let made = Cell::new(0);
+        let geometry = HwGeometry::new(gpu, scene, false, &made)?;
+        geometry.write_frame(gpu, scene, camera, settings);
+        Ok(geometry.raster(gpu, settings.width, settings.height, &made))
     }
 
     /// The 12 triangles of each instance's world bounding box (`Aabb::TRIANGLES` over the corners
     /// of `scene.instance_bounds`), triangle `t` of instance `i` primitive `12·i + t`, as oit-cpu's
     /// `TriangleSetup::bounding_boxes`: for the bounds passes of bdp and adp.
     pub fn boxes(gpu: &Gpu, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<Self, OitError> {
-        let view_proj = camera.view_proj();
-        let mut vertices = Vec::new();
-        let mut indices: Vec<u32> = Vec::new();
-        for inst in &scene.instances {
-            let (object, _) = scene.instance_parts(inst);
-            let bounds: Aabb = scene.instance_bounds(inst);
-            let base = settings.material_color(object.color).to_array();
-            let first = vertices.len() as u32;
-            for c in bounds.corners() {
-                vertices.push(HwVertex {
-                    clip: (view_proj * c.extend(1.0)).to_array(),
-                    normal: (c - bounds.center()).normalize_or_zero().extend(0.0).to_array(),
-                    color: [0.0; 4],
-                    base,
-                });
-            }
-            indices.extend(Aabb::TRIANGLES.iter().flatten().map(|&i| first + i));
-        }
-        Self::upload(gpu, &vertices, &indices, camera, settings)
+        let made = Cell::new(0);
+        let geometry = HwGeometry::new(gpu, scene, true, &made)?;
+        geometry.write_frame(gpu, scene, camera, settings);
+        Ok(geometry.raster(gpu, settings.width, settings.height, &made))
     }
+}
 
-    fn upload(
-        gpu: &Gpu,
-        vertices: &[HwVertex],
-        indices: &[u32],
-        camera: &Camera,
-        settings: &Settings,
-    ) -> Result<Self, OitError> {
-        gpu.check_storage("the clip-space vertices", std::mem::size_of_val(vertices) as u64)?;
-        gpu.check_storage("the triangle indices", std::mem::size_of_val(indices) as u64)?;
+/// The geometry of a scene (or of its instances' bounding boxes) on the GPU, uploaded once (see
+/// the module docs): vertices and triangles that never change, and the per-instance buffer and
+/// shading uniform that [`HwGeometry::write_frame`] writes each frame.
+pub(crate) struct HwGeometry {
+    boxes: bool,
+    instances: wgpu::Buffer,
+    uniform: wgpu::Buffer,
+    stage: SceneStage,
+}
+
+/// A buffer holding `bytes` (at least 64 bytes: a binding may not be empty), counted in `made`.
+fn buffer_init(
+    gpu: &Gpu,
+    label: &str,
+    bytes: &[u8],
+    usage: wgpu::BufferUsages,
+    made: &Cell<u64>,
+) -> wgpu::Buffer {
+    made.set(made.get() + 1);
+    let padded: Vec<u8> = if bytes.is_empty() { vec![0; 64] } else { bytes.to_vec() };
+    gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: &padded,
+        usage,
+    })
+}
+
+impl HwGeometry {
+    /// Uploads the scene's meshes and triangles (`boxes`: its instances' bounding boxes) and
+    /// makes the per-frame buffers; `made` counts the buffers created.
+    pub(crate) fn new(gpu: &Gpu, scene: &Scene, boxes: bool, made: &Cell<u64>) -> Result<Self, OitError> {
+        let too_many = || OitError::Device("over 2^32 vertices in one draw".into());
+        let mut vertices: Vec<HwVertex> = Vec::new();
+        // per triangle: its three vertices and its instance
+        let mut triangles: Vec<[u32; 4]> = Vec::new();
+        if boxes {
+            for (i, inst) in scene.instances.iter().enumerate() {
+                let bounds: Aabb = scene.instance_bounds(inst);
+                let first = u32::try_from(vertices.len()).map_err(|_| too_many())?;
+                for c in bounds.corners() {
+                    vertices.push(HwVertex {
+                        position: c.extend(0.0).to_array(),
+                        normal: (c - bounds.center()).normalize_or_zero().extend(0.0).to_array(),
+                        color: [0.0; 4],
+                    });
+                }
+                let i = i as u32;
+                triangles
+                    .extend(Aabb::TRIANGLES.iter().map(|t| [first + t[0], first + t[1], first + t[2], i]));
+            }
+        } else {
+            // each mesh an instance places, once
+            let mut firsts: Vec<Option<u32>> = vec![None; scene.meshes.len()];
+            for (i, inst) in scene.instances.iter().enumerate() {
+                let (object, mesh) = scene.instance_parts(inst);
+                let first = match firsts[object.mesh] {
+                    Some(first) => first,
+                    None => {
+                        let first = u32::try_from(vertices.len()).map_err(|_| too_many())?;
+                        let has_color = if mesh.colors.is_some() { 1.0 } else { 0.0 };
+                        for (v, p) in mesh.positions.iter().enumerate() {
+                            let n = mesh.normals.get(v).copied().unwrap_or(Vec3::ZERO);
+                            let c =
+                                mesh.colors.as_ref().and_then(|c| c.get(v).copied()).unwrap_or(Vec3::ZERO);
+                            vertices.push(HwVertex {
+                                position: p.extend(has_color).to_array(),
+                                normal: n.extend(0.0).to_array(),
+                                color: c.extend(0.0).to_array(),
+                            });
+                        }
+                        firsts[object.mesh] = Some(first);
+                        first
+                    }
+                };
+                let i = i as u32;
+                triangles.extend(mesh.indices.iter().map(|t| [first + t[0], first + t[1], first + t[2], i]));
+            }
+        }
+        u32::try_from(vertices.len()).map_err(|_| too_many())?;
+        let vertex_count = u32::try_from(triangles.len() * 3).map_err(|_| too_many())?;
+        let instance_bytes = (scene.instances.len() * size_of::<HwInstance>()) as u64;
+        gpu.check_storage_hint(
+            "the meshes' vertices",
+            size_of_val(vertices.as_slice()) as u64,
+            GEOMETRY_HINT,
+        )?;
+        gpu.check_storage_hint(
+            "the triangles' indices",
+            size_of_val(triangles.as_slice()) as u64,
+            GEOMETRY_HINT,
+        )?;
+        gpu.check_storage_hint("the instances' matrices", instance_bytes, GEOMETRY_HINT)?;
         let device = &gpu.device;
-        let storage = |label: &str, bytes: &[u8]| {
-            let padded: Vec<u8> = if bytes.is_empty() { vec![0; 64] } else { bytes.to_vec() };
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: &padded,
-                usage: wgpu::BufferUsages::STORAGE,
-            })
-        };
-        let vertex_buf = storage("clip-space vertices", bytemuck::cast_slice(vertices));
-        let index_buf = storage("triangle indices", bytemuck::cast_slice(indices));
-        let shading = settings.shading.code();
-        let f: Vec4 = camera.forward.extend(0.0);
-        let uniform: [u32; 8] =
-            [shading, 0, 0, 0, f.x.to_bits(), f.y.to_bits(), f.z.to_bits(), f.w.to_bits()];
-        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        let storage = wgpu::BufferUsages::STORAGE;
+        let vertex_buf = buffer_init(gpu, "mesh vertices", bytemuck::cast_slice(&vertices), storage, made);
+        let triangle_buf = buffer_init(gpu, "triangles", bytemuck::cast_slice(&triangles), storage, made);
+        made.set(made.get() + 2);
+        let instances = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("instances"),
+            size: instance_bytes.max(size_of::<HwInstance>() as u64),
+            usage: storage | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("hardware raster uniform"),
-            contents: bytemuck::cast_slice(&uniform),
-            usage: wgpu::BufferUsages::UNIFORM,
+            size: 32,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
         });
         let entry = |binding: u32, visibility: wgpu::ShaderStages, ty: wgpu::BufferBindingType| {
             wgpu::BindGroupLayoutEntry {
@@ -243,27 +320,67 @@ impl HardwareRaster {
                 count: None,
             }
         };
-        let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        let read = wgpu::BufferBindingType::Storage { read_only: true };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("hardware raster"),
             entries: &[
-                entry(0, wgpu::ShaderStages::VERTEX, wgpu::BufferBindingType::Storage { read_only: true }),
-                entry(1, wgpu::ShaderStages::VERTEX, wgpu::BufferBindingType::Storage { read_only: true }),
+                entry(0, wgpu::ShaderStages::VERTEX, read),
+                entry(1, wgpu::ShaderStages::VERTEX, read),
                 entry(2, wgpu::ShaderStages::VERTEX_FRAGMENT, wgpu::BufferBindingType::Uniform),
+                entry(3, wgpu::ShaderStages::VERTEX, read),
             ],
         });
-        let group1 = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("hardware raster"),
-            layout: &layout1,
+            layout: &layout,
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: vertex_buf.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: index_buf.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: triangle_buf.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 2, resource: uniform.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: instances.as_entire_binding() },
             ],
         });
-        let vertex_count = u32::try_from(indices.len())
-            .map_err(|_| OitError::Device("over 2^32 vertices in one draw".into()))?;
-        let stage = SceneStage { layout: layout1.clone(), group: group1.clone(), vertex_count };
-        let pipeline_device = device.clone();
+        Ok(HwGeometry { boxes, instances, uniform, stage: SceneStage { layout, group, vertex_count } })
+    }
+
+    /// Writes the frame's instance data (`view_proj · transform`, the normal matrix, the base
+    /// colour; for the boxes, whose corners are in world space, `view_proj` and the identity) and
+    /// the shading uniform: all a frame sends of the geometry.
+    pub(crate) fn write_frame(&self, gpu: &Gpu, scene: &Scene, camera: &Camera, settings: &Settings) {
+        let view_proj = camera.view_proj();
+        let data: Vec<HwInstance> = scene
+            .instances
+            .iter()
+            .map(|inst| {
+                let (object, _) = scene.instance_parts(inst);
+                let (mvp, nm) = if self.boxes {
+                    (view_proj, Mat3::IDENTITY)
+                } else {
+                    (view_proj * inst.transform, oit_core::setup::normal_matrix(&inst.transform))
+                };
+                HwInstance {
+                    mvp: mvp.to_cols_array(),
+                    normal: [nm.x_axis, nm.y_axis, nm.z_axis].map(|c| c.extend(0.0).to_array()),
+                    base: settings.material_color(object.color).to_array(),
+                }
+            })
+            .collect();
+        if !data.is_empty() {
+            gpu.queue.write_buffer(&self.instances, 0, bytemuck::cast_slice(&data));
+        }
+        let f: Vec4 = camera.forward.extend(0.0);
+        let uniform: [u32; 8] =
+            [settings.shading.code(), 0, 0, 0, f.x.to_bits(), f.y.to_bits(), f.z.to_bits(), f.w.to_bits()];
+        gpu.queue.write_buffer(&self.uniform, 0, bytemuck::cast_slice(&uniform));
+    }
+
+    /// A rasterizer of this geometry into a `width × height` count target (a texture and a
+    /// counter buffer, counted in `made`), drawn with whatever [`HwGeometry::write_frame`] wrote
+    /// last.
+    pub(crate) fn raster(&self, gpu: &Gpu, width: u32, height: u32, made: &Cell<u64>) -> HardwareRaster {
+        let stage = self.stage.clone();
+        let layout1 = stage.layout.clone();
+        let pipeline_device = gpu.device.clone();
         let pipeline = move |capture: &CaptureShader<'_>| {
             let device = &pipeline_device;
             scene_pipeline(
@@ -276,21 +393,61 @@ impl HardwareRaster {
                 None,
             )
         };
-        let draw = move |rpass: &mut wgpu::RenderPass<'_>, _: &GeometryPass<'_>| {
-            rpass.set_bind_group(1, &group1, &[]);
-            if vertex_count > 0 {
-                rpass.draw(0..vertex_count, 0..1);
+        let draw_stage = stage.clone();
+        let draw = move |rpass: &mut wgpu::RenderPass<'_>, _: &GeometryPass<'_>| draw_stage.draw(rpass);
+        made.set(made.get() + RenderDriver::CREATES);
+        let driver = RenderDriver::new(gpu, width, height, "hardware", Box::new(pipeline), Box::new(draw));
+        HardwareRaster { driver: Rc::new(driver), stage }
+    }
+}
+
+/// The hardware path's part of a prepared scene: the scene's [`HwGeometry`] (uploaded when made),
+/// the boxes' (uploaded on first use), and a [`HardwareRaster`] per (geometry, image size), so a
+/// frame of a size seen before creates no buffer or texture.
+pub(crate) struct HardwareScene {
+    scene: HwGeometry,
+    boxes: OnceCell<HwGeometry>,
+    rasters: RefCell<Vec<(bool, u32, u32, HardwareRaster)>>,
+}
+
+impl HardwareScene {
+    /// Uploads the scene's geometry; `made` counts the buffers created.
+    pub(crate) fn new(gpu: &Gpu, scene: &Scene, made: &Cell<u64>) -> Result<Self, OitError> {
+        Ok(HardwareScene {
+            scene: HwGeometry::new(gpu, scene, false, made)?,
+            boxes: OnceCell::new(),
+            rasters: RefCell::new(Vec::new()),
+        })
+    }
+
+    /// The frame's rasterizer of the scene (`boxes`: of its instances' bounding boxes): this
+    /// frame's instance data and uniform written, the count target of its size kept or made.
+    pub(crate) fn raster(
+        &self,
+        gpu: &Gpu,
+        scene: &Scene,
+        camera: &Camera,
+        settings: &Settings,
+        boxes: bool,
+        made: &Cell<u64>,
+    ) -> Result<HardwareRaster, OitError> {
+        let geometry = match (boxes, self.boxes.get()) {
+            (false, _) => &self.scene,
+            (true, Some(made_before)) => made_before,
+            (true, None) => {
+                let geometry = HwGeometry::new(gpu, scene, true, made)?;
+                self.boxes.get_or_init(|| geometry)
             }
         };
-        let driver = RenderDriver::new(
-            gpu,
-            settings.width,
-            settings.height,
-            "hardware",
-            Box::new(pipeline),
-            Box::new(draw),
-        );
-        Ok(HardwareRaster { driver, stage })
+        geometry.write_frame(gpu, scene, camera, settings);
+        let (w, h) = (settings.width, settings.height);
+        let mut rasters = self.rasters.borrow_mut();
+        if let Some((.., raster)) = rasters.iter().find(|(b, rw, rh, _)| (*b, *rw, *rh) == (boxes, w, h)) {
+            return Ok(raster.clone());
+        }
+        let raster = geometry.raster(gpu, w, h, made);
+        rasters.push((boxes, w, h, raster.clone()));
+        Ok(raster)
     }
 }
 

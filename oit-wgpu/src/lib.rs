@@ -4,6 +4,13 @@
 //!   oit-cpu's fixed-point setup and rules, so its fragments equal oit-cpu's;
 //! - **hardware** (`RasterPath::Hardware`): the GPU's own rasterizer.
 //!
+//! [`WgpuBackend::prepare`] gives a [`WgpuPrepared`]: what does not depend on the camera is made
+//! once and kept, and a steady-state frame creates no buffer for its geometry or storage. On the
+//! hardware path the scene's meshes and triangles are uploaded once and a frame writes only the
+//! instances' matrices and the shading uniform (`hardware`); on the compute path the triangles
+//! are still set up on the host each frame, written into buffers the prepared scene keeps
+//! (`raster`); per-pixel storage comes from a pool (`pool`).
+//!
 //! Each technique's WGSL sits next to its Rust in `src/technique/`; the rules shared with oit-core
 //! are in `src/shaders/common.wgsl`.
 
@@ -15,6 +22,7 @@ mod pool;
 mod raster;
 mod technique;
 
+use std::cell::{Cell, RefCell};
 use std::sync::OnceLock;
 use std::time::Instant;
 
@@ -29,6 +37,9 @@ pub use crate::gpu::{COMMON_WGSL, Gpu, adapters, required_features};
 pub use crate::hardware::HardwareRaster;
 pub use crate::pool::BufferPool;
 pub use crate::raster::ComputeRaster;
+
+use crate::hardware::HardwareScene;
+use crate::raster::ComputeBuffers;
 
 /// The rasterizers of one frame: the scene's, and (made on demand) one for the instances'
 /// bounding boxes, on the same path (bdp and adp render boxes for each pixel's depth range).
@@ -77,6 +88,22 @@ impl WgpuBackend {
             _ => RasterPath::Hardware,
         }
     }
+
+    /// [`Backend::prepare`] as its own type, whose [`WgpuPrepared::geometry_allocations`] a
+    /// caller can read apart from the per-pixel storage's.
+    pub fn prepare_scene<'s>(&'s self, scene: &'s Scene) -> Result<WgpuPrepared<'s>, OitError> {
+        scene.validate()?;
+        let gpu = self.gpu()?;
+        Ok(WgpuPrepared {
+            gpu,
+            scene,
+            pool: BufferPool::default(),
+            geometry_made: Cell::new(0),
+            hardware: None,
+            compute: RefCell::new(None),
+            compute_boxes: RefCell::new(None),
+        })
+    }
 }
 
 impl Backend for WgpuBackend {
@@ -113,9 +140,7 @@ impl Backend for WgpuBackend {
     }
 
     fn prepare<'s>(&'s self, scene: &'s Scene) -> Result<Box<dyn Prepared + 's>, OitError> {
-        scene.validate()?;
-        let gpu = self.gpu()?;
-        Ok(Box::new(WgpuPrepared { gpu, scene, pool: BufferPool::default() }))
+        Ok(Box::new(self.prepare_scene(scene)?))
     }
 
     /// One counting geometry pass (`technique::count`'s) on the settings' raster path, timed with
@@ -154,12 +179,54 @@ impl Backend for WgpuBackend {
 
 /// A scene prepared on the wgpu backend: checked once; the per-pixel storage, resolve state and
 /// image buffers of one frame are kept and reused by the next of the same size; pipelines are
-/// cached on the device. (The scene's vertices are still transformed and uploaded per frame, on
-/// both raster paths: that moves to the GPU with GPU-resident setup.)
+/// cached on the device.
+///
+/// Geometry, on the first frame of each raster path: on the hardware path the scene's meshes
+/// (positions, normals, vertex colours, each mesh once) and its triangles (three vertex indices
+/// and an instance each, in primitive order) are uploaded once, and each frame writes only the
+/// instances' `view_proj · transform`, normal matrices and base colours and the shading uniform;
+/// the instances' bounding boxes likewise, on first use; the count target and counter of the
+/// geometry passes are kept per image size. On the compute path each frame still sets up its
+/// triangles on the host (that depends on the camera), but writes them, the work list and the
+/// uniform into buffers kept here, grown only when a frame needs more.
+///
+/// [`Prepared::storage_allocations`] counts every buffer (and count texture) this prepared scene
+/// created: the per-pixel storage of [`BufferPool::allocations`] and the geometry's,
+/// [`WgpuPrepared::geometry_allocations`]. A frame at a view and size seen before adds nothing.
 pub struct WgpuPrepared<'s> {
     gpu: &'s Gpu,
     scene: &'s Scene,
     pool: BufferPool,
+    /// Buffers and textures created for the geometry so far.
+    geometry_made: Cell<u64>,
+    /// The hardware path's geometry, uploaded on its first frame.
+    hardware: Option<HardwareScene>,
+    /// The compute path's buffers for the scene's triangles, made on its first frame.
+    compute: RefCell<Option<ComputeBuffers>>,
+    /// The same for the instances' bounding boxes, made on first use.
+    compute_boxes: RefCell<Option<ComputeBuffers>>,
+}
+
+impl WgpuPrepared<'_> {
+    /// Buffers and textures created so far for the geometry: uploads, per-instance and uniform
+    /// buffers, the compute rasterizer's triangles and work lists (each time one grows), and the
+    /// hardware path's count targets and counters (one pair per image size).
+    pub fn geometry_allocations(&self) -> u64 {
+        self.geometry_made.get()
+    }
+
+    /// The compute rasterizer of this frame, through the kept buffers in `cell`.
+    fn compute_raster(
+        &self,
+        cell: &RefCell<Option<ComputeBuffers>>,
+        camera: &Camera,
+        settings: &Settings,
+        boxes: bool,
+    ) -> Result<ComputeRaster, OitError> {
+        let mut kept = cell.borrow_mut();
+        let buffers = kept.get_or_insert_with(|| ComputeBuffers::new(self.gpu, &self.geometry_made));
+        buffers.frame(self.gpu, self.scene, camera, settings, boxes, &self.geometry_made)
+    }
 }
 
 impl Prepared for WgpuPrepared<'_> {
@@ -168,27 +235,35 @@ impl Prepared for WgpuPrepared<'_> {
         let (gpu, scene) = (self.gpu, self.scene);
         let start = Instant::now();
         let path = settings.raster.unwrap_or(WgpuBackend::default_path(settings.technique));
-        let drivers = match path {
-            RasterPath::Compute => Drivers {
-                scene: Box::new(ComputeRaster::new(gpu, scene, camera, settings, false)?),
+        if path == RasterPath::Hardware && self.hardware.is_none() {
+            self.hardware = Some(HardwareScene::new(gpu, scene, &self.geometry_made)?);
+        }
+        let this = &*self;
+        let drivers = match (path, &this.hardware) {
+            (RasterPath::Compute, _) => Drivers {
+                scene: Box::new(this.compute_raster(&this.compute, camera, settings, false)?),
                 boxes: Box::new(move || {
-                    Ok(Box::new(ComputeRaster::new(gpu, scene, camera, settings, true)?) as Box<dyn Driver>)
+                    Ok(Box::new(this.compute_raster(&this.compute_boxes, camera, settings, true)?)
+                        as Box<dyn Driver>)
                 }),
             },
-            RasterPath::Hardware => Drivers {
-                scene: Box::new(HardwareRaster::new(gpu, scene, camera, settings)?),
-                boxes: Box::new(move || {
-                    Ok(Box::new(HardwareRaster::boxes(gpu, scene, camera, settings)?) as Box<dyn Driver>)
-                }),
-            },
-            other => {
+            (RasterPath::Hardware, Some(hw)) => {
+                let made = &this.geometry_made;
+                Drivers {
+                    scene: Box::new(hw.raster(gpu, scene, camera, settings, false, made)?),
+                    boxes: Box::new(move || {
+                        Ok(Box::new(hw.raster(gpu, scene, camera, settings, true, made)?) as Box<dyn Driver>)
+                    }),
+                }
+            }
+            (other, _) => {
                 return Err(OitError::Unsupported {
                     backend: "wgpu".into(),
                     what: format!("the {other} raster path"),
                 });
             }
         };
-        let mut ctx = GpuCtx::with_pool(gpu, scene, camera, settings, Some(&self.pool))?;
+        let mut ctx = GpuCtx::with_pool(gpu, scene, camera, settings, Some(&this.pool))?;
         let layers = run_technique(&mut ctx, &drivers)?;
         let mut frame = ctx.finish(path)?;
         frame.layers = layers;
@@ -197,7 +272,7 @@ impl Prepared for WgpuPrepared<'_> {
     }
 
     fn storage_allocations(&self) -> u64 {
-        self.pool.allocations()
+        self.pool.allocations() + self.geometry_made.get()
     }
 }
 

@@ -1,11 +1,19 @@
 //! The compute-raster path: the papers' "CUDA rasterizer" as a compute shader. Setup (vertex
-//! transform, clipping, snapping) is oit-core's `setup`, shared with oit-cpu, so the triangles are the same bits; the
-//! kernel in `shaders/raster_compute.wgsl` walks each triangle's pixels with the same integer edge
-//! functions and f32 interpolation, which makes the fragment sets equal oit-cpu's by construction.
+//! transform, clipping, snapping) is oit-core's `setup`, shared with oit-cpu, so the triangles are
+//! the same bits; the kernel in `shaders/raster_compute.wgsl` walks each triangle's pixels with
+//! the same integer edge functions and f32 interpolation, which makes the fragment sets equal
+//! oit-cpu's by construction.
+//!
+//! Setup depends on the camera, so it runs on the host every frame (moving it to the GPU is a
+//! later step). What a prepared scene keeps is the buffers it goes into: [`ComputeBuffers`] holds
+//! the triangles, the (triangle, tile) work list, the raster uniform and the `generated` counter,
+//! one set for the scene and one for the instances' bounding boxes; a frame writes them with
+//! `queue.write_buffer` and creates a buffer only when it needs more room than any frame before.
+
+use std::cell::Cell;
 
 use oit_core::setup::{TRIANGLE_WORDS, TriangleSetup};
 use oit_core::{Camera, OitError, RasterPath, Scene, Settings};
-use wgpu::util::DeviceExt;
 
 use crate::ctx::{Driver, GpuCtx, dispatch_size};
 use crate::gpu::Gpu;
@@ -13,8 +21,11 @@ use crate::gpu::Gpu;
 const RASTER_WGSL: &str = include_str!("shaders/raster_compute.wgsl");
 /// Pixels on a side of the tile one workgroup of 64 covers (one invocation per pixel).
 const TILE: u32 = 8;
+/// Bytes of the smallest triangle and work-list buffers (a binding may not be empty).
+const MIN_BYTES: u64 = 256;
 
-/// Triangles on the GPU and the (triangle, tile) work list of the compute rasterizer.
+/// Triangles on the GPU and the (triangle, tile) work list of the compute rasterizer, for one
+/// frame: handles to a `ComputeBuffers`' buffers.
 pub struct ComputeRaster {
     layout: wgpu::BindGroupLayout,
     group: wgpu::BindGroup,
@@ -23,7 +34,8 @@ pub struct ComputeRaster {
 }
 
 impl ComputeRaster {
-    /// Sets up the scene's triangles (or its instances' bounding boxes) for compute raster.
+    /// Sets up the scene's triangles (or its instances' bounding boxes) for compute raster, in
+    /// buffers of its own (a prepared scene keeps a `ComputeBuffers` instead).
     pub fn new(
         gpu: &Gpu,
         scene: &Scene,
@@ -31,49 +43,53 @@ impl ComputeRaster {
         settings: &Settings,
         boxes: bool,
     ) -> Result<Self, OitError> {
-        let r = if boxes {
-            TriangleSetup::bounding_boxes(scene, camera, settings)
-        } else {
-            TriangleSetup::new(scene, camera, settings)
-        };
-        let words = r.triangle_words();
-        let mut items: Vec<[u32; 2]> = Vec::new();
-        for (i, [x0, y0, x1, y1]) in r.triangle_boxes().enumerate() {
-            for ty in y0 / TILE..=y1 / TILE {
-                for tx in x0 / TILE..=x1 / TILE {
-                    items.push([i as u32, ty << 16 | tx]);
-                }
-            }
-        }
-        gpu.check_scene_storage("the triangles", words.len() as u64 * 4)?;
-        gpu.check_storage("the raster work list", items.len() as u64 * 8)?;
+        let made = Cell::new(0);
+        ComputeBuffers::new(gpu, &made).frame(gpu, scene, camera, settings, boxes, &made)
+    }
+}
+
+/// The compute rasterizer's buffers, kept between the frames of a prepared scene: the set-up
+/// triangles and the work list (grown, never shrunk, when a frame needs more), the raster uniform
+/// and the `generated` counter. A frame that fits creates no buffer.
+pub(crate) struct ComputeBuffers {
+    tris: wgpu::Buffer,
+    items: wgpu::Buffer,
+    uniform: wgpu::Buffer,
+    generated: wgpu::Buffer,
+    layout: wgpu::BindGroupLayout,
+    group: wgpu::BindGroup,
+}
+
+fn storage_buffer(gpu: &Gpu, label: &str, size: u64, made: &Cell<u64>) -> wgpu::Buffer {
+    made.set(made.get() + 1);
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// The size a buffer of `old` bytes grows to when `needed` bytes do not fit: at least double, so
+/// that views needing a little more each time do not create a buffer each frame, but never over
+/// the device's limit (`needed` was checked against it).
+fn grown(gpu: &Gpu, old: u64, needed: u64) -> u64 {
+    let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+    needed.max(old.saturating_mul(2).min(limit)).next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT)
+}
+
+impl ComputeBuffers {
+    /// Empty buffers (grown by the first frame that needs more); `made` counts the buffers created.
+    pub(crate) fn new(gpu: &Gpu, made: &Cell<u64>) -> ComputeBuffers {
         let device = &gpu.device;
-        let storage = |label: &str, bytes: &[u8]| {
-            let padded: Vec<u8> = if bytes.is_empty() { vec![0; 16] } else { bytes.to_vec() };
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: &padded,
-                usage: wgpu::BufferUsages::STORAGE,
-            })
-        };
-        let tris = storage("triangles", bytemuck::cast_slice(&words));
-        let item_buf = storage("raster items", bytemuck::cast_slice(&items));
-        let forward = camera.forward;
-        let shading = settings.shading.code();
-        let uniform: [u32; 8] = [
-            items.len() as u32,
-            settings.width,
-            settings.height,
-            shading,
-            forward.x.to_bits(),
-            forward.y.to_bits(),
-            forward.z.to_bits(),
-            0,
-        ];
-        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        let tris = storage_buffer(gpu, "triangles", MIN_BYTES, made);
+        let items = storage_buffer(gpu, "raster items", MIN_BYTES, made);
+        made.set(made.get() + 2);
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("raster uniform"),
-            contents: bytemuck::cast_slice(&uniform),
-            usage: wgpu::BufferUsages::UNIFORM,
+            size: 32,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
         });
         let generated = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("generated"),
@@ -96,18 +112,91 @@ impl ComputeRaster {
                 entry(3, wgpu::BufferBindingType::Storage { read_only: false }),
             ],
         });
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let group = Self::bind(gpu, &layout, [&tris, &items, &uniform, &generated]);
+        ComputeBuffers { tris, items, uniform, generated, layout, group }
+    }
+
+    fn bind(gpu: &Gpu, layout: &wgpu::BindGroupLayout, buffers: [&wgpu::Buffer; 4]) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry { binding: i as u32, resource: b.as_entire_binding() })
+            .collect();
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("compute raster"),
-            layout: &layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: tris.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: item_buf.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: uniform.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: generated.as_entire_binding() },
-            ],
-        });
-        let _ = TRIANGLE_WORDS;
-        Ok(ComputeRaster { layout, group, generated, items: items.len() as u64 })
+            layout,
+            entries: &entries,
+        })
+    }
+
+    /// Sets up this frame's triangles of the scene (or of its instances' bounding boxes) on the
+    /// host and writes them, their work list and the uniform into the kept buffers, growing a
+    /// buffer first where they do not fit (counted in `made`).
+    pub(crate) fn frame(
+        &mut self,
+        gpu: &Gpu,
+        scene: &Scene,
+        camera: &Camera,
+        settings: &Settings,
+        boxes: bool,
+        made: &Cell<u64>,
+    ) -> Result<ComputeRaster, OitError> {
+        let r = if boxes {
+            TriangleSetup::bounding_boxes(scene, camera, settings)
+        } else {
+            TriangleSetup::new(scene, camera, settings)
+        };
+        let words = r.triangle_words();
+        debug_assert_eq!(words.len() % TRIANGLE_WORDS, 0);
+        let mut items: Vec<[u32; 2]> = Vec::new();
+        for (i, [x0, y0, x1, y1]) in r.triangle_boxes().enumerate() {
+            for ty in y0 / TILE..=y1 / TILE {
+                for tx in x0 / TILE..=x1 / TILE {
+                    items.push([i as u32, ty << 16 | tx]);
+                }
+            }
+        }
+        let (tri_bytes, item_bytes) = (words.len() as u64 * 4, items.len() as u64 * 8);
+        gpu.check_scene_storage("the triangles", tri_bytes)?;
+        gpu.check_storage("the raster work list", item_bytes)?;
+        let mut rebind = false;
+        if tri_bytes > self.tris.size() {
+            self.tris = storage_buffer(gpu, "triangles", grown(gpu, self.tris.size(), tri_bytes), made);
+            rebind = true;
+        }
+        if item_bytes > self.items.size() {
+            self.items = storage_buffer(gpu, "raster items", grown(gpu, self.items.size(), item_bytes), made);
+            rebind = true;
+        }
+        if rebind {
+            self.group =
+                Self::bind(gpu, &self.layout, [&self.tris, &self.items, &self.uniform, &self.generated]);
+        }
+        let queue = &gpu.queue;
+        if !words.is_empty() {
+            queue.write_buffer(&self.tris, 0, bytemuck::cast_slice(&words));
+        }
+        if !items.is_empty() {
+            queue.write_buffer(&self.items, 0, bytemuck::cast_slice(&items));
+        }
+        let forward = camera.forward;
+        let uniform: [u32; 8] = [
+            items.len() as u32,
+            settings.width,
+            settings.height,
+            settings.shading.code(),
+            forward.x.to_bits(),
+            forward.y.to_bits(),
+            forward.z.to_bits(),
+            0,
+        ];
+        queue.write_buffer(&self.uniform, 0, bytemuck::cast_slice(&uniform));
+        Ok(ComputeRaster {
+            layout: self.layout.clone(),
+            group: self.group.clone(),
+            generated: self.generated.clone(),
+            items: items.len() as u64,
+        })
     }
 }
 

@@ -1,14 +1,25 @@
-// The hardware-raster path: the GPU's own rasterizer. Vertices come transformed to clip space on
-// the host (the same `view_proj · transform` as oit-cpu), pulled from storage by vertex index so
-// each triangle's three vertices carry its primitive id (triangle t of the draw is primitive t:
-// the triangles are laid out in primitive order). No culling, no depth test; the fragment shades
-// like oit-cpu's `Shading::shade` and calls `oit_capture_full` (capture_render.wgsl).
+// The hardware-raster path: the GPU's own rasterizer. The meshes' vertices are uploaded once in
+// their own space; the vertex stage transforms them with the frame's per-instance matrices (the
+// same `view_proj · transform` and normal matrix as oit-cpu, applied in the same order of
+// operations as glam's). Vertices are pulled from storage by vertex index so each triangle's
+// three vertices carry its primitive id (triangle t of the draw is primitive t: the triangles are
+// laid out in primitive order). No culling, no depth test; the fragment shades like oit-cpu's
+// `Shading::shade` and calls `oit_capture_full` (capture_render.wgsl).
 
 struct HwVertex {
-    clip: vec4<f32>,
-    // xyz: world normal; w: 1 when the mesh has vertex colours
+    // xyz: position in the mesh's space; w: 1 when the mesh has vertex colours
+    position: vec4<f32>,
     normal: vec4<f32>,
     color: vec4<f32>,
+}
+
+struct HwInstance {
+    // object to clip space: view_proj · transform
+    mvp: mat4x4<f32>,
+    // the normal matrix's columns (w unused)
+    normal0: vec4<f32>,
+    normal1: vec4<f32>,
+    normal2: vec4<f32>,
     base: vec4<f32>,
 }
 
@@ -21,8 +32,10 @@ struct HwUniform {
 }
 
 @group(1) @binding(0) var<storage, read> hw_vertices: array<HwVertex>;
-@group(1) @binding(1) var<storage, read> hw_indices: array<u32>;
+// per triangle: its three vertices and its instance
+@group(1) @binding(1) var<storage, read> hw_indices: array<vec4<u32>>;
 @group(1) @binding(2) var<uniform> hw: HwUniform;
+@group(1) @binding(3) var<storage, read> hw_instances: array<HwInstance>;
 
 struct HwOut {
     @builtin(position) position: vec4<f32>,
@@ -35,14 +48,21 @@ struct HwOut {
 
 @vertex
 fn hw_vs(@builtin(vertex_index) vi: u32) -> HwOut {
-    let v = hw_vertices[hw_indices[vi]];
+    let prim = vi / 3u;
+    let tri = hw_indices[prim];
+    let v = hw_vertices[tri[vi % 3u]];
+    let inst = hw_instances[tri.w];
+    let p = v.position;
+    let m = inst.mvp;
+    let n = v.normal;
     var out: HwOut;
-    out.position = v.clip;
-    out.normal = v.normal.xyz;
+    // glam's Mat4 · Vec4 and Mat3 · Vec3, term by term (w = 1)
+    out.position = m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3];
+    out.normal = inst.normal0.xyz * n.x + inst.normal1.xyz * n.y + inst.normal2.xyz * n.z;
     out.vcolor = v.color.xyz;
-    out.base = v.base;
-    out.prim = vi / 3u;
-    out.has_color = select(0u, 1u, v.normal.w != 0.0);
+    out.base = inst.base;
+    out.prim = prim;
+    out.has_color = select(0u, 1u, p.w != 0.0);
     return out;
 }
 
