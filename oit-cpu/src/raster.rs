@@ -254,9 +254,10 @@ impl Rasterizer {
     }
 }
 
-/// Edge function `k` (the edge opposite vertex `k`, from vertex k+1 to k+2) at the sub-pixel point
-/// (px, py): twice the signed area of (a, b, p), positive inside; with `inside_above`, the value a
-
+/// Visits the covered pixels of `t` inside the inclusive pixel rectangle `rect`, row by row, with
+/// the three edge functions ([`edge`]) at each pixel centre. Each row's covered span is found
+/// exactly by integer division: edge k is covered at column offset n when
+/// `e + step·n > inside_above`.
 fn walk(t: &Triangle, rect: [u32; 4], mut visit: impl FnMut(u32, u32, [i64; 3])) {
     let [x0, y0, x1, y1] = rect;
     if x0 > x1 || y0 > y1 {
