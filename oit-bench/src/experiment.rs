@@ -17,7 +17,7 @@ use std::time::Instant;
 
 use oit_core::metrics::{Accuracy, accuracy};
 use oit_core::{
-    Backend, Camera, Frame, Image, OitError, RasterPath, Scene, Settings, Stats, Technique, View,
+    Backend, Camera, Frame, Image, OitError, Prepared, RasterPath, Scene, Settings, Stats, Technique, View,
 };
 
 /// What to measure: which backends, which techniques, how many frames each.
@@ -118,23 +118,24 @@ pub(crate) struct Timed {
     pub gpu: Vec<f64>,
 }
 
-/// Renders `warmup` untimed frames, then `frames` (at least 1) timed ones.
+/// Renders `warmup` untimed frames, then `frames` (at least 1) timed ones, all of one prepared
+/// scene: the timed frames are steady-state frames (storage and pipelines made by the warm-up or
+/// an earlier technique are reused), what a frame loop sees.
 pub(crate) fn measure(
-    backend: &dyn Backend,
-    scene: &Scene,
+    prepared: &mut dyn Prepared,
     camera: &Camera,
     settings: &Settings,
     warmup: u32,
     frames: u32,
 ) -> Result<Timed, OitError> {
     for _ in 0..warmup {
-        backend.render(scene, camera, settings)?;
+        prepared.frame(camera, settings)?;
     }
     let (mut wall, mut gpu) = (Vec::new(), Vec::new());
     let mut last = None;
     for _ in 0..frames.max(1) {
         let start = Instant::now();
-        let frame = backend.render(scene, camera, settings)?;
+        let frame = prepared.frame(camera, settings)?;
         // the backend's own wall time where it keeps one, else ours around the call
         let ms =
             if frame.stats.wall_ms > 0.0 { frame.stats.wall_ms } else { start.elapsed().as_secs_f64() * 1e3 };
@@ -179,6 +180,9 @@ impl Experiment<'_> {
             .map(|&view| Camera::orbit_scene(scene, view, aspect))
             .collect::<Result<Vec<_>, _>>()?;
 
+        // Each backend prepares the scene once, on first use, for every view and technique.
+        let mut prepared: Vec<Option<Result<Box<dyn Prepared + '_>, String>>> =
+            self.backends.iter().map(|_| None).collect();
         let mut out = Vec::new();
         for (&view, camera) in views.iter().zip(&cameras) {
             let at = if views.len() > 1 { format!("{:.1}°: ", view.azimuth) } else { String::new() };
@@ -197,7 +201,17 @@ impl Experiment<'_> {
 
                 let raster = backend.raster_path(&base);
                 on_step(Step::Rendering(&format!("{at}reference on {}", label_of(backend.name(), raster))));
-                let reference = backend.render(scene, camera, &base);
+                let ready = prepared[backend_index]
+                    .get_or_insert_with(|| backend.prepare(scene).map_err(|e| e.to_string()));
+                let ready = match ready {
+                    Ok(p) => p.as_mut(),
+                    Err(e) => {
+                        out.push(row(Technique::Reference, raster, true, Err(e.clone())));
+                        on_step(Step::Measured(out.last().expect("just pushed")));
+                        continue;
+                    }
+                };
+                let reference = ready.frame(camera, &base);
                 let measured = reference.as_ref().map(|frame| self.numbers(frame, None, vec![], vec![]));
                 out.push(row(Technique::Reference, raster, true, measured.map_err(ToString::to_string)));
                 on_step(Step::Measured(out.last().expect("just pushed")));
@@ -210,11 +224,10 @@ impl Experiment<'_> {
                         "{at}{technique} on {}",
                         label_of(backend.name(), raster)
                     )));
-                    let result = measure(backend, scene, camera, &settings, self.warmup, self.frames)
-                        .and_then(|t| {
-                            let acc = accuracy(&reference, &t.frame.image)?;
-                            Ok(self.numbers(&t.frame, Some(acc), t.wall, t.gpu))
-                        });
+                    let result = measure(ready, camera, &settings, self.warmup, self.frames).and_then(|t| {
+                        let acc = accuracy(&reference, &t.frame.image)?;
+                        Ok(self.numbers(&t.frame, Some(acc), t.wall, t.gpu))
+                    });
                     out.push(row(technique, raster, false, result.map_err(|e| e.to_string())));
                     on_step(Step::Measured(out.last().expect("just pushed")));
                 }

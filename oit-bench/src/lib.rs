@@ -723,11 +723,17 @@ fn run_curves(
         };
         let x = x.unwrap_or(scene.triangle_count() as f64);
         for backend in &config.backends {
+            // one prepared scene per backend and curve point, every technique's frames on it
+            let mut prepared = backend.prepare(&scene);
             for &technique in &curves.techniques {
                 let s = Settings { technique, ..settings.clone() };
                 let l = label(backend.as_ref(), &s);
                 on_step(&format!("{curve} curve: {name}, {technique} on {l}"));
-                match measure(backend.as_ref(), &scene, &camera, &s, 1, curves.frames) {
+                let timed = match &mut prepared {
+                    Ok(p) => measure(p.as_mut(), &camera, &s, 1, curves.frames),
+                    Err(e) => Err(OitError::InvalidSettings(e.to_string())),
+                };
+                match timed {
                     Ok(t) => report.curves.push(CurvePoint {
                         curve: curve.into(),
                         scene: name.clone(),

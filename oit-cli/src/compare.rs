@@ -4,8 +4,8 @@ use std::path::PathBuf;
 
 use clap::Args;
 use oit_bench::experiment::{Experiment, Measured, Measurement, Step};
-use oit_core::metrics::error_image;
 use oit_bench::present::{SheetEntry, annotate_frame, contact_sheet};
+use oit_core::metrics::error_image;
 use oit_core::{Effect, Frame, Image, OitError, Stats, Technique};
 use serde::Serialize;
 

@@ -29,7 +29,8 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         let (zn, zf) = bounds[px];
         histogram.set(px, histogram_bin(f.depth, zn, zf));
     });
-    let hist: Vec<[u32; HISTOGRAM_WORDS]> = (0..ctx.pixels).into_par_iter().map(|px| histogram.read(px)).collect();
+    let hist: Vec<[u32; HISTOGRAM_WORDS]> =
+        (0..ctx.pixels).into_par_iter().map(|px| histogram.read(px)).collect();
     let batches = ctx.plan.adp_batches(hist.iter().map(histogram_count).max().unwrap_or(0));
     let buckets = Buckets::new(ctx.alloc64(BUCKETS, 0)?, BUCKETS);
     let mut states = ctx.states();
@@ -42,7 +43,11 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
             let rank = histogram_rank(&hist[px], histogram_bin(f.depth, zn, zf));
             if rank / BUCKETS as u32 == batch {
                 // bit 63 marks a full bucket, so a fragment at depth 0 with payload 0 is not empty
-                buckets.update_max(px, (rank % BUCKETS as u32) as usize, depth_key64(f.depth, payload(f)) | 1 << 63);
+                buckets.update_max(
+                    px,
+                    (rank % BUCKETS as u32) as usize,
+                    depth_key64(f.depth, payload(f)) | 1 << 63,
+                );
             }
         });
         ctx.passes += 1;
