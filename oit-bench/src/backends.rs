@@ -13,7 +13,9 @@
 
 use std::sync::Arc;
 
-use oit_core::{Backend, Camera, Capabilities, Frame, OitError, OnPath, Prepared, RasterPath, Scene, Settings};
+use oit_core::{
+    Backend, Camera, Capabilities, Frame, OitError, OnPath, Prepared, RasterPath, Scene, Settings,
+};
 
 /// Options that shape how a backend is built.
 #[derive(Clone, Debug, Default)]

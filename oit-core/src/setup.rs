@@ -514,8 +514,6 @@ pub fn edge(t: &Triangle, k: usize, px: i64, py: i64) -> (i64, i64, i64, i64) {
 }
 
 /// The rule in its plainest form: the edge functions of `t` at the centre of pixel (x, y) when
-
-/// The rule in its plainest form: the edge functions of `t` at the centre of pixel (x, y) when
 /// the pixel is covered. A backend's traversal must visit exactly these pixels.
 pub fn covers(t: &Triangle, x: u32, y: u32) -> Option<[i64; 3]> {
     let (px, py) = (i64::from(x) * SUBPIXEL + HALF_PIXEL, i64::from(y) * SUBPIXEL + HALF_PIXEL);

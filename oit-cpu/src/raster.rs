@@ -254,9 +254,9 @@ impl Rasterizer {
     }
 }
 
-/// Edge function `k` (the edge opposite vertex `k`, from vertex k+1 to k+2) at the sub-pixel point
-/// (px, py): twice the signed area of (a, b, p), positive inside; with `inside_above`, the value a
-
+/// Visits, row by row, the pixels of `rect` whose centres `t` covers (oit-core's `edge` rule, top-left
+/// fill), with the three edge functions there: each row's covered span is solved from the edge
+/// functions' per-pixel steps instead of testing every pixel.
 fn walk(t: &Triangle, rect: [u32; 4], mut visit: impl FnMut(u32, u32, [i64; 3])) {
     let [x0, y0, x1, y1] = rect;
     if x0 > x1 || y0 > y1 {
