@@ -162,6 +162,10 @@ pub struct Row {
     pub captured: u64,
     /// Fragments that did not.
     pub lost: u64,
+    /// Fragments whose order against an equal-depth fragment the technique could not establish
+    /// ([`oit_core::Stats::tied`]); 0 in reports written before it was counted.
+    #[serde(default)]
+    pub tied: u64,
     /// Bytes of per-pixel storage.
     pub storage_bytes: u64,
     /// Wall milliseconds per frame.
@@ -599,6 +603,7 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
                     fragments: s.fragments,
                     captured: s.captured,
                     lost: s.lost,
+                    tied: s.tied,
                     storage_bytes: s.storage_bytes,
                     wall_ms: wall_spread(&r.wall_ms),
                     gpu_ms: gpu_spread(&r.wall_ms, &r.gpu_ms),

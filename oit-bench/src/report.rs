@@ -343,8 +343,9 @@ fn markdown(report: &Report, trade: &[(String, String, f64)], curves: &[(&str, S
         w,
         "- **passes**: geometry passes per frame (bounds, histogram, sizing and peel passes all count).\n\
          - **fragments**: fragments one geometry pass generates for the scene; **lost**: those that \
-         did not reach the composite (collisions, overflow, coplanar ties); **storage**: per-pixel \
-         storage the technique allocated.\n\
+         did not reach the composite (collisions, overflow, coplanar ties); **tied**: those that \
+         did, but tie in depth with another colour that the technique ordered by colour, not by \
+         primitive as the reference; **storage**: per-pixel storage the technique allocated.\n\
          - **wall ms**: time of `Backend::render` per frame (median of the timed frames, then \
          min–max); **GPU ms**: the sum of the frame's GPU timestamp intervals (device time, no \
          readbacks or pipeline creation), where the backend has timestamps.\n\
@@ -367,9 +368,9 @@ fn markdown(report: &Report, trade: &[(String, String, f64)], curves: &[(&str, S
         );
         let _ = writeln!(
             w,
-            "| technique | backend | raster | passes | fragments | lost | storage | wall ms (min–max) | GPU ms (min–max) | Gfrag/s | EPR | PSNR (dB) |"
+            "| technique | backend | raster | passes | fragments | lost | tied | storage | wall ms (min–max) | GPU ms (min–max) | Gfrag/s | EPR | PSNR (dB) |"
         );
-        let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|---|---|");
+        let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|---|---|---|");
         for r in report.rows.iter().filter(|r| r.scene == scene.name) {
             let gpu = r
                 .gpu_ms
@@ -377,13 +378,14 @@ fn markdown(report: &Report, trade: &[(String, String, f64)], curves: &[(&str, S
                 .map_or("-".into(), |g| format!("{} ({}–{})", ms(g.median), ms(g.min), ms(g.max)));
             let _ = writeln!(
                 w,
-                "| {} | {} | {} | {} | {} | {} | {} | {} ({}–{}) | {} | {:.3} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} ({}–{}) | {} | {:.3} | {} | {} |",
                 r.technique,
                 r.backend,
                 r.raster,
                 r.passes,
                 r.fragments,
                 r.lost,
+                r.tied,
                 bytes(r.storage_bytes),
                 ms(r.wall_ms.median),
                 ms(r.wall_ms.min),

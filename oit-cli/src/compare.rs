@@ -19,11 +19,12 @@ use crate::output::{self, Table};
     about = "Render techniques from one view and measure each against the exact reference",
     long_about = "Render techniques from one view and measure each against the exact reference.\n\n\
         Renders `reference` once per backend, then every technique, and prints a table: geometry \
-        passes, fragments, fragments lost, per-pixel storage, time, error pixel rate (EPR: the \
+        passes, fragments, fragments lost, fragments tied (equal depths the technique ordered by \
+        colour, not as the reference), per-pixel storage, time, error pixel rate (EPR: the \
         share of covered pixels off by more than 1 in 8 bits) and PSNR (inf when identical). A \
         technique that fails prints its error in its row and the others go on; the exit code is \
         then 1. With --json, prints one JSON array of objects with the keys technique, backend, \
-        raster, width, height, geometry_passes, fragments, captured, lost, storage_bytes, \
+        raster, width, height, geometry_passes, fragments, captured, lost, tied, storage_bytes, \
         wall_ms, gpu_ms, epr, psnr, max_error (gpu_ms null when not measured, psnr null when \
         identical); failures go to stderr."
 )]
@@ -55,7 +56,8 @@ struct CompareJson<'a> {
     raster: String,
     width: u32,
     height: u32,
-    /// `geometry_passes`, `fragments`, `captured`, `lost`, `storage_bytes`, `wall_ms`, `gpu_ms`.
+    /// `geometry_passes`, `fragments`, `captured`, `lost`, `tied`, `storage_bytes`, `wall_ms`,
+    /// `gpu_ms`, `max_layers`.
     #[serde(flatten)]
     stats: &'a Stats,
     epr: f64,
@@ -63,13 +65,14 @@ struct CompareJson<'a> {
     max_error: f64,
 }
 
-const HEADERS: [(&str, usize); 11] = [
+const HEADERS: [(&str, usize); 12] = [
     ("technique", 10),
     ("backend", 7),
     ("raster", 8),
     ("passes", 6),
     ("fragments", 10),
     ("lost", 8),
+    ("tied", 8),
     ("storage", 10),
     ("time (ms)", 9),
     ("GPU (ms)", 8),
@@ -140,6 +143,7 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
                 s.geometry_passes.to_string(),
                 s.fragments.to_string(),
                 s.lost.to_string(),
+                s.tied.to_string(),
                 output::bytes(s.storage_bytes),
                 format!("{:.2}", s.wall_ms),
                 s.gpu_ms.map_or_else(|| "-".to_string(), |g| format!("{g:.2}")),
@@ -222,10 +226,11 @@ fn sheet_rows(measurements: &[Measurement], width: u32, height: u32, effect: Eff
             label,
             error: Some(error_image(reference, &frame.image)),
             caption: format!(
-                "EPR {}%  PSNR {} dB  lost {}",
+                "EPR {}%  PSNR {} dB  lost {}  tied {}",
                 output::percent(acc.epr),
                 output::psnr(acc.psnr),
-                s.lost
+                s.lost,
+                s.tied
             ),
             image,
         });

@@ -14,8 +14,9 @@ use oit_core::{
 #[derive(Args, Clone, Debug)]
 #[command(next_help_heading = "Scene, camera and shading")]
 pub struct SceneArgs {
-    /// The scene: a built-in name (default, planes:N, spheres:N, cluster:N, knot, coplanar) or a
-    /// path to a Wavefront .obj file (at most 1 GiB; OIT_MAX_MODEL_BYTES raises the limit).
+    /// The scene: a built-in name (default, planes:N, spheres:N, cluster:N, knot, coplanar,
+    /// ties:N, near:N) or a path to a Wavefront .obj file (at most 1 GiB; OIT_MAX_MODEL_BYTES
+    /// raises the limit).
     #[arg(long, value_name = "NAME|FILE.obj", default_value = oit_core::DEFAULT_SCENE)]
     pub scene: String,
 

@@ -16,7 +16,7 @@ use crate::output::{self, CameraJson};
 #[command(
     about = "Render the scene with one technique and write a PNG",
     long_about = "Render the scene with one technique and write a PNG.\n\n\
-        Prints the frame's numbers: geometry passes, fragments generated, captured and lost, \
+        Prints the frame's numbers: geometry passes, fragments generated, captured, lost and tied, \
         per-pixel storage and time. With --json, prints one JSON object with those numbers, the \
         image size and the camera (view and projection matrices, eye, planes, angles), so another \
         renderer can reproduce the view. With several backends or raster paths (--backend all, \
@@ -130,6 +130,7 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
                  fragments  {}\n\
                  captured   {}\n\
                  lost       {} ({}%)\n\
+                 tied       {}\n\
                  storage    {}\n\
                  time       {:.2} ms{gpu}\n\
                  wrote      {}\n",
@@ -143,6 +144,7 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
                 s.captured,
                 s.lost,
                 output::percent(lost_share),
+                s.tied,
                 output::bytes(s.storage_bytes),
                 s.wall_ms,
                 path.display(),

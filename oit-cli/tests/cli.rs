@@ -135,7 +135,7 @@ fn render_complexity_draws_the_legend_on_the_heat_map() {
     assert!(legend_pixels * 2 > (rect.width * rect.height) as usize, "no legend in {rect:?}");
 }
 
-const COMPARE_KEYS: [&str; 16] = [
+const COMPARE_KEYS: [&str; 17] = [
     "technique",
     "backend",
     "raster",
@@ -145,6 +145,7 @@ const COMPARE_KEYS: [&str; 16] = [
     "fragments",
     "captured",
     "lost",
+    "tied",
     "storage_bytes",
     "wall_ms",
     "gpu_ms",
@@ -310,7 +311,7 @@ fn info_json_parses() {
 
 /// The keys of every `oit sweep --json` record: where and what (backend and raster path
 /// included), the frame's counters as `oit compare --json` names them, and the accuracy.
-const SWEEP_KEYS: [&str; 15] = [
+const SWEEP_KEYS: [&str; 16] = [
     "azimuth",
     "technique",
     "backend",
@@ -319,6 +320,7 @@ const SWEEP_KEYS: [&str; 15] = [
     "fragments",
     "captured",
     "lost",
+    "tied",
     "storage_bytes",
     "wall_ms",
     "gpu_ms",

@@ -17,6 +17,13 @@ pub struct Stats {
     pub captured: u64,
     /// Fragments that did not: collisions, overflow, coplanar ties, peel limits.
     pub lost: u64,
+    /// Fragments that reached the composite but whose order against an equal-depth fragment of
+    /// another colour (payload) the technique could not establish: the reference orders equal
+    /// depths by primitive id, a technique that keys on (depth, payload) orders them by colour.
+    /// Counted per fragment of every run of equal depths (equal at the precision the technique
+    /// keeps: `mdts`'s 20 bits) holding two payloads or more. 0 where the technique orders ties
+    /// as the reference does (`fabs` carries the primitive id), and where it cannot see them.
+    pub tied: u64,
     /// Bytes of per-pixel storage the technique allocated.
     pub storage_bytes: u64,
     /// Wall-clock time of the frame in milliseconds.

@@ -34,6 +34,16 @@ pub struct Plan {
     pub peel_limit: u32,
     /// `mdts` (32-bit) only: the 8-bit alpha every fragment gets, since its words hold RGB.
     pub mdts_alpha8: u32,
+    /// Whether the resolve counts ties ([`crate::Stats::tied`]): the technique orders equal
+    /// depths by its key's payload (colour or normal), not by primitive id as the reference does,
+    /// so a run of equal depths with two payloads or more reaching the resolve may be out of the
+    /// reference's order. `dp`, `ddp`, `mlp`, `mdts64` (depth bits above the payload in one 64-bit
+    /// atomic word: no room for an id), `mdts` (20 depth bits above colour bits: equal at 2⁻²⁰)
+    /// and `bdp`'s depth mode (a subinterval's min and max keys). Not `fabs`: it carries the
+    /// primitive id and sorts by (depth, id) as the reference does; not the colour mode of `bdp`,
+    /// `adp` (equal depths share a bucket: one is kept, the other counted in `lost`) nor the
+    /// order-free `wavg`/`wsum`.
+    pub count_ties: bool,
 }
 
 impl Plan {
@@ -73,6 +83,15 @@ impl Plan {
             sizing,
             peel_limit: settings.max_peels.unwrap_or(u32::MAX),
             mdts_alpha8: (alpha.clamp(0.0, 1.0) * 255.0 + 0.5) as u32,
+            count_ties: match technique {
+                Technique::Dp
+                | Technique::Ddp
+                | Technique::Mlp { .. }
+                | Technique::Mdts { .. }
+                | Technique::Mdts64 { .. } => true,
+                Technique::Bdp { .. } => !bdp_color,
+                _ => false,
+            },
         })
     }
 

@@ -7,6 +7,8 @@
 //! | `cluster:N` | N small spheres placed by a fixed seed | varies |
 //! | `knot` | a self-overlapping (2, 3) torus-knot tube | ≈ 8 |
 //! | `coplanar` | two overlapping quads in one plane, different colours | 2 (a tie) |
+//! | `ties:N` | N overlapping quads in one plane, colour order unlike primitive order | up to N, all tied |
+//! | `near:N` | `ties:N` with the quads 10⁻⁷ apart in depth (equal after projection to f32) | up to N |
 //! | `default` | a torus knot inside two glass spheres | ≥ 8 |
 
 use std::f32::consts::TAU;
@@ -17,13 +19,17 @@ use glam::{Mat4, Vec3, Vec4};
 use crate::{Instance, Mesh, Object, OitError, Scene};
 
 /// The built-in names, for messages.
-pub const BUILTIN_SCENES: &str = "default, planes:N, spheres:N, cluster:N, knot, coplanar, grid:RxC:MESH";
+pub const BUILTIN_SCENES: &str =
+    "default, planes:N, spheres:N, cluster:N, knot, coplanar, ties:N, near:N, grid:RxC:MESH";
 
 /// The scene rendered when none is named.
 pub const DEFAULT_SCENE: &str = "default";
 
 /// Largest N accepted by `planes`, `spheres`, `cluster`.
 const MAX_COUNT: u32 = 100_000;
+
+/// Largest N accepted by `ties` and `near`: their alphas must stay distinct in 8 bits.
+const MAX_TIES: u32 = 128;
 
 /// A built-in scene or an OBJ file: names in [`BUILTIN_SCENES`] are built, anything else is read as a
 /// path.
@@ -82,6 +88,14 @@ fn builtin_unchecked(name: &str) -> Option<Result<Scene, OitError>> {
         "cluster" => count(200).map(cluster),
         "knot" => no_param(knot()),
         "coplanar" => no_param(coplanar()),
+        "ties" | "near" => count(8).and_then(|n| {
+            if n > MAX_TIES {
+                return Err(OitError::InvalidSettings(format!(
+                    "scene '{name}': N must be at most {MAX_TIES} (each quad needs its own 8-bit alpha)"
+                )));
+            }
+            Ok(if base == "ties" { ties(n) } else { near(n) })
+        }),
         "default" => no_param(default_scene()),
         _ => return None,
     })
@@ -349,6 +363,39 @@ pub fn coplanar() -> Scene {
     )
 }
 
+/// `ties:N`: N 1.4 × 1.4 quads in the plane z = 0, each shifted from the last so that pixels see
+/// different subsets of them and the middle sees all N, where every fragment ties in depth with
+/// every other. Each quad has its own colour and alpha (alphas from 60/255 to 210/255), and the
+/// order of the packed colours (alpha is their top byte) is neither the primitive order nor its
+/// reverse (for N ≥ 3; for N = 2 it is the reverse): quad i gets alpha rank (N + ⌊N/2⌋ − i) mod N.
+/// A technique that orders equal depths by colour instead of by primitive id, as the reference
+/// does, composites these pixels in the wrong order (`coplanar` hides that: its colour order is
+/// its primitive order).
+pub fn ties(n: u32) -> Scene {
+    tie_quads(format!("ties:{n}"), n, 0.0)
+}
+
+/// `near:N`: `ties:N` with quad i at z = i · 10⁻⁷: distinct in the scene, equal (or an ulp apart)
+/// once projected to f32 depth, and always equal in `mdts`'s 20 depth bits.
+pub fn near(n: u32) -> Scene {
+    tie_quads(format!("near:{n}"), n, 1e-7)
+}
+
+fn tie_quads(name: String, n: u32, dz: f32) -> Scene {
+    let mut meshes = Vec::new();
+    let mut colors = Vec::new();
+    for i in 0..n {
+        let t = if n == 1 { 0.0 } else { i as f32 / (n - 1) as f32 };
+        // x steps evenly, y zigzags, so neighbouring quads overlap in different corners
+        let (x, y) = (-1.0 + 0.6 * t, -1.0 + 0.6 * ((i * 3) % n) as f32 / n.max(2) as f32);
+        meshes.push(quad(&format!("quad {i}"), (x, y), (x + 1.4, y + 1.4), i as f32 * dz));
+        let rank = (n + n / 2 - i) % n;
+        let alpha = (60 + rank * 150 / (n - 1).max(1)) as f32 / 255.0;
+        colors.push(hue(i as f32 / n as f32 + 0.1).extend(alpha));
+    }
+    single(name, meshes, colors)
+}
+
 /// `default`: a warm torus knot inside two cool glass spheres: most pixels see 4 to 12 layers.
 pub fn default_scene() -> Scene {
     let mut scene = knot();
@@ -371,7 +418,20 @@ mod tests {
 
     #[test]
     fn every_builtin_validates() {
-        for name in ["default", "planes:1", "planes:8", "spheres:4", "cluster:20", "knot", "coplanar"] {
+        for name in [
+            "default",
+            "planes:1",
+            "planes:8",
+            "spheres:4",
+            "cluster:20",
+            "knot",
+            "coplanar",
+            "ties:1",
+            "ties:2",
+            "ties:8",
+            "near:8",
+            "near:128",
+        ] {
             let s = load_scene(name).unwrap();
             s.validate().unwrap();
         }
@@ -382,6 +442,8 @@ mod tests {
         assert!(load_scene("planes:0").is_err());
         assert!(load_scene("planes:x").is_err());
         assert!(load_scene("knot:3").is_err());
+        assert!(load_scene("ties:0").is_err());
+        assert!(load_scene("ties:129").is_err());
         assert!(matches!(load_scene("nothing-like-this"), Err(OitError::UnknownScene { .. })));
     }
 
@@ -410,6 +472,24 @@ mod tests {
         // a flat built-in over the cap is refused too (spheres:N has 2,208 triangles per sphere)
         let e = load_scene("spheres:100000").unwrap_err().to_string();
         assert!(e.contains("220800000 triangles"), "{e}");
+    }
+
+    #[test]
+    fn tie_colours_are_out_of_primitive_order() {
+        use crate::rules::pack_rgba8;
+        for n in [2u32, 3, 4, 8, 128] {
+            let s = ties(n);
+            let keys: Vec<u32> = s.objects.iter().map(|o| pack_rgba8(o.color)).collect();
+            let mut sorted = keys.clone();
+            sorted.sort_unstable();
+            sorted.dedup();
+            assert_eq!(sorted.len(), n as usize, "ties:{n}: distinct colours");
+            assert_ne!(keys, sorted, "ties:{n}: colour order is not primitive order");
+            if n >= 3 {
+                sorted.reverse();
+                assert_ne!(keys, sorted, "ties:{n}: nor its reverse");
+            }
+        }
     }
 
     #[test]

@@ -31,8 +31,8 @@ pub const TECHNIQUE_PRELUDE: &str =
 const FINISH_WGSL: &str = include_str!("shaders/finish.wgsl");
 const FILL_WGSL: &str = include_str!("shaders/fill.wgsl");
 
-/// Words of one `PixelState`.
-const STATE_WORDS: u64 = 16;
+/// Words of one `PixelState` (resolve.wgsl): 16 for the composite, 7 for the ties.
+const STATE_WORDS: u64 = 23;
 
 /// The frame uniform (`FrameUniform` in fragment.wgsl).
 #[repr(C)]
@@ -50,8 +50,10 @@ pub struct FrameUniform {
     pub effect: u32,
     /// width × height.
     pub pixel_count: u32,
+    /// 1 when the resolve counts ties (the plan's `count_ties`).
+    pub ties: u32,
     /// Padding.
-    pub pad: [u32; 2],
+    pub pad: u32,
     /// Camera forward (xyz).
     pub forward: [f32; 4],
     /// Background (rgb).
@@ -179,7 +181,8 @@ impl<'a> GpuCtx<'a> {
                 Effect::Complexity => 3,
             },
             pixel_count: pixels,
-            pad: [0; 2],
+            ties: u32::from(plan.count_ties),
+            pad: 0,
             forward: camera.forward.extend(0.0).to_array(),
             background: settings.background.extend(1.0).to_array(),
             lens: [camera.near, camera.far, sigma / radius, 0.0],
@@ -226,7 +229,7 @@ impl<'a> GpuCtx<'a> {
         );
         let totals = make(
             "totals",
-            8,
+            12,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         );
         let mut ctx = GpuCtx {
@@ -493,6 +496,7 @@ impl<'a> GpuCtx<'a> {
                 fragments,
                 captured,
                 lost: fragments.saturating_sub(captured),
+                tied: u64::from(t[2]),
                 storage_bytes: self.storage_bytes,
                 wall_ms: 0.0,
                 gpu_ms: self.timestamps.is_some().then_some(self.gpu_ms),

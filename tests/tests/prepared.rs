@@ -12,8 +12,8 @@ fn same(a: &Frame, b: &Frame, what: &str) {
     assert_eq!(a.layers, b.layers, "{what}: layers");
     let (s, t) = (&a.stats, &b.stats);
     assert_eq!(
-        (s.geometry_passes, s.fragments, s.captured, s.lost, s.storage_bytes),
-        (t.geometry_passes, t.fragments, t.captured, t.lost, t.storage_bytes),
+        (s.geometry_passes, s.fragments, s.captured, s.lost, s.tied, s.storage_bytes),
+        (t.geometry_passes, t.fragments, t.captured, t.lost, t.tied, t.storage_bytes),
         "{what}: stats"
     );
 }

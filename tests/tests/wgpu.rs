@@ -2,7 +2,7 @@
 //! that it was skipped; `OIT_REQUIRE_GPU=1`, which CI sets, makes that a failure).
 //!
 //! - compute path: the same fragments as oit-cpu (per-pixel counts of the reference equal, every
-//!   technique's fragments/captured/lost equal) and the same 8-bit images (no channel off by more
+//!   technique's fragments/captured/lost/tied equal, on the tie scenes too) and the same 8-bit images (no channel off by more
 //!   than 1, where the order of float operations may differ);
 //! - hardware path: images differ from oit-cpu's only along triangle edges, and each technique's
 //!   EPR against wgpu's own reference is close to oit-cpu's;
@@ -34,11 +34,15 @@ fn order_independent() -> Vec<Technique> {
 
 const SCENES: [&str; 4] = ["planes:8", "spheres:4", "knot", "cluster:200"];
 
+/// Scenes whose fragments tie in depth: both backends must count the same ties (`ties.rs` checks
+/// what the counts mean).
+const TIE_SCENES: [&str; 3] = ["ties:5", "near:8", "coplanar"];
+
 #[test]
 fn compute_path_equals_cpu() {
     let Some(gpu) = oit_wgpu::backend_or_skip("compute_path_equals_cpu") else { return };
     let cpu = oit_cpu::CpuBackend::default();
-    for name in SCENES {
+    for name in SCENES.into_iter().chain(TIE_SCENES) {
         let scene = scene(name);
         let base = Settings { raster: Some(RasterPath::Compute), ..settings(64, "reference") };
         let cam = camera(&scene, &base, View::default());
@@ -49,6 +53,7 @@ fn compute_path_equals_cpu() {
             let what = format!("{t} on {name}");
             assert_eq!(g.stats.fragments, c.stats.fragments, "{what}: fragments");
             assert_eq!(g.stats.lost, c.stats.lost, "{what}: lost");
+            assert_eq!(g.stats.tied, c.stats.tied, "{what}: tied");
             assert_eq!(g.stats.geometry_passes, c.stats.geometry_passes, "{what}: passes");
             if t == Technique::Reference {
                 assert_eq!(g.layers, c.layers, "{what}: the same fragments per pixel");
@@ -90,6 +95,7 @@ fn compute_path_equals_cpu_on_a_random_soup() {
         let (g, c) = (render(&gpu, &scene, &cam, &s), render(&cpu, &scene, &cam, &s));
         assert_eq!(g.stats.fragments, c.stats.fragments, "{t}");
         assert_eq!(g.stats.lost, c.stats.lost, "{t}");
+        assert_eq!(g.stats.tied, c.stats.tied, "{t}");
         assert!(max_diff(&g, &c) <= 1, "{t}");
     }
 }

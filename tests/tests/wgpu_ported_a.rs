@@ -41,7 +41,8 @@ fn ported_techniques_match_cpu() {
 fn max_peels_and_other_effects_match_cpu() {
     let Some(gpu) = oit_wgpu::backend_or_skip("max_peels_and_other_effects_match_cpu") else { return };
     let cpu = oit_cpu::CpuBackend::default();
-    for scene_name in ["knot", "cluster:200"] {
+    // ties:5: the resolve's tie runs under every effect and peel limit
+    for scene_name in ["knot", "cluster:200", "ties:5"] {
         for t in ["dp", "ddp", "mlp:2"] {
             for peels in [1, 2] {
                 compare(&gpu, &cpu, scene_name, &Settings { max_peels: Some(peels), ..settings(t) });

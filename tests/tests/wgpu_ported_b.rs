@@ -65,7 +65,7 @@ fn max_peels_and_other_effects_match_cpu() {
 fn deep_scenes_match_cpu() {
     let Some(gpu) = oit_wgpu::backend_or_skip("deep_scenes_match_cpu") else { return };
     let cpu = oit_cpu::CpuBackend::default();
-    for scene_name in ["planes:70", "coplanar"] {
+    for scene_name in ["planes:70", "coplanar", "ties:5"] {
         for (t, max_peels) in [("adp", None), ("adp", Some(2)), ("bdp:3", None), ("bdp", None)] {
             for bounds in [BoundsMode::Boxes, BoundsMode::Exact] {
                 let s = Settings { max_peels, ..settings(t, BdpMode::Auto, bounds) };

@@ -21,6 +21,7 @@ fn compute_path_matches_cpu() {
             let c = cpu.render(&scene, &cam, &s).unwrap();
             assert_eq!(g.stats.fragments, c.stats.fragments, "{scene_name} {t}");
             assert_eq!(g.stats.lost, c.stats.lost, "{scene_name} {t}");
+            assert_eq!(g.stats.tied, c.stats.tied, "{scene_name} {t}");
             let worst = g
                 .image
                 .pixels

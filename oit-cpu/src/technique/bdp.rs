@@ -12,6 +12,7 @@
 //!   (or normal) of the kept fragment travels with it. Pass p of `bdp:P` discards fragments with
 //!   d ≤ dmin or d ≥ dmax of their subinterval in pass p − 1 (eq. 5) and so keeps the next
 //!   nearest and farthest; after P passes subinterval k reads min₁ … min_P, max_P … max₁.
+//!   A min and max of equal depth (two colours) are ordered by colour: counted in `tied`.
 
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 

@@ -5,6 +5,12 @@
 //!
 //! A pixel whose nearest and farthest remaining fragment is the same one composites it once; other
 //! fragments that tie in depth with a peeled one are never peeled and are counted in `lost`.
+//!
+//! Ties: the MIN and MAX are on one 64-bit word, depth bits above the payload, with no room for
+//! the primitive id the reference orders equal depths by; so where the front and the back meet at
+//! one depth (the last pass finds nearest and farthest equal in depth, of two colours) their order
+//! is by colour. The resolve counts both in `tied` (the join of the front and back runs,
+//! `PixelState::tied`); the fragments between them at that depth are `lost`.
 
 use std::sync::atomic::Ordering::Relaxed;
 

@@ -5,7 +5,9 @@
 //! nothing plays the role of the occlusion query that ends the loop: N + 1 passes for N layers.
 //!
 //! Strictly behind means that of two fragments at one depth, one is peeled and the other never
-//! is: the loss is counted in `lost`.
+//! is: the loss is counted in `lost`. (The one peeled is the smaller payload, not the smaller
+//! primitive id; the resolve would count consecutive equal depths in `tied`, but dp never peels
+//! two.)
 
 use std::sync::atomic::Ordering::Relaxed;
 

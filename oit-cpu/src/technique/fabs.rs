@@ -2,10 +2,17 @@
 //! A per-pixel counter hands each fragment a slot by atomic increment, in rasterization order; a
 //! resolve sorts each pixel's n ≤ K slots by depth and composites them. Fragments past K are
 //! counted in `lost`.
+//!
+//! Ties: a slot is the 64-bit key (depth bits, primitive id) and the payload beside it (12 bytes),
+//! and the sort is by key, so equal depths come out in primitive order, as the reference orders
+//! them: `fabs` never counts `tied`. It can, where the one-word techniques cannot, because its
+//! sort runs after capture, over words no atomic has to compare (`mdts64`, `mlp`, `ddp` and `dp`
+//! order by an atomic min/max of one 64-bit word, with no room for an id beside depth and payload,
+//! and count their ties instead).
 
 use std::sync::atomic::Ordering::Relaxed;
 
-use oit_core::rules::{depth_key64, split_key64};
+use oit_core::rules::{depth_bits, depth_from_bits};
 use oit_core::{Frame, OitError};
 use rayon::prelude::*;
 
@@ -29,7 +36,7 @@ use super::Ctx;
 pub const INSERTION_SORT_MAX: usize = 8;
 
 /// Sorts a pixel's keys in place, choosing the sort by length (see [`INSERTION_SORT_MAX`]).
-pub fn sort_keys(keys: &mut [u64]) {
+pub fn sort_keys<K: Ord + Copy>(keys: &mut [K]) {
     if keys.len() <= INSERTION_SORT_MAX {
         for i in 1..keys.len() {
             let v = keys[i];
@@ -50,28 +57,37 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let k = ctx.plan.slots(deepest) as usize;
     let counters = ctx.alloc32(1, 0)?;
     let slots = ctx.alloc64(k, 0)?;
+    let payloads = ctx.alloc32(k, 0)?;
     let payload = |f: &crate::raster::Fragment| ctx.payload(f);
     let generated = ctx.raster.for_each_fragment(|f| {
         let px = f.pixel as usize;
         let i = counters[px].fetch_add(1, Relaxed) as usize;
         if i < k {
-            slots[px * k + i].store(depth_key64(f.depth, payload(f)), Relaxed);
+            slots[px * k + i].store(u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim), Relaxed);
+            payloads[px * k + i].store(payload(f), Relaxed);
         }
     });
     ctx.passes += 1;
     ctx.fragments.get_or_insert(generated);
     let mut states = ctx.states();
     let resolve = &ctx.resolve;
-    states.par_iter_mut().zip(slots.par_chunks(k).zip(counters.par_iter())).for_each_init(
+    let lists = slots.par_chunks(k).zip(payloads.par_chunks(k));
+    states.par_iter_mut().zip(lists.zip(counters.par_iter())).for_each_init(
         Vec::new,
-        |keys, (s, (slots, count))| {
+        |keys, (s, ((slots, payloads), count))| {
             let n = (count.load(Relaxed) as usize).min(k);
             keys.clear();
-            keys.extend(slots[..n].iter().map(|x| x.load(Relaxed)));
+            // (depth bits, primitive id) above the payload: one primitive has one fragment a
+            // pixel, so the payload never decides
+            keys.extend(
+                slots[..n]
+                    .iter()
+                    .zip(&payloads[..n])
+                    .map(|(x, p)| u128::from(x.load(Relaxed)) << 32 | u128::from(p.load(Relaxed))),
+            );
             sort_keys(keys);
             for &key in keys.iter() {
-                let (d, p) = split_key64(key);
-                resolve.push(s, d, p);
+                resolve.push(s, depth_from_bits((key >> 64) as u32), key as u32);
             }
         },
     );

@@ -8,6 +8,14 @@
 //!   than 2⁻²⁰ may swap or mismatch halves, and alpha is not stored: the scene's alpha is used
 //!   (the `--alpha` override, else the mean of the objects' alphas).
 //! - `mdts64` stores depth bits above the packed RGBA8 in one 64-bit word: exact for the first K.
+//!
+//! Ties: neither word has room for the primitive id the reference orders equal depths by, so
+//! equal depths come out by colour, and `mdts` makes depths equal that were only within one 2⁻²⁰
+//! step (where the reference orders them by their f32 depths). The resolve counts in `tied` every
+//! fragment of a run of equal stored depths (f32 bits for `mdts64`, the 20 bits for `mdts`) that
+//! holds two colours or more; a run of one colour composites alike in any order. What `mdts`
+//! loses besides, and does not count: depth below 2⁻²⁰ (the resolve sees the lower end of the
+//! step, which moves translucency's distances) and per-fragment alpha.
 
 use std::sync::atomic::Ordering::Relaxed;
 

@@ -3,6 +3,10 @@
 //! captured (atomic-min insertion into M 64-bit words, as `mdts64`), composites them, and repeats
 //! while any pixel had more than M left: ⌈N/M⌉ passes for N layers. Fragments that tie in depth
 //! with the deepest of a pass are never captured and are counted in `lost`.
+//!
+//! Ties within a pass: the insertion is atomic min on one 64-bit word, depth bits above the
+//! payload, with no room for the primitive id the reference orders equal depths by, so equal
+//! depths of a pass come out by colour; the resolve counts every fragment of such a run in `tied`.
 
 use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
 

@@ -51,12 +51,14 @@ impl<'a> Ctx<'a> {
         pool: &'a Pool,
         plan: Plan,
     ) -> Self {
+        let mut resolve = Resolve::new(scene, camera, settings);
+        resolve.count_ties = plan.count_ties;
         Ctx {
             scene,
             camera,
             settings,
             raster,
-            resolve: Resolve::new(scene, camera, settings),
+            resolve,
             pixels: settings.pixel_count(),
             passes: 0,
             fragments: None,
@@ -193,8 +195,9 @@ pub(crate) fn frame(ctx: &Ctx<'_>, image: oit_core::Image, captured: u64) -> oit
 
 /// Resolves the states into the frame (the common ending).
 pub(crate) fn finish(ctx: &Ctx<'_>, mut states: Pooled<'_, PixelState>) -> oit_core::Frame {
-    let (image, captured) = ctx.resolve.image(ctx.settings.width, ctx.settings.height, &mut states);
+    let (image, captured, tied) = ctx.resolve.image(ctx.settings.width, ctx.settings.height, &mut states);
     let mut frame = frame(ctx, image, captured);
+    frame.stats.tied = tied;
     frame.stats.max_layers = states.iter().map(|s| s.captured).max().unwrap_or(0);
     frame
 }

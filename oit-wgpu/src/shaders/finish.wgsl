@@ -1,6 +1,6 @@
 // The last kernels of every frame: the state becomes sRGB8 pixels; totals for the stats.
 @group(0) @binding(2) var<storage, read_write> image: array<u32>;
-// [captured total, max captured]
+// [captured total, max captured, tied total]
 @group(0) @binding(3) var<storage, read_write> totals: array<atomic<u32>>;
 
 @compute @workgroup_size(64)
@@ -9,10 +9,15 @@ fn totals_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     if (px >= fu.pixel_count) {
         return;
     }
-    let c = state[px].captured;
+    let s = state[px];
+    let c = s.captured;
     if (c > 0u) {
         atomicAdd(&totals[0], c);
         atomicMax(&totals[1], c);
+    }
+    let tied = state_tied(s);
+    if (tied > 0u) {
+        atomicAdd(&totals[2], tied);
     }
 }
 

@@ -15,7 +15,8 @@ struct FrameUniform {
     param: u32,
     effect: u32,
     pixel_count: u32,
-    pad0: u32,
+    // 1: the resolve counts ties (the plan's `count_ties`)
+    ties: u32,
     pad1: u32,
     forward: vec4<f32>,
     background: vec4<f32>,

@@ -1,6 +1,12 @@
 // The per-pixel resolve of oit-cpu (crates/oit-cpu/src/resolve.rs) in WGSL: captured fragments
 // are pushed nearest first (and, for dual depth peeling, farthest first from the back); `finish`
 // turns the state into an sRGB8 pixel. Needs `fu: FrameUniform` and `state` bound by the includer.
+//
+// Ties (`fu.ties` = the plan's `count_ties`): as oit-cpu's `Run`, each sequence keeps the run of
+// equal depth bits it ends in (last depth bits, last payload, and the run's length in bits 0..=30
+// with bit 31 set once it holds two payloads); every fragment of a run with two payloads or more
+// is counted in `tied`, and `state_tied` joins the front's and the back's last runs where they
+// meet at one depth.
 
 struct PixelState {
     fr: f32,
@@ -19,6 +25,56 @@ struct PixelState {
     entry_dist: f32,
     entry_rgba: u32,
     has_entry: u32,
+    front_depth: u32,
+    front_payload: u32,
+    front_run: u32,
+    back_depth: u32,
+    back_payload: u32,
+    back_run: u32,
+    tied: u32,
+}
+
+const RUN_MIXED: u32 = 0x80000000u;
+const RUN_LEN: u32 = 0x7fffffffu;
+
+// Extends a run (depth bits, payload, length | mixed) with a fragment; returns the fragments that
+// makes tied (oit-cpu's `Run::push`).
+fn run_push(depth: ptr<function, u32>, payload: ptr<function, u32>, run: ptr<function, u32>, d: u32, p: u32) -> u32 {
+    var tied = 0u;
+    if (((*run) & RUN_LEN) > 0u && *depth == d) {
+        *run += 1u;
+        if (((*run) & RUN_MIXED) != 0u) {
+            tied = 1u;
+        } else if (*payload != p) {
+            *run |= RUN_MIXED;
+            tied = (*run) & RUN_LEN;
+        }
+    } else {
+        *run = 1u;
+    }
+    *depth = d;
+    *payload = p;
+    return tied;
+}
+
+fn run_counted(run: u32) -> u32 {
+    if ((run & RUN_MIXED) != 0u) {
+        return run & RUN_LEN;
+    }
+    return 0u;
+}
+
+// Fragments counted tied, the join of the front and back sequences included (oit-cpu's
+// `PixelState::tied`).
+fn state_tied(s: PixelState) -> u32 {
+    if ((s.front_run & RUN_LEN) == 0u || (s.back_run & RUN_LEN) == 0u || s.front_depth != s.back_depth) {
+        return s.tied;
+    }
+    var joined = 0u;
+    if (((s.front_run | s.back_run) & RUN_MIXED) != 0u || s.front_payload != s.back_payload) {
+        joined = (s.front_run & RUN_LEN) + (s.back_run & RUN_LEN);
+    }
+    return s.tied - run_counted(s.front_run) - run_counted(s.back_run) + joined;
 }
 
 fn state_init(px: u32) {
@@ -38,6 +94,15 @@ fn linear_depth(d: f32) -> f32 {
 // list: `fabs`'s resolve).
 fn push_local(s: ptr<function, PixelState>, depth: f32, payload: u32) {
     (*s).captured += 1u;
+    if (fu.ties != 0u) {
+        var d = (*s).front_depth;
+        var p = (*s).front_payload;
+        var r = (*s).front_run;
+        (*s).tied += run_push(&d, &p, &r, bitcast<u32>(depth), payload);
+        (*s).front_depth = d;
+        (*s).front_payload = p;
+        (*s).front_run = r;
+    }
     if (fu.effect == EFFECT_TRANSPARENCY) {
         let c = unpack_rgba8(payload);
         let add = (*s).transmittance * c.w * c.xyz;
@@ -73,9 +138,18 @@ fn push(px: u32, depth: f32, payload: u32) {
 }
 
 // Dual depth peeling's back half (transparency only): over-blend in front of what is behind.
-fn push_back(px: u32, payload: u32) {
+fn push_back(px: u32, depth: f32, payload: u32) {
     var s = state[px];
     s.captured += 1u;
+    if (fu.ties != 0u) {
+        var d = s.back_depth;
+        var p = s.back_payload;
+        var r = s.back_run;
+        s.tied += run_push(&d, &p, &r, bitcast<u32>(depth), payload);
+        s.back_depth = d;
+        s.back_payload = p;
+        s.back_run = r;
+    }
     let c = unpack_rgba8(payload);
     var back = fu.background.xyz;
     if (s.has_back != 0u) {

@@ -52,7 +52,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     push(px, bitcast<f32>(dn), u32(n & 0xfffffffflu));
     if (f != n) {
         if (fu.effect == EFFECT_TRANSPARENCY) {
-            push_back(px, u32(f & 0xfffffffflu));
+            push_back(px, bitcast<f32>(df), u32(f & 0xfffffffflu));
         } else {
             // complexity: only the count matters, and push counts it
             push(px, bitcast<f32>(df), u32(f & 0xfffffffflu));

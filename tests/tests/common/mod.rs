@@ -6,7 +6,7 @@ use oit_core::{Backend, Camera, Settings, View, load_scene};
 pub const SCENES: [&str; 4] = ["planes:8", "spheres:4", "knot", "cluster:200"];
 
 /// Renders `scene_name` with `s` on wgpu and on oit-cpu and checks that they agree: the same
-/// fragments, losses, geometry passes and storage, and no image channel off by more than 1.
+/// fragments, losses, ties, geometry passes and storage, and no image channel off by more than 1.
 pub fn compare(gpu: &oit_wgpu::WgpuBackend, cpu: &oit_cpu::CpuBackend, scene_name: &str, s: &Settings) {
     let scene = load_scene(scene_name).unwrap();
     let cam = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();
@@ -18,6 +18,7 @@ pub fn compare(gpu: &oit_wgpu::WgpuBackend, cpu: &oit_cpu::CpuBackend, scene_nam
     let c = cpu.render(&scene, &cam, s).unwrap();
     assert_eq!(g.stats.fragments, c.stats.fragments, "{what}: fragments");
     assert_eq!(g.stats.lost, c.stats.lost, "{what}: lost");
+    assert_eq!(g.stats.tied, c.stats.tied, "{what}: tied");
     assert_eq!(g.stats.geometry_passes, c.stats.geometry_passes, "{what}: geometry passes");
     assert_eq!(g.stats.storage_bytes, c.stats.storage_bytes, "{what}: storage");
     let worst = g
