@@ -15,6 +15,28 @@
 //! assert_eq!(frame.stats.lost, 0);
 //! assert_eq!(frame.stats.geometry_passes, 5); // 4 layers + the pass that finds none left
 //! ```
+//!
+//! A scene prepared once renders many frames; the second orbit of the same views allocates no
+//! per-pixel storage (the README's example):
+//!
+//! ```
+//! use oit_core::{load_scene, Backend, Camera, Settings, Technique, View};
+//! let scene = load_scene("knot").unwrap();
+//! let backend = oit_cpu::CpuBackend::default();
+//! let mut prepared = backend.prepare(&scene).unwrap();
+//! let settings = Settings { width: 64, height: 64, technique: Technique::Fabs { k: None }, ..Settings::default() };
+//! let mut orbit = |prepared: &mut Box<dyn oit_core::Prepared + '_>| {
+//!     for step in 0..4 {
+//!         let view = View { azimuth: 90.0 * step as f32, ..View::default() };
+//!         let frame = prepared.frame(&Camera::orbit_scene(&scene, view, 1.0).unwrap(), &settings).unwrap();
+//!         assert_eq!(frame.stats.lost, 0);
+//!     }
+//! };
+//! orbit(&mut prepared);
+//! let made = prepared.storage_allocations();
+//! orbit(&mut prepared);
+//! assert_eq!(prepared.storage_allocations(), made);
+//! ```
 
 mod pool;
 pub mod raster;
