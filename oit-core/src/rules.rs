@@ -87,6 +87,27 @@ pub fn bucket_index(d: f32, z_near: f32, z_far: f32, n: u32) -> u32 {
     if k <= 0.0 { 0 } else { (k as u32).min(n - 1) }
 }
 
+/// The depth bdp's colour mode gives the fragment kept in subinterval `k` of `n`: the
+/// subinterval's midpoint (the bucket stores a colour, not a depth; the order of buckets is the
+/// order of depths, which is all the composite needs).
+#[inline]
+pub fn bucket_midpoint(k: u32, n: u32, z_near: f32, z_far: f32) -> f32 {
+    z_near + (k as f32 + 0.5) / n as f32 * (z_far - z_near)
+}
+
+/// The empty min slot of bdp's depth mode (a (min, max) pair of 64-bit depth-above-payload keys
+/// per subinterval).
+pub const BDP_EMPTY_MIN: u64 = u64::MAX;
+
+/// HPG 2009's eq. 5 for `bdp:P`: may pass p capture a fragment of depth bits `d` in a subinterval
+/// where pass p − 1 kept the keys `lo` (its min) and `hi` (its max)? Only strictly between them:
+/// what the previous pass kept, or anything outside its range, is done; an empty subinterval
+/// (`lo` = [`BDP_EMPTY_MIN`]) has nothing left.
+#[inline]
+pub fn bdp_eq5_next(d: u32, lo: u64, hi: u64) -> bool {
+    lo != BDP_EMPTY_MIN && d > (lo >> 32) as u32 && d < (hi >> 32) as u32
+}
+
 /// The adaptive scheme's histogram bin: [`bucket_index`] with 1024 subintervals.
 #[inline]
 pub fn histogram_bin(d: f32, z_near: f32, z_far: f32) -> u32 {
@@ -216,6 +237,28 @@ pub fn unpack_normal(p: u32) -> Vec3 {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn eq5_keeps_only_what_lies_strictly_between() {
+        let key = |d: f32| u64::from(depth_bits(d)) << 32 | 7;
+        let (lo, hi) = (key(0.25), key(0.75));
+        assert!(bdp_eq5_next(depth_bits(0.5), lo, hi));
+        assert!(!bdp_eq5_next(depth_bits(0.25), lo, hi), "the previous min is done");
+        assert!(!bdp_eq5_next(depth_bits(0.75), lo, hi), "the previous max is done");
+        assert!(!bdp_eq5_next(depth_bits(0.1), lo, hi) && !bdp_eq5_next(depth_bits(0.9), lo, hi));
+        assert!(!bdp_eq5_next(depth_bits(0.5), BDP_EMPTY_MIN, hi), "an empty subinterval is done");
+    }
+
+    #[test]
+    fn midpoints_lie_inside_their_buckets() {
+        for n in [16, 32] {
+            for k in 0..n {
+                let d = bucket_midpoint(k, n, 0.2, 0.6);
+                assert_eq!(bucket_index(d, 0.2, 0.6, n), k, "k {k} of {n}");
+            }
+        }
+        assert_eq!(bucket_midpoint(3, 32, 0.5, 0.5), 0.5, "a point range");
+    }
     use super::*;
 
     #[test]

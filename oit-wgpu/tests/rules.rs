@@ -1,6 +1,6 @@
 //! oit-core's rules and their WGSL twins (src/shaders/common.wgsl) on the same edge values:
 //! d = 0, d = 1, −0, NaN, beyond [0, 1], zNear = zFar, alpha 0 and 255, every alpha for the bdp
-//! packing. Integer results must be equal; sRGB encoding may differ by one step (pow differs).
+//! packing; the bucket midpoint and eq. 5 at and around their boundaries. Integer results must be equal; sRGB encoding may differ by one step (pow differs).
 
 use oit_core::composite::linear_to_srgb8;
 use oit_core::rules::*;
@@ -30,6 +30,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         case 6u: { r.x = pack_normal(vec3<f32>(a, b, d)); }
         case 7u: { r.x = linear_to_srgb8(a); }
         case 8u: { r = mdts_unpack(vec2<u32>(c.y, c.z)); }
+        case 9u: { r.x = bitcast<u32>(bucket_midpoint(c.y, 32u, b, d)); r.y = bitcast<u32>(bucket_midpoint(c.y, 16u, b, d)); }
+        case 10u: {
+            let lo = (u64(c.z) << 32u) | 0x1234lu;
+            let hi = (u64(c.w) << 32u) | 0x5678lu;
+            r.x = u32(bdp_eq5_next(c.y, lo, hi));
+            r.y = u32(bdp_eq5_next(c.y, BDP_EMPTY_MIN, hi));
+        }
         default: {}
     }
     results[i] = r;
@@ -48,6 +55,24 @@ fn wgsl_rules_equal_rust_rules() {
         [0.0f32, -0.0, 1.0, 1.000_000_1, -1.0, f32::NAN, 0.5, 1e-30, f32::INFINITY, 0.999_999_9, 0.3];
     let mut cases: Vec<[u32; 4]> = Vec::new();
     let mut expected: Vec<[u32; 2]> = Vec::new();
+    // the bucket midpoint for every k at both bucket counts, on ranges that include a point range
+    for k in [0u32, 1, 15, 31] {
+        for (zn, zf) in [(0.0f32, 1.0f32), (0.25, 0.75), (0.5, 0.5), (0.1, 0.100_000_1)] {
+            cases.push([9, k, f(zn), f(zf)]);
+            expected.push([f(bucket_midpoint(k, 32, zn, zf)), f(bucket_midpoint(k, 16, zn, zf))]);
+        }
+    }
+    // eq. 5 on either side of, and at, the previous pass's min and max depths
+    for (lo, hi) in [(f(0.25), f(0.75)), (f(0.5), f(0.5)), (0, u32::MAX), (f(0.3), f(0.300_000_04))] {
+        for d in [lo.wrapping_sub(1), lo, lo.wrapping_add(1), hi.wrapping_sub(1), hi, hi.wrapping_add(1)] {
+            let (lo_key, hi_key) = (u64::from(lo) << 32 | 0x1234, u64::from(hi) << 32 | 0x5678);
+            cases.push([10, d, lo, hi]);
+            expected.push([
+                u32::from(bdp_eq5_next(d, lo_key, hi_key)),
+                u32::from(bdp_eq5_next(d, BDP_EMPTY_MIN, hi_key)),
+            ]);
+        }
+    }
     for &d in &depths {
         cases.push([0, f(d), 0, 0]);
         expected.push([depth_bits(d), 0]);

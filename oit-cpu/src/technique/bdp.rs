@@ -17,8 +17,8 @@
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 
 use oit_core::rules::{
-    BDP_COLOR_SUBINTERVALS, BDP_DEPTH_SUBINTERVALS, bdp_pack_color, bdp_unpack_color, bucket_index,
-    depth_bits, depth_key64, split_key64,
+    BDP_COLOR_SUBINTERVALS, BDP_DEPTH_SUBINTERVALS, BDP_EMPTY_MIN, bdp_eq5_next, bdp_pack_color,
+    bdp_unpack_color, bucket_index, bucket_midpoint, depth_bits, depth_key64, split_key64,
 };
 use oit_core::{BucketArray, Frame, OitError};
 use rayon::prelude::*;
@@ -52,7 +52,7 @@ fn color(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
             for (k, &v) in words.iter().enumerate() {
                 if v != 0 {
                     // The bucket's subinterval midpoint stands for its depth.
-                    let d = zn + (k as f32 + 0.5) / n as f32 * (zf - zn);
+                    let d = bucket_midpoint(k as u32, n as u32, zn, zf);
                     resolve.push(s, d, bdp_unpack_color(v));
                 }
             }
@@ -63,14 +63,13 @@ fn color(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
 
 fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
     let n = BDP_DEPTH_SUBINTERVALS as usize;
-    const EMPTY_MIN: u64 = u64::MAX;
     // One bucket array per pass, as the paper allocates new MRTs per pass: [min, max] per subinterval.
     let mut arrays: Vec<crate::pool::Pooled<'_, AtomicU64>> = Vec::new();
     // P passes, or fewer under --max-peels: the plan's stop rule
     for _ in 0..ctx.plan.bdp_capture_passes() {
         let array = ctx.alloc64(2 * n, 0)?;
         for slot in array.iter().step_by(2) {
-            slot.store(EMPTY_MIN, Relaxed);
+            slot.store(BDP_EMPTY_MIN, Relaxed);
         }
         {
             let previous = arrays.last();
@@ -84,7 +83,7 @@ fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
                     let (lo, hi) = (prev[slot].load(Relaxed), prev[slot + 1].load(Relaxed));
                     let d = depth_bits(f.depth);
                     // eq. 5: what the previous pass kept, or anything outside its range, is done
-                    if lo == EMPTY_MIN || d <= (lo >> 32) as u32 || d >= (hi >> 32) as u32 {
+                    if !bdp_eq5_next(d, lo, hi) {
                         return;
                     }
                 }
@@ -105,7 +104,7 @@ fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
             let mut backs = Vec::new();
             for array in &arrays {
                 let (lo, hi) = (array[slot].load(Relaxed), array[slot + 1].load(Relaxed));
-                if lo == EMPTY_MIN {
+                if lo == BDP_EMPTY_MIN {
                     break;
                 }
                 let (d, p) = split_key64(lo);

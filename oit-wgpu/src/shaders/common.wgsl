@@ -42,6 +42,18 @@ fn bucket_index(d: f32, z_near: f32, z_far: f32, n: u32) -> u32 {
     return min(u32(k), n - 1u);
 }
 
+// oit_core::rules::bucket_midpoint: the depth bdp's colour mode gives bucket k of n.
+fn bucket_midpoint(k: u32, n: u32, z_near: f32, z_far: f32) -> f32 {
+    return z_near + (f32(k) + 0.5) / f32(n) * (z_far - z_near);
+}
+
+const BDP_EMPTY_MIN: u64 = 0xfffffffffffffffflu;
+
+// oit_core::rules::bdp_eq5_next: HPG 2009's eq. 5, strictly between the previous pass's min and max.
+fn bdp_eq5_next(d: u32, lo: u64, hi: u64) -> bool {
+    return lo != BDP_EMPTY_MIN && d > u32(lo >> 32u) && d < u32(hi >> 32u);
+}
+
 fn histogram_bin(d: f32, z_near: f32, z_far: f32) -> u32 {
     return bucket_index(d, z_near, z_far, HISTOGRAM_BINS);
 }

@@ -7,7 +7,6 @@
 // Depth mode: one array per pass, each 16 × (min, max) u64 keys per pixel, arrays back to back.
 @group(0) @binding(4) var<storage, read_write> arrays: array<atomic<u64>>;
 
-const BDP_EMPTY_MIN: u64 = 0xfffffffffffffffflu;
 const MODE_COLOR: u32 = 0u;
 const MODE_DEPTH: u32 = 1u;
 
@@ -43,7 +42,7 @@ fn capture(f: Fragment) {
         let lo = atomicLoad(&arrays[prev]);
         let hi = atomicLoad(&arrays[prev + 1u]);
         // eq. 5: what the previous pass kept, or anything outside its range, is done
-        if (lo == BDP_EMPTY_MIN || d <= u32(lo >> 32u) || d >= u32(hi >> 32u)) {
+        if (!bdp_eq5_next(d, lo, hi)) {
             return;
         }
     }
@@ -78,7 +77,7 @@ fn color_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
     for (var k = 0u; k < n; k++) {
         let v = atomicLoad(&colors[px * n + k]);
         if (v != 0u) {
-            let d = zn + (f32(k) + 0.5) / f32(n) * (zf - zn);
+            let d = bucket_midpoint(k, n, zn, zf);
             push_local(&s, d, bdp_unpack_color(v));
         }
     }
