@@ -465,10 +465,10 @@ impl TriangleSetup {
 
     /// The set-up triangles as 32-bit words, [`TRIANGLE_WORDS`] per triangle, for a GPU rasterizer
     /// that walks and interpolates them with the same rules (oit-wgpu's compute path), so both
-    /// produce the same fragments. Layout per triangle: x[3] (i32, 1/256 px), y[3] (i32), z[3]
-    /// (f32), inv_w[3] (f32), normal[3][3] (f32), color[3][3] (f32), inv_area (f32), base[4]
-    /// (f32), has_color (u32), prim (u32), bbox[4] (u32, inclusive x0 y0 x1 y1), 3 words of
-    /// padding.
+    /// produce the same fragments. Layout per triangle: `x[3]` (i32, 1/256 px), `y[3]` (i32),
+    /// `z[3]` (f32), `inv_w[3]` (f32), `normal[3][3]` (f32), `color[3][3]` (f32), `inv_area`
+    /// (f32), `base[4]` (f32), `has_color` (u32), `prim` (u32), `bbox[4]` (u32, inclusive x0 y0
+    /// x1 y1), 3 words of padding.
     pub fn triangle_words(&self) -> Vec<u32> {
         let mut out = Vec::with_capacity(self.triangles.len() * TRIANGLE_WORDS);
         for t in &self.triangles {
