@@ -72,6 +72,7 @@ impl CpuBackend {
     fn thread_pool(&self) -> Result<Option<rayon::ThreadPool>, OitError> {
         self.threads
             .map(|n| {
+                oit_core::check_threads(n)?;
                 rayon::ThreadPoolBuilder::new()
                     .num_threads(n)
                     .build()
@@ -182,11 +183,7 @@ impl Backend for CpuBackend {
         };
         match self.threads {
             None => Ok(time()),
-            Some(n) => Ok(rayon::ThreadPoolBuilder::new()
-                .num_threads(n)
-                .build()
-                .map_err(|e| OitError::Device(format!("cannot start {n} rayon threads: {e}")))?
-                .install(time)),
+            Some(_) => Ok(self.thread_pool()?.expect("threads are set").install(time)),
         }
     }
 }

@@ -30,6 +30,9 @@ pub const TECHNIQUE_PRELUDE: &str =
 
 const FINISH_WGSL: &str = include_str!("shaders/finish.wgsl");
 const FILL_WGSL: &str = include_str!("shaders/fill.wgsl");
+/// The fewest words a storage buffer of [`GpuCtx::buffer`] holds: 64 bytes, one of the widest
+/// element any technique binds, so that an array sized from zero fragments still binds.
+const MIN_BUFFER_WORDS: u64 = 16;
 
 /// Words of one `PixelState` (resolve.wgsl): 16 for the composite, 7 for the ties.
 const STATE_WORDS: u64 = 23;
@@ -260,7 +263,10 @@ impl<'a> GpuCtx<'a> {
     /// A storage buffer of `words` 32-bit words for the technique, checked against the limits and
     /// counted in `storage_bytes`.
     pub fn buffer(&mut self, label: &str, words: u64, init: Init) -> Result<wgpu::Buffer, OitError> {
-        let bytes = words.max(1) * 4;
+        // never smaller than the widest element a shader binds (u64 keys, vec4s, fabs' slots):
+        // a frame with no fragments sizes its arrays to zero, and wgpu refuses a binding smaller
+        // than one element ("bound with size 4 where the shader expects 8", issue 13.8)
+        let bytes = words.max(MIN_BUFFER_WORDS) * 4;
         self.gpu.check_storage(label, bytes)?;
         self.storage_bytes += words * 4;
         let pooled = self.lent.pool.is_some();
