@@ -98,6 +98,13 @@ impl CpuPrepared<'_> {
             return Err(OitError::InvalidSettings("camera matrices are not finite".into()));
         }
         let plan = oit_core::plan::Plan::new("cpu", self.scene, settings)?;
+        // the whole frame's storage against the host's memory, before anything is allocated
+        // (sizes from a counting pass are checked again as they are allocated)
+        plan.check_budget(
+            settings.pixel_count() as u64,
+            plan.slots(0),
+            oit_core::plan::host_memory_budget(),
+        )?;
         let start = Instant::now();
         let mut raster = Rasterizer::new(self.scene, camera, settings);
         if let Some(mode) = self.backend.mode {
