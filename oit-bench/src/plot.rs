@@ -195,77 +195,82 @@ impl Chart {
 
     fn draw_svg(&self, path: &Path) -> Result<(), OitError> {
         let err = write_err(path);
-        let root = SVGBackend::new(path, (WIDTH, HEIGHT)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| err(&e))?;
-        let ((x0, x1), (y0, y1)) = self.ranges();
-        let mut builder = ChartBuilder::on(&root);
-        builder
-            .caption(&self.title, ("sans-serif", 22))
-            .margin(14)
-            .x_label_area_size(50)
-            .y_label_area_size(90);
-        // four axis kinds, one body
-        macro_rules! body {
-            ($xr:expr, $yr:expr) => {{
-                let mut chart = builder.build_cartesian_2d($xr, $yr).map_err(|e| err(&e))?;
-                chart
-                    .configure_mesh()
-                    .x_desc(&self.x_desc)
-                    .y_desc(&self.y_desc)
-                    .x_label_formatter(&|v| tick_label(*v))
-                    .y_label_formatter(&|v| tick_label(*v))
-                    .draw()
-                    .map_err(|e| err(&e))?;
-                for (i, s) in self.series.iter().enumerate() {
-                    let color = s.rgb(i);
-                    let style = color.stroke_width(2);
-                    if s.line {
-                        let drawn = chart
-                            .draw_series(LineSeries::new(s.points.clone(), style))
-                            .map_err(|e| err(&e))?;
-                        if !s.name.is_empty() {
-                            drawn.label(&s.name).legend(move |(x, y)| {
-                                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                            });
+        // drawn into memory and written with one checked write: plotters' file target drops its
+        // writer unflushed, so a full disk would pass unnoticed (issue 13.5)
+        let mut text = String::new();
+        {
+            let root = SVGBackend::with_string(&mut text, (WIDTH, HEIGHT)).into_drawing_area();
+            root.fill(&WHITE).map_err(|e| err(&e))?;
+            let ((x0, x1), (y0, y1)) = self.ranges();
+            let mut builder = ChartBuilder::on(&root);
+            builder
+                .caption(&self.title, ("sans-serif", 22))
+                .margin(14)
+                .x_label_area_size(50)
+                .y_label_area_size(90);
+            // four axis kinds, one body
+            macro_rules! body {
+                ($xr:expr, $yr:expr) => {{
+                    let mut chart = builder.build_cartesian_2d($xr, $yr).map_err(|e| err(&e))?;
+                    chart
+                        .configure_mesh()
+                        .x_desc(&self.x_desc)
+                        .y_desc(&self.y_desc)
+                        .x_label_formatter(&|v| tick_label(*v))
+                        .y_label_formatter(&|v| tick_label(*v))
+                        .draw()
+                        .map_err(|e| err(&e))?;
+                    for (i, s) in self.series.iter().enumerate() {
+                        let color = s.rgb(i);
+                        let style = color.stroke_width(2);
+                        if s.line {
+                            let drawn = chart
+                                .draw_series(LineSeries::new(s.points.clone(), style))
+                                .map_err(|e| err(&e))?;
+                            if !s.name.is_empty() {
+                                drawn.label(&s.name).legend(move |(x, y)| {
+                                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                                });
+                            }
+                        }
+                        if s.markers {
+                            let labels = s.labels.clone();
+                            let drawn = chart
+                                .draw_series(s.points.iter().enumerate().map(|(k, &p)| {
+                                    EmptyElement::at(p)
+                                        + Circle::new((0, 0), 5, color.filled())
+                                        + Text::new(
+                                            labels.get(k).cloned().unwrap_or_default(),
+                                            (7, -14),
+                                            ("sans-serif", 13),
+                                        )
+                                }))
+                                .map_err(|e| err(&e))?;
+                            if !s.line && !s.name.is_empty() {
+                                drawn
+                                    .label(&s.name)
+                                    .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
+                            }
                         }
                     }
-                    if s.markers {
-                        let labels = s.labels.clone();
-                        let drawn = chart
-                            .draw_series(s.points.iter().enumerate().map(|(k, &p)| {
-                                EmptyElement::at(p)
-                                    + Circle::new((0, 0), 5, color.filled())
-                                    + Text::new(
-                                        labels.get(k).cloned().unwrap_or_default(),
-                                        (7, -14),
-                                        ("sans-serif", 13),
-                                    )
-                            }))
-                            .map_err(|e| err(&e))?;
-                        if !s.line && !s.name.is_empty() {
-                            drawn
-                                .label(&s.name)
-                                .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
-                        }
-                    }
-                }
-                chart
-                    .configure_series_labels()
-                    .background_style(WHITE.mix(0.85))
-                    .border_style(BLACK)
-                    .position(SeriesLabelPosition::UpperRight)
-                    .draw()
-                    .map_err(|e| err(&e))?;
-            }};
+                    chart
+                        .configure_series_labels()
+                        .background_style(WHITE.mix(0.85))
+                        .border_style(BLACK)
+                        .position(SeriesLabelPosition::UpperRight)
+                        .draw()
+                        .map_err(|e| err(&e))?;
+                }};
+            }
+            match (self.x_log, self.y_log) {
+                (true, true) => body!((x0..x1).log_scale(), (y0..y1).log_scale()),
+                (true, false) => body!((x0..x1).log_scale(), y0..y1),
+                (false, true) => body!(x0..x1, (y0..y1).log_scale()),
+                (false, false) => body!(x0..x1, y0..y1),
+            }
+            root.present().map_err(|e| err(&e))?;
         }
-        match (self.x_log, self.y_log) {
-            (true, true) => body!((x0..x1).log_scale(), (y0..y1).log_scale()),
-            (true, false) => body!((x0..x1).log_scale(), y0..y1),
-            (false, true) => body!(x0..x1, (y0..y1).log_scale()),
-            (false, false) => body!(x0..x1, y0..y1),
-        }
-        root.present().map_err(|e| err(&e))?;
-        Ok(())
+        std::fs::write(path, text).map_err(|e| err(&e))
     }
 
     fn draw_png(&self, path: &Path) -> Result<(), OitError> {
@@ -419,5 +424,28 @@ mod tests {
         chart.svg(&dir.join("x.svg")).unwrap();
         chart.png(&dir.join("x.png")).unwrap();
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// Issue 13.5: an SVG or PNG chart written to a full disk is an error.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn charts_to_a_full_disk_are_errors() {
+        let chart = Chart {
+            title: "t".into(),
+            x_desc: "x".into(),
+            y_desc: "y".into(),
+            x_log: false,
+            y_log: false,
+            series: vec![Series {
+                name: "s".into(),
+                points: vec![(1.0, 1.0), (2.0, 0.5)],
+                labels: vec![],
+                line: true,
+                markers: false,
+                color: None,
+            }],
+        };
+        assert!(chart.svg(Path::new("/dev/full")).is_err());
+        assert!(chart.png(Path::new("/dev/full")).is_err());
     }
 }

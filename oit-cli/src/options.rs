@@ -130,8 +130,8 @@ impl SceneArgs {
     /// first so a typo fails before a large scene is read.
     pub fn prepare(&self) -> Result<Prepared, OitError> {
         let (width, height) = parse_size(&self.size)?;
-        if self.threads == Some(0) {
-            return Err(OitError::InvalidSettings("--threads must be at least 1".into()));
+        if let Some(n) = self.threads {
+            oit_core::check_threads(n)?;
         }
         let settings = Settings {
             width,

@@ -264,6 +264,7 @@ fn bad_inputs_fail_with_one_error_line() {
         ("unknown effect", vec!["render", "--effect", "glow"]),
         ("unknown backend", vec!["render", "--backend", "metal"]),
         ("zero threads", vec!["render", "--threads", "0"]),
+        ("too many threads", vec!["render", "--threads", "100000"]),
         ("zero peels", vec!["render", "--max-peels", "0"]),
         ("unwritable output", vec!["render", "-o", unwritable.to_str().unwrap()]),
         ("not a png", vec!["render", "-o", "out.jpg"]),

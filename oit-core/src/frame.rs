@@ -61,11 +61,32 @@ impl Image {
         self.pixels[(y * self.width + x) as usize]
     }
 
-    /// Writes a PNG.
+    /// Writes a PNG. Encoded in memory and written with one checked write, so that a write that
+    /// fails (a full disk) is an error however small the file: `image::save_buffer` drops its
+    /// buffered writer unflushed, and a small file failed silently.
     pub fn save_png(&self, path: &Path) -> Result<(), OitError> {
+        use image::ImageEncoder;
+        let err = |message: String| OitError::Write { path: path.to_path_buf(), message };
         let bytes: Vec<u8> = self.pixels.iter().flatten().copied().collect();
-        image::save_buffer(path, &bytes, self.width, self.height, image::ExtendedColorType::Rgba8)
-            .map_err(|e| OitError::Write { path: path.to_path_buf(), message: e.to_string() })
+        let mut png = Vec::new();
+        image::codecs::png::PngEncoder::new(&mut png)
+            .write_image(&bytes, self.width, self.height, image::ExtendedColorType::Rgba8)
+            .map_err(|e| err(e.to_string()))?;
+        std::fs::write(path, png).map_err(|e| err(e.to_string()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 13.5: a write to a full disk is an error, even for a tiny image.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn png_to_a_full_disk_is_an_error() {
+        let image = Image::new(2, 2, [10, 20, 30, 255]);
+        let e = image.save_png(Path::new("/dev/full")).expect_err("/dev/full must fail");
+        assert!(matches!(e, OitError::Write { .. }), "{e}");
     }
 }
 

@@ -43,7 +43,9 @@ pub use frame::{Frame, Image, Stats};
 pub use obj::load_obj;
 pub use procedural::{BUILTIN_SCENES, DEFAULT_SCENE, builtin_scene, load_scene};
 pub use scene::{Aabb, Instance, Mesh, Object, Scene};
-pub use settings::{BdpMode, HardwareCapture, MAX_SIZE, Settings, Shading, parse_rgb, parse_size};
+pub use settings::{
+    BdpMode, HardwareCapture, MAX_SIZE, Settings, Shading, check_threads, max_threads, parse_rgb, parse_size,
+};
 pub use technique::{
     BoundsMode, Effect, KNOWN_TECHNIQUES, MAX_PARAMETER, RasterPath, Technique, TechniqueKind,
 };

@@ -104,6 +104,39 @@ impl Plan {
         }
     }
 
+    /// Bytes of storage a frame of this plan allocates over `pixels` pixels with `slots` slots a
+    /// pixel ([`Plan::slots`]; for the reference, the deepest pixel's count, 0 before it is known):
+    /// the technique's per-pixel arrays (as oit-cpu lays them out; oit-wgpu's are the same words)
+    /// and the resolve state every technique keeps. One number both backends check against their
+    /// memory budget ([`Plan::check_budget`]) before they allocate.
+    pub fn storage_bytes(&self, pixels: u64, slots: u32) -> u64 {
+        use crate::rules::{BDP_COLOR_SUBINTERVALS, BDP_DEPTH_SUBINTERVALS, BUCKETS, HISTOGRAM_WORDS};
+        let k = u64::from(slots);
+        let per_pixel = match self.technique {
+            Technique::Reference => 4 + 12 * k,
+            Technique::Dp => 8,
+            Technique::Ddp => 16,
+            Technique::WeightedAverage | Technique::WeightedSum => 40,
+            Technique::Bdp { .. } if self.bdp_color => 8 + 4 * u64::from(BDP_COLOR_SUBINTERVALS),
+            Technique::Bdp { .. } => {
+                8 + u64::from(self.bdp_capture_passes()) * 2 * 8 * u64::from(BDP_DEPTH_SUBINTERVALS)
+            }
+            Technique::Adp => 8 + 4 * HISTOGRAM_WORDS as u64 + 8 * BUCKETS as u64,
+            Technique::Mdts { .. } | Technique::Mdts64 { .. } | Technique::Mlp { .. } => 8 * k,
+            Technique::Fabs { .. } => 4 + 12 * k,
+        };
+        // the resolve state (23 words a pixel)
+        pixels.saturating_mul(per_pixel.saturating_add(92))
+    }
+
+    /// Checks [`Plan::storage_bytes`] against `budget` (a name and bytes: the host's available
+    /// memory, a device's): a clear error naming the size, the budget and what helps.
+    pub fn check_budget(&self, pixels: u64, slots: u32, budget: (&str, u64)) -> Result<u64, OitError> {
+        let needed = self.storage_bytes(pixels, slots);
+        check_total(&format!("{} storage of a frame of {pixels} pixels", self.technique), needed, budget)?;
+        Ok(needed)
+    }
+
     /// True when the technique needs the counting pass before it can size its arrays.
     pub fn needs_count(&self) -> bool {
         self.sizing == Sizing::FromCount
@@ -127,6 +160,38 @@ impl Plan {
     /// adp batches for a pixel set whose histograms hold at most `bins` occupied bins.
     pub fn adp_batches(&self, bins: u32) -> u32 {
         bins.div_ceil(crate::rules::BUCKETS as u32).min(self.peel_limit)
+    }
+}
+
+/// Checks `needed` bytes of a frame's storage (`what`) against `budget`; see [`Plan::check_budget`].
+pub fn check_total(what: &str, needed: u64, budget: (&str, u64)) -> Result<(), OitError> {
+    let (limit_name, limit) = budget;
+    if needed > limit {
+        return Err(OitError::TooLarge {
+            what: what.into(),
+            needed,
+            limit_name: limit_name.into(),
+            limit,
+            hint: format!(
+                "use fewer passes (bdp:P), fewer slots (fabs:K, mdts:K, mlp:M) or a smaller --size; {:.1}% of this would fit",
+                100.0 * limit as f64 / needed as f64
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// The memory budget of a frame on this host: `MemAvailable` of `/proc/meminfo`, else a fixed
+/// 8 GiB where the host does not say (not Linux).
+pub fn host_memory_budget() -> (&'static str, u64) {
+    let available = std::fs::read_to_string("/proc/meminfo").ok().and_then(|text| {
+        let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+        let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+        Some(kib.saturating_mul(1024))
+    });
+    match available {
+        Some(bytes) => ("the host's available memory (MemAvailable)", bytes),
+        None => ("oit's fixed memory budget (the host does not report its available memory)", 8 << 30),
     }
 }
 
@@ -161,6 +226,20 @@ mod tests {
         let adp = plan("adp", |s| s.max_peels = Some(2)).unwrap();
         assert_eq!((adp.adp_batches(0), adp.adp_batches(33), adp.adp_batches(1000)), (0, 2, 2));
         assert_eq!(plan("adp", |_| {}).unwrap().adp_batches(65), 3);
+    }
+
+    /// Issue 13.9: storage over the budget is refused before anything is allocated.
+    #[test]
+    fn storage_budget() {
+        let p = plan("bdp:1000", |_| {}).unwrap();
+        let px = 512 * 512;
+        assert!(p.storage_bytes(px, 1) > 60 << 30);
+        let e = p.check_budget(px, 1, ("test budget", 24 << 30)).unwrap_err().to_string();
+        assert!(e.contains("test budget") && e.contains("smaller --size"), "{e}");
+        assert!(plan("bdp", |_| {}).unwrap().check_budget(px, 1, ("test budget", 1 << 30)).is_ok());
+        let fabs = plan("fabs:4", |_| {}).unwrap();
+        assert_eq!(fabs.storage_bytes(10, 4), 10 * (4 + 48 + 92));
+        assert!(host_memory_budget().1 > 0);
     }
 
     #[test]

@@ -178,6 +178,27 @@ impl Default for Settings {
 /// Largest width or height accepted.
 pub const MAX_SIZE: u32 = 16_384;
 
+/// The most worker threads a CPU backend accepts: 4 × the machine's available parallelism. More
+/// buys nothing and each costs a stack and start-up time (`--threads 100000` ran for minutes).
+pub fn max_threads() -> usize {
+    4 * std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// Checks a thread count against 1 ..= [`max_threads`].
+pub fn check_threads(threads: usize) -> Result<(), OitError> {
+    let max = max_threads();
+    if threads == 0 {
+        return Err(OitError::InvalidSettings("--threads must be at least 1".into()));
+    }
+    if threads > max {
+        return Err(OitError::InvalidSettings(format!(
+            "--threads {threads} is over {max} (4 × this machine's {} cores): use at most {max}, or leave it out for one per core",
+            max / 4
+        )));
+    }
+    Ok(())
+}
+
 impl Settings {
     /// Whether `bdp:passes` runs in colour mode (packed colours in 32 buckets, transparency only,
     /// one pass) under these settings, or in depth mode; `bdp_mode: Auto` picks colour mode
@@ -260,5 +281,20 @@ pub fn parse_rgb(text: &str) -> Result<Vec3, OitError> {
     match parts[..] {
         [r, g, b] if [r, g, b].iter().all(|c| (0.0..=1.0).contains(c)) => Ok(Vec3::new(r, g, b)),
         _ => Err(bad()),
+    }
+}
+
+#[cfg(test)]
+mod thread_tests {
+    use super::*;
+
+    /// Issue 13.11: thread counts are bounded by the machine.
+    #[test]
+    fn threads_are_bounded() {
+        assert!(check_threads(0).is_err());
+        assert!(check_threads(1).is_ok());
+        assert!(check_threads(max_threads()).is_ok());
+        let e = check_threads(100_000).unwrap_err().to_string();
+        assert!(e.contains("100000") && e.contains(&max_threads().to_string()), "{e}");
     }
 }

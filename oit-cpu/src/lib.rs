@@ -72,6 +72,7 @@ impl CpuBackend {
     fn thread_pool(&self) -> Result<Option<rayon::ThreadPool>, OitError> {
         self.threads
             .map(|n| {
+                oit_core::check_threads(n)?;
                 rayon::ThreadPoolBuilder::new()
                     .num_threads(n)
                     .build()
@@ -97,6 +98,13 @@ impl CpuPrepared<'_> {
             return Err(OitError::InvalidSettings("camera matrices are not finite".into()));
         }
         let plan = oit_core::plan::Plan::new("cpu", self.scene, settings)?;
+        // the whole frame's storage against the host's memory, before anything is allocated
+        // (sizes from a counting pass are checked again as they are allocated)
+        plan.check_budget(
+            settings.pixel_count() as u64,
+            plan.slots(0),
+            oit_core::plan::host_memory_budget(),
+        )?;
         let start = Instant::now();
         let mut raster = Rasterizer::new(self.scene, camera, settings);
         if let Some(mode) = self.backend.mode {
@@ -182,11 +190,7 @@ impl Backend for CpuBackend {
         };
         match self.threads {
             None => Ok(time()),
-            Some(n) => Ok(rayon::ThreadPoolBuilder::new()
-                .num_threads(n)
-                .build()
-                .map_err(|e| OitError::Device(format!("cannot start {n} rayon threads: {e}")))?
-                .install(time)),
+            Some(_) => Ok(self.thread_pool()?.expect("threads are set").install(time)),
         }
     }
 }

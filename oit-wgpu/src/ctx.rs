@@ -30,6 +30,9 @@ pub const TECHNIQUE_PRELUDE: &str =
 
 const FINISH_WGSL: &str = include_str!("shaders/finish.wgsl");
 const FILL_WGSL: &str = include_str!("shaders/fill.wgsl");
+/// The fewest words a storage buffer of [`GpuCtx::buffer`] holds: 64 bytes, one of the widest
+/// element any technique binds, so that an array sized from zero fragments still binds.
+const MIN_BUFFER_WORDS: u64 = 16;
 
 /// Words of one `PixelState` (resolve.wgsl): 16 for the composite, 7 for the ties.
 const STATE_WORDS: u64 = 23;
@@ -163,6 +166,10 @@ impl<'a> GpuCtx<'a> {
         let pixels = settings.width * settings.height;
         let state_bytes = u64::from(pixels) * STATE_WORDS * 4;
         gpu.check_storage("the per-pixel resolve state", state_bytes)?;
+        // the whole frame's storage against the device's budget, before anything is allocated
+        // (sizes from a counting pass are checked again in `buffer`)
+        let budget = gpu.memory_budget();
+        plan.check_budget(u64::from(pixels), plan.slots(0), (&budget.0, budget.1))?;
         let radius = scene.bounds().radius().max(1e-6) / 8.0;
         let sigma = if scene.objects.is_empty() {
             1.0
@@ -260,8 +267,17 @@ impl<'a> GpuCtx<'a> {
     /// A storage buffer of `words` 32-bit words for the technique, checked against the limits and
     /// counted in `storage_bytes`.
     pub fn buffer(&mut self, label: &str, words: u64, init: Init) -> Result<wgpu::Buffer, OitError> {
-        let bytes = words.max(1) * 4;
+        // never smaller than the widest element a shader binds (u64 keys, vec4s, fabs' slots):
+        // a frame with no fragments sizes its arrays to zero, and wgpu refuses a binding smaller
+        // than one element ("bound with size 4 where the shader expects 8", issue 13.8)
+        let bytes = words.max(MIN_BUFFER_WORDS) * 4;
         self.gpu.check_storage(label, bytes)?;
+        let budget = self.gpu.memory_budget();
+        oit_core::plan::check_total(
+            &format!("{} storage of a frame of {} pixels", self.settings.technique, self.pixels),
+            self.storage_bytes.saturating_add(u64::from(self.pixels) * STATE_WORDS * 4).saturating_add(bytes),
+            (&budget.0, budget.1),
+        )?;
         self.storage_bytes += words * 4;
         let pooled = self.lent.pool.is_some();
         let buffer = self.make(

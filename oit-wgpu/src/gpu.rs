@@ -222,6 +222,21 @@ impl Gpu {
         )
     }
 
+    /// The budget of one frame's storage, all buffers together (issue 13.9): wgpu reports no
+    /// device memory size, so 16 × `max_storage_buffer_binding_size` (lavapipe 2 GiB, the H200
+    /// 32 GiB), and no more than the host's available memory on a CPU device (lavapipe).
+    pub fn memory_budget(&self) -> (String, u64) {
+        let fixed = self.limits.max_storage_buffer_binding_size.saturating_mul(16);
+        let name = format!("16 × max_storage_buffer_binding_size of '{}'", self.info.name);
+        if self.info.device_type == wgpu::DeviceType::Cpu {
+            let (host_name, host) = oit_core::plan::host_memory_budget();
+            if host < fixed {
+                return (host_name.to_string(), host);
+            }
+        }
+        (name, fixed)
+    }
+
     /// [`Gpu::check_storage`] for a buffer that grows with the scene, not the image (the compute
     /// rasterizer's triangles).
     pub fn check_scene_storage(&self, what: &str, bytes: u64) -> Result<(), OitError> {

@@ -173,3 +173,27 @@ fn concave_obj_polygon_covers_each_pixel_once() {
         assert_eq!(f.stats.fragments, covered);
     }
 }
+
+/// Issue 13.9: storage far over any memory budget is refused with a clear error before anything
+/// is allocated, on every backend × path (it used to be accepted and OOM-killed).
+#[test]
+fn storage_over_the_budget_is_refused() {
+    for backend in backends_for("storage_over_the_budget_is_refused") {
+        let scene = scene("planes:2");
+        for (technique, size) in [("bdp:65536", 512), ("fabs:65536", 1024)] {
+            let s = settings(size, technique);
+            let cam = camera(&scene, &s, FRONT);
+            match backend.render(&scene, &cam, &s) {
+                Err(oit_core::OitError::TooLarge { needed, limit, hint, .. }) => {
+                    assert!(needed > limit, "{technique}");
+                    assert!(hint.contains("--size"), "{technique}: {hint}");
+                }
+                other => panic!(
+                    "{} {technique}: expected TooLarge, got {:?}",
+                    label(backend.as_ref()),
+                    other.map(|f| f.stats)
+                ),
+            }
+        }
+    }
+}

@@ -1,7 +1,9 @@
 //! `fabs:K`: the fixed A-buffer (Liu et al., SIGGRAPH 2009 talk; Huang et al. 2011, section 4).
 //! A per-pixel counter hands each fragment a slot by atomic increment, in rasterization order; a
 //! resolve sorts each pixel's n ≤ K slots by depth and composites them. Fragments past K are
-//! counted in `lost`.
+//! counted in `lost`; a pixel that overflowed keeps its K nearest fragments by (depth, primitive
+//! id), found by two more passes over the overflowing pixels only, so the same input always gives
+//! the same image (issue 13.7).
 //!
 //! Ties: a slot is the 64-bit key (depth bits, primitive id) and the payload beside it (12 bytes),
 //! and the sort is by key, so equal depths come out in primitive order, as the reference orders
@@ -67,7 +69,52 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
             payloads[px * k + i].store(payload(f), Relaxed);
         }
     });
-    ctx.passes += 1;
+    let mut passes = 1;
+    // Overflow keeps the K smallest keys whatever the arrival order (as `fabs.wgsl`): the pixels
+    // that overflowed are emptied, every key of theirs is inserted by repeated atomic min carrying
+    // the larger value on (as mdts64), then each surviving key's payload is written beside it.
+    // Sized from the counting pass, no pixel can overflow; a frame where none did runs nothing.
+    let overflowing = |px: usize| counters[px].load(Relaxed) as usize > k;
+    let any = !ctx.plan.needs_count()
+        && slots
+            .par_chunks(k)
+            .enumerate()
+            .map(|(px, s)| {
+                if overflowing(px) {
+                    s.iter().for_each(|w| w.store(u64::MAX, Relaxed));
+                    true
+                } else {
+                    false
+                }
+            })
+            .reduce(|| false, |a, b| a || b);
+    if any {
+        ctx.raster.for_each_fragment(|f| {
+            let px = f.pixel as usize;
+            if overflowing(px) {
+                let mut carry = u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim);
+                for slot in &slots[px * k..px * k + k] {
+                    let old = slot.fetch_min(carry, Relaxed);
+                    if old == u64::MAX {
+                        break;
+                    }
+                    carry = carry.max(old);
+                }
+            }
+        });
+        ctx.raster.for_each_fragment(|f| {
+            let px = f.pixel as usize;
+            if overflowing(px) {
+                // keys are unique at a pixel: one fragment per primitive
+                let key = u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim);
+                if let Some(i) = slots[px * k..px * k + k].iter().position(|w| w.load(Relaxed) == key) {
+                    payloads[px * k + i].store(payload(f), Relaxed);
+                }
+            }
+        });
+        passes += 2;
+    }
+    ctx.passes += passes;
     ctx.fragments.get_or_insert(generated);
     let mut states = ctx.states();
     let resolve = &ctx.resolve;

@@ -40,6 +40,8 @@ pub(crate) struct Ctx<'a> {
     pub pool: &'a Pool,
     /// The frame's plan: refusals, sizing and stop rules, oit-core's.
     pub plan: Plan,
+    /// The memory budget of the frame's storage, all allocations together (issue 13.9).
+    pub budget: (&'static str, u64),
 }
 
 impl<'a> Ctx<'a> {
@@ -65,6 +67,7 @@ impl<'a> Ctx<'a> {
             storage_bytes: 0,
             pool,
             plan,
+            budget: oit_core::plan::host_memory_budget(),
         }
     }
 
@@ -109,6 +112,13 @@ impl<'a> Ctx<'a> {
                 hint: "use a smaller --size or a smaller K".into(),
             });
         }
+        // the frame's total so far against the host's memory: sizes known only after a counting
+        // pass (the reference's lists, fabs/mdts without K) are checked here, before allocating
+        oit_core::plan::check_total(
+            &format!("{} storage of a frame of {} pixels", self.settings.technique, self.pixels),
+            self.storage_bytes.saturating_add(bytes),
+            self.budget,
+        )?;
         self.storage_bytes += bytes;
         Ok(self.pixels * per_pixel)
     }

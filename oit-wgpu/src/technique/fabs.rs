@@ -1,6 +1,7 @@
 //! `fabs:K` on the GPU (see oit-cpu's `technique/fabs.rs` and `fabs.wgsl`): slots of a 64-bit
 //! (depth bits, primitive id) key and a 32-bit payload, 12 bytes as oit-cpu's, sorted by key, so
-//! ties come out in primitive order as the reference's do.
+//! ties come out in primitive order as the reference's do. A pixel that overflows keeps its K
+//! smallest keys, so the same input gives the same image (see `fabs.wgsl`).
 
 use oit_core::OitError;
 
@@ -8,6 +9,11 @@ use crate::Drivers;
 use crate::ctx::{GpuCtx, Init};
 
 const WGSL: &str = include_str!("fabs.wgsl");
+
+/// The passes of `fabs.wgsl` (pass_index).
+const FABS_CAPTURE: u32 = 0;
+const FABS_KEYS: u32 = 1;
+const FABS_PAYLOADS: u32 = 2;
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     // slots per pixel by the plan: K, or the deepest pixel's count from a counting pass
@@ -17,6 +23,19 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     let counters = ctx.buffer("fabs counters", px, Init::Zero)?;
     let slots = ctx.buffer("fabs slots", px * u64::from(k) * 2, Init::Zero)?;
     let payloads = ctx.buffer("fabs payloads", px * u64::from(k), Init::Zero)?;
-    ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &[&counters, &slots, &payloads], 0, k)?;
-    ctx.pixel_kernel(WGSL, "resolve_main", &[&counters, &slots, &payloads], 0, k)
+    let overflowed = ctx.buffer("fabs overflowed", 1, Init::Zero)?;
+    // the flag is bookkeeping, not per-pixel storage (oit-cpu counts none either)
+    ctx.storage_bytes -= 4;
+    let buffers = [&counters, &slots, &payloads, &overflowed];
+    ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, FABS_CAPTURE, k)?;
+    // sized from the counting pass, no pixel can overflow: no check, no readback
+    if !ctx.plan.needs_count() {
+        ctx.pixel_kernel(WGSL, "overflow_main", &buffers, FABS_CAPTURE, k)?;
+        if ctx.gpu.read_u32(&overflowed)?[0] != 0 {
+            // the K smallest (depth, primitive) keys of each overflowing pixel, then their payloads
+            ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, FABS_KEYS, k)?;
+            ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, FABS_PAYLOADS, k)?;
+        }
+    }
+    ctx.pixel_kernel(WGSL, "resolve_main", &buffers, 0, k)
 }

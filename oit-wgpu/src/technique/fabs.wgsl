@@ -11,19 +11,69 @@
 // and the resolve 4.4; with this layout 1.65 and 4.0; and with the pixel's resolve state kept in
 // a local across the list (`push_local`, one load and one store instead of one per layer) the
 // resolve takes 0.46 ms. Every resolve that walks a list does the same.
+//
+// Overflow (n > K at a pixel) keeps the K smallest keys, whatever the arrival order, as oit-cpu
+// does: the first pass (FABS_CAPTURE) keeps the first K to arrive; `overflow_main` empties the
+// slots of the pixels that overflowed and raises `overflowed[0]`; only then (the flag read back)
+// FABS_KEYS inserts every key of those pixels by repeated atomicMin, carrying the larger value on
+// (as mdts64), and FABS_PAYLOADS writes each surviving key's payload beside it. Pixels that did
+// not overflow are untouched by the extra passes; a frame with none runs none of them.
 @group(0) @binding(2) var<storage, read_write> counters: array<atomic<u32>>;
-@group(0) @binding(3) var<storage, read_write> slots: array<u64>;
+@group(0) @binding(3) var<storage, read_write> slots: array<atomic<u64>>;
 @group(0) @binding(4) var<storage, read_write> payloads: array<u32>;
+@group(0) @binding(5) var<storage, read_write> overflowed: array<atomic<u32>>;
 
 const LOCAL_SLOTS: u32 = 64u;
+const FABS_EMPTY: u64 = 0xfffffffffffffffflu;
+const FABS_CAPTURE: u32 = 0u;
+const FABS_KEYS: u32 = 1u;
+const FABS_PAYLOADS: u32 = 2u;
 
 fn capture(f: Fragment) {
     let k = fu.param;
-    let i = atomicAdd(&counters[f.pixel], 1u);
-    if (i < k) {
-        slots[i * fu.pixel_count + f.pixel] = (u64(depth_bits(f.depth)) << 32u) | u64(f.prim);
-        payloads[i * fu.pixel_count + f.pixel] = payload(f, fu.effect);
+    let stride = fu.pixel_count;
+    let key = (u64(depth_bits(f.depth)) << 32u) | u64(f.prim);
+    if (fu.pass_index == FABS_CAPTURE) {
+        let i = atomicAdd(&counters[f.pixel], 1u);
+        if (i < k) {
+            atomicStore(&slots[i * stride + f.pixel], key);
+            payloads[i * stride + f.pixel] = payload(f, fu.effect);
+        }
+        return;
     }
+    if (atomicLoad(&counters[f.pixel]) <= k) {
+        return;
+    }
+    if (fu.pass_index == FABS_KEYS) {
+        var carry = key;
+        for (var i = 0u; i < k; i++) {
+            let old = atomicMin(&slots[i * stride + f.pixel], carry);
+            if (old == FABS_EMPTY) {
+                return;
+            }
+            carry = max(carry, old);
+        }
+        return;
+    }
+    // FABS_PAYLOADS: keys are unique at a pixel (one fragment per primitive)
+    for (var i = 0u; i < k; i++) {
+        if (atomicLoad(&slots[i * stride + f.pixel]) == key) {
+            payloads[i * stride + f.pixel] = payload(f, fu.effect);
+            return;
+        }
+    }
+}
+
+@compute @workgroup_size(64)
+fn overflow_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let px = kernel_pixel(gid, groups);
+    if (px >= fu.pixel_count || atomicLoad(&counters[px]) <= fu.param) {
+        return;
+    }
+    for (var i = 0u; i < fu.param; i++) {
+        atomicStore(&slots[i * fu.pixel_count + px], FABS_EMPTY);
+    }
+    atomicMax(&overflowed[0], 1u);
 }
 
 @compute @workgroup_size(64)
@@ -39,7 +89,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         var list: array<u64, LOCAL_SLOTS>;
         var list_payloads: array<u32, LOCAL_SLOTS>;
         for (var i = 0u; i < n; i++) {
-            let v = slots[i * stride + px];
+            let v = atomicLoad(&slots[i * stride + px]);
             let p = payloads[i * stride + px];
             var j = i;
             while (j > 0u && list[j - 1u] > v) {
@@ -57,19 +107,19 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         return;
     }
     for (var i = 1u; i < n; i++) {
-        let v = slots[i * stride + px];
+        let v = atomicLoad(&slots[i * stride + px]);
         let p = payloads[i * stride + px];
         var j = i;
-        while (j > 0u && slots[(j - 1u) * stride + px] > v) {
-            slots[j * stride + px] = slots[(j - 1u) * stride + px];
+        while (j > 0u && atomicLoad(&slots[(j - 1u) * stride + px]) > v) {
+            atomicStore(&slots[j * stride + px], atomicLoad(&slots[(j - 1u) * stride + px]));
             payloads[j * stride + px] = payloads[(j - 1u) * stride + px];
             j -= 1u;
         }
-        slots[j * stride + px] = v;
+        atomicStore(&slots[j * stride + px], v);
         payloads[j * stride + px] = p;
     }
     for (var i = 0u; i < n; i++) {
-        let key = slots[i * stride + px];
+        let key = atomicLoad(&slots[i * stride + px]);
         push_local(&s, bitcast<f32>(u32(key >> 32u)), payloads[i * stride + px]);
     }
     state[px] = s;
