@@ -491,6 +491,7 @@ impl<'a> GpuCtx<'a> {
         Ok(Frame {
             image,
             layers: None,
+            lost_pixels: None,
             stats: Stats {
                 geometry_passes: self.passes,
                 fragments,
