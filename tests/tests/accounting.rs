@@ -22,7 +22,9 @@ fn accounting(f: &Frame) -> Result<(), String> {
 }
 
 /// (scene, front view?, techniques, max peels, those that must lose there (`bdp`: colour mode)).
-const CASES: &[(&str, bool, &[&str], Option<u32>, &[&str])] = &[
+type Case = (&'static str, bool, &'static [&'static str], Option<u32>, &'static [&'static str]);
+
+const CASES: &[Case] = &[
     (
         "knot",
         false,
