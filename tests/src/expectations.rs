@@ -54,21 +54,6 @@ pub const EXPECTED: &[Expected] = &[
               The loss is reported in `lost`, not hidden; the cause is open (the architecture \
               issue's closing note)",
     },
-    Expected {
-        test: "captured_plus_lost_is_fragments",
-        backend: "wgpu",
-        path: RasterPath::Hardware,
-        why: "NOT YET COUNTED (issue 16): wgpu's hardware path still derives `lost` as \
-              fragments − captured, so the check would hold by construction; left out until its \
-              shaders count losses where they happen",
-    },
-    Expected {
-        test: "captured_plus_lost_is_fragments",
-        backend: "wgpu",
-        path: RasterPath::Compute,
-        why: "NOT YET COUNTED (issue 16): as on the hardware path, wgpu's compute path still \
-              derives `lost`",
-    },
 ];
 
 /// The reason `test` does not run on `backend`/`path`, if the table has one.

@@ -23,6 +23,9 @@ fn capture(f: Fragment) {
     if (i < k) {
         slots[i * fu.pixel_count + f.pixel] = (u64(depth_bits(f.depth)) << 32u) | u64(f.prim);
         payloads[i * fu.pixel_count + f.pixel] = payload(f, fu.effect);
+    } else {
+        // the counter is past K: no slot for this fragment
+        lose(f.pixel);
     }
 }
 
