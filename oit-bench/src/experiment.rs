@@ -95,7 +95,7 @@ impl Measured {
     /// The frame again (image and layers as kept; stats), for [`accuracy`] and error images.
     pub fn frame(&self) -> Option<Frame> {
         let image = self.image.clone()?;
-        Some(Frame { image, layers: self.layers.clone(), stats: self.stats.clone() })
+        Some(Frame { image, layers: self.layers.clone(), lost_pixels: None, stats: self.stats.clone() })
     }
 }
 

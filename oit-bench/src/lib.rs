@@ -663,8 +663,12 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
                 for j in i + 1..list.len() {
                     let (a, img_a, cover) = &list[i];
                     let (b, img_b, _) = &list[j];
-                    let frame_a =
-                        Frame { image: img_a.clone(), layers: cover.clone(), stats: Default::default() };
+                    let frame_a = Frame {
+                        image: img_a.clone(),
+                        layers: cover.clone(),
+                        lost_pixels: None,
+                        stats: Default::default(),
+                    };
                     match accuracy(&frame_a, img_b) {
                         Ok(acc) => report.matrix.push(MatrixEntry {
                             scene: scene_name.clone(),

@@ -98,6 +98,10 @@ pub struct Frame {
     /// Fragments generated per pixel, where the technique counted them (the reference does):
     /// pixels with none are not *covered* and accuracy metrics skip them.
     pub layers: Option<Vec<u32>>,
+    /// Fragments lost per pixel, where the backend counts them per pixel (`oit-cpu`; oit-wgpu's
+    /// compute path and its hardware path with atomics capture): each pixel's share of
+    /// [`Stats::lost`]. `None` where losses are not counted per pixel.
+    pub lost_pixels: Option<Vec<u32>>,
     /// How it was made.
     pub stats: Stats,
 }

@@ -151,7 +151,7 @@ mod tests {
             image.pixels[i] = [100 + k as u8 * 30, 50, 200 - k as u8 * 40, 255];
             layers[i] = 2;
         }
-        Frame { image, layers: Some(layers), stats: Stats::default() }
+        Frame { image, layers: Some(layers), lost_pixels: None, stats: Stats::default() }
     }
 
     #[test]

@@ -28,6 +28,9 @@ impl Drop for Lent<'_> {
 pub const TECHNIQUE_PRELUDE: &str =
     concat!(include_str!("shaders/resolve.wgsl"), "\n", include_str!("shaders/prelude.wgsl"), "\n");
 
+/// Group 0's binding of the loss accounting (`acct` in prelude.wgsl).
+const ACCT_BINDING: u32 = 15;
+
 const FINISH_WGSL: &str = include_str!("shaders/finish.wgsl");
 const FILL_WGSL: &str = include_str!("shaders/fill.wgsl");
 /// The fewest words a storage buffer of [`GpuCtx::buffer`] holds: 64 bytes, one of the widest
@@ -55,8 +58,8 @@ pub struct FrameUniform {
     pub pixel_count: u32,
     /// 1 when the resolve counts ties (the plan's `count_ties`).
     pub ties: u32,
-    /// Padding.
-    pub pad: u32,
+    /// 1 in the last capture pass the plan allows (`--max-peels`): what it leaves behind is lost.
+    pub last_pass: u32,
     /// Camera forward (xyz).
     pub forward: [f32; 4],
     /// Background (rgb).
@@ -123,6 +126,13 @@ pub struct GpuCtx<'a> {
     timestamps: Option<(wgpu::QuerySet, wgpu::Buffer)>,
     image: wgpu::Buffer,
     totals: wgpu::Buffer,
+    /// Loss accounting, 3 words a pixel (prelude.wgsl's `acct`): fragments lost, counted where
+    /// each is lost; fragments a pass saw at the depths the previous pass peeled; and how many
+    /// of those that pass captured. Bound at group 0, binding 15, in every module.
+    acct: wgpu::Buffer,
+    /// Whether the technique's capture counts its losses; the `--hardware-capture blend` captures
+    /// do not yet (issue 16), and their `lost` is `fragments − captured`.
+    pub counts_losses: bool,
     gpu_ms: f64,
     pass_ms: Vec<(String, f64)>,
     lent: Lent<'a>,
@@ -189,7 +199,7 @@ impl<'a> GpuCtx<'a> {
             },
             pixel_count: pixels,
             ties: u32::from(plan.count_ties),
-            pad: 0,
+            last_pass: 0,
             forward: camera.forward.extend(0.0).to_array(),
             background: settings.background.extend(1.0).to_array(),
             lens: [camera.near, camera.far, sigma / radius, 0.0],
@@ -234,9 +244,14 @@ impl<'a> GpuCtx<'a> {
             u64::from(pixels).max(1) * 4,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         );
+        let acct = make(
+            "loss accounting",
+            u64::from(pixels).max(1) * 12,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        );
         let totals = make(
             "totals",
-            12,
+            16,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         );
         let mut ctx = GpuCtx {
@@ -255,11 +270,15 @@ impl<'a> GpuCtx<'a> {
             timestamps,
             image,
             totals,
+            acct,
+            counts_losses: true,
             gpu_ms: 0.0,
             pass_ms: Vec::new(),
             lent,
         };
         let (image, totals) = (ctx.image.clone(), ctx.totals.clone());
+        let acct = ctx.acct.clone();
+        ctx.fill(&acct, 0)?;
         ctx.kernel_over(FINISH_WGSL, "init_main", &[&image, &totals], u64::from(pixels), 0, 0, "init")?;
         Ok(ctx)
     }
@@ -330,10 +349,26 @@ impl<'a> GpuCtx<'a> {
                 count: None,
             });
         }
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: ACCT_BINDING,
+            visibility,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: false },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        });
         self.gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("group 0"),
             entries: &entries,
         })
+    }
+
+    /// Marks the passes that follow as the last capture pass the plan allows (or not): the
+    /// shaders count what such a pass leaves behind as lost.
+    pub fn last_pass(&mut self, last: bool) {
+        self.uniform.last_pass = u32::from(last);
     }
 
     /// Group 0 for `buffers` (bound from binding 2), after writing the uniform with this pass's
@@ -351,6 +386,7 @@ impl<'a> GpuCtx<'a> {
         let mut entries = vec![
             wgpu::BindGroupEntry { binding: 0, resource: self.uniform_buffer.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 1, resource: self.state.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: ACCT_BINDING, resource: self.acct.as_entire_binding() },
         ];
         for (i, b) in buffers.iter().enumerate() {
             entries.push(wgpu::BindGroupEntry { binding: i as u32 + 2, resource: b.as_entire_binding() });
@@ -504,14 +540,23 @@ impl<'a> GpuCtx<'a> {
         let fragments = self.fragments.unwrap_or(0);
         let captured = u64::from(t[0]);
         let _ = path;
+        let (lost, lost_pixels) = if self.counts_losses {
+            let acct = self.gpu.read_u32(&self.acct)?;
+            let px: Vec<u32> = acct.chunks(3).take(self.pixels as usize).map(|w| w[0]).collect();
+            (u64::from(t[3]), Some(px))
+        } else {
+            // NOT COUNTED (issue 16): the blend captures do not count their losses yet
+            (fragments.saturating_sub(captured), None)
+        };
         Ok(Frame {
             image,
             layers: None,
+            lost_pixels,
             stats: Stats {
                 geometry_passes: self.passes,
                 fragments,
                 captured,
-                lost: fragments.saturating_sub(captured),
+                lost,
                 tied: u64::from(t[2]),
                 storage_bytes: self.storage_bytes,
                 wall_ms: 0.0,

@@ -37,17 +37,25 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     for batch in 0..batches {
         let payload = |f: &crate::raster::Fragment| ctx.payload(f);
         let hist = &hist;
+        let lost = &*ctx;
         let generated = ctx.raster.for_each_fragment(|f| {
             let px = f.pixel as usize;
             let (zn, zf) = bounds[px];
             let rank = histogram_rank(&hist[px], histogram_bin(f.depth, zn, zf));
             if rank / BUCKETS as u32 == batch {
                 // bit 63 marks a full bucket, so a fragment at depth 0 with payload 0 is not empty
-                buckets.update_max(
+                let old = buckets.update_max(
                     px,
                     (rank % BUCKETS as u32) as usize,
                     depth_key64(f.depth, payload(f)) | 1 << 63,
                 );
+                // two fragments in one bin: the MAX kept one
+                if old != 0 {
+                    lost.lose(px);
+                }
+            } else if rank / BUCKETS as u32 >= batches && batch + 1 == batches {
+                // beyond the last batch the plan allows (--max-peels)
+                lost.lose(px);
             }
         });
         ctx.passes += 1;

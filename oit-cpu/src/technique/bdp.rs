@@ -36,11 +36,15 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
 fn color(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
     let n = BDP_COLOR_SUBINTERVALS as usize;
     let buckets = Buckets::new(ctx.alloc32(n, 0)?, n);
-    ctx.pass(|f| {
+    ctx.pass_lossy(|f, ctx| {
         let px = f.pixel as usize;
         let (zn, zf) = bounds[px];
         let k = bucket_index(f.depth, zn, zf, BDP_COLOR_SUBINTERVALS) as usize;
-        buckets.update_max(px, k, bdp_pack_color(oit_core::rules::pack_rgba8(f.color)));
+        let word = bdp_pack_color(oit_core::rules::pack_rgba8(f.color));
+        // a full bucket: one of the two fragments is gone; a zero word is never read back
+        if buckets.update_max(px, k, word) != 0 || word == 0 {
+            ctx.lose(px);
+        }
     });
     let mut states = ctx.states();
     let resolve = &ctx.resolve;
@@ -66,7 +70,28 @@ fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
     // One bucket array per pass, as the paper allocates new MRTs per pass: [min, max] per subinterval.
     let mut arrays: Vec<crate::pool::Pooled<'_, AtomicU64>> = Vec::new();
     // P passes, or fewer under --max-peels: the plan's stop rule
-    for _ in 0..ctx.plan.bdp_capture_passes() {
+    let passes = ctx.plan.bdp_capture_passes();
+    // Per pixel: fragments a pass skipped at the depths the previous pass kept (ties), plus, in the
+    // last pass, those it routed to a subinterval (all but the kept min and max stay behind).
+    let seen = ctx.pool.u32s(ctx.pixels, 0);
+    // Fragments an array kept for a pixel: a min, and a max unless it is the same key.
+    let kept = |array: &[AtomicU64], px: usize| -> u32 {
+        (0..n)
+            .map(|k| {
+                let slot = px * 2 * n + 2 * k;
+                let (lo, hi) = (array[slot].load(Relaxed), array[slot + 1].load(Relaxed));
+                if lo == BDP_EMPTY_MIN {
+                    0
+                } else if hi == lo {
+                    1
+                } else {
+                    2
+                }
+            })
+            .sum()
+    };
+    for pass in 0..passes {
+        let last = pass + 1 == passes;
         let array = ctx.alloc64(2 * n, 0)?;
         for slot in array.iter().step_by(2) {
             slot.store(BDP_EMPTY_MIN, Relaxed);
@@ -84,15 +109,28 @@ fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
                     let d = depth_bits(f.depth);
                     // eq. 5: what the previous pass kept, or anything outside its range, is done
                     if !bdp_eq5_next(d, lo, hi) {
+                        // at a depth the previous pass kept: kept then, or a tie eq. 5 skips
+                        if lo != BDP_EMPTY_MIN && (d == (lo >> 32) as u32 || d == (hi >> 32) as u32) {
+                            seen[px].fetch_add(1, Relaxed);
+                        }
                         return;
                     }
                 }
                 let key = depth_key64(f.depth, payload(f));
                 array[slot].fetch_min(key, Relaxed);
                 array[slot + 1].fetch_max(key, Relaxed);
+                if last {
+                    seen[px].fetch_add(1, Relaxed);
+                }
             });
             ctx.passes += 1;
             ctx.fragments.get_or_insert(generated);
+            let ctx_ref = &*ctx;
+            (0..ctx.pixels).into_par_iter().for_each(|px| {
+                let taken =
+                    previous.map_or(0, |prev| kept(prev, px)) + if last { kept(&array, px) } else { 0 };
+                ctx_ref.settle_ties(px, seen[px].swap(0, Relaxed), taken);
+            });
         }
         arrays.push(array);
     }

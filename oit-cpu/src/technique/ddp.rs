@@ -27,12 +27,18 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     // Open depth range (exclusive) of what is left, as depth bits; the first pass takes all.
     let mut range: Vec<(i64, i64)> = vec![(-1, i64::MAX); ctx.pixels];
     ctx.storage_bytes += ctx.pixels as u64 * 8;
+    // Per pixel: fragments seen at the depths the previous pass peeled (or, in the last pass the
+    // plan allows, inside the range), and how many that pass peeled.
+    let seen = ctx.pool.u32s(ctx.pixels, 0);
+    let mut peeled_at = vec![0u32; ctx.pixels];
     let mut states = ctx.states();
     let limit = ctx.plan.peel_limit;
     let mut peels = 0;
     while peels < limit {
         let r = &range;
         let payload = |f: &crate::raster::Fragment| ctx.payload(f);
+        let last = peels + 1 == limit;
+        let (seen_r, at_r) = (&seen, &peeled_at);
         let generated = ctx.raster.for_each_fragment(|f| {
             let px = f.pixel as usize;
             let d = i64::from(depth_bits(f.depth));
@@ -41,17 +47,38 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
                 let key = depth_key64(f.depth, payload(f));
                 near[px].fetch_min(key, Relaxed);
                 far[px].fetch_max(key, Relaxed);
+                if last {
+                    // the last peel allowed: all but the one or two it peels stay behind
+                    seen_r[px].fetch_add(1, Relaxed);
+                }
+            } else if at_r[px] > 0 && (d == lo || d == hi) {
+                // at a depth just peeled: a peeled one, or a tie the strict range skips
+                seen_r[px].fetch_add(1, Relaxed);
             }
         });
         ctx.passes += 1;
         ctx.fragments.get_or_insert(generated);
         let resolve = &ctx.resolve;
+        let ctx_ref = &*ctx;
         let peeled: u64 = states
             .par_iter_mut()
             .zip(range.par_iter_mut())
             .zip(near.par_iter().zip(far.par_iter()))
-            .map(|((s, range), (n, f))| {
+            .zip(peeled_at.par_iter_mut())
+            .enumerate()
+            .map(|(px, (((s, range), (n, f)), at))| {
                 let (n, f) = (n.swap(EMPTY_MIN, Relaxed), f.swap(0, Relaxed));
+                let count = if n == EMPTY_MIN {
+                    0
+                } else if f != n {
+                    2
+                } else {
+                    1
+                };
+                // ties at the previous pass's depths, or (last pass) what it left behind
+                let taken = if last { count + *at } else { *at };
+                ctx_ref.settle_ties(px, seen[px].swap(0, Relaxed), taken);
+                *at = count;
                 if n == EMPTY_MIN {
                     *range = (0, 0);
                     return 0;

@@ -23,6 +23,8 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     // Depth bits of the last peeled layer; u64 so "nothing peeled yet" sits below every depth.
     let mut previous: Vec<i64> = vec![-1; ctx.pixels];
     ctx.storage_bytes += ctx.pixels as u64 * 4; // the previous pass's depth buffer
+    // Per pixel, fragments of a pass at the depth the pass before peeled.
+    let at_prev = ctx.pool.u32s(ctx.pixels, 0);
     let mut states = ctx.states();
     let limit = ctx.plan.peel_limit;
     let mut peels = 0;
@@ -33,22 +35,40 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         let prev = &previous;
         let payload = |f: &crate::raster::Fragment| ctx.payload(f);
         let raster = ctx.raster;
+        let last = peels + 1 == limit;
+        let at_prev = &at_prev;
+        let lost = &*ctx;
         let generated = raster.for_each_fragment(|f| {
             let px = f.pixel as usize;
-            if i64::from(depth_bits(f.depth)) > prev[px] {
-                nearest[px].fetch_min(depth_key64(f.depth, payload(f)), Relaxed);
+            let d = i64::from(depth_bits(f.depth));
+            if d > prev[px] {
+                let old = nearest[px].fetch_min(depth_key64(f.depth, payload(f)), Relaxed);
+                // the last peel allowed: of two fragments one is left behind for good
+                if last && old != EMPTY {
+                    lost.lose(px);
+                }
+            } else if d == prev[px] {
+                // at the depth just peeled: the peeled one, or a coplanar tie the `>` skips
+                at_prev[px].fetch_add(1, Relaxed);
             }
         });
         ctx.passes += 1;
         ctx.fragments.get_or_insert(generated);
         let resolve = &ctx.resolve;
+        let ctx_ref = &*ctx;
         let peeled: u64 = states
             .par_iter_mut()
             .zip(previous.par_iter_mut())
             .zip(nearest.par_iter())
-            .map(|((s, prev), slot)| {
+            .enumerate()
+            .map(|(px, ((s, prev), slot))| {
+                if (0..i64::MAX).contains(prev) {
+                    ctx_ref.settle_ties(px, at_prev[px].swap(0, Relaxed), 1);
+                }
                 let key = slot.swap(EMPTY, Relaxed);
                 if key == EMPTY {
+                    // nothing behind: done (no depth matches i64::MAX, so no tie is counted twice)
+                    *prev = i64::MAX;
                     return 0;
                 }
                 let (d, p) = split_key64(key);

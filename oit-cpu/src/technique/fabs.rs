@@ -61,12 +61,16 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let slots = ctx.alloc64(k, 0)?;
     let payloads = ctx.alloc32(k, 0)?;
     let payload = |f: &crate::raster::Fragment| ctx.payload(f);
+    let lost = &*ctx;
     let generated = ctx.raster.for_each_fragment(|f| {
         let px = f.pixel as usize;
         let i = counters[px].fetch_add(1, Relaxed) as usize;
         if i < k {
             slots[px * k + i].store(u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim), Relaxed);
             payloads[px * k + i].store(payload(f), Relaxed);
+        } else {
+            // the counter is past K: no slot for this fragment
+            lost.lose(px);
         }
     });
     let mut passes = 1;

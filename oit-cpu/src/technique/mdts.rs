@@ -37,7 +37,10 @@ pub(crate) fn render64(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let list = MinList::new(ctx.alloc64(k, MinList::EMPTY)?, k);
     let payload = |f: &crate::raster::Fragment| ctx.payload(f);
     let generated = ctx.raster.for_each_fragment(|f| {
-        list.insert(f.pixel as usize, depth_key64(f.depth, payload(f)));
+        if list.insert(f.pixel as usize, depth_key64(f.depth, payload(f))).is_some() {
+            // a key carried off the end of the full array
+            ctx.lose(f.pixel as usize);
+        }
     });
     ctx.passes += 1;
     ctx.fragments.get_or_insert(generated);
@@ -60,11 +63,14 @@ pub(crate) fn render32(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let alpha8 = ctx.plan.mdts_alpha8;
     let high = ctx.alloc32(k, u32::MAX)?;
     let low = ctx.alloc32(k, u32::MAX)?;
-    ctx.pass(|f| {
+    ctx.pass_lossy(|f, ctx| {
         let px = f.pixel as usize;
         // All ones is the empty word: a fragment at d ≈ 1 with that colour gives up its last bit.
         let [a, b] = mdts_pack(f.depth, oit_core::rules::pack_rgba8(f.color)).map(|w| w.min(u32::MAX - 1));
-        insert_min32(&high[px * k..(px + 1) * k], a);
+        // both arrays hold the same number of words: one carried off the high array is one lost
+        if insert_min32(&high[px * k..(px + 1) * k], a) {
+            ctx.lose(px);
+        }
         insert_min32(&low[px * k..(px + 1) * k], b);
     });
     let mut states = ctx.states();

@@ -22,6 +22,10 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
     let list = MinList::new(ctx.alloc64(m, MinList::EMPTY)?, m);
     let mut deepest: Vec<i64> = vec![-1; ctx.pixels];
     ctx.storage_bytes += ctx.pixels as u64 * 4;
+    // Per pixel: fragments of a pass at the deepest depth the pass before captured, and how many
+    // that pass captured at that depth.
+    let at_prev = ctx.pool.u32s(ctx.pixels, 0);
+    let mut captured_at = vec![0u32; ctx.pixels];
     let mut states = ctx.states();
     let limit = ctx.plan.peel_limit;
     let mut peels = 0;
@@ -29,12 +33,22 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
         let more = AtomicBool::new(false);
         let prev = &deepest;
         let payload = |f: &crate::raster::Fragment| ctx.payload(f);
+        let last = peels + 1 == limit;
+        let (at_prev, lost) = (&at_prev, &*ctx);
         let generated = ctx.raster.for_each_fragment(|f| {
             let px = f.pixel as usize;
-            if i64::from(depth_bits(f.depth)) > prev[px]
-                && list.insert(px, depth_key64(f.depth, payload(f))).is_some()
-            {
-                more.store(true, Relaxed);
+            let d = i64::from(depth_bits(f.depth));
+            if d > prev[px] {
+                if list.insert(px, depth_key64(f.depth, payload(f))).is_some() {
+                    more.store(true, Relaxed);
+                    if last {
+                        // carried off the end in the last pass the plan allows
+                        lost.lose(px);
+                    }
+                }
+            } else if d == prev[px] {
+                // at the deepest depth the pass before captured: captured then, or a tie skipped
+                at_prev[px].fetch_add(1, Relaxed);
             }
         });
         ctx.passes += 1;
@@ -42,17 +56,28 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
         peels += 1;
         let resolve = &ctx.resolve;
         let list = &list;
-        states.par_iter_mut().zip(deepest.par_iter_mut()).enumerate().for_each_init(
-            Vec::new,
-            |keys, (px, (s, deep))| {
+        let ctx_ref = &*ctx;
+        states
+            .par_iter_mut()
+            .zip(deepest.par_iter_mut())
+            .zip(captured_at.par_iter_mut())
+            .enumerate()
+            .for_each_init(Vec::new, |keys, (px, ((s, deep), at))| {
+                ctx_ref.settle_ties(px, at_prev[px].swap(0, Relaxed), *at);
                 list.take_sorted(px, keys);
+                if keys.is_empty() {
+                    // nothing left behind the deepest: done (no depth matches i64::MAX)
+                    *at = 0;
+                    *deep = i64::MAX;
+                }
                 for &key in keys.iter() {
                     let (d, p) = split_key64(key);
                     resolve.push(s, d, p);
-                    *deep = i64::from(depth_bits(d));
+                    let bits = i64::from(depth_bits(d));
+                    *at = if bits == *deep { *at + 1 } else { 1 };
+                    *deep = bits;
                 }
-            },
-        );
+            });
         if !more.load(Relaxed) {
             break;
         }

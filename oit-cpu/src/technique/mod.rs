@@ -42,6 +42,10 @@ pub(crate) struct Ctx<'a> {
     pub plan: Plan,
     /// The memory budget of the frame's storage, all allocations together (issue 13.9).
     pub budget: (&'static str, u64),
+    /// Fragments lost per pixel, counted where each is lost (a bucket collision, a key carried
+    /// off a full array, a counter past K, a tie a peel skips, a fragment left behind the last
+    /// peel the plan allows): never derived from `fragments − captured`.
+    pub lost: Pooled<'a, AtomicU32>,
 }
 
 impl<'a> Ctx<'a> {
@@ -68,7 +72,30 @@ impl<'a> Ctx<'a> {
             pool,
             plan,
             budget: oit_core::plan::host_memory_budget(),
+            lost: pool.u32s(settings.pixel_count(), 0),
         }
+    }
+
+    /// Counts one fragment of `pixel` lost.
+    #[inline]
+    pub fn lose(&self, pixel: usize) {
+        self.lost[pixel].fetch_add(1, Relaxed);
+    }
+
+    /// Settles a tie count after a peel pass: `seen` fragments of a pixel sat at the depths the
+    /// previous pass peeled and were skipped by the strict comparison; `peeled` of them were the
+    /// ones that pass captured, the rest are lost. A mismatch (`seen < peeled`) is left
+    /// uncounted, so the frame's `captured + lost == fragments` check catches it.
+    #[inline]
+    pub fn settle_ties(&self, pixel: usize, seen: u32, peeled: u32) {
+        self.lost[pixel].fetch_add(seen.saturating_sub(peeled), Relaxed);
+    }
+
+    /// [`Ctx::pass`] for shaders that count losses: `shader` gets the per-pixel lost counters.
+    pub fn pass_lossy<F: Fn(&Fragment, &Ctx<'_>) + Sync>(&mut self, shader: F) {
+        let generated = self.raster.for_each_fragment(|f| shader(f, self));
+        self.passes += 1;
+        self.fragments.get_or_insert(generated);
     }
 
     /// One geometry pass over the scene: `shader` runs for every fragment, concurrently.
@@ -189,14 +216,17 @@ pub(crate) fn insert_min32(slots: &[AtomicU32], key: u32) -> bool {
 /// Wraps up a frame: stats from the context; `captured` fragments reached the composite.
 pub(crate) fn frame(ctx: &Ctx<'_>, image: oit_core::Image, captured: u64) -> oit_core::Frame {
     let fragments = ctx.fragments.unwrap_or(0);
+    let lost_pixels: Vec<u32> = ctx.lost.iter().map(|l| l.load(Relaxed)).collect();
+    let lost: u64 = lost_pixels.iter().map(|&l| u64::from(l)).sum();
     oit_core::Frame {
         image,
         layers: None,
+        lost_pixels: Some(lost_pixels),
         stats: oit_core::Stats {
             geometry_passes: ctx.passes,
             fragments,
             captured,
-            lost: fragments.saturating_sub(captured),
+            lost,
             storage_bytes: ctx.storage_bytes,
             ..Default::default()
         },

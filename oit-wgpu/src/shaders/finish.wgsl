@@ -1,6 +1,6 @@
 // The last kernels of every frame: the state becomes sRGB8 pixels; totals for the stats.
 @group(0) @binding(2) var<storage, read_write> image: array<u32>;
-// [captured total, max captured, tied total]
+// [captured total, max captured, tied total, lost total]
 @group(0) @binding(3) var<storage, read_write> totals: array<atomic<u32>>;
 
 @compute @workgroup_size(64)
@@ -14,6 +14,10 @@ fn totals_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     if (c > 0u) {
         atomicAdd(&totals[0], c);
         atomicMax(&totals[1], c);
+    }
+    let lost = atomicLoad(&acct[3u * px]);
+    if (lost > 0u) {
+        atomicAdd(&totals[3], lost);
     }
     let tied = state_tied(s);
     if (tied > 0u) {

@@ -17,7 +17,8 @@ struct FrameUniform {
     pixel_count: u32,
     // 1: the resolve counts ties (the plan's `count_ties`)
     ties: u32,
-    pad1: u32,
+    // 1 in the last capture pass the plan allows
+    last_pass: u32,
     forward: vec4<f32>,
     background: vec4<f32>,
     // near, far, sigma / unit, unused

@@ -26,8 +26,10 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     let bins = ctx.gpu.read_u32(&max_bins)?[0];
     let batches = ctx.plan.adp_batches(bins);
     for batch in 0..batches {
+        ctx.last_pass(batch + 1 == batches);
         ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, 1, batch)?;
         ctx.pixel_kernel(WGSL, "resolve_main", &buffers, 1, batch)?;
     }
+    ctx.last_pass(false);
     Ok(())
 }

@@ -37,7 +37,13 @@ fn capture(f: Fragment) {
     let rank = adp_rank(px, bin);
     if (rank / BUCKETS == fu.param) {
         let key = (u64(depth_bits(f.depth)) << 32u) | u64(payload(f, fu.effect));
-        atomicMax(&buckets[px * BUCKETS + rank % BUCKETS], key | ADP_FILLED);
+        // two fragments in one bin: the MAX kept one
+        if (atomicMax(&buckets[px * BUCKETS + rank % BUCKETS], key | ADP_FILLED) != 0lu) {
+            lose(px);
+        }
+    } else if (rank / BUCKETS > fu.param && last_pass()) {
+        // beyond the last batch the plan allows (--max-peels)
+        lose(px);
     }
 }
 

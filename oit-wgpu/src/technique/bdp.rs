@@ -77,7 +77,10 @@ fn depth(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>, bounds: &wgpu::Buffer) -> 
     let buffers = [bounds, &colors, &arrays];
     ctx.kernel_over(WGSL, "depth_init_main", &buffers, pairs, 0, 0, "depth_init_main")?;
     for p in 0..run {
+        ctx.last_pass(p + 1 == run);
         ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, p, MODE_DEPTH)?;
+        ctx.pixel_kernel(WGSL, "depth_settle_main", &buffers, p, MODE_DEPTH)?;
     }
+    ctx.last_pass(false);
     ctx.pixel_kernel(WGSL, "depth_resolve_main", &buffers, 0, run)
 }

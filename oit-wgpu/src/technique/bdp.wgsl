@@ -30,7 +30,11 @@ fn capture(f: Fragment) {
     let zf = bdp_z_far(px);
     if (fu.param == MODE_COLOR) {
         let k = bucket_index(f.depth, zn, zf, BDP_COLOR_SUBINTERVALS);
-        atomicMax(&colors[px * BDP_COLOR_SUBINTERVALS + k], bdp_pack_color(pack_rgba8(f.color)));
+        let word = bdp_pack_color(pack_rgba8(f.color));
+        // a full bucket: one of the two fragments is gone; a zero word is never read back
+        if (atomicMax(&colors[px * BDP_COLOR_SUBINTERVALS + k], word) != 0u || word == 0u) {
+            lose(px);
+        }
         return;
     }
     let k = bucket_index(f.depth, zn, zf, BDP_DEPTH_SUBINTERVALS);
@@ -43,6 +47,10 @@ fn capture(f: Fragment) {
         let hi = atomicLoad(&arrays[prev + 1u]);
         // eq. 5: what the previous pass kept, or anything outside its range, is done
         if (!bdp_eq5_next(d, lo, hi)) {
+            // at a depth the previous pass kept: kept then, or a tie eq. 5 skips
+            if (lo != BDP_EMPTY_MIN && (d == u32(lo >> 32u) || d == u32(hi >> 32u))) {
+                seen(px);
+            }
             return;
         }
     }
@@ -50,6 +58,10 @@ fn capture(f: Fragment) {
     let at = p * bdp_stride() + slot;
     atomicMin(&arrays[at], key);
     atomicMax(&arrays[at + 1u], key);
+    if (last_pass()) {
+        // the last pass: all but the kept min and max stay behind
+        seen(px);
+    }
 }
 
 // Empties the depth-mode arrays: min slots EMPTY, max slots 0. One invocation per (min, max) pair.
@@ -115,4 +127,37 @@ fn depth_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
         }
     }
     state[px] = s;
+}
+
+// Fragments array `p` kept for pixel `px`: a min, and a max unless it is the same key.
+fn bdp_kept(p: u32, px: u32) -> u32 {
+    var n = 0u;
+    for (var k = 0u; k < BDP_DEPTH_SUBINTERVALS; k++) {
+        let at = p * bdp_stride() + px * 2u * BDP_DEPTH_SUBINTERVALS + 2u * k;
+        let lo = atomicLoad(&arrays[at]);
+        let hi = atomicLoad(&arrays[at + 1u]);
+        if (lo != BDP_EMPTY_MIN) {
+            n += select(2u, 1u, hi == lo);
+        }
+    }
+    return n;
+}
+
+// After depth pass `fu.pass_index`: ties at the previous pass's depths, and in the last pass what
+// it left behind, become lost (oit-cpu's `bdp.rs`).
+@compute @workgroup_size(64)
+fn depth_settle_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let px = kernel_pixel(gid, groups);
+    if (px >= fu.pixel_count) {
+        return;
+    }
+    let p = fu.pass_index;
+    var taken = 0u;
+    if (p > 0u) {
+        taken = bdp_kept(p - 1u, px);
+    }
+    if (last_pass()) {
+        taken += bdp_kept(p, px);
+    }
+    settle(px, taken);
 }

@@ -16,10 +16,19 @@ const DDP_EMPTY_MIN: u64 = 0xfffffffffffffffflu;
 fn capture(f: Fragment) {
     let d = depth_bits(f.depth);
     let px = f.pixel;
-    if (d + 1u > ddp_range[2u * px] && d < ddp_range[2u * px + 1u]) {
+    let lo = ddp_range[2u * px];
+    let hi = ddp_range[2u * px + 1u];
+    if (d + 1u > lo && d < hi) {
         let key = (u64(d) << 32u) | u64(payload(f, fu.effect));
         atomicMin(&ddp_near[px], key);
         atomicMax(&ddp_far[px], key);
+        if (last_pass()) {
+            // the last peel allowed: all but the one or two it peels stay behind
+            seen(px);
+        }
+    } else if (atomicLoad(&acct[3u * px + 2u]) > 0u && (d + 1u == lo || d == hi)) {
+        // at a depth just peeled: a peeled one, or a tie the strict range skips
+        seen(px);
     }
 }
 
@@ -42,6 +51,13 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     }
     let n = atomicExchange(&ddp_near[px], DDP_EMPTY_MIN);
     let f = atomicExchange(&ddp_far[px], 0lu);
+    var count = 0u;
+    if (n != DDP_EMPTY_MIN) {
+        count = select(1u, 2u, f != n);
+    }
+    // ties at the previous pass's depths, or (last pass) what it left behind
+    let before = atomicExchange(&acct[3u * px + 2u], count);
+    settle(px, select(before, before + count, last_pass()));
     if (n == DDP_EMPTY_MIN) {
         ddp_range[2u * px] = 1u;
         ddp_range[2u * px + 1u] = 0u;

@@ -9,11 +9,20 @@
 @group(0) @binding(4) var<storage, read_write> peeled: array<atomic<u32>>;
 
 const DP_EMPTY: u64 = 0xfffffffffffffffflu;
+const DP_DONE: u32 = 0xffffffffu;
 
 fn capture(f: Fragment) {
     let d = depth_bits(f.depth);
-    if (d + 1u > previous[f.pixel]) {
-        atomicMin(&nearest[f.pixel], (u64(d) << 32u) | u64(payload(f, fu.effect)));
+    let prev = previous[f.pixel];
+    if (d + 1u > prev) {
+        let old = atomicMin(&nearest[f.pixel], (u64(d) << 32u) | u64(payload(f, fu.effect)));
+        // the last peel allowed: of two fragments one is left behind for good
+        if (last_pass() && old != DP_EMPTY) {
+            lose(f.pixel);
+        }
+    } else if (prev != 0u && d + 1u == prev) {
+        // at the depth just peeled: the peeled one, or a coplanar tie the `>` skips
+        seen(f.pixel);
     }
 }
 
@@ -23,8 +32,13 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if (px >= fu.pixel_count) {
         return;
     }
+    if (previous[px] != 0u && previous[px] != DP_DONE) {
+        settle(px, 1u);
+    }
     let key = atomicExchange(&nearest[px], DP_EMPTY);
     if (key == DP_EMPTY) {
+        // nothing behind: done (no depth matches DP_DONE, so no tie is counted twice)
+        previous[px] = DP_DONE;
         return;
     }
     let d = u32(key >> 32u);

@@ -38,6 +38,10 @@ fn capture(f: Fragment) {
         if (i < k) {
             atomicStore(&slots[i * stride + f.pixel], key);
             payloads[i * stride + f.pixel] = payload(f, fu.effect);
+        } else {
+            // the counter is past K: one fragment of this pixel finds no slot (which one is
+            // settled by the overflow passes below: the K nearest stay); counted once here
+            lose(f.pixel);
         }
         return;
     }

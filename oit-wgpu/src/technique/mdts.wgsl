@@ -56,13 +56,19 @@ fn mdts_insert64(base: u32, key: u64) -> bool {
 fn capture(f: Fragment) {
     let base = f.pixel * fu.param;
     if ((fu.pass_index & 0xffu) == MDTS_64) {
-        mdts_insert64(base, (u64(depth_bits(f.depth)) << 32u) | u64(payload(f, fu.effect)));
+        if (mdts_insert64(base, (u64(depth_bits(f.depth)) << 32u) | u64(payload(f, fu.effect)))) {
+            // a key carried off the end of the full array
+            lose(f.pixel);
+        }
         return;
     }
     // All ones is the empty word: a fragment at d ≈ 1 with that colour gives up its last bit.
     let w = min(mdts_pack(f.depth, pack_rgba8(f.color)), vec2<u32>(MDTS_EMPTY32 - 1u));
-    mdts_insert_high(base, w.x);
-    mdts_insert_low(base, w.y);
+    // both arrays hold the same number of words: one carried off the high array is one lost
+    if (mdts_insert_high(base, w.x)) {
+        lose(f.pixel);
+    }
+    _ = mdts_insert_low(base, w.y);
 }
 
 @compute @workgroup_size(64)

@@ -31,6 +31,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     let limit = ctx.plan.peel_limit;
     let mut peels = 0;
     while peels < limit {
+        ctx.last_pass(peels + 1 == limit);
         ctx.fill(&overflowed, 0)?;
         ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, peels, m)?;
         peels += 1;

@@ -25,9 +25,18 @@ fn mlp_insert(base: u32, key: u64) -> bool {
 
 fn capture(f: Fragment) {
     let d = depth_bits(f.depth);
-    if (d + 1u > mlp_deepest[f.pixel]
-        && mlp_insert(f.pixel * fu.param, (u64(d) << 32u) | u64(payload(f, fu.effect)))) {
-        atomicStore(&mlp_overflowed[0], 1u);
+    let deepest = mlp_deepest[f.pixel];
+    if (d + 1u > deepest) {
+        if (mlp_insert(f.pixel * fu.param, (u64(d) << 32u) | u64(payload(f, fu.effect)))) {
+            atomicStore(&mlp_overflowed[0], 1u);
+            if (last_pass()) {
+                // carried off the end in the last pass the plan allows
+                lose(f.pixel);
+            }
+        }
+    } else if (deepest != 0u && d + 1u == deepest) {
+        // at the deepest depth the pass before captured: captured then, or a tie skipped
+        seen(f.pixel);
     }
 }
 
@@ -39,6 +48,9 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     }
     var s = state[px];
     let base = px * fu.param;
+    settle(px, atomicLoad(&acct[3u * px + 2u]));
+    var at = 0u;
+    var deep = mlp_deepest[px];
     for (var i = 0u; i < fu.param; i++) {
         let key = atomicExchange(&mlp_slots[base + i], MLP_EMPTY);
         if (key == MLP_EMPTY) {
@@ -46,7 +58,14 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         }
         let d = u32(key >> 32u);
         push_local(&s, bitcast<f32>(d), u32(key & 0xfffffffflu));
-        mlp_deepest[px] = d + 1u;
+        at = select(1u, at + 1u, d + 1u == deep);
+        deep = d + 1u;
     }
+    if (at == 0u) {
+        // nothing left behind the deepest: done (no depth matches all ones)
+        deep = 0xffffffffu;
+    }
+    mlp_deepest[px] = deep;
+    atomicStore(&acct[3u * px + 2u], at);
     state[px] = s;
 }

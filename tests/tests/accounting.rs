@@ -1,0 +1,110 @@
+//! Issue 16: `lost` is counted where each fragment is lost (bucket collisions, array overflow,
+//! coplanar ties a peel skips, the tail behind the last peel `--max-peels` allows, adp's shared
+//! bins), so `captured + lost == fragments` is a check, not an identity. Run for every technique
+//! on every backend × raster path, on scenes where each kind of loss happens.
+
+use oit_core::{BdpMode, Frame, Settings, View};
+use oit_tests::*;
+
+/// What is wrong with a frame's accounting, if anything.
+fn accounting(f: &Frame) -> Result<(), String> {
+    let s = &f.stats;
+    if s.captured + s.lost != s.fragments {
+        return Err(format!("captured {} + lost {} != fragments {}", s.captured, s.lost, s.fragments));
+    }
+    if let Some(px) = &f.lost_pixels {
+        let sum: u64 = px.iter().map(|&l| u64::from(l)).sum();
+        if sum != s.lost {
+            return Err(format!("per-pixel lost sums to {sum}, stats.lost is {}", s.lost));
+        }
+    }
+    Ok(())
+}
+
+/// (scene, front view?, techniques, max peels, those that must lose there (`bdp`: colour mode)).
+type Case = (&'static str, bool, &'static [&'static str], Option<u32>, &'static [&'static str]);
+
+const CASES: &[Case] = &[
+    (
+        "knot",
+        false,
+        &[
+            "reference",
+            "wavg",
+            "wsum",
+            "dp",
+            "ddp",
+            "bdp",
+            "bdp2",
+            "adp",
+            "fabs:2",
+            "mdts:2",
+            "mdts64:2",
+            "mlp:2",
+        ],
+        None,
+        &["bdp", "fabs:2", "mdts:2", "mdts64:2"],
+    ),
+    ("coplanar", true, &["dp", "ddp", "mlp:1", "mlp:2", "bdp2", "fabs:2"], None, &["dp"]),
+    (
+        "ties:4",
+        true,
+        &["dp", "ddp", "mlp:1", "mlp:3", "bdp2", "mdts64:2", "fabs:2"],
+        None,
+        &["dp", "ddp", "mlp:1"],
+    ),
+    (
+        "planes:8",
+        true,
+        &["dp", "ddp", "mlp:1", "mlp:3", "adp", "bdp2"],
+        Some(2),
+        &["dp", "ddp", "mlp:1", "mlp:3"],
+    ),
+    ("planes:2000", true, &["adp", "fabs:4", "mdts64:4", "mlp:16"], None, &["adp", "fabs:4", "mdts64:4"]),
+];
+
+#[test]
+fn captured_plus_lost_is_fragments() {
+    for backend in backends_for("captured_plus_lost_is_fragments") {
+        let b = backend.as_ref();
+        eprintln!("on {}", label(b));
+        for &(name, front, techniques, max_peels, must_lose) in CASES {
+            let scene = scene(name);
+            let size = if name == "planes:2000" { 8 } else { 48 };
+            for &t in techniques {
+                for bdp_mode in [BdpMode::Color, BdpMode::Depth] {
+                    if bdp_mode == BdpMode::Color && t != "bdp" {
+                        continue;
+                    }
+                    let s = Settings { max_peels, bdp_mode, ..settings(size, t) };
+                    let view = if front { FRONT } else { View::default() };
+                    let f = render(b, &scene, &camera(&scene, &s, view), &s);
+                    let what = format!("{} {t} ({bdp_mode:?}) on {name}, max peels {max_peels:?}", label(b));
+                    accounting(&f).unwrap_or_else(|e| panic!("{what}: {e}"));
+                    if must_lose.contains(&t) && !(t == "bdp" && bdp_mode == BdpMode::Depth) {
+                        assert!(f.stats.lost > 0, "{what}: the case is meant to lose fragments");
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The mutation check: a frame that drops one captured fragment without counting it fails.
+#[test]
+fn an_uncounted_loss_fails_the_check() {
+    let b = oit_cpu::CpuBackend::default();
+    let scene = scene("planes:8");
+    let s = settings(16, "fabs:4");
+    let mut f = render(&b, &scene, &camera(&scene, &s, FRONT), &s);
+    accounting(&f).expect("fabs:4 on planes:8 accounts");
+    assert!(f.stats.lost > 0);
+    f.stats.captured -= 1;
+    assert!(accounting(&f).is_err(), "one captured fragment dropped uncounted");
+    f.stats.captured += 1;
+    if let Some(px) = f.lost_pixels.as_mut() {
+        let i = px.iter().position(|&l| l > 0).unwrap();
+        px[i] -= 1;
+    }
+    assert!(accounting(&f).is_err(), "a per-pixel count off by one");
+}
