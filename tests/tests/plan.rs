@@ -1,0 +1,47 @@
+//! The plan's storage figure (`Plan::storage_bytes`, what both backends check against their memory
+//! budget before allocating) bounds what every backend reports allocating, for every technique,
+//! on every backend and raster path: a backend that allocated past the plan would make the budget
+//! check a promise it does not keep.
+
+use oit_core::plan::Plan;
+use oit_core::{Settings, Technique, View};
+use oit_tests::*;
+
+#[test]
+fn reported_storage_stays_within_the_plan() {
+    let mut techniques = vec![Technique::Reference];
+    techniques.extend(Technique::all());
+    techniques.extend([
+        Technique::Bdp { passes: 3 },
+        Technique::Fabs { k: Some(3) },
+        Technique::Mlp { m: 2 },
+    ]);
+    for backend in backends_for("reported_storage_stays_within_the_plan") {
+        let b = backend.as_ref();
+        for name in ["knot", "spheres:3", "planes:5"] {
+            let scene = scene(name);
+            let base = settings(40, "reference");
+            let cam = camera(&scene, &base, View::default());
+            let reference = render(b, &scene, &cam, &base);
+            let deepest = reference.layers.as_ref().and_then(|l| l.iter().copied().max()).unwrap_or(0);
+            for &technique in &techniques {
+                let s = Settings { technique, ..base.clone() };
+                let plan = Plan::new(b.name(), &scene, &s).unwrap_or_else(|e| panic!("{technique}: {e}"));
+                let frame = render(b, &scene, &cam, &s);
+                let pixels = u64::from(s.width) * u64::from(s.height);
+                let bound = plan.storage_bytes(pixels, plan.slots(deepest));
+                assert!(
+                    frame.stats.storage_bytes <= bound,
+                    "{} {technique} on {name}: reports {} bytes, the plan allows {bound}",
+                    label(b),
+                    frame.stats.storage_bytes
+                );
+                assert!(
+                    frame.stats.storage_bytes > 0,
+                    "{} {technique} on {name}: no storage reported",
+                    label(b)
+                );
+            }
+        }
+    }
+}
