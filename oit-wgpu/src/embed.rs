@@ -23,9 +23,10 @@
 //!   counts to size storage, a peel's occlusion), so it takes no encoder: submit what the draws
 //!   depend on before calling `frame`.
 //! - Supported: every technique whose geometry passes draw the scene itself (`reference`, `fabs`,
-//!   `mdts`, `mdts64`, `mlp`, `wavg`, `wsum`, `dp`, `ddp`, as far as each is ported). `bdp` and
-//!   `adp` also draw the instances' bounding boxes, which an embedded pass does not know: they
-//!   fail with [`OitError::Unsupported`].
+//!   `mdts64`, `mlp`, `wavg`, `wsum`, `dp`, `ddp`; `mdts` when `Settings::alpha` is set, since its
+//!   32-bit words store no alpha and the pass does not know the caller's). `bdp` and `adp` also
+//!   draw the instances' bounding boxes, which an embedded pass does not know: they fail with
+//!   [`OitError::Unsupported`], as `mdts` does without an alpha.
 //!
 //! `Backend::render` on the hardware path is a client of the same code: [`crate::HardwareRaster`]
 //! is this pass's driver with oit's own vertex stage (`shaders/raster_hardware.wgsl`) and draws.
@@ -385,6 +386,18 @@ impl OitPass {
                 })
             }),
         };
+        // mdts's 32-bit words hold no alpha: oit's own scenes give it the objects' mean alpha; an
+        // embedded pass does not know the caller's alphas, so it must be told, not guess
+        if matches!(self.settings.technique, oit_core::Technique::Mdts { .. })
+            && self.settings.alpha.is_none()
+        {
+            return Err(OitError::Unsupported {
+                backend: "wgpu (embedded pass)".into(),
+                what: "mdts: its 32-bit words store no alpha and the embedded pass does not know your \
+                       scene's; set `Settings::alpha`, or use mdts64, which stores it"
+                    .into(),
+            });
+        }
         let mut ctx = GpuCtx::new(&self.gpu, &self.scene, &self.camera, &self.settings)?;
         let layers = crate::run_technique(&mut ctx, &drivers)?;
         let mut frame = ctx.finish(RasterPath::Hardware)?;
