@@ -12,12 +12,17 @@ use oit_core::{Backend, Camera, Frame, Scene, Settings, Technique, View, load_sc
 /// pinned to its path ([`oit_core::OnPath`]). A GPU backend without a device is left out with one
 /// line on stderr, unless `OIT_REQUIRE_GPU=1` (set by CI), where that is a panic.
 pub fn backends() -> Vec<Box<dyn Backend>> {
+    backends_labelled("the wgpu rows of the conformance suite")
+}
+
+/// [`backends`], a missing GPU reported under `label` (the test's name).
+fn backends_labelled(label: &str) -> Vec<Box<dyn Backend>> {
     #[cfg_attr(not(feature = "wgpu"), expect(unused_mut, reason = "only GPU backends add paths"))]
     let mut out: Vec<Box<dyn Backend>> = Vec::new();
     #[cfg(feature = "cpu")]
     out.push(Box::new(oit_cpu::CpuBackend::default()));
     #[cfg(feature = "wgpu")]
-    if oit_wgpu::backend_or_skip("the wgpu rows of the conformance suite").is_some() {
+    if oit_wgpu::backend_or_skip(&format!("{label} on wgpu")).is_some() {
         for path in [oit_core::RasterPath::Hardware, oit_core::RasterPath::Compute] {
             out.push(Box::new(oit_core::OnPath {
                 backend: Box::new(oit_wgpu::WgpuBackend::default()),
@@ -31,7 +36,7 @@ pub fn backends() -> Vec<Box<dyn Backend>> {
 /// [`backends`] less those [`expectations::EXPECTED`] excludes from `test` (each exclusion printed
 /// with its reason).
 pub fn backends_for(test: &str) -> Vec<Box<dyn Backend>> {
-    backends()
+    backends_labelled(test)
         .into_iter()
         .filter(|b| {
             let path = b.raster_path(&Settings::default());
