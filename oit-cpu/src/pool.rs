@@ -85,7 +85,8 @@ impl Pool {
             }
             None => {
                 self.allocations.fetch_add(1, Relaxed);
-                (0..len).into_par_iter().map(|_| make()).collect()
+                // made serially, as before the pool: a one-shot frame costs what it did
+                (0..len).map(|_| make()).collect()
             }
         };
         Pooled { array, shelf }
