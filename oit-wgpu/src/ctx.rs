@@ -337,20 +337,8 @@ impl<'a> GpuCtx<'a> {
             },
             count: None,
         }];
-        for b in 1..=(n as u32 + 1) {
-            entries.push(wgpu::BindGroupLayoutEntry {
-                binding: b,
-                visibility,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only: false },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            });
-        }
-        entries.push(wgpu::BindGroupLayoutEntry {
-            binding: ACCT_BINDING,
+        let storage = |binding: u32| wgpu::BindGroupLayoutEntry {
+            binding,
             visibility,
             ty: wgpu::BindingType::Buffer {
                 ty: wgpu::BufferBindingType::Storage { read_only: false },
@@ -358,7 +346,9 @@ impl<'a> GpuCtx<'a> {
                 min_binding_size: None,
             },
             count: None,
-        });
+        };
+        // the state and the technique's buffers, then the per-pixel loss counts
+        entries.extend((1..=(n as u32 + 1)).chain([ACCT_BINDING]).map(storage));
         self.gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("group 0"),
             entries: &entries,

@@ -100,7 +100,18 @@ impl Gpu {
             ..Default::default()
         }))
         .map_err(|e| OitError::Device(format!("cannot open '{}': {e}", info.name)))?;
-        Ok(Gpu {
+        Ok(Gpu::wrap(device, queue, info, features, limits))
+    }
+
+    /// A `Gpu` of an open device, its pipeline caches empty.
+    fn wrap(
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+        info: wgpu::AdapterInfo,
+        features: wgpu::Features,
+        limits: wgpu::Limits,
+    ) -> Gpu {
+        Gpu {
             device,
             queue,
             info,
@@ -108,7 +119,7 @@ impl Gpu {
             limits,
             pipelines: Mutex::new(HashMap::new()),
             render_pipelines: Mutex::new(HashMap::new()),
-        })
+        }
     }
 
     /// Wraps a device the caller opened (the embedded pass, `crate::embed`). It must have
@@ -124,15 +135,7 @@ impl Gpu {
             )));
         }
         let limits = device.limits();
-        Ok(Gpu {
-            device,
-            queue,
-            info,
-            features,
-            limits,
-            pipelines: Mutex::new(HashMap::new()),
-            render_pipelines: Mutex::new(HashMap::new()),
-        })
+        Ok(Gpu::wrap(device, queue, info, features, limits))
     }
 
     /// The render pipeline cached under `key` (a hash of everything it is built from), else the
