@@ -9,7 +9,6 @@
 //! - exact techniques: EPR 0 against the same backend's reference, on both paths.
 #![cfg(feature = "wgpu")]
 
-use oit_core::metrics::accuracy;
 use oit_core::{Frame, RasterPath, Settings, Technique, View};
 use oit_tests::*;
 
