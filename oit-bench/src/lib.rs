@@ -861,3 +861,36 @@ fn run_curves(
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod cross_check_tests {
+    use super::*;
+
+    fn image(pixels: Vec<[u8; 4]>) -> Image {
+        Image { width: pixels.len() as u32, height: 1, pixels }
+    }
+
+    /// The bench's matrix check fails on a skewed colour, off the edges, and only there.
+    #[test]
+    fn cross_check_fails_on_a_skew_off_the_edges() {
+        let a = image(vec![[100, 100, 100, 255]; 4]);
+        let mut b = a.clone();
+        let edges = [true, false, false, false];
+        let t = Technique::Fabs { k: None };
+        let check = |b: &Image, raster| {
+            let sa = Side { label: "cpu", raster: RasterPath::Cpu, image: &a, lost: 0 };
+            let sb = Side { label: "other", raster, image: b, lost: 0 };
+            cross_check(t, &sa, &sb, &edges)
+        };
+        assert!(!check(&b, RasterPath::Compute).2);
+        b.pixels[0][1] = 140; // on an edge: a hardware rasterizer may differ there, oit's rules may not
+        assert!(!check(&b, RasterPath::Hardware).2);
+        assert!(check(&b, RasterPath::Compute).2);
+        b.pixels[0][1] = 100;
+        b.pixels[2][2] = 102; // off the edges, 2 steps: fails on every path
+        assert!(check(&b, RasterPath::Hardware).2);
+        assert!(check(&b, RasterPath::Compute).2);
+        b.pixels[2][2] = 101; // 1 step: float order
+        assert!(!check(&b, RasterPath::Hardware).2);
+    }
+}

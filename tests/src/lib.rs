@@ -4,6 +4,7 @@
 //! returns, so a new backend is tested by adding it there. What a backend or path is expected to
 //! do differently lives in one table, [`expectations`], never inside a test.
 
+pub mod checks;
 pub mod expectations;
 
 use oit_core::{Backend, Camera, Frame, Scene, Settings, Technique, View, load_scene};
