@@ -108,27 +108,20 @@ pub(crate) struct Resolve<'a> {
     pub effect: Effect,
     pub camera: &'a Camera,
     pub background: Vec3,
-    /// Translucency: absorption σ per unit of length, the unit being 1/8 of the scene radius (so
-    /// an object of a scene of any scale absorbs alike).
-    sigma: f32,
-    radius: f32,
+    /// Translucency: absorption per unit of view-space distance
+    /// ([`Scene::absorption_per_length`]).
+    per_length: f32,
     /// Whether ties are counted (the plan's `count_ties`).
     pub count_ties: bool,
 }
 
 impl<'a> Resolve<'a> {
     pub fn new(scene: &Scene, camera: &'a Camera, settings: &Settings) -> Self {
-        let sigma = if scene.objects.is_empty() {
-            1.0
-        } else {
-            scene.objects.iter().map(|o| o.absorption).sum::<f32>() / scene.objects.len() as f32
-        };
         Resolve {
             effect: settings.effect,
             camera,
             background: settings.background,
-            sigma,
-            radius: scene.bounds().radius().max(1e-6) / 8.0,
+            per_length: scene.absorption_per_length() as f32,
             count_ties: false,
         }
     }
@@ -152,7 +145,7 @@ impl<'a> Resolve<'a> {
                 match s.entry.take() {
                     None => s.entry = Some((dist, unpack_rgba8(payload))),
                     Some((d0, c)) => {
-                        let absorb = (Vec3::ONE - c.truncate()) * self.sigma / self.radius;
+                        let absorb = (Vec3::ONE - c.truncate()) * self.per_length;
                         s.optical += absorb * (dist - d0).max(0.0);
                     }
                 }
