@@ -272,11 +272,12 @@ mod tests {
         ];
         let k = 0.8;
         let got = translucency_f64(layers, k, bg);
-        // medium 1: 1.5 long, entered at (0.25, 1, 0); medium 2: 0.5 long, entered at (0, 0.5, 1)
+        // medium 1: 1.5 long, entered at (0.25, 1, 0), absorbing (0.75, 0, 1)·k; medium 2: 0.5
+        // long, entered at (0, 0.5, 1), absorbing (1, 0.5, 0)·k
         let want = DVec3::new(
-            1.0 * (-0.75 * k * 1.5f64).exp() * (-1.0 * k * 0.5f64).exp(),
+            (-0.75 * k * 1.5f64).exp() * (-k * 0.5f64).exp(),
             0.5 * (-0.5 * k * 0.5f64).exp(),
-            0.25 * (-1.0 * k * 1.5f64).exp(),
+            0.25 * (-k * 1.5f64).exp(),
         );
         assert!((got - want).abs().max_element() < 1e-15, "{got} {want}");
         assert_eq!(beer_lambert(DVec3::ONE, -1.0), DVec3::ONE, "no negative thickness");

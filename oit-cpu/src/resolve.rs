@@ -299,7 +299,8 @@ mod tests {
         let r = resolve(&scene, &camera, Effect::Transparency, true);
         let (p, q) = (pack_rgba8(Vec4::new(1.0, 0.0, 0.0, 0.5)), pack_rgba8(Vec4::new(0.0, 1.0, 0.0, 0.5)));
         // (front pushes nearest first, back pushes farthest first, fragments counted tied)
-        let cases: [(&[(f32, u32)], &[(f32, u32)], u32); 6] = [
+        type Layers<'a> = &'a [(f32, u32)];
+        let cases: [(Layers<'_>, Layers<'_>, u32); 6] = [
             (&[(0.3, p)], &[(0.3, q)], 2),
             (&[(0.3, p)], &[(0.3, p)], 0),
             (&[(0.3, p), (0.3, q)], &[(0.3, p)], 3),

@@ -228,7 +228,7 @@ fn complexity_is_heat_of_the_layer_count() {
         let heat = |k: u32| {
             let at = |j: usize| DVec3::from_array(STOPS[j]);
             let j = (4 * k / n) as usize;
-            if 4 * k % n == 0 { at(j) } else { (at(j) + at(j + 1)) / 2.0 }
+            if (4 * k).is_multiple_of(n) { at(j) } else { (at(j) + at(j + 1)) / 2.0 }
         };
         let tan = (fov.to_radians() / 2.0).tan();
         for (t, frame) in renders(&scene, &camera, &settings) {
