@@ -4,8 +4,8 @@
 //! held to the closed form, on the CPU backend; the expected colours are computed here from the
 //! geometry, not through the code under test.
 //!
-//! Every check notes a mutation of the code it guards that makes it fail (tried when the test was
-//! written).
+//! Every check names mutations of the code it guards that make it fail; those marked (tried) were
+//! made and seen to fail when the test was written.
 //!
 //! Tolerance: one 8-bit step per channel. The closed forms are exact; the renders carry f32 NDC
 //! depths and 16-bit octahedral normals, whose error moves the linear colour by under 1e-4 here,
@@ -76,8 +76,11 @@ fn spheres(n: u32, sigma: f32) -> Scene {
 ///   sphere 2 (1/3), entered through spheres 2, 0 and 1.
 ///
 /// Mutations caught: pairing from layer 1 (1–2, 3–4: N = 2 sees the inner chord, 1, entered
-/// through sphere 0; N = 1 absorbs nothing); distances from NDC depth without
-/// `linear_depth` (thickness of 0.1 NDC units); k without the 1/8 (8× thinner).
+/// through sphere 0; N = 1 absorbs nothing) (tried); distances from NDC depth without
+/// `linear_depth` (thickness of 0.1 NDC units) (tried); k without the 1/8 (8× thinner). Not
+/// caught here: the leaving layer's colour for the entering one (nested spheres are symmetric
+/// along the axis, so both give the same sum); `composite.rs`'s and `resolve.rs`'s unit tests
+/// catch that.
 #[test]
 fn translucency_through_nested_spheres() {
     let settings = Settings {
@@ -156,8 +159,9 @@ fn schlick(degrees: f64) -> f64 {
 /// passes 31/32; towards grazing it tends to 0 (85°: 0.366, 89°: 0.084); a plane facing away
 /// (120°) passes what one at 60° does.
 ///
-/// Mutations caught: the power 5 → 4 (60°: 15/16, 85°: 0.306); `abs` dropped (120°: 1 − 1.5⁵ < 0,
-/// black); the product over layers replaced by one layer's factor (the stacked case, 0.355).
+/// Mutations caught: the power 5 → 4 (60°: 15/16, 85°: 0.306) (tried, f64); `abs` dropped
+/// (facing: |n·v| = −1 gives 1 − 2⁵ < 0, black) (tried, f32); the product over layers replaced by
+/// one layer's factor (the stacked case, 0.355).
 #[test]
 fn fresnel_at_normal_and_grazing_incidence() {
     let settings = Settings {
@@ -198,8 +202,8 @@ fn fresnel_at_normal_and_grazing_incidence() {
 /// quads hold a pixel's ray is worked out here from the camera (pixels within 0.75 px of an edge
 /// are skipped).
 ///
-/// Mutations caught: scaling by N + 1 (every pixel one step of the ramp down); counting a
-/// pixel's layers from 1 (background pixels turn black, k/N shifts); the ramp run backwards.
+/// Mutations caught: scaling by N + 1 (every pixel one step of the ramp down) (tried); the ramp
+/// run backwards (tried); counting a pixel's layers from 1 (k/N shifts).
 #[test]
 fn complexity_is_heat_of_the_layer_count() {
     const STOPS: [[f64; 3]; 5] =
