@@ -160,7 +160,7 @@ fn schlick(degrees: f64) -> f64 {
 /// (120°) passes what one at 60° does.
 ///
 /// Mutations caught: the power 5 → 4 (60°: 15/16, 85°: 0.306) (tried, f64); `abs` dropped
-/// (facing: |n·v| = −1 gives 1 − 2⁵ < 0, black) (tried, f32); the product over layers replaced by
+/// (facing: n·v = −1 gives 1 − 2⁵ < 0, black) (tried, f32); the product over layers replaced by
 /// one layer's factor (the stacked case, 0.355).
 #[test]
 fn fresnel_at_normal_and_grazing_incidence() {
