@@ -12,7 +12,7 @@
 use glam::{Vec3, Vec4};
 use oit_core::composite::{FrontToBack, heat, linear_to_srgb8, schlick_transmittance};
 use oit_core::rules::{depth_bits, unpack_normal, unpack_rgba8};
-use oit_core::{Camera, Effect, Image, Scene, Settings};
+use oit_core::{Camera, Compositor, Effect, Image, Scene, Settings};
 
 /// The run of equal depths a sequence of pushes ends in.
 #[derive(Clone, Copy, Debug, Default)]
@@ -126,9 +126,37 @@ impl<'a> Resolve<'a> {
         }
     }
 
+    /// Finishes every pixel into an sRGB image; returns it, the fragments captured in all and
+    /// those counted tied.
+    pub fn image(&self, width: u32, height: u32, states: &mut [PixelState]) -> (Image, u64, u64) {
+        use rayon::prelude::*;
+        let colors: Vec<Vec3> = states.par_iter_mut().map(|s| self.finish(s)).collect();
+        let captured = states.iter().map(|s| u64::from(s.captured)).sum();
+        let tied = states.iter().map(|s| u64::from(s.tied())).sum();
+        let mut image = Image::new(width, height, [0, 0, 0, 255]);
+        if self.effect == Effect::Complexity {
+            let max = states.iter().map(|s| s.captured).max().unwrap_or(0).max(1);
+            for (px, s) in image.pixels.iter_mut().zip(states.iter()) {
+                let c = if s.captured == 0 { self.background } else { heat(s.captured as f32 / max as f32) };
+                *px = srgb(c);
+            }
+        } else {
+            for (px, c) in image.pixels.iter_mut().zip(colors) {
+                *px = srgb(c);
+            }
+        }
+        (image, captured, tied)
+    }
+}
+
+/// The f32 resolve every technique of oit-cpu composites through (the reference has its own f64
+/// code in `technique/reference.rs`).
+impl Compositor for Resolve<'_> {
+    type State = PixelState;
+
     /// The next fragment behind everything pushed so far.
     #[inline]
-    pub fn push(&self, s: &mut PixelState, depth: f32, payload: u32) {
+    fn push(&self, s: &mut PixelState, depth: f32, payload: u32) {
         s.captured += 1;
         if self.count_ties {
             s.tied += s.front_run.push(depth_bits(depth), payload);
@@ -155,7 +183,7 @@ impl<'a> Resolve<'a> {
 
     /// The next fragment in front of everything pushed from the back so far (dual depth peeling).
     #[inline]
-    pub fn push_back(&self, s: &mut PixelState, depth: f32, payload: u32) {
+    fn push_back(&self, s: &mut PixelState, depth: f32, payload: u32) {
         if self.effect == Effect::Transparency {
             s.captured += 1;
             if self.count_ties {
@@ -169,7 +197,7 @@ impl<'a> Resolve<'a> {
     }
 
     /// The final linear colour of a pixel (heat maps are finished by [`Resolve::image`]).
-    pub fn finish(&self, s: &mut PixelState) -> Vec3 {
+    fn finish(&self, s: &mut PixelState) -> Vec3 {
         while let Some((d, p)) = s.back_stack.pop() {
             self.push(s, d, p);
         }
@@ -182,28 +210,6 @@ impl<'a> Resolve<'a> {
                 self.background * t
             }
         }
-    }
-
-    /// Finishes every pixel into an sRGB image; returns it, the fragments captured in all and
-    /// those counted tied.
-    pub fn image(&self, width: u32, height: u32, states: &mut [PixelState]) -> (Image, u64, u64) {
-        use rayon::prelude::*;
-        let colors: Vec<Vec3> = states.par_iter_mut().map(|s| self.finish(s)).collect();
-        let captured = states.iter().map(|s| u64::from(s.captured)).sum();
-        let tied = states.iter().map(|s| u64::from(s.tied())).sum();
-        let mut image = Image::new(width, height, [0, 0, 0, 255]);
-        if self.effect == Effect::Complexity {
-            let max = states.iter().map(|s| s.captured).max().unwrap_or(0).max(1);
-            for (px, s) in image.pixels.iter_mut().zip(states.iter()) {
-                let c = if s.captured == 0 { self.background } else { heat(s.captured as f32 / max as f32) };
-                *px = srgb(c);
-            }
-        } else {
-            for (px, c) in image.pixels.iter_mut().zip(colors) {
-                *px = srgb(c);
-            }
-        }
-        (image, captured, tied)
     }
 }
 
@@ -221,7 +227,7 @@ mod tests {
     use glam::{DVec3, Vec3, Vec4};
     use oit_core::composite::{front_to_back, heat, translucency_f64};
     use oit_core::rules::{pack_normal, pack_rgba8};
-    use oit_core::{Camera, Effect, Scene, Settings, load_scene};
+    use oit_core::{Camera, Compositor as _, Effect, Scene, Settings, load_scene};
 
     use super::{PixelState, Resolve, Run, srgb};
 
