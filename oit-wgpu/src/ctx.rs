@@ -180,7 +180,7 @@ impl<'a> GpuCtx<'a> {
         // the whole frame's storage against the device's budget, before anything is allocated
         // (sizes from a counting pass are checked again in `buffer`)
         let budget = gpu.memory_budget();
-        plan.check_budget(u64::from(pixels), plan.slots(0), (&budget.0, budget.1))?;
+        plan.check_budget(u64::from(pixels), oit_core::plan::Counted::default(), (&budget.0, budget.1))?;
         let uniform = FrameUniform {
             width: settings.width,
             height: settings.height,

@@ -27,15 +27,17 @@ const CASES: &[Case] = &[
             "mdts:2",
             "mdts64:2",
             "mlp:2",
+            "dfb",
+            "ll",
         ],
         None,
         &["bdp", "fabs:2", "mdts:2", "mdts64:2"],
     ),
-    ("coplanar", true, &["dp", "ddp", "mlp:1", "mlp:2", "bdp2", "fabs:2"], None, &["dp"]),
+    ("coplanar", true, &["dp", "ddp", "mlp:1", "mlp:2", "bdp2", "fabs:2", "dfb", "ll"], None, &["dp"]),
     (
         "ties:4",
         true,
-        &["dp", "ddp", "mlp:1", "mlp:3", "bdp2", "mdts64:2", "fabs:2"],
+        &["dp", "ddp", "mlp:1", "mlp:3", "bdp2", "mdts64:2", "fabs:2", "dfb", "ll"],
         None,
         &["dp", "ddp", "mlp:1"],
     ),
@@ -46,7 +48,13 @@ const CASES: &[Case] = &[
         Some(2),
         &["dp", "ddp", "mlp:1", "mlp:3"],
     ),
-    ("planes:2000", true, &["adp", "fabs:4", "mdts64:4", "mlp:16"], None, &["adp", "fabs:4", "mdts64:4"]),
+    (
+        "planes:2000",
+        true,
+        &["adp", "fabs:4", "mdts64:4", "mlp:16", "dfb", "ll"],
+        None,
+        &["adp", "fabs:4", "mdts64:4"],
+    ),
 ];
 
 #[test]

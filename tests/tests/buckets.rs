@@ -60,6 +60,8 @@ fn exact_schemes_on_separated_layers() {
                 Technique::Mlp { m: 1 },
                 Technique::Mlp { m: 3 },
                 Technique::Mlp { m: 8 },
+                Technique::Dfb,
+                Technique::Ll,
             ];
             for t in techniques {
                 let (r, f) = with_reference(b, &scene, view, &s, t);

@@ -85,8 +85,9 @@ fn ties_are_ordered_or_counted() {
                     if a.error_pixels > 0 {
                         wrong_but_counted += 1;
                     }
-                    if matches!(t, Technique::Fabs { k: None }) {
-                        // fabs carries the primitive id: it orders ties as the reference does
+                    if matches!(t, Technique::Fabs { k: None } | Technique::Dfb | Technique::Ll) {
+                        // fabs, dfb and ll carry the primitive id: they order ties as the
+                        // reference does
                         assert_eq!((a.error_pixels, tied, lost), (0, 0, 0), "{what}");
                     }
                 }

@@ -94,6 +94,8 @@ fn exact_techniques_on_both_paths() {
                 Technique::Fabs { k: None },
                 Technique::Mdts64 { k: None },
                 Technique::Mlp { m: 3 },
+                Technique::Dfb,
+                Technique::Ll,
             ] {
                 let e = epr(&gpu, &scene, View::default(), &base, t);
                 assert_eq!(e, 0.0, "{t} on {name}, {path} path");
