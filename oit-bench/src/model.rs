@@ -363,11 +363,11 @@ fn weighted_lsq(rows: &[([f64; 5], f64)], cols: &[usize]) -> Option<Vec<f64>> {
     let mut a = vec![vec![0.0; k + 1]; k];
     for (x, y) in rows {
         let w: Vec<f64> = cols.iter().zip(&scale).map(|(&c, s)| x[c] / y / s).collect();
-        for i in 0..k {
-            for j in 0..k {
-                a[i][j] += w[i] * w[j];
+        for (row, wi) in a.iter_mut().zip(&w) {
+            for (cell, wj) in row.iter_mut().zip(&w) {
+                *cell += wi * wj;
             }
-            a[i][k] += w[i]; // y / y
+            row[k] += wi; // y / y
         }
     }
     for col in 0..k {
@@ -376,12 +376,11 @@ fn weighted_lsq(rows: &[([f64; 5], f64)], cols: &[usize]) -> Option<Vec<f64>> {
             return None;
         }
         a.swap(col, pivot);
-        for r in 0..k {
-            if r != col {
-                let f = a[r][col] / a[col][col];
-                for c in col..=k {
-                    a[r][c] -= f * a[col][c];
-                }
+        let top = a[col].clone();
+        for (_, row) in a.iter_mut().enumerate().filter(|(r, _)| *r != col) {
+            let f = row[col] / top[col];
+            for (x, t) in row.iter_mut().zip(&top).skip(col) {
+                *x -= f * t;
             }
         }
     }
@@ -578,10 +577,10 @@ pub fn summarize(predictions: &[Prediction]) -> Vec<ModelSummary> {
 
 /// The commit measured: `OIT_COMMIT`, else `git rev-parse HEAD` in the current folder.
 pub fn commit() -> Option<String> {
-    if let Ok(c) = std::env::var("OIT_COMMIT") {
-        if !c.trim().is_empty() {
-            return Some(c.trim().to_string());
-        }
+    if let Ok(c) = std::env::var("OIT_COMMIT")
+        && !c.trim().is_empty()
+    {
+        return Some(c.trim().to_string());
     }
     let out = std::process::Command::new("git").args(["rev-parse", "HEAD"]).output().ok()?;
     let text = String::from_utf8(out.stdout).ok()?;
@@ -683,7 +682,7 @@ mod tests {
             let x = features(passes, stats, *f);
             let clean: f64 = x.iter().zip(c).map(|(a, b)| a * b).sum();
             let mut h =
-                (scene as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ technique.len() as u64 * 0x51;
+                (scene as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (technique.len() as u64 * 0x51);
             h ^= h >> 29;
             h = h.wrapping_mul(0xBF58_476D_1CE4_E5B9);
             let u = (h >> 11) as f64 / (1u64 << 53) as f64; // in [0, 1)

@@ -88,6 +88,17 @@ pub struct BenchArgs {
     #[arg(long, value_name = "N", default_value_t = 3)]
     pub curve_frames: u32,
 
+    #[command(flatten)]
+    pub cost: Box<ModelArgs>,
+
+    #[command(flatten)]
+    pub scene: SceneArgs,
+}
+
+/// The cost model's options of `oit bench` (boxed: they would make every command's arguments
+/// larger).
+#[derive(Args, Debug)]
+pub struct ModelArgs {
     /// Calibrate the cost model on this device instead: time every technique on the procedural
     /// calibration scenes (--scenes replaces them; procedural scenes only), fit each backend/path ×
     /// technique, and write DIR/calibration.json (with the fit's residuals) beside the report of
@@ -103,9 +114,6 @@ pub struct BenchArgs {
     /// A note recorded in the calibration (e.g. that the machine was loaded).
     #[arg(long, value_name = "TEXT")]
     pub note: Option<String>,
-
-    #[command(flatten)]
-    pub scene: SceneArgs,
 }
 
 /// Runs `oit bench`.
@@ -141,20 +149,19 @@ pub fn run(args: &BenchArgs) -> Result<Outcome, OitError> {
     };
     let scenes: Vec<String> = match &args.scenes {
         Some(l) => list(l),
-        None if args.calibrate => list(oit_bench::model::CALIBRATION_SCENES),
+        None if args.cost.calibrate => list(oit_bench::model::CALIBRATION_SCENES),
         None => vec![args.scene.scene.clone()],
     };
-    if args.calibrate {
-        if let Some(s) =
+    if args.cost.calibrate
+        && let Some(s) =
             scenes.iter().find(|s| s.contains('/') || s.ends_with(".obj") || s.starts_with("grid:"))
-        {
-            return Err(OitError::InvalidSettings(format!(
-                "--calibrate: scene {s} is a mesh; calibrate on procedural scenes only (planes:N, \
+    {
+        return Err(OitError::InvalidSettings(format!(
+            "--calibrate: scene {s} is a mesh; calibrate on procedural scenes only (planes:N, \
                  spheres:N, cluster:N), so that the meshes stay unseen for the check"
-            )));
-        }
+        )));
     }
-    let (model, model_source) = match &args.model {
+    let (model, model_source) = match &args.cost.model {
         Some(path) => {
             let text = std::fs::read_to_string(path)
                 .map_err(|source| OitError::Io { path: path.clone(), source })?;
@@ -173,7 +180,7 @@ pub fn run(args: &BenchArgs) -> Result<Outcome, OitError> {
     if args.out.exists() && !args.out.is_dir() {
         return Err(OitError::Write { path: args.out.clone(), message: "--out must name a folder".into() });
     }
-    let curves = if args.no_curves || args.calibrate {
+    let curves = if args.no_curves || args.cost.calibrate {
         None
     } else {
         if !(1..=MAX_CURVE_DEPTH).contains(&args.curve_depth) {
@@ -221,7 +228,7 @@ pub fn run(args: &BenchArgs) -> Result<Outcome, OitError> {
         frames: args.frames,
         curves,
         command_line: std::env::args().collect::<Vec<_>>().join(" "),
-        model: if args.calibrate { None } else { model },
+        model: if args.cost.calibrate { None } else { model },
         model_source,
     };
     config.validate()?;
@@ -245,7 +252,7 @@ pub fn run(args: &BenchArgs) -> Result<Outcome, OitError> {
     });
     bar.finish_and_clear();
     let mut report = result?;
-    if args.calibrate {
+    if args.cost.calibrate {
         let path = args.out.join("calibration.json");
         let samples = oit_bench::samples(&report);
         let devices = report.backends.iter().map(|b| (b.label.clone(), b.device.clone())).collect();
@@ -255,7 +262,7 @@ pub fn run(args: &BenchArgs) -> Result<Outcome, OitError> {
             command_line: report.command_line.clone(),
             scenes: config.scenes.clone(),
             frames: config.frames,
-            note: args.note.clone(),
+            note: args.cost.note.clone(),
             calibrations: oit_bench::model::calibrate(&samples, &devices, (report.width, report.height)),
         };
         let json = serde_json::to_string_pretty(&model)
