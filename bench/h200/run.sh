@@ -4,12 +4,39 @@
 # and wall time per frame). On the GPU machine, after `../shared/gpu/stage.sh` and a release build
 # of `oit-cli --features wgpu` copied (stripped) to .gpubin/oit:
 #   source .gpu/prelude.sh; OUT=$OUT bench/h200/run.sh
+#
+# The cost model (issue 15), two more modes:
+#   OUT=$OUT bench/h200/run.sh calibrate   # one command, one file: $OUT/calibrate/calibration.json
+#                                          # (both raster paths, procedural scenes only, 1024²)
+#   OUT=$OUT MODEL=$OUT/calibrate/calibration.json bench/h200/run.sh model
+#                                          # the check: predictions on the unseen meshes
+# Commit the calibration as bench/results/h200/calibration.json.
 set -u
 OIT=${OIT:-.gpubin/oit}
 export OIT_MODELS=${OIT_MODELS:-.gpu/models}
 OUT=${OUT:-bench/results/h200/readme}
+MODE=${1:-readme}
 mkdir -p "$OUT"
 run() { echo "+ $*" >&2; "$@"; }
-run "$OIT" info --json > "$OUT/info.json"
-run "$OIT" bench --backend wgpu --raster all --size 1024x1024 --frames 10 --warmup 2 \
-    --scenes "$OIT_MODELS/bunny.obj,planes:64,grid:4x4:bunny" --no-curves --out "$OUT/bench-1024"
+# the commit measured, recorded in the calibration (the GPU machine may have no .git)
+export OIT_COMMIT=${OIT_COMMIT:-$(git rev-parse HEAD 2>/dev/null || true)}
+case "$MODE" in
+readme)
+    run "$OIT" info --json > "$OUT/info.json"
+    run "$OIT" bench --backend wgpu --raster all --size 1024x1024 --frames 10 --warmup 2 \
+        --scenes "$OIT_MODELS/bunny.obj,planes:64,grid:4x4:bunny" --no-curves --out "$OUT/bench-1024"
+    ;;
+calibrate)
+    run "$OIT" bench --calibrate --backend wgpu --raster all --size 1024x1024 --frames 10 --warmup 2 \
+        --out "$OUT/calibrate"
+    ;;
+model)
+    run "$OIT" bench --backend wgpu --raster all --size 1024x1024 --frames 10 --warmup 2 \
+        --model "${MODEL:-$OUT/calibrate/calibration.json}" --no-curves \
+        --scenes "$OIT_MODELS/bunny.obj,$OIT_MODELS/armadillo.obj,grid:4x4:bunny" --out "$OUT/model-1024"
+    ;;
+*)
+    echo "usage: $0 [readme|calibrate|model]" >&2
+    exit 2
+    ;;
+esac

@@ -7,8 +7,11 @@
 //! - one [`Row`] per run: passes, fragments, lost, storage, the median and spread (min, max,
 //!   quartiles) of wall and GPU milliseconds, Gfrag/s, and EPR and PSNR against the reference of
 //!   the same backend and path;
-//! - the speedup model ([`ModelRow`]): `Tv` ([`oit_core::Backend::plain_pass_ms`]), each
-//!   technique's `Tf`, the predicted `K = N·Tv/(Tv+Tf)` beside the measured speedup over `dp`;
+//! - the cost model's check ([`model`]): per scene and backend/path its statistics
+//!   ([`StatsRow`]: triangles, pixels, fragments, the depth histogram), and, where a calibration
+//!   is loaded ([`Config::model`]), each technique's predicted time and speedup over `dp` beside
+//!   the measured ones ([`model::Prediction`]) and the error on the scenes the model was not
+//!   calibrated on ([`model::ModelSummary`]);
 //! - the cross-backend matrix ([`MatrixEntry`]): per technique, the largest 8-bit difference and
 //!   the EPR between the images of every pair of backend/paths;
 //! - the two curves ([`CurvePoint`]): time against depth complexity (`planes:N`) and against
@@ -38,11 +41,12 @@ use std::collections::HashMap;
 
 use experiment::{Experiment, Measurement, Step, label_of, measure};
 use oit_core::metrics::accuracy;
+use oit_core::plan::Plan;
 use oit_core::{Backend, Camera, Frame, Image, OitError, RasterPath, Settings, Technique, View, load_scene};
 use serde::{Deserialize, Serialize};
 
 pub use backends::available_backends;
-pub use model::{pareto_front, predicted_speedup};
+pub use model::{ModelFile, pareto_front};
 pub use report::{read_report, write_report};
 
 /// What to measure.
@@ -65,6 +69,10 @@ pub struct Config {
     pub curves: Option<CurveConfig>,
     /// The command line, recorded in the report.
     pub command_line: String,
+    /// The cost model to check, per backend/path (none: no predictions).
+    pub model: Option<ModelFile>,
+    /// Where the model came from, for the report.
+    pub model_source: Option<String>,
 }
 
 /// The scenes and runs of the two curves.
@@ -189,6 +197,10 @@ pub struct Row {
     /// where measured: where a technique's time goes.
     #[serde(default)]
     pub gpu_pass_ms: Vec<(String, f64)>,
+    /// Geometry passes the technique's plan predicts from the scene's deepest pixel
+    /// ([`model::geometry_passes`]); 0 in reports written before the model.
+    #[serde(default)]
+    pub model_passes: u32,
 }
 
 /// A run that failed.
@@ -206,29 +218,16 @@ pub struct Failure {
     pub error: String,
 }
 
-/// The speedup model for one technique on one backend/path and scene.
+/// A scene's statistics on one backend/path: the cost model's inputs.
 #[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct ModelRow {
+pub struct StatsRow {
     /// The scene.
     pub scene: String,
     /// The backend/path label.
     pub backend: String,
-    /// The technique.
-    pub technique: String,
-    /// The scene's deepest pixel (the reference's count; else dp's passes − 1).
-    pub n: u32,
-    /// One plain geometry pass, milliseconds (median).
-    pub tv_ms: f64,
-    /// The technique's time (median).
-    pub time_ms: f64,
-    /// Its extra fragment cost over one plain pass: `time_ms − tv_ms` (all its passes included).
-    pub tf_ms: f64,
-    /// `N·Tv / (Tv + Tf)`.
-    pub predicted_k: f64,
-    /// dp's time over the technique's on the same backend/path, where dp ran.
-    pub measured: Option<f64>,
-    /// `measured / predicted_k`.
-    pub ratio: Option<f64>,
+    /// Triangles, pixels, fragments per pass and the depth histogram (from the reference's
+    /// layers per pixel).
+    pub stats: model::SceneStats,
 }
 
 /// One pair of backend/paths for one technique.
@@ -373,8 +372,18 @@ pub struct Report {
     pub scenes: Vec<SceneInfo>,
     /// The table.
     pub rows: Vec<Row>,
-    /// The speedup model.
-    pub model: Vec<ModelRow>,
+    /// The cost model's inputs, per scene and backend/path.
+    #[serde(default)]
+    pub scene_stats: Vec<StatsRow>,
+    /// Where the cost model came from (a calibration file), if one was loaded.
+    #[serde(default)]
+    pub model_source: Option<String>,
+    /// The cost model's predictions beside the measurements.
+    #[serde(default)]
+    pub predictions: Vec<model::Prediction>,
+    /// The check: per backend/path, the model's error on scenes it was not calibrated on.
+    #[serde(default)]
+    pub model_summary: Vec<model::ModelSummary>,
     /// The cross-backend matrix.
     pub matrix: Vec<MatrixEntry>,
     /// The curves' points.
@@ -481,11 +490,11 @@ impl Config {
         Ok(())
     }
 
-    /// How many steps [`run_bench_with`] reports: per scene and backend the reference, the plain
-    /// pass and each technique; per curve point and backend each curve technique.
+    /// How many steps [`run_bench_with`] reports: per scene and backend the reference and each
+    /// technique; per curve point and backend each curve technique.
     pub fn steps(&self) -> u64 {
         let b = self.backends.len() as u64;
-        let main = self.scenes.len() as u64 * b * (self.techniques.len() as u64 + 2);
+        let main = self.scenes.len() as u64 * b * (self.techniques.len() as u64 + 1);
         let curves = self
             .curves
             .as_ref()
@@ -552,7 +561,10 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
             .collect(),
         scenes: Vec::new(),
         rows: Vec::new(),
-        model: Vec::new(),
+        scene_stats: Vec::new(),
+        model_source: None,
+        predictions: Vec::new(),
+        model_summary: Vec::new(),
         matrix: Vec::new(),
         curves: Vec::new(),
         curve_mesh: config.curves.as_ref().map(|c| c.mesh.clone()),
@@ -628,19 +640,18 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
                 });
             }
 
-            on_step(&format!("{scene_name}: plain pass on {ref_label}"));
-            let mut tv = Vec::new();
-            for i in 0..config.frames + 1 {
-                match backend.plain_pass_ms(&scene, &camera, &base) {
-                    Ok(ms) if i > 0 => tv.push(ms),
-                    Ok(_) => {}
-                    Err(e) => {
-                        fail(&mut report, "plain pass", scene_name, &ref_label, "-", &e.to_string());
-                        break;
-                    }
-                }
+            // the model's inputs: the scene's statistics from the reference's layers per pixel
+            let stats = reference.layers.as_ref().map(|layers| {
+                model::SceneStats::from_layers(scene.triangle_count(), reference.stats.fragments, layers)
+            });
+            if let Some(stats) = &stats {
+                report.scene_stats.push(StatsRow {
+                    scene: scene_name.clone(),
+                    backend: ref_label.clone(),
+                    stats: stats.clone(),
+                });
             }
-            let tv = Spread::of(&tv).map(|s| s.median);
+            let n = stats.as_ref().map_or(0, model::SceneStats::deepest);
 
             let mut measured: Vec<(Technique, Row)> = Vec::new();
             for m in mine.iter().filter(|m| !m.baseline) {
@@ -680,6 +691,12 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
                     psnr: acc.psnr.is_finite().then_some(acc.psnr),
                     max_diff: (acc.max_error * 255.0).round() as u32,
                     gpu_pass_ms: s.gpu_pass_ms.clone(),
+                    model_passes: Plan::new(
+                        backend.name(),
+                        &scene,
+                        &Settings { technique: m.technique, ..base.clone() },
+                    )
+                    .map_or(0, |plan| model::geometry_passes(&plan, n)),
                 };
                 if let Some(image) = &r.image {
                     images.entry(technique).or_default().push(Rendered {
@@ -694,28 +711,6 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
                 measured.push((m.technique, row));
             }
 
-            // the model, on this backend
-            let dp = measured.iter().find(|(t, _)| *t == Technique::Dp).map(|(_, r)| r);
-            let n = reference.max_depth.or(dp.map(|r| r.passes.saturating_sub(1)));
-            if let (Some(tv), Some(n)) = (tv, n) {
-                for (_, row) in &measured {
-                    let tf = row.time_ms - tv;
-                    let k = predicted_speedup(f64::from(n), tv, tf);
-                    let speedup = dp.map(|d| d.time_ms / row.time_ms);
-                    report.model.push(ModelRow {
-                        scene: scene_name.clone(),
-                        backend: format!("{}/{}", row.backend, row.raster).replace("cpu/cpu", "cpu"),
-                        technique: row.technique.clone(),
-                        n,
-                        tv_ms: tv,
-                        time_ms: row.time_ms,
-                        tf_ms: tf,
-                        predicted_k: k,
-                        measured: speedup,
-                        ratio: speedup.map(|m| m / k),
-                    });
-                }
-            }
             report.rows.extend(measured.into_iter().map(|(_, r)| r));
         }
 
@@ -773,7 +768,34 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
     if let Some(curves) = &config.curves {
         run_curves(config, curves, &mut report, on_step, fail)?;
     }
+    if let Some(model) = &config.model {
+        report.model_source.clone_from(&config.model_source);
+        report.predictions = model::predict(model, &samples(&report));
+        report.model_summary = model::summarize(&report.predictions);
+    }
     Ok(report)
+}
+
+/// The report's runs as the cost model sees them: one [`model::Sample`] per row whose scene and
+/// backend/path have statistics.
+pub fn samples(report: &Report) -> Vec<model::Sample> {
+    report
+        .rows
+        .iter()
+        .filter_map(|r| {
+            let label = label_of(&r.backend, r.raster.parse().ok()?);
+            let stats = report.scene_stats.iter().find(|s| s.scene == r.scene && s.backend == label)?;
+            Some(model::Sample {
+                scene: r.scene.clone(),
+                backend: label,
+                technique: r.technique.clone(),
+                passes: r.model_passes,
+                measured_passes: r.passes,
+                stats: stats.stats.clone(),
+                time_ms: r.time_ms,
+            })
+        })
+        .collect()
 }
 
 /// A technique's image on one backend/path, with the coverage of that backend's reference.

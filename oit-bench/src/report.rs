@@ -6,6 +6,7 @@ use std::path::Path;
 
 use oit_core::OitError;
 
+use crate::model::Prediction;
 use crate::plot::{Chart, Series};
 use crate::{CurvePoint, Report, Row, Spread, pareto_front};
 
@@ -201,16 +202,35 @@ fn check_numbers(report: &Report) -> Result<(), String> {
             check_ms(&at(&format!("gpu_pass_ms[{k}]")), *ms)?;
         }
     }
-    for (i, m) in report.model.iter().enumerate() {
-        let at = |field: &str| format!("model[{i}].{field}");
-        check_ms(&at("tv_ms"), m.tv_ms)?;
-        check_ms(&at("time_ms"), m.time_ms)?;
-        check(&at("tf_ms"), m.tf_ms, -MAX_MS, MAX_MS, "a time difference is milliseconds")?;
-        check(&at("predicted_k"), m.predicted_k, -MAX_VALUE, MAX_VALUE, "a speedup is")?;
-        for (name, value) in [("measured", m.measured), ("ratio", m.ratio)] {
+    for (i, p) in report.predictions.iter().enumerate() {
+        let at = |field: &str| format!("predictions[{i}].{field}");
+        check_ms(&at("predicted_ms"), p.predicted_ms)?;
+        check_ms(&at("measured_ms"), p.measured_ms)?;
+        check(&at("ratio"), p.ratio, 0.0, MAX_VALUE, "a ratio of times is")?;
+        for (name, value) in
+            [("predicted_speedup", p.predicted_speedup), ("measured_speedup", p.measured_speedup)]
+        {
             if let Some(value) = value {
-                check(&at(name), value, -MAX_VALUE, MAX_VALUE, "a speedup is")?;
+                check(&at(name), value, 0.0, MAX_VALUE, "a speedup is")?;
             }
+        }
+    }
+    for (i, m) in report.model_summary.iter().enumerate() {
+        let at = |field: &str| format!("model_summary[{i}].{field}");
+        check(&at("median_error"), m.median_error, 0.0, MAX_VALUE, "a relative error is")?;
+        check(&at("worst_error"), m.worst_error, 0.0, MAX_VALUE, "a relative error is")?;
+        check(&at("worst_factor"), m.worst_factor, 1.0, MAX_VALUE, "a factor is")?;
+    }
+    for (i, st) in report.scene_stats.iter().enumerate() {
+        let s = &st.stats;
+        for (name, v) in [("triangles", s.triangles), ("pixels", s.pixels), ("fragments", s.fragments)] {
+            check(&format!("scene_stats[{i}].{name}"), v as f64, 0.0, MAX_VALUE, "a count is")?;
+        }
+        if s.histogram.len() > 1 << 20 {
+            return Err(format!(
+                "scene_stats[{i}].histogram has {} bins: more layers than oit renders",
+                s.histogram.len()
+            ));
         }
     }
     for (i, m) in report.matrix.iter().enumerate() {
@@ -382,18 +402,29 @@ pub fn write_report(report: &mut Report, dir: &Path) -> Result<(), OitError> {
         draw(&chart, &stem)?;
         curve_plots.push((curve, stem));
     }
+    // the model: predicted against measured, log–log, the diagonal drawn
+    let mut model_plot = None;
+    if !report.predictions.is_empty() {
+        draw(&model_chart(report), "model")?;
+        model_plot = Some("model".to_string());
+    }
     report.files = files;
     report.files.push("report.json".into());
     report.files.push("report.md".into());
 
     let json = serde_json::to_string_pretty(&report).map_err(|e| err(&dir.join("report.json"), &e))?;
     std::fs::write(dir.join("report.json"), json + "\n").map_err(|e| err(&dir.join("report.json"), &e))?;
-    let md = markdown(report, &trade_plots, &curve_plots);
+    let md = markdown(report, &trade_plots, &curve_plots, model_plot.as_deref());
     std::fs::write(dir.join("report.md"), md).map_err(|e| err(&dir.join("report.md"), &e))?;
     Ok(())
 }
 
-fn markdown(report: &Report, trade: &[(String, String, f64)], curves: &[(&str, String)]) -> String {
+fn markdown(
+    report: &Report,
+    trade: &[(String, String, f64)],
+    curves: &[(&str, String)],
+    model_plot: Option<&str>,
+) -> String {
     let mut md = String::new();
     let w = &mut md;
     let _ = writeln!(w, "# oit bench\n");
@@ -484,42 +515,7 @@ fn markdown(report: &Report, trade: &[(String, String, f64)], curves: &[(&str, S
         }
     }
 
-    let _ = writeln!(w, "\n## The speedup model\n");
-    let _ = writeln!(
-        w,
-        "DESIGN.md's model: depth peeling spends N plain geometry passes, a technique one pass and \
-         its extra fragment cost, so its speedup over `dp` is `K = N·Tv / (Tv + Tf)`. **N**: the \
-         scene's deepest pixel (the reference's count); **Tv**: one plain geometry pass \
-         (`Backend::plain_pass_ms`: every fragment added to a per-pixel counter; GPU time where \
-         measured), median of the timed frames; **Tf** = the technique's time − Tv (all its passes \
-         and kernels: what it costs beyond one plain pass). **measured** = dp's time / the \
-         technique's time on the same backend; **ratio** = measured / K (the model holds at 1; \
-         dp's own fragment cost and setup push it below).\n"
-    );
-    let _ = writeln!(
-        w,
-        "| scene | backend | technique | N | Tv ms | time ms | Tf ms | predicted K | measured | ratio |"
-    );
-    let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|");
-    for m in &report.model {
-        let _ = writeln!(
-            w,
-            "| {} | {} | {} | {} | {} | {} | {} | {:.2} | {} | {} |",
-            m.scene,
-            m.backend,
-            m.technique,
-            m.n,
-            ms(m.tv_ms),
-            ms(m.time_ms),
-            ms(m.tf_ms),
-            m.predicted_k,
-            m.measured.map_or("-".into(), |v| format!("{v:.2}")),
-            m.ratio.map_or("-".into(), |v| format!("{v:.2}")),
-        );
-    }
-    if report.model.is_empty() {
-        let _ = writeln!(w, "(no backend measured a plain pass; see the failures)");
-    }
+    model_section(w, report, model_plot);
 
     let _ = writeln!(w, "\n## Cross-backend matrix\n");
     let _ = writeln!(
@@ -608,6 +604,155 @@ fn markdown(report: &Report, trade: &[(String, String, f64)], curves: &[(&str, S
         "\nEverything above, and more (quartiles, captured counts), is in [report.json](report.json)."
     );
     md
+}
+
+/// Predicted against measured time, both log axes: per backend/path the unseen scenes (labelled
+/// by technique) and the calibration scenes, the diagonal, and the 2× band around it.
+fn model_chart(report: &Report) -> Chart {
+    let mut backends: Vec<&str> = Vec::new();
+    for p in &report.predictions {
+        if !backends.contains(&p.backend.as_str()) {
+            backends.push(&p.backend);
+        }
+    }
+    let mut series = Vec::new();
+    for b in backends {
+        for calibration in [false, true] {
+            let mine: Vec<&Prediction> = report
+                .predictions
+                .iter()
+                .filter(|p| p.backend == b && p.calibration_scene == calibration)
+                .collect();
+            if mine.is_empty() {
+                continue;
+            }
+            series.push(Series {
+                name: format!(
+                    "{b}{}",
+                    if calibration { " (calibration scenes)" } else { " (unseen scenes)" }
+                ),
+                points: mine.iter().map(|p| (p.measured_ms.max(1e-6), p.predicted_ms.max(1e-6))).collect(),
+                labels: if calibration {
+                    Vec::new()
+                } else {
+                    mine.iter().map(|p| p.technique.clone()).collect()
+                },
+                line: false,
+                markers: true,
+                color: None,
+            });
+        }
+    }
+    let all = report.predictions.iter().flat_map(|p| [p.measured_ms, p.predicted_ms]).filter(|v| *v > 0.0);
+    let (lo, hi) = all.fold((f64::INFINITY, 0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    let (lo, hi) = if lo.is_finite() { (lo / 2.0, hi * 2.0) } else { (0.1, 10.0) };
+    for (name, factor, color) in [
+        ("predicted = measured", 1.0, (0, 0, 0)),
+        ("2× off", 2.0, (170, 170, 170)),
+        ("", 0.5, (170, 170, 170)),
+    ] {
+        series.push(Series {
+            name: name.into(),
+            points: vec![(lo, lo * factor), (hi, hi * factor)],
+            labels: Vec::new(),
+            line: true,
+            markers: false,
+            color: Some(color),
+        });
+    }
+    Chart {
+        title: format!("the cost model: predicted vs measured time ({}x{})", report.width, report.height),
+        x_desc: "measured time per frame (ms, log)".into(),
+        y_desc: "predicted time per frame (ms, log)".into(),
+        x_log: true,
+        y_log: true,
+        series,
+    }
+}
+
+/// The model's section of report.md: the check per backend/path, then every prediction.
+fn model_section(w: &mut String, report: &Report, plot: Option<&str>) {
+    let _ = writeln!(w, "\n## The cost model\n");
+    let _ = writeln!(
+        w,
+        "Each technique's time predicted before it runs, from a per backend/path calibration \
+         (`oit bench --calibrate`, procedural scenes only) and the scene's statistics (triangles, \
+         pixels, fragments per pass, the depth histogram of the reference's layers per pixel): \
+         `time ≈ a·passes·triangles + b·passes·fragments + c·passes·pixels + d·Σ f(layers) + e` \
+         (oit-bench's `model` module documents the terms and units). **passes**: the plan's \
+         prediction from the deepest pixel N (the run's count in brackets where it differs); \
+         **ratio** = measured / predicted; **K** = dp's predicted time / the technique's (DESIGN.md's \
+         `N·Tv/(Tv+Tf)`, where dp is N+1 passes of Tv), beside dp's measured time / the technique's. \
+         The check counts only the scenes the model was not calibrated on.\n"
+    );
+    if report.predictions.is_empty() {
+        let _ = writeln!(
+            w,
+            "(no calibration loaded for these backend/paths: run `oit bench --calibrate`, then `oit \
+             bench --model FILE`; the cpu backend loads `bench/results/cpu/calibration.json` by default)"
+        );
+        return;
+    }
+    if let Some(source) = &report.model_source {
+        let _ = writeln!(w, "Model: {source}.\n");
+    }
+    if !report.model_summary.is_empty() {
+        let _ = writeln!(
+            w,
+            "| backend | predictions (unseen scenes) | median \\|pred − meas\\| / meas | worst technique | its error | worst factor off | targets (median ≤ 20 %, none > 2×) |"
+        );
+        let _ = writeln!(w, "|---|---|---|---|---|---|---|");
+        for m in &report.model_summary {
+            let _ = writeln!(
+                w,
+                "| {} | {} | {:.1} % | {} | {:.1} % | {:.2}× | {} |",
+                m.backend,
+                m.predictions,
+                m.median_error * 100.0,
+                m.worst_technique,
+                m.worst_error * 100.0,
+                m.worst_factor,
+                if m.within_targets { "met" } else { "**missed**" }
+            );
+        }
+        let _ = writeln!(w);
+    } else {
+        let _ = writeln!(w, "(every scene here was a calibration scene: nothing to check)\n");
+    }
+    if let Some(stem) = plot {
+        let _ = writeln!(
+            w,
+            "Predicted against measured, log–log: the black line is a perfect prediction, the grey ones \
+             2× off. ([SVG]({stem}.svg), [PNG]({stem}.png))\n\n![the cost model]({stem}.svg)\n"
+        );
+    }
+    let _ = writeln!(
+        w,
+        "| scene | backend | technique | N | passes | predicted ms | measured ms | ratio | K predicted | K measured |"
+    );
+    let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|");
+    for p in &report.predictions {
+        let passes = if p.measured_passes == p.passes || p.measured_passes == 0 {
+            p.passes.to_string()
+        } else {
+            format!("{} ({})", p.passes, p.measured_passes)
+        };
+        let _ = writeln!(
+            w,
+            "| {}{} | {} | {} | {} | {} | {} | {} | {:.2} | {} | {} |",
+            p.scene,
+            if p.calibration_scene { " (calibration)" } else { "" },
+            p.backend,
+            p.technique,
+            p.n,
+            passes,
+            ms(p.predicted_ms),
+            ms(p.measured_ms),
+            p.ratio,
+            p.predicted_speedup.map_or("-".into(), |v| format!("{v:.2}")),
+            p.measured_speedup.map_or("-".into(), |v| format!("{v:.2}")),
+        );
+    }
 }
 
 #[cfg(test)]

@@ -27,9 +27,30 @@ fn report_holds_every_technique() {
         frames: 2,
         curves: Some(curves),
         command_line: "report test".into(),
+        model: None,
+        model_source: None,
     };
     let mut report = run_bench(&config).unwrap();
     assert!(report.failures.is_empty(), "{:?}", report.failures);
+    // the cost model: the plan's passes are the run's, and a model fitted on this run predicts it
+    assert_eq!(report.scene_stats.len(), labels.len());
+    for r in report.rows.iter().filter(|r| r.backend == "cpu") {
+        assert_eq!(r.model_passes, r.passes, "{}", r.technique);
+    }
+    let samples = oit_bench::samples(&report);
+    assert_eq!(samples.len(), report.rows.len());
+    let model = oit_bench::ModelFile {
+        host: String::new(),
+        commit: None,
+        command_line: String::new(),
+        scenes: vec!["planes:4".into()],
+        frames: 2,
+        note: None,
+        calibrations: oit_bench::model::calibrate(&samples, &Default::default(), (32, 32)),
+    };
+    report.predictions = oit_bench::model::predict(&model, &samples);
+    assert_eq!(report.predictions.len(), samples.len());
+    assert!(report.predictions.iter().all(|p| p.calibration_scene && p.predicted_ms > 0.0));
     let dir = std::env::temp_dir().join(format!("oit-bench-test-{}", std::process::id()));
     write_report(&mut report, &dir).unwrap();
 
@@ -57,7 +78,7 @@ fn report_holds_every_technique() {
     let dp = rows.iter().find(|r| r["technique"] == "dp").unwrap();
     assert_eq!(dp["passes"], 5);
     assert_eq!(dp["epr"], 0.0);
-    assert!(!json["model"].as_array().unwrap().is_empty());
+    assert!(!json["predictions"].as_array().unwrap().is_empty());
     assert_eq!(json["curves"].as_array().unwrap().len(), 3 * labels.len() * 2);
     for file in [
         "report.md",
@@ -65,6 +86,8 @@ fn report_holds_every_technique() {
         "trade-0-planes-4.png",
         "curve-depth.png",
         "curve-triangles.svg",
+        "model.svg",
+        "model.png",
     ] {
         assert!(dir.join(file).is_file(), "{file} missing");
     }

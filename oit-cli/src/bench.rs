@@ -4,7 +4,8 @@ use std::path::PathBuf;
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use oit_bench::{Config, CurveConfig, MAX_CURVE_DEPTH, MAX_FRAMES};
+use oit_bench::model::CPU_CALIBRATION;
+use oit_bench::{Config, CurveConfig, MAX_CURVE_DEPTH, MAX_FRAMES, ModelFile};
 use oit_core::{OitError, Technique};
 
 use crate::Outcome;
@@ -19,8 +20,10 @@ use crate::output;
         For each scene × backend (× raster path) × technique: --warmup untimed frames, then \
         --frames timed ones; the median and spread of wall and GPU milliseconds, passes, \
         fragments, lost, storage, Gfrag/s, and EPR and PSNR against the same backend's reference. \
-        Then the trade plot (time vs EPR, log axes, the Pareto front), the speedup model \
-        (K = N·Tv/(Tv+Tf) beside the measured speedup over dp), the cross-backend matrix, and two \
+        Then the trade plot (time vs EPR, log axes, the Pareto front), the cost model's \
+        check (each technique's time and speedup over dp predicted from the scene's statistics by \
+        a per-device calibration, --calibrate, beside the measured ones; its error on scenes it \
+        was not calibrated on), the cross-backend matrix, and two \
         curves: time vs depth complexity (planes:N, N = 1, 2, 4, ..., 256) and time vs triangles \
         (grid:RxC:MESH). Writes report.md, report.json and the plots (SVG and PNG) into --out. \
         A progress bar goes to stderr; a run that fails is listed in the report and the exit \
@@ -86,7 +89,31 @@ pub struct BenchArgs {
     pub curve_frames: u32,
 
     #[command(flatten)]
+    pub cost: Box<ModelArgs>,
+
+    #[command(flatten)]
     pub scene: SceneArgs,
+}
+
+/// The cost model's options of `oit bench` (boxed: they would make every command's arguments
+/// larger).
+#[derive(Args, Debug)]
+pub struct ModelArgs {
+    /// Calibrate the cost model on this device instead: time every technique on the procedural
+    /// calibration scenes (--scenes replaces them; procedural scenes only), fit each backend/path ×
+    /// technique, and write DIR/calibration.json (with the fit's residuals) beside the report of
+    /// the calibration runs. The curves are skipped.
+    #[arg(long)]
+    pub calibrate: bool,
+
+    /// The cost model to check: a calibration.json written by --calibrate [default: the shipped
+    /// CPU calibration, for the cpu backend].
+    #[arg(long, value_name = "FILE")]
+    pub model: Option<PathBuf>,
+
+    /// A note recorded in the calibration (e.g. that the machine was loaded).
+    #[arg(long, value_name = "TEXT")]
+    pub note: Option<String>,
 }
 
 /// Runs `oit bench`.
@@ -117,9 +144,35 @@ pub fn run(args: &BenchArgs) -> Result<Outcome, OitError> {
     frames(args.frames, 1, "--frames")?;
     frames(args.warmup, 0, "--warmup")?;
     frames(args.curve_frames, 1, "--curve-frames")?;
+    let list = |list: &str| -> Vec<String> {
+        list.split(',').map(str::trim).filter(|s| !s.is_empty()).map(String::from).collect()
+    };
     let scenes: Vec<String> = match &args.scenes {
-        Some(list) => list.split(',').map(str::trim).filter(|s| !s.is_empty()).map(String::from).collect(),
+        Some(l) => list(l),
+        None if args.cost.calibrate => list(oit_bench::model::CALIBRATION_SCENES),
         None => vec![args.scene.scene.clone()],
+    };
+    if args.cost.calibrate
+        && let Some(s) =
+            scenes.iter().find(|s| s.contains('/') || s.ends_with(".obj") || s.starts_with("grid:"))
+    {
+        return Err(OitError::InvalidSettings(format!(
+            "--calibrate: scene {s} is a mesh; calibrate on procedural scenes only (planes:N, \
+                 spheres:N, cluster:N), so that the meshes stay unseen for the check"
+        )));
+    }
+    let (model, model_source) = match &args.cost.model {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .map_err(|source| OitError::Io { path: path.clone(), source })?;
+            let name = path.display().to_string();
+            (Some(ModelFile::parse(&text, &name)?), Some(name))
+        }
+        None => {
+            let shipped = ModelFile::parse(CPU_CALIBRATION, "the shipped CPU calibration")?;
+            let source = "bench/results/cpu/calibration.json (shipped with oit-bench)".to_string();
+            (Some(shipped).filter(|m| !m.calibrations.is_empty()), Some(source))
+        }
     };
     let Some(first) = scenes.first() else {
         return Err(OitError::InvalidSettings("--scenes names no scene".into()));
@@ -127,7 +180,7 @@ pub fn run(args: &BenchArgs) -> Result<Outcome, OitError> {
     if args.out.exists() && !args.out.is_dir() {
         return Err(OitError::Write { path: args.out.clone(), message: "--out must name a folder".into() });
     }
-    let curves = if args.no_curves {
+    let curves = if args.no_curves || args.cost.calibrate {
         None
     } else {
         if !(1..=MAX_CURVE_DEPTH).contains(&args.curve_depth) {
@@ -175,6 +228,8 @@ pub fn run(args: &BenchArgs) -> Result<Outcome, OitError> {
         frames: args.frames,
         curves,
         command_line: std::env::args().collect::<Vec<_>>().join(" "),
+        model: if args.cost.calibrate { None } else { model },
+        model_source,
     };
     config.validate()?;
     std::fs::create_dir_all(&args.out)
@@ -197,7 +252,51 @@ pub fn run(args: &BenchArgs) -> Result<Outcome, OitError> {
     });
     bar.finish_and_clear();
     let mut report = result?;
+    if args.cost.calibrate {
+        let path = args.out.join("calibration.json");
+        let samples = oit_bench::samples(&report);
+        let devices = report.backends.iter().map(|b| (b.label.clone(), b.device.clone())).collect();
+        let model = ModelFile {
+            host: report.host.clone(),
+            commit: oit_bench::model::commit(),
+            command_line: report.command_line.clone(),
+            scenes: config.scenes.clone(),
+            frames: config.frames,
+            note: args.cost.note.clone(),
+            calibrations: oit_bench::model::calibrate(&samples, &devices, (report.width, report.height)),
+        };
+        let json = serde_json::to_string_pretty(&model)
+            .map_err(|e| OitError::Write { path: path.clone(), message: e.to_string() })?;
+        std::fs::write(&path, json + "\n")
+            .map_err(|e| OitError::Write { path: path.clone(), message: e.to_string() })?;
+        // the report of the calibration runs shows the fit against them
+        report.model_source = Some(path.display().to_string());
+        report.predictions = oit_bench::model::predict(&model, &samples);
+        output::print(&format!("wrote {}\n", path.display()))?;
+        for c in &model.calibrations {
+            for t in &c.techniques {
+                output::print(&format!(
+                    "{} {}: rms relative residual {:.1} %\n",
+                    c.backend,
+                    t.technique,
+                    t.rms_relative * 100.0
+                ))?;
+            }
+        }
+    }
     oit_bench::write_report(&mut report, &args.out)?;
+    for m in &report.model_summary {
+        output::print(&format!(
+            "model on {} ({} predictions on unseen scenes): median error {:.1} %, worst {} {:.1} % ({:.2}× off){}\n",
+            m.backend,
+            m.predictions,
+            m.median_error * 100.0,
+            m.worst_technique,
+            m.worst_error * 100.0,
+            m.worst_factor,
+            if m.within_targets { "" } else { "; targets missed" }
+        ))?;
+    }
     for f in &report.failures {
         output::error_line(&format!(
             "{} {} on {} ({}): {}",
