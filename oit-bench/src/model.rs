@@ -150,7 +150,8 @@ pub fn geometry_passes(plan: &Plan, n: u32) -> u32 {
     let peels = |wanted: u32| wanted.min(plan.peel_limit);
     let count = u32::from(plan.needs_count());
     match plan.technique {
-        Technique::Reference => 2,
+        // a counting (or sizing) pass, then the fill
+        Technique::Reference | Technique::Dfb | Technique::Ll => 2,
         Technique::Dp => peels(n).saturating_add(1),
         Technique::Ddp => peels(n.div_ceil(2)).saturating_add(1),
         Technique::WeightedAverage | Technique::WeightedSum => 1,
