@@ -422,7 +422,8 @@ impl ReflexGrid {
             max = max.max(q);
         }
         let scale = DVec2::splat(side as f64) / (max - min).max(DVec2::splat(f64::MIN_POSITIVE));
-        let mut grid = ReflexGrid { min, scale, side, start: vec![0; side * side + 1], items: vec![0; count] };
+        let mut grid =
+            ReflexGrid { min, scale, side, start: vec![0; side * side + 1], items: vec![0; count] };
         // a counting sort of the reflex corners by cell
         let cells: Vec<(usize, usize)> =
             (0..p.len()).filter(|&i| reflex[i]).map(|i| (grid.cell_index(p[i]), i)).collect();
