@@ -7,7 +7,7 @@
 //! (clap's own usage errors keep clap's format and exit code 2). Reports go to stdout — a table,
 //! or with `--json` JSON and nothing else — and progress to stderr.
 //!
-//! Scene, camera and shading options are one flattened struct ([`options::SceneArgs`]) shared by
+//! Scene, camera and shading options are one flattened struct (`options::SceneArgs`) shared by
 //! `render`, `compare` and `sweep`; backends are chosen by name in one place, oit-bench's
 //! registry (`oit_bench::backends`), and `compare`, `sweep` and `bench` run one loop, oit-bench's
 //! `oit_bench::experiment`.
