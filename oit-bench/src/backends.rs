@@ -222,6 +222,9 @@ pub fn available_backends() -> Vec<Box<dyn Backend>> {
     for (name, result) in probe_all(&BackendOptions::default()) {
         match result {
             Ok(backend) => found.push(backend),
+            Err(e) if name != "cpu" && std::env::var("OIT_REQUIRE_GPU").as_deref() == Ok("1") => {
+                panic!("OIT_REQUIRE_GPU=1 but backend {name} is missing: {e}")
+            }
             Err(e) => eprintln!("note: backend {name} skipped: {e}"),
         }
     }

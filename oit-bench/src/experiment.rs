@@ -261,7 +261,7 @@ mod tests {
 
     #[test]
     fn reference_once_per_view_and_backend_then_each_technique() {
-        let backends = crate::backends::available_backends();
+        let backends: Vec<Box<dyn Backend>> = vec![Box::new(oit_cpu::CpuBackend::default())];
         let settings = Settings { width: 16, height: 16, ..Settings::default() };
         let techniques = [Technique::Dp, Technique::WeightedAverage];
         let exp = Experiment {
@@ -298,7 +298,7 @@ mod tests {
 
     #[test]
     fn a_failing_technique_is_a_row_and_the_rest_go_on() {
-        let backends = crate::backends::available_backends();
+        let backends: Vec<Box<dyn Backend>> = vec![Box::new(oit_cpu::CpuBackend::default())];
         // the weighted techniques never order fragments, so they cannot absorb through a thickness
         let settings =
             Settings { width: 16, height: 16, effect: oit_core::Effect::Translucency, ..Settings::default() };
@@ -322,7 +322,7 @@ mod tests {
 
     #[test]
     fn a_view_that_cannot_be_framed_fails_before_any_render() {
-        let backends = crate::backends::available_backends();
+        let backends: Vec<Box<dyn Backend>> = vec![Box::new(oit_cpu::CpuBackend::default())];
         let settings = Settings { width: 16, height: 16, ..Settings::default() };
         let exp = Experiment {
             backends: &backends,

@@ -38,7 +38,7 @@ use std::collections::HashMap;
 
 use experiment::{Experiment, Measurement, Step, label_of, measure};
 use oit_core::metrics::accuracy;
-use oit_core::{Backend, Camera, Frame, Image, OitError, Settings, Technique, View, load_scene};
+use oit_core::{Backend, Camera, Frame, Image, OitError, RasterPath, Settings, Technique, View, load_scene};
 use serde::{Deserialize, Serialize};
 
 pub use backends::available_backends;
@@ -246,6 +246,65 @@ pub struct MatrixEntry {
     pub max_diff: u32,
     /// The share of covered pixels that differ by more than 1 step.
     pub epr: f64,
+    /// The largest channel difference over pixels off projected triangle edges (more than a pixel
+    /// from every edge), 8-bit steps: where a hardware rasterizer may cover other fragments than
+    /// oit's fixed-point rules, only edge pixels may differ.
+    #[serde(default)]
+    pub max_diff_off_edges: u32,
+    /// What the pair is held to: [`cross_check`]'s verdict (`None`: held and within; `Some`:
+    /// why it was not held, or how it failed, as `failed` says).
+    #[serde(default)]
+    pub note: Option<String>,
+    /// Whether the pair broke the conformance bound (also listed in the report's failures).
+    #[serde(default)]
+    pub failed: bool,
+}
+
+/// One side of a cross-backend comparison: a technique's frame on one backend/path.
+#[derive(Clone, Debug)]
+pub struct Side<'a> {
+    /// `backend` or `backend/path`.
+    pub label: &'a str,
+    /// The raster path it ran on.
+    pub raster: RasterPath,
+    /// Its image.
+    pub image: &'a Image,
+    /// Fragments it lost (counted).
+    pub lost: u64,
+}
+
+/// The conformance bounds of the cross-backend matrix (as the suite holds them in
+/// `tests/tests/wgpu.rs`): two paths that share oit's fixed-point rules (oit-cpu, a compute
+/// path) produce the same fragments, so no channel may differ by more than 1 (float order); a
+/// hardware path may differ only on pixels within a pixel of a projected edge (`edges`, from
+/// [`oit_core::metrics::edge_mask`]), and off them by at most 1. Not held: a technique that keeps
+/// fragments in arrival order when it overflows (`fabs:K` with losses), whose survivors depend on
+/// the device's scheduling. Returns (largest difference off the edges, a note, failed).
+pub fn cross_check(
+    technique: Technique,
+    a: &Side<'_>,
+    b: &Side<'_>,
+    edges: &[bool],
+) -> (u32, Option<String>, bool) {
+    let hardware = a.raster == RasterPath::Hardware || b.raster == RasterPath::Hardware;
+    let none = vec![false; edges.len()];
+    let mask = if hardware { edges } else { &none };
+    let (worst, differ) = oit_core::metrics::differ_off_mask(a.image, b.image, mask);
+    let worst = u32::from(worst);
+    if matches!(technique, Technique::Fabs { k: Some(_) }) && (a.lost > 0 || b.lost > 0) {
+        let note =
+            "not held: fabs:K keeps the first K fragments to arrive, and arrival order is the device's";
+        return (worst, Some(note.into()), false);
+    }
+    if worst <= 1 {
+        return (worst, None, false);
+    }
+    let where_ = if hardware { "off triangle edges" } else { "anywhere (the same fixed-point fragments)" };
+    let note = format!(
+        "{} vs {}: {differ} pixels differ by up to {worst} 8-bit steps {where_}; the bound is 1",
+        a.label, b.label
+    );
+    (worst, Some(note), true)
 }
 
 /// One point of a curve.
@@ -559,11 +618,14 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
                 info.max_depth = reference.max_depth;
             }
             if let Some(image) = &reference.image {
-                images.entry("reference".into()).or_default().push((
-                    ref_label.clone(),
-                    image.clone(),
-                    reference.layers.clone(),
-                ));
+                images.entry("reference".into()).or_default().push(Rendered {
+                    label: ref_label.clone(),
+                    raster: reference_raster(&mine),
+                    technique: Technique::Reference,
+                    image: image.clone(),
+                    cover: reference.layers.clone(),
+                    lost: reference.stats.lost,
+                });
             }
 
             on_step(&format!("{scene_name}: plain pass on {ref_label}"));
@@ -620,11 +682,14 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
                     gpu_pass_ms: s.gpu_pass_ms.clone(),
                 };
                 if let Some(image) = &r.image {
-                    images.entry(technique).or_default().push((
-                        m.label(),
-                        image.clone(),
-                        reference.layers.clone(),
-                    ));
+                    images.entry(technique).or_default().push(Rendered {
+                        label: m.label(),
+                        raster: m.raster,
+                        technique: m.technique,
+                        image: image.clone(),
+                        cover: reference.layers.clone(),
+                        lost: s.lost,
+                    });
                 }
                 measured.push((m.technique, row));
             }
@@ -654,35 +719,47 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
             report.rows.extend(measured.into_iter().map(|(_, r)| r));
         }
 
-        // the matrix: every pair of backend/paths, per technique
+        // the matrix: every pair of backend/paths, per technique, held to the conformance bounds
+        let edges = oit_core::metrics::edge_mask(&scene, &camera, base.width, base.height, 1.0);
         let mut names: Vec<String> = vec!["reference".into()];
         names.extend(config.techniques.iter().map(ToString::to_string));
         for technique in names {
             let Some(list) = images.get(&technique) else { continue };
             for i in 0..list.len() {
                 for j in i + 1..list.len() {
-                    let (a, img_a, cover) = &list[i];
-                    let (b, img_b, _) = &list[j];
+                    let (a, b) = (&list[i], &list[j]);
                     let frame_a = Frame {
-                        image: img_a.clone(),
-                        layers: cover.clone(),
+                        image: a.image.clone(),
+                        layers: a.cover.clone(),
                         lost_pixels: None,
                         stats: Default::default(),
                     };
-                    match accuracy(&frame_a, img_b) {
-                        Ok(acc) => report.matrix.push(MatrixEntry {
-                            scene: scene_name.clone(),
-                            technique: technique.clone(),
-                            a: a.clone(),
-                            b: b.clone(),
-                            max_diff: (acc.max_error * 255.0).round() as u32,
-                            epr: acc.epr,
-                        }),
+                    match accuracy(&frame_a, &b.image) {
+                        Ok(acc) => {
+                            let (off_edges, note, failed) =
+                                cross_check(a.technique, &a.side(), &b.side(), &edges);
+                            if failed {
+                                let pair = format!("{} vs {}", a.label, b.label);
+                                let why = note.clone().unwrap_or_default();
+                                fail(&mut report, "matrix", scene_name, &pair, &technique, &why);
+                            }
+                            report.matrix.push(MatrixEntry {
+                                scene: scene_name.clone(),
+                                technique: technique.clone(),
+                                a: a.label.clone(),
+                                b: b.label.clone(),
+                                max_diff: (acc.max_error * 255.0).round() as u32,
+                                epr: acc.epr,
+                                max_diff_off_edges: off_edges,
+                                note,
+                                failed,
+                            })
+                        }
                         Err(e) => fail(
                             &mut report,
                             "matrix",
                             scene_name,
-                            &format!("{a} vs {b}"),
+                            &format!("{} vs {}", a.label, b.label),
                             &technique,
                             &e.to_string(),
                         ),
@@ -699,9 +776,26 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
     Ok(report)
 }
 
-/// A technique's image on one backend/path: (label, image, the coverage of that backend's
-/// reference).
-type Rendered = (String, Image, Option<Vec<u32>>);
+/// A technique's image on one backend/path, with the coverage of that backend's reference.
+struct Rendered {
+    label: String,
+    raster: RasterPath,
+    technique: Technique,
+    image: Image,
+    cover: Option<Vec<u32>>,
+    lost: u64,
+}
+
+impl Rendered {
+    fn side(&self) -> Side<'_> {
+        Side { label: &self.label, raster: self.raster, image: &self.image, lost: self.lost }
+    }
+}
+
+/// The raster path of a backend's measurements (the reference's).
+fn reference_raster(mine: &[&Measurement]) -> RasterPath {
+    mine.iter().find(|m| m.baseline).map_or(RasterPath::Cpu, |m| m.raster)
+}
 
 type FailFn = fn(&mut Report, &str, &str, &str, &str, &str);
 
@@ -766,4 +860,37 @@ fn run_curves(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod cross_check_tests {
+    use super::*;
+
+    fn image(pixels: Vec<[u8; 4]>) -> Image {
+        Image { width: pixels.len() as u32, height: 1, pixels }
+    }
+
+    /// The bench's matrix check fails on a skewed colour, off the edges, and only there.
+    #[test]
+    fn cross_check_fails_on_a_skew_off_the_edges() {
+        let a = image(vec![[100, 100, 100, 255]; 4]);
+        let mut b = a.clone();
+        let edges = [true, false, false, false];
+        let t = Technique::Fabs { k: None };
+        let check = |b: &Image, raster| {
+            let sa = Side { label: "cpu", raster: RasterPath::Cpu, image: &a, lost: 0 };
+            let sb = Side { label: "other", raster, image: b, lost: 0 };
+            cross_check(t, &sa, &sb, &edges)
+        };
+        assert!(!check(&b, RasterPath::Compute).2);
+        b.pixels[0][1] = 140; // on an edge: a hardware rasterizer may differ there, oit's rules may not
+        assert!(!check(&b, RasterPath::Hardware).2);
+        assert!(check(&b, RasterPath::Compute).2);
+        b.pixels[0][1] = 100;
+        b.pixels[2][2] = 102; // off the edges, 2 steps: fails on every path
+        assert!(check(&b, RasterPath::Hardware).2);
+        assert!(check(&b, RasterPath::Compute).2);
+        b.pixels[2][2] = 101; // 1 step: float order
+        assert!(!check(&b, RasterPath::Hardware).2);
+    }
 }

@@ -56,6 +56,76 @@ fn row_label(r: &Row) -> String {
     if r.raster == r.backend { r.backend.clone() } else { format!("{}/{}", r.backend, r.raster) }
 }
 
+/// Which of `spreads` (label, spread) is faster with the spread supporting it: the one whose slowest
+/// frame beats every other's fastest frame; `None` where the ranges overlap (no ordering claimed).
+pub fn separated_fastest<'a>(spreads: &[(&'a str, &Spread)]) -> Option<&'a str> {
+    let (best, s) = spreads.iter().min_by(|a, b| a.1.median.total_cmp(&b.1.median))?;
+    let clear = spreads.iter().filter(|(l, _)| l != best).all(|(_, o)| s.max < o.min);
+    (clear && spreads.len() > 1).then_some(*best)
+}
+
+/// Per technique, its time on each backend/path side by side (median, then min–max of the timed
+/// frames: GPU time where measured, wall time otherwise, and wall time beside it), and which is
+/// faster only where the ranges do not overlap.
+fn side_by_side(w: &mut String, report: &Report, scene: &str) {
+    let rows: Vec<&Row> = report.rows.iter().filter(|r| r.scene == scene).collect();
+    let mut labels: Vec<String> = Vec::new();
+    for r in &rows {
+        let l = row_label(r);
+        if !labels.contains(&l) {
+            labels.push(l);
+        }
+    }
+    if labels.len() < 2 {
+        return;
+    }
+    let range = |s: &Spread| format!("{} ({}–{})", ms(s.median), ms(s.min), ms(s.max));
+    let _ = writeln!(
+        w,
+        "\nSide by side: per backend/path, GPU ms where measured and wall ms (median of the timed \
+         frames, then min–max). *faster* names a backend/path only where its slowest frame beats \
+         every other's fastest (GPU time where all have it, else wall): overlapping ranges support \
+         no ordering.\n"
+    );
+    let mut head = "| technique | lost | EPR |".to_string();
+    for l in &labels {
+        let _ = write!(head, " {l} GPU ms | {l} wall ms |");
+    }
+    let _ = writeln!(w, "{head} faster |");
+    let _ = writeln!(w, "|---|---|---|{}---|", "---|---|".repeat(labels.len()));
+    let mut techniques: Vec<&str> = Vec::new();
+    for r in &rows {
+        if !techniques.contains(&r.technique.as_str()) {
+            techniques.push(&r.technique);
+        }
+    }
+    for t in techniques {
+        let mine: Vec<&&Row> = rows.iter().filter(|r| r.technique == t).collect();
+        let first = mine[0];
+        let mut line = format!("| {t} | {} | {} |", first.lost, percent(first.epr));
+        for l in &labels {
+            match mine.iter().find(|r| row_label(r) == *l) {
+                Some(r) => {
+                    let gpu = r.gpu_ms.as_ref().map_or("-".into(), range);
+                    let _ = write!(line, " {gpu} | {} |", range(&r.wall_ms));
+                }
+                None => line.push_str(" - | - |"),
+            }
+        }
+        let all_gpu = mine.iter().all(|r| r.gpu_ms.is_some());
+        let labelled: Vec<(String, &Spread)> = mine
+            .iter()
+            .map(|r| {
+                (row_label(r), if all_gpu { r.gpu_ms.as_ref().unwrap_or(&r.wall_ms) } else { &r.wall_ms })
+            })
+            .collect();
+        let spreads: Vec<(&str, &Spread)> = labelled.iter().map(|(l, s)| (l.as_str(), *s)).collect();
+        let verdict = separated_fastest(&spreads).unwrap_or("overlap");
+        let _ = writeln!(line, " {verdict} |");
+        w.push_str(&line);
+    }
+}
+
 /// Reads the `report.json` that [`write_report`] wrote into `dir`, to draw it again (`oit bench
 /// --replot DIR`) without measuring again.
 pub fn read_report(dir: &Path) -> Result<Report, OitError> {
@@ -148,6 +218,13 @@ fn check_numbers(report: &Report) -> Result<(), String> {
         check(
             &format!("matrix[{i}].max_diff"),
             f64::from(m.max_diff),
+            0.0,
+            255.0,
+            "a difference is 8-bit steps",
+        )?;
+        check(
+            &format!("matrix[{i}].max_diff_off_edges"),
+            f64::from(m.max_diff_off_edges),
             0.0,
             255.0,
             "a difference is 8-bit steps",
@@ -396,6 +473,7 @@ fn markdown(report: &Report, trade: &[(String, String, f64)], curves: &[(&str, S
                 r.psnr.map_or("inf".into(), |p| format!("{p:.1}")),
             );
         }
+        side_by_side(w, report, &scene.name);
         if let Some((_, stem, floor)) = trade.iter().find(|(s, _, _)| *s == scene.name) {
             let _ = writeln!(
                 w,
@@ -447,24 +525,33 @@ fn markdown(report: &Report, trade: &[(String, String, f64)], curves: &[(&str, S
     let _ = writeln!(
         w,
         "Per technique, every pair of backend/paths on the same scene and view: the largest 8-bit \
-         channel difference between their images and the share of pixels (covered by the first's \
-         reference) that differ by more than 1.\n"
+         channel difference between their images, the same off projected triangle edges, and the \
+         share of pixels (covered by the first's reference) that differ by more than 1. Each pair \
+         is held to the conformance bounds: at most 1 step anywhere between paths that share oit's \
+         fixed-point rules (cpu, compute), at most 1 off the edges where a hardware rasterizer is \
+         one side; a pair that breaks its bound is a failure of the run.\n"
     );
     if report.matrix.is_empty() {
         let _ = writeln!(w, "(one backend/path only: nothing to compare)");
     } else {
-        let _ = writeln!(w, "| scene | technique | a | b | max diff | EPR |");
-        let _ = writeln!(w, "|---|---|---|---|---|---|");
+        let _ = writeln!(w, "| scene | technique | a | b | max diff | off edges | EPR | held |");
+        let _ = writeln!(w, "|---|---|---|---|---|---|---|---|");
         for m in &report.matrix {
             let _ = writeln!(
                 w,
-                "| {} | {} | {} | {} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {} |",
                 m.scene,
                 m.technique,
                 m.a,
                 m.b,
                 m.max_diff,
-                percent(m.epr)
+                m.max_diff_off_edges,
+                percent(m.epr),
+                match (&m.note, m.failed) {
+                    (_, true) => "**FAILED**".to_string(),
+                    (Some(note), false) => note.clone(),
+                    (None, false) => "yes".to_string(),
+                }
             );
         }
     }
@@ -525,7 +612,21 @@ fn markdown(report: &Report, trade: &[(String, String, f64)], curves: &[(&str, S
 
 #[cfg(test)]
 mod tests {
-    use super::slug;
+    use super::{Spread, separated_fastest, slug};
+
+    #[test]
+    fn an_ordering_only_where_the_spreads_separate() {
+        let s = |min, median, max| Spread { median, min, max, q1: median, q3: median, samples: 10 };
+        let (a, b, c) = (s(1.0, 1.1, 1.2), s(1.3, 1.4, 1.5), s(1.15, 1.3, 1.6));
+        assert_eq!(separated_fastest(&[("a", &a), ("b", &b)]), Some("a"));
+        assert_eq!(separated_fastest(&[("b", &b), ("a", &a)]), Some("a"));
+        assert_eq!(
+            separated_fastest(&[("a", &a), ("c", &c)]),
+            None,
+            "a's slowest is slower than c's fastest"
+        );
+        assert_eq!(separated_fastest(&[("a", &a)]), None, "one alone is no ordering");
+    }
 
     #[test]
     fn slugs() {

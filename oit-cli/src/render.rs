@@ -26,7 +26,9 @@ use crate::output::{self, CameraJson};
 )]
 pub struct RenderArgs {
     /// The technique: reference, dp, ddp, wavg, wsum, bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K],
-    /// fabs[:K] or mlp:M (K, M, P from 1 to 65536; K left out is sized from the scene).
+    /// fabs[:K], mlp:M, dfb (dynamic fragment buffer, Maule et al. 2012) or ll (per-pixel linked
+    /// lists, Yang et al. 2010) (K, M, P from 1 to 65536; K left out is sized from the scene; dfb
+    /// and ll allocate exactly the frame's fragments, counted first).
     #[arg(short, long, value_name = "T", default_value = "reference")]
     pub technique: String,
 

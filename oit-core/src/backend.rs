@@ -9,9 +9,9 @@
 //! - [`BucketArray`]: K one-fragment buckets per pixel, updated with MAX;
 //! - [`DepthHistogram`]: a 1024-bit per-pixel presence histogram, updated with OR;
 //! - [`AtomicFragmentList`]: a per-pixel fixed array, by atomic increment or atomic-min insertion;
-//! - [`Compositor`]: sorted fragments to a colour.
+//! - [`Compositor`]: a pixel's fragments, fed in depth order, to a colour.
 
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 use serde::Serialize;
 
 use crate::rules::HISTOGRAM_WORDS;
@@ -181,19 +181,24 @@ pub trait AtomicFragmentList: Sync {
     fn sorted(&self, pixel: usize, out: &mut Vec<u64>);
 }
 
-/// One captured fragment as the resolve sees it.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Sample {
-    /// NDC depth.
-    pub depth: f32,
-    /// Straight-alpha linear colour (transparency) or packed attributes decoded by the effect.
-    pub color: Vec4,
-    /// The normal, for effects that use it.
-    pub normal: Vec3,
-}
-
-/// Sorted fragments to a colour.
+/// A pixel's captured fragments to a colour, fed one at a time in depth order: the resolve every
+/// technique ends in, under the frame's effect (transparency, translucency, Fresnel, complexity).
+///
+/// Streaming, not a sorted slice: the peeling techniques produce a pixel's layers one pass at a
+/// time and never hold them together, and dual depth peeling feeds two sequences (the front
+/// nearest first, the back farthest first) that meet at the end. `push_back` is that second
+/// sequence; a compositor that cannot take it composites it at `finish` from the nearest end.
+/// The per-pixel state is the compositor's own type, kept in locals or a per-pixel array by the
+/// backend. oit-cpu implements it over its f32 resolve (`oit-cpu/src/resolve.rs`); the GPU's
+/// `resolve.wgsl` is the same state machine in WGSL, rule for rule.
 pub trait Compositor {
-    /// The pixel's colour from its fragments, nearest first.
-    fn composite(&self, sorted: &[Sample], background: Vec3) -> Vec3;
+    /// A pixel's state.
+    type State: Default;
+    /// The next fragment behind every fragment pushed so far (`payload`: the technique's packed
+    /// colour, or the normal for Fresnel).
+    fn push(&self, state: &mut Self::State, depth: f32, payload: u32);
+    /// The next fragment in front of every fragment pushed from the back so far.
+    fn push_back(&self, state: &mut Self::State, depth: f32, payload: u32);
+    /// The pixel's linear colour once its fragments are in.
+    fn finish(&self, state: &mut Self::State) -> Vec3;
 }

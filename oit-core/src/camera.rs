@@ -137,6 +137,12 @@ impl Camera {
         let (n, f) = (self.near, self.far);
         n * f / (f - ndc_z * (f - n))
     }
+
+    /// [`Camera::linear_depth`] in f64 (the reference's translucency).
+    pub fn linear_depth_f64(&self, ndc_z: f32) -> f64 {
+        let (n, f, z) = (f64::from(self.near), f64::from(self.far), f64::from(ndc_z));
+        n * f / (f - z * (f - n))
+    }
 }
 
 #[cfg(test)]

@@ -7,6 +7,21 @@
 //! - weighted average (Bavoil & Myers 2008): the α-weighted mean colour, with the mean alpha applied
 //!   n times: `T = (1 − ᾱ)ⁿ`, result `c̄·(1 − T) + background·T`;
 //! - weighted sum (Meshkin 2007): `Σ α·c + background·(1 − Σ α)` (clamped).
+//!
+//! The effects other than transparency, on sorted layers:
+//! - translucency: layers pair up along the ray, 0 entering a medium and 1 leaving it, 2 entering
+//!   and 3 leaving, ... (an unpaired last layer adds nothing); each pair absorbs per channel
+//!   `(1 − c)·k` per unit of view-space distance over its thickness, `c` the entering layer's
+//!   colour and `k` [`Scene::absorption_per_length`](crate::Scene::absorption_per_length); the
+//!   result is the background times the Beer–Lambert transmittance `exp(−Σ (1 − c)·k·thickness)`;
+//! - Fresnel: the background times every layer's Schlick transmittance `1 − (1 − |n·v|)⁵` (no
+//!   index of refraction: F0 = 0, so a layer facing the camera passes everything);
+//! - complexity: the layer count `n` of a pixel as [`heat`]`(n / max)`, `max` the deepest pixel's
+//!   count; the background where there is no layer.
+//!
+//! The techniques' resolve runs these in f32 (oit-cpu's `resolve.rs`, oit-wgpu's `resolve.wgsl`);
+//! the reference runs them in f64 ([`front_to_back_f64`], [`translucency_f64`], [`fresnel_f64`],
+//! [`heat_f64`]), written apart from the f32 resolve so each checks the other.
 
 use glam::{DVec3, Vec3, Vec4};
 
@@ -120,22 +135,50 @@ pub fn schlick_transmittance(cos_theta: f32) -> f32 {
     1.0 - (1.0 - cos_theta.abs().min(1.0)).powi(5)
 }
 
-/// Beer–Lambert transmittance through `thickness` of a medium with absorption `sigma`.
+/// [`schlick_transmittance`] in f64 (the reference).
 #[inline]
-pub fn beer_lambert(sigma: f32, thickness: f32) -> f32 {
-    (-sigma * thickness.max(0.0)).exp()
+pub fn schlick_transmittance_f64(cos_theta: f64) -> f64 {
+    1.0 - (1.0 - cos_theta.abs().min(1.0)).powi(5)
 }
 
-/// Thickness of the medium along a ray from sorted view-space distances: the sum of the gaps
-/// between successive entry/exit pairs (layer 0 to 1, 2 to 3, ...). An unpaired last layer adds
-/// nothing.
-pub fn paired_thickness(sorted_distances: impl IntoIterator<Item = f32>) -> f32 {
-    let mut it = sorted_distances.into_iter();
-    let mut total = 0.0;
-    while let (Some(a), Some(b)) = (it.next(), it.next()) {
-        total += b - a;
-    }
-    total
+/// Fresnel in f64 (the reference): `background` seen through layers whose normals make the
+/// cosines `cos_theta` with the viewing direction (any order: the product does not depend on it).
+pub fn fresnel_f64(cos_theta: impl IntoIterator<Item = f64>, background: DVec3) -> DVec3 {
+    background * cos_theta.into_iter().map(schlick_transmittance_f64).product::<f64>()
+}
+
+/// Beer–Lambert transmittance, per channel, through `thickness` of a medium absorbing `sigma`
+/// per unit of length (a negative thickness, which sorted layers never give, absorbs nothing).
+#[inline]
+pub fn beer_lambert(sigma: DVec3, thickness: f64) -> DVec3 {
+    let t = thickness.max(0.0);
+    DVec3::new((-sigma.x * t).exp(), (-sigma.y * t).exp(), (-sigma.z * t).exp())
+}
+
+/// The media along a ray, from layers sorted nearest first as (view-space distance, payload):
+/// layer 0 enters and layer 1 leaves, 2 enters and 3 leaves, ...; yields each entering layer's
+/// payload and the medium's thickness (leaving distance − entering distance). An unpaired last
+/// layer opens a medium that never closes and yields nothing.
+pub fn paired_layers<T>(sorted: impl IntoIterator<Item = (f64, T)>) -> impl Iterator<Item = (T, f64)> {
+    let mut it = sorted.into_iter();
+    std::iter::from_fn(move || {
+        let (entry, payload) = it.next()?;
+        let (exit, _) = it.next()?;
+        Some((payload, exit - entry))
+    })
+}
+
+/// Translucency in f64 (the reference): layers sorted nearest first as (view-space distance,
+/// straight-alpha colour), paired by [`paired_layers`]; each medium absorbs `(1 − c)·per_length`
+/// per channel, `c` its entering layer's colour ([`beer_lambert`]).
+pub fn translucency_f64(
+    sorted: impl IntoIterator<Item = (f64, [f64; 4])>,
+    per_length: f64,
+    background: DVec3,
+) -> DVec3 {
+    paired_layers(sorted).fold(background, |color, ([r, g, b, _], thickness)| {
+        color * beer_lambert((DVec3::ONE - DVec3::new(r, g, b)) * per_length, thickness)
+    })
 }
 
 /// Linear [0, 1] to 8-bit sRGB.
@@ -154,18 +197,23 @@ pub fn linear_to_srgb8_f64(x: f64) -> u8 {
     (s * 255.0 + 0.5) as u8
 }
 
-/// A colour ramp for heat maps (black → blue → magenta → orange → white), `t` in [0, 1].
+/// The stops of [`heat`]'s ramp, evenly spaced over [0, 1]: black, blue, magenta, orange, white.
+pub const HEAT_STOPS: [[f32; 3]; 5] =
+    [[0.0, 0.0, 0.0], [0.05, 0.1, 0.6], [0.6, 0.05, 0.5], [1.0, 0.5, 0.05], [1.0, 1.0, 1.0]];
+
+/// A colour ramp for heat maps ([`HEAT_STOPS`], linear between them), `t` in [0, 1].
 pub fn heat(t: f32) -> Vec3 {
-    const STOPS: [Vec3; 5] = [
-        Vec3::new(0.0, 0.0, 0.0),
-        Vec3::new(0.05, 0.1, 0.6),
-        Vec3::new(0.6, 0.05, 0.5),
-        Vec3::new(1.0, 0.5, 0.05),
-        Vec3::new(1.0, 1.0, 1.0),
-    ];
-    let t = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) } * (STOPS.len() - 1) as f32;
-    let i = (t.floor() as usize).min(STOPS.len() - 2);
-    STOPS[i].lerp(STOPS[i + 1], t - i as f32)
+    let t = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) } * (HEAT_STOPS.len() - 1) as f32;
+    let i = (t.floor() as usize).min(HEAT_STOPS.len() - 2);
+    Vec3::from(HEAT_STOPS[i]).lerp(Vec3::from(HEAT_STOPS[i + 1]), t - i as f32)
+}
+
+/// [`heat`] in f64 (the reference).
+pub fn heat_f64(t: f64) -> DVec3 {
+    let stop = |i: usize| Vec3::from(HEAT_STOPS[i]).as_dvec3();
+    let t = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) } * (HEAT_STOPS.len() - 1) as f64;
+    let i = (t.floor() as usize).min(HEAT_STOPS.len() - 2);
+    stop(i).lerp(stop(i + 1), t - i as f64)
 }
 
 #[cfg(test)]
@@ -198,11 +246,75 @@ mod tests {
         assert_eq!(weighted_sum(&s, bg), Vec3::new(1.0, 0.0, 0.0));
     }
 
+    /// Pairing: 0 enters and 1 leaves, 2 enters and 3 leaves; a last unpaired layer yields
+    /// nothing. Fails if pairing started at layer 1 (yields ('b', 3) and misses 'c'), or if the
+    /// unpaired layer were closed at infinity or at zero.
     #[test]
-    fn thickness_pairs() {
-        assert_eq!(paired_thickness([1.0, 2.0, 5.0, 7.5]), 3.5);
-        assert_eq!(paired_thickness([1.0, 2.0, 5.0]), 1.0);
-        assert_eq!(paired_thickness([]), 0.0);
+    fn layers_pair_up() {
+        let pairs: Vec<_> = paired_layers([(1.0, 'a'), (2.0, 'b'), (5.0, 'c'), (7.5, 'd')]).collect();
+        assert_eq!(pairs, [('a', 1.0), ('c', 2.5)]);
+        let pairs: Vec<_> = paired_layers([(1.0, 'a'), (2.0, 'b'), (5.0, 'c')]).collect();
+        assert_eq!(pairs, [('a', 1.0)]);
+        assert_eq!(paired_layers::<char>([]).count(), 0);
+    }
+
+    /// Translucency of two media by hand: exp(−(1 − c)·k·thickness) per channel, per medium.
+    /// Fails if the leaving layer's colour were used (its red is 0.5, not 0.25), or the sign of
+    /// the exponent flipped.
+    #[test]
+    fn translucency_by_hand() {
+        let bg = DVec3::new(1.0, 0.5, 0.25);
+        let layers = [
+            (2.0, [0.25, 1.0, 0.0, 0.3]),
+            (3.5, [0.5, 0.5, 0.5, 0.3]),
+            (4.0, [0.0, 0.5, 1.0, 0.3]),
+            (4.5, [1.0, 1.0, 1.0, 0.3]),
+        ];
+        let k = 0.8;
+        let got = translucency_f64(layers, k, bg);
+        // medium 1: 1.5 long, entered at (0.25, 1, 0), absorbing (0.75, 0, 1)·k; medium 2: 0.5
+        // long, entered at (0, 0.5, 1), absorbing (1, 0.5, 0)·k
+        let want = DVec3::new(
+            (-0.75 * k * 1.5f64).exp() * (-k * 0.5f64).exp(),
+            0.5 * (-0.5 * k * 0.5f64).exp(),
+            0.25 * (-k * 1.5f64).exp(),
+        );
+        assert!((got - want).abs().max_element() < 1e-15, "{got} {want}");
+        assert_eq!(beer_lambert(DVec3::ONE, -1.0), DVec3::ONE, "no negative thickness");
+    }
+
+    /// Schlick with F0 = 0: 1 at normal incidence, 0 at grazing, 1 − (1/2)⁵ at 60°, and
+    /// symmetric in the normal's side. Fails if the power were 4 (15/16 at 60°) or `abs` dropped.
+    #[test]
+    fn schlick_closed_forms() {
+        assert_eq!(schlick_transmittance_f64(1.0), 1.0);
+        assert_eq!(schlick_transmittance_f64(-1.0), 1.0);
+        assert_eq!(schlick_transmittance_f64(0.0), 0.0);
+        assert!((schlick_transmittance_f64(0.5) - 31.0 / 32.0).abs() < 1e-15);
+        assert!((schlick_transmittance_f64(-0.5) - 31.0 / 32.0).abs() < 1e-15);
+        let bg = DVec3::splat(0.5);
+        assert!((fresnel_f64([0.5, -0.5], bg) - bg * (31.0f64 / 32.0).powi(2)).abs().max_element() < 1e-15);
+        // the f32 resolve's Schlick agrees within f32 rounding
+        for c in [-1.0f32, -0.3, 0.0, 0.1, 0.5, 0.99, 1.0] {
+            let d = schlick_transmittance(c) as f64 - schlick_transmittance_f64(c as f64);
+            assert!(d.abs() < 1e-6, "{c}: {d}");
+        }
+    }
+
+    /// The heat ramp at its stops and midway between them, in f32 and f64. Fails if a stop
+    /// were skipped (t·3 for t·4) or the ramp ran backwards.
+    #[test]
+    fn heat_at_stops() {
+        for (i, stop) in HEAT_STOPS.iter().enumerate() {
+            let t = i as f64 / 4.0;
+            assert_eq!(heat_f64(t), Vec3::from(*stop).as_dvec3(), "stop {i}");
+            assert_eq!(heat(t as f32), Vec3::from(*stop), "stop {i}");
+        }
+        let mid = heat_f64(0.125);
+        // 1e-7: the stops are f32
+        assert!((mid - DVec3::new(0.025, 0.05, 0.3)).abs().max_element() < 1e-7, "{mid}");
+        assert_eq!(heat_f64(f64::NAN), DVec3::ZERO);
+        assert_eq!(heat_f64(2.0), DVec3::ONE);
     }
 
     #[test]

@@ -35,7 +35,6 @@ mod technique;
 
 pub use backend::{
     AtomicFragmentList, Backend, BucketArray, Capabilities, Compositor, DepthHistogram, OnPath, Prepared,
-    Sample,
 };
 pub use camera::{Camera, View};
 pub use error::OitError;

@@ -135,6 +135,69 @@ pub fn error_image(reference: &Frame, image: &Image) -> Image {
     out
 }
 
+/// Pixels whose centre lies within `r` pixels of a projected triangle edge of `scene` under
+/// `camera`, in a `width`×`height` image (row-major, top row first). Two rasterizers may disagree
+/// on these pixels (each snaps vertices and breaks edge ties its own way); on every other pixel
+/// they cover the same triangles. A triangle with a vertex behind the eye marks the whole image
+/// (its projected edges are not segments): the scenes of the suite are fitted by the camera and
+/// never have one.
+pub fn edge_mask(scene: &crate::Scene, camera: &crate::Camera, width: u32, height: u32, r: f32) -> Vec<bool> {
+    use glam::Vec2;
+    let vp = camera.view_proj();
+    let (w, h) = (width as f32, height as f32);
+    let mut mask = vec![false; (width * height) as usize];
+    for inst in &scene.instances {
+        let (_, mesh) = scene.instance_parts(inst);
+        let clip: Vec<glam::Vec4> =
+            mesh.positions.iter().map(|p| vp * inst.transform.transform_point3(*p).extend(1.0)).collect();
+        for t in &mesh.indices {
+            let c = t.map(|i| clip[i as usize]);
+            if c.iter().any(|v| v.w <= 0.0) {
+                mask.fill(true);
+                return mask;
+            }
+            let s = c.map(|v| {
+                let n = v.truncate() / v.w;
+                Vec2::new((n.x * 0.5 + 0.5) * w, (0.5 - n.y * 0.5) * h)
+            });
+            for k in 0..3 {
+                let (a, b) = (s[k], s[(k + 1) % 3]);
+                // the pixels of the segment's bounding box grown by r
+                let lo = a.min(b) - Vec2::splat(r + 0.5);
+                let hi = a.max(b) + Vec2::splat(r + 0.5);
+                let (x0, y0) = (lo.x.max(0.0) as u32, lo.y.max(0.0) as u32);
+                let (x1, y1) = (hi.x.min(w - 1.0).max(0.0) as u32, hi.y.min(h - 1.0).max(0.0) as u32);
+                let ab = b - a;
+                for y in y0..=y1 {
+                    for x in x0..=x1 {
+                        let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                        let t = ((p - a).dot(ab) / ab.length_squared().max(1e-12)).clamp(0.0, 1.0);
+                        if (a + ab * t - p).length() < r {
+                            mask[(y * width + x) as usize] = true;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    mask
+}
+
+/// Over the pixels `mask` leaves out: the worst channel difference (RGB) between `a` and `b`, and
+/// how many pixels differ by more than 1.
+pub fn differ_off_mask(a: &Image, b: &Image, mask: &[bool]) -> (u8, usize) {
+    let (mut worst, mut differ) = (0u8, 0usize);
+    for ((p, q), &edge) in a.pixels.iter().zip(&b.pixels).zip(mask) {
+        if edge {
+            continue;
+        }
+        let d = (0..3).map(|i| p[i].abs_diff(q[i])).max().unwrap_or(0);
+        worst = worst.max(d);
+        differ += usize::from(d > 1);
+    }
+    (worst, differ)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,6 +1,7 @@
 //! A technique's plan for one frame: the rules every backend executes and none restates — what
 //! the combination of technique and settings refuses, how many capture passes run, when peeling
-//! stops, how scene-sized arrays are sized, what the 32-bit `mdts` stores for alpha.
+//! stops, how scene-sized arrays are sized, what the 32-bit `mdts` stores for alpha, and the
+//! storage a frame allocates.
 //!
 //! Backends build one [`Plan`] per frame ([`Plan::new`], before allocating anything) and ask it;
 //! the WGSL mirrors of the per-fragment rules (bucket index, eq. 5, packing) live in
@@ -15,8 +16,25 @@ pub enum Sizing {
     Fixed(u32),
     /// From the scene: a counting pass measures the deepest pixel ([`Plan::slots`]).
     FromCount,
+    /// Exactly the frame's fragments (`dfb`, `ll`): a counting pass totals them
+    /// ([`Counted::fragments`]), and storage is a per-pixel part and one entry per fragment.
+    Exact,
     /// The technique has no per-pixel array whose size follows the scene.
     None,
+}
+
+/// Bytes of the resolve state every technique keeps per pixel (23 words: the composite's 16 and
+/// the ties' 7), counted in [`Plan::storage_bytes`] and not in `Stats::storage_bytes`.
+pub const RESOLVE_STATE_BYTES: u64 = 92;
+
+/// What a frame's counting pass found: the deepest pixel's fragments and the frame's. Zeros
+/// (`Counted::default()`) before a count, or for a technique that runs none.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counted {
+    /// Fragments of the deepest pixel.
+    pub deepest: u32,
+    /// Fragments of the whole frame (one geometry pass's).
+    pub fragments: u64,
 }
 
 /// The plan of one frame: see the module docs.
@@ -40,9 +58,9 @@ pub struct Plan {
     /// reference's order. `dp`, `ddp`, `mlp`, `mdts64` (depth bits above the payload in one 64-bit
     /// atomic word: no room for an id), `mdts` (20 depth bits above colour bits: equal at 2⁻²⁰)
     /// and `bdp`'s depth mode (a subinterval's min and max keys). Not `fabs`: it carries the
-    /// primitive id and sorts by (depth, id) as the reference does; not the colour mode of `bdp`,
-    /// `adp` (equal depths share a bucket: one is kept, the other counted in `lost`) nor the
-    /// order-free `wavg`/`wsum`.
+    /// primitive id and sorts by (depth, id) as the reference does, nor `dfb` and `ll`, whose
+    /// entries carry it likewise; not the colour mode of `bdp`, `adp` (equal depths share a
+    /// bucket: one is kept, the other counted in `lost`) nor the order-free `wavg`/`wsum`.
     pub count_ties: bool,
 }
 
@@ -66,6 +84,7 @@ impl Plan {
                 k.map_or(Sizing::FromCount, Sizing::Fixed)
             }
             Technique::Mlp { m } => Sizing::Fixed(m),
+            Technique::Dfb | Technique::Ll => Sizing::Exact,
             _ => Sizing::None,
         };
         // alpha is not stored by mdts: the override, else the mean of the objects' alphas
@@ -100,18 +119,35 @@ impl Plan {
     pub fn slots(&self, deepest: u32) -> u32 {
         match self.sizing {
             Sizing::Fixed(k) => k,
-            Sizing::FromCount | Sizing::None => deepest.max(1),
+            Sizing::FromCount | Sizing::Exact | Sizing::None => deepest.max(1),
         }
     }
 
-    /// Bytes of storage a frame of this plan allocates over `pixels` pixels with `slots` slots a
-    /// pixel ([`Plan::slots`]; for the reference, the deepest pixel's count, 0 before it is known):
+    /// Bytes of storage a frame of this plan allocates over `pixels` pixels, given what its
+    /// counting pass found (`Counted::default()` before it is known; the slots a pixel are
+    /// [`Plan::slots`] of the deepest pixel, and for the reference the deepest pixel's count):
     /// the technique's per-pixel arrays (as oit-cpu lays them out; oit-wgpu's are the same words)
     /// and the resolve state every technique keeps. One number both backends check against their
     /// memory budget ([`Plan::check_budget`]) before they allocate.
-    pub fn storage_bytes(&self, pixels: u64, slots: u32) -> u64 {
+    ///
+    /// `dfb` and `ll` need exactly what the frame's fragments need: a fragment is a 64-bit key
+    /// (depth bits, primitive id) and a 32-bit payload, 12 bytes; `dfb` adds a count and an offset
+    /// a pixel (each array one entry longer, the offsets' last entry the total), `ll` a head a
+    /// pixel, a 4-byte link a node and the node counter. Their prefix sum's block totals on the GPU
+    /// (one word per 256 pixels and per 256 of those) are bookkeeping, not counted, as the
+    /// counting pass's own counters are not.
+    pub fn storage_bytes(&self, pixels: u64, counted: Counted) -> u64 {
         use crate::rules::{BDP_COLOR_SUBINTERVALS, BDP_DEPTH_SUBINTERVALS, BUCKETS, HISTOGRAM_WORDS};
-        let k = u64::from(slots);
+        let k = u64::from(match self.technique {
+            Technique::Reference => counted.deepest,
+            _ => self.slots(counted.deepest),
+        });
+        let exact = |per_pixel: u64, fixed: u64, per_fragment: u64| {
+            pixels
+                .saturating_mul(per_pixel.saturating_add(RESOLVE_STATE_BYTES))
+                .saturating_add(fixed)
+                .saturating_add(counted.fragments.saturating_mul(per_fragment))
+        };
         let per_pixel = match self.technique {
             Technique::Reference => 4 + 12 * k,
             Technique::Dp => 8,
@@ -124,22 +160,38 @@ impl Plan {
             Technique::Adp => 8 + 4 * HISTOGRAM_WORDS as u64 + 8 * BUCKETS as u64,
             Technique::Mdts { .. } | Technique::Mdts64 { .. } | Technique::Mlp { .. } => 8 * k,
             Technique::Fabs { .. } => 4 + 12 * k,
+            Technique::Dfb => return exact(8, 8, 12),
+            Technique::Ll => return exact(4, 4, 16),
         };
-        // the resolve state (23 words a pixel)
-        pixels.saturating_mul(per_pixel.saturating_add(92))
+        pixels.saturating_mul(per_pixel.saturating_add(RESOLVE_STATE_BYTES))
     }
 
     /// Checks [`Plan::storage_bytes`] against `budget` (a name and bytes: the host's available
     /// memory, a device's): a clear error naming the size, the budget and what helps.
-    pub fn check_budget(&self, pixels: u64, slots: u32, budget: (&str, u64)) -> Result<u64, OitError> {
-        let needed = self.storage_bytes(pixels, slots);
+    pub fn check_budget(&self, pixels: u64, counted: Counted, budget: (&str, u64)) -> Result<u64, OitError> {
+        let needed = self.storage_bytes(pixels, counted);
         check_total(&format!("{} storage of a frame of {pixels} pixels", self.technique), needed, budget)?;
         Ok(needed)
     }
 
+    /// The fragments of an exact allocation (`dfb`, `ll`) as the 32-bit index both backends give
+    /// them (per-pixel offsets, node indices; `ll`'s end-of-list marker is `u32::MAX`), or a
+    /// clear error naming the limit and what helps.
+    pub fn check_fragments(&self, fragments: u64) -> Result<u32, OitError> {
+        const LIMIT: u64 = u32::MAX as u64 - 1;
+        let per_fragment = if self.technique == Technique::Ll { 16 } else { 12 };
+        u32::try_from(fragments).ok().filter(|&n| u64::from(n) <= LIMIT).ok_or_else(|| OitError::TooLarge {
+            what: format!("{} storage of {fragments} fragments", self.technique),
+            needed: fragments.saturating_mul(per_fragment),
+            limit_name: "32-bit fragment indices (2³² − 2 fragments)".into(),
+            limit: LIMIT * per_fragment,
+            hint: "use a smaller --size, or a fixed size per pixel (fabs:K)".into(),
+        })
+    }
+
     /// True when the technique needs the counting pass before it can size its arrays.
     pub fn needs_count(&self) -> bool {
-        self.sizing == Sizing::FromCount
+        matches!(self.sizing, Sizing::FromCount | Sizing::Exact)
     }
 
     /// The stop rule of peeling and batching: after `done` peels (or capture passes, or adp
@@ -233,12 +285,22 @@ mod tests {
     fn storage_budget() {
         let p = plan("bdp:1000", |_| {}).unwrap();
         let px = 512 * 512;
-        assert!(p.storage_bytes(px, 1) > 60 << 30);
-        let e = p.check_budget(px, 1, ("test budget", 24 << 30)).unwrap_err().to_string();
+        let one = Counted { deepest: 1, fragments: px };
+        assert!(p.storage_bytes(px, one) > 60 << 30);
+        let e = p.check_budget(px, one, ("test budget", 24 << 30)).unwrap_err().to_string();
         assert!(e.contains("test budget") && e.contains("smaller --size"), "{e}");
-        assert!(plan("bdp", |_| {}).unwrap().check_budget(px, 1, ("test budget", 1 << 30)).is_ok());
+        assert!(plan("bdp", |_| {}).unwrap().check_budget(px, one, ("test budget", 1 << 30)).is_ok());
         let fabs = plan("fabs:4", |_| {}).unwrap();
-        assert_eq!(fabs.storage_bytes(10, 4), 10 * (4 + 48 + 92));
+        let counted = Counted { deepest: 9, fragments: 25 };
+        assert_eq!(fabs.storage_bytes(10, counted), 10 * (4 + 48 + 92));
+        assert_eq!(plan("fabs", |_| {}).unwrap().storage_bytes(10, counted), 10 * (4 + 9 * 12 + 92));
+        // exact allocation: per pixel, then per fragment, whatever the deepest pixel
+        assert_eq!(plan("dfb", |_| {}).unwrap().storage_bytes(10, counted), 10 * (8 + 92) + 8 + 25 * 12);
+        assert_eq!(plan("ll", |_| {}).unwrap().storage_bytes(10, counted), 10 * (4 + 92) + 4 + 25 * 16);
+        assert_eq!(plan("dfb", |_| {}).unwrap().storage_bytes(10, Counted::default()), 10 * 100 + 8);
+        assert_eq!(plan("ll", |_| {}).unwrap().check_fragments(7).unwrap(), 7);
+        let e = plan("ll", |_| {}).unwrap().check_fragments(1 << 32).unwrap_err().to_string();
+        assert!(e.contains("32-bit fragment indices") && e.contains("fabs:K"), "{e}");
         assert!(host_memory_budget().1 > 0);
     }
 
@@ -248,6 +310,9 @@ mod tests {
         assert_eq!(plan("fabs", |_| {}).unwrap().slots(7), 7);
         assert_eq!(plan("fabs:3", |_| {}).unwrap().slots(7), 3);
         assert!(plan("mdts", |_| {}).unwrap().needs_count());
+        assert!(plan("dfb", |_| {}).unwrap().needs_count() && plan("ll", |_| {}).unwrap().needs_count());
+        assert!(!plan("fabs:3", |_| {}).unwrap().needs_count());
+        assert!(!plan("dfb", |_| {}).unwrap().count_ties && !plan("ll", |_| {}).unwrap().count_ties);
         assert_eq!(plan("mdts", |s| s.alpha = Some(1.0)).unwrap().mdts_alpha8, 255);
         assert_eq!(plan("mdts", |s| s.alpha = Some(0.5)).unwrap().mdts_alpha8, 128);
         assert_eq!(plan("mdts", |s| s.alpha = Some(-3.0)).unwrap().mdts_alpha8, 0);

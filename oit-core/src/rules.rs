@@ -13,7 +13,7 @@
 //!   ([`pack_rgba8`]). Every technique, the reference included, composites these quantized
 //!   colours, so exact techniques can match the reference bit for bit.
 
-use glam::{Vec2, Vec3, Vec4};
+use glam::{DVec3, Vec2, Vec3, Vec4};
 
 /// Number of subintervals in [`bucket_index`]'s depth mode (pairs of min/max buckets).
 pub const BDP_DEPTH_SUBINTERVALS: u32 = 16;
@@ -235,6 +235,20 @@ pub fn unpack_normal(p: u32) -> Vec3 {
     n.normalize_or(Vec3::Z)
 }
 
+/// [`unpack_normal`] in f64 (the reference's Fresnel).
+#[inline]
+pub fn unpack_normal_f64(p: u32) -> DVec3 {
+    let f = |v: u32| (v as f64 / 65535.0) * 2.0 - 1.0;
+    let (x, y) = (f(p & 0xffff), f(p >> 16));
+    let mut n = DVec3::new(x, y, 1.0 - x.abs() - y.abs());
+    if n.z < 0.0 {
+        let (ox, oy) = (n.x, n.y);
+        n.x = (1.0 - oy.abs()) * ox.signum();
+        n.y = (1.0 - ox.abs()) * oy.signum();
+    }
+    n.normalize_or(DVec3::Z)
+}
+
 #[cfg(test)]
 mod tests {
 
@@ -384,6 +398,8 @@ mod tests {
         ] {
             let back = unpack_normal(pack_normal(n));
             assert!((back - n).length() < 1e-3, "{n} -> {back}");
+            let back64 = unpack_normal_f64(pack_normal(n));
+            assert!((back64.as_vec3() - back).length() < 1e-6, "{n} -> {back64}");
         }
     }
 }

@@ -305,6 +305,18 @@ impl Scene {
         self.instances.iter().fold(Aabb::EMPTY, |b, i| b.union(&self.instance_bounds(i)))
     }
 
+    /// Translucency's absorption per unit of view-space distance: the objects' mean absorption
+    /// σ (1 without objects) per 1/8 of the scene's bounding radius, so a scene of any scale
+    /// absorbs alike. One value for the whole scene: the effect does not tell objects apart.
+    pub fn absorption_per_length(&self) -> f64 {
+        let sigma = if self.objects.is_empty() {
+            1.0
+        } else {
+            self.objects.iter().map(|o| f64::from(o.absorption)).sum::<f64>() / self.objects.len() as f64
+        };
+        sigma / (f64::from(self.bounds().radius()).max(1e-6) / 8.0)
+    }
+
     /// Checks the scene before any raster: finite data, valid references, something to draw.
     pub fn validate(&self) -> Result<(), OitError> {
         for m in &self.meshes {

@@ -11,7 +11,8 @@ use crate::OitError;
 /// A technique and its parameters.
 ///
 /// Parameters left out (`fabs`, `mdts`, `mdts64`) are sized from the scene: a counting pass
-/// measures the deepest pixel and the arrays get exactly that many slots.
+/// measures the deepest pixel and the arrays get exactly that many slots. `dfb` and `ll` take no
+/// parameter: a counting pass sizes their storage to exactly the frame's fragments.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Technique {
     /// Every fragment, sorted by (depth, primitive id), composited in f64: the ground truth.
@@ -52,6 +53,12 @@ pub enum Technique {
         /// Layers per pass (≥ 1).
         m: u32,
     },
+    /// Dynamic fragment buffer (Maule et al. 2012): a counting pass, a prefix sum of the counts
+    /// into per-pixel offsets, a fill pass into exactly the fragments' storage, a per-pixel sort.
+    Dfb,
+    /// Per-pixel linked lists (Yang et al. 2010): a head per pixel and a node pool sized from a
+    /// counting pass, filled by atomic counter and exchange; each list sorted at resolve.
+    Ll,
 }
 
 /// The kind of a technique, parameters dropped: what a backend's capabilities list.
@@ -70,11 +77,13 @@ pub enum TechniqueKind {
     Mdts64,
     Fabs,
     Mlp,
+    Dfb,
+    Ll,
 }
 
 impl TechniqueKind {
     /// Every kind, in catalogue order.
-    pub const ALL: [TechniqueKind; 11] = [
+    pub const ALL: [TechniqueKind; 13] = [
         TechniqueKind::Reference,
         TechniqueKind::Dp,
         TechniqueKind::Ddp,
@@ -86,12 +95,14 @@ impl TechniqueKind {
         TechniqueKind::Mdts64,
         TechniqueKind::Fabs,
         TechniqueKind::Mlp,
+        TechniqueKind::Dfb,
+        TechniqueKind::Ll,
     ];
 }
 
 /// The names `parse` accepts, for messages.
 pub const KNOWN_TECHNIQUES: &str =
-    "reference, dp, ddp, wavg, wsum, bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K], fabs[:K], mlp:M";
+    "reference, dp, ddp, wavg, wsum, bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K], fabs[:K], mlp:M, dfb, ll";
 
 /// Largest K or M accepted (a pixel with this many layers is already far past any real scene).
 pub const MAX_PARAMETER: u32 = 65_536;
@@ -111,6 +122,8 @@ impl Technique {
             Technique::Mdts64 { k: None },
             Technique::Fabs { k: None },
             Technique::Mlp { m: 4 },
+            Technique::Dfb,
+            Technique::Ll,
         ]
     }
 
@@ -148,6 +161,8 @@ impl Technique {
             Technique::Mdts64 { .. } => TechniqueKind::Mdts64,
             Technique::Fabs { .. } => TechniqueKind::Fabs,
             Technique::Mlp { .. } => TechniqueKind::Mlp,
+            Technique::Dfb => TechniqueKind::Dfb,
+            Technique::Ll => TechniqueKind::Ll,
         }
     }
 
@@ -161,6 +176,8 @@ impl Technique {
                 | Technique::Mdts64 { .. }
                 | Technique::Fabs { .. }
                 | Technique::Mlp { .. }
+                | Technique::Dfb
+                | Technique::Ll
         )
     }
 }
@@ -185,6 +202,8 @@ impl fmt::Display for Technique {
             Technique::Mdts64 { k } => opt(f, "mdts64", k),
             Technique::Fabs { k } => opt(f, "fabs", k),
             Technique::Mlp { m } => write!(f, "mlp:{m}"),
+            Technique::Dfb => write!(f, "dfb"),
+            Technique::Ll => write!(f, "ll"),
         }
     }
 }
@@ -232,6 +251,8 @@ impl FromStr for Technique {
             "mdts64" => Ok(Technique::Mdts64 { k: param.map(number).transpose()? }),
             "fabs" => Ok(Technique::Fabs { k: param.map(number).transpose()? }),
             "mlp" => Ok(Technique::Mlp { m: param.map(number).transpose()?.unwrap_or(4) }),
+            "dfb" => none(Technique::Dfb),
+            "ll" => none(Technique::Ll),
             _ => Err(err("not in the catalogue".into())),
         }
     }
@@ -347,6 +368,8 @@ mod tests {
             "fabs",
             "fabs:16",
             "mlp:4",
+            "dfb",
+            "ll",
         ] {
             let t: Technique = name.parse().unwrap();
             assert_eq!(t.to_string(), name);
@@ -357,7 +380,7 @@ mod tests {
 
     #[test]
     fn bad_names_are_errors() {
-        for bad in ["", "nope", "fabs:0", "fabs:x", "dp:3", "mlp:-1", "bdp:99999999"] {
+        for bad in ["", "nope", "fabs:0", "fabs:x", "dp:3", "mlp:-1", "bdp:99999999", "dfb:4", "ll:2"] {
             assert!(bad.parse::<Technique>().is_err(), "{bad}");
         }
     }

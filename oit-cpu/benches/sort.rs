@@ -2,7 +2,9 @@
 //! sorting network (padded to a power of two, as a GPU resolve would run it), the standard
 //! library's stable merge sort (driftsort) and its unstable pdqsort, by n.
 //!
-//! `cargo bench -p oit-cpu --bench sort`
+//! Each sort's output is checked against the standard library's before it is timed.
+//!
+//! `cargo bench -p oit-cpu --bench sort` (`cargo test` runs each once, in criterion's test mode)
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
@@ -77,6 +79,13 @@ fn bench(c: &mut Criterion) {
             ("pdq", |k: &mut [u64]| k.sort_unstable()),
         ];
         for (name, sort) in sorts {
+            // a sort that does not sort is not timed: each must give the standard library's order
+            for list in &input {
+                let (mut mine, mut expected) = (list.clone(), list.clone());
+                sort(&mut mine);
+                expected.sort_unstable();
+                assert_eq!(mine, expected, "{name} does not sort {n} keys");
+            }
             g.bench_with_input(BenchmarkId::new(name, n), &input, |b, input| {
                 b.iter_batched_ref(
                     || input.clone(),

@@ -102,7 +102,7 @@ impl CpuPrepared<'_> {
         // (sizes from a counting pass are checked again as they are allocated)
         plan.check_budget(
             settings.pixel_count() as u64,
-            plan.slots(0),
+            oit_core::plan::Counted::default(),
             oit_core::plan::host_memory_budget(),
         )?;
         let start = Instant::now();
@@ -123,6 +123,8 @@ impl CpuPrepared<'_> {
             Technique::Mdts64 { .. } => technique::mdts::render64(&mut ctx),
             Technique::Fabs { .. } => technique::fabs::render(&mut ctx),
             Technique::Mlp { m } => technique::mlp::render(&mut ctx, m),
+            Technique::Dfb => technique::dfb::render(&mut ctx),
+            Technique::Ll => technique::ll::render(&mut ctx),
         }?;
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(frame)

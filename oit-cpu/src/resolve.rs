@@ -12,7 +12,7 @@
 use glam::{Vec3, Vec4};
 use oit_core::composite::{FrontToBack, heat, linear_to_srgb8, schlick_transmittance};
 use oit_core::rules::{depth_bits, unpack_normal, unpack_rgba8};
-use oit_core::{Camera, Effect, Image, Scene, Settings};
+use oit_core::{Camera, Compositor, Effect, Image, Scene, Settings};
 
 /// The run of equal depths a sequence of pushes ends in.
 #[derive(Clone, Copy, Debug, Default)]
@@ -108,86 +108,21 @@ pub(crate) struct Resolve<'a> {
     pub effect: Effect,
     pub camera: &'a Camera,
     pub background: Vec3,
-    /// Translucency: absorption σ per unit of length, the unit being 1/8 of the scene radius (so
-    /// an object of a scene of any scale absorbs alike).
-    sigma: f32,
-    radius: f32,
+    /// Translucency: absorption per unit of view-space distance
+    /// ([`Scene::absorption_per_length`]).
+    per_length: f32,
     /// Whether ties are counted (the plan's `count_ties`).
     pub count_ties: bool,
 }
 
 impl<'a> Resolve<'a> {
     pub fn new(scene: &Scene, camera: &'a Camera, settings: &Settings) -> Self {
-        let sigma = if scene.objects.is_empty() {
-            1.0
-        } else {
-            scene.objects.iter().map(|o| o.absorption).sum::<f32>() / scene.objects.len() as f32
-        };
         Resolve {
             effect: settings.effect,
             camera,
             background: settings.background,
-            sigma,
-            radius: scene.bounds().radius().max(1e-6) / 8.0,
+            per_length: scene.absorption_per_length() as f32,
             count_ties: false,
-        }
-    }
-
-    /// The next fragment behind everything pushed so far.
-    #[inline]
-    pub fn push(&self, s: &mut PixelState, depth: f32, payload: u32) {
-        s.captured += 1;
-        if self.count_ties {
-            s.tied += s.front_run.push(depth_bits(depth), payload);
-        }
-        match self.effect {
-            Effect::Transparency => s.front.under(unpack_rgba8(payload)),
-            Effect::Complexity => {}
-            Effect::Fresnel => {
-                let n = unpack_normal(payload);
-                s.fresnel *= schlick_transmittance(n.dot(self.camera.forward));
-            }
-            Effect::Translucency => {
-                let dist = self.camera.linear_depth(depth);
-                match s.entry.take() {
-                    None => s.entry = Some((dist, unpack_rgba8(payload))),
-                    Some((d0, c)) => {
-                        let absorb = (Vec3::ONE - c.truncate()) * self.sigma / self.radius;
-                        s.optical += absorb * (dist - d0).max(0.0);
-                    }
-                }
-            }
-        }
-    }
-
-    /// The next fragment in front of everything pushed from the back so far (dual depth peeling).
-    #[inline]
-    pub fn push_back(&self, s: &mut PixelState, depth: f32, payload: u32) {
-        if self.effect == Effect::Transparency {
-            s.captured += 1;
-            if self.count_ties {
-                s.tied += s.back_run.push(depth_bits(depth), payload);
-            }
-            let back = s.back.unwrap_or(self.background);
-            s.back = Some(oit_core::composite::over(back, unpack_rgba8(payload)));
-        } else {
-            s.back_stack.push((depth, payload));
-        }
-    }
-
-    /// The final linear colour of a pixel (heat maps are finished by [`Resolve::image`]).
-    pub fn finish(&self, s: &mut PixelState) -> Vec3 {
-        while let Some((d, p)) = s.back_stack.pop() {
-            self.push(s, d, p);
-        }
-        match self.effect {
-            Effect::Transparency => s.front.over(s.back.unwrap_or(self.background)),
-            Effect::Complexity => Vec3::ZERO,
-            Effect::Fresnel => self.background * s.fresnel,
-            Effect::Translucency => {
-                let t = Vec3::new((-s.optical.x).exp(), (-s.optical.y).exp(), (-s.optical.z).exp());
-                self.background * t
-            }
         }
     }
 
@@ -214,8 +149,303 @@ impl<'a> Resolve<'a> {
     }
 }
 
+/// The f32 resolve every technique of oit-cpu composites through (the reference has its own f64
+/// code in `technique/reference.rs`).
+impl Compositor for Resolve<'_> {
+    type State = PixelState;
+
+    /// The next fragment behind everything pushed so far.
+    #[inline]
+    fn push(&self, s: &mut PixelState, depth: f32, payload: u32) {
+        s.captured += 1;
+        if self.count_ties {
+            s.tied += s.front_run.push(depth_bits(depth), payload);
+        }
+        match self.effect {
+            Effect::Transparency => s.front.under(unpack_rgba8(payload)),
+            Effect::Complexity => {}
+            Effect::Fresnel => {
+                let n = unpack_normal(payload);
+                s.fresnel *= schlick_transmittance(n.dot(self.camera.forward));
+            }
+            Effect::Translucency => {
+                let dist = self.camera.linear_depth(depth);
+                match s.entry.take() {
+                    None => s.entry = Some((dist, unpack_rgba8(payload))),
+                    Some((d0, c)) => {
+                        let absorb = (Vec3::ONE - c.truncate()) * self.per_length;
+                        s.optical += absorb * (dist - d0).max(0.0);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The next fragment in front of everything pushed from the back so far (dual depth peeling).
+    #[inline]
+    fn push_back(&self, s: &mut PixelState, depth: f32, payload: u32) {
+        if self.effect == Effect::Transparency {
+            s.captured += 1;
+            if self.count_ties {
+                s.tied += s.back_run.push(depth_bits(depth), payload);
+            }
+            let back = s.back.unwrap_or(self.background);
+            s.back = Some(oit_core::composite::over(back, unpack_rgba8(payload)));
+        } else {
+            s.back_stack.push((depth, payload));
+        }
+    }
+
+    /// The final linear colour of a pixel (heat maps are finished by [`Resolve::image`]).
+    fn finish(&self, s: &mut PixelState) -> Vec3 {
+        while let Some((d, p)) = s.back_stack.pop() {
+            self.push(s, d, p);
+        }
+        match self.effect {
+            Effect::Transparency => s.front.over(s.back.unwrap_or(self.background)),
+            Effect::Complexity => Vec3::ZERO,
+            Effect::Fresnel => self.background * s.fresnel,
+            Effect::Translucency => {
+                let t = Vec3::new((-s.optical.x).exp(), (-s.optical.y).exp(), (-s.optical.z).exp());
+                self.background * t
+            }
+        }
+    }
+}
+
 /// Linear RGB to an sRGB8 pixel.
 #[inline]
 pub(crate) fn srgb(c: Vec3) -> [u8; 4] {
     [linear_to_srgb8(c.x), linear_to_srgb8(c.y), linear_to_srgb8(c.z), 255]
+}
+
+#[cfg(test)]
+mod tests {
+    //! The resolve on small hand-built inputs. Each test names a mutation it catches (each was
+    //! tried when the test was written).
+
+    use glam::{DVec3, Vec3, Vec4};
+    use oit_core::composite::{front_to_back, heat, translucency_f64};
+    use oit_core::rules::{pack_normal, pack_rgba8};
+    use oit_core::{Camera, Compositor as _, Effect, Scene, Settings, load_scene};
+
+    use super::{PixelState, Resolve, Run, srgb};
+
+    const BG: Vec3 = Vec3::new(0.9, 0.6, 0.3);
+
+    /// A camera on +z looking at the origin, near 1, far 9 (so `linear_depth` spans 1..9).
+    fn camera() -> Camera {
+        Camera::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 45.0, 1.0, 1.0, 9.0)
+    }
+
+    fn scene() -> Scene {
+        load_scene("planes:2").unwrap()
+    }
+
+    fn resolve<'a>(scene: &Scene, camera: &'a Camera, effect: Effect, count_ties: bool) -> Resolve<'a> {
+        let settings = Settings { effect, background: BG, ..Settings::default() };
+        let mut r = Resolve::new(scene, camera, &settings);
+        r.count_ties = count_ties;
+        r
+    }
+
+    /// The NDC depth [`Camera::linear_depth`] maps to view-space distance `dist`.
+    fn ndc(camera: &Camera, dist: f32) -> f32 {
+        let (n, f) = (camera.near, camera.far);
+        (f - n * f / dist) / (f - n)
+    }
+
+    /// A run of equal depths counts nothing while it holds one payload, and every fragment of it
+    /// once it holds two: the fragment that mixes it counts the whole run. Mutations caught:
+    /// `tied = self.len` → `tied = 1` (the first push of `b` returns 1); a new run not clearing
+    /// `mixed` (the push at depth 2 returns 1).
+    #[test]
+    fn runs_count_every_fragment_of_a_mixed_run() {
+        let (a, b) = (7, 9);
+        let mut run = Run::default();
+        assert_eq!(run.counted(), 0);
+        let got: Vec<u32> =
+            [(1, a), (1, a), (1, b), (1, a), (2, a), (2, a), (3, b)].map(|(d, p)| run.push(d, p)).to_vec();
+        assert_eq!(got, [0, 0, 3, 1, 0, 0, 0]);
+        assert_eq!(run.counted(), 0, "the last run holds one fragment");
+        // one payload over many depths is never tied
+        let mut run = Run::default();
+        assert_eq!([(1, a), (2, a), (2, a)].map(|(d, p)| run.push(d, p)), [0, 0, 0]);
+        assert_eq!(run.counted(), 0);
+        let mut run = Run::default();
+        run.push(5, a);
+        run.push(5, b);
+        assert_eq!(run.counted(), 2);
+    }
+
+    /// Through [`Resolve::push`]: ties are counted only where the plan asks. Mutation caught:
+    /// counting whatever `count_ties` says (the second total is 3, not 0).
+    #[test]
+    fn push_counts_ties_where_the_plan_asks() {
+        let (scene, camera) = (scene(), camera());
+        let (p, q) = (pack_rgba8(Vec4::new(1.0, 0.0, 0.0, 0.5)), pack_rgba8(Vec4::new(0.0, 1.0, 0.0, 0.5)));
+        let layers = [(0.2, p), (0.2, p), (0.5, p), (0.5, q), (0.5, p)];
+        for (count, want) in [(true, 3), (false, 0)] {
+            let r = resolve(&scene, &camera, Effect::Transparency, count);
+            let mut s = PixelState::default();
+            for (d, payload) in layers {
+                r.push(&mut s, d, payload);
+            }
+            assert_eq!((s.captured, s.tied()), (5, want), "count_ties {count}");
+        }
+    }
+
+    /// Dual depth peeling: the front's last run and the back's last run join where they meet at
+    /// one depth. Mutations caught: ignoring the back run's `mixed` in the join (case 5 gives 0);
+    /// joining runs of different depths (case 4 gives 2); not subtracting the runs' own counts
+    /// (case 3 gives 5).
+    #[test]
+    fn front_and_back_runs_join_where_they_meet() {
+        let (scene, camera) = (scene(), camera());
+        let r = resolve(&scene, &camera, Effect::Transparency, true);
+        let (p, q) = (pack_rgba8(Vec4::new(1.0, 0.0, 0.0, 0.5)), pack_rgba8(Vec4::new(0.0, 1.0, 0.0, 0.5)));
+        // (front pushes nearest first, back pushes farthest first, fragments counted tied)
+        type Layers<'a> = &'a [(f32, u32)];
+        let cases: [(Layers<'_>, Layers<'_>, u32); 6] = [
+            (&[(0.3, p)], &[(0.3, q)], 2),
+            (&[(0.3, p)], &[(0.3, p)], 0),
+            (&[(0.3, p), (0.3, q)], &[(0.3, p)], 3),
+            (&[(0.3, p)], &[(0.6, q)], 0),
+            (&[(0.3, p)], &[(0.3, q), (0.3, p)], 3),
+            (&[(0.1, q), (0.1, p), (0.3, p)], &[(0.9, q), (0.3, p)], 2),
+        ];
+        for (i, (front, back, want)) in cases.into_iter().enumerate() {
+            let mut s = PixelState::default();
+            for &(d, payload) in front {
+                r.push(&mut s, d, payload);
+            }
+            for &(d, payload) in back {
+                r.push_back(&mut s, d, payload);
+            }
+            assert_eq!(s.tied(), want, "case {}", i + 1);
+            assert_eq!(s.captured as usize, front.len() + back.len(), "case {}", i + 1);
+        }
+    }
+
+    /// Transparency from both ends equals front-to-back over all layers: the front under-blended,
+    /// the back over-blended onto the background, joined. Mutation caught: the back half over
+    /// `self.background` instead of the back accumulated so far (the middle layer drops out).
+    #[test]
+    fn front_and_back_halves_composite_as_one() {
+        let (scene, camera) = (scene(), camera());
+        let r = resolve(&scene, &camera, Effect::Transparency, false);
+        let c = [
+            Vec4::new(1.0, 0.0, 0.0, 0.4),
+            Vec4::new(0.0, 1.0, 0.0, 0.6),
+            Vec4::new(0.0, 0.0, 1.0, 0.2),
+            Vec4::new(1.0, 1.0, 0.0, 0.8),
+        ];
+        let packed = c.map(pack_rgba8);
+        let mut s = PixelState::default();
+        r.push(&mut s, 0.1, packed[0]);
+        r.push_back(&mut s, 0.9, packed[3]);
+        r.push_back(&mut s, 0.6, packed[2]);
+        r.push(&mut s, 0.3, packed[1]);
+        let want = front_to_back(packed.map(oit_core::rules::unpack_rgba8), BG);
+        let got = r.finish(&mut s);
+        assert!((got - want).abs().max_element() < 1e-6, "{got} {want}");
+    }
+
+    /// Translucency pairs layers 0–1 and 2–3 and absorbs (1 − entry colour)·k per unit of
+    /// view-space distance; the back half of dual depth peeling is replayed nearest first at the
+    /// end. Closed form: background·exp(−k·((1 − c₀)·(d₁ − d₀) + (1 − c₂)·(d₃ − d₂))). Mutations
+    /// caught: pairing the exit's colour (red channel: 0 absorbed for 1 − 0.25); replaying the
+    /// back stack farthest first (the second medium gets a negative, clamped thickness).
+    #[test]
+    fn translucency_pairs_entries_with_exits() {
+        let (scene, camera) = (scene(), camera());
+        let r = resolve(&scene, &camera, Effect::Translucency, false);
+        let k = scene.absorption_per_length();
+        let dist = [2.0, 2.5, 3.25, 4.0];
+        let c = [
+            Vec4::new(0.2, 0.6, 1.0, 0.5),
+            Vec4::new(1.0, 0.2, 0.6, 0.5),
+            Vec4::new(0.6, 1.0, 0.2, 0.5),
+            Vec4::new(0.2, 0.2, 0.2, 0.5),
+        ];
+        let (depth, payload) = (dist.map(|d| ndc(&camera, d)), c.map(pack_rgba8));
+        let absorbed = |c: Vec4| (DVec3::ONE - c.truncate().as_dvec3()) * k;
+        let tau = absorbed(c[0]) * 0.5 + absorbed(c[2]) * 0.75;
+        let want = BG.as_dvec3() * DVec3::new((-tau.x).exp(), (-tau.y).exp(), (-tau.z).exp());
+        // all from the front
+        let mut s = PixelState::default();
+        for i in 0..4 {
+            r.push(&mut s, depth[i], payload[i]);
+        }
+        let front = r.finish(&mut s).as_dvec3();
+        // dual depth peeling: two from the front, two from the back (farthest first)
+        let mut s = PixelState::default();
+        r.push(&mut s, depth[0], payload[0]);
+        r.push(&mut s, depth[1], payload[1]);
+        r.push_back(&mut s, depth[3], payload[3]);
+        r.push_back(&mut s, depth[2], payload[2]);
+        let dual = r.finish(&mut s).as_dvec3();
+        assert_eq!(s.captured, 4);
+        // the reference's f64 translucency on the same layers
+        let reference = translucency_f64(
+            (0..4).map(|i| {
+                let q = oit_core::rules::unpack_rgba8_f64(payload[i]);
+                (camera.linear_depth_f64(depth[i]), q)
+            }),
+            k,
+            BG.as_dvec3(),
+        );
+        // 1e-5: f32 rounding of the depths, the distances and exp (the colours are exact in 8
+        // bits: 0.2 = 51/255)
+        for (what, got) in [("front", front), ("dual", dual), ("reference", reference)] {
+            assert!((got - want).abs().max_element() < 1e-5, "{what}: {got} {want}");
+        }
+        // an unpaired last layer absorbs nothing
+        let mut s = PixelState::default();
+        for i in 0..3 {
+            r.push(&mut s, depth[i], payload[i]);
+        }
+        let one = BG.as_dvec3()
+            * DVec3::new(
+                (-absorbed(c[0]).x * 0.5).exp(),
+                (-absorbed(c[0]).y * 0.5).exp(),
+                (-absorbed(c[0]).z * 0.5).exp(),
+            );
+        assert!((r.finish(&mut s).as_dvec3() - one).abs().max_element() < 1e-5);
+    }
+
+    /// Fresnel multiplies the background by 1 − (1 − |n·v|)⁵ per layer; complexity's heat map is
+    /// heat(count / deepest), the background where nothing was captured. Mutations caught:
+    /// dropping `abs` (the back-facing layer's 1 − 1.5⁵ < 0); the heat map scaled by a fixed 8
+    /// instead of the deepest pixel (the 2-layer pixel shows heat(1/4), not heat(1/2)).
+    #[test]
+    fn fresnel_and_complexity() {
+        let (scene, camera) = (scene(), camera());
+        let r = resolve(&scene, &camera, Effect::Fresnel, false);
+        let v = camera.forward;
+        let tilted = |deg: f32| {
+            let a = deg.to_radians();
+            // a unit normal making angle `deg` with the viewing direction
+            (v * a.cos() + Vec3::X * a.sin()).normalize()
+        };
+        let mut s = PixelState::default();
+        r.push(&mut s, 0.2, pack_normal(tilted(0.0)));
+        r.push(&mut s, 0.4, pack_normal(tilted(120.0)));
+        r.push(&mut s, 0.6, pack_normal(tilted(60.0)));
+        let want = BG * (31.0f32 / 32.0).powi(2);
+        let got = r.finish(&mut s);
+        assert!((got - want).abs().max_element() < 1e-4, "{got} {want}");
+
+        let r = resolve(&scene, &camera, Effect::Complexity, false);
+        let mut states = vec![PixelState::default(); 3];
+        for (px, n) in [(1, 2), (2, 4)] {
+            for i in 0..n {
+                r.push(&mut states[px], 0.1 * (i + 1) as f32, 0);
+            }
+        }
+        let (image, captured, tied) = r.image(3, 1, &mut states);
+        assert_eq!((captured, tied), (6, 0));
+        assert_eq!(image.pixels, [srgb(BG), srgb(heat(0.5)), srgb(heat(1.0))]);
+        assert_eq!(heat(0.5), Vec3::new(0.6, 0.05, 0.5), "the ramp's middle stop");
+    }
 }

@@ -64,7 +64,8 @@ pub struct FrameUniform {
     pub forward: [f32; 4],
     /// Background (rgb).
     pub background: [f32; 4],
-    /// near, far, translucency σ per unit, unused.
+    /// near, far, translucency's absorption per unit of length
+    /// ([`Scene::absorption_per_length`](oit_core::Scene::absorption_per_length)), unused.
     pub lens: [f32; 4],
 }
 
@@ -179,13 +180,7 @@ impl<'a> GpuCtx<'a> {
         // the whole frame's storage against the device's budget, before anything is allocated
         // (sizes from a counting pass are checked again in `buffer`)
         let budget = gpu.memory_budget();
-        plan.check_budget(u64::from(pixels), plan.slots(0), (&budget.0, budget.1))?;
-        let radius = scene.bounds().radius().max(1e-6) / 8.0;
-        let sigma = if scene.objects.is_empty() {
-            1.0
-        } else {
-            scene.objects.iter().map(|o| o.absorption).sum::<f32>() / scene.objects.len() as f32
-        };
+        plan.check_budget(u64::from(pixels), oit_core::plan::Counted::default(), (&budget.0, budget.1))?;
         let uniform = FrameUniform {
             width: settings.width,
             height: settings.height,
@@ -202,7 +197,7 @@ impl<'a> GpuCtx<'a> {
             last_pass: 0,
             forward: camera.forward.extend(0.0).to_array(),
             background: settings.background.extend(1.0).to_array(),
-            lens: [camera.near, camera.far, sigma / radius, 0.0],
+            lens: [camera.near, camera.far, scene.absorption_per_length() as f32, 0.0],
         };
         let mut lent = Lent { pool, buffers: Vec::new() };
         let mut make = |label: &str, size: u64, usage: wgpu::BufferUsages| {

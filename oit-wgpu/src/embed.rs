@@ -17,13 +17,13 @@
 //!   pipeline of that pass's capture module (once per module: cached in the pass) and calls the
 //!   user's draw closure inside a render pass; multi-pass techniques (`dp`, or a counting pass
 //!   first when a size is not given, as in `reference` and `fabs` without K) call it once per
-//!   geometry pass. Then the resolve: the image is returned in the [`Frame`] and, when a target is
+//!   geometry pass (`dfb` and `ll` count first too). Then the resolve: the image is returned in the [`Frame`] and, when a target is
 //!   given, written into it.
 //! - oit submits its own command buffers on the queue (techniques read back between passes:
 //!   counts to size storage, a peel's occlusion), so it takes no encoder: submit what the draws
 //!   depend on before calling `frame`.
 //! - Supported: every technique whose geometry passes draw the scene itself (`reference`, `fabs`,
-//!   `mdts64`, `mlp`, `wavg`, `wsum`, `dp`, `ddp`; `mdts` when `Settings::alpha` is set, since its
+//!   `mdts64`, `mlp`, `wavg`, `wsum`, `dp`, `ddp`, `dfb`, `ll`; `mdts` when `Settings::alpha` is set, since its
 //!   32-bit words store no alpha and the pass does not know the caller's). `bdp` and `adp` also
 //!   draw the instances' bounding boxes, which an embedded pass does not know: they fail with
 //!   [`OitError::Unsupported`], as `mdts` does without an alpha.

@@ -82,9 +82,12 @@ impl WgpuBackend {
     /// the techniques the papers wrote for it, the compute rasterizer for the CUDA-rasterizer ones.
     pub fn default_path(technique: Technique) -> RasterPath {
         match technique.kind() {
-            TechniqueKind::Mdts | TechniqueKind::Mdts64 | TechniqueKind::Fabs | TechniqueKind::Mlp => {
-                RasterPath::Compute
-            }
+            TechniqueKind::Mdts
+            | TechniqueKind::Mdts64
+            | TechniqueKind::Fabs
+            | TechniqueKind::Mlp
+            | TechniqueKind::Dfb
+            | TechniqueKind::Ll => RasterPath::Compute,
             _ => RasterPath::Hardware,
         }
     }
@@ -300,6 +303,8 @@ pub(crate) fn run_technique(
         Technique::Adp => technique::adp::render(ctx, drivers)?,
         Technique::Mdts { .. } | Technique::Mdts64 { .. } => technique::mdts::render(ctx, drivers)?,
         Technique::Mlp { .. } => technique::mlp::render(ctx, drivers)?,
+        Technique::Dfb => technique::dfb::render(ctx, drivers)?,
+        Technique::Ll => technique::ll::render(ctx, drivers)?,
     }
     Ok(layers)
 }

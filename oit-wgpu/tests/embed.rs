@@ -143,4 +143,4 @@ fn embedded_pass_matches_backend_render() {
 /// caller's draws does not have; mdts without `Settings::alpha`: it stores no alpha, and the pass
 /// does not know the caller's — it used to composite every fragment as opaque, silently).
 const EMBED_SUPPORTED: &[&str] =
-    &["reference", "fabs", "fabs:2", "wavg", "wsum", "mdts64:4", "mdts64", "dp", "ddp", "mlp:4"];
+    &["reference", "fabs", "fabs:2", "wavg", "wsum", "mdts64:4", "mdts64", "dp", "ddp", "mlp:4", "dfb", "ll"];

@@ -175,3 +175,111 @@ fn wgsl_rules_equal_rust_rules() {
         }
     }
 }
+
+/// adp's bucket routing: `adp_rank` of `src/technique/adp.wgsl` (the text itself, cut from the
+/// file) against `oit_core::rules::histogram_rank`, on histograms whose set bits sit at word
+/// boundaries (bins 0, 31, 32, 1023), on the empty and the full histogram, and on a scatter.
+#[test]
+fn wgsl_histogram_rank_equals_rust() {
+    let Some(backend) = oit_wgpu::backend_or_skip("wgsl_histogram_rank_equals_rust") else { return };
+    let gpu = backend.gpu().expect("opened by backend_or_skip");
+    let adp = include_str!("../src/technique/adp.wgsl");
+    let start = adp.find("fn adp_rank(").expect("adp.wgsl defines adp_rank");
+    let end = start + adp[start..].find("\n}\n").expect("adp_rank ends") + 3;
+    let kernel = format!(
+        "@group(0) @binding(0) var<storage, read_write> hist: array<atomic<u32>>;
+@group(0) @binding(1) var<storage, read> cases: array<vec2<u32>>;
+@group(0) @binding(2) var<storage, read_write> results: array<u32>;
+{}
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
+    let i = gid.x;
+    if (i >= arrayLength(&cases)) {{
+        return;
+    }}
+    results[i] = adp_rank(cases[i].x, cases[i].y);
+}}
+",
+        &adp[start..end]
+    );
+    let mut s = 0x9e37_79b9u32;
+    let mut next = || {
+        s ^= s << 13;
+        s ^= s >> 17;
+        s ^= s << 5;
+        s
+    };
+    let mut hists: Vec<[u32; HISTOGRAM_WORDS]> = vec![[0; HISTOGRAM_WORDS], [u32::MAX; HISTOGRAM_WORDS]];
+    let mut edges = [0u32; HISTOGRAM_WORDS];
+    for bin in [0u32, 31, 32, 33, 511, 512, 1022, 1023] {
+        edges[(bin / 32) as usize] |= 1 << (bin % 32);
+    }
+    hists.push(edges);
+    hists.push(std::array::from_fn(|_| next()));
+    hists.push(std::array::from_fn(|i| if i % 3 == 0 { next() & next() } else { 0 }));
+    let bins = [0u32, 1, 30, 31, 32, 33, 63, 64, 511, 512, 513, 1000, 1022, 1023];
+    let mut cases: Vec<[u32; 2]> = Vec::new();
+    let mut expected = Vec::new();
+    for (px, h) in hists.iter().enumerate() {
+        for &bin in &bins {
+            cases.push([px as u32, bin]);
+            expected.push(histogram_rank(h, bin));
+        }
+    }
+    let flat: Vec<u32> = hists.iter().flatten().copied().collect();
+    let device = &gpu.device;
+    use wgpu::util::DeviceExt;
+    let init = |label, contents: &[u8]| {
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents,
+            usage: wgpu::BufferUsages::STORAGE,
+        })
+    };
+    let hist = init("hist", bytemuck::cast_slice(&flat));
+    let input = init("cases", bytemuck::cast_slice(&cases));
+    let output = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("results"),
+        size: (cases.len() * 4) as u64,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let entry = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: None,
+        entries: &[entry(0, false), entry(1, true), entry(2, false)],
+    });
+    let pipeline = gpu.compute_pipeline(&kernel, "main", &[&layout]).expect("kernel builds");
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &layout,
+        entries: &[
+            wgpu::BindGroupEntry { binding: 0, resource: hist.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 1, resource: input.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 2, resource: output.as_entire_binding() },
+        ],
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups((cases.len() as u32).div_ceil(64), 1, 1);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    let got = gpu.read_u32(&output).unwrap();
+    for ((case, want), have) in cases.iter().zip(&expected).zip(&got) {
+        assert_eq!(have, want, "histogram {} bin {}", case[0], case[1]);
+    }
+    // and the cases can tell ranks apart: the full histogram's rank is the bin itself
+    assert_eq!(histogram_rank(&[u32::MAX; HISTOGRAM_WORDS], 1000), 1000);
+}

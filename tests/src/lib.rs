@@ -4,6 +4,7 @@
 //! returns, so a new backend is tested by adding it there. What a backend or path is expected to
 //! do differently lives in one table, [`expectations`], never inside a test.
 
+pub mod checks;
 pub mod expectations;
 
 use oit_core::{Backend, Camera, Frame, Scene, Settings, Technique, View, load_scene};
@@ -113,3 +114,5 @@ pub fn epr(backend: &dyn Backend, scene: &Scene, view: View, base: &Settings, te
 
 /// Looking straight down −z (planes face the camera).
 pub const FRONT: View = View { azimuth: 0.0, elevation: 0.0, fov: 45.0 };
+
+pub use oit_core::metrics::{differ_off_mask, edge_mask};

@@ -108,6 +108,8 @@ fn effects_run_on_sorting_techniques() {
                 Technique::Mdts64 { k: None },
                 Technique::Mlp { m: 3 },
                 Technique::Adp,
+                Technique::Dfb,
+                Technique::Ll,
             ] {
                 let f = render(backend.as_ref(), &scene, &cam, &Settings { technique: t, ..base.clone() });
                 let a = oit_core::metrics::accuracy(&r, &f.image).unwrap();

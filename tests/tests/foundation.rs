@@ -263,9 +263,22 @@ fn coplanar_tie_is_counted_lost() {
 #[test]
 fn exact_techniques_do_not_depend_on_thread_count() {
     let scene = scene("cluster:200");
-    for t in
-        ["reference", "dp", "ddp", "wavg", "wsum", "fabs", "mdts64", "mlp:3", "adp", "bdp", "bdp2", "mdts"]
-    {
+    for t in [
+        "reference",
+        "dp",
+        "ddp",
+        "wavg",
+        "wsum",
+        "fabs",
+        "mdts64",
+        "mlp:3",
+        "adp",
+        "bdp",
+        "bdp2",
+        "mdts",
+        "dfb",
+        "ll",
+    ] {
         let s = settings(96, t);
         let cam = camera(&scene, &s, View::default());
         let one = render(cpu_with_threads(1).as_ref(), &scene, &cam, &s);

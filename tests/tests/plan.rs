@@ -3,7 +3,7 @@
 //! on every backend and raster path: a backend that allocated past the plan would make the budget
 //! check a promise it does not keep.
 
-use oit_core::plan::Plan;
+use oit_core::plan::{Counted, Plan, RESOLVE_STATE_BYTES};
 use oit_core::{Settings, Technique, View};
 use oit_tests::*;
 
@@ -29,13 +29,23 @@ fn reported_storage_stays_within_the_plan() {
                 let plan = Plan::new(b.name(), &scene, &s).unwrap_or_else(|e| panic!("{technique}: {e}"));
                 let frame = render(b, &scene, &cam, &s);
                 let pixels = u64::from(s.width) * u64::from(s.height);
-                let bound = plan.storage_bytes(pixels, plan.slots(deepest));
+                let counted = Counted { deepest, fragments: reference.stats.fragments };
+                let bound = plan.storage_bytes(pixels, counted);
                 assert!(
                     frame.stats.storage_bytes <= bound,
                     "{} {technique} on {name}: reports {} bytes, the plan allows {bound}",
                     label(b),
                     frame.stats.storage_bytes
                 );
+                if matches!(technique, Technique::Dfb | Technique::Ll) {
+                    // exact allocation: the plan's figure is what was allocated, to the byte
+                    assert_eq!(
+                        frame.stats.storage_bytes,
+                        bound - pixels * RESOLVE_STATE_BYTES,
+                        "{} {technique} on {name}: the plan's exact figure",
+                        label(b)
+                    );
+                }
                 assert!(
                     frame.stats.storage_bytes > 0,
                     "{} {technique} on {name}: no storage reported",

@@ -11,6 +11,7 @@
 //! Two fragments closer than 1/1024 of the range can share a bin: one survives (MAX on the 64-bit
 //! (depth, payload) word), the other is counted in `lost`.
 
+use oit_core::Compositor as _;
 use oit_core::rules::{
     BUCKETS, HISTOGRAM_WORDS, depth_key64, histogram_bin, histogram_count, histogram_rank, split_key64,
 };

@@ -14,6 +14,7 @@
 //!   nearest and farthest; after P passes subinterval k reads min₁ … min_P, max_P … max₁.
 //!   A min and max of equal depth (two colours) are ordered by colour: counted in `tied`.
 
+use oit_core::Compositor as _;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 
 use oit_core::rules::{

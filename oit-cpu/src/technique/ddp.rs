@@ -12,6 +12,7 @@
 //! is by colour. The resolve counts both in `tied` (the join of the front and back runs,
 //! `PixelState::tied`); the fragments between them at that depth are `lost`.
 
+use oit_core::Compositor as _;
 use std::sync::atomic::Ordering::Relaxed;
 
 use oit_core::rules::{depth_bits, depth_key64, split_key64};

@@ -9,6 +9,7 @@
 //! primitive id; the resolve would count consecutive equal depths in `tied`, but dp never peels
 //! two.)
 
+use oit_core::Compositor as _;
 use std::sync::atomic::Ordering::Relaxed;
 
 use oit_core::rules::{depth_bits, depth_key64, split_key64};

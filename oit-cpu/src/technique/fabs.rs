@@ -12,6 +12,7 @@
 //! order by an atomic min/max of one 64-bit word, with no room for an id beside depth and payload,
 //! and count their ties instead).
 
+use oit_core::Compositor as _;
 use std::sync::atomic::Ordering::Relaxed;
 
 use oit_core::rules::{depth_bits, depth_from_bits};

@@ -17,6 +17,7 @@
 //! loses besides, and does not count: depth below 2⁻²⁰ (the resolve sees the lower end of the
 //! step, which moves translucency's distances) and per-fragment alpha.
 
+use oit_core::Compositor as _;
 use std::sync::atomic::Ordering::Relaxed;
 
 use oit_core::rules::{depth_key64, mdts_pack, mdts_unpack, split_key64};

@@ -8,6 +8,7 @@
 //! payload, with no room for the primitive id the reference orders equal depths by, so equal
 //! depths of a pass come out by colour; the resolve counts every fragment of such a run in `tied`.
 
+use oit_core::Compositor as _;
 use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
 
 use oit_core::rules::{depth_bits, depth_key64, split_key64};

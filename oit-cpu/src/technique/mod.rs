@@ -15,8 +15,10 @@ use crate::resolve::{PixelState, Resolve};
 pub(crate) mod adp;
 pub(crate) mod bdp;
 pub(crate) mod ddp;
+pub(crate) mod dfb;
 pub(crate) mod dp;
 pub(crate) mod fabs;
+pub(crate) mod ll;
 pub(crate) mod mdts;
 pub(crate) mod mlp;
 pub(crate) mod reference;
@@ -116,20 +118,31 @@ impl<'a> Ctx<'a> {
 
     /// Allocates `per_pixel` zeroed-or-`init` words of 32 bits per pixel, counting the bytes.
     pub fn alloc32(&mut self, per_pixel: usize, init: u32) -> Result<Pooled<'a, AtomicU32>, OitError> {
-        let n = self.checked(per_pixel, 4)?;
-        Ok(self.pool.u32s(n, init))
+        self.words32((self.pixels as u64).saturating_mul(per_pixel as u64), init)
     }
 
     /// Allocates `per_pixel` words of 64 bits per pixel, counting the bytes.
     pub fn alloc64(&mut self, per_pixel: usize, init: u64) -> Result<Pooled<'a, AtomicU64>, OitError> {
-        let n = self.checked(per_pixel, 8)?;
+        self.words64((self.pixels as u64).saturating_mul(per_pixel as u64), init)
+    }
+
+    /// Allocates `len` words of 32 bits (an array sized from a count, not a multiple of the
+    /// pixels), counting the bytes.
+    pub fn words32(&mut self, len: u64, init: u32) -> Result<Pooled<'a, AtomicU32>, OitError> {
+        let n = self.checked(len, 4)?;
+        Ok(self.pool.u32s(n, init))
+    }
+
+    /// Allocates `len` words of 64 bits, counting the bytes.
+    pub fn words64(&mut self, len: u64, init: u64) -> Result<Pooled<'a, AtomicU64>, OitError> {
+        let n = self.checked(len, 8)?;
         Ok(self.pool.u64s(n, init))
     }
 
-    fn checked(&mut self, per_pixel: usize, word: u64) -> Result<usize, OitError> {
+    fn checked(&mut self, len: u64, word: u64) -> Result<usize, OitError> {
         // Keep one allocation under 16 GiB: past that a laptop swaps or dies, so say so instead.
         const LIMIT: u64 = 16 << 30;
-        let bytes = (self.pixels as u64).saturating_mul(per_pixel as u64).saturating_mul(word);
+        let bytes = len.saturating_mul(word);
         if bytes > LIMIT {
             return Err(OitError::TooLarge {
                 what: format!("{} per-pixel storage", self.settings.technique),
@@ -147,7 +160,8 @@ impl<'a> Ctx<'a> {
             self.budget,
         )?;
         self.storage_bytes += bytes;
-        Ok(self.pixels * per_pixel)
+        usize::try_from(len)
+            .map_err(|_| OitError::Device(format!("{len} words do not fit this host's address space")))
     }
 
     /// Per-pixel resolve state.

@@ -1,11 +1,16 @@
 //! `reference`: the exact A-buffer. A counting pass sizes each pixel's list, a second pass fills
 //! it (atomic increment on a per-pixel cursor), then each list is sorted by (depth, primitive id)
 //! and composited in f64. Two geometry passes; memory for every fragment.
+//!
+//! Every effect runs here in f64 on the sorted list ([`oit_core::composite`]'s `*_f64`
+//! functions), not through the techniques' f32 [`Resolve`](crate::resolve::Resolve), so the
+//! ground truth and the resolve it judges are two implementations of one definition.
 
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
 
-use oit_core::composite::{front_to_back_f64, linear_to_srgb8_f64};
-use oit_core::rules::{depth_bits, unpack_rgba8_f64};
+use glam::DVec3;
+use oit_core::composite::{fresnel_f64, front_to_back_f64, heat_f64, linear_to_srgb8_f64, translucency_f64};
+use oit_core::rules::{depth_bits, unpack_normal_f64, unpack_rgba8_f64};
 use oit_core::{Effect, Frame, Image, OitError};
 use rayon::prelude::*;
 
@@ -42,29 +47,34 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
 
     let (w, h) = (ctx.settings.width, ctx.settings.height);
     let bg = ctx.settings.background.as_dvec3();
-    let image = if ctx.resolve.effect == Effect::Transparency {
-        // f64 all the way for the ground truth.
-        let pixels: Vec<[u8; 4]> = (0..counts.len())
-            .into_par_iter()
-            .map(|px| {
-                let mut order: Vec<usize> = (offsets[px]..offsets[px + 1]).collect();
-                order.sort_unstable_by_key(|&i| keys[i]);
-                let c = front_to_back_f64(order.iter().map(|&i| unpack_rgba8_f64(payloads[i])), bg);
-                [linear_to_srgb8_f64(c.x), linear_to_srgb8_f64(c.y), linear_to_srgb8_f64(c.z), 255]
-            })
-            .collect();
-        Image { width: w, height: h, pixels }
-    } else {
-        let mut states = ctx.states();
-        states.par_iter_mut().enumerate().for_each(|(px, s)| {
+    let (camera, effect) = (ctx.camera, ctx.settings.effect);
+    let per_length = ctx.scene.absorption_per_length();
+    let forward = camera.forward.as_dvec3();
+    let deepest = counts.iter().copied().max().unwrap_or(0).max(1);
+    let depth = |i: usize| f32::from_bits((keys[i] >> 32) as u32);
+    let pixels: Vec<[u8; 4]> = (0..counts.len())
+        .into_par_iter()
+        .map(|px| {
             let mut order: Vec<usize> = (offsets[px]..offsets[px + 1]).collect();
             order.sort_unstable_by_key(|&i| keys[i]);
-            for i in order {
-                ctx.resolve.push(s, f32::from_bits((keys[i] >> 32) as u32), payloads[i]);
-            }
-        });
-        ctx.resolve.image(w, h, &mut states).0
-    };
+            let layers = order.iter().copied();
+            let c: DVec3 = match effect {
+                Effect::Transparency => front_to_back_f64(layers.map(|i| unpack_rgba8_f64(payloads[i])), bg),
+                Effect::Translucency => translucency_f64(
+                    layers.map(|i| (camera.linear_depth_f64(depth(i)), unpack_rgba8_f64(payloads[i]))),
+                    per_length,
+                    bg,
+                ),
+                Effect::Fresnel => {
+                    fresnel_f64(layers.map(|i| unpack_normal_f64(payloads[i]).dot(forward)), bg)
+                }
+                Effect::Complexity if counts[px] == 0 => bg,
+                Effect::Complexity => heat_f64(f64::from(counts[px]) / f64::from(deepest)),
+            };
+            [linear_to_srgb8_f64(c.x), linear_to_srgb8_f64(c.y), linear_to_srgb8_f64(c.z), 255]
+        })
+        .collect();
+    let image = Image { width: w, height: h, pixels };
     let fragments = total as u64;
     let mut frame = super::frame(ctx, image, fragments);
     frame.stats.max_layers = counts.iter().copied().max().unwrap_or(0);

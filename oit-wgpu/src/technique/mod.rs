@@ -6,9 +6,11 @@ pub(crate) mod bdp;
 pub(crate) mod bdp_blend;
 pub(crate) mod ddp;
 pub(crate) mod ddp_blend;
+pub(crate) mod dfb;
 pub(crate) mod dp;
 pub(crate) mod dp_depth;
 pub(crate) mod fabs;
+pub(crate) mod ll;
 pub(crate) mod mdts;
 pub(crate) mod mlp;
 pub(crate) mod reference;
@@ -19,6 +21,9 @@ use oit_core::OitError;
 use crate::ctx::{Driver, GpuCtx, Init};
 
 const COUNT_WGSL: &str = include_str!("count.wgsl");
+const SCAN_WGSL: &str = include_str!("scan.wgsl");
+/// Words one workgroup of `scan.wgsl` scans.
+const SCAN_BLOCK: u64 = 256;
 
 /// Fragments per pixel from one counting pass (the buffer), and the deepest pixel's count.
 pub(crate) fn count(ctx: &mut GpuCtx<'_>, driver: &dyn Driver) -> Result<(wgpu::Buffer, u32), OitError> {
@@ -30,4 +35,23 @@ pub(crate) fn count(ctx: &mut GpuCtx<'_>, driver: &dyn Driver) -> Result<(wgpu::
     ctx.storage_bytes -= u64::from(ctx.pixels) * 4 + 4;
     let m = ctx.gpu.read_u32(&max)?[0];
     Ok((counts, m))
+}
+
+/// The exclusive prefix sum of the first `n` words of `words`, in place, on the GPU
+/// (`scan.wgsl`): each block of 256 words scanned by one workgroup, the blocks' totals scanned
+/// the same way one level up, and added back. Returns the total, read back from the top level's
+/// one block total (a single word: no round trip sized by the image). The block totals are
+/// bookkeeping, not counted in `storage_bytes` (the plan's figure leaves them out likewise).
+pub(crate) fn scan(ctx: &mut GpuCtx<'_>, words: &wgpu::Buffer, n: u64) -> Result<u64, OitError> {
+    let blocks = n.div_ceil(SCAN_BLOCK).max(1);
+    let param = u32::try_from(n).map_err(|_| OitError::Device(format!("a prefix sum over {n} words")))?;
+    let sums = ctx.buffer("scan block sums", blocks, Init::Zero)?;
+    ctx.storage_bytes -= blocks * 4;
+    ctx.kernel_over(SCAN_WGSL, "scan_main", &[words, &sums], blocks * 64, 0, param, "scan")?;
+    if blocks == 1 {
+        return Ok(u64::from(ctx.gpu.read_u32(&sums)?[0]));
+    }
+    let total = scan(ctx, &sums, blocks)?;
+    ctx.kernel_over(SCAN_WGSL, "add_main", &[words, &sums], blocks * 64, 0, param, "scan")?;
+    Ok(total)
 }

@@ -1,0 +1,112 @@
+// ll, per-pixel linked lists (Yang et al. 2010), as oit-cpu's `technique/ll.rs`: a head per
+// pixel (LL_END when empty), a pool of fu.param nodes sized by the sizing pass (ll_size.wgsl), a
+// node counter. The capture takes a node by atomicAdd on the counter (past the pool: lost, where
+// it happens), writes the key (depth bits << 32 | primitive id) and payload into it, and links it
+// in front of its pixel's list by atomicExchange on the head. The resolve walks each list into a
+// private array of up to LOCAL_NODES, sorted as it goes (insertion), and composites it; a longer
+// list is merge-sorted in place along its links.
+@group(0) @binding(2) var<storage, read_write> heads: array<atomic<u32>>;
+@group(0) @binding(3) var<storage, read_write> counter: array<atomic<u32>>;
+@group(0) @binding(4) var<storage, read_write> keys: array<u64>;
+@group(0) @binding(5) var<storage, read_write> payloads: array<u32>;
+@group(0) @binding(6) var<storage, read_write> links: array<u32>;
+
+const LL_END: u32 = 0xffffffffu;
+const LOCAL_NODES: u32 = 64u;
+
+fn capture(f: Fragment) {
+    let node = atomicAdd(&counter[0], 1u);
+    if (node >= fu.param) {
+        // the pool is used up: no node for this fragment
+        lose(f.pixel);
+        return;
+    }
+    keys[node] = (u64(depth_bits(f.depth)) << 32u) | u64(f.prim);
+    payloads[node] = payload(f, fu.effect);
+    links[node] = atomicExchange(&heads[f.pixel], node);
+}
+
+@compute @workgroup_size(64)
+fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let px = kernel_pixel(gid, groups);
+    if (px >= fu.pixel_count) {
+        return;
+    }
+    var s = state[px];
+    let head = atomicLoad(&heads[px]);
+    var list: array<u64, LOCAL_NODES>;
+    var list_payloads: array<u32, LOCAL_NODES>;
+    var n = 0u;
+    var node = head;
+    while (node != LL_END && n < LOCAL_NODES) {
+        let v = keys[node];
+        let p = payloads[node];
+        var j = n;
+        while (j > 0u && list[j - 1u] > v) {
+            list[j] = list[j - 1u];
+            list_payloads[j] = list_payloads[j - 1u];
+            j -= 1u;
+        }
+        list[j] = v;
+        list_payloads[j] = p;
+        n += 1u;
+        node = links[node];
+    }
+    if (node == LL_END) {
+        for (var i = 0u; i < n; i++) {
+            push_local(&s, bitcast<f32>(u32(list[i] >> 32u)), list_payloads[i]);
+        }
+        state[px] = s;
+        return;
+    }
+    // longer than the private array: merge sort along the links, in place (S. Tatham's
+    // bottom-up merge sort of a linked list: runs of `width` nodes merged pairwise, `width`
+    // doubled until one run is left), then walked
+    var first = head;
+    var width = 1u;
+    loop {
+        var p = first;
+        first = LL_END;
+        var tail = LL_END;
+        var merges = 0u;
+        while (p != LL_END) {
+            merges += 1u;
+            var q = p;
+            var p_len = 0u;
+            for (var i = 0u; i < width && q != LL_END; i++) {
+                p_len += 1u;
+                q = links[q];
+            }
+            var q_len = width;
+            while (p_len > 0u || (q_len > 0u && q != LL_END)) {
+                var e: u32;
+                if (p_len == 0u || (q_len > 0u && q != LL_END && keys[q] < keys[p])) {
+                    e = q;
+                    q = links[q];
+                    q_len -= 1u;
+                } else {
+                    e = p;
+                    p = links[p];
+                    p_len -= 1u;
+                }
+                if (tail == LL_END) {
+                    first = e;
+                } else {
+                    links[tail] = e;
+                }
+                tail = e;
+            }
+            p = q;
+        }
+        links[tail] = LL_END;
+        if (merges <= 1u) {
+            break;
+        }
+        width *= 2u;
+    }
+    atomicStore(&heads[px], first);
+    for (var a = first; a != LL_END; a = links[a]) {
+        push_local(&s, bitcast<f32>(u32(keys[a] >> 32u)), payloads[a]);
+    }
+    state[px] = s;
+}

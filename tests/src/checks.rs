@@ -1,0 +1,115 @@
+//! The suite's checks, one function per family, each returning what is wrong (or `Ok`), so the
+//! conformance bodies assert them and `tests/tests/mutations.rs` shows each one failing on a
+//! deliberately broken frame (a dropped fragment, two layers swapped, a skewed colour, a loss
+//! moved or uncounted). A check that no mutation can fail would not be a check.
+
+use oit_core::metrics::{accuracy, differ_off_mask};
+use oit_core::{Frame, Image};
+
+/// Pixels whose 8-bit colour differs by more than 1 in a channel (EPR's error pixels).
+pub fn error_pixels<'a>(a: &'a Image, b: &'a Image) -> impl Iterator<Item = usize> + 'a {
+    a.pixels
+        .iter()
+        .zip(&b.pixels)
+        .enumerate()
+        .filter(|(_, (p, q))| (0..3).any(|c| p[c].abs_diff(q[c]) > 1))
+        .map(|(i, _)| i)
+}
+
+/// Losses are counted where they happen: `captured + lost == fragments`, and the per-pixel losses
+/// (where the backend reports them) sum to `lost`.
+pub fn accounting(f: &Frame) -> Result<(), String> {
+    let s = &f.stats;
+    if s.captured + s.lost != s.fragments {
+        return Err(format!("captured {} + lost {} != fragments {}", s.captured, s.lost, s.fragments));
+    }
+    if let Some(px) = &f.lost_pixels {
+        let sum: u64 = px.iter().map(|&l| u64::from(l)).sum();
+        if sum != s.lost {
+            return Err(format!("per-pixel lost sums to {sum}, stats.lost is {}", s.lost));
+        }
+    }
+    Ok(())
+}
+
+/// An exact technique's frame against the reference of the same backend: the same fragments,
+/// none lost or tied, and not one error pixel over a measured (covered) frame.
+pub fn exact(reference: &Frame, f: &Frame) -> Result<(), String> {
+    accounting(f)?;
+    let a = accuracy(reference, &f.image).map_err(|e| e.to_string())?;
+    let s = &f.stats;
+    if !a.is_measured() {
+        return Err("nothing covered: no accuracy to hold".into());
+    }
+    if s.fragments != reference.stats.fragments {
+        return Err(format!("{} fragments, the reference {}", s.fragments, reference.stats.fragments));
+    }
+    if (a.error_pixels, s.lost, s.tied) != (0, 0, 0) {
+        return Err(format!("{} error pixels, lost {}, tied {}", a.error_pixels, s.lost, s.tied));
+    }
+    Ok(())
+}
+
+/// Never wrong in silence: where a frame differs from the reference, it counted at least as many
+/// lost or tied fragments as it has error pixels (each error pixel holds a loss or a tie).
+pub fn never_silent(reference: &Frame, f: &Frame) -> Result<(), String> {
+    accounting(f)?;
+    let a = accuracy(reference, &f.image).map_err(|e| e.to_string())?;
+    let counted = f.stats.tied + f.stats.lost;
+    if a.error_pixels > counted {
+        return Err(format!(
+            "{} error pixels but only {} tied + {} lost: wrong in silence",
+            a.error_pixels, f.stats.tied, f.stats.lost
+        ));
+    }
+    Ok(())
+}
+
+/// For techniques whose only error is loss (bdp's depth mode, adp): every error pixel lost a
+/// fragment, per the frame's loss mask. `Ok(false)` where the backend reports no per-pixel
+/// losses (nothing to hold), `Ok(true)` where it held.
+pub fn errors_within_losses(reference: &Frame, f: &Frame) -> Result<bool, String> {
+    let Some(lost) = &f.lost_pixels else { return Ok(false) };
+    let stray: Vec<usize> = error_pixels(&reference.image, &f.image).filter(|&i| lost[i] == 0).collect();
+    if !stray.is_empty() {
+        return Err(format!("{} error pixels where nothing was lost (first {:?})", stray.len(), &stray[..1]));
+    }
+    Ok(true)
+}
+
+/// Two backends/paths with the same fixed-point rules (oit-cpu and a compute path): the same
+/// fragments, losses, ties and passes, the same per-pixel counts where both report them, and no
+/// channel off by more than 1 (the order of float operations may differ).
+pub fn same_fragments(a: &Frame, b: &Frame) -> Result<(), String> {
+    let (x, y) = (&a.stats, &b.stats);
+    let pairs = [
+        ("fragments", x.fragments, y.fragments),
+        ("lost", x.lost, y.lost),
+        ("tied", x.tied, y.tied),
+        ("passes", u64::from(x.geometry_passes), u64::from(y.geometry_passes)),
+    ];
+    for (what, p, q) in pairs {
+        if p != q {
+            return Err(format!("{what}: {p} vs {q}"));
+        }
+    }
+    if let (Some(p), Some(q)) = (&a.layers, &b.layers)
+        && let Some(i) = p.iter().zip(q).position(|(m, n)| m != n)
+    {
+        return Err(format!("pixel {i}: {} vs {} fragments", p[i], q[i]));
+    }
+    off_edges_equal(&a.image, &b.image, &vec![false; a.image.pixels.len()])
+}
+
+/// A hardware path against a path with oit's rules: equal (within 1 of 8 bits) on every pixel
+/// `edges` leaves out (pixels more than a pixel from every projected triangle edge).
+pub fn off_edges_equal(a: &Image, b: &Image, edges: &[bool]) -> Result<(), String> {
+    if a.pixels.len() != b.pixels.len() || edges.len() != a.pixels.len() {
+        return Err("image sizes differ".into());
+    }
+    let (worst, differ) = differ_off_mask(a, b, edges);
+    if worst > 1 {
+        return Err(format!("{differ} pixels off the edges differ, by up to {worst}"));
+    }
+    Ok(())
+}

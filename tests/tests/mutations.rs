@@ -1,0 +1,206 @@
+//! Every check family of the suite fails on a deliberately broken frame (issue 16's target): a
+//! check that passes whatever the code does would hide the wrong answers it is there to catch.
+//! Each test takes a real, correct frame (oit-cpu), shows the check holds on it, breaks the frame
+//! one way (a dropped fragment, two layers swapped, a skewed colour, a loss moved or uncounted),
+//! and shows the check fails.
+//!
+//! Families and where they guard: `accounting` (accounting.rs, every technique), `exact`
+//! (exact techniques against the reference), `never_silent` (ties.rs), `errors_within_losses`
+//! (buckets.rs), `same_fragments` and `off_edges_equal` (wgpu.rs, wgpu_hardware.rs), the metrics'
+//! coverage (metrics.rs). The weighted bound and the closed-form composite carry their own
+//! mutations in foundation.rs; the bench's cross-backend check in oit-bench's unit tests.
+
+use glam::{Mat4, Vec3, Vec4};
+use oit_core::metrics::{accuracy, edge_mask};
+use oit_core::{Frame, Mesh, Object, Scene, Settings, Shading, Technique};
+use oit_tests::checks::*;
+use oit_tests::*;
+
+/// Frontal quads of the given depths and colours (the first in front of the camera at z = 0
+/// nearest), one object each, overlapping over most of the image.
+fn quads(layers: &[(f32, Vec4)]) -> Scene {
+    let mut scene = Scene { name: "quads".into(), ..Default::default() };
+    for (i, &(z, color)) in layers.iter().enumerate() {
+        let p = vec![
+            Vec3::new(-1.0, -1.0, z),
+            Vec3::new(1.0, -1.0, z),
+            Vec3::new(1.0, 1.0, z),
+            Vec3::new(-1.0, 1.0, z),
+        ];
+        scene.meshes.push(Mesh::new(format!("q{i}"), p, vec![[0, 1, 2], [0, 2, 3]]));
+        scene.objects.push(Object { name: format!("q{i}"), mesh: i, color, absorption: 1.0 });
+        scene.instances.push(oit_core::Instance { object: i, transform: Mat4::IDENTITY });
+    }
+    scene
+}
+
+const RED: Vec4 = Vec4::new(0.9, 0.1, 0.1, 0.5);
+const BLUE: Vec4 = Vec4::new(0.1, 0.2, 0.9, 0.5);
+
+fn flat(size: u32, t: &str) -> Settings {
+    Settings { shading: Shading::Flat, ..settings(size, t) }
+}
+
+fn cpu() -> oit_cpu::CpuBackend {
+    oit_cpu::CpuBackend::default()
+}
+
+/// A covered pixel of `f` (the first whose reference layers hold `k`).
+fn pixel_with(f: &Frame, k: u32) -> usize {
+    f.layers.as_ref().unwrap().iter().position(|&l| l == k).expect("such a pixel")
+}
+
+/// `f` with one pixel's channel moved by `by` 8-bit steps.
+fn skewed(f: &Frame, i: usize, by: i16) -> Frame {
+    let mut g = f.clone();
+    let c = &mut g.image.pixels[i][0];
+    *c = (i16::from(*c) + if i16::from(*c) + by > 255 { -by } else { by }) as u8;
+    g
+}
+
+#[test]
+fn accounting_fails_on_an_uncounted_loss() {
+    let scene = scene("planes:8");
+    let s = settings(16, "fabs:4");
+    let mut f = render(&cpu(), &scene, &camera(&scene, &s, FRONT), &s);
+    accounting(&f).expect("fabs:4 on planes:8 accounts");
+    assert!(f.stats.lost > 0);
+    f.stats.captured -= 1;
+    assert!(accounting(&f).is_err(), "one captured fragment dropped uncounted");
+    f.stats.captured += 1;
+    let px = f.lost_pixels.as_mut().expect("oit-cpu counts losses per pixel");
+    let i = px.iter().position(|&l| l > 0).unwrap();
+    px[i] -= 1;
+    assert!(accounting(&f).is_err(), "a per-pixel count off by one");
+}
+
+#[test]
+fn exact_fails_on_a_swap_a_drop_and_a_skew() {
+    let b = cpu();
+    let scene = quads(&[(0.0, RED), (-1.0, BLUE)]);
+    let s = flat(16, "reference");
+    let cam = camera(&scene, &s, FRONT);
+    let r = render(&b, &scene, &cam, &s);
+    let fabs = Settings { technique: Technique::Fabs { k: None }, ..s.clone() };
+    let f = render(&b, &scene, &cam, &fabs);
+    exact(&r, &f).expect("fabs is exact");
+    // two layers swapped: the same quads, their depths exchanged
+    let swapped = quads(&[(-1.0, RED), (0.0, BLUE)]);
+    let g = render(&b, &swapped, &cam, &fabs);
+    assert_eq!(g.stats.fragments, f.stats.fragments);
+    assert!(exact(&r, &g).is_err(), "two layers swapped");
+    // a fragment dropped (and counted: the accounting holds, exactness does not)
+    let mut d = f.clone();
+    d.stats.fragments -= 1;
+    d.stats.captured -= 1;
+    assert!(accounting(&d).is_ok() && exact(&r, &d).is_err(), "one fragment dropped");
+    // a colour skewed by 2 steps on one pixel; by 1 is within EPR's rounding allowance
+    let i = pixel_with(&r, 2);
+    assert!(exact(&r, &skewed(&f, i, 2)).is_err(), "one channel 2 steps off");
+    assert!(exact(&r, &skewed(&f, i, 1)).is_ok(), "1 step is rounding, by EPR's definition");
+}
+
+#[test]
+fn never_silent_fails_when_a_loss_goes_uncounted() {
+    let b = cpu();
+    let scene = scene("planes:8");
+    let s = settings(16, "reference");
+    let cam = camera(&scene, &s, FRONT);
+    let r = render(&b, &scene, &cam, &s);
+    let f = render(&b, &scene, &cam, &Settings { technique: Technique::Mdts { k: Some(2) }, ..s.clone() });
+    let a = accuracy(&r, &f.image).unwrap();
+    assert!(a.error_pixels > 0, "mdts:2 on 8 layers is wrong somewhere");
+    never_silent(&r, &f).expect("and says so");
+    // the same frame, its losses taken back as captured: accounting holds, the silence shows
+    let mut g = f.clone();
+    g.stats.captured += g.stats.lost;
+    g.stats.lost = 0;
+    g.lost_pixels = None;
+    assert!(accounting(&g).is_ok());
+    assert!(never_silent(&r, &g).is_err(), "wrong and silent");
+}
+
+#[test]
+fn errors_within_losses_fails_on_a_moved_loss_or_a_stray_error() {
+    let b = cpu();
+    // two quads 1/10,000 of the depth range apart share one of adp's 1,024 bins: one is lost
+    let scene = quads(&[(0.0, RED), (-1e-4, BLUE), (-1.0, RED)]);
+    let s = flat(16, "reference");
+    let cam = camera(&scene, &s, FRONT);
+    let r = render(&b, &scene, &cam, &s);
+    let f = render(&b, &scene, &cam, &Settings { technique: Technique::Adp, ..s.clone() });
+    assert_eq!(errors_within_losses(&r, &f), Ok(true));
+    let errors: Vec<usize> = error_pixels(&r.image, &f.image).collect();
+    assert!(!errors.is_empty(), "adp loses one of two quads sharing a bin");
+    // the loss of an error pixel moved to another pixel
+    let mut g = f.clone();
+    let lost = g.lost_pixels.as_mut().unwrap();
+    let i = errors[0];
+    let j = (0..lost.len()).find(|&j| lost[j] == 0).unwrap();
+    lost[j] = lost[i];
+    lost[i] = 0;
+    let pixels = lost.len();
+    assert!(accounting(&g).is_ok(), "the count still sums");
+    assert!(errors_within_losses(&r, &g).is_err(), "an error pixel with no loss");
+    // an error drawn where nothing was lost
+    let k =
+        (0..pixels).find(|&k| f.lost_pixels.as_ref().unwrap()[k] == 0 && r.layers.as_ref().unwrap()[k] > 0);
+    let k = k.expect("a covered pixel without loss");
+    assert!(errors_within_losses(&r, &skewed(&f, k, 3)).is_err(), "a stray error");
+}
+
+#[test]
+fn same_fragments_fails_on_a_dropped_fragment_or_a_skew() {
+    let b = cpu();
+    let scene = scene("spheres:3");
+    let s = settings(32, "reference");
+    let cam = camera(&scene, &s, oit_core::View::default());
+    let f = render(&b, &scene, &cam, &s);
+    same_fragments(&f, &f.clone()).expect("a frame equals itself");
+    let i = pixel_with(&f, 2);
+    let mut g = f.clone();
+    g.layers.as_mut().unwrap()[i] -= 1;
+    assert!(same_fragments(&f, &g).is_err(), "one pixel one fragment short");
+    let mut g = f.clone();
+    g.stats.lost += 1;
+    assert!(same_fragments(&f, &g).is_err(), "one more lost");
+    assert!(same_fragments(&f, &skewed(&f, i, 2)).is_err(), "a channel 2 steps off");
+    assert!(same_fragments(&f, &skewed(&f, i, 1)).is_ok(), "1 step is float order");
+}
+
+#[test]
+fn off_edges_equal_fails_off_the_edges_only() {
+    let b = cpu();
+    let scene = quads(&[(0.0, RED), (-1.0, BLUE)]);
+    let s = flat(32, "reference");
+    let cam = camera(&scene, &s, FRONT);
+    let f = render(&b, &scene, &cam, &s);
+    let mask = edge_mask(&scene, &cam, 32, 32, 1.0);
+    let on = mask.iter().position(|&m| m).expect("the quads have edges in view");
+    let off =
+        (0..mask.len()).find(|&i| !mask[i] && f.layers.as_ref().unwrap()[i] == 2).expect("an inner pixel");
+    // the quad's inner pixels are far from every edge; its border and diagonal are on them
+    assert!(mask.iter().filter(|&&m| !m).count() > mask.len() / 4, "the mask leaves most pixels");
+    off_edges_equal(&f.image, &f.image, &mask).expect("equal");
+    assert!(off_edges_equal(&f.image, &skewed(&f, on, 50).image, &mask).is_ok(), "an edge pixel may differ");
+    assert!(off_edges_equal(&f.image, &skewed(&f, off, 2).image, &mask).is_err(), "an inner pixel may not");
+}
+
+#[test]
+fn metrics_count_what_is_drawn_outside_the_reference() {
+    let b = cpu();
+    let scene = quads(&[(0.0, RED)]);
+    let s = Settings { width: 32, height: 32, ..flat(32, "reference") };
+    let cam =
+        oit_core::Camera::look_at(Vec3::new(3.0, 0.0, 3.0), Vec3::new(3.0, 0.0, 0.0), 45.0, 1.0, 0.1, 10.0);
+    // the quad is out of view: nothing covered, nothing to measure (not a perfect score)
+    let r = render(&b, &scene, &cam, &s);
+    assert_eq!(r.stats.fragments, 0);
+    let a = accuracy(&r, &r.image).unwrap();
+    assert!(!a.is_measured() && a.epr.is_nan(), "zero coverage is unmeasured, not EPR 0");
+    // garbage drawn where the reference is empty is an error pixel
+    let g = skewed(&r, 5, 40);
+    let a = accuracy(&r, &g.image).unwrap();
+    assert_eq!((a.covered, a.error_pixels, a.covered_by_image_only), (1, 1, 1));
+    assert_eq!(a.epr, 1.0);
+}
