@@ -116,18 +116,19 @@ pub struct ModelArgs {
     pub note: Option<String>,
 }
 
-/// Runs `oit bench`.
-pub fn run(args: &BenchArgs) -> Result<Outcome, OitError> {
+/// What `oit bench` will do, every option checked.
+pub enum Checked {
+    /// Redraw the report read from this folder (`--replot`).
+    Replot(PathBuf, oit_bench::Report),
+    /// Measure: the bench's configuration.
+    Measure(Config),
+}
+
+/// Every check `oit bench` makes before any work: with `--replot` the report read back and its
+/// numbers; otherwise every option, every scene and the curves. Reads, writes nothing.
+pub fn check(args: &BenchArgs) -> Result<Checked, OitError> {
     if let Some(dir) = &args.replot {
-        let mut report = oit_bench::read_report(dir)?;
-        report.files.clear();
-        oit_bench::write_report(&mut report, dir)?;
-        output::print(&format!(
-            "redrew {} ({} files)\n",
-            dir.join("report.md").display(),
-            report.files.len()
-        ))?;
-        return Ok(Outcome::Success);
+        return Ok(Checked::Replot(dir.clone(), oit_bench::read_report(dir)?));
     }
     // Every option is checked before any work: the cheap ones first, then (once the settings are
     // parsed and the backends open) every scene and the curves, then the output folder.
@@ -232,6 +233,24 @@ pub fn run(args: &BenchArgs) -> Result<Outcome, OitError> {
         model_source,
     };
     config.validate()?;
+    Ok(Checked::Measure(config))
+}
+
+/// Runs `oit bench`.
+pub fn run(args: &BenchArgs) -> Result<Outcome, OitError> {
+    let config = match check(args)? {
+        Checked::Replot(dir, mut report) => {
+            report.files.clear();
+            oit_bench::write_report(&mut report, &dir)?;
+            output::print(&format!(
+                "redrew {} ({} files)\n",
+                dir.join("report.md").display(),
+                report.files.len()
+            ))?;
+            return Ok(Outcome::Success);
+        }
+        Checked::Measure(config) => config,
+    };
     std::fs::create_dir_all(&args.out)
         .map_err(|e| OitError::Write { path: args.out.clone(), message: e.to_string() })?;
     let bar = ProgressBar::new(config.steps());

@@ -10,7 +10,7 @@ use oit_core::{Effect, Frame, Image, OitError, Stats, Technique};
 use serde::Serialize;
 
 use crate::Outcome;
-use crate::options::{SceneArgs, check_output};
+use crate::options::{Prepared, SceneArgs, check_output};
 use crate::output::{self, Table};
 
 /// Arguments of `oit compare`.
@@ -90,13 +90,19 @@ fn failed_row(label: String, message: &str, width: u32, height: u32) -> SheetEnt
     }
 }
 
-/// Runs `oit compare`.
-pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
+/// Every check `oit compare` makes before it renders: the technique list, the sheet's path,
+/// then the scene options ([`SceneArgs::prepare`]). Reads, writes nothing.
+pub fn check(args: &CompareArgs) -> Result<(Vec<Technique>, Prepared), OitError> {
     let techniques = Technique::parse_list(&args.techniques)?;
     if let Some(sheet) = &args.sheet {
         check_output(sheet, "png", "--sheet")?;
     }
-    let prepared = args.scene.prepare()?;
+    Ok((techniques, args.scene.prepare()?))
+}
+
+/// Runs `oit compare`.
+pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
+    let (techniques, prepared) = check(args)?;
     let (width, height) = (prepared.settings.width, prepared.settings.height);
     let experiment = Experiment {
         backends: &prepared.backends,

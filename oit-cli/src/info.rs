@@ -55,11 +55,15 @@ fn kind_name(kind: TechniqueKind) -> String {
         .unwrap_or_else(|| format!("{kind:?}"))
 }
 
+/// Every check `oit info` makes: the thread count, bounded by the machine as the other commands
+/// bound it.
+pub fn check(args: &InfoArgs) -> Result<(), OitError> {
+    args.threads.map_or(Ok(()), oit_core::check_threads)
+}
+
 /// Runs `oit info`.
 pub fn run(args: &InfoArgs) -> Result<Outcome, OitError> {
-    if args.threads == Some(0) {
-        return Err(OitError::InvalidSettings("--threads must be at least 1".into()));
-    }
+    check(args)?;
     let backends: Vec<BackendInfo> = probe_all(&BackendOptions { threads: args.threads, adapter: None })
         .into_iter()
         .map(|(name, result)| match result {

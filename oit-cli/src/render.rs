@@ -8,7 +8,7 @@ use oit_core::{OitError, Stats, Technique};
 use serde::Serialize;
 
 use crate::Outcome;
-use crate::options::{SceneArgs, check_output};
+use crate::options::{Prepared, SceneArgs, check_output};
 use crate::output::{self, CameraJson};
 
 /// Arguments of `oit render`.
@@ -85,11 +85,17 @@ fn output_paths(base: &Path, labels: &[String]) -> Vec<PathBuf> {
     out
 }
 
-/// Runs `oit render`.
-pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
+/// Every check `oit render` makes before it renders: the technique, the output path, then the
+/// scene options ([`SceneArgs::prepare`]). Reads, writes nothing.
+pub fn check(args: &RenderArgs) -> Result<(Technique, Prepared), OitError> {
     let technique: Technique = args.technique.parse()?;
     check_output(&args.output, "png", "--output")?;
-    let prepared = args.scene.prepare()?;
+    Ok((technique, args.scene.prepare()?))
+}
+
+/// Runs `oit render`.
+pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
+    let (technique, prepared) = check(args)?;
     let camera = prepared.camera(prepared.view)?;
     let settings = prepared.with_technique(technique);
     let labels: Vec<String> =

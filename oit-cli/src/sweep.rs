@@ -10,7 +10,7 @@ use oit_core::{OitError, Stats, Technique, View};
 use serde::Serialize;
 
 use crate::Outcome;
-use crate::options::{SceneArgs, check_output};
+use crate::options::{Prepared, SceneArgs, check_output};
 use crate::output::{self, Table};
 use crate::plot;
 
@@ -87,8 +87,9 @@ impl Record {
     }
 }
 
-/// Runs `oit sweep`.
-pub fn run(args: &SweepArgs) -> Result<Outcome, OitError> {
+/// Every check `oit sweep` makes before it renders: the technique list, the view count, the
+/// plot's path, then the scene options ([`SceneArgs::prepare`]). Reads, writes nothing.
+pub fn check(args: &SweepArgs) -> Result<(Vec<Technique>, Prepared), OitError> {
     let techniques = Technique::parse_list(&args.techniques)?;
     if !(1..=MAX_VIEWS).contains(&args.views) {
         return Err(OitError::InvalidSettings(format!(
@@ -99,7 +100,12 @@ pub fn run(args: &SweepArgs) -> Result<Outcome, OitError> {
     if let Some(path) = &args.plot {
         check_output(path, "svg", "--plot")?;
     }
-    let prepared = args.scene.prepare()?;
+    Ok((techniques, args.scene.prepare()?))
+}
+
+/// Runs `oit sweep`.
+pub fn run(args: &SweepArgs) -> Result<Outcome, OitError> {
+    let (techniques, prepared) = check(args)?;
     let views: Vec<View> = (0..args.views)
         .map(|i| View { azimuth: (f64::from(i) * 360.0 / f64::from(args.views)) as f32, ..prepared.view })
         .collect();

@@ -284,6 +284,8 @@ fn bad_inputs_fail_with_one_error_line() {
         }
         assert_one_error(&oit(&args), what);
     }
+    // `info` bounds the threads as the others do (it once reported "100000 rayon threads")
+    assert_one_error(&oit(&["info", "--threads", "100000"]), "info with too many threads");
 }
 
 #[test]

@@ -1,0 +1,162 @@
+//! oit-cli: the command line of oit — render one technique, compare techniques with the exact
+//! reference, sweep the camera around the scene, write the bench report, and list the backends
+//! compiled in. The `oit` binary (`main.rs`) is [`main`]; [`validate`] makes every check a command
+//! makes before it works, without working, for the fuzz harness (`oit-fuzz`).
+//!
+//! Contract: every failure prints one line `error: <message>` on stderr and exits with code 1
+//! (clap's own usage errors keep clap's format and exit code 2). Reports go to stdout — a table,
+//! or with `--json` JSON and nothing else — and progress to stderr.
+//!
+//! Scene, camera and shading options are one flattened struct (`options::SceneArgs`) shared by
+//! `render`, `compare` and `sweep`; backends are chosen by name in one place, oit-bench's
+//! registry (`oit_bench::backends`), and `compare`, `sweep` and `bench` run one loop, oit-bench's
+//! `oit_bench::experiment`.
+
+mod bench;
+mod compare;
+mod info;
+mod options;
+mod output;
+mod plot;
+mod render;
+mod sweep;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use oit_core::{OitError, Technique};
+
+pub use options::Prepared;
+
+/// Order-independent transparency techniques, measured against an exact reference.
+#[derive(Parser, Debug)]
+#[command(
+    name = "oit",
+    version,
+    about = "Order-independent transparency techniques, measured against an exact reference",
+    long_about = "Order-independent transparency techniques, measured against an exact reference.\n\n\
+        oit renders a scene of transparent objects with one of many ways of capturing and \
+        ordering the fragments of every pixel (depth peeling, bucket depth peeling, weighted \
+        averages, fixed A-buffers, ...) and measures each against an exact A-buffer reference: \
+        error pixel rate (EPR), PSNR, fragments lost, memory and time.\n\n\
+        Run `oit info` for the backends compiled in and what each runs, and `oit <command> \
+        --help` for a command's options.",
+    propagate_version = true
+)]
+pub struct Cli {
+    /// The command and its arguments.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// `oit render`.
+    Render(render::RenderArgs),
+    /// `oit compare`.
+    Compare(compare::CompareArgs),
+    /// `oit sweep`.
+    Sweep(sweep::SweepArgs),
+    /// `oit info`.
+    Info(info::InfoArgs),
+    /// `oit bench`.
+    Bench(bench::BenchArgs),
+}
+
+/// How a command ended when it did not fail outright.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Outcome {
+    /// Everything asked for was done.
+    Success,
+    /// The command went on past failures it has already reported (one `error:` line each).
+    Failed,
+}
+
+/// Runs the command.
+pub fn run(cli: Cli) -> Result<Outcome, OitError> {
+    match cli.command {
+        Command::Render(args) => render::run(&args),
+        Command::Compare(args) => compare::run(&args),
+        Command::Sweep(args) => sweep::run(&args),
+        Command::Info(args) => info::run(&args),
+        Command::Bench(args) => bench::run(&args),
+    }
+}
+
+/// What a command would run, every option checked: [`validate`]'s answer.
+pub struct Validated {
+    /// The techniques the command would render, in order (none for `info` and `bench --replot`).
+    pub techniques: Vec<Technique>,
+    /// The scene, settings, camera angles and backends of `render`, `compare` and `sweep`.
+    pub prepared: Option<Prepared>,
+}
+
+/// Every check the command makes before it does any work (each command's `check`, which its run
+/// starts with): options parsed and in range, scenes loaded and framed, output paths checked,
+/// backends built; nothing rendered, nothing written. What passes here is what the command would
+/// start on; an error here is the error the command would print.
+pub fn validate(cli: &Cli) -> Result<Validated, OitError> {
+    let rendering = |(techniques, prepared)| Validated { techniques, prepared: Some(prepared) };
+    Ok(match &cli.command {
+        Command::Render(args) => {
+            let (technique, prepared) = render::check(args)?;
+            Validated { techniques: vec![technique], prepared: Some(prepared) }
+        }
+        Command::Compare(args) => rendering(compare::check(args)?),
+        Command::Sweep(args) => rendering(sweep::check(args)?),
+        Command::Info(args) => {
+            info::check(args)?;
+            Validated { techniques: Vec::new(), prepared: None }
+        }
+        Command::Bench(args) => match bench::check(args)? {
+            bench::Checked::Replot(..) => Validated { techniques: Vec::new(), prepared: None },
+            bench::Checked::Measure(config) => Validated { techniques: config.techniques, prepared: None },
+        },
+    })
+}
+
+/// Prints one `error:` line for a panic instead of Rust's message and backtrace note: a panic is
+/// a bug in oit, and the user still gets the one-line contract.
+fn install_panic_hook() {
+    std::panic::set_hook(Box::new(|info| {
+        let payload = info
+            .payload()
+            .downcast_ref::<&str>()
+            .map(|s| (*s).to_string())
+            .or_else(|| info.payload().downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown cause".into());
+        let place = info.location().map(|l| format!(" at {}:{}", l.file(), l.line())).unwrap_or_default();
+        let line = format!("internal error{place}: {payload}; this is a bug in oit, please report it");
+        eprintln!("error: {}", line.replace('\n', " "));
+    }));
+}
+
+/// The `oit` binary: parses the command line, runs it, and turns the result (or a panic) into
+/// the exit code and the one `error:` line.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    install_panic_hook();
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(cli))) {
+        Ok(Ok(Outcome::Success)) => ExitCode::SUCCESS,
+        Ok(Ok(Outcome::Failed)) => ExitCode::FAILURE,
+        Ok(Err(e)) => {
+            output::error_line(&e.to_string());
+            ExitCode::FAILURE
+        }
+        // The hook has already printed the one line.
+        Err(_) => ExitCode::FAILURE,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    use super::Cli;
+
+    #[test]
+    fn clap_definition_is_consistent() {
+        Cli::command().debug_assert();
+    }
+}
