@@ -109,8 +109,7 @@ fn render_complexity_draws_the_legend_on_the_heat_map() {
 
     // The same frame from the library, without a legend.
     let scene = load_scene(scene_name).unwrap();
-    let camera =
-        Camera::orbit_scene(&scene, View { azimuth: 30.0, elevation: 20.0, fov: 45.0 }, 1.0).unwrap();
+    let camera = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();
     let settings = Settings {
         width: 256,
         height: 256,
