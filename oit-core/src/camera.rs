@@ -189,26 +189,25 @@ impl Camera {
             None => distance + depth * 1.01,
         };
         if near >= far {
-            let (n, f) = (near * framed, far * framed);
-            let fitted = match (view.near, view.far) {
-                (Some(_), None) => {
-                    format!(" (the far plane fitted to this scene is at {f:e}: set --far beyond --near)")
-                }
-                (None, Some(_)) => {
-                    format!(" (the near plane fitted to this scene is at {n:e}: set --near below --far)")
-                }
-                _ => String::new(),
-            };
-            return Err(OitError::InvalidSettings(format!(
-                "the near plane ({n:e}) must be nearer than the far plane ({f:e}){fitted}"
-            )));
+            let (n, f) = ((near * framed) as f32, (far * framed) as f32);
+            return Err(OitError::InvalidSettings(match (view.near, view.far) {
+                (Some(_), None) => format!(
+                    "the near plane ({n}) lies beyond the far plane fitted to this scene ({f}): \
+                     set --far beyond --near, or a smaller --near"
+                ),
+                (None, Some(_)) => format!(
+                    "the far plane ({f}) lies in front of the near plane fitted to this scene ({n}): \
+                     set --near below --far, or a larger --far"
+                ),
+                _ => format!("the near plane ({n}) must be nearer than the far plane ({f})"),
+            }));
         }
         let proj = DMat4::perspective_rh(vhalf * 2.0, f64::from(aspect), near, far).as_mat4();
         if !(proj.is_finite() && (near as f32).is_normal() && (proj.w_axis.z != 0.0)) {
             return Err(OitError::InvalidSettings(format!(
-                "the near plane ({:e}) is too close to the eye for f32 at this scene's scale (radius {framed:e}): \
+                "the near plane ({}) is too close to the eye for f32 at this scene's scale (radius {framed:e}): \
                  use a larger --near",
-                near * framed
+                (near * framed) as f32
             )));
         }
         let up = if dir.cross(DVec3::Y).length_squared() < 1e-8 { DVec3::Z } else { DVec3::Y };
@@ -345,6 +344,10 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("nearer than the far plane"), "{e}");
+        // a near plane f32 cannot hold in the camera's units (1e-39 of a unit radius: subnormal)
+        let e =
+            Camera::orbit(&unit, View { near: Some(1e-39), ..View::default() }, 1.0).unwrap_err().to_string();
+        assert!(e.contains("too close to the eye") && e.contains("larger --near"), "{e}");
     }
 
     #[test]
