@@ -15,8 +15,8 @@ use oit_core::{
 #[command(next_help_heading = "Scene, camera and shading")]
 pub struct SceneArgs {
     /// The scene: a built-in name (default, planes:N, spheres:N, cluster:N, knot, coplanar,
-    /// ties:N, near:N) or a path to a Wavefront .obj file (at most 1 GiB; OIT_MAX_MODEL_BYTES
-    /// raises the limit).
+    /// ties:N, near:N, grid:RxC:MESH, scale:S:SCENE for SCENE with every coordinate times S) or a
+    /// path to a Wavefront .obj file (at most 1 GiB; OIT_MAX_MODEL_BYTES raises the limit).
     #[arg(long, value_name = "NAME|FILE.obj", default_value = oit_core::DEFAULT_SCENE)]
     pub scene: String,
 
@@ -36,6 +36,17 @@ pub struct SceneArgs {
     /// fits.
     #[arg(long, value_name = "DEG", default_value_t = 45.0, allow_negative_numbers = true)]
     pub fov: f32,
+
+    /// Distance from the eye to the near clipping plane, in scene units: above 0 and below the far
+    /// plane (`render --json` reports the fitted camera's near and far) [default: fitted to the
+    /// scene].
+    #[arg(long, value_name = "DIST", allow_negative_numbers = true)]
+    pub near: Option<f32>,
+
+    /// Distance from the eye to the far clipping plane, in scene units: beyond the near plane
+    /// [default: fitted to the scene].
+    #[arg(long, value_name = "DIST", allow_negative_numbers = true)]
+    pub far: Option<f32>,
 
     /// Opacity in [0, 1] given to every object instead of its own [default: each object's own].
     #[arg(long, value_name = "A", allow_negative_numbers = true)]
@@ -148,10 +159,18 @@ impl SceneArgs {
             hardware_capture: self.hardware_capture.parse::<HardwareCapture>()?,
         };
         settings.validate()?;
-        let view = View { azimuth: self.azimuth, elevation: self.elevation, fov: self.fov };
-        // Checks the angles before the scene is loaded (the unit box stands in for its bounds).
+        check_planes(self.near, self.far)?;
+        let view = View {
+            azimuth: self.azimuth,
+            elevation: self.elevation,
+            fov: self.fov,
+            near: self.near,
+            far: self.far,
+        };
+        // Checks the angles before the scene is loaded (the unit box stands in for its bounds; a
+        // plane set against one fitted to the scene is checked once the scene is loaded).
         let unit = oit_core::Aabb { min: oit_core::glam::Vec3::ZERO, max: oit_core::glam::Vec3::ONE };
-        Camera::orbit(&unit, view, width as f32 / height as f32)?;
+        Camera::orbit(&unit, View { near: None, far: None, ..view }, width as f32 / height as f32)?;
         let raster = RasterChoice::parse(self.raster.as_deref(), &self.backend)?;
         let options = BackendOptions { threads: self.threads, adapter: self.adapter.clone() };
         let backends = with_paths(select(&self.backend, &options)?, raster)?;
@@ -164,6 +183,28 @@ impl SceneArgs {
         prepared.camera(view)?;
         Ok(prepared)
     }
+}
+
+/// Checks `--near` and `--far` on their own and against each other (against a plane fitted to the
+/// scene, the camera checks them once the scene is loaded).
+fn check_planes(near: Option<f32>, far: Option<f32>) -> Result<(), OitError> {
+    for (flag, value) in [("--near", near), ("--far", far)] {
+        if let Some(d) = value
+            && !(d.is_finite() && d > 0.0)
+        {
+            return Err(OitError::InvalidSettings(format!(
+                "{flag} {d} is not a distance: use a finite number above 0 (in scene units, from the eye)"
+            )));
+        }
+    }
+    if let (Some(n), Some(f)) = (near, far)
+        && n >= f
+    {
+        return Err(OitError::InvalidSettings(format!(
+            "--near {n} must be less than --far {f}: the near plane lies between the eye and the far plane"
+        )));
+    }
+    Ok(())
 }
 
 /// Checks before any work that `path` can be written: its folder exists, it is not a folder, and

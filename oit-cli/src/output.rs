@@ -104,7 +104,8 @@ impl Table {
 /// A camera as JSON: enough for another renderer to reproduce the view.
 #[derive(Serialize)]
 pub struct CameraJson {
-    /// World to view, column-major.
+    /// World to view, column-major (a fitted camera's view space is scaled by 1/radius of the
+    /// scene, and `proj` is made for that scale: `proj · view` is world to clip).
     pub view: [f32; 16],
     /// View to clip (right-handed, depth in [0, 1]), column-major.
     pub proj: [f32; 16],
@@ -112,9 +113,9 @@ pub struct CameraJson {
     pub eye: [f32; 3],
     /// Unit viewing direction.
     pub forward: [f32; 3],
-    /// Near plane distance.
+    /// Near plane distance from the eye, in scene units.
     pub near: f32,
-    /// Far plane distance.
+    /// Far plane distance from the eye, in scene units.
     pub far: f32,
     /// Degrees around the vertical axis.
     pub azimuth: f32,

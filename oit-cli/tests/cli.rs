@@ -109,8 +109,7 @@ fn render_complexity_draws_the_legend_on_the_heat_map() {
 
     // The same frame from the library, without a legend.
     let scene = load_scene(scene_name).unwrap();
-    let camera =
-        Camera::orbit_scene(&scene, View { azimuth: 30.0, elevation: 20.0, fov: 45.0 }, 1.0).unwrap();
+    let camera = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();
     let settings = Settings {
         width: 256,
         height: 256,
@@ -286,6 +285,57 @@ fn bad_inputs_fail_with_one_error_line() {
     }
     // `info` bounds the threads as the others do (it once reported "100000 rayon threads")
     assert_one_error(&oit(&["info", "--threads", "100000"]), "info with too many threads");
+}
+
+/// `--near` and `--far` (issue 13.17) reach the camera, and every bad value is one clear error
+/// naming the flag.
+#[test]
+fn near_and_far_planes() {
+    let dir = scratch("near_far");
+    let png = dir.join("out.png");
+    let png = png.to_str().unwrap();
+    let out = oit(&["render", "--size", "16x16", "--near", "0.5", "--far", "20", "--json", "-o", png]);
+    let v = parse_json(&out, "render --near --far");
+    let (near, far) = (v["camera"]["near"].as_f64().unwrap(), v["camera"]["far"].as_f64().unwrap());
+    assert!((near - 0.5).abs() < 1e-6 && (far - 20.0).abs() < 1e-5, "{near} {far}");
+    let cases: [(&[&str], &str); 7] = [
+        (&["--near", "0"], "--near 0 is not a distance"),
+        (&["--near", "-1"], "--near -1 is not a distance"),
+        (&["--far", "inf"], "--far inf is not a distance"),
+        (&["--near", "nan"], "--near NaN is not a distance"),
+        (&["--near", "5", "--far", "2"], "--near 5 must be less than --far 2"),
+        // against the plane fitted to the scene: checked once the scene is loaded
+        (&["--near", "1000"], "set --far beyond --near"),
+        (&["--far", "0.001"], "set --near below --far"),
+    ];
+    for (flags, message) in cases {
+        let mut args = vec!["render", "--size", "16x16", "-o", png];
+        args.extend(flags);
+        let out = oit(&args);
+        assert_one_error(&out, message);
+        assert!(stderr(&out).contains(message), "{flags:?}: {}", stderr(&out));
+    }
+}
+
+/// A scene scaled to 10⁻²⁰ or 10²⁰ renders the fragments it renders at unit scale (issue 13.6: at
+/// 10⁻³⁰ it rendered none); one too small for f32 is refused.
+#[test]
+fn scaled_scenes_render_alike() {
+    let dir = scratch("scaled");
+    let png = dir.join("out.png");
+    let png = png.to_str().unwrap();
+    let fragments = |scene: &str| {
+        let out = oit(&["render", "--size", "32x32", "--scene", scene, "--json", "-o", png]);
+        parse_json(&out, scene)["fragments"].as_u64().unwrap()
+    };
+    let unit = fragments("planes:4");
+    assert!(unit > 1000, "{unit}");
+    for scene in ["scale:1e-30:planes:4", "scale:1e-20:planes:4", "scale:1e20:planes:4"] {
+        assert_eq!(fragments(scene), unit, "{scene}");
+    }
+    let out = oit(&["render", "--size", "16x16", "--scene", "scale:1e-32:planes:4", "-o", png]);
+    assert_one_error(&out, "too small");
+    assert!(stderr(&out).contains("too small to frame"), "{}", stderr(&out));
 }
 
 #[test]

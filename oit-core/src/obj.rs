@@ -550,7 +550,7 @@ mod tests {
         assert!(e.contains("line 2") && e.contains("out of range"), "{e}");
         assert!(!e.contains("NaN") && !e.contains("finite"), "{e}");
         // the largest allowed coordinate loads
-        let p = write("big.obj", "v 0 0 0\nv 1e15 0 0\nv 0 1e15 0\nf 1 2 3\n");
+        let p = write("big.obj", "v 0 0 0\nv 1e30 0 0\nv 0 1e30 0\nf 1 2 3\n");
         load_obj(&p).unwrap();
     }
 

@@ -9,6 +9,7 @@
 //! | `coplanar` | two overlapping quads in one plane, different colours | 2 (a tie) |
 //! | `ties:N` | N overlapping quads in one plane, colour order unlike primitive order | up to N, all tied |
 //! | `near:N` | `ties:N` with the quads 10⁻⁷ apart in depth (equal after projection to f32) | up to N |
+//! | `scale:S:SCENE` | SCENE with every coordinate multiplied by S (e.g. `scale:1e-20:planes:8`) | SCENE's |
 //! | `default` | a torus knot inside two glass spheres | ≥ 8 |
 
 use std::f32::consts::TAU;
@@ -20,7 +21,7 @@ use crate::{Instance, Mesh, Object, OitError, Scene};
 
 /// The built-in names, for messages.
 pub const BUILTIN_SCENES: &str =
-    "default, planes:N, spheres:N, cluster:N, knot, coplanar, ties:N, near:N, grid:RxC:MESH";
+    "default, planes:N, spheres:N, cluster:N, knot, coplanar, ties:N, near:N, grid:RxC:MESH, scale:S:SCENE";
 
 /// The scene rendered when none is named.
 pub const DEFAULT_SCENE: &str = "default";
@@ -62,6 +63,9 @@ pub fn builtin_scene(name: &str) -> Option<Result<Scene, OitError>> {
 fn builtin_unchecked(name: &str) -> Option<Result<Scene, OitError>> {
     if let Some(rest) = name.strip_prefix("grid:") {
         return Some(grid(rest));
+    }
+    if let Some(rest) = name.strip_prefix("scale:") {
+        return Some(scaled(rest));
     }
     let (base, param) = match name.split_once(':') {
         Some((b, p)) => (b, Some(p)),
@@ -130,13 +134,7 @@ fn grid(spec: &str) -> Result<Scene, OitError> {
             "scene 'grid:{spec}': R and C from 1, R×C at most 4096"
         )));
     }
-    let base = match builtin_scene(mesh) {
-        Some(s) => s?,
-        None => match find_model(mesh) {
-            Some(path) if Path::new(mesh).extension().is_none() => crate::load_obj(&path)?,
-            _ => load_scene(mesh)?,
-        },
-    };
+    let base = inner_scene(mesh)?;
     // R×C ≤ 4096 bounds one grid, not a grid of grids: count before copying
     let copies = u64::from(rows * cols);
     Scene::check_size(
@@ -179,6 +177,56 @@ fn grid(spec: &str) -> Result<Scene, OitError> {
             });
         }
     }
+    Ok(scene)
+}
+
+/// The scene a `grid:` or `scale:` expression wraps: a built-in scene, a bare model name looked up
+/// by [`find_model`], or a path.
+fn inner_scene(name: &str) -> Result<Scene, OitError> {
+    match builtin_scene(name) {
+        Some(s) => s,
+        None => match find_model(name) {
+            Some(path) if Path::new(name).extension().is_none() => crate::load_obj(&path),
+            _ => load_scene(name),
+        },
+    }
+}
+
+/// `scale:S:SCENE`: SCENE (as `grid:` takes it) with every world coordinate multiplied by S, a
+/// positive number such as `1e-20`: mesh positions are scaled, and instances' translations, so a
+/// point `M·p` lands at `S·M·p`. Normals, colours and primitive order are untouched, so the camera,
+/// which fits any scale, draws the same picture. Refused when the scaled scene would reach beyond
+/// ±[`crate::Mesh::MAX_COORDINATE`].
+fn scaled(spec: &str) -> Result<Scene, OitError> {
+    let bad = || {
+        OitError::InvalidSettings(format!(
+            "scene 'scale:{spec}': expected scale:S:SCENE with S a finite number above 0, e.g. scale:1e-20:planes:8"
+        ))
+    };
+    let (factor, inner) = spec.split_once(':').ok_or_else(bad)?;
+    let s: f32 = factor.parse().map_err(|_| bad())?;
+    if !(s.is_finite() && s > 0.0) {
+        return Err(bad());
+    }
+    let mut scene = inner_scene(inner)?;
+    let bounds = scene.bounds();
+    let reach = f64::from(bounds.min.abs().max(bounds.max.abs()).max_element()) * f64::from(s);
+    if reach > f64::from(crate::Mesh::MAX_COORDINATE) {
+        return Err(OitError::InvalidScene(format!(
+            "scene 'scale:{spec}' would reach {reach:e} from the origin: world coordinates must lie within ±{:e}; use a smaller S",
+            crate::Mesh::MAX_COORDINATE
+        )));
+    }
+    for mesh in &mut scene.meshes {
+        for p in &mut mesh.positions {
+            *p *= s;
+        }
+    }
+    for inst in &mut scene.instances {
+        let t = inst.transform.w_axis;
+        inst.transform.w_axis = (t.truncate() * s).extend(t.w);
+    }
+    scene.name = format!("scale:{spec}");
     Ok(scene)
 }
 
@@ -456,6 +504,37 @@ mod tests {
         for bad in ["grid:0x3:knot", "grid:2:knot", "grid:2x3", "grid:2x3:nope-nothing", "grid:axb:knot"] {
             assert!(load_scene(bad).is_err(), "{bad}");
         }
+    }
+
+    #[test]
+    fn scaled_scenes() {
+        let unit = load_scene("planes:3").unwrap();
+        for (factor, k) in [("1e-20", 1e-20f32), ("1e20", 1e20), ("0.5", 0.5)] {
+            let s = load_scene(&format!("scale:{factor}:planes:3")).unwrap();
+            s.validate().unwrap();
+            assert_eq!(s.name, format!("scale:{factor}:planes:3"));
+            assert_eq!(s.triangle_count(), unit.triangle_count());
+            let (a, b) = (s.bounds(), unit.bounds());
+            assert_eq!((a.min, a.max), (b.min * k, b.max * k), "{factor}");
+            assert_eq!(s.meshes[0].normals, unit.meshes[0].normals);
+        }
+        // instances: translations scale with the positions (spheres:2 places scaled copies)
+        let s = load_scene("scale:4:grid:1x2:spheres:2").unwrap();
+        let g = load_scene("grid:1x2:spheres:2").unwrap();
+        let (a, b) = (s.bounds(), g.bounds());
+        assert!(
+            (a.min - b.min * 4.0).abs().max_element() < 1e-5
+                && (a.max - b.max * 4.0).abs().max_element() < 1e-5
+        );
+        for bad in
+            ["scale:0:planes:2", "scale:-1:planes:2", "scale:inf:planes:2", "scale:x:planes:2", "scale:2"]
+        {
+            let e = load_scene(bad).unwrap_err().to_string();
+            assert!(e.contains("scale:S:SCENE"), "{bad}: {e}");
+        }
+        let e = load_scene("scale:1e31:planes:2").unwrap_err().to_string();
+        assert!(e.contains("within ±1e30") && e.contains("smaller S"), "{e}");
+        assert!(load_scene("scale:2:nothing-like-this").is_err());
     }
 
     #[test]

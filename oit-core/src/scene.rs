@@ -5,7 +5,7 @@
 //! of instance `i` is `scene.primitive_base(i) + t`. Ties between fragments of equal depth are broken
 //! by that id wherever a technique can.
 
-use glam::{Mat4, Vec3, Vec4};
+use glam::{DVec3, Mat4, Vec3, Vec4};
 
 use crate::OitError;
 
@@ -43,9 +43,20 @@ impl Aabb {
         (self.min + self.max) * 0.5
     }
 
+    /// The centre, in f64 (no overflow for boxes near f32's range).
+    pub fn center_f64(&self) -> DVec3 {
+        (self.min.as_dvec3() + self.max.as_dvec3()) * 0.5
+    }
+
     /// Radius of the bounding sphere around the centre.
     pub fn radius(&self) -> f32 {
-        (self.max - self.min).length() * 0.5
+        self.radius_f64() as f32
+    }
+
+    /// Radius of the bounding sphere around the centre, in f64: the squared diagonal of a box at
+    /// 10²⁰ (10⁴⁰) overflows f32, and of a box at 10⁻²⁰ underflows to 0.
+    pub fn radius_f64(&self) -> f64 {
+        (self.max.as_dvec3() - self.min.as_dvec3()).length() * 0.5
     }
 
     /// The eight corners.
@@ -105,11 +116,11 @@ pub struct Mesh {
 }
 
 impl Mesh {
-    /// The largest coordinate magnitude a vertex may have. Far beyond any real model (f32 keeps 7
-    /// digits), and far below where a camera framing the scene overflows f32: at the narrowest
-    /// field of view (0.5°) the eye stands about 240 bounding radii away and its squared distance
-    /// must stay under f32::MAX ≈ 3.4e38, which allows radii up to about 4e16.
-    pub const MAX_COORDINATE: f32 = 1e15;
+    /// The largest coordinate magnitude a vertex may have: 10³⁰, about as far above 1 as
+    /// [`crate::Camera::MIN_RADIUS`] (10⁻³¹) is below it (the camera fits both ends alike), and
+    /// far below where a camera framing the scene overflows f32 ([`crate::Camera::MAX_RADIUS`],
+    /// 10³⁶).
+    pub const MAX_COORDINATE: f32 = 1e30;
 
     /// A mesh from positions and triangles, with area-weighted vertex normals computed.
     pub fn new(name: impl Into<String>, positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> Mesh {
@@ -118,11 +129,14 @@ impl Mesh {
         mesh
     }
 
-    /// Replaces the normals by area-weighted averages of the adjacent faces' normals.
+    /// Replaces the normals by area-weighted averages of the adjacent faces' normals. Computed in
+    /// f64, where the cross products of f32 coordinates neither underflow (a mesh at 10⁻²⁰ has
+    /// face areas of 10⁻⁴⁰) nor overflow (at 10²⁰, 10⁴⁰): the normals are the same at every scale.
     pub fn compute_normals(&mut self) {
-        let mut normals = vec![Vec3::ZERO; self.positions.len()];
+        let mut normals = vec![DVec3::ZERO; self.positions.len()];
         for tri in &self.indices {
-            let [a, b, c] = tri.map(|i| self.positions.get(i as usize).copied().unwrap_or(Vec3::ZERO));
+            let [a, b, c] =
+                tri.map(|i| self.positions.get(i as usize).copied().unwrap_or(Vec3::ZERO).as_dvec3());
             let n = (b - a).cross(c - a);
             if n.is_finite() {
                 for &i in tri {
@@ -132,7 +146,7 @@ impl Mesh {
                 }
             }
         }
-        self.normals = normals.into_iter().map(|n| n.normalize_or_zero()).collect();
+        self.normals = normals.into_iter().map(|n| n.normalize_or_zero().as_vec3()).collect();
     }
 
     /// The bounds of the positions.
@@ -355,5 +369,44 @@ impl Scene {
             )));
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normals_are_the_same_at_every_scale() {
+        // f32 cross products of a mesh at 1e-20 (1e-40) are subnormal and at 1e20 (1e40) infinite
+        let knot = crate::procedural::torus_knot(2, 3, 0.14, 48, 8);
+        let mut unit = knot.clone();
+        unit.compute_normals();
+        for k in [1e-30f32, 1e-20, 1e20, 1e30] {
+            let mut m = knot.clone();
+            m.positions.iter_mut().for_each(|p| *p *= k);
+            m.compute_normals();
+            let worst = m
+                .normals
+                .iter()
+                .zip(&unit.normals)
+                .map(|(a, b)| (*a - *b).abs().max_element())
+                .fold(0.0, f32::max);
+            assert!(worst < 1e-6, "{k}: normals differ by {worst}");
+            assert!(m.normals.iter().all(|n| (n.length() - 1.0).abs() < 1e-6), "{k}");
+        }
+        // a power-of-two scale gives the same bits
+        let mut m = knot.clone();
+        m.positions.iter_mut().for_each(|p| *p *= 2f32.powi(-70));
+        m.compute_normals();
+        assert_eq!(m.normals, unit.normals);
+    }
+
+    #[test]
+    fn bounds_hold_at_the_ends_of_f32() {
+        let b = Aabb { min: Vec3::splat(-1e30), max: Vec3::splat(1e30) };
+        assert!((f64::from(b.radius()) / (1e30 * 3f64.sqrt()) - 1.0).abs() < 1e-6, "{}", b.radius());
+        let b = Aabb { min: Vec3::ZERO, max: Vec3::splat(1e-25) };
+        assert!((f64::from(b.radius()) / (0.5e-25 * 3f64.sqrt()) - 1.0).abs() < 1e-6, "{}", b.radius());
     }
 }

@@ -339,9 +339,15 @@ struct MeshView<'a> {
     indices: &'a [[u32; 3]],
 }
 
-/// The normal matrix of `transform`: its inverse transpose (the matrix itself when singular).
+/// The normal matrix of `transform`: its inverse transpose (the matrix itself when singular), up
+/// to a power-of-two factor, as only the directions it gives matter. The factor brings the largest
+/// entry near 1 before inverting, so that a transform scaling by 10⁻²⁰ (determinant 10⁻⁶⁰, 0 in
+/// f32) or 10²⁰ inverts as one scaling by 1 does; being a power of two, it changes no bit of a
+/// normalized result.
 pub fn normal_matrix(transform: &Mat4) -> Mat3 {
     let m = Mat3::from_mat4(*transform);
+    let largest = m.to_cols_array().iter().fold(0.0f32, |a, &x| a.max(x.abs()));
+    let m = if largest.is_normal() { m * 2f32.powi(-(largest.log2().round() as i32)) } else { m };
     let inv = m.inverse();
     if inv.is_finite() { inv.transpose() } else { m }
 }

@@ -152,7 +152,7 @@ const VIEWS: &[(f32, f32, f32)] = &[
 /// The camera fitted to `scene` from a view of [`VIEWS`], checked, and a sampled render.
 fn framed(target: Target, scene: &Scene, ctx: &Ctx) -> Verdict {
     let (azimuth, elevation, fov) = VIEWS[(ctx.bits >> 8) as usize % VIEWS.len()];
-    let view = View { azimuth, elevation, fov };
+    let view = View { azimuth, elevation, fov, ..View::default() };
     let camera = match Camera::orbit_scene(scene, view, 1.0) {
         Ok(c) => c,
         Err(e) => return Verdict::Refused(signature(target, &e)),

@@ -113,6 +113,6 @@ pub fn epr(backend: &dyn Backend, scene: &Scene, view: View, base: &Settings, te
 }
 
 /// Looking straight down −z (planes face the camera).
-pub const FRONT: View = View { azimuth: 0.0, elevation: 0.0, fov: 45.0 };
+pub const FRONT: View = View { azimuth: 0.0, elevation: 0.0, fov: 45.0, near: None, far: None };
 
 pub use oit_core::metrics::{differ_off_mask, edge_mask};

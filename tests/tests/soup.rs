@@ -58,7 +58,7 @@ fn random_soups() {
                 eprintln!("on {}", label(backend.as_ref()));
                 let b = backend.as_ref();
                 let base = Settings { ..settings(48, "reference") };
-                let view = View { azimuth: 10.0, elevation: 15.0, fov: 50.0 };
+                let view = View { azimuth: 10.0, elevation: 15.0, fov: 50.0, ..View::default() };
                 let cam = camera(&scene, &base, view);
                 let r1 = render(b, &scene, &cam, &base);
                 let r2 = render(b, &shuffled, &cam, &base);

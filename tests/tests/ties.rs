@@ -51,7 +51,7 @@ fn exact_techniques() -> Vec<Technique> {
 /// wgpu hardware path (the CPU and compute paths ignore it and run the default again).
 const CAPTURES: [HardwareCapture; 2] = [HardwareCapture::Atomics, HardwareCapture::Blend];
 
-const VIEWS: [View; 2] = [FRONT, View { azimuth: 25.0, elevation: 20.0, fov: 45.0 }];
+const VIEWS: [View; 2] = [FRONT, View { azimuth: 25.0, elevation: 20.0, ..FRONT }];
 
 #[test]
 fn ties_are_ordered_or_counted() {

@@ -6,9 +6,11 @@
 //!   than 1, where the order of float operations may differ);
 //! - hardware path: images differ from oit-cpu's only along triangle edges, and each technique's
 //!   EPR against wgpu's own reference is close to oit-cpu's;
-//! - exact techniques: EPR 0 against the same backend's reference, on both paths.
+//! - exact techniques: EPR 0 against the same backend's reference, on both paths, or every error
+//!   pixel a pixel where the technique counted a loss (a tie it cannot split).
 #![cfg(feature = "wgpu")]
 
+use oit_core::metrics::accuracy;
 use oit_core::{RasterPath, Settings, Technique, View};
 use oit_tests::*;
 
@@ -97,8 +99,29 @@ fn exact_techniques_on_both_paths() {
                 Technique::Dfb,
                 Technique::Ll,
             ] {
-                let e = epr(&gpu, &scene, View::default(), &base, t);
-                assert_eq!(e, 0.0, "{t} on {name}, {path} path");
+                let (r, f) = with_reference(&gpu, &scene, View::default(), &base, t);
+                let a = accuracy(&r, &f.image).expect("same size");
+                let what = format!(
+                    "{t} on {name}, {path} path: {} error pixels, lost {}, tied {}",
+                    a.error_pixels, f.stats.lost, f.stats.tied
+                );
+                // Exact, or counted: lavapipe's own depth interpolation (hardware path) can give two
+                // fragments one depth (cluster:200 at the default view: one pixel), which dp keeps
+                // one of and counts the other lost.
+                assert!(a.error_pixels <= f.stats.lost + f.stats.tied, "{what}");
+                if let Some(lost) = &f.lost_pixels {
+                    let stray = (0..lost.len())
+                        .filter(|&i| {
+                            lost[i] == 0
+                                && (0..3).any(|c| r.image.pixels[i][c].abs_diff(f.image.pixels[i][c]) > 1)
+                        })
+                        .count();
+                    assert_eq!(stray, 0, "{what}: error pixels where nothing was lost");
+                }
+                if path == RasterPath::Compute || matches!(t, Technique::Fabs { .. }) {
+                    // oit's fixed-point depths tie only where the scene does; fabs orders ties
+                    assert_eq!(a.epr, 0.0, "{what}");
+                }
             }
         }
         // adp is exact on separated layers

@@ -84,10 +84,12 @@ fn state_init(px: u32) {
     state[px] = s;
 }
 
+// oit_core::Camera::linear_depth: n·f / (f − d(f − n)) without the product n·f, which is 0 or
+// infinite in f32 for a scene at 1e-20 or 1e20.
 fn linear_depth(d: f32) -> f32 {
     let n = fu.lens.x;
     let f = fu.lens.y;
-    return n * f / (f - d * (f - n));
+    return n / (1.0 - d * (1.0 - n / f));
 }
 
 // Pushes one layer into the state a caller keeps in a local (one load and one store for a whole
