@@ -78,9 +78,8 @@ impl<'g> Recorder<'g> {
         let uniforms =
             gpu.buffer(u64::from(SLOTS) * SLOT_BYTES, vk::BufferUsageFlags::UNIFORM_BUFFER, true)?;
         let pool_info = vk::CommandPoolCreateInfo::default().queue_family_index(gpu.family);
-        // SAFETY: valid create infos on a live device; each object is destroyed by `drop` (the
-        // ones made before a failure by the partial `Recorder`'s own drop is not possible, so
-        // they are destroyed here on the error paths).
+        // SAFETY: a valid create info on a live device; the pool is destroyed by `drop`, or
+        // below if what follows fails.
         let pool =
             unsafe { d.create_command_pool(&pool_info, None) }.map_err(vk_err("creating a command pool"))?;
         let alloc = vk::CommandBufferAllocateInfo::default()
