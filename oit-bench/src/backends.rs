@@ -123,17 +123,12 @@ const COMPILED: &[(&str, Constructor)] = &[
     ("cpu", cpu),
     #[cfg(feature = "wgpu")]
     ("wgpu", wgpu),
+    #[cfg(feature = "vulkan")]
+    ("vulkan", vulkan),
 ];
 
 /// Every backend oit has, and the cargo feature that compiles it in.
-const KNOWN: &[(&str, &str)] = &[("cpu", "cpu"), ("wgpu", "wgpu")];
-
-/// Backends the design names that do not exist yet, and what to use meanwhile.
-const PLANNED: &[(&str, &str)] = &[(
-    "vulkan",
-    "the raw-Vulkan backend (oit-vulkan, on ash) is not written yet: use `--backend wgpu`, which runs \
-     on Vulkan (build with `--features wgpu`), or `--backend cpu`",
-)];
+const KNOWN: &[(&str, &str)] = &[("cpu", "cpu"), ("wgpu", "wgpu"), ("vulkan", "vulkan")];
 
 #[cfg(feature = "cpu")]
 fn cpu(options: &BackendOptions) -> Result<Box<dyn Backend>, OitError> {
@@ -143,6 +138,14 @@ fn cpu(options: &BackendOptions) -> Result<Box<dyn Backend>, OitError> {
 #[cfg(feature = "wgpu")]
 fn wgpu(options: &BackendOptions) -> Result<Box<dyn Backend>, OitError> {
     let backend = oit_wgpu::WgpuBackend::new(options.adapter.clone());
+    // open the device now, so a missing one is reported (and skipped by `all`) up front
+    backend.gpu()?;
+    Ok(Box::new(backend))
+}
+
+#[cfg(feature = "vulkan")]
+fn vulkan(options: &BackendOptions) -> Result<Box<dyn Backend>, OitError> {
+    let backend = oit_vulkan::VulkanBackend::new(options.adapter.clone());
     // open the device now, so a missing one is reported (and skipped by `all`) up front
     backend.gpu()?;
     Ok(Box::new(backend))
@@ -165,7 +168,7 @@ pub fn select(name: &str, options: &BackendOptions) -> Result<Vec<Box<dyn Backen
     let compiled = compiled_names().join(", ");
     if COMPILED.is_empty() {
         return Err(OitError::InvalidSettings(
-            "no backend is compiled in: rebuild oit with --features cpu (or wgpu)".into(),
+            "no backend is compiled in: rebuild oit with --features cpu (or wgpu, vulkan)".into(),
         ));
     }
     let mut out: Vec<Box<dyn Backend>> = Vec::new();
@@ -187,8 +190,6 @@ pub fn select(name: &str, options: &BackendOptions) -> Result<Vec<Box<dyn Backen
         }
         if let Some((_, make)) = COMPILED.iter().find(|(n, _)| *n == item) {
             out.push(make(options)?);
-        } else if let Some((_, what)) = PLANNED.iter().find(|(n, _)| *n == item) {
-            return Err(OitError::Unsupported { backend: item, what: (*what).into() });
         } else if let Some((_, feature)) = KNOWN.iter().find(|(n, _)| *n == item) {
             return Err(OitError::InvalidSettings(format!(
                 "backend '{item}' is not compiled into this oit: rebuild with `--features {feature}`; \
@@ -245,9 +246,10 @@ mod tests {
             assert_eq!(select("all", &opts).unwrap().len(), COMPILED.len());
             assert_eq!(select(&format!("{},all", COMPILED[0].0), &opts).unwrap().len(), COMPILED.len());
         }
-        assert!(select("wgpu,vulkan,cpu", &opts).is_err(), "vulkan does not exist yet");
-        let message = select("vulkan", &opts).err().map(|e| e.to_string()).unwrap_or_default();
-        assert!(message.contains("not written yet") && message.contains("--backend wgpu"), "{message}");
+        if !cfg!(feature = "vulkan") {
+            let message = select("vulkan", &opts).err().map(|e| e.to_string()).unwrap_or_default();
+            assert!(message.contains("--features vulkan"), "{message}");
+        }
         assert!(select("nope", &opts).is_err());
         assert!(select("", &opts).is_err());
     }

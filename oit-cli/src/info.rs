@@ -101,7 +101,7 @@ pub fn run(args: &InfoArgs) -> Result<Outcome, OitError> {
     }
     let mut text = format!("oit {}\n\n", info.version);
     if info.backends.is_empty() {
-        text.push_str("no backend compiled in: rebuild with --features cpu (or wgpu)\n");
+        text.push_str("no backend compiled in: rebuild with --features cpu (or wgpu, vulkan)\n");
     }
     for b in &info.backends {
         text.push_str(&format!("backend {}\n", b.name));

@@ -91,7 +91,7 @@ pub struct SceneArgs {
     #[arg(long, value_name = "N")]
     pub max_peels: Option<u32>,
 
-    /// Backend to render with: a name (cpu; wgpu when compiled in; vulkan is not written yet), a comma-separated
+    /// Backend to render with: a name (cpu; wgpu, vulkan when compiled in), a comma-separated
     /// list, or all (every backend compiled in whose device is present).
     #[arg(long, value_name = "NAME|all", default_value = "cpu")]
     pub backend: String,

@@ -36,6 +36,14 @@ pub const EXPECTED: &[Expected] = &[
         why: "as on the hardware path: wgpu's ddp refuses translucency",
     },
     Expected {
+        test: "effects_run_on_sorting_techniques",
+        backend: "vulkan",
+        path: RasterPath::Compute,
+        why: "oit-vulkan runs oit-wgpu's ddp resolve, which refuses translucency (no per-pixel stack \
+              to replay the back layers nearest first); the other effects and techniques are held \
+              to oit-cpu in vulkan.rs",
+    },
+    Expected {
         test: "exact_schemes_on_separated_layers",
         backend: "wgpu",
         path: RasterPath::Hardware,

@@ -9,16 +9,19 @@ pub mod expectations;
 
 use oit_core::{Backend, Camera, Frame, Scene, Settings, Technique, View, load_scene};
 
-/// Every backend compiled in (cargo features `cpu`, `wgpu`), once per raster path it has, each
+/// Every backend compiled in (cargo features `cpu`, `wgpu`, `vulkan`), once per raster path it has, each
 /// pinned to its path ([`oit_core::OnPath`]). A GPU backend without a device is left out with one
 /// line on stderr, unless `OIT_REQUIRE_GPU=1` (set by CI), where that is a panic.
 pub fn backends() -> Vec<Box<dyn Backend>> {
-    backends_labelled("the wgpu rows of the conformance suite")
+    backends_labelled("the GPU rows of the conformance suite")
 }
 
 /// [`backends`], a missing GPU reported under `label` (the test's name).
 fn backends_labelled(label: &str) -> Vec<Box<dyn Backend>> {
-    #[cfg_attr(not(feature = "wgpu"), expect(unused_mut, reason = "only GPU backends add paths"))]
+    #[cfg_attr(
+        not(any(feature = "wgpu", feature = "vulkan")),
+        expect(unused_mut, reason = "only GPU backends add paths")
+    )]
     let mut out: Vec<Box<dyn Backend>> = Vec::new();
     #[cfg(feature = "cpu")]
     out.push(Box::new(oit_cpu::CpuBackend::default()));
@@ -30,6 +33,14 @@ fn backends_labelled(label: &str) -> Vec<Box<dyn Backend>> {
                 path,
             }));
         }
+    }
+    // the compute path only: its hardware path is not written yet (issue 9)
+    #[cfg(feature = "vulkan")]
+    if oit_vulkan::backend_or_skip(&format!("{label} on vulkan")).is_some() {
+        out.push(Box::new(oit_core::OnPath {
+            backend: Box::new(oit_vulkan::VulkanBackend::default()),
+            path: oit_core::RasterPath::Compute,
+        }));
     }
     out
 }

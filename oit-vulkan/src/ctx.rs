@@ -1,0 +1,361 @@
+//! One frame on Vulkan: the frame uniform, the per-pixel resolve state, storage buffers checked
+//! against the limits, geometry passes through the compute rasterizer, per-pixel kernels and the
+//! final image — oit-wgpu's `GpuCtx`, step for step, on the same WGSL (as SPIR-V), so that a
+//! technique's file here reads like its twin in `oit-wgpu/src/technique/`.
+
+use std::cell::{Cell, RefCell};
+use std::rc::Rc;
+
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+use oit_core::plan::Plan;
+use oit_core::{Camera, Effect, Frame, Image, OitError, RasterPath, Scene, Settings, Stats};
+
+use crate::device::{Buffer, Gpu};
+use crate::raster::ComputeRaster;
+use crate::record::Recorder;
+
+/// Group 0's binding of the loss accounting (`acct` in prelude.wgsl).
+pub(crate) const ACCT_BINDING: u32 = 15;
+/// The fewest words a storage buffer holds (as oit-wgpu: one of the widest elements).
+const MIN_BUFFER_WORDS: u64 = 16;
+/// Words of one `PixelState` (resolve.wgsl).
+const STATE_WORDS: u64 = 23;
+
+/// The frame uniform (`FrameUniform` in fragment.wgsl; oit-wgpu's `FrameUniform`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub(crate) struct FrameUniform {
+    width: u32,
+    height: u32,
+    pass_index: u32,
+    param: u32,
+    effect: u32,
+    pixel_count: u32,
+    ties: u32,
+    last_pass: u32,
+    forward: [f32; 4],
+    background: [f32; 4],
+    lens: [f32; 4],
+}
+
+/// Usage of every storage buffer.
+pub(crate) fn storage_usage() -> vk::BufferUsageFlags {
+    vk::BufferUsageFlags::STORAGE_BUFFER
+        | vk::BufferUsageFlags::TRANSFER_SRC
+        | vk::BufferUsageFlags::TRANSFER_DST
+}
+
+/// Per-pixel buffers kept between the frames of a prepared scene, by size and usage.
+#[derive(Default)]
+pub struct BufferPool {
+    free: RefCell<Vec<Rc<Buffer>>>,
+    allocations: Cell<u64>,
+}
+
+impl BufferPool {
+    /// Buffers created so far.
+    pub fn allocations(&self) -> u64 {
+        self.allocations.get()
+    }
+
+    /// A device-local buffer of `size` bytes and `usage`, free or new; its contents are whatever
+    /// the last frame left.
+    fn take(&self, gpu: &Gpu, size: u64, usage: vk::BufferUsageFlags) -> Result<Rc<Buffer>, OitError> {
+        let mut free = self.free.borrow_mut();
+        if let Some(i) = free.iter().position(|b| b.size == size && b.usage == usage) {
+            return Ok(free.swap_remove(i));
+        }
+        self.allocations.set(self.allocations.get() + 1);
+        Ok(Rc::new(gpu.buffer(size, usage, false)?))
+    }
+}
+
+/// Initial contents of a storage buffer.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Init {
+    /// All zero bits.
+    Zero,
+    /// Every 32-bit word set to this.
+    Fill(u32),
+}
+
+/// Everything a technique needs for one frame.
+pub(crate) struct VkCtx<'a> {
+    pub(crate) gpu: &'a Gpu,
+    pub(crate) settings: &'a Settings,
+    pub(crate) plan: Plan,
+    pub(crate) pixels: u32,
+    pub(crate) passes: u32,
+    pub(crate) fragments: Option<u64>,
+    pub(crate) storage_bytes: u64,
+    uniform: FrameUniform,
+    state: Rc<Buffer>,
+    image: Rc<Buffer>,
+    totals: Rc<Buffer>,
+    acct: Rc<Buffer>,
+    pool: &'a BufferPool,
+    lent: Vec<Rc<Buffer>>,
+    rec: Recorder<'a>,
+    validation_before: u64,
+}
+
+impl Drop for VkCtx<'_> {
+    fn drop(&mut self) {
+        self.pool.free.borrow_mut().append(&mut self.lent);
+    }
+}
+
+impl<'a> VkCtx<'a> {
+    /// Sets up the frame: uniform, resolve state (initialized), image, totals, loss accounting.
+    pub(crate) fn new(
+        gpu: &'a Gpu,
+        scene: &'a Scene,
+        camera: &'a Camera,
+        settings: &'a Settings,
+        pool: &'a BufferPool,
+    ) -> Result<Self, OitError> {
+        let plan = Plan::new("vulkan", scene, settings)?;
+        let pixels = settings.width * settings.height;
+        let state_bytes = u64::from(pixels) * STATE_WORDS * 4;
+        gpu.check_storage("the per-pixel resolve state", state_bytes)?;
+        // the whole frame's storage against the device's budget, before anything is allocated
+        let budget = gpu.memory_budget();
+        plan.check_budget(u64::from(pixels), oit_core::plan::Counted::default(), (&budget.0, budget.1))?;
+        let uniform = FrameUniform {
+            width: settings.width,
+            height: settings.height,
+            pass_index: 0,
+            param: 0,
+            effect: match settings.effect {
+                Effect::Transparency => 0,
+                Effect::Translucency => 1,
+                Effect::Fresnel => 2,
+                Effect::Complexity => 3,
+            },
+            pixel_count: pixels,
+            ties: u32::from(plan.count_ties),
+            last_pass: 0,
+            forward: camera.forward.extend(0.0).to_array(),
+            background: settings.background.extend(1.0).to_array(),
+            lens: [camera.near, camera.far, scene.absorption_per_length() as f32, 0.0],
+        };
+        let mut lent = Vec::new();
+        let mut take = |bytes: u64| -> Result<Rc<Buffer>, OitError> {
+            let b = pool.take(gpu, bytes, storage_usage())?;
+            lent.push(b.clone());
+            Ok(b)
+        };
+        let state = take(state_bytes.max(4))?;
+        let image = take(u64::from(pixels).max(1) * 4)?;
+        let acct = take(u64::from(pixels).max(1) * 12)?;
+        let totals = take(16)?;
+        let rec = Recorder::new(gpu)?;
+        let mut ctx = VkCtx {
+            gpu,
+            settings,
+            plan,
+            pixels,
+            passes: 0,
+            fragments: None,
+            storage_bytes: 0,
+            uniform,
+            state,
+            image,
+            totals,
+            acct,
+            pool,
+            lent,
+            rec,
+            validation_before: crate::device::validation_errors(),
+        };
+        let acct = ctx.acct.clone();
+        ctx.rec.fill(&acct, 0);
+        let (image, totals) = (ctx.image.clone(), ctx.totals.clone());
+        ctx.kernel_over("finish", "init_main", &[&image, &totals], u64::from(pixels), 0, 0)?;
+        Ok(ctx)
+    }
+
+    /// A storage buffer of `words` 32-bit words for the technique, checked against the limits and
+    /// counted in `storage_bytes`.
+    pub(crate) fn buffer(&mut self, label: &str, words: u64, init: Init) -> Result<Rc<Buffer>, OitError> {
+        let bytes = words.max(MIN_BUFFER_WORDS) * 4;
+        self.gpu.check_storage(label, bytes)?;
+        let budget = self.gpu.memory_budget();
+        oit_core::plan::check_total(
+            &format!("{} storage of a frame of {} pixels", self.settings.technique, self.pixels),
+            self.storage_bytes.saturating_add(u64::from(self.pixels) * STATE_WORDS * 4).saturating_add(bytes),
+            (&budget.0, budget.1),
+        )?;
+        self.storage_bytes += words * 4;
+        let buffer = self.pool.take(self.gpu, bytes, storage_usage())?;
+        self.lent.push(buffer.clone());
+        // a pooled buffer holds the last frame's words, a new one garbage: always initialise
+        self.rec.fill(
+            &buffer,
+            match init {
+                Init::Zero => 0,
+                Init::Fill(v) => v,
+            },
+        );
+        Ok(buffer)
+    }
+
+    /// A small buffer bound where a mode's WGSL declares an array it does not use (not storage).
+    pub(crate) fn placeholder(&mut self) -> Result<Rc<Buffer>, OitError> {
+        let buffer = self.pool.take(self.gpu, 64, storage_usage())?;
+        self.lent.push(buffer.clone());
+        Ok(buffer)
+    }
+
+    /// Sets every word of `buffer` to `value`.
+    pub(crate) fn fill(&mut self, buffer: &Buffer, value: u32) {
+        self.rec.fill(buffer, value);
+    }
+
+    /// Writes `bytes` to the start of `buffer` (through staging, in the frame's command stream).
+    pub(crate) fn upload(&mut self, buffer: &Buffer, bytes: &[u8]) -> Result<(), OitError> {
+        self.rec.upload(buffer, bytes)
+    }
+
+    /// Reads a buffer back (waits for everything recorded so far).
+    pub(crate) fn read_u32(&mut self, buffer: &Buffer) -> Result<Vec<u32>, OitError> {
+        let words = self.rec.read_u32(buffer)?;
+        self.check_validation()?;
+        Ok(words)
+    }
+
+    /// Marks the passes that follow as the last capture pass the plan allows (or not).
+    pub(crate) fn last_pass(&mut self, last: bool) {
+        self.uniform.last_pass = u32::from(last);
+    }
+
+    /// Group 0's (binding, buffer) list: the state, the technique's buffers from 2, acct at 15.
+    fn storage<'b>(state: &'b Buffer, acct: &'b Buffer, buffers: &[&'b Buffer]) -> Vec<(u32, &'b Buffer)> {
+        let mut out = vec![(1, state), (ACCT_BINDING, acct)];
+        out.extend(buffers.iter().enumerate().map(|(i, b)| (i as u32 + 2, *b)));
+        out
+    }
+
+    /// One geometry pass of `module`'s `capture` through the compute rasterizer; returns the
+    /// fragments generated.
+    pub(crate) fn geometry_pass(
+        &mut self,
+        raster: &ComputeRaster,
+        module: &'static str,
+        buffers: &[&Buffer],
+        pass_index: u32,
+        param: u32,
+    ) -> Result<u64, OitError> {
+        self.uniform.pass_index = pass_index;
+        self.uniform.param = param;
+        // as oit-wgpu: a workgroup per (triangle, tile) item on GPUs, an invocation per item on a
+        // CPU device (lavapipe), where 64 invocations of one small triangle mostly test nothing
+        let per_pixel = !self.gpu.is_cpu();
+        let entry = if per_pixel { "raster_main" } else { "raster_loop_main" };
+        let pipeline = self.gpu.pipeline(module, entry, buffers.len())?;
+        let groups = dispatch_size(if per_pixel { raster.items * 64 } else { raster.items });
+        raster.upload(&mut self.rec)?;
+        self.rec.fill(&raster.generated, 0);
+        let (state, acct) = (self.state.clone(), self.acct.clone());
+        let storage = Self::storage(&state, &acct, buffers);
+        let raster_set = raster.bindings();
+        let uniform = self.uniform;
+        self.rec.dispatch(
+            &pipeline,
+            bytemuck::bytes_of(&uniform),
+            &storage,
+            Some((&raster_set, &raster.uniform)),
+            groups,
+        )?;
+        let generated = u64::from(self.read_u32(&raster.generated)?[0]);
+        self.passes += 1;
+        self.fragments.get_or_insert(generated);
+        Ok(generated)
+    }
+
+    /// Runs compute `entry` of `module` once per pixel.
+    pub(crate) fn pixel_kernel(
+        &mut self,
+        module: &'static str,
+        entry: &str,
+        buffers: &[&Buffer],
+        pass_index: u32,
+        param: u32,
+    ) -> Result<(), OitError> {
+        self.kernel_over(module, entry, buffers, u64::from(self.pixels), pass_index, param)
+    }
+
+    /// Runs compute `entry` of `module` over `invocations` (in 2D rows of 64 × 65535 when needed).
+    pub(crate) fn kernel_over(
+        &mut self,
+        module: &'static str,
+        entry: &str,
+        buffers: &[&Buffer],
+        invocations: u64,
+        pass_index: u32,
+        param: u32,
+    ) -> Result<(), OitError> {
+        self.uniform.pass_index = pass_index;
+        self.uniform.param = param;
+        let pipeline = self.gpu.pipeline(module, entry, buffers.len())?;
+        let (state, acct) = (self.state.clone(), self.acct.clone());
+        let storage = Self::storage(&state, &acct, buffers);
+        let uniform = self.uniform;
+        self.rec.dispatch(&pipeline, bytemuck::bytes_of(&uniform), &storage, None, dispatch_size(invocations))
+    }
+
+    /// A validation error since the frame began fails it (`OIT_VULKAN_VALIDATION=1`).
+    fn check_validation(&self) -> Result<(), OitError> {
+        let now = crate::device::validation_errors();
+        if now > self.validation_before {
+            return Err(OitError::Device(format!(
+                "the Vulkan validation layer reported {} error(s) in this frame (printed above)",
+                now - self.validation_before
+            )));
+        }
+        Ok(())
+    }
+
+    /// Resolves the state into the frame and its stats.
+    pub(crate) fn finish(mut self, path: RasterPath) -> Result<Frame, OitError> {
+        let _ = path;
+        let (image_buf, totals) = (self.image.clone(), self.totals.clone());
+        self.rec.fill(&totals, 0);
+        let px = u64::from(self.pixels);
+        self.kernel_over("finish", "totals_main", &[&image_buf, &totals], px, 0, 0)?;
+        self.kernel_over("finish", "finish_main", &[&image_buf, &totals], px, 0, 0)?;
+        let words = self.read_u32(&image_buf)?;
+        let t = self.read_u32(&totals)?;
+        let acct = self.read_u32(&self.acct.clone())?;
+        let image = Image {
+            width: self.settings.width,
+            height: self.settings.height,
+            pixels: words[..self.pixels as usize].iter().map(|w| w.to_le_bytes()).collect(),
+        };
+        let lost_pixels: Vec<u32> = acct.chunks(3).take(self.pixels as usize).map(|w| w[0]).collect();
+        Ok(Frame {
+            image,
+            layers: None,
+            lost_pixels: Some(lost_pixels),
+            stats: Stats {
+                geometry_passes: self.passes,
+                fragments: self.fragments.unwrap_or(0),
+                captured: u64::from(t[0]),
+                lost: u64::from(t[3]),
+                tied: u64::from(t[2]),
+                storage_bytes: self.storage_bytes,
+                wall_ms: 0.0,
+                gpu_ms: None,
+                max_layers: t[1],
+                gpu_pass_ms: Vec::new(),
+            },
+        })
+    }
+}
+
+/// Workgroups of 64 for `invocations`, as (x, y) with x ≤ 65535.
+pub(crate) fn dispatch_size(invocations: u64) -> (u32, u32) {
+    let groups = invocations.div_ceil(64);
+    if groups <= 65_535 { (groups as u32, 1) } else { (65_535, groups.div_ceil(65_535) as u32) }
+}

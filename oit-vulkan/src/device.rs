@@ -1,0 +1,708 @@
+//! The device: the runtime-loaded Vulkan entry, the instance (with the Khronos validation layer
+//! and a debug-utils messenger when `OIT_VULKAN_VALIDATION=1`), the physical device choice, one
+//! logical device with one compute queue, buffers with their own memory, the SPIR-V modules and a
+//! pipeline cache.
+//!
+//! Ownership is the destruction order: [`RawDevice`] owns the `VkDevice` and, in a field dropped
+//! after it, the [`RawInstance`]; every buffer holds an `Arc<RawDevice>`, so the device outlives
+//! them; [`Gpu`]'s `Drop` destroys the pipelines, layouts and modules it made (newest first)
+//! before its `Arc<RawDevice>` goes.
+
+use std::collections::HashMap;
+use std::ffi::{CStr, c_void};
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+use std::sync::{Arc, Mutex};
+
+use ash::vk;
+use oit_core::OitError;
+
+/// The SPIR-V `build.rs` compiled from oit-wgpu's WGSL: (module, words as bytes, entry points).
+const MODULES: &[(&str, &[u8], &[&str])] = include!(concat!(env!("OUT_DIR"), "/modules.rs"));
+
+/// The extensions the papers' raw operations need, reported by `oit info`.
+pub const PAPER_EXTENSIONS: [&CStr; 4] = [
+    c"VK_EXT_shader_atomic_float",
+    c"VK_KHR_shader_atomic_int64",
+    c"VK_EXT_shader_image_atomic_int64",
+    c"VK_EXT_fragment_shader_interlock",
+];
+
+/// What to install when there is no Vulkan at all.
+const INSTALL: &str = "install a Vulkan loader and driver: `apt-get install libvulkan1 mesa-vulkan-drivers` \
+                       (lavapipe, a CPU Vulkan device) or your GPU's driver";
+
+/// Validation errors the messenger has seen, over every instance of the process.
+static VALIDATION_ERRORS: AtomicU64 = AtomicU64::new(0);
+
+/// Validation errors reported so far in this process (0 without `OIT_VULKAN_VALIDATION=1`).
+pub fn validation_errors() -> u64 {
+    VALIDATION_ERRORS.load(Relaxed)
+}
+
+/// True when `OIT_VULKAN_VALIDATION` is `1` (or `true`): the instance enables
+/// `VK_LAYER_KHRONOS_validation` with synchronization validation, and every error it reports
+/// fails the frame that caused it.
+pub fn validation_requested() -> bool {
+    std::env::var("OIT_VULKAN_VALIDATION").is_ok_and(|v| v == "1" || v.eq_ignore_ascii_case("true"))
+}
+
+/// Prints a validation message and counts the errors.
+unsafe extern "system" fn on_message(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    _types: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    _user: *mut c_void,
+) -> vk::Bool32 {
+    // SAFETY: the layer passes a valid callback-data struct for the duration of the call, whose
+    // message is null or a NUL-terminated string.
+    let message = unsafe {
+        data.as_ref()
+            .and_then(|d| d.message_as_c_str())
+            .map_or_else(|| "(no message)".into(), CStr::to_string_lossy)
+    };
+    if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
+        VALIDATION_ERRORS.fetch_add(1, Relaxed);
+        eprintln!("vulkan validation error: {message}");
+    } else {
+        eprintln!("vulkan validation: {message}");
+    }
+    vk::FALSE
+}
+
+fn vk_error(what: &str) -> impl Fn(vk::Result) -> OitError + '_ {
+    move |e| match e {
+        vk::Result::ERROR_DEVICE_LOST => {
+            OitError::Device(format!("{what}: the Vulkan device was lost (driver reset or crash)"))
+        }
+        vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => {
+            OitError::Device(format!("{what}: out of memory ({e}); use a smaller --size or K"))
+        }
+        other => OitError::Device(format!("{what}: {other}")),
+    }
+}
+
+/// The instance and, when validation is on, its messenger.
+pub(crate) struct RawInstance {
+    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    pub(crate) instance: ash::Instance,
+    /// Kept so that the loader library stays open while the instance lives.
+    _entry: ash::Entry,
+}
+
+impl Drop for RawInstance {
+    fn drop(&mut self) {
+        // SAFETY: the messenger was made from this instance, which nothing else uses any more
+        // (the device, made from it, was destroyed first: `RawDevice` drops before its field).
+        unsafe {
+            if let Some((utils, messenger)) = self.debug.take() {
+                utils.destroy_debug_utils_messenger(messenger, None);
+            }
+            self.instance.destroy_instance(None);
+        }
+    }
+}
+
+/// The logical device, destroyed before its instance (a field, dropped after `drop`).
+pub(crate) struct RawDevice {
+    pub(crate) device: ash::Device,
+    /// Destroyed after the device (fields drop after `Drop::drop`).
+    _instance: RawInstance,
+}
+
+impl Drop for RawDevice {
+    fn drop(&mut self) {
+        // SAFETY: every object made from the device holds an `Arc<RawDevice>` and is gone when
+        // this runs; waiting for idle first leaves no work in flight.
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            self.device.destroy_device(None);
+        }
+    }
+}
+
+/// What oit learned about the physical device.
+#[derive(Clone, Debug)]
+pub struct DeviceInfo {
+    /// `deviceName`.
+    pub name: String,
+    /// Discrete, integrated, CPU...
+    pub device_type: vk::PhysicalDeviceType,
+    /// `apiVersion`.
+    pub api_version: u32,
+    /// `driverVersion` (vendor encoding).
+    pub driver_version: u32,
+    /// `driverName` and `driverInfo` (VkPhysicalDeviceDriverProperties).
+    pub driver: String,
+    /// [`PAPER_EXTENSIONS`], each present or not.
+    pub extensions: Vec<(String, bool)>,
+    /// The core limits.
+    pub limits: vk::PhysicalDeviceLimits,
+    /// The `logicOp` feature (adp's histogram by logic-op OR needs it).
+    pub logic_op: bool,
+    /// The largest device-local heap, bytes.
+    pub device_heap: u64,
+    /// Whether the validation layer is on.
+    pub validation: bool,
+}
+
+impl DeviceInfo {
+    /// `major.minor.patch` of a Vulkan version number.
+    pub fn version(v: u32) -> String {
+        format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v))
+    }
+}
+
+/// A buffer and its own memory, freed on drop.
+pub struct Buffer {
+    raw: Arc<RawDevice>,
+    pub(crate) buffer: vk::Buffer,
+    memory: vk::DeviceMemory,
+    /// Bytes.
+    pub size: u64,
+    /// How it may be used.
+    pub usage: vk::BufferUsageFlags,
+    host: bool,
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        // SAFETY: the buffer and its memory were made from `raw`, which is alive (the Arc); every
+        // command that used them has completed (each frame waits for its last submission). The
+        // buffer, the memory's user, goes first.
+        unsafe {
+            self.raw.device.destroy_buffer(self.buffer, None);
+            self.raw.device.free_memory(self.memory, None);
+        }
+    }
+}
+
+impl Buffer {
+    /// Copies `bytes` into a host-visible buffer at offset 0.
+    pub fn write(&self, bytes: &[u8]) -> Result<(), OitError> {
+        assert!(self.host && bytes.len() as u64 <= self.size, "write to a host buffer that fits");
+        if bytes.is_empty() {
+            return Ok(());
+        }
+        // SAFETY: host-visible, host-coherent memory bound to this buffer, mapped for its whole
+        // size; no submitted command accesses it (writes happen before a submission or after the
+        // last one completed); the copy stays inside the mapping.
+        unsafe {
+            let ptr = self
+                .raw
+                .device
+                .map_memory(self.memory, 0, vk::WHOLE_SIZE, vk::MemoryMapFlags::empty())
+                .map_err(vk_error("mapping a buffer"))?;
+            std::ptr::copy_nonoverlapping(bytes.as_ptr(), ptr.cast::<u8>(), bytes.len());
+            self.raw.device.unmap_memory(self.memory);
+        }
+        Ok(())
+    }
+
+    /// The words of a host-visible buffer.
+    pub fn read_u32(&self) -> Result<Vec<u32>, OitError> {
+        assert!(self.host, "read of a host buffer");
+        let mut out = vec![0u32; (self.size / 4) as usize];
+        // SAFETY: as in `write`; the last submission that wrote the buffer completed (its fence
+        // was waited for) behind a barrier that made transfer writes visible to the host.
+        unsafe {
+            let ptr = self
+                .raw
+                .device
+                .map_memory(self.memory, 0, vk::WHOLE_SIZE, vk::MemoryMapFlags::empty())
+                .map_err(vk_error("mapping a buffer"))?;
+            std::ptr::copy_nonoverlapping(ptr.cast::<u8>(), out.as_mut_ptr().cast::<u8>(), out.len() * 4);
+            self.raw.device.unmap_memory(self.memory);
+        }
+        Ok(out)
+    }
+}
+
+/// Pipelines and what they are made of, destroyed newest first by [`Gpu`]'s drop.
+#[derive(Default)]
+struct Cache {
+    modules: HashMap<&'static str, vk::ShaderModule>,
+    /// Group 0's layout by the number of technique buffers.
+    set0: HashMap<usize, vk::DescriptorSetLayout>,
+    raster_set: Option<vk::DescriptorSetLayout>,
+    layouts: HashMap<usize, vk::PipelineLayout>,
+    pipelines: HashMap<(&'static str, String, usize), vk::Pipeline>,
+}
+
+/// A compute pipeline and its layout (owned by the [`Gpu`]'s cache).
+#[derive(Clone, Copy, Debug)]
+pub struct Pipeline {
+    pub(crate) pipeline: vk::Pipeline,
+    pub(crate) layout: vk::PipelineLayout,
+    pub(crate) set0: vk::DescriptorSetLayout,
+    pub(crate) raster: vk::DescriptorSetLayout,
+}
+
+/// An open device.
+pub struct Gpu {
+    cache: Mutex<Cache>,
+    /// What the device is.
+    pub info: DeviceInfo,
+    pub(crate) queue: vk::Queue,
+    pub(crate) family: u32,
+    memory: vk::PhysicalDeviceMemoryProperties,
+    pub(crate) raw: Arc<RawDevice>,
+}
+
+impl Drop for Gpu {
+    fn drop(&mut self) {
+        let Ok(cache) = self.cache.get_mut() else { return };
+        // SAFETY: every handle was made from this device; the wait leaves none in use; each is
+        // destroyed once, pipelines before the layouts and modules they were made from.
+        unsafe {
+            let d = &self.raw.device;
+            let _ = d.device_wait_idle();
+            for (_, p) in cache.pipelines.drain() {
+                d.destroy_pipeline(p, None);
+            }
+            for (_, l) in cache.layouts.drain() {
+                d.destroy_pipeline_layout(l, None);
+            }
+            if let Some(l) = cache.raster_set.take() {
+                d.destroy_descriptor_set_layout(l, None);
+            }
+            for (_, l) in cache.set0.drain() {
+                d.destroy_descriptor_set_layout(l, None);
+            }
+            for (_, m) in cache.modules.drain() {
+                d.destroy_shader_module(m, None);
+            }
+        }
+    }
+}
+
+fn c_name(bytes: Result<&CStr, std::ffi::FromBytesUntilNulError>) -> String {
+    bytes.map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
+}
+
+/// A candidate physical device and why it can or cannot serve.
+struct Candidate {
+    physical: vk::PhysicalDevice,
+    name: String,
+    device_type: vk::PhysicalDeviceType,
+    family: Option<u32>,
+    missing: Vec<&'static str>,
+}
+
+impl Gpu {
+    /// Opens a device: the first whose name contains `filter` (case-insensitive), else the one
+    /// `OIT_ADAPTER` names, else the first discrete GPU, else an integrated one, else any.
+    pub fn new(filter: Option<&str>) -> Result<Gpu, OitError> {
+        // SAFETY: loading the loader library runs its initialisers; nothing else in the process
+        // loads or unloads libvulkan concurrently in a way that could conflict.
+        let entry = unsafe { ash::Entry::load() }
+            .map_err(|e| OitError::Device(format!("no Vulkan loader (libvulkan.so.1): {e}; {INSTALL}")))?;
+        let validation = validation_requested();
+        let layer = c"VK_LAYER_KHRONOS_validation";
+        let mut layers = Vec::new();
+        let mut extensions = Vec::new();
+        if validation {
+            // SAFETY: a plain query of the loaded entry.
+            let available = unsafe { entry.enumerate_instance_layer_properties() }
+                .map_err(vk_error("listing Vulkan layers"))?;
+            if !available.iter().any(|l| l.layer_name_as_c_str() == Ok(layer)) {
+                return Err(OitError::Device(
+                    "OIT_VULKAN_VALIDATION=1 but VK_LAYER_KHRONOS_validation is not installed: \
+                     `apt-get install vulkan-validationlayers`"
+                        .into(),
+                ));
+            }
+            layers.push(layer.as_ptr());
+            extensions.push(ash::ext::debug_utils::NAME.as_ptr());
+        }
+        let app = vk::ApplicationInfo::default()
+            .application_name(c"oit")
+            .engine_name(c"oit-vulkan")
+            .api_version(vk::API_VERSION_1_2);
+        let enables = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+        let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enables);
+        let mut create = vk::InstanceCreateInfo::default()
+            .application_info(&app)
+            .enabled_layer_names(&layers)
+            .enabled_extension_names(&extensions);
+        if validation {
+            create = create.push_next(&mut features);
+        }
+        // SAFETY: the create info and everything it points to live until the call returns.
+        let instance = unsafe { entry.create_instance(&create, None) }
+            .map_err(|e| OitError::Device(format!("cannot create a Vulkan 1.2 instance ({e}): {INSTALL}")))?;
+        let mut raw_instance = RawInstance { debug: None, instance, _entry: entry };
+        if validation {
+            let utils = ash::ext::debug_utils::Instance::new(&raw_instance._entry, &raw_instance.instance);
+            let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+                .message_severity(
+                    vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
+                        | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
+                )
+                .message_type(
+                    vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                        | vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+                )
+                .pfn_user_callback(Some(on_message));
+            // SAFETY: the instance has VK_EXT_debug_utils enabled; the callback is a plain
+            // function that touches only a static counter and stderr.
+            let messenger = unsafe { utils.create_debug_utils_messenger(&info, None) }
+                .map_err(vk_error("creating the validation messenger"))?;
+            raw_instance.debug = Some((utils, messenger));
+        }
+        let instance = &raw_instance.instance;
+        // SAFETY: a plain query of a live instance.
+        let physicals =
+            unsafe { instance.enumerate_physical_devices() }.map_err(vk_error("listing Vulkan devices"))?;
+        if physicals.is_empty() {
+            return Err(OitError::Device(format!("no Vulkan device found: {INSTALL}")));
+        }
+        let candidates: Vec<Candidate> = physicals.iter().map(|&p| Self::candidate(instance, p)).collect();
+        let env = std::env::var("OIT_ADAPTER").ok();
+        let filter = filter.map(str::to_owned).or(env).map(|f| f.to_lowercase());
+        let usable = |c: &&Candidate| c.missing.is_empty() && c.family.is_some();
+        let describe = || {
+            candidates
+                .iter()
+                .map(|c| {
+                    if c.missing.is_empty() {
+                        c.name.clone()
+                    } else {
+                        format!("{} (lacks {})", c.name, c.missing.join(", "))
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join("; ")
+        };
+        let chosen = match &filter {
+            Some(f) => {
+                candidates.iter().filter(usable).find(|c| c.name.to_lowercase().contains(f)).ok_or_else(
+                    || {
+                        OitError::Device(format!(
+                            "no usable Vulkan device matches '{f}'; devices: {}",
+                            describe()
+                        ))
+                    },
+                )?
+            }
+            None => {
+                let rank = |t: vk::PhysicalDeviceType| match t {
+                    vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+                    vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+                    vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+                    vk::PhysicalDeviceType::CPU => 3,
+                    _ => 4,
+                };
+                candidates.iter().filter(usable).min_by_key(|c| rank(c.device_type)).ok_or_else(|| {
+                    OitError::Device(format!("no Vulkan device oit-vulkan can use; devices: {}", describe()))
+                })?
+            }
+        };
+        let physical = chosen.physical;
+        let family = chosen.family.expect("usable has a family");
+        let info = Self::info(instance, physical, validation);
+        let priorities = [1.0f32];
+        let queues =
+            [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
+        let core = vk::PhysicalDeviceFeatures::default().shader_int64(true);
+        let mut v12 = vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(true);
+        let create = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queues)
+            .enabled_features(&core)
+            .push_next(&mut v12);
+        // SAFETY: the physical device belongs to the instance; the features asked for were
+        // checked present (`candidate`); the create info outlives the call.
+        let device = unsafe { instance.create_device(physical, &create, None) }
+            .map_err(vk_error(&format!("opening '{}'", info.name)))?;
+        // SAFETY: a plain query; the family was created with one queue.
+        let (queue, memory) = unsafe {
+            (device.get_device_queue(family, 0), instance.get_physical_device_memory_properties(physical))
+        };
+        let raw = Arc::new(RawDevice { device, _instance: raw_instance });
+        Ok(Gpu { cache: Mutex::new(Cache::default()), info, queue, family, memory, raw })
+    }
+
+    fn candidate(instance: &ash::Instance, physical: vk::PhysicalDevice) -> Candidate {
+        let mut v12 = vk::PhysicalDeviceVulkan12Features::default();
+        let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut v12);
+        // SAFETY: plain queries of a physical device of this instance; `features` chains a
+        // struct that lives across the call.
+        let (props, families) = unsafe {
+            instance.get_physical_device_features2(physical, &mut features);
+            (
+                instance.get_physical_device_properties(physical),
+                instance.get_physical_device_queue_family_properties(physical),
+            )
+        };
+        let core = features.features;
+        let mut missing = Vec::new();
+        if props.api_version < vk::API_VERSION_1_2 {
+            missing.push("Vulkan 1.2");
+        }
+        if core.shader_int64 == vk::FALSE {
+            missing.push("shaderInt64");
+        }
+        if v12.shader_buffer_int64_atomics == vk::FALSE {
+            missing.push("shaderBufferInt64Atomics");
+        }
+        let compute = |f: &vk::QueueFamilyProperties| f.queue_flags.contains(vk::QueueFlags::COMPUTE);
+        let both = vk::QueueFlags::COMPUTE | vk::QueueFlags::GRAPHICS;
+        let family = families
+            .iter()
+            .position(|f| f.queue_flags.contains(both))
+            .or_else(|| families.iter().position(compute))
+            .map(|i| i as u32);
+        Candidate {
+            physical,
+            name: c_name(props.device_name_as_c_str()),
+            device_type: props.device_type,
+            family,
+            missing,
+        }
+    }
+
+    fn info(instance: &ash::Instance, physical: vk::PhysicalDevice, validation: bool) -> DeviceInfo {
+        let mut driver = vk::PhysicalDeviceDriverProperties::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+        // SAFETY: plain queries of a physical device of this instance, the chained struct alive.
+        let (features, extensions, memory) = unsafe {
+            instance.get_physical_device_properties2(physical, &mut props2);
+            (
+                instance.get_physical_device_features(physical),
+                instance.enumerate_device_extension_properties(physical).unwrap_or_default(),
+                instance.get_physical_device_memory_properties(physical),
+            )
+        };
+        let props = props2.properties;
+        let names: Vec<String> = extensions.iter().map(|e| c_name(e.extension_name_as_c_str())).collect();
+        let device_heap = memory.memory_heaps[..memory.memory_heap_count as usize]
+            .iter()
+            .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+            .map(|h| h.size)
+            .max()
+            .unwrap_or(0);
+        DeviceInfo {
+            name: c_name(props.device_name_as_c_str()),
+            device_type: props.device_type,
+            api_version: props.api_version,
+            driver_version: props.driver_version,
+            driver: format!(
+                "{} {}",
+                c_name(driver.driver_name_as_c_str()),
+                c_name(driver.driver_info_as_c_str())
+            )
+            .trim()
+            .to_string(),
+            extensions: PAPER_EXTENSIONS
+                .iter()
+                .map(|e| {
+                    let e = e.to_string_lossy().into_owned();
+                    let present = names.contains(&e);
+                    (e, present)
+                })
+                .collect(),
+            limits: props.limits,
+            logic_op: features.logic_op == vk::TRUE,
+            device_heap,
+            validation,
+        }
+    }
+
+    /// True on a CPU device (lavapipe).
+    pub fn is_cpu(&self) -> bool {
+        self.info.device_type == vk::PhysicalDeviceType::CPU
+    }
+
+    /// A buffer of `size` bytes with its own memory: device-local, or host-visible and coherent
+    /// when `host` (staging, readback, uniforms written by the host).
+    pub fn buffer(&self, size: u64, usage: vk::BufferUsageFlags, host: bool) -> Result<Buffer, OitError> {
+        let d = &self.raw.device;
+        let info = vk::BufferCreateInfo::default()
+            .size(size.max(4))
+            .usage(usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: a valid create info on a live device; the buffer is destroyed by `Buffer`'s drop
+        // (or just below, when no memory can be found for it).
+        let buffer = unsafe { d.create_buffer(&info, None) }.map_err(vk_error("creating a buffer"))?;
+        // SAFETY: a plain query of the buffer just made.
+        let needs = unsafe { d.get_buffer_memory_requirements(buffer) };
+        let wanted = if host {
+            vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT
+        } else {
+            vk::MemoryPropertyFlags::DEVICE_LOCAL
+        };
+        let types = &self.memory.memory_types[..self.memory.memory_type_count as usize];
+        let Some(index) = (0..types.len())
+            .find(|&i| needs.memory_type_bits & (1 << i) != 0 && types[i].property_flags.contains(wanted))
+            .or_else(|| {
+                (!host).then(|| (0..types.len()).find(|&i| needs.memory_type_bits & (1 << i) != 0)).flatten()
+            })
+        else {
+            // SAFETY: the buffer was made above and never used.
+            unsafe { d.destroy_buffer(buffer, None) };
+            return Err(OitError::Device(format!("'{}' has no memory type for a buffer", self.info.name)));
+        };
+        let alloc =
+            vk::MemoryAllocateInfo::default().allocation_size(needs.size).memory_type_index(index as u32);
+        // SAFETY: the allocation info names a memory type the buffer accepts; the memory is bound
+        // once, at offset 0, which satisfies any alignment.
+        let memory = unsafe {
+            match d.allocate_memory(&alloc, None) {
+                Ok(m) => m,
+                Err(e) => {
+                    d.destroy_buffer(buffer, None);
+                    return Err(vk_error(&format!("allocating {} bytes", needs.size))(e));
+                }
+            }
+        };
+        // SAFETY: both made above from this device; the memory is large enough (its requirements).
+        if let Err(e) = unsafe { d.bind_buffer_memory(buffer, memory, 0) } {
+            // SAFETY: neither is in use.
+            unsafe {
+                d.destroy_buffer(buffer, None);
+                d.free_memory(memory, None);
+            }
+            return Err(vk_error("binding buffer memory")(e));
+        }
+        Ok(Buffer { raw: self.raw.clone(), buffer, memory, size, usage, host })
+    }
+
+    /// The compute pipeline of `entry` in `module` (a module of `build.rs`) whose group 0 has `n`
+    /// technique buffers; made once, then cached.
+    pub fn pipeline(&self, module: &'static str, entry: &str, n: usize) -> Result<Pipeline, OitError> {
+        let mut guard = self.cache.lock().map_err(|_| OitError::Device("pipeline cache poisoned".into()))?;
+        let cache = &mut *guard;
+        let d = &self.raw.device;
+        let raster = match cache.raster_set {
+            Some(l) => l,
+            None => {
+                let l = self.set_layout(&[
+                    (0, vk::DescriptorType::STORAGE_BUFFER),
+                    (1, vk::DescriptorType::STORAGE_BUFFER),
+                    (2, vk::DescriptorType::UNIFORM_BUFFER),
+                    (3, vk::DescriptorType::STORAGE_BUFFER),
+                ])?;
+                *cache.raster_set.insert(l)
+            }
+        };
+        let set0 = match cache.set0.get(&n) {
+            Some(&l) => l,
+            None => {
+                let mut bindings = vec![(0, vk::DescriptorType::UNIFORM_BUFFER)];
+                bindings.extend(
+                    (1..=n as u32 + 1)
+                        .chain([crate::ctx::ACCT_BINDING])
+                        .map(|b| (b, vk::DescriptorType::STORAGE_BUFFER)),
+                );
+                let l = self.set_layout(&bindings)?;
+                cache.set0.insert(n, l);
+                l
+            }
+        };
+        let layout = match cache.layouts.get(&n) {
+            Some(&l) => l,
+            None => {
+                let sets = [set0, raster];
+                let info = vk::PipelineLayoutCreateInfo::default().set_layouts(&sets);
+                // SAFETY: both set layouts are alive (cached until the Gpu drops).
+                let l = unsafe { d.create_pipeline_layout(&info, None) }
+                    .map_err(vk_error("creating a pipeline layout"))?;
+                cache.layouts.insert(n, l);
+                l
+            }
+        };
+        let key = (module, entry.to_string(), n);
+        if let Some(&pipeline) = cache.pipelines.get(&key) {
+            return Ok(Pipeline { pipeline, layout, set0, raster });
+        }
+        let shader = match cache.modules.get(module) {
+            Some(&m) => m,
+            None => {
+                let (_, bytes, entries) = MODULES
+                    .iter()
+                    .find(|(name, _, _)| *name == module)
+                    .ok_or_else(|| OitError::Device(format!("no SPIR-V module '{module}' was built")))?;
+                if !entries.contains(&entry) {
+                    return Err(OitError::Device(format!("module '{module}' has no entry point '{entry}'")));
+                }
+                let words = ash::util::read_spv(&mut std::io::Cursor::new(bytes))
+                    .map_err(|e| OitError::Device(format!("module '{module}': bad SPIR-V: {e}")))?;
+                let info = vk::ShaderModuleCreateInfo::default().code(&words);
+                // SAFETY: the words are naga's output for a validated module.
+                let m = unsafe { d.create_shader_module(&info, None) }
+                    .map_err(vk_error("creating a shader module"))?;
+                cache.modules.insert(module, m);
+                m
+            }
+        };
+        let name = std::ffi::CString::new(entry).map_err(|_| OitError::Device("bad entry name".into()))?;
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(shader)
+            .name(&name);
+        let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
+        // SAFETY: the module and layout are alive; the layout declares every binding the entry
+        // point uses (group 0 as `set0`, the rasterizer's group 1).
+        let pipeline = unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &info, None) }
+            .map_err(|(_, e)| vk_error(&format!("building '{module}::{entry}'"))(e))?[0];
+        cache.pipelines.insert(key, pipeline);
+        Ok(Pipeline { pipeline, layout, set0, raster })
+    }
+
+    fn set_layout(
+        &self,
+        bindings: &[(u32, vk::DescriptorType)],
+    ) -> Result<vk::DescriptorSetLayout, OitError> {
+        let bindings: Vec<_> = bindings
+            .iter()
+            .map(|&(b, ty)| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b)
+                    .descriptor_type(ty)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            })
+            .collect();
+        let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
+        // SAFETY: a valid create info on a live device; cached and destroyed by `Gpu`'s drop.
+        unsafe { self.raw.device.create_descriptor_set_layout(&info, None) }
+            .map_err(vk_error("creating a descriptor set layout"))
+    }
+
+    /// Checks a storage buffer of `bytes` against `maxStorageBufferRange` before allocating it.
+    pub fn check_storage(&self, what: &str, bytes: u64) -> Result<(), OitError> {
+        self.check_storage_hint(
+            what,
+            bytes,
+            "use a smaller --size (storage grows with pixels), a smaller K, or the cpu backend",
+        )
+    }
+
+    /// [`Gpu::check_storage`] with `hint` saying what helps.
+    pub fn check_storage_hint(&self, what: &str, bytes: u64, hint: &str) -> Result<(), OitError> {
+        let limit = u64::from(self.info.limits.max_storage_buffer_range);
+        if bytes > limit {
+            return Err(OitError::TooLarge {
+                what: what.into(),
+                needed: bytes,
+                limit_name: format!("maxStorageBufferRange of '{}'", self.info.name),
+                limit,
+                hint: format!("{hint}; {:.0}% of this would fit", 100.0 * limit as f64 / bytes as f64),
+            });
+        }
+        Ok(())
+    }
+
+    /// The budget of one frame's storage, all buffers together: the largest device-local heap,
+    /// and no more than the host's available memory on a CPU device (lavapipe).
+    pub fn memory_budget(&self) -> (String, u64) {
+        let heap = (format!("the device-local memory heap of '{}'", self.info.name), self.info.device_heap);
+        if self.is_cpu() {
+            let (host_name, host) = oit_core::plan::host_memory_budget();
+            if host < heap.1 {
+                return (host_name.to_string(), host);
+            }
+        }
+        heap
+    }
+}

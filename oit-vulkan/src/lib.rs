@@ -1,0 +1,248 @@
+//! oit-vulkan: oit's techniques on raw Vulkan through [ash](https://docs.rs/ash).
+//!
+//! **What runs today.** Every technique of the catalogue (`reference`, `dp`, `ddp`, `wavg`,
+//! `wsum`, `bdp`/`bdp:P`, `adp`, `mdts:K`, `mdts64:K`, `fabs:K`, `mlp:M`) on the
+//! **compute-raster path** (`RasterPath::Compute`): oit-wgpu's compute rasterizer and technique
+//! WGSL, compiled to SPIR-V by naga in `build.rs`, with oit-core's setup, so the fragments equal
+//! oit-cpu's and the images equal oit-wgpu's compute path. Captures use storage-*buffer* atomics,
+//! as on wgpu.
+//!
+//! **What is refused** (`OitError::Unsupported`, naming what is missing): the hardware-raster path
+//! (graphics pipelines, hence the papers' raw operations: MAX blending into 8 ×
+//! R32G32B32A32_SFLOAT for bdp, logic-op OR into 8 × R32G32B32A32_UINT for adp's histogram,
+//! depth textures and occlusion queries for dp/ddp), storage-*image* atomics for mdts/fabs, the
+//! interlock k-buffer, and GPU timestamps (`gpu_ms` is `None`; wall time is measured).
+//!
+//! **Starting without Vulkan.** The entry is loaded at run time (`ash::Entry::load`, feature
+//! `loaded`): a binary runs on a machine without `libvulkan.so.1` and [`VulkanBackend::gpu`]
+//! says what to install. The device: the adapter whose name contains the filter (or
+//! `OIT_ADAPTER`), else a discrete GPU, else integrated, else any (lavapipe); it needs Vulkan 1.2,
+//! `shaderInt64` and `shaderBufferInt64Atomics`, and one compute queue.
+//!
+//! **Correctness aids.** `OIT_VULKAN_VALIDATION=1` enables `VK_LAYER_KHRONOS_validation` with
+//! synchronization validation and a debug-utils messenger; any error it reports fails the frame.
+//! Every `unsafe` block carries a `// SAFETY:` comment; Vulkan objects are owned by types that
+//! destroy them in `Drop`, newest first (see `device`).
+
+mod ctx;
+mod device;
+mod raster;
+mod record;
+mod technique;
+
+use std::cell::{Cell, RefCell};
+use std::sync::OnceLock;
+use std::time::Instant;
+
+use oit_core::{
+    Backend, Camera, Capabilities, Frame, OitError, Prepared, RasterPath, Scene, Settings, Technique,
+    TechniqueKind,
+};
+
+pub use crate::ctx::BufferPool;
+pub use crate::device::{DeviceInfo, Gpu, PAPER_EXTENSIONS, validation_errors, validation_requested};
+
+use crate::ctx::VkCtx;
+use crate::raster::{ComputeBuffers, ComputeRaster};
+
+/// The rasterizers of one frame: the scene's, and (made on demand) the instances' bounding boxes'.
+pub(crate) struct Drivers<'a> {
+    pub(crate) scene: ComputeRaster,
+    pub(crate) boxes: Box<dyn Fn() -> Result<ComputeRaster, OitError> + 'a>,
+}
+
+/// The Vulkan backend. The device opens on first use.
+#[derive(Default)]
+pub struct VulkanBackend {
+    /// Adapter name filter (substring); `None` reads `OIT_ADAPTER`, else prefers a discrete GPU.
+    pub adapter: Option<String>,
+    gpu: OnceLock<Result<Gpu, String>>,
+}
+
+/// The message for the hardware path until it exists.
+fn hardware_unsupported() -> OitError {
+    OitError::Unsupported {
+        backend: "vulkan".into(),
+        what: "the hardware raster path (graphics pipelines: MAX blending, logic-op OR, depth peeling \
+               with occlusion queries; issue 9, not written yet): use --raster compute, or --backend wgpu"
+            .into(),
+    }
+}
+
+impl VulkanBackend {
+    /// A backend for the adapter whose name contains `filter`.
+    pub fn new(adapter: Option<String>) -> Self {
+        VulkanBackend { adapter, gpu: OnceLock::new() }
+    }
+
+    /// The device, opened on first use.
+    pub fn gpu(&self) -> Result<&Gpu, OitError> {
+        self.gpu
+            .get_or_init(|| {
+                Gpu::new(self.adapter.as_deref()).map_err(|e| match e {
+                    OitError::Device(message) => message,
+                    other => other.to_string(),
+                })
+            })
+            .as_ref()
+            .map_err(|e| OitError::Device(e.clone()))
+    }
+}
+
+impl Backend for VulkanBackend {
+    fn name(&self) -> &str {
+        "vulkan"
+    }
+
+    fn capabilities(&self) -> Capabilities {
+        let gpu = match self.gpu() {
+            Ok(gpu) => gpu,
+            Err(e) => return Capabilities { device: format!("none: {e}"), ..Default::default() },
+        };
+        let info = &gpu.info;
+        let l = &info.limits;
+        let yes = |b: bool| if b { "present" } else { "absent" }.to_string();
+        let mut limits = vec![
+            ("api_version".into(), DeviceInfo::version(info.api_version)),
+            ("driver_version".into(), format!("{:#x}", info.driver_version)),
+        ];
+        limits.extend(info.extensions.iter().map(|(name, present)| (name.clone(), yes(*present))));
+        limits.extend([
+            ("maxStorageBufferRange".into(), l.max_storage_buffer_range.to_string()),
+            ("maxComputeWorkGroupCount".into(), format!("{:?}", l.max_compute_work_group_count)),
+            ("maxColorAttachments".into(), l.max_color_attachments.to_string()),
+            ("logicOp".into(), info.logic_op.to_string()),
+            ("device_local_heap".into(), info.device_heap.to_string()),
+            ("validation".into(), info.validation.to_string()),
+        ]);
+        Capabilities {
+            device: format!("{} ({:?}, {})", info.name, info.device_type, info.driver),
+            techniques: TechniqueKind::ALL.to_vec(),
+            raster_paths: vec![RasterPath::Compute],
+            limits,
+        }
+    }
+
+    fn raster_path(&self, settings: &Settings) -> RasterPath {
+        settings.raster.unwrap_or(RasterPath::Compute)
+    }
+
+    fn prepare<'s>(&'s self, scene: &'s Scene) -> Result<Box<dyn Prepared + 's>, OitError> {
+        scene.validate()?;
+        let gpu = self.gpu()?;
+        Ok(Box::new(VulkanPrepared {
+            gpu,
+            scene,
+            pool: BufferPool::default(),
+            geometry_made: Cell::new(0),
+            compute: RefCell::new(None),
+            compute_boxes: RefCell::new(None),
+        }))
+    }
+}
+
+/// A scene prepared on the Vulkan backend: per-pixel storage from a pool, reused by the next
+/// frame of the same size; the compute rasterizer's buffers kept and grown only when needed;
+/// pipelines cached on the device. [`Prepared::storage_allocations`] counts both.
+pub struct VulkanPrepared<'s> {
+    gpu: &'s Gpu,
+    scene: &'s Scene,
+    pool: BufferPool,
+    geometry_made: Cell<u64>,
+    compute: RefCell<Option<ComputeBuffers>>,
+    compute_boxes: RefCell<Option<ComputeBuffers>>,
+}
+
+impl VulkanPrepared<'_> {
+    fn compute_raster(
+        &self,
+        cell: &RefCell<Option<ComputeBuffers>>,
+        camera: &Camera,
+        settings: &Settings,
+        boxes: bool,
+    ) -> Result<ComputeRaster, OitError> {
+        let mut kept = cell.borrow_mut();
+        if kept.is_none() {
+            *kept = Some(ComputeBuffers::new(self.gpu, &self.geometry_made)?);
+        }
+        let buffers = kept.as_mut().expect("just made");
+        buffers.frame(self.gpu, self.scene, camera, settings, boxes, &self.geometry_made)
+    }
+}
+
+impl Prepared for VulkanPrepared<'_> {
+    fn frame(&mut self, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
+        settings.validate()?;
+        let start = Instant::now();
+        let path = settings.raster.unwrap_or(RasterPath::Compute);
+        if path != RasterPath::Compute {
+            return Err(match path {
+                RasterPath::Hardware => hardware_unsupported(),
+                other => OitError::Unsupported {
+                    backend: "vulkan".into(),
+                    what: format!("the {other} raster path"),
+                },
+            });
+        }
+        let this = &*self;
+        let drivers = Drivers {
+            scene: this.compute_raster(&this.compute, camera, settings, false)?,
+            boxes: Box::new(move || this.compute_raster(&this.compute_boxes, camera, settings, true)),
+        };
+        let mut ctx = VkCtx::new(this.gpu, this.scene, camera, settings, &this.pool)?;
+        let layers = run_technique(&mut ctx, &drivers)?;
+        let mut frame = ctx.finish(path)?;
+        frame.layers = layers;
+        frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok(frame)
+    }
+
+    fn storage_allocations(&self) -> u64 {
+        self.pool.allocations() + self.geometry_made.get()
+    }
+}
+
+/// Runs the frame's technique; the reference returns its per-pixel fragment counts.
+fn run_technique(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<Option<Vec<u32>>, OitError> {
+    let mut layers = None;
+    match ctx.settings.technique {
+        Technique::Reference => layers = Some(technique::reference::render(ctx, drivers)?),
+        Technique::Fabs { .. } => technique::fabs::render(ctx, drivers)?,
+        Technique::Dp => technique::dp::render(ctx, drivers)?,
+        Technique::Ddp => technique::ddp::render(ctx, drivers)?,
+        Technique::WeightedAverage | Technique::WeightedSum => technique::weighted::render(ctx, drivers)?,
+        Technique::Bdp { .. } => technique::bdp::render(ctx, drivers)?,
+        Technique::Adp => technique::adp::render(ctx, drivers)?,
+        Technique::Mdts { .. } | Technique::Mdts64 { .. } => technique::mdts::render(ctx, drivers)?,
+        Technique::Mlp { .. } => technique::mlp::render(ctx, drivers)?,
+        Technique::Dfb => technique::dfb::render(ctx, drivers)?,
+        Technique::Ll => technique::ll::render(ctx, drivers)?,
+    }
+    Ok(layers)
+}
+
+/// For test suites: the backend when a Vulkan device can be opened, else `None` after one line on
+/// stderr naming the test and what to install. With `OIT_REQUIRE_GPU=1` a missing device panics.
+pub fn backend_or_skip(test: &str) -> Option<VulkanBackend> {
+    let backend = VulkanBackend::default();
+    match backend.gpu() {
+        Ok(_) => Some(backend),
+        Err(e) if gpu_required() => {
+            panic!("{test}: OIT_REQUIRE_GPU=1 but no Vulkan device could be opened: {e}")
+        }
+        Err(e) => {
+            // to the stream itself: the test harness captures `eprintln!`
+            use std::io::Write as _;
+            let _ = writeln!(
+                std::io::stderr(),
+                "skipped {test} on vulkan: {e} (set OIT_REQUIRE_GPU=1 to make this a failure)"
+            );
+            None
+        }
+    }
+}
+
+/// True when `OIT_REQUIRE_GPU` is set to `1` (or `true`): GPU tests must not skip.
+pub fn gpu_required() -> bool {
+    std::env::var("OIT_REQUIRE_GPU").is_ok_and(|v| v == "1" || v.eq_ignore_ascii_case("true"))
+}

@@ -1,0 +1,340 @@
+//! Command recording: one command buffer at a time, every command followed by a memory barrier,
+//! submitted and waited for when the host needs a result (a readback) or when the frame ends.
+//!
+//! Synchronization: after every dispatch, fill and copy, one `VkMemoryBarrier` from the compute
+//! and transfer stages' writes to the compute, transfer and host stages' reads and writes. A
+//! global memory barrier covers every buffer the previous command touched (Khronos recommends it
+//! over per-buffer barriers when many buffers are involved); it orders read-after-write,
+//! write-after-write and (by its execution dependency) write-after-read. The host writes
+//! uniforms and staging buffers before the submission that reads them (made visible by the
+//! submission itself) and reads results only after the fence, behind the barrier's `HOST_READ`.
+
+use std::rc::Rc;
+
+use ash::vk;
+use oit_core::OitError;
+
+use crate::device::{Buffer, Gpu, Pipeline};
+
+/// Uniform slots (and dispatches) per submission before a flush.
+const SLOTS: u32 = 256;
+/// Bytes between uniform slots (≥ every device's `minUniformBufferOffsetAlignment`).
+const SLOT_BYTES: u64 = 256;
+/// Descriptor sets per submission: one per dispatch, two per geometry pass.
+const MAX_SETS: u32 = 2 * SLOTS;
+/// Storage bindings of one set at most (group 0: state, up to 6 technique buffers, acct).
+const MAX_STORAGE_PER_SET: u32 = 16;
+/// How long a submission may run before it counts as hung.
+const TIMEOUT_NS: u64 = 120_000_000_000;
+
+/// The recorder of one frame: a command pool and buffer, a fence, a descriptor pool and a ring
+/// of uniform slots, made at the start and destroyed (newest first) at the end.
+pub(crate) struct Recorder<'g> {
+    gpu: &'g Gpu,
+    pool: vk::CommandPool,
+    cmd: vk::CommandBuffer,
+    fence: vk::Fence,
+    descriptors: vk::DescriptorPool,
+    uniforms: Buffer,
+    /// The ring's contents, written to `uniforms` before each submission.
+    uniform_bytes: Vec<u8>,
+    slot: u32,
+    sets: u32,
+    /// Buffers a recorded command uses that nothing else keeps alive (staging), until the flush.
+    keep: Vec<Rc<Buffer>>,
+}
+
+impl Drop for Recorder<'_> {
+    fn drop(&mut self) {
+        // SAFETY: all made from this device; the wait leaves nothing in flight (a flush always
+        // waits, so at most an unsubmitted recording is left, which may be freed as it is).
+        unsafe {
+            let d = &self.gpu.raw.device;
+            let _ = d.queue_wait_idle(self.gpu.queue);
+            d.destroy_descriptor_pool(self.descriptors, None);
+            d.destroy_fence(self.fence, None);
+            d.destroy_command_pool(self.pool, None);
+        }
+    }
+}
+
+fn vk_err(what: &'static str) -> impl Fn(vk::Result) -> OitError {
+    move |e| match e {
+        vk::Result::ERROR_DEVICE_LOST => {
+            OitError::Device(format!("{what}: the Vulkan device was lost (driver reset or crash)"))
+        }
+        vk::Result::TIMEOUT => OitError::Device(format!(
+            "{what}: the GPU did not finish within {} s; use a smaller scene or --size",
+            TIMEOUT_NS / 1_000_000_000
+        )),
+        other => OitError::Device(format!("{what}: {other}")),
+    }
+}
+
+impl<'g> Recorder<'g> {
+    /// A recorder, recording.
+    pub(crate) fn new(gpu: &'g Gpu) -> Result<Self, OitError> {
+        let d = &gpu.raw.device;
+        let uniforms =
+            gpu.buffer(u64::from(SLOTS) * SLOT_BYTES, vk::BufferUsageFlags::UNIFORM_BUFFER, true)?;
+        let pool_info = vk::CommandPoolCreateInfo::default().queue_family_index(gpu.family);
+        // SAFETY: a valid create info on a live device; the pool is destroyed by `drop`, or
+        // below if what follows fails.
+        let pool =
+            unsafe { d.create_command_pool(&pool_info, None) }.map_err(vk_err("creating a command pool"))?;
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        let sizes = [
+            vk::DescriptorPoolSize { ty: vk::DescriptorType::UNIFORM_BUFFER, descriptor_count: MAX_SETS },
+            vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::STORAGE_BUFFER,
+                descriptor_count: MAX_SETS * MAX_STORAGE_PER_SET,
+            },
+        ];
+        let dp_info = vk::DescriptorPoolCreateInfo::default().max_sets(MAX_SETS).pool_sizes(&sizes);
+        // SAFETY: as above; on failure the objects made so far are destroyed before returning.
+        let made = unsafe {
+            let cmd = d.allocate_command_buffers(&alloc);
+            let fence = d.create_fence(&vk::FenceCreateInfo::default(), None);
+            let descriptors = d.create_descriptor_pool(&dp_info, None);
+            match (cmd, fence, descriptors) {
+                (Ok(cmd), Ok(fence), Ok(descriptors)) => Ok((cmd[0], fence, descriptors)),
+                (cmd, fence, descriptors) => {
+                    if let Ok(dp) = descriptors {
+                        d.destroy_descriptor_pool(dp, None);
+                    }
+                    if let Ok(f) = fence {
+                        d.destroy_fence(f, None);
+                    }
+                    d.destroy_command_pool(pool, None);
+                    Err(cmd.err().or(fence.err()).unwrap_or(vk::Result::ERROR_OUT_OF_HOST_MEMORY))
+                }
+            }
+        }
+        .map_err(vk_err("creating a recorder"))?;
+        let (cmd, fence, descriptors) = made;
+        let r = Recorder {
+            gpu,
+            pool,
+            cmd,
+            fence,
+            descriptors,
+            uniforms,
+            uniform_bytes: vec![0; (u64::from(SLOTS) * SLOT_BYTES) as usize],
+            slot: 0,
+            sets: 0,
+            keep: Vec::new(),
+        };
+        r.begin()?;
+        Ok(r)
+    }
+
+    fn begin(&self) -> Result<(), OitError> {
+        let info = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // SAFETY: the command buffer is in the initial state (new, or its pool was just reset).
+        unsafe { self.gpu.raw.device.begin_command_buffer(self.cmd, &info) }.map_err(vk_err("recording"))
+    }
+
+    /// The barrier after every command (see the module docs).
+    fn barrier(&self) {
+        let barrier = vk::MemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
+            .dst_access_mask(
+                vk::AccessFlags::SHADER_READ
+                    | vk::AccessFlags::SHADER_WRITE
+                    | vk::AccessFlags::TRANSFER_READ
+                    | vk::AccessFlags::TRANSFER_WRITE
+                    | vk::AccessFlags::HOST_READ,
+            );
+        // SAFETY: the command buffer is recording; the stages exist on a compute queue.
+        unsafe {
+            self.gpu.raw.device.cmd_pipeline_barrier(
+                self.cmd,
+                vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+                vk::PipelineStageFlags::COMPUTE_SHADER
+                    | vk::PipelineStageFlags::TRANSFER
+                    | vk::PipelineStageFlags::HOST,
+                vk::DependencyFlags::empty(),
+                &[barrier],
+                &[],
+                &[],
+            );
+        }
+    }
+
+    /// Submits what was recorded, waits for it, and starts recording again.
+    pub(crate) fn flush(&mut self) -> Result<(), OitError> {
+        let d = &self.gpu.raw.device;
+        self.uniforms.write(&self.uniform_bytes[..(u64::from(self.slot) * SLOT_BYTES) as usize])?;
+        let cmds = [self.cmd];
+        let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
+        // SAFETY: the command buffer was recorded on this device and everything it references
+        // is alive (the frame's buffers, `keep`, the cached pipelines); the fence is unsignalled;
+        // after the wait nothing is in flight, so the pools may be reset.
+        unsafe {
+            d.end_command_buffer(self.cmd).map_err(vk_err("recording"))?;
+            d.queue_submit(self.gpu.queue, &submit, self.fence).map_err(vk_err("submitting work"))?;
+            d.wait_for_fences(&[self.fence], true, TIMEOUT_NS).map_err(vk_err("waiting for the GPU"))?;
+            d.reset_fences(&[self.fence]).map_err(vk_err("resetting a fence"))?;
+            d.reset_command_pool(self.pool, vk::CommandPoolResetFlags::empty())
+                .map_err(vk_err("resetting a command pool"))?;
+            d.reset_descriptor_pool(self.descriptors, vk::DescriptorPoolResetFlags::empty())
+                .map_err(vk_err("resetting a descriptor pool"))?;
+        }
+        self.slot = 0;
+        self.sets = 0;
+        self.keep.clear();
+        self.begin()
+    }
+
+    /// Room for a dispatch with `sets` descriptor sets, flushing first when the ring is full.
+    fn room(&mut self, sets: u32) -> Result<(), OitError> {
+        if self.slot >= SLOTS || self.sets + sets > MAX_SETS {
+            self.flush()?;
+        }
+        Ok(())
+    }
+
+    fn allocate(&mut self, layout: vk::DescriptorSetLayout) -> Result<vk::DescriptorSet, OitError> {
+        let layouts = [layout];
+        let info =
+            vk::DescriptorSetAllocateInfo::default().descriptor_pool(self.descriptors).set_layouts(&layouts);
+        self.sets += 1;
+        // SAFETY: the pool has room (`room`) and the layout is alive (cached in the Gpu).
+        Ok(unsafe { self.gpu.raw.device.allocate_descriptor_sets(&info) }
+            .map_err(vk_err("allocating descriptors"))?[0])
+    }
+
+    /// Writes `buffers` (binding, buffer) into `set`, and the uniform slot at binding 0 when given.
+    fn write_set(
+        &self,
+        set: vk::DescriptorSet,
+        uniform: Option<(u32, &Buffer, u64)>,
+        buffers: &[(u32, &Buffer)],
+    ) {
+        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
+            .iter()
+            .map(|(_, b)| [vk::DescriptorBufferInfo { buffer: b.buffer, offset: 0, range: vk::WHOLE_SIZE }])
+            .collect();
+        let uniform_info = uniform.map(|(_, b, offset)| {
+            [vk::DescriptorBufferInfo { buffer: b.buffer, offset, range: SLOT_BYTES.min(b.size) }]
+        });
+        let mut writes: Vec<vk::WriteDescriptorSet<'_>> = buffers
+            .iter()
+            .zip(&infos)
+            .map(|((binding, _), info)| {
+                vk::WriteDescriptorSet::default()
+                    .dst_set(set)
+                    .dst_binding(*binding)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .buffer_info(info)
+            })
+            .collect();
+        if let (Some((binding, _, _)), Some(info)) = (uniform, uniform_info.as_ref()) {
+            writes.push(
+                vk::WriteDescriptorSet::default()
+                    .dst_set(set)
+                    .dst_binding(binding)
+                    .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
+                    .buffer_info(info),
+            );
+        }
+        // SAFETY: the set is allocated and not in use by a pending submission (sets are reset
+        // only after a wait); every buffer is alive and has the usage its descriptor type needs.
+        unsafe { self.gpu.raw.device.update_descriptor_sets(&writes, &[]) };
+    }
+
+    /// Records one dispatch of `pipeline`: group 0 with `uniform` (copied into the next slot of
+    /// the ring) and `storage` (binding, buffer), group 1 the rasterizer's (binding, buffer) with
+    /// its uniform at binding 2, when given. A barrier follows.
+    pub(crate) fn dispatch(
+        &mut self,
+        pipeline: &Pipeline,
+        uniform: &[u8],
+        storage: &[(u32, &Buffer)],
+        raster: Option<(&[(u32, &Buffer)], &Buffer)>,
+        groups: (u32, u32),
+    ) -> Result<(), OitError> {
+        self.room(if raster.is_some() { 2 } else { 1 })?;
+        let offset = u64::from(self.slot) * SLOT_BYTES;
+        self.uniform_bytes[offset as usize..offset as usize + uniform.len()].copy_from_slice(uniform);
+        self.slot += 1;
+        let set0 = self.allocate(pipeline.set0)?;
+        self.write_set(set0, Some((0, &self.uniforms, offset)), storage);
+        let mut sets = vec![set0];
+        if let Some((buffers, ru)) = raster {
+            let set1 = self.allocate(pipeline.raster)?;
+            // the raster uniform is a whole (small) buffer of its own
+            let info = [vk::DescriptorBufferInfo { buffer: ru.buffer, offset: 0, range: vk::WHOLE_SIZE }];
+            self.write_set(set1, None, buffers);
+            let write = vk::WriteDescriptorSet::default()
+                .dst_set(set1)
+                .dst_binding(2)
+                .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
+                .buffer_info(&info);
+            // SAFETY: as in `write_set`.
+            unsafe { self.gpu.raw.device.update_descriptor_sets(&[write], &[]) };
+            sets.push(set1);
+        }
+        let d = &self.gpu.raw.device;
+        // SAFETY: recording; the pipeline's layout matches the sets bound (made from its set
+        // layouts); the group counts are within maxComputeWorkGroupCount (x ≤ 65535).
+        unsafe {
+            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, pipeline.pipeline);
+            d.cmd_bind_descriptor_sets(
+                self.cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                pipeline.layout,
+                0,
+                &sets,
+                &[],
+            );
+            if groups.0 > 0 && groups.1 > 0 {
+                d.cmd_dispatch(self.cmd, groups.0, groups.1, 1);
+            }
+        }
+        self.barrier();
+        Ok(())
+    }
+
+    /// Records setting every word of `buffer` to `value`; a barrier follows.
+    pub(crate) fn fill(&mut self, buffer: &Buffer, value: u32) {
+        // SAFETY: recording; the buffer has TRANSFER_DST usage and a size that is a multiple of 4.
+        unsafe { self.gpu.raw.device.cmd_fill_buffer(self.cmd, buffer.buffer, 0, vk::WHOLE_SIZE, value) };
+        self.barrier();
+    }
+
+    /// Records a copy of `bytes` from the start of `src` to the start of `dst`; a barrier follows.
+    pub(crate) fn copy(&mut self, src: &Buffer, dst: &Buffer, bytes: u64) {
+        if bytes == 0 {
+            return;
+        }
+        let region = [vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes }];
+        // SAFETY: recording; src has TRANSFER_SRC, dst TRANSFER_DST usage, both hold `bytes`.
+        unsafe { self.gpu.raw.device.cmd_copy_buffer(self.cmd, src.buffer, dst.buffer, &region) };
+        self.barrier();
+    }
+
+    /// Records an upload of `bytes` into `dst` through a staging buffer kept until the flush.
+    pub(crate) fn upload(&mut self, dst: &Buffer, bytes: &[u8]) -> Result<(), OitError> {
+        if bytes.is_empty() {
+            return Ok(());
+        }
+        let staging =
+            Rc::new(self.gpu.buffer(bytes.len() as u64, vk::BufferUsageFlags::TRANSFER_SRC, true)?);
+        staging.write(bytes)?;
+        self.copy(&staging, dst, bytes.len() as u64);
+        self.keep.push(staging);
+        Ok(())
+    }
+
+    /// Reads `buffer` back as u32 words: a copy to a staging buffer, a flush, a map.
+    pub(crate) fn read_u32(&mut self, buffer: &Buffer) -> Result<Vec<u32>, OitError> {
+        let staging = self.gpu.buffer(buffer.size, vk::BufferUsageFlags::TRANSFER_DST, true)?;
+        self.copy(buffer, &staging, buffer.size);
+        self.flush()?;
+        staging.read_u32()
+    }
+}

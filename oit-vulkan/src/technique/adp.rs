@@ -1,0 +1,31 @@
+//! `adp` (see oit-wgpu's `technique/adp.rs`) by storage-buffer atomics on the compute path: bounds
+//! pass, histogram pass (atomicOr), the deepest pixel's set-bin count (one readback) for the
+//! number of batches, then one bucket pass and one resolve per batch of 32. The paper's capture
+//! (logic-op OR into 8 × R32G32B32A32_UINT targets) needs the hardware path, not written yet.
+
+use oit_core::OitError;
+use oit_core::rules::{BUCKETS, HISTOGRAM_WORDS};
+
+use crate::Drivers;
+use crate::ctx::{Init, VkCtx};
+
+pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
+    let bounds = super::bdp::depth_bounds(ctx, drivers)?;
+    let px = u64::from(ctx.pixels);
+    let hist = ctx.buffer("adp histogram", px * HISTOGRAM_WORDS as u64, Init::Zero)?;
+    let max_bins = ctx.buffer("adp deepest pixel", 1, Init::Zero)?;
+    ctx.storage_bytes -= 4;
+    let buckets = ctx.buffer("adp buckets", px * BUCKETS as u64 * 2, Init::Zero)?;
+    let buffers = [&*bounds, &*hist, &*buckets, &*max_bins];
+    ctx.geometry_pass(&drivers.scene, "adp", &buffers, 0, 0)?;
+    ctx.pixel_kernel("adp", "count_main", &buffers, 0, 0)?;
+    let bins = ctx.read_u32(&max_bins)?[0];
+    let batches = ctx.plan.adp_batches(bins);
+    for batch in 0..batches {
+        ctx.last_pass(batch + 1 == batches);
+        ctx.geometry_pass(&drivers.scene, "adp", &buffers, 1, batch)?;
+        ctx.pixel_kernel("adp", "resolve_main", &buffers, 1, batch)?;
+    }
+    ctx.last_pass(false);
+    Ok(())
+}

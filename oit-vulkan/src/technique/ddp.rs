@@ -1,0 +1,42 @@
+//! `ddp` (see oit-wgpu's `technique/ddp.rs`): per peel a geometry pass (u64 atomicMin and
+//! atomicMax strictly inside each pixel's open range) and a resolve kernel; transparency and
+//! complexity only (the resolve keeps no per-pixel stack to replay the far layers nearest first).
+
+use oit_core::{Effect, OitError};
+
+use crate::Drivers;
+use crate::ctx::{Init, VkCtx};
+
+pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
+    let effect = ctx.settings.effect;
+    if !matches!(effect, Effect::Transparency | Effect::Complexity) {
+        return Err(OitError::Unsupported {
+            backend: "vulkan".into(),
+            what: format!(
+                "the {effect:?} effect with ddp: the far layers it peels would have to be replayed nearest first from a per-pixel stack, which the GPU resolve does not keep; use dp, fabs, mlp or adp (or the cpu backend)"
+            ),
+        });
+    }
+    let px = u64::from(ctx.pixels);
+    let near = ctx.buffer("ddp near", px * 2, Init::Fill(u32::MAX))?;
+    let far = ctx.buffer("ddp far", px * 2, Init::Zero)?;
+    let range = ctx.buffer("ddp range", px * 2, Init::Zero)?;
+    let peeled = ctx.buffer("ddp peeled count", 1, Init::Zero)?;
+    ctx.storage_bytes -= 4;
+    let buffers = [&*near, &*far, &*range, &*peeled];
+    ctx.pixel_kernel("ddp", "ddp_init_main", &buffers, 0, 0)?;
+    let limit = ctx.plan.peel_limit;
+    let mut peels = 0;
+    while peels < limit {
+        ctx.last_pass(peels + 1 == limit);
+        ctx.fill(&peeled, 0);
+        ctx.geometry_pass(&drivers.scene, "ddp", &buffers, peels, 0)?;
+        ctx.pixel_kernel("ddp", "resolve_main", &buffers, peels, 0)?;
+        if ctx.read_u32(&peeled)?[0] == 0 {
+            break;
+        }
+        peels += 1;
+    }
+    ctx.last_pass(false);
+    Ok(())
+}

@@ -1,0 +1,38 @@
+//! `mdts:K` and `mdts64:K` (see oit-wgpu's `technique/mdts.rs`): one geometry pass of atomic-min
+//! insertion into K sorted words per pixel (the paper's 20 + 12-bit packing in two u32 arrays, or
+//! one u64 array), then a resolve kernel. On storage *buffers*: the image-atomic capture the paper
+//! used (R32_UINT / R64_UINT storage images) is not written yet.
+
+use oit_core::{OitError, Technique};
+
+use crate::Drivers;
+use crate::ctx::{Init, VkCtx};
+
+const MDTS_32: u32 = 0;
+const MDTS_64: u32 = 1;
+
+pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
+    let wide = match ctx.settings.technique {
+        Technique::Mdts { .. } => false,
+        Technique::Mdts64 { .. } => true,
+        other => return Err(OitError::InvalidSettings(format!("{other} is not mdts or mdts64"))),
+    };
+    let deepest = if ctx.plan.needs_count() { super::count(ctx, &drivers.scene)?.1 } else { 0 };
+    let k = ctx.plan.slots(deepest);
+    let words = u64::from(ctx.pixels) * u64::from(k);
+    if wide {
+        let (high, low) = (ctx.placeholder()?, ctx.placeholder()?);
+        let slots = ctx.buffer("mdts64 slots", words * 2, Init::Fill(u32::MAX))?;
+        let buffers = [&*high, &*low, &*slots];
+        ctx.geometry_pass(&drivers.scene, "mdts", &buffers, MDTS_64, k)?;
+        return ctx.pixel_kernel("mdts", "resolve_main", &buffers, MDTS_64, k);
+    }
+    let alpha8 = ctx.plan.mdts_alpha8;
+    let high = ctx.buffer("mdts high words", words, Init::Fill(u32::MAX))?;
+    let low = ctx.buffer("mdts low words", words, Init::Fill(u32::MAX))?;
+    let slots = ctx.placeholder()?;
+    let buffers = [&*high, &*low, &*slots];
+    let mode = MDTS_32 | alpha8 << 8;
+    ctx.geometry_pass(&drivers.scene, "mdts", &buffers, mode, k)?;
+    ctx.pixel_kernel("mdts", "resolve_main", &buffers, mode, k)
+}

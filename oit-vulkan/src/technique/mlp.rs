@@ -1,0 +1,37 @@
+//! `mlp:M` (see oit-wgpu's `technique/mlp.rs`): per pass a geometry pass of atomic-min insertion
+//! into M u64 words per pixel, strictly behind the previous pass's deepest, and a resolve kernel;
+//! one readback of the "overflowed" flag per pass ends the loop.
+
+use oit_core::{OitError, Technique};
+
+use crate::Drivers;
+use crate::ctx::{Init, VkCtx};
+
+pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
+    let m = match ctx.settings.technique {
+        Technique::Mlp { m } => m,
+        other => return Err(OitError::InvalidSettings(format!("{other} is not mlp"))),
+    };
+    if m == 0 {
+        return Err(OitError::InvalidSettings("mlp:0 holds no layer: use mlp:M with M ≥ 1".into()));
+    }
+    let px = u64::from(ctx.pixels);
+    let slots = ctx.buffer("mlp slots", px * u64::from(m) * 2, Init::Fill(u32::MAX))?;
+    let deepest = ctx.buffer("mlp deepest", px, Init::Zero)?;
+    let overflowed = ctx.buffer("mlp overflowed", 1, Init::Zero)?;
+    ctx.storage_bytes -= 4;
+    let buffers = [&*slots, &*deepest, &*overflowed];
+    let limit = ctx.plan.peel_limit;
+    let mut peels = 0;
+    while peels < limit {
+        ctx.last_pass(peels + 1 == limit);
+        ctx.fill(&overflowed, 0);
+        ctx.geometry_pass(&drivers.scene, "mlp", &buffers, peels, m)?;
+        peels += 1;
+        ctx.pixel_kernel("mlp", "resolve_main", &buffers, peels, m)?;
+        if ctx.read_u32(&overflowed)?[0] == 0 {
+            break;
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,35 @@
+//! One file per technique, each the twin of oit-wgpu's `src/technique/*.rs`: the same buffers,
+//! passes, kernels and readbacks, on the same WGSL (compiled to SPIR-V by `build.rs`; the module
+//! names here are `build.rs`'s).
+
+pub(crate) mod adp;
+pub(crate) mod bdp;
+pub(crate) mod ddp;
+pub(crate) mod dfb;
+pub(crate) mod dp;
+pub(crate) mod fabs;
+pub(crate) mod ll;
+pub(crate) mod mdts;
+pub(crate) mod mlp;
+pub(crate) mod reference;
+pub(crate) mod weighted;
+
+use std::rc::Rc;
+
+use oit_core::OitError;
+
+use crate::ctx::{Init, VkCtx};
+use crate::device::Buffer;
+use crate::raster::ComputeRaster;
+
+/// Fragments per pixel from one counting pass (the buffer), and the deepest pixel's count.
+pub(crate) fn count(ctx: &mut VkCtx<'_>, raster: &ComputeRaster) -> Result<(Rc<Buffer>, u32), OitError> {
+    let counts = ctx.buffer("fragment counts", u64::from(ctx.pixels), Init::Zero)?;
+    let max = ctx.buffer("max count", 1, Init::Zero)?;
+    ctx.geometry_pass(raster, "count", &[&counts, &max], 0, 0)?;
+    ctx.pixel_kernel("count", "max_main", &[&counts, &max], 0, 0)?;
+    // sizing storage is not the technique's: oit-cpu does not count it either
+    ctx.storage_bytes -= u64::from(ctx.pixels) * 4 + 4;
+    let m = ctx.read_u32(&max)?[0];
+    Ok((counts, m))
+}
