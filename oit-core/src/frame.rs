@@ -39,6 +39,26 @@ pub struct Stats {
     pub gpu_pass_ms: Vec<(String, f64)>,
 }
 
+impl Stats {
+    /// The frame's own check, where its losses were counted as they happened: every fragment the
+    /// first geometry pass generated was either composited or counted lost. A device that stops
+    /// a kernel early (lavapipe ends a shader invocation's loops after 65,535 iterations in all)
+    /// breaks it, and the frame is refused with an error rather than shown with fragments
+    /// missing and `lost` silent.
+    pub fn check_accounting(&self, backend: &str) -> Result<(), OitError> {
+        if self.captured + self.lost == self.fragments {
+            return Ok(());
+        }
+        Err(OitError::Device(format!(
+            "{backend}: {} fragments composited + {} counted lost ≠ {} generated: the device did not \
+             run every step of the frame to the end (lavapipe, for one, ends a shader's loops after \
+             65,535 iterations, which a pixel of thousands of layers can need); the frame is refused \
+             rather than shown wrong. Use fewer layers, another raster path or the cpu backend",
+            self.captured, self.lost, self.fragments
+        )))
+    }
+}
+
 /// An 8-bit sRGB image, row-major, top row first.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {

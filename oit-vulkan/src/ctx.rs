@@ -334,7 +334,7 @@ impl<'a> VkCtx<'a> {
             pixels: words[..self.pixels as usize].iter().map(|w| w.to_le_bytes()).collect(),
         };
         let lost_pixels: Vec<u32> = acct.chunks(3).take(self.pixels as usize).map(|w| w[0]).collect();
-        Ok(Frame {
+        let frame = Frame {
             image,
             layers: None,
             lost_pixels: Some(lost_pixels),
@@ -350,7 +350,9 @@ impl<'a> VkCtx<'a> {
                 max_layers: t[1],
                 gpu_pass_ms: Vec::new(),
             },
-        })
+        };
+        frame.stats.check_accounting("vulkan")?;
+        Ok(frame)
     }
 }
 

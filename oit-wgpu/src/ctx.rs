@@ -533,7 +533,7 @@ impl<'a> GpuCtx<'a> {
             // NOT COUNTED (issue 16): the blend captures do not count their losses yet
             (fragments.saturating_sub(captured), None)
         };
-        Ok(Frame {
+        let frame = Frame {
             image,
             layers: None,
             lost_pixels,
@@ -549,7 +549,11 @@ impl<'a> GpuCtx<'a> {
                 max_layers: t[1],
                 gpu_pass_ms: self.pass_ms,
             },
-        })
+        };
+        if self.counts_losses {
+            frame.stats.check_accounting("wgpu")?;
+        }
+        Ok(frame)
     }
 }
 

@@ -54,41 +54,7 @@ pub const EXPECTED: &[Expected] = &[
               --scene spheres:16 --size 64x64 --shading flat --techniques adp`). The body asserts \
               lost 0, which only oit's fixed-point depths guarantee",
     },
-    Expected {
-        test: "a_thousand_layers",
-        backend: "wgpu",
-        path: RasterPath::Compute,
-        why: "KNOWN BUG, not a tolerance: on lavapipe the compute path's reference with 1,000 layers \
-              per pixel sometimes composites only part of the deepest pixels (planes:1000 at 8x8, \
-              default view: 1,552 of 17,347 fragments about one run in five, the per-pixel counts \
-              and offsets correct; also on the commit before the conformance suite ran on wgpu). \
-              The loss is reported in `lost`, not hidden; the cause is open (the architecture \
-              issue's closing note)",
-    },
-    Expected {
-        test: "four_thousand_layers",
-        backend: "wgpu",
-        path: RasterPath::Compute,
-        why: LAVAPIPE_LOOP_LIMIT,
-    },
-    Expected {
-        test: "alpha_extremes_over_a_thousand_layers",
-        backend: "wgpu",
-        path: RasterPath::Compute,
-        why: LAVAPIPE_LOOP_LIMIT,
-    },
 ];
-
-/// Why the compute path cannot composite a thousand layers per pixel on lavapipe (found with
-/// `planes:4096` at 8×8, where it happens every run: each of the 24 pixels of the rows that hold
-/// a 4,096-layer pixel ends with 1 fragment captured).
-const LAVAPIPE_LOOP_LIMIT: &str = "KNOWN BUG, not a tolerance: llvmpipe (lavapipe) ends a shader \
-    invocation's loops after 65,535 iterations in all (LP_MAX_TGSI_LOOP_ITERATIONS, shared by every \
-    loop of the shader and counted per SIMD row of pixels). The compute path fills a pixel's list out \
-    of primitive order, so the reference's and fabs's per-pixel insertion sorts of 1,000+ fragments \
-    pass that limit and the resolve stops after the first fragment, and `lost` does not count the rest \
-    (captured + lost < fragments). The hardware path fills in primitive order (already sorted). Also \
-    the cause of a_thousand_layers' row above; a fix is a resolve that stays under the limit";
 
 /// The reason `test` does not run on `backend`/`path`, if the table has one.
 pub fn expected(test: &str, backend: &str, path: RasterPath) -> Option<&'static str> {

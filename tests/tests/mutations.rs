@@ -74,6 +74,19 @@ fn accounting_fails_on_an_uncounted_loss() {
     assert!(accounting(&f).is_err(), "a per-pixel count off by one");
 }
 
+/// The GPU backends' own guard (`Stats::check_accounting`, run on every frame whose losses are
+/// counted): a frame a device cut short is refused, not shown.
+#[test]
+fn a_frame_cut_short_is_refused() {
+    let scene = scene("planes:8");
+    let s = settings(16, "fabs");
+    let mut f = render(&cpu(), &scene, &camera(&scene, &s, FRONT), &s);
+    f.stats.check_accounting("cpu").expect("a whole frame");
+    f.stats.captured -= 3;
+    let e = f.stats.check_accounting("test").unwrap_err().to_string();
+    assert!(e.contains("refused"), "{e}");
+}
+
 #[test]
 fn exact_fails_on_a_swap_a_drop_and_a_skew() {
     let b = cpu();

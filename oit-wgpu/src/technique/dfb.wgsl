@@ -7,7 +7,7 @@
 // in primitive order, as the reference's.
 //
 // A range of up to LOCAL_ENTRIES is sorted in a private array (as fabs.wgsl's lists), a longer
-// one in place by heapsort. (An in-place insertion sort, as reference.wgsl's, composited only
+// one in place by heapsort, as reference.wgsl and fabs.wgsl do. (An in-place insertion sort composited only
 // part of the list on lavapipe from about 1,000 entries a pixel: 250 of 1,000 on planes:1000 at
 // 8², 1 of 2,000 on planes:2000, the counts and offsets read back correct; heapsort's
 // O(n log n) loops composite all of them.)

@@ -1,12 +1,12 @@
 // fabs:K (Huang et al. 2011, section 4): counter + K slots per pixel by atomic increment; the
-// resolve sorts each pixel's n ≤ K slots (insertion sort, as oit-cpu does for short lists) and
+// resolve sorts each pixel's n ≤ K slots (insertion sort up to LOCAL_SLOTS, heapsort beyond) and
 // composites them. param = K. A slot is a key, depth bits << 32 | primitive id, and the payload
 // beside it (in `payloads`, at the same index): sorted by key, equal depths come out in primitive
 // order, as the reference's.
 //
 // Slot i of pixel px is slots[i · pixels + px] (slot-major), so the neighbouring pixels of one
 // workgroup read and write neighbouring words in the resolve; lists of up to LOCAL_SLOTS are sorted
-// in a private array, longer ones in place. Measured on the H100 (planes:64 at 1024², 64 layers a
+// in a private array, longer ones in place (heapsort). Measured on the H100 (planes:64 at 1024², 64 layers a
 // pixel): with pixel-major slots sorted in place the capture pass and its sizing pass took 2.8 ms
 // and the resolve 4.4; with this layout 1.65 and 4.0; and with the pixel's resolve state kept in
 // a local across the list (`push_local`, one load and one store instead of one per layer) the
@@ -110,21 +110,48 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         state[px] = s;
         return;
     }
-    for (var i = 1u; i < n; i++) {
-        let v = atomicLoad(&slots[i * stride + px]);
-        let p = payloads[i * stride + px];
-        var j = i;
-        while (j > 0u && atomicLoad(&slots[(j - 1u) * stride + px]) > v) {
-            atomicStore(&slots[j * stride + px], atomicLoad(&slots[(j - 1u) * stride + px]));
-            payloads[j * stride + px] = payloads[(j - 1u) * stride + px];
-            j -= 1u;
-        }
-        atomicStore(&slots[j * stride + px], v);
-        payloads[j * stride + px] = p;
+    // longer: heapsort in place (O(n log n) loops; an in-place insertion sort composited only
+    // part of 2,000-entry lists on lavapipe, see dfb.wgsl)
+    for (var i = n / 2u; i > 0u; i--) {
+        fabs_sift_down(px, stride, i - 1u, n);
+    }
+    for (var end = n - 1u; end > 0u; end--) {
+        fabs_swap(px, stride, 0u, end);
+        fabs_sift_down(px, stride, 0u, end);
     }
     for (var i = 0u; i < n; i++) {
         let key = atomicLoad(&slots[i * stride + px]);
         push_local(&s, bitcast<f32>(u32(key >> 32u)), payloads[i * stride + px]);
     }
     state[px] = s;
+}
+
+// Slots `a` and `b` of pixel `px` (and their payloads) exchanged.
+fn fabs_swap(px: u32, stride: u32, a: u32, b: u32) {
+    let k = atomicLoad(&slots[a * stride + px]);
+    let p = payloads[a * stride + px];
+    atomicStore(&slots[a * stride + px], atomicLoad(&slots[b * stride + px]));
+    payloads[a * stride + px] = payloads[b * stride + px];
+    atomicStore(&slots[b * stride + px], k);
+    payloads[b * stride + px] = p;
+}
+
+// Moves slot `root` of pixel `px`'s heap of `n` slots down to its place (a max-heap by key).
+fn fabs_sift_down(px: u32, stride: u32, root_in: u32, n: u32) {
+    var root = root_in;
+    loop {
+        var child = 2u * root + 1u;
+        if (child >= n) {
+            break;
+        }
+        if (child + 1u < n
+            && atomicLoad(&slots[(child + 1u) * stride + px]) > atomicLoad(&slots[child * stride + px])) {
+            child += 1u;
+        }
+        if (atomicLoad(&slots[root * stride + px]) >= atomicLoad(&slots[child * stride + px])) {
+            break;
+        }
+        fabs_swap(px, stride, root, child);
+        root = child;
+    }
 }
