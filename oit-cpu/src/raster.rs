@@ -11,11 +11,14 @@
 //!   same whatever the [`RasterMode`] and the number of rayon threads; only the order of the calls
 //!   varies.
 //!
-//! How: [`RasterMode::Scatter`] runs the set-up triangles in parallel chunks, each walking its
-//! box; [`RasterMode::Tiled`] bins them into [`TILE_SIZE`]-pixel tiles once and runs the tiles in
-//! parallel, each tile its triangles in primitive order. A walk visits, row by row, the exact
-//! span of covered pixels ([`oit_core::setup::covers`]), found by integer division of the edge
-//! functions rather than by testing every pixel of the box.
+//! How: [`RasterMode::Tiled`] (the default) bins the triangles into [`TILE_SIZE`]-pixel tiles
+//! once per frame, with the setup, and runs the tiles in parallel, each on one thread (so a
+//! pixel's fragments all come from one thread). A triangle at most 64 pixels across is walked
+//! eight pixels of a row at a time in 32-bit lanes ([`walk_small`], its edge functions set up
+//! with the bins); a larger one, and every triangle in [`RasterMode::Scatter`] (parallel chunks of
+//! triangles, each walking its box), by the span walk, which visits row by row the exact span of
+//! covered pixels ([`oit_core::setup::covers`]), found by integer division of the edge functions.
+//! Both walks are tested against the per-pixel rule and against each other.
 
 use std::sync::OnceLock;
 
@@ -37,28 +40,18 @@ pub enum RasterMode {
     /// Parallel over chunks of triangles; each walks its bounding box clamped to the viewport.
     Scatter,
     /// Triangles binned into screen tiles; parallel over tiles, each tile runs its triangles in
-    /// primitive order (so a pixel's fragments arrive in primitive order, from one thread).
+    /// a fixed order (by the tile their box starts in, then primitive order), so a pixel's
+    /// fragments arrive from one thread, in the same order every pass.
     Tiled,
 }
 
-/// The mode [`Rasterizer::new`] starts in: [`RasterMode::Scatter`].
+/// The mode [`Rasterizer::new`] starts in: [`RasterMode::Tiled`].
 ///
-/// Measured with `cargo bench -p oit-cpu --bench raster -- --warm-up-time 1 --measurement-time 3`
-/// (one pass, a relaxed atomic add into a per-pixel counter per fragment, 512×512, default orbit
-/// view; criterion's median, on a 2-core development host shared with other builds):
-///
-/// | scene | triangles | fragments | Scatter | Tiled (32 px) |
-/// |---|---|---|---|---|
-/// | knot | 18,164 | 101,218 | 3.5 ms | 4.0 ms |
-/// | spheres:8 | 16,980 | 347,868 | 15.2 ms | 16.1 ms |
-/// | bunny.obj | 65,782 | 108,472 | 8.9 ms | 9.9 ms |
-///
-/// Scatter was as fast or faster on every scene in every run, and on 64-px tiles too (single
-/// runs of 50 passes on a quiet host: knot 3.5 / 3.7 ms, spheres:8 9.7 / 9.9 ms, bunny 6.0 /
-/// 7.7 ms). Tiling pays a walk setup for every tile a triangle straddles, and these meshes are
-/// made of small triangles; what it buys (one thread per pixel, so no contended cache lines) does
-/// not show at two threads. Shading ([`Shading::shade`]) is about half of a pass either way.
-/// Re-measure on a many-core host before changing this: that is where Tiled could win.
+/// Measured side by side with `cargo bench -p oit-cpu --bench raster` (see the bench's header:
+/// Scatter is the rasterizer before issue 12, Tiled the one since; on a 2-core host loaded by
+/// other builds, so the ratios hold better than the times). On the bunny (tiny triangles) the
+/// two cost about the same, the interpolation and shading of the fragments being most of a
+/// pass; Tiled keeps each pixel on one thread, and its per-pass coverage work is 32-bit adds.
 pub const DEFAULT_MODE: RasterMode = RasterMode::Tiled;
 
 /// The triangles in tile order, and the tiles' lists of them, compressed: tile `t` holds
@@ -182,7 +175,8 @@ impl Rasterizer {
 
     /// One geometry pass: calls `f` exactly once per covered (pixel, triangle), concurrently from
     /// rayon's threads, in no particular order (in [`RasterMode::Tiled`] a pixel's fragments come
-    /// in primitive order from one thread). Returns the number of fragments, i.e. of calls.
+    /// from one thread, in the same order every pass). Returns the number of fragments, i.e. of
+    /// calls.
     pub fn for_each_fragment<F: Fn(&Fragment) + Sync>(&self, f: F) -> u64 {
         let n = self.for_each_covered(|t, x, y, e| f(&self.setup.fragment(t, x, y, e)));
         self.fragments.get_or_init(|| n);
@@ -221,8 +215,9 @@ impl Rasterizer {
                         let y1 = (y0 + TILE_SIZE - 1).min(self.setup.height - 1);
                         let mut n = 0u64;
                         for &i in &bins.tris[bins.start[tile] as usize..bins.start[tile + 1] as usize] {
+                            // The triangle itself is read only where it covers a pixel.
                             let (t, edges) = (&bins.triangles[i as usize], &bins.edges[i as usize]);
-                            let [bx0, by0, bx1, by1] = t.bbox;
+                            let [bx0, by0, bx1, by1] = edges.bbox;
                             let rect = [bx0.max(x0), by0.max(y0), bx1.min(x1), by1.min(y1)];
                             walk_tile(t, edges, rect, |x, y, e| {
                                 f(t, x, y, e);
@@ -338,6 +333,8 @@ const SMALL_EXTENT: i32 = 1 << 14;
 /// frame with the bins, so a pass does no 64-bit arithmetic for such a triangle.
 #[derive(Clone, Copy, Debug, Default)]
 struct SmallEdges {
+    /// The triangle's box (a copy of [`Triangle::bbox`], so the traversal reads only this).
+    bbox: [u32; 4],
     /// Whether the triangle is small; the rest is meaningful only then.
     small: bool,
     origin: [i32; 3],
@@ -350,13 +347,14 @@ impl SmallEdges {
     fn new(t: &Triangle) -> SmallEdges {
         let extent = |v: [i32; 3]| v[0].max(v[1]).max(v[2]) - v[0].min(v[1]).min(v[2]);
         if extent(t.x) > SMALL_EXTENT || extent(t.y) > SMALL_EXTENT {
-            return SmallEdges::default();
+            return SmallEdges { bbox: t.bbox, ..SmallEdges::default() };
         }
         let [x0, y0, _, _] = t.bbox;
         let (px, py) = (i64::from(x0) * SUBPIXEL + HALF_PIXEL, i64::from(y0) * SUBPIXEL + HALF_PIXEL);
         let edges = [0, 1, 2].map(|k| edge(t, k, px, py));
         // The value within ±2^29 (the pixel is in the box), the steps within ±2^22.
         SmallEdges {
+            bbox: t.bbox,
             small: true,
             origin: edges.map(|e| e.0 as i32),
             step_x: edges.map(|e| e.1 as i32),
@@ -371,7 +369,7 @@ impl SmallEdges {
 #[inline]
 fn walk_tile(t: &Triangle, edges: &SmallEdges, rect: [u32; 4], visit: impl FnMut(u32, u32, [i64; 3])) {
     if edges.small {
-        walk_small(edges, [t.bbox[0], t.bbox[1]], rect, visit);
+        walk_small(edges, [edges.bbox[0], edges.bbox[1]], rect, visit);
     } else {
         walk(t, rect, visit);
     }
@@ -379,19 +377,27 @@ fn walk_tile(t: &Triangle, edges: &SmallEdges, rect: [u32; 4], visit: impl FnMut
 
 /// [`walk`] for a triangle at most [`SMALL_EXTENT`] across, whose box starts at pixel `origin`:
 /// the edge functions of [`LANES`] pixels of a row are tested at once, in 32-bit lanes the
-/// compiler vectorizes (SSE2 has 32-bit compares, not 64-bit ones). The rule is [`edge`]'s,
-/// unchanged: wherever a pixel lies in the triangle's box its lane holds the 64-bit edge function
-/// exactly (wrapping arithmetic is exact modulo 2^32, and the true value fits); lanes past `rect`
-/// (which may wrap) are masked off before they are read.
+/// compiler vectorizes (SSE2 has 32-bit adds and compares, not 64-bit ones). The rule is
+/// [`edge`]'s, unchanged: wherever a pixel lies in the triangle's box its lane holds the 64-bit
+/// edge function exactly (wrapping arithmetic is exact modulo 2^32, and the true value fits);
+/// lanes past `rect` (which may wrap) are masked off before they are read.
+///
+/// The test `e > above` (`above` is −1 or 0) is `e − (above + 1) ≥ 0`, so the lanes hold the
+/// edge functions less `above + 1` and a pixel is covered where the OR of its three lanes has
+/// the sign bit clear: an add and an OR per edge, then the sign bits as a mask.
 #[inline]
 fn walk_small(s: &SmallEdges, origin: [u32; 2], rect: [u32; 4], mut visit: impl FnMut(u32, u32, [i64; 3])) {
     let [x0, y0, x1, y1] = rect;
     if x0 > x1 || y0 > y1 {
         return;
     }
+    let bias: [i32; 3] = std::array::from_fn(|k| s.above[k] + 1);
     let (dx, dy) = ((x0 - origin[0]) as i32, (y0 - origin[1]) as i32);
     let mut row: [i32; 3] = std::array::from_fn(|k| {
-        s.origin[k].wrapping_add(s.step_x[k].wrapping_mul(dx)).wrapping_add(s.step_y[k].wrapping_mul(dy))
+        s.origin[k]
+            .wrapping_add(s.step_x[k].wrapping_mul(dx))
+            .wrapping_add(s.step_y[k].wrapping_mul(dy))
+            .wrapping_sub(bias[k])
     });
     let mut offsets = [[0i32; LANES]; 3];
     for k in 0..3 {
@@ -405,20 +411,25 @@ fn walk_small(s: &SmallEdges, origin: [u32; 2], rect: [u32; 4], mut visit: impl 
         let mut base = row;
         let mut c = 0u32;
         while c < width {
-            let e: [[i32; LANES]; 3] =
-                std::array::from_fn(|k| std::array::from_fn(|n| base[k].wrapping_add(offsets[k][n])));
-            let mut mask = 0u32;
+            let mut sign = [0i32; LANES];
             for n in 0..LANES {
-                let inside = (e[0][n] > s.above[0])
-                    & (e[1][n] > s.above[1])
-                    & (e[2][n] > s.above[2])
-                    & (c + (n as u32) < width);
-                mask |= u32::from(inside) << n;
+                sign[n] = base[0].wrapping_add(offsets[0][n])
+                    | base[1].wrapping_add(offsets[1][n])
+                    | base[2].wrapping_add(offsets[2][n]);
             }
+            let mut outside = 0u32;
+            for (n, v) in sign.iter().enumerate() {
+                outside |= ((*v as u32) >> 31) << n;
+            }
+            let left = width - c;
+            let valid = if left >= LANES as u32 { (1u32 << LANES) - 1 } else { (1u32 << left) - 1 };
+            let mut mask = !outside & valid;
             while mask != 0 {
                 let n = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                visit(x0 + c + n as u32, y, [0, 1, 2].map(|k| i64::from(e[k][n])));
+                let e: [i64; 3] =
+                    std::array::from_fn(|k| i64::from(base[k].wrapping_add(offsets[k][n]).wrapping_add(bias[k])));
+                visit(x0 + c + n as u32, y, e);
             }
             c += LANES as u32;
             for k in 0..3 {
