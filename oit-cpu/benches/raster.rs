@@ -1,7 +1,7 @@
 //! One geometry pass of the software rasterizer at 512×512, on the bunny and `planes:64`: the
 //! span walk of every triangle in parallel chunks ([`RasterMode::Scatter`], the rasterizer before
-//! issue 12) against the tiled walk with the vectorized coverage test of small triangles
-//! ([`RasterMode::Tiled`], the default since), side by side in one run. Each mode is timed twice:
+//! issue 12 and still the default) against the tiled walk with the vectorized coverage test of
+//! small triangles ([`RasterMode::Tiled`]), side by side in one run. Each mode is timed twice:
 //! `coverage` is the traversal alone ([`Rasterizer::coverage_pass`]), `pass` the whole geometry
 //! pass (each fragment made in full) with a per-fragment relaxed atomic add into a per-pixel
 //! counter, about the cheapest a technique does, so the rasterizer's own cost dominates.

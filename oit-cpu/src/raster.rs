@@ -11,14 +11,14 @@
 //!   same whatever the [`RasterMode`] and the number of rayon threads; only the order of the calls
 //!   varies.
 //!
-//! How: [`RasterMode::Tiled`] (the default) bins the triangles into [`TILE_SIZE`]-pixel tiles
-//! once per frame, with the setup, and runs the tiles in parallel, each on one thread (so a
-//! pixel's fragments all come from one thread). A triangle at most 64 pixels across is walked
-//! eight pixels of a row at a time in 32-bit lanes ([`walk_small`], its edge functions set up
-//! with the bins); a larger one, and every triangle in [`RasterMode::Scatter`] (parallel chunks of
-//! triangles, each walking its box), by the span walk, which visits row by row the exact span of
-//! covered pixels ([`oit_core::setup::covers`]), found by integer division of the edge functions.
-//! Both walks are tested against the per-pixel rule and against each other.
+//! How: [`RasterMode::Scatter`] (the default) runs the set-up triangles in parallel chunks, each
+//! walking its box by the span walk, which visits row by row the exact span of covered pixels
+//! ([`oit_core::setup::covers`]), found by integer division of the edge functions.
+//! [`RasterMode::Tiled`] bins the triangles into [`TILE_SIZE`]-pixel tiles once per frame, with
+//! the setup, and runs the tiles in parallel, each on one thread (so a pixel's fragments all come
+//! from one thread). There a triangle at most 64 pixels across is walked eight pixels of a row at
+//! a time in 32-bit lanes ([`walk_small`], its edge functions set up with the bins), a larger one
+//! by the span walk. Both walks are tested against the per-pixel rule and against each other.
 
 use std::sync::OnceLock;
 
@@ -45,14 +45,24 @@ pub enum RasterMode {
     Tiled,
 }
 
-/// The mode [`Rasterizer::new`] starts in: [`RasterMode::Tiled`].
+/// The mode [`Rasterizer::new`] starts in: [`RasterMode::Scatter`] (as before issue 12).
 ///
-/// Measured side by side with `cargo bench -p oit-cpu --bench raster` (see the bench's header:
-/// Scatter is the rasterizer before issue 12, Tiled the one since; on a 2-core host loaded by
-/// other builds, so the ratios hold better than the times). On the bunny (tiny triangles) the
-/// two cost about the same, the interpolation and shading of the fragments being most of a
-/// pass; Tiled keeps each pixel on one thread, and its per-pass coverage work is 32-bit adds.
-pub const DEFAULT_MODE: RasterMode = RasterMode::Tiled;
+/// Measured side by side with `cargo bench -p oit-cpu --bench raster -- --warm-up-time 1
+/// --measurement-time 3` (2 rayon threads on a 2-core host shared with other builds, load
+/// average about 4; criterion's median; `pass` makes every fragment in full):
+///
+/// | scene | fragments | Scatter coverage | Tiled coverage | Scatter pass | Tiled pass |
+/// |---|---|---|---|---|---|
+/// | bunny.obj, 512² | 156,812 | 7.2 ms | 6.9 ms | 16.0 ms | 17.3 ms |
+/// | planes:64, 512² | 4,921,315 | 10.6 ms | 19.2 ms | 306 ms | 344 ms |
+///
+/// Tiled's coverage is as fast or faster on the bunny's small triangles (the 32-bit lanes do
+/// without Scatter's 64-bit divisions), slower where large triangles are walked tile by tile;
+/// but in both modes interpolation and shading ([`TriangleSetup::fragment`]) are most of a pass,
+/// and Tiled adds the binning and the tile-ordered copy of the triangles to each frame's setup.
+/// At two threads that does not pay; re-measure on a many-core host, where one thread per pixel
+/// (no contended cache lines) may.
+pub const DEFAULT_MODE: RasterMode = RasterMode::Scatter;
 
 /// The triangles in tile order, and the tiles' lists of them, compressed: tile `t` holds
 /// `triangles[i]` for `i` in `tris[start[t]..start[t + 1]]`.
@@ -126,7 +136,8 @@ impl Rasterizer {
                 let [x0, y0, x1, y1] = t.bbox;
                 (x0 / TILE_SIZE..=x1 / TILE_SIZE, y0 / TILE_SIZE..=y1 / TILE_SIZE)
             };
-            let first_tile = |t: &Triangle| ((t.bbox[1] / TILE_SIZE) * tiles_x + t.bbox[0] / TILE_SIZE) as usize;
+            let first_tile =
+                |t: &Triangle| ((t.bbox[1] / TILE_SIZE) * tiles_x + t.bbox[0] / TILE_SIZE) as usize;
             // Counting sort by first tile (stable: primitive order within a tile).
             let mut first = vec![0u32; tiles + 1];
             for t in &self.setup.triangles {
@@ -399,12 +410,8 @@ fn walk_small(s: &SmallEdges, origin: [u32; 2], rect: [u32; 4], mut visit: impl 
             .wrapping_add(s.step_y[k].wrapping_mul(dy))
             .wrapping_sub(bias[k])
     });
-    let mut offsets = [[0i32; LANES]; 3];
-    for k in 0..3 {
-        for n in 1..LANES {
-            offsets[k][n] = offsets[k][n - 1].wrapping_add(s.step_x[k]);
-        }
-    }
+    let offsets: [[i32; LANES]; 3] =
+        std::array::from_fn(|k| std::array::from_fn(|n| s.step_x[k].wrapping_mul(n as i32)));
     let stride: [i32; 3] = std::array::from_fn(|k| offsets[k][LANES - 1].wrapping_add(s.step_x[k]));
     let width = x1 - x0 + 1;
     for y in y0..=y1 {
@@ -427,8 +434,9 @@ fn walk_small(s: &SmallEdges, origin: [u32; 2], rect: [u32; 4], mut visit: impl 
             while mask != 0 {
                 let n = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                let e: [i64; 3] =
-                    std::array::from_fn(|k| i64::from(base[k].wrapping_add(offsets[k][n]).wrapping_add(bias[k])));
+                let e: [i64; 3] = std::array::from_fn(|k| {
+                    i64::from(base[k].wrapping_add(offsets[k][n]).wrapping_add(bias[k]))
+                });
                 visit(x0 + c + n as u32, y, e);
             }
             c += LANES as u32;
@@ -436,8 +444,8 @@ fn walk_small(s: &SmallEdges, origin: [u32; 2], rect: [u32; 4], mut visit: impl 
                 base[k] = base[k].wrapping_add(stride[k]);
             }
         }
-        for k in 0..3 {
-            row[k] = row[k].wrapping_add(s.step_y[k]);
+        for (r, step) in row.iter_mut().zip(s.step_y) {
+            *r = r.wrapping_add(step);
         }
     }
 }
@@ -779,7 +787,7 @@ mod tests {
     fn modes_and_thread_counts_agree() {
         let scene = random_scene();
         let cam = Camera::look_at(Vec3::new(0.0, 0.0, 2.5), Vec3::ZERO, 70.0, 200.0 / 150.0, 0.3, 8.0);
-        for shading in [Shading::Headlight, Shading::Vertex] {
+        for shading in [Shading::Headlight, Shading::Vertex, Shading::Flat, Shading::Normal] {
             let s = Settings { shading, ..settings(200, 150) };
             let run = |threads: usize, mode: RasterMode| {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
@@ -840,7 +848,12 @@ mod tests {
                     for ty in by0 / tile..=by1 / tile {
                         for tx in bx0 / tile..=bx1 / tile {
                             let (x0, y0) = (tx * tile, ty * tile);
-                            rects.push([bx0.max(x0), by0.max(y0), bx1.min(x0 + tile - 1), by1.min(y0 + tile - 1)]);
+                            rects.push([
+                                bx0.max(x0),
+                                by0.max(y0),
+                                bx1.min(x0 + tile - 1),
+                                by1.min(y0 + tile - 1),
+                            ]);
                         }
                     }
                 }
