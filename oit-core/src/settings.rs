@@ -56,6 +56,7 @@ impl Shading {
     /// The straight-alpha linear colour of a fragment. `normal` is the interpolated (not yet
     /// normalized) world-space normal, `vertex_color` the interpolated vertex colour if the mesh
     /// has one, `forward` the camera's viewing direction.
+    #[inline]
     pub fn shade(self, base: Vec4, normal: Vec3, vertex_color: Option<Vec3>, forward: Vec3) -> Vec4 {
         let n = normal.normalize_or_zero();
         let rgb = match self {

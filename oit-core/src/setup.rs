@@ -506,6 +506,7 @@ impl TriangleSetup {
 
 /// covered pixel's edge function must exceed (−1 on a top or left edge, so 0 is covered; 0
 /// elsewhere).
+#[inline]
 pub fn edge(t: &Triangle, k: usize, px: i64, py: i64) -> (i64, i64, i64, i64) {
     let (a, b) = ((k + 1) % 3, (k + 2) % 3);
     let (ax, ay) = (i64::from(t.x[a]), i64::from(t.y[a]));
@@ -521,6 +522,7 @@ pub fn edge(t: &Triangle, k: usize, px: i64, py: i64) -> (i64, i64, i64, i64) {
 
 /// The rule in its plainest form: the edge functions of `t` at the centre of pixel (x, y) when
 /// the pixel is covered. A backend's traversal must visit exactly these pixels.
+#[inline]
 pub fn covers(t: &Triangle, x: u32, y: u32) -> Option<[i64; 3]> {
     let (px, py) = (i64::from(x) * SUBPIXEL + HALF_PIXEL, i64::from(y) * SUBPIXEL + HALF_PIXEL);
     let e = [0, 1, 2].map(|k| edge(t, k, px, py));

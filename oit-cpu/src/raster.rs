@@ -11,11 +11,14 @@
 //!   same whatever the [`RasterMode`] and the number of rayon threads; only the order of the calls
 //!   varies.
 //!
-//! How: [`RasterMode::Scatter`] runs the set-up triangles in parallel chunks, each walking its
-//! box; [`RasterMode::Tiled`] bins them into [`TILE_SIZE`]-pixel tiles once and runs the tiles in
-//! parallel, each tile its triangles in primitive order. A walk visits, row by row, the exact
-//! span of covered pixels ([`oit_core::setup::covers`]), found by integer division of the edge
-//! functions rather than by testing every pixel of the box.
+//! How: [`RasterMode::Scatter`] (the default) runs the set-up triangles in parallel chunks, each
+//! walking its box by the span walk, which visits row by row the exact span of covered pixels
+//! ([`oit_core::setup::covers`]), found by integer division of the edge functions.
+//! [`RasterMode::Tiled`] bins the triangles into [`TILE_SIZE`]-pixel tiles once per frame, with
+//! the setup, and runs the tiles in parallel, each on one thread (so a pixel's fragments all come
+//! from one thread). There a triangle at most 64 pixels across is walked eight pixels of a row at
+//! a time in 32-bit lanes ([`walk_small`], its edge functions set up with the bins), a larger one
+//! by the span walk. Both walks are tested against the per-pixel rule and against each other.
 
 use std::sync::OnceLock;
 
@@ -37,33 +40,40 @@ pub enum RasterMode {
     /// Parallel over chunks of triangles; each walks its bounding box clamped to the viewport.
     Scatter,
     /// Triangles binned into screen tiles; parallel over tiles, each tile runs its triangles in
-    /// primitive order (so a pixel's fragments arrive in primitive order, from one thread).
+    /// a fixed order (by the tile their box starts in, then primitive order), so a pixel's
+    /// fragments arrive from one thread, in the same order every pass.
     Tiled,
 }
 
-/// The mode [`Rasterizer::new`] starts in: [`RasterMode::Scatter`].
+/// The mode [`Rasterizer::new`] starts in: [`RasterMode::Scatter`] (as before issue 12).
 ///
-/// Measured with `cargo bench -p oit-cpu --bench raster -- --warm-up-time 1 --measurement-time 3`
-/// (one pass, a relaxed atomic add into a per-pixel counter per fragment, 512×512, default orbit
-/// view; criterion's median, on a 2-core development host shared with other builds):
+/// Measured side by side with `cargo bench -p oit-cpu --bench raster -- --warm-up-time 1
+/// --measurement-time 3` (2 rayon threads on a 2-core host shared with other builds, load
+/// average about 4; criterion's median; `pass` makes every fragment in full):
 ///
-/// | scene | triangles | fragments | Scatter | Tiled (32 px) |
-/// |---|---|---|---|---|
-/// | knot | 18,164 | 101,218 | 3.5 ms | 4.0 ms |
-/// | spheres:8 | 16,980 | 347,868 | 15.2 ms | 16.1 ms |
-/// | bunny.obj | 65,782 | 108,472 | 8.9 ms | 9.9 ms |
+/// | scene | fragments | Scatter coverage | Tiled coverage | Scatter pass | Tiled pass |
+/// |---|---|---|---|---|---|
+/// | bunny.obj, 512² | 156,812 | 7.2 ms | 6.9 ms | 16.0 ms | 17.3 ms |
+/// | planes:64, 512² | 4,921,315 | 10.6 ms | 19.2 ms | 306 ms | 344 ms |
 ///
-/// Scatter was as fast or faster on every scene in every run, and on 64-px tiles too (single
-/// runs of 50 passes on a quiet host: knot 3.5 / 3.7 ms, spheres:8 9.7 / 9.9 ms, bunny 6.0 /
-/// 7.7 ms). Tiling pays a walk setup for every tile a triangle straddles, and these meshes are
-/// made of small triangles; what it buys (one thread per pixel, so no contended cache lines) does
-/// not show at two threads. Shading ([`Shading::shade`]) is about half of a pass either way.
-/// Re-measure on a many-core host before changing this: that is where Tiled could win.
+/// Tiled's coverage is as fast or faster on the bunny's small triangles (the 32-bit lanes do
+/// without Scatter's 64-bit divisions), slower where large triangles are walked tile by tile;
+/// but in both modes interpolation and shading ([`TriangleSetup::fragment`]) are most of a pass,
+/// and Tiled adds the binning and the tile-ordered copy of the triangles to each frame's setup.
+/// At two threads that does not pay; re-measure on a many-core host, where one thread per pixel
+/// (no contended cache lines) may.
 pub const DEFAULT_MODE: RasterMode = RasterMode::Scatter;
 
-/// The tiles' triangle lists, compressed: tile `t` holds `tris[start[t]..start[t + 1]]`.
+/// The triangles in tile order, and the tiles' lists of them, compressed: tile `t` holds
+/// `triangles[i]` for `i` in `tris[start[t]..start[t + 1]]`.
 struct Bins {
     tiles_x: u32,
+    /// The set-up triangles sorted by the tile of their box's top-left pixel (row-major), stably,
+    /// so each tile's list reads them from a few runs of memory rather than from all over the
+    /// frame's (a mesh's primitive order is seldom its order on screen).
+    triangles: Vec<Triangle>,
+    /// [`SmallEdges`] of each of `triangles`.
+    edges: Vec<SmallEdges>,
     start: Vec<u32>,
     tris: Vec<u32>,
 }
@@ -126,8 +136,25 @@ impl Rasterizer {
                 let [x0, y0, x1, y1] = t.bbox;
                 (x0 / TILE_SIZE..=x1 / TILE_SIZE, y0 / TILE_SIZE..=y1 / TILE_SIZE)
             };
-            let mut count = vec![0u32; tiles + 1];
+            let first_tile =
+                |t: &Triangle| ((t.bbox[1] / TILE_SIZE) * tiles_x + t.bbox[0] / TILE_SIZE) as usize;
+            // Counting sort by first tile (stable: primitive order within a tile).
+            let mut first = vec![0u32; tiles + 1];
             for t in &self.setup.triangles {
+                first[first_tile(t) + 1] += 1;
+            }
+            for i in 1..first.len() {
+                first[i] += first[i - 1];
+            }
+            let mut order = vec![0u32; self.setup.triangles.len()];
+            for (i, t) in self.setup.triangles.iter().enumerate() {
+                let slot = &mut first[first_tile(t)];
+                order[*slot as usize] = i as u32;
+                *slot += 1;
+            }
+            let triangles: Vec<Triangle> = order.iter().map(|&i| self.setup.triangles[i as usize]).collect();
+            let mut count = vec![0u32; tiles + 1];
+            for t in &triangles {
                 let (xr, yr) = tile_range(t);
                 for ty in yr {
                     for tx in xr.clone() {
@@ -141,8 +168,8 @@ impl Rasterizer {
             let start = count;
             let mut fill = start.clone();
             let mut tris = vec![0u32; start[tiles] as usize];
-            // Triangles are stored in primitive order, so each tile's list is too.
-            for (i, t) in self.setup.triangles.iter().enumerate() {
+            // Each tile's list is in the sorted triangles' order.
+            for (i, t) in triangles.iter().enumerate() {
                 let (xr, yr) = tile_range(t);
                 for ty in yr {
                     for tx in xr.clone() {
@@ -152,13 +179,15 @@ impl Rasterizer {
                     }
                 }
             }
-            Bins { tiles_x, start, tris }
+            let edges = triangles.par_iter().map(SmallEdges::new).collect();
+            Bins { tiles_x, triangles, edges, start, tris }
         })
     }
 
     /// One geometry pass: calls `f` exactly once per covered (pixel, triangle), concurrently from
     /// rayon's threads, in no particular order (in [`RasterMode::Tiled`] a pixel's fragments come
-    /// in primitive order from one thread). Returns the number of fragments, i.e. of calls.
+    /// from one thread, in the same order every pass). Returns the number of fragments, i.e. of
+    /// calls.
     pub fn for_each_fragment<F: Fn(&Fragment) + Sync>(&self, f: F) -> u64 {
         let n = self.for_each_covered(|t, x, y, e| f(&self.setup.fragment(t, x, y, e)));
         self.fragments.get_or_init(|| n);
@@ -197,10 +226,11 @@ impl Rasterizer {
                         let y1 = (y0 + TILE_SIZE - 1).min(self.setup.height - 1);
                         let mut n = 0u64;
                         for &i in &bins.tris[bins.start[tile] as usize..bins.start[tile + 1] as usize] {
-                            let t = &self.setup.triangles[i as usize];
-                            let [bx0, by0, bx1, by1] = t.bbox;
+                            // The triangle itself is read only where it covers a pixel.
+                            let (t, edges) = (&bins.triangles[i as usize], &bins.edges[i as usize]);
+                            let [bx0, by0, bx1, by1] = edges.bbox;
                             let rect = [bx0.max(x0), by0.max(y0), bx1.min(x1), by1.min(y1)];
-                            walk(t, rect, |x, y, e| {
+                            walk_tile(t, edges, rect, |x, y, e| {
                                 f(t, x, y, e);
                                 n += 1;
                             });
@@ -210,6 +240,14 @@ impl Rasterizer {
                     .sum()
             }
         }
+    }
+
+    /// A coverage-only pass: the traversal without interpolation or shading (what the
+    /// rasterizer's bench times apart from the fragments); returns the covered pairs.
+    pub fn coverage_pass(&self) -> u64 {
+        self.for_each_covered(|_, _, _, e| {
+            std::hint::black_box(e);
+        })
     }
 
     /// Fragments one pass generates (counted by a coverage-only pass unless a pass ran already).
@@ -290,6 +328,124 @@ fn walk(t: &Triangle, rect: [u32; 4], mut visit: impl FnMut(u32, u32, [i64; 3]))
         }
         for k in 0..3 {
             row[k] += edges[k].2;
+        }
+    }
+}
+
+/// Lanes of the vectorized coverage test: one row of [`LANES`] pixels at a time.
+const LANES: usize = 8;
+/// Largest extent (in sub-pixel units, each axis) of a triangle [`walk_small`] takes: every edge
+/// function at a pixel centre inside the triangle's box is then below `2·SMALL_EXTENT² = 2^29`
+/// in magnitude, so it fits an `i32` exactly.
+const SMALL_EXTENT: i32 = 1 << 14;
+
+/// The edge functions of a triangle at most [`SMALL_EXTENT`] across at the centre of its box's
+/// top-left pixel, with their steps, in 32-bit form (exact: see [`SMALL_EXTENT`]); made once per
+/// frame with the bins, so a pass does no 64-bit arithmetic for such a triangle.
+#[derive(Clone, Copy, Debug, Default)]
+struct SmallEdges {
+    /// The triangle's box (a copy of [`Triangle::bbox`], so the traversal reads only this).
+    bbox: [u32; 4],
+    /// Whether the triangle is small; the rest is meaningful only then.
+    small: bool,
+    origin: [i32; 3],
+    step_x: [i32; 3],
+    step_y: [i32; 3],
+    above: [i32; 3],
+}
+
+impl SmallEdges {
+    fn new(t: &Triangle) -> SmallEdges {
+        let extent = |v: [i32; 3]| v[0].max(v[1]).max(v[2]) - v[0].min(v[1]).min(v[2]);
+        if extent(t.x) > SMALL_EXTENT || extent(t.y) > SMALL_EXTENT {
+            return SmallEdges { bbox: t.bbox, ..SmallEdges::default() };
+        }
+        let [x0, y0, _, _] = t.bbox;
+        let (px, py) = (i64::from(x0) * SUBPIXEL + HALF_PIXEL, i64::from(y0) * SUBPIXEL + HALF_PIXEL);
+        let edges = [0, 1, 2].map(|k| edge(t, k, px, py));
+        // The value within ±2^29 (the pixel is in the box), the steps within ±2^22.
+        SmallEdges {
+            bbox: t.bbox,
+            small: true,
+            origin: edges.map(|e| e.0 as i32),
+            step_x: edges.map(|e| e.1 as i32),
+            step_y: edges.map(|e| e.2 as i32),
+            above: edges.map(|e| e.3 as i32),
+        }
+    }
+}
+
+/// Visits the covered pixels of `t` inside `rect` (within its box) as [`walk`] does (same pixels,
+/// same order, same edge values): small triangles by [`walk_small`], the others by the span walk.
+#[inline]
+fn walk_tile(t: &Triangle, edges: &SmallEdges, rect: [u32; 4], visit: impl FnMut(u32, u32, [i64; 3])) {
+    if edges.small {
+        walk_small(edges, [edges.bbox[0], edges.bbox[1]], rect, visit);
+    } else {
+        walk(t, rect, visit);
+    }
+}
+
+/// [`walk`] for a triangle at most [`SMALL_EXTENT`] across, whose box starts at pixel `origin`:
+/// the edge functions of [`LANES`] pixels of a row are tested at once, in 32-bit lanes the
+/// compiler vectorizes (SSE2 has 32-bit adds and compares, not 64-bit ones). The rule is
+/// [`edge`]'s, unchanged: wherever a pixel lies in the triangle's box its lane holds the 64-bit
+/// edge function exactly (wrapping arithmetic is exact modulo 2^32, and the true value fits);
+/// lanes past `rect` (which may wrap) are masked off before they are read.
+///
+/// The test `e > above` (`above` is −1 or 0) is `e − (above + 1) ≥ 0`, so the lanes hold the
+/// edge functions less `above + 1` and a pixel is covered where the OR of its three lanes has
+/// the sign bit clear: an add and an OR per edge, then the sign bits as a mask.
+#[inline]
+fn walk_small(s: &SmallEdges, origin: [u32; 2], rect: [u32; 4], mut visit: impl FnMut(u32, u32, [i64; 3])) {
+    let [x0, y0, x1, y1] = rect;
+    if x0 > x1 || y0 > y1 {
+        return;
+    }
+    let bias: [i32; 3] = std::array::from_fn(|k| s.above[k] + 1);
+    let (dx, dy) = ((x0 - origin[0]) as i32, (y0 - origin[1]) as i32);
+    let mut row: [i32; 3] = std::array::from_fn(|k| {
+        s.origin[k]
+            .wrapping_add(s.step_x[k].wrapping_mul(dx))
+            .wrapping_add(s.step_y[k].wrapping_mul(dy))
+            .wrapping_sub(bias[k])
+    });
+    let offsets: [[i32; LANES]; 3] =
+        std::array::from_fn(|k| std::array::from_fn(|n| s.step_x[k].wrapping_mul(n as i32)));
+    let stride: [i32; 3] = std::array::from_fn(|k| offsets[k][LANES - 1].wrapping_add(s.step_x[k]));
+    let width = x1 - x0 + 1;
+    for y in y0..=y1 {
+        let mut base = row;
+        let mut c = 0u32;
+        while c < width {
+            let mut sign = [0i32; LANES];
+            for n in 0..LANES {
+                sign[n] = base[0].wrapping_add(offsets[0][n])
+                    | base[1].wrapping_add(offsets[1][n])
+                    | base[2].wrapping_add(offsets[2][n]);
+            }
+            let mut outside = 0u32;
+            for (n, v) in sign.iter().enumerate() {
+                outside |= ((*v as u32) >> 31) << n;
+            }
+            let left = width - c;
+            let valid = if left >= LANES as u32 { (1u32 << LANES) - 1 } else { (1u32 << left) - 1 };
+            let mut mask = !outside & valid;
+            while mask != 0 {
+                let n = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let e: [i64; 3] = std::array::from_fn(|k| {
+                    i64::from(base[k].wrapping_add(offsets[k][n]).wrapping_add(bias[k]))
+                });
+                visit(x0 + c + n as u32, y, e);
+            }
+            c += LANES as u32;
+            for k in 0..3 {
+                base[k] = base[k].wrapping_add(stride[k]);
+            }
+        }
+        for (r, step) in row.iter_mut().zip(s.step_y) {
+            *r = r.wrapping_add(step);
         }
     }
 }
@@ -631,7 +787,7 @@ mod tests {
     fn modes_and_thread_counts_agree() {
         let scene = random_scene();
         let cam = Camera::look_at(Vec3::new(0.0, 0.0, 2.5), Vec3::ZERO, 70.0, 200.0 / 150.0, 0.3, 8.0);
-        for shading in [Shading::Headlight, Shading::Vertex] {
+        for shading in [Shading::Headlight, Shading::Vertex, Shading::Flat, Shading::Normal] {
             let s = Settings { shading, ..settings(200, 150) };
             let run = |threads: usize, mode: RasterMode| {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
@@ -672,6 +828,44 @@ mod tests {
             }
             assert_eq!(walked, expected);
         }
+    }
+
+    /// The vectorized walk of small triangles against the span walk, on whole boxes and on
+    /// tile-sized pieces of them, at a size where some triangles are small and some are not.
+    #[test]
+    fn tile_walk_matches_the_span_walk() {
+        let scene = random_scene();
+        let mut small = 0;
+        for size in [70u32, 600] {
+            let cam = Camera::look_at(Vec3::new(0.0, 0.0, 2.5), Vec3::ZERO, 70.0, 1.0, 0.3, 8.0);
+            let r = Rasterizer::new(&scene, &cam, &settings(size, size));
+            for t in &r.setup().triangles {
+                let edges = SmallEdges::new(t);
+                small += usize::from(edges.small);
+                let [bx0, by0, bx1, by1] = t.bbox;
+                let mut rects = vec![t.bbox];
+                for tile in [7u32, 32] {
+                    for ty in by0 / tile..=by1 / tile {
+                        for tx in bx0 / tile..=bx1 / tile {
+                            let (x0, y0) = (tx * tile, ty * tile);
+                            rects.push([
+                                bx0.max(x0),
+                                by0.max(y0),
+                                bx1.min(x0 + tile - 1),
+                                by1.min(y0 + tile - 1),
+                            ]);
+                        }
+                    }
+                }
+                for rect in rects {
+                    let (mut spans, mut tiles) = (Vec::new(), Vec::new());
+                    walk(t, rect, |x, y, e| spans.push((x, y, e)));
+                    walk_tile(t, &edges, rect, |x, y, e| tiles.push((x, y, e)));
+                    assert_eq!(tiles, spans, "triangle {} in {rect:?}", t.prim);
+                }
+            }
+        }
+        assert!(small > 100, "{small} small triangles");
     }
 
     #[test]

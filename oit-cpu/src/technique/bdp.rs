@@ -137,10 +137,11 @@ fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
     }
     let mut states = ctx.states();
     let resolve = &ctx.resolve;
-    states.par_iter_mut().enumerate().for_each(|(px, s)| {
+    // one list of back layers per rayon task, not one per pixel and bucket
+    states.par_iter_mut().enumerate().for_each_init(Vec::new, |backs, (px, s)| {
         for k in 0..n {
             let slot = px * 2 * n + 2 * k;
-            let mut backs = Vec::new();
+            backs.clear();
             for array in &arrays {
                 let (lo, hi) = (array[slot].load(Relaxed), array[slot + 1].load(Relaxed));
                 if lo == BDP_EMPTY_MIN {
@@ -152,7 +153,7 @@ fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
                     backs.push(split_key64(hi));
                 }
             }
-            for (d, p) in backs.into_iter().rev() {
+            for &(d, p) in backs.iter().rev() {
                 resolve.push(s, d, p);
             }
         }
