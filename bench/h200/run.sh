@@ -27,7 +27,7 @@ readme)
         --scenes "$OIT_MODELS/bunny.obj,planes:64,grid:4x4:bunny" --no-curves --out "$OUT/bench-1024"
     ;;
 calibrate)
-    run "$OIT" bench --calibrate --backend wgpu --raster all --size 1024x1024 --frames 10 --warmup 2 \
+    run "$OIT" bench --calibrate --backend wgpu --raster all --size 1024x1024 --frames ${FRAMES:-10} --warmup 2 \
         --out "$OUT/calibrate"
     ;;
 model)
@@ -35,8 +35,15 @@ model)
         --model "${MODEL:-$OUT/calibrate/calibration.json}" --no-curves \
         --scenes "$OIT_MODELS/bunny.obj,$OIT_MODELS/armadillo.obj,grid:4x4:bunny" --out "$OUT/model-1024"
     ;;
+vulkan)
+    # oit-vulkan beside wgpu on the compute path (vulkan has no hardware path yet), every
+    # technique dfb and ll included; needs a build with --features wgpu,vulkan
+    run "$OIT" info --json > "$OUT/info-vulkan.json"
+    run "$OIT" bench --backend wgpu,vulkan --raster compute --size 1024x1024 --frames 10 --warmup 2 \
+        --scenes "$OIT_MODELS/bunny.obj,planes:64" --no-curves --out "$OUT/vulkan-1024"
+    ;;
 *)
-    echo "usage: $0 [readme|calibrate|model]" >&2
+    echo "usage: $0 [readme|calibrate|model|vulkan]" >&2
     exit 2
     ;;
 esac
