@@ -36,7 +36,7 @@ fn backends_labelled(label: &str) -> Vec<Box<dyn Backend>> {
     }
     // the compute path only: its hardware path is not written yet (issue 9)
     #[cfg(feature = "vulkan")]
-    if oit_vulkan::backend_or_skip(&format!("{label} on vulkan")).is_some() {
+    if oit_vulkan::backend_or_skip(label).is_some() {
         out.push(Box::new(oit_core::OnPath {
             backend: Box::new(oit_vulkan::VulkanBackend::default()),
             path: oit_core::RasterPath::Compute,
