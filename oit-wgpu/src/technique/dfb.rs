@@ -9,7 +9,8 @@ use crate::Drivers;
 use crate::ctx::{GpuCtx, Init};
 
 const COUNT_WGSL: &str = include_str!("dfb_count.wgsl");
-const WGSL: &str = include_str!("dfb.wgsl");
+/// The technique, and the in-place sort its resolve calls.
+const WGSL: &str = concat!(include_str!("dfb.wgsl"), "\n", include_str!("sort_entries.wgsl"));
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     let entries = u64::from(ctx.pixels) + 1;

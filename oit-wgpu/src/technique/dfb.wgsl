@@ -62,45 +62,10 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         state[px] = s;
         return;
     }
-    // longer: heapsort in place (O(n log n), no private array)
-    let n = hi - lo;
-    for (var i = n / 2u; i > 0u; i--) {
-        sift_down(lo, i - 1u, n);
-    }
-    for (var end = n - 1u; end > 0u; end--) {
-        swap_entries(lo, lo + end);
-        sift_down(lo, 0u, end);
-    }
+    // longer: in place (sort_entries.wgsl)
+    sort_entries(lo, hi - lo);
     for (var i = lo; i < hi; i++) {
         push_local(&s, bitcast<f32>(u32(keys[i] >> 32u)), payloads[i]);
     }
     state[px] = s;
-}
-
-fn swap_entries(a: u32, b: u32) {
-    let k = keys[a];
-    let p = payloads[a];
-    keys[a] = keys[b];
-    payloads[a] = payloads[b];
-    keys[b] = k;
-    payloads[b] = p;
-}
-
-// Moves entry `root` of the heap over [lo, lo + n) down to its place (a max-heap by key).
-fn sift_down(lo: u32, root_in: u32, n: u32) {
-    var root = root_in;
-    loop {
-        var child = 2u * root + 1u;
-        if (child >= n) {
-            break;
-        }
-        if (child + 1u < n && keys[lo + child + 1u] > keys[lo + child]) {
-            child += 1u;
-        }
-        if (keys[lo + root] >= keys[lo + child]) {
-            break;
-        }
-        swap_entries(lo + root, lo + child);
-        root = child;
-    }
 }

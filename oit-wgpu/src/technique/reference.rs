@@ -7,7 +7,8 @@ use wgpu::util::DeviceExt;
 use crate::Drivers;
 use crate::ctx::{GpuCtx, Init};
 
-const WGSL: &str = include_str!("reference.wgsl");
+/// The technique, and the in-place sort its resolve calls.
+const WGSL: &str = concat!(include_str!("reference.wgsl"), "\n", include_str!("sort_entries.wgsl"));
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<Vec<u32>, OitError> {
     let (counts, _) = super::count(ctx, drivers.scene.as_ref())?;
