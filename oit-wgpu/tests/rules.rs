@@ -6,7 +6,7 @@ use oit_core::composite::linear_to_srgb8;
 use oit_core::rules::*;
 
 const KERNEL: &str = r#"
-@group(0) @binding(0) var<storage, read> cases: array<vec4<u32>>;
+@group(0) @binding(0) var<storage, read_write> cases: array<vec4<u32>>;
 @group(0) @binding(1) var<storage, read_write> results: array<vec2<u32>>;
 
 @compute @workgroup_size(64)
@@ -42,6 +42,69 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     results[i] = r;
 }
 "#;
+
+/// Runs `main` of `kernel` over `invocations`: bindings 0.. are storage buffers holding `inputs`
+/// (read-write, so a kernel may bind atomics), the last one `out_words` u32 results, read back.
+fn run_kernel(
+    gpu: &oit_wgpu::Gpu,
+    kernel: &str,
+    inputs: &[&[u8]],
+    out_words: usize,
+    invocations: u32,
+) -> Vec<u32> {
+    use wgpu::util::DeviceExt;
+    let device = &gpu.device;
+    let mut buffers: Vec<wgpu::Buffer> = inputs
+        .iter()
+        .map(|contents| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("input"),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+        })
+        .collect();
+    buffers.push(device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("results"),
+        size: (out_words * 4) as u64,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    }));
+    let entries: Vec<wgpu::BindGroupLayoutEntry> = (0..buffers.len() as u32)
+        .map(|binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: false },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        })
+        .collect();
+    let layout =
+        device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &entries });
+    let pipeline = gpu.compute_pipeline(kernel, "main", &[&layout]).expect("kernel builds");
+    let bound: Vec<wgpu::BindGroupEntry<'_>> = buffers
+        .iter()
+        .enumerate()
+        .map(|(i, b)| wgpu::BindGroupEntry { binding: i as u32, resource: b.as_entire_binding() })
+        .collect();
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &layout,
+        entries: &bound,
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(invocations.div_ceil(64), 1, 1);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    gpu.read_u32(buffers.last().expect("the results buffer")).unwrap()
+}
 
 fn f(x: f32) -> u32 {
     x.to_bits()
@@ -115,51 +178,7 @@ fn wgsl_rules_equal_rust_rules() {
         expected.push([u32::from(linear_to_srgb8(x)), 0]);
     }
 
-    let device = &gpu.device;
-    use wgpu::util::DeviceExt;
-    let input = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("cases"),
-        contents: bytemuck::cast_slice(&cases),
-        usage: wgpu::BufferUsages::STORAGE,
-    });
-    let output = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("results"),
-        size: (cases.len() * 8) as u64,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let entry = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: None,
-        entries: &[entry(0, true), entry(1, false)],
-    });
-    let pipeline = gpu.compute_pipeline(KERNEL, "main", &[&layout]).expect("kernel builds");
-    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &layout,
-        entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: input.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: output.as_entire_binding() },
-        ],
-    });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups((cases.len() as u32).div_ceil(64), 1, 1);
-    }
-    gpu.queue.submit([encoder.finish()]);
-    let got = gpu.read_u32(&output).unwrap();
+    let got = run_kernel(gpu, KERNEL, &[bytemuck::cast_slice(&cases)], cases.len() * 2, cases.len() as u32);
     for (i, (case, want)) in cases.iter().zip(&expected).enumerate() {
         let have = [got[2 * i], got[2 * i + 1]];
         if i >= srgb_start {
@@ -188,7 +207,7 @@ fn wgsl_histogram_rank_equals_rust() {
     let end = start + adp[start..].find("\n}\n").expect("adp_rank ends") + 3;
     let kernel = format!(
         "@group(0) @binding(0) var<storage, read_write> hist: array<atomic<u32>>;
-@group(0) @binding(1) var<storage, read> cases: array<vec2<u32>>;
+@group(0) @binding(1) var<storage, read_write> cases: array<vec2<u32>>;
 @group(0) @binding(2) var<storage, read_write> results: array<u32>;
 {}
 @compute @workgroup_size(64)
@@ -227,56 +246,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
         }
     }
     let flat: Vec<u32> = hists.iter().flatten().copied().collect();
-    let device = &gpu.device;
-    use wgpu::util::DeviceExt;
-    let init = |label, contents: &[u8]| {
-        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents,
-            usage: wgpu::BufferUsages::STORAGE,
-        })
-    };
-    let hist = init("hist", bytemuck::cast_slice(&flat));
-    let input = init("cases", bytemuck::cast_slice(&cases));
-    let output = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("results"),
-        size: (cases.len() * 4) as u64,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let entry = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: None,
-        entries: &[entry(0, false), entry(1, true), entry(2, false)],
-    });
-    let pipeline = gpu.compute_pipeline(&kernel, "main", &[&layout]).expect("kernel builds");
-    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &layout,
-        entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: hist.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: input.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 2, resource: output.as_entire_binding() },
-        ],
-    });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups((cases.len() as u32).div_ceil(64), 1, 1);
-    }
-    gpu.queue.submit([encoder.finish()]);
-    let got = gpu.read_u32(&output).unwrap();
+    let inputs: [&[u8]; 2] = [bytemuck::cast_slice(&flat), bytemuck::cast_slice(&cases)];
+    let got = run_kernel(gpu, &kernel, &inputs, cases.len(), cases.len() as u32);
     for ((case, want), have) in cases.iter().zip(&expected).zip(&got) {
         assert_eq!(have, want, "histogram {} bin {}", case[0], case[1]);
     }
