@@ -75,6 +75,17 @@ impl Plan {
                 what: "fresnel with mdts: its 12 + 12 spare bits hold RGB only; use mdts64".into(),
             });
         }
+        if matches!(technique, Technique::WeightedAverage | Technique::WeightedSum)
+            && matches!(settings.effect, Effect::Translucency | Effect::Fresnel)
+        {
+            return Err(OitError::Unsupported {
+                backend: backend.into(),
+                what: format!(
+                    "the {:?} effect with {technique}: it never orders fragments; use a sorting technique (dp, fabs, adp, ...)",
+                    settings.effect
+                ),
+            });
+        }
         let bdp_color = match technique {
             Technique::Bdp { passes } => settings.bdp_color_mode(passes)?,
             _ => false,

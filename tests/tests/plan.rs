@@ -55,3 +55,25 @@ fn reported_storage_stays_within_the_plan() {
         }
     }
 }
+
+/// A rule the plan holds for every backend: the weighted blends never order fragments, so the
+/// effects that need the order (translucency, Fresnel) are refused, not run wrong.
+#[test]
+fn weighted_blends_refuse_ordered_effects_everywhere() {
+    use oit_core::{Effect, OitError};
+    let scene = scene("planes:4");
+    for backend in backends_for("weighted_blends_refuse_ordered_effects_everywhere") {
+        let b = backend.as_ref();
+        for t in ["wavg", "wsum"] {
+            for effect in [Effect::Translucency, Effect::Fresnel] {
+                let s = Settings { effect, ..settings(16, t) };
+                match b.render(&scene, &camera(&scene, &s, View::default()), &s) {
+                    Err(OitError::Unsupported { .. }) => {}
+                    other => panic!("{} {t} {effect:?}: {:?}", label(b), other.map(|f| f.stats)),
+                }
+            }
+            let s = Settings { effect: Effect::Complexity, ..settings(16, t) };
+            assert!(b.render(&scene, &camera(&scene, &s, View::default()), &s).is_ok(), "{t} complexity");
+        }
+    }
+}

@@ -13,16 +13,8 @@ use rayon::prelude::*;
 use super::Ctx;
 
 pub(crate) fn render(ctx: &mut Ctx<'_>, average: bool) -> Result<Frame, OitError> {
+    // translucency and Fresnel are refused by the plan (oit_core::plan::Plan::new)
     let effect = ctx.resolve.effect;
-    if matches!(effect, Effect::Translucency | Effect::Fresnel) {
-        return Err(OitError::Unsupported {
-            backend: "cpu".into(),
-            what: format!(
-                "the {effect:?} effect with {}: it never orders fragments; use a sorting technique (dp, fabs, adp, ...)",
-                ctx.settings.technique
-            ),
-        });
-    }
     // r, g, b premultiplied sums, alpha sum, count
     let sums = ctx.alloc64(5, 0)?;
     ctx.pass(|f| {

@@ -1,7 +1,7 @@
 //! `wavg` and `wsum` (see oit-wgpu's `technique/weighted.rs`): one geometry pass of unordered
 //! u64 sums of the RGBA8 colour, a kernel that composites them into the resolve state.
 
-use oit_core::{Effect, OitError, Technique};
+use oit_core::{OitError, Technique};
 
 use crate::Drivers;
 use crate::ctx::{Init, VkCtx};
@@ -12,16 +12,7 @@ pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), O
         Technique::WeightedSum => false,
         other => return Err(OitError::InvalidSettings(format!("{other} is not wavg or wsum"))),
     };
-    let effect = ctx.settings.effect;
-    if matches!(effect, Effect::Translucency | Effect::Fresnel) {
-        return Err(OitError::Unsupported {
-            backend: "vulkan".into(),
-            what: format!(
-                "the {effect:?} effect with {}: it never orders fragments; use a sorting technique (dp, fabs, adp, ...)",
-                ctx.settings.technique
-            ),
-        });
-    }
+    // translucency and Fresnel are refused by the plan (oit_core::plan::Plan::new)
     let sums = ctx.buffer("weighted sums", u64::from(ctx.pixels) * 5 * 2, Init::Zero)?;
     ctx.geometry_pass(&drivers.scene, "weighted", &[&sums], 0, 0)?;
     ctx.pixel_kernel("weighted", "composite_main", &[&sums], 0, u32::from(average))

@@ -5,7 +5,7 @@
 //! them and leaves the final colour in the resolve state, so the common finish (and the heat map
 //! of the complexity effect) works unchanged.
 
-use oit_core::{Effect, OitError, Technique};
+use oit_core::{OitError, Technique};
 
 use crate::Drivers;
 use crate::ctx::{GpuCtx, Init};
@@ -18,16 +18,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         Technique::WeightedSum => false,
         other => return Err(OitError::InvalidSettings(format!("{other} is not wavg or wsum"))),
     };
-    let effect = ctx.settings.effect;
-    if matches!(effect, Effect::Translucency | Effect::Fresnel) {
-        return Err(OitError::Unsupported {
-            backend: "wgpu".into(),
-            what: format!(
-                "the {effect:?} effect with {}: it never orders fragments; use a sorting technique (dp, fabs, adp, ...)",
-                ctx.settings.technique
-            ),
-        });
-    }
+    // translucency and Fresnel are refused by the plan (oit_core::plan::Plan::new)
     // r, g, b premultiplied sums, alpha sum, count: u64 each
     let sums = ctx.buffer("weighted sums", u64::from(ctx.pixels) * 5 * 2, Init::Zero)?;
     ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &[&sums], 0, 0)?;
