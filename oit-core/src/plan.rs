@@ -37,6 +37,54 @@ pub struct Counted {
     pub fragments: u64,
 }
 
+/// What one geometry pass of a [`Plan::schedule`] does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PassKind {
+    /// Each pixel's depth range, over the instances' bounding boxes or the scene (bdp, adp).
+    Bounds,
+    /// Each pixel's fragments counted, to size the arrays.
+    Count,
+    /// adp's 1024-bin depth histogram.
+    Histogram,
+    /// One capture into the arrays (bdp runs P of them).
+    Capture,
+    /// A peel: the next layer(s) of every pixel (dp, ddp, mlp).
+    Peel,
+    /// One adp batch of 32 equalized buckets.
+    Batch,
+    /// The fill of an exact allocation (reference, dfb, ll).
+    Fill,
+    /// `fabs:K` where a pixel overflowed: its K nearest keys, then their payloads.
+    Overflow,
+}
+
+/// One array of a technique's storage ([`Plan::arrays`]): `element_bytes` per element, and
+/// `per_pixel` elements a pixel, `per_fragment` a fragment of the frame, `fixed` once.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Array {
+    /// What the array holds.
+    pub name: &'static str,
+    /// Bytes of one element.
+    pub element_bytes: u64,
+    /// Elements per pixel.
+    pub per_pixel: u64,
+    /// Elements per fragment of the frame (exact allocations).
+    pub per_fragment: u64,
+    /// Elements once per frame.
+    pub fixed: u64,
+}
+
+impl Array {
+    /// The array's bytes for a frame of `pixels` pixels and `fragments` fragments.
+    pub fn bytes(&self, pixels: u64, fragments: u64) -> u64 {
+        pixels
+            .saturating_mul(self.per_pixel)
+            .saturating_add(fragments.saturating_mul(self.per_fragment))
+            .saturating_add(self.fixed)
+            .saturating_mul(self.element_bytes)
+    }
+}
+
 /// The plan of one frame: see the module docs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Plan {
@@ -134,47 +182,155 @@ impl Plan {
         }
     }
 
-    /// Bytes of storage a frame of this plan allocates over `pixels` pixels, given what its
-    /// counting pass found (`Counted::default()` before it is known; the slots a pixel are
-    /// [`Plan::slots`] of the deepest pixel, and for the reference the deepest pixel's count):
-    /// the technique's per-pixel arrays (as oit-cpu lays them out; oit-wgpu's are the same words)
-    /// and the resolve state every technique keeps. One number both backends check against their
-    /// memory budget ([`Plan::check_budget`]) before they allocate.
+    /// The technique's arrays, as the GPU backends lay them out (oit-cpu reports the same bytes;
+    /// its host-side layouts differ in places): each one's name, element size and
+    /// count (per pixel, per fragment of the frame, and fixed), given what the frame's counting
+    /// pass found (`Counted::default()` before it is known; per-pixel slots are [`Plan::slots`]
+    /// of the deepest pixel). This is the one definition of a technique's storage: each backend
+    /// allocates these arrays and reports their bytes in `Stats::storage_bytes`, and
+    /// `tests/tests/plan.rs` holds every backend and raster path to it, to the byte.
     ///
     /// `dfb` and `ll` need exactly what the frame's fragments need: a fragment is a 64-bit key
     /// (depth bits, primitive id) and a 32-bit payload, 12 bytes; `dfb` adds a count and an offset
     /// a pixel (each array one entry longer, the offsets' last entry the total), `ll` a head a
-    /// pixel, a 4-byte link a node and the node counter. Their prefix sum's block totals on the GPU
-    /// (one word per 256 pixels and per 256 of those) are bookkeeping, not counted, as the
-    /// counting pass's own counters are not.
-    pub fn storage_bytes(&self, pixels: u64, counted: Counted) -> u64 {
+    /// pixel, a 4-byte link a node and the node counter. The reference stores every fragment too
+    /// (an offset a pixel and the total, a fill cursor a pixel, then 12-byte entries). Bookkeeping is not counted: the counting
+    /// pass's own counters, the prefix sum's block totals on the GPU (one word per 256 pixels and
+    /// per 256 of those), a peel loop's one-word flag, the resolve state (counted once, in
+    /// [`Plan::storage_bytes`]).
+    pub fn arrays(&self, counted: Counted) -> Vec<Array> {
         use crate::rules::{BDP_COLOR_SUBINTERVALS, BDP_DEPTH_SUBINTERVALS, BUCKETS, HISTOGRAM_WORDS};
-        let k = u64::from(match self.technique {
-            Technique::Reference => counted.deepest,
-            _ => self.slots(counted.deepest),
-        });
-        let exact = |per_pixel: u64, fixed: u64, per_fragment: u64| {
-            pixels
-                .saturating_mul(per_pixel.saturating_add(RESOLVE_STATE_BYTES))
-                .saturating_add(fixed)
-                .saturating_add(counted.fragments.saturating_mul(per_fragment))
+        let k = u64::from(self.slots(counted.deepest));
+        let per_pixel = |name, element_bytes, per_pixel| Array {
+            name,
+            element_bytes,
+            per_pixel,
+            per_fragment: 0,
+            fixed: 0,
         };
-        let per_pixel = match self.technique {
-            Technique::Reference => 4 + 12 * k,
-            Technique::Dp => 8,
-            Technique::Ddp => 16,
-            Technique::WeightedAverage | Technique::WeightedSum => 40,
-            Technique::Bdp { .. } if self.bdp_color => 8 + 4 * u64::from(BDP_COLOR_SUBINTERVALS),
-            Technique::Bdp { .. } => {
-                8 + u64::from(self.bdp_capture_passes()) * 2 * 8 * u64::from(BDP_DEPTH_SUBINTERVALS)
+        let bounds = per_pixel("depth bounds (min, max depth bits)", 4, 2);
+        match self.technique {
+            Technique::Reference => vec![
+                Array { name: "offsets", element_bytes: 4, per_pixel: 1, per_fragment: 0, fixed: 1 },
+                per_pixel("fill cursors", 4, 1),
+                Array {
+                    name: "entries (depth key, colour)",
+                    element_bytes: 12,
+                    per_pixel: 0,
+                    per_fragment: 1,
+                    fixed: 0,
+                },
+            ],
+            Technique::Dp => {
+                vec![per_pixel("nearest (depth key, colour)", 8, 1), per_pixel("previous peel's depth", 4, 1)]
             }
-            Technique::Adp => 8 + 4 * HISTOGRAM_WORDS as u64 + 8 * BUCKETS as u64,
-            Technique::Mdts { .. } | Technique::Mdts64 { .. } | Technique::Mlp { .. } => 8 * k,
-            Technique::Fabs { .. } => 4 + 12 * k,
-            Technique::Dfb => return exact(8, 8, 12),
-            Technique::Ll => return exact(4, 4, 16),
-        };
-        pixels.saturating_mul(per_pixel.saturating_add(RESOLVE_STATE_BYTES))
+            Technique::Ddp => vec![
+                per_pixel("near (depth key, colour)", 8, 1),
+                per_pixel("far (depth key, colour)", 8, 1),
+                per_pixel("open depth range", 8, 1),
+            ],
+            Technique::WeightedAverage | Technique::WeightedSum => vec![per_pixel("weighted sums", 8, 5)],
+            Technique::Bdp { .. } if self.bdp_color => {
+                vec![bounds, per_pixel("colour buckets", 4, u64::from(BDP_COLOR_SUBINTERVALS))]
+            }
+            Technique::Bdp { .. } => vec![
+                bounds,
+                per_pixel(
+                    "min and max buckets, per capture pass",
+                    8,
+                    u64::from(self.bdp_capture_passes()) * 2 * u64::from(BDP_DEPTH_SUBINTERVALS),
+                ),
+            ],
+            Technique::Adp => vec![
+                bounds,
+                per_pixel("depth histogram (1024 bits)", 4, HISTOGRAM_WORDS as u64),
+                per_pixel("buckets", 8, BUCKETS as u64),
+            ],
+            Technique::Mdts { .. } | Technique::Mdts64 { .. } => vec![per_pixel("sorted slots", 8, k)],
+            Technique::Mlp { .. } => vec![
+                per_pixel("sorted slots", 8, k),
+                per_pixel("fragments at the previous pass's deepest depth", 4, 1),
+            ],
+            Technique::Fabs { .. } => vec![
+                per_pixel("counter", 4, 1),
+                per_pixel("slots (depth key, primitive id)", 8, k),
+                per_pixel("payloads", 4, k),
+            ],
+            Technique::Dfb => vec![
+                Array { name: "counts", element_bytes: 4, per_pixel: 1, per_fragment: 0, fixed: 1 },
+                Array { name: "offsets", element_bytes: 4, per_pixel: 1, per_fragment: 0, fixed: 1 },
+                Array {
+                    name: "entries (depth key, colour)",
+                    element_bytes: 12,
+                    per_pixel: 0,
+                    per_fragment: 1,
+                    fixed: 0,
+                },
+            ],
+            Technique::Ll => vec![
+                per_pixel("heads", 4, 1),
+                Array { name: "node counter", element_bytes: 4, per_pixel: 0, per_fragment: 0, fixed: 1 },
+                Array {
+                    name: "nodes (depth key, colour, link)",
+                    element_bytes: 16,
+                    per_pixel: 0,
+                    per_fragment: 1,
+                    fixed: 0,
+                },
+            ],
+        }
+    }
+
+    /// Bytes of storage a frame of this plan allocates over `pixels` pixels, given what its
+    /// counting pass found: the technique's [`Plan::arrays`] and the resolve state every
+    /// technique keeps. One number every backend checks against its memory budget
+    /// ([`Plan::check_budget`]) before it allocates.
+    pub fn storage_bytes(&self, pixels: u64, counted: Counted) -> u64 {
+        self.arrays(counted).iter().fold(pixels.saturating_mul(RESOLVE_STATE_BYTES), |sum, a| {
+            sum.saturating_add(a.bytes(pixels, counted.fragments))
+        })
+    }
+
+    /// The frame's geometry passes, in order, for a scene whose deepest pixel holds `layers`
+    /// distinct depths (its fragment count where no two are equal) and, for `adp`, whose fullest
+    /// histogram holds `bins` occupied bins: the schedule every backend runs, written once. Peels
+    /// stop when a pass finds nothing left (that empty pass is run: it is how a peel learns it is
+    /// done) or at the peel limit; `mlp` stops when a pass kept everything it met; `fabs:K` adds
+    /// two passes when a pixel holds more than K.
+    /// `tests/tests/plan.rs` holds every backend's `Stats::geometry_passes` to the total.
+    pub fn schedule(&self, layers: u32, bins: u32) -> Vec<(PassKind, u32)> {
+        let peels = |n: u32| n.min(self.peel_limit);
+        let mut passes = Vec::new();
+        if self.bounds_pass {
+            passes.push((PassKind::Bounds, 1));
+        }
+        if self.needs_count() || self.technique == Technique::Reference {
+            passes.push((PassKind::Count, 1));
+        }
+        match self.technique {
+            Technique::Reference | Technique::Dfb | Technique::Ll => passes.push((PassKind::Fill, 1)),
+            Technique::Dp => passes.push((PassKind::Peel, peels(layers.saturating_add(1)))),
+            Technique::Ddp => passes.push((PassKind::Peel, peels(layers.div_ceil(2).saturating_add(1)))),
+            Technique::Mlp { m } => passes.push((PassKind::Peel, peels(layers.div_ceil(m.max(1)).max(1)))),
+            Technique::Bdp { .. } => passes.push((PassKind::Capture, self.bdp_capture_passes().max(1))),
+            Technique::Adp => {
+                passes.push((PassKind::Histogram, 1));
+                passes.push((PassKind::Batch, self.adp_batches(bins)));
+            }
+            Technique::WeightedAverage
+            | Technique::WeightedSum
+            | Technique::Mdts { .. }
+            | Technique::Mdts64 { .. } => passes.push((PassKind::Capture, 1)),
+            Technique::Fabs { .. } => {
+                passes.push((PassKind::Capture, 1));
+                // a pixel past K keeps its K nearest by (depth, primitive id): two more passes,
+                // its keys by atomic min, then their payloads (never when sized from a count)
+                if matches!(self.sizing, Sizing::Fixed(k) if layers > k) {
+                    passes.push((PassKind::Overflow, 2));
+                }
+            }
+        }
+        passes
     }
 
     /// Checks [`Plan::storage_bytes`] against `budget` (a name and bytes: the host's available

@@ -23,7 +23,6 @@ use crate::storage::{Buckets, Histogram};
 
 pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let bounds = ctx.depth_bounds()?;
-    ctx.storage_bytes += ctx.pixels as u64 * 8;
     let histogram = Histogram::new(ctx.alloc32(HISTOGRAM_WORDS, 0)?);
     ctx.pass(|f| {
         let px = f.pixel as usize;

@@ -30,7 +30,6 @@ use crate::storage::Buckets;
 pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let color_mode = ctx.plan.bdp_color;
     let bounds = ctx.depth_bounds()?;
-    ctx.storage_bytes += ctx.pixels as u64 * 8;
     if color_mode { color(ctx, &bounds) } else { depth(ctx, &bounds) }
 }
 

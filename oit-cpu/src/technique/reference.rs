@@ -29,7 +29,8 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         total += c as usize;
     }
     offsets.push(total);
-    ctx.storage_bytes += total as u64 * 12 + counts.len() as u64 * 4;
+    // the plan's arrays: the counts above serve as the fill cursors; the offsets and the entries
+    ctx.storage_bytes += total as u64 * 12 + offsets.len() as u64 * 4;
     let cursor: Vec<AtomicU32> = (0..counts.len()).map(|_| AtomicU32::new(0)).collect();
     let keys: Vec<AtomicU64> = (0..total).map(|_| AtomicU64::new(0)).collect();
     let payloads: Vec<AtomicU32> = (0..total).map(|_| AtomicU32::new(0)).collect();

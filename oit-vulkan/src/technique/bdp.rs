@@ -38,7 +38,6 @@ pub(crate) fn depth_bounds(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result
         }
     }
     ctx.pixel_kernel("bounds", "bounds_finish_main", &[&bounds], 0, 0)?;
-    ctx.storage_bytes += u64::from(ctx.pixels) * 8;
     Ok(bounds)
 }
 

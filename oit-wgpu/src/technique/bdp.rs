@@ -25,8 +25,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
 
 /// Per-pixel [zNear, zFar] (two words of depth bits per pixel) from one geometry pass over the
 /// instances' bounding boxes or the scene (`settings.bounds`), as oit-cpu's `Ctx::depth_bounds`;
-/// pixels nothing reached get [0, 1]. Counts the bytes as oit-cpu does (8 for the bounds, 8 more
-/// the techniques add per pixel).
+/// pixels nothing reached get [0, 1]. 8 bytes a pixel, as the plan's `depth bounds` array.
 pub(crate) fn depth_bounds(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<wgpu::Buffer, OitError> {
     let bounds = ctx.buffer("depth bounds", 2 * u64::from(ctx.pixels), Init::Zero)?;
     ctx.pixel_kernel(BOUNDS_WGSL, "bounds_init_main", &[&bounds], 0, 0)?;
@@ -43,7 +42,6 @@ pub(crate) fn depth_bounds(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Resul
         }
     }
     ctx.pixel_kernel(BOUNDS_WGSL, "bounds_finish_main", &[&bounds], 0, 0)?;
-    ctx.storage_bytes += u64::from(ctx.pixels) * 8;
     Ok(bounds)
 }
 
