@@ -141,29 +141,11 @@ impl Resolve {
     }
 }
 
-/// Geometry passes the technique of `plan` runs on a scene whose deepest pixel holds `n` layers:
-/// the plan's stop rules applied to N (dp N+1, ddp ⌈N/2⌉+1, mlp:M ⌈N/M⌉, bdp:P a bounds pass and P
-/// capture passes, adp bounds, histogram and ⌈bins/32⌉ batches with bins ≤ N, a counting pass
-/// first for arrays sized from the scene; fabs:K two more passes when N > K). The CPU's counts;
-/// a backend that counts otherwise is still fitted per backend, and the report shows both.
+/// Geometry passes the technique of `plan` runs on a scene whose deepest pixel holds `n` layers
+/// (adp's bins taken as at most `n`): the total of the plan's schedule (`Plan::schedule`), which
+/// every backend's pass count is held to.
 pub fn geometry_passes(plan: &Plan, n: u32) -> u32 {
-    let peels = |wanted: u32| wanted.min(plan.peel_limit);
-    let count = u32::from(plan.needs_count());
-    match plan.technique {
-        // a counting (or sizing) pass, then the fill
-        Technique::Reference | Technique::Dfb | Technique::Ll => 2,
-        Technique::Dp => peels(n).saturating_add(1),
-        Technique::Ddp => peels(n.div_ceil(2)).saturating_add(1),
-        Technique::WeightedAverage | Technique::WeightedSum => 1,
-        Technique::Bdp { .. } => 1 + plan.bdp_capture_passes(),
-        Technique::Adp => 2 + plan.adp_batches(n),
-        Technique::Mlp { m } => peels(n.div_ceil(m.max(1))).max(1),
-        Technique::Mdts { .. } | Technique::Mdts64 { .. } => count + 1,
-        Technique::Fabs { .. } => {
-            let overflow = matches!(plan.sizing, Sizing::Fixed(k) if n > k);
-            count + 1 + if overflow { 2 } else { 0 }
-        }
-    }
+    plan.schedule(n, n).iter().map(|&(_, passes)| passes).sum()
 }
 
 /// The model's terms: (name, unit of the coefficient).
