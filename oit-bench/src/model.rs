@@ -33,8 +33,8 @@
 
 use std::collections::BTreeMap;
 
-use oit_core::plan::{Plan, Sizing};
-use oit_core::{OitError, Technique};
+use oit_core::OitError;
+use oit_core::plan::Plan;
 use serde::{Deserialize, Serialize};
 
 /// Indices of the points no other point beats on both axes (both minimized), in order of
