@@ -3,8 +3,9 @@
 //! a covered pixel's edge functions into a [`Fragment`].
 //!
 //! Contract (Vulkan's rules, written so a GPU compute rasterizer can copy them line for line, as
-//! oit-wgpu's does from [`TriangleSetup::triangle_words`]; the traversal that visits covered
-//! pixels is each backend's own):
+//! oit-wgpu's `setup.wgsl` does, every float operation in the order written here and rounded as
+//! here, into [`TriangleSetup::triangle_words`]' layout; the traversal that visits covered pixels
+//! is each backend's own):
 //! - clipping in homogeneous space against near (`z ≥ 0`), far (`z ≤ w`) and a guard band
 //!   (`|x|, |y| ≤ GUARD_BAND·w`) that keeps the fixed-point coordinates in range; a clipped
 //!   polygon is fan-triangulated and every piece keeps the original primitive id;
