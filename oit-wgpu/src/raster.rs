@@ -134,7 +134,8 @@ pub(crate) struct GpuGeometry {
 
 impl GpuGeometry {
     fn new(gpu: &Gpu, scene: &Scene, boxes: bool, made: &Cell<u64>) -> Result<GpuGeometry, OitError> {
-        let (mut pos, mut nor, mut col, mut idx): (Vec<u32>, Vec<u32>, Vec<u32>, Vec<u32>) = Default::default();
+        let (mut pos, mut nor, mut col, mut idx): (Vec<u32>, Vec<u32>, Vec<u32>, Vec<u32>) =
+            Default::default();
         let mut instances = Vec::with_capacity(scene.instances.len());
         let mut colors_at = Vec::new();
         let mut tasks = 0u32;
@@ -297,7 +298,12 @@ fn storage_buffer(gpu: &Gpu, label: &str, size: u64, made: &Cell<u64>) -> wgpu::
 
 fn buffer(gpu: &Gpu, label: &str, size: u64, usage: wgpu::BufferUsages, made: &Cell<u64>) -> wgpu::Buffer {
     made.set(made.get() + 1);
-    gpu.device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage,
+        mapped_at_creation: false,
+    })
 }
 
 /// The size a buffer of `old` bytes grows to when `needed` bytes do not fit: at least double, so
@@ -323,7 +329,11 @@ fn bind(gpu: &Gpu, layout: &wgpu::BindGroupLayout, buffers: &[&wgpu::Buffer]) ->
         .enumerate()
         .map(|(i, b)| wgpu::BindGroupEntry { binding: i as u32, resource: b.as_entire_binding() })
         .collect();
-    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("compute raster"), layout, entries: &entries })
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("compute raster"),
+        layout,
+        entries: &entries,
+    })
 }
 
 /// The raster kernel's indirect arguments for `items` work items, as `setup_finish_main` writes
@@ -343,7 +353,13 @@ impl ComputeBuffers {
         let items = storage_buffer(gpu, "raster items", MIN_BYTES, made);
         let uniform = buffer(gpu, "raster uniform", 32, U::UNIFORM | U::COPY_DST, made);
         let generated = buffer(gpu, "generated", 16, U::STORAGE | U::COPY_SRC | U::COPY_DST, made);
-        let args = buffer(gpu, "raster dispatch", ARGS_BYTES, U::STORAGE | U::INDIRECT | U::COPY_SRC | U::COPY_DST, made);
+        let args = buffer(
+            gpu,
+            "raster dispatch",
+            ARGS_BYTES,
+            U::STORAGE | U::INDIRECT | U::COPY_SRC | U::COPY_DST,
+            made,
+        );
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("compute raster"),
             entries: &[
@@ -359,7 +375,13 @@ impl ComputeBuffers {
 
     /// Grows the triangle and work-list buffers to hold `tri_bytes` and `item_bytes` (counted in
     /// `made`); true when one was made.
-    fn reserve(&mut self, gpu: &Gpu, tri_bytes: u64, item_bytes: u64, made: &Cell<u64>) -> Result<bool, OitError> {
+    fn reserve(
+        &mut self,
+        gpu: &Gpu,
+        tri_bytes: u64,
+        item_bytes: u64,
+        made: &Cell<u64>,
+    ) -> Result<bool, OitError> {
         gpu.check_scene_storage("the triangles", tri_bytes)?;
         gpu.check_storage("the raster work list", item_bytes)?;
         let mut rebind = false;
@@ -534,14 +556,24 @@ impl ComputeBuffers {
                 bind(
                     gpu,
                     &s.layout,
-                    &[&s.uniform, &s.instances, &s.geometry.buffer, &self.tris, &self.items, &s.counters, &self.args],
+                    &[
+                        &s.uniform,
+                        &s.instances,
+                        &s.geometry.buffer,
+                        &self.tris,
+                        &self.items,
+                        &s.counters,
+                        &self.args,
+                    ],
                 )
             });
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             encoder.clear_buffer(&s.counters, 0, None);
             {
-                let mut pass = encoder
-                    .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("setup"), timestamp_writes: None });
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("setup"),
+                    timestamp_writes: None,
+                });
                 pass.set_bind_group(0, &*group, &[]);
                 let (x, y) = dispatch_size(u64::from(s.geometry.tasks));
                 if x > 0 {

@@ -25,7 +25,11 @@ fn cameras(scene: &Scene) -> Vec<(&'static str, Camera)> {
     let eye = c + Vec3::new(0.3, 0.4, 1.5) * r;
     let d = (eye - c).length();
     vec![
-        ("orbit", Camera::orbit_scene(scene, View { azimuth: 30.0, elevation: 20.0, ..View::default() }, aspect).unwrap()),
+        (
+            "orbit",
+            Camera::orbit_scene(scene, View { azimuth: 30.0, elevation: 20.0, ..View::default() }, aspect)
+                .unwrap(),
+        ),
         ("near and far cut", Camera::look_at(eye, c, 50.0, aspect, d - 0.3 * r, d + 0.2 * r)),
         ("guard band", Camera::look_at(c + Vec3::new(0.0, 0.1, 0.6) * r, c, 0.4, aspect, 0.01 * r, 4.0 * r)),
     ]
@@ -34,7 +38,8 @@ fn cameras(scene: &Scene) -> Vec<(&'static str, Camera)> {
 /// Triangles (44 words each) sorted, and work items as (triangle's words, tile) sorted.
 fn canonical(words: &[u32], items: &[[u32; 2]]) -> (Vec<Vec<u32>>, Vec<(Vec<u32>, u32)>) {
     let tris: Vec<Vec<u32>> = words.chunks_exact(TRIANGLE_WORDS).map(<[u32]>::to_vec).collect();
-    let mut list: Vec<(Vec<u32>, u32)> = items.iter().map(|&[t, tile]| (tris[t as usize].clone(), tile)).collect();
+    let mut list: Vec<(Vec<u32>, u32)> =
+        items.iter().map(|&[t, tile]| (tris[t as usize].clone(), tile)).collect();
     let mut tris = tris;
     tris.sort_unstable();
     list.sort_unstable();

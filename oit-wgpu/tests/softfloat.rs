@@ -60,8 +60,10 @@ fn run(gpu: &oit_wgpu::Gpu, cases: &[[u32; 4]]) -> Vec<u32> {
         },
         count: None,
     };
-    let layout = device
-        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &[entry(0), entry(1)] });
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: None,
+        entries: &[entry(0), entry(1)],
+    });
     let pipeline =
         gpu.compute_pipeline(&format!("{SOFTFLOAT}\n{KERNEL}"), "main", &[&layout]).expect("kernel builds");
     let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -215,7 +217,8 @@ fn softfloat_equals_host_f32_on_edge_values() {
         cases.push([6, (x as f32).to_bits(), 0, 0]);
     }
     // u64 → f32: exact, halfway (ties to even) and around 2^60, the largest area
-    for v in [0u64, 1, 3, (1 << 24) - 1, 1 << 24, (1 << 24) + 1, (1 << 24) + 3, (1 << 25) + 2, u64::MAX, 1 << 60]
+    for v in
+        [0u64, 1, 3, (1 << 24) - 1, 1 << 24, (1 << 24) + 1, (1 << 24) + 3, (1 << 25) + 2, u64::MAX, 1 << 60]
     {
         for d in [0u64, 1, 2] {
             let v = v.wrapping_add(d);
