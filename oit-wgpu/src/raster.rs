@@ -18,9 +18,13 @@
 //! of a scene, and a view that needs more room than any before). The raster kernel itself is
 //! dispatched indirectly from the GPU-written arguments.
 //!
-//! `OIT_HOST_SETUP=1` in the environment sets triangles up on the host instead (oit-core's
-//! `TriangleSetup`, uploaded every frame, as before the GPU setup): the fallback, and the
-//! comparison `oit bench` measures against.
+//! Where setup runs ([`setup_on_gpu`]): on the GPU, except on a CPU device (lavapipe), where the
+//! "GPU" is the host's own cores and the integer f32 costs many times the host's float unit
+//! (`oit bench --backend wgpu --raster compute --techniques fabs --size 512x512` on lavapipe:
+//! bunny 1,826 ms a frame with the GPU's setup against 750 with the host's, `grid:3x3:bunny`
+//! 12,126 against 1,781): there oit-core's `TriangleSetup` runs on the host and its words are
+//! uploaded each frame, as before the GPU setup. `OIT_HOST_SETUP=1` forces the host's setup,
+//! `OIT_HOST_SETUP=0` the GPU's, on any device.
 
 use std::cell::Cell;
 
@@ -45,9 +49,16 @@ const INSTANCE_WORDS: usize = 40;
 /// each) and the item count.
 const ARGS_BYTES: u64 = 48;
 
-/// Whether `OIT_HOST_SETUP=1` asks for the host's setup.
-pub fn host_setup_forced() -> bool {
-    std::env::var("OIT_HOST_SETUP").is_ok_and(|v| v == "1" || v.eq_ignore_ascii_case("true"))
+/// Whether the compute path sets triangles up on the GPU: `OIT_HOST_SETUP=1` (or `true`) says no,
+/// `OIT_HOST_SETUP=0` (or `false`) yes; otherwise yes unless the device is a CPU (module docs).
+pub fn setup_on_gpu(gpu: &Gpu) -> bool {
+    match std::env::var("OIT_HOST_SETUP").as_deref() {
+        Ok("1") => false,
+        Ok("0") => true,
+        Ok(v) if v.eq_ignore_ascii_case("true") => false,
+        Ok(v) if v.eq_ignore_ascii_case("false") => true,
+        _ => gpu.info.device_type != wgpu::DeviceType::Cpu,
+    }
 }
 
 /// Triangles on the GPU and the (triangle, tile) work list of the compute rasterizer, for one
@@ -76,22 +87,28 @@ impl ComputeRaster {
 
 impl ComputeRaster {
     /// The triangles the compute path sets up for this view, as `TriangleSetup::triangle_words`
-    /// lays them out, and the work list ((triangle, tile) pairs), read back: the GPU's setup, or
-    /// the host's with `OIT_HOST_SETUP=1`. The GPU's come in an order of its choosing. For tests.
+    /// lays them out, and the work list ((triangle, tile) pairs), read back: the GPU's setup
+    /// (`on_gpu`, on any device), or the host's. The GPU's come in an order of its choosing. For
+    /// tests.
     pub fn setup_words(
         gpu: &Gpu,
         scene: &Scene,
         camera: &Camera,
         settings: &Settings,
         boxes: bool,
+        on_gpu: bool,
     ) -> Result<(Vec<u32>, Vec<[u32; 2]>), OitError> {
         let made = Cell::new(0);
         let mut buffers = ComputeBuffers::new(gpu, &made);
-        let raster = buffers.frame(gpu, scene, camera, settings, boxes, &made)?;
-        let args = gpu.read_u32(&raster.args)?;
+        if on_gpu {
+            buffers.gpu_frame(gpu, scene, camera, settings, boxes, &made)?;
+        } else {
+            buffers.host_frame(gpu, scene, camera, settings, boxes, &made)?;
+        }
+        let args = gpu.read_u32(&buffers.args)?;
         let items = args[8] as usize;
         let pieces = match &buffers.setup {
-            Some(s) if !host_setup_forced() => gpu.read_u32(&s.counters)?[0] as usize,
+            Some(s) if on_gpu => gpu.read_u32(&s.counters)?[0] as usize,
             _ if boxes => TriangleSetup::bounding_boxes(scene, camera, settings).triangles.len(),
             _ => TriangleSetup::new(scene, camera, settings).triangles.len(),
         };
@@ -419,7 +436,7 @@ impl ComputeBuffers {
     }
 
     /// Sets up this frame's triangles of the scene (or of its instances' bounding boxes) and their
-    /// work list into the kept buffers: on the GPU, or on the host with `OIT_HOST_SETUP=1`.
+    /// work list into the kept buffers: on the GPU, or on the host where [`setup_on_gpu`] says.
     pub(crate) fn frame(
         &mut self,
         gpu: &Gpu,
@@ -429,10 +446,10 @@ impl ComputeBuffers {
         boxes: bool,
         made: &Cell<u64>,
     ) -> Result<ComputeRaster, OitError> {
-        if host_setup_forced() {
-            self.host_frame(gpu, scene, camera, settings, boxes, made)?;
-        } else {
+        if setup_on_gpu(gpu) {
             self.gpu_frame(gpu, scene, camera, settings, boxes, made)?;
+        } else {
+            self.host_frame(gpu, scene, camera, settings, boxes, made)?;
         }
         Ok(ComputeRaster {
             layout: self.layout.clone(),

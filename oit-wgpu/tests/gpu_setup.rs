@@ -88,8 +88,9 @@ fn gpu_setup_equals_host_setup() {
                 } else {
                     TriangleSetup::new(&scene, &camera, &s)
                 };
-                let (words, items) = oit_wgpu::ComputeRaster::setup_words(gpu, &scene, &camera, &s, boxes)
-                    .unwrap_or_else(|e| panic!("{name}, {view}: {e}"));
+                let (words, items) =
+                    oit_wgpu::ComputeRaster::setup_words(gpu, &scene, &camera, &s, boxes, true)
+                        .unwrap_or_else(|e| panic!("{name}, {view}: {e}"));
                 let (gpu_tris, gpu_items) = canonical(&words, &items);
                 let (host_tris, host_list) = canonical(&host.triangle_words(), &host_items(&host));
                 assert_eq!(gpu_tris.len(), host_tris.len(), "{name}, {view}, boxes {boxes}: triangle count");
