@@ -35,11 +35,13 @@ fn cameras(scene: &Scene) -> Vec<(&'static str, Camera)> {
     ]
 }
 
+/// A work item by its triangle's words and its tile.
+type Item = (Vec<u32>, u32);
+
 /// Triangles (44 words each) sorted, and work items as (triangle's words, tile) sorted.
-fn canonical(words: &[u32], items: &[[u32; 2]]) -> (Vec<Vec<u32>>, Vec<(Vec<u32>, u32)>) {
+fn canonical(words: &[u32], items: &[[u32; 2]]) -> (Vec<Vec<u32>>, Vec<Item>) {
     let tris: Vec<Vec<u32>> = words.chunks_exact(TRIANGLE_WORDS).map(<[u32]>::to_vec).collect();
-    let mut list: Vec<(Vec<u32>, u32)> =
-        items.iter().map(|&[t, tile]| (tris[t as usize].clone(), tile)).collect();
+    let mut list: Vec<Item> = items.iter().map(|&[t, tile]| (tris[t as usize].clone(), tile)).collect();
     let mut tris = tris;
     tris.sort_unstable();
     list.sort_unstable();
