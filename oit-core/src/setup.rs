@@ -3,8 +3,9 @@
 //! a covered pixel's edge functions into a [`Fragment`].
 //!
 //! Contract (Vulkan's rules, written so a GPU compute rasterizer can copy them line for line, as
-//! oit-wgpu's does from [`TriangleSetup::triangle_words`]; the traversal that visits covered
-//! pixels is each backend's own):
+//! oit-wgpu's `setup.wgsl` does, every float operation in the order written here and rounded as
+//! here, into [`TriangleSetup::triangle_words`]' layout; the traversal that visits covered pixels
+//! is each backend's own):
 //! - clipping in homogeneous space against near (`z ≥ 0`), far (`z ≤ w`) and a guard band
 //!   (`|x|, |y| ≤ GUARD_BAND·w`) that keeps the fixed-point coordinates in range; a clipped
 //!   polygon is fan-triangulated and every piece keeps the original primitive id;
@@ -352,6 +353,34 @@ pub fn normal_matrix(transform: &Mat4) -> Mat3 {
     if inv.is_finite() { inv.transpose() } else { m }
 }
 
+/// `m · (p, 1)`, spelled out in scalars in the order every port follows (oit-wgpu's setup.wgsl
+/// does it in integer f32): per row, `((c0·x + c1·y) + c2·z) + c3·1`, each product rounded
+/// before its add (Rust never fuses them). This is what glam's `Mat4 * Vec4` computes on x86_64;
+/// written out so the order is this file's, not a library's.
+#[inline]
+pub fn transform_point(m: &Mat4, p: Vec3) -> Vec4 {
+    let (c0, c1, c2, c3) = (m.x_axis, m.y_axis, m.z_axis, m.w_axis);
+    let row = |r: usize| ((c0[r] * p.x + c1[r] * p.y) + c2[r] * p.z) + c3[r] * 1.0;
+    Vec4::new(row(0), row(1), row(2), row(3))
+}
+
+/// `m · n` for a normal: per row `(c0·x + c1·y) + c2·z`, as [`transform_point`] spells it.
+#[inline]
+pub fn transform_normal(m: &Mat3, n: Vec3) -> Vec3 {
+    let (c0, c1, c2) = (m.x_axis, m.y_axis, m.z_axis);
+    let row = |r: usize| (c0[r] * n.x + c1[r] * n.y) + c2[r] * n.z;
+    Vec3::new(row(0), row(1), row(2))
+}
+
+/// The eight world-space corners of a mesh's bounding box under `transform` (`Aabb::corners`
+/// order, the vertices `Aabb::TRIANGLES` indexes) and their normals, pointing out from the box's
+/// centre: the geometry of [`TriangleSetup::bounding_boxes`].
+pub fn box_vertices(mesh_bounds: &Aabb, transform: &Mat4) -> ([Vec3; 8], [Vec3; 8]) {
+    let bounds = mesh_bounds.transformed(transform);
+    let corners = bounds.corners();
+    (corners, corners.map(|c| (c - bounds.center()).normalize_or_zero()))
+}
+
 /// `f` over the chunks of `items` (chunk index, chunk), results in chunk order: in parallel with
 /// the `rayon` feature.
 fn map_chunks<T: Sync, R: Send>(
@@ -409,9 +438,9 @@ impl TriangleSetup {
             let base_id = prim_base;
             prim_base = prim_base.saturating_add(u32::try_from(mesh.indices.len()).unwrap_or(u32::MAX));
             let mvp = view_proj * inst.transform;
-            let clip_pos: Vec<Vec4> = map_all(&mesh.positions, |p| mvp * p.extend(1.0));
+            let clip_pos: Vec<Vec4> = map_all(&mesh.positions, |p| transform_point(&mvp, *p));
             let nm = normal_matrix(&inst.transform);
-            let normals: Vec<Vec3> = map_all(&mesh.normals, |n| nm * *n);
+            let normals: Vec<Vec3> = map_all(&mesh.normals, |n| transform_normal(&nm, *n));
             let view = MeshView { normals: &normals, colors: mesh.colors.as_deref(), indices: &mesh.indices };
             let base = settings.material_color(object.color);
             r.triangles.extend(snap.instance(&clip_pos, view, base, base_id));
@@ -433,10 +462,8 @@ impl TriangleSetup {
             let Some(mesh) = scene.meshes.get(object.mesh) else {
                 continue;
             };
-            let bounds: Aabb = mesh.bounds().transformed(&inst.transform);
-            let corners = bounds.corners();
-            let clip_pos = corners.map(|c| view_proj * c.extend(1.0));
-            let normals = corners.map(|c| (c - bounds.center()).normalize_or_zero());
+            let (corners, normals) = box_vertices(&mesh.bounds(), &inst.transform);
+            let clip_pos = corners.map(|c| transform_point(&view_proj, c));
             let view = MeshView { normals: &normals, colors: None, indices: &Aabb::TRIANGLES };
             let base_id = u32::try_from(i).unwrap_or(u32::MAX).saturating_mul(12);
             let base = settings.material_color(object.color);

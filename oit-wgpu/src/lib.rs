@@ -7,9 +7,9 @@
 //! [`WgpuBackend::prepare`] gives a [`WgpuPrepared`]: what does not depend on the camera is made
 //! once and kept, and a steady-state frame creates no buffer for its geometry or storage. On the
 //! hardware path the scene's meshes and triangles are uploaded once and a frame writes only the
-//! instances' matrices and the shading uniform (`hardware`); on the compute path the triangles
-//! are still set up on the host each frame, written into buffers the prepared scene keeps
-//! (`raster`); per-pixel storage comes from a pool (`pool`).
+//! instances' matrices and the shading uniform (`hardware`); on the compute path likewise, and
+//! setup kernels transform, clip, snap and bin the triangles on the GPU into buffers the prepared
+//! scene keeps (`raster`); per-pixel storage comes from a pool (`pool`).
 //!
 //! Each technique's WGSL sits next to its Rust in `src/technique/`; the rules shared with oit-core
 //! are in `src/shaders/common.wgsl`.
@@ -189,9 +189,10 @@ impl Backend for WgpuBackend {
 /// and an instance each, in primitive order) are uploaded once, and each frame writes only the
 /// instances' `view_proj · transform`, normal matrices and base colours and the shading uniform;
 /// the instances' bounding boxes likewise, on first use; the count target and counter of the
-/// geometry passes are kept per image size. On the compute path each frame still sets up its
-/// triangles on the host (that depends on the camera), but writes them, the work list and the
-/// uniform into buffers kept here, grown only when a frame needs more.
+/// geometry passes are kept per image size. On the compute path the meshes are uploaded once too
+/// (and the boxes' corners on first use); each frame writes the instances' matrices and a
+/// uniform and the setup kernels write triangles and work list into buffers kept here, grown
+/// only when a frame needs more.
 ///
 /// [`Prepared::storage_allocations`] counts every buffer (and count texture) this prepared scene
 /// created: the per-pixel storage of [`BufferPool::allocations`] and the geometry's,

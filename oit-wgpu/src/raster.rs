@@ -1,28 +1,65 @@
 //! The compute-raster path: the papers' "CUDA rasterizer" as a compute shader. Setup (vertex
-//! transform, clipping, snapping) is oit-core's `setup`, shared with oit-cpu, so the triangles are
-//! the same bits; the kernel in `shaders/raster_compute.wgsl` walks each triangle's pixels with
-//! the same integer edge functions and f32 interpolation, which makes the fragment sets equal
-//! oit-cpu's by construction.
+//! transform, clipping, snapping, triangle setup) follows oit-core's `setup` rule for rule, so the
+//! triangles are the same bits as oit-cpu's; the kernel in `shaders/raster_compute.wgsl` walks each
+//! triangle's pixels with the same integer edge functions and f32 interpolation, which makes the
+//! fragment sets equal oit-cpu's by construction.
 //!
-//! Setup depends on the camera, so it runs on the host every frame (moving it to the GPU is a
-//! later step). What a prepared scene keeps is the buffers it goes into: [`ComputeBuffers`] holds
-//! the triangles, the (triangle, tile) work list, the raster uniform and the `generated` counter,
-//! one set for the scene and one for the instances' bounding boxes; a frame writes them with
-//! `queue.write_buffer` and creates a buffer only when it needs more room than any frame before.
+//! Setup runs on the GPU (`shaders/setup.wgsl` over `shaders/softfloat.wgsl`): a prepared scene
+//! uploads its world-space geometry once ([`GpuGeometry`]: positions, normals, colours and
+//! indices of each mesh, and for the bounds passes each instance's box corners), and a frame
+//! writes only the per-instance matrices and colours and a uniform, then records the setup kernel
+//! (transform, clip, snap, set up, bin into 8×8 tiles) and a one-invocation kernel that writes the
+//! raster kernel's indirect dispatch arguments and item count. Every float operation of the setup
+//! kernel is done in integers (softfloat.wgsl says why), so its triangles equal
+//! `TriangleSetup::triangle_words`' bit for bit; `tests/gpu_setup.rs` checks that on several scenes.
+//!
+//! One read-back remains per frame: the two counters (pieces, work items), so that a frame whose
+//! triangles or work list outgrow the kept buffers grows them and sets up again (the first frame
+//! of a scene, and a view that needs more room than any before). The raster kernel itself is
+//! dispatched indirectly from the GPU-written arguments.
+//!
+//! Where setup runs ([`setup_on_gpu`]): on the GPU, except on a CPU device (lavapipe), where the
+//! "GPU" is the host's own cores and the integer f32 costs many times the host's float unit
+//! (`oit bench --backend wgpu --raster compute --techniques fabs --size 512x512` on lavapipe:
+//! bunny 1,826 ms a frame with the GPU's setup against 750 with the host's, `grid:3x3:bunny`
+//! 12,126 against 1,781): there oit-core's `TriangleSetup` runs on the host and its words are
+//! uploaded each frame, as before the GPU setup. `OIT_HOST_SETUP=1` forces the host's setup,
+//! `OIT_HOST_SETUP=0` the GPU's, on any device.
 
 use std::cell::Cell;
 
-use oit_core::setup::{TRIANGLE_WORDS, TriangleSetup};
-use oit_core::{Camera, OitError, RasterPath, Scene, Settings};
+use glam::{Mat3, Vec3, Vec4};
+use oit_core::setup::{TRIANGLE_WORDS, TriangleSetup, box_vertices, normal_matrix};
+use oit_core::{Aabb, Camera, OitError, RasterPath, Scene, Settings};
 
 use crate::ctx::{Driver, GpuCtx, dispatch_size};
 use crate::gpu::Gpu;
 
 const RASTER_WGSL: &str = include_str!("shaders/raster_compute.wgsl");
+/// The setup kernels: softfloat.wgsl's integer f32, then setup.wgsl.
+pub const SETUP_WGSL: &str =
+    concat!(include_str!("shaders/softfloat.wgsl"), "\n", include_str!("shaders/setup.wgsl"));
 /// Pixels on a side of the tile one workgroup of 64 covers (one invocation per pixel).
 const TILE: u32 = 8;
 /// Bytes of the smallest triangle and work-list buffers (a binding may not be empty).
 const MIN_BYTES: u64 = 256;
+/// Words per instance in the setup kernel's instance table (setup.wgsl's `INSTANCE_WORDS`).
+const INSTANCE_WORDS: usize = 40;
+/// Bytes of the indirect-argument buffer: the per-pixel and per-item raster dispatches (4 words
+/// each) and the item count.
+const ARGS_BYTES: u64 = 48;
+
+/// Whether the compute path sets triangles up on the GPU: `OIT_HOST_SETUP=1` (or `true`) says no,
+/// `OIT_HOST_SETUP=0` (or `false`) yes; otherwise yes unless the device is a CPU (module docs).
+pub fn setup_on_gpu(gpu: &Gpu) -> bool {
+    match std::env::var("OIT_HOST_SETUP").as_deref() {
+        Ok("1") => false,
+        Ok("0") => true,
+        Ok(v) if v.eq_ignore_ascii_case("true") => false,
+        Ok(v) if v.eq_ignore_ascii_case("false") => true,
+        _ => gpu.info.device_type != wgpu::DeviceType::Cpu,
+    }
+}
 
 /// Triangles on the GPU and the (triangle, tile) work list of the compute rasterizer, for one
 /// frame: handles to a `ComputeBuffers`' buffers.
@@ -30,7 +67,7 @@ pub struct ComputeRaster {
     layout: wgpu::BindGroupLayout,
     group: wgpu::BindGroup,
     generated: wgpu::Buffer,
-    items: u64,
+    args: wgpu::Buffer,
 }
 
 impl ComputeRaster {
@@ -48,24 +85,240 @@ impl ComputeRaster {
     }
 }
 
+impl ComputeRaster {
+    /// The triangles the compute path sets up for this view, as `TriangleSetup::triangle_words`
+    /// lays them out, and the work list ((triangle, tile) pairs), read back: the GPU's setup
+    /// (`on_gpu`, on any device), or the host's. The GPU's come in an order of its choosing. For
+    /// tests.
+    pub fn setup_words(
+        gpu: &Gpu,
+        scene: &Scene,
+        camera: &Camera,
+        settings: &Settings,
+        boxes: bool,
+        on_gpu: bool,
+    ) -> Result<(Vec<u32>, Vec<[u32; 2]>), OitError> {
+        let made = Cell::new(0);
+        let mut buffers = ComputeBuffers::new(gpu, &made);
+        if on_gpu {
+            buffers.gpu_frame(gpu, scene, camera, settings, boxes, &made)?;
+        } else {
+            buffers.host_frame(gpu, scene, camera, settings, boxes, &made)?;
+        }
+        let args = gpu.read_u32(&buffers.args)?;
+        let items = args[8] as usize;
+        let pieces = match &buffers.setup {
+            Some(s) if on_gpu => gpu.read_u32(&s.counters)?[0] as usize,
+            _ if boxes => TriangleSetup::bounding_boxes(scene, camera, settings).triangles.len(),
+            _ => TriangleSetup::new(scene, camera, settings).triangles.len(),
+        };
+        let mut tris = gpu.read_u32(&buffers.tris)?;
+        tris.truncate(pieces * TRIANGLE_WORDS);
+        let list = gpu.read_u32(&buffers.items)?;
+        let list = list.chunks_exact(2).take(items).map(|c| [c[0], c[1]]).collect();
+        Ok((tris, list))
+    }
+}
+
+/// Where one instance's mesh lies in [`GpuGeometry`]'s buffer, and its primitive ids.
+#[derive(Clone, Copy)]
+struct InstanceGeometry {
+    vertex_base: u32,
+    vertex_count: u32,
+    /// First colour word, `u32::MAX` without vertex colours.
+    color_base: u32,
+    index_base: u32,
+    tri_count: u32,
+    prim_base: u32,
+    first_task: u32,
+    /// Normals used as given (the boxes' are world-space already), not through a normal matrix.
+    raw_normals: bool,
+    /// The instance's object colour.
+    color: Vec4,
+}
+
+/// A scene's world-space geometry on the GPU for the setup kernel, uploaded once: all positions,
+/// then all normals, all vertex colours and all indices in one buffer of words, each mesh once
+/// (the instances of a mesh share it); or, for the bounds passes, each instance's box.
+pub(crate) struct GpuGeometry {
+    buffer: wgpu::Buffer,
+    instances: Vec<InstanceGeometry>,
+    positions: u32,
+    normals: u32,
+    tasks: u32,
+    boxes: bool,
+}
+
+impl GpuGeometry {
+    fn new(gpu: &Gpu, scene: &Scene, boxes: bool, made: &Cell<u64>) -> Result<GpuGeometry, OitError> {
+        let (mut pos, mut nor, mut col, mut idx): (Vec<u32>, Vec<u32>, Vec<u32>, Vec<u32>) =
+            Default::default();
+        let mut instances = Vec::with_capacity(scene.instances.len());
+        let mut colors_at = Vec::new();
+        let mut tasks = 0u32;
+        let word = |v: Vec3| v.to_array().map(f32::to_bits);
+        if boxes {
+            idx.extend(Aabb::TRIANGLES.iter().flatten());
+            for (i, inst) in scene.instances.iter().enumerate() {
+                let Some(object) = scene.objects.get(inst.object) else { continue };
+                let Some(mesh) = scene.meshes.get(object.mesh) else { continue };
+                let (corners, normals) = box_vertices(&mesh.bounds(), &inst.transform);
+                let vertex_base = (pos.len() / 3) as u32;
+                corners.iter().for_each(|&c| pos.extend(word(c)));
+                normals.iter().for_each(|&n| nor.extend(word(n)));
+                instances.push(InstanceGeometry {
+                    vertex_base,
+                    vertex_count: 8,
+                    color_base: u32::MAX,
+                    index_base: 0,
+                    tri_count: 12,
+                    prim_base: u32::try_from(i).unwrap_or(u32::MAX).saturating_mul(12),
+                    first_task: tasks,
+                    raw_normals: true,
+                    color: object.color,
+                });
+                colors_at.push(None);
+                tasks = tasks.saturating_add(12);
+            }
+        } else {
+            // each mesh once: (vertex base, colour offset in `col`, index base)
+            let mut meshes: Vec<Option<(u32, Option<u32>, u32)>> = vec![None; scene.meshes.len()];
+            let mut prim_base = 0u32;
+            for inst in &scene.instances {
+                let Some(object) = scene.objects.get(inst.object) else { continue };
+                let Some(mesh) = scene.meshes.get(object.mesh) else { continue };
+                let tri_count = u32::try_from(mesh.indices.len()).unwrap_or(u32::MAX);
+                let (vertex_base, color_at, index_base) = *meshes[object.mesh].get_or_insert_with(|| {
+                    let (vertex_base, index_base) = ((pos.len() / 3) as u32, idx.len() as u32);
+                    mesh.positions.iter().for_each(|&p| pos.extend(word(p)));
+                    // Scene::validate holds one normal per position; a short list reads as zero
+                    for k in 0..mesh.positions.len() {
+                        nor.extend(word(mesh.normals.get(k).copied().unwrap_or(Vec3::ZERO)));
+                    }
+                    idx.extend(mesh.indices.iter().flatten());
+                    let color_at = mesh.colors.as_ref().map(|c| {
+                        let at = col.len() as u32;
+                        c.iter().for_each(|&c| col.extend(word(c)));
+                        at
+                    });
+                    (vertex_base, color_at, index_base)
+                });
+                instances.push(InstanceGeometry {
+                    vertex_base,
+                    vertex_count: mesh.positions.len() as u32,
+                    color_base: u32::MAX,
+                    index_base,
+                    tri_count,
+                    prim_base,
+                    first_task: tasks,
+                    raw_normals: false,
+                    color: object.color,
+                });
+                colors_at.push(color_at);
+                prim_base = prim_base.saturating_add(tri_count);
+                tasks = tasks.checked_add(tri_count).ok_or_else(|| {
+                    OitError::InvalidScene("more than 2^32 triangles for the compute path's setup".into())
+                })?;
+            }
+        }
+        let positions = 0u32;
+        let normals = pos.len() as u32;
+        let colors = normals + nor.len() as u32;
+        let indices = colors + col.len() as u32;
+        for (g, at) in instances.iter_mut().zip(colors_at) {
+            g.color_base = at.map_or(u32::MAX, |at| colors + at);
+            g.index_base += indices;
+        }
+        let mut words = pos;
+        words.extend(nor);
+        words.extend(col);
+        words.extend(idx);
+        let bytes = (words.len() as u64 * 4).max(MIN_BYTES);
+        gpu.check_scene_storage("the scene's geometry for the compute path's setup", bytes)?;
+        let buffer = storage_buffer(gpu, "setup geometry", bytes, made);
+        gpu.queue.write_buffer(&buffer, 0, bytemuck::cast_slice(&words));
+        Ok(GpuGeometry { buffer, instances, positions, normals, tasks, boxes })
+    }
+
+    /// The instance table of one frame (setup.wgsl's layout): mvp, normal matrix, base colour,
+    /// where the mesh lies, primitive ids.
+    fn instance_words(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Vec<u32> {
+        let view_proj = camera.view_proj();
+        let mut out = Vec::with_capacity(self.instances.len().max(1) * INSTANCE_WORDS);
+        let mut live = scene.instances.iter().filter(|inst| {
+            scene.objects.get(inst.object).is_some_and(|o| scene.meshes.get(o.mesh).is_some())
+        });
+        for g in &self.instances {
+            let Some(inst) = live.next() else { break };
+            // as TriangleSetup::new and ::bounding_boxes compute them
+            let (mvp, nm) = if self.boxes {
+                (view_proj, Mat3::IDENTITY)
+            } else {
+                (view_proj * inst.transform, normal_matrix(&inst.transform))
+            };
+            let base = settings.material_color(g.color);
+            out.extend(mvp.to_cols_array().map(f32::to_bits));
+            out.extend(nm.to_cols_array().map(f32::to_bits));
+            out.extend(base.to_array().map(f32::to_bits));
+            out.extend([
+                g.vertex_base,
+                g.vertex_count,
+                g.color_base,
+                g.index_base,
+                g.tri_count,
+                g.prim_base,
+                g.first_task,
+                u32::from(g.raw_normals),
+                self.positions,
+                self.normals,
+                0,
+            ]);
+        }
+        if out.is_empty() {
+            out.resize(INSTANCE_WORDS, 0);
+        }
+        debug_assert_eq!(out.len() % INSTANCE_WORDS, 0);
+        out
+    }
+}
+
 /// The compute rasterizer's buffers, kept between the frames of a prepared scene: the set-up
-/// triangles and the work list (grown, never shrunk, when a frame needs more), the raster uniform
-/// and the `generated` counter. A frame that fits creates no buffer.
+/// triangles and the work list (grown, never shrunk, when a frame needs more), the raster uniform,
+/// the `generated` counter, and the setup kernel's geometry (uploaded once), instance table,
+/// uniform, counters and indirect arguments. A frame that fits creates no buffer.
 pub(crate) struct ComputeBuffers {
     tris: wgpu::Buffer,
     items: wgpu::Buffer,
     uniform: wgpu::Buffer,
     generated: wgpu::Buffer,
+    args: wgpu::Buffer,
     layout: wgpu::BindGroupLayout,
     group: wgpu::BindGroup,
+    setup: Option<SetupBuffers>,
+}
+
+/// What the GPU setup keeps besides the outputs.
+struct SetupBuffers {
+    geometry: GpuGeometry,
+    instances: wgpu::Buffer,
+    uniform: wgpu::Buffer,
+    counters: wgpu::Buffer,
+    layout: wgpu::BindGroupLayout,
+    /// Bound to the current triangle and work-list buffers (remade when one grows).
+    group: Option<wgpu::BindGroup>,
 }
 
 fn storage_buffer(gpu: &Gpu, label: &str, size: u64, made: &Cell<u64>) -> wgpu::Buffer {
+    use wgpu::BufferUsages as U;
+    buffer(gpu, label, size, U::STORAGE | U::COPY_DST | U::COPY_SRC, made)
+}
+
+fn buffer(gpu: &Gpu, label: &str, size: u64, usage: wgpu::BufferUsages, made: &Cell<u64>) -> wgpu::Buffer {
     made.set(made.get() + 1);
     gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
         size,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        usage,
         mapped_at_creation: false,
     })
 }
@@ -78,60 +331,112 @@ fn grown(gpu: &Gpu, old: u64, needed: u64) -> u64 {
     needed.max(old.saturating_mul(2).min(limit)).next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT)
 }
 
+fn layout_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
+        count: None,
+    }
+}
+
+fn bind(gpu: &Gpu, layout: &wgpu::BindGroupLayout, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
+        .iter()
+        .enumerate()
+        .map(|(i, b)| wgpu::BindGroupEntry { binding: i as u32, resource: b.as_entire_binding() })
+        .collect();
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("compute raster"),
+        layout,
+        entries: &entries,
+    })
+}
+
+/// The raster kernel's indirect arguments for `items` work items, as `setup_finish_main` writes
+/// them: per-pixel dispatch, per-item dispatch, the item count.
+fn raster_args(items: u64) -> [u32; 12] {
+    let (px, py) = dispatch_size(items * 64);
+    let (ix, iy) = dispatch_size(items);
+    [px, py, 1, 0, ix, iy, 1, 0, items as u32, 0, 0, 0]
+}
+
 impl ComputeBuffers {
     /// Empty buffers (grown by the first frame that needs more); `made` counts the buffers created.
     pub(crate) fn new(gpu: &Gpu, made: &Cell<u64>) -> ComputeBuffers {
+        use wgpu::BufferUsages as U;
         let device = &gpu.device;
         let tris = storage_buffer(gpu, "triangles", MIN_BYTES, made);
         let items = storage_buffer(gpu, "raster items", MIN_BYTES, made);
-        made.set(made.get() + 2);
-        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("raster uniform"),
-            size: 32,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let generated = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("generated"),
-            size: 16,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
-            count: None,
-        };
+        let uniform = buffer(gpu, "raster uniform", 32, U::UNIFORM | U::COPY_DST, made);
+        let generated = buffer(gpu, "generated", 16, U::STORAGE | U::COPY_SRC | U::COPY_DST, made);
+        let args = buffer(
+            gpu,
+            "raster dispatch",
+            ARGS_BYTES,
+            U::STORAGE | U::INDIRECT | U::COPY_SRC | U::COPY_DST,
+            made,
+        );
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("compute raster"),
             entries: &[
-                entry(0, wgpu::BufferBindingType::Storage { read_only: true }),
-                entry(1, wgpu::BufferBindingType::Storage { read_only: true }),
-                entry(2, wgpu::BufferBindingType::Uniform),
-                entry(3, wgpu::BufferBindingType::Storage { read_only: false }),
+                layout_entry(0, wgpu::BufferBindingType::Storage { read_only: true }),
+                layout_entry(1, wgpu::BufferBindingType::Storage { read_only: true }),
+                layout_entry(2, wgpu::BufferBindingType::Uniform),
+                layout_entry(3, wgpu::BufferBindingType::Storage { read_only: false }),
             ],
         });
-        let group = Self::bind(gpu, &layout, [&tris, &items, &uniform, &generated]);
-        ComputeBuffers { tris, items, uniform, generated, layout, group }
+        let group = bind(gpu, &layout, &[&tris, &items, &uniform, &generated]);
+        ComputeBuffers { tris, items, uniform, generated, args, layout, group, setup: None }
     }
 
-    fn bind(gpu: &Gpu, layout: &wgpu::BindGroupLayout, buffers: [&wgpu::Buffer; 4]) -> wgpu::BindGroup {
-        let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
-            .iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry { binding: i as u32, resource: b.as_entire_binding() })
-            .collect();
-        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("compute raster"),
-            layout,
-            entries: &entries,
-        })
+    /// Grows the triangle and work-list buffers to hold `tri_bytes` and `item_bytes` (counted in
+    /// `made`); true when one was made.
+    fn reserve(
+        &mut self,
+        gpu: &Gpu,
+        tri_bytes: u64,
+        item_bytes: u64,
+        made: &Cell<u64>,
+    ) -> Result<bool, OitError> {
+        gpu.check_scene_storage("the triangles", tri_bytes)?;
+        gpu.check_storage("the raster work list", item_bytes)?;
+        let mut rebind = false;
+        if tri_bytes > self.tris.size() {
+            self.tris = storage_buffer(gpu, "triangles", grown(gpu, self.tris.size(), tri_bytes), made);
+            rebind = true;
+        }
+        if item_bytes > self.items.size() {
+            self.items = storage_buffer(gpu, "raster items", grown(gpu, self.items.size(), item_bytes), made);
+            rebind = true;
+        }
+        if rebind {
+            self.group = bind(gpu, &self.layout, &[&self.tris, &self.items, &self.uniform, &self.generated]);
+            if let Some(s) = &mut self.setup {
+                s.group = None;
+            }
+        }
+        Ok(rebind)
     }
 
-    /// Sets up this frame's triangles of the scene (or of its instances' bounding boxes) on the
-    /// host and writes them, their work list and the uniform into the kept buffers, growing a
-    /// buffer first where they do not fit (counted in `made`).
+    /// The raster uniform with `items` work items (the GPU setup overwrites the count).
+    fn write_uniform(&self, gpu: &Gpu, camera: &Camera, settings: &Settings, items: u32) {
+        let forward = camera.forward;
+        let uniform: [u32; 8] = [
+            items,
+            settings.width,
+            settings.height,
+            settings.shading.code(),
+            forward.x.to_bits(),
+            forward.y.to_bits(),
+            forward.z.to_bits(),
+            0,
+        ];
+        gpu.queue.write_buffer(&self.uniform, 0, bytemuck::cast_slice(&uniform));
+    }
+
+    /// Sets up this frame's triangles of the scene (or of its instances' bounding boxes) and their
+    /// work list into the kept buffers: on the GPU, or on the host where [`setup_on_gpu`] says.
     pub(crate) fn frame(
         &mut self,
         gpu: &Gpu,
@@ -141,6 +446,29 @@ impl ComputeBuffers {
         boxes: bool,
         made: &Cell<u64>,
     ) -> Result<ComputeRaster, OitError> {
+        if setup_on_gpu(gpu) {
+            self.gpu_frame(gpu, scene, camera, settings, boxes, made)?;
+        } else {
+            self.host_frame(gpu, scene, camera, settings, boxes, made)?;
+        }
+        Ok(ComputeRaster {
+            layout: self.layout.clone(),
+            group: self.group.clone(),
+            generated: self.generated.clone(),
+            args: self.args.clone(),
+        })
+    }
+
+    /// The host's setup (oit-core's `TriangleSetup`), its words and work list uploaded.
+    fn host_frame(
+        &mut self,
+        gpu: &Gpu,
+        scene: &Scene,
+        camera: &Camera,
+        settings: &Settings,
+        boxes: bool,
+        made: &Cell<u64>,
+    ) -> Result<(), OitError> {
         let r = if boxes {
             TriangleSetup::bounding_boxes(scene, camera, settings)
         } else {
@@ -156,22 +484,7 @@ impl ComputeBuffers {
                 }
             }
         }
-        let (tri_bytes, item_bytes) = (words.len() as u64 * 4, items.len() as u64 * 8);
-        gpu.check_scene_storage("the triangles", tri_bytes)?;
-        gpu.check_storage("the raster work list", item_bytes)?;
-        let mut rebind = false;
-        if tri_bytes > self.tris.size() {
-            self.tris = storage_buffer(gpu, "triangles", grown(gpu, self.tris.size(), tri_bytes), made);
-            rebind = true;
-        }
-        if item_bytes > self.items.size() {
-            self.items = storage_buffer(gpu, "raster items", grown(gpu, self.items.size(), item_bytes), made);
-            rebind = true;
-        }
-        if rebind {
-            self.group =
-                Self::bind(gpu, &self.layout, [&self.tris, &self.items, &self.uniform, &self.generated]);
-        }
+        self.reserve(gpu, words.len() as u64 * 4, items.len() as u64 * 8, made)?;
         let queue = &gpu.queue;
         if !words.is_empty() {
             queue.write_buffer(&self.tris, 0, bytemuck::cast_slice(&words));
@@ -179,24 +492,129 @@ impl ComputeBuffers {
         if !items.is_empty() {
             queue.write_buffer(&self.items, 0, bytemuck::cast_slice(&items));
         }
-        let forward = camera.forward;
-        let uniform: [u32; 8] = [
-            items.len() as u32,
-            settings.width,
-            settings.height,
-            settings.shading.code(),
-            forward.x.to_bits(),
-            forward.y.to_bits(),
-            forward.z.to_bits(),
-            0,
-        ];
-        queue.write_buffer(&self.uniform, 0, bytemuck::cast_slice(&uniform));
-        Ok(ComputeRaster {
-            layout: self.layout.clone(),
-            group: self.group.clone(),
-            generated: self.generated.clone(),
-            items: items.len() as u64,
-        })
+        self.write_uniform(gpu, camera, settings, items.len() as u32);
+        queue.write_buffer(&self.args, 0, bytemuck::cast_slice(&raster_args(items.len() as u64)));
+        Ok(())
+    }
+
+    /// The GPU's setup: the instance table and uniform written, the setup kernel and the
+    /// arguments kernel recorded and run, the counters read back; set up again into grown
+    /// buffers when they did not fit.
+    fn gpu_frame(
+        &mut self,
+        gpu: &Gpu,
+        scene: &Scene,
+        camera: &Camera,
+        settings: &Settings,
+        boxes: bool,
+        made: &Cell<u64>,
+    ) -> Result<(), OitError> {
+        use wgpu::BufferUsages as U;
+        if self.setup.as_ref().is_none_or(|s| s.geometry.boxes != boxes) {
+            let geometry = GpuGeometry::new(gpu, scene, boxes, made)?;
+            let instance_bytes = (geometry.instances.len().max(1) * INSTANCE_WORDS * 4) as u64;
+            let layout = gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("setup"),
+                entries: &[
+                    layout_entry(0, wgpu::BufferBindingType::Uniform),
+                    layout_entry(1, wgpu::BufferBindingType::Storage { read_only: true }),
+                    layout_entry(2, wgpu::BufferBindingType::Storage { read_only: true }),
+                    layout_entry(3, wgpu::BufferBindingType::Storage { read_only: false }),
+                    layout_entry(4, wgpu::BufferBindingType::Storage { read_only: false }),
+                    layout_entry(5, wgpu::BufferBindingType::Storage { read_only: false }),
+                    layout_entry(6, wgpu::BufferBindingType::Storage { read_only: false }),
+                ],
+            });
+            // a first guess at the room the pieces and the work list need (grown if short)
+            let tasks = u64::from(geometry.tasks);
+            let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+            let guess_tris = ((tasks + tasks / 8 + 64) * TRIANGLE_WORDS as u64 * 4).min(limit);
+            let guess_items = ((2 * tasks + 4096) * 8).min(limit);
+            self.setup = Some(SetupBuffers {
+                geometry,
+                instances: storage_buffer(gpu, "setup instances", instance_bytes, made),
+                uniform: buffer(gpu, "setup uniform", 32, U::UNIFORM | U::COPY_DST, made),
+                counters: buffer(gpu, "setup counters", 16, U::STORAGE | U::COPY_SRC | U::COPY_DST, made),
+                layout,
+                group: None,
+            });
+            self.reserve(gpu, guess_tris.max(self.tris.size()), guess_items.max(self.items.size()), made)?;
+        }
+        let setup_pipeline = {
+            let s = self.setup.as_ref().expect("made above");
+            gpu.compute_pipeline(SETUP_WGSL, "setup_main", &[&s.layout])?
+        };
+        let finish_pipeline = {
+            let s = self.setup.as_ref().expect("made above");
+            gpu.compute_pipeline(SETUP_WGSL, "setup_finish_main", &[&s.layout])?
+        };
+        {
+            let s = self.setup.as_ref().expect("made above");
+            let words = s.geometry.instance_words(scene, camera, settings);
+            gpu.queue.write_buffer(&s.instances, 0, bytemuck::cast_slice(&words));
+        }
+        self.write_uniform(gpu, camera, settings, 0);
+        loop {
+            let tri_capacity = self.tris.size() / (TRIANGLE_WORDS as u64 * 4);
+            let item_capacity = self.items.size() / 8;
+            let s = self.setup.as_mut().expect("made above");
+            let uniform: [u32; 8] = [
+                settings.width,
+                settings.height,
+                (settings.width as f32).to_bits(),
+                (settings.height as f32).to_bits(),
+                s.geometry.instances.len() as u32,
+                s.geometry.tasks,
+                tri_capacity.min(u64::from(u32::MAX)) as u32,
+                item_capacity.min(u64::from(u32::MAX)) as u32,
+            ];
+            gpu.queue.write_buffer(&s.uniform, 0, bytemuck::cast_slice(&uniform));
+            let group = s.group.get_or_insert_with(|| {
+                bind(
+                    gpu,
+                    &s.layout,
+                    &[
+                        &s.uniform,
+                        &s.instances,
+                        &s.geometry.buffer,
+                        &self.tris,
+                        &self.items,
+                        &s.counters,
+                        &self.args,
+                    ],
+                )
+            });
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            encoder.clear_buffer(&s.counters, 0, None);
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("setup"),
+                    timestamp_writes: None,
+                });
+                pass.set_bind_group(0, &*group, &[]);
+                let (x, y) = dispatch_size(u64::from(s.geometry.tasks));
+                if x > 0 {
+                    pass.set_pipeline(&setup_pipeline);
+                    pass.dispatch_workgroups(x, y, 1);
+                }
+                pass.set_pipeline(&finish_pipeline);
+                pass.dispatch_workgroups(1, 1, 1);
+            }
+            // the raster uniform's item count, from the arguments kernel
+            encoder.copy_buffer_to_buffer(&self.args, 32, &self.uniform, 0, 4);
+            gpu.queue.submit([encoder.finish()]);
+            let counts = gpu.read_u32(&s.counters)?;
+            let (pieces, items) = (u64::from(counts[0]), u64::from(counts[1]));
+            if pieces <= tri_capacity && items <= item_capacity {
+                return Ok(());
+            }
+            let grew = self.reserve(gpu, pieces * TRIANGLE_WORDS as u64 * 4, items * 8, made)?;
+            if !grew {
+                return Err(OitError::Device(format!(
+                    "the compute path's setup needs {pieces} triangles and {items} work items, more than its buffers hold"
+                )));
+            }
+        }
     }
 }
 
@@ -221,7 +639,6 @@ impl Driver for ComputeRaster {
         let entry = if per_pixel { "raster_main" } else { "raster_loop_main" };
         let pipeline =
             ctx.gpu.compute_pipeline(&format!("{source}\n{RASTER_WGSL}"), entry, &[layout0, &self.layout])?;
-        let (x, y) = dispatch_size(if per_pixel { self.items * 64 } else { self.items });
         let mut encoder = ctx.gpu.device.create_command_encoder(&Default::default());
         encoder.clear_buffer(&self.generated, 0, None);
         let writes = ctx.render_timestamps().map(|w| wgpu::ComputePassTimestampWrites {
@@ -237,9 +654,9 @@ impl Driver for ComputeRaster {
             pass.set_pipeline(&pipeline);
             pass.set_bind_group(0, group0, &[]);
             pass.set_bind_group(1, &self.group, &[]);
-            if x > 0 {
-                pass.dispatch_workgroups(x, y, 1);
-            }
+            // arguments written by the setup (or the host's): the per-pixel dispatch, then the
+            // per-item one
+            pass.dispatch_workgroups_indirect(&self.args, if per_pixel { 0 } else { 16 });
         }
         ctx.finish_timed("geometry", encoder)?;
         Ok(u64::from(ctx.gpu.read_u32(&self.generated)?[0]))

@@ -1,0 +1,411 @@
+// The compute path's triangle setup on the GPU: oit-core's `setup` (crates' oit-core/src/setup.rs)
+// rule for rule, every float operation in softfloat.wgsl's integer f32 (so in the host's order and
+// rounding, bit for bit, whatever the driver does with float math), writing the 44-word triangles
+// of `TriangleSetup::triangle_words` and the (triangle, 8×8 tile) work list the raster kernel
+// (raster_compute.wgsl) reads.
+//
+// `setup_main`: one invocation per (instance, triangle): vertex transform (`mvp · (p, 1)` as
+// ((c0·x + c1·y) + c2·z) + c3·1), normal matrix, clipping against near, far and the guard band
+// (Sutherland–Hodgman, cut from the inside end), fan triangulation, perspective divide, viewport,
+// snapping by floor(v·256 + 0.5), the area, orientation and pixel box; each piece kept takes a
+// slot by atomic increment and appends its tiles to the work list the same way. Pieces land in
+// an order of the GPU's choosing: nothing reads the triangle order (the raster kernel runs its
+// work items concurrently and every capture is an atomic update; exact techniques sort by
+// (depth, primitive id)), so only the set of pieces matters, and it is the host's.
+// `setup_finish_main`: one invocation; the raster kernel's indirect dispatch arguments and item
+// count from the counters.
+
+struct SetupUniform {
+    width: u32,
+    height: u32,
+    // `width as f32`, `height as f32`
+    width_f: u32,
+    height_f: u32,
+    instance_count: u32,
+    task_count: u32,
+    tri_capacity: u32,
+    item_capacity: u32,
+}
+
+// Per instance, INSTANCE_WORDS words: mvp (16, columns), normal matrix (9, columns), base colour
+// (4), then the fields below.
+const INSTANCE_WORDS: u32 = 40u;
+const I_VERTEX_BASE: u32 = 29u;   // first vertex (in vertices) of the instance's mesh
+const I_VERTEX_COUNT: u32 = 30u;
+const I_COLOR_BASE: u32 = 31u;    // first colour word, 0xffffffff without vertex colours
+const I_INDEX_BASE: u32 = 32u;    // first index word of the mesh's triangles
+const I_TRI_COUNT: u32 = 33u;
+const I_PRIM_BASE: u32 = 34u;
+const I_FIRST_TASK: u32 = 35u;    // tasks (triangles) of the instances before this one
+const I_FLAGS: u32 = 36u;         // bit 0: normals are used as given (no normal matrix)
+const I_POSITIONS: u32 = 37u;     // first position word of the geometry
+const I_NORMALS: u32 = 38u;       // first normal word of the geometry
+
+const TRI_WORDS: u32 = 44u;
+const SETUP_TILE: u32 = 8u;
+const GUARD_BAND_BITS: u32 = 0x42800000u; // 64.0
+const SUBPIXEL_F: u32 = 0x43800000u;      // 256.0
+const COORD_LIMIT_BITS: u32 = 0x4e000000u; // 2^29
+
+@group(0) @binding(0) var<uniform> su: SetupUniform;
+@group(0) @binding(1) var<storage, read> instances: array<u32>;
+@group(0) @binding(2) var<storage, read> geometry: array<u32>;
+@group(0) @binding(3) var<storage, read_write> out_tris: array<u32>;
+@group(0) @binding(4) var<storage, read_write> out_items: array<vec2<u32>>;
+// 0: pieces, 1: work items (both counted past the capacities, so the host sees what is needed)
+@group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>>;
+// 0..3: per-pixel raster dispatch, 4..7: per-item raster dispatch, 8: work items in the list
+@group(0) @binding(6) var<storage, read_write> args: array<u32>;
+
+struct ClipVertex {
+    pos: vec4<u32>,
+    n: vec3<u32>,
+    c: vec3<u32>,
+}
+
+fn inst(i: u32, word: u32) -> u32 {
+    return instances[i * INSTANCE_WORDS + word];
+}
+
+// glam's Mat4 · Vec4 on x86_64: ((c0·x + c1·y) + c2·z) + c3·w, each product rounded.
+fn transform_point(i: u32, x: u32, y: u32, z: u32) -> vec4<u32> {
+    var r: vec4<u32>;
+    for (var row = 0u; row < 4u; row++) {
+        let s0 = sf_mul(inst(i, row), x);
+        let s1 = sf_mul(inst(i, 4u + row), y);
+        let s2 = sf_mul(inst(i, 8u + row), z);
+        let s3 = sf_mul(inst(i, 12u + row), SF_ONE);
+        r[row] = sf_add(sf_add(sf_add(s0, s1), s2), s3);
+    }
+    return r;
+}
+
+// glam's Mat3 · Vec3: (c0·x + c1·y) + c2·z.
+fn transform_normal(i: u32, x: u32, y: u32, z: u32) -> vec3<u32> {
+    var r: vec3<u32>;
+    for (var row = 0u; row < 3u; row++) {
+        let s0 = sf_mul(inst(i, 16u + row), x);
+        let s1 = sf_mul(inst(i, 19u + row), y);
+        let s2 = sf_mul(inst(i, 22u + row), z);
+        r[row] = sf_add(sf_add(s0, s1), s2);
+    }
+    return r;
+}
+
+fn load_vertex(i: u32, v: u32) -> ClipVertex {
+    var out: ClipVertex;
+    let p = inst(i, I_POSITIONS) + 3u * (inst(i, I_VERTEX_BASE) + v);
+    out.pos = transform_point(i, geometry[p], geometry[p + 1u], geometry[p + 2u]);
+    let n = inst(i, I_NORMALS) + 3u * (inst(i, I_VERTEX_BASE) + v);
+    if ((inst(i, I_FLAGS) & 1u) != 0u) {
+        out.n = vec3<u32>(geometry[n], geometry[n + 1u], geometry[n + 2u]);
+    } else {
+        out.n = transform_normal(i, geometry[n], geometry[n + 1u], geometry[n + 2u]);
+    }
+    let cb = inst(i, I_COLOR_BASE);
+    if (cb != 0xffffffffu) {
+        let c = cb + 3u * v;
+        out.c = vec3<u32>(geometry[c], geometry[c + 1u], geometry[c + 2u]);
+    } else {
+        out.c = vec3<u32>(0u);
+    }
+    return out;
+}
+
+// self + (other − self)·t, per component.
+fn toward(a: ClipVertex, b: ClipVertex, t: u32) -> ClipVertex {
+    var r: ClipVertex;
+    for (var k = 0u; k < 4u; k++) {
+        r.pos[k] = sf_add(a.pos[k], sf_mul(sf_sub(b.pos[k], a.pos[k]), t));
+    }
+    for (var k = 0u; k < 3u; k++) {
+        r.n[k] = sf_add(a.n[k], sf_mul(sf_sub(b.n[k], a.n[k]), t));
+        r.c[k] = sf_add(a.c[k], sf_mul(sf_sub(b.c[k], a.c[k]), t));
+    }
+    return r;
+}
+
+// Signed distance to clip plane `plane` (inside when ≥ 0): near, far, then the guard band.
+fn plane_distance(p: vec4<u32>, plane: u32) -> u32 {
+    switch plane {
+        case 0u: { return p.z; }
+        case 1u: { return sf_sub(p.w, p.z); }
+        case 2u: { return sf_sub(sf_mul(GUARD_BAND_BITS, p.w), p.x); }
+        case 3u: { return sf_add(sf_mul(GUARD_BAND_BITS, p.w), p.x); }
+        case 4u: { return sf_sub(sf_mul(GUARD_BAND_BITS, p.w), p.y); }
+        default: { return sf_add(sf_mul(GUARD_BAND_BITS, p.w), p.y); }
+    }
+}
+
+const MAX_POLYGON: u32 = 9u;
+
+var<private> poly: array<ClipVertex, 9>;
+var<private> poly_n: u32;
+var<private> next_poly: array<ClipVertex, 9>;
+var<private> next_n: u32;
+
+fn push_next(v: ClipVertex) {
+    if (next_n < MAX_POLYGON) {
+        next_poly[next_n] = v;
+        next_n += 1u;
+    }
+}
+
+// Sutherland–Hodgman against the planes in `planes` (a bit mask), on `poly`.
+fn clip_poly(planes: u32) {
+    for (var plane = 0u; plane < 6u; plane++) {
+        if ((planes & (1u << plane)) == 0u) {
+            continue;
+        }
+        next_n = 0u;
+        for (var i = 0u; i < poly_n; i++) {
+            let a = poly[i];
+            let b = poly[(i + 1u) % poly_n];
+            let da = plane_distance(a.pos, plane);
+            let db = plane_distance(b.pos, plane);
+            let a_in = sf_ge0(da);
+            let b_in = sf_ge0(db);
+            if (a_in) {
+                push_next(a);
+            }
+            if (a_in != b_in) {
+                // cut from the inside end (no crack where two triangles share an edge)
+                if (a_in) {
+                    push_next(toward(a, b, sf_div(da, sf_sub(da, db))));
+                } else {
+                    push_next(toward(b, a, sf_div(db, sf_sub(db, da))));
+                }
+            }
+        }
+        for (var i = 0u; i < next_n; i++) {
+            poly[i] = next_poly[i];
+        }
+        poly_n = next_n;
+        if (poly_n < 3u) {
+            return;
+        }
+    }
+}
+
+struct Projected {
+    ok: bool,
+    x: i32,
+    y: i32,
+    z: u32,
+    inv_w: u32,
+}
+
+// Perspective divide, viewport, snap.
+fn project(p: vec4<u32>) -> Projected {
+    var r: Projected;
+    r.ok = false;
+    // w.is_nan() || w <= 0.0
+    if (sf_is_nan(p.w) || sf_lt0(p.w) || (p.w & 0x7fffffffu) == 0u) {
+        return r;
+    }
+    let inv_w = sf_div(SF_ONE, p.w);
+    let nx = sf_mul(p.x, inv_w);
+    let ny = sf_mul(p.y, inv_w);
+    let nz = sf_mul(p.z, inv_w);
+    let fx = sf_mul(sf_add(sf_mul(nx, SF_HALF), SF_HALF), su.width_f);
+    let fy = sf_mul(sf_sub(SF_ONE, sf_add(sf_mul(ny, SF_HALF), SF_HALF)), su.height_f);
+    let sx = sf_floor(sf_add(sf_mul(fx, SUBPIXEL_F), SF_HALF));
+    let sy = sf_floor(sf_add(sf_mul(fy, SUBPIXEL_F), SF_HALF));
+    let in_range = (sx & 0x7fffffffu) <= COORD_LIMIT_BITS && (sy & 0x7fffffffu) <= COORD_LIMIT_BITS;
+    if (!(in_range && sf_is_finite(nz) && sf_is_finite(inv_w))) {
+        return r;
+    }
+    r.ok = true;
+    r.x = sf_to_i32(sx);
+    r.y = sf_to_i32(sy);
+    r.z = nz;
+    r.inv_w = inv_w;
+    return r;
+}
+
+struct Range {
+    ok: bool,
+    first: u32,
+    last: u32,
+}
+
+// Pixel k's centre is at 256k + 128: the first centre at or after `lo`, the last at or before `hi`.
+fn pixel_range(lo: i32, hi: i32, size: u32) -> Range {
+    let first = max((lo - 128 + 255) >> 8u, 0);
+    let last = min((hi - 128) >> 8u, i32(size) - 1);
+    return Range(first <= last, u32(max(first, 0)), u32(max(last, 0)));
+}
+
+// Projects and snaps one (clipped) triangle; keeps it if it has area and touches the viewport.
+fn piece(i: u32, v_in: array<ClipVertex, 3>, prim: u32) {
+    var v = v_in;
+    var p: array<Projected, 3>;
+    for (var k = 0u; k < 3u; k++) {
+        p[k] = project(v[k].pos);
+        if (!p[k].ok) {
+            return;
+        }
+    }
+    let x0 = i64(p[0].x);
+    let y0 = i64(p[0].y);
+    var area = (i64(p[1].x) - x0) * (i64(p[2].y) - y0) - (i64(p[1].y) - y0) * (i64(p[2].x) - x0);
+    if (area == 0li) {
+        return;
+    }
+    if (area < 0li) {
+        let tp = p[1];
+        p[1] = p[2];
+        p[2] = tp;
+        let tv = v[1];
+        v[1] = v[2];
+        v[2] = tv;
+        area = -area;
+    }
+    let rx = pixel_range(min(min(p[0].x, p[1].x), p[2].x), max(max(p[0].x, p[1].x), p[2].x), su.width);
+    let ry = pixel_range(min(min(p[0].y, p[1].y), p[2].y), max(max(p[0].y, p[1].y), p[2].y), su.height);
+    if (!rx.ok || !ry.ok) {
+        return;
+    }
+    // binning: the piece's 8×8 tiles, row by row, counted even when the piece does not fit
+    let tx0 = rx.first / SETUP_TILE;
+    let tx1 = rx.last / SETUP_TILE;
+    let ty0 = ry.first / SETUP_TILE;
+    let ty1 = ry.last / SETUP_TILE;
+    let n = (tx1 - tx0 + 1u) * (ty1 - ty0 + 1u);
+    let base = atomicAdd(&counters[1], n);
+    let slot = atomicAdd(&counters[0], 1u);
+    if (slot >= su.tri_capacity) {
+        return;
+    }
+    let o = slot * TRI_WORDS;
+    for (var k = 0u; k < 3u; k++) {
+        out_tris[o + k] = u32(p[k].x);
+        out_tris[o + 3u + k] = u32(p[k].y);
+        out_tris[o + 6u + k] = p[k].z;
+        out_tris[o + 9u + k] = p[k].inv_w;
+        for (var c = 0u; c < 3u; c++) {
+            out_tris[o + 12u + 3u * k + c] = v[k].n[c];
+            out_tris[o + 21u + 3u * k + c] = v[k].c[c];
+        }
+    }
+    out_tris[o + 30u] = sf_div(SF_ONE, sf_from_u64(u64(area)));
+    for (var c = 0u; c < 4u; c++) {
+        out_tris[o + 31u + c] = inst(i, 25u + c);
+    }
+    out_tris[o + 35u] = select(0u, 1u, inst(i, I_COLOR_BASE) != 0xffffffffu);
+    out_tris[o + 36u] = prim;
+    out_tris[o + 37u] = rx.first;
+    out_tris[o + 38u] = ry.first;
+    out_tris[o + 39u] = rx.last;
+    out_tris[o + 40u] = ry.last;
+    out_tris[o + 41u] = 0u;
+    out_tris[o + 42u] = 0u;
+    out_tris[o + 43u] = 0u;
+    if (base >= su.item_capacity || su.item_capacity - base < n) {
+        return;
+    }
+    var k = base;
+    for (var ty = ty0; ty <= ty1; ty++) {
+        for (var tx = tx0; tx <= tx1; tx++) {
+            out_items[k] = vec2<u32>(slot, (ty << 16u) | tx);
+            k += 1u;
+        }
+    }
+}
+
+// The instance whose tasks include `task`: the last with first task ≤ `task`.
+fn find_instance(task: u32) -> u32 {
+    var lo = 0u;
+    var hi = su.instance_count;
+    while (hi - lo > 1u) {
+        let mid = (lo + hi) / 2u;
+        if (inst(mid, I_FIRST_TASK) <= task) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
+@compute @workgroup_size(64)
+fn setup_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let task = gid.x + gid.y * groups.x * 64u;
+    if (task >= su.task_count) {
+        return;
+    }
+    let i = find_instance(task);
+    let t = task - inst(i, I_FIRST_TASK);
+    if (t >= inst(i, I_TRI_COUNT)) {
+        return;
+    }
+    let ib = inst(i, I_INDEX_BASE) + 3u * t;
+    let count = inst(i, I_VERTEX_COUNT);
+    var v: array<ClipVertex, 3>;
+    for (var k = 0u; k < 3u; k++) {
+        let index = geometry[ib + k];
+        if (index >= count) {
+            return;
+        }
+        v[k] = load_vertex(i, index);
+    }
+    let pb = inst(i, I_PRIM_BASE);
+    let prim = select(pb + t, 0xffffffffu, pb + t < pb);
+    for (var k = 0u; k < 3u; k++) {
+        for (var c = 0u; c < 4u; c++) {
+            if (!sf_is_finite(v[k].pos[c])) {
+                return;
+            }
+        }
+    }
+    var outside_any = 0u;
+    for (var plane = 0u; plane < 6u; plane++) {
+        var all_out = true;
+        var any_out = false;
+        for (var k = 0u; k < 3u; k++) {
+            let out = sf_lt0(plane_distance(v[k].pos, plane));
+            all_out = all_out && out;
+            any_out = any_out || out;
+        }
+        if (all_out) {
+            return;
+        }
+        if (any_out) {
+            outside_any |= 1u << plane;
+        }
+    }
+    if (outside_any == 0u) {
+        piece(i, v, prim);
+        return;
+    }
+    poly[0] = v[0];
+    poly[1] = v[1];
+    poly[2] = v[2];
+    poly_n = 3u;
+    clip_poly(outside_any);
+    for (var k = 1u; k + 1u < poly_n; k++) {
+        piece(i, array<ClipVertex, 3>(poly[0], poly[k], poly[k + 1u]), prim);
+    }
+}
+
+// Workgroups of 64 for `invocations` as (x, y) with x ≤ 65535 (oit-wgpu's `dispatch_size`).
+fn write_dispatch(at: u32, groups: u32) {
+    if (groups <= 65535u) {
+        args[at] = groups;
+        args[at + 1u] = 1u;
+    } else {
+        args[at] = 65535u;
+        args[at + 1u] = (groups + 65534u) / 65535u;
+    }
+    args[at + 2u] = 1u;
+    args[at + 3u] = 0u;
+}
+
+@compute @workgroup_size(1)
+fn setup_finish_main() {
+    let items = min(atomicLoad(&counters[1]), su.item_capacity);
+    // raster_main: a workgroup per item; raster_loop_main: an invocation per item
+    write_dispatch(0u, items);
+    write_dispatch(4u, (items + 63u) / 64u);
+    args[8u] = items;
+}
