@@ -20,6 +20,8 @@ mod output;
 mod plot;
 mod render;
 mod sweep;
+#[cfg(feature = "view")]
+mod view;
 
 use std::process::ExitCode;
 
@@ -62,6 +64,9 @@ pub enum Command {
     Info(info::InfoArgs),
     /// `oit bench`.
     Bench(bench::BenchArgs),
+    /// `oit view` (with the `view` feature, on by default).
+    #[cfg(feature = "view")]
+    View(view::ViewArgs),
 }
 
 /// How a command ended when it did not fail outright.
@@ -81,6 +86,8 @@ pub fn run(cli: Cli) -> Result<Outcome, OitError> {
         Command::Sweep(args) => sweep::run(&args),
         Command::Info(args) => info::run(&args),
         Command::Bench(args) => bench::run(&args),
+        #[cfg(feature = "view")]
+        Command::View(args) => view::run(&args),
     }
 }
 
@@ -113,6 +120,11 @@ pub fn validate(cli: &Cli) -> Result<Validated, OitError> {
             bench::Checked::Replot(..) => Validated { techniques: Vec::new(), prepared: None },
             bench::Checked::Measure(config) => Validated { techniques: config.techniques, prepared: None },
         },
+        #[cfg(feature = "view")]
+        Command::View(args) => {
+            let checked = view::check(args)?;
+            Validated { techniques: vec![checked.state.technique], prepared: None }
+        }
     })
 }
 
