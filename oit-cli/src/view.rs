@@ -182,7 +182,8 @@ pub fn check(args: &ViewArgs) -> Result<Checked, OitError> {
             args.fov
         )));
     }
-    let view = View { azimuth: args.azimuth, elevation: args.elevation, fov: args.fov, near: None, far: None };
+    let view =
+        View { azimuth: args.azimuth, elevation: args.elevation, fov: args.fov, near: None, far: None };
     let unit = oit_core::Aabb { min: oit_core::glam::Vec3::ZERO, max: oit_core::glam::Vec3::ONE };
     Camera::orbit(&unit, view, width as f32 / height as f32)?;
     if let Some(path) = &args.screenshot {

@@ -63,9 +63,13 @@ fn display(test: &str) -> Option<(String, Option<Xvfb>)> {
     }
     let Some(xvfb) = find_xvfb() else {
         if oit_wgpu::gpu_required() {
-            panic!("{test}: OIT_REQUIRE_GPU=1 but Xvfb is not installed (apt-get install xvfb) and DISPLAY is unset");
+            panic!(
+                "{test}: OIT_REQUIRE_GPU=1 but Xvfb is not installed (apt-get install xvfb) and DISPLAY is unset"
+            );
         }
-        skip(&format!("skipped {test}: no DISPLAY and no Xvfb: install xvfb (set OIT_REQUIRE_GPU=1 to make this a failure)"));
+        skip(&format!(
+            "skipped {test}: no DISPLAY and no Xvfb: install xvfb (set OIT_REQUIRE_GPU=1 to make this a failure)"
+        ));
         return None;
     };
     // a display number no other server holds; another Xvfb may take it first, then try the next
@@ -173,7 +177,18 @@ fn scripted_view_matches_render() {
     ";
     std::fs::write(dir.join("run.txt"), script).unwrap();
     let out = oit(
-        &["view", "--scene", SCENE, "--technique", "fabs:4", "--size", "128x96", "--no-overlay", "--script", "run.txt"],
+        &[
+            "view",
+            "--scene",
+            SCENE,
+            "--technique",
+            "fabs:4",
+            "--size",
+            "128x96",
+            "--no-overlay",
+            "--script",
+            "run.txt",
+        ],
         Some(&display),
         &dir,
     );
@@ -205,7 +220,18 @@ fn scripted_view_matches_render() {
 
     // --screenshot alone: the first frame, written on exit
     let out = oit(
-        &["view", "--scene", SCENE, "--technique", "dp", "--size", "80x64", "--no-overlay", "--screenshot", "alone.png"],
+        &[
+            "view",
+            "--scene",
+            SCENE,
+            "--technique",
+            "dp",
+            "--size",
+            "80x64",
+            "--no-overlay",
+            "--screenshot",
+            "alone.png",
+        ],
         Some(&display),
         &dir,
     );

@@ -68,7 +68,11 @@ pub fn parse(text: &str) -> Result<Vec<Event>, String> {
             .ok_or_else(|| format!("line {n}: '{}' is not a time (seconds, 0 or more)", words[0]))?;
         let args = &words[2.min(words.len())..];
         let want = |count: usize, usage: &str| {
-            if args.len() == count { Ok(()) } else { Err(format!("line {n}: expected `{usage}`, got `{line}`")) }
+            if args.len() == count {
+                Ok(())
+            } else {
+                Err(format!("line {n}: expected `{usage}`, got `{line}`"))
+            }
         };
         let number = |word: &str| -> Result<f32, String> {
             word.parse::<f32>()
@@ -87,7 +91,9 @@ pub fn parse(text: &str) -> Result<Vec<Event>, String> {
                 want(1, "TIME key NAME")?;
                 let (shift, name) = match args[0].split_once('+') {
                     Some((m, name)) if m.eq_ignore_ascii_case("shift") => (true, name),
-                    Some(_) => return Err(format!("line {n}: only the shift modifier is known: `shift+NAME`")),
+                    Some(_) => {
+                        return Err(format!("line {n}: only the shift modifier is known: `shift+NAME`"));
+                    }
                     None => (false, args[0]),
                 };
                 if super::keys::lookup(name).is_none() {
@@ -110,7 +116,8 @@ pub fn parse(text: &str) -> Result<Vec<Event>, String> {
             Some("screenshot") => {
                 want(1, "TIME screenshot FILE.png")?;
                 let path = PathBuf::from(args[0]);
-                crate::options::check_output(&path, "png", "screenshot").map_err(|e| format!("line {n}: {e}"))?;
+                crate::options::check_output(&path, "png", "screenshot")
+                    .map_err(|e| format!("line {n}: {e}"))?;
                 Action::Screenshot(path)
             }
             Some("quit") => {

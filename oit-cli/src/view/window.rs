@@ -56,7 +56,11 @@ fn render_frame(
 
 /// The viewer's render pipeline for one capture module: oit's module, then the hardware path's
 /// vertex and fragment stages (`hw_vs`, `hw_fs`), no vertex buffers, no culling.
-fn scene_pipeline(device: &wgpu::Device, geometry: &SceneGeometry, capture: &CaptureShader<'_>) -> wgpu::RenderPipeline {
+fn scene_pipeline(
+    device: &wgpu::Device,
+    geometry: &SceneGeometry,
+    capture: &CaptureShader<'_>,
+) -> wgpu::RenderPipeline {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("oit view"),
         source: wgpu::ShaderSource::Wgsl(format!("{}\n{}", capture.wgsl, SceneGeometry::WGSL).into()),
@@ -115,13 +119,19 @@ fn optional_features() -> wgpu::Features {
 impl Gfx {
     /// Opens the window, a Vulkan adapter that can present to it, the device, the surface, the
     /// scene's geometry and the pass.
-    fn new(event_loop: &ActiveEventLoop, checked: &Checked, adapter_filter: Option<&str>) -> Result<Gfx, OitError> {
+    fn new(
+        event_loop: &ActiveEventLoop,
+        checked: &Checked,
+        adapter_filter: Option<&str>,
+    ) -> Result<Gfx, OitError> {
         let device_error = |what: String| OitError::Device(what);
         let (w, h) = (checked.settings.width, checked.settings.height);
         let attributes =
             Window::default_attributes().with_title("oit view").with_inner_size(PhysicalSize::new(w, h));
         let window = Arc::new(
-            event_loop.create_window(attributes).map_err(|e| device_error(format!("cannot open a window: {e}")))?,
+            event_loop
+                .create_window(attributes)
+                .map_err(|e| device_error(format!("cannot open a window: {e}")))?,
         );
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
         desc.backends = wgpu::Backends::VULKAN;
@@ -139,7 +149,9 @@ impl Gfx {
         let filter = adapter_filter.map(str::to_owned).or_else(|| std::env::var("OIT_ADAPTER").ok());
         let mut usable: Vec<wgpu::Adapter> = adapters
             .into_iter()
-            .filter(|a| filter.as_ref().is_none_or(|f| a.get_info().name.to_lowercase().contains(&f.to_lowercase())))
+            .filter(|a| {
+                filter.as_ref().is_none_or(|f| a.get_info().name.to_lowercase().contains(&f.to_lowercase()))
+            })
             .filter(|a| a.is_surface_supported(&surface))
             .filter(|a| a.features().contains(oit_wgpu::required_features()))
             .collect();
@@ -206,8 +218,8 @@ impl Gfx {
             scene.objects.iter().map(|o| o.absorption).sum::<f32>() / scene.objects.len() as f32
         };
         let camera = Camera::orbit_scene(scene, checked.state.view, w as f32 / h as f32)?;
-        let pass =
-            OitPass::new(&device, &queue, checked.settings.clone(), camera)?.with_scene_bounds(scene.bounds(), absorption);
+        let pass = OitPass::new(&device, &queue, checked.settings.clone(), camera)?
+            .with_scene_bounds(scene.bounds(), absorption);
         Ok(Gfx {
             window,
             surface,
@@ -246,9 +258,13 @@ impl Gfx {
         if target.width() < image.width || target.height() < image.height {
             return;
         }
-        let bgra = matches!(target.format(), wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb);
-        let bytes: Vec<u8> =
-            image.pixels.iter().flat_map(|p| if bgra { [p[2], p[1], p[0], 255] } else { [p[0], p[1], p[2], 255] }).collect();
+        let bgra =
+            matches!(target.format(), wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb);
+        let bytes: Vec<u8> = image
+            .pixels
+            .iter()
+            .flat_map(|p| if bgra { [p[2], p[1], p[0], 255] } else { [p[0], p[1], p[2], 255] })
+            .collect();
         self.queue.write_texture(
             wgpu::TexelCopyTextureInfo {
                 texture: target,
@@ -366,18 +382,27 @@ impl App<'_> {
         };
         let options = state.render_options(size.width, size.height);
         let scene = &self.checked.scene;
-        let result = Camera::orbit_scene(scene, state.view, size.width as f32 / size.height as f32).and_then(|camera| {
-            let frame = render_frame(&mut gfx.pass, &gfx.geometry, &gfx.device, scene, camera, &settings)?;
-            let compared = if state.compare {
-                let reference_settings = Settings { technique: Technique::Reference, ..settings.clone() };
-                let reference =
-                    render_frame(&mut gfx.pass, &gfx.geometry, &gfx.device, scene, camera, &reference_settings)?;
-                Some((accuracy(&reference, &frame.image)?, error_image(&reference, &frame.image)))
-            } else {
-                None
-            };
-            Ok((frame, compared))
-        });
+        let result = Camera::orbit_scene(scene, state.view, size.width as f32 / size.height as f32).and_then(
+            |camera| {
+                let frame =
+                    render_frame(&mut gfx.pass, &gfx.geometry, &gfx.device, scene, camera, &settings)?;
+                let compared = if state.compare {
+                    let reference_settings = Settings { technique: Technique::Reference, ..settings.clone() };
+                    let reference = render_frame(
+                        &mut gfx.pass,
+                        &gfx.geometry,
+                        &gfx.device,
+                        scene,
+                        camera,
+                        &reference_settings,
+                    )?;
+                    Some((accuracy(&reference, &frame.image)?, error_image(&reference, &frame.image)))
+                } else {
+                    None
+                };
+                Ok((frame, compared))
+            },
+        );
         let device_error = gfx.take_device_error();
         let (image, mut shown, frame, acc) = match result {
             Ok((frame, compared)) => {
@@ -402,7 +427,14 @@ impl App<'_> {
         let previous_ms = self.drawn.as_ref().map_or(0.0, |d| d.frame_ms);
         if self.checked.state.overlay {
             let gfx = self.gfx.as_ref().expect("checked above");
-            draw_overlay(&mut shown, &self.checked.state, &drawn, previous_ms, &gfx.adapter_name, self.note.as_deref());
+            draw_overlay(
+                &mut shown,
+                &self.checked.state,
+                &drawn,
+                previous_ms,
+                &gfx.adapter_name,
+                self.note.as_deref(),
+            );
         }
         let gfx = self.gfx.as_mut().expect("checked above");
         gfx.present(&shown);
@@ -446,12 +478,16 @@ impl App<'_> {
         }
         if let Some((w, h, until)) = self.pending_resize {
             let size = self.gfx.as_ref().map(|g| g.window.inner_size());
-            if size == Some(PhysicalSize::new(w, h)) && self.drawn.as_ref().is_some_and(|d| d.image.width == w && d.image.height == h) {
+            if size == Some(PhysicalSize::new(w, h))
+                && self.drawn.as_ref().is_some_and(|d| d.image.width == w && d.image.height == h)
+            {
                 self.pending_resize = None;
             } else if Instant::now() < until {
                 return Some(Instant::now() + Duration::from_millis(20));
             } else {
-                self.report(format!("the window did not take the scripted size {w}x{h} within {RESIZE_WAIT:?}"));
+                self.report(format!(
+                    "the window did not take the scripted size {w}x{h} within {RESIZE_WAIT:?}"
+                ));
                 self.pending_resize = None;
             }
         }
@@ -504,20 +540,37 @@ fn free_name() -> PathBuf {
 
 /// The overlay: technique, passes, fragments, lost, GPU and frame time, the settings the keys
 /// change, the comparison, and the last note, on a dimmed box at the top left.
-fn draw_overlay(image: &mut Image, state: &ViewState, drawn: &Drawn, frame_ms: f64, adapter: &str, note: Option<&str>) {
+fn draw_overlay(
+    image: &mut Image,
+    state: &ViewState,
+    drawn: &Drawn,
+    frame_ms: f64,
+    adapter: &str,
+    note: Option<&str>,
+) {
     let mut lines = vec![format!("{}   wgpu hardware (embedded pass) on {adapter}", state.technique)];
     if let Some(frame) = &drawn.frame {
         let s = &frame.stats;
         let lost = if s.fragments > 0 { 100.0 * s.lost as f64 / s.fragments as f64 } else { 0.0 };
-        lines.push(format!("passes {}   fragments {}   lost {} ({lost:.2}%)", s.geometry_passes, s.fragments, s.lost));
+        lines.push(format!(
+            "passes {}   fragments {}   lost {} ({lost:.2}%)",
+            s.geometry_passes, s.fragments, s.lost
+        ));
         let gpu = s.gpu_ms.map_or("n/a".to_string(), |g| format!("{g:.2} ms"));
         lines.push(format!("GPU {gpu}   frame {frame_ms:.1} ms"));
     }
     let alpha = state.alpha.map_or("own".to_string(), |a| a.to_string());
     lines.push(format!("alpha {alpha}   shading {}   effect {}", state.shading_name(), state.effect_name()));
     if let Some(acc) = &drawn.accuracy {
-        let epr = if acc.is_measured() { format!("{:.3}%", acc.epr * 100.0) } else { "n/a (nothing covered)".into() };
-        lines.push(format!("EPR {epr} vs reference ({} of {} pixels); heat map of the error x8", acc.error_pixels, acc.covered));
+        let epr = if acc.is_measured() {
+            format!("{:.3}%", acc.epr * 100.0)
+        } else {
+            "n/a (nothing covered)".into()
+        };
+        lines.push(format!(
+            "EPR {epr} vs reference ({} of {} pixels); heat map of the error x8",
+            acc.error_pixels, acc.covered
+        ));
     }
     if let Some(note) = note {
         lines.push(note.to_string());
@@ -551,9 +604,9 @@ impl ApplicationHandler for App<'_> {
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
-            WindowEvent::Resized(_) | WindowEvent::ScaleFactorChanged { .. } | WindowEvent::Occluded(false) => {
-                self.dirty = true
-            }
+            WindowEvent::Resized(_)
+            | WindowEvent::ScaleFactorChanged { .. }
+            | WindowEvent::Occluded(false) => self.dirty = true,
             WindowEvent::RedrawRequested => {
                 self.dirty = false;
                 self.draw();
@@ -627,7 +680,8 @@ pub fn run(checked: Checked, args: &ViewArgs) -> Result<Outcome, OitError> {
     if std::env::var_os("DISPLAY").is_none_or(|d| d.is_empty()) {
         return Err(no_display("DISPLAY is not set"));
     }
-    let event_loop = EventLoop::new().map_err(|e| no_display(&format!("cannot connect to the X server ({e})")))?;
+    let event_loop =
+        EventLoop::new().map_err(|e| no_display(&format!("cannot connect to the X server ({e})")))?;
     eprintln!("{}", keys::BINDINGS);
     let mut app = App {
         checked,
@@ -647,7 +701,9 @@ pub fn run(checked: Checked, args: &ViewArgs) -> Result<Outcome, OitError> {
         shift: false,
         dirty: true,
     };
-    event_loop.run_app(&mut app).map_err(|e| OitError::Device(format!("the window's event loop failed: {e}")))?;
+    event_loop
+        .run_app(&mut app)
+        .map_err(|e| OitError::Device(format!("the window's event loop failed: {e}")))?;
     if let Some(e) = app.fatal.take() {
         return Err(e);
     }
