@@ -1,7 +1,8 @@
 //! oit-cli: the command line of oit — render one technique, compare techniques with the exact
-//! reference, sweep the camera around the scene, write the bench report, and list the backends
-//! compiled in. The `oit` binary (`main.rs`) is [`main`]; [`validate`] makes every check a command
-//! makes before it works, without working, for the fuzz harness (`oit-fuzz`).
+//! reference, sweep the camera around the scene, write the bench report, list the backends
+//! compiled in, and (with the `view` feature, on by default) show the scene live in a window.
+//! The `oit` binary (`main.rs`) is [`main`]; [`validate`] makes every check a command makes before
+//! it works, without working, for the fuzz harness (`oit-fuzz`).
 //!
 //! Contract: every failure prints one line `error: <message>` on stderr and exits with code 1
 //! (clap's own usage errors keep clap's format and exit code 2). Reports go to stdout — a table,

@@ -44,11 +44,24 @@ pub struct Event {
     pub action: Action,
 }
 
-/// Reads and parses the script at `path`; every error names the line.
+/// The latest time an event may have, in seconds (about 11 days).
+const MAX_TIME: f64 = 1e6;
+
+/// The largest script read, in bytes.
+const MAX_SCRIPT_BYTES: u64 = 1 << 20;
+
+/// Reads and parses the script at `path` (a file of at most 1 MiB); every error names the line.
 pub fn load(path: &Path) -> Result<Vec<Event>, OitError> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| OitError::InvalidSettings(format!("cannot read the script {}: {e}", path.display())))?;
-    parse(&text).map_err(|e| OitError::InvalidSettings(format!("script {}: {e}", path.display())))
+    let bad = |message: String| OitError::InvalidSettings(format!("script {}: {message}", path.display()));
+    let meta = std::fs::metadata(path).map_err(|e| bad(format!("cannot read it: {e}")))?;
+    if !meta.is_file() {
+        return Err(bad("not a file".into()));
+    }
+    if meta.len() > MAX_SCRIPT_BYTES {
+        return Err(bad(format!("{} bytes: a script is at most 1 MiB", meta.len())));
+    }
+    let text = std::fs::read_to_string(path).map_err(|e| bad(format!("cannot read it: {e}")))?;
+    parse(&text).map_err(bad)
 }
 
 /// Parses a script (see the module docs).
@@ -61,11 +74,10 @@ pub fn parse(text: &str) -> Result<Vec<Event>, String> {
         }
         let n = i + 1;
         let words: Vec<&str> = line.split_whitespace().collect();
-        let time: f64 = words[0]
-            .parse()
-            .ok()
-            .filter(|t: &f64| t.is_finite() && *t >= 0.0)
-            .ok_or_else(|| format!("line {n}: '{}' is not a time (seconds, 0 or more)", words[0]))?;
+        let time: f64 =
+            words[0].parse().ok().filter(|t: &f64| (0.0..=MAX_TIME).contains(t)).ok_or_else(|| {
+                format!("line {n}: '{}' is not a time (seconds, from 0 to {MAX_TIME})", words[0])
+            })?;
         let args = &words[2.min(words.len())..];
         let want = |count: usize, usage: &str| {
             if args.len() == count {
@@ -173,6 +185,7 @@ mod tests {
             ("1 resize 0 10", "'0' is not a size"),
             ("1 screenshot out.jpg", "must name a .png file"),
             ("-1 quit", "'-1' is not a time"),
+            ("1e300 quit", "'1e300' is not a time"),
             ("1 quit now", "expected `TIME quit`"),
         ] {
             let e = parse(text).unwrap_err();
