@@ -89,7 +89,7 @@ pub struct ViewArgs {
     #[arg(long)]
     pub no_overlay: bool,
 
-    /// Replays the timed key and mouse events of FILE (format above).
+    /// Replays the timed key and mouse events of FILE (the format is below).
     #[arg(long, value_name = "FILE")]
     pub script: Option<PathBuf>,
 
