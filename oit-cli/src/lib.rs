@@ -1,7 +1,8 @@
 //! oit-cli: the command line of oit — render one technique, compare techniques with the exact
-//! reference, sweep the camera around the scene, write the bench report, and list the backends
-//! compiled in. The `oit` binary (`main.rs`) is [`main`]; [`validate`] makes every check a command
-//! makes before it works, without working, for the fuzz harness (`oit-fuzz`).
+//! reference, sweep the camera around the scene, write the bench report, list the backends
+//! compiled in, and (with the `view` feature, on by default) show the scene live in a window.
+//! The `oit` binary (`main.rs`) is [`main`]; [`validate`] makes every check a command makes before
+//! it works, without working, for the fuzz harness (`oit-fuzz`).
 //!
 //! Contract: every failure prints one line `error: <message>` on stderr and exits with code 1
 //! (clap's own usage errors keep clap's format and exit code 2). Reports go to stdout — a table,
@@ -20,6 +21,8 @@ mod output;
 mod plot;
 mod render;
 mod sweep;
+#[cfg(feature = "view")]
+mod view;
 
 use std::process::ExitCode;
 
@@ -62,6 +65,9 @@ pub enum Command {
     Info(info::InfoArgs),
     /// `oit bench`.
     Bench(bench::BenchArgs),
+    /// `oit view` (with the `view` feature, on by default).
+    #[cfg(feature = "view")]
+    View(view::ViewArgs),
 }
 
 /// How a command ended when it did not fail outright.
@@ -81,6 +87,8 @@ pub fn run(cli: Cli) -> Result<Outcome, OitError> {
         Command::Sweep(args) => sweep::run(&args),
         Command::Info(args) => info::run(&args),
         Command::Bench(args) => bench::run(&args),
+        #[cfg(feature = "view")]
+        Command::View(args) => view::run(&args),
     }
 }
 
@@ -113,6 +121,11 @@ pub fn validate(cli: &Cli) -> Result<Validated, OitError> {
             bench::Checked::Replot(..) => Validated { techniques: Vec::new(), prepared: None },
             bench::Checked::Measure(config) => Validated { techniques: config.techniques, prepared: None },
         },
+        #[cfg(feature = "view")]
+        Command::View(args) => {
+            let checked = view::check(args)?;
+            Validated { techniques: vec![checked.state.technique], prepared: None }
+        }
     })
 }
 

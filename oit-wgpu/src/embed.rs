@@ -30,6 +30,10 @@
 //!
 //! `Backend::render` on the hardware path is a client of the same code: [`crate::HardwareRaster`]
 //! is this pass's driver with oit's own vertex stage (`shaders/raster_hardware.wgsl`) and draws.
+//! A user who draws an oit [`Scene`] (the `oit view` window does) can take that vertex stage and
+//! its upload instead of writing their own: [`SceneGeometry`] holds the scene on the device in
+//! the hardware path's format and [`SceneGeometry::WGSL`] is its shader, so the pass's image equals
+//! `Backend::render`'s on the hardware path.
 //!
 //! The module oit supplies defines many unprefixed names (`Fragment`, `capture`, `fu`, `state`,
 //! `shade`, ...), and uses group 0: keep the user's names distinct and their bindings in groups
@@ -101,6 +105,7 @@ use oit_core::{Aabb, Camera, Frame, Instance, Mesh, OitError, RasterPath, Scene,
 
 use crate::ctx::{Driver, GpuCtx};
 use crate::gpu::{COMMON_WGSL, Gpu};
+use crate::hardware::{HwGeometry, RASTER_WGSL};
 
 /// The fragment side every render-pipeline geometry pass shares (`oit_capture`).
 pub const CAPTURE_RENDER_WGSL: &str = include_str!("shaders/capture_render.wgsl");
@@ -357,6 +362,16 @@ impl OitPass {
         &self.settings
     }
 
+    /// Changes the settings and camera of the next frames (a new view, a new window size, another
+    /// technique), keeping what the pass has compiled on the device (its pipelines and the user's,
+    /// cached per module). Checks the settings as [`OitPass::new`] does.
+    pub fn set_view(&mut self, settings: Settings, camera: Camera) -> Result<(), OitError> {
+        settings.validate()?;
+        self.settings = settings;
+        self.camera = camera;
+        Ok(())
+    }
+
     /// One frame: the technique's geometry passes (the user's `draw` in each, on the pipeline
     /// `pipeline` builds for that pass's capture module; built once per module and kept), its
     /// resolve, and the image written into `target` when given (an `Rgba8Unorm`, `Rgba8UnormSrgb`,
@@ -454,5 +469,60 @@ impl OitPass {
         );
         self.gpu.queue.submit([]);
         Ok(())
+    }
+}
+
+/// An oit [`Scene`] on the user's device in the hardware path's format, for drawing it through an
+/// [`OitPass`] with oit's own vertex stage (the shading and transform of `Backend::render` on the
+/// hardware path, so the images agree).
+///
+/// Upload: each mesh's vertices once (position, normal, vertex colour) and per triangle its three
+/// vertex indices and its instance, in primitive order, read from storage buffers by vertex index
+/// (no vertex buffers); per frame, [`SceneGeometry::write_frame`] writes each instance's
+/// `camera.view_proj() · transform`, normal matrix and base colour, and the shading uniform.
+///
+/// Use: the pipeline's module is `capture.wgsl` followed by [`SceneGeometry::WGSL`], vertex entry
+/// point `hw_vs`, fragment entry point `hw_fs`, no vertex buffers, no culling; its layout is the
+/// capture's group 0 then [`SceneGeometry::bind_group_layout`] as group 1. In the draw closure, set
+/// [`SceneGeometry::bind_group`] at index 1 and draw `0..vertex_count()`.
+pub struct SceneGeometry {
+    gpu: Gpu,
+    geometry: HwGeometry,
+}
+
+impl SceneGeometry {
+    /// The hardware path's shader (`shaders/raster_hardware.wgsl`): its group 1 bindings, the
+    /// vertex stage `hw_vs` (vertex pulled by index, transformed as oit-cpu's setup does) and the
+    /// fragment stage `hw_fs` (shading as `Shading::shade`, then `oit_capture_full`).
+    pub const WGSL: &'static str = RASTER_WGSL;
+
+    /// Uploads `scene`'s meshes and triangles to the device (which must have
+    /// [`crate::required_features`]).
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> Result<SceneGeometry, OitError> {
+        let gpu = Gpu::from_device(device.clone(), queue.clone())?;
+        let geometry = HwGeometry::new(&gpu, scene, false, &std::cell::Cell::new(0))?;
+        Ok(SceneGeometry { gpu, geometry })
+    }
+
+    /// Writes one frame's instance data and shading uniform (`scene` is the one uploaded; the
+    /// settings' shading, alpha and colours apply) on the queue.
+    pub fn write_frame(&self, scene: &Scene, camera: &Camera, settings: &Settings) {
+        self.geometry.write_frame(&self.gpu, scene, camera, settings);
+    }
+
+    /// The layout of group 1 of the pipeline.
+    pub fn bind_group_layout(&self) -> &wgpu::BindGroupLayout {
+        self.geometry.stage().layout()
+    }
+
+    /// Group 1 of the draw.
+    pub fn bind_group(&self) -> &wgpu::BindGroup {
+        self.geometry.stage().group()
+    }
+
+    /// The vertices of the one draw: three per triangle (primitive `t` of the draw is the scene's
+    /// primitive `t`).
+    pub fn vertex_count(&self) -> u32 {
+        self.geometry.stage().vertex_count()
     }
 }

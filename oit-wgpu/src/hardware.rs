@@ -32,7 +32,7 @@ use crate::ctx::{Driver, GpuCtx};
 use crate::embed::{CaptureShader, GeometryPass, RenderDriver};
 use crate::gpu::Gpu;
 
-const RASTER_WGSL: &str = include_str!("shaders/raster_hardware.wgsl");
+pub(crate) const RASTER_WGSL: &str = include_str!("shaders/raster_hardware.wgsl");
 /// What to try when the geometry does not fit in one storage binding.
 const GEOMETRY_HINT: &str = "use fewer triangles or instances, or the cpu backend";
 
@@ -78,6 +78,16 @@ pub struct SceneStage {
 }
 
 impl SceneStage {
+    /// The number of vertices of the one draw (three per triangle).
+    pub(crate) fn vertex_count(&self) -> u32 {
+        self.vertex_count
+    }
+
+    /// Group 1 (the vertices, triangles, shading uniform and instances).
+    pub(crate) fn group(&self) -> &wgpu::BindGroup {
+        &self.group
+    }
+
     /// raster_hardware.wgsl without its fragment entry point (`hw_fs`, which calls the atomics
     /// capture): the group 1 bindings, `HwOut` and `hw_vs`.
     pub(crate) fn wgsl(&self) -> &'static str {
@@ -341,6 +351,11 @@ impl HwGeometry {
             ],
         });
         Ok(HwGeometry { boxes, instances, uniform, stage: SceneStage { layout, group, vertex_count } })
+    }
+
+    /// The vertex stage's group 1 and draw over this geometry.
+    pub(crate) fn stage(&self) -> &SceneStage {
+        &self.stage
     }
 
     /// Writes the frame's instance data (`view_proj · transform`, the normal matrix, the base

@@ -1,0 +1,270 @@
+//! `oit view` as a user runs it: a scripted run (keys, drag, wheel, resize, the reference
+//! comparison) under a virtual X server, each screenshot against `oit render --backend wgpu
+//! --raster hardware` of the view and settings the viewer prints for it (±1 in 8 bits, overlay
+//! off); `--screenshot` alone; and a clear error without a display.
+//!
+//! The window needs a display and a Vulkan adapter: with DISPLAY unset the test starts `Xvfb`
+//! itself (and stops it after). Without Xvfb, or without an adapter, it prints one `skipped` line;
+//! with `OIT_REQUIRE_GPU=1` (CI, which installs both) either is a failure.
+#![cfg(feature = "view")]
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+const SCENE: &str = "default";
+const BACKGROUND: &str = "0.06,0.07,0.09";
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// A fresh folder of this test's own under cargo's scratch space.
+fn scratch(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("oit-view").join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch folder");
+    dir
+}
+
+/// One line on stderr past the harness's capture: a skip must be seen in a passing run.
+fn skip(line: &str) {
+    use std::io::Write as _;
+    let _ = writeln!(std::io::stderr(), "{line}");
+}
+
+/// A virtual X server this test started; stopped when dropped.
+struct Xvfb {
+    child: Child,
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// `Xvfb` on the PATH.
+fn find_xvfb() -> Option<PathBuf> {
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path).map(|dir| dir.join("Xvfb")).find(|p| p.is_file())
+}
+
+/// The display to open windows on: DISPLAY when set, else a fresh Xvfb (kept alive by the
+/// returned guard). `None` after a skip line when there is neither.
+fn display(test: &str) -> Option<(String, Option<Xvfb>)> {
+    if let Some(d) = std::env::var_os("DISPLAY").filter(|d| !d.is_empty()) {
+        return Some((d.to_string_lossy().into_owned(), None));
+    }
+    let Some(xvfb) = find_xvfb() else {
+        if oit_wgpu::gpu_required() {
+            panic!(
+                "{test}: OIT_REQUIRE_GPU=1 but Xvfb is not installed (apt-get install xvfb) and DISPLAY is unset"
+            );
+        }
+        skip(&format!(
+            "skipped {test}: no DISPLAY and no Xvfb: install xvfb (set OIT_REQUIRE_GPU=1 to make this a failure)"
+        ));
+        return None;
+    };
+    // a display number no other server holds; another Xvfb may take it first, then try the next
+    for n in (90 + std::process::id() % 100)..400 {
+        if Path::new(&format!("/tmp/.X{n}-lock")).exists() {
+            continue;
+        }
+        let mut child = Command::new(&xvfb)
+            .args([format!(":{n}").as_str(), "-screen", "0", "1024x768x24", "-nolisten", "tcp"])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("Xvfb starts");
+        let socket = PathBuf::from(format!("/tmp/.X11-unix/X{n}"));
+        let until = Instant::now() + Duration::from_secs(20);
+        while Instant::now() < until {
+            if let Ok(Some(_)) = child.try_wait() {
+                break;
+            }
+            if socket.exists() {
+                return Some((format!(":{n}"), Some(Xvfb { child })));
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        let _ = child.kill();
+        let _ = child.wait();
+    }
+    panic!("{test}: Xvfb did not start on any display");
+}
+
+fn oit(args: &[&str], display: Option<&str>, dir: &Path) -> Output {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_oit"));
+    command.args(args).current_dir(dir).env_remove("WAYLAND_DISPLAY");
+    match display {
+        Some(d) => command.env("DISPLAY", d),
+        None => command.env_remove("DISPLAY"),
+    };
+    command.output().expect("the oit binary runs")
+}
+
+/// Every channel of `a` within 1 of `b`'s, sizes equal.
+fn assert_close(a: &Path, b: &Path, what: &str) {
+    let a = image::open(a).unwrap_or_else(|e| panic!("{what}: {}: {e}", a.display())).to_rgba8();
+    let b = image::open(b).unwrap_or_else(|e| panic!("{what}: {}: {e}", b.display())).to_rgba8();
+    assert_eq!(a.dimensions(), b.dimensions(), "{what}: sizes");
+    let mut worst = (0u8, 0u32, 0u32);
+    for (x, y, p) in a.enumerate_pixels() {
+        let q = b.get_pixel(x, y);
+        let d = (0..4).map(|c| p[c].abs_diff(q[c])).max().unwrap_or(0);
+        if d > worst.0 {
+            worst = (d, x, y);
+        }
+    }
+    assert!(worst.0 <= 1, "{what}: pixel ({}, {}) differs by {} in 8 bits", worst.1, worst.2, worst.0);
+}
+
+/// Renders `options` (the viewer's printed view) with `oit render` on the hardware path and
+/// compares it with the viewer's `shot`.
+fn check_against_render(dir: &Path, shot: &Path, options: &str, what: &str) {
+    let out_png = dir.join(format!("render-{}", shot.file_name().unwrap().to_string_lossy()));
+    let mut args = vec!["render", "--backend", "wgpu", "--raster", "hardware", "--scene", SCENE];
+    args.extend(["--background", BACKGROUND, "-o", out_png.to_str().unwrap()]);
+    args.extend(options.split_whitespace());
+    let out = oit(&args, None, dir);
+    assert!(out.status.success(), "{what}: oit render {options}: {}", stderr(&out));
+    assert_close(shot, &out_png, what);
+}
+
+/// The value of `flag` in a printed view.
+fn option<'a>(options: &'a str, flag: &str) -> &'a str {
+    let words: Vec<&str> = options.split_whitespace().collect();
+    let i = words.iter().position(|w| *w == flag).unwrap_or_else(|| panic!("{flag} missing from {options}"));
+    words[i + 1]
+}
+
+#[test]
+fn scripted_view_matches_render() {
+    let test = "oit view under Xvfb";
+    if oit_wgpu::backend_or_skip(test).is_none() {
+        return;
+    }
+    let Some((display, _xvfb)) = display(test) else {
+        return;
+    };
+    let dir = scratch("scripted");
+    // known steps: K (fabs:4 → fabs:8), a drag of (40, -20) px at 0.25°/px (azimuth 30 → 20,
+    // elevation 20 → 15), one wheel line (fov 45 → 40.5), alpha three steps (own → 0.5)
+    let script = "\
+        # the test's script
+        0.0 key K
+        0.1 drag 40 -20
+        0.2 scroll 1
+        0.3 key A
+        0.3 key A
+        0.3 key A
+        0.4 screenshot one.png
+        0.5 key shift+T    # the previous technique: mdts64:8
+        0.5 key E          # translucency
+        0.6 resize 112 72
+        0.7 screenshot two.png
+        0.8 key R          # the reference comparison on: the screenshot is still the technique's
+        0.8 key E          # fresnel
+        0.9 screenshot three.png
+        1.0 quit
+    ";
+    std::fs::write(dir.join("run.txt"), script).unwrap();
+    let out = oit(
+        &[
+            "view",
+            "--scene",
+            SCENE,
+            "--technique",
+            "fabs:4",
+            "--size",
+            "128x96",
+            "--no-overlay",
+            "--script",
+            "run.txt",
+        ],
+        Some(&display),
+        &dir,
+    );
+    let (text, err) = (stdout(&out), stderr(&out));
+    assert!(out.status.success(), "oit view failed: {err}\nstdout: {text}");
+    assert!(err.contains("T / shift+T"), "the key bindings are printed on start: {err}");
+    let shots: Vec<(&str, &str)> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("screenshot "))
+        .map(|l| l.split_once(": ").expect("screenshot PATH: OPTIONS"))
+        .collect();
+    assert_eq!(shots.len(), 3, "three screenshots: {text}");
+    let first = shots[0].1;
+    assert_eq!(option(first, "--technique"), "fabs:8");
+    assert_eq!(option(first, "--size"), "128x96");
+    assert_eq!(option(first, "--azimuth").parse::<f32>().unwrap(), 20.0);
+    assert_eq!(option(first, "--elevation").parse::<f32>().unwrap(), 15.0);
+    assert!((option(first, "--fov").parse::<f32>().unwrap() - 40.5).abs() < 1e-4, "{first}");
+    assert_eq!(option(first, "--alpha"), "0.5");
+    assert_eq!(option(shots[1].1, "--technique"), "mdts64:8");
+    assert_eq!(option(shots[1].1, "--effect"), "translucency");
+    assert_eq!(option(shots[1].1, "--size"), "112x72", "the window took the scripted size");
+    assert_eq!(option(shots[2].1, "--effect"), "fresnel");
+    let last = text.lines().find_map(|l| l.strip_prefix("view ")).expect("the final view is printed");
+    assert_eq!(last, shots[2].1, "nothing changed after the last screenshot");
+    for (name, options) in &shots {
+        check_against_render(&dir, &dir.join(name), options, name);
+    }
+
+    // --screenshot alone: the first frame, written on exit
+    let out = oit(
+        &[
+            "view",
+            "--scene",
+            SCENE,
+            "--technique",
+            "dp",
+            "--size",
+            "80x64",
+            "--no-overlay",
+            "--screenshot",
+            "alone.png",
+        ],
+        Some(&display),
+        &dir,
+    );
+    assert!(out.status.success(), "oit view --screenshot: {}", stderr(&out));
+    let text = stdout(&out);
+    let view = text.lines().find_map(|l| l.strip_prefix("view ")).expect("the view is printed");
+    assert_eq!(option(view, "--technique"), "dp");
+    check_against_render(&dir, &dir.join("alone.png"), view, "--screenshot");
+}
+
+/// Asserts the failure contract: exit code 1, one `error:` line, no panic.
+fn assert_one_error(out: &Output, what: &str, needles: &[&str]) {
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(1), "{what}: exit code, stderr: {err}");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "{what}: one line on stderr, got {err:?}");
+    assert!(lines[0].starts_with("error: "), "{what}: {err:?}");
+    assert!(!err.contains("panicked"), "{what}: {err:?}");
+    for needle in needles {
+        assert!(err.contains(needle), "{what}: '{needle}' missing from {err:?}");
+    }
+}
+
+#[test]
+fn without_a_display_it_says_so() {
+    let dir = scratch("no_display");
+    let out = oit(&["view", "--size", "64x64"], None, &dir);
+    assert_one_error(&out, "no DISPLAY", &["no display", "xvfb-run"]);
+    let out = oit(&["view", "--backend", "vulkan"], None, &dir);
+    assert_one_error(&out, "--backend vulkan", &["embeddable pass", "--backend wgpu"]);
+    let out = oit(&["view", "--technique", "bdp"], None, &dir);
+    assert_one_error(&out, "bdp", &["bounding boxes"]);
+    std::fs::write(dir.join("bad.txt"), "0 key T\n1 wiggle\n").unwrap();
+    let out = oit(&["view", "--script", "bad.txt"], None, &dir);
+    assert_one_error(&out, "bad script", &["line 2", "unknown action 'wiggle'"]);
+}
