@@ -53,7 +53,8 @@ pub struct SceneArgs {
     pub alpha: Option<f32>,
 
     /// How fragments are coloured: headlight (colour × (0.3 + 0.7·|n·l|), light from the eye),
-    /// flat (the object's colour), vertex (per-vertex colours) or normal (the normal as colour).
+    /// flat (the object's colour), vertex (per-vertex colours; a mesh without them gets its
+    /// object's colour, as flat, and a warning naming it) or normal (the normal as colour).
     #[arg(long, value_name = "MODE", default_value = "headlight")]
     pub shading: String,
 
@@ -179,10 +180,50 @@ impl SceneArgs {
             eprintln!("warning: {warning}");
         }
         scene.validate()?;
+        if let Some(warning) = shading_warning(&scene, settings.shading) {
+            eprintln!("warning: {warning}");
+        }
         let prepared = Prepared { scene, settings, view, backends };
         prepared.camera(view)?;
         Ok(prepared)
     }
+}
+
+/// Most mesh names [`shading_warning`] lists before it counts the rest.
+const LISTED_MESHES: usize = 3;
+
+/// The one warning `--shading vertex` gets when meshes the scene draws have no vertex colours:
+/// those are shaded with their object's colour, unlit, exactly as `--shading flat` would (see
+/// [`Shading::Vertex`]). Names up to [`LISTED_MESHES`] such meshes, each once, and counts the
+/// rest; `None` for other shadings or when every drawn mesh has colours.
+pub fn shading_warning(scene: &Scene, shading: Shading) -> Option<String> {
+    if shading != Shading::Vertex {
+        return None;
+    }
+    let mut bare: Vec<usize> = Vec::new();
+    for instance in &scene.instances {
+        let mesh = scene.objects.get(instance.object).map(|o| o.mesh);
+        if let Some(m) = mesh.filter(|&m| scene.meshes.get(m).is_some_and(|m| m.colors.is_none()))
+            && !bare.contains(&m)
+        {
+            bare.push(m);
+        }
+    }
+    if bare.is_empty() {
+        return None;
+    }
+    let mut names: Vec<String> =
+        bare.iter().take(LISTED_MESHES).map(|&m| format!("'{}'", scene.meshes[m].name)).collect();
+    if bare.len() > LISTED_MESHES {
+        names.push(format!("{} more", bare.len() - LISTED_MESHES));
+    }
+    let (noun, verb) = if bare.len() == 1 { ("mesh", "has") } else { ("meshes", "have") };
+    Some(format!(
+        "--shading vertex: {noun} {} of scene '{}' {verb} no vertex colours; drawn with the object \
+         colour, unlit, as --shading flat (vertex colours come from OBJ lines `v x y z r g b`)",
+        names.join(", "),
+        scene.name
+    ))
 }
 
 /// Checks `--near` and `--far` on their own and against each other (against a plane fitted to the
