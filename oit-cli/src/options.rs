@@ -200,11 +200,13 @@ pub fn shading_warning(scene: &Scene, shading: Shading) -> Option<String> {
     if shading != Shading::Vertex {
         return None;
     }
+    // in the order first drawn, each once (a flag per mesh: an OBJ may hold many thousands)
+    let mut seen = vec![false; scene.meshes.len()];
     let mut bare: Vec<usize> = Vec::new();
     for instance in &scene.instances {
         let mesh = scene.objects.get(instance.object).map(|o| o.mesh);
         if let Some(m) = mesh.filter(|&m| scene.meshes.get(m).is_some_and(|m| m.colors.is_none()))
-            && !bare.contains(&m)
+            && !std::mem::replace(&mut seen[m], true)
         {
             bare.push(m);
         }
@@ -263,4 +265,43 @@ pub fn check_output(path: &Path, extension: &str, option: &str) -> Result<(), Oi
         return Err(bad(format!("folder {} does not exist", parent.display())));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use oit_core::glam::{Mat4, Vec3, Vec4};
+    use oit_core::{Instance, Mesh, Object, Scene, Shading};
+
+    use super::shading_warning;
+
+    /// `n` meshes, each drawn twice; the first `coloured` of them with vertex colours.
+    fn scene(n: usize, coloured: usize) -> Scene {
+        let mut scene = Scene { name: "s".into(), ..Scene::default() };
+        for i in 0..n {
+            let mut mesh = Mesh::new(format!("m{i}"), vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]);
+            if i < coloured {
+                mesh.colors = Some(vec![Vec3::ONE; 3]);
+            }
+            scene.meshes.push(mesh);
+            scene.objects.push(Object { name: format!("o{i}"), mesh: i, color: Vec4::ONE, absorption: 1.0 });
+            for _ in 0..2 {
+                scene.instances.push(Instance { object: i, transform: Mat4::IDENTITY });
+            }
+        }
+        scene
+    }
+
+    #[test]
+    fn vertex_shading_names_the_meshes_without_colours() {
+        assert_eq!(shading_warning(&scene(5, 0), Shading::Flat), None);
+        assert_eq!(shading_warning(&scene(3, 3), Shading::Vertex), None);
+        let one = shading_warning(&scene(2, 1), Shading::Vertex).expect("m1 has no colours");
+        assert!(
+            one.contains("mesh 'm1' of scene 's' has no vertex colours") && one.contains("flat"),
+            "{one}"
+        );
+        let many = shading_warning(&scene(6, 1), Shading::Vertex).expect("five have none");
+        assert!(many.contains("meshes 'm1', 'm2', 'm3', 2 more of scene 's' have"), "{many}");
+        assert_eq!(many.matches("'m1'").count(), 1, "each mesh once: {many}");
+    }
 }

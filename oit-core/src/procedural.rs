@@ -10,7 +10,7 @@
 //! | `ties:N` | N overlapping quads in one plane, colour order unlike primitive order | up to N, all tied |
 //! | `near:N` | `ties:N` with the quads 10⁻⁷ apart in depth (equal after projection to f32) | up to N |
 //! | `scale:S:SCENE` | SCENE with every coordinate multiplied by S (e.g. `scale:1e-20:planes:8`) | SCENE's |
-//! | `default` | a see-through torus knot inside two glass spheres | 10 at the default view, up to 14 |
+//! | `default` | a see-through torus knot inside two glass spheres | 10 at the default view, up to 16 |
 
 use std::f32::consts::TAU;
 use std::path::Path;
@@ -444,12 +444,12 @@ fn tie_quads(name: String, n: u32, dz: f32) -> Scene {
     single(name, meshes, colors)
 }
 
-/// `default`: a warm torus knot inside two cool glass spheres: the deepest pixel holds 10 layers
-/// at the default view (14 at some views around the orbit). The knot's alpha (0.32) and the glass's (0.06,
-/// 0.045) are low enough that where the tube crosses itself the crossing behind shows through the
-/// one in front: 41 % of its colour passes the near walls of both glass spheres and the front and
-/// back walls of the nearer tube, `(1 − 0.32)² · (1 − 0.06) · (1 − 0.045)` (at the former alphas,
-/// 0.6, 0.14 and 0.1, it was 12 %, and the knot read as opaque).
+/// `default`: a warm torus knot inside two cool glass spheres: at 512² the deepest pixel holds 10
+/// layers at the default view, and up to 16 at others around the orbit. The knot's alpha (0.32)
+/// and the glass's (0.06, 0.045) are low enough that where the tube crosses itself the crossing
+/// behind shows through the one in front: 41 % of its colour passes the near walls of both glass
+/// spheres and the front and back walls of the nearer tube, `(1 − 0.32)² · (1 − 0.06) · (1 −
+/// 0.045)` (at the former alphas, 0.6, 0.14 and 0.1, it was 12 %, and the knot read as opaque).
 pub fn default_scene() -> Scene {
     let mut scene = knot();
     scene.name = "default".into();
