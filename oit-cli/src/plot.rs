@@ -13,12 +13,15 @@ use crate::sweep::Record;
 /// pixel in 10⁵.
 const FLOOR_PERCENT: f64 = 1e-3;
 
+/// One line of the plot: technique, backend/raster path, (azimuth, EPR %) points.
+type Line = (String, String, Vec<(f64, f64)>);
+
 /// Draws `records` as one line per technique (and backend/raster path, when there are several)
 /// against the azimuth, EPR in per cent on a log axis, into `path`: an SVG or, for a `.png` path,
 /// a PNG.
 pub fn epr_plot(path: &Path, records: &[Record], scene: &str, elevation: f32) -> Result<(), OitError> {
     // Series in first-seen order: the order of --techniques.
-    let mut series: Vec<(String, String, Vec<(f64, f64)>)> = Vec::new();
+    let mut series: Vec<Line> = Vec::new();
     for r in records {
         let point = (f64::from(r.azimuth), (r.epr * 100.0).max(FLOOR_PERCENT));
         let label = r.label();
