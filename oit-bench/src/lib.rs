@@ -29,6 +29,45 @@
 //! Every input is checked before anything is rendered ([`Config::validate`]). The runs themselves
 //! are [`experiment::Experiment`]'s reference-versus-techniques loop, the one `oit compare` and
 //! `oit sweep` run too, and the backends come from the one registry, [`backends`].
+//!
+//! The loop on its own: backends by name from the registry, the reference and each technique at
+//! each view, every technique measured against the reference (EPR a fraction in [0, 1]):
+//!
+//! ```
+//! use oit_bench::backends::{select, BackendOptions};
+//! use oit_bench::experiment::{Experiment, Step};
+//! use oit_core::{load_scene, Settings, Technique, View};
+//!
+//! let backends = select("cpu", &BackendOptions::default())?;
+//! let scene = load_scene("spheres:3")?;
+//! let settings = Settings { width: 32, height: 32, ..Settings::default() };
+//! let techniques = [Technique::Dp, Technique::WeightedAverage];
+//! let experiment = Experiment {
+//!     backends: &backends,
+//!     settings: &settings,
+//!     techniques: &techniques,
+//!     warmup: 0,
+//!     frames: 1,
+//!     keep_images: false,
+//! };
+//! let views = [View { azimuth: 0.0, ..View::default() }, View { azimuth: 90.0, ..View::default() }];
+//! let mut renders = 0;
+//! let measurements = experiment.run("spheres:3", &scene, &views, &mut |step| {
+//!     if let Step::Measured(_) = step {
+//!         renders += 1;
+//!     }
+//! })?;
+//! assert_eq!(renders, 2 * 3); // per view: the reference, dp, wavg
+//! for m in measurements.iter().filter(|m| !m.baseline) {
+//!     let measured = m.result.as_ref().expect("rendered");
+//!     let epr = measured.accuracy.expect("measured against the reference").epr;
+//!     match m.technique {
+//!         Technique::Dp => assert_eq!(epr, 0.0), // exact
+//!         _ => assert!(epr > 0.0 && epr <= 1.0), // wavg ignores order
+//!     }
+//! }
+//! # Ok::<(), oit_core::OitError>(())
+//! ```
 
 pub mod backends;
 pub mod experiment;
@@ -187,7 +226,8 @@ pub struct Row {
     pub time_source: String,
     /// Scene fragments resolved per second: `fragments / time_ms`, in 10⁹ per second.
     pub gfrag_per_s: f64,
-    /// Error pixel rate against the same backend/path's reference, a fraction.
+    /// Error pixel rate against the same backend/path's reference, a fraction in [0, 1]
+    /// (`report.md` and the plots show it in per cent).
     pub epr: f64,
     /// PSNR in dB against it; null when identical.
     pub psnr: Option<f64>,
@@ -243,7 +283,8 @@ pub struct MatrixEntry {
     pub b: String,
     /// The largest channel difference between the two images, 8-bit steps.
     pub max_diff: u32,
-    /// The share of covered pixels that differ by more than 1 step.
+    /// The share of covered pixels that differ by more than 1 step, a fraction in [0, 1]
+    /// (`report.md` shows it in per cent).
     pub epr: f64,
     /// The largest channel difference over pixels off projected triangle edges (more than a pixel
     /// from every edge), 8-bit steps: where a hardware rasterizer may cover other fragments than

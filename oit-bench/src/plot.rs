@@ -1,15 +1,16 @@
-//! One chart description, drawn twice: as SVG with plotters (text by the SVG viewer, no fonts
-//! needed) and as PNG with plotters' bitmap backend for lines and points and
-//! [`crate::present::draw_text`] (the embedded font) for every label, since plotters' bitmap text
-//! would need system font libraries; labels are placed through the chart's own coordinate
-//! mapping.
+//! One chart description, drawn twice, the legend in a column right of the plot area (never over
+//! the data): as SVG with plotters (text by the SVG viewer, no fonts needed) and as PNG with
+//! plotters' bitmap backend for lines and points and [`crate::present::draw_text`] (the embedded
+//! font) for every label, since plotters' bitmap text would need system font libraries; labels
+//! are placed through the chart's own coordinate mapping.
 
 use std::path::Path;
 
 use oit_core::{Image, OitError};
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use crate::present::{draw_text, fill_rect, line_height, text_width};
+use crate::present::{draw_text, fill_rect, fit_text, line_height, text_width};
 
 /// A set of points drawn in one colour.
 #[derive(Clone, Debug)]
@@ -47,8 +48,11 @@ pub struct Chart {
 
 const WIDTH: u32 = 1200;
 const HEIGHT: u32 = 720;
-/// Room on the right of the PNG for its legend.
+/// Room on the right of the SVG and the PNG for the legend, outside the plot area, so that it
+/// never covers the data.
 const LEGEND_WIDTH: u32 = 230;
+/// Top of the legend's first row.
+const LEGEND_TOP: i32 = 60;
 /// Text sizes of the PNG (line heights in pixels): title, axis descriptions, tick labels, legend
 /// entries, labels beside points.
 const TITLE_PX: f32 = 24.0;
@@ -152,6 +156,20 @@ impl Series {
 }
 
 impl Chart {
+    /// The series the legend lists (those with a name), with their index for the palette.
+    fn named(&self) -> impl Iterator<Item = (usize, &Series)> {
+        self.series.iter().enumerate().filter(|(_, s)| !s.name.is_empty())
+    }
+
+    /// The legend's row pitch and text size: [`LEGEND_PX`] text 8 pixels apart, smaller when
+    /// that many rows would run past the bottom of the picture.
+    fn legend_rows(&self) -> (i32, f32) {
+        let rows = self.named().count().max(1) as i32;
+        let room = HEIGHT as i32 - LEGEND_TOP - 10;
+        let step = (line_height(LEGEND_PX) as i32 + 8).min(room / rows).max(4);
+        (step, (step as f32 - 4.0).clamp(3.0, LEGEND_PX))
+    }
+
     fn ranges(&self) -> ((f64, f64), (f64, f64)) {
         let pts = || self.series.iter().flat_map(|s| s.points.iter().copied());
         (range(pts().map(|p| p.0), self.x_log), range(pts().map(|p| p.1), self.y_log))
@@ -202,7 +220,9 @@ impl Chart {
             let root = SVGBackend::with_string(&mut text, (WIDTH, HEIGHT)).into_drawing_area();
             root.fill(&WHITE).map_err(|e| err(&e))?;
             let ((x0, x1), (y0, y1)) = self.ranges();
-            let mut builder = ChartBuilder::on(&root);
+            // the plot on the left, the legend in its own column on the right: never over the data
+            let (area, _) = root.split_horizontally(WIDTH - LEGEND_WIDTH);
+            let mut builder = ChartBuilder::on(&area);
             builder
                 .caption(&self.title, ("sans-serif", 22))
                 .margin(14)
@@ -224,18 +244,13 @@ impl Chart {
                         let color = s.rgb(i);
                         let style = color.stroke_width(2);
                         if s.line {
-                            let drawn = chart
+                            chart
                                 .draw_series(LineSeries::new(s.points.clone(), style))
                                 .map_err(|e| err(&e))?;
-                            if !s.name.is_empty() {
-                                drawn.label(&s.name).legend(move |(x, y)| {
-                                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                                });
-                            }
                         }
                         if s.markers {
                             let labels = s.labels.clone();
-                            let drawn = chart
+                            chart
                                 .draw_series(s.points.iter().enumerate().map(|(k, &p)| {
                                     EmptyElement::at(p)
                                         + Circle::new((0, 0), 5, color.filled())
@@ -246,20 +261,8 @@ impl Chart {
                                         )
                                 }))
                                 .map_err(|e| err(&e))?;
-                            if !s.line && !s.name.is_empty() {
-                                drawn
-                                    .label(&s.name)
-                                    .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
-                            }
                         }
                     }
-                    chart
-                        .configure_series_labels()
-                        .background_style(WHITE.mix(0.85))
-                        .border_style(BLACK)
-                        .position(SeriesLabelPosition::UpperRight)
-                        .draw()
-                        .map_err(|e| err(&e))?;
                 }};
             }
             match (self.x_log, self.y_log) {
@@ -268,12 +271,33 @@ impl Chart {
                 (false, true) => body!(x0..x1, (y0..y1).log_scale()),
                 (false, false) => body!(x0..x1, y0..y1),
             }
+            let (step, px) = self.legend_rows();
+            let lx = (WIDTH - LEGEND_WIDTH + 8) as i32;
+            for (k, (i, s)) in self.named().enumerate() {
+                let (r, g, b) = {
+                    let c = s.rgb(i);
+                    (c.0, c.1, c.2)
+                };
+                let y = LEGEND_TOP + k as i32 * step;
+                let mid = y + line_height(px) as i32 / 2;
+                root.draw(&Rectangle::new([(lx, mid - 5), (lx + 18, mid + 5)], RGBColor(r, g, b).filled()))
+                    .map_err(|e| err(&e))?;
+                let name = fit_text(&s.name, px, LEGEND_WIDTH - 36);
+                let style = TextStyle::from(("sans-serif", px as f64).into_font())
+                    .pos(Pos::new(HPos::Left, VPos::Center));
+                root.draw(&Text::new(name, (lx + 24, mid), style)).map_err(|e| err(&e))?;
+            }
             root.present().map_err(|e| err(&e))?;
         }
         std::fs::write(path, text).map_err(|e| err(&e))
     }
 
     fn draw_png(&self, path: &Path) -> Result<(), OitError> {
+        self.png_image(path)?.save_png(path)
+    }
+
+    /// The PNG's pixels (`path` only names the file in errors).
+    fn png_image(&self, path: &Path) -> Result<Image, OitError> {
         let err = write_err(path);
         let mut buf = vec![0u8; (WIDTH * HEIGHT * 3) as usize];
         let ((x0, x1), (y0, y1)) = self.ranges();
@@ -310,15 +334,17 @@ impl Chart {
             draw_text(&mut image, x.into(), y.into(), &text, px, [0, 0, 0, 255]);
         }
         // the legend, right of the chart
+        let (step, px) = self.legend_rows();
         let lx = (WIDTH - LEGEND_WIDTH + 8) as i32;
-        let mut ly = 60i32;
-        for (i, s) in self.series.iter().enumerate().filter(|(_, s)| !s.name.is_empty()) {
+        for (k, (i, s)) in self.named().enumerate() {
             let c = s.rgb(i);
-            fill_rect(&mut image, lx.into(), (ly + 3).into(), 18, 10, [c.0, c.1, c.2, 255]);
-            draw_text(&mut image, (lx + 24).into(), ly.into(), &s.name, LEGEND_PX, [0, 0, 0, 255]);
-            ly += line_height(LEGEND_PX) as i32 + 8;
+            let y = LEGEND_TOP + k as i32 * step;
+            let mid = y + line_height(px) as i32 / 2;
+            fill_rect(&mut image, lx.into(), (mid - 5).into(), 18, 10, [c.0, c.1, c.2, 255]);
+            let name = fit_text(&s.name, px, LEGEND_WIDTH - 36);
+            draw_text(&mut image, (lx + 24).into(), y.into(), &name, px, [0, 0, 0, 255]);
         }
-        image.save_png(path)
+        Ok(image)
     }
 
     fn png_body<X, Y>(
@@ -424,6 +450,57 @@ mod tests {
         chart.svg(&dir.join("x.svg")).unwrap();
         chart.png(&dir.join("x.png")).unwrap();
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// Issue 14: the legend sits in its own column right of the plot area, never over the data:
+    /// naming the series (even many, with long names) changes no pixel left of that column, and
+    /// the column holds the legend's swatches.
+    #[test]
+    fn the_legend_never_covers_the_plot() {
+        let series = |named: bool| {
+            (0..40)
+                .map(|i| Series {
+                    name: if named {
+                        format!("technique {i} (backend/with-a-long-path-name)")
+                    } else {
+                        String::new()
+                    },
+                    points: (0..=36)
+                        .map(|k| (f64::from(k) * 10.0, 1e-3 * f64::from(1 + (k * (i + 1)) % 97)))
+                        .collect(),
+                    labels: Vec::new(),
+                    line: true,
+                    markers: false,
+                    color: None,
+                })
+                .collect()
+        };
+        let chart = |named| {
+            Chart {
+                title: "t".into(),
+                x_desc: "x".into(),
+                y_desc: "y".into(),
+                x_log: false,
+                y_log: true,
+                series: series(named),
+            }
+            .clamped()
+        };
+        let path = Path::new("legend.png");
+        let (with, without) = (chart(true).png_image(path).unwrap(), chart(false).png_image(path).unwrap());
+        let column = WIDTH - LEGEND_WIDTH;
+        let mut legend = 0;
+        for y in 0..HEIGHT {
+            for x in 0..WIDTH {
+                let differs = with.get(x, y) != without.get(x, y);
+                assert!(!differs || x >= column, "the legend drew at ({x}, {y}), inside the plot");
+                legend += usize::from(differs);
+            }
+        }
+        assert!(legend > 40 * 100, "the legend's 40 rows drew only {legend} pixels");
+        // every row inside the picture
+        let (step, px) = chart(true).legend_rows();
+        assert!(LEGEND_TOP + 40 * step <= HEIGHT as i32 && px >= 3.0, "{step} {px}");
     }
 
     /// Issue 13.5: an SVG or PNG chart written to a full disk is an error.

@@ -301,9 +301,13 @@ pub const SHEET_LABEL_PX: u32 = 18;
 pub const SHEET_CAPTION_PX: u32 = 16;
 
 /// The tallest image for which a [`contact_sheet`]'s text keeps its base sizes; for taller images
-/// the text grows in proportion (up to 3×), so that it stays readable when a large sheet is shown
-/// scaled down.
-pub const SHEET_TEXT_BASE_HEIGHT: u32 = 320;
+/// the text grows in proportion (up to [`SHEET_TEXT_MAX_SCALE`]×): a caption is about a twelfth of
+/// its image's height (43 pixels over 512-pixel images), so that it stays readable when the
+/// sheet is shown scaled down to a screen's or a page's width.
+pub const SHEET_TEXT_BASE_HEIGHT: u32 = 192;
+
+/// The most a [`contact_sheet`]'s text grows over its base sizes.
+pub const SHEET_TEXT_MAX_SCALE: f32 = 6.0;
 
 /// Height of a cell's header on a [`contact_sheet`]: label, 2 pixels, caption, 6 pixels.
 fn header_height(label_px: u32, caption_px: u32) -> u32 {
@@ -328,7 +332,7 @@ pub struct SheetLayout {
     /// Rows of cells.
     pub rows: u32,
     /// Text size of the labels: [`SHEET_LABEL_PX`] × the text's scale (tallest image height /
-    /// [`SHEET_TEXT_BASE_HEIGHT`], from 1 to 3), rounded.
+    /// [`SHEET_TEXT_BASE_HEIGHT`], from 1 to [`SHEET_TEXT_MAX_SCALE`]), rounded.
     pub label_px: u32,
     /// Text size of the captions: [`SHEET_CAPTION_PX`] × the same scale, rounded.
     pub caption_px: u32,
@@ -380,7 +384,7 @@ pub fn sheet_layout(entries: &[SheetEntry]) -> SheetLayout {
         (u64::from(e.image.width) + ew, u64::from(e.image.height).max(eh))
     };
     let tallest = entries.iter().map(|e| pair(e).1).max().unwrap_or(0);
-    let scale = (tallest as f32 / SHEET_TEXT_BASE_HEIGHT as f32).clamp(1.0, 3.0);
+    let scale = (tallest as f32 / SHEET_TEXT_BASE_HEIGHT as f32).clamp(1.0, SHEET_TEXT_MAX_SCALE);
     let sized = |base: u32| (base as f32 * scale).round() as u32;
     let (label_px, caption_px) = (sized(SHEET_LABEL_PX), sized(SHEET_CAPTION_PX));
     let header_max = u64::from(sized(SHEET_HEADER_MAX_WIDTH));
@@ -775,11 +779,11 @@ mod tests {
         assert_eq!((small.label_px, small.caption_px), (SHEET_LABEL_PX, SHEET_CAPTION_PX));
         assert_eq!(small.header_height, SHEET_HEADER_HEIGHT);
         let mut tall = entry("dp", "EPR 1%", GREY, true);
-        tall.image = Image::new(640, 640, GREY);
+        tall.image = Image::new(2 * SHEET_TEXT_BASE_HEIGHT, 2 * SHEET_TEXT_BASE_HEIGHT, GREY);
         let layout = sheet_layout(&[tall.clone()]);
         assert_eq!((layout.label_px, layout.caption_px), (2 * SHEET_LABEL_PX, 2 * SHEET_CAPTION_PX));
         assert_eq!(layout.header_height, 2 * SHEET_LABEL_PX + 2 + 2 * SHEET_CAPTION_PX + 6);
-        assert_eq!(layout.cell_height, layout.header_height + 640);
+        assert_eq!(layout.cell_height, layout.header_height + 2 * SHEET_TEXT_BASE_HEIGHT);
         // The label's ink is about twice as tall as at the base size.
         let sheet = contact_sheet(&[tall]);
         let gap = SHEET_GAP;
@@ -787,10 +791,22 @@ mod tests {
             .filter(|&y| (gap..gap + 100).any(|x| sheet.get(x, y) != SHEET_BACKGROUND))
             .count() as u32;
         assert!(inked > SHEET_LABEL_PX, "label only {inked} rows high");
-        // Huge images cap the scale at 3.
+        // Huge images cap the scale.
         let mut huge = entry("dp", "", GREY, false);
         huge.image = Image::new(4, 5000, GREY);
-        assert_eq!(sheet_layout(&[huge]).label_px, 3 * SHEET_LABEL_PX);
+        assert_eq!(sheet_layout(&[huge]).label_px, (SHEET_TEXT_MAX_SCALE * SHEET_LABEL_PX as f32) as u32);
+        // 512-pixel renders, as `oit compare --sheet` makes by default: captions are at least a
+        // thirteenth of the image's height, so a 3-column sheet shown 1000 pixels wide keeps
+        // them over 12 pixels high
+        let mut frame = entry("dp", "EPR 0.000%  PSNR 102.53 dB  lost 0  tied 0", GREY, true);
+        frame.image = Image::new(512, 512, GREY);
+        frame.error = Some(Image::new(512, 512, GREY));
+        let layout = sheet_layout(&vec![frame.clone(); 13]);
+        assert!(layout.caption_px * 13 >= 512, "{layout:?}");
+        assert_eq!(layout.columns, 3, "{layout:?}");
+        assert!(layout.caption_px as f32 * 1000.0 / layout.width as f32 > 12.0, "{layout:?}");
+        // and the caption fits its cell uncut
+        assert!(text_width(&frame.caption, layout.caption_px as f32) <= layout.cell_width);
     }
 
     #[test]

@@ -10,9 +10,9 @@ use crate::model::Prediction;
 use crate::plot::{Chart, Series};
 use crate::{CurvePoint, Report, Row, Spread, pareto_front};
 
-/// Where an EPR of 0 is drawn on the trade plot's log axis at most (lower when a real EPR is
-/// lower): a log axis has no 0.
-const EPR_FLOOR: f64 = 1e-5;
+/// Where an EPR of 0 is drawn on the trade plot's log axis at most, in per cent (lower when a
+/// real EPR is lower): a log axis has no 0.
+const EPR_FLOOR_PERCENT: f64 = 1e-3;
 
 /// A file-name-safe form of a scene name: path folders and `.obj` dropped, the rest
 /// alphanumerics and `-`.
@@ -39,8 +39,9 @@ fn bytes(n: u64) -> String {
     if unit == 0 { format!("{n} B") } else { format!("{v:.1} {}", UNITS[unit]) }
 }
 
+/// A fraction in per cent, without the sign: the columns' headers say `(%)`.
 fn percent(f: f64) -> String {
-    if f == 0.0 { "0".into() } else { format!("{:.3} %", f * 100.0) }
+    if f == 0.0 { "0".into() } else { format!("{:.3}", f * 100.0) }
 }
 
 fn ms(v: f64) -> String {
@@ -88,7 +89,7 @@ fn side_by_side(w: &mut String, report: &Report, scene: &str) {
          every other's fastest (GPU time where all have it, else wall): overlapping ranges support \
          no ordering.\n"
     );
-    let mut head = "| technique | lost | EPR |".to_string();
+    let mut head = "| technique | lost | EPR (%) |".to_string();
     for l in &labels {
         let _ = write!(head, " {l} GPU ms | {l} wall ms |");
     }
@@ -287,11 +288,13 @@ pub fn write_report(report: &mut Report, dir: &Path) -> Result<(), OitError> {
         if rows.is_empty() {
             continue;
         }
-        let min_epr = rows.iter().map(|r| r.epr).filter(|e| *e > 0.0).fold(f64::INFINITY, f64::min);
+        // EPR in per cent on the plot, as in the tables
+        let pct = |r: &Row| r.epr * 100.0;
+        let min_epr = rows.iter().map(|r| pct(r)).filter(|e| *e > 0.0).fold(f64::INFINITY, f64::min);
         let floor = if min_epr.is_finite() {
-            EPR_FLOOR.min(10f64.powf((min_epr / 3.0).log10().floor()))
+            EPR_FLOOR_PERCENT.min(10f64.powf((min_epr / 3.0).log10().floor()))
         } else {
-            EPR_FLOOR
+            EPR_FLOOR_PERCENT
         };
         let mut labels: Vec<String> = Vec::new();
         for r in &rows {
@@ -305,7 +308,7 @@ pub fn write_report(report: &mut Report, dir: &Path) -> Result<(), OitError> {
                 let mine: Vec<&&Row> = rows.iter().filter(|r| row_label(r) == *l).collect();
                 Series {
                     name: l.clone(),
-                    points: mine.iter().map(|r| (r.time_ms.max(1e-6), r.epr.max(floor))).collect(),
+                    points: mine.iter().map(|r| (r.time_ms.max(1e-6), pct(r).max(floor))).collect(),
                     labels: mine.iter().map(|r| r.technique.clone()).collect(),
                     line: false,
                     markers: true,
@@ -313,7 +316,7 @@ pub fn write_report(report: &mut Report, dir: &Path) -> Result<(), OitError> {
                 }
             })
             .collect();
-        let all: Vec<(f64, f64)> = rows.iter().map(|r| (r.time_ms.max(1e-6), r.epr.max(floor))).collect();
+        let all: Vec<(f64, f64)> = rows.iter().map(|r| (r.time_ms.max(1e-6), pct(r).max(floor))).collect();
         let front: Vec<(f64, f64)> = pareto_front(&all).into_iter().map(|k| all[k]).collect();
         // a staircase: each front point holds its error until the next, faster-to-slower
         let mut stairs = Vec::new();
@@ -334,7 +337,7 @@ pub fn write_report(report: &mut Report, dir: &Path) -> Result<(), OitError> {
         let chart = Chart {
             title: format!("time vs error on {} ({}x{})", scene.name, report.width, report.height),
             x_desc: "time per frame (ms, log)".into(),
-            y_desc: format!("error pixel rate (log; EPR 0 drawn at {floor:e})"),
+            y_desc: format!("EPR, % of covered pixels (log; EPR 0 drawn at {floor:e} %)"),
             x_log: true,
             y_log: true,
             series,
@@ -461,7 +464,8 @@ fn markdown(
          - **Gfrag/s**: scene fragments resolved per second, `fragments / time` (one pass's \
          fragments, whatever the passes: the rate at which the technique turns the scene into a picture).\n\
          - **EPR**: error pixel rate, the share of covered pixels whose 8-bit colour differs from \
-         the same backend/path's `reference` by more than 1 in any channel; **PSNR** over covered \
+         the same backend/path's `reference` by more than 1 in any channel, in per cent in these \
+         tables and plots (`report.json`'s `epr` holds the fraction, 0 to 1); **PSNR** over covered \
          pixels (`inf` when identical); **max diff**: the largest channel difference in 8-bit steps."
     );
 
@@ -476,7 +480,7 @@ fn markdown(
         );
         let _ = writeln!(
             w,
-            "| technique | backend | raster | passes | fragments | lost | tied | storage | wall ms (min–max) | GPU ms (min–max) | Gfrag/s | EPR | PSNR (dB) |"
+            "| technique | backend | raster | passes | fragments | lost | tied | storage | wall ms (min–max) | GPU ms (min–max) | Gfrag/s | EPR (%) | PSNR (dB) |"
         );
         let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|---|---|---|");
         for r in report.rows.iter().filter(|r| r.scene == scene.name) {
@@ -510,7 +514,7 @@ fn markdown(
                 w,
                 "\nTime against error, both log axes, one point per technique and backend/path; the \
                  black staircase is the Pareto front (no other point is both faster and more \
-                 accurate). EPR 0 is drawn at {floor:e}. ([SVG]({stem}.svg), [PNG]({stem}.png))\n\n![trade plot]({stem}.svg)"
+                 accurate). EPR 0 is drawn at {floor:e} %. ([SVG]({stem}.svg), [PNG]({stem}.png))\n\n![trade plot]({stem}.svg)"
             );
         }
     }
@@ -530,7 +534,7 @@ fn markdown(
     if report.matrix.is_empty() {
         let _ = writeln!(w, "(one backend/path only: nothing to compare)");
     } else {
-        let _ = writeln!(w, "| scene | technique | a | b | max diff | off edges | EPR | held |");
+        let _ = writeln!(w, "| scene | technique | a | b | max diff | off edges | EPR (%) | held |");
         let _ = writeln!(w, "|---|---|---|---|---|---|---|---|");
         for m in &report.matrix {
             let _ = writeln!(

@@ -19,7 +19,9 @@ use crate::output;
     long_about = "Time every technique on every backend and write the speed/accuracy report.\n\n\
         For each scene × backend (× raster path) × technique: --warmup untimed frames, then \
         --frames timed ones; the median and spread of wall and GPU milliseconds, passes, \
-        fragments, lost, storage, Gfrag/s, and EPR and PSNR against the same backend's reference. \
+        fragments, lost, storage, Gfrag/s, and EPR (error pixel rate: in per cent in report.md \
+        and the plots, a fraction in [0, 1] in report.json) and PSNR against the same backend's \
+        reference. \
         Then the trade plot (time vs EPR, log axes, the Pareto front), the cost model's \
         check (each technique's time and speedup over dp predicted from the scene's statistics by \
         a per-device calibration, --calibrate, beside the measured ones; its error on scenes it \

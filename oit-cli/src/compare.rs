@@ -21,12 +21,13 @@ use crate::output::{self, Table};
         Renders `reference` once per backend, then every technique, and prints a table: geometry \
         passes, fragments, fragments lost, fragments tied (equal depths the technique ordered by \
         colour, not as the reference), per-pixel storage, time, error pixel rate (EPR: the \
-        share of covered pixels off by more than 1 in 8 bits) and PSNR (inf when identical). A \
+        share of covered pixels off by more than 1 in 8 bits, in per cent) and PSNR (inf when \
+        identical). A \
         technique that fails prints its error in its row and the others go on; the exit code is \
         then 1. With --json, prints one JSON array of objects with the keys technique, backend, \
         raster, width, height, geometry_passes, fragments, captured, lost, tied, storage_bytes, \
-        wall_ms, gpu_ms, epr, psnr, max_error (gpu_ms null when not measured, psnr null when \
-        identical); failures go to stderr."
+        wall_ms, gpu_ms, epr, psnr, max_error (epr a fraction in [0, 1], not per cent; gpu_ms \
+        null when not measured, psnr null when identical); failures go to stderr."
 )]
 pub struct CompareArgs {
     /// Comma-separated techniques (e.g. dp,bdp2,fabs:16), or all (every technique but the
@@ -60,6 +61,7 @@ struct CompareJson<'a> {
     /// `gpu_ms`, `max_layers`.
     #[serde(flatten)]
     stats: &'a Stats,
+    /// Error pixel rate, a fraction in [0, 1] (the table prints it in per cent).
     epr: f64,
     psnr: Option<f64>,
     max_error: f64,

@@ -12,6 +12,21 @@
 //! `render`, `compare` and `sweep`; backends are chosen by name in one place, oit-bench's
 //! registry (`oit_bench::backends`), and `compare`, `sweep` and `bench` run one loop, oit-bench's
 //! `oit_bench::experiment`.
+//!
+//! A command line parsed and checked as `oit` would, nothing rendered:
+//!
+//! ```
+//! use clap::Parser;
+//!
+//! let cli = oit_cli::Cli::try_parse_from(["oit", "compare", "--size", "32x32", "-t", "dp,wavg"]).unwrap();
+//! let checked = oit_cli::validate(&cli)?;
+//! assert_eq!(checked.techniques.len(), 2);
+//! assert_eq!(checked.prepared.expect("compare renders").scene.name, "default");
+//!
+//! let typo = oit_cli::Cli::try_parse_from(["oit", "render", "--technique", "fabs:0"]).unwrap();
+//! assert!(oit_cli::validate(&typo).is_err()); // the error `oit` would print, nothing rendered
+//! # Ok::<(), oit_core::OitError>(())
+//! ```
 
 mod bench;
 mod compare;
@@ -41,7 +56,11 @@ pub use options::Prepared;
         oit renders a scene of transparent objects with one of many ways of capturing and \
         ordering the fragments of every pixel (depth peeling, bucket depth peeling, weighted \
         averages, fixed A-buffers, ...) and measures each against an exact A-buffer reference: \
-        error pixel rate (EPR), PSNR, fragments lost, memory and time.\n\n\
+        error pixel rate (EPR: the share of covered pixels off by more than 1 in 8 bits; tables \
+        print it in per cent, JSON holds the fraction), PSNR, fragments lost, memory and time.\n\n\
+        Which technique for which scene (exact and small, fastest exact on a GPU, one pass but \
+        approximate, ...): the README's guide, \"Which technique for which scene\", with the \
+        measured trade; `oit compare --scene YOURS` measures it on your own scene.\n\n\
         Run `oit info` for the backends compiled in and what each runs, and `oit <command> \
         --help` for a command's options.",
     propagate_version = true

@@ -53,7 +53,8 @@ pub struct SceneArgs {
     pub alpha: Option<f32>,
 
     /// How fragments are coloured: headlight (colour × (0.3 + 0.7·|n·l|), light from the eye),
-    /// flat (the object's colour), vertex (per-vertex colours) or normal (the normal as colour).
+    /// flat (the object's colour), vertex (per-vertex colours; a mesh without them gets its
+    /// object's colour, as flat, and a warning naming it) or normal (the normal as colour).
     #[arg(long, value_name = "MODE", default_value = "headlight")]
     pub shading: String,
 
@@ -179,10 +180,52 @@ impl SceneArgs {
             eprintln!("warning: {warning}");
         }
         scene.validate()?;
+        if let Some(warning) = shading_warning(&scene, settings.shading) {
+            eprintln!("warning: {warning}");
+        }
         let prepared = Prepared { scene, settings, view, backends };
         prepared.camera(view)?;
         Ok(prepared)
     }
+}
+
+/// Most mesh names [`shading_warning`] lists before it counts the rest.
+const LISTED_MESHES: usize = 3;
+
+/// The one warning `--shading vertex` gets when meshes the scene draws have no vertex colours:
+/// those are shaded with their object's colour, unlit, exactly as `--shading flat` would (see
+/// [`Shading::Vertex`]). Names up to [`LISTED_MESHES`] such meshes, each once, and counts the
+/// rest; `None` for other shadings or when every drawn mesh has colours.
+pub fn shading_warning(scene: &Scene, shading: Shading) -> Option<String> {
+    if shading != Shading::Vertex {
+        return None;
+    }
+    // in the order first drawn, each once (a flag per mesh: an OBJ may hold many thousands)
+    let mut seen = vec![false; scene.meshes.len()];
+    let mut bare: Vec<usize> = Vec::new();
+    for instance in &scene.instances {
+        let mesh = scene.objects.get(instance.object).map(|o| o.mesh);
+        if let Some(m) = mesh.filter(|&m| scene.meshes.get(m).is_some_and(|m| m.colors.is_none()))
+            && !std::mem::replace(&mut seen[m], true)
+        {
+            bare.push(m);
+        }
+    }
+    if bare.is_empty() {
+        return None;
+    }
+    let mut names: Vec<String> =
+        bare.iter().take(LISTED_MESHES).map(|&m| format!("'{}'", scene.meshes[m].name)).collect();
+    if bare.len() > LISTED_MESHES {
+        names.push(format!("{} more", bare.len() - LISTED_MESHES));
+    }
+    let (noun, verb) = if bare.len() == 1 { ("mesh", "has") } else { ("meshes", "have") };
+    Some(format!(
+        "--shading vertex: {noun} {} of scene '{}' {verb} no vertex colours; drawn with the object \
+         colour, unlit, as --shading flat (vertex colours come from OBJ lines `v x y z r g b`)",
+        names.join(", "),
+        scene.name
+    ))
 }
 
 /// Checks `--near` and `--far` on their own and against each other (against a plane fitted to the
@@ -222,4 +265,43 @@ pub fn check_output(path: &Path, extension: &str, option: &str) -> Result<(), Oi
         return Err(bad(format!("folder {} does not exist", parent.display())));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use oit_core::glam::{Mat4, Vec3, Vec4};
+    use oit_core::{Instance, Mesh, Object, Scene, Shading};
+
+    use super::shading_warning;
+
+    /// `n` meshes, each drawn twice; the first `coloured` of them with vertex colours.
+    fn scene(n: usize, coloured: usize) -> Scene {
+        let mut scene = Scene { name: "s".into(), ..Scene::default() };
+        for i in 0..n {
+            let mut mesh = Mesh::new(format!("m{i}"), vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]);
+            if i < coloured {
+                mesh.colors = Some(vec![Vec3::ONE; 3]);
+            }
+            scene.meshes.push(mesh);
+            scene.objects.push(Object { name: format!("o{i}"), mesh: i, color: Vec4::ONE, absorption: 1.0 });
+            for _ in 0..2 {
+                scene.instances.push(Instance { object: i, transform: Mat4::IDENTITY });
+            }
+        }
+        scene
+    }
+
+    #[test]
+    fn vertex_shading_names_the_meshes_without_colours() {
+        assert_eq!(shading_warning(&scene(5, 0), Shading::Flat), None);
+        assert_eq!(shading_warning(&scene(3, 3), Shading::Vertex), None);
+        let one = shading_warning(&scene(2, 1), Shading::Vertex).expect("m1 has no colours");
+        assert!(
+            one.contains("mesh 'm1' of scene 's' has no vertex colours") && one.contains("flat"),
+            "{one}"
+        );
+        let many = shading_warning(&scene(6, 1), Shading::Vertex).expect("five have none");
+        assert!(many.contains("meshes 'm1', 'm2', 'm3', 2 more of scene 's' have"), "{many}");
+        assert_eq!(many.matches("'m1'").count(), 1, "each mesh once: {many}");
+    }
 }

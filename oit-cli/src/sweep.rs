@@ -24,11 +24,13 @@ const MAX_VIEWS: u32 = 36_000;
     long_about = "Orbit the camera around the scene and measure techniques at every view.\n\n\
         Takes N views at evenly spaced azimuths from 0 to 360 degrees (the elevation stays at \
         --elevation; --azimuth is not used). At each view renders the reference and every \
-        technique on every backend (and raster path), and records the error pixel rate (EPR), \
-        PSNR, fragments lost and time. Prints a summary per technique, backend and raster path \
-        (mean and max EPR, mean lost, mean time), or with --json a JSON array of every record \
-        ({azimuth, technique, backend, raster, geometry_passes, fragments, captured, lost, tied, \
-        storage_bytes, wall_ms, gpu_ms, epr, psnr, max_error}) and nothing else. A progress bar goes to stderr. A technique that fails is reported once \
+        technique on every backend (and raster path), and records the error pixel rate (EPR: the \
+        share of covered pixels off by more than 1 in 8 bits), PSNR, fragments lost and time. \
+        Prints a summary per technique, backend and raster path (mean and max EPR in per cent, \
+        mean lost, mean time), or with --json a JSON array of every record ({azimuth, technique, \
+        backend, raster, geometry_passes, fragments, captured, lost, tied, storage_bytes, \
+        wall_ms, gpu_ms, epr, psnr, max_error}; epr is a fraction in [0, 1], not per cent) and \
+        nothing else. A progress bar goes to stderr. A technique that fails is reported once \
         on stderr and left out of the results; the exit code is then 1."
 )]
 pub struct SweepArgs {
@@ -45,8 +47,9 @@ pub struct SweepArgs {
     #[arg(long)]
     pub json: bool,
 
-    /// Also draw EPR per view for each technique, on a log axis, as an SVG [default: none].
-    #[arg(long, value_name = "FILE.svg")]
+    /// Also draw EPR per view (in per cent, log axis) for each technique, as an SVG, or a PNG
+    /// when FILE ends in .png [default: none].
+    #[arg(long, value_name = "FILE.svg|FILE.png")]
     pub plot: Option<PathBuf>,
 
     #[command(flatten)]
@@ -68,7 +71,8 @@ pub struct Record {
     /// `storage_bytes`, `wall_ms`, `gpu_ms`, and `gpu_pass_ms` where measured).
     #[serde(flatten)]
     pub stats: Stats,
-    /// Error pixel rate, a fraction.
+    /// Error pixel rate: the share of covered pixels off by more than 1 in 8 bits, a fraction in
+    /// [0, 1] (the summary table prints it in per cent).
     pub epr: f64,
     /// PSNR in dB against the reference; null when identical.
     pub psnr: Option<f64>,
@@ -98,7 +102,15 @@ pub fn check(args: &SweepArgs) -> Result<(Vec<Technique>, Prepared), OitError> {
         )));
     }
     if let Some(path) = &args.plot {
-        check_output(path, "svg", "--plot")?;
+        // an SVG, or a PNG when the name says so
+        let is = |ext: &str| path.extension().is_some_and(|e| e.eq_ignore_ascii_case(ext));
+        if !is("svg") && !is("png") {
+            return Err(OitError::Write {
+                path: path.clone(),
+                message: "--plot must name a .svg or .png file".into(),
+            });
+        }
+        check_output(path, if is("png") { "png" } else { "svg" }, "--plot")?;
     }
     Ok((techniques, args.scene.prepare()?))
 }

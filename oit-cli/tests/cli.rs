@@ -90,6 +90,42 @@ fn render_json_has_the_camera() {
     assert!(png.exists());
 }
 
+/// `--shading vertex` on meshes without vertex colours says so, once, naming the meshes and that
+/// they are drawn as `flat`; on a mesh with colours, and with other shadings, nothing is said.
+#[test]
+fn vertex_shading_without_colours_warns() {
+    let dir = scratch("vertex_shading");
+    let png = dir.join("v.png");
+    let out_path = png.to_str().unwrap();
+    let out = oit(&["render", "--size", SIZE, "--shading", "vertex", "-o", out_path]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let err = stderr(&out);
+    let warnings: Vec<&str> = err.lines().filter(|l| l.starts_with("warning: ")).collect();
+    assert_eq!(warnings.len(), 1, "one warning: {err}");
+    // the default scene draws two meshes, the knot and the sphere (twice): each named once
+    let w = warnings[0];
+    assert!(w.contains("--shading vertex") && w.contains("flat"), "{w}");
+    assert!(w.contains("'knot'") && w.matches("'sphere'").count() == 1, "{w}");
+    assert!(w.contains("scene 'default'"), "{w}");
+
+    let quiet = oit(&["render", "--size", SIZE, "--shading", "flat", "-o", out_path]);
+    assert!(quiet.status.success() && !stderr(&quiet).contains("warning"), "{}", stderr(&quiet));
+    let coloured = dir.join("coloured.obj");
+    std::fs::write(&coloured, "v -1 -1 0 1 0 0\nv 1 -1 0 0 1 0\nv 0 1 0 0 0 1\nf 1 2 3\n").unwrap();
+    let scene = coloured.to_str().unwrap();
+    let quiet = oit(&["render", "--size", SIZE, "--shading", "vertex", "--scene", scene, "-o", out_path]);
+    assert!(quiet.status.success() && !stderr(&quiet).contains("warning"), "{}", stderr(&quiet));
+    // compare and sweep share the check
+    let sweep = oit(&["sweep", "--size", "16x16", "--views", "1", "-t", "wavg", "--shading", "vertex"]);
+    assert!(sweep.status.success(), "{}", stderr(&sweep));
+    assert_eq!(
+        stderr(&sweep).lines().filter(|l| l.starts_with("warning: ")).count(),
+        1,
+        "{}",
+        stderr(&sweep)
+    );
+}
+
 /// `oit render --effect complexity` writes the backend's heat map with the legend drawn over its
 /// bottom-right corner, scaled to the frame's `max_layers`, and every other pixel as rendered.
 #[cfg(feature = "cpu")]
@@ -271,7 +307,7 @@ fn bad_inputs_fail_with_one_error_line() {
         ("compare unknown scene", vec!["compare", "--scene", "no-such-scene"]),
         ("sweep zero views", vec!["sweep", "--views", "0"]),
         ("sweep 0x0 size", vec!["sweep", "--views", "2", "--size", "0x0"]),
-        ("sweep plot not svg", vec!["sweep", "--views", "2", "--plot", "plot.png"]),
+        ("sweep plot not svg or png", vec!["sweep", "--views", "2", "--plot", "plot.jpg"]),
     ];
     for (what, mut args) in cases {
         // Outputs go to the scratch folder, and renders stay small, unless the case says otherwise.
@@ -416,7 +452,7 @@ fn sweep_json_has_a_record_per_view_and_technique() {
     }
     let plot = std::fs::read_to_string(&svg).expect("the plot was written");
     assert!(plot.starts_with("<svg"));
-    for label in ["dp", "wavg", "bdp", "azimuth", "1e-5"] {
+    for label in ["dp", "wavg", "bdp", "azimuth", "EPR, % of covered pixels", "1e-3 %"] {
         assert!(plot.contains(label), "plot lacks {label}");
     }
 }

@@ -11,12 +11,63 @@
 //! - [`rules`]: the one definition of bucket routing, histogram equalization and packing;
 //! - [`composite`]: the compositing equations; [`metrics`]: accuracy against the reference.
 //!
+//! A scene (built in, made by hand, or read from an OBJ file), a camera that frames it, and the
+//! settings of a frame, each checked before any backend sees them:
+//!
 //! ```
-//! use oit_core::{load_scene, Camera, View};
-//! let scene = load_scene("planes:4").unwrap();
-//! let camera = Camera::orbit(&scene.bounds(), View::default(), 1.0).unwrap();
+//! use oit_core::glam::{Mat4, Vec3, Vec4};
+//! use oit_core::{
+//!     load_scene, parse_obj, Camera, Effect, Instance, Mesh, Object, Scene, Settings, Shading,
+//!     Technique, View,
+//! };
+//!
+//! // built in: 4 overlapping quads, 4 layers where they all overlap
+//! let planes = load_scene("planes:4")?;
+//! assert_eq!(planes.triangle_count(), 8);
+//!
+//! // by hand: one triangle, a half-transparent red
+//! let mesh = Mesh::new("tri", vec![Vec3::new(-1.0, -1.0, 0.0), Vec3::X, Vec3::Y], vec![[0, 1, 2]]);
+//! let scene = Scene {
+//!     name: "one triangle".into(),
+//!     meshes: vec![mesh],
+//!     objects: vec![Object {
+//!         name: "red".into(),
+//!         mesh: 0,
+//!         color: Vec4::new(1.0, 0.0, 0.0, 0.5),
+//!         absorption: 1.0,
+//!     }],
+//!     instances: vec![Instance { object: 0, transform: Mat4::IDENTITY }],
+//!     ..Scene::default()
+//! };
+//! scene.validate()?;
+//!
+//! // from OBJ text (a file: `load_obj`, or `load_scene("model.obj")`), vertex colours kept
+//! let text = "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nf 1 2 3\n";
+//! let obj = parse_obj(std::path::Path::new("tri.obj"), text)?;
+//! assert!(obj.meshes[0].colors.is_some());
+//!
+//! // a camera orbiting the scene, fitted to its bounds at a 1:1 aspect
+//! let view = View { azimuth: 30.0, elevation: 20.0, ..View::default() };
+//! let camera = Camera::orbit_scene(&planes, view, 1.0)?;
 //! assert!(camera.near < camera.far);
+//!
+//! // what one frame is asked for: size, technique (parsed as the command line writes it),
+//! // shading and effect
+//! let settings = Settings {
+//!     width: 64,
+//!     height: 64,
+//!     technique: "fabs:8".parse::<Technique>()?,
+//!     shading: Shading::Headlight,
+//!     effect: Effect::Transparency,
+//!     ..Settings::default()
+//! };
+//! settings.validate()?;
+//! assert!("fabs:0".parse::<Technique>().is_err()); // a bad parameter is an error, never a panic
+//! # Ok::<(), oit_core::OitError>(())
 //! ```
+//!
+//! A [`Backend`] (oit-cpu's `CpuBackend`, oit-wgpu's `WgpuBackend`, oit-vulkan's `VulkanBackend`)
+//! turns the three into a [`Frame`]: see those crates' examples.
 
 mod backend;
 mod camera;

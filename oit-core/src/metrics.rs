@@ -14,7 +14,8 @@ use crate::{Frame, Image, OitError};
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Accuracy {
     /// Error pixel rate (HPG 2009 section 5.2): the share of covered pixels whose 8-bit colour
-    /// differs from the reference by more than 1 in any channel. NaN when nothing is covered
+    /// differs from the reference by more than 1 in any channel, a fraction in [0, 1] (the
+    /// command line's tables print it in per cent). NaN when nothing is covered
     /// (`covered == 0`; serialized as null).
     pub epr: f64,
     /// Peak signal-to-noise ratio in dB over covered pixels (infinite when identical; NaN when

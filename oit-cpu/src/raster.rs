@@ -17,7 +17,7 @@
 //! [`RasterMode::Tiled`] bins the triangles into [`TILE_SIZE`]-pixel tiles once per frame, with
 //! the setup, and runs the tiles in parallel, each on one thread (so a pixel's fragments all come
 //! from one thread). There a triangle at most 64 pixels across is walked eight pixels of a row at
-//! a time in 32-bit lanes ([`walk_small`], its edge functions set up with the bins), a larger one
+//! a time in 32-bit lanes (`walk_small`, its edge functions set up with the bins), a larger one
 //! by the span walk. Both walks are tested against the per-pixel rule and against each other.
 
 use std::sync::OnceLock;

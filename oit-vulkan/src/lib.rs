@@ -23,6 +23,24 @@
 //! synchronization validation and a debug-utils messenger; any error it reports fails the frame.
 //! Every `unsafe` block carries a `// SAFETY:` comment; Vulkan objects are owned by types that
 //! destroy them in `Drop`, newest first (see `device`).
+//!
+//! A frame on the compute path, its fragments equal to oit-cpu's. Without a Vulkan device
+//! [`backend_or_skip`] prints one `skipped …` line naming what to install and the example stops
+//! there, so it runs everywhere (with `OIT_REQUIRE_GPU=1` a missing device is a panic instead):
+//!
+//! ```
+//! use oit_core::{load_scene, Backend, Camera, Settings, Technique, View};
+//!
+//! let Some(vulkan) = oit_vulkan::backend_or_skip("oit-vulkan's crate example") else { return };
+//! let scene = load_scene("planes:4").unwrap();
+//! let camera = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();
+//! let settings = Settings { width: 32, height: 32, technique: Technique::Dp, ..Settings::default() };
+//! let frame = vulkan.render(&scene, &camera, &settings).unwrap();
+//! let cpu = oit_cpu::CpuBackend::default().render(&scene, &camera, &settings).unwrap();
+//! assert_eq!(frame.stats.fragments, cpu.stats.fragments);
+//! assert_eq!(frame.stats.lost, 0);
+//! assert_eq!(frame.stats.geometry_passes, 5); // 4 layers + the pass that finds none left
+//! ```
 
 mod ctx;
 mod device;

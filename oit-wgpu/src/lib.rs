@@ -13,6 +13,35 @@
 //!
 //! Each technique's WGSL sits next to its Rust in `src/technique/`; the rules shared with oit-core
 //! are in `src/shaders/common.wgsl`.
+//!
+//! A frame on each path, read back with its numbers. Without a Vulkan adapter
+//! [`backend_or_skip`] prints one `skipped …` line naming what to install and the example stops
+//! there, so it runs everywhere (with `OIT_REQUIRE_GPU=1` a missing adapter is a panic instead):
+//!
+//! ```
+//! use oit_core::{load_scene, Backend, Camera, RasterPath, Settings, Technique, View};
+//!
+//! let Some(backend) = oit_wgpu::backend_or_skip("oit-wgpu's crate example") else { return };
+//! let scene = load_scene("planes:4").unwrap();
+//! let camera = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();
+//! for raster in [RasterPath::Hardware, RasterPath::Compute] {
+//!     let settings = Settings {
+//!         width: 32,
+//!         height: 32,
+//!         technique: Technique::Fabs { k: None },
+//!         raster: Some(raster),
+//!         ..Settings::default()
+//!     };
+//!     let frame = backend.render(&scene, &camera, &settings).unwrap();
+//!     // sized from the scene's deepest pixel: every fragment captured, none lost
+//!     assert_eq!(frame.stats.captured, frame.stats.fragments);
+//!     assert_eq!(frame.stats.lost, 0);
+//!     assert_eq!(frame.image.pixels.len(), 32 * 32);
+//! }
+//! ```
+//!
+//! To draw into your own renderer instead (your device, vertex buffers and draw calls), see
+//! [`OitPass`] and `examples/embed.rs`.
 
 mod ctx;
 pub mod embed;
