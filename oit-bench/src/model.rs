@@ -158,7 +158,8 @@ pub fn geometry_passes(plan: &Plan, n: u32) -> u32 {
         Technique::Bdp { .. } => 1 + plan.bdp_capture_passes(),
         Technique::Adp => 2 + plan.adp_batches(n),
         Technique::Mlp { m } => peels(n.div_ceil(m.max(1))).max(1),
-        Technique::Mdts { .. } | Technique::Mdts64 { .. } => count + 1,
+        // sorted by primitive id where no blender keeps submission order: counted first
+        Technique::Plain | Technique::Mdts { .. } | Technique::Mdts64 { .. } => count + 1,
         Technique::Fabs { .. } => {
             let overflow = matches!(plan.sizing, Sizing::Fixed(k) if n > k);
             count + 1 + if overflow { 2 } else { 0 }

@@ -57,7 +57,8 @@ pub struct Plan {
     /// so a run of equal depths with two payloads or more reaching the resolve may be out of the
     /// reference's order. `dp`, `ddp`, `mlp`, `mdts64` (depth bits above the payload in one 64-bit
     /// atomic word: no room for an id), `mdts` (20 depth bits above colour bits: equal at 2⁻²⁰)
-    /// and `bdp`'s depth mode (a subinterval's min and max keys). Not `fabs`: it carries the
+    /// and `bdp`'s depth mode (a subinterval's min and max keys). Not `plain`, which orders by
+    /// primitive id alone and never claims depth order, nor `fabs`: it carries the
     /// primitive id and sorts by (depth, id) as the reference does, nor `dfb` and `ll`, whose
     /// entries carry it likewise; not the colour mode of `bdp`, `adp` (equal depths share a
     /// bucket: one is kept, the other counted in `lost`) nor the order-free `wavg`/`wsum`.
@@ -75,7 +76,7 @@ impl Plan {
                 what: "fresnel with mdts: its 12 + 12 spare bits hold RGB only; use mdts64".into(),
             });
         }
-        if matches!(technique, Technique::WeightedAverage | Technique::WeightedSum)
+        if matches!(technique, Technique::Plain | Technique::WeightedAverage | Technique::WeightedSum)
             && matches!(settings.effect, Effect::Translucency | Effect::Fresnel)
         {
             return Err(OitError::Unsupported {
@@ -96,6 +97,9 @@ impl Plan {
             }
             Technique::Mlp { m } => Sizing::Fixed(m),
             Technique::Dfb | Technique::Ll => Sizing::Exact,
+            // where no blender keeps submission order (a CPU, a compute rasterizer), each pixel's
+            // fragments are kept and sorted by primitive id: as many slots as the deepest pixel
+            Technique::Plain => Sizing::FromCount,
             _ => Sizing::None,
         };
         // alpha is not stored by mdts: the override, else the mean of the objects' alphas
@@ -161,6 +165,9 @@ impl Plan {
         };
         let per_pixel = match self.technique {
             Technique::Reference => 4 + 12 * k,
+            // a counter and K slots of (primitive id, payload) where the fragments are sorted (a
+            // hardware blender needs none of it: the caller's render target is not counted)
+            Technique::Plain => 4 + 8 * k,
             Technique::Dp => 8,
             Technique::Ddp => 16,
             Technique::WeightedAverage | Technique::WeightedSum => 40,
@@ -273,6 +280,8 @@ mod tests {
     fn refusals_are_the_same_for_every_backend() {
         assert!(plan("mdts", |s| s.effect = Effect::Fresnel).is_err());
         assert!(plan("mdts64", |s| s.effect = Effect::Fresnel).is_ok());
+        assert!(plan("plain", |s| s.effect = Effect::Translucency).is_err());
+        assert!(plan("plain", |s| s.effect = Effect::Complexity).is_ok());
         assert!(plan("bdp2", |s| s.bdp_mode = crate::BdpMode::Color).is_err());
         assert!(plan("bdp", |s| s.bdp_mode = crate::BdpMode::Color).unwrap().bdp_color);
         assert!(!plan("bdp", |s| s.effect = Effect::Fresnel).unwrap().bdp_color);
