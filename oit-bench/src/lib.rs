@@ -176,8 +176,17 @@ pub struct Row {
     pub tied: u64,
     /// Bytes of per-pixel storage.
     pub storage_bytes: u64,
-    /// Wall milliseconds per frame.
+    /// Wall milliseconds per frame, the image read back to the host (as `readback_wall_ms`; the
+    /// name reports before the steady state was measured used).
     pub wall_ms: Spread,
+    /// Wall milliseconds per steady-state frame: the same prepared scene after the warm-up, the
+    /// frame waited for and its counters read back, not its image (`Prepared::frame_stats`).
+    /// `None` in reports written before it was measured.
+    #[serde(default)]
+    pub steady_wall_ms: Option<Spread>,
+    /// Wall milliseconds per frame plus the readback of its image: `wall_ms` under its own name.
+    #[serde(default)]
+    pub readback_wall_ms: Option<Spread>,
     /// GPU milliseconds per frame (timestamps), where measured.
     pub gpu_ms: Option<Spread>,
     /// The time used for the model, the plots and Gfrag/s: `gpu_ms.median`, else
@@ -679,6 +688,8 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
                     tied: s.tied,
                     storage_bytes: s.storage_bytes,
                     wall_ms: wall_spread(&r.wall_ms),
+                    steady_wall_ms: Spread::of(&r.steady_wall_ms),
+                    readback_wall_ms: Spread::of(&r.wall_ms),
                     gpu_ms: gpu_spread(&r.wall_ms, &r.gpu_ms),
                     time_ms,
                     time_source: source.into(),

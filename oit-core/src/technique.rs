@@ -111,8 +111,7 @@ impl TechniqueKind {
 }
 
 /// The names `parse` accepts, for messages.
-pub const KNOWN_TECHNIQUES: &str =
-    "reference, plain, dp, ddp, wavg, wsum, bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K], fabs[:K], mlp:M, dfb, ll";
+pub const KNOWN_TECHNIQUES: &str = "reference, plain, dp, ddp, wavg, wsum, bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K], fabs[:K], mlp:M, dfb, ll";
 
 /// Largest K or M accepted (a pixel with this many layers is already far past any real scene).
 pub const MAX_PARAMETER: u32 = 65_536;
@@ -395,7 +394,9 @@ mod tests {
 
     #[test]
     fn bad_names_are_errors() {
-        for bad in ["", "nope", "fabs:0", "fabs:x", "dp:3", "mlp:-1", "bdp:99999999", "dfb:4", "ll:2", "plain:2"] {
+        for bad in
+            ["", "nope", "fabs:0", "fabs:x", "dp:3", "mlp:-1", "bdp:99999999", "dfb:4", "ll:2", "plain:2"]
+        {
             assert!(bad.parse::<Technique>().is_err(), "{bad}");
         }
     }

@@ -93,7 +93,8 @@ mod tests {
             let layers = reference.layers.as_ref().unwrap();
             let deep = layers.iter().filter(|&&n| n >= 2).count();
             assert!(deep > 0, "no pixel holds two quads at azimuth {azimuth}");
-            let differs = plain.image.pixels.iter().zip(&reference.image.pixels).filter(|(a, b)| a != b).count();
+            let differs =
+                plain.image.pixels.iter().zip(&reference.image.pixels).filter(|(a, b)| a != b).count();
             if differs == 0 {
                 equal_views += 1;
             } else {
