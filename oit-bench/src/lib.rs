@@ -42,7 +42,10 @@ use std::collections::HashMap;
 use experiment::{Experiment, Measurement, Step, label_of, measure};
 use oit_core::metrics::accuracy;
 use oit_core::plan::Plan;
-use oit_core::{Backend, Camera, Frame, Image, OitError, RasterPath, Settings, Technique, View, load_scene};
+use oit_core::{
+    Backend, Camera, Frame, HardwareCapture, Image, OitError, RasterPath, Scene, Settings, Technique, View,
+    load_scene,
+};
 use serde::{Deserialize, Serialize};
 
 pub use backends::available_backends;
@@ -517,6 +520,49 @@ pub fn run_bench(config: &Config) -> Result<Report, OitError> {
     run_bench_with(config, &mut |_| {})
 }
 
+/// Issue 10.5: `wavg` and `wsum` on the hardware path by additive blending into float targets
+/// (`--hardware-capture blend`, the form real renderers use) beside the default atomics capture,
+/// so the report compares the two, time and error: rows of backend `NAME+blend` on the hardware
+/// path, timed and measured against that backend/path's reference like every row. None when the
+/// bench runs neither technique, no backend takes the hardware path for them, or the settings ask
+/// for the blend capture already.
+fn blend_rows(
+    config: &Config,
+    base: &Settings,
+    scene_name: &str,
+    scene: &Scene,
+) -> Result<Vec<Measurement>, OitError> {
+    let techniques: Vec<Technique> = config
+        .techniques
+        .iter()
+        .copied()
+        .filter(|t| matches!(t, Technique::WeightedAverage | Technique::WeightedSum))
+        .collect();
+    let weighted = Settings { technique: Technique::WeightedAverage, ..base.clone() };
+    let on_hardware = config.backends.iter().any(|b| b.raster_path(&weighted) == RasterPath::Hardware);
+    if techniques.is_empty() || !on_hardware || base.hardware_capture == HardwareCapture::Blend {
+        return Ok(Vec::new());
+    }
+    let settings = Settings { hardware_capture: HardwareCapture::Blend, ..base.clone() };
+    let experiment = Experiment {
+        backends: &config.backends,
+        settings: &settings,
+        techniques: &techniques,
+        warmup: config.warmup,
+        frames: config.frames,
+        keep_images: true,
+    };
+    let measured = experiment.run(scene_name, scene, &[config.view], &mut |_| {})?;
+    Ok(measured
+        .into_iter()
+        .filter(|m| !m.baseline && m.raster == RasterPath::Hardware)
+        .map(|mut m| {
+            m.backend = format!("{}+blend", m.backend);
+            m
+        })
+        .collect())
+}
+
 /// The wall-time spread of timed frames.
 fn wall_spread(wall: &[f64]) -> Spread {
     Spread::of(wall).unwrap_or_default()
@@ -608,16 +654,18 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
             fragments: None,
             max_depth: None,
         };
-        let measurements = experiment.run(scene_name, &scene, &[config.view], &mut |step| match step {
-            Step::Rendering(what) => on_step(&format!("{scene_name}: {what}")),
-            // nothing is measured on a backend whose reference failed
-            Step::Measured(m) if m.baseline && m.result.is_err() => {
-                for _ in &config.techniques {
-                    on_step(&format!("{scene_name}: skipped on {}", m.label()));
+        let mut measurements =
+            experiment.run(scene_name, &scene, &[config.view], &mut |step| match step {
+                Step::Rendering(what) => on_step(&format!("{scene_name}: {what}")),
+                // nothing is measured on a backend whose reference failed
+                Step::Measured(m) if m.baseline && m.result.is_err() => {
+                    for _ in &config.techniques {
+                        on_step(&format!("{scene_name}: skipped on {}", m.label()));
+                    }
                 }
-            }
-            Step::Measured(_) => {}
-        })?;
+                Step::Measured(_) => {}
+            })?;
+        measurements.extend(blend_rows(config, &base, scene_name, &scene)?);
 
         // per technique: (label, image, the coverage of that backend's reference)
         let mut images: HashMap<String, Vec<Rendered>> = HashMap::new();
