@@ -78,8 +78,11 @@ pub struct SceneStage {
     /// The image size of the rasterizer this stage belongs to, and the render targets its
     /// captures drew into, kept for the next frame of that size ([`SceneStage::target`]).
     size: (u32, u32),
-    targets: Rc<RefCell<Vec<(&'static str, wgpu::TextureFormat, wgpu::TextureView)>>>,
+    targets: Rc<RefCell<Vec<KeptTarget>>>,
 }
+
+/// A render target a [`SceneStage`] keeps: its label, format and view.
+type KeptTarget = (&'static str, wgpu::TextureFormat, wgpu::TextureView);
 
 impl SceneStage {
     /// raster_hardware.wgsl without its fragment entry point (`hw_fs`, which calls the atomics

@@ -16,10 +16,10 @@ const WGSL: &str = include_str!("plain.wgsl");
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     // translucency and Fresnel are refused by the plan (oit_core::plan::Plan::new)
-    if drivers.scene.path() == RasterPath::Hardware {
-        if let Some(stage) = drivers.scene.scene_stage() {
-            return super::blend::plain(ctx, stage);
-        }
+    if drivers.scene.path() == RasterPath::Hardware
+        && let Some(stage) = drivers.scene.scene_stage()
+    {
+        return super::blend::plain(ctx, stage);
     }
     let deepest = super::count(ctx, drivers.scene.as_ref())?.1;
     let k = ctx.plan.slots(deepest);
