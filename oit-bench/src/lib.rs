@@ -842,8 +842,11 @@ pub fn samples(report: &Report) -> Vec<model::Sample> {
         .rows
         .iter()
         .filter_map(|r| {
-            let label = label_of(&r.backend, r.raster.parse().ok()?);
-            let stats = report.scene_stats.iter().find(|s| s.scene == r.scene && s.backend == label)?;
+            let raster = r.raster.parse().ok()?;
+            let label = label_of(&r.backend, raster);
+            // a `NAME+blend` row (`blend_rows`) draws the scene of NAME's statistics
+            let measured = label_of(r.backend.split('+').next().unwrap_or(&r.backend), raster);
+            let stats = report.scene_stats.iter().find(|s| s.scene == r.scene && s.backend == measured)?;
             Some(model::Sample {
                 scene: r.scene.clone(),
                 backend: label,

@@ -74,6 +74,23 @@ fn report_holds_every_technique() {
             );
         }
     }
+    // issue 10.6: every row has its steady-state wall time (no image readback) and its wall time
+    // with the readback
+    for r in rows {
+        for key in ["steady_wall_ms", "readback_wall_ms"] {
+            assert!(r[key]["median"].as_f64().is_some_and(|ms| ms > 0.0), "{key} of {}", r["technique"]);
+        }
+    }
+    // issue 10.5: where wavg ran on wgpu's hardware path, its blend capture ran beside it, with
+    // the same error (the sums are equal below 2^24)
+    let on = |backend: &str| {
+        rows.iter().find(|r| r["technique"] == "wavg" && r["backend"] == backend && r["raster"] == "hardware")
+    };
+    if let Some(atomics) = on("wgpu") {
+        let blend = on("wgpu+blend").expect("a wgpu+blend row for wavg");
+        assert_eq!(blend["epr"], atomics["epr"]);
+        assert_eq!(blend["fragments"], atomics["fragments"]);
+    }
     // planes:4 is 4 layers deep: dp peels 4 and finds none left
     let dp = rows.iter().find(|r| r["technique"] == "dp").unwrap();
     assert_eq!(dp["passes"], 5);
