@@ -22,6 +22,7 @@ const MODULES: &[(&str, &str, bool)] = &[
     ("reference", "technique/reference.wgsl+technique/sort_entries.wgsl", true),
     ("fabs", "technique/fabs.wgsl", true),
     ("weighted", "technique/weighted.wgsl", true),
+    ("plain", "technique/plain.wgsl", true),
     ("mdts", "technique/mdts.wgsl", true),
     ("dp", "technique/dp.wgsl", true),
     ("ddp", "technique/ddp.wgsl", true),

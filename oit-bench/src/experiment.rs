@@ -78,9 +78,13 @@ pub struct Measured {
     pub stats: Stats,
     /// Against the reference; `None` for the reference itself.
     pub accuracy: Option<Accuracy>,
-    /// Wall milliseconds of each timed frame (the backend's own where it keeps one, else the time
-    /// around the call).
+    /// Wall milliseconds of each timed frame, its image read back to the host (the backend's own
+    /// where it keeps one, else the time around the call): `readback_wall_ms` in the report.
     pub wall_ms: Vec<f64>,
+    /// Wall milliseconds of each steady-state frame: the same prepared scene after the warm-up,
+    /// through [`Prepared::frame_stats`] (the frame waited for, its counters read back, not its
+    /// image): `steady_wall_ms` in the report. Empty for a single untimed render.
+    pub steady_wall_ms: Vec<f64>,
     /// Device milliseconds of each timed frame that measured them.
     pub gpu_ms: Vec<f64>,
     /// The deepest pixel, where the frame counted layers (the reference does).
@@ -112,15 +116,18 @@ pub enum Step<'a> {
 pub(crate) struct Timed {
     /// The last frame.
     pub frame: Frame,
-    /// Wall milliseconds per timed frame.
+    /// Wall milliseconds per timed frame, image read back.
     pub wall: Vec<f64>,
+    /// Wall milliseconds per steady-state frame, no image read back.
+    pub steady: Vec<f64>,
     /// Device milliseconds per timed frame that has them.
     pub gpu: Vec<f64>,
 }
 
-/// Renders `warmup` untimed frames, then `frames` (at least 1) timed ones, all of one prepared
-/// scene: the timed frames are steady-state frames (storage and pipelines made by the warm-up or
-/// an earlier technique are reused), what a frame loop sees.
+/// Renders `warmup` untimed frames, then `frames` (at least 1) timed steady-state frames without
+/// their image ([`Prepared::frame_stats`]), then `frames` timed frames with it, all of one
+/// prepared scene: the timed frames reuse the storage and pipelines the warm-up or an earlier
+/// technique made, as a frame loop does.
 pub(crate) fn measure(
     prepared: &mut dyn Prepared,
     camera: &Camera,
@@ -130,6 +137,12 @@ pub(crate) fn measure(
 ) -> Result<Timed, OitError> {
     for _ in 0..warmup {
         prepared.frame(camera, settings)?;
+    }
+    let mut steady = Vec::new();
+    for _ in 0..frames.max(1) {
+        let start = Instant::now();
+        let stats = prepared.frame_stats(camera, settings)?;
+        steady.push(if stats.wall_ms > 0.0 { stats.wall_ms } else { start.elapsed().as_secs_f64() * 1e3 });
     }
     let (mut wall, mut gpu) = (Vec::new(), Vec::new());
     let mut last = None;
@@ -146,7 +159,7 @@ pub(crate) fn measure(
         last = Some(frame);
     }
     let frame = last.ok_or_else(|| OitError::InvalidSettings("no frame was timed".into()))?;
-    Ok(Timed { frame, wall, gpu })
+    Ok(Timed { frame, wall, steady, gpu })
 }
 
 impl Experiment<'_> {
@@ -226,7 +239,9 @@ impl Experiment<'_> {
                     )));
                     let result = measure(ready, camera, &settings, self.warmup, self.frames).and_then(|t| {
                         let acc = accuracy(&reference, &t.frame.image)?;
-                        Ok(self.numbers(&t.frame, Some(acc), t.wall, t.gpu))
+                        let mut numbers = self.numbers(&t.frame, Some(acc), t.wall, t.gpu);
+                        numbers.steady_wall_ms = t.steady;
+                        Ok(numbers)
                     });
                     out.push(row(technique, raster, false, result.map_err(|e| e.to_string())));
                     on_step(Step::Measured(out.last().expect("just pushed")));
@@ -247,6 +262,7 @@ impl Experiment<'_> {
             stats: frame.stats.clone(),
             accuracy,
             wall_ms: wall,
+            steady_wall_ms: Vec::new(),
             gpu_ms: gpu,
             max_depth: frame.layers.as_ref().and_then(|l| l.iter().copied().max()),
             image: self.keep_images.then(|| frame.image.clone()),

@@ -81,7 +81,10 @@ use std::collections::HashMap;
 use experiment::{Experiment, Measurement, Step, label_of, measure};
 use oit_core::metrics::accuracy;
 use oit_core::plan::Plan;
-use oit_core::{Backend, Camera, Frame, Image, OitError, RasterPath, Settings, Technique, View, load_scene};
+use oit_core::{
+    Backend, Camera, Frame, HardwareCapture, Image, OitError, RasterPath, Scene, Settings, Technique, View,
+    load_scene,
+};
 use serde::{Deserialize, Serialize};
 
 pub use backends::available_backends;
@@ -215,8 +218,17 @@ pub struct Row {
     pub tied: u64,
     /// Bytes of per-pixel storage.
     pub storage_bytes: u64,
-    /// Wall milliseconds per frame.
+    /// Wall milliseconds per frame, the image read back to the host (as `readback_wall_ms`; the
+    /// name reports before the steady state was measured used).
     pub wall_ms: Spread,
+    /// Wall milliseconds per steady-state frame: the same prepared scene after the warm-up, the
+    /// frame waited for and its counters read back, not its image (`Prepared::frame_stats`).
+    /// `None` in reports written before it was measured.
+    #[serde(default)]
+    pub steady_wall_ms: Option<Spread>,
+    /// Wall milliseconds per frame plus the readback of its image: `wall_ms` under its own name.
+    #[serde(default)]
+    pub readback_wall_ms: Option<Spread>,
     /// GPU milliseconds per frame (timestamps), where measured.
     pub gpu_ms: Option<Spread>,
     /// The time used for the model, the plots and Gfrag/s: `gpu_ms.median`, else
@@ -549,6 +561,49 @@ pub fn run_bench(config: &Config) -> Result<Report, OitError> {
     run_bench_with(config, &mut |_| {})
 }
 
+/// Issue 10.5: `wavg` and `wsum` on the hardware path by additive blending into float targets
+/// (`--hardware-capture blend`, the form real renderers use) beside the default atomics capture,
+/// so the report compares the two, time and error: rows of backend `NAME+blend` on the hardware
+/// path, timed and measured against that backend/path's reference like every row. None when the
+/// bench runs neither technique, no backend takes the hardware path for them, or the settings ask
+/// for the blend capture already.
+fn blend_rows(
+    config: &Config,
+    base: &Settings,
+    scene_name: &str,
+    scene: &Scene,
+) -> Result<Vec<Measurement>, OitError> {
+    let techniques: Vec<Technique> = config
+        .techniques
+        .iter()
+        .copied()
+        .filter(|t| matches!(t, Technique::WeightedAverage | Technique::WeightedSum))
+        .collect();
+    let weighted = Settings { technique: Technique::WeightedAverage, ..base.clone() };
+    let on_hardware = config.backends.iter().any(|b| b.raster_path(&weighted) == RasterPath::Hardware);
+    if techniques.is_empty() || !on_hardware || base.hardware_capture == HardwareCapture::Blend {
+        return Ok(Vec::new());
+    }
+    let settings = Settings { hardware_capture: HardwareCapture::Blend, ..base.clone() };
+    let experiment = Experiment {
+        backends: &config.backends,
+        settings: &settings,
+        techniques: &techniques,
+        warmup: config.warmup,
+        frames: config.frames,
+        keep_images: true,
+    };
+    let measured = experiment.run(scene_name, scene, &[config.view], &mut |_| {})?;
+    Ok(measured
+        .into_iter()
+        .filter(|m| !m.baseline && m.raster == RasterPath::Hardware)
+        .map(|mut m| {
+            m.backend = format!("{}+blend", m.backend);
+            m
+        })
+        .collect())
+}
+
 /// The wall-time spread of timed frames.
 fn wall_spread(wall: &[f64]) -> Spread {
     Spread::of(wall).unwrap_or_default()
@@ -640,16 +695,18 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
             fragments: None,
             max_depth: None,
         };
-        let measurements = experiment.run(scene_name, &scene, &[config.view], &mut |step| match step {
-            Step::Rendering(what) => on_step(&format!("{scene_name}: {what}")),
-            // nothing is measured on a backend whose reference failed
-            Step::Measured(m) if m.baseline && m.result.is_err() => {
-                for _ in &config.techniques {
-                    on_step(&format!("{scene_name}: skipped on {}", m.label()));
+        let mut measurements =
+            experiment.run(scene_name, &scene, &[config.view], &mut |step| match step {
+                Step::Rendering(what) => on_step(&format!("{scene_name}: {what}")),
+                // nothing is measured on a backend whose reference failed
+                Step::Measured(m) if m.baseline && m.result.is_err() => {
+                    for _ in &config.techniques {
+                        on_step(&format!("{scene_name}: skipped on {}", m.label()));
+                    }
                 }
-            }
-            Step::Measured(_) => {}
-        })?;
+                Step::Measured(_) => {}
+            })?;
+        measurements.extend(blend_rows(config, &base, scene_name, &scene)?);
 
         // per technique: (label, image, the coverage of that backend's reference)
         let mut images: HashMap<String, Vec<Rendered>> = HashMap::new();
@@ -720,6 +777,8 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
                     tied: s.tied,
                     storage_bytes: s.storage_bytes,
                     wall_ms: wall_spread(&r.wall_ms),
+                    steady_wall_ms: Spread::of(&r.steady_wall_ms),
+                    readback_wall_ms: Spread::of(&r.wall_ms),
                     gpu_ms: gpu_spread(&r.wall_ms, &r.gpu_ms),
                     time_ms,
                     time_source: source.into(),
@@ -824,8 +883,11 @@ pub fn samples(report: &Report) -> Vec<model::Sample> {
         .rows
         .iter()
         .filter_map(|r| {
-            let label = label_of(&r.backend, r.raster.parse().ok()?);
-            let stats = report.scene_stats.iter().find(|s| s.scene == r.scene && s.backend == label)?;
+            let raster = r.raster.parse().ok()?;
+            let label = label_of(&r.backend, raster);
+            // a `NAME+blend` row (`blend_rows`) draws the scene of NAME's statistics
+            let measured = label_of(r.backend.split('+').next().unwrap_or(&r.backend), raster);
+            let stats = report.scene_stats.iter().find(|s| s.scene == r.scene && s.backend == measured)?;
             Some(model::Sample {
                 scene: r.scene.clone(),
                 backend: label,

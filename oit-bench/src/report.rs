@@ -84,14 +84,15 @@ fn side_by_side(w: &mut String, report: &Report, scene: &str) {
     let range = |s: &Spread| format!("{} ({}–{})", ms(s.median), ms(s.min), ms(s.max));
     let _ = writeln!(
         w,
-        "\nSide by side: per backend/path, GPU ms where measured and wall ms (median of the timed \
-         frames, then min–max). *faster* names a backend/path only where its slowest frame beats \
+        "\nSide by side: per backend/path, GPU ms where measured and steady-state wall ms (no image \
+         readback; wall ms with the readback where the steady state was not measured), median of \
+         the timed frames, then min–max. *faster* names a backend/path only where its slowest frame beats \
          every other's fastest (GPU time where all have it, else wall): overlapping ranges support \
          no ordering.\n"
     );
     let mut head = "| technique | lost | EPR (%) |".to_string();
     for l in &labels {
-        let _ = write!(head, " {l} GPU ms | {l} wall ms |");
+        let _ = write!(head, " {l} GPU ms | {l} steady wall ms |");
     }
     let _ = writeln!(w, "{head} faster |");
     let _ = writeln!(w, "|---|---|---|{}---|", "---|---|".repeat(labels.len()));
@@ -109,7 +110,8 @@ fn side_by_side(w: &mut String, report: &Report, scene: &str) {
             match mine.iter().find(|r| row_label(r) == *l) {
                 Some(r) => {
                     let gpu = r.gpu_ms.as_ref().map_or("-".into(), range);
-                    let _ = write!(line, " {gpu} | {} |", range(&r.wall_ms));
+                    let _ =
+                        write!(line, " {gpu} | {} |", range(r.steady_wall_ms.as_ref().unwrap_or(&r.wall_ms)));
                 }
                 None => line.push_str(" - | - |"),
             }
@@ -457,8 +459,12 @@ fn markdown(
          did not reach the composite (collisions, overflow, coplanar ties); **tied**: those that \
          did, but tie in depth with another colour that the technique ordered by colour, not by \
          primitive as the reference; **storage**: per-pixel storage the technique allocated.\n\
-         - **wall ms**: time of `Backend::render` per frame (median of the timed frames, then \
-         min–max); **GPU ms**: the sum of the frame's GPU timestamp intervals (device time, no \
+         - **steady wall ms**: wall time per steady-state frame: the same prepared scene after the \
+         warm-up, the frame waited for and only its counters read back, not its image \
+         (`Prepared::frame_stats`; median of the timed frames, then min–max), what a frame loop \
+         that presents on the device waits. **wall ms + readback**: the same frame with its image \
+         read back to the host (`Prepared::frame`; `readback_wall_ms`, and `wall_ms`, in \
+         report.json). **GPU ms**: the sum of the frame's GPU timestamp intervals (device time, no \
          readbacks or pipeline creation), where the backend has timestamps.\n\
          - **time**: GPU ms where measured, else wall ms. It is what the plots, Gfrag/s and the model use.\n\
          - **Gfrag/s**: scene fragments resolved per second, `fragments / time` (one pass's \
@@ -480,17 +486,18 @@ fn markdown(
         );
         let _ = writeln!(
             w,
-            "| technique | backend | raster | passes | fragments | lost | tied | storage | wall ms (min–max) | GPU ms (min–max) | Gfrag/s | EPR (%) | PSNR (dB) |"
+            "| technique | backend | raster | passes | fragments | lost | tied | storage | GPU ms (min–max) | steady wall ms (min–max) | wall ms + readback (min–max) | Gfrag/s | EPR (%) | PSNR (dB) |"
         );
-        let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+        let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
         for r in report.rows.iter().filter(|r| r.scene == scene.name) {
             let gpu = r
                 .gpu_ms
                 .as_ref()
                 .map_or("-".into(), |g| format!("{} ({}–{})", ms(g.median), ms(g.min), ms(g.max)));
+            let spread = |s: &Spread| format!("{} ({}–{})", ms(s.median), ms(s.min), ms(s.max));
             let _ = writeln!(
                 w,
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} ({}–{}) | {} | {:.3} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.3} | {} | {} |",
                 r.technique,
                 r.backend,
                 r.raster,
@@ -499,10 +506,9 @@ fn markdown(
                 r.lost,
                 r.tied,
                 bytes(r.storage_bytes),
-                ms(r.wall_ms.median),
-                ms(r.wall_ms.min),
-                ms(r.wall_ms.max),
                 gpu,
+                r.steady_wall_ms.as_ref().map_or("-".into(), spread),
+                spread(r.readback_wall_ms.as_ref().unwrap_or(&r.wall_ms)),
                 r.gfrag_per_s,
                 percent(r.epr),
                 r.psnr.map_or("inf".into(), |p| format!("{p:.1}")),

@@ -58,7 +58,12 @@ fn report_holds_every_technique() {
     let again = read_report(&dir).unwrap();
     assert_eq!(again.rows.len(), report.rows.len());
     assert_eq!(again.curves.len(), report.curves.len());
-    assert_eq!(again.rows[0].wall_ms, report.rows[0].wall_ms);
+    // serde_json's float parsing is not exactly round-trip (it can come back an ulp or so off)
+    let (a, b) = (&again.rows[0].wall_ms, &report.rows[0].wall_ms);
+    for (x, y) in [(a.median, b.median), (a.min, b.min), (a.max, b.max)] {
+        assert!((x - y).abs() <= 1e-12 * y.abs().max(1.0), "{a:?} read back as {b:?}");
+    }
+    assert_eq!(a.samples, b.samples);
 
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
@@ -73,6 +78,23 @@ fn report_holds_every_technique() {
                 "no row for {name} on {label}"
             );
         }
+    }
+    // issue 10.6: every row has its steady-state wall time (no image readback) and its wall time
+    // with the readback
+    for r in rows {
+        for key in ["steady_wall_ms", "readback_wall_ms"] {
+            assert!(r[key]["median"].as_f64().is_some_and(|ms| ms > 0.0), "{key} of {}", r["technique"]);
+        }
+    }
+    // issue 10.5: where wavg ran on wgpu's hardware path, its blend capture ran beside it, with
+    // the same error (the sums are equal below 2^24)
+    let on = |backend: &str| {
+        rows.iter().find(|r| r["technique"] == "wavg" && r["backend"] == backend && r["raster"] == "hardware")
+    };
+    if let Some(atomics) = on("wgpu") {
+        let blend = on("wgpu+blend").expect("a wgpu+blend row for wavg");
+        assert_eq!(blend["epr"], atomics["epr"]);
+        assert_eq!(blend["fragments"], atomics["fragments"]);
     }
     // planes:4 is 4 layers deep: dp peels 4 and finds none left
     let dp = rows.iter().find(|r| r["technique"] == "dp").unwrap();

@@ -18,7 +18,9 @@ use crate::output;
     about = "Time every technique on every backend and write the speed/accuracy report",
     long_about = "Time every technique on every backend and write the speed/accuracy report.\n\n\
         For each scene × backend (× raster path) × technique: --warmup untimed frames, then \
-        --frames timed ones; the median and spread of wall and GPU milliseconds, passes, \
+        --frames timed steady-state frames (the same prepared scene, no image readback) and \
+        --frames timed frames with their image read back; the median and spread of GPU \
+        milliseconds, steady-state wall milliseconds and wall milliseconds with the readback, passes, \
         fragments, lost, storage, Gfrag/s, and EPR (error pixel rate: in per cent in report.md \
         and the plots, a fraction in [0, 1] in report.json) and PSNR against the same backend's \
         reference. \
@@ -44,7 +46,8 @@ pub struct BenchArgs {
     #[arg(short, long, value_name = "LIST|all", default_value = "all")]
     pub techniques: String,
 
-    /// Timed frames per run (medians want 10 or more).
+    /// Timed frames per run (medians want 10 or more), twice: without the image's readback (the
+    /// steady state) and with it.
     #[arg(long, value_name = "N", default_value_t = 10)]
     pub frames: u32,
 

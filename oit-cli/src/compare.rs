@@ -31,7 +31,7 @@ use crate::output::{self, Table};
 )]
 pub struct CompareArgs {
     /// Comma-separated techniques (e.g. dp,bdp2,fabs:16), or all (every technique but the
-    /// reference, in catalogue order). Names: reference, dp, ddp, wavg, wsum, bdp, bdp:P, bdp2,
+    /// reference, in catalogue order). Names: reference, plain, dp, ddp, wavg, wsum, bdp, bdp:P, bdp2,
     /// adp, mdts[:K], mdts64[:K], fabs[:K], mlp:M, dfb, ll.
     #[arg(short, long, value_name = "LIST|all", default_value = "all")]
     pub techniques: String,

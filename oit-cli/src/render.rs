@@ -25,7 +25,8 @@ use crate::output::{self, CameraJson};
         them), and --json prints one object per line."
 )]
 pub struct RenderArgs {
-    /// The technique: reference, dp, ddp, wavg, wsum, bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K],
+    /// The technique: reference, plain (unsorted alpha blending in primitive order, the
+    /// baseline), dp, ddp, wavg, wsum, bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K],
     /// fabs[:K], mlp:M, dfb (dynamic fragment buffer, Maule et al. 2012) or ll (per-pixel linked
     /// lists, Yang et al. 2010) (K, M, P from 1 to 65536; K left out is sized from the scene; dfb
     /// and ll allocate exactly the frame's fragments, counted first).

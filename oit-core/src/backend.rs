@@ -52,10 +52,23 @@ pub struct Capabilities {
 pub trait Prepared {
     /// Renders one frame of the prepared scene. Bad input is an error, never a panic.
     fn frame(&mut self, camera: &Camera, settings: &Settings) -> Result<Frame, OitError>;
+    /// Renders one frame as [`Prepared::frame`] does and waits for it, but reads back only its
+    /// counters, not the image (nor per-pixel losses): what a frame loop that presents on the
+    /// device pays. `oit bench` times it as the steady-state frame. The default renders a whole
+    /// frame (a backend whose image is in host memory already has nothing to skip).
+    fn frame_stats(&mut self, camera: &Camera, settings: &Settings) -> Result<crate::Stats, OitError> {
+        self.frame(camera, settings).map(|f| f.stats)
+    }
     /// How many per-pixel storage allocations (buffers, arrays, resolve state) this prepared
     /// scene has made so far: the backend's own counter. A frame that reuses what an earlier
     /// frame of the same size made adds nothing.
     fn storage_allocations(&self) -> u64;
+    /// How many pipelines (compute and render) the backend has created on this scene's device so
+    /// far, where it makes any: a steady-state frame creates none. `None` for a backend without
+    /// pipelines (oit-cpu).
+    fn pipelines_created(&self) -> Option<u64> {
+        None
+    }
 }
 
 /// A renderer of every technique in its capabilities.
@@ -134,8 +147,14 @@ impl Prepared for PreparedOnPath<'_> {
     fn frame(&mut self, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
         self.inner.frame(camera, &Settings { raster: Some(self.path), ..settings.clone() })
     }
+    fn frame_stats(&mut self, camera: &Camera, settings: &Settings) -> Result<crate::Stats, OitError> {
+        self.inner.frame_stats(camera, &Settings { raster: Some(self.path), ..settings.clone() })
+    }
     fn storage_allocations(&self) -> u64 {
         self.inner.storage_allocations()
+    }
+    fn pipelines_created(&self) -> Option<u64> {
+        self.inner.pipelines_created()
     }
 }
 

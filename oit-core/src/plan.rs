@@ -105,11 +105,16 @@ pub struct Plan {
     /// so a run of equal depths with two payloads or more reaching the resolve may be out of the
     /// reference's order. `dp`, `ddp`, `mlp`, `mdts64` (depth bits above the payload in one 64-bit
     /// atomic word: no room for an id), `mdts` (20 depth bits above colour bits: equal at 2⁻²⁰)
-    /// and `bdp`'s depth mode (a subinterval's min and max keys). Not `fabs`: it carries the
+    /// and `bdp`'s depth mode (a subinterval's min and max keys). Not `plain`, which orders by
+    /// primitive id alone and never claims depth order, nor `fabs`: it carries the
     /// primitive id and sorts by (depth, id) as the reference does, nor `dfb` and `ll`, whose
     /// entries carry it likewise; not the colour mode of `bdp`, `adp` (equal depths share a
     /// bucket: one is kept, the other counted in `lost`) nor the order-free `wavg`/`wsum`.
     pub count_ties: bool,
+    /// `plain` composited by a hardware blender in submission order (a backend's hardware raster
+    /// path, [`Plan::on_path`]): float render targets, no counting pass. Elsewhere `plain` keeps each
+    /// pixel's fragments and sorts them by primitive id.
+    pub blender: bool,
 }
 
 impl Plan {
@@ -123,7 +128,7 @@ impl Plan {
                 what: "fresnel with mdts: its 12 + 12 spare bits hold RGB only; use mdts64".into(),
             });
         }
-        if matches!(technique, Technique::WeightedAverage | Technique::WeightedSum)
+        if matches!(technique, Technique::Plain | Technique::WeightedAverage | Technique::WeightedSum)
             && matches!(settings.effect, Effect::Translucency | Effect::Fresnel)
         {
             return Err(OitError::Unsupported {
@@ -144,6 +149,9 @@ impl Plan {
             }
             Technique::Mlp { m } => Sizing::Fixed(m),
             Technique::Dfb | Technique::Ll => Sizing::Exact,
+            // where no blender keeps submission order (a CPU, a compute rasterizer), each pixel's
+            // fragments are kept and sorted by primitive id: as many slots as the deepest pixel
+            Technique::Plain => Sizing::FromCount,
             _ => Sizing::None,
         };
         // alpha is not stored by mdts: the override, else the mean of the objects' alphas
@@ -161,6 +169,7 @@ impl Plan {
             sizing,
             peel_limit: settings.max_peels.unwrap_or(u32::MAX),
             mdts_alpha8: (alpha.clamp(0.0, 1.0) * 255.0 + 0.5) as u32,
+            blender: false,
             count_ties: match technique {
                 Technique::Dp
                 | Technique::Ddp
@@ -171,6 +180,17 @@ impl Plan {
                 _ => false,
             },
         })
+    }
+
+    /// The plan as a backend's `path` runs it: on a hardware raster path `plain` is the blender's
+    /// (one draw in submission order into float targets); every other technique is the same on
+    /// every path.
+    pub fn on_path(mut self, path: crate::RasterPath) -> Plan {
+        if self.technique == Technique::Plain && path == crate::RasterPath::Hardware {
+            self.blender = true;
+            self.sizing = Sizing::None;
+        }
+        self
     }
 
     /// Slots per pixel for a scene whose deepest pixel holds `deepest` fragments (from the
@@ -221,6 +241,16 @@ impl Plan {
                     fixed: 0,
                 },
             ],
+            // where no blender keeps submission order (a CPU, a compute rasterizer): a counter and
+            // K slots of (primitive id, payload), sorted by id; the blender needs none of it
+            // the blender's: a premultiplied colour target and a fragment-count target, 32-bit
+            // floats (a device without 32-bit float blending gets 16-bit ones, half the bytes)
+            Technique::Plain if self.blender => {
+                vec![per_pixel("colour target (RGBA float)", 16, 1), per_pixel("count target (float)", 4, 1)]
+            }
+            Technique::Plain => {
+                vec![per_pixel("counter", 4, 1), per_pixel("slots (primitive id, payload)", 8, k)]
+            }
             Technique::Dp => {
                 vec![per_pixel("nearest (depth key, colour)", 8, 1), per_pixel("previous peel's depth", 4, 1)]
             }
@@ -317,7 +347,8 @@ impl Plan {
                 passes.push((PassKind::Histogram, 1));
                 passes.push((PassKind::Batch, self.adp_batches(bins)));
             }
-            Technique::WeightedAverage
+            Technique::Plain
+            | Technique::WeightedAverage
             | Technique::WeightedSum
             | Technique::Mdts { .. }
             | Technique::Mdts64 { .. } => passes.push((PassKind::Capture, 1)),
@@ -429,6 +460,8 @@ mod tests {
     fn refusals_are_the_same_for_every_backend() {
         assert!(plan("mdts", |s| s.effect = Effect::Fresnel).is_err());
         assert!(plan("mdts64", |s| s.effect = Effect::Fresnel).is_ok());
+        assert!(plan("plain", |s| s.effect = Effect::Translucency).is_err());
+        assert!(plan("plain", |s| s.effect = Effect::Complexity).is_ok());
         assert!(plan("bdp2", |s| s.bdp_mode = crate::BdpMode::Color).is_err());
         assert!(plan("bdp", |s| s.bdp_mode = crate::BdpMode::Color).unwrap().bdp_color);
         assert!(!plan("bdp", |s| s.effect = Effect::Fresnel).unwrap().bdp_color);

@@ -17,6 +17,14 @@ use crate::OitError;
 pub enum Technique {
     /// Every fragment, sorted by (depth, primitive id), composited in f64: the ground truth.
     Reference,
+    /// Plain alpha blending, unsorted: each fragment blended over what the pixel holds in
+    /// submission order, as a GPU's blender composites one draw, with no attempt at depth order.
+    /// What a renderer without OIT shows; the speed baseline of every other technique. Submission
+    /// order is primitive order (the order a blender guarantees within one draw): a pixel's
+    /// fragments are composited by ascending primitive id, the highest on top, on every backend
+    /// and path, so backends agree. An approximation: equal to the reference only where a pixel's
+    /// fragments in primitive order are farthest first.
+    Plain,
     /// Classical depth peeling (Everitt 2001): one layer per geometry pass.
     Dp,
     /// Dual depth peeling (Bavoil & Myers 2008): the nearest and farthest layer per pass.
@@ -67,6 +75,7 @@ pub enum Technique {
 #[expect(missing_docs, reason = "the variants are the techniques' names")]
 pub enum TechniqueKind {
     Reference,
+    Plain,
     Dp,
     Ddp,
     Wavg,
@@ -83,8 +92,9 @@ pub enum TechniqueKind {
 
 impl TechniqueKind {
     /// Every kind, in catalogue order.
-    pub const ALL: [TechniqueKind; 13] = [
+    pub const ALL: [TechniqueKind; 14] = [
         TechniqueKind::Reference,
+        TechniqueKind::Plain,
         TechniqueKind::Dp,
         TechniqueKind::Ddp,
         TechniqueKind::Wavg,
@@ -101,8 +111,7 @@ impl TechniqueKind {
 }
 
 /// The names `parse` accepts, for messages.
-pub const KNOWN_TECHNIQUES: &str =
-    "reference, dp, ddp, wavg, wsum, bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K], fabs[:K], mlp:M, dfb, ll";
+pub const KNOWN_TECHNIQUES: &str = "reference, plain, dp, ddp, wavg, wsum, bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K], fabs[:K], mlp:M, dfb, ll";
 
 /// Largest K or M accepted (a pixel with this many layers is already far past any real scene).
 pub const MAX_PARAMETER: u32 = 65_536;
@@ -111,6 +120,7 @@ impl Technique {
     /// The techniques `--techniques all` runs, reference excluded, in catalogue order.
     pub fn all() -> Vec<Technique> {
         vec![
+            Technique::Plain,
             Technique::Dp,
             Technique::Ddp,
             Technique::WeightedAverage,
@@ -151,6 +161,7 @@ impl Technique {
     pub fn kind(&self) -> TechniqueKind {
         match self {
             Technique::Reference => TechniqueKind::Reference,
+            Technique::Plain => TechniqueKind::Plain,
             Technique::Dp => TechniqueKind::Dp,
             Technique::Ddp => TechniqueKind::Ddp,
             Technique::WeightedAverage => TechniqueKind::Wavg,
@@ -190,6 +201,7 @@ impl fmt::Display for Technique {
         };
         match self {
             Technique::Reference => write!(f, "reference"),
+            Technique::Plain => write!(f, "plain"),
             Technique::Dp => write!(f, "dp"),
             Technique::Ddp => write!(f, "ddp"),
             Technique::WeightedAverage => write!(f, "wavg"),
@@ -240,6 +252,7 @@ impl FromStr for Technique {
         };
         match name {
             "reference" | "ref" => none(Technique::Reference),
+            "plain" => none(Technique::Plain),
             "dp" => none(Technique::Dp),
             "ddp" => none(Technique::Ddp),
             "wavg" => none(Technique::WeightedAverage),
@@ -354,6 +367,7 @@ mod tests {
     fn names_round_trip() {
         for name in [
             "reference",
+            "plain",
             "dp",
             "ddp",
             "wavg",
@@ -380,7 +394,9 @@ mod tests {
 
     #[test]
     fn bad_names_are_errors() {
-        for bad in ["", "nope", "fabs:0", "fabs:x", "dp:3", "mlp:-1", "bdp:99999999", "dfb:4", "ll:2"] {
+        for bad in
+            ["", "nope", "fabs:0", "fabs:x", "dp:3", "mlp:-1", "bdp:99999999", "dfb:4", "ll:2", "plain:2"]
+        {
             assert!(bad.parse::<Technique>().is_err(), "{bad}");
         }
     }

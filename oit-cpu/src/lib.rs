@@ -113,6 +113,7 @@ impl CpuPrepared<'_> {
         let mut ctx = Ctx::new(self.scene, camera, settings, &raster, &self.pool, plan);
         let mut frame = match settings.technique {
             Technique::Reference => technique::reference::render(&mut ctx),
+            Technique::Plain => technique::plain::render(&mut ctx),
             Technique::Dp => technique::dp::render(&mut ctx),
             Technique::Ddp => technique::ddp::render(&mut ctx),
             Technique::WeightedAverage => technique::weighted::render(&mut ctx, true),

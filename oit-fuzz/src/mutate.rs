@@ -247,6 +247,8 @@ pub fn values(option: &str) -> &'static [&'static str] {
         "technique" | "techniques" | "curve-techniques" => &[
             "reference",
             "all",
+            "plain",
+            "plain:2",
             "dp",
             "ddp",
             "wavg",

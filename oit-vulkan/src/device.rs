@@ -567,6 +567,12 @@ impl Gpu {
         Ok(Buffer { raw: self.raw.clone(), buffer, memory, size, usage, host })
     }
 
+    /// Compute pipelines created on this device so far (each is cached until the device drops,
+    /// so the cache's size counts them): a steady-state frame adds none.
+    pub fn pipelines_created(&self) -> u64 {
+        self.cache.lock().map_or(0, |c| c.pipelines.len() as u64)
+    }
+
     /// The compute pipeline of `entry` in `module` (a module of `build.rs`) whose group 0 has `n`
     /// technique buffers; made once, then cached.
     pub fn pipeline(&self, module: &'static str, entry: &str, n: usize) -> Result<Pipeline, OitError> {

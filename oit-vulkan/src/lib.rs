@@ -218,6 +218,10 @@ impl Prepared for VulkanPrepared<'_> {
     fn storage_allocations(&self) -> u64 {
         self.pool.allocations() + self.geometry_made.get()
     }
+
+    fn pipelines_created(&self) -> Option<u64> {
+        Some(self.gpu.pipelines_created())
+    }
 }
 
 /// Runs the frame's technique; the reference returns its per-pixel fragment counts.
@@ -225,6 +229,7 @@ fn run_technique(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<Option<Ve
     let mut layers = None;
     match ctx.settings.technique {
         Technique::Reference => layers = Some(technique::reference::render(ctx, drivers)?),
+        Technique::Plain => technique::plain::render(ctx, drivers)?,
         Technique::Fabs { .. } => technique::fabs::render(ctx, drivers)?,
         Technique::Dp => technique::dp::render(ctx, drivers)?,
         Technique::Ddp => technique::ddp::render(ctx, drivers)?,

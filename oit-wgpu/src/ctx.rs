@@ -134,6 +134,11 @@ pub struct GpuCtx<'a> {
     /// Whether the technique's capture counts its losses; the `--hardware-capture blend` captures
     /// do not yet (issue 16), and their `lost` is `fragments − captured`.
     pub counts_losses: bool,
+    /// Set by the blend captures of `plain`, `wavg` and `wsum` (`technique::blend`), whose draw
+    /// does not go through a [`Driver`]'s counted geometry pass: they count every fragment in a
+    /// count target the resolve reads into `captured` and lose none, so the frame's fragments
+    /// are its captured total, read with the totals at the end of the frame.
+    pub fragments_from_captured: bool,
     gpu_ms: f64,
     pass_ms: Vec<(String, f64)>,
     lent: Lent<'a>,
@@ -267,6 +272,7 @@ impl<'a> GpuCtx<'a> {
             totals,
             acct,
             counts_losses: true,
+            fragments_from_captured: false,
             gpu_ms: 0.0,
             pass_ms: Vec::new(),
             lent,
@@ -494,7 +500,14 @@ impl<'a> GpuCtx<'a> {
     }
 
     /// Resolves the state into the frame and its stats.
-    pub fn finish(mut self, path: oit_core::RasterPath) -> Result<Frame, OitError> {
+    pub fn finish(self, path: oit_core::RasterPath) -> Result<Frame, OitError> {
+        self.finish_with(path, true)
+    }
+
+    /// [`GpuCtx::finish`], reading back the image and per-pixel losses only when `readback`:
+    /// without, the resolve still writes the image on the device and only the four totals (16
+    /// bytes) come back; the frame's image is then empty (0 × 0) and `lost_pixels` `None`.
+    pub fn finish_with(mut self, path: oit_core::RasterPath, readback: bool) -> Result<Frame, OitError> {
         let (image_buf, totals) = (self.image.clone(), self.totals.clone());
         self.fill(&totals, 0)?;
         self.kernel_over(
@@ -515,20 +528,33 @@ impl<'a> GpuCtx<'a> {
             0,
             "resolve",
         )?;
-        let words = self.gpu.read_u32(&image_buf)?;
+        let _ = path;
         let t = self.gpu.read_u32(&totals)?;
+        if !readback {
+            return self.frame_of(Image { width: 0, height: 0, pixels: Vec::new() }, &t, None);
+        }
+        let words = self.gpu.read_u32(&image_buf)?;
         let image = Image {
             width: self.settings.width,
             height: self.settings.height,
             pixels: words[..self.pixels as usize].iter().map(|w| w.to_le_bytes()).collect(),
         };
-        let fragments = self.fragments.unwrap_or(0);
+        let acct = if self.counts_losses { Some(self.gpu.read_u32(&self.acct)?) } else { None };
+        self.frame_of(image, &t, acct)
+    }
+
+    /// The frame of `image`, the totals `t` and the per-pixel loss accounting (read back where
+    /// the technique counts its losses and the caller wants them).
+    fn frame_of(self, image: Image, t: &[u32], acct: Option<Vec<u32>>) -> Result<Frame, OitError> {
         let captured = u64::from(t[0]);
-        let _ = path;
+        let fragments = match self.fragments {
+            Some(generated) => generated,
+            None if self.fragments_from_captured => captured,
+            None => 0,
+        };
         let (lost, lost_pixels) = if self.counts_losses {
-            let acct = self.gpu.read_u32(&self.acct)?;
-            let px: Vec<u32> = acct.chunks(3).take(self.pixels as usize).map(|w| w[0]).collect();
-            (u64::from(t[3]), Some(px))
+            let px = acct.map(|acct| acct.chunks(3).take(self.pixels as usize).map(|w| w[0]).collect());
+            (u64::from(t[3]), px)
         } else {
             // NOT COUNTED (issue 16): the blend captures do not count their losses yet
             (fragments.saturating_sub(captured), None)

@@ -23,7 +23,9 @@
 //!   counts to size storage, a peel's occlusion), so it takes no encoder: submit what the draws
 //!   depend on before calling `frame`.
 //! - Supported: every technique whose geometry passes draw the scene itself (`reference`, `fabs`,
-//!   `mdts64`, `mlp`, `wavg`, `wsum`, `dp`, `ddp`, `dfb`, `ll`; `mdts` when `Settings::alpha` is set, since its
+//!   `mdts64`, `mlp`, `wavg`, `wsum`, `dp`, `ddp`, `dfb`, `ll`; `plain` by sorting each pixel's
+//!   fragments by primitive id, as the compute path does, since the blend units of the user's
+//!   pipeline are not oit's; `mdts` when `Settings::alpha` is set, since its
 //!   32-bit words store no alpha and the pass does not know the caller's). `bdp` and `adp` also
 //!   draw the instances' bounding boxes, which an embedded pass does not know: they fail with
 //!   [`OitError::Unsupported`], as `mdts` does without an alpha.

@@ -161,6 +161,14 @@ impl Gpu {
         Ok(p)
     }
 
+    /// Pipelines (compute and render) created on this device so far: every one is kept in the
+    /// caches, so their sizes count them. A steady-state frame adds none (`tests/tests/prepared.rs`).
+    pub fn pipelines_created(&self) -> u64 {
+        let compute = self.pipelines.lock().map_or(0, |c| c.len());
+        let render = self.render_pipelines.lock().map_or(0, |c| c.len());
+        (compute + render) as u64
+    }
+
     /// True when GPU timestamps can be taken and mean device time. Not on a CPU device: lavapipe
     /// has the feature, but its compute passes read as well under 1 % of their wall time (dp on
     /// the bunny at 512²: 1.2 ms of GPU time in a 318 ms frame), so `gpu_ms` there would mislead;

@@ -75,7 +75,14 @@ pub struct SceneStage {
     layout: wgpu::BindGroupLayout,
     group: wgpu::BindGroup,
     vertex_count: u32,
+    /// The image size of the rasterizer this stage belongs to, and the render targets its
+    /// captures drew into, kept for the next frame of that size ([`SceneStage::target`]).
+    size: (u32, u32),
+    targets: Rc<RefCell<Vec<KeptTarget>>>,
 }
+
+/// A render target a [`SceneStage`] keeps: its label, format and view.
+type KeptTarget = (&'static str, wgpu::TextureFormat, wgpu::TextureView);
 
 impl SceneStage {
     /// The number of vertices of the one draw (three per triangle).
@@ -97,6 +104,34 @@ impl SceneStage {
     /// The layout of group 1 (the vertices, triangles, shading uniform and instances).
     pub(crate) fn layout(&self) -> &wgpu::BindGroupLayout {
         &self.layout
+    }
+
+    /// The render target `label` of `format` at this rasterizer's image size (sampled by a
+    /// resolve as well), made on first use and kept: a frame of a size seen before makes none.
+    pub(crate) fn target(
+        &self,
+        device: &wgpu::Device,
+        label: &'static str,
+        format: wgpu::TextureFormat,
+    ) -> wgpu::TextureView {
+        let mut targets = self.targets.borrow_mut();
+        if let Some((.., view)) = targets.iter().find(|(l, f, _)| (*l, *f) == (label, format)) {
+            return view.clone();
+        }
+        let (width, height) = self.size;
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d { width: width.max(1), height: height.max(1), depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&Default::default());
+        targets.push((label, format, view.clone()));
+        view
     }
 
     /// Sets group 1 and draws every triangle (primitive `t` of the draw is the scene's `t`).
@@ -350,7 +385,8 @@ impl HwGeometry {
                 wgpu::BindGroupEntry { binding: 3, resource: instances.as_entire_binding() },
             ],
         });
-        Ok(HwGeometry { boxes, instances, uniform, stage: SceneStage { layout, group, vertex_count } })
+        let stage = SceneStage { layout, group, vertex_count, size: (0, 0), targets: Rc::default() };
+        Ok(HwGeometry { boxes, instances, uniform, stage })
     }
 
     /// The vertex stage's group 1 and draw over this geometry.
@@ -393,7 +429,8 @@ impl HwGeometry {
     /// counter buffer, counted in `made`), drawn with whatever [`HwGeometry::write_frame`] wrote
     /// last.
     pub(crate) fn raster(&self, gpu: &Gpu, width: u32, height: u32, made: &Cell<u64>) -> HardwareRaster {
-        let stage = self.stage.clone();
+        // the stage of this size, with render targets of its own
+        let stage = SceneStage { size: (width, height), targets: Rc::default(), ..self.stage.clone() };
         let layout1 = stage.layout.clone();
         let pipeline_device = gpu.device.clone();
         let pipeline = move |capture: &CaptureShader<'_>| {

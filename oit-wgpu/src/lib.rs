@@ -264,6 +264,31 @@ impl WgpuPrepared<'_> {
 
 impl Prepared for WgpuPrepared<'_> {
     fn frame(&mut self, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
+        self.frame_with(camera, settings, true)
+    }
+
+    fn frame_stats(&mut self, camera: &Camera, settings: &Settings) -> Result<oit_core::Stats, OitError> {
+        Ok(self.frame_with(camera, settings, false)?.stats)
+    }
+
+    fn storage_allocations(&self) -> u64 {
+        self.pool.allocations() + self.geometry_made.get()
+    }
+
+    fn pipelines_created(&self) -> Option<u64> {
+        Some(self.gpu.pipelines_created())
+    }
+}
+
+impl WgpuPrepared<'_> {
+    /// A frame; the image and per-pixel losses read back only when `readback`
+    /// ([`GpuCtx::finish_with`]).
+    fn frame_with(
+        &mut self,
+        camera: &Camera,
+        settings: &Settings,
+        readback: bool,
+    ) -> Result<Frame, OitError> {
         settings.validate()?;
         let (gpu, scene) = (self.gpu, self.scene);
         let start = Instant::now();
@@ -298,14 +323,10 @@ impl Prepared for WgpuPrepared<'_> {
         };
         let mut ctx = GpuCtx::with_pool(gpu, scene, camera, settings, Some(&this.pool))?;
         let layers = run_technique(&mut ctx, &drivers)?;
-        let mut frame = ctx.finish(path)?;
-        frame.layers = layers;
+        let mut frame = ctx.finish_with(path, readback)?;
+        frame.layers = layers.filter(|_| readback);
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(frame)
-    }
-
-    fn storage_allocations(&self) -> u64 {
-        self.pool.allocations() + self.geometry_made.get()
     }
 }
 
@@ -324,6 +345,10 @@ pub(crate) fn run_technique(
         Technique::Dp if blend => technique::dp_depth::render(ctx, drivers)?,
         Technique::Ddp if blend => technique::ddp_blend::render(ctx, drivers)?,
         Technique::Bdp { .. } if blend => technique::bdp_blend::render(ctx, drivers)?,
+        Technique::WeightedAverage | Technique::WeightedSum if blend => {
+            technique::blend::weighted(ctx, technique::bdp_blend::scene_stage(drivers)?)?
+        }
+        Technique::Plain => technique::plain::render(ctx, drivers)?,
         Technique::Reference => layers = Some(technique::reference::render(ctx, drivers)?),
         Technique::Fabs { .. } => technique::fabs::render(ctx, drivers)?,
         Technique::Dp => technique::dp::render(ctx, drivers)?,

@@ -16,6 +16,7 @@ const CASES: &[Case] = &[
         false,
         &[
             "reference",
+            "plain",
             "wavg",
             "wsum",
             "dp",

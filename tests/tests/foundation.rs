@@ -265,6 +265,7 @@ fn exact_techniques_do_not_depend_on_thread_count() {
     let scene = scene("cluster:200");
     for t in [
         "reference",
+        "plain",
         "dp",
         "ddp",
         "wavg",

@@ -27,7 +27,9 @@ fn reported_storage_is_the_plans_arrays() {
             let deepest = reference.layers.as_ref().and_then(|l| l.iter().copied().max()).unwrap_or(0);
             for &technique in &techniques {
                 let s = Settings { technique, ..base.clone() };
-                let plan = Plan::new(b.name(), &scene, &s).unwrap_or_else(|e| panic!("{technique}: {e}"));
+                let plan = Plan::new(b.name(), &scene, &s)
+                    .unwrap_or_else(|e| panic!("{technique}: {e}"))
+                    .on_path(b.raster_path(&s));
                 let frame = render(b, &scene, &cam, &s);
                 let pixels = u64::from(s.width) * u64::from(s.height);
                 let counted = Counted { deepest, fragments: reference.stats.fragments };
@@ -60,7 +62,7 @@ fn weighted_blends_refuse_ordered_effects_everywhere() {
     let scene = scene("planes:4");
     for backend in backends_for("weighted_blends_refuse_ordered_effects_everywhere") {
         let b = backend.as_ref();
-        for t in ["wavg", "wsum"] {
+        for t in ["plain", "wavg", "wsum"] {
             for effect in [Effect::Translucency, Effect::Fresnel] {
                 let s = Settings { effect, ..settings(16, t) };
                 match b.render(&scene, &camera(&scene, &s, View::default()), &s) {
@@ -103,7 +105,9 @@ fn geometry_passes_follow_the_plans_schedule() {
             for &technique in &techniques {
                 for max_peels in [None, Some(2)] {
                     let s = Settings { technique, max_peels, ..base.clone() };
-                    let plan = Plan::new(b.name(), &scene, &s).unwrap_or_else(|e| panic!("{technique}: {e}"));
+                    let plan = Plan::new(b.name(), &scene, &s)
+                        .unwrap_or_else(|e| panic!("{technique}: {e}"))
+                        .on_path(b.raster_path(&s));
                     let schedule = plan.schedule(layers, layers);
                     let frame = render(b, &scene, &cam, &s);
                     assert_eq!(

@@ -29,7 +29,7 @@ fn prepared_frames_equal_one_shot_renders_and_reuse_storage() {
         // every technique with its default capture, and the hardware path's blend captures (oit's
         // own vertex stage in the techniques' pipelines; elsewhere the setting is ignored)
         let runs = techniques.iter().map(|&t| (t, HardwareCapture::Atomics)).chain(
-            ["dp", "ddp", "bdp"]
+            ["dp", "ddp", "bdp", "wavg", "wsum"]
                 .map(|t| (t.parse::<Technique>().expect("a technique"), HardwareCapture::Blend)),
         );
         for (technique, capture) in runs {
@@ -56,6 +56,7 @@ fn prepared_frames_equal_one_shot_renders_and_reuse_storage() {
                 same(&framed, &one_shot, &format!("{what} view {i}"));
             }
             let made = prepared.storage_allocations();
+            let pipelines = prepared.pipelines_created();
             assert!(made > 0, "{what}: the counter counts the first frames' storage");
             // The same views again: the same sizes (K of the scene-sized techniques follows the
             // view, so both views' arrays are kept) and the same triangles (the compute path's
@@ -69,6 +70,11 @@ fn prepared_frames_equal_one_shot_renders_and_reuse_storage() {
                     prepared.storage_allocations(),
                     made,
                     "{what} view {i}: a frame of a view and size seen before created a buffer"
+                );
+                assert_eq!(
+                    prepared.pipelines_created(),
+                    pipelines,
+                    "{what} view {i}: a pipeline was created"
                 );
             }
         }
@@ -151,6 +157,61 @@ fn wgpu_geometry_is_uploaded_once() {
                     "{path} {technique}: a view seen before grew a buffer"
                 );
             }
+        }
+    }
+}
+
+/// Issue 10.1: after the first frame, frames of a prepared scene create no pipeline, at any view
+/// (views change the scene-sized techniques' K, a kernel parameter, never a shader's source), on
+/// every backend and path that makes pipelines (the counter is the device's,
+/// `Prepared::pipelines_created`).
+#[test]
+fn steady_frames_create_no_pipeline() {
+    let scene = scene("knot");
+    let mut techniques = vec![Technique::Reference];
+    techniques.extend(Technique::all());
+    let views: Vec<View> =
+        (0..4).map(|i| View { azimuth: 35.0 * i as f32, elevation: 10.0, ..View::default() }).collect();
+    for backend in backends_for("steady_frames_create_no_pipeline") {
+        let b = backend.as_ref();
+        let who = label(b);
+        for &technique in &techniques {
+            let s = settings(40, &technique.to_string());
+            let mut prepared = b.prepare(&scene).unwrap_or_else(|e| panic!("{who} prepare: {e}"));
+            prepared
+                .frame(&camera(&scene, &s, views[0]), &s)
+                .unwrap_or_else(|e| panic!("{who} {technique}: {e}"));
+            let Some(first) = prepared.pipelines_created() else { continue };
+            assert!(first > 0, "{who} {technique}: the first frame builds its pipelines");
+            for (i, &view) in views.iter().enumerate().skip(1) {
+                let cam = camera(&scene, &s, view);
+                prepared.frame(&cam, &s).unwrap_or_else(|e| panic!("{who} {technique}: {e}"));
+                prepared.frame_stats(&cam, &s).unwrap_or_else(|e| panic!("{who} {technique}: {e}"));
+                assert_eq!(prepared.pipelines_created(), Some(first), "{who} {technique}, frame {}", i + 1);
+            }
+        }
+    }
+}
+
+/// `Prepared::frame_stats` (the steady-state frame `oit bench` times: no image read back) renders
+/// the same frame as `Prepared::frame`: the same counters.
+#[test]
+fn frame_stats_counts_what_frame_counts() {
+    let scene = scene("spheres:3");
+    for backend in backends_for("frame_stats_counts_what_frame_counts") {
+        let b = backend.as_ref();
+        let who = label(b);
+        for technique in ["plain", "dp", "wavg", "fabs", "adp", "dfb"] {
+            let s = settings(40, technique);
+            let cam = camera(&scene, &s, FRONT);
+            let mut prepared = b.prepare(&scene).unwrap();
+            let frame = prepared.frame(&cam, &s).unwrap_or_else(|e| panic!("{who} {technique}: {e}"));
+            let stats = prepared.frame_stats(&cam, &s).unwrap_or_else(|e| panic!("{who} {technique}: {e}"));
+            let key = |t: &oit_core::Stats| {
+                (t.geometry_passes, t.fragments, t.captured, t.lost, t.tied, t.storage_bytes, t.max_layers)
+            };
+            assert_eq!(key(&stats), key(&frame.stats), "{who} {technique}");
+            assert!(stats.fragments > 0, "{who} {technique}");
         }
     }
 }

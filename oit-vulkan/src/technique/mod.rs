@@ -11,6 +11,7 @@ pub(crate) mod fabs;
 pub(crate) mod ll;
 pub(crate) mod mdts;
 pub(crate) mod mlp;
+pub(crate) mod plain;
 pub(crate) mod reference;
 pub(crate) mod weighted;
 

@@ -4,6 +4,7 @@
 pub(crate) mod adp;
 pub(crate) mod bdp;
 pub(crate) mod bdp_blend;
+pub(crate) mod blend;
 pub(crate) mod ddp;
 pub(crate) mod ddp_blend;
 pub(crate) mod dfb;
@@ -13,6 +14,7 @@ pub(crate) mod fabs;
 pub(crate) mod ll;
 pub(crate) mod mdts;
 pub(crate) mod mlp;
+pub(crate) mod plain;
 pub(crate) mod reference;
 pub(crate) mod weighted;
 

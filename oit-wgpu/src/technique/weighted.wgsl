@@ -47,7 +47,12 @@ fn composite_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
         f32(atomicLoad(&sums[base + 2u])),
     ) / (255.0 * 255.0);
     let alpha = f32(atomicLoad(&sums[base + 3u])) / 255.0;
-    let count = u32(atomicLoad(&sums[base + 4u]));
+    weighted_composite(px, premultiplied, alpha, u32(atomicLoad(&sums[base + 4u])));
+}
+
+// The composite of a pixel's sums (premultiplied colour, alpha), into its resolve state; shared
+// with the blend capture (blend.wgsl).
+fn weighted_composite(px: u32, premultiplied: vec3<f32>, alpha: f32, count: u32) {
     let bg = fu.background.xyz;
     var c: vec3<f32>;
     if (fu.param == 1u) {

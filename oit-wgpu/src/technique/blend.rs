@@ -1,0 +1,203 @@
+//! `plain`, `wavg` and `wsum` through the blend unit, on the hardware path (`blend.wgsl`): the form
+//! these techniques take in real renderers. One draw of oit's scene vertex stage
+//! ([`SceneStage`]) into two float render targets, a colour target and an additive fragment
+//! count, then a compute resolve reading both into the resolve state for the common finish.
+//!
+//! - `plain` always blends on the hardware path: the blender composites one draw in primitive
+//!   order, which is the definition of its submission order (oit-cpu's `technique/plain.rs`), so
+//!   there is nothing to sort; `--hardware-capture` does not apply. `Rgba32Float` targets with
+//!   `FLOAT32_BLENDABLE`, else `Rgba16Float`. The over operator in f32, back to front, against
+//!   oit-cpu's f32 resolve front to back: the same sum in another association, equal up to f32
+//!   rounding (within 1 in 8 bits; `tests/tests/plain.rs`).
+//! - `wavg` and `wsum` blend with `--hardware-capture blend` (the atomics capture, 64-bit integer
+//!   atomics, stays the default where bit-equality with oit-cpu matters). Additive blending of the
+//!   8-bit integers α·r, α·g, α·b and α into `Rgba32Float` (needs `FLOAT32_BLENDABLE`): every
+//!   addend is an integer up to 255² and every partial sum an integer, exact in f32 while below
+//!   2^24, so up to 258 full-alpha white layers at a pixel the sums equal the atomics capture's
+//!   whatever order the blender adds them in, and so does the image. Beyond, each addition rounds
+//!   by at most half an ulp: the relative error of a pixel's sum is below n · 2^-24 for n layers.
+//!
+//! Storage per pixel: the two targets (20 bytes in f32, 10 in f16). The blender loses no
+//! fragment: every fragment drawn is counted in the count target and composited, so the frame's
+//! fragments are its captured total (read with the totals at the end of the frame: no readback
+//! between the draw and the resolve). The targets are kept by the frame's rasterizer
+//! ([`SceneStage::target`]), made once per image size.
+
+use oit_core::{OitError, Technique};
+
+use crate::ctx::{GpuCtx, TECHNIQUE_PRELUDE};
+use crate::gpu::COMMON_WGSL;
+use crate::hardware::{SceneStage, scene_pipeline};
+use crate::technique::bdp_blend::{check_texture_size, key, unsupported};
+
+const WGSL: &str = include_str!("blend.wgsl");
+const WEIGHTED_WGSL: &str = include_str!("weighted.wgsl");
+
+/// `plain` on the blender.
+pub(crate) fn plain(ctx: &mut GpuCtx<'_>, stage: &SceneStage) -> Result<(), OitError> {
+    let f32_blend = ctx.gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE);
+    let formats = if f32_blend {
+        (wgpu::TextureFormat::Rgba32Float, wgpu::TextureFormat::R32Float)
+    } else {
+        (wgpu::TextureFormat::Rgba16Float, wgpu::TextureFormat::R16Float)
+    };
+    let over = wgpu::BlendState {
+        color: wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+            operation: wgpu::BlendOperation::Add,
+        },
+        alpha: wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::Zero,
+            dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+            operation: wgpu::BlendOperation::Add,
+        },
+    };
+    let clear = wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: 1.0 };
+    draw_and_resolve(ctx, stage, formats, over, clear, ("plain_blend_fs", "plain_blend_resolve_main"), 0)
+}
+
+/// `wavg` (`average`) or `wsum` on the blender.
+pub(crate) fn weighted(ctx: &mut GpuCtx<'_>, stage: &SceneStage) -> Result<(), OitError> {
+    let average = match ctx.settings.technique {
+        Technique::WeightedAverage => true,
+        Technique::WeightedSum => false,
+        other => return Err(OitError::InvalidSettings(format!("{other} is not wavg or wsum"))),
+    };
+    if !ctx.gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
+        return Err(unsupported(
+            "additive blending into Rgba32Float targets for wavg/wsum: the device lacks FLOAT32_BLENDABLE; use --hardware-capture atomics",
+        ));
+    }
+    let add = wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Add,
+    };
+    draw_and_resolve(
+        ctx,
+        stage,
+        (wgpu::TextureFormat::Rgba32Float, wgpu::TextureFormat::R32Float),
+        wgpu::BlendState { color: add, alpha: add },
+        wgpu::Color::TRANSPARENT,
+        ("weighted_blend_fs", "weighted_blend_resolve_main"),
+        u32::from(average),
+    )
+}
+
+/// The draw into the colour and count targets, and the resolve `entries.1` reading them.
+fn draw_and_resolve(
+    ctx: &mut GpuCtx<'_>,
+    stage: &SceneStage,
+    formats: (wgpu::TextureFormat, wgpu::TextureFormat),
+    blend: wgpu::BlendState,
+    clear: wgpu::Color,
+    entries: (&str, &str),
+    param: u32,
+) -> Result<(), OitError> {
+    check_texture_size(ctx, "the blend targets")?;
+    let device = ctx.gpu.device.clone();
+    let color = stage.target(&device, "blend colour", formats.0);
+    let count = stage.target(&device, "blend count", formats.1);
+    let texel = |f: wgpu::TextureFormat| u64::from(f.block_copy_size(None).unwrap_or(16));
+    ctx.storage_bytes += u64::from(ctx.pixels) * (texel(formats.0) + texel(formats.1));
+    ctx.fragments_from_captured = true;
+
+    let (layout0, group0) = ctx.group0(&[], 0, param);
+    let body = format!("{TECHNIQUE_PRELUDE}{WEIGHTED_WGSL}\n{WGSL}\n{}", stage.wgsl());
+    let module_source = format!("{COMMON_WGSL}\n{body}");
+    let targets = [
+        Some(wgpu::ColorTargetState {
+            format: formats.0,
+            blend: Some(blend),
+            write_mask: wgpu::ColorWrites::ALL,
+        }),
+        Some(wgpu::ColorTargetState {
+            format: formats.1,
+            blend: Some(wgpu::BlendState {
+                color: wgpu::BlendComponent {
+                    src_factor: wgpu::BlendFactor::One,
+                    dst_factor: wgpu::BlendFactor::One,
+                    operation: wgpu::BlendOperation::Add,
+                },
+                alpha: wgpu::BlendComponent::REPLACE,
+            }),
+            write_mask: wgpu::ColorWrites::RED,
+        }),
+    ];
+    let name = format!("{} {:?} {:?}", entries.0, formats.0, formats.1);
+    let pipeline = ctx.gpu.render_pipeline(key(&module_source, &name), "blend capture", || {
+        scene_pipeline(
+            &device,
+            "blend capture",
+            &module_source,
+            &[&layout0, stage.layout()],
+            entries.0,
+            &targets,
+            None,
+        )
+    })?;
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let attachment = |view, clear| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(clear), store: wgpu::StoreOp::Store },
+            })
+        };
+        let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("blend capture"),
+            color_attachments: &[attachment(&color, clear), attachment(&count, wgpu::Color::TRANSPARENT)],
+            depth_stencil_attachment: None,
+            timestamp_writes: ctx.render_timestamps(),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        rpass.set_pipeline(&pipeline);
+        rpass.set_bind_group(0, &group0, &[]);
+        stage.draw(&mut rpass);
+    }
+    ctx.finish_timed("geometry", encoder)?;
+    ctx.passes += 1;
+
+    // the resolve, reading the targets
+    let texture_entry = |binding: u32| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    };
+    let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("blend targets"),
+        entries: &[texture_entry(8), texture_entry(9)],
+    });
+    let group1 = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("blend targets"),
+        layout: &layout1,
+        entries: &[
+            wgpu::BindGroupEntry { binding: 8, resource: wgpu::BindingResource::TextureView(&color) },
+            wgpu::BindGroupEntry { binding: 9, resource: wgpu::BindingResource::TextureView(&count) },
+        ],
+    });
+    let (layout0, group0) = ctx.group0(&[], 0, param);
+    let pipeline = ctx.gpu.compute_pipeline(&body, entries.1, &[&layout0, &layout1])?;
+    let (x, y) = crate::ctx::dispatch_size(u64::from(ctx.pixels));
+    ctx.timed(entries.1, |encoder, timestamps| {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("blend resolve"),
+            timestamp_writes: timestamps,
+        });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group0, &[]);
+        pass.set_bind_group(1, &group1, &[]);
+        if x > 0 {
+            pass.dispatch_workgroups(x, y, 1);
+        }
+    })
+}

@@ -1,0 +1,87 @@
+// plain, wavg and wsum through the blend unit (hardware path): one draw of oit's scene vertex
+// stage into two float targets, then a compute resolve reading them into the resolve state, as
+// the storage captures leave it (front colour, transmittance, captured), for the common finish.
+//
+// Target 0 (`blend_color`) and target 1 (`blend_count`, additive: the fragments of each pixel).
+// Colours go through pack_rgba8 first, as every capture's payload does, so the blender gets the
+// same 8-bit colours as oit-cpu's resolve.
+// - plain: target 0 holds (premultiplied colour, transmittance), cleared to (0, 0, 0, 1); colour
+//   blended One, OneMinusSrcAlpha (the over operator) and alpha Zero, OneMinusSrcAlpha (the product
+//   of 1 − α), in the blender's primitive order: the highest primitive on top.
+// - wavg / wsum: target 0 holds (Σα·r, Σα·g, Σα·b, Σα) in units of 1/255² and 1/255 (integers),
+//   additive, as the atomics capture's u64 sums (weighted.wgsl); integer-valued floats add exactly
+//   while a sum stays below 2^24, i.e. up to 258 layers of full-alpha white at one pixel, so the
+//   blend equals the atomics capture there, in any summation order (see technique/blend.rs).
+//
+// Module: COMMON_WGSL, TECHNIQUE_PRELUDE (group 0: fu, state), this, then the hardware raster's
+// vertex stage (group 1 bindings 0..3; `HwOut`, `hw_vs`, `shade`). The resolve's targets are
+// group 1 bindings 8 and 9 of the compute pipeline, clear of the vertex stage's.
+
+@group(1) @binding(8) var blend_color: texture_2d<f32>;
+@group(1) @binding(9) var blend_count: texture_2d<f32>;
+
+struct BlendOut {
+    @location(0) color: vec4<f32>,
+    @location(1) count: vec4<f32>,
+}
+
+// The fragment's 8-bit colour (pack_rgba8, unpacked), or none outside the image.
+fn blend_fragment(in: HwOut, out: ptr<function, BlendOut>) -> vec4<f32> {
+    let xy = vec2<u32>(max(floor(in.position.xy), vec2<f32>(0.0)));
+    if (xy.x >= fu.width || xy.y >= fu.height) {
+        return vec4<f32>(0.0);
+    }
+    (*out).count = vec4<f32>(1.0, 0.0, 0.0, 0.0);
+    let color = shade(hw.shading, in.base, in.normal, in.vcolor, in.has_color != 0u, hw.forward.xyz);
+    return unpack_rgba8(pack_rgba8(clamp(color, vec4<f32>(0.0), vec4<f32>(1.0))));
+}
+
+@fragment
+fn plain_blend_fs(in: HwOut) -> BlendOut {
+    var out: BlendOut;
+    let c = blend_fragment(in, &out);
+    out.color = vec4<f32>(c.xyz * c.w, c.w);
+    return out;
+}
+
+@fragment
+fn weighted_blend_fs(in: HwOut) -> BlendOut {
+    var out: BlendOut;
+    // the 8-bit integers themselves: a·r in units of 1/255², a in units of 1/255
+    let q = round(blend_fragment(in, &out) * 255.0);
+    out.color = vec4<f32>(q.xyz * q.w, q.w);
+    return out;
+}
+
+fn blend_texel(px: u32) -> vec2<i32> {
+    return vec2<i32>(i32(px % fu.width), i32(px / fu.width));
+}
+
+@compute @workgroup_size(64)
+fn plain_blend_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let px = kernel_pixel(gid, groups);
+    if (px >= fu.pixel_count) {
+        return;
+    }
+    let xy = blend_texel(px);
+    let c = textureLoad(blend_color, xy, 0);
+    var s = state[px];
+    s.fr = c.x;
+    s.fg = c.y;
+    s.fb = c.z;
+    s.transmittance = c.w;
+    s.captured = u32(textureLoad(blend_count, xy, 0).x + 0.5);
+    state[px] = s;
+}
+
+@compute @workgroup_size(64)
+fn weighted_blend_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let px = kernel_pixel(gid, groups);
+    if (px >= fu.pixel_count) {
+        return;
+    }
+    let xy = blend_texel(px);
+    let sums = textureLoad(blend_color, xy, 0);
+    let count = u32(textureLoad(blend_count, xy, 0).x + 0.5);
+    weighted_composite(px, sums.xyz / (255.0 * 255.0), sums.w / 255.0, count);
+}
