@@ -474,6 +474,14 @@ fn markdown(
             scene.fragments.map_or("?".into(), |f| f.to_string()),
             scene.max_depth.map_or("?".into(), |f| f.to_string())
         );
+        // the depth complexity, compactly: the first reference's layers per pixel
+        if let Some(row) = report.scene_stats.iter().find(|r| r.scene == scene.name) {
+            let depth = oit_core::metrics::DepthComplexity {
+                histogram: row.stats.histogram.clone(),
+                max_depth: row.stats.deepest(),
+            };
+            let _ = writeln!(w, "Depth complexity ({}): {}.\n", row.backend, depth.summary());
+        }
         let _ = writeln!(
             w,
             "| technique | backend | raster | passes | fragments | lost | tied | storage | wall ms (min–max) | GPU ms (min–max) | Gfrag/s | EPR | PSNR (dB) |"

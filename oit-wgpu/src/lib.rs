@@ -233,11 +233,36 @@ impl WgpuPrepared<'_> {
 }
 
 impl Prepared for WgpuPrepared<'_> {
+    /// One frame, in screen tiles where its storage does not fit the budget or the device's
+    /// limits ([`oit_core::tiling`]).
     fn frame(&mut self, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
+        let scene = self.scene;
+        oit_core::tiling::run("wgpu", scene, settings, |s| self.frame_whole(camera, s))
+    }
+
+    fn storage_allocations(&self) -> u64 {
+        self.pool.allocations() + self.geometry_made.get()
+    }
+}
+
+impl WgpuPrepared<'_> {
+    /// One frame or one window of a frame (`settings.region`): the compute path's setup shifts
+    /// the window in fixed point; the hardware path maps it onto its viewport in clip space
+    /// (`Region::clip_matrix`).
+    fn frame_whole(&mut self, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
         settings.validate()?;
         let (gpu, scene) = (self.gpu, self.scene);
         let start = Instant::now();
         let path = settings.raster.unwrap_or(WgpuBackend::default_path(settings.technique));
+        let window_camera;
+        let camera = match settings.region {
+            Some(region) if path == RasterPath::Hardware => {
+                let proj = region.clip_matrix(settings.width, settings.height) * camera.proj;
+                window_camera = Camera { proj, ..camera.clone() };
+                &window_camera
+            }
+            _ => camera,
+        };
         if path == RasterPath::Hardware && self.hardware.is_none() {
             self.hardware = Some(HardwareScene::new(gpu, scene, &self.geometry_made)?);
         }
@@ -272,10 +297,6 @@ impl Prepared for WgpuPrepared<'_> {
         frame.layers = layers;
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(frame)
-    }
-
-    fn storage_allocations(&self) -> u64 {
-        self.pool.allocations() + self.geometry_made.get()
     }
 }
 

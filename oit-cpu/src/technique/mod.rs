@@ -43,7 +43,7 @@ pub(crate) struct Ctx<'a> {
     /// The frame's plan: refusals, sizing and stop rules, oit-core's.
     pub plan: Plan,
     /// The memory budget of the frame's storage, all allocations together (issue 13.9).
-    pub budget: (&'static str, u64),
+    pub budget: (String, u64),
     /// Fragments lost per pixel, counted where each is lost (a bucket collision, a key carried
     /// off a full array, a counter past K, a tie a peel skips, a fragment left behind the last
     /// peel the plan allows): never derived from `fragments − captured`.
@@ -73,7 +73,7 @@ impl<'a> Ctx<'a> {
             storage_bytes: 0,
             pool,
             plan,
-            budget: oit_core::plan::host_memory_budget(),
+            budget: crate::cpu_budget(settings),
             lost: pool.u32s(settings.pixel_count(), 0),
         }
     }
@@ -157,7 +157,7 @@ impl<'a> Ctx<'a> {
         oit_core::plan::check_total(
             &format!("{} storage of a frame of {} pixels", self.settings.technique, self.pixels),
             self.storage_bytes.saturating_add(bytes),
-            self.budget,
+            (&self.budget.0, self.budget.1),
         )?;
         self.storage_bytes += bytes;
         usize::try_from(len)
