@@ -349,6 +349,7 @@ impl<'a> VkCtx<'a> {
                 gpu_ms: None,
                 max_layers: t[1],
                 gpu_pass_ms: Vec::new(),
+                tiles: 1,
             },
         };
         frame.stats.check_accounting("vulkan")?;

@@ -548,6 +548,7 @@ impl<'a> GpuCtx<'a> {
                 gpu_ms: self.timestamps.is_some().then_some(self.gpu_ms),
                 max_layers: t[1],
                 gpu_pass_ms: self.pass_ms,
+                tiles: 1,
             },
         };
         if self.counts_losses {

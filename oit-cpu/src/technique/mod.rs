@@ -152,11 +152,13 @@ impl<'a> Ctx<'a> {
                 hint: "use a smaller --size or a smaller K".into(),
             });
         }
-        // the frame's total so far against the host's memory: sizes known only after a counting
-        // pass (the reference's lists, fabs/mdts without K) are checked here, before allocating
+        // the frame's total so far, the resolve state included (as `Plan::storage_bytes` counts
+        // it), against the budget: sizes known only after a counting pass (the reference's
+        // lists, fabs/mdts without K) are checked here, before allocating
+        let state = (self.pixels as u64).saturating_mul(oit_core::plan::RESOLVE_STATE_BYTES);
         oit_core::plan::check_total(
             &format!("{} storage of a frame of {} pixels", self.settings.technique, self.pixels),
-            self.storage_bytes.saturating_add(bytes),
+            self.storage_bytes.saturating_add(state).saturating_add(bytes),
             (&self.budget.0, self.budget.1),
         )?;
         self.storage_bytes += bytes;
