@@ -174,8 +174,12 @@ pub struct Row {
     /// ([`oit_core::Stats::tied`]); 0 in reports written before it was counted.
     #[serde(default)]
     pub tied: u64,
-    /// Bytes of per-pixel storage.
+    /// Bytes of per-pixel storage (the largest tile's, where the frame ran in tiles).
     pub storage_bytes: u64,
+    /// Screen tiles the frame ran in ([`oit_core::Stats::tiles`]; `--memory`); 1 in reports
+    /// written before frames were tiled.
+    #[serde(default = "one")]
+    pub tiles: u32,
     /// Wall milliseconds per frame.
     pub wall_ms: Spread,
     /// GPU milliseconds per frame (timestamps), where measured.
@@ -334,6 +338,11 @@ pub struct BackendInfo {
     pub label: String,
     /// The device, in words.
     pub device: String,
+}
+
+/// 1: the screen tiles of a row read from a report written before frames were tiled.
+fn one() -> u32 {
+    1
 }
 
 /// A scene that was measured.
@@ -678,6 +687,7 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
                     lost: s.lost,
                     tied: s.tied,
                     storage_bytes: s.storage_bytes,
+                    tiles: s.tiles.max(1),
                     wall_ms: wall_spread(&r.wall_ms),
                     gpu_ms: gpu_spread(&r.wall_ms, &r.gpu_ms),
                     time_ms,

@@ -449,7 +449,8 @@ fn markdown(
     let _ = writeln!(w, "\n## What the numbers mean\n");
     let _ = writeln!(
         w,
-        "- **passes**: geometry passes per frame (bounds, histogram, sizing and peel passes all count).\n\
+        "- **passes**: geometry passes per frame (bounds, histogram, sizing and peel passes all count; \
+         a frame run in screen tiles under `--memory` counts every tile's, and says how many tiles).\n\
          - **fragments**: fragments one geometry pass generates for the scene; **lost**: those that \
          did not reach the composite (collisions, overflow, coplanar ties); **tied**: those that \
          did, but tie in depth with another colour that the technique ordered by colour, not by \
@@ -498,7 +499,7 @@ fn markdown(
                 r.technique,
                 r.backend,
                 r.raster,
-                r.passes,
+                if r.tiles > 1 { format!("{} ({} tiles)", r.passes, r.tiles) } else { r.passes.to_string() },
                 r.fragments,
                 r.lost,
                 r.tied,

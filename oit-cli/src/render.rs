@@ -165,7 +165,11 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
                 output::percent(lost_share),
                 s.tied,
                 output::bytes(s.storage_bytes),
-                if s.tiles > 1 { format!(" (the largest of {} screen tiles)", s.tiles) } else { String::new() },
+                if s.tiles > 1 {
+                    format!(" (the largest of {} screen tiles)", s.tiles)
+                } else {
+                    String::new()
+                },
                 s.wall_ms,
                 path.display(),
             );
@@ -191,7 +195,10 @@ fn depth_complexity(
     let reference = oit_core::Settings { technique: Technique::Reference, ..settings.clone() };
     let counted = backend.render(scene, camera, &reference)?;
     let layers = counted.layers.ok_or_else(|| {
-        OitError::Device(format!("{}'s reference frame came back without its per-pixel counts", backend.name()))
+        OitError::Device(format!(
+            "{}'s reference frame came back without its per-pixel counts",
+            backend.name()
+        ))
     })?;
     Ok(DepthComplexity::from_layers(&layers))
 }

@@ -31,8 +31,8 @@ pub mod rules;
 mod scene;
 mod settings;
 pub mod setup;
-pub mod tiling;
 mod technique;
+pub mod tiling;
 
 pub use backend::{
     AtomicFragmentList, Backend, BucketArray, Capabilities, Compositor, DepthHistogram, OnPath, Prepared,

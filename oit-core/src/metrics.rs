@@ -263,9 +263,15 @@ mod tests {
         assert_eq!(d.histogram, [3, 6, 2, 1]);
         assert_eq!(d.max_depth, 3);
         assert_eq!((d.percentile(0.5), d.percentile(0.9), d.percentile(1.0)), (Some(1), Some(2), Some(3)));
-        assert_eq!(d.summary(), "75.0% of pixels covered; layers per covered pixel: median 1, p90 2, p99 3, max 3");
+        assert_eq!(
+            d.summary(),
+            "75.0% of pixels covered; layers per covered pixel: median 1, p90 2, p99 3, max 3"
+        );
         let empty = DepthComplexity::from_layers(&[0, 0]);
-        assert_eq!((empty.histogram.as_slice(), empty.max_depth, empty.percentile(0.5)), (&[2u64][..], 0, None));
+        assert_eq!(
+            (empty.histogram.as_slice(), empty.max_depth, empty.percentile(0.5)),
+            (&[2u64][..], 0, None)
+        );
         assert_eq!(empty.summary(), "no pixel covered");
     }
 

@@ -297,10 +297,13 @@ impl Settings {
             return Err(OitError::InvalidSettings("--max-peels must be at least 1".into()));
         }
         if self.memory == Some(0) {
-            return Err(OitError::InvalidSettings("--memory must be at least 1 byte, e.g. --memory 512M".into()));
+            return Err(OitError::InvalidSettings(
+                "--memory must be at least 1 byte, e.g. --memory 512M".into(),
+            ));
         }
         if let Some(r) = self.region {
-            let inside = |origin: u32, size: u32, full: u32| u64::from(origin) + u64::from(size) <= u64::from(full);
+            let inside =
+                |origin: u32, size: u32, full: u32| u64::from(origin) + u64::from(size) <= u64::from(full);
             if r.full_width > MAX_SIZE
                 || r.full_height > MAX_SIZE
                 || !inside(r.x, self.width, r.full_width)

@@ -131,7 +131,10 @@ pub fn run(
     settings.validate()?;
     let start = Instant::now();
     let (root, full) = match settings.region {
-        None => (Rect { x: 0, y: 0, width: settings.width, height: settings.height }, (settings.width, settings.height)),
+        None => (
+            Rect { x: 0, y: 0, width: settings.width, height: settings.height },
+            (settings.width, settings.height),
+        ),
         Some(r) => (
             Rect { x: r.x, y: r.y, width: settings.width, height: settings.height },
             (r.full_width, r.full_height),
@@ -162,7 +165,10 @@ pub fn run(
                 queue.extend(rect.quarters());
                 if done.len() + queue.len() > MAX_TILES {
                     return Err(OitError::TooLarge {
-                        what: format!("{} at {}x{} in screen tiles", settings.technique, root.width, root.height),
+                        what: format!(
+                            "{} at {}x{} in screen tiles",
+                            settings.technique, root.width, root.height
+                        ),
                         needed: (done.len() + queue.len()) as u64,
                         limit_name: "oit's most tiles a frame (MAX_TILES)".into(),
                         limit: MAX_TILES as u64,
@@ -219,7 +225,10 @@ fn stitch(root: Rect, parts: &[(Rect, Frame)]) -> Result<Frame, OitError> {
     for (rect, f) in parts {
         let len = rect.pixels() as usize;
         let bad_len = |v: &Option<Vec<u32>>| v.as_ref().is_some_and(|v| v.len() != len);
-        if f.image.width != rect.width || f.image.height != rect.height || bad_len(&f.layers) || bad_len(&f.lost_pixels)
+        if f.image.width != rect.width
+            || f.image.height != rect.height
+            || bad_len(&f.layers)
+            || bad_len(&f.lost_pixels)
         {
             return Err(OitError::Device(format!(
                 "a screen tile of {}x{} came back as a {}x{} frame",
@@ -231,7 +240,8 @@ fn stitch(root: Rect, parts: &[(Rect, Frame)]) -> Result<Frame, OitError> {
     place(root, &mut image.pixels, parts.iter().map(|(r, f)| (*r, &f.image.pixels[..])));
     let per_pixel = |get: fn(&Frame) -> Option<&Vec<u32>>| -> Option<Vec<u32>> {
         let mut out = vec![0; root.pixels() as usize];
-        let slices: Option<Vec<(Rect, &[u32])>> = parts.iter().map(|(r, f)| Some((*r, &get(f)?[..]))).collect();
+        let slices: Option<Vec<(Rect, &[u32])>> =
+            parts.iter().map(|(r, f)| Some((*r, &get(f)?[..]))).collect();
         place(root, &mut out, slices?.into_iter());
         Some(out)
     };
@@ -316,7 +326,10 @@ mod tests {
     #[test]
     fn quarters_split_every_shape() {
         let r = Rect { x: 3, y: 5, width: 5, height: 1 };
-        assert_eq!(r.quarters(), [Rect { x: 3, y: 5, width: 3, height: 1 }, Rect { x: 6, y: 5, width: 2, height: 1 }]);
+        assert_eq!(
+            r.quarters(),
+            [Rect { x: 3, y: 5, width: 3, height: 1 }, Rect { x: 6, y: 5, width: 2, height: 1 }]
+        );
         let q = Rect { x: 0, y: 0, width: 3, height: 3 }.quarters();
         assert_eq!(q.iter().map(Rect::pixels).sum::<u64>(), 9);
         assert_eq!(q.len(), 4);
@@ -324,8 +337,27 @@ mod tests {
 
     #[test]
     fn stats_merge() {
-        let a = Stats { geometry_passes: 3, fragments: 10, captured: 9, lost: 1, storage_bytes: 100, max_layers: 4, gpu_ms: Some(1.0), gpu_pass_ms: vec![("count".into(), 0.5)], ..Stats::default() };
-        let b = Stats { geometry_passes: 2, fragments: 5, captured: 5, storage_bytes: 80, max_layers: 6, gpu_ms: Some(2.0), gpu_pass_ms: vec![("count".into(), 0.25)], ..Stats::default() };
+        let a = Stats {
+            geometry_passes: 3,
+            fragments: 10,
+            captured: 9,
+            lost: 1,
+            storage_bytes: 100,
+            max_layers: 4,
+            gpu_ms: Some(1.0),
+            gpu_pass_ms: vec![("count".into(), 0.5)],
+            ..Stats::default()
+        };
+        let b = Stats {
+            geometry_passes: 2,
+            fragments: 5,
+            captured: 5,
+            storage_bytes: 80,
+            max_layers: 6,
+            gpu_ms: Some(2.0),
+            gpu_pass_ms: vec![("count".into(), 0.25)],
+            ..Stats::default()
+        };
         let m = merge([&a, &b].into_iter());
         assert_eq!((m.geometry_passes, m.fragments, m.captured, m.lost), (5, 15, 14, 1));
         assert_eq!((m.storage_bytes, m.max_layers, m.gpu_ms, m.tiles), (100, 6, Some(3.0), 2));

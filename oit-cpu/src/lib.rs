@@ -101,7 +101,11 @@ impl CpuPrepared<'_> {
         // the whole frame's storage against the host's memory, before anything is allocated
         // (sizes from a counting pass are checked again as they are allocated)
         let budget = cpu_budget(settings);
-        plan.check_budget(settings.pixel_count() as u64, oit_core::plan::Counted::default(), (&budget.0, budget.1))?;
+        plan.check_budget(
+            settings.pixel_count() as u64,
+            oit_core::plan::Counted::default(),
+            (&budget.0, budget.1),
+        )?;
         let start = Instant::now();
         let mut raster = Rasterizer::new(self.scene, camera, settings);
         if let Some(mode) = self.backend.mode {

@@ -37,7 +37,11 @@ fn tiled_frames_equal_untiled_frames() {
                 let tiled = render(b, &scene, &cam, &Settings { memory: Some(budget), ..s.clone() });
                 let (w, t) = (&whole.stats, &tiled.stats);
                 assert!(t.tiles >= fewest, "{what}: {} tiles under a budget of {tile} pixels", t.tiles);
-                assert!(t.storage_bytes <= budget, "{what}: a tile of {} bytes over {budget}", t.storage_bytes);
+                assert!(
+                    t.storage_bytes <= budget,
+                    "{what}: a tile of {} bytes over {budget}",
+                    t.storage_bytes
+                );
                 assert!(t.geometry_passes >= w.geometry_passes, "{what}: tiles count their passes");
                 assert_eq!(t.captured + t.lost, t.fragments, "{what}: accounting");
                 if exact {
@@ -51,7 +55,8 @@ fn tiled_frames_equal_untiled_frames() {
                     );
                 } else {
                     let mask = edge_mask(&scene, &cam, width, height, 1.0);
-                    off_edges_equal(&tiled.image, &whole.image, &mask).unwrap_or_else(|e| panic!("{what}: {e}"));
+                    off_edges_equal(&tiled.image, &whole.image, &mask)
+                        .unwrap_or_else(|e| panic!("{what}: {e}"));
                     let drift = t.fragments.abs_diff(w.fragments) as f64 / w.fragments.max(1) as f64;
                     assert!(drift < 0.02, "{what}: {} fragments tiled, {} whole", t.fragments, w.fragments);
                 }
@@ -69,7 +74,12 @@ fn budgets_too_small_are_clear_errors() {
     for backend in backends_for("budgets_too_small_are_clear_errors") {
         let b = backend.as_ref();
         let who = label(b);
-        let s = Settings { width: 8, height: 8, technique: Technique::Fabs { k: Some(4) }, ..Settings::default() };
+        let s = Settings {
+            width: 8,
+            height: 8,
+            technique: Technique::Fabs { k: Some(4) },
+            ..Settings::default()
+        };
         let cam = camera(&scene, &s, View::default());
         let e = b.render(&scene, &cam, &Settings { memory: Some(50), ..s.clone() }).unwrap_err();
         assert!(matches!(e, OitError::TooLarge { .. }), "{who}: {e}");
@@ -94,7 +104,8 @@ fn depth_complexity_is_the_same_everywhere() {
     let s = settings(40, "reference");
     let cam = camera(&scene, &s, View::default());
     let mask = edge_mask(&scene, &cam, 40, 40, 1.0);
-    let counts = |b: &dyn oit_core::Backend| render(b, &scene, &cam, &s).layers.expect("the reference counts");
+    let counts =
+        |b: &dyn oit_core::Backend| render(b, &scene, &cam, &s).layers.expect("the reference counts");
     let cpu = counts(&oit_cpu::CpuBackend::default());
     let off_edges = |layers: &[u32]| -> Vec<u32> {
         layers.iter().zip(&mask).filter(|(_, e)| !**e).map(|(&n, _)| n).collect()
@@ -107,7 +118,12 @@ fn depth_complexity_is_the_same_everywhere() {
         let layers = counts(b);
         if b.raster_path(&Settings::default()) == RasterPath::Hardware {
             let (mine, cpus) = (off_edges(&layers), off_edges(&cpu));
-            assert_eq!(DepthComplexity::from_layers(&mine), DepthComplexity::from_layers(&cpus), "{}", label(b));
+            assert_eq!(
+                DepthComplexity::from_layers(&mine),
+                DepthComplexity::from_layers(&cpus),
+                "{}",
+                label(b)
+            );
         } else {
             assert_eq!(DepthComplexity::from_layers(&layers), expected, "{}", label(b));
         }
