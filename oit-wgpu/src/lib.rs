@@ -258,7 +258,7 @@ impl WgpuPrepared<'_> {
         let camera = match settings.region {
             Some(region) if path == RasterPath::Hardware => {
                 let proj = region.clip_matrix(settings.width, settings.height) * camera.proj;
-                window_camera = Camera { proj, ..camera.clone() };
+                window_camera = Camera { proj, ..*camera };
                 &window_camera
             }
             _ => camera,
