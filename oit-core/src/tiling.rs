@@ -21,7 +21,8 @@
 //!   device limit such as a storage binding's size, or, for techniques sized by a counting pass,
 //!   found over after that pass): that window splits in four and each runs again, recursively,
 //!   down to a single pixel; a pixel that does not fit alone is a clear error, and so is a frame
-//!   that would need more than [`MAX_TILES`] windows.
+//!   that would need more than [`MAX_TILES`] windows (without `--memory`, more than
+//!   [`AUTO_TILES`]: the device's refusal stands).
 
 use std::collections::VecDeque;
 use std::time::Instant;
@@ -32,6 +33,11 @@ use crate::{Frame, Image, OitError, Region, Scene, Settings, Stats};
 /// The most windows one frame runs in: each window sets up the whole scene again, so a budget
 /// that needs more is refused with a clear error rather than left to run for hours.
 pub const MAX_TILES: usize = 4096;
+
+/// The most windows a frame runs in when no `--memory` is set and the device refuses it as too
+/// large: beyond this the device's own refusal is the answer (a frame that far over the device
+/// asks for a smaller size or technique, not hours of tiles).
+pub const AUTO_TILES: usize = 64;
 
 /// A window of the screen, in pixels of the full frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -163,6 +169,11 @@ pub fn run(
                     return Err(too_small(settings, 0, budget, Some(e)));
                 }
                 queue.extend(rect.quarters());
+                // without --memory, a device refusal tiles a frame only modestly: a request far
+                // over the device (fabs:65536) is refused with the device's own error
+                if settings.memory.is_none() && done.len() + queue.len() > AUTO_TILES {
+                    return Err(e);
+                }
                 if done.len() + queue.len() > MAX_TILES {
                     return Err(OitError::TooLarge {
                         what: format!(
