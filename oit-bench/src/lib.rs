@@ -216,8 +216,12 @@ pub struct Row {
     /// ([`oit_core::Stats::tied`]); 0 in reports written before it was counted.
     #[serde(default)]
     pub tied: u64,
-    /// Bytes of per-pixel storage.
+    /// Bytes of per-pixel storage (the largest tile's, where the frame ran in tiles).
     pub storage_bytes: u64,
+    /// Screen tiles the frame ran in ([`oit_core::Stats::tiles`]; `--memory`); 1 in reports
+    /// written before frames were tiled.
+    #[serde(default = "one")]
+    pub tiles: u32,
     /// Wall milliseconds per frame, the image read back to the host (as `readback_wall_ms`; the
     /// name reports before the steady state was measured used).
     pub wall_ms: Spread,
@@ -387,6 +391,11 @@ pub struct BackendInfo {
     pub label: String,
     /// The device, in words.
     pub device: String,
+}
+
+/// 1: the screen tiles of a row read from a report written before frames were tiled.
+fn one() -> u32 {
+    1
 }
 
 /// A scene that was measured.
@@ -776,6 +785,7 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
                     lost: s.lost,
                     tied: s.tied,
                     storage_bytes: s.storage_bytes,
+                    tiles: s.tiles.max(1),
                     wall_ms: wall_spread(&r.wall_ms),
                     steady_wall_ms: Spread::of(&r.steady_wall_ms),
                     readback_wall_ms: Spread::of(&r.wall_ms),

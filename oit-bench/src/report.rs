@@ -454,7 +454,8 @@ fn markdown(
     let _ = writeln!(w, "\n## What the numbers mean\n");
     let _ = writeln!(
         w,
-        "- **passes**: geometry passes per frame (bounds, histogram, sizing and peel passes all count).\n\
+        "- **passes**: geometry passes per frame (bounds, histogram, sizing and peel passes all count; \
+         a frame run in screen tiles under `--memory` counts every tile's, and says how many tiles).\n\
          - **fragments**: fragments one geometry pass generates for the scene; **lost**: those that \
          did not reach the composite (collisions, overflow, coplanar ties); **tied**: those that \
          did, but tie in depth with another colour that the technique ordered by colour, not by \
@@ -484,6 +485,14 @@ fn markdown(
             scene.fragments.map_or("?".into(), |f| f.to_string()),
             scene.max_depth.map_or("?".into(), |f| f.to_string())
         );
+        // the depth complexity, compactly: the first reference's layers per pixel
+        if let Some(row) = report.scene_stats.iter().find(|r| r.scene == scene.name) {
+            let depth = oit_core::metrics::DepthComplexity {
+                histogram: row.stats.histogram.clone(),
+                max_depth: row.stats.deepest(),
+            };
+            let _ = writeln!(w, "Depth complexity ({}): {}.\n", row.backend, depth.summary());
+        }
         let _ = writeln!(
             w,
             "| technique | backend | raster | passes | fragments | lost | tied | storage | GPU ms (min–max) | steady wall ms (min–max) | wall ms + readback (min–max) | Gfrag/s | EPR (%) | PSNR (dB) |"
@@ -501,7 +510,7 @@ fn markdown(
                 r.technique,
                 r.backend,
                 r.raster,
-                r.passes,
+                if r.tiles > 1 { format!("{} ({} tiles)", r.passes, r.tiles) } else { r.passes.to_string() },
                 r.fragments,
                 r.lost,
                 r.tied,

@@ -26,7 +26,7 @@ use crate::output::{self, Table};
         technique that fails prints its error in its row and the others go on; the exit code is \
         then 1. With --json, prints one JSON array of objects with the keys technique, backend, \
         raster, width, height, geometry_passes, fragments, captured, lost, tied, storage_bytes, \
-        wall_ms, gpu_ms, epr, psnr, max_error (epr a fraction in [0, 1], not per cent; gpu_ms \
+        tiles, wall_ms, gpu_ms, epr, psnr, max_error (epr a fraction in [0, 1], not per cent; gpu_ms \
         null when not measured, psnr null when identical); failures go to stderr."
 )]
 pub struct CompareArgs {
@@ -58,7 +58,7 @@ struct CompareJson<'a> {
     width: u32,
     height: u32,
     /// `geometry_passes`, `fragments`, `captured`, `lost`, `tied`, `storage_bytes`, `wall_ms`,
-    /// `gpu_ms`, `max_layers`.
+    /// `gpu_ms`, `max_layers`, `tiles`.
     #[serde(flatten)]
     stats: &'a Stats,
     /// Error pixel rate, a fraction in [0, 1] (the table prints it in per cent).

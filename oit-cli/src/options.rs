@@ -7,7 +7,7 @@ use clap::Args;
 use oit_bench::backends::{BackendOptions, RasterChoice, select, with_paths};
 use oit_core::{
     Backend, BdpMode, BoundsMode, Camera, Effect, HardwareCapture, OitError, Scene, Settings, Shading,
-    Technique, View, load_scene, parse_rgb, parse_size,
+    Technique, View, load_scene, parse_memory, parse_rgb, parse_size,
 };
 
 /// Options shared by `render`, `compare` and `sweep`.
@@ -92,6 +92,13 @@ pub struct SceneArgs {
     #[arg(long, value_name = "N")]
     pub max_peels: Option<u32>,
 
+    /// Memory budget of a frame's per-pixel storage, in bytes with an optional K, M, G or T
+    /// (binary: 512M, 2G). A frame that needs more runs in screen tiles that each fit, with the
+    /// same image and counts (`tiles` in --json says how many) [default: what the device allows;
+    /// a frame the device refuses as too large is tiled the same way].
+    #[arg(long, value_name = "BYTES")]
+    pub memory: Option<String>,
+
     /// Backend to render with: a name (cpu; wgpu, vulkan when compiled in), a comma-separated
     /// list, or all (every backend compiled in whose device is present).
     #[arg(long, value_name = "NAME|all", default_value = "cpu")]
@@ -158,6 +165,8 @@ impl SceneArgs {
             raster: None,
             bdp_mode: self.bdp_mode.parse::<BdpMode>()?,
             hardware_capture: self.hardware_capture.parse::<HardwareCapture>()?,
+            region: None,
+            memory: self.memory.as_deref().map(parse_memory).transpose()?,
         };
         settings.validate()?;
         check_planes(self.near, self.far)?;

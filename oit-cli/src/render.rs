@@ -4,6 +4,7 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use oit_bench::present::annotate_frame;
+use oit_core::metrics::DepthComplexity;
 use oit_core::{OitError, Stats, Technique};
 use serde::Serialize;
 
@@ -17,9 +18,12 @@ use crate::output::{self, CameraJson};
     about = "Render the scene with one technique and write a PNG",
     long_about = "Render the scene with one technique and write a PNG.\n\n\
         Prints the frame's numbers: geometry passes, fragments generated, captured, lost and tied, \
-        per-pixel storage and time. With --json, prints one JSON object with those numbers, the \
-        image size and the camera (view and projection matrices, eye, planes, angles), so another \
-        renderer can reproduce the view. With several backends or raster paths (--backend all, \
+        per-pixel storage, screen tiles and time. With --json, prints one JSON object with those \
+        numbers, the image size, the camera (view and projection matrices, eye, planes, angles), so \
+        another renderer can reproduce the view, and the depth complexity: `max_depth` (the \
+        deepest pixel's fragments) and `depth_histogram` (pixels with 0, 1, 2, ... fragments), \
+        from the reference's per-pixel counts (for another technique, one reference frame more \
+        is rendered on the same backend to count them). With several backends or raster paths (--backend all, \
         --raster all), each writes its own PNG, named FILE-BACKEND.png or FILE-BACKEND-PATH.png \
         (e.g. out-cpu.png, out-wgpu-hardware.png, out-wgpu-compute.png; a note on stderr lists \
         them), and --json prints one object per line."
@@ -60,6 +64,10 @@ struct RenderJson<'a> {
     stats: &'a Stats,
     output: &'a Path,
     camera: CameraJson,
+    /// The deepest pixel's fragments (from the reference's per-pixel counts).
+    max_depth: u32,
+    /// `depth_histogram[n]`: pixels with n fragments, n from 0 to `max_depth`.
+    depth_histogram: &'a [u64],
 }
 
 /// Where each image goes: `FILE.png` when there is one; `FILE-LABEL.png` for each of several,
@@ -113,6 +121,7 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
         let raster = backend.raster_path(&settings).to_string();
         let s = &frame.stats;
         if args.json {
+            let depth = depth_complexity(backend.as_ref(), &prepared.scene, &camera, &settings, &frame)?;
             let json = RenderJson {
                 technique: technique.to_string(),
                 backend: backend.name(),
@@ -123,6 +132,8 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
                 stats: s,
                 output: path,
                 camera: CameraJson::new(&camera, prepared.view),
+                max_depth: depth.max_depth,
+                depth_histogram: &depth.histogram,
             };
             let text = serde_json::to_string(&json)
                 .map_err(|e| OitError::Write { path: "standard output".into(), message: e.to_string() })?;
@@ -140,7 +151,7 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
                  captured   {}\n\
                  lost       {} ({}%)\n\
                  tied       {}\n\
-                 storage    {}\n\
+                 storage    {}{}\n\
                  time       {:.2} ms{gpu}\n\
                  wrote      {}\n",
                 backend.name(),
@@ -155,6 +166,11 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
                 output::percent(lost_share),
                 s.tied,
                 output::bytes(s.storage_bytes),
+                if s.tiles > 1 {
+                    format!(" (the largest of {} screen tiles)", s.tiles)
+                } else {
+                    String::new()
+                },
                 s.wall_ms,
                 path.display(),
             );
@@ -162,6 +178,30 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
         }
     }
     Ok(Outcome::Success)
+}
+
+/// The frame's depth complexity from per-pixel fragment counts: the frame's own where its
+/// technique counted them (the reference), else a reference frame's on the same backend, path and
+/// settings (memory budget included).
+fn depth_complexity(
+    backend: &dyn oit_core::Backend,
+    scene: &oit_core::Scene,
+    camera: &oit_core::Camera,
+    settings: &oit_core::Settings,
+    frame: &oit_core::Frame,
+) -> Result<DepthComplexity, OitError> {
+    if let Some(layers) = &frame.layers {
+        return Ok(DepthComplexity::from_layers(layers));
+    }
+    let reference = oit_core::Settings { technique: Technique::Reference, ..settings.clone() };
+    let counted = backend.render(scene, camera, &reference)?;
+    let layers = counted.layers.ok_or_else(|| {
+        OitError::Device(format!(
+            "{}'s reference frame came back without its per-pixel counts",
+            backend.name()
+        ))
+    })?;
+    Ok(DepthComplexity::from_layers(&layers))
 }
 
 #[cfg(test)]

@@ -29,7 +29,7 @@ const MAX_VIEWS: u32 = 36_000;
         Prints a summary per technique, backend and raster path (mean and max EPR in per cent, \
         mean lost, mean time), or with --json a JSON array of every record ({azimuth, technique, \
         backend, raster, geometry_passes, fragments, captured, lost, tied, storage_bytes, \
-        wall_ms, gpu_ms, epr, psnr, max_error}; epr is a fraction in [0, 1], not per cent) and \
+        tiles, wall_ms, gpu_ms, epr, psnr, max_error}; epr is a fraction in [0, 1], not per cent) and \
         nothing else. A progress bar goes to stderr. A technique that fails is reported once \
         on stderr and left out of the results; the exit code is then 1."
 )]
@@ -68,7 +68,7 @@ pub struct Record {
     /// The raster path it took.
     pub raster: String,
     /// The frame's counters (`geometry_passes`, `fragments`, `captured`, `lost`, `tied`,
-    /// `storage_bytes`, `wall_ms`, `gpu_ms`, and `gpu_pass_ms` where measured).
+    /// `storage_bytes`, `tiles`, `wall_ms`, `gpu_ms`, and `gpu_pass_ms` where measured).
     #[serde(flatten)]
     pub stats: Stats,
     /// Error pixel rate: the share of covered pixels off by more than 1 in 8 bits, a fraction in

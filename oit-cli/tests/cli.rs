@@ -1,7 +1,7 @@
 //! The `oit` binary as a user runs it: outputs written, JSON shapes, and one `error:` line with
 //! exit code 1 for every bad input.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use serde_json::Value;
@@ -129,6 +129,40 @@ fn vertex_shading_without_colours_warns() {
 /// `oit render --effect complexity` writes the backend's heat map with the legend drawn over its
 /// bottom-right corner, scaled to the frame's `max_layers`, and every other pixel as rendered.
 #[cfg(feature = "cpu")]
+/// Issue 11.2 and 11.6: `--memory` tiles the frame, with the same image and counts, and says so
+/// (`tiles`); `--json` gives the depth histogram and its maximum, from the reference's counts.
+#[test]
+fn render_memory_tiles_and_depth_complexity() {
+    let dir = scratch("render_memory");
+    let (whole_png, tiled_png) = (dir.join("whole.png"), dir.join("tiled.png"));
+    let run = |png: &Path, memory: &[&str]| {
+        let mut args = vec!["render", "--size", SIZE, "--json", "-t", "fabs", "-o", png.to_str().unwrap()];
+        args.extend_from_slice(memory);
+        parse_json(&oit(&args), "render --json")
+    };
+    let whole = run(&whole_png, &[]);
+    let tiled = run(&tiled_png, &["--memory", "100K"]);
+    assert_eq!(whole["tiles"], 1);
+    assert!(tiled["tiles"].as_u64().unwrap() >= 4, "{tiled}");
+    assert!(tiled["storage_bytes"].as_u64().unwrap() <= 100 << 10, "{tiled}");
+    for key in ["fragments", "captured", "lost", "max_layers", "max_depth", "depth_histogram"] {
+        assert_eq!(whole[key], tiled[key], "{key}");
+    }
+    assert_eq!(std::fs::read(&whole_png).unwrap(), std::fs::read(&tiled_png).unwrap(), "the same image");
+    let histogram: Vec<u64> =
+        whole["depth_histogram"].as_array().unwrap().iter().map(|n| n.as_u64().unwrap()).collect();
+    let max_depth = whole["max_depth"].as_u64().unwrap();
+    assert_eq!(histogram.len() as u64, max_depth + 1);
+    assert_eq!(histogram.iter().sum::<u64>(), 64 * 64);
+    let fragments: u64 = histogram.iter().enumerate().map(|(n, c)| n as u64 * c).sum();
+    assert_eq!(fragments, whole["fragments"].as_u64().unwrap(), "the histogram counts every fragment");
+    for (memory, says) in [("12Q", "not a byte count"), ("10", "one pixel")] {
+        let out = oit(&["render", "--size", SIZE, "--memory", memory, "-o", whole_png.to_str().unwrap()]);
+        assert_one_error(&out, memory);
+        assert!(stderr(&out).contains(says), "--memory {memory}: {}", stderr(&out));
+    }
+}
+
 #[test]
 fn render_complexity_draws_the_legend_on_the_heat_map() {
     use oit_bench::present::heat_legend_rect;
@@ -170,7 +204,7 @@ fn render_complexity_draws_the_legend_on_the_heat_map() {
     assert!(legend_pixels * 2 > (rect.width * rect.height) as usize, "no legend in {rect:?}");
 }
 
-const COMPARE_KEYS: [&str; 17] = [
+const COMPARE_KEYS: [&str; 18] = [
     "technique",
     "backend",
     "raster",
@@ -188,6 +222,7 @@ const COMPARE_KEYS: [&str; 17] = [
     "psnr",
     "max_error",
     "max_layers",
+    "tiles",
 ];
 
 #[test]
@@ -400,7 +435,7 @@ fn info_json_parses() {
 
 /// The keys of every `oit sweep --json` record: where and what (backend and raster path
 /// included), the frame's counters as `oit compare --json` names them, and the accuracy.
-const SWEEP_KEYS: [&str; 16] = [
+const SWEEP_KEYS: [&str; 17] = [
     "azimuth",
     "technique",
     "backend",
@@ -417,6 +452,7 @@ const SWEEP_KEYS: [&str; 16] = [
     "psnr",
     "max_error",
     "max_layers",
+    "tiles",
 ];
 
 #[test]

@@ -34,6 +34,10 @@ pub struct Stats {
     /// end of the depth-complexity heat map stands for, which a front end needs to draw the
     /// map's key. Backends return the map without one; every backend fills this, for every effect.
     pub max_layers: u32,
+    /// Screen tiles the frame ran in ([`crate::tiling`]): 1 for a frame run whole, more where
+    /// its storage did not fit the memory budget (`--memory`) or the device. Every backend's
+    /// `Prepared::frame` sets it; 0 only on a frame made outside that loop.
+    pub tiles: u32,
     /// Device time per pass, where measured.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub gpu_pass_ms: Vec<(String, f64)>,

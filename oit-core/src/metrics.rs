@@ -199,8 +199,84 @@ pub fn differ_off_mask(a: &Image, b: &Image, mask: &[bool]) -> (u8, usize) {
     (worst, differ)
 }
 
+/// A frame's depth complexity: how many pixels hold 0, 1, 2, … fragments, from per-pixel
+/// fragment counts (`Frame::layers`: the reference counts every fragment a pixel generates).
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct DepthComplexity {
+    /// `histogram[n]`: pixels with n fragments (index 0: pixels nothing covers); as long as the
+    /// deepest pixel's count + 1.
+    pub histogram: Vec<u64>,
+    /// The deepest pixel's fragments (0 when nothing is covered).
+    pub max_depth: u32,
+}
+
+impl DepthComplexity {
+    /// The histogram of per-pixel counts `layers`.
+    pub fn from_layers(layers: &[u32]) -> DepthComplexity {
+        let max_depth = layers.iter().copied().max().unwrap_or(0);
+        let mut histogram = vec![0u64; max_depth as usize + 1];
+        for &n in layers {
+            histogram[n as usize] += 1;
+        }
+        DepthComplexity { histogram, max_depth }
+    }
+
+    /// The smallest count that `share` (in [0, 1]) of the covered pixels hold at most (`None`
+    /// when nothing is covered).
+    pub fn percentile(&self, share: f64) -> Option<u32> {
+        let covered: u64 = self.histogram.iter().skip(1).sum();
+        if covered == 0 {
+            return None;
+        }
+        let want = (share.clamp(0.0, 1.0) * covered as f64).ceil().max(1.0) as u64;
+        let mut seen = 0;
+        for (n, &count) in self.histogram.iter().enumerate().skip(1) {
+            seen += count;
+            if seen >= want {
+                return Some(n as u32);
+            }
+        }
+        Some(self.max_depth)
+    }
+
+    /// One line: the share of pixels covered, the median, 90th and 99th percentiles of the
+    /// covered pixels' counts and the deepest, e.g. `62.1% of pixels covered; layers per covered
+    /// pixel: median 2, p90 5, p99 9, max 14`.
+    pub fn summary(&self) -> String {
+        let pixels: u64 = self.histogram.iter().sum();
+        let covered = pixels - self.histogram.first().copied().unwrap_or(0);
+        match (self.percentile(0.5), self.percentile(0.9), self.percentile(0.99)) {
+            (Some(p50), Some(p90), Some(p99)) => format!(
+                "{:.1}% of pixels covered; layers per covered pixel: median {p50}, p90 {p90}, p99 {p99}, max {}",
+                100.0 * covered as f64 / pixels as f64,
+                self.max_depth
+            ),
+            _ => "no pixel covered".into(),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn depth_complexity() {
+        let d = DepthComplexity::from_layers(&[0, 0, 1, 3, 1, 2, 0, 1, 1, 1, 2, 1]);
+        assert_eq!(d.histogram, [3, 6, 2, 1]);
+        assert_eq!(d.max_depth, 3);
+        // 9 covered pixels: six of 1, two of 2, one of 3; the 90th percentile is the 9th pixel's
+        assert_eq!((d.percentile(0.5), d.percentile(0.8), d.percentile(0.9)), (Some(1), Some(2), Some(3)));
+        assert_eq!(
+            d.summary(),
+            "75.0% of pixels covered; layers per covered pixel: median 1, p90 3, p99 3, max 3"
+        );
+        let empty = DepthComplexity::from_layers(&[0, 0]);
+        assert_eq!(
+            (empty.histogram.as_slice(), empty.max_depth, empty.percentile(0.5)),
+            (&[2u64][..], 0, None)
+        );
+        assert_eq!(empty.summary(), "no pixel covered");
+    }
+
     use super::*;
     use crate::Stats;
 

@@ -96,6 +96,55 @@ pub struct Settings {
     pub bdp_mode: BdpMode,
     /// How the hardware raster path of GPU backends captures for `bdp`, `dp` and `ddp`.
     pub hardware_capture: HardwareCapture,
+    /// Where this frame lies in a larger one (`None`: it is the whole frame). Set by the tiling
+    /// loop ([`crate::tiling`]): the frame is then the `width × height` window at
+    /// (`region.x`, `region.y`) of a `region.full_width × region.full_height` frame, and its
+    /// fragments are exactly that window's fragments of the full frame.
+    pub region: Option<Region>,
+    /// The memory budget of one frame's storage in bytes (`--memory`; `None`: what the device
+    /// allows). A frame that needs more runs in screen tiles that each fit ([`crate::tiling`]).
+    pub memory: Option<u64>,
+}
+
+/// A frame's place in a larger frame: its top-left pixel and the larger frame's size. Backends
+/// size everything per pixel by the frame's own `width × height`, as for any frame; setup snaps
+/// with the full viewport and shifts the snapped coordinates by the origin (an exact integer
+/// shift, so the fragments are the full frame's, bit for bit), and the hardware raster path maps
+/// the window onto its viewport ([`Region::clip_matrix`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+pub struct Region {
+    /// Column of the window's left edge in the full frame.
+    pub x: u32,
+    /// Row of the window's top edge in the full frame (row 0 at the top).
+    pub y: u32,
+    /// The full frame's width in pixels.
+    pub full_width: u32,
+    /// The full frame's height in pixels.
+    pub full_height: u32,
+}
+
+impl Region {
+    /// The clip-space transform that maps the window `width × height` at this region's origin
+    /// onto the whole viewport of a `width × height` target: applied after the projection
+    /// (`clip_matrix · proj · view`), a rasterizer with the window's viewport draws what the full
+    /// frame's viewport draws there. x and y only (z and w are untouched, so depths and the
+    /// near and far planes are the full frame's). Float arithmetic: pixels on an edge may differ
+    /// from the full frame's as the hardware path's edges may anyway.
+    pub fn clip_matrix(&self, width: u32, height: u32) -> glam::Mat4 {
+        let (fw, fh) = (self.full_width as f32, self.full_height as f32);
+        let (w, h) = (width.max(1) as f32, height.max(1) as f32);
+        // x_t = ndc·W/w + (W − 2x)/w − 1 and y_t = ndc·H/h + 1 − (H − 2y)/h, times w_clip
+        let sx = fw / w;
+        let tx = (fw - 2.0 * self.x as f32) / w - 1.0;
+        let sy = fh / h;
+        let ty = 1.0 - (fh - 2.0 * self.y as f32) / h;
+        glam::Mat4::from_cols(
+            Vec4::new(sx, 0.0, 0.0, 0.0),
+            Vec4::new(0.0, sy, 0.0, 0.0),
+            Vec4::new(0.0, 0.0, 1.0, 0.0),
+            Vec4::new(tx, ty, 0.0, 1.0),
+        )
+    }
 }
 
 /// How `bdp`, `dp` and `ddp` capture fragments on a GPU backend's hardware raster path (other
@@ -172,6 +221,8 @@ impl Default for Settings {
             raster: None,
             bdp_mode: BdpMode::Auto,
             hardware_capture: HardwareCapture::Atomics,
+            region: None,
+            memory: None,
         }
     }
 }
@@ -245,7 +296,35 @@ impl Settings {
         if self.max_peels == Some(0) {
             return Err(OitError::InvalidSettings("--max-peels must be at least 1".into()));
         }
+        if self.memory == Some(0) {
+            return Err(OitError::InvalidSettings(
+                "--memory must be at least 1 byte, e.g. --memory 512M".into(),
+            ));
+        }
+        if let Some(r) = self.region {
+            let inside =
+                |origin: u32, size: u32, full: u32| u64::from(origin) + u64::from(size) <= u64::from(full);
+            if r.full_width > MAX_SIZE
+                || r.full_height > MAX_SIZE
+                || !inside(r.x, self.width, r.full_width)
+                || !inside(r.y, self.height, r.full_height)
+            {
+                return Err(OitError::InvalidSettings(format!(
+                    "region {}x{} at ({}, {}) does not lie within its {}x{} frame",
+                    self.width, self.height, r.x, r.y, r.full_width, r.full_height
+                )));
+            }
+        }
         Ok(())
+    }
+
+    /// The memory budget of a frame's storage: the device's (`device`, a name and bytes) or
+    /// `--memory`, whichever is smaller. Every backend checks its storage against this.
+    pub fn memory_budget(&self, device: (String, u64)) -> (String, u64) {
+        match self.memory {
+            Some(m) if m < device.1 => (format!("the memory budget (--memory {m})"), m),
+            _ => device,
+        }
     }
 
     /// The object's colour with the alpha override applied.
@@ -274,6 +353,40 @@ pub fn parse_size(text: &str) -> Result<(u32, u32), OitError> {
     Ok((w, h))
 }
 
+/// Parses a byte count: a whole or decimal number with an optional binary suffix, `K`, `M`, `G`
+/// or `T` (× 1024, 1024², 1024³, 1024⁴; `KiB`, `MB`, ... read the same), e.g. `512M`, `2G`,
+/// `1.5G`, `100000`.
+pub fn parse_memory(text: &str) -> Result<u64, OitError> {
+    let bad = || {
+        OitError::InvalidSettings(format!(
+            "memory '{text}' is not a byte count: use a number with an optional K, M, G or T (binary), e.g. 512M or 2G"
+        ))
+    };
+    let t = text.trim();
+    let digits = t.find(|c: char| !(c.is_ascii_digit() || c == '.')).unwrap_or(t.len());
+    let (number, suffix) = t.split_at(digits);
+    let number: f64 = number.parse().map_err(|_| bad())?;
+    let suffix = suffix.trim().to_ascii_lowercase();
+    let suffix = suffix.strip_suffix('b').unwrap_or(&suffix);
+    let suffix = suffix.strip_suffix('i').unwrap_or(suffix);
+    let scale: f64 = match suffix {
+        "" => 1.0,
+        "k" => 1024.0,
+        "m" => 1024.0 * 1024.0,
+        "g" => 1024.0 * 1024.0 * 1024.0,
+        "t" => 1024.0 * 1024.0 * 1024.0 * 1024.0,
+        _ => return Err(bad()),
+    };
+    let bytes = (number * scale).floor();
+    if !bytes.is_finite() || bytes >= u64::MAX as f64 {
+        return Err(bad());
+    }
+    if bytes < 1.0 {
+        return Err(OitError::InvalidSettings(format!("memory '{text}' is less than one byte")));
+    }
+    Ok(bytes as u64)
+}
+
 /// Parses `R,G,B` in [0, 1] (e.g. `1,1,1`).
 pub fn parse_rgb(text: &str) -> Result<Vec3, OitError> {
     let bad = || OitError::InvalidSettings(format!("colour '{text}' is not R,G,B with each in [0, 1]"));
@@ -288,6 +401,49 @@ pub fn parse_rgb(text: &str) -> Result<Vec3, OitError> {
 #[cfg(test)]
 mod thread_tests {
     use super::*;
+
+    #[test]
+    fn memory_sizes() {
+        assert_eq!(parse_memory("512M").unwrap(), 512 << 20);
+        assert_eq!(parse_memory("2G").unwrap(), 2 << 30);
+        assert_eq!(parse_memory("2GiB").unwrap(), 2 << 30);
+        assert_eq!(parse_memory("1.5k").unwrap(), 1536);
+        assert_eq!(parse_memory(" 100000 ").unwrap(), 100_000);
+        for bad in ["", "M", "12Q", "-5M", "0", "1e99T", "0.1"] {
+            assert!(parse_memory(bad).is_err(), "{bad}");
+        }
+        let s = Settings { memory: Some(1000), ..Settings::default() };
+        assert_eq!(s.memory_budget(("device".into(), 5000)).1, 1000);
+        assert_eq!(s.memory_budget(("device".into(), 500)), ("device".to_string(), 500));
+    }
+
+    #[test]
+    fn regions_lie_within_their_frame() {
+        let r = |x, y| Settings {
+            width: 10,
+            height: 5,
+            region: Some(Region { x, y, full_width: 20, full_height: 10 }),
+            ..Settings::default()
+        };
+        assert!(r(10, 5).validate().is_ok());
+        assert!(r(11, 0).validate().is_err());
+        assert!(r(0, 6).validate().is_err());
+        assert!(r(u32::MAX, 0).validate().is_err());
+    }
+
+    /// The clip matrix puts a window's corners at the corners of its viewport.
+    #[test]
+    fn region_clip_matrix() {
+        let region = Region { x: 30, y: 10, full_width: 100, full_height: 50 };
+        let m = region.clip_matrix(20, 40);
+        // full-frame pixel (x, y) → ndc
+        let ndc = |x: f32, y: f32| Vec4::new(x / 100.0 * 2.0 - 1.0, 1.0 - y / 50.0 * 2.0, 0.5, 1.0);
+        let a = m * ndc(30.0, 10.0);
+        let b = m * ndc(50.0, 50.0);
+        assert!((a.x + 1.0).abs() < 1e-6 && (a.y - 1.0).abs() < 1e-6, "{a}");
+        assert!((b.x - 1.0).abs() < 1e-6 && (b.y + 1.0).abs() < 1e-6, "{b}");
+        assert_eq!((a.z, a.w), (0.5, 1.0));
+    }
 
     /// Issue 13.11: thread counts are bounded by the machine.
     #[test]

@@ -11,6 +11,10 @@
 //!   polygon is fan-triangulated and every piece keeps the original primitive id;
 //! - viewport `x = (ndc.x·0.5 + 0.5)·width`, `y = (1 − (ndc.y·0.5 + 0.5))·height` (row 0 at the
 //!   top, as in wgpu), snapped to [`SUBPIXEL_BITS`] fractional bits by `floor(v·256 + 0.5)`;
+//! - a frame that is a window of a larger one (`Settings::region`, a screen tile) snaps in the
+//!   full frame's viewport and subtracts the window's origin from the snapped coordinates (an
+//!   exact integer shift: its fragments are the full frame's there, bit for bit); bounding boxes
+//!   are clamped to the window;
 //! - coverage at pixel centres by 64-bit integer edge functions ([`edge`]) with the top-left fill
 //!   rule; no back-face culling; zero-area triangles are dropped here;
 //! - depth: NDC z interpolated linearly in screen space with barycentrics from the edge functions,
@@ -195,10 +199,19 @@ struct Projected {
     inv_w: f32,
 }
 
-/// What setup needs besides the geometry.
+/// What setup needs besides the geometry: the full frame's viewport, which every coordinate is
+/// snapped in, and the window of it this frame covers (`Settings::region`; the whole frame when
+/// none).
 struct Snap {
+    /// The full frame's width and height: the viewport transform's.
     width: u32,
     height: u32,
+    /// The window's origin in the full frame, in 1/256 pixel: subtracted from the snapped
+    /// coordinates, an exact integer shift (edge functions and barycentrics are differences of
+    /// coordinates, so they are the full frame's bit for bit).
+    origin: (i32, i32),
+    /// The window's size: bounding boxes are clamped to it.
+    region: (u32, u32),
 }
 
 impl Snap {
@@ -219,7 +232,7 @@ impl Snap {
         if !(in_range && nz.is_finite() && inv_w.is_finite()) {
             return None;
         }
-        Some(Projected { x: sx as i32, y: sy as i32, z: nz, inv_w })
+        Some(Projected { x: sx as i32 - self.origin.0, y: sy as i32 - self.origin.1, z: nz, inv_w })
     }
 
     /// Clips one triangle and appends the pieces that touch the viewport.
@@ -281,12 +294,12 @@ impl Snap {
             pixel_range(
                 xs.iter().copied().min().unwrap_or(0),
                 xs.iter().copied().max().unwrap_or(-1),
-                self.width,
+                self.region.0,
             ),
             pixel_range(
                 ys.iter().copied().min().unwrap_or(0),
                 ys.iter().copied().max().unwrap_or(-1),
-                self.height,
+                self.region.1,
             ),
         ) else {
             return;
@@ -415,8 +428,22 @@ impl TriangleSetup {
         }
     }
 
-    fn snap(&self) -> Snap {
-        Snap { width: self.width, height: self.height }
+    fn snap(settings: &Settings) -> Snap {
+        let (width, height) = (settings.width.min(MAX_SIZE), settings.height.min(MAX_SIZE));
+        match settings.region {
+            None => Snap { width, height, origin: (0, 0), region: (width, height) },
+            // the origin lies within a frame of at most MAX_SIZE a side (Settings::validate), so
+            // origin × 256 fits an i32 with room to spare
+            Some(r) => Snap {
+                width: r.full_width.min(MAX_SIZE),
+                height: r.full_height.min(MAX_SIZE),
+                origin: (
+                    (r.x.min(MAX_SIZE) as i32) << SUBPIXEL_BITS,
+                    (r.y.min(MAX_SIZE) as i32) << SUBPIXEL_BITS,
+                ),
+                region: (width, height),
+            },
+        }
     }
 
     /// Sets up every instance's triangles: clip space (`view_proj · transform · p`), clipping,
@@ -425,7 +452,7 @@ impl TriangleSetup {
     /// data are skipped (Scene::validate rejects them earlier).
     pub fn new(scene: &Scene, camera: &Camera, settings: &Settings) -> TriangleSetup {
         let mut r = TriangleSetup::empty(camera, settings);
-        let snap = r.snap();
+        let snap = TriangleSetup::snap(settings);
         let view_proj = camera.view_proj();
         let mut prim_base = 0u32;
         for inst in &scene.instances {
@@ -453,7 +480,7 @@ impl TriangleSetup {
     /// passes of the bucket techniques; colours and normals are not meaningful.
     pub fn bounding_boxes(scene: &Scene, camera: &Camera, settings: &Settings) -> TriangleSetup {
         let mut r = TriangleSetup::empty(camera, settings);
-        let snap = r.snap();
+        let snap = TriangleSetup::snap(settings);
         let view_proj = camera.view_proj();
         for (i, inst) in scene.instances.iter().enumerate() {
             let Some(object) = scene.objects.get(inst.object) else {

@@ -100,10 +100,11 @@ impl CpuPrepared<'_> {
         let plan = oit_core::plan::Plan::new("cpu", self.scene, settings)?;
         // the whole frame's storage against the host's memory, before anything is allocated
         // (sizes from a counting pass are checked again as they are allocated)
+        let budget = cpu_budget(settings);
         plan.check_budget(
             settings.pixel_count() as u64,
             oit_core::plan::Counted::default(),
-            oit_core::plan::host_memory_budget(),
+            (&budget.0, budget.1),
         )?;
         let start = Instant::now();
         let mut raster = Rasterizer::new(self.scene, camera, settings);
@@ -132,11 +133,21 @@ impl CpuPrepared<'_> {
     }
 }
 
+/// The budget of a CPU frame's storage: the host's available memory, or `--memory` where smaller.
+pub(crate) fn cpu_budget(settings: &Settings) -> (String, u64) {
+    let (name, bytes) = oit_core::plan::host_memory_budget();
+    settings.memory_budget((name.to_string(), bytes))
+}
+
 impl Prepared for CpuPrepared<'_> {
+    /// One frame, in screen tiles where its storage does not fit the budget
+    /// ([`oit_core::tiling`]).
     fn frame(&mut self, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
+        let this = &*self;
+        let run = || oit_core::tiling::run("cpu", this.scene, settings, |s| this.frame_inner(camera, s));
         match &self.threads {
-            None => self.frame_inner(camera, settings),
-            Some(pool) => pool.install(|| self.frame_inner(camera, settings)),
+            None => run(),
+            Some(pool) => pool.install(run),
         }
     }
 

@@ -120,7 +120,7 @@ impl<'a> VkCtx<'a> {
         let state_bytes = u64::from(pixels) * STATE_WORDS * 4;
         gpu.check_storage("the per-pixel resolve state", state_bytes)?;
         // the whole frame's storage against the device's budget, before anything is allocated
-        let budget = gpu.memory_budget();
+        let budget = settings.memory_budget(gpu.memory_budget());
         plan.check_budget(u64::from(pixels), oit_core::plan::Counted::default(), (&budget.0, budget.1))?;
         let uniform = FrameUniform {
             width: settings.width,
@@ -181,7 +181,7 @@ impl<'a> VkCtx<'a> {
     pub(crate) fn buffer(&mut self, label: &str, words: u64, init: Init) -> Result<Rc<Buffer>, OitError> {
         let bytes = words.max(MIN_BUFFER_WORDS) * 4;
         self.gpu.check_storage(label, bytes)?;
-        let budget = self.gpu.memory_budget();
+        let budget = self.settings.memory_budget(self.gpu.memory_budget());
         oit_core::plan::check_total(
             &format!("{} storage of a frame of {} pixels", self.settings.technique, self.pixels),
             self.storage_bytes.saturating_add(u64::from(self.pixels) * STATE_WORDS * 4).saturating_add(bytes),
@@ -349,6 +349,7 @@ impl<'a> VkCtx<'a> {
                 gpu_ms: None,
                 max_layers: t[1],
                 gpu_pass_ms: Vec::new(),
+                tiles: 1,
             },
         };
         frame.stats.check_accounting("vulkan")?;

@@ -189,7 +189,25 @@ impl VulkanPrepared<'_> {
 }
 
 impl Prepared for VulkanPrepared<'_> {
+    /// One frame, in screen tiles where its storage does not fit the budget or the device's
+    /// limits ([`oit_core::tiling`]).
     fn frame(&mut self, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
+        let scene = self.scene;
+        oit_core::tiling::run("vulkan", scene, settings, |s| self.frame_whole(camera, s))
+    }
+
+    fn storage_allocations(&self) -> u64 {
+        self.pool.allocations() + self.geometry_made.get()
+    }
+
+    fn pipelines_created(&self) -> Option<u64> {
+        Some(self.gpu.pipelines_created())
+    }
+}
+
+impl VulkanPrepared<'_> {
+    /// One frame or one window of a frame (`settings.region`, shifted by setup in fixed point).
+    fn frame_whole(&mut self, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
         settings.validate()?;
         let start = Instant::now();
         let path = settings.raster.unwrap_or(RasterPath::Compute);
@@ -213,14 +231,6 @@ impl Prepared for VulkanPrepared<'_> {
         frame.layers = layers;
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(frame)
-    }
-
-    fn storage_allocations(&self) -> u64 {
-        self.pool.allocations() + self.geometry_made.get()
-    }
-
-    fn pipelines_created(&self) -> Option<u64> {
-        Some(self.gpu.pipelines_created())
     }
 }
 

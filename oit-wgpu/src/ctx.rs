@@ -184,7 +184,7 @@ impl<'a> GpuCtx<'a> {
         gpu.check_storage("the per-pixel resolve state", state_bytes)?;
         // the whole frame's storage against the device's budget, before anything is allocated
         // (sizes from a counting pass are checked again in `buffer`)
-        let budget = gpu.memory_budget();
+        let budget = settings.memory_budget(gpu.memory_budget());
         plan.check_budget(u64::from(pixels), oit_core::plan::Counted::default(), (&budget.0, budget.1))?;
         let uniform = FrameUniform {
             width: settings.width,
@@ -292,7 +292,7 @@ impl<'a> GpuCtx<'a> {
         // than one element ("bound with size 4 where the shader expects 8", issue 13.8)
         let bytes = words.max(MIN_BUFFER_WORDS) * 4;
         self.gpu.check_storage(label, bytes)?;
-        let budget = self.gpu.memory_budget();
+        let budget = self.settings.memory_budget(self.gpu.memory_budget());
         oit_core::plan::check_total(
             &format!("{} storage of a frame of {} pixels", self.settings.technique, self.pixels),
             self.storage_bytes.saturating_add(u64::from(self.pixels) * STATE_WORDS * 4).saturating_add(bytes),
@@ -574,6 +574,7 @@ impl<'a> GpuCtx<'a> {
                 gpu_ms: self.timestamps.is_some().then_some(self.gpu_ms),
                 max_layers: t[1],
                 gpu_pass_ms: self.pass_ms,
+                tiles: 1,
             },
         };
         if self.counts_losses {

@@ -263,12 +263,23 @@ impl WgpuPrepared<'_> {
 }
 
 impl Prepared for WgpuPrepared<'_> {
+    /// One frame, in screen tiles where its storage does not fit the budget or the device's
+    /// limits ([`oit_core::tiling`]).
     fn frame(&mut self, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
-        self.frame_with(camera, settings, true)
+        let scene = self.scene;
+        oit_core::tiling::run("wgpu", scene, settings, |s| self.frame_with(camera, s, true))
     }
 
+    /// A frame without the image's readback; a frame that needs tiles (`--memory`, or over the
+    /// device's limits) runs through [`Prepared::frame`], image and all.
     fn frame_stats(&mut self, camera: &Camera, settings: &Settings) -> Result<oit_core::Stats, OitError> {
-        Ok(self.frame_with(camera, settings, false)?.stats)
+        if settings.memory.is_none() {
+            match self.frame_with(camera, settings, false) {
+                Err(OitError::TooLarge { .. }) => {}
+                other => return other.map(|f| f.stats),
+            }
+        }
+        self.frame(camera, settings).map(|f| f.stats)
     }
 
     fn storage_allocations(&self) -> u64 {
@@ -281,7 +292,9 @@ impl Prepared for WgpuPrepared<'_> {
 }
 
 impl WgpuPrepared<'_> {
-    /// A frame; the image and per-pixel losses read back only when `readback`
+    /// One frame or one window of a frame (`settings.region`: the compute path's setup shifts
+    /// the window in fixed point; the hardware path maps it onto its viewport in clip space,
+    /// `Region::clip_matrix`); the image and per-pixel losses read back only when `readback`
     /// ([`GpuCtx::finish_with`]).
     fn frame_with(
         &mut self,
@@ -293,6 +306,15 @@ impl WgpuPrepared<'_> {
         let (gpu, scene) = (self.gpu, self.scene);
         let start = Instant::now();
         let path = settings.raster.unwrap_or(WgpuBackend::default_path(settings.technique));
+        let window_camera;
+        let camera = match settings.region {
+            Some(region) if path == RasterPath::Hardware => {
+                let proj = region.clip_matrix(settings.width, settings.height) * camera.proj;
+                window_camera = Camera { proj, ..*camera };
+                &window_camera
+            }
+            _ => camera,
+        };
         if path == RasterPath::Hardware && self.hardware.is_none() {
             self.hardware = Some(HardwareScene::new(gpu, scene, &self.geometry_made)?);
         }

@@ -533,7 +533,7 @@ impl ComputeBuffers {
             self.setup = Some(SetupBuffers {
                 geometry,
                 instances: storage_buffer(gpu, "setup instances", instance_bytes, made),
-                uniform: buffer(gpu, "setup uniform", 32, U::UNIFORM | U::COPY_DST, made),
+                uniform: buffer(gpu, "setup uniform", 48, U::UNIFORM | U::COPY_DST, made),
                 counters: buffer(gpu, "setup counters", 16, U::STORAGE | U::COPY_SRC | U::COPY_DST, made),
                 layout,
                 group: None,
@@ -558,15 +558,29 @@ impl ComputeBuffers {
             let tri_capacity = self.tris.size() / (TRIANGLE_WORDS as u64 * 4);
             let item_capacity = self.items.size() / 8;
             let s = self.setup.as_mut().expect("made above");
-            let uniform: [u32; 8] = [
-                settings.width,
-                settings.height,
-                (settings.width as f32).to_bits(),
-                (settings.height as f32).to_bits(),
+            // a window of a larger frame (`Settings::region`, a screen tile) snaps in the full
+            // frame's viewport and shifts by its origin, as oit-core's setup does
+            let (full, origin) = match settings.region {
+                Some(r) => ((r.full_width, r.full_height), (r.x << 8, r.y << 8)),
+                None => ((settings.width, settings.height), (0, 0)),
+            };
+            let (full, origin) = (
+                (full.0.min(oit_core::MAX_SIZE), full.1.min(oit_core::MAX_SIZE)),
+                (origin.0.min(oit_core::MAX_SIZE << 8), origin.1.min(oit_core::MAX_SIZE << 8)),
+            );
+            let uniform: [u32; 12] = [
+                settings.width.min(oit_core::MAX_SIZE),
+                settings.height.min(oit_core::MAX_SIZE),
+                (full.0 as f32).to_bits(),
+                (full.1 as f32).to_bits(),
                 s.geometry.instances.len() as u32,
                 s.geometry.tasks,
                 tri_capacity.min(u64::from(u32::MAX)) as u32,
                 item_capacity.min(u64::from(u32::MAX)) as u32,
+                origin.0,
+                origin.1,
+                0,
+                0,
             ];
             gpu.queue.write_buffer(&s.uniform, 0, bytemuck::cast_slice(&uniform));
             let group = s.group.get_or_insert_with(|| {

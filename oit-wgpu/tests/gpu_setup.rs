@@ -83,13 +83,22 @@ fn gpu_setup_equals_host_setup() {
     for name in &scenes {
         let scene = load_scene(name).unwrap();
         for (view, camera) in cameras(&scene) {
-            for boxes in [false, true] {
-                let s = settings();
+            // the whole frame, and a window of it (a screen tile: `Settings::region`)
+            let window = Settings {
+                width: 80,
+                height: 61,
+                region: Some(oit_core::Region { x: 97, y: 40, full_width: 203, full_height: 150 }),
+                ..settings()
+            };
+            for (boxes, s) in
+                [(false, settings()), (true, settings()), (false, window.clone()), (true, window)]
+            {
                 let host = if boxes {
                     TriangleSetup::bounding_boxes(&scene, &camera, &s)
                 } else {
                     TriangleSetup::new(&scene, &camera, &s)
                 };
+                let view = format!("{view}, region {:?}", s.region);
                 let (words, items) =
                     oit_wgpu::ComputeRaster::setup_words(gpu, &scene, &camera, &s, boxes, true)
                         .unwrap_or_else(|e| panic!("{name}, {view}: {e}"));

@@ -44,7 +44,7 @@ pub(crate) struct Ctx<'a> {
     /// The frame's plan: refusals, sizing and stop rules, oit-core's.
     pub plan: Plan,
     /// The memory budget of the frame's storage, all allocations together (issue 13.9).
-    pub budget: (&'static str, u64),
+    pub budget: (String, u64),
     /// Fragments lost per pixel, counted where each is lost (a bucket collision, a key carried
     /// off a full array, a counter past K, a tie a peel skips, a fragment left behind the last
     /// peel the plan allows): never derived from `fragments − captured`.
@@ -74,7 +74,7 @@ impl<'a> Ctx<'a> {
             storage_bytes: 0,
             pool,
             plan,
-            budget: oit_core::plan::host_memory_budget(),
+            budget: crate::cpu_budget(settings),
             lost: pool.u32s(settings.pixel_count(), 0),
         }
     }
@@ -153,12 +153,14 @@ impl<'a> Ctx<'a> {
                 hint: "use a smaller --size or a smaller K".into(),
             });
         }
-        // the frame's total so far against the host's memory: sizes known only after a counting
-        // pass (the reference's lists, fabs/mdts without K) are checked here, before allocating
+        // the frame's total so far, the resolve state included (as `Plan::storage_bytes` counts
+        // it), against the budget: sizes known only after a counting pass (the reference's
+        // lists, fabs/mdts without K) are checked here, before allocating
+        let state = (self.pixels as u64).saturating_mul(oit_core::plan::RESOLVE_STATE_BYTES);
         oit_core::plan::check_total(
             &format!("{} storage of a frame of {} pixels", self.settings.technique, self.pixels),
-            self.storage_bytes.saturating_add(bytes),
-            self.budget,
+            self.storage_bytes.saturating_add(state).saturating_add(bytes),
+            (&self.budget.0, self.budget.1),
         )?;
         self.storage_bytes += bytes;
         usize::try_from(len)

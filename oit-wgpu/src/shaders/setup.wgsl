@@ -16,15 +16,22 @@
 // count from the counters.
 
 struct SetupUniform {
+    // the frame's (or the window's, `Settings::region`) width and height: pixel boxes clamp to it
     width: u32,
     height: u32,
-    // `width as f32`, `height as f32`
+    // the full frame's width and height as f32 bits: the viewport every vertex is snapped in
     width_f: u32,
     height_f: u32,
     instance_count: u32,
     task_count: u32,
     tri_capacity: u32,
     item_capacity: u32,
+    // the window's origin in the full frame, in 1/256 pixel: subtracted from the snapped
+    // coordinates (an exact integer shift, as oit-core's setup does); 0 for a whole frame
+    origin_x: i32,
+    origin_y: i32,
+    pad0: u32,
+    pad1: u32,
 }
 
 // Per instance, INSTANCE_WORDS words: mvp (16, columns), normal matrix (9, columns), base colour
@@ -216,8 +223,8 @@ fn project(p: vec4<u32>) -> Projected {
         return r;
     }
     r.ok = true;
-    r.x = sf_to_i32(sx);
-    r.y = sf_to_i32(sy);
+    r.x = sf_to_i32(sx) - su.origin_x;
+    r.y = sf_to_i32(sy) - su.origin_y;
     r.z = nz;
     r.inv_w = inv_w;
     return r;

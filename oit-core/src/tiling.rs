@@ -1,0 +1,377 @@
+//! Screen tiles: a frame whose storage does not fit its memory budget runs as windows of the
+//! screen that each fit, one after another, and the windows' images, per-pixel outputs and
+//! counters are put back together. One loop for every backend and technique: each backend's
+//! [`crate::Prepared::frame`] runs its frame through [`run`].
+//!
+//! A window is a frame of its own size with [`Settings::region`] saying where it lies in the full
+//! frame. Setup snaps in the full frame's viewport and shifts by the window's origin, so on the
+//! CPU and compute-raster paths a window's fragments are the full frame's there, bit for bit, and
+//! since every technique decides per pixel (what it keeps, loses and how it composites), the
+//! stitched frame equals the untiled one: image, `lost_pixels`, `layers` and the counters
+//! `fragments`, `captured`, `lost`, `tied` and `max_layers`. What tiling changes is counted:
+//! `geometry_passes` adds up every window's passes (the extra passes tiling costs),
+//! `storage_bytes` is the largest window's (windows run one at a time and each fits the budget)
+//! and [`crate::Stats::tiles`] says how many windows ran.
+//!
+//! When the frame splits:
+//! - before anything runs, when `--memory` is set and the plan's storage
+//!   ([`Plan::storage_bytes`], before any counting pass) is over it: into the fewest near-square
+//!   tiles of a grid that each fit ([`grid`]);
+//! - when a backend refuses a window as too large ([`OitError::TooLarge`]: over the budget, over a
+//!   device limit such as a storage binding's size, or, for techniques sized by a counting pass,
+//!   found over after that pass): that window splits in four and each runs again, recursively,
+//!   down to a single pixel; a pixel that does not fit alone is a clear error, and so is a frame
+//!   that would need more than [`MAX_TILES`] windows (without `--memory`, more than
+//!   [`AUTO_TILES`]: the device's refusal stands).
+
+use std::collections::VecDeque;
+use std::time::Instant;
+
+use crate::plan::{Counted, Plan};
+use crate::{Frame, Image, OitError, Region, Scene, Settings, Stats};
+
+/// The most windows one frame runs in: each window sets up the whole scene again, so a budget
+/// that needs more is refused with a clear error rather than left to run for hours.
+pub const MAX_TILES: usize = 4096;
+
+/// The most windows a frame runs in when no `--memory` is set and the device refuses it as too
+/// large: beyond this the device's own refusal is the answer (a frame that far over the device
+/// asks for a smaller size or technique, not hours of tiles).
+pub const AUTO_TILES: usize = 64;
+
+/// A window of the screen, in pixels of the full frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Rect {
+    /// Left column.
+    pub x: u32,
+    /// Top row.
+    pub y: u32,
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+}
+
+impl Rect {
+    /// Pixels in the window.
+    pub fn pixels(&self) -> u64 {
+        u64::from(self.width) * u64::from(self.height)
+    }
+
+    /// The window's four quarters (two halves where it is one pixel wide or high; empty parts
+    /// left out).
+    pub fn quarters(&self) -> Vec<Rect> {
+        let (w0, h0) = (self.width.div_ceil(2), self.height.div_ceil(2));
+        let mut out = Vec::with_capacity(4);
+        for (y, h) in [(self.y, h0), (self.y + h0, self.height - h0)] {
+            for (x, w) in [(self.x, w0), (self.x + w0, self.width - w0)] {
+                if w > 0 && h > 0 {
+                    out.push(Rect { x, y, width: w, height: h });
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The fewest tiles of a `cols × rows` grid over `area` whose largest tile `fits` (a test on its
+/// pixel count), near-square: the grid grows a column where tiles are wider than high, else a
+/// row. Tiles are `⌈width / cols⌉ × ⌈height / rows⌉`, the last column and row what is left (an
+/// uneven tiling). `None` when even one-pixel tiles do not fit, or more than [`MAX_TILES`] are
+/// needed.
+pub fn grid(area: Rect, fits: impl Fn(u64) -> bool) -> Option<Vec<Rect>> {
+    let (mut cols, mut rows) = (1u32, 1u32);
+    loop {
+        let (tw, th) = (area.width.div_ceil(cols), area.height.div_ceil(rows));
+        if fits(u64::from(tw) * u64::from(th)) {
+            break;
+        }
+        let grow_cols = (tw >= th && cols < area.width) || rows >= area.height;
+        if grow_cols && cols < area.width {
+            cols += 1;
+        } else if rows < area.height {
+            rows += 1;
+        } else {
+            return None;
+        }
+        if u64::from(cols) * u64::from(rows) > 4 * MAX_TILES as u64 {
+            return None;
+        }
+    }
+    let (tw, th) = (area.width.div_ceil(cols), area.height.div_ceil(rows));
+    let mut tiles = Vec::new();
+    for y in (0..area.height).step_by(th as usize) {
+        for x in (0..area.width).step_by(tw as usize) {
+            tiles.push(Rect {
+                x: area.x + x,
+                y: area.y + y,
+                width: tw.min(area.width - x),
+                height: th.min(area.height - y),
+            });
+        }
+    }
+    (tiles.len() <= MAX_TILES).then_some(tiles)
+}
+
+/// The settings of the window `rect` of the frame `full` (width, height): its own size and its
+/// region (none where the window is the whole frame, so an untiled frame runs as before).
+pub fn window(settings: &Settings, full: (u32, u32), rect: Rect) -> Settings {
+    let whole = rect == Rect { x: 0, y: 0, width: full.0, height: full.1 };
+    Settings {
+        width: rect.width,
+        height: rect.height,
+        region: (!whole).then_some(Region { x: rect.x, y: rect.y, full_width: full.0, full_height: full.1 }),
+        ..settings.clone()
+    }
+}
+
+/// Runs one frame of `settings` through `frame` (a backend's untiled frame), in as many windows
+/// as its memory budget and the backend's refusals need (module docs), and puts them together.
+/// `backend` names the backend, for messages; `scene` is what the plan sizes storage from.
+pub fn run(
+    backend: &str,
+    scene: &Scene,
+    settings: &Settings,
+    mut frame: impl FnMut(&Settings) -> Result<Frame, OitError>,
+) -> Result<Frame, OitError> {
+    settings.validate()?;
+    let start = Instant::now();
+    let (root, full) = match settings.region {
+        None => (
+            Rect { x: 0, y: 0, width: settings.width, height: settings.height },
+            (settings.width, settings.height),
+        ),
+        Some(r) => (
+            Rect { x: r.x, y: r.y, width: settings.width, height: settings.height },
+            (r.full_width, r.full_height),
+        ),
+    };
+    let mut queue: VecDeque<Rect> = match settings.memory {
+        None => VecDeque::from([root]),
+        Some(budget) => {
+            let plan = Plan::new(backend, scene, settings)?;
+            let need = |pixels: u64| plan.storage_bytes(pixels, Counted::default());
+            if need(1) > budget {
+                return Err(too_small(settings, need(1), budget, None));
+            }
+            grid(root, |pixels| need(pixels) <= budget)
+                .ok_or_else(|| too_many(settings, need(root.pixels()), budget))?
+                .into()
+        }
+    };
+    let mut done: Vec<(Rect, Frame)> = Vec::with_capacity(queue.len());
+    while let Some(rect) = queue.pop_front() {
+        match frame(&window(settings, full, rect)) {
+            Ok(f) => done.push((rect, f)),
+            Err(e @ OitError::TooLarge { .. }) => {
+                if rect.pixels() == 1 {
+                    let budget = settings.memory.unwrap_or(u64::MAX);
+                    return Err(too_small(settings, 0, budget, Some(e)));
+                }
+                queue.extend(rect.quarters());
+                // without --memory, a device refusal tiles a frame only modestly: a request far
+                // over the device (fabs:65536) is refused with the device's own error
+                if settings.memory.is_none() && done.len() + queue.len() > AUTO_TILES {
+                    return Err(e);
+                }
+                if done.len() + queue.len() > MAX_TILES {
+                    return Err(OitError::TooLarge {
+                        what: format!(
+                            "{} at {}x{} in screen tiles",
+                            settings.technique, root.width, root.height
+                        ),
+                        needed: (done.len() + queue.len()) as u64,
+                        limit_name: "oit's most tiles a frame (MAX_TILES)".into(),
+                        limit: MAX_TILES as u64,
+                        hint: format!("a window of {}x{} was still refused: {e}", rect.width, rect.height),
+                    });
+                }
+            }
+            Err(e) => return Err(e),
+        }
+    }
+    let tiles = done.len();
+    let mut frame = match done.pop() {
+        Some((rect, f)) if tiles == 1 && rect == root => f,
+        last => {
+            done.extend(last);
+            stitch(root, &done)?
+        }
+    };
+    frame.stats.tiles = tiles.max(1) as u32;
+    if frame.stats.tiles > 1 {
+        frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
+    }
+    Ok(frame)
+}
+
+/// The error for a budget one pixel does not fit.
+fn too_small(settings: &Settings, needed: u64, budget: u64, refusal: Option<OitError>) -> OitError {
+    let hint = match refusal {
+        Some(e) => format!("a single pixel was refused: {e}"),
+        None => "raise --memory, or use a technique with less storage a pixel (fewer slots, fabs:K)".into(),
+    };
+    OitError::TooLarge {
+        what: format!("{} storage of one pixel", settings.technique),
+        needed,
+        limit_name: "the memory budget (--memory)".into(),
+        limit: budget,
+        hint,
+    }
+}
+
+/// The error for a budget that needs more than [`MAX_TILES`] windows.
+fn too_many(settings: &Settings, needed: u64, budget: u64) -> OitError {
+    OitError::TooLarge {
+        what: format!("{} storage of a {}x{} frame", settings.technique, settings.width, settings.height),
+        needed,
+        limit_name: format!("the memory budget (--memory) in at most {MAX_TILES} screen tiles"),
+        limit: budget.saturating_mul(MAX_TILES as u64),
+        hint: "raise --memory, or use a smaller --size or a technique with less storage a pixel".into(),
+    }
+}
+
+/// Puts the windows' frames together into the frame of `root`.
+fn stitch(root: Rect, parts: &[(Rect, Frame)]) -> Result<Frame, OitError> {
+    for (rect, f) in parts {
+        let len = rect.pixels() as usize;
+        let bad_len = |v: &Option<Vec<u32>>| v.as_ref().is_some_and(|v| v.len() != len);
+        if f.image.width != rect.width
+            || f.image.height != rect.height
+            || bad_len(&f.layers)
+            || bad_len(&f.lost_pixels)
+        {
+            return Err(OitError::Device(format!(
+                "a screen tile of {}x{} came back as a {}x{} frame",
+                rect.width, rect.height, f.image.width, f.image.height
+            )));
+        }
+    }
+    let mut image = Image::new(root.width, root.height, [0, 0, 0, 255]);
+    place(root, &mut image.pixels, parts.iter().map(|(r, f)| (*r, &f.image.pixels[..])));
+    let per_pixel = |get: fn(&Frame) -> Option<&Vec<u32>>| -> Option<Vec<u32>> {
+        let mut out = vec![0; root.pixels() as usize];
+        let slices: Option<Vec<(Rect, &[u32])>> =
+            parts.iter().map(|(r, f)| Some((*r, &get(f)?[..]))).collect();
+        place(root, &mut out, slices?.into_iter());
+        Some(out)
+    };
+    Ok(Frame {
+        image,
+        layers: per_pixel(|f| f.layers.as_ref()),
+        lost_pixels: per_pixel(|f| f.lost_pixels.as_ref()),
+        stats: merge(parts.iter().map(|(_, f)| &f.stats)),
+    })
+}
+
+/// Copies each window's rows into their place in `out`, the rows of `root`.
+fn place<'a, T: Copy + 'a>(root: Rect, out: &mut [T], parts: impl Iterator<Item = (Rect, &'a [T])>) {
+    let stride = root.width as usize;
+    for (rect, values) in parts {
+        let w = rect.width as usize;
+        for (row, src) in values.chunks_exact(w).enumerate() {
+            let at = (rect.y - root.y) as usize * stride + row * stride + (rect.x - root.x) as usize;
+            out[at..at + w].copy_from_slice(src);
+        }
+    }
+}
+
+/// The counters of a frame run in windows: counts add up, `max_layers` and `storage_bytes` are
+/// the largest window's (windows run one after another), device times add up (per pass by name).
+pub fn merge<'a>(stats: impl Iterator<Item = &'a Stats>) -> Stats {
+    let mut out = Stats::default();
+    for s in stats {
+        out.geometry_passes += s.geometry_passes;
+        out.fragments += s.fragments;
+        out.captured += s.captured;
+        out.lost += s.lost;
+        out.tied += s.tied;
+        out.storage_bytes = out.storage_bytes.max(s.storage_bytes);
+        out.wall_ms += s.wall_ms;
+        out.gpu_ms = match (out.gpu_ms, s.gpu_ms) {
+            (Some(a), Some(b)) => Some(a + b),
+            (a, b) => a.or(b),
+        };
+        out.max_layers = out.max_layers.max(s.max_layers);
+        for (name, ms) in &s.gpu_pass_ms {
+            match out.gpu_pass_ms.iter_mut().find(|(n, _)| n == name) {
+                Some((_, total)) => *total += ms,
+                None => out.gpu_pass_ms.push((name.clone(), *ms)),
+            }
+        }
+        out.tiles += s.tiles.max(1);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn area(width: u32, height: u32) -> Rect {
+        Rect { x: 0, y: 0, width, height }
+    }
+
+    /// Tiles cover the area once each, and each fits.
+    #[test]
+    fn grids_cover_and_fit() {
+        for (w, h, max) in [(512, 512, 70_000u64), (100, 7, 30), (1, 1000, 64), (333, 1, 1), (16, 16, 256)] {
+            let tiles = grid(area(w, h), |p| p <= max).expect("fits");
+            let mut seen = vec![0u8; (w * h) as usize];
+            for t in &tiles {
+                assert!(t.pixels() <= max, "{t:?} over {max}");
+                for y in t.y..t.y + t.height {
+                    for x in t.x..t.x + t.width {
+                        seen[(y * w + x) as usize] += 1;
+                    }
+                }
+            }
+            assert!(seen.iter().all(|&n| n == 1), "{w}x{h} at {max}: {tiles:?}");
+        }
+        assert_eq!(grid(area(512, 512), |p| p <= 70_000).unwrap().len(), 4);
+        assert_eq!(grid(area(16, 16), |_| true).unwrap(), [area(16, 16)]);
+        assert!(grid(area(4, 4), |_| false).is_none());
+        assert!(grid(area(4096, 4096), |p| p <= 16).is_none(), "over MAX_TILES");
+    }
+
+    #[test]
+    fn quarters_split_every_shape() {
+        let r = Rect { x: 3, y: 5, width: 5, height: 1 };
+        assert_eq!(
+            r.quarters(),
+            [Rect { x: 3, y: 5, width: 3, height: 1 }, Rect { x: 6, y: 5, width: 2, height: 1 }]
+        );
+        let q = Rect { x: 0, y: 0, width: 3, height: 3 }.quarters();
+        assert_eq!(q.iter().map(Rect::pixels).sum::<u64>(), 9);
+        assert_eq!(q.len(), 4);
+    }
+
+    #[test]
+    fn stats_merge() {
+        let a = Stats {
+            geometry_passes: 3,
+            fragments: 10,
+            captured: 9,
+            lost: 1,
+            storage_bytes: 100,
+            max_layers: 4,
+            gpu_ms: Some(1.0),
+            gpu_pass_ms: vec![("count".into(), 0.5)],
+            ..Stats::default()
+        };
+        let b = Stats {
+            geometry_passes: 2,
+            fragments: 5,
+            captured: 5,
+            storage_bytes: 80,
+            max_layers: 6,
+            gpu_ms: Some(2.0),
+            gpu_pass_ms: vec![("count".into(), 0.25)],
+            ..Stats::default()
+        };
+        let m = merge([&a, &b].into_iter());
+        assert_eq!((m.geometry_passes, m.fragments, m.captured, m.lost), (5, 15, 14, 1));
+        assert_eq!((m.storage_bytes, m.max_layers, m.gpu_ms, m.tiles), (100, 6, Some(3.0), 2));
+        assert_eq!(m.gpu_pass_ms, [("count".to_string(), 0.75)]);
+    }
+}
