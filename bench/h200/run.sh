@@ -42,8 +42,24 @@ vulkan)
     run "$OIT" bench --backend wgpu,vulkan --raster compute --size 1024x1024 --frames 10 --warmup 2 \
         --scenes "$OIT_MODELS/bunny.obj,planes:64" --no-curves --out "$OUT/vulkan-1024"
     ;;
+grid)
+    # issue 10's 10M-triangle frame: grid:12x12:bunny at 1024², fabs on the compute path (setup
+    # on the GPU) and the hardware path, and plain as the baseline; steady-state wall beside GPU
+    run "$OIT" bench --backend wgpu --raster all --size 1024x1024 --frames 5 --warmup 1 \
+        --scenes "grid:12x12:$OIT_MODELS/bunny.obj" --techniques plain,fabs --no-curves --out "$OUT/grid12-1024"
+    ;;
+criterion)
+    # issue 8 item 10: the criterion benches before the architecture work (bb02087) and now, one
+    # after the other on this machine; BEFORE and AFTER are the two bench binaries
+    # (`cargo bench -p oit-bench --no-run`, target/release/deps/techniques-*), FILTER a regex
+    mkdir -p "$OUT/criterion"
+    for side in before after; do
+        bin=$([ $side = before ] && echo "$BEFORE" || echo "$AFTER")
+        run "$bin" --bench "${FILTER:-.}" > "$OUT/criterion/$side.txt" 2>&1
+    done
+    ;;
 *)
-    echo "usage: $0 [readme|calibrate|model|vulkan]" >&2
+    echo "usage: $0 [readme|calibrate|model|vulkan|grid|criterion]" >&2
     exit 2
     ;;
 esac
