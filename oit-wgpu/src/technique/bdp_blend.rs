@@ -138,32 +138,8 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     ctx.passes += 1;
 
     // the resolve, reading the targets
-    let texture_entry = |binding: u32| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: false },
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        },
-        count: None,
-    };
-    let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("bdp bucket targets"),
-        entries: &(0..TARGETS).map(|i| texture_entry(3 + i)).collect::<Vec<_>>(),
-    });
-    let group1 = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("bdp bucket targets"),
-        layout: &layout1,
-        entries: &views
-            .iter()
-            .enumerate()
-            .map(|(i, view)| wgpu::BindGroupEntry {
-                binding: 3 + i as u32,
-                resource: wgpu::BindingResource::TextureView(view),
-            })
-            .collect::<Vec<_>>(),
-    });
+    let (layout1, group1) =
+        super::targets_group(device, "bdp bucket targets", 3, &views.iter().collect::<Vec<_>>());
     let (layout0, group0) = ctx.group0(&[&bounds], 0, 0);
     let source = format!("{TECHNIQUE_PRELUDE}{WGSL}\n{}", stage.wgsl());
     let pipeline = ctx.gpu.compute_pipeline(&source, "bdp_blend_resolve_main", &[&layout0, &layout1])?;

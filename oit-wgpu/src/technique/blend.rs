@@ -163,28 +163,7 @@ fn draw_and_resolve(
     ctx.passes += 1;
 
     // the resolve, reading the targets
-    let texture_entry = |binding: u32| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: false },
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        },
-        count: None,
-    };
-    let layout1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("blend targets"),
-        entries: &[texture_entry(8), texture_entry(9)],
-    });
-    let group1 = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("blend targets"),
-        layout: &layout1,
-        entries: &[
-            wgpu::BindGroupEntry { binding: 8, resource: wgpu::BindingResource::TextureView(&color) },
-            wgpu::BindGroupEntry { binding: 9, resource: wgpu::BindingResource::TextureView(&count) },
-        ],
-    });
+    let (layout1, group1) = super::targets_group(&device, "blend targets", 8, &[&color, &count]);
     let (layout0, group0) = ctx.group0(&[], 0, param);
     let pipeline = ctx.gpu.compute_pipeline(&body, entries.1, &[&layout0, &layout1])?;
     let (x, y) = crate::ctx::dispatch_size(u64::from(ctx.pixels));

@@ -57,3 +57,41 @@ pub(crate) fn scan(ctx: &mut GpuCtx<'_>, words: &wgpu::Buffer, n: u64) -> Result
     ctx.kernel_over(SCAN_WGSL, "add_main", &[words, &sums], blocks * 64, 0, param, "scan")?;
     Ok(total)
 }
+
+/// Group 1 of a resolve that reads a blend capture's render targets: `views` as unfilterable
+/// float textures at bindings `first`, `first + 1`, ... (bdp's 8 bucket targets, plain's and the
+/// weighted blends' colour and count targets).
+pub(crate) fn targets_group(
+    device: &wgpu::Device,
+    label: &str,
+    first: u32,
+    views: &[&wgpu::TextureView],
+) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
+    let entries: Vec<wgpu::BindGroupLayoutEntry> = (0..views.len() as u32)
+        .map(|i| wgpu::BindGroupLayoutEntry {
+            binding: first + i,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        })
+        .collect();
+    let layout = device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &entries });
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout: &layout,
+        entries: &views
+            .iter()
+            .enumerate()
+            .map(|(i, view)| wgpu::BindGroupEntry {
+                binding: first + i as u32,
+                resource: wgpu::BindingResource::TextureView(view),
+            })
+            .collect::<Vec<_>>(),
+    });
+    (layout, group)
+}
