@@ -48,6 +48,19 @@ grid)
     run "$OIT" bench --backend wgpu --raster all --size 1024x1024 --frames 5 --warmup 1 \
         --scenes "grid:12x12:$OIT_MODELS/bunny.obj" --techniques plain,fabs --no-curves --out "$OUT/grid12-1024"
     ;;
+big)
+    # issue 11 item 2: frames bigger than the device's per-binding limit, run in screen tiles
+    # within the default budget, exact techniques against the reference (EPR 0, lost 0 expected)
+    for size in 4096 8192; do
+        run "$OIT" compare --backend wgpu --raster compute --scene "$OIT_MODELS/armadillo.obj" \
+            --size ${size}x${size} --techniques fabs,dfb,ll,mdts64,bdp,adp --json > "$OUT/big-armadillo-$size.json"
+    done
+    for t in fabs dfb; do
+        run "$OIT" render --backend wgpu --raster compute --scene "$OIT_MODELS/armadillo.obj" \
+            --size 16384x16384 --technique $t --json -o "$OUT/armadillo-16384-$t.png" > "$OUT/big-armadillo-16384-$t.json"
+        rm -f "$OUT/armadillo-16384-$t.png"
+    done
+    ;;
 criterion)
     # issue 8 item 10: the criterion benches before the architecture work (bb02087) and now, one
     # after the other on this machine; BEFORE and AFTER are the two bench binaries
@@ -59,7 +72,7 @@ criterion)
     done
     ;;
 *)
-    echo "usage: $0 [readme|calibrate|model|vulkan|grid|criterion]" >&2
+    echo "usage: $0 [readme|calibrate|model|vulkan|grid|big|criterion]" >&2
     exit 2
     ;;
 esac

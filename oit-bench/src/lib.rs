@@ -806,7 +806,7 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
                         &scene,
                         &Settings { technique: m.technique, ..base.clone() },
                     )
-                    .map_or(0, |plan| model::geometry_passes(&plan, n)),
+                    .map_or(0, |plan| model::geometry_passes(&plan.on_path(m.raster), n)),
                 };
                 if let Some(image) = &r.image {
                     images.entry(technique).or_default().push(Rendered {
