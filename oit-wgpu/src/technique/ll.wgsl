@@ -3,8 +3,11 @@
 // node counter. The capture takes a node by atomicAdd on the counter (past the pool: lost, where
 // it happens), writes the key (depth bits << 32 | primitive id) and payload into it, and links it
 // in front of its pixel's list by atomicExchange on the head. The resolve walks each list into a
-// private array of up to LOCAL_NODES, sorted as it goes (insertion), and composites it; a longer
-// list is merge-sorted in place along its links.
+// private array of up to LOCAL_NODES, sorted as it goes (insertion, farthest first: a list holds
+// its pixel's fragments newest first, so fragments that arrived front to back come out farthest
+// first and each insertion is one comparison, as fabs's are for its slots in arrival order;
+// sorted nearest first, that order was the insertion's worst case), and composites it from the
+// nearest; a longer list is merge-sorted in place along its links.
 @group(0) @binding(2) var<storage, read_write> heads: array<atomic<u32>>;
 @group(0) @binding(3) var<storage, read_write> counter: array<atomic<u32>>;
 @group(0) @binding(4) var<storage, read_write> keys: array<u64>;
@@ -42,7 +45,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         let v = keys[node];
         let p = payloads[node];
         var j = n;
-        while (j > 0u && list[j - 1u] > v) {
+        while (j > 0u && list[j - 1u] < v) {
             list[j] = list[j - 1u];
             list_payloads[j] = list_payloads[j - 1u];
             j -= 1u;
@@ -53,8 +56,8 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         node = links[node];
     }
     if (node == LL_END) {
-        for (var i = 0u; i < n; i++) {
-            push_local(&s, bitcast<f32>(u32(list[i] >> 32u)), list_payloads[i]);
+        for (var i = n; i > 0u; i--) {
+            push_local(&s, bitcast<f32>(u32(list[i - 1u] >> 32u)), list_payloads[i - 1u]);
         }
         state[px] = s;
         return;
