@@ -19,10 +19,11 @@
 //!   tiles of a grid that each fit ([`grid`]);
 //! - when a backend refuses a window as too large ([`OitError::TooLarge`]: over the budget, over a
 //!   device limit such as a storage binding's size, or, for techniques sized by a counting pass,
-//!   found over after that pass): that window splits in four and each runs again, recursively,
-//!   down to a single pixel; a pixel that does not fit alone is a clear error, and so is a frame
-//!   that would need more than [`MAX_TILES`] windows (without `--memory`, more than
-//!   [`AUTO_TILES`]: the device's refusal stands).
+//!   found over after that pass): that window splits into as many tiles as the refusal's
+//!   needed/limit ratio says, with a margin ([`split`]; in four where the refusal gives no ratio),
+//!   and each runs again, recursively, down to a single pixel; a pixel that does not fit alone is
+//!   a clear error, and so is a frame that would need more than [`MAX_TILES`] windows (without
+//!   `--memory`, more than [`AUTO_TILES`]: the device's refusal stands).
 
 use std::collections::VecDeque;
 use std::time::Instant;
@@ -36,8 +37,32 @@ pub const MAX_TILES: usize = 4096;
 
 /// The most windows a frame runs in when no `--memory` is set and the device refuses it as too
 /// large: beyond this the device's own refusal is the answer (a frame that far over the device
-/// asks for a smaller size or technique, not hours of tiles).
-pub const AUTO_TILES: usize = 64;
+/// asks for a smaller size or technique, not hours of tiles). 1024 lets a 16384² frame of a mesh
+/// run on lavapipe, whose storage bindings hold 128 MiB (the armadillo's `fabs` there needs about
+/// 250 windows), and still refuses `fabs:65536` at 512² (over a thousand).
+pub const AUTO_TILES: usize = 1024;
+
+/// The windows a window refused as too large runs as instead: a grid whose tiles each hold at
+/// most 85 % of the refused window's pixels divided by the refusal's needed/limit ratio (storage
+/// grows with pixels; a tile's deepest pixel is no deeper than the window's; the margin covers
+/// what does not shrink with the pixels), so one refusal costs one retry, not a cascade of
+/// quarterings each with its own counting pass. In four when the refusal gives no ratio or the
+/// grid would be one tile.
+pub fn split(rect: Rect, refusal: &OitError) -> Vec<Rect> {
+    if let OitError::TooLarge { needed, limit, .. } = *refusal
+        && limit > 0
+        && needed > limit
+    {
+        let ratio = needed as f64 / limit as f64;
+        let most = ((rect.pixels() as f64 / ratio) * 0.85).floor().max(1.0) as u64;
+        if let Some(tiles) = grid(rect, |pixels| pixels <= most)
+            && tiles.len() > 1
+        {
+            return tiles;
+        }
+    }
+    rect.quarters()
+}
 
 /// A window of the screen, in pixels of the full frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -168,7 +193,7 @@ pub fn run(
                     let budget = settings.memory.unwrap_or(u64::MAX);
                     return Err(too_small(settings, 0, budget, Some(e)));
                 }
-                queue.extend(rect.quarters());
+                queue.extend(split(rect, &e));
                 // without --memory, a device refusal tiles a frame only modestly: a request far
                 // over the device (fabs:65536) is refused with the device's own error
                 if settings.memory.is_none() && done.len() + queue.len() > AUTO_TILES {
@@ -332,6 +357,32 @@ mod tests {
         assert_eq!(grid(area(16, 16), |_| true).unwrap(), [area(16, 16)]);
         assert!(grid(area(4, 4), |_| false).is_none());
         assert!(grid(area(4096, 4096), |p| p <= 16).is_none(), "over MAX_TILES");
+    }
+
+    #[test]
+    fn a_refusal_splits_by_its_ratio() {
+        let refusal = |needed, limit| OitError::TooLarge {
+            what: "slots".into(),
+            needed,
+            limit_name: "a binding".into(),
+            limit,
+            hint: String::new(),
+        };
+        let r = Rect { x: 100, y: 40, width: 1000, height: 1000 };
+        let tiles = split(r, &refusal(350, 100));
+        // 1e6 / 3.5 × 0.85 = 242,857 pixels a tile at most: 2 × 2 tiles hold 250,000 each (over),
+        // so more than four, each under the bound, covering r
+        assert!(tiles.len() > 4 && tiles.len() <= 9, "{}", tiles.len());
+        assert!(tiles.iter().all(|t| t.pixels() <= 242_857), "{tiles:?}");
+        assert_eq!(tiles.iter().map(Rect::pixels).sum::<u64>(), r.pixels());
+        assert!(
+            tiles.iter().all(|t| t.x >= 100 && t.y >= 40 && t.x + t.width <= 1100 && t.y + t.height <= 1040)
+        );
+        // no ratio (a refusal of another kind, or needed under the limit): quarters
+        assert_eq!(split(r, &refusal(50, 100)), r.quarters());
+        assert_eq!(split(r, &OitError::Device("lost".into())), r.quarters());
+        // just over: halves (each 500,000 ≤ 1e6 / 1.01 × 0.85), not quarters
+        assert_eq!(split(r, &refusal(101, 100)).len(), 2);
     }
 
     #[test]
