@@ -141,10 +141,10 @@ fn embedded_pass_matches_backend_render() {
     }
 }
 
-/// The techniques the embedded pass runs; the rest of the catalogue it refuses as unsupported
-/// (bdp, bdp2 and adp: their bounds pass draws the instances' bounding boxes, which a pass of the
-/// caller's draws does not have; mdts without `Settings::alpha`: it stores no alpha, and the pass
-/// does not know the caller's — it used to composite every fragment as opaque, silently).
+/// The techniques the embedded pass runs (bdp, bdp2 and adp with the quads' boxes, which the
+/// example gives it); the rest of the catalogue it refuses as unsupported (mdts without
+/// `Settings::alpha`: it stores no alpha, and the pass does not know the caller's — it used to
+/// composite every fragment as opaque, silently).
 const EMBED_SUPPORTED: &[&str] = &[
     "reference",
     "plain",
@@ -159,4 +159,47 @@ const EMBED_SUPPORTED: &[&str] = &[
     "mlp:4",
     "dfb",
     "ll",
+    "bdp",
+    "bdp2",
+    "adp",
 ];
+
+/// Without the instances' boxes, bdp and adp are refused before any pass runs, naming the method
+/// that gives them; a box that is not one is refused when given.
+#[test]
+fn bdp_and_adp_without_boxes_name_the_method() {
+    let Some(backend) = oit_wgpu::backend_or_skip("bdp_and_adp_without_boxes_name_the_method") else {
+        return;
+    };
+    let gpu = backend.gpu().unwrap();
+    for technique in [Technique::Bdp { passes: 1 }, Technique::Bdp { passes: 3 }, Technique::Adp] {
+        let settings = Settings { width: 16, height: 16, technique, ..Settings::default() };
+        let pass = oit_wgpu::OitPass::new(&gpu.device, &gpu.queue, settings, example::camera()).unwrap();
+        let mut asked = false;
+        let result = pass.frame(
+            None,
+            |_| panic!("{technique}: no pipeline is built for a refused frame"),
+            |_, _| asked = true,
+        );
+        match result {
+            Err(OitError::Unsupported { what, .. }) => {
+                assert!(what.contains("OitPass::with_instance_boxes"), "{technique}: {what}");
+                assert!(what.contains(&technique.to_string()), "{technique}: {what}");
+            }
+            other => panic!("{technique}: expected Unsupported, got {:?}", other.map(|f| f.stats)),
+        }
+        assert!(!asked, "{technique}: nothing drawn");
+    }
+    let pass =
+        || oit_wgpu::OitPass::new(&gpu.device, &gpu.queue, Settings::default(), example::camera()).unwrap();
+    let inverted = oit_core::Aabb { min: glam::Vec3::ONE, max: glam::Vec3::ZERO };
+    let unit = oit_core::Aabb { min: glam::Vec3::ZERO, max: glam::Vec3::ONE };
+    for (boxes, index) in [(vec![unit, inverted], "box 1"), (vec![oit_core::Aabb::EMPTY], "box 0")] {
+        match pass().with_instance_boxes(&boxes) {
+            Err(OitError::InvalidSettings(message)) => assert!(message.contains(index), "{message}"),
+            other => panic!("{boxes:?}: expected InvalidSettings, got ok: {}", other.is_ok()),
+        }
+    }
+    assert!(pass().with_instance_boxes(&[unit]).is_ok());
+    assert!(pass().with_instance_boxes(&[]).is_ok(), "no instances, no boxes");
+}
