@@ -212,14 +212,10 @@ impl Gfx {
         }
         let scene = &checked.scene;
         let geometry = SceneGeometry::new(&device, &queue, scene)?;
-        let absorption = if scene.objects.is_empty() {
-            1.0
-        } else {
-            scene.objects.iter().map(|o| o.absorption).sum::<f32>() / scene.objects.len() as f32
-        };
         let camera = Camera::orbit_scene(scene, checked.state.view, w as f32 / h as f32)?;
-        let pass = OitPass::new(&device, &queue, checked.settings.clone(), camera)?
-            .with_scene_bounds(scene.bounds(), absorption);
+        // the scene's bounds and absorption, and its instances' boxes for bdp and adp
+        let pass =
+            OitPass::new(&device, &queue, checked.settings.clone(), camera)?.with_scene_geometry(&geometry);
         Ok(Gfx {
             window,
             surface,
@@ -575,7 +571,7 @@ fn draw_overlay(
     if let Some(note) = note {
         lines.push(note.to_string());
     }
-    lines.push("T technique  K/M parameter  A alpha  S shading  E effect  R reference  F12 shot".into());
+    lines.push("T technique  K/P/M parameter  A alpha  S shading  E effect  R reference  F12 shot".into());
     let step = line_height(OVERLAY_PX) as i64 + 2;
     let width = lines.iter().map(|l| oit_bench::present::text_width(l, OVERLAY_PX)).max().unwrap_or(0);
     fill_rect(image, 0, 0, u64::from(width) + 12, (step * lines.len() as i64 + 8) as u64, [0, 0, 0, 160]);
