@@ -393,7 +393,7 @@ impl OitPass {
     /// What the pass needs of an oit [`Scene`] drawn through `geometry`: its instances' bounding
     /// boxes (uploaded with the geometry, shared, not uploaded again), and its world bounds and
     /// the objects' mean absorption ([`OitPass::with_scene_bounds`]), so every technique's image
-    /// equals `Backend::render`'s on the hardware path.
+    /// equals `Backend::render`'s on the hardware path. `geometry` must be on the pass's device.
     pub fn with_scene_geometry(mut self, geometry: &SceneGeometry) -> OitPass {
         self.scene = stand_in(geometry.bounds, geometry.absorption);
         self.boxes = Some(geometry.boxes.clone());

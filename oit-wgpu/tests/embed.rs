@@ -204,6 +204,17 @@ fn bdp_and_adp_without_boxes_name_the_method() {
     assert!(pass().with_instance_boxes(&[]).is_ok(), "no instances, no boxes");
 }
 
+/// The largest channel difference between two images of one size.
+fn worst_difference(a: &Image, b: &Image) -> u8 {
+    assert_eq!((a.width, a.height), (b.width, b.height), "sizes");
+    a.pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(p, q)| (0..4).map(|i| p[i].abs_diff(q[i])).max().unwrap_or(0))
+        .max()
+        .unwrap_or(0)
+}
+
 /// The render pipeline of a capture module over `SceneGeometry`'s vertex and fragment stages, as
 /// `oit view` builds it.
 fn scene_pipeline(
@@ -300,14 +311,7 @@ fn scene_geometry_bdp_and_adp_match_backend_render() {
                     },
                 )
                 .unwrap();
-            let worst = frame
-                .image
-                .pixels
-                .iter()
-                .zip(&own.image.pixels)
-                .map(|(p, q)| (0..4).map(|i| p[i].abs_diff(q[i])).max().unwrap_or(0))
-                .max()
-                .unwrap_or(0);
+            let worst = worst_difference(&frame.image, &own.image);
             println!(
                 "{technique} {effect:?} ({how}): worst {worst}; fragments {} vs {}, passes {} vs {}, lost {} vs {}",
                 frame.stats.fragments,
@@ -322,5 +326,36 @@ fn scene_geometry_bdp_and_adp_match_backend_render() {
             assert_eq!(frame.stats.geometry_passes, own.stats.geometry_passes, "{technique} ({how})");
             assert_eq!(frame.stats.lost, own.stats.lost, "{technique} ({how})");
         }
+    }
+    // exact bounds (the fragments' own depth range): the bounds pass draws the caller's
+    // geometry, so a pass without boxes runs bdp and adp too
+    for technique in [Technique::Bdp { passes: 2 }, Technique::Adp] {
+        let settings = Settings {
+            width: w,
+            height: h,
+            technique,
+            bounds: oit_core::BoundsMode::Exact,
+            raster: Some(RasterPath::Hardware),
+            ..Settings::default()
+        };
+        let own = backend.render(&scene, &camera, &settings).unwrap();
+        let pass = oit_wgpu::OitPass::new(&gpu.device, &gpu.queue, settings.clone(), camera)
+            .unwrap()
+            .with_scene_bounds(scene.bounds(), absorption);
+        geometry.write_frame(&scene, &camera, &settings);
+        let frame = pass
+            .frame(
+                None,
+                |capture| scene_pipeline(&gpu.device, &geometry, capture),
+                |rpass, _| {
+                    rpass.set_bind_group(1, geometry.bind_group(), &[]);
+                    rpass.draw(0..geometry.vertex_count(), 0..1);
+                },
+            )
+            .unwrap();
+        let worst = worst_difference(&frame.image, &own.image);
+        assert!(worst <= 1, "{technique} with exact bounds, no boxes: a pixel differs by {worst}");
+        assert_eq!(frame.stats.geometry_passes, own.stats.geometry_passes, "{technique} exact");
+        assert_eq!(frame.stats.lost, own.stats.lost, "{technique} exact");
     }
 }
