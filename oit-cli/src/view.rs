@@ -108,6 +108,8 @@ fn help_text() -> String {
          1.0 drag 40 -20       a left-button drag in pixels (orbit)\n  \
          1.5 scroll 2          the wheel in lines (zoom; negative zooms out)\n  \
          2.0 resize 320 240    the window's inner size, waited for\n  \
+         2.2 minimize          minimise the window (no frames until restore)\n  \
+         2.4 restore           map it again\n  \
          2.5 screenshot a.png  the image now (no overlay); prints its `oit render` options\n  \
          3.0 quit",
         keys::BINDINGS
