@@ -30,9 +30,8 @@ use crate::options::check_output;
     after_help = help_text()
 )]
 pub struct ViewArgs {
-    /// The technique to start with (any the embeddable pass draws: reference, dp, ddp, wavg, wsum,
-    /// fabs[:K], mdts64[:K], mdts[:K] with --alpha, mlp:M, dfb, ll; not bdp or adp, which also
-    /// draw the instances' bounding boxes).
+    /// The technique to start with (any the embeddable pass draws: reference, plain, dp, ddp, wavg,
+    /// wsum, bdp[:P], adp, fabs[:K], mdts64[:K], mdts[:K] with --alpha, mlp:M, dfb, ll).
     #[arg(short, long, value_name = "T", default_value = "reference")]
     pub technique: String,
 
@@ -109,6 +108,8 @@ fn help_text() -> String {
          1.0 drag 40 -20       a left-button drag in pixels (orbit)\n  \
          1.5 scroll 2          the wheel in lines (zoom; negative zooms out)\n  \
          2.0 resize 320 240    the window's inner size, waited for\n  \
+         2.2 minimize          minimise the window (no frames until restore)\n  \
+         2.4 restore           map it again\n  \
          2.5 screenshot a.png  the image now (no overlay); prints its `oit render` options\n  \
          3.0 quit",
         keys::BINDINGS
@@ -159,15 +160,6 @@ pub fn check(args: &ViewArgs) -> Result<Checked, OitError> {
         ..Settings::default()
     };
     settings.validate()?;
-    if matches!(technique, Technique::Bdp { .. } | Technique::Adp) {
-        return Err(OitError::Unsupported {
-            backend: "oit view".into(),
-            what: format!(
-                "{technique}: it also draws the instances' bounding boxes, which the embeddable pass the \
-                 viewer draws through does not have; `oit render --technique {technique}` renders it"
-            ),
-        });
-    }
     if matches!(technique, Technique::Mdts { .. }) && args.alpha.is_none() {
         return Err(OitError::Unsupported {
             backend: "oit view".into(),
@@ -207,7 +199,10 @@ pub fn check(args: &ViewArgs) -> Result<Checked, OitError> {
         effect: settings.effect,
         compare: false,
         overlay: !args.no_overlay,
-        p: 1,
+        p: match technique {
+            Technique::Bdp { passes } => passes,
+            _ => 1,
+        },
     };
     Ok(Checked { scene, settings, state, script })
 }

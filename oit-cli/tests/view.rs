@@ -1,5 +1,5 @@
-//! `oit view` as a user runs it: a scripted run (keys, drag, wheel, resize, the reference
-//! comparison) under a virtual X server, each screenshot against `oit render --backend wgpu
+//! `oit view` as a user runs it: a scripted run (keys, drag, wheel, resize, minimise and restore,
+//! the reference comparison, bdp, bdp:P and adp) under a virtual X server, each screenshot against `oit render --backend wgpu
 //! --raster hardware` of the view and settings the viewer prints for it (±1 in 8 bits, overlay
 //! off); `--screenshot` alone; and a clear error without a display.
 //!
@@ -173,7 +173,22 @@ fn scripted_view_matches_render() {
         0.8 key R          # the reference comparison on: the screenshot is still the technique's
         0.8 key E          # fresnel
         0.9 screenshot three.png
-        1.0 quit
+        1.0 key shift+T    # adp (its bounds pass draws the instances' boxes)
+        1.1 screenshot four.png
+        1.2 key R          # the comparison off
+        1.2 key shift+T    # bdp
+        1.2 key P          # bdp2: P capture passes, the depth mode
+        1.2 key E          # complexity
+        1.2 key E          # transparency
+        1.3 screenshot five.png
+        1.4 key shift+P    # bdp: the colour mode
+        1.5 screenshot six.png
+        1.6 minimize       # no frames until restore; keys and the mouse still act
+        1.7 key T          # adp
+        1.7 drag -40 0     # azimuth 20 → 30
+        1.9 restore
+        2.0 screenshot seven.png
+        2.1 quit
     ";
     std::fs::write(dir.join("run.txt"), script).unwrap();
     let out = oit(
@@ -200,7 +215,7 @@ fn scripted_view_matches_render() {
         .filter_map(|l| l.strip_prefix("screenshot "))
         .map(|l| l.split_once(": ").expect("screenshot PATH: OPTIONS"))
         .collect();
-    assert_eq!(shots.len(), 3, "three screenshots: {text}");
+    assert_eq!(shots.len(), 7, "seven screenshots: {text}");
     let first = shots[0].1;
     assert_eq!(option(first, "--technique"), "fabs:8");
     assert_eq!(option(first, "--size"), "128x96");
@@ -212,8 +227,17 @@ fn scripted_view_matches_render() {
     assert_eq!(option(shots[1].1, "--effect"), "translucency");
     assert_eq!(option(shots[1].1, "--size"), "112x72", "the window took the scripted size");
     assert_eq!(option(shots[2].1, "--effect"), "fresnel");
+    assert_eq!(option(shots[3].1, "--technique"), "adp");
+    assert_eq!(option(shots[3].1, "--effect"), "fresnel");
+    assert_eq!(option(shots[4].1, "--technique"), "bdp2");
+    assert_eq!(option(shots[4].1, "--effect"), "transparency");
+    assert_eq!(option(shots[5].1, "--technique"), "bdp");
+    // minimised and restored: the view changed meanwhile is the one drawn
+    assert_eq!(option(shots[6].1, "--technique"), "adp");
+    assert_eq!(option(shots[6].1, "--azimuth").parse::<f32>().unwrap(), 30.0);
+    assert_eq!(option(shots[6].1, "--size"), "112x72");
     let last = text.lines().find_map(|l| l.strip_prefix("view ")).expect("the final view is printed");
-    assert_eq!(last, shots[2].1, "nothing changed after the last screenshot");
+    assert_eq!(last, shots[6].1, "nothing changed after the last screenshot");
     for (name, options) in &shots {
         check_against_render(&dir, &dir.join(name), options, name);
     }
@@ -240,6 +264,23 @@ fn scripted_view_matches_render() {
     let view = text.lines().find_map(|l| l.strip_prefix("view ")).expect("the view is printed");
     assert_eq!(option(view, "--technique"), "dp");
     check_against_render(&dir, &dir.join("alone.png"), view, "--screenshot");
+
+    // a screenshot while minimised: an error of the run (no frame to write), not a wait forever
+    std::fs::write(
+        dir.join("minimised.txt"),
+        "0.0 minimize\n0.1 screenshot never.png\n0.2 restore\n0.3 quit\n",
+    )
+    .unwrap();
+    let out = oit(
+        &["view", "--scene", SCENE, "--size", "64x48", "--no-overlay", "--script", "minimised.txt"],
+        Some(&display),
+        &dir,
+    );
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "a failed scripted run: {err}");
+    assert!(err.contains("error: screenshot never.png: the window is minimised"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!dir.join("never.png").exists(), "nothing written");
 }
 
 /// Asserts the failure contract: exit code 1, one `error:` line, no panic.
@@ -262,8 +303,8 @@ fn without_a_display_it_says_so() {
     assert_one_error(&out, "no DISPLAY", &["no display", "xvfb-run"]);
     let out = oit(&["view", "--backend", "vulkan"], None, &dir);
     assert_one_error(&out, "--backend vulkan", &["embeddable pass", "--backend wgpu"]);
-    let out = oit(&["view", "--technique", "bdp"], None, &dir);
-    assert_one_error(&out, "bdp", &["bounding boxes"]);
+    let out = oit(&["view", "--technique", "mdts"], None, &dir);
+    assert_one_error(&out, "mdts without --alpha", &["--alpha", "mdts64"]);
     std::fs::write(dir.join("bad.txt"), "0 key T\n1 wiggle\n").unwrap();
     let out = oit(&["view", "--script", "bad.txt"], None, &dir);
     assert_one_error(&out, "bad script", &["line 2", "unknown action 'wiggle'"]);

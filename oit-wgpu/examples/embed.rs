@@ -5,7 +5,7 @@
 //! `cargo run -p oit-wgpu --example embed -- [technique] [out.png]` (default `fabs`, `embed.png`).
 
 use glam::{Mat4, Vec3, Vec4};
-use oit_core::{Camera, Frame, Image, OitError, Settings, Technique};
+use oit_core::{Aabb, Camera, Frame, Image, OitError, Settings, Technique};
 use oit_wgpu::OitPass;
 use wgpu::util::DeviceExt;
 
@@ -50,7 +50,9 @@ struct UserUniform { view_proj: mat4x4<f32> }
 
 struct UserOut {
     @builtin(position) position: vec4<f32>,
-    @location(0) color: vec4<f32>,
+    // flat: each quad's colour exactly as given (interpolating a constant may round it, and
+    // bdp keeps 8-bit colours, so a rounding can move a pixel by more than one step)
+    @location(0) @interpolate(flat) color: vec4<f32>,
     @location(1) @interpolate(flat) prim: u32,
 }
 
@@ -137,9 +139,18 @@ pub fn render(technique: Technique) -> Result<(Frame, Image, String), OitError> 
     });
     let target_view = target.create_view(&Default::default());
 
-    // oit's pass, and one frame: the user builds a pipeline per capture module and draws.
+    // oit's pass, and one frame: the user builds a pipeline per capture module and draws. The
+    // quads' world-space boxes are for bdp and adp, whose bounds pass oit draws from them.
     let settings = Settings { width: SIZE, height: SIZE, technique, ..Settings::default() };
-    let pass = OitPass::new(&device, &queue, settings, camera)?;
+    let boxes: Vec<Aabb> = quads()
+        .iter()
+        .map(|(corners, _)| {
+            let mut b = Aabb::EMPTY;
+            corners.iter().for_each(|&c| b.include(c));
+            b
+        })
+        .collect();
+    let pass = OitPass::new(&device, &queue, settings, camera)?.with_instance_boxes(&boxes)?;
     let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4];
     let frame = pass.frame(
         Some(&target_view),

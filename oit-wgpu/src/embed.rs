@@ -26,9 +26,16 @@
 //!   `mdts64`, `mlp`, `wavg`, `wsum`, `dp`, `ddp`, `dfb`, `ll`; `plain` by sorting each pixel's
 //!   fragments by primitive id, as the compute path does, since the blend units of the user's
 //!   pipeline are not oit's; `mdts` when `Settings::alpha` is set, since its
-//!   32-bit words store no alpha and the pass does not know the caller's). `bdp` and `adp` also
-//!   draw the instances' bounding boxes, which an embedded pass does not know: they fail with
-//!   [`OitError::Unsupported`], as `mdts` does without an alpha.
+//!   32-bit words store no alpha and the pass does not know the caller's); `bdp`, `bdp:P` and
+//!   `adp` when the pass has the instances' bounding boxes. Their bounds pass (Liu et al., HPG
+//!   2009: each pixel's depth range from the rendered depths of the instances' boxes) draws
+//!   boxes, not the user's geometry: the user gives their instances' world-space boxes once
+//!   ([`OitPass::with_instance_boxes`]; [`OitPass::with_scene_geometry`] takes an oit
+//!   [`Scene`]'s) and oit draws them itself, 12 triangles each with its hardware path's vertex
+//!   stage, through `camera.view_proj()` (so the camera must be the one the user's draws use).
+//!   Without boxes they fail with [`OitError::Unsupported`] naming that method, as `mdts` does
+//!   without an alpha (or set `Settings::bounds` to `BoundsMode::Exact`: then the bounds pass
+//!   draws the user's geometry like any other pass).
 //!
 //! `Backend::render` on the hardware path is a client of the same code: [`crate::HardwareRaster`]
 //! is this pass's driver with oit's own vertex stage (`shaders/raster_hardware.wgsl`) and draws.
@@ -103,7 +110,9 @@ use std::hash::{DefaultHasher, Hash, Hasher};
 use std::time::Instant;
 
 use glam::{Vec3, Vec4};
-use oit_core::{Aabb, Camera, Frame, Instance, Mesh, OitError, RasterPath, Scene, Settings};
+use oit_core::{
+    Aabb, BoundsMode, Camera, Frame, Instance, Mesh, OitError, RasterPath, Scene, Settings, Technique,
+};
 
 use crate::ctx::{Driver, GpuCtx};
 use crate::gpu::{COMMON_WGSL, Gpu};
@@ -324,6 +333,8 @@ pub struct OitPass {
     settings: Settings,
     camera: Camera,
     scene: Scene,
+    /// The instances' bounding boxes on the device, for the bounds pass of bdp and adp.
+    boxes: Option<HwGeometry>,
 }
 
 /// A stand-in scene for the frame: what `GpuCtx` reads from a scene (its bounds, which scale the
@@ -348,7 +359,45 @@ impl OitPass {
     ) -> Result<OitPass, OitError> {
         settings.validate()?;
         let gpu = Gpu::from_device(device.clone(), queue.clone())?;
-        Ok(OitPass { gpu, settings, camera, scene: stand_in(Aabb { min: -Vec3::ONE, max: Vec3::ONE }, 1.0) })
+        Ok(OitPass {
+            gpu,
+            settings,
+            camera,
+            scene: stand_in(Aabb { min: -Vec3::ONE, max: Vec3::ONE }, 1.0),
+            boxes: None,
+        })
+    }
+
+    /// The world-space bounding boxes of the user's instances, for the bounds pass of `bdp` and
+    /// `adp` (with `Settings::bounds` at its default, `BoundsMode::Boxes`): uploaded once, and
+    /// drawn by oit in each frame of those techniques with `camera.view_proj()`, box `i`'s 12
+    /// triangles as primitives `12·i ..` (`Aabb::TRIANGLES`), as `Backend::render` draws an oit
+    /// scene's `Scene::instance_bounds` on the hardware path. A box must hold finite corners,
+    /// `min ≤ max` on each axis. Replaces the boxes given before.
+    pub fn with_instance_boxes(mut self, boxes: &[Aabb]) -> Result<OitPass, OitError> {
+        if let Some((i, b)) = boxes
+            .iter()
+            .enumerate()
+            .find(|(_, b)| !(b.min.is_finite() && b.max.is_finite() && b.min.cmple(b.max).all()))
+        {
+            return Err(OitError::InvalidSettings(format!(
+                "instance box {i} is {:?} .. {:?}: a box needs finite corners with min <= max on each axis",
+                b.min.to_array(),
+                b.max.to_array()
+            )));
+        }
+        self.boxes = Some(HwGeometry::boxes(&self.gpu, boxes, &std::cell::Cell::new(0))?);
+        Ok(self)
+    }
+
+    /// What the pass needs of an oit [`Scene`] drawn through `geometry`: its instances' bounding
+    /// boxes (uploaded with the geometry, shared, not uploaded again), and its world bounds and
+    /// the objects' mean absorption ([`OitPass::with_scene_bounds`]), so every technique's image
+    /// equals `Backend::render`'s on the hardware path. `geometry` must be on the pass's device.
+    pub fn with_scene_geometry(mut self, geometry: &SceneGeometry) -> OitPass {
+        self.scene = stand_in(geometry.bounds, geometry.absorption);
+        self.boxes = Some(geometry.boxes.clone());
+        self
     }
 
     /// The world bounds of the user's scene and its absorption coefficient, for the translucency
@@ -391,23 +440,24 @@ impl OitPass {
         }
         let (w, h) = (self.settings.width, self.settings.height);
         let driver = RenderDriver::new(&self.gpu, w, h, "embedded", Box::new(pipeline), Box::new(draw));
-        let drivers = crate::Drivers {
-            scene: Box::new(driver),
-            boxes: Box::new(|| {
-                Err(OitError::Unsupported {
-                    backend: "wgpu (embedded pass)".into(),
-                    what: format!(
-                        "{}: it also draws the instances' bounding boxes, which an embedded pass does not have",
-                        self.settings.technique
-                    ),
-                })
-            }),
+        let boxes_driver = || -> Result<Box<dyn Driver>, OitError> {
+            let Some(boxes) = &self.boxes else {
+                return Err(self.no_boxes());
+            };
+            boxes.write_boxes_frame(&self.gpu, &self.camera, &self.settings);
+            Ok(Box::new(boxes.raster(&self.gpu, w, h, &std::cell::Cell::new(0))))
         };
+        let drivers = crate::Drivers { scene: Box::new(driver), boxes: Box::new(boxes_driver) };
+        // refused before any pass runs, not at the bounds pass
+        if self.boxes.is_none()
+            && self.settings.bounds == BoundsMode::Boxes
+            && matches!(self.settings.technique, Technique::Bdp { .. } | Technique::Adp)
+        {
+            return Err(self.no_boxes());
+        }
         // mdts's 32-bit words hold no alpha: oit's own scenes give it the objects' mean alpha; an
         // embedded pass does not know the caller's alphas, so it must be told, not guess
-        if matches!(self.settings.technique, oit_core::Technique::Mdts { .. })
-            && self.settings.alpha.is_none()
-        {
+        if matches!(self.settings.technique, Technique::Mdts { .. }) && self.settings.alpha.is_none() {
             return Err(OitError::Unsupported {
                 backend: "wgpu (embedded pass)".into(),
                 what: "mdts: its 32-bit words store no alpha and the embedded pass does not know your \
@@ -424,6 +474,19 @@ impl OitPass {
         }
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(frame)
+    }
+
+    /// bdp or adp without the instances' boxes: the error naming what to call.
+    fn no_boxes(&self) -> OitError {
+        OitError::Unsupported {
+            backend: "wgpu (embedded pass)".into(),
+            what: format!(
+                "{}: its bounds pass draws the instances' bounding boxes, which this pass was not given: \
+                 call `OitPass::with_instance_boxes` (or `OitPass::with_scene_geometry` for an oit Scene), \
+                 or set `Settings::bounds` to `BoundsMode::Exact`",
+                self.settings.technique
+            ),
+        }
     }
 
     fn check_target(&self, texture: &wgpu::Texture) -> Result<(), OitError> {
@@ -483,6 +546,10 @@ impl OitPass {
 /// (no vertex buffers); per frame, [`SceneGeometry::write_frame`] writes each instance's
 /// `camera.view_proj() · transform`, normal matrix and base colour, and the shading uniform.
 ///
+/// The instances' bounding boxes are uploaded with it too (8 corners and 12 triangles each), for
+/// the bounds pass of `bdp` and `adp`: [`OitPass::with_scene_geometry`] hands them (and the
+/// scene's bounds and absorption) to a pass, which draws them itself.
+///
 /// Use: the pipeline's module is `capture.wgsl` followed by [`SceneGeometry::WGSL`], vertex entry
 /// point `hw_vs`, fragment entry point `hw_fs`, no vertex buffers, no culling; its layout is the
 /// capture's group 0 then [`SceneGeometry::bind_group_layout`] as group 1. In the draw closure, set
@@ -490,6 +557,9 @@ impl OitPass {
 pub struct SceneGeometry {
     gpu: Gpu,
     geometry: HwGeometry,
+    boxes: HwGeometry,
+    bounds: Aabb,
+    absorption: f32,
 }
 
 impl SceneGeometry {
@@ -498,12 +568,19 @@ impl SceneGeometry {
     /// fragment stage `hw_fs` (shading as `Shading::shade`, then `oit_capture_full`).
     pub const WGSL: &'static str = RASTER_WGSL;
 
-    /// Uploads `scene`'s meshes and triangles to the device (which must have
-    /// [`crate::required_features`]).
+    /// Uploads `scene`'s meshes and triangles, and its instances' bounding boxes, to the device
+    /// (which must have [`crate::required_features`]).
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> Result<SceneGeometry, OitError> {
         let gpu = Gpu::from_device(device.clone(), queue.clone())?;
-        let geometry = HwGeometry::new(&gpu, scene, false, &std::cell::Cell::new(0))?;
-        Ok(SceneGeometry { gpu, geometry })
+        let made = std::cell::Cell::new(0);
+        let geometry = HwGeometry::new(&gpu, scene, false, &made)?;
+        let boxes = HwGeometry::new(&gpu, scene, true, &made)?;
+        let absorption = if scene.objects.is_empty() {
+            1.0
+        } else {
+            scene.objects.iter().map(|o| o.absorption).sum::<f32>() / scene.objects.len() as f32
+        };
+        Ok(SceneGeometry { gpu, geometry, boxes, bounds: scene.bounds(), absorption })
     }
 
     /// Writes one frame's instance data and shading uniform (`scene` is the one uploaded; the
@@ -514,17 +591,17 @@ impl SceneGeometry {
 
     /// The layout of group 1 of the pipeline.
     pub fn bind_group_layout(&self) -> &wgpu::BindGroupLayout {
-        self.geometry.stage().layout()
+        self.geometry.layout()
     }
 
     /// Group 1 of the draw.
     pub fn bind_group(&self) -> &wgpu::BindGroup {
-        self.geometry.stage().group()
+        self.geometry.group()
     }
 
     /// The vertices of the one draw: three per triangle (primitive `t` of the draw is the scene's
     /// primitive `t`).
     pub fn vertex_count(&self) -> u32 {
-        self.geometry.stage().vertex_count()
+        self.geometry.vertex_count()
     }
 }

@@ -13,8 +13,10 @@
 //! stage shades like `Shading::shade` and calls the shared `oit_capture_full`. The instances'
 //! bounding boxes (12 triangles each, for the bounds passes of bdp and adp) are a second
 //! [`HwGeometry`] of world-space corners, uploaded on first use, whose per-frame matrix is the
-//! view-projection itself. A prepared scene keeps one [`HardwareRaster`] (count target and
-//! counter) per image size.
+//! view-projection itself; the embedded pass draws the boxes its user gives it
+//! (`OitPass::with_instance_boxes`, `OitPass::with_scene_geometry`) with the same upload
+//! ([`HwGeometry::boxes`]) and vertex stage. A prepared scene keeps one [`HardwareRaster`] (count
+//! target and counter) per image size.
 //!
 //! The GPU's rasterizer has its own sub-pixel precision and clipping, and the GPU may round the
 //! vertex transform differently (a fused multiply-add), so against oit-cpu (and the compute path)
@@ -85,16 +87,6 @@ pub struct SceneStage {
 type KeptTarget = (&'static str, wgpu::TextureFormat, wgpu::TextureView);
 
 impl SceneStage {
-    /// The number of vertices of the one draw (three per triangle).
-    pub(crate) fn vertex_count(&self) -> u32 {
-        self.vertex_count
-    }
-
-    /// Group 1 (the vertices, triangles, shading uniform and instances).
-    pub(crate) fn group(&self) -> &wgpu::BindGroup {
-        &self.group
-    }
-
     /// raster_hardware.wgsl without its fragment entry point (`hw_fs`, which calls the atomics
     /// capture): the group 1 bindings, `HwOut` and `hw_vs`.
     pub(crate) fn wgsl(&self) -> &'static str {
@@ -251,11 +243,21 @@ impl HardwareRaster {
 /// The geometry of a scene (or of its instances' bounding boxes) on the GPU, uploaded once (see
 /// the module docs): vertices and triangles that never change, and the per-instance buffer and
 /// shading uniform that [`HwGeometry::write_frame`] writes each frame.
+///
+/// Only wgpu handles (no per-size state: that is each [`HardwareRaster`]'s), so it can be shared
+/// (`Clone`) and sent between threads, as the embedded pass and [`crate::embed::SceneGeometry`]
+/// hold it.
+#[derive(Clone)]
 pub(crate) struct HwGeometry {
     boxes: bool,
+    /// The instances the per-instance buffer holds (one per box for the boxes).
+    instance_count: usize,
     instances: wgpu::Buffer,
     uniform: wgpu::Buffer,
-    stage: SceneStage,
+    /// Group 1 of the vertex stage and its layout, and the vertices of the one draw.
+    layout: wgpu::BindGroupLayout,
+    group: wgpu::BindGroup,
+    vertex_count: u32,
 }
 
 /// A buffer holding `bytes` (at least 64 bytes: a binding may not be empty), counted in `made`.
@@ -279,71 +281,86 @@ impl HwGeometry {
     /// Uploads the scene's meshes and triangles (`boxes`: its instances' bounding boxes) and
     /// makes the per-frame buffers; `made` counts the buffers created.
     pub(crate) fn new(gpu: &Gpu, scene: &Scene, boxes: bool, made: &Cell<u64>) -> Result<Self, OitError> {
+        if boxes {
+            let bounds: Vec<Aabb> = scene.instances.iter().map(|inst| scene.instance_bounds(inst)).collect();
+            return HwGeometry::boxes(gpu, &bounds, made);
+        }
         let too_many = || OitError::Device("over 2^32 vertices in one draw".into());
         let mut vertices: Vec<HwVertex> = Vec::new();
         // per triangle: its three vertices and its instance
         let mut triangles: Vec<[u32; 4]> = Vec::new();
-        if boxes {
-            for (i, inst) in scene.instances.iter().enumerate() {
-                let bounds: Aabb = scene.instance_bounds(inst);
-                let first = u32::try_from(vertices.len()).map_err(|_| too_many())?;
-                for c in bounds.corners() {
-                    vertices.push(HwVertex {
-                        position: c.extend(0.0).to_array(),
-                        normal: (c - bounds.center()).normalize_or_zero().extend(0.0).to_array(),
-                        color: [0.0; 4],
-                    });
-                }
-                let i = i as u32;
-                triangles
-                    .extend(Aabb::TRIANGLES.iter().map(|t| [first + t[0], first + t[1], first + t[2], i]));
-            }
-        } else {
-            // each mesh an instance places, once
-            let mut firsts: Vec<Option<u32>> = vec![None; scene.meshes.len()];
-            for (i, inst) in scene.instances.iter().enumerate() {
-                let (object, mesh) = scene.instance_parts(inst);
-                let first = match firsts[object.mesh] {
-                    Some(first) => first,
-                    None => {
-                        let first = u32::try_from(vertices.len()).map_err(|_| too_many())?;
-                        let has_color = if mesh.colors.is_some() { 1.0 } else { 0.0 };
-                        for (v, p) in mesh.positions.iter().enumerate() {
-                            let n = mesh.normals.get(v).copied().unwrap_or(Vec3::ZERO);
-                            let c =
-                                mesh.colors.as_ref().and_then(|c| c.get(v).copied()).unwrap_or(Vec3::ZERO);
-                            vertices.push(HwVertex {
-                                position: p.extend(has_color).to_array(),
-                                normal: n.extend(0.0).to_array(),
-                                color: c.extend(0.0).to_array(),
-                            });
-                        }
-                        firsts[object.mesh] = Some(first);
-                        first
+        // each mesh an instance places, once
+        let mut firsts: Vec<Option<u32>> = vec![None; scene.meshes.len()];
+        for (i, inst) in scene.instances.iter().enumerate() {
+            let (object, mesh) = scene.instance_parts(inst);
+            let first = match firsts[object.mesh] {
+                Some(first) => first,
+                None => {
+                    let first = u32::try_from(vertices.len()).map_err(|_| too_many())?;
+                    let has_color = if mesh.colors.is_some() { 1.0 } else { 0.0 };
+                    for (v, p) in mesh.positions.iter().enumerate() {
+                        let n = mesh.normals.get(v).copied().unwrap_or(Vec3::ZERO);
+                        let c = mesh.colors.as_ref().and_then(|c| c.get(v).copied()).unwrap_or(Vec3::ZERO);
+                        vertices.push(HwVertex {
+                            position: p.extend(has_color).to_array(),
+                            normal: n.extend(0.0).to_array(),
+                            color: c.extend(0.0).to_array(),
+                        });
                     }
-                };
-                let i = i as u32;
-                triangles.extend(mesh.indices.iter().map(|t| [first + t[0], first + t[1], first + t[2], i]));
-            }
+                    firsts[object.mesh] = Some(first);
+                    first
+                }
+            };
+            let i = i as u32;
+            triangles.extend(mesh.indices.iter().map(|t| [first + t[0], first + t[1], first + t[2], i]));
         }
+        HwGeometry::upload(gpu, &vertices, &triangles, scene.instances.len(), false, made)
+    }
+
+    /// The 12 triangles of each of `bounds` (world-space boxes, one per instance: `Aabb::TRIANGLES`
+    /// over its corners, normals from its centre, as oit-core's `setup::box_vertices`), triangle
+    /// `t` of box `i` primitive `12·i + t`, as oit-cpu's `TriangleSetup::bounding_boxes` orders
+    /// them; `made` counts the buffers created.
+    pub(crate) fn boxes(gpu: &Gpu, bounds: &[Aabb], made: &Cell<u64>) -> Result<Self, OitError> {
+        let too_many = || OitError::Device("over 2^32 vertices in one draw".into());
+        let mut vertices: Vec<HwVertex> = Vec::with_capacity(bounds.len() * 8);
+        let mut triangles: Vec<[u32; 4]> = Vec::with_capacity(bounds.len() * 12);
+        for (i, b) in bounds.iter().enumerate() {
+            let first = u32::try_from(vertices.len()).map_err(|_| too_many())?;
+            for c in b.corners() {
+                vertices.push(HwVertex {
+                    position: c.extend(0.0).to_array(),
+                    normal: (c - b.center()).normalize_or_zero().extend(0.0).to_array(),
+                    color: [0.0; 4],
+                });
+            }
+            let i = u32::try_from(i).map_err(|_| too_many())?;
+            triangles.extend(Aabb::TRIANGLES.iter().map(|t| [first + t[0], first + t[1], first + t[2], i]));
+        }
+        HwGeometry::upload(gpu, &vertices, &triangles, bounds.len(), true, made)
+    }
+
+    /// Uploads `vertices` and `triangles` (per triangle: three vertex indices and an instance) and
+    /// makes the per-frame buffers for `instance_count` instances.
+    fn upload(
+        gpu: &Gpu,
+        vertices: &[HwVertex],
+        triangles: &[[u32; 4]],
+        instance_count: usize,
+        boxes: bool,
+        made: &Cell<u64>,
+    ) -> Result<Self, OitError> {
+        let too_many = || OitError::Device("over 2^32 vertices in one draw".into());
         u32::try_from(vertices.len()).map_err(|_| too_many())?;
         let vertex_count = u32::try_from(triangles.len() * 3).map_err(|_| too_many())?;
-        let instance_bytes = (scene.instances.len() * size_of::<HwInstance>()) as u64;
-        gpu.check_storage_hint(
-            "the meshes' vertices",
-            size_of_val(vertices.as_slice()) as u64,
-            GEOMETRY_HINT,
-        )?;
-        gpu.check_storage_hint(
-            "the triangles' indices",
-            size_of_val(triangles.as_slice()) as u64,
-            GEOMETRY_HINT,
-        )?;
+        let instance_bytes = (instance_count * size_of::<HwInstance>()) as u64;
+        gpu.check_storage_hint("the meshes' vertices", size_of_val(vertices) as u64, GEOMETRY_HINT)?;
+        gpu.check_storage_hint("the triangles' indices", size_of_val(triangles) as u64, GEOMETRY_HINT)?;
         gpu.check_storage_hint("the instances' matrices", instance_bytes, GEOMETRY_HINT)?;
         let device = &gpu.device;
         let storage = wgpu::BufferUsages::STORAGE;
-        let vertex_buf = buffer_init(gpu, "mesh vertices", bytemuck::cast_slice(&vertices), storage, made);
-        let triangle_buf = buffer_init(gpu, "triangles", bytemuck::cast_slice(&triangles), storage, made);
+        let vertex_buf = buffer_init(gpu, "mesh vertices", bytemuck::cast_slice(vertices), storage, made);
+        let triangle_buf = buffer_init(gpu, "triangles", bytemuck::cast_slice(triangles), storage, made);
         made.set(made.get() + 2);
         let instances = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("instances"),
@@ -385,19 +402,29 @@ impl HwGeometry {
                 wgpu::BindGroupEntry { binding: 3, resource: instances.as_entire_binding() },
             ],
         });
-        let stage = SceneStage { layout, group, vertex_count, size: (0, 0), targets: Rc::default() };
-        Ok(HwGeometry { boxes, instances, uniform, stage })
+        Ok(HwGeometry { boxes, instance_count, instances, uniform, layout, group, vertex_count })
     }
 
-    /// The vertex stage's group 1 and draw over this geometry.
-    pub(crate) fn stage(&self) -> &SceneStage {
-        &self.stage
+    /// The layout of the vertex stage's group 1.
+    pub(crate) fn layout(&self) -> &wgpu::BindGroupLayout {
+        &self.layout
+    }
+
+    /// The vertex stage's group 1 (the vertices, triangles, shading uniform and instances).
+    pub(crate) fn group(&self) -> &wgpu::BindGroup {
+        &self.group
+    }
+
+    /// The vertices of the one draw (three per triangle).
+    pub(crate) fn vertex_count(&self) -> u32 {
+        self.vertex_count
     }
 
     /// Writes the frame's instance data (`view_proj · transform`, the normal matrix, the base
     /// colour; for the boxes, whose corners are in world space, `view_proj` and the identity) and
     /// the shading uniform: all a frame sends of the geometry.
     pub(crate) fn write_frame(&self, gpu: &Gpu, scene: &Scene, camera: &Camera, settings: &Settings) {
+        debug_assert_eq!(self.instance_count, scene.instances.len(), "the scene uploaded");
         let view_proj = camera.view_proj();
         let data: Vec<HwInstance> = scene
             .instances
@@ -416,8 +443,27 @@ impl HwGeometry {
                 }
             })
             .collect();
+        self.write_instances(gpu, &data, camera, settings);
+    }
+
+    /// Writes the frame's instance data of boxes uploaded by [`HwGeometry::boxes`] without their
+    /// scene: `view_proj` and the identity for each, base colour white (with the settings' alpha).
+    /// The bounds passes the boxes serve read only their fragments' depths, so the colour that
+    /// oit's own scenes give them (their object's) makes no difference to a frame.
+    pub(crate) fn write_boxes_frame(&self, gpu: &Gpu, camera: &Camera, settings: &Settings) {
+        debug_assert!(self.boxes, "boxes uploaded");
+        let one = HwInstance {
+            mvp: camera.view_proj().to_cols_array(),
+            normal: [Vec3::X, Vec3::Y, Vec3::Z].map(|c| c.extend(0.0).to_array()),
+            base: settings.material_color(Vec4::ONE).to_array(),
+        };
+        self.write_instances(gpu, &vec![one; self.instance_count], camera, settings);
+    }
+
+    /// Writes `data` into the per-instance buffer and the shading uniform.
+    fn write_instances(&self, gpu: &Gpu, data: &[HwInstance], camera: &Camera, settings: &Settings) {
         if !data.is_empty() {
-            gpu.queue.write_buffer(&self.instances, 0, bytemuck::cast_slice(&data));
+            gpu.queue.write_buffer(&self.instances, 0, bytemuck::cast_slice(data));
         }
         let f: Vec4 = camera.forward.extend(0.0);
         let uniform: [u32; 8] =
@@ -430,7 +476,13 @@ impl HwGeometry {
     /// last.
     pub(crate) fn raster(&self, gpu: &Gpu, width: u32, height: u32, made: &Cell<u64>) -> HardwareRaster {
         // the stage of this size, with render targets of its own
-        let stage = SceneStage { size: (width, height), targets: Rc::default(), ..self.stage.clone() };
+        let stage = SceneStage {
+            layout: self.layout.clone(),
+            group: self.group.clone(),
+            vertex_count: self.vertex_count,
+            size: (width, height),
+            targets: Rc::default(),
+        };
         let layout1 = stage.layout.clone();
         let pipeline_device = gpu.device.clone();
         let pipeline = move |capture: &CaptureShader<'_>| {

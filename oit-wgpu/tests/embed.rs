@@ -141,10 +141,10 @@ fn embedded_pass_matches_backend_render() {
     }
 }
 
-/// The techniques the embedded pass runs; the rest of the catalogue it refuses as unsupported
-/// (bdp, bdp2 and adp: their bounds pass draws the instances' bounding boxes, which a pass of the
-/// caller's draws does not have; mdts without `Settings::alpha`: it stores no alpha, and the pass
-/// does not know the caller's — it used to composite every fragment as opaque, silently).
+/// The techniques the embedded pass runs (bdp, bdp2 and adp with the quads' boxes, which the
+/// example gives it); the rest of the catalogue it refuses as unsupported (mdts without
+/// `Settings::alpha`: it stores no alpha, and the pass does not know the caller's — it used to
+/// composite every fragment as opaque, silently).
 const EMBED_SUPPORTED: &[&str] = &[
     "reference",
     "plain",
@@ -159,4 +159,203 @@ const EMBED_SUPPORTED: &[&str] = &[
     "mlp:4",
     "dfb",
     "ll",
+    "bdp",
+    "bdp2",
+    "adp",
 ];
+
+/// Without the instances' boxes, bdp and adp are refused before any pass runs, naming the method
+/// that gives them; a box that is not one is refused when given.
+#[test]
+fn bdp_and_adp_without_boxes_name_the_method() {
+    let Some(backend) = oit_wgpu::backend_or_skip("bdp_and_adp_without_boxes_name_the_method") else {
+        return;
+    };
+    let gpu = backend.gpu().unwrap();
+    for technique in [Technique::Bdp { passes: 1 }, Technique::Bdp { passes: 3 }, Technique::Adp] {
+        let settings = Settings { width: 16, height: 16, technique, ..Settings::default() };
+        let pass = oit_wgpu::OitPass::new(&gpu.device, &gpu.queue, settings, example::camera()).unwrap();
+        let mut asked = false;
+        let result = pass.frame(
+            None,
+            |_| panic!("{technique}: no pipeline is built for a refused frame"),
+            |_, _| asked = true,
+        );
+        match result {
+            Err(OitError::Unsupported { what, .. }) => {
+                assert!(what.contains("OitPass::with_instance_boxes"), "{technique}: {what}");
+                assert!(what.contains(&technique.to_string()), "{technique}: {what}");
+            }
+            other => panic!("{technique}: expected Unsupported, got {:?}", other.map(|f| f.stats)),
+        }
+        assert!(!asked, "{technique}: nothing drawn");
+    }
+    let pass =
+        || oit_wgpu::OitPass::new(&gpu.device, &gpu.queue, Settings::default(), example::camera()).unwrap();
+    let inverted = oit_core::Aabb { min: glam::Vec3::ONE, max: glam::Vec3::ZERO };
+    let unit = oit_core::Aabb { min: glam::Vec3::ZERO, max: glam::Vec3::ONE };
+    for (boxes, index) in [(vec![unit, inverted], "box 1"), (vec![oit_core::Aabb::EMPTY], "box 0")] {
+        match pass().with_instance_boxes(&boxes) {
+            Err(OitError::InvalidSettings(message)) => assert!(message.contains(index), "{message}"),
+            other => panic!("{boxes:?}: expected InvalidSettings, got ok: {}", other.is_ok()),
+        }
+    }
+    assert!(pass().with_instance_boxes(&[unit]).is_ok());
+    assert!(pass().with_instance_boxes(&[]).is_ok(), "no instances, no boxes");
+}
+
+/// The largest channel difference between two images of one size.
+fn worst_difference(a: &Image, b: &Image) -> u8 {
+    assert_eq!((a.width, a.height), (b.width, b.height), "sizes");
+    a.pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(p, q)| (0..4).map(|i| p[i].abs_diff(q[i])).max().unwrap_or(0))
+        .max()
+        .unwrap_or(0)
+}
+
+/// The render pipeline of a capture module over `SceneGeometry`'s vertex and fragment stages, as
+/// `oit view` builds it.
+fn scene_pipeline(
+    device: &wgpu::Device,
+    geometry: &oit_wgpu::embed::SceneGeometry,
+    capture: &oit_wgpu::CaptureShader<'_>,
+) -> wgpu::RenderPipeline {
+    let source = format!("{}\n{}", capture.wgsl, oit_wgpu::embed::SceneGeometry::WGSL);
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("scene geometry"),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: None,
+        bind_group_layouts: &[Some(capture.bind_group_layout), Some(geometry.bind_group_layout())],
+        immediate_size: 0,
+    });
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("scene geometry"),
+        layout: Some(&layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("hw_vs"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+        depth_stencil: None,
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("hw_fs"),
+            compilation_options: Default::default(),
+            targets: &[Some(capture.count_target.clone())],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+/// An oit scene of transformed instances through `SceneGeometry` and the embedded pass: bdp,
+/// bdp:P and adp (whose bounds pass draws the instances' world boxes) give `Backend::render`'s
+/// image, fragments and passes on the hardware path, with the boxes from
+/// `OitPass::with_scene_geometry` and from `OitPass::with_instance_boxes` alike. The same vertex
+/// stage on both sides: no edge allowance.
+#[test]
+fn scene_geometry_bdp_and_adp_match_backend_render() {
+    let Some(backend) = oit_wgpu::backend_or_skip("scene_geometry_bdp_and_adp_match_backend_render") else {
+        return;
+    };
+    let gpu = backend.gpu().unwrap();
+    let scene = oit_core::load_scene("grid:2x2:spheres:2").unwrap();
+    assert!(scene.instances.iter().any(|i| i.transform != glam::Mat4::IDENTITY), "placed instances");
+    let (w, h) = (64, 48);
+    let camera =
+        oit_core::Camera::orbit_scene(&scene, oit_core::View::default(), w as f32 / h as f32).unwrap();
+    let geometry = oit_wgpu::embed::SceneGeometry::new(&gpu.device, &gpu.queue, &scene).unwrap();
+    let boxes: Vec<oit_core::Aabb> = scene.instances.iter().map(|i| scene.instance_bounds(i)).collect();
+    let absorption = scene.objects.iter().map(|o| o.absorption).sum::<f32>() / scene.objects.len() as f32;
+    let cases = [
+        (Technique::Bdp { passes: 1 }, oit_core::Effect::Transparency),
+        (Technique::Bdp { passes: 3 }, oit_core::Effect::Transparency),
+        (Technique::Bdp { passes: 1 }, oit_core::Effect::Translucency),
+        (Technique::Adp, oit_core::Effect::Transparency),
+        (Technique::Adp, oit_core::Effect::Fresnel),
+    ];
+    for (technique, effect) in cases {
+        let settings = Settings {
+            width: w,
+            height: h,
+            technique,
+            effect,
+            raster: Some(RasterPath::Hardware),
+            ..Settings::default()
+        };
+        let own = backend.render(&scene, &camera, &settings).unwrap();
+        let pass = oit_wgpu::OitPass::new(&gpu.device, &gpu.queue, settings.clone(), camera).unwrap();
+        let given = oit_wgpu::OitPass::new(&gpu.device, &gpu.queue, settings.clone(), camera)
+            .unwrap()
+            .with_scene_bounds(scene.bounds(), absorption)
+            .with_instance_boxes(&boxes)
+            .unwrap();
+        for (how, pass) in
+            [("with_scene_geometry", pass.with_scene_geometry(&geometry)), ("with_instance_boxes", given)]
+        {
+            geometry.write_frame(&scene, &camera, &settings);
+            let frame = pass
+                .frame(
+                    None,
+                    |capture| scene_pipeline(&gpu.device, &geometry, capture),
+                    |rpass, _| {
+                        rpass.set_bind_group(1, geometry.bind_group(), &[]);
+                        rpass.draw(0..geometry.vertex_count(), 0..1);
+                    },
+                )
+                .unwrap();
+            let worst = worst_difference(&frame.image, &own.image);
+            println!(
+                "{technique} {effect:?} ({how}): worst {worst}; fragments {} vs {}, passes {} vs {}, lost {} vs {}",
+                frame.stats.fragments,
+                own.stats.fragments,
+                frame.stats.geometry_passes,
+                own.stats.geometry_passes,
+                frame.stats.lost,
+                own.stats.lost
+            );
+            assert!(worst <= 1, "{technique} {effect:?} ({how}): a pixel differs by {worst}");
+            assert_eq!(frame.stats.fragments, own.stats.fragments, "{technique} ({how})");
+            assert_eq!(frame.stats.geometry_passes, own.stats.geometry_passes, "{technique} ({how})");
+            assert_eq!(frame.stats.lost, own.stats.lost, "{technique} ({how})");
+        }
+    }
+    // exact bounds (the fragments' own depth range): the bounds pass draws the caller's
+    // geometry, so a pass without boxes runs bdp and adp too
+    for technique in [Technique::Bdp { passes: 2 }, Technique::Adp] {
+        let settings = Settings {
+            width: w,
+            height: h,
+            technique,
+            bounds: oit_core::BoundsMode::Exact,
+            raster: Some(RasterPath::Hardware),
+            ..Settings::default()
+        };
+        let own = backend.render(&scene, &camera, &settings).unwrap();
+        let pass = oit_wgpu::OitPass::new(&gpu.device, &gpu.queue, settings.clone(), camera)
+            .unwrap()
+            .with_scene_bounds(scene.bounds(), absorption);
+        geometry.write_frame(&scene, &camera, &settings);
+        let frame = pass
+            .frame(
+                None,
+                |capture| scene_pipeline(&gpu.device, &geometry, capture),
+                |rpass, _| {
+                    rpass.set_bind_group(1, geometry.bind_group(), &[]);
+                    rpass.draw(0..geometry.vertex_count(), 0..1);
+                },
+            )
+            .unwrap();
+        let worst = worst_difference(&frame.image, &own.image);
+        assert!(worst <= 1, "{technique} with exact bounds, no boxes: a pixel differs by {worst}");
+        assert_eq!(frame.stats.geometry_passes, own.stats.geometry_passes, "{technique} exact");
+        assert_eq!(frame.stats.lost, own.stats.lost, "{technique} exact");
+    }
+}

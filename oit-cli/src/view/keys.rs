@@ -10,7 +10,7 @@ pub enum Key {
     Technique,
     /// K of fabs, mdts and mdts64.
     K,
-    /// P of bdp:P.
+    /// P of bdp:P (its capture passes).
     P,
     /// M of mlp.
     M,
@@ -80,8 +80,8 @@ Keys and mouse:
   T / shift+T        next / previous technique
   K / shift+K        K of fabs, mdts, mdts64 (auto, 1, 2, 4, ..., 64)
   M / shift+M        M of mlp (1, 2, 4, 8, 16)
-  P / shift+P        P of bdp:P (kept; bdp needs the instances' bounding boxes, which the
-                     embedded pass does not draw, so it is not in the technique cycle)
+  P / shift+P        P of bdp:P, its capture passes (1, 2, 3, 4); bdp and adp's bounds pass
+                     draws the instances' bounding boxes, which the viewer gives the pass
   A / shift+A        alpha of every object (own, 0.1, 0.25, 0.5, 0.75, 1)
   S, E               next shading, next effect
   R                  compare with the reference at this view: EPR, and the error heat map
@@ -149,7 +149,8 @@ pub struct ViewState {
     pub compare: bool,
     /// Whether the overlay is drawn.
     pub overlay: bool,
-    /// bdp's P, kept for when the pass can draw it.
+    /// bdp's P: what the technique cycle gives bdp, and P's value while another technique is
+    /// drawn.
     pub p: u32,
 }
 
@@ -177,7 +178,8 @@ impl ViewState {
     }
 
     /// The techniques T cycles through: those the embeddable pass draws (mdts only with an
-    /// alpha: its words hold none), parameters as set now.
+    /// alpha: its words hold none; bdp and adp with the scene's instance boxes the viewer gives
+    /// it), parameters as set now.
     fn cycle(&self) -> Vec<Technique> {
         let k = self.k();
         let m = match self.technique {
@@ -190,6 +192,8 @@ impl ViewState {
             Technique::Ddp,
             Technique::WeightedAverage,
             Technique::WeightedSum,
+            Technique::Bdp { passes: self.p },
+            Technique::Adp,
             Technique::Mdts64 { k },
             Technique::Fabs { k },
             Technique::Mlp { m },
@@ -238,12 +242,11 @@ impl ViewState {
                 };
             }
             Key::P => {
-                self.p = step(&PS, &self.p, shift);
-                return Reaction::Note(format!(
-                    "P = {}: bdp:P draws the instances' bounding boxes too, which the embedded pass does not \
-                     draw; `oit render --technique bdp:{}` renders it",
-                    self.p, self.p
-                ));
+                let Technique::Bdp { passes } = self.technique else {
+                    return Reaction::Note("P is the parameter of bdp (bdp:P)".into());
+                };
+                self.p = step(&PS, &passes, shift);
+                self.technique = Technique::Bdp { passes: self.p };
             }
             Key::Alpha => {
                 self.alpha = step(&ALPHAS, &self.alpha, shift);
@@ -330,12 +333,14 @@ mod tests {
     fn technique_cycles_both_ways_and_skips_mdts_without_alpha() {
         let mut s = state();
         let mut seen = vec![s.technique];
-        for _ in 0..10 {
+        for _ in 0..12 {
             s.key(Key::Technique, false);
             seen.push(s.technique);
         }
-        assert_eq!(seen.first(), seen.last(), "ten techniques, then back to the first");
+        assert_eq!(seen.first(), seen.last(), "twelve techniques, then back to the first");
         assert!(!seen.iter().any(|t| matches!(t, Technique::Mdts { .. })));
+        assert!(seen.contains(&Technique::Bdp { passes: 1 }), "{seen:?}");
+        assert!(seen.contains(&Technique::Adp), "{seen:?}");
         s.key(Key::Technique, true);
         assert_eq!(s.technique, Technique::Ll);
         s.key(Key::Alpha, false);
@@ -366,7 +371,20 @@ mod tests {
         s.technique = Technique::Mlp { m: 16 };
         s.key(Key::M, false);
         assert_eq!(s.technique, Technique::Mlp { m: 1 });
-        assert!(matches!(s.key(Key::P, false), Reaction::Note(n) if n.contains("bdp:2")));
+        // P changes bdp only
+        assert!(matches!(s.key(Key::P, false), Reaction::Note(n) if n.contains("bdp")));
+        assert_eq!(s.technique, Technique::Mlp { m: 1 });
+        s.technique = Technique::Bdp { passes: 1 };
+        assert_eq!(s.key(Key::P, false), Reaction::Redraw);
+        assert_eq!(s.technique, Technique::Bdp { passes: 2 });
+        s.key(Key::P, true);
+        s.key(Key::P, true);
+        assert_eq!(s.technique, Technique::Bdp { passes: 4 }, "P wraps");
+        // the cycle keeps P: away and back to bdp
+        s.key(Key::Technique, false);
+        assert_eq!(s.technique, Technique::Adp);
+        s.key(Key::Technique, true);
+        assert_eq!(s.technique, Technique::Bdp { passes: 4 });
     }
 
     #[test]

@@ -10,6 +10,10 @@
 //! - `scroll LINES`: the mouse wheel (zoom: each line narrows the field of view by 10 %; negative
 //!   widens it).
 //! - `resize W H`: asks for a window of W × H pixels and waits (up to 5 s) until it has it.
+//! - `minimize`: minimises the window (asks the window manager to iconify it, and unmaps it, as
+//!   a window manager does; a bare X server such as Xvfb has none, so the unmap is what happens
+//!   there). No frame is drawn until `restore`; keys and the mouse still change the view.
+//! - `restore`: maps the window again; the next frame is drawn at the current view.
 //! - `screenshot FILE.png`: renders the current view and writes it (the technique's image, never
 //!   the overlay), printing the `oit render` options that reproduce it.
 //! - `quit`: closes the window.
@@ -29,6 +33,10 @@ pub enum Action {
     Scroll { lines: f32 },
     /// A window of this inner size.
     Resize { width: u32, height: u32 },
+    /// Minimise (iconify and unmap) the window.
+    Minimize,
+    /// Map the window again.
+    Restore,
     /// Renders the view and writes it here.
     Screenshot(PathBuf),
     /// Closes the window.
@@ -125,6 +133,14 @@ pub fn parse(text: &str) -> Result<Vec<Event>, String> {
                 want(2, "TIME resize W H")?;
                 Action::Resize { width: size(args[0])?, height: size(args[1])? }
             }
+            Some("minimize") => {
+                want(0, "TIME minimize")?;
+                Action::Minimize
+            }
+            Some("restore") => {
+                want(0, "TIME restore")?;
+                Action::Restore
+            }
             Some("screenshot") => {
                 want(1, "TIME screenshot FILE.png")?;
                 let path = PathBuf::from(args[0]);
@@ -138,7 +154,7 @@ pub fn parse(text: &str) -> Result<Vec<Event>, String> {
             }
             other => {
                 return Err(format!(
-                    "line {n}: unknown action '{}': use key, drag, scroll, resize, screenshot or quit",
+                    "line {n}: unknown action '{}': use key, drag, scroll, resize, minimize, restore, screenshot or quit",
                     other.unwrap_or("")
                 ));
             }
@@ -155,7 +171,7 @@ mod tests {
     #[test]
     fn parses_every_action() {
         let text = "# a run\n0.5 key T\n1 key shift+k  # back\n1.0 drag 10 -2.5\n\n2 scroll -1\n\
-                    2.5 resize 320 200\n3 screenshot out.png\n4 quit\n";
+                    2.5 resize 320 200\n2.6 minimize\n2.7 restore\n3 screenshot out.png\n4 quit\n";
         let events = parse(text).unwrap();
         let actions: Vec<Action> = events.iter().map(|e| e.action.clone()).collect();
         assert_eq!(
@@ -166,6 +182,8 @@ mod tests {
                 Action::Drag { dx: 10.0, dy: -2.5 },
                 Action::Scroll { lines: -1.0 },
                 Action::Resize { width: 320, height: 200 },
+                Action::Minimize,
+                Action::Restore,
                 Action::Screenshot("out.png".into()),
                 Action::Quit,
             ]
@@ -187,6 +205,7 @@ mod tests {
             ("-1 quit", "'-1' is not a time"),
             ("1e300 quit", "'1e300' is not a time"),
             ("1 quit now", "expected `TIME quit`"),
+            ("1 minimize 2", "expected `TIME minimize`"),
         ] {
             let e = parse(text).unwrap_err();
             assert!(e.contains(needle), "{text:?}: {e}");

@@ -3,7 +3,8 @@
 //!
 //! The pass renders at the window's size and returns the image; the viewer writes it (with the
 //! overlay, or the error heat map when comparing) into the surface texture, which it configures
-//! with `COPY_DST`. A minimised window (size 0) draws nothing until it is restored.
+//! with `COPY_DST`. A minimised window (size 0, iconified, or unmapped) draws nothing until it is
+//! restored: no frame, no present, the surface left as it was ([`drawable`]).
 
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
@@ -91,6 +92,16 @@ fn scene_pipeline(
         multiview_mask: None,
         cache: None,
     })
+}
+
+/// Whether a frame can be drawn into the window: not minimised (iconified, as a window manager
+/// reports it), mapped, and of a size above 0 × 0 (a minimised window's size on some platforms).
+fn drawable(window: &Window) -> bool {
+    let size = window.inner_size();
+    size.width > 0
+        && size.height > 0
+        && window.is_minimized() != Some(true)
+        && window.is_visible() != Some(false)
 }
 
 /// The device, the surface and what oit keeps on the device.
@@ -212,14 +223,10 @@ impl Gfx {
         }
         let scene = &checked.scene;
         let geometry = SceneGeometry::new(&device, &queue, scene)?;
-        let absorption = if scene.objects.is_empty() {
-            1.0
-        } else {
-            scene.objects.iter().map(|o| o.absorption).sum::<f32>() / scene.objects.len() as f32
-        };
         let camera = Camera::orbit_scene(scene, checked.state.view, w as f32 / h as f32)?;
-        let pass = OitPass::new(&device, &queue, checked.settings.clone(), camera)?
-            .with_scene_bounds(scene.bounds(), absorption);
+        // the scene's bounds and absorption, and its instances' boxes for bdp and adp
+        let pass =
+            OitPass::new(&device, &queue, checked.settings.clone(), camera)?.with_scene_geometry(&geometry);
         Ok(Gfx {
             window,
             surface,
@@ -320,6 +327,8 @@ struct App<'a> {
     pending_shot: Option<PathBuf>,
     /// A scripted resize waited for: its size and when the wait ends.
     pending_resize: Option<(u32, u32, Instant)>,
+    /// The script minimised the window (and has not restored it).
+    minimized: bool,
     /// Whether F12 asked for a screenshot.
     want_shot: bool,
     /// The left button is down at this cursor position.
@@ -365,10 +374,10 @@ impl App<'_> {
         let Some(gfx) = self.gfx.as_mut() else {
             return;
         };
-        let size = gfx.window.inner_size();
-        if size.width == 0 || size.height == 0 || gfx.window.is_minimized() == Some(true) {
+        if !drawable(&gfx.window) {
             return;
         }
+        let size = gfx.window.inner_size();
         let start = Instant::now();
         let state = &self.checked.state;
         let settings = Settings {
@@ -474,6 +483,11 @@ impl App<'_> {
     fn run_script(&mut self, event_loop: &ActiveEventLoop) -> Option<Instant> {
         let started = self.started?;
         if self.pending_shot.is_some() {
+            // restored but not mapped yet: look again soon (the map may come without a redraw)
+            if self.gfx.as_ref().is_some_and(|g| !drawable(&g.window)) {
+                self.dirty = true;
+                return Some(Instant::now() + Duration::from_millis(20));
+            }
             return None;
         }
         if let Some((w, h, until)) = self.pending_resize {
@@ -514,6 +528,27 @@ impl App<'_> {
                     self.pending_resize = Some((width, height, Instant::now() + RESIZE_WAIT));
                     self.dirty = true;
                     return Some(Instant::now() + Duration::from_millis(20));
+                }
+                Action::Minimize => {
+                    if let Some(gfx) = &self.gfx {
+                        gfx.window.set_minimized(true);
+                        gfx.window.set_visible(false);
+                    }
+                    self.minimized = true;
+                }
+                Action::Restore => {
+                    if let Some(gfx) = &self.gfx {
+                        gfx.window.set_visible(true);
+                        gfx.window.set_minimized(false);
+                    }
+                    self.minimized = false;
+                    self.dirty = true;
+                }
+                Action::Screenshot(path) if self.minimized => {
+                    self.report(format!(
+                        "screenshot {}: the window is minimised, so no frame is drawn: `restore` it first",
+                        path.display()
+                    ));
                 }
                 Action::Screenshot(path) => {
                     self.pending_shot = Some(path);
@@ -575,7 +610,7 @@ fn draw_overlay(
     if let Some(note) = note {
         lines.push(note.to_string());
     }
-    lines.push("T technique  K/M parameter  A alpha  S shading  E effect  R reference  F12 shot".into());
+    lines.push("T technique  K/P/M parameter  A alpha  S shading  E effect  R reference  F12 shot".into());
     let step = line_height(OVERLAY_PX) as i64 + 2;
     let width = lines.iter().map(|l| oit_bench::present::text_width(l, OVERLAY_PX)).max().unwrap_or(0);
     fill_rect(image, 0, 0, u64::from(width) + 12, (step * lines.len() as i64 + 8) as u64, [0, 0, 0, 160]);
@@ -695,6 +730,7 @@ pub fn run(checked: Checked, args: &ViewArgs) -> Result<Outcome, OitError> {
         next_event: 0,
         pending_shot: None,
         pending_resize: None,
+        minimized: false,
         want_shot: false,
         drag_from: None,
         cursor: (0.0, 0.0),
