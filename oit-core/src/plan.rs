@@ -56,6 +56,9 @@ pub enum PassKind {
     Fill,
     /// `fabs:K` where a pixel overflowed: its K nearest keys, then their payloads.
     Overflow,
+    /// `--overflow tail` where a pixel overflowed: every fragment behind its K-th nearest added to
+    /// its tail sums.
+    Tail,
 }
 
 /// One array of a technique's storage ([`Plan::arrays`]): `element_bytes` per element, and
@@ -115,6 +118,11 @@ pub struct Plan {
     /// path, [`Plan::on_path`]): float render targets, no counting pass. Elsewhere `plain` keeps each
     /// pixel's fragments and sorts them by primitive id.
     pub blender: bool,
+    /// `--overflow tail` on a fixed-size `fabs:K`, `mdts:K` or `mdts64:K`: a pixel's fragments
+    /// behind its K nearest are merged into a tail (5 sums of 64 bits a pixel, one more geometry
+    /// pass where a pixel overflowed) instead of dropped. False where K comes from a counting
+    /// pass: nothing can overflow there.
+    pub tail: bool,
 }
 
 impl Plan {
@@ -135,6 +143,24 @@ impl Plan {
                 backend: backend.into(),
                 what: format!(
                     "the {:?} effect with {technique}: it never orders fragments; use a sorting technique (dp, fabs, adp, ...)",
+                    settings.effect
+                ),
+            });
+        }
+        let fixed_k = matches!(
+            technique,
+            Technique::Fabs { k: Some(_) }
+                | Technique::Mdts { k: Some(_) }
+                | Technique::Mdts64 { k: Some(_) }
+        );
+        // other techniques have no K to overflow and ignore the setting (the reference a
+        // comparison renders beside fabs:K runs under the same settings)
+        if settings.overflow == crate::Overflow::Tail && fixed_k && settings.effect != Effect::Transparency {
+            return Err(OitError::Unsupported {
+                backend: backend.into(),
+                what: format!(
+                    "--overflow tail with the {:?} effect: the tail merges colours by weight and keeps no \
+                     order or normals; use --overflow drop",
                     settings.effect
                 ),
             });
@@ -170,6 +196,7 @@ impl Plan {
             peel_limit: settings.max_peels.unwrap_or(u32::MAX),
             mdts_alpha8: (alpha.clamp(0.0, 1.0) * 255.0 + 0.5) as u32,
             blender: false,
+            tail: fixed_k && settings.overflow == crate::Overflow::Tail,
             count_ties: match technique {
                 Technique::Dp
                 | Technique::Ddp
@@ -219,7 +246,6 @@ impl Plan {
     /// per 256 of those), a peel loop's one-word flag, the resolve state (counted once, in
     /// [`Plan::storage_bytes`]).
     pub fn arrays(&self, counted: Counted) -> Vec<Array> {
-        use crate::rules::{BDP_COLOR_SUBINTERVALS, BDP_DEPTH_SUBINTERVALS, BUCKETS, HISTOGRAM_WORDS};
         let k = u64::from(self.slots(counted.deepest));
         let per_pixel = |name, element_bytes, per_pixel| Array {
             name,
@@ -229,6 +255,21 @@ impl Plan {
             fixed: 0,
         };
         let bounds = per_pixel("depth bounds (min, max depth bits)", 4, 2);
+        let mut arrays = self.own_arrays(k, per_pixel, bounds);
+        if self.tail {
+            arrays.push(per_pixel("tail sums (Σα·r, Σα·g, Σα·b, Σα, count)", 8, 5));
+        }
+        arrays
+    }
+
+    /// [`Plan::arrays`] but the tail's.
+    fn own_arrays(
+        &self,
+        k: u64,
+        per_pixel: impl Fn(&'static str, u64, u64) -> Array,
+        bounds: Array,
+    ) -> Vec<Array> {
+        use crate::rules::{BDP_COLOR_SUBINTERVALS, BDP_DEPTH_SUBINTERVALS, BUCKETS, HISTOGRAM_WORDS};
         match self.technique {
             Technique::Reference => vec![
                 Array { name: "offsets", element_bytes: 4, per_pixel: 1, per_fragment: 0, fixed: 1 },
@@ -360,6 +401,11 @@ impl Plan {
                     passes.push((PassKind::Overflow, 2));
                 }
             }
+        }
+        // the tail: one pass over the fragments behind each overflowing pixel's K-th nearest, run
+        // where some pixel holds more than K
+        if self.tail && matches!(self.sizing, Sizing::Fixed(k) if layers > k) {
+            passes.push((PassKind::Tail, 1));
         }
         passes
     }
