@@ -550,6 +550,31 @@ mod tests {
         assert!(host_memory_budget().1 > 0);
     }
 
+    /// `--overflow tail`: 5 sums of 8 bytes a pixel and one pass more where a pixel holds more than
+    /// K, for the fixed-size techniques only; other effects refused; ignored elsewhere.
+    #[test]
+    fn overflow_tail() {
+        let tail = |t: &str| plan(t, |s| s.overflow = crate::Overflow::Tail);
+        let counted = Counted { deepest: 9, fragments: 25 };
+        for t in ["fabs:4", "mdts:4", "mdts64:4"] {
+            let (with, without) = (tail(t).unwrap(), plan(t, |_| {}).unwrap());
+            assert!(with.tail && !without.tail, "{t}");
+            assert_eq!(with.storage_bytes(10, counted), without.storage_bytes(10, counted) + 10 * 40, "{t}");
+            assert_eq!(with.schedule(5, 5).last(), Some(&(PassKind::Tail, 1)), "{t}");
+            assert!(!with.schedule(4, 4).iter().any(|(p, _)| *p == PassKind::Tail), "{t}");
+            let e = plan(t, |s| {
+                s.overflow = crate::Overflow::Tail;
+                s.effect = Effect::Translucency;
+            });
+            assert!(matches!(e, Err(OitError::Unsupported { .. })), "{t}");
+        }
+        for t in ["fabs", "mdts64", "dp", "reference"] {
+            assert!(!tail(t).unwrap().tail, "{t}: no K to overflow");
+        }
+        assert_eq!("TAIL".parse::<crate::Overflow>().unwrap(), crate::Overflow::Tail);
+        assert!("merge".parse::<crate::Overflow>().is_err());
+    }
+
     #[test]
     fn sizing_and_alpha() {
         assert_eq!(plan("fabs", |_| {}).unwrap().slots(0), 1);
