@@ -108,11 +108,11 @@ pub struct Plan {
     /// so a run of equal depths with two payloads or more reaching the resolve may be out of the
     /// reference's order. `dp`, `ddp`, `mlp`, `mdts64` (depth bits above the payload in one 64-bit
     /// atomic word: no room for an id), `mdts` (20 depth bits above colour bits: equal at 2⁻²⁰)
-    /// and `bdp`'s depth mode (a subinterval's min and max keys). Not `plain`, which orders by
+    /// `bdp`'s depth mode (a subinterval's min and max keys) and `adp` (a bin's nearest and
+    /// farthest keys). Not `plain`, which orders by
     /// primitive id alone and never claims depth order, nor `fabs`: it carries the
     /// primitive id and sorts by (depth, id) as the reference does, nor `dfb` and `ll`, whose
-    /// entries carry it likewise; not the colour mode of `bdp`, `adp` (equal depths share a
-    /// bucket: one is kept, the other counted in `lost`) nor the order-free `wavg`/`wsum`.
+    /// entries carry it likewise; not the colour mode of `bdp` nor the order-free `wavg`/`wsum`.
     pub count_ties: bool,
     /// `plain` composited by a hardware blender in submission order (a backend's hardware raster
     /// path, [`Plan::on_path`]): float render targets, no counting pass. Elsewhere `plain` keeps each
@@ -202,7 +202,8 @@ impl Plan {
                 | Technique::Ddp
                 | Technique::Mlp { .. }
                 | Technique::Mdts { .. }
-                | Technique::Mdts64 { .. } => true,
+                | Technique::Mdts64 { .. }
+                | Technique::Adp => true,
                 Technique::Bdp { .. } => !bdp_color,
                 _ => false,
             },
@@ -315,7 +316,8 @@ impl Plan {
             Technique::Adp => vec![
                 bounds,
                 per_pixel("depth histogram (1024 bits)", 4, HISTOGRAM_WORDS as u64),
-                per_pixel("buckets", 8, BUCKETS as u64),
+                per_pixel("buckets (farthest of each bin)", 8, BUCKETS as u64),
+                per_pixel("nearest of each bin", 8, BUCKETS as u64),
             ],
             Technique::Mdts { .. } | Technique::Mdts64 { .. } => vec![per_pixel("sorted slots", 8, k)],
             Technique::Mlp { .. } => vec![
