@@ -63,8 +63,9 @@ fn mdts_insert64(base: u32, key: u64) -> bool {
 // A word carried off a full array: one fragment lost (merged later where there is a tail).
 fn mdts_lose(px: u32) {
     lose(px);
-    if ((fu.pass_index & MDTS_WITH_TAIL) != 0u) {
-        atomicMax(&tail_words[0], 1u);
+    // read before written: one word every overflowing fragment of the frame would hit
+    if ((fu.pass_index & MDTS_WITH_TAIL) != 0u && atomicLoad(&tail_words[0]) == 0u) {
+        atomicStore(&tail_words[0], 1u);
     }
 }
 
