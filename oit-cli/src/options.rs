@@ -6,8 +6,8 @@ use std::path::Path;
 use clap::Args;
 use oit_bench::backends::{BackendOptions, RasterChoice, select, with_paths};
 use oit_core::{
-    Backend, BdpMode, BoundsMode, Camera, Effect, HardwareCapture, OitError, Scene, Settings, Shading,
-    Technique, View, load_scene, parse_memory, parse_rgb, parse_size,
+    Backend, BdpMode, BoundsMode, Camera, Effect, HardwareCapture, OitError, Overflow, Scene, Settings,
+    Shading, Technique, View, load_scene, parse_memory, parse_rgb, parse_size,
 };
 
 /// Options shared by `render`, `compare` and `sweep`.
@@ -99,6 +99,13 @@ pub struct SceneArgs {
     #[arg(long, value_name = "BYTES")]
     pub memory: Option<String>,
 
+    /// What fabs:K, mdts:K and mdts64:K make of a pixel's fragments beyond its K nearest: drop
+    /// (counted in `lost`) or tail (merged into a weighted-average tail behind the K, multi-layer
+    /// alpha blending after Salvi & Vaidyanathan 2014; one more geometry pass where a pixel
+    /// overflows; counted in `merged`; transparency only). Other techniques ignore it.
+    #[arg(long, value_name = "drop|tail", default_value = "drop")]
+    pub overflow: String,
+
     /// Backend to render with: a name (cpu; wgpu, vulkan when compiled in), a comma-separated
     /// list, or all (every backend compiled in whose device is present).
     #[arg(long, value_name = "NAME|all", default_value = "cpu")]
@@ -167,6 +174,7 @@ impl SceneArgs {
             hardware_capture: self.hardware_capture.parse::<HardwareCapture>()?,
             region: None,
             memory: self.memory.as_deref().map(parse_memory).transpose()?,
+            overflow: self.overflow.parse::<Overflow>()?,
         };
         settings.validate()?;
         check_planes(self.near, self.far)?;

@@ -204,7 +204,7 @@ fn render_complexity_draws_the_legend_on_the_heat_map() {
     assert!(legend_pixels * 2 > (rect.width * rect.height) as usize, "no legend in {rect:?}");
 }
 
-const COMPARE_KEYS: [&str; 18] = [
+const COMPARE_KEYS: [&str; 19] = [
     "technique",
     "backend",
     "raster",
@@ -214,6 +214,7 @@ const COMPARE_KEYS: [&str; 18] = [
     "fragments",
     "captured",
     "lost",
+    "merged",
     "tied",
     "storage_bytes",
     "wall_ms",
@@ -435,7 +436,7 @@ fn info_json_parses() {
 
 /// The keys of every `oit sweep --json` record: where and what (backend and raster path
 /// included), the frame's counters as `oit compare --json` names them, and the accuracy.
-const SWEEP_KEYS: [&str; 17] = [
+const SWEEP_KEYS: [&str; 18] = [
     "azimuth",
     "technique",
     "backend",
@@ -444,6 +445,7 @@ const SWEEP_KEYS: [&str; 17] = [
     "fragments",
     "captured",
     "lost",
+    "merged",
     "tied",
     "storage_bytes",
     "wall_ms",

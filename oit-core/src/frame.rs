@@ -17,6 +17,9 @@ pub struct Stats {
     pub captured: u64,
     /// Fragments that did not: collisions, overflow, coplanar ties, peel limits.
     pub lost: u64,
+    /// Fragments that did not reach the composite one by one but were merged into a pixel's tail
+    /// behind its K nearest (`--overflow tail`): approximated, not lost. 0 elsewhere.
+    pub merged: u64,
     /// Fragments that reached the composite but whose order against an equal-depth fragment of
     /// another colour (payload) the technique could not establish: the reference orders equal
     /// depths by primitive id, a technique that keys on (depth, payload) orders them by colour.
@@ -45,20 +48,20 @@ pub struct Stats {
 
 impl Stats {
     /// The frame's own check, where its losses were counted as they happened: every fragment the
-    /// first geometry pass generated was either composited or counted lost. A device that stops
+    /// first geometry pass generated was either composited, merged into a tail or counted lost. A device that stops
     /// a kernel early (lavapipe ends a shader invocation's loops after 65,535 iterations in all)
     /// breaks it, and the frame is refused with an error rather than shown with fragments
     /// missing and `lost` silent.
     pub fn check_accounting(&self, backend: &str) -> Result<(), OitError> {
-        if self.captured + self.lost == self.fragments {
+        if self.captured + self.merged + self.lost == self.fragments {
             return Ok(());
         }
         Err(OitError::Device(format!(
-            "{backend}: {} fragments composited + {} counted lost ≠ {} generated: the device did not \
+            "{backend}: {} fragments composited + {} merged + {} counted lost ≠ {} generated: the device did not \
              run every step of the frame to the end (lavapipe, for one, ends a shader's loops after \
              65,535 iterations, which a pixel of thousands of layers can need); the frame is refused \
              rather than shown wrong. Use fewer layers, another raster path or the cpu backend",
-            self.captured, self.lost, self.fragments
+            self.captured, self.merged, self.lost, self.fragments
         )))
     }
 }

@@ -56,6 +56,9 @@ pub enum PassKind {
     Fill,
     /// `fabs:K` where a pixel overflowed: its K nearest keys, then their payloads.
     Overflow,
+    /// `--overflow tail` where a pixel overflowed: every fragment behind its K-th nearest added to
+    /// its tail sums.
+    Tail,
 }
 
 /// One array of a technique's storage ([`Plan::arrays`]): `element_bytes` per element, and
@@ -105,16 +108,21 @@ pub struct Plan {
     /// so a run of equal depths with two payloads or more reaching the resolve may be out of the
     /// reference's order. `dp`, `ddp`, `mlp`, `mdts64` (depth bits above the payload in one 64-bit
     /// atomic word: no room for an id), `mdts` (20 depth bits above colour bits: equal at 2⁻²⁰)
-    /// and `bdp`'s depth mode (a subinterval's min and max keys). Not `plain`, which orders by
+    /// `bdp`'s depth mode (a subinterval's min and max keys) and `adp` (a bin's nearest and
+    /// farthest keys). Not `plain`, which orders by
     /// primitive id alone and never claims depth order, nor `fabs`: it carries the
     /// primitive id and sorts by (depth, id) as the reference does, nor `dfb` and `ll`, whose
-    /// entries carry it likewise; not the colour mode of `bdp`, `adp` (equal depths share a
-    /// bucket: one is kept, the other counted in `lost`) nor the order-free `wavg`/`wsum`.
+    /// entries carry it likewise; not the colour mode of `bdp` nor the order-free `wavg`/`wsum`.
     pub count_ties: bool,
     /// `plain` composited by a hardware blender in submission order (a backend's hardware raster
     /// path, [`Plan::on_path`]): float render targets, no counting pass. Elsewhere `plain` keeps each
     /// pixel's fragments and sorts them by primitive id.
     pub blender: bool,
+    /// `--overflow tail` on a fixed-size `fabs:K`, `mdts:K` or `mdts64:K`: a pixel's fragments
+    /// behind its K nearest are merged into a tail (5 sums of 64 bits a pixel, one more geometry
+    /// pass where a pixel overflowed) instead of dropped. False where K comes from a counting
+    /// pass: nothing can overflow there.
+    pub tail: bool,
 }
 
 impl Plan {
@@ -135,6 +143,24 @@ impl Plan {
                 backend: backend.into(),
                 what: format!(
                     "the {:?} effect with {technique}: it never orders fragments; use a sorting technique (dp, fabs, adp, ...)",
+                    settings.effect
+                ),
+            });
+        }
+        let fixed_k = matches!(
+            technique,
+            Technique::Fabs { k: Some(_) }
+                | Technique::Mdts { k: Some(_) }
+                | Technique::Mdts64 { k: Some(_) }
+        );
+        // other techniques have no K to overflow and ignore the setting (the reference a
+        // comparison renders beside fabs:K runs under the same settings)
+        if settings.overflow == crate::Overflow::Tail && fixed_k && settings.effect != Effect::Transparency {
+            return Err(OitError::Unsupported {
+                backend: backend.into(),
+                what: format!(
+                    "--overflow tail with the {:?} effect: the tail merges colours by weight and keeps no \
+                     order or normals; use --overflow drop",
                     settings.effect
                 ),
             });
@@ -170,12 +196,14 @@ impl Plan {
             peel_limit: settings.max_peels.unwrap_or(u32::MAX),
             mdts_alpha8: (alpha.clamp(0.0, 1.0) * 255.0 + 0.5) as u32,
             blender: false,
+            tail: fixed_k && settings.overflow == crate::Overflow::Tail,
             count_ties: match technique {
                 Technique::Dp
                 | Technique::Ddp
                 | Technique::Mlp { .. }
                 | Technique::Mdts { .. }
-                | Technique::Mdts64 { .. } => true,
+                | Technique::Mdts64 { .. }
+                | Technique::Adp => true,
                 Technique::Bdp { .. } => !bdp_color,
                 _ => false,
             },
@@ -219,7 +247,6 @@ impl Plan {
     /// per 256 of those), a peel loop's one-word flag, the resolve state (counted once, in
     /// [`Plan::storage_bytes`]).
     pub fn arrays(&self, counted: Counted) -> Vec<Array> {
-        use crate::rules::{BDP_COLOR_SUBINTERVALS, BDP_DEPTH_SUBINTERVALS, BUCKETS, HISTOGRAM_WORDS};
         let k = u64::from(self.slots(counted.deepest));
         let per_pixel = |name, element_bytes, per_pixel| Array {
             name,
@@ -229,6 +256,21 @@ impl Plan {
             fixed: 0,
         };
         let bounds = per_pixel("depth bounds (min, max depth bits)", 4, 2);
+        let mut arrays = self.own_arrays(k, per_pixel, bounds);
+        if self.tail {
+            arrays.push(per_pixel("tail sums (Σα·r, Σα·g, Σα·b, Σα, count)", 8, 5));
+        }
+        arrays
+    }
+
+    /// [`Plan::arrays`] but the tail's.
+    fn own_arrays(
+        &self,
+        k: u64,
+        per_pixel: impl Fn(&'static str, u64, u64) -> Array,
+        bounds: Array,
+    ) -> Vec<Array> {
+        use crate::rules::{BDP_COLOR_SUBINTERVALS, BDP_DEPTH_SUBINTERVALS, BUCKETS, HISTOGRAM_WORDS};
         match self.technique {
             Technique::Reference => vec![
                 Array { name: "offsets", element_bytes: 4, per_pixel: 1, per_fragment: 0, fixed: 1 },
@@ -274,7 +316,8 @@ impl Plan {
             Technique::Adp => vec![
                 bounds,
                 per_pixel("depth histogram (1024 bits)", 4, HISTOGRAM_WORDS as u64),
-                per_pixel("buckets", 8, BUCKETS as u64),
+                per_pixel("buckets (farthest of each bin)", 8, BUCKETS as u64),
+                per_pixel("nearest of each bin", 8, BUCKETS as u64),
             ],
             Technique::Mdts { .. } | Technique::Mdts64 { .. } => vec![per_pixel("sorted slots", 8, k)],
             Technique::Mlp { .. } => vec![
@@ -360,6 +403,11 @@ impl Plan {
                     passes.push((PassKind::Overflow, 2));
                 }
             }
+        }
+        // the tail: one pass over the fragments behind each overflowing pixel's K-th nearest, run
+        // where some pixel holds more than K
+        if self.tail && matches!(self.sizing, Sizing::Fixed(k) if layers > k) {
+            passes.push((PassKind::Tail, 1));
         }
         passes
     }
@@ -502,6 +550,31 @@ mod tests {
         let e = plan("ll", |_| {}).unwrap().check_fragments(1 << 32).unwrap_err().to_string();
         assert!(e.contains("32-bit fragment indices") && e.contains("fabs:K"), "{e}");
         assert!(host_memory_budget().1 > 0);
+    }
+
+    /// `--overflow tail`: 5 sums of 8 bytes a pixel and one pass more where a pixel holds more than
+    /// K, for the fixed-size techniques only; other effects refused; ignored elsewhere.
+    #[test]
+    fn overflow_tail() {
+        let tail = |t: &str| plan(t, |s| s.overflow = crate::Overflow::Tail);
+        let counted = Counted { deepest: 9, fragments: 25 };
+        for t in ["fabs:4", "mdts:4", "mdts64:4"] {
+            let (with, without) = (tail(t).unwrap(), plan(t, |_| {}).unwrap());
+            assert!(with.tail && !without.tail, "{t}");
+            assert_eq!(with.storage_bytes(10, counted), without.storage_bytes(10, counted) + 10 * 40, "{t}");
+            assert_eq!(with.schedule(5, 5).last(), Some(&(PassKind::Tail, 1)), "{t}");
+            assert!(!with.schedule(4, 4).iter().any(|(p, _)| *p == PassKind::Tail), "{t}");
+            let e = plan(t, |s| {
+                s.overflow = crate::Overflow::Tail;
+                s.effect = Effect::Translucency;
+            });
+            assert!(matches!(e, Err(OitError::Unsupported { .. })), "{t}");
+        }
+        for t in ["fabs", "mdts64", "dp", "reference"] {
+            assert!(!tail(t).unwrap().tail, "{t}: no K to overflow");
+        }
+        assert_eq!("TAIL".parse::<crate::Overflow>().unwrap(), crate::Overflow::Tail);
+        assert!("merge".parse::<crate::Overflow>().is_err());
     }
 
     #[test]

@@ -104,6 +104,36 @@ pub struct Settings {
     /// The memory budget of one frame's storage in bytes (`--memory`; `None`: what the device
     /// allows). A frame that needs more runs in screen tiles that each fit ([`crate::tiling`]).
     pub memory: Option<u64>,
+    /// What `fabs:K`, `mdts:K` and `mdts64:K` make of the fragments a pixel has beyond its K
+    /// (`--overflow`); other techniques, and those three sized from a counting pass, ignore it.
+    pub overflow: Overflow,
+}
+
+/// What the fixed-size techniques (`fabs:K`, `mdts:K`, `mdts64:K`) make of a pixel's fragments
+/// beyond the K nearest.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Overflow {
+    /// Dropped and counted in `Stats::lost` (the papers' behaviour).
+    #[default]
+    Drop,
+    /// Merged into a per-pixel tail behind the K nearest, after multi-layer alpha blending
+    /// (Salvi & Vaidyanathan 2014): one more geometry pass adds every fragment behind the pixel's
+    /// K-th nearest into order-independent integer sums (Σα·c, Σα, n of its RGBA8 colour), and
+    /// the resolve composites their weighted average (Bavoil & Myers 2008) behind the K sorted
+    /// fragments. Counted in `Stats::merged`. Transparency only.
+    Tail,
+}
+
+impl FromStr for Overflow {
+    type Err = OitError;
+    fn from_str(s: &str) -> Result<Overflow, OitError> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "drop" => Ok(Overflow::Drop),
+            "tail" => Ok(Overflow::Tail),
+            other => Err(OitError::InvalidSettings(format!("unknown overflow '{other}': use drop or tail"))),
+        }
+    }
 }
 
 /// A frame's place in a larger frame: its top-left pixel and the larger frame's size. Backends
@@ -223,6 +253,7 @@ impl Default for Settings {
             hardware_capture: HardwareCapture::Atomics,
             region: None,
             memory: None,
+            overflow: Overflow::Drop,
         }
     }
 }

@@ -310,6 +310,7 @@ pub fn merge<'a>(stats: impl Iterator<Item = &'a Stats>) -> Stats {
         out.fragments += s.fragments;
         out.captured += s.captured;
         out.lost += s.lost;
+        out.merged += s.merged;
         out.tied += s.tied;
         out.storage_bytes = out.storage_bytes.max(s.storage_bytes);
         out.wall_ms += s.wall_ms;

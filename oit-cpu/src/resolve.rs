@@ -126,6 +126,26 @@ impl<'a> Resolve<'a> {
         }
     }
 
+    /// Puts a pixel's tail (`--overflow tail`: the integer sums of the fragments behind its K
+    /// nearest, Σα·r, Σα·g, Σα·b, Σα, count, as `Ctx::tail_pass` adds them) behind what was
+    /// pushed: their weighted average (Bavoil & Myers 2008, `composite::weighted_average`) over
+    /// the background becomes what the front composites over, as dual depth peeling's back half
+    /// does. Transparency only (the plan refuses the tail with other effects).
+    pub fn tail(&self, s: &mut PixelState, sums: &[std::sync::atomic::AtomicU64]) {
+        use std::sync::atomic::Ordering::Relaxed;
+        let l = |i: usize| sums[i].load(Relaxed) as f32;
+        let count = sums[4].load(Relaxed) as u32;
+        if count == 0 {
+            return;
+        }
+        let w = oit_core::composite::WeightedSums {
+            premultiplied: Vec3::new(l(0), l(1), l(2)) / (255.0 * 255.0),
+            alpha: l(3) / 255.0,
+            count,
+        };
+        s.back = Some(oit_core::composite::weighted_average(&w, self.background));
+    }
+
     /// Finishes every pixel into an sRGB image; returns it, the fragments captured in all and
     /// those counted tied.
     pub fn image(&self, width: u32, height: u32, states: &mut [PixelState]) -> (Image, u64, u64) {

@@ -87,6 +87,12 @@ impl<'p> MinList<'p> {
 }
 
 impl MinList<'_> {
+    /// The pixel's K-th slot: its largest key kept, [`MinList::EMPTY`] while the list is not full
+    /// (`--overflow tail`: a fragment whose key is larger was carried off).
+    pub fn last(&self, pixel: usize) -> u64 {
+        self.slots[(pixel + 1) * self.k - 1].load(Relaxed)
+    }
+
     /// [`AtomicFragmentList::sorted`], leaving the pixel's slots empty for the next pass (mlp).
     pub fn take_sorted(&self, pixel: usize, out: &mut Vec<u64>) {
         out.clear();

@@ -139,6 +139,8 @@ pub struct GpuCtx<'a> {
     /// count target the resolve reads into `captured` and lose none, so the frame's fragments
     /// are its captured total, read with the totals at the end of the frame.
     pub fragments_from_captured: bool,
+    /// Fragments merged into pixels' tails (`--overflow tail`), read back by the technique.
+    pub merged: u64,
     gpu_ms: f64,
     pass_ms: Vec<(String, f64)>,
     lent: Lent<'a>,
@@ -273,6 +275,7 @@ impl<'a> GpuCtx<'a> {
             acct,
             counts_losses: true,
             fragments_from_captured: false,
+            merged: 0,
             gpu_ms: 0.0,
             pass_ms: Vec::new(),
             lent,
@@ -568,6 +571,7 @@ impl<'a> GpuCtx<'a> {
                 fragments,
                 captured,
                 lost,
+                merged: self.merged,
                 tied: u64::from(t[2]),
                 storage_bytes: self.storage_bytes,
                 wall_ms: 0.0,

@@ -16,12 +16,16 @@ pub fn error_pixels<'a>(a: &'a Image, b: &'a Image) -> impl Iterator<Item = usiz
         .map(|(i, _)| i)
 }
 
-/// Losses are counted where they happen: `captured + lost == fragments`, and the per-pixel losses
+/// Losses are counted where they happen: `captured + merged + lost == fragments` (`merged`: the
+/// fragments `--overflow tail` merged into a pixel's tail, 0 elsewhere), and the per-pixel losses
 /// (where the backend reports them) sum to `lost`.
 pub fn accounting(f: &Frame) -> Result<(), String> {
     let s = &f.stats;
-    if s.captured + s.lost != s.fragments {
-        return Err(format!("captured {} + lost {} != fragments {}", s.captured, s.lost, s.fragments));
+    if s.captured + s.merged + s.lost != s.fragments {
+        return Err(format!(
+            "captured {} + merged {} + lost {} != fragments {}",
+            s.captured, s.merged, s.lost, s.fragments
+        ));
     }
     if let Some(px) = &f.lost_pixels {
         let sum: u64 = px.iter().map(|&l| u64::from(l)).sum();
@@ -51,15 +55,16 @@ pub fn exact(reference: &Frame, f: &Frame) -> Result<(), String> {
 }
 
 /// Never wrong in silence: where a frame differs from the reference, it counted at least as many
-/// lost or tied fragments as it has error pixels (each error pixel holds a loss or a tie).
+/// lost, merged or tied fragments as it has error pixels (each error pixel holds a loss, a tail or
+/// a tie).
 pub fn never_silent(reference: &Frame, f: &Frame) -> Result<(), String> {
     accounting(f)?;
     let a = accuracy(reference, &f.image).map_err(|e| e.to_string())?;
-    let counted = f.stats.tied + f.stats.lost;
+    let counted = f.stats.tied + f.stats.lost + f.stats.merged;
     if a.error_pixels > counted {
         return Err(format!(
-            "{} error pixels but only {} tied + {} lost: wrong in silence",
-            a.error_pixels, f.stats.tied, f.stats.lost
+            "{} error pixels but only {} tied + {} lost + {} merged: wrong in silence",
+            a.error_pixels, f.stats.tied, f.stats.lost, f.stats.merged
         ));
     }
     Ok(())
@@ -85,6 +90,7 @@ pub fn same_fragments(a: &Frame, b: &Frame) -> Result<(), String> {
     let pairs = [
         ("fragments", x.fragments, y.fragments),
         ("lost", x.lost, y.lost),
+        ("merged", x.merged, y.merged),
         ("tied", x.tied, y.tied),
         ("passes", u64::from(x.geometry_passes), u64::from(y.geometry_passes)),
     ];

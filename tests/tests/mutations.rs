@@ -136,15 +136,16 @@ fn never_silent_fails_when_a_loss_goes_uncounted() {
 #[test]
 fn errors_within_losses_fails_on_a_moved_loss_or_a_stray_error() {
     let b = cpu();
-    // two quads 1/10,000 of the depth range apart share one of adp's 1,024 bins: one is lost
-    let scene = quads(&[(0.0, RED), (-1e-4, BLUE), (-1.0, RED)]);
+    // three quads 1/10,000 of the depth range apart share one of adp's 1,024 bins: the bin keeps
+    // its nearest and farthest, the middle one is lost
+    let scene = quads(&[(0.0, RED), (-1e-4, BLUE), (-2e-4, RED), (-1.0, RED)]);
     let s = flat(16, "reference");
     let cam = camera(&scene, &s, FRONT);
     let r = render(&b, &scene, &cam, &s);
     let f = render(&b, &scene, &cam, &Settings { technique: Technique::Adp, ..s.clone() });
     assert_eq!(errors_within_losses(&r, &f), Ok(true));
     let errors: Vec<usize> = error_pixels(&r.image, &f.image).collect();
-    assert!(!errors.is_empty(), "adp loses one of two quads sharing a bin");
+    assert!(!errors.is_empty(), "adp loses the middle one of three quads sharing a bin");
     // the loss of an error pixel moved to another pixel
     let mut g = f.clone();
     let lost = g.lost_pixels.as_mut().unwrap();

@@ -5,8 +5,26 @@
 //! else would be restating the plan in its own words.
 
 use oit_core::plan::{Counted, Plan, RESOLVE_STATE_BYTES};
-use oit_core::{Settings, Technique, View};
+use oit_core::{Overflow, Settings, Technique, View};
 use oit_tests::*;
+
+/// Each technique with `--overflow drop`, and the fixed-size ones (`fabs:K`, `mdts:K`, `mdts64:K`)
+/// with `--overflow tail` too (its sums are an array of the plan, its pass a pass of the schedule).
+fn with_tails(techniques: &[Technique]) -> Vec<(Technique, Overflow)> {
+    let mut out = Vec::new();
+    for &t in techniques {
+        out.push((t, Overflow::Drop));
+        if matches!(
+            t,
+            Technique::Fabs { k: Some(_) }
+                | Technique::Mdts { k: Some(_) }
+                | Technique::Mdts64 { k: Some(_) }
+        ) {
+            out.push((t, Overflow::Tail));
+        }
+    }
+    out
+}
 
 #[test]
 fn reported_storage_is_the_plans_arrays() {
@@ -15,6 +33,8 @@ fn reported_storage_is_the_plans_arrays() {
     techniques.extend([
         Technique::Bdp { passes: 3 },
         Technique::Fabs { k: Some(3) },
+        Technique::Mdts { k: Some(3) },
+        Technique::Mdts64 { k: Some(3) },
         Technique::Mlp { m: 2 },
     ]);
     for backend in backends_for("reported_storage_is_the_plans_arrays") {
@@ -25,8 +45,8 @@ fn reported_storage_is_the_plans_arrays() {
             let cam = camera(&scene, &base, View::default());
             let reference = render(b, &scene, &cam, &base);
             let deepest = reference.layers.as_ref().and_then(|l| l.iter().copied().max()).unwrap_or(0);
-            for &technique in &techniques {
-                let s = Settings { technique, ..base.clone() };
+            for (technique, overflow) in with_tails(&techniques) {
+                let s = Settings { technique, overflow, ..base.clone() };
                 let plan = Plan::new(b.name(), &scene, &s)
                     .unwrap_or_else(|e| panic!("{technique}: {e}"))
                     .on_path(b.raster_path(&s));
@@ -39,7 +59,7 @@ fn reported_storage_is_the_plans_arrays() {
                 assert_eq!(
                     frame.stats.storage_bytes,
                     bound - pixels * RESOLVE_STATE_BYTES,
-                    "{} {technique} on {name}: reports {} bytes, the plan's arrays {:?}",
+                    "{} {technique} {overflow:?} on {name}: reports {} bytes, the plan's arrays {:?}",
                     label(b),
                     frame.stats.storage_bytes,
                     plan.arrays(counted)
@@ -102,9 +122,9 @@ fn geometry_passes_follow_the_plans_schedule() {
             let reference = render(b, &scene, &cam, &base);
             let layers = reference.layers.as_ref().and_then(|l| l.iter().copied().max()).unwrap_or(0);
             assert!(layers > 2 && layers < 32, "{name}: {layers} layers");
-            for &technique in &techniques {
+            for (technique, overflow) in with_tails(&techniques) {
                 for max_peels in [None, Some(2)] {
-                    let s = Settings { technique, max_peels, ..base.clone() };
+                    let s = Settings { technique, max_peels, overflow, ..base.clone() };
                     let plan = Plan::new(b.name(), &scene, &s)
                         .unwrap_or_else(|e| panic!("{technique}: {e}"))
                         .on_path(b.raster_path(&s));
@@ -113,7 +133,7 @@ fn geometry_passes_follow_the_plans_schedule() {
                     assert_eq!(
                         frame.stats.geometry_passes,
                         schedule.iter().map(|(_, n)| n).sum::<u32>(),
-                        "{} {technique} --max-peels {max_peels:?} on {name} ({layers} layers): schedule {schedule:?}",
+                        "{} {technique} {overflow:?} --max-peels {max_peels:?} on {name} ({layers} layers): schedule {schedule:?}",
                         label(b)
                     );
                 }

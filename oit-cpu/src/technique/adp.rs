@@ -8,8 +8,14 @@
 //! 4. One bucket pass per batch of 32 subintervals, until every set bin was captured: passes =
 //!    2 + ⌈bins/32⌉ for the deepest pixel.
 //!
-//! Two fragments closer than 1/1024 of the range can share a bin: one survives (MAX on the 64-bit
-//! (depth, payload) word), the other is counted in `lost`.
+//! Two fragments closer than 1/1024 of the range can share a bin (the paper keeps one: MAX on the
+//! 64-bit (depth, payload) word). Here each bucket also keeps the MIN of its bin's words in the
+//! same pass (issue 11.5, the two ends of a subinterval as HPG 2009's depth mode of `bdp` keeps
+//! them, eq. 2–4): a bin of two fragments is captured whole, nearest first; of three or more, the
+//! ones between its nearest and farthest are counted in `lost` (each fragment that finds its
+//! bucket's MAX already filled is counted lost at capture; the resolve takes one back where the MIN
+//! holds a second fragment). Two fragments of one bin at equal depths come out by payload, not by
+//! primitive id: the resolve counts them in `tied`.
 
 use oit_core::Compositor as _;
 use oit_core::rules::{
@@ -17,6 +23,7 @@ use oit_core::rules::{
 };
 use oit_core::{BucketArray, DepthHistogram, Frame, OitError};
 use rayon::prelude::*;
+use std::sync::atomic::Ordering::Relaxed;
 
 use super::Ctx;
 use crate::storage::{Buckets, Histogram};
@@ -33,6 +40,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         (0..ctx.pixels).into_par_iter().map(|px| histogram.read(px)).collect();
     let batches = ctx.plan.adp_batches(hist.iter().map(histogram_count).max().unwrap_or(0));
     let buckets = Buckets::new(ctx.alloc64(BUCKETS, 0)?, BUCKETS);
+    let nearest = ctx.alloc64(BUCKETS, u64::MAX)?;
     let mut states = ctx.states();
     for batch in 0..batches {
         let payload = |f: &crate::raster::Fragment| ctx.payload(f);
@@ -43,13 +51,14 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
             let (zn, zf) = bounds[px];
             let rank = histogram_rank(&hist[px], histogram_bin(f.depth, zn, zf));
             if rank / BUCKETS as u32 == batch {
+                let bucket = (rank % BUCKETS as u32) as usize;
+                let key = depth_key64(f.depth, payload(f));
                 // bit 63 marks a full bucket, so a fragment at depth 0 with payload 0 is not empty
-                let old = buckets.update_max(
-                    px,
-                    (rank % BUCKETS as u32) as usize,
-                    depth_key64(f.depth, payload(f)) | 1 << 63,
-                );
-                // two fragments in one bin: the MAX kept one
+                let old = buckets.update_max(px, bucket, key | 1 << 63);
+                // the nearest of the bin (a depth key never has all bits set: depths are ≤ 1)
+                nearest[px * BUCKETS + bucket].fetch_min(key, Relaxed);
+                // two fragments in one bin: the MAX kept one (the resolve takes one back where
+                // the MIN kept another)
                 if old != 0 {
                     lost.lose(px);
                 }
@@ -62,11 +71,20 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         ctx.fragments.get_or_insert(generated);
         let resolve = &ctx.resolve;
         let buckets = &buckets;
+        let (nearest, lost) = (&nearest, &ctx.lost);
         states.par_iter_mut().enumerate().for_each(|(px, s)| {
             for k in 0..buckets.buckets() {
                 let key = buckets.take(px, k);
+                let near = nearest[px * BUCKETS + k].swap(u64::MAX, Relaxed);
                 if key != 0 {
-                    let (d, p) = split_key64(key & !(1 << 63));
+                    let far = key & !(1 << 63);
+                    if near != far {
+                        // a second fragment of the bin, in front of the farthest: captured after all
+                        let (d, p) = split_key64(near);
+                        resolve.push(s, d, p);
+                        lost[px].fetch_sub(1, Relaxed);
+                    }
+                    let (d, p) = split_key64(far);
                     resolve.push(s, d, p);
                 }
             }

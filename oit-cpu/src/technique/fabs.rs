@@ -3,7 +3,9 @@
 //! resolve sorts each pixel's n ≤ K slots by depth and composites them. Fragments past K are
 //! counted in `lost`; a pixel that overflowed keeps its K nearest fragments by (depth, primitive
 //! id), found by two more passes over the overflowing pixels only, so the same input always gives
-//! the same image (issue 13.7).
+//! the same image (issue 13.7). With `--overflow tail` one more pass merges the fragments behind
+//! those K into the pixel's tail (see `Ctx::tail_pass`): each is one whose key is larger than the
+//! K-th kept, so every fragment past K is merged and none is lost.
 //!
 //! Ties: a slot is the 64-bit key (depth bits, primitive id) and the payload beside it (12 bytes),
 //! and the sort is by key, so equal depths come out in primitive order, as the reference orders
@@ -61,6 +63,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let counters = ctx.alloc32(1, 0)?;
     let slots = ctx.alloc64(k, 0)?;
     let payloads = ctx.alloc32(k, 0)?;
+    let tail = ctx.tail_sums()?;
     let payload = |f: &crate::raster::Fragment| ctx.payload(f);
     let lost = &*ctx;
     let generated = ctx.raster.for_each_fragment(|f| {
@@ -120,13 +123,23 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         passes += 2;
     }
     ctx.passes += passes;
+    if let (Some(sums), true) = (&tail, any) {
+        // the overflow passes left an overflowing pixel's K keys sorted: the last is the largest
+        let color = |f: &crate::raster::Fragment| oit_core::rules::pack_rgba8(f.color);
+        ctx.tail_pass(sums, |f| {
+            let px = f.pixel as usize;
+            let key = u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim);
+            (overflowing(px) && key > slots[px * k + k - 1].load(Relaxed)).then(|| color(f))
+        });
+    }
     ctx.fragments.get_or_insert(generated);
     let mut states = ctx.states();
     let resolve = &ctx.resolve;
     let lists = slots.par_chunks(k).zip(payloads.par_chunks(k));
-    states.par_iter_mut().zip(lists.zip(counters.par_iter())).for_each_init(
+    let tail = tail.as_deref();
+    states.par_iter_mut().zip(lists.zip(counters.par_iter())).enumerate().for_each_init(
         Vec::new,
-        |keys, (s, ((slots, payloads), count))| {
+        |keys, (px, (s, ((slots, payloads), count)))| {
             let n = (count.load(Relaxed) as usize).min(k);
             keys.clear();
             // (depth bits, primitive id) above the payload: one primitive has one fragment a
@@ -140,6 +153,9 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
             sort_keys(keys);
             for &key in keys.iter() {
                 resolve.push(s, depth_from_bits((key >> 64) as u32), key as u32);
+            }
+            if let Some(t) = tail {
+                resolve.tail(s, &t[px * 5..px * 5 + 5]);
             }
         },
     );

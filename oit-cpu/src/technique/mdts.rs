@@ -11,7 +11,12 @@
 //!
 //! Ties: neither word has room for the primitive id the reference orders equal depths by, so
 //! equal depths come out by colour, and `mdts` makes depths equal that were only within one 2⁻²⁰
-//! step (where the reference orders them by their f32 depths). The resolve counts in `tied` every
+//! step (where the reference orders them by their f32 depths).
+//!
+//! `--overflow tail`: a second pass merges into the pixel's tail every fragment whose word is
+//! larger than the K-th kept (see `Ctx::tail_pass`); one equal to it (same depth bits and colour)
+//! that was carried off stays counted in `lost`. `mdts`'s tail takes the fragment's 8-bit RGB and
+//! the plan's alpha, as its kept words do. The resolve counts in `tied` every
 //! fragment of a run of equal stored depths (f32 bits for `mdts64`, the 20 bits for `mdts`) that
 //! holds two colours or more; a run of one colour composites alike in any order. What `mdts`
 //! loses besides, and does not count: depth below 2⁻²⁰ (the resolve sees the lower end of the
@@ -20,12 +25,17 @@
 use oit_core::Compositor as _;
 use std::sync::atomic::Ordering::Relaxed;
 
-use oit_core::rules::{depth_key64, mdts_pack, mdts_unpack, split_key64};
+use oit_core::rules::{depth_key64, mdts_pack, mdts_unpack, pack_rgba8, split_key64};
 use oit_core::{AtomicFragmentList, Frame, OitError};
 use rayon::prelude::*;
 
 use super::{Ctx, insert_min32};
 use crate::storage::MinList;
+
+/// Whether the capture found a pixel full (a fragment counted lost): the tail pass runs only then.
+fn overflowed(ctx: &Ctx<'_>) -> bool {
+    ctx.lost.par_iter().any(|l| l.load(Relaxed) > 0)
+}
 
 /// Slots per pixel, by the plan (a counting pass first where it sizes from the scene).
 fn capacity(ctx: &mut Ctx<'_>) -> Result<usize, OitError> {
@@ -36,6 +46,7 @@ fn capacity(ctx: &mut Ctx<'_>) -> Result<usize, OitError> {
 pub(crate) fn render64(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let k = capacity(ctx)?;
     let list = MinList::new(ctx.alloc64(k, MinList::EMPTY)?, k);
+    let tail = ctx.tail_sums()?;
     let payload = |f: &crate::raster::Fragment| ctx.payload(f);
     let generated = ctx.raster.for_each_fragment(|f| {
         if list.insert(f.pixel as usize, depth_key64(f.depth, payload(f))).is_some() {
@@ -45,14 +56,27 @@ pub(crate) fn render64(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     });
     ctx.passes += 1;
     ctx.fragments.get_or_insert(generated);
+    if let Some(sums) = &tail
+        && overflowed(ctx)
+    {
+        let list = &list;
+        ctx.tail_pass(sums, |f| {
+            let p = pack_rgba8(f.color);
+            (depth_key64(f.depth, p) > list.last(f.pixel as usize)).then_some(p)
+        });
+    }
     let mut states = ctx.states();
     let resolve = &ctx.resolve;
     let list = &list;
+    let tail = tail.as_deref();
     states.par_iter_mut().enumerate().for_each_init(Vec::new, |keys, (px, s)| {
         list.sorted(px, keys);
         for &key in keys.iter() {
             let (d, p) = split_key64(key);
             resolve.push(s, d, p);
+        }
+        if let Some(t) = tail {
+            resolve.tail(s, &t[px * 5..px * 5 + 5]);
         }
     });
     Ok(super::finish(ctx, states))
@@ -64,6 +88,7 @@ pub(crate) fn render32(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let alpha8 = ctx.plan.mdts_alpha8;
     let high = ctx.alloc32(k, u32::MAX)?;
     let low = ctx.alloc32(k, u32::MAX)?;
+    let tail = ctx.tail_sums()?;
     ctx.pass_lossy(|f, ctx| {
         let px = f.pixel as usize;
         // All ones is the empty word: a fragment at d ≈ 1 with that colour gives up its last bit.
@@ -74,9 +99,20 @@ pub(crate) fn render32(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         }
         insert_min32(&low[px * k..(px + 1) * k], b);
     });
+    if let Some(sums) = &tail
+        && overflowed(ctx)
+    {
+        ctx.tail_pass(sums, |f| {
+            let px = f.pixel as usize;
+            let [a, _] = mdts_pack(f.depth, pack_rgba8(f.color)).map(|w| w.min(u32::MAX - 1));
+            (a > high[px * k + k - 1].load(Relaxed)).then(|| pack_rgba8(f.color) & 0xff_ffff | alpha8 << 24)
+        });
+    }
     let mut states = ctx.states();
     let resolve = &ctx.resolve;
-    states.par_iter_mut().zip(high.par_chunks(k).zip(low.par_chunks(k))).for_each(|(s, (hi, lo))| {
+    let tail = tail.as_deref();
+    let lists = high.par_chunks(k).zip(low.par_chunks(k));
+    states.par_iter_mut().zip(lists).enumerate().for_each(|(px, (s, (hi, lo)))| {
         for (h, l) in hi.iter().zip(lo) {
             let (h, l) = (h.load(Relaxed), l.load(Relaxed));
             if h == u32::MAX || l == u32::MAX {
@@ -84,6 +120,9 @@ pub(crate) fn render32(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
             }
             let (d, rgb) = mdts_unpack([h, l]);
             resolve.push(s, d, rgb | alpha8 << 24);
+        }
+        if let Some(t) = tail {
+            resolve.tail(s, &t[px * 5..px * 5 + 5]);
         }
     });
     Ok(super::finish(ctx, states))

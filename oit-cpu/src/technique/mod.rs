@@ -49,6 +49,8 @@ pub(crate) struct Ctx<'a> {
     /// off a full array, a counter past K, a tie a peel skips, a fragment left behind the last
     /// peel the plan allows): never derived from `fragments − captured`.
     pub lost: Pooled<'a, AtomicU32>,
+    /// Fragments merged into pixels' tails (`--overflow tail`), set by the technique.
+    pub merged: u64,
 }
 
 impl<'a> Ctx<'a> {
@@ -76,6 +78,7 @@ impl<'a> Ctx<'a> {
             plan,
             budget: crate::cpu_budget(settings),
             lost: pool.u32s(settings.pixel_count(), 0),
+            merged: 0,
         }
     }
 
@@ -167,6 +170,38 @@ impl<'a> Ctx<'a> {
             .map_err(|_| OitError::Device(format!("{len} words do not fit this host's address space")))
     }
 
+    /// The tail sums of `--overflow tail` where the plan has a tail (5 words a pixel: Σα·r,
+    /// Σα·g, Σα·b in units of 1/255², Σα in units of 1/255, the count), allocated whether or not
+    /// a pixel overflows, as `Plan::arrays` counts them.
+    pub fn tail_sums(&mut self) -> Result<Option<Pooled<'a, AtomicU64>>, OitError> {
+        if self.plan.tail { Ok(Some(self.alloc64(5, 0)?)) } else { Ok(None) }
+    }
+
+    /// The tail pass of `--overflow tail` (multi-layer alpha blending's tail, Salvi & Vaidyanathan
+    /// 2014, kept as order-independent integer sums): one geometry pass in which `behind` gives the
+    /// RGBA8 colour of each fragment that lies behind its pixel's K-th nearest (None for the
+    /// others); those are added to the pixel's `sums` and, since the capture counted them lost
+    /// when it found no room, moved from `lost` to `merged`. Integer adds, so the sums and the
+    /// image do not depend on the order fragments arrive in.
+    pub fn tail_pass<F: Fn(&Fragment) -> Option<u32> + Sync>(&mut self, sums: &[AtomicU64], behind: F) {
+        let lost = &self.lost;
+        self.raster.for_each_fragment(|f| {
+            if let Some(c) = behind(f) {
+                let px = f.pixel as usize;
+                let a = u64::from(c >> 24);
+                let base = px * 5;
+                sums[base].fetch_add(a * u64::from(c & 0xff), Relaxed);
+                sums[base + 1].fetch_add(a * u64::from(c >> 8 & 0xff), Relaxed);
+                sums[base + 2].fetch_add(a * u64::from(c >> 16 & 0xff), Relaxed);
+                sums[base + 3].fetch_add(a, Relaxed);
+                sums[base + 4].fetch_add(1, Relaxed);
+                lost[px].fetch_sub(1, Relaxed);
+            }
+        });
+        self.passes += 1;
+        self.merged = sums.iter().skip(4).step_by(5).map(|c| c.load(Relaxed)).sum();
+    }
+
     /// Per-pixel resolve state.
     pub fn states(&self) -> Pooled<'a, PixelState> {
         self.pool.states(self.pixels)
@@ -244,6 +279,7 @@ pub(crate) fn frame(ctx: &Ctx<'_>, image: oit_core::Image, captured: u64) -> oit
             fragments,
             captured,
             lost,
+            merged: ctx.merged,
             storage_bytes: ctx.storage_bytes,
             ..Default::default()
         },

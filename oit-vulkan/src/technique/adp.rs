@@ -16,7 +16,8 @@ pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), O
     let max_bins = ctx.buffer("adp deepest pixel", 1, Init::Zero)?;
     ctx.storage_bytes -= 4;
     let buckets = ctx.buffer("adp buckets", px * BUCKETS as u64 * 2, Init::Zero)?;
-    let buffers = [&*bounds, &*hist, &*buckets, &*max_bins];
+    let nearest = ctx.buffer("adp nearest", px * BUCKETS as u64 * 2, Init::Fill(u32::MAX))?;
+    let buffers = [&*bounds, &*hist, &*buckets, &*max_bins, &*nearest];
     ctx.geometry_pass(&drivers.scene, "adp", &buffers, 0, 0)?;
     ctx.pixel_kernel("adp", "count_main", &buffers, 0, 0)?;
     let bins = ctx.read_u32(&max_bins)?[0];

@@ -1,6 +1,7 @@
 //! `fabs:K` (see oit-wgpu's `technique/fabs.rs` and `fabs.wgsl`): slots of a 64-bit (depth bits,
 //! primitive id) key and a 32-bit payload, sorted by key; an overflowing pixel keeps its K
-//! smallest keys, so the same input gives the same image.
+//! smallest keys, so the same input gives the same image; `--overflow tail` merges what lies
+//! behind the K into a tail (`tail.wgsl`).
 
 use oit_core::OitError;
 
@@ -10,6 +11,8 @@ use crate::ctx::{Init, VkCtx};
 const FABS_CAPTURE: u32 = 0;
 const FABS_KEYS: u32 = 1;
 const FABS_PAYLOADS: u32 = 2;
+const FABS_TAIL: u32 = 3;
+const FABS_WITH_TAIL: u32 = 1;
 
 pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     let deepest = if ctx.plan.needs_count() { super::count(ctx, &drivers.scene)?.1 } else { 0 };
@@ -21,7 +24,9 @@ pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), O
     let overflowed = ctx.buffer("fabs overflowed", 1, Init::Zero)?;
     // the flag is bookkeeping, not per-pixel storage (oit-cpu counts none either)
     ctx.storage_bytes -= 4;
-    let buffers = [&*counters, &*slots, &*payloads, &*overflowed];
+    let (tail, tail_words) = super::tail_buffers(ctx)?;
+    let buffers = [&*counters, &*slots, &*payloads, &*overflowed, &*tail, &*tail_words];
+    let mut tail_ran = false;
     ctx.geometry_pass(&drivers.scene, "fabs", &buffers, FABS_CAPTURE, k)?;
     // sized from the counting pass, no pixel can overflow: no check, no readback
     if !ctx.plan.needs_count() {
@@ -29,7 +34,16 @@ pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), O
         if ctx.read_u32(&overflowed)?[0] != 0 {
             ctx.geometry_pass(&drivers.scene, "fabs", &buffers, FABS_KEYS, k)?;
             ctx.geometry_pass(&drivers.scene, "fabs", &buffers, FABS_PAYLOADS, k)?;
+            if ctx.plan.tail {
+                ctx.geometry_pass(&drivers.scene, "fabs", &buffers, FABS_TAIL, k)?;
+                tail_ran = true;
+            }
         }
     }
-    ctx.pixel_kernel("fabs", "resolve_main", &buffers, 0, k)
+    let resolve = if ctx.plan.tail { FABS_WITH_TAIL } else { 0 };
+    ctx.pixel_kernel("fabs", "resolve_main", &buffers, resolve, k)?;
+    if tail_ran {
+        ctx.merged = u64::from(ctx.read_u32(&tail_words)?[1]);
+    }
+    Ok(())
 }

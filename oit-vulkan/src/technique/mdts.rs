@@ -7,9 +7,37 @@ use oit_core::{OitError, Technique};
 
 use crate::Drivers;
 use crate::ctx::{Init, VkCtx};
+use crate::device::Buffer;
 
 const MDTS_32: u32 = 0;
 const MDTS_64: u32 = 1;
+const MDTS_WITH_TAIL: u32 = 0x10000;
+const MDTS_TAIL_PASS: u32 = 0x20000;
+
+/// The capture, the tail pass where the plan has a tail and a pixel overflowed, the resolve (as
+/// oit-wgpu's `mdts.rs`).
+fn passes(
+    ctx: &mut VkCtx<'_>,
+    drivers: &Drivers<'_>,
+    arrays: [&Buffer; 3],
+    mode: u32,
+    k: u32,
+) -> Result<(), OitError> {
+    let (tail, tail_words) = super::tail_buffers(ctx)?;
+    let unused = ctx.placeholder()?;
+    let buffers = [arrays[0], arrays[1], arrays[2], &*unused, &*tail, &*tail_words];
+    let mode = if ctx.plan.tail { mode | MDTS_WITH_TAIL } else { mode };
+    ctx.geometry_pass(&drivers.scene, "mdts", &buffers, mode, k)?;
+    let tail_ran = ctx.plan.tail && ctx.read_u32(&tail_words)?[0] != 0;
+    if tail_ran {
+        ctx.geometry_pass(&drivers.scene, "mdts", &buffers, mode | MDTS_TAIL_PASS, k)?;
+    }
+    ctx.pixel_kernel("mdts", "resolve_main", &buffers, mode, k)?;
+    if tail_ran {
+        ctx.merged = u64::from(ctx.read_u32(&tail_words)?[1]);
+    }
+    Ok(())
+}
 
 pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     let wide = match ctx.settings.technique {
@@ -23,16 +51,11 @@ pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), O
     if wide {
         let (high, low) = (ctx.placeholder()?, ctx.placeholder()?);
         let slots = ctx.buffer("mdts64 slots", words * 2, Init::Fill(u32::MAX))?;
-        let buffers = [&*high, &*low, &*slots];
-        ctx.geometry_pass(&drivers.scene, "mdts", &buffers, MDTS_64, k)?;
-        return ctx.pixel_kernel("mdts", "resolve_main", &buffers, MDTS_64, k);
+        return passes(ctx, drivers, [&*high, &*low, &*slots], MDTS_64, k);
     }
     let alpha8 = ctx.plan.mdts_alpha8;
     let high = ctx.buffer("mdts high words", words, Init::Fill(u32::MAX))?;
     let low = ctx.buffer("mdts low words", words, Init::Fill(u32::MAX))?;
     let slots = ctx.placeholder()?;
-    let buffers = [&*high, &*low, &*slots];
-    let mode = MDTS_32 | alpha8 << 8;
-    ctx.geometry_pass(&drivers.scene, "mdts", &buffers, mode, k)?;
-    ctx.pixel_kernel("mdts", "resolve_main", &buffers, mode, k)
+    passes(ctx, drivers, [&*high, &*low, &*slots], MDTS_32 | alpha8 << 8, k)
 }

@@ -23,6 +23,18 @@ use crate::ctx::{Init, VkCtx};
 use crate::device::Buffer;
 use crate::raster::ComputeRaster;
 
+/// The buffers of `tail.wgsl` (`--overflow tail`), as oit-wgpu's `tail_buffers`: the tail sums
+/// and two bookkeeping words, or placeholders where the plan has no tail.
+pub(crate) fn tail_buffers(ctx: &mut VkCtx<'_>) -> Result<(Rc<Buffer>, Rc<Buffer>), OitError> {
+    if !ctx.plan.tail {
+        return Ok((ctx.placeholder()?, ctx.placeholder()?));
+    }
+    let sums = ctx.buffer("tail sums", u64::from(ctx.pixels) * 5 * 2, Init::Zero)?;
+    let words = ctx.buffer("tail words", 2, Init::Zero)?;
+    ctx.storage_bytes -= 8;
+    Ok((sums, words))
+}
+
 /// Fragments per pixel from one counting pass (the buffer), and the deepest pixel's count.
 pub(crate) fn count(ctx: &mut VkCtx<'_>, raster: &ComputeRaster) -> Result<(Rc<Buffer>, u32), OitError> {
     let counts = ctx.buffer("fragment counts", u64::from(ctx.pixels), Init::Zero)?;

@@ -1,7 +1,8 @@
 //! `adp` on the GPU: adaptive bucket depth peeling (Liu et al., HPG 2009, section 3.3), the same
 //! passes, storage and resolve as oit-cpu's `technique/adp.rs` (see its docs), in `adp.wgsl`:
 //! bounds pass, histogram pass (atomicOr), the deepest pixel's set-bin count (one readback) for the
-//! number of batches, then one bucket pass and one resolve per batch of 32.
+//! number of batches, then one bucket pass and one resolve per batch of 32. Each bucket keeps its
+//! bin's farthest (MAX) and nearest (MIN) words, so a bin of two fragments is captured whole.
 
 use oit_core::OitError;
 use oit_core::rules::{BUCKETS, HISTOGRAM_WORDS};
@@ -20,7 +21,8 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     ctx.storage_bytes -= 4;
     // oit-cpu allocates the buckets after the histogram pass; the bytes are the same
     let buckets = ctx.buffer("adp buckets", px * BUCKETS as u64 * 2, Init::Zero)?;
-    let buffers = [&bounds, &hist, &buckets, &max_bins];
+    let nearest = ctx.buffer("adp nearest", px * BUCKETS as u64 * 2, Init::Fill(u32::MAX))?;
+    let buffers = [&bounds, &hist, &buckets, &max_bins, &nearest];
     ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, 0, 0)?;
     ctx.pixel_kernel(WGSL, "count_main", &buffers, 0, 0)?;
     let bins = ctx.gpu.read_u32(&max_bins)?[0];

@@ -7,6 +7,9 @@
 @group(0) @binding(4) var<storage, read_write> buckets: array<atomic<u64>>;
 // The deepest pixel's set-bin count.
 @group(0) @binding(5) var<storage, read_write> max_bins: array<atomic<u32>>;
+// 32 u64 a pixel beside the buckets: MIN of each bin's depth keys (all ones is empty), so a bin of
+// two fragments is captured whole (oit-cpu's `technique/adp.rs`).
+@group(0) @binding(6) var<storage, read_write> nearest: array<atomic<u64>>;
 
 const ADP_FILLED: u64 = 0x8000000000000000lu;
 
@@ -37,8 +40,12 @@ fn capture(f: Fragment) {
     let rank = adp_rank(px, bin);
     if (rank / BUCKETS == fu.param) {
         let key = (u64(depth_bits(f.depth)) << 32u) | u64(payload(f, fu.effect));
-        // two fragments in one bin: the MAX kept one
-        if (atomicMax(&buckets[px * BUCKETS + rank % BUCKETS], key | ADP_FILLED) != 0lu) {
+        let bucket = px * BUCKETS + rank % BUCKETS;
+        // the nearest of the bin (a depth key never has all bits set: depths are ≤ 1)
+        atomicMin(&nearest[bucket], key);
+        // two fragments in one bin: the MAX kept one (the resolve takes one back where the MIN
+        // kept another)
+        if (atomicMax(&buckets[bucket], key | ADP_FILLED) != 0lu) {
             lose(px);
         }
     } else if (rank / BUCKETS > fu.param && last_pass()) {
@@ -61,7 +68,8 @@ fn count_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     atomicMax(&max_bins[0], n);
 }
 
-// One batch's resolve: the filled buckets in rank order (nearest first), emptied for the next.
+// One batch's resolve: the filled buckets in rank order, each bin's nearest then its farthest
+// where they differ, emptied for the next.
 @compute @workgroup_size(64)
 fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let px = kernel_pixel(gid, groups);
@@ -71,8 +79,14 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     var s = state[px];
     for (var b = 0u; b < BUCKETS; b++) {
         let key = atomicExchange(&buckets[px * BUCKETS + b], 0lu);
+        let near = atomicExchange(&nearest[px * BUCKETS + b], 0xfffffffffffffffflu);
         if (key != 0lu) {
             let k = key & ~ADP_FILLED;
+            if (near != k) {
+                // a second fragment of the bin, in front of the farthest: captured after all
+                push_local(&s, bitcast<f32>(u32(near >> 32u)), u32(near & 0xfffffffflu));
+                atomicSub(&acct[3u * px], 1u);
+            }
             push_local(&s, bitcast<f32>(u32(k >> 32u)), u32(k & 0xfffffffflu));
         }
     }

@@ -1,19 +1,23 @@
 //! `fabs:K` on the GPU (see oit-cpu's `technique/fabs.rs` and `fabs.wgsl`): slots of a 64-bit
 //! (depth bits, primitive id) key and a 32-bit payload, 12 bytes as oit-cpu's, sorted by key, so
 //! ties come out in primitive order as the reference's do. A pixel that overflows keeps its K
-//! smallest keys, so the same input gives the same image (see `fabs.wgsl`).
+//! smallest keys, so the same input gives the same image (see `fabs.wgsl`). `--overflow tail` adds
+//! one pass where a pixel overflowed, merging what lies behind its K into a tail (`tail.wgsl`).
 
 use oit_core::OitError;
 
 use crate::Drivers;
 use crate::ctx::{GpuCtx, Init};
 
-const WGSL: &str = include_str!("fabs.wgsl");
+const WGSL: &str = concat!(include_str!("fabs.wgsl"), "\n", include_str!("tail.wgsl"));
 
 /// The passes of `fabs.wgsl` (pass_index).
 const FABS_CAPTURE: u32 = 0;
 const FABS_KEYS: u32 = 1;
 const FABS_PAYLOADS: u32 = 2;
+const FABS_TAIL: u32 = 3;
+/// The resolve's pass_index when the plan has a tail.
+const FABS_WITH_TAIL: u32 = 1;
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     // slots per pixel by the plan: K, or the deepest pixel's count from a counting pass
@@ -26,7 +30,9 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     let overflowed = ctx.buffer("fabs overflowed", 1, Init::Zero)?;
     // the flag is bookkeeping, not per-pixel storage (oit-cpu counts none either)
     ctx.storage_bytes -= 4;
-    let buffers = [&counters, &slots, &payloads, &overflowed];
+    let (tail, tail_words) = super::tail_buffers(ctx)?;
+    let buffers = [&counters, &slots, &payloads, &overflowed, &tail, &tail_words];
+    let mut tail_ran = false;
     ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, FABS_CAPTURE, k)?;
     // sized from the counting pass, no pixel can overflow: no check, no readback
     if !ctx.plan.needs_count() {
@@ -35,7 +41,16 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
             // the K smallest (depth, primitive) keys of each overflowing pixel, then their payloads
             ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, FABS_KEYS, k)?;
             ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, FABS_PAYLOADS, k)?;
+            if ctx.plan.tail {
+                ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, FABS_TAIL, k)?;
+                tail_ran = true;
+            }
         }
     }
-    ctx.pixel_kernel(WGSL, "resolve_main", &buffers, 0, k)
+    let resolve = if ctx.plan.tail { FABS_WITH_TAIL } else { 0 };
+    ctx.pixel_kernel(WGSL, "resolve_main", &buffers, resolve, k)?;
+    if tail_ran {
+        super::read_merged(ctx, &tail_words)?;
+    }
+    Ok(())
 }

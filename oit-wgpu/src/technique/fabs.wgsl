@@ -18,6 +18,10 @@
 // FABS_KEYS inserts every key of those pixels by repeated atomicMin, carrying the larger value on
 // (as mdts64), and FABS_PAYLOADS writes each surviving key's payload beside it. Pixels that did
 // not overflow are untouched by the extra passes; a frame with none runs none of them.
+//
+// `--overflow tail` (tail.wgsl, appended): after those passes an overflowing pixel's slots hold
+// its K smallest keys sorted, and FABS_TAIL adds every fragment whose key is larger than the last
+// into the pixel's tail; the resolve (pass_index FABS_WITH_TAIL) puts the tail behind the K.
 @group(0) @binding(2) var<storage, read_write> counters: array<atomic<u32>>;
 @group(0) @binding(3) var<storage, read_write> slots: array<atomic<u64>>;
 @group(0) @binding(4) var<storage, read_write> payloads: array<u32>;
@@ -28,6 +32,8 @@ const FABS_EMPTY: u64 = 0xfffffffffffffffflu;
 const FABS_CAPTURE: u32 = 0u;
 const FABS_KEYS: u32 = 1u;
 const FABS_PAYLOADS: u32 = 2u;
+const FABS_TAIL: u32 = 3u;
+const FABS_WITH_TAIL: u32 = 1u;
 
 fn capture(f: Fragment) {
     let k = fu.param;
@@ -46,6 +52,12 @@ fn capture(f: Fragment) {
         return;
     }
     if (atomicLoad(&counters[f.pixel]) <= k) {
+        return;
+    }
+    if (fu.pass_index == FABS_TAIL) {
+        if (key > atomicLoad(&slots[(k - 1u) * stride + f.pixel])) {
+            tail_add(f.pixel, pack_rgba8(f.color));
+        }
         return;
     }
     if (fu.pass_index == FABS_KEYS) {
@@ -107,6 +119,9 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         for (var i = 0u; i < n; i++) {
             push_local(&s, bitcast<f32>(u32(list[i] >> 32u)), list_payloads[i]);
         }
+        if (fu.pass_index == FABS_WITH_TAIL) {
+            tail_resolve(&s, px);
+        }
         state[px] = s;
         return;
     }
@@ -122,6 +137,9 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     for (var i = 0u; i < n; i++) {
         let key = atomicLoad(&slots[i * stride + px]);
         push_local(&s, bitcast<f32>(u32(key >> 32u)), payloads[i * stride + px]);
+    }
+    if (fu.pass_index == FABS_WITH_TAIL) {
+        tail_resolve(&s, px);
     }
     state[px] = s;
 }

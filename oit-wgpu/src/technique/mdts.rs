@@ -5,27 +5,49 @@
 //! counting pass to the deepest pixel, as oit-cpu does.
 //!
 //! The arrays end as the K smallest words inserted, sorted, whatever the arrival order, so the
-//! result equals oit-cpu's exactly (mdts's packing losses included).
+//! result equals oit-cpu's exactly (mdts's packing losses included). `--overflow tail` adds one
+//! pass where a pixel overflowed (the capture raises a flag, read back), merging what lies behind
+//! the K into a tail (`tail.wgsl`).
 
 use oit_core::{OitError, Technique};
 
 use crate::Drivers;
 use crate::ctx::{GpuCtx, Init};
 
-const WGSL: &str = include_str!("mdts.wgsl");
+const WGSL: &str = concat!(include_str!("mdts.wgsl"), "\n", include_str!("tail.wgsl"));
 
 /// The modes of `mdts.wgsl` (low byte of pass_index).
 const MDTS_32: u32 = 0;
 const MDTS_64: u32 = 1;
+/// Flags of pass_index: the plan has a tail; this pass is the tail pass.
+const MDTS_WITH_TAIL: u32 = 0x10000;
+const MDTS_TAIL_PASS: u32 = 0x20000;
 
-/// A small buffer bound where the mode's WGSL declares an array it does not use (not storage).
-fn placeholder(ctx: &GpuCtx<'_>) -> wgpu::Buffer {
-    ctx.gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("unused binding"),
-        size: 16,
-        usage: wgpu::BufferUsages::STORAGE,
-        mapped_at_creation: false,
-    })
+use super::placeholder;
+
+/// The capture in `mode`, then (where the plan has a tail and a pixel overflowed) the tail pass,
+/// then the resolve: `buffers` are the mode's three arrays.
+fn passes(
+    ctx: &mut GpuCtx<'_>,
+    drivers: &Drivers<'_>,
+    arrays: [&wgpu::Buffer; 3],
+    mode: u32,
+    k: u32,
+) -> Result<(), OitError> {
+    let (tail, tail_words) = super::tail_buffers(ctx)?;
+    let unused = placeholder(ctx);
+    let buffers = [arrays[0], arrays[1], arrays[2], &unused, &tail, &tail_words];
+    let mode = if ctx.plan.tail { mode | MDTS_WITH_TAIL } else { mode };
+    ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, mode, k)?;
+    let tail_ran = ctx.plan.tail && ctx.gpu.read_u32(&tail_words)?[0] != 0;
+    if tail_ran {
+        ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, mode | MDTS_TAIL_PASS, k)?;
+    }
+    ctx.pixel_kernel(WGSL, "resolve_main", &buffers, mode, k)?;
+    if tail_ran {
+        super::read_merged(ctx, &tail_words)?;
+    }
+    Ok(())
 }
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
@@ -41,17 +63,12 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     if wide {
         let (high, low) = (placeholder(ctx), placeholder(ctx));
         let slots = ctx.buffer("mdts64 slots", words * 2, Init::Fill(u32::MAX))?;
-        let buffers = [&high, &low, &slots];
-        ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, MDTS_64, k)?;
-        return ctx.pixel_kernel(WGSL, "resolve_main", &buffers, MDTS_64, k);
+        return passes(ctx, drivers, [&high, &low, &slots], MDTS_64, k);
     }
     // alpha is not stored: the plan's (the override, else the mean of the objects' alphas)
     let alpha8 = ctx.plan.mdts_alpha8;
     let high = ctx.buffer("mdts high words", words, Init::Fill(u32::MAX))?;
     let low = ctx.buffer("mdts low words", words, Init::Fill(u32::MAX))?;
     let slots = placeholder(ctx);
-    let buffers = [&high, &low, &slots];
-    let mode = MDTS_32 | alpha8 << 8;
-    ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, mode, k)?;
-    ctx.pixel_kernel(WGSL, "resolve_main", &buffers, mode, k)
+    passes(ctx, drivers, [&high, &low, &slots], MDTS_32 | alpha8 << 8, k)
 }

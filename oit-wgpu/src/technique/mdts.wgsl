@@ -7,6 +7,11 @@
 // 20 + 12-bit words, high then low colour halves; alpha is not stored, the resolve uses alpha8,
 // the scene's alpha as oit-cpu computes it) or MDTS_64 (one u64 array of depth bits << 32 |
 // payload, exact). The mode's unused arrays are bound to small placeholders.
+//
+// `--overflow tail` (tail.wgsl, appended): with MDTS_WITH_TAIL set the capture raises
+// tail_words[0] when it carries a word off a full array, and the resolve puts the pixel's tail
+// behind its K; the pass MDTS_TAIL_PASS adds every fragment whose word is larger than the pixel's
+// K-th into the tail (one equal to it that was carried off stays lost).
 @group(0) @binding(2) var<storage, read_write> mdts_high: array<atomic<u32>>;
 @group(0) @binding(3) var<storage, read_write> mdts_low: array<atomic<u32>>;
 @group(0) @binding(4) var<storage, read_write> mdts_slots: array<atomic<u64>>;
@@ -15,6 +20,8 @@ const MDTS_EMPTY32: u32 = 0xffffffffu;
 const MDTS_EMPTY64: u64 = 0xfffffffffffffffflu;
 const MDTS_32: u32 = 0u;
 const MDTS_64: u32 = 1u;
+const MDTS_WITH_TAIL: u32 = 0x10000u;
+const MDTS_TAIL_PASS: u32 = 0x20000u;
 
 // insert_min32 into the high array at `base` (K words); true when a word fell off the end
 fn mdts_insert_high(base: u32, key: u32) -> bool {
@@ -53,20 +60,42 @@ fn mdts_insert64(base: u32, key: u64) -> bool {
     return true;
 }
 
+// A word carried off a full array: one fragment lost (merged later where there is a tail).
+fn mdts_lose(px: u32) {
+    lose(px);
+    // read before written: one word every overflowing fragment of the frame would hit
+    if ((fu.pass_index & MDTS_WITH_TAIL) != 0u && atomicLoad(&tail_words[0]) == 0u) {
+        atomicStore(&tail_words[0], 1u);
+    }
+}
+
 fn capture(f: Fragment) {
     let base = f.pixel * fu.param;
+    let last = base + fu.param - 1u;
     if ((fu.pass_index & 0xffu) == MDTS_64) {
-        if (mdts_insert64(base, (u64(depth_bits(f.depth)) << 32u) | u64(payload(f, fu.effect)))) {
+        let key = (u64(depth_bits(f.depth)) << 32u) | u64(payload(f, fu.effect));
+        if ((fu.pass_index & MDTS_TAIL_PASS) != 0u) {
+            if (key > atomicLoad(&mdts_slots[last])) {
+                tail_add(f.pixel, pack_rgba8(f.color));
+            }
+        } else if (mdts_insert64(base, key)) {
             // a key carried off the end of the full array
-            lose(f.pixel);
+            mdts_lose(f.pixel);
         }
         return;
     }
     // All ones is the empty word: a fragment at d ≈ 1 with that colour gives up its last bit.
     let w = min(mdts_pack(f.depth, pack_rgba8(f.color)), vec2<u32>(MDTS_EMPTY32 - 1u));
+    if ((fu.pass_index & MDTS_TAIL_PASS) != 0u) {
+        if (w.x > atomicLoad(&mdts_high[last])) {
+            // the fragment's 8-bit RGB with the plan's alpha, as the kept words get
+            tail_add(f.pixel, (pack_rgba8(f.color) & 0xffffffu) | (((fu.pass_index >> 8u) & 0xffu) << 24u));
+        }
+        return;
+    }
     // both arrays hold the same number of words: one carried off the high array is one lost
     if (mdts_insert_high(base, w.x)) {
-        lose(f.pixel);
+        mdts_lose(f.pixel);
     }
     _ = mdts_insert_low(base, w.y);
 }
@@ -88,6 +117,9 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
             }
             push_local(&s, bitcast<f32>(u32(key >> 32u)), u32(key & 0xfffffffflu));
         }
+        if ((fu.pass_index & MDTS_WITH_TAIL) != 0u) {
+            tail_resolve(&s, px);
+        }
         state[px] = s;
         return;
     }
@@ -100,6 +132,9 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         }
         let u = mdts_unpack(vec2<u32>(h, l));
         push_local(&s, bitcast<f32>(u.x), u.y | (alpha8 << 24u));
+    }
+    if ((fu.pass_index & MDTS_WITH_TAIL) != 0u) {
+        tail_resolve(&s, px);
     }
     state[px] = s;
 }

@@ -27,6 +27,36 @@ const SCAN_WGSL: &str = include_str!("scan.wgsl");
 /// Words one workgroup of `scan.wgsl` scans.
 const SCAN_BLOCK: u64 = 256;
 
+/// A small buffer bound where a module declares an array the frame does not use (not storage).
+pub(crate) fn placeholder(ctx: &GpuCtx<'_>) -> wgpu::Buffer {
+    ctx.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("unused binding"),
+        size: 16,
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    })
+}
+
+/// The buffers of `tail.wgsl` (`--overflow tail`), bound at 6 and 7: the tail sums (5 u64 a pixel,
+/// `Plan::arrays`'s "tail sums") and two bookkeeping words (overflowed, merged; not storage);
+/// placeholders where the plan has no tail.
+pub(crate) fn tail_buffers(ctx: &mut GpuCtx<'_>) -> Result<(wgpu::Buffer, wgpu::Buffer), OitError> {
+    if !ctx.plan.tail {
+        return Ok((placeholder(ctx), placeholder(ctx)));
+    }
+    let sums = ctx.buffer("tail sums", u64::from(ctx.pixels) * 5 * 2, Init::Zero)?;
+    let words = ctx.buffer("tail words", 2, Init::Zero)?;
+    ctx.storage_bytes -= 8;
+    Ok((sums, words))
+}
+
+/// After the resolve of a frame whose tail pass ran: the fragments merged, read back into the
+/// frame's `merged`.
+pub(crate) fn read_merged(ctx: &mut GpuCtx<'_>, words: &wgpu::Buffer) -> Result<(), OitError> {
+    ctx.merged = u64::from(ctx.gpu.read_u32(words)?[1]);
+    Ok(())
+}
+
 /// Fragments per pixel from one counting pass (the buffer), and the deepest pixel's count.
 pub(crate) fn count(ctx: &mut GpuCtx<'_>, driver: &dyn Driver) -> Result<(wgpu::Buffer, u32), OitError> {
     let counts = ctx.buffer("fragment counts", u64::from(ctx.pixels), Init::Zero)?;

@@ -1,0 +1,69 @@
+// `--overflow tail` for fabs:K, mdts:K and mdts64:K, appended to fabs.wgsl and mdts.wgsl: oit-cpu's
+// `Ctx::tail_pass` and `Resolve::tail`. The tail of multi-layer alpha blending (Salvi &
+// Vaidyanathan 2014), kept as order-independent sums: a geometry pass adds every fragment behind
+// its pixel's K-th nearest into u64 integer sums of its RGBA8 colour (Σα·r, Σα·g, Σα·b in units of
+// 1/255², Σα in units of 1/255, the count; 64-bit atomicAdd, so the sums do not depend on arrival
+// order), and moves it from `lost` (where the capture counted it, finding no room) to merged. The
+// resolve puts the sums' weighted average (Bavoil & Myers 2008) behind the K sorted fragments, as
+// dual depth peeling's back half. The technique binds the sums at 6 and two words at 7.
+@group(0) @binding(6) var<storage, read_write> tail_sums: array<atomic<u64>>;
+// [a pixel overflowed (mdts raises it in its capture), fragments merged in all (the resolve)]
+@group(0) @binding(7) var<storage, read_write> tail_words: array<atomic<u32>>;
+
+fn tail_add(px: u32, c: u32) {
+    let a = u64(c >> 24u);
+    let base = px * 5u;
+    atomicAdd(&tail_sums[base], a * u64(c & 0xffu));
+    atomicAdd(&tail_sums[base + 1u], a * u64((c >> 8u) & 0xffu));
+    atomicAdd(&tail_sums[base + 2u], a * u64((c >> 16u) & 0xffu));
+    atomicAdd(&tail_sums[base + 3u], a);
+    atomicAdd(&tail_sums[base + 4u], 1lu);
+    atomicSub(&acct[3u * px], 1u);
+}
+
+// f32::powi as Rust's compiler-builtins computes it (square and multiply), n ≥ 0; weighted.wgsl's.
+fn tail_powi(x_in: f32, n_in: u32) -> f32 {
+    var x = x_in;
+    var n = n_in;
+    var r = 1.0;
+    loop {
+        if ((n & 1u) != 0u) {
+            r *= x;
+        }
+        n = n >> 1u;
+        if (n == 0u) {
+            break;
+        }
+        x *= x;
+    }
+    return r;
+}
+
+// The pixel's tail behind what was pushed into `s` (composite::weighted_average over the
+// background, as the back colour the front composites over); counts its fragments merged.
+fn tail_resolve(s: ptr<function, PixelState>, px: u32) {
+    let base = px * 5u;
+    let count = u32(atomicLoad(&tail_sums[base + 4u]));
+    if (count == 0u) {
+        return;
+    }
+    let premultiplied = vec3<f32>(
+        f32(atomicLoad(&tail_sums[base])),
+        f32(atomicLoad(&tail_sums[base + 1u])),
+        f32(atomicLoad(&tail_sums[base + 2u])),
+    ) / (255.0 * 255.0);
+    let alpha = f32(atomicLoad(&tail_sums[base + 3u])) / 255.0;
+    let bg = fu.background.xyz;
+    var back = bg;
+    if (alpha > 0.0) {
+        let mean_color = premultiplied / alpha;
+        let mean_alpha = min(alpha / f32(count), 1.0);
+        let t = tail_powi(1.0 - mean_alpha, count);
+        back = mean_color * (1.0 - t) + bg * t;
+    }
+    (*s).br = back.x;
+    (*s).bg = back.y;
+    (*s).bb = back.z;
+    (*s).has_back = 1u;
+    atomicAdd(&tail_words[1], count);
+}
