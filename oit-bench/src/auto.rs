@@ -21,7 +21,9 @@
 //!   against `--memory`: over it, the frame would run in screen tiles ([`oit_core::tiling`]), at
 //!   least ⌈storage / memory⌉ of them, each one setting the whole scene up again; the prediction
 //!   adds those repeated geometry and fixed costs, and a candidate one pixel of which does not
-//!   fit is refused.
+//!   fit is refused. On a hardware raster path the GPU rasterizes each window itself, so
+//!   fragments at the seams may differ from the whole frame's (the CPU and compute paths give the
+//!   same fragments bit for bit): there a tiled candidate has no bound below 1.
 //! - its **predicted time** from the backend/path's calibration ([`TechniqueModel::predict`])
 //!   with the geometry passes its plan runs at this N ([`geometry_passes`]).
 //!
@@ -41,7 +43,7 @@
 //! the CPU's), and the choice says so: the ranking then rests on another device's relative costs.
 
 use oit_core::plan::{Counted, Plan, Sizing};
-use oit_core::{Backend, Camera, OitError, Scene, Settings, Technique};
+use oit_core::{Backend, Camera, OitError, RasterPath, Scene, Settings, Technique};
 use serde::Serialize;
 
 use crate::model::{CPU_CALIBRATION, Calibration, ModelFile, SceneStats, geometry_passes};
@@ -69,7 +71,9 @@ impl Budget {
             )));
         }
         if memory == Some(0) {
-            return Err(OitError::InvalidSettings("--memory must be at least 1 byte, e.g. --memory 512M".into()));
+            return Err(OitError::InvalidSettings(
+                "--memory must be at least 1 byte, e.g. --memory 512M".into(),
+            ));
         }
         Ok(Budget { max_epr, memory })
     }
@@ -207,17 +211,22 @@ impl Choice {
 
 /// The counting pass: the reference frame's per-pixel fragment counts on `backend` at `camera` and
 /// `settings` (its technique replaced by the reference), as the model's statistics, with the
-/// counting frame (its layers included) for a caller that reports depth complexity.
+/// counting frame (its layers included) for a caller that reports depth complexity. The count is
+/// `auto`'s own work, not the frame the budget is for: it runs without `--memory` (the device's
+/// limits still tile it where they must).
 pub fn count(
     backend: &dyn Backend,
     scene: &Scene,
     camera: &Camera,
     settings: &Settings,
 ) -> Result<(SceneStats, oit_core::Frame), OitError> {
-    let reference = Settings { technique: Technique::Reference, ..settings.clone() };
+    let reference = Settings { technique: Technique::Reference, memory: None, ..settings.clone() };
     let frame = backend.render(scene, camera, &reference)?;
     let layers = frame.layers.as_ref().ok_or_else(|| {
-        OitError::Device(format!("{}'s reference frame came back without its per-pixel counts", backend.name()))
+        OitError::Device(format!(
+            "{}'s reference frame came back without its per-pixel counts",
+            backend.name()
+        ))
     })?;
     let stats = SceneStats::from_layers(scene.triangle_count(), frame.stats.fragments, layers);
     Ok((stats, frame))
@@ -254,7 +263,9 @@ pub fn epr_bound(plan: &Plan, stats: &SceneStats) -> (f64, String) {
         Technique::Fabs { .. } => match fixed {
             Some(k) if k < n => (
                 share_deeper(stats, k),
-                format!("pixels deeper than K = {k} keep their {k} nearest and lose the rest; the others are exact"),
+                format!(
+                    "pixels deeper than K = {k} keep their {k} nearest and lose the rest; the others are exact"
+                ),
             ),
             _ => (0.0, "exact: K at least the deepest pixel, sorted by (depth, primitive id)".into()),
         },
@@ -269,9 +280,10 @@ pub fn epr_bound(plan: &Plan, stats: &SceneStats) -> (f64, String) {
         Technique::WeightedAverage | Technique::WeightedSum | Technique::Plain => {
             (two, "order ignored: exact at one fragment, any pixel of 2 or more can differ".into())
         }
-        Technique::Bdp { .. } => {
-            (two, "bucket collisions need 2 fragments in one bucket: only pixels of 2 or more can differ".into())
-        }
+        Technique::Bdp { .. } => (
+            two,
+            "bucket collisions need 2 fragments in one bucket: only pixels of 2 or more can differ".into(),
+        ),
         Technique::Adp => {
             (two, "fragments sharing one of 1024 bins are lost: only pixels of 2 or more can differ".into())
         }
@@ -357,16 +369,14 @@ pub fn choose(
                 continue;
             }
         };
-        let (epr, epr_reason) = epr_bound(&plan, stats);
+        let (mut epr, mut epr_reason) = epr_bound(&plan, stats);
         let storage = plan.storage_bytes(pixels, counted);
         let passes = geometry_passes(&plan, n);
         let table = tables.lookup(&label);
         let model = table.as_ref().and_then(|(c, _)| model_name(technique, c));
         let mut rejected = Vec::new();
-        if epr > budget.max_epr {
-            rejected.push(format!("EPR bound {epr:.4} over --max-epr {}", budget.max_epr));
-        }
         let mut tiles = 1u64;
+        let mut seams = false;
         if let Some(memory) = budget.memory
             && storage > memory
         {
@@ -381,13 +391,29 @@ pub fn choose(
                     oit_core::tiling::MAX_TILES
                 ));
             }
+            if backend.raster_path(&s) == RasterPath::Hardware && covered(stats) > 0 {
+                seams = epr < 1.0;
+                epr = 1.0;
+                epr_reason = format!(
+                    "{epr_reason}; but in screen tiles on the hardware raster path, where the GPU \
+                     rasterizes each window itself and fragments at the seams may differ from the \
+                     whole frame's: no bound"
+                );
+            }
+        }
+        if epr > budget.max_epr {
+            rejected.push(format!(
+                "EPR bound {epr:.4} over --max-epr {}{}",
+                budget.max_epr,
+                if seams { " (in screen tiles on the hardware raster path)" } else { "" }
+            ));
         }
         let predicted = match (&table, &model) {
             (Some((c, _)), Some(m)) => c.technique(m).map(|t| {
                 let once = t.predict(passes, stats);
                 // each further tile sets the whole scene up again: its triangles and fixed cost
-                let repeated = t.coefficients[0] * f64::from(passes) * stats.triangles as f64 * 1e-6
-                    + t.coefficients[4];
+                let repeated =
+                    t.coefficients[0] * f64::from(passes) * stats.triangles as f64 * 1e-6 + t.coefficients[4];
                 once + (tiles - 1) as f64 * repeated
             }),
             _ => None,
@@ -424,7 +450,7 @@ pub fn choose(
     let Some((first, calibration)) = judged.first().filter(|(c, _)| c.rejected.is_none()).cloned() else {
         let exact: Vec<String> = judged
             .iter()
-            .filter(|(c, _)| c.epr_bound == 0.0)
+            .filter(|(c, _)| c.epr_reason.starts_with("exact:"))
             .map(|(c, _)| format!("{} ({})", c.technique, c.rejected.as_deref().unwrap_or("eligible")))
             .collect();
         return Err(OitError::InvalidSettings(format!(
