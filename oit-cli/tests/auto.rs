@@ -33,18 +33,17 @@ fn scenes() -> Vec<(String, Scene)> {
     names.into_iter().map(|n| (n.clone(), load_scene(&n).expect("the scene loads"))).collect()
 }
 
-/// Every backend and raster path compiled in whose device opens: the CPU, and wgpu's two paths
-/// where an adapter is found (lavapipe counts).
+/// Every backend and raster path compiled in whose device opens: the CPU, and each GPU backend's
+/// paths where an adapter is found (lavapipe counts).
 fn backends() -> Vec<(Box<dyn Backend>, u32)> {
     let options = BackendOptions::default();
     let mut out: Vec<(Box<dyn Backend>, u32)> =
         select("cpu", &options).expect("the cpu backend").into_iter().map(|b| (b, 72)).collect();
-    match select("wgpu", &options) {
-        Ok(found) => {
-            let raster = RasterChoice::parse(Some("all"), "wgpu").expect("both paths");
-            out.extend(with_paths(found, raster).expect("wgpu's paths").into_iter().map(|b| (b, 48)));
+    for gpu in ["wgpu", "vulkan"] {
+        match select(gpu, &options).and_then(|found| with_paths(found, RasterChoice::All)) {
+            Ok(found) => out.extend(found.into_iter().map(|b| (b, 48))),
+            Err(e) => eprintln!("note: {gpu} skipped: {e}"),
         }
-        Err(e) => eprintln!("note: wgpu skipped: {e}"),
     }
     out
 }
@@ -138,12 +137,12 @@ fn every_bound_holds() {
     let mut checked = 0;
     let scenes = scenes();
     for (backend, size) in &runs {
-        for (name, scene) in scenes.iter().cloned() {
+        for (name, scene) in &scenes {
             let settings = Settings { width: *size, height: *size, ..Settings::default() };
-            let camera = camera(&scene);
+            let camera = camera(scene);
             let budget = Budget::new(1.0, None).unwrap();
             let (choice, reference) =
-                resolve(backend.as_ref(), &scene, &camera, &settings, &tables, budget).unwrap();
+                resolve(backend.as_ref(), scene, &camera, &settings, &tables, budget).unwrap();
             let stats = oit_bench::model::SceneStats::from_layers(
                 scene.triangle_count(),
                 reference.stats.fragments,
@@ -159,10 +158,9 @@ fn every_bound_holds() {
             }
             for technique in all {
                 let s = Settings { technique, ..settings.clone() };
-                let Ok(plan) = Plan::new(backend.name(), &scene, &s) else { continue };
+                let Ok(plan) = Plan::new(backend.name(), scene, &s) else { continue };
                 let (bound, why) = epr_bound(&plan.on_path(backend.raster_path(&s)), &stats);
-                let frame =
-                    backend.render(&scene, &camera, &s).unwrap_or_else(|e| panic!("{technique}: {e}"));
+                let frame = backend.render(scene, &camera, &s).unwrap_or_else(|e| panic!("{technique}: {e}"));
                 let acc = accuracy(&reference, &frame.image).unwrap();
                 assert!(
                     acc.epr <= bound,
