@@ -94,6 +94,9 @@ struct RenderJson<'a> {
     auto: Option<&'a Choice>,
 }
 
+/// Largest `--calibration` file read (the committed ones are under 100 KiB).
+const MAX_CALIBRATION_BYTES: u64 = 16 << 20;
+
 /// What `--technique` asked for: one technique, or a choice under budgets.
 pub enum Requested {
     /// The technique named.
@@ -144,6 +147,16 @@ pub fn check(args: &RenderArgs) -> Result<(Requested, Prepared), OitError> {
         let memory = args.scene.memory.as_deref().map(oit_core::parse_memory).transpose()?;
         let given = match &args.calibration {
             Some(path) => {
+                // a calibration is a few kilobytes: refuse a device or a huge file before reading it
+                let meta =
+                    std::fs::metadata(path).map_err(|source| OitError::Io { path: path.clone(), source })?;
+                if !meta.is_file() || meta.len() > MAX_CALIBRATION_BYTES {
+                    return Err(OitError::InvalidSettings(format!(
+                        "--calibration {} is not an oit calibration: expected a calibration.json \
+                         written by `oit bench --calibrate` (a file of at most {MAX_CALIBRATION_BYTES} bytes)",
+                        path.display()
+                    )));
+                }
                 let text = std::fs::read_to_string(path)
                     .map_err(|source| OitError::Io { path: path.clone(), source })?;
                 let name = path.display().to_string();

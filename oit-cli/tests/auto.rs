@@ -263,6 +263,10 @@ fn bad_budgets_are_one_clear_error() {
         &oit(&["render", "-t", "auto", "--calibration", "/nonexistent.json", "-o", o]),
         &["cannot read"],
     );
+    assert_error(
+        &oit(&["render", "-t", "auto", "--calibration", "/dev/zero", "-o", o]),
+        &["not an oit calibration"],
+    );
     let junk = dir.join("junk.json");
     std::fs::write(&junk, "{}").unwrap();
     assert_error(
