@@ -24,7 +24,7 @@
 //!   fit is refused. On a hardware raster path the GPU rasterizes each window itself, so
 //!   fragments at the seams may differ from the whole frame's (the CPU and compute paths give the
 //!   same fragments bit for bit): there a tiled candidate has no bound below 1.
-//! - its **predicted time** from the backend/path's calibration ([`TechniqueModel::predict`])
+//! - its **predicted time** from the backend/path's calibration ([`crate::model::TechniqueModel::predict`])
 //!   with the geometry passes its plan runs at this N ([`geometry_passes`]).
 //!
 //! Besides the catalogue's techniques as calibrated, the count itself opens two exact
