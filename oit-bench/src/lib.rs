@@ -69,6 +69,7 @@
 //! # Ok::<(), oit_core::OitError>(())
 //! ```
 
+pub mod auto;
 pub mod backends;
 pub mod experiment;
 pub mod model;

@@ -127,8 +127,9 @@ pub fn validate(cli: &Cli) -> Result<Validated, OitError> {
     let rendering = |(techniques, prepared)| Validated { techniques, prepared: Some(prepared) };
     Ok(match &cli.command {
         Command::Render(args) => {
-            let (technique, prepared) = render::check(args)?;
-            Validated { techniques: vec![technique], prepared: Some(prepared) }
+            // `auto` names no technique until its counting pass has run
+            let (requested, prepared) = render::check(args)?;
+            Validated { techniques: requested.fixed().into_iter().collect(), prepared: Some(prepared) }
         }
         Command::Compare(args) => rendering(compare::check(args)?),
         Command::Sweep(args) => rendering(sweep::check(args)?),

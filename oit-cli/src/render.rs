@@ -3,6 +3,8 @@
 use std::path::{Path, PathBuf};
 
 use clap::Args;
+use oit_bench::auto::{Budget, Choice, Tables, parse_max_epr};
+use oit_bench::model::ModelFile;
 use oit_bench::present::annotate_frame;
 use oit_core::metrics::DepthComplexity;
 use oit_core::{OitError, Stats, Technique};
@@ -26,16 +28,35 @@ use crate::output::{self, CameraJson};
         is rendered on the same backend to count them). With several backends or raster paths (--backend all, \
         --raster all), each writes its own PNG, named FILE-BACKEND.png or FILE-BACKEND-PATH.png \
         (e.g. out-cpu.png, out-wgpu-hardware.png, out-wgpu-compute.png; a note on stderr lists \
-        them), and --json prints one object per line."
+        them), and --json prints one object per line.\n\n\
+        --technique auto chooses the technique and its parameters for this scene and device: one \
+        counting pass gives the scene's depth histogram, each candidate gets an upper bound on its \
+        error pixel rate from it, its storage, and a predicted time from the device's cost table \
+        (`oit bench --calibrate`; --calibration FILE, else the shipped CPU and H200 tables); the \
+        cheapest within --max-epr and --memory is rendered. --json's `auto` says what was picked \
+        and why, every candidate with its prediction, bound, storage and any reason it was refused \
+        (docs/auto.md)."
 )]
 pub struct RenderArgs {
     /// The technique: reference, plain (unsorted alpha blending in primitive order, the
     /// baseline), dp, ddp, wavg, wsum, bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K],
     /// fabs[:K], mlp:M, dfb (dynamic fragment buffer, Maule et al. 2012) or ll (per-pixel linked
     /// lists, Yang et al. 2010) (K, M, P from 1 to 65536; K left out is sized from the scene; dfb
-    /// and ll allocate exactly the frame's fragments, counted first).
+    /// and ll allocate exactly the frame's fragments, counted first), or auto (chosen for this
+    /// scene and device under --max-epr and --memory).
     #[arg(short, long, value_name = "T", default_value = "reference")]
     pub technique: String,
+
+    /// With --technique auto: the largest error pixel rate allowed, a fraction from 0 to 1 (0.001)
+    /// or a percentage (0.1%); 0 picks an exact technique [default: 0].
+    #[arg(long, value_name = "E", allow_negative_numbers = true)]
+    pub max_epr: Option<String>,
+
+    /// With --technique auto: the cost table, a calibration.json written by `oit bench
+    /// --calibrate` [default: the shipped CPU calibration for cpu, the committed H200 one for
+    /// wgpu; a backend/path neither has is ranked by the closest, and --json says so].
+    #[arg(long, value_name = "FILE")]
+    pub calibration: Option<PathBuf>,
 
     /// Where to write the image (PNG, sRGB).
     #[arg(short, long, value_name = "FILE.png", default_value = "oit.png")]
@@ -68,6 +89,30 @@ struct RenderJson<'a> {
     max_depth: u32,
     /// `depth_histogram[n]`: pixels with n fragments, n from 0 to `max_depth`.
     depth_histogram: &'a [u64],
+    /// With `--technique auto`: what was picked and why.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    auto: Option<&'a Choice>,
+}
+
+/// Largest `--calibration` file read (the committed ones are under 100 KiB).
+const MAX_CALIBRATION_BYTES: u64 = 16 << 20;
+
+/// What `--technique` asked for: one technique, or a choice under budgets.
+pub enum Requested {
+    /// The technique named.
+    Fixed(Technique),
+    /// `auto`: the budgets and the cost tables.
+    Auto(Budget, Box<Tables>),
+}
+
+impl Requested {
+    /// The technique, where one was named.
+    pub fn fixed(&self) -> Option<Technique> {
+        match self {
+            Requested::Fixed(t) => Some(*t),
+            Requested::Auto(..) => None,
+        }
+    }
 }
 
 /// Where each image goes: `FILE.png` when there is one; `FILE-LABEL.png` for each of several,
@@ -96,32 +141,87 @@ fn output_paths(base: &Path, labels: &[String]) -> Vec<PathBuf> {
 
 /// Every check `oit render` makes before it renders: the technique, the output path, then the
 /// scene options ([`SceneArgs::prepare`]). Reads, writes nothing.
-pub fn check(args: &RenderArgs) -> Result<(Technique, Prepared), OitError> {
-    let technique: Technique = args.technique.parse()?;
+pub fn check(args: &RenderArgs) -> Result<(Requested, Prepared), OitError> {
+    let requested = if args.technique.trim().eq_ignore_ascii_case("auto") {
+        let max_epr = args.max_epr.as_deref().map(parse_max_epr).transpose()?.unwrap_or(0.0);
+        let memory = args.scene.memory.as_deref().map(oit_core::parse_memory).transpose()?;
+        let given = match &args.calibration {
+            Some(path) => {
+                // a calibration is a few kilobytes: refuse a device or a huge file before reading it
+                let meta =
+                    std::fs::metadata(path).map_err(|source| OitError::Io { path: path.clone(), source })?;
+                if !meta.is_file() || meta.len() > MAX_CALIBRATION_BYTES {
+                    return Err(OitError::InvalidSettings(format!(
+                        "--calibration {} is not an oit calibration: expected a calibration.json \
+                         written by `oit bench --calibrate` (a file of at most {MAX_CALIBRATION_BYTES} bytes)",
+                        path.display()
+                    )));
+                }
+                let text = std::fs::read_to_string(path)
+                    .map_err(|source| OitError::Io { path: path.clone(), source })?;
+                let name = path.display().to_string();
+                Some((ModelFile::parse(&text, &name)?, name))
+            }
+            None => None,
+        };
+        Requested::Auto(Budget::new(max_epr, memory)?, Box::new(Tables::new(given)?))
+    } else {
+        for (flag, given) in
+            [("--max-epr", args.max_epr.is_some()), ("--calibration", args.calibration.is_some())]
+        {
+            if given {
+                return Err(OitError::InvalidSettings(format!(
+                    "{flag} applies to --technique auto only (the technique named is '{}')",
+                    args.technique
+                )));
+            }
+        }
+        Requested::Fixed(args.technique.parse()?)
+    };
     check_output(&args.output, "png", "--output")?;
-    Ok((technique, args.scene.prepare()?))
+    Ok((requested, args.scene.prepare()?))
 }
 
 /// Runs `oit render`.
 pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
-    let (technique, prepared) = check(args)?;
+    let (requested, prepared) = check(args)?;
     let camera = prepared.camera(prepared.view)?;
-    let settings = prepared.with_technique(technique);
+    // auto is labelled by the backend's default path for the reference (its counting pass)
+    let labelled = prepared.with_technique(requested.fixed().unwrap_or(Technique::Reference));
     let labels: Vec<String> =
-        prepared.backends.iter().map(|b| oit_bench::label(b.as_ref(), &settings)).collect();
+        prepared.backends.iter().map(|b| oit_bench::label(b.as_ref(), &labelled)).collect();
     let paths = output_paths(&args.output, &labels);
     if paths.len() > 1 {
         let names: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
         eprintln!("note: {} images, one per backend and raster path: {}", paths.len(), names.join(", "));
     }
     for (backend, path) in prepared.backends.iter().zip(&paths) {
+        // auto: the counting pass and the choice, per backend; its counts are the depth complexity
+        let (technique, choice, counted) = match &requested {
+            Requested::Fixed(t) => (*t, None, None),
+            Requested::Auto(budget, tables) => {
+                let (choice, frame) = oit_bench::auto::resolve(
+                    backend.as_ref(),
+                    &prepared.scene,
+                    &camera,
+                    &labelled,
+                    tables,
+                    *budget,
+                )?;
+                (choice.technique, Some(choice), Some(frame))
+            }
+        };
+        let settings = prepared.with_technique(technique);
         let mut frame = backend.render(&prepared.scene, &camera, &settings)?;
         annotate_frame(&mut frame.image, settings.effect, &frame.stats);
         frame.image.save_png(path)?;
         let raster = backend.raster_path(&settings).to_string();
         let s = &frame.stats;
         if args.json {
-            let depth = depth_complexity(backend.as_ref(), &prepared.scene, &camera, &settings, &frame)?;
+            let depth = match &counted {
+                Some(c) => depth_complexity(backend.as_ref(), &prepared.scene, &camera, &settings, c)?,
+                None => depth_complexity(backend.as_ref(), &prepared.scene, &camera, &settings, &frame)?,
+            };
             let json = RenderJson {
                 technique: technique.to_string(),
                 backend: backend.name(),
@@ -134,6 +234,7 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
                 camera: CameraJson::new(&camera, prepared.view),
                 max_depth: depth.max_depth,
                 depth_histogram: &depth.histogram,
+                auto: choice.as_ref(),
             };
             let text = serde_json::to_string(&json)
                 .map_err(|e| OitError::Write { path: "standard output".into(), message: e.to_string() })?;
@@ -141,8 +242,13 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
         } else {
             let lost_share = if s.fragments > 0 { s.lost as f64 / s.fragments as f64 } else { 0.0 };
             let gpu = s.gpu_ms.map(|g| format!(", {g:.2} ms on the device")).unwrap_or_default();
+            let auto = choice
+                .as_ref()
+                .map(|c| format!("auto       {}\n           cost table: {}\n", c.reason, c.calibration))
+                .unwrap_or_default();
             let text = format!(
                 "technique  {technique}\n\
+                 {auto}\
                  backend    {} (raster {raster})\n\
                  scene      {} ({} triangles)\n\
                  size       {}x{}\n\
