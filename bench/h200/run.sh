@@ -61,6 +61,26 @@ big)
         rm -f "$OUT/armadillo-16384-$t.png"
     done
     ;;
+exact)
+    # the exact allocations beside fabs (issue 11's target: dfb at least as fast as fabs), both paths
+    run "$OIT" bench --backend wgpu --raster all --size 1024x1024 --frames 10 --warmup 2 \
+        --scenes "$OIT_MODELS/bunny.obj,planes:64" --techniques fabs,dfb,ll --no-curves --out "$OUT/exact-1024"
+    ;;
+tail)
+    # --overflow tail beside drop for the fixed-K techniques, and adp (its MIN beside the MAX)
+    for overflow in drop tail; do
+        run "$OIT" bench --backend wgpu --raster all --size 1024x1024 --frames 10 --warmup 2 --overflow $overflow \
+            --scenes "$OIT_MODELS/bunny.obj,$OIT_MODELS/armadillo.obj" --techniques fabs:4,mdts64:4,adp \
+            --no-curves --out "$OUT/tail-$overflow-1024"
+    done
+    ;;
+auto)
+    # issue 11's auto target on this device (bench/auto/run.sh; the H200 calibration ships)
+    OIT="$OIT" BACKEND=wgpu SIZE=1024x1024 OUT="$OUT/auto-1024" \
+        SCENES="$OIT_MODELS/bunny.obj,$OIT_MODELS/armadillo.obj,planes:64,grid:4x4:$OIT_MODELS/bunny.obj" \
+        bench/auto/run.sh
+    python3 bench/auto/summary.py "$OUT/auto-1024" > "$OUT/auto-1024/summary.md" || true
+    ;;
 criterion)
     # issue 8 item 10: the criterion benches before the architecture work (bb02087) and now, one
     # after the other on this machine; BEFORE and AFTER are the two bench binaries
@@ -72,7 +92,7 @@ criterion)
     done
     ;;
 *)
-    echo "usage: $0 [readme|calibrate|model|vulkan|grid|big|criterion]" >&2
+    echo "usage: $0 [readme|calibrate|model|vulkan|grid|big|exact|tail|auto|criterion]" >&2
     exit 2
     ;;
 esac
