@@ -21,7 +21,9 @@ EXACT=${EXACT:-dp,ddp,mlp:4,mdts64,fabs,dfb,ll}
 mkdir -p "$OUT"
 run() { echo "+ $*" >&2; "$@"; }
 for scene in ${SCENES//,/ }; do
-    slug=$(basename "$scene" .obj | tr -c 'A-Za-z0-9_\n-' '-')
+    # the scene expression with its folders dropped (grid:4x4:DIR/bunny.obj is grid-4x4-bunny,
+    # not bunny: two scenes of one mesh must not share a slug)
+    slug=$(echo "$scene" | sed -E 's#[^:,]*/##g; s#\.obj$##' | tr -c 'A-Za-z0-9_\n-' '-')
     run "$OIT" render --backend "$BACKEND" --size "$SIZE" --scene "$scene" -t auto --max-epr 0 --json \
         -o "$OUT/$slug.png" > "$OUT/$slug-auto.json" || continue
     pick=$(grep -o '"technique":"[^"]*"' "$OUT/$slug-auto.json" | head -1 | cut -d'"' -f4)

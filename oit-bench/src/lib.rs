@@ -213,6 +213,10 @@ pub struct Row {
     pub captured: u64,
     /// Fragments that did not.
     pub lost: u64,
+    /// Fragments `--overflow tail` merged behind the K nearest ([`oit_core::Stats::merged`]); 0
+    /// in reports written before the tail existed.
+    #[serde(default)]
+    pub merged: u64,
     /// Fragments whose order against an equal-depth fragment the technique could not establish
     /// ([`oit_core::Stats::tied`]); 0 in reports written before it was counted.
     #[serde(default)]
@@ -784,6 +788,7 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
                     fragments: s.fragments,
                     captured: s.captured,
                     lost: s.lost,
+                    merged: s.merged,
                     tied: s.tied,
                     storage_bytes: s.storage_bytes,
                     tiles: s.tiles.max(1),
