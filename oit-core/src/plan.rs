@@ -479,8 +479,11 @@ pub fn check_total(what: &str, needed: u64, budget: (&str, u64)) -> Result<(), O
     Ok(())
 }
 
-/// The memory budget of a frame on this host: `MemAvailable` of `/proc/meminfo`, else a fixed
-/// 8 GiB where the host does not say (not Linux).
+/// The memory budget of a frame's technique storage on this host: half of `MemAvailable` of
+/// `/proc/meminfo`, else a fixed 4 GiB where the host does not say (not Linux). Half, because the
+/// storage is not all a frame holds: the set-up triangles, the image and its per-pixel outputs
+/// (layers, losses) and the allocator's slack come on top (an 8192² `fabs` frame of the armadillo
+/// whose storage was just under all of `MemAvailable` was killed by the kernel at 24 GB).
 pub fn host_memory_budget() -> (&'static str, u64) {
     let available = std::fs::read_to_string("/proc/meminfo").ok().and_then(|text| {
         let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
@@ -488,8 +491,8 @@ pub fn host_memory_budget() -> (&'static str, u64) {
         Some(kib.saturating_mul(1024))
     });
     match available {
-        Some(bytes) => ("the host's available memory (MemAvailable)", bytes),
-        None => ("oit's fixed memory budget (the host does not report its available memory)", 8 << 30),
+        Some(bytes) => ("half the host's available memory (MemAvailable / 2)", bytes / 2),
+        None => ("oit's fixed memory budget (the host does not report its available memory)", 4 << 30),
     }
 }
 

@@ -133,7 +133,7 @@ impl CpuPrepared<'_> {
     }
 }
 
-/// The budget of a CPU frame's storage: the host's available memory, or `--memory` where smaller.
+/// The budget of a CPU frame's storage: half the host's available memory ([`oit_core::plan::host_memory_budget`]), or `--memory` where smaller.
 pub(crate) fn cpu_budget(settings: &Settings) -> (String, u64) {
     let (name, bytes) = oit_core::plan::host_memory_budget();
     settings.memory_budget((name.to_string(), bytes))

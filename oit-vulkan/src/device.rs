@@ -700,7 +700,7 @@ impl Gpu {
     }
 
     /// The budget of one frame's storage, all buffers together: the largest device-local heap,
-    /// and no more than the host's available memory on a CPU device (lavapipe).
+    /// and no more than half the host's available memory on a CPU device (lavapipe).
     pub fn memory_budget(&self) -> (String, u64) {
         let heap = (format!("the device-local memory heap of '{}'", self.info.name), self.info.device_heap);
         if self.is_cpu() {

@@ -235,7 +235,7 @@ impl Gpu {
 
     /// The budget of one frame's storage, all buffers together (issue 13.9): wgpu reports no
     /// device memory size, so 16 × `max_storage_buffer_binding_size` (lavapipe 2 GiB, the H200
-    /// 32 GiB), and no more than the host's available memory on a CPU device (lavapipe).
+    /// 32 GiB), and no more than half the host's available memory on a CPU device (lavapipe).
     pub fn memory_budget(&self) -> (String, u64) {
         let fixed = self.limits.max_storage_buffer_binding_size.saturating_mul(16);
         let name = format!("16 × max_storage_buffer_binding_size of '{}'", self.info.name);
