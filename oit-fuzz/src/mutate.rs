@@ -247,6 +247,8 @@ pub fn values(option: &str) -> &'static [&'static str] {
         "technique" | "techniques" | "curve-techniques" => &[
             "reference",
             "all",
+            "auto",
+            "auto:2",
             "plain",
             "plain:2",
             "dp",
@@ -306,6 +308,16 @@ pub fn values(option: &str) -> &'static [&'static str] {
         "bounds" => &["boxes", "exact", "", "box"],
         "bdp-mode" => &["color", "depth", "auto", "colour", ""],
         "hardware-capture" => &["atomics", "blend", "", "both"],
+        "overflow" => &["drop", "tail", "", "Tail", "merge"],
+        "max-epr" => &["0", "0.01", "1", "1%", "0.5%", "100%", "101%", "-0", "-1", "1e-300", "nan", "inf", "%", ""],
+        "calibration" => &[
+            "bench/results/cpu/calibration.json",
+            "/dev/zero",
+            "obj/triangle.obj",
+            "nosuch.json",
+            "",
+            "/",
+        ],
         "backend" => {
             &["cpu", "wgpu", "vulkan", "all", "cpu,cpu", "cpu,wgpu", "", ",", "CPU", "cpu,", "nosuch"]
         }
