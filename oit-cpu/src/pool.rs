@@ -102,6 +102,17 @@ impl Pool {
         self.lend(&self.u64s, len, || AtomicU64::new(init), |a| *a.get_mut() = init)
     }
 
+    /// `len` 32-bit atomics holding whatever their last user left (0 when newly made): for arrays
+    /// every element of which is written before it is read.
+    pub fn u32s_scratch(&self, len: usize) -> Pooled<'_, AtomicU32> {
+        self.lend(&self.u32s, len, || AtomicU32::new(0), |_| {})
+    }
+
+    /// [`Pool::u32s_scratch`] in 64-bit atomics.
+    pub fn u64s_scratch(&self, len: usize) -> Pooled<'_, AtomicU64> {
+        self.lend(&self.u64s, len, || AtomicU64::new(0), |_| {})
+    }
+
     /// `len` fresh resolve states.
     pub fn states(&self, len: usize) -> Pooled<'_, PixelState> {
         self.lend(&self.states, len, PixelState::default, |s| *s = PixelState::default())

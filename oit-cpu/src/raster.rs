@@ -22,12 +22,57 @@
 
 use std::sync::OnceLock;
 
-use glam::Vec3;
-use oit_core::setup::{HALF_PIXEL, SUBPIXEL, Triangle, TriangleSetup, edge};
+use glam::{Vec3, Vec4};
+use oit_core::setup::{DepthPlane, HALF_PIXEL, SUBPIXEL, Triangle, TriangleSetup, edge, normal_at};
 use oit_core::{Camera, Scene, Settings, Shading};
 use rayon::prelude::*;
 
-pub use oit_core::setup::{Fragment, GUARD_BAND, SUBPIXEL_BITS, TRIANGLE_WORDS};
+pub use oit_core::setup::{GUARD_BAND, SUBPIXEL_BITS, TRIANGLE_WORDS};
+
+/// One covered (pixel, triangle) pair as a technique's shader sees it: where it is, its depth and
+/// primitive id at once, its colour and normal on demand ([`Fragment::color`],
+/// [`Fragment::normal`]). Interpolation and shading are most of a geometry pass, and many passes
+/// read neither (a counting pass, a peel that the fragment's depth alone rules out), so they are
+/// computed only where a shader asks. Every value is [`TriangleSetup::fragment`]'s, bit for bit:
+/// the same functions of oit-core compute it.
+#[derive(Clone, Copy)]
+pub struct Fragment<'a> {
+    /// `y·width + x`, row `y = 0` at the top.
+    pub pixel: u32,
+    /// NDC z in [0, 1].
+    pub depth: f32,
+    /// Primitive id: `scene.primitive_bases().0[instance] + triangle index`.
+    pub prim: u32,
+    /// Screen-space barycentrics ([`oit_core::setup::barycentrics`]).
+    b: [f32; 3],
+    t: &'a Triangle,
+    setup: &'a TriangleSetup,
+}
+
+impl Fragment<'_> {
+    /// Shaded colour, straight-alpha linear RGBA ([`TriangleSetup::color_at`]).
+    #[inline]
+    pub fn color(&self) -> Vec4 {
+        self.setup.color_at(self.t, self.b)
+    }
+
+    /// Interpolated world-space normal, normalized, zero where the mesh has none ([`normal_at`]).
+    #[inline]
+    pub fn normal(&self) -> Vec3 {
+        normal_at(self.t, self.b)
+    }
+
+    /// Every value at once, as [`TriangleSetup::fragment`] makes it.
+    pub fn full(&self) -> oit_core::setup::Fragment {
+        oit_core::setup::Fragment {
+            pixel: self.pixel,
+            depth: self.depth,
+            prim: self.prim,
+            color: self.color(),
+            normal: self.normal(),
+        }
+    }
+}
 
 /// Side of a screen tile of [`RasterMode::Tiled`], in pixels.
 pub const TILE_SIZE: u32 = 32;
@@ -81,6 +126,8 @@ struct Bins {
 /// The triangles of one frame, ready for any number of geometry passes.
 pub struct Rasterizer {
     setup: TriangleSetup,
+    /// [`SmallEdges`] of each of `setup.triangles`, made with the setup ([`RasterMode::Scatter`]'s).
+    edges: Vec<SmallEdges>,
     mode: RasterMode,
     bins: OnceLock<Bins>,
     fragments: OnceLock<u64>,
@@ -89,7 +136,8 @@ pub struct Rasterizer {
 impl Rasterizer {
     /// A rasterizer over triangles already set up (a persistent renderer keeps its setup).
     pub fn from_setup(setup: TriangleSetup) -> Rasterizer {
-        let r = Rasterizer { setup, mode: DEFAULT_MODE, bins: OnceLock::new(), fragments: OnceLock::new() };
+        let edges = setup.triangles.par_iter().map(SmallEdges::new).collect();
+        let r = Rasterizer { setup, edges, mode: DEFAULT_MODE, bins: OnceLock::new(), fragments: OnceLock::new() };
         r.warm_bins();
         r
     }
@@ -179,7 +227,7 @@ impl Rasterizer {
                     }
                 }
             }
-            let edges = triangles.par_iter().map(SmallEdges::new).collect();
+            let edges = order.iter().map(|&i| self.edges[i as usize]).collect();
             Bins { tiles_x, triangles, edges, start, tris }
         })
     }
@@ -188,25 +236,31 @@ impl Rasterizer {
     /// rayon's threads, in no particular order (in [`RasterMode::Tiled`] a pixel's fragments come
     /// from one thread, in the same order every pass). Returns the number of fragments, i.e. of
     /// calls.
-    pub fn for_each_fragment<F: Fn(&Fragment) + Sync>(&self, f: F) -> u64 {
-        let n = self.for_each_covered(|t, x, y, e| f(&self.setup.fragment(t, x, y, e)));
+    pub fn for_each_fragment<F: Fn(&Fragment<'_>) + Sync>(&self, f: F) -> u64 {
+        let setup = &self.setup;
+        let n = self.for_each_covered(|t, s, x, y, e| {
+            // depth from the traversal's own record: the triangle is read only for colour or normal
+            let b = s.plane.barycentrics(e);
+            f(&Fragment { pixel: y * setup.width + x, depth: s.plane.depth(b), prim: s.prim, b, t, setup })
+        });
         self.fragments.get_or_init(|| n);
         n
     }
 
     /// The coverage pass under [`Rasterizer::for_each_fragment`], before any interpolation;
     /// returns the number of covered (pixel, triangle) pairs.
-    fn for_each_covered<F: Fn(&Triangle, u32, u32, [i64; 3]) + Sync>(&self, f: F) -> u64 {
+    fn for_each_covered<F: Fn(&Triangle, &SmallEdges, u32, u32, [i64; 3]) + Sync>(&self, f: F) -> u64 {
         match self.mode {
             RasterMode::Scatter => self
                 .setup
                 .triangles
                 .par_chunks(SCATTER_CHUNK)
-                .map(|chunk| {
+                .zip(self.edges.par_chunks(SCATTER_CHUNK))
+                .map(|(chunk, edges)| {
                     let mut n = 0u64;
-                    for t in chunk {
-                        walk(t, t.bbox, |x, y, e| {
-                            f(t, x, y, e);
+                    for (t, edges) in chunk.iter().zip(edges) {
+                        walk_tile(t, edges, t.bbox, |x, y, e| {
+                            f(t, edges, x, y, e);
                             n += 1;
                         });
                     }
@@ -231,7 +285,7 @@ impl Rasterizer {
                             let [bx0, by0, bx1, by1] = edges.bbox;
                             let rect = [bx0.max(x0), by0.max(y0), bx1.min(x1), by1.min(y1)];
                             walk_tile(t, edges, rect, |x, y, e| {
-                                f(t, x, y, e);
+                                f(t, edges, x, y, e);
                                 n += 1;
                             });
                         }
@@ -245,14 +299,14 @@ impl Rasterizer {
     /// A coverage-only pass: the traversal without interpolation or shading (what the
     /// rasterizer's bench times apart from the fragments); returns the covered pairs.
     pub fn coverage_pass(&self) -> u64 {
-        self.for_each_covered(|_, _, _, e| {
+        self.for_each_covered(|_, _, _, _, e| {
             std::hint::black_box(e);
         })
     }
 
     /// Fragments one pass generates (counted by a coverage-only pass unless a pass ran already).
     pub fn fragment_count(&self) -> u64 {
-        *self.fragments.get_or_init(|| self.for_each_covered(|_, _, _, _| {}))
+        *self.fragments.get_or_init(|| self.for_each_covered(|_, _, _, _, _| {}))
     }
 
     /// Triangles after setup: the pieces of clipped triangles counted apiece, triangles that cover
@@ -352,13 +406,17 @@ struct SmallEdges {
     step_x: [i32; 3],
     step_y: [i32; 3],
     above: [i32; 3],
+    /// What the fragments' depth needs ([`DepthPlane`]), and the primitive id: with these a
+    /// depth-only pass reads nothing else of the triangle.
+    plane: DepthPlane,
+    prim: u32,
 }
 
 impl SmallEdges {
     fn new(t: &Triangle) -> SmallEdges {
         let extent = |v: [i32; 3]| v[0].max(v[1]).max(v[2]) - v[0].min(v[1]).min(v[2]);
         if extent(t.x) > SMALL_EXTENT || extent(t.y) > SMALL_EXTENT {
-            return SmallEdges { bbox: t.bbox, ..SmallEdges::default() };
+            return SmallEdges { bbox: t.bbox, plane: DepthPlane::new(t), prim: t.prim, ..SmallEdges::default() };
         }
         let [x0, y0, _, _] = t.bbox;
         let (px, py) = (i64::from(x0) * SUBPIXEL + HALF_PIXEL, i64::from(y0) * SUBPIXEL + HALF_PIXEL);
@@ -371,6 +429,8 @@ impl SmallEdges {
             step_x: edges.map(|e| e.1 as i32),
             step_y: edges.map(|e| e.2 as i32),
             above: edges.map(|e| e.3 as i32),
+            plane: DepthPlane::new(t),
+            prim: t.prim,
         }
     }
 }
@@ -508,6 +568,7 @@ mod tests {
     fn sorted_fragments(r: &Rasterizer) -> Vec<Key> {
         let all = Mutex::new(Vec::new());
         r.for_each_fragment(|f| {
+            let f = f.full();
             let key = (
                 f.pixel,
                 f.prim,
@@ -806,6 +867,42 @@ mod tests {
             let bases = scene.primitive_bases().0;
             for base in bases {
                 assert!(scatter.iter().any(|k| (base..base + 60).contains(&k.1)));
+            }
+        }
+    }
+
+    /// The lazy fragments of a pass, in both modes and under every shading, against
+    /// [`TriangleSetup::fragment`] at every pixel the per-pixel rule covers: the same set, bit for
+    /// bit (depth at once, colour and normal on demand).
+    #[test]
+    fn lazy_fragments_are_the_setups() {
+        let scene = random_scene();
+        let cam = Camera::look_at(Vec3::new(0.0, 0.0, 2.5), Vec3::ZERO, 70.0, 1.0, 0.3, 8.0);
+        for shading in [Shading::Headlight, Shading::Vertex, Shading::Flat, Shading::Normal] {
+            let s = Settings { shading, ..settings(90, 90) };
+            let r = Rasterizer::new(&scene, &cam, &s);
+            let mut expected = Vec::new();
+            for t in &r.setup().triangles {
+                for y in 0..90 {
+                    for x in 0..90 {
+                        if let Some(e) = covers(t, x, y) {
+                            let f = r.setup().fragment(t, x, y, e);
+                            expected.push((
+                                f.pixel,
+                                f.prim,
+                                f.depth.to_bits(),
+                                f.color.to_array().map(f32::to_bits),
+                                f.normal.to_array().map(f32::to_bits),
+                            ));
+                        }
+                    }
+                }
+            }
+            expected.sort_unstable();
+            assert!(expected.len() > 1000, "{} fragments", expected.len());
+            for mode in [RasterMode::Scatter, RasterMode::Tiled] {
+                let r = Rasterizer::new(&scene, &cam, &s).with_mode(mode);
+                assert_eq!(sorted_fragments(&r), expected, "{shading:?} {mode:?}");
             }
         }
     }

@@ -149,6 +149,63 @@ impl<'a> Resolve<'a> {
     }
 }
 
+impl Resolve<'_> {
+    /// [`Resolve::image`] for a technique whose fragments are all captured before the resolve
+    /// (one sort and composite per pixel): each pixel's state lives only in the resolving thread's
+    /// locals, made fresh, fed by `feed` (pixel index, a per-thread scratch value, the state) and
+    /// finished at once, as a GPU resolve keeps it in registers: no per-pixel state array is
+    /// written, reset or read back. Returns the image, the fragments captured and counted tied,
+    /// and the most fragments one pixel captured.
+    pub fn image_with<S, F>(&self, width: u32, height: u32, feed: F) -> (Image, u64, u64, u32)
+    where
+        S: Default + Send,
+        F: Fn(usize, &mut S, &mut PixelState) + Sync + Send,
+    {
+        use rayon::prelude::*;
+        let mut image = Image::new(width, height, [0, 0, 0, 255]);
+        let complexity = self.effect == Effect::Complexity;
+        // the heat map's scale is the deepest pixel: there a pixel keeps its count for a second
+        // sweep (the pixel's bytes hold it, as `captured` fits no colour until the max is known)
+        let mut counts = if complexity { vec![0u32; image.pixels.len()] } else { Vec::new() };
+        let sums = |px: usize, scratch: &mut S, out: &mut [u8; 4]| {
+            let mut state = PixelState::default();
+            feed(px, scratch, &mut state);
+            let c = self.finish(&mut state);
+            *out = srgb(c);
+            (u64::from(state.captured), u64::from(state.tied()), state.captured)
+        };
+        let add = |a: (u64, u64, u32), b: (u64, u64, u32)| (a.0 + b.0, a.1 + b.1, a.2.max(b.2));
+        let (captured, tied, deepest) = if complexity {
+            image
+                .pixels
+                .par_iter_mut()
+                .zip(counts.par_iter_mut())
+                .enumerate()
+                .map_init(S::default, |scratch, (px, (out, count))| {
+                    let r = sums(px, scratch, out);
+                    *count = r.2;
+                    r
+                })
+                .reduce(|| (0, 0, 0), add)
+        } else {
+            image
+                .pixels
+                .par_iter_mut()
+                .enumerate()
+                .map_init(S::default, |scratch, (px, out)| sums(px, scratch, out))
+                .reduce(|| (0, 0, 0), add)
+        };
+        if complexity {
+            let max = deepest.max(1);
+            for (px, &n) in image.pixels.iter_mut().zip(&counts) {
+                let c = if n == 0 { self.background } else { heat(n as f32 / max as f32) };
+                *px = srgb(c);
+            }
+        }
+        (image, captured, tied, deepest)
+    }
+}
+
 /// The f32 resolve every technique of oit-cpu composites through (the reference has its own f64
 /// code in `technique/reference.rs`).
 impl Compositor for Resolve<'_> {

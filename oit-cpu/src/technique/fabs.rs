@@ -59,9 +59,11 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let deepest = if ctx.plan.needs_count() { ctx.max_depth_complexity()? } else { 0 };
     let k = ctx.plan.slots(deepest) as usize;
     let counters = ctx.alloc32(1, 0)?;
-    let slots = ctx.alloc64(k, 0)?;
-    let payloads = ctx.alloc32(k, 0)?;
-    let payload = |f: &crate::raster::Fragment| ctx.payload(f);
+    // below each pixel's counter every slot is written before the resolve reads it (an
+    // overflowing pixel's are all set before its keys are inserted)
+    let slots = ctx.scratch64(k)?;
+    let payloads = ctx.scratch32(k)?;
+    let payload = |f: &crate::raster::Fragment<'_>| ctx.payload(f);
     let lost = &*ctx;
     let generated = ctx.raster.for_each_fragment(|f| {
         let px = f.pixel as usize;
@@ -121,27 +123,19 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     }
     ctx.passes += passes;
     ctx.fragments.get_or_insert(generated);
-    let mut states = ctx.states();
     let resolve = &ctx.resolve;
-    let lists = slots.par_chunks(k).zip(payloads.par_chunks(k));
-    states.par_iter_mut().zip(lists.zip(counters.par_iter())).for_each_init(
-        Vec::new,
-        |keys, (s, ((slots, payloads), count))| {
-            let n = (count.load(Relaxed) as usize).min(k);
-            keys.clear();
-            // (depth bits, primitive id) above the payload: one primitive has one fragment a
-            // pixel, so the payload never decides
-            keys.extend(
-                slots[..n]
-                    .iter()
-                    .zip(&payloads[..n])
-                    .map(|(x, p)| u128::from(x.load(Relaxed)) << 32 | u128::from(p.load(Relaxed))),
-            );
-            sort_keys(keys);
-            for &key in keys.iter() {
-                resolve.push(s, depth_from_bits((key >> 64) as u32), key as u32);
-            }
-        },
-    );
-    Ok(super::finish(ctx, states))
+    Ok(super::finish_with(ctx, |px, keys: &mut Vec<u128>, s| {
+        let n = (counters[px].load(Relaxed) as usize).min(k);
+        let (slots, payloads) = (&slots[px * k..px * k + n], &payloads[px * k..px * k + n]);
+        keys.clear();
+        // (depth bits, primitive id) above the payload: one primitive has one fragment a pixel,
+        // so the payload never decides
+        keys.extend(
+            slots.iter().zip(payloads).map(|(x, p)| u128::from(x.load(Relaxed)) << 32 | u128::from(p.load(Relaxed))),
+        );
+        sort_keys(keys);
+        for &key in keys.iter() {
+            resolve.push(s, depth_from_bits((key >> 64) as u32), key as u32);
+        }
+    }))
 }

@@ -18,7 +18,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, average: bool) -> Result<Frame, OitError
     // r, g, b premultiplied sums, alpha sum, count
     let sums = ctx.alloc64(5, 0)?;
     ctx.pass(|f| {
-        let c = pack_rgba8(f.color);
+        let c = pack_rgba8(f.color());
         let a = u64::from(c >> 24);
         let base = f.pixel as usize * 5;
         sums[base].fetch_add(a * u64::from(c & 0xff), Relaxed);
