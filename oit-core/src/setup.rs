@@ -143,6 +143,19 @@ fn plane_distance(p: Vec4, plane: usize) -> f32 {
     }
 }
 
+/// [`outcode`]'s bit for a position with a coordinate that is not finite.
+const NOT_FINITE: u8 = 1 << 7;
+
+/// Bit `plane` set for each clip plane `p` lies outside of ([`plane_distance`] below 0), or
+/// [`NOT_FINITE`] alone.
+#[inline]
+fn outcode(p: Vec4) -> u8 {
+    if !p.is_finite() {
+        return NOT_FINITE;
+    }
+    (0..CLIP_PLANES).fold(0, |code, plane| code | u8::from(plane_distance(p, plane) < 0.0) << plane)
+}
+
 /// A convex polygon of at most [`MAX_POLYGON`] vertices.
 #[derive(Clone, Copy)]
 struct Polygon {
@@ -235,39 +248,58 @@ impl Snap {
         Some(Projected { x: sx as i32 - self.origin.0, y: sy as i32 - self.origin.1, z: nz, inv_w })
     }
 
-    /// Clips one triangle and appends the pieces that touch the viewport.
-    fn triangle(&self, out: &mut Vec<Triangle>, v: [ClipVertex; 3], base: Vec4, has_color: bool, prim: u32) {
-        if v.iter().any(|v| !v.pos.is_finite()) {
+    /// Clips one triangle and appends the pieces that touch the viewport. `codes` are its
+    /// vertices' [`outcode`]s and `projected` their [`Snap::project`]ions, made once per vertex:
+    /// a triangle inside every plane is snapped from those (the projection is a function of the
+    /// clip-space position alone, so this is what projecting it here would give, bit for bit).
+    fn triangle(
+        &self,
+        out: &mut Vec<Triangle>,
+        v: [ClipVertex; 3],
+        codes: [u8; 3],
+        projected: [Option<Projected>; 3],
+        base: Vec4,
+        has_color: bool,
+        prim: u32,
+    ) {
+        let (any, all) = (codes[0] | codes[1] | codes[2], codes[0] & codes[1] & codes[2]);
+        // a vertex not finite, or all three outside one plane
+        if any & NOT_FINITE != 0 || all != 0 {
             return;
         }
-        let mut outside_any = 0u32;
-        for plane in 0..CLIP_PLANES {
-            let d = v.map(|v| plane_distance(v.pos, plane));
-            if d.iter().all(|&d| d < 0.0) {
+        if any == 0 {
+            let (Some(p0), Some(p1), Some(p2)) = (projected[0], projected[1], projected[2]) else {
                 return;
-            }
-            if d.iter().any(|&d| d < 0.0) {
-                outside_any |= 1 << plane;
-            }
-        }
-        if outside_any == 0 {
-            self.piece(out, v, base, has_color, prim);
+            };
+            self.snapped(out, v, [p0, p1, p2], base, has_color, prim);
             return;
         }
-        let poly = clip(v, outside_any);
+        let poly = clip(v, u32::from(any));
         for i in 1..poly.n.saturating_sub(1) {
             self.piece(out, [poly.v[0], poly.v[i], poly.v[i + 1]], base, has_color, prim);
         }
     }
 
     /// Projects and snaps one (clipped) triangle; keeps it if it has area and touches the viewport.
-    fn piece(&self, out: &mut Vec<Triangle>, mut v: [ClipVertex; 3], base: Vec4, has_color: bool, prim: u32) {
+    fn piece(&self, out: &mut Vec<Triangle>, v: [ClipVertex; 3], base: Vec4, has_color: bool, prim: u32) {
         let (Some(p0), Some(p1), Some(p2)) =
             (self.project(v[0].pos), self.project(v[1].pos), self.project(v[2].pos))
         else {
             return;
         };
-        let mut p = [p0, p1, p2];
+        self.snapped(out, v, [p0, p1, p2], base, has_color, prim);
+    }
+
+    /// [`Snap::piece`] once its vertices are projected (`p`, in the order of `v`).
+    fn snapped(
+        &self,
+        out: &mut Vec<Triangle>,
+        mut v: [ClipVertex; 3],
+        mut p: [Projected; 3],
+        base: Vec4,
+        has_color: bool,
+        prim: u32,
+    ) {
         let (x0, y0) = (i64::from(p[0].x), i64::from(p[0].y));
         let area = (i64::from(p[1].x) - x0) * (i64::from(p[2].y) - y0)
             - (i64::from(p[1].y) - y0) * (i64::from(p[2].x) - x0);
@@ -321,6 +353,10 @@ impl Snap {
 
     /// Sets up the triangles of one instance, in order, in parallel.
     fn instance(&self, clip_pos: &[Vec4], mesh: MeshView<'_>, base: Vec4, prim_base: u32) -> Vec<Triangle> {
+        // Once per vertex rather than once per triangle that uses it (about six on a closed
+        // mesh): which planes it lies outside, and where it lands on screen.
+        let codes: Vec<u8> = map_all(clip_pos, |p| outcode(*p));
+        let projected: Vec<Option<Projected>> = map_all(clip_pos, |p| self.project(*p));
         let chunks: Vec<Vec<Triangle>> = map_chunks(mesh.indices, SETUP_CHUNK, |c, chunk| {
             let mut out = Vec::with_capacity(chunk.len());
             for (j, tri) in chunk.iter().enumerate() {
@@ -337,7 +373,9 @@ impl Snap {
                     continue;
                 };
                 let prim = prim_base.saturating_add(u32::try_from(t).unwrap_or(u32::MAX));
-                self.triangle(&mut out, [a, b, c], base, mesh.colors.is_some(), prim);
+                let at = |i: u32| (codes[i as usize], projected[i as usize]);
+                let ((ca, pa), (cb, pb), (cc, pc)) = (at(tri[0]), at(tri[1]), at(tri[2]));
+                self.triangle(&mut out, [a, b, c], [ca, cb, cc], [pa, pb, pc], base, mesh.colors.is_some(), prim);
             }
             out
         });

@@ -11,14 +11,20 @@
 //!   same whatever the [`RasterMode`] and the number of rayon threads; only the order of the calls
 //!   varies.
 //!
-//! How: [`RasterMode::Scatter`] (the default) runs the set-up triangles in parallel chunks, each
-//! walking its box by the span walk, which visits row by row the exact span of covered pixels
-//! ([`oit_core::setup::covers`]), found by integer division of the edge functions.
-//! [`RasterMode::Tiled`] bins the triangles into [`TILE_SIZE`]-pixel tiles once per frame, with
-//! the setup, and runs the tiles in parallel, each on one thread (so a pixel's fragments all come
-//! from one thread). There a triangle at most 64 pixels across is walked eight pixels of a row at
-//! a time in 32-bit lanes (`walk_small`, its edge functions set up with the bins), a larger one
-//! by the span walk. Both walks are tested against the per-pixel rule and against each other.
+//! How: [`RasterMode::Tiled`] (the default) bins the triangles into [`TILE_SIZE`]-pixel tiles once
+//! per frame, with the setup, and runs the tiles in parallel, each on one thread (so a pixel's
+//! fragments all come from one thread, and a pass's per-pixel storage is touched tile by tile,
+//! not all over the frame). [`RasterMode::Scatter`] runs the set-up triangles in parallel chunks
+//! in primitive order. In both, a triangle at most 64 pixels across is walked eight pixels of a
+//! row at a time in 32-bit lanes (`walk_small`, its edge functions set up once per frame), a
+//! larger one by the span walk, which visits row by row the exact span of covered pixels
+//! ([`oit_core::setup::covers`]), found by integer division of the edge functions. Both walks are
+//! tested against the per-pixel rule and against each other.
+//!
+//! A pass reads one compact record per triangle (its edge functions, its [`DepthPlane`] and its
+//! primitive id): depth and id are all a [`Fragment`] holds at once; colour and normal are
+//! interpolated from the full [`Triangle`] only when a shader asks ([`Fragment::color`],
+//! [`Fragment::normal`]), so a counting pass or a peel's depth test never shades.
 
 use std::sync::OnceLock;
 
@@ -90,24 +96,15 @@ pub enum RasterMode {
     Tiled,
 }
 
-/// The mode [`Rasterizer::new`] starts in: [`RasterMode::Scatter`] (as before issue 12).
+/// The mode [`Rasterizer::new`] starts in: [`RasterMode::Tiled`] since issue 12.
 ///
-/// Measured side by side with `cargo bench -p oit-cpu --bench raster -- --warm-up-time 1
-/// --measurement-time 3` (2 rayon threads on a 2-core host shared with other builds, load
-/// average about 4; criterion's median; `pass` makes every fragment in full):
-///
-/// | scene | fragments | Scatter coverage | Tiled coverage | Scatter pass | Tiled pass |
-/// |---|---|---|---|---|---|
-/// | bunny.obj, 512² | 156,812 | 7.2 ms | 6.9 ms | 16.0 ms | 17.3 ms |
-/// | planes:64, 512² | 4,921,315 | 10.6 ms | 19.2 ms | 306 ms | 344 ms |
-///
-/// Tiled's coverage is as fast or faster on the bunny's small triangles (the 32-bit lanes do
-/// without Scatter's 64-bit divisions), slower where large triangles are walked tile by tile;
-/// but in both modes interpolation and shading ([`TriangleSetup::fragment`]) are most of a pass,
-/// and Tiled adds the binning and the tile-ordered copy of the triangles to each frame's setup.
-/// At two threads that does not pay; re-measure on a many-core host, where one thread per pixel
-/// (no contended cache lines) may.
-pub const DEFAULT_MODE: RasterMode = RasterMode::Scatter;
+/// Before issue 12 Scatter was the default: both modes then made every fragment in full, and
+/// Tiled read the whole triangle record for each, so its pass was slower on the bunny. With the
+/// compact traversal record and lazy fragments, Tiled was as fast or faster in every pass of
+/// `cargo bench -p oit-cpu --bench raster` and in the techniques' frames (figures in
+/// `bench/results/cpu/issue12/`; a 2-core host shared with other jobs, so differences under
+/// about 20 % are within its noise).
+pub const DEFAULT_MODE: RasterMode = RasterMode::Tiled;
 
 /// The triangles in tile order, and the tiles' lists of them, compressed: tile `t` holds
 /// `triangles[i]` for `i` in `tris[start[t]..start[t + 1]]`.
