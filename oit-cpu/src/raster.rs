@@ -107,14 +107,16 @@ pub enum RasterMode {
 pub const DEFAULT_MODE: RasterMode = RasterMode::Tiled;
 
 /// The triangles in tile order, and the tiles' lists of them, compressed: tile `t` holds
-/// `triangles[i]` for `i` in `tris[start[t]..start[t + 1]]`.
+/// sorted triangle `i` for `i` in `tris[start[t]..start[t + 1]]`.
 struct Bins {
     tiles_x: u32,
-    /// The set-up triangles sorted by the tile of their box's top-left pixel (row-major), stably,
-    /// so each tile's list reads them from a few runs of memory rather than from all over the
-    /// frame's (a mesh's primitive order is seldom its order on screen).
-    triangles: Vec<Triangle>,
-    /// [`SmallEdges`] of each of `triangles`.
+    /// The set-up triangles' indices sorted by the tile of their box's top-left pixel
+    /// (row-major), stably.
+    order: Vec<u32>,
+    /// [`SmallEdges`] of each of the sorted triangles: what a pass reads of every triangle it
+    /// walks, so each tile's list reads them from a few runs of memory rather than from all over
+    /// the frame's (a mesh's primitive order is seldom its order on screen). The triangles
+    /// themselves are read (through `order`) only for a colour or a normal.
     edges: Vec<SmallEdges>,
     start: Vec<u32>,
     tris: Vec<u32>,
@@ -177,29 +179,29 @@ impl Rasterizer {
             let tiles_x = self.setup.width.div_ceil(TILE_SIZE);
             let tiles_y = self.setup.height.div_ceil(TILE_SIZE);
             let tiles = (tiles_x * tiles_y) as usize;
-            let tile_range = |t: &Triangle| {
+            let tile_range = |t: &SmallEdges| {
                 let [x0, y0, x1, y1] = t.bbox;
                 (x0 / TILE_SIZE..=x1 / TILE_SIZE, y0 / TILE_SIZE..=y1 / TILE_SIZE)
             };
             let first_tile =
-                |t: &Triangle| ((t.bbox[1] / TILE_SIZE) * tiles_x + t.bbox[0] / TILE_SIZE) as usize;
+                |t: &SmallEdges| ((t.bbox[1] / TILE_SIZE) * tiles_x + t.bbox[0] / TILE_SIZE) as usize;
             // Counting sort by first tile (stable: primitive order within a tile).
             let mut first = vec![0u32; tiles + 1];
-            for t in &self.setup.triangles {
+            for t in &self.edges {
                 first[first_tile(t) + 1] += 1;
             }
             for i in 1..first.len() {
                 first[i] += first[i - 1];
             }
-            let mut order = vec![0u32; self.setup.triangles.len()];
-            for (i, t) in self.setup.triangles.iter().enumerate() {
+            let mut order = vec![0u32; self.edges.len()];
+            for (i, t) in self.edges.iter().enumerate() {
                 let slot = &mut first[first_tile(t)];
                 order[*slot as usize] = i as u32;
                 *slot += 1;
             }
-            let triangles: Vec<Triangle> = order.iter().map(|&i| self.setup.triangles[i as usize]).collect();
+            let edges: Vec<SmallEdges> = order.iter().map(|&i| self.edges[i as usize]).collect();
             let mut count = vec![0u32; tiles + 1];
-            for t in &triangles {
+            for t in &edges {
                 let (xr, yr) = tile_range(t);
                 for ty in yr {
                     for tx in xr.clone() {
@@ -214,7 +216,7 @@ impl Rasterizer {
             let mut fill = start.clone();
             let mut tris = vec![0u32; start[tiles] as usize];
             // Each tile's list is in the sorted triangles' order.
-            for (i, t) in triangles.iter().enumerate() {
+            for (i, t) in edges.iter().enumerate() {
                 let (xr, yr) = tile_range(t);
                 for ty in yr {
                     for tx in xr.clone() {
@@ -224,8 +226,7 @@ impl Rasterizer {
                     }
                 }
             }
-            let edges = order.iter().map(|&i| self.edges[i as usize]).collect();
-            Bins { tiles_x, triangles, edges, start, tris }
+            Bins { tiles_x, order, edges, start, tris }
         })
     }
 
@@ -278,7 +279,8 @@ impl Rasterizer {
                         let mut n = 0u64;
                         for &i in &bins.tris[bins.start[tile] as usize..bins.start[tile + 1] as usize] {
                             // The triangle itself is read only where it covers a pixel.
-                            let (t, edges) = (&bins.triangles[i as usize], &bins.edges[i as usize]);
+                            let edges = &bins.edges[i as usize];
+                            let t = &self.setup.triangles[bins.order[i as usize] as usize];
                             let [bx0, by0, bx1, by1] = edges.bbox;
                             let rect = [bx0.max(x0), by0.max(y0), bx1.min(x1), by1.min(y1)];
                             walk_tile(t, edges, rect, |x, y, e| {

@@ -127,25 +127,28 @@ impl<'a> Resolve<'a> {
     }
 
     /// Finishes every pixel into an sRGB image; returns it, the fragments captured in all and
-    /// those counted tied.
-    pub fn image(&self, width: u32, height: u32, states: &mut [PixelState]) -> (Image, u64, u64) {
+    /// those counted tied, and the most fragments one pixel captured. Each pixel is finished, converted to sRGB and counted in one parallel
+    /// sweep (the heat map, which needs the deepest pixel first, takes a second).
+    pub fn image(&self, width: u32, height: u32, states: &mut [PixelState]) -> (Image, u64, u64, u32) {
         use rayon::prelude::*;
-        let colors: Vec<Vec3> = states.par_iter_mut().map(|s| self.finish(s)).collect();
-        let captured = states.iter().map(|s| u64::from(s.captured)).sum();
-        let tied = states.iter().map(|s| u64::from(s.tied())).sum();
         let mut image = Image::new(width, height, [0, 0, 0, 255]);
+        let (captured, tied, deepest) = image
+            .pixels
+            .par_iter_mut()
+            .zip(states.par_iter_mut())
+            .map(|(px, s)| {
+                *px = srgb(self.finish(s));
+                (u64::from(s.captured), u64::from(s.tied()), s.captured)
+            })
+            .reduce(|| (0, 0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2.max(b.2)));
         if self.effect == Effect::Complexity {
-            let max = states.iter().map(|s| s.captured).max().unwrap_or(0).max(1);
-            for (px, s) in image.pixels.iter_mut().zip(states.iter()) {
+            let max = deepest.max(1);
+            image.pixels.par_iter_mut().zip(states.par_iter()).for_each(|(px, s)| {
                 let c = if s.captured == 0 { self.background } else { heat(s.captured as f32 / max as f32) };
                 *px = srgb(c);
-            }
-        } else {
-            for (px, c) in image.pixels.iter_mut().zip(colors) {
-                *px = srgb(c);
-            }
+            });
         }
-        (image, captured, tied)
+        (image, captured, tied, deepest)
     }
 }
 
@@ -500,7 +503,7 @@ mod tests {
                 r.push(&mut states[px], 0.1 * (i + 1) as f32, 0);
             }
         }
-        let (image, captured, tied) = r.image(3, 1, &mut states);
+        let (image, captured, tied, _) = r.image(3, 1, &mut states);
         assert_eq!((captured, tied), (6, 0));
         assert_eq!(image.pixels, [srgb(BG), srgb(heat(0.5)), srgb(heat(1.0))]);
         assert_eq!(heat(0.5), Vec3::new(0.6, 0.05, 0.5), "the ramp's middle stop");

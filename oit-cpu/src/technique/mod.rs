@@ -282,9 +282,9 @@ where
 
 /// Resolves the states into the frame (the common ending).
 pub(crate) fn finish(ctx: &Ctx<'_>, mut states: Pooled<'_, PixelState>) -> oit_core::Frame {
-    let (image, captured, tied) = ctx.resolve.image(ctx.settings.width, ctx.settings.height, &mut states);
+    let (image, captured, tied, deepest) = ctx.resolve.image(ctx.settings.width, ctx.settings.height, &mut states);
     let mut frame = frame(ctx, image, captured);
     frame.stats.tied = tied;
-    frame.stats.max_layers = states.iter().map(|s| s.captured).max().unwrap_or(0);
+    frame.stats.max_layers = deepest;
     frame
 }
