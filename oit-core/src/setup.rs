@@ -375,7 +375,15 @@ impl Snap {
                 let prim = prim_base.saturating_add(u32::try_from(t).unwrap_or(u32::MAX));
                 let at = |i: u32| (codes[i as usize], projected[i as usize]);
                 let ((ca, pa), (cb, pb), (cc, pc)) = (at(tri[0]), at(tri[1]), at(tri[2]));
-                self.triangle(&mut out, [a, b, c], [ca, cb, cc], [pa, pb, pc], base, mesh.colors.is_some(), prim);
+                self.triangle(
+                    &mut out,
+                    [a, b, c],
+                    [ca, cb, cc],
+                    [pa, pb, pc],
+                    base,
+                    mesh.colors.is_some(),
+                    prim,
+                );
             }
             out
         });

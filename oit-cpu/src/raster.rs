@@ -136,7 +136,13 @@ impl Rasterizer {
     /// A rasterizer over triangles already set up (a persistent renderer keeps its setup).
     pub fn from_setup(setup: TriangleSetup) -> Rasterizer {
         let edges = setup.triangles.par_iter().map(SmallEdges::new).collect();
-        let r = Rasterizer { setup, edges, mode: DEFAULT_MODE, bins: OnceLock::new(), fragments: OnceLock::new() };
+        let r = Rasterizer {
+            setup,
+            edges,
+            mode: DEFAULT_MODE,
+            bins: OnceLock::new(),
+            fragments: OnceLock::new(),
+        };
         r.warm_bins();
         r
     }
@@ -415,7 +421,12 @@ impl SmallEdges {
     fn new(t: &Triangle) -> SmallEdges {
         let extent = |v: [i32; 3]| v[0].max(v[1]).max(v[2]) - v[0].min(v[1]).min(v[2]);
         if extent(t.x) > SMALL_EXTENT || extent(t.y) > SMALL_EXTENT {
-            return SmallEdges { bbox: t.bbox, plane: DepthPlane::new(t), prim: t.prim, ..SmallEdges::default() };
+            return SmallEdges {
+                bbox: t.bbox,
+                plane: DepthPlane::new(t),
+                prim: t.prim,
+                ..SmallEdges::default()
+            };
         }
         let [x0, y0, _, _] = t.bbox;
         let (px, py) = (i64::from(x0) * SUBPIXEL + HALF_PIXEL, i64::from(y0) * SUBPIXEL + HALF_PIXEL);

@@ -131,7 +131,10 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         // (depth bits, primitive id) above the payload: one primitive has one fragment a pixel,
         // so the payload never decides
         keys.extend(
-            slots.iter().zip(payloads).map(|(x, p)| u128::from(x.load(Relaxed)) << 32 | u128::from(p.load(Relaxed))),
+            slots
+                .iter()
+                .zip(payloads)
+                .map(|(x, p)| u128::from(x.load(Relaxed)) << 32 | u128::from(p.load(Relaxed))),
         );
         sort_keys(keys);
         for &key in keys.iter() {

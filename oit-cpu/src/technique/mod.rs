@@ -273,7 +273,8 @@ where
     S: Default + Send,
     F: Fn(usize, &mut S, &mut PixelState) + Sync + Send,
 {
-    let (image, captured, tied, deepest) = ctx.resolve.image_with(ctx.settings.width, ctx.settings.height, feed);
+    let (image, captured, tied, deepest) =
+        ctx.resolve.image_with(ctx.settings.width, ctx.settings.height, feed);
     let mut frame = frame(ctx, image, captured);
     frame.stats.tied = tied;
     frame.stats.max_layers = deepest;
@@ -282,7 +283,8 @@ where
 
 /// Resolves the states into the frame (the common ending).
 pub(crate) fn finish(ctx: &Ctx<'_>, mut states: Pooled<'_, PixelState>) -> oit_core::Frame {
-    let (image, captured, tied, deepest) = ctx.resolve.image(ctx.settings.width, ctx.settings.height, &mut states);
+    let (image, captured, tied, deepest) =
+        ctx.resolve.image(ctx.settings.width, ctx.settings.height, &mut states);
     let mut frame = frame(ctx, image, captured);
     frame.stats.tied = tied;
     frame.stats.max_layers = deepest;
