@@ -248,20 +248,20 @@ impl Snap {
         Some(Projected { x: sx as i32 - self.origin.0, y: sy as i32 - self.origin.1, z: nz, inv_w })
     }
 
-    /// Clips one triangle and appends the pieces that touch the viewport. `codes` are its
-    /// vertices' [`outcode`]s and `projected` their [`Snap::project`]ions, made once per vertex:
+    /// Clips one triangle and appends the pieces that touch the viewport. `pre` holds its
+    /// vertices' [`outcode`]s and [`Snap::project`]ions, made once per vertex:
     /// a triangle inside every plane is snapped from those (the projection is a function of the
     /// clip-space position alone, so this is what projecting it here would give, bit for bit).
     fn triangle(
         &self,
         out: &mut Vec<Triangle>,
         v: [ClipVertex; 3],
-        codes: [u8; 3],
-        projected: [Option<Projected>; 3],
+        pre: [(u8, Option<Projected>); 3],
         base: Vec4,
         has_color: bool,
         prim: u32,
     ) {
+        let (codes, projected) = (pre.map(|p| p.0), pre.map(|p| p.1));
         let (any, all) = (codes[0] | codes[1] | codes[2], codes[0] & codes[1] & codes[2]);
         // a vertex not finite, or all three outside one plane
         if any & NOT_FINITE != 0 || all != 0 {
@@ -373,17 +373,8 @@ impl Snap {
                     continue;
                 };
                 let prim = prim_base.saturating_add(u32::try_from(t).unwrap_or(u32::MAX));
-                let at = |i: u32| (codes[i as usize], projected[i as usize]);
-                let ((ca, pa), (cb, pb), (cc, pc)) = (at(tri[0]), at(tri[1]), at(tri[2]));
-                self.triangle(
-                    &mut out,
-                    [a, b, c],
-                    [ca, cb, cc],
-                    [pa, pb, pc],
-                    base,
-                    mesh.colors.is_some(),
-                    prim,
-                );
+                let pre = tri.map(|i| (codes[i as usize], projected[i as usize]));
+                self.triangle(&mut out, [a, b, c], pre, base, mesh.colors.is_some(), prim);
             }
             out
         });
