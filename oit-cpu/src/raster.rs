@@ -11,13 +11,13 @@
 //!   same whatever the [`RasterMode`] and the number of rayon threads; only the order of the calls
 //!   varies.
 //!
-//! How: [`RasterMode::Tiled`] (the default) bins the triangles into [`TILE_SIZE`]-pixel tiles once
-//! per frame, with the setup, and runs the tiles in parallel, each on one thread (so a pixel's
-//! fragments all come from one thread, and a pass's per-pixel storage is touched tile by tile,
-//! not all over the frame). [`RasterMode::Scatter`] runs the set-up triangles in parallel chunks
-//! in primitive order. In both, a triangle at most 64 pixels across is walked eight pixels of a
-//! row at a time in 32-bit lanes (`walk_small`, its edge functions set up once per frame), a
-//! larger one by the span walk, which visits row by row the exact span of covered pixels
+//! How: [`RasterMode::Scatter`] (the default, [`DEFAULT_MODE`]) runs the set-up triangles in
+//! parallel chunks in primitive order. [`RasterMode::Tiled`] bins the triangles into
+//! [`TILE_SIZE`]-pixel tiles once per frame, with the setup, and runs the tiles in parallel, each
+//! on one thread (so a pixel's fragments all come from one thread, and a pass's per-pixel storage
+//! is touched tile by tile, not all over the frame). In both, a triangle at most 64 pixels across
+//! is walked eight pixels of a row at a time in 32-bit lanes (`walk_small`, its edge functions set
+//! up once per frame), a larger one by the span walk, which visits row by row the exact span of covered pixels
 //! ([`oit_core::setup::covers`]), found by integer division of the edge functions. Both walks are
 //! tested against the per-pixel rule and against each other.
 //!
@@ -96,15 +96,18 @@ pub enum RasterMode {
     Tiled,
 }
 
-/// The mode [`Rasterizer::new`] starts in: [`RasterMode::Tiled`] since issue 12.
+/// The mode [`Rasterizer::new`] starts in: [`RasterMode::Scatter`].
 ///
-/// Before issue 12 Scatter was the default: both modes then made every fragment in full, and
-/// Tiled read the whole triangle record for each, so its pass was slower on the bunny. With the
-/// compact traversal record and lazy fragments, Tiled was as fast or faster in every pass of
-/// `cargo bench -p oit-cpu --bench raster` and in the techniques' frames (figures in
-/// `bench/results/cpu/issue12/`; a 2-core host shared with other jobs, so differences under
-/// about 20 % are within its noise).
-pub const DEFAULT_MODE: RasterMode = RasterMode::Tiled;
+/// Measured side by side on a 2-core host shared with other jobs (`cargo bench -p oit-cpu
+/// --bench raster`, 2 rayon threads, criterion's median, runs alternated; figures in
+/// `bench/results/cpu/issue12/`): on the bunny at 512² the two modes' passes are within noise of
+/// each other (colour 7.5–8.5 ms against 8.4–9.0 ms, depth only 2.9–4.0 ms against 2.5–3.7 ms),
+/// on `planes:64` Tiled's colour pass is slower (269 ms against 155 ms: its large triangles are
+/// walked tile by tile by the span walk), and Tiled adds the binning, serial, to each frame's
+/// setup (the bench's bunny `setup` with the bins: 16.1–16.8 ms). At two threads Tiled does not
+/// pay; re-measure on a many-core host, where one thread per pixel (no contended cache lines)
+/// may.
+pub const DEFAULT_MODE: RasterMode = RasterMode::Scatter;
 
 /// The triangles in tile order, and the tiles' lists of them, compressed: tile `t` holds
 /// sorted triangle `i` for `i` in `tris[start[t]..start[t + 1]]`.
