@@ -143,6 +143,19 @@ fn plane_distance(p: Vec4, plane: usize) -> f32 {
     }
 }
 
+/// [`outcode`]'s bit for a position with a coordinate that is not finite.
+const NOT_FINITE: u8 = 1 << 7;
+
+/// Bit `plane` set for each clip plane `p` lies outside of ([`plane_distance`] below 0), or
+/// [`NOT_FINITE`] alone.
+#[inline]
+fn outcode(p: Vec4) -> u8 {
+    if !p.is_finite() {
+        return NOT_FINITE;
+    }
+    (0..CLIP_PLANES).fold(0, |code, plane| code | u8::from(plane_distance(p, plane) < 0.0) << plane)
+}
+
 /// A convex polygon of at most [`MAX_POLYGON`] vertices.
 #[derive(Clone, Copy)]
 struct Polygon {
@@ -235,39 +248,58 @@ impl Snap {
         Some(Projected { x: sx as i32 - self.origin.0, y: sy as i32 - self.origin.1, z: nz, inv_w })
     }
 
-    /// Clips one triangle and appends the pieces that touch the viewport.
-    fn triangle(&self, out: &mut Vec<Triangle>, v: [ClipVertex; 3], base: Vec4, has_color: bool, prim: u32) {
-        if v.iter().any(|v| !v.pos.is_finite()) {
+    /// Clips one triangle and appends the pieces that touch the viewport. `pre` holds its
+    /// vertices' [`outcode`]s and [`Snap::project`]ions, made once per vertex:
+    /// a triangle inside every plane is snapped from those (the projection is a function of the
+    /// clip-space position alone, so this is what projecting it here would give, bit for bit).
+    fn triangle(
+        &self,
+        out: &mut Vec<Triangle>,
+        v: [ClipVertex; 3],
+        pre: [(u8, Option<Projected>); 3],
+        base: Vec4,
+        has_color: bool,
+        prim: u32,
+    ) {
+        let (codes, projected) = (pre.map(|p| p.0), pre.map(|p| p.1));
+        let (any, all) = (codes[0] | codes[1] | codes[2], codes[0] & codes[1] & codes[2]);
+        // a vertex not finite, or all three outside one plane
+        if any & NOT_FINITE != 0 || all != 0 {
             return;
         }
-        let mut outside_any = 0u32;
-        for plane in 0..CLIP_PLANES {
-            let d = v.map(|v| plane_distance(v.pos, plane));
-            if d.iter().all(|&d| d < 0.0) {
+        if any == 0 {
+            let (Some(p0), Some(p1), Some(p2)) = (projected[0], projected[1], projected[2]) else {
                 return;
-            }
-            if d.iter().any(|&d| d < 0.0) {
-                outside_any |= 1 << plane;
-            }
-        }
-        if outside_any == 0 {
-            self.piece(out, v, base, has_color, prim);
+            };
+            self.snapped(out, v, [p0, p1, p2], base, has_color, prim);
             return;
         }
-        let poly = clip(v, outside_any);
+        let poly = clip(v, u32::from(any));
         for i in 1..poly.n.saturating_sub(1) {
             self.piece(out, [poly.v[0], poly.v[i], poly.v[i + 1]], base, has_color, prim);
         }
     }
 
     /// Projects and snaps one (clipped) triangle; keeps it if it has area and touches the viewport.
-    fn piece(&self, out: &mut Vec<Triangle>, mut v: [ClipVertex; 3], base: Vec4, has_color: bool, prim: u32) {
+    fn piece(&self, out: &mut Vec<Triangle>, v: [ClipVertex; 3], base: Vec4, has_color: bool, prim: u32) {
         let (Some(p0), Some(p1), Some(p2)) =
             (self.project(v[0].pos), self.project(v[1].pos), self.project(v[2].pos))
         else {
             return;
         };
-        let mut p = [p0, p1, p2];
+        self.snapped(out, v, [p0, p1, p2], base, has_color, prim);
+    }
+
+    /// [`Snap::piece`] once its vertices are projected (`p`, in the order of `v`).
+    fn snapped(
+        &self,
+        out: &mut Vec<Triangle>,
+        mut v: [ClipVertex; 3],
+        mut p: [Projected; 3],
+        base: Vec4,
+        has_color: bool,
+        prim: u32,
+    ) {
         let (x0, y0) = (i64::from(p[0].x), i64::from(p[0].y));
         let area = (i64::from(p[1].x) - x0) * (i64::from(p[2].y) - y0)
             - (i64::from(p[1].y) - y0) * (i64::from(p[2].x) - x0);
@@ -321,6 +353,10 @@ impl Snap {
 
     /// Sets up the triangles of one instance, in order, in parallel.
     fn instance(&self, clip_pos: &[Vec4], mesh: MeshView<'_>, base: Vec4, prim_base: u32) -> Vec<Triangle> {
+        // Once per vertex rather than once per triangle that uses it (about six on a closed
+        // mesh): which planes it lies outside, and where it lands on screen.
+        let codes: Vec<u8> = map_all(clip_pos, |p| outcode(*p));
+        let projected: Vec<Option<Projected>> = map_all(clip_pos, |p| self.project(*p));
         let chunks: Vec<Vec<Triangle>> = map_chunks(mesh.indices, SETUP_CHUNK, |c, chunk| {
             let mut out = Vec::with_capacity(chunk.len());
             for (j, tri) in chunk.iter().enumerate() {
@@ -337,7 +373,8 @@ impl Snap {
                     continue;
                 };
                 let prim = prim_base.saturating_add(u32::try_from(t).unwrap_or(u32::MAX));
-                self.triangle(&mut out, [a, b, c], base, mesh.colors.is_some(), prim);
+                let pre = tri.map(|i| (codes[i as usize], projected[i as usize]));
+                self.triangle(&mut out, [a, b, c], pre, base, mesh.colors.is_some(), prim);
             }
             out
         });
@@ -501,28 +538,30 @@ impl TriangleSetup {
 
     /// Interpolates and shades the fragment of `t` at pixel (x, y), whose edge functions
     /// ([`edge`]) are `e`. The formula is fixed (no fused multiply-add), so a port gets the same
-    /// bits.
+    /// bits. It is [`barycentrics`], [`depth_at`], then [`TriangleSetup::color_at`] and
+    /// [`normal_at`]: a backend that needs only some of these for a fragment (a depth-only pass)
+    /// may call just those, and gets the same bits for them.
     #[inline]
     pub fn fragment(&self, t: &Triangle, x: u32, y: u32, e: [i64; 3]) -> Fragment {
-        let b = e.map(|e| e as f32 * t.inv_area);
-        // Anchored at vertex 0, so a triangle of constant depth (a quad facing the camera, a plane
-        // at exactly d = 0 or 1) gives exactly that depth at every pixel: coplanar fragments of
-        // different triangles then tie exactly, as the rules for ties assume.
-        let depth = (t.z[0] + b[1] * (t.z[1] - t.z[0]) + b[2] * (t.z[2] - t.z[0])).clamp(0.0, 1.0);
-        let q = [b[0] * t.inv_w[0], b[1] * t.inv_w[1], b[2] * t.inv_w[2]];
-        let inv_q = 1.0 / (q[0] + q[1] + q[2]);
-        let p = q.map(|q| q * inv_q);
-        let normal = t.normal[0] * p[0] + t.normal[1] * p[1] + t.normal[2] * p[2];
-        let vertex_color = t.has_color.then(|| t.color[0] * p[0] + t.color[1] * p[1] + t.color[2] * p[2]);
+        let b = barycentrics(t, e);
         Fragment {
             pixel: y * self.width + x,
-            depth,
+            depth: depth_at(t, b),
             prim: t.prim,
-            color: self.shading.shade(t.base, normal, vertex_color, self.forward),
-            normal: normal.normalize_or_zero(),
+            color: self.color_at(t, b),
+            normal: normal_at(t, b),
         }
     }
 
+    /// The shaded colour of the fragment of `t` with barycentrics `b` ([`barycentrics`]):
+    /// [`TriangleSetup::fragment`]'s `color`.
+    #[inline]
+    pub fn color_at(&self, t: &Triangle, b: [f32; 3]) -> Vec4 {
+        let p = perspective(t, b);
+        let normal = interpolated_normal(t, p);
+        let vertex_color = t.has_color.then(|| t.color[0] * p[0] + t.color[1] * p[1] + t.color[2] * p[2]);
+        self.shading.shade(t.base, normal, vertex_color, self.forward)
+    }
     /// The set-up triangles as 32-bit words, [`TRIANGLE_WORDS`] per triangle, for a GPU rasterizer
     /// that walks and interpolates them with the same rules (oit-wgpu's compute path), so both
     /// produce the same fragments. Layout per triangle: `x[3]` (i32, 1/256 px), `y[3]` (i32),
@@ -558,6 +597,80 @@ impl TriangleSetup {
     }
 }
 
+/// The screen-space barycentrics of a fragment of `t` from its edge functions `e` ([`edge`]).
+#[inline]
+pub fn barycentrics(t: &Triangle, e: [i64; 3]) -> [f32; 3] {
+    DepthPlane::new(t).barycentrics(e)
+}
+
+/// The depth of the fragment of `t` with barycentrics `b` ([`barycentrics`]):
+/// [`TriangleSetup::fragment`]'s `depth`.
+#[inline]
+pub fn depth_at(t: &Triangle, b: [f32; 3]) -> f32 {
+    DepthPlane::new(t).depth(b)
+}
+
+/// What a fragment's barycentrics and depth need of its triangle, a few words a traversal can
+/// keep beside its edge functions (the rest of [`Triangle`] is read only for colour and normal).
+/// The differences are the ones [`depth_at`] takes, the same f32 subtractions made once.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DepthPlane {
+    /// NDC z of vertex 0.
+    pub z0: f32,
+    /// `z[1] − z[0]`.
+    pub dz1: f32,
+    /// `z[2] − z[0]`.
+    pub dz2: f32,
+    /// [`Triangle::inv_area`].
+    pub inv_area: f32,
+}
+
+impl DepthPlane {
+    /// The plane of `t`.
+    #[inline]
+    pub fn new(t: &Triangle) -> DepthPlane {
+        DepthPlane { z0: t.z[0], dz1: t.z[1] - t.z[0], dz2: t.z[2] - t.z[0], inv_area: t.inv_area }
+    }
+
+    /// [`barycentrics`].
+    #[inline]
+    pub fn barycentrics(&self, e: [i64; 3]) -> [f32; 3] {
+        e.map(|e| e as f32 * self.inv_area)
+    }
+
+    /// [`depth_at`].
+    #[inline]
+    pub fn depth(&self, b: [f32; 3]) -> f32 {
+        // Anchored at vertex 0, so a triangle of constant depth (a quad facing the camera, a plane
+        // at exactly d = 0 or 1) gives exactly that depth at every pixel: coplanar fragments of
+        // different triangles then tie exactly, as the rules for ties assume.
+        (self.z0 + b[1] * self.dz1 + b[2] * self.dz2).clamp(0.0, 1.0)
+    }
+}
+
+/// The perspective-correct weights of the vertices (barycentrics weighted by 1/w, normalized).
+#[inline]
+fn perspective(t: &Triangle, b: [f32; 3]) -> [f32; 3] {
+    let q = [b[0] * t.inv_w[0], b[1] * t.inv_w[1], b[2] * t.inv_w[2]];
+    let inv_q = 1.0 / (q[0] + q[1] + q[2]);
+    q.map(|q| q * inv_q)
+}
+
+/// The interpolated normal before normalization.
+#[inline]
+fn interpolated_normal(t: &Triangle, p: [f32; 3]) -> Vec3 {
+    t.normal[0] * p[0] + t.normal[1] * p[1] + t.normal[2] * p[2]
+}
+
+/// The normalized world normal of the fragment of `t` with barycentrics `b` ([`barycentrics`]):
+/// [`TriangleSetup::fragment`]'s `normal`.
+#[inline]
+pub fn normal_at(t: &Triangle, b: [f32; 3]) -> Vec3 {
+    interpolated_normal(t, perspective(t, b)).normalize_or_zero()
+}
+
+/// Edge function `k` of `t` (the edge opposite vertex `k`) at the point (px, py) in sub-pixel
+/// units: its value, its steps per pixel in x and in y, and the value a
 /// covered pixel's edge function must exceed (−1 on a top or left edge, so 0 is covered; 0
 /// elsewhere).
 #[inline]

@@ -3,8 +3,10 @@
 //! issue 12 and still the default) against the tiled walk with the vectorized coverage test of
 //! small triangles ([`RasterMode::Tiled`]), side by side in one run. Each mode is timed twice:
 //! `coverage` is the traversal alone ([`Rasterizer::coverage_pass`]), `pass` the whole geometry
-//! pass (each fragment made in full) with a per-fragment relaxed atomic add into a per-pixel
-//! counter, about the cheapest a technique does, so the rasterizer's own cost dominates.
+//! pass (each fragment's depth, id and shaded colour, what a capture pass of the transparency
+//! effect stores) with a per-fragment relaxed atomic add into a per-pixel counter, about the cheapest a technique does, so the rasterizer's own cost
+//! dominates; `depth` the same pass reading only depth and primitive id, as a counting pass or a
+//! peel's depth test does (colour and normal are computed only where a shader reads them).
 //! Throughput is in fragments.
 //!
 //! `cargo bench -p oit-cpu --bench raster -- --warm-up-time 1 --measurement-time 3`
@@ -61,8 +63,18 @@ fn pass(c: &mut Criterion) {
             group.bench_function(format!("{mode}/pass"), |b| {
                 b.iter(|| {
                     r.for_each_fragment(|f| {
-                        // made in full: unread, the interpolation and shading would be dropped
-                        black_box(f);
+                        // what a capture of the transparency effect reads: depth, id and colour
+                        // (colour and normal are computed only where read; none reads both)
+                        black_box((f.depth, f.prim, f.color()));
+                        counts[f.pixel as usize].fetch_add(1, Ordering::Relaxed);
+                    })
+                })
+            });
+            group.bench_function(format!("{mode}/depth"), |b| {
+                b.iter(|| {
+                    r.for_each_fragment(|f| {
+                        // a depth-only pass (a peel's test, a counting pass): no colour, no normal
+                        black_box((f.depth, f.prim));
                         counts[f.pixel as usize].fetch_add(1, Ordering::Relaxed);
                     })
                 })

@@ -1,9 +1,9 @@
 //! Per-pixel storage kept between frames: a [`Pool`] of arrays by element type and length, lent
 //! out as [`Pooled`] guards that give the array back when dropped. A frame of the same size as an
 //! earlier one finds its arrays here and allocates nothing; [`Pool::allocations`] counts the
-//! arrays that had to be made. Arrays of other lengths stay on their shelf only while the shelf
-//! and the array a lend must make fit the host's budget ([`oit_core::plan::host_memory_budget`]):
-//! a tiled frame's windows do not pile up.
+//! arrays that had to be made. A shelf keeps at most [`SHELF_ARRAYS`] arrays, and only while they
+//! and the array a lend must make fit the host's budget ([`oit_core::plan::host_memory_budget`]),
+//! oldest out first: a tiled frame's windows, or frames of ever-new sizes, do not pile up.
 
 use std::ops::{Deref, DerefMut};
 use std::sync::Mutex;
@@ -12,6 +12,11 @@ use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
 use rayon::prelude::*;
 
 use crate::resolve::PixelState;
+
+/// The most arrays a shelf keeps: enough for the few lengths a prepared scene's frames take (a
+/// turning camera changes the count-sized arrays' lengths), few enough that a run of frames of
+/// ever-new shapes does not hoard them.
+const SHELF_ARRAYS: usize = 8;
 
 /// Free arrays of one element type.
 pub(crate) struct Shelf<T> {
@@ -86,10 +91,14 @@ impl Pool {
                 let bytes = |a: &Vec<T>| (a.len() * std::mem::size_of::<T>()) as u64;
                 let cap = oit_core::plan::host_memory_budget().1;
                 let new = (len * std::mem::size_of::<T>()) as u64;
-                free.sort_by_key(|a| bytes(a));
-                while !free.is_empty() && free.iter().map(bytes).sum::<u64>() + new > cap {
-                    free.pop();
+                let mut kept: u64 = free.iter().map(bytes).sum();
+                // oldest first out (arrays come back to the end of the list)
+                let mut out = 0;
+                while out < free.len() && (free.len() - out >= SHELF_ARRAYS || kept + new > cap) {
+                    kept -= bytes(&free[out]);
+                    out += 1;
                 }
+                free.drain(..out);
                 return None;
             };
             Some(free.swap_remove(i))
@@ -116,6 +125,17 @@ impl Pool {
     /// `len` 64-bit atomics set to `init`.
     pub fn u64s(&self, len: usize, init: u64) -> Pooled<'_, AtomicU64> {
         self.lend(&self.u64s, len, || AtomicU64::new(init), |a| *a.get_mut() = init)
+    }
+
+    /// `len` 32-bit atomics holding whatever their last user left (0 when newly made): for arrays
+    /// every element of which is written before it is read.
+    pub fn u32s_scratch(&self, len: usize) -> Pooled<'_, AtomicU32> {
+        self.lend(&self.u32s, len, || AtomicU32::new(0), |_| {})
+    }
+
+    /// [`Pool::u32s_scratch`] in 64-bit atomics.
+    pub fn u64s_scratch(&self, len: usize) -> Pooled<'_, AtomicU64> {
+        self.lend(&self.u64s, len, || AtomicU64::new(0), |_| {})
     }
 
     /// `len` fresh resolve states.

@@ -11,23 +11,74 @@
 //!   same whatever the [`RasterMode`] and the number of rayon threads; only the order of the calls
 //!   varies.
 //!
-//! How: [`RasterMode::Scatter`] (the default) runs the set-up triangles in parallel chunks, each
-//! walking its box by the span walk, which visits row by row the exact span of covered pixels
-//! ([`oit_core::setup::covers`]), found by integer division of the edge functions.
-//! [`RasterMode::Tiled`] bins the triangles into [`TILE_SIZE`]-pixel tiles once per frame, with
-//! the setup, and runs the tiles in parallel, each on one thread (so a pixel's fragments all come
-//! from one thread). There a triangle at most 64 pixels across is walked eight pixels of a row at
-//! a time in 32-bit lanes (`walk_small`, its edge functions set up with the bins), a larger one
-//! by the span walk. Both walks are tested against the per-pixel rule and against each other.
+//! How: [`RasterMode::Scatter`] (the default, [`DEFAULT_MODE`]) runs the set-up triangles in
+//! parallel chunks in primitive order. [`RasterMode::Tiled`] bins the triangles into
+//! [`TILE_SIZE`]-pixel tiles once per frame, with the setup, and runs the tiles in parallel, each
+//! on one thread (so a pixel's fragments all come from one thread, and a pass's per-pixel storage
+//! is touched tile by tile, not all over the frame). In both, a triangle at most 64 pixels across
+//! is walked eight pixels of a row at a time in 32-bit lanes (`walk_small`, its edge functions set
+//! up once per frame), a larger one by the span walk, which visits row by row the exact span of covered pixels
+//! ([`oit_core::setup::covers`]), found by integer division of the edge functions. Both walks are
+//! tested against the per-pixel rule and against each other.
+//!
+//! A pass reads one compact record per triangle (its edge functions, its [`DepthPlane`] and its
+//! primitive id): depth and id are all a [`Fragment`] holds at once; colour and normal are
+//! interpolated from the full [`Triangle`] only when a shader asks ([`Fragment::color`],
+//! [`Fragment::normal`]), so a counting pass or a peel's depth test never shades.
 
 use std::sync::OnceLock;
 
-use glam::Vec3;
-use oit_core::setup::{HALF_PIXEL, SUBPIXEL, Triangle, TriangleSetup, edge};
+use glam::{Vec3, Vec4};
+use oit_core::setup::{DepthPlane, HALF_PIXEL, SUBPIXEL, Triangle, TriangleSetup, edge, normal_at};
 use oit_core::{Camera, Scene, Settings, Shading};
 use rayon::prelude::*;
 
-pub use oit_core::setup::{Fragment, GUARD_BAND, SUBPIXEL_BITS, TRIANGLE_WORDS};
+pub use oit_core::setup::{GUARD_BAND, SUBPIXEL_BITS, TRIANGLE_WORDS};
+
+/// One covered (pixel, triangle) pair as a technique's shader sees it: where it is, its depth and
+/// primitive id at once, its colour and normal on demand ([`Fragment::color`],
+/// [`Fragment::normal`]). Interpolation and shading are most of a geometry pass, and many passes
+/// read neither (a counting pass, a peel that the fragment's depth alone rules out), so they are
+/// computed only where a shader asks. Every value is [`TriangleSetup::fragment`]'s, bit for bit:
+/// the same functions of oit-core compute it.
+#[derive(Clone, Copy)]
+pub struct Fragment<'a> {
+    /// `y·width + x`, row `y = 0` at the top.
+    pub pixel: u32,
+    /// NDC z in [0, 1].
+    pub depth: f32,
+    /// Primitive id: `scene.primitive_bases().0[instance] + triangle index`.
+    pub prim: u32,
+    /// Screen-space barycentrics ([`oit_core::setup::barycentrics`]).
+    b: [f32; 3],
+    t: &'a Triangle,
+    setup: &'a TriangleSetup,
+}
+
+impl Fragment<'_> {
+    /// Shaded colour, straight-alpha linear RGBA ([`TriangleSetup::color_at`]).
+    #[inline]
+    pub fn color(&self) -> Vec4 {
+        self.setup.color_at(self.t, self.b)
+    }
+
+    /// Interpolated world-space normal, normalized, zero where the mesh has none ([`normal_at`]).
+    #[inline]
+    pub fn normal(&self) -> Vec3 {
+        normal_at(self.t, self.b)
+    }
+
+    /// Every value at once, as [`TriangleSetup::fragment`] makes it.
+    pub fn full(&self) -> oit_core::setup::Fragment {
+        oit_core::setup::Fragment {
+            pixel: self.pixel,
+            depth: self.depth,
+            prim: self.prim,
+            color: self.color(),
+            normal: self.normal(),
+        }
+    }
+}
 
 /// Side of a screen tile of [`RasterMode::Tiled`], in pixels.
 pub const TILE_SIZE: u32 = 32;
@@ -45,34 +96,30 @@ pub enum RasterMode {
     Tiled,
 }
 
-/// The mode [`Rasterizer::new`] starts in: [`RasterMode::Scatter`] (as before issue 12).
+/// The mode [`Rasterizer::new`] starts in: [`RasterMode::Scatter`].
 ///
-/// Measured side by side with `cargo bench -p oit-cpu --bench raster -- --warm-up-time 1
-/// --measurement-time 3` (2 rayon threads on a 2-core host shared with other builds, load
-/// average about 4; criterion's median; `pass` makes every fragment in full):
-///
-/// | scene | fragments | Scatter coverage | Tiled coverage | Scatter pass | Tiled pass |
-/// |---|---|---|---|---|---|
-/// | bunny.obj, 512² | 156,812 | 7.2 ms | 6.9 ms | 16.0 ms | 17.3 ms |
-/// | planes:64, 512² | 4,921,315 | 10.6 ms | 19.2 ms | 306 ms | 344 ms |
-///
-/// Tiled's coverage is as fast or faster on the bunny's small triangles (the 32-bit lanes do
-/// without Scatter's 64-bit divisions), slower where large triangles are walked tile by tile;
-/// but in both modes interpolation and shading ([`TriangleSetup::fragment`]) are most of a pass,
-/// and Tiled adds the binning and the tile-ordered copy of the triangles to each frame's setup.
-/// At two threads that does not pay; re-measure on a many-core host, where one thread per pixel
-/// (no contended cache lines) may.
+/// Measured side by side on a 2-core host shared with other jobs (`cargo bench -p oit-cpu
+/// --bench raster`, 2 rayon threads, criterion's median, runs alternated; figures in
+/// `bench/results/cpu/issue12/`): on the bunny at 512² the two modes' passes are within noise of
+/// each other (colour 7.5–8.5 ms against 8.4–9.0 ms, depth only 2.9–4.0 ms against 2.5–3.7 ms),
+/// on `planes:64` Tiled's colour pass is slower (269 ms against 155 ms: its large triangles are
+/// walked tile by tile by the span walk), and Tiled adds the binning, serial, to each frame's
+/// setup (the bench's bunny `setup` with the bins: 16.1–16.8 ms). At two threads Tiled does not
+/// pay; re-measure on a many-core host, where one thread per pixel (no contended cache lines)
+/// may.
 pub const DEFAULT_MODE: RasterMode = RasterMode::Scatter;
 
 /// The triangles in tile order, and the tiles' lists of them, compressed: tile `t` holds
-/// `triangles[i]` for `i` in `tris[start[t]..start[t + 1]]`.
+/// sorted triangle `i` for `i` in `tris[start[t]..start[t + 1]]`.
 struct Bins {
     tiles_x: u32,
-    /// The set-up triangles sorted by the tile of their box's top-left pixel (row-major), stably,
-    /// so each tile's list reads them from a few runs of memory rather than from all over the
-    /// frame's (a mesh's primitive order is seldom its order on screen).
-    triangles: Vec<Triangle>,
-    /// [`SmallEdges`] of each of `triangles`.
+    /// The set-up triangles' indices sorted by the tile of their box's top-left pixel
+    /// (row-major), stably.
+    order: Vec<u32>,
+    /// [`SmallEdges`] of each of the sorted triangles: what a pass reads of every triangle it
+    /// walks, so each tile's list reads them from a few runs of memory rather than from all over
+    /// the frame's (a mesh's primitive order is seldom its order on screen). The triangles
+    /// themselves are read (through `order`) only for a colour or a normal.
     edges: Vec<SmallEdges>,
     start: Vec<u32>,
     tris: Vec<u32>,
@@ -81,6 +128,8 @@ struct Bins {
 /// The triangles of one frame, ready for any number of geometry passes.
 pub struct Rasterizer {
     setup: TriangleSetup,
+    /// [`SmallEdges`] of each of `setup.triangles`, made with the setup ([`RasterMode::Scatter`]'s).
+    edges: Vec<SmallEdges>,
     mode: RasterMode,
     bins: OnceLock<Bins>,
     fragments: OnceLock<u64>,
@@ -89,7 +138,14 @@ pub struct Rasterizer {
 impl Rasterizer {
     /// A rasterizer over triangles already set up (a persistent renderer keeps its setup).
     pub fn from_setup(setup: TriangleSetup) -> Rasterizer {
-        let r = Rasterizer { setup, mode: DEFAULT_MODE, bins: OnceLock::new(), fragments: OnceLock::new() };
+        let edges = setup.triangles.par_iter().map(SmallEdges::new).collect();
+        let r = Rasterizer {
+            setup,
+            edges,
+            mode: DEFAULT_MODE,
+            bins: OnceLock::new(),
+            fragments: OnceLock::new(),
+        };
         r.warm_bins();
         r
     }
@@ -132,29 +188,29 @@ impl Rasterizer {
             let tiles_x = self.setup.width.div_ceil(TILE_SIZE);
             let tiles_y = self.setup.height.div_ceil(TILE_SIZE);
             let tiles = (tiles_x * tiles_y) as usize;
-            let tile_range = |t: &Triangle| {
+            let tile_range = |t: &SmallEdges| {
                 let [x0, y0, x1, y1] = t.bbox;
                 (x0 / TILE_SIZE..=x1 / TILE_SIZE, y0 / TILE_SIZE..=y1 / TILE_SIZE)
             };
             let first_tile =
-                |t: &Triangle| ((t.bbox[1] / TILE_SIZE) * tiles_x + t.bbox[0] / TILE_SIZE) as usize;
+                |t: &SmallEdges| ((t.bbox[1] / TILE_SIZE) * tiles_x + t.bbox[0] / TILE_SIZE) as usize;
             // Counting sort by first tile (stable: primitive order within a tile).
             let mut first = vec![0u32; tiles + 1];
-            for t in &self.setup.triangles {
+            for t in &self.edges {
                 first[first_tile(t) + 1] += 1;
             }
             for i in 1..first.len() {
                 first[i] += first[i - 1];
             }
-            let mut order = vec![0u32; self.setup.triangles.len()];
-            for (i, t) in self.setup.triangles.iter().enumerate() {
+            let mut order = vec![0u32; self.edges.len()];
+            for (i, t) in self.edges.iter().enumerate() {
                 let slot = &mut first[first_tile(t)];
                 order[*slot as usize] = i as u32;
                 *slot += 1;
             }
-            let triangles: Vec<Triangle> = order.iter().map(|&i| self.setup.triangles[i as usize]).collect();
+            let edges: Vec<SmallEdges> = order.iter().map(|&i| self.edges[i as usize]).collect();
             let mut count = vec![0u32; tiles + 1];
-            for t in &triangles {
+            for t in &edges {
                 let (xr, yr) = tile_range(t);
                 for ty in yr {
                     for tx in xr.clone() {
@@ -169,7 +225,7 @@ impl Rasterizer {
             let mut fill = start.clone();
             let mut tris = vec![0u32; start[tiles] as usize];
             // Each tile's list is in the sorted triangles' order.
-            for (i, t) in triangles.iter().enumerate() {
+            for (i, t) in edges.iter().enumerate() {
                 let (xr, yr) = tile_range(t);
                 for ty in yr {
                     for tx in xr.clone() {
@@ -179,8 +235,7 @@ impl Rasterizer {
                     }
                 }
             }
-            let edges = triangles.par_iter().map(SmallEdges::new).collect();
-            Bins { tiles_x, triangles, edges, start, tris }
+            Bins { tiles_x, order, edges, start, tris }
         })
     }
 
@@ -188,25 +243,31 @@ impl Rasterizer {
     /// rayon's threads, in no particular order (in [`RasterMode::Tiled`] a pixel's fragments come
     /// from one thread, in the same order every pass). Returns the number of fragments, i.e. of
     /// calls.
-    pub fn for_each_fragment<F: Fn(&Fragment) + Sync>(&self, f: F) -> u64 {
-        let n = self.for_each_covered(|t, x, y, e| f(&self.setup.fragment(t, x, y, e)));
+    pub fn for_each_fragment<F: Fn(&Fragment<'_>) + Sync>(&self, f: F) -> u64 {
+        let setup = &self.setup;
+        let n = self.for_each_covered(|t, s, x, y, e| {
+            // depth from the traversal's own record: the triangle is read only for colour or normal
+            let b = s.plane.barycentrics(e);
+            f(&Fragment { pixel: y * setup.width + x, depth: s.plane.depth(b), prim: s.prim, b, t, setup })
+        });
         self.fragments.get_or_init(|| n);
         n
     }
 
     /// The coverage pass under [`Rasterizer::for_each_fragment`], before any interpolation;
     /// returns the number of covered (pixel, triangle) pairs.
-    fn for_each_covered<F: Fn(&Triangle, u32, u32, [i64; 3]) + Sync>(&self, f: F) -> u64 {
+    fn for_each_covered<F: Fn(&Triangle, &SmallEdges, u32, u32, [i64; 3]) + Sync>(&self, f: F) -> u64 {
         match self.mode {
             RasterMode::Scatter => self
                 .setup
                 .triangles
                 .par_chunks(SCATTER_CHUNK)
-                .map(|chunk| {
+                .zip(self.edges.par_chunks(SCATTER_CHUNK))
+                .map(|(chunk, edges)| {
                     let mut n = 0u64;
-                    for t in chunk {
-                        walk(t, t.bbox, |x, y, e| {
-                            f(t, x, y, e);
+                    for (t, edges) in chunk.iter().zip(edges) {
+                        walk_tile(t, edges, t.bbox, |x, y, e| {
+                            f(t, edges, x, y, e);
                             n += 1;
                         });
                     }
@@ -227,11 +288,12 @@ impl Rasterizer {
                         let mut n = 0u64;
                         for &i in &bins.tris[bins.start[tile] as usize..bins.start[tile + 1] as usize] {
                             // The triangle itself is read only where it covers a pixel.
-                            let (t, edges) = (&bins.triangles[i as usize], &bins.edges[i as usize]);
+                            let edges = &bins.edges[i as usize];
+                            let t = &self.setup.triangles[bins.order[i as usize] as usize];
                             let [bx0, by0, bx1, by1] = edges.bbox;
                             let rect = [bx0.max(x0), by0.max(y0), bx1.min(x1), by1.min(y1)];
                             walk_tile(t, edges, rect, |x, y, e| {
-                                f(t, x, y, e);
+                                f(t, edges, x, y, e);
                                 n += 1;
                             });
                         }
@@ -245,14 +307,14 @@ impl Rasterizer {
     /// A coverage-only pass: the traversal without interpolation or shading (what the
     /// rasterizer's bench times apart from the fragments); returns the covered pairs.
     pub fn coverage_pass(&self) -> u64 {
-        self.for_each_covered(|_, _, _, e| {
+        self.for_each_covered(|_, _, _, _, e| {
             std::hint::black_box(e);
         })
     }
 
     /// Fragments one pass generates (counted by a coverage-only pass unless a pass ran already).
     pub fn fragment_count(&self) -> u64 {
-        *self.fragments.get_or_init(|| self.for_each_covered(|_, _, _, _| {}))
+        *self.fragments.get_or_init(|| self.for_each_covered(|_, _, _, _, _| {}))
     }
 
     /// Triangles after setup: the pieces of clipped triangles counted apiece, triangles that cover
@@ -352,13 +414,22 @@ struct SmallEdges {
     step_x: [i32; 3],
     step_y: [i32; 3],
     above: [i32; 3],
+    /// What the fragments' depth needs ([`DepthPlane`]), and the primitive id: with these a
+    /// depth-only pass reads nothing else of the triangle.
+    plane: DepthPlane,
+    prim: u32,
 }
 
 impl SmallEdges {
     fn new(t: &Triangle) -> SmallEdges {
         let extent = |v: [i32; 3]| v[0].max(v[1]).max(v[2]) - v[0].min(v[1]).min(v[2]);
         if extent(t.x) > SMALL_EXTENT || extent(t.y) > SMALL_EXTENT {
-            return SmallEdges { bbox: t.bbox, ..SmallEdges::default() };
+            return SmallEdges {
+                bbox: t.bbox,
+                plane: DepthPlane::new(t),
+                prim: t.prim,
+                ..SmallEdges::default()
+            };
         }
         let [x0, y0, _, _] = t.bbox;
         let (px, py) = (i64::from(x0) * SUBPIXEL + HALF_PIXEL, i64::from(y0) * SUBPIXEL + HALF_PIXEL);
@@ -371,6 +442,8 @@ impl SmallEdges {
             step_x: edges.map(|e| e.1 as i32),
             step_y: edges.map(|e| e.2 as i32),
             above: edges.map(|e| e.3 as i32),
+            plane: DepthPlane::new(t),
+            prim: t.prim,
         }
     }
 }
@@ -508,6 +581,7 @@ mod tests {
     fn sorted_fragments(r: &Rasterizer) -> Vec<Key> {
         let all = Mutex::new(Vec::new());
         r.for_each_fragment(|f| {
+            let f = f.full();
             let key = (
                 f.pixel,
                 f.prim,
@@ -806,6 +880,42 @@ mod tests {
             let bases = scene.primitive_bases().0;
             for base in bases {
                 assert!(scatter.iter().any(|k| (base..base + 60).contains(&k.1)));
+            }
+        }
+    }
+
+    /// The lazy fragments of a pass, in both modes and under every shading, against
+    /// [`TriangleSetup::fragment`] at every pixel the per-pixel rule covers: the same set, bit for
+    /// bit (depth at once, colour and normal on demand).
+    #[test]
+    fn lazy_fragments_are_the_setups() {
+        let scene = random_scene();
+        let cam = Camera::look_at(Vec3::new(0.0, 0.0, 2.5), Vec3::ZERO, 70.0, 1.0, 0.3, 8.0);
+        for shading in [Shading::Headlight, Shading::Vertex, Shading::Flat, Shading::Normal] {
+            let s = Settings { shading, ..settings(90, 90) };
+            let r = Rasterizer::new(&scene, &cam, &s);
+            let mut expected = Vec::new();
+            for t in &r.setup().triangles {
+                for y in 0..90 {
+                    for x in 0..90 {
+                        if let Some(e) = covers(t, x, y) {
+                            let f = r.setup().fragment(t, x, y, e);
+                            expected.push((
+                                f.pixel,
+                                f.prim,
+                                f.depth.to_bits(),
+                                f.color.to_array().map(f32::to_bits),
+                                f.normal.to_array().map(f32::to_bits),
+                            ));
+                        }
+                    }
+                }
+            }
+            expected.sort_unstable();
+            assert!(expected.len() > 1000, "{} fragments", expected.len());
+            for mode in [RasterMode::Scatter, RasterMode::Tiled] {
+                let r = Rasterizer::new(&scene, &cam, &s).with_mode(mode);
+                assert_eq!(sorted_fragments(&r), expected, "{shading:?} {mode:?}");
             }
         }
     }

@@ -147,25 +147,85 @@ impl<'a> Resolve<'a> {
     }
 
     /// Finishes every pixel into an sRGB image; returns it, the fragments captured in all and
-    /// those counted tied.
-    pub fn image(&self, width: u32, height: u32, states: &mut [PixelState]) -> (Image, u64, u64) {
+    /// those counted tied, and the most fragments one pixel captured. Each pixel is finished, converted to sRGB and counted in one parallel
+    /// sweep (the heat map, which needs the deepest pixel first, takes a second).
+    pub fn image(&self, width: u32, height: u32, states: &mut [PixelState]) -> (Image, u64, u64, u32) {
         use rayon::prelude::*;
-        let colors: Vec<Vec3> = states.par_iter_mut().map(|s| self.finish(s)).collect();
-        let captured = states.iter().map(|s| u64::from(s.captured)).sum();
-        let tied = states.iter().map(|s| u64::from(s.tied())).sum();
         let mut image = Image::new(width, height, [0, 0, 0, 255]);
+        let (captured, tied, deepest) = image
+            .pixels
+            .par_iter_mut()
+            .zip(states.par_iter_mut())
+            .map(|(px, s)| {
+                *px = srgb(self.finish(s));
+                (u64::from(s.captured), u64::from(s.tied()), s.captured)
+            })
+            .reduce(|| (0, 0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2.max(b.2)));
         if self.effect == Effect::Complexity {
-            let max = states.iter().map(|s| s.captured).max().unwrap_or(0).max(1);
-            for (px, s) in image.pixels.iter_mut().zip(states.iter()) {
+            let max = deepest.max(1);
+            image.pixels.par_iter_mut().zip(states.par_iter()).for_each(|(px, s)| {
                 let c = if s.captured == 0 { self.background } else { heat(s.captured as f32 / max as f32) };
                 *px = srgb(c);
-            }
+            });
+        }
+        (image, captured, tied, deepest)
+    }
+}
+
+impl Resolve<'_> {
+    /// [`Resolve::image`] for a technique whose fragments are all captured before the resolve
+    /// (one sort and composite per pixel): each pixel's state lives only in the resolving thread's
+    /// locals, made fresh, fed by `feed` (pixel index, a per-thread scratch value, the state) and
+    /// finished at once, as a GPU resolve keeps it in registers: no per-pixel state array is
+    /// written, reset or read back. Returns the image, the fragments captured and counted tied,
+    /// and the most fragments one pixel captured.
+    pub fn image_with<S, F>(&self, width: u32, height: u32, feed: F) -> (Image, u64, u64, u32)
+    where
+        S: Default + Send,
+        F: Fn(usize, &mut S, &mut PixelState) + Sync + Send,
+    {
+        use rayon::prelude::*;
+        let mut image = Image::new(width, height, [0, 0, 0, 255]);
+        let complexity = self.effect == Effect::Complexity;
+        // the heat map's scale is the deepest pixel: there a pixel keeps its count for a second
+        // sweep (the pixel's bytes hold it, as `captured` fits no colour until the max is known)
+        let mut counts = if complexity { vec![0u32; image.pixels.len()] } else { Vec::new() };
+        let sums = |px: usize, scratch: &mut S, out: &mut [u8; 4]| {
+            let mut state = PixelState::default();
+            feed(px, scratch, &mut state);
+            let c = self.finish(&mut state);
+            *out = srgb(c);
+            (u64::from(state.captured), u64::from(state.tied()), state.captured)
+        };
+        let add = |a: (u64, u64, u32), b: (u64, u64, u32)| (a.0 + b.0, a.1 + b.1, a.2.max(b.2));
+        let (captured, tied, deepest) = if complexity {
+            image
+                .pixels
+                .par_iter_mut()
+                .zip(counts.par_iter_mut())
+                .enumerate()
+                .map_init(S::default, |scratch, (px, (out, count))| {
+                    let r = sums(px, scratch, out);
+                    *count = r.2;
+                    r
+                })
+                .reduce(|| (0, 0, 0), add)
         } else {
-            for (px, c) in image.pixels.iter_mut().zip(colors) {
+            image
+                .pixels
+                .par_iter_mut()
+                .enumerate()
+                .map_init(S::default, |scratch, (px, out)| sums(px, scratch, out))
+                .reduce(|| (0, 0, 0), add)
+        };
+        if complexity {
+            let max = deepest.max(1);
+            for (px, &n) in image.pixels.iter_mut().zip(&counts) {
+                let c = if n == 0 { self.background } else { heat(n as f32 / max as f32) };
                 *px = srgb(c);
             }
         }
-        (image, captured, tied)
+        (image, captured, tied, deepest)
     }
 }
 
@@ -463,7 +523,7 @@ mod tests {
                 r.push(&mut states[px], 0.1 * (i + 1) as f32, 0);
             }
         }
-        let (image, captured, tied) = r.image(3, 1, &mut states);
+        let (image, captured, tied, _) = r.image(3, 1, &mut states);
         assert_eq!((captured, tied), (6, 0));
         assert_eq!(image.pixels, [srgb(BG), srgb(heat(0.5)), srgb(heat(1.0))]);
         assert_eq!(heat(0.5), Vec3::new(0.6, 0.05, 0.5), "the ramp's middle stop");

@@ -309,15 +309,12 @@ pub fn values(option: &str) -> &'static [&'static str] {
         "bdp-mode" => &["color", "depth", "auto", "colour", ""],
         "hardware-capture" => &["atomics", "blend", "", "both"],
         "overflow" => &["drop", "tail", "", "Tail", "merge"],
-        "max-epr" => &["0", "0.01", "1", "1%", "0.5%", "100%", "101%", "-0", "-1", "1e-300", "nan", "inf", "%", ""],
-        "calibration" => &[
-            "bench/results/cpu/calibration.json",
-            "/dev/zero",
-            "obj/triangle.obj",
-            "nosuch.json",
-            "",
-            "/",
-        ],
+        "max-epr" => {
+            &["0", "0.01", "1", "1%", "0.5%", "100%", "101%", "-0", "-1", "1e-300", "nan", "inf", "%", ""]
+        }
+        "calibration" => {
+            &["bench/results/cpu/calibration.json", "/dev/zero", "obj/triangle.obj", "nosuch.json", "", "/"]
+        }
         "backend" => {
             &["cpu", "wgpu", "vulkan", "all", "cpu,cpu", "cpu,wgpu", "", ",", "CPU", "cpu,", "nosuch"]
         }

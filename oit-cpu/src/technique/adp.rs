@@ -43,7 +43,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let nearest = ctx.alloc64(BUCKETS, u64::MAX)?;
     let mut states = ctx.states();
     for batch in 0..batches {
-        let payload = |f: &crate::raster::Fragment| ctx.payload(f);
+        let payload = |f: &crate::raster::Fragment<'_>| ctx.payload(f);
         let hist = &hist;
         let lost = &*ctx;
         let generated = ctx.raster.for_each_fragment(|f| {

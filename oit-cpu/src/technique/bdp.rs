@@ -40,7 +40,7 @@ fn color(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
         let px = f.pixel as usize;
         let (zn, zf) = bounds[px];
         let k = bucket_index(f.depth, zn, zf, BDP_COLOR_SUBINTERVALS) as usize;
-        let word = bdp_pack_color(oit_core::rules::pack_rgba8(f.color));
+        let word = bdp_pack_color(oit_core::rules::pack_rgba8(f.color()));
         // a full bucket: one of the two fragments is gone; a zero word is never read back
         if buckets.update_max(px, k, word) != 0 || word == 0 {
             ctx.lose(px);
@@ -98,7 +98,7 @@ fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
         }
         {
             let previous = arrays.last();
-            let payload = |f: &crate::raster::Fragment| ctx.payload(f);
+            let payload = |f: &crate::raster::Fragment<'_>| ctx.payload(f);
             let generated = ctx.raster.for_each_fragment(|f| {
                 let px = f.pixel as usize;
                 let (zn, zf) = bounds[px];

@@ -37,7 +37,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let mut peels = 0;
     while peels < limit {
         let r = &range;
-        let payload = |f: &crate::raster::Fragment| ctx.payload(f);
+        let payload = |f: &crate::raster::Fragment<'_>| ctx.payload(f);
         let last = peels + 1 == limit;
         let (seen_r, at_r) = (&seen, &peeled_at);
         let generated = ctx.raster.for_each_fragment(|f| {
@@ -45,9 +45,16 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
             let d = i64::from(depth_bits(f.depth));
             let (lo, hi) = r[px];
             if d > lo && d < hi {
-                let key = depth_key64(f.depth, payload(f));
-                near[px].fetch_min(key, Relaxed);
-                far[px].fetch_max(key, Relaxed);
+                // A key's depth bits are its high word: a fragment strictly between the pixel's
+                // nearest and farthest so far can lower neither, whatever its payload, and is not
+                // shaded (near only falls and far only rises, so a stale read errs toward
+                // shading, never toward a wrong skip).
+                let (low, high) = ((d as u64) << 32, (d as u64) << 32 | u64::from(u32::MAX));
+                if low <= near[px].load(Relaxed) || high >= far[px].load(Relaxed) {
+                    let key = depth_key64(f.depth, payload(f));
+                    near[px].fetch_min(key, Relaxed);
+                    far[px].fetch_max(key, Relaxed);
+                }
                 if last {
                     // the last peel allowed: all but the one or two it peels stay behind
                     seen_r[px].fetch_add(1, Relaxed);

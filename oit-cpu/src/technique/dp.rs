@@ -34,7 +34,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
             break;
         }
         let prev = &previous;
-        let payload = |f: &crate::raster::Fragment| ctx.payload(f);
+        let payload = |f: &crate::raster::Fragment<'_>| ctx.payload(f);
         let raster = ctx.raster;
         let last = peels + 1 == limit;
         let at_prev = &at_prev;
@@ -43,7 +43,15 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
             let px = f.pixel as usize;
             let d = i64::from(depth_bits(f.depth));
             if d > prev[px] {
-                let old = nearest[px].fetch_min(depth_key64(f.depth, payload(f)), Relaxed);
+                // A key's depth bits are its high word: a fragment deeper than the pixel's nearest
+                // so far cannot lower it, whatever its payload, and is not shaded (the slot only
+                // falls, so a stale read errs toward shading, never toward a wrong skip).
+                let held = nearest[px].load(Relaxed);
+                let old = if (d as u64) << 32 > held {
+                    held
+                } else {
+                    nearest[px].fetch_min(depth_key64(f.depth, payload(f)), Relaxed)
+                };
                 // the last peel allowed: of two fragments one is left behind for good
                 if last && old != EMPTY {
                     lost.lose(px);

@@ -61,10 +61,12 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let deepest = if ctx.plan.needs_count() { ctx.max_depth_complexity()? } else { 0 };
     let k = ctx.plan.slots(deepest) as usize;
     let counters = ctx.alloc32(1, 0)?;
-    let slots = ctx.alloc64(k, 0)?;
-    let payloads = ctx.alloc32(k, 0)?;
+    // below each pixel's counter every slot is written before the resolve reads it (an
+    // overflowing pixel's are all set before its keys are inserted)
+    let slots = ctx.scratch64(k)?;
+    let payloads = ctx.scratch32(k)?;
     let tail = ctx.tail_sums()?;
-    let payload = |f: &crate::raster::Fragment| ctx.payload(f);
+    let payload = |f: &crate::raster::Fragment<'_>| ctx.payload(f);
     let lost = &*ctx;
     let generated = ctx.raster.for_each_fragment(|f| {
         let px = f.pixel as usize;
@@ -125,7 +127,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     ctx.passes += passes;
     if let (Some(sums), true) = (&tail, any) {
         // the overflow passes left an overflowing pixel's K keys sorted: the last is the largest
-        let color = |f: &crate::raster::Fragment| oit_core::rules::pack_rgba8(f.color);
+        let color = |f: &crate::raster::Fragment<'_>| oit_core::rules::pack_rgba8(f.color());
         ctx.tail_pass(sums, |f| {
             let px = f.pixel as usize;
             let key = u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim);
@@ -133,31 +135,26 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         });
     }
     ctx.fragments.get_or_insert(generated);
-    let mut states = ctx.states();
     let resolve = &ctx.resolve;
-    let lists = slots.par_chunks(k).zip(payloads.par_chunks(k));
     let tail = tail.as_deref();
-    states.par_iter_mut().zip(lists.zip(counters.par_iter())).enumerate().for_each_init(
-        Vec::new,
-        |keys, (px, (s, ((slots, payloads), count)))| {
-            let n = (count.load(Relaxed) as usize).min(k);
-            keys.clear();
-            // (depth bits, primitive id) above the payload: one primitive has one fragment a
-            // pixel, so the payload never decides
-            keys.extend(
-                slots[..n]
-                    .iter()
-                    .zip(&payloads[..n])
-                    .map(|(x, p)| u128::from(x.load(Relaxed)) << 32 | u128::from(p.load(Relaxed))),
-            );
-            sort_keys(keys);
-            for &key in keys.iter() {
-                resolve.push(s, depth_from_bits((key >> 64) as u32), key as u32);
-            }
-            if let Some(t) = tail {
-                resolve.tail(s, &t[px * 5..px * 5 + 5]);
-            }
-        },
-    );
-    Ok(super::finish(ctx, states))
+    Ok(super::finish_with(ctx, |px, keys: &mut Vec<u128>, s| {
+        let n = (counters[px].load(Relaxed) as usize).min(k);
+        let (slots, payloads) = (&slots[px * k..px * k + n], &payloads[px * k..px * k + n]);
+        keys.clear();
+        // (depth bits, primitive id) above the payload: one primitive has one fragment a pixel,
+        // so the payload never decides
+        keys.extend(
+            slots
+                .iter()
+                .zip(payloads)
+                .map(|(x, p)| u128::from(x.load(Relaxed)) << 32 | u128::from(p.load(Relaxed))),
+        );
+        sort_keys(keys);
+        for &key in keys.iter() {
+            resolve.push(s, depth_from_bits((key >> 64) as u32), key as u32);
+        }
+        if let Some(t) = tail {
+            resolve.tail(s, &t[px * 5..px * 5 + 5]);
+        }
+    }))
 }

@@ -47,7 +47,7 @@ pub(crate) fn render64(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let k = capacity(ctx)?;
     let list = MinList::new(ctx.alloc64(k, MinList::EMPTY)?, k);
     let tail = ctx.tail_sums()?;
-    let payload = |f: &crate::raster::Fragment| ctx.payload(f);
+    let payload = |f: &crate::raster::Fragment<'_>| ctx.payload(f);
     let generated = ctx.raster.for_each_fragment(|f| {
         if list.insert(f.pixel as usize, depth_key64(f.depth, payload(f))).is_some() {
             // a key carried off the end of the full array
@@ -61,7 +61,7 @@ pub(crate) fn render64(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     {
         let list = &list;
         ctx.tail_pass(sums, |f| {
-            let p = pack_rgba8(f.color);
+            let p = pack_rgba8(f.color());
             (depth_key64(f.depth, p) > list.last(f.pixel as usize)).then_some(p)
         });
     }
@@ -92,7 +92,7 @@ pub(crate) fn render32(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     ctx.pass_lossy(|f, ctx| {
         let px = f.pixel as usize;
         // All ones is the empty word: a fragment at d ≈ 1 with that colour gives up its last bit.
-        let [a, b] = mdts_pack(f.depth, oit_core::rules::pack_rgba8(f.color)).map(|w| w.min(u32::MAX - 1));
+        let [a, b] = mdts_pack(f.depth, oit_core::rules::pack_rgba8(f.color())).map(|w| w.min(u32::MAX - 1));
         // both arrays hold the same number of words: one carried off the high array is one lost
         if insert_min32(&high[px * k..(px + 1) * k], a) {
             ctx.lose(px);
@@ -104,8 +104,8 @@ pub(crate) fn render32(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     {
         ctx.tail_pass(sums, |f| {
             let px = f.pixel as usize;
-            let [a, _] = mdts_pack(f.depth, pack_rgba8(f.color)).map(|w| w.min(u32::MAX - 1));
-            (a > high[px * k + k - 1].load(Relaxed)).then(|| pack_rgba8(f.color) & 0xff_ffff | alpha8 << 24)
+            let [a, _] = mdts_pack(f.depth, pack_rgba8(f.color())).map(|w| w.min(u32::MAX - 1));
+            (a > high[px * k + k - 1].load(Relaxed)).then(|| pack_rgba8(f.color()) & 0xff_ffff | alpha8 << 24)
         });
     }
     let mut states = ctx.states();

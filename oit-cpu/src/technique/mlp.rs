@@ -33,7 +33,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
     while peels < limit {
         let more = AtomicBool::new(false);
         let prev = &deepest;
-        let payload = |f: &crate::raster::Fragment| ctx.payload(f);
+        let payload = |f: &crate::raster::Fragment<'_>| ctx.payload(f);
         let last = peels + 1 == limit;
         let (at_prev, lost) = (&at_prev, &*ctx);
         let generated = ctx.raster.for_each_fragment(|f| {

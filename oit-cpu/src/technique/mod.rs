@@ -98,14 +98,14 @@ impl<'a> Ctx<'a> {
     }
 
     /// [`Ctx::pass`] for shaders that count losses: `shader` gets the per-pixel lost counters.
-    pub fn pass_lossy<F: Fn(&Fragment, &Ctx<'_>) + Sync>(&mut self, shader: F) {
+    pub fn pass_lossy<F: Fn(&Fragment<'_>, &Ctx<'_>) + Sync>(&mut self, shader: F) {
         let generated = self.raster.for_each_fragment(|f| shader(f, self));
         self.passes += 1;
         self.fragments.get_or_insert(generated);
     }
 
     /// One geometry pass over the scene: `shader` runs for every fragment, concurrently.
-    pub fn pass<F: Fn(&Fragment) + Sync>(&mut self, shader: F) {
+    pub fn pass<F: Fn(&Fragment<'_>) + Sync>(&mut self, shader: F) {
         let generated = self.raster.for_each_fragment(shader);
         self.passes += 1;
         self.fragments.get_or_insert(generated);
@@ -113,10 +113,10 @@ impl<'a> Ctx<'a> {
 
     /// The word a fragment carries for the chosen effect: its RGBA8 colour, or its packed normal.
     #[inline]
-    pub fn payload(&self, f: &Fragment) -> u32 {
+    pub fn payload(&self, f: &Fragment<'_>) -> u32 {
         match self.resolve.effect {
-            Effect::Fresnel => pack_normal(f.normal),
-            _ => pack_rgba8(f.color),
+            Effect::Fresnel => pack_normal(f.normal()),
+            _ => pack_rgba8(f.color()),
         }
     }
 
@@ -128,6 +128,21 @@ impl<'a> Ctx<'a> {
     /// Allocates `per_pixel` words of 64 bits per pixel, counting the bytes.
     pub fn alloc64(&mut self, per_pixel: usize, init: u64) -> Result<Pooled<'a, AtomicU64>, OitError> {
         self.words64((self.pixels as u64).saturating_mul(per_pixel as u64), init)
+    }
+
+    /// Allocates `per_pixel` words of 64 bits per pixel whose contents are left as an earlier
+    /// frame left them (zero when newly made), counting the bytes: for slots written before they
+    /// are read (below a per-pixel counter), where resetting them would be a frame's largest
+    /// memory traffic for nothing.
+    pub fn scratch64(&mut self, per_pixel: usize) -> Result<Pooled<'a, AtomicU64>, OitError> {
+        let n = self.checked((self.pixels as u64).saturating_mul(per_pixel as u64), 8)?;
+        Ok(self.pool.u64s_scratch(n))
+    }
+
+    /// [`Ctx::scratch64`] in words of 32 bits.
+    pub fn scratch32(&mut self, per_pixel: usize) -> Result<Pooled<'a, AtomicU32>, OitError> {
+        let n = self.checked((self.pixels as u64).saturating_mul(per_pixel as u64), 4)?;
+        Ok(self.pool.u32s_scratch(n))
     }
 
     /// Allocates `len` words of 32 bits (an array sized from a count, not a multiple of the
@@ -183,7 +198,7 @@ impl<'a> Ctx<'a> {
     /// others); those are added to the pixel's `sums` and, since the capture counted them lost
     /// when it found no room, moved from `lost` to `merged`. Integer adds, so the sums and the
     /// image do not depend on the order fragments arrive in.
-    pub fn tail_pass<F: Fn(&Fragment) -> Option<u32> + Sync>(&mut self, sums: &[AtomicU64], behind: F) {
+    pub fn tail_pass<F: Fn(&Fragment<'_>) -> Option<u32> + Sync>(&mut self, sums: &[AtomicU64], behind: F) {
         let lost = &self.lost;
         self.raster.for_each_fragment(|f| {
             if let Some(c) = behind(f) {
@@ -224,7 +239,7 @@ impl<'a> Ctx<'a> {
     pub fn depth_bounds(&mut self) -> Result<Vec<(f32, f32)>, OitError> {
         let lo = self.alloc32(1, u32::MAX)?;
         let hi = self.alloc32(1, 0)?;
-        let shader = |f: &Fragment| {
+        let shader = |f: &Fragment<'_>| {
             let b = depth_bits(f.depth);
             lo[f.pixel as usize].fetch_min(b, Relaxed);
             hi[f.pixel as usize].fetch_max(b, Relaxed);
@@ -286,11 +301,28 @@ pub(crate) fn frame(ctx: &Ctx<'_>, image: oit_core::Image, captured: u64) -> oit
     }
 }
 
-/// Resolves the states into the frame (the common ending).
-pub(crate) fn finish(ctx: &Ctx<'_>, mut states: Pooled<'_, PixelState>) -> oit_core::Frame {
-    let (image, captured, tied) = ctx.resolve.image(ctx.settings.width, ctx.settings.height, &mut states);
+/// Resolves each pixel from a state in the resolving thread's locals, fed by `feed` (the ending
+/// of a technique that captures every fragment before its one resolve;
+/// [`Resolve::image_with`](crate::resolve::Resolve::image_with)).
+pub(crate) fn finish_with<S, F>(ctx: &Ctx<'_>, feed: F) -> oit_core::Frame
+where
+    S: Default + Send,
+    F: Fn(usize, &mut S, &mut PixelState) + Sync + Send,
+{
+    let (image, captured, tied, deepest) =
+        ctx.resolve.image_with(ctx.settings.width, ctx.settings.height, feed);
     let mut frame = frame(ctx, image, captured);
     frame.stats.tied = tied;
-    frame.stats.max_layers = states.iter().map(|s| s.captured).max().unwrap_or(0);
+    frame.stats.max_layers = deepest;
+    frame
+}
+
+/// Resolves the states into the frame (the common ending).
+pub(crate) fn finish(ctx: &Ctx<'_>, mut states: Pooled<'_, PixelState>) -> oit_core::Frame {
+    let (image, captured, tied, deepest) =
+        ctx.resolve.image(ctx.settings.width, ctx.settings.height, &mut states);
+    let mut frame = frame(ctx, image, captured);
+    frame.stats.tied = tied;
+    frame.stats.max_layers = deepest;
     frame
 }

@@ -18,7 +18,6 @@ use oit_core::Compositor as _;
 use std::sync::atomic::Ordering::Relaxed;
 
 use oit_core::{Frame, OitError};
-use rayon::prelude::*;
 
 use super::Ctx;
 use super::fabs::sort_keys;
@@ -34,8 +33,9 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let deepest = ctx.max_depth_complexity()?;
     let k = ctx.plan.slots(deepest) as usize;
     let counters = ctx.alloc32(1, 0)?;
-    let slots = ctx.alloc64(k, 0)?;
-    let payload = |f: &crate::raster::Fragment| ctx.payload(f);
+    // below each pixel's counter every slot is written before the resolve reads it
+    let slots = ctx.scratch64(k)?;
+    let payload = |f: &crate::raster::Fragment<'_>| ctx.payload(f);
     let lost = &*ctx;
     let generated = ctx.raster.for_each_fragment(|f| {
         let px = f.pixel as usize;
@@ -49,21 +49,16 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     });
     ctx.passes += 1;
     ctx.fragments.get_or_insert(generated);
-    let mut states = ctx.states();
     let resolve = &ctx.resolve;
-    states.par_iter_mut().zip(slots.par_chunks(k).zip(counters.par_iter())).for_each_init(
-        Vec::new,
-        |words, (s, (slots, count))| {
-            let n = (count.load(Relaxed) as usize).min(k);
-            words.clear();
-            words.extend(slots[..n].iter().map(|w| w.load(Relaxed)));
-            sort_keys(words);
-            for &w in words.iter() {
-                resolve.push(s, 0.0, w as u32);
-            }
-        },
-    );
-    Ok(super::finish(ctx, states))
+    Ok(super::finish_with(ctx, |px, words: &mut Vec<u64>, s| {
+        let n = (counters[px].load(Relaxed) as usize).min(k);
+        words.clear();
+        words.extend(slots[px * k..px * k + n].iter().map(|w| w.load(Relaxed)));
+        sort_keys(words);
+        for &w in words.iter() {
+            resolve.push(s, 0.0, w as u32);
+        }
+    }))
 }
 
 #[cfg(test)]

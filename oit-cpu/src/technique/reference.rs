@@ -34,7 +34,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let cursor: Vec<AtomicU32> = (0..counts.len()).map(|_| AtomicU32::new(0)).collect();
     let keys: Vec<AtomicU64> = (0..total).map(|_| AtomicU64::new(0)).collect();
     let payloads: Vec<AtomicU32> = (0..total).map(|_| AtomicU32::new(0)).collect();
-    let resolve_payload = |f: &crate::raster::Fragment| ctx.payload(f);
+    let resolve_payload = |f: &crate::raster::Fragment<'_>| ctx.payload(f);
     let raster = ctx.raster;
     raster.for_each_fragment(|f| {
         let px = f.pixel as usize;

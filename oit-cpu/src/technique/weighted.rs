@@ -18,7 +18,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, average: bool) -> Result<Frame, OitError
     // r, g, b premultiplied sums, alpha sum, count
     let sums = ctx.alloc64(5, 0)?;
     ctx.pass(|f| {
-        let c = pack_rgba8(f.color);
+        let c = pack_rgba8(f.color());
         let a = u64::from(c >> 24);
         let base = f.pixel as usize * 5;
         sums[base].fetch_add(a * u64::from(c & 0xff), Relaxed);
@@ -48,9 +48,8 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, average: bool) -> Result<Frame, OitError
     }
     let captured = states.iter().map(|s| u64::from(s.captured)).sum();
     let mut image = oit_core::Image::new(ctx.settings.width, ctx.settings.height, [0, 0, 0, 255]);
-    for (px, c) in image.pixels.iter_mut().zip(colors) {
-        *px = crate::resolve::srgb(c);
-    }
+    // three powf a pixel: in parallel
+    image.pixels.par_iter_mut().zip(colors.par_iter()).for_each(|(px, &c)| *px = crate::resolve::srgb(c));
     let mut frame = super::frame(ctx, image, captured);
     frame.stats.max_layers = states.iter().map(|s| s.captured).max().unwrap_or(0);
     Ok(frame)
