@@ -42,6 +42,12 @@ pub const MAX_TILES: usize = 4096;
 /// 250 windows), and still refuses `fabs:65536` at 512² (over a thousand).
 pub const AUTO_TILES: usize = 1024;
 
+/// Without `--memory`, a frame whose refused storage is more than this many times the host's
+/// budget ([`crate::plan::host_memory_budget`]) is refused, not tiled (lavapipe's 16384²
+/// armadillo `fabs`, tiled for its 128 MiB bindings, needs about 3 times; `bdp:65536` at 512²
+/// on the CPU about 200).
+pub const AUTO_WORK: u64 = 16;
+
 /// The windows a window refused as too large runs as instead: a grid whose tiles each hold at
 /// most 85 % of the refused window's pixels divided by the refusal's needed/limit ratio (storage
 /// grows with pixels; a tile's deepest pixel is no deeper than the window's; the margin covers
@@ -192,6 +198,15 @@ pub fn run(
                 if rect.pixels() == 1 {
                     let budget = settings.memory.unwrap_or(u64::MAX);
                     return Err(too_small(settings, 0, budget, Some(e)));
+                }
+                // without --memory, a refusal of more than AUTO_WORK times the host's budget is
+                // not tiled at all: such a frame (bdp:65536, fabs:65536) asks for a smaller
+                // technique or size, not hundreds of windows each filling the machine
+                if settings.memory.is_none()
+                    && let OitError::TooLarge { needed, .. } = e
+                    && needed > AUTO_WORK.saturating_mul(crate::plan::host_memory_budget().1)
+                {
+                    return Err(e);
                 }
                 queue.extend(split(rect, &e));
                 // without --memory, a device refusal tiles a frame only modestly: a request far
