@@ -169,3 +169,22 @@ fn schlick_transmittance(cos_theta: f32) -> f32 {
     let m = 1.0 - c;
     return 1.0 - m * m * m * m * m;
 }
+
+// f32::powi as Rust's compiler-builtins computes it (square and multiply), n ≥ 0: the weighted
+// average's transmittance (1 − mean α)^n, in wavg's composite and the overflow tail's resolve.
+fn powi_rust(x_in: f32, n_in: u32) -> f32 {
+    var x = x_in;
+    var n = n_in;
+    var r = 1.0;
+    loop {
+        if ((n & 1u) != 0u) {
+            r *= x;
+        }
+        n = n >> 1u;
+        if (n == 0u) {
+            break;
+        }
+        x *= x;
+    }
+    return r;
+}

@@ -21,24 +21,6 @@ fn tail_add(px: u32, c: u32) {
     atomicSub(&acct[3u * px], 1u);
 }
 
-// f32::powi as Rust's compiler-builtins computes it (square and multiply), n ≥ 0; weighted.wgsl's.
-fn tail_powi(x_in: f32, n_in: u32) -> f32 {
-    var x = x_in;
-    var n = n_in;
-    var r = 1.0;
-    loop {
-        if ((n & 1u) != 0u) {
-            r *= x;
-        }
-        n = n >> 1u;
-        if (n == 0u) {
-            break;
-        }
-        x *= x;
-    }
-    return r;
-}
-
 // The pixel's tail behind what was pushed into `s` (composite::weighted_average over the
 // background, as the back colour the front composites over); counts its fragments merged.
 fn tail_resolve(s: ptr<function, PixelState>, px: u32) {
@@ -58,7 +40,7 @@ fn tail_resolve(s: ptr<function, PixelState>, px: u32) {
     if (alpha > 0.0) {
         let mean_color = premultiplied / alpha;
         let mean_alpha = min(alpha / f32(count), 1.0);
-        let t = tail_powi(1.0 - mean_alpha, count);
+        let t = powi_rust(1.0 - mean_alpha, count);
         back = mean_color * (1.0 - t) + bg * t;
     }
     (*s).br = back.x;

@@ -16,24 +16,6 @@ fn capture(f: Fragment) {
     atomicAdd(&sums[base + 4u], 1lu);
 }
 
-// f32::powi as Rust's compiler-builtins computes it (square and multiply), n ≥ 0.
-fn weighted_powi(x_in: f32, n_in: u32) -> f32 {
-    var x = x_in;
-    var n = n_in;
-    var r = 1.0;
-    loop {
-        if ((n & 1u) != 0u) {
-            r *= x;
-        }
-        n = n >> 1u;
-        if (n == 0u) {
-            break;
-        }
-        x *= x;
-    }
-    return r;
-}
-
 @compute @workgroup_size(64)
 fn composite_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let px = kernel_pixel(gid, groups);
@@ -62,7 +44,7 @@ fn weighted_composite(px: u32, premultiplied: vec3<f32>, alpha: f32, count: u32)
         } else {
             let mean_color = premultiplied / alpha;
             let mean_alpha = min(alpha / f32(count), 1.0);
-            let t = weighted_powi(1.0 - mean_alpha, count);
+            let t = powi_rust(1.0 - mean_alpha, count);
             c = mean_color * (1.0 - t) + bg * t;
         }
     } else {
