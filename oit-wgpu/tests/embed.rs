@@ -359,3 +359,57 @@ fn scene_geometry_bdp_and_adp_match_backend_render() {
         assert_eq!(frame.stats.lost, own.stats.lost, "{technique} exact");
     }
 }
+
+/// `--overflow tail` through the embedded pass: the fixed-K techniques' tail pass draws the
+/// caller's geometry like their capture, and the frame equals the backend's own on the hardware
+/// path (image, fragments, passes, losses and what was merged), with something merged.
+#[test]
+fn overflow_tail_through_the_embedded_pass_matches_backend_render() {
+    let Some(backend) =
+        oit_wgpu::backend_or_skip("overflow_tail_through_the_embedded_pass_matches_backend_render")
+    else {
+        return;
+    };
+    let gpu = backend.gpu().unwrap();
+    let scene = oit_core::load_scene("grid:2x2:spheres:2").unwrap();
+    let (w, h) = (64, 48);
+    let camera =
+        oit_core::Camera::orbit_scene(&scene, oit_core::View::default(), w as f32 / h as f32).unwrap();
+    let geometry = oit_wgpu::embed::SceneGeometry::new(&gpu.device, &gpu.queue, &scene).unwrap();
+    for technique in [Technique::Fabs { k: Some(2) }, Technique::Mdts64 { k: Some(2) }] {
+        let settings = Settings {
+            width: w,
+            height: h,
+            technique,
+            overflow: oit_core::Overflow::Tail,
+            raster: Some(RasterPath::Hardware),
+            ..Settings::default()
+        };
+        let own = backend.render(&scene, &camera, &settings).unwrap();
+        assert!(own.stats.merged > 0, "{technique}: the scene must overflow K for the test to mean anything");
+        let pass = oit_wgpu::OitPass::new(&gpu.device, &gpu.queue, settings.clone(), camera)
+            .unwrap()
+            .with_scene_geometry(&geometry);
+        geometry.write_frame(&scene, &camera, &settings);
+        let frame = pass
+            .frame(
+                None,
+                |capture| scene_pipeline(&gpu.device, &geometry, capture),
+                |rpass, _| {
+                    rpass.set_bind_group(1, geometry.bind_group(), &[]);
+                    rpass.draw(0..geometry.vertex_count(), 0..1);
+                },
+            )
+            .unwrap();
+        let worst = worst_difference(&frame.image, &own.image);
+        println!(
+            "{technique} tail: worst {worst}; merged {} vs {}, lost {} vs {}",
+            frame.stats.merged, own.stats.merged, frame.stats.lost, own.stats.lost
+        );
+        assert!(worst <= 1, "{technique} tail: a pixel differs by {worst}");
+        assert_eq!(frame.stats.fragments, own.stats.fragments, "{technique}");
+        assert_eq!(frame.stats.geometry_passes, own.stats.geometry_passes, "{technique}");
+        assert_eq!(frame.stats.merged, own.stats.merged, "{technique}");
+        assert_eq!(frame.stats.lost, own.stats.lost, "{technique}");
+    }
+}
