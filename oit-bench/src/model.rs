@@ -575,6 +575,13 @@ pub fn commit() -> Option<String> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn calibration_scenes_are_procedural() {
+        for s in super::CALIBRATION_SCENES.split(',') {
+            assert!(oit_core::is_procedural(s), "{s}");
+        }
+    }
+
     use super::*;
 
     #[test]

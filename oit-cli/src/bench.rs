@@ -159,7 +159,7 @@ pub fn check(args: &BenchArgs) -> Result<Checked, OitError> {
         None => vec![args.scene.scene.clone()],
     };
     if args.cost.calibrate
-        && let Some(s) = scenes.iter().find(|s| !procedural(s))
+        && let Some(s) = scenes.iter().find(|s| !oit_core::is_procedural(s))
     {
         return Err(OitError::InvalidSettings(format!(
             "--calibrate: scene {s} is not procedural; calibrate on procedural scenes only (planes:N, \
@@ -341,59 +341,4 @@ pub fn run(args: &BenchArgs) -> Result<Outcome, OitError> {
         return Ok(Outcome::Failed);
     }
     Ok(Outcome::Success)
-}
-
-/// Whether scene expression `s` is built from oit's procedural scenes only (`planes:N`,
-/// `spheres:N`, `cluster:N`, `knot`, and `grid:RxC:` / `scale:S:` of those): what `--calibrate`
-/// may measure. A mesh file, or a bare mesh name looked up in the model folders, is not.
-fn procedural(s: &str) -> bool {
-    let mut rest = s.trim();
-    loop {
-        let stripped = ["grid:", "scale:"].iter().find_map(|p| {
-            let tail = rest.strip_prefix(p)?;
-            // the prefix's own argument (R×C or S), then the inner scene
-            tail.split_once(':').map(|(_, inner)| inner)
-        });
-        match stripped {
-            Some(inner) => rest = inner,
-            None => break,
-        }
-    }
-    rest == "knot" || ["planes:", "spheres:", "cluster:"].iter().any(|p| rest.starts_with(p))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::procedural;
-
-    #[test]
-    fn calibration_scenes_are_procedural_and_meshes_are_not() {
-        for s in [
-            "planes:4",
-            "spheres:6",
-            "cluster:800",
-            "knot",
-            "grid:4x4:knot",
-            "grid:2x2:grid:3x3:spheres:1",
-            "scale:2:planes:3",
-        ] {
-            assert!(procedural(s), "{s}");
-        }
-        for s in [
-            "bunny",
-            "bunny.obj",
-            "models/bunny.obj",
-            "grid:4x4:bunny",
-            "grid:4x4:bunny.obj",
-            "scale:2:armadillo",
-            "grid:4x4",
-            "default",
-            "coplanar",
-        ] {
-            assert!(!procedural(s), "{s}");
-        }
-        for s in oit_bench::model::CALIBRATION_SCENES.split(',') {
-            assert!(procedural(s), "{s}");
-        }
-    }
 }

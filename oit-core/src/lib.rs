@@ -92,7 +92,7 @@ pub use camera::{Camera, View};
 pub use error::OitError;
 pub use frame::{Frame, Image, Stats};
 pub use obj::{load_obj, parse_obj};
-pub use procedural::{BUILTIN_SCENES, DEFAULT_SCENE, builtin_scene, load_scene};
+pub use procedural::{BUILTIN_SCENES, DEFAULT_SCENE, builtin_scene, is_procedural, load_scene};
 pub use scene::{Aabb, Instance, Mesh, Object, Scene};
 pub use settings::{
     BdpMode, HardwareCapture, MAX_SIZE, Overflow, Region, Settings, Shading, check_threads, max_threads,

@@ -48,6 +48,25 @@ pub fn load_scene(name: &str) -> Result<Scene, OitError> {
     }
 }
 
+/// Whether scene expression `s` is built from oit's procedural scenes only (`planes:N`,
+/// `spheres:N`, `cluster:N`, `knot`, and `grid:RxC:` / `scale:S:` of those): what `--calibrate`
+/// may measure. A mesh file, or a bare mesh name looked up in the model folders, is not.
+pub fn is_procedural(s: &str) -> bool {
+    let mut rest = s.trim();
+    loop {
+        let stripped = ["grid:", "scale:"].iter().find_map(|p| {
+            let tail = rest.strip_prefix(p)?;
+            // the prefix's own argument (R×C or S), then the inner scene
+            tail.split_once(':').map(|(_, inner)| inner)
+        });
+        match stripped {
+            Some(inner) => rest = inner,
+            None => break,
+        }
+    }
+    rest == "knot" || ["planes:", "spheres:", "cluster:"].iter().any(|p| rest.starts_with(p))
+}
+
 /// Builds a built-in scene; `None` when the name is not a built-in one, `Some(Err)` when it is but
 /// its parameter is bad.
 ///
@@ -594,5 +613,33 @@ mod tests {
     #[test]
     fn cluster_is_deterministic() {
         assert_eq!(cluster(50), cluster(50));
+    }
+
+    #[test]
+    fn calibration_scenes_are_procedural_and_meshes_are_not() {
+        for s in [
+            "planes:4",
+            "spheres:6",
+            "cluster:800",
+            "knot",
+            "grid:4x4:knot",
+            "grid:2x2:grid:3x3:spheres:1",
+            "scale:2:planes:3",
+        ] {
+            assert!(is_procedural(s), "{s}");
+        }
+        for s in [
+            "bunny",
+            "bunny.obj",
+            "models/bunny.obj",
+            "grid:4x4:bunny",
+            "grid:4x4:bunny.obj",
+            "scale:2:armadillo",
+            "grid:4x4",
+            "default",
+            "coplanar",
+        ] {
+            assert!(!is_procedural(s), "{s}");
+        }
     }
 }
