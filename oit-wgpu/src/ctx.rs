@@ -23,6 +23,51 @@ impl Drop for Lent<'_> {
     }
 }
 
+/// A frame's GPU timestamps: each timed pass writes its own pair of queries, and the pairs are
+/// resolved and read back together at the end of the frame (or when the set is full), not
+/// after each pass: a readback per pass was a CPU–GPU round trip per pass (issue 10).
+struct Timestamps<'a> {
+    gpu: &'a Gpu,
+    set: Option<wgpu::QuerySet>,
+    resolve: wgpu::Buffer,
+    /// The label of each pair written so far (pair i is queries 2i and 2i + 1).
+    labels: Vec<String>,
+}
+
+impl Timestamps<'_> {
+    fn set(&self) -> &wgpu::QuerySet {
+        // present from creation until drop
+        self.set.as_ref().expect("a frame's timestamp set lives as long as the frame")
+    }
+}
+
+impl Drop for Timestamps<'_> {
+    fn drop(&mut self) {
+        if let Some(set) = self.set.take() {
+            self.gpu.give_back_queries(set);
+        }
+    }
+}
+
+/// Where the fragments of the frame's first scene pass are known (`GpuCtx::fragments`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fragments {
+    /// No geometry pass of the scene has run.
+    Unset,
+    /// Copied on the device into the frame's totals, read with them at the end of the frame.
+    OnDevice,
+    /// Read back.
+    Known(u64),
+}
+
+/// Where a geometry pass leaves its count of generated fragments: word 0 of this buffer, written
+/// by the pass's submission (a [`Driver`] returns it instead of reading it back, so a pass costs
+/// no round trip; [`GpuCtx::geometry_pass_read`] reads it where a technique sizes from it).
+pub struct Generated(pub wgpu::Buffer);
+
+/// The totals' word that holds the first scene pass's fragments (after finish.wgsl's four).
+const FRAGMENTS_WORD: u64 = 4;
+
 /// WGSL every technique module starts with (after `COMMON_WGSL`): bindings 0 and 1 of group 0 and
 /// the resolve functions.
 pub const TECHNIQUE_PRELUDE: &str =
@@ -74,14 +119,22 @@ pub struct FrameUniform {
 pub trait Driver {
     /// Which path this is.
     fn path(&self) -> oit_core::RasterPath;
-    /// Runs one geometry pass, returns the fragments generated.
+    /// Runs one geometry pass (submitted, not waited for); returns where it counted the
+    /// fragments it generated.
     fn geometry_pass(
         &self,
         ctx: &mut GpuCtx<'_>,
         source: &str,
         layout0: &wgpu::BindGroupLayout,
         group0: &wgpu::BindGroup,
-    ) -> Result<u64, OitError>;
+    ) -> Result<Generated, OitError>;
+
+    /// Device milliseconds of the work this driver did for the frame before its first pass
+    /// (the compute path's GPU setup), once: the next call gives `None`. The frame adds it to its
+    /// GPU time as `setup`.
+    fn take_setup_ms(&self) -> Option<f64> {
+        None
+    }
 
     /// oit's own vertex stage of the scene, for techniques with their own render pipelines
     /// (`--hardware-capture blend`); `None` where the draws are not oit's (the compute
@@ -116,15 +169,15 @@ pub struct GpuCtx<'a> {
     pub pixels: u32,
     /// Geometry passes so far.
     pub passes: u32,
-    /// Fragments one pass generates (set by the first).
-    pub fragments: Option<u64>,
+    /// Fragments one pass generates (the first scene pass's).
+    pub fragments: Fragments,
     /// Bytes of per-pixel storage allocated (state excluded, as oit-cpu's count excludes its own).
     pub storage_bytes: u64,
     uniform_buffer: wgpu::Buffer,
     uniform: FrameUniform,
     /// The per-pixel resolve state.
     pub state: wgpu::Buffer,
-    timestamps: Option<(wgpu::QuerySet, wgpu::Buffer)>,
+    timestamps: Option<Timestamps<'a>>,
     image: wgpu::Buffer,
     totals: wgpu::Buffer,
     /// Loss accounting, 3 words a pixel (prelude.wgsl's `acct`): fragments lost, counted where
@@ -232,14 +285,12 @@ impl<'a> GpuCtx<'a> {
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         );
         let timestamps = gpu.has_timestamps().then(|| {
-            let set = gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("timestamps"),
-                ty: wgpu::QueryType::Timestamp,
-                count: 2,
-            });
-            let resolve =
-                make("timestamps", 16, wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC);
-            (set, resolve)
+            let resolve = make(
+                "timestamps",
+                u64::from(crate::gpu::TIMESTAMP_QUERIES) * 8,
+                wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            );
+            Timestamps { gpu, set: Some(gpu.take_queries()), resolve, labels: Vec::new() }
         });
         let image = make(
             "image",
@@ -253,7 +304,7 @@ impl<'a> GpuCtx<'a> {
         );
         let totals = make(
             "totals",
-            16,
+            32,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         );
         let mut ctx = GpuCtx {
@@ -264,7 +315,7 @@ impl<'a> GpuCtx<'a> {
             plan,
             pixels,
             passes: 0,
-            fragments: None,
+            fragments: Fragments::Unset,
             storage_bytes: 0,
             uniform_buffer,
             uniform,
@@ -393,8 +444,28 @@ impl<'a> GpuCtx<'a> {
         (layout, group)
     }
 
-    /// One geometry pass of `source` (the technique's capture, after [`TECHNIQUE_PRELUDE`]).
+    /// One geometry pass of `source` (the technique's capture, after [`TECHNIQUE_PRELUDE`]),
+    /// submitted, not waited for.
     pub fn geometry_pass(
+        &mut self,
+        driver: &dyn Driver,
+        source: &str,
+        buffers: &[&wgpu::Buffer],
+        pass_index: u32,
+        param: u32,
+    ) -> Result<(), OitError> {
+        let (layout, group) = self.group0(buffers, pass_index, param);
+        let full = format!("{TECHNIQUE_PRELUDE}{source}");
+        self.add_setup_ms(driver);
+        let generated = driver.geometry_pass(self, &full, &layout, &group)?;
+        self.passes += 1;
+        self.note_generated(&generated);
+        Ok(())
+    }
+
+    /// [`GpuCtx::geometry_pass`], then the fragments it generated, read back (a round trip:
+    /// for the techniques that size storage from them).
+    pub fn geometry_pass_read(
         &mut self,
         driver: &dyn Driver,
         source: &str,
@@ -404,10 +475,37 @@ impl<'a> GpuCtx<'a> {
     ) -> Result<u64, OitError> {
         let (layout, group) = self.group0(buffers, pass_index, param);
         let full = format!("{TECHNIQUE_PRELUDE}{source}");
+        self.add_setup_ms(driver);
         let generated = driver.geometry_pass(self, &full, &layout, &group)?;
         self.passes += 1;
-        self.fragments.get_or_insert(generated);
-        Ok(generated)
+        let n = u64::from(self.gpu.read_u32(&generated.0)?[0]);
+        if self.fragments == Fragments::Unset {
+            self.fragments = Fragments::Known(n);
+        }
+        Ok(n)
+    }
+
+    /// Adds the driver's setup time (once per driver and frame) to the frame's GPU time.
+    pub fn add_setup_ms(&mut self, driver: &dyn Driver) {
+        if let Some(ms) = driver.take_setup_ms().filter(|_| self.timestamps.is_some()) {
+            self.gpu_ms += ms;
+            match self.pass_ms.iter_mut().find(|(l, _)| l == "setup") {
+                Some((_, total)) => *total += ms,
+                None => self.pass_ms.push(("setup".to_string(), ms)),
+            }
+        }
+    }
+
+    /// Keeps the first scene pass's count of generated fragments: copied on the device into the
+    /// frame's totals, read back with them when the frame ends.
+    pub fn note_generated(&mut self, generated: &Generated) {
+        if self.fragments != Fragments::Unset {
+            return;
+        }
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(&generated.0, 0, &self.totals, FRAGMENTS_WORD * 4, 4);
+        self.gpu.queue.submit([encoder.finish()]);
+        self.fragments = Fragments::OnDevice;
     }
 
     /// Runs compute `entry` of `source` (after [`TECHNIQUE_PRELUDE`]) once per pixel.
@@ -463,42 +561,73 @@ impl<'a> GpuCtx<'a> {
         record: impl FnOnce(&mut wgpu::CommandEncoder, Option<wgpu::ComputePassTimestampWrites<'_>>),
     ) -> Result<(), OitError> {
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        let writes = self.timestamps.as_ref().map(|(set, _)| wgpu::ComputePassTimestampWrites {
-            query_set: set,
-            beginning_of_pass_write_index: Some(0),
-            end_of_pass_write_index: Some(1),
+        let writes = self.render_timestamps().map(|w| wgpu::ComputePassTimestampWrites {
+            query_set: w.query_set,
+            beginning_of_pass_write_index: w.beginning_of_pass_write_index,
+            end_of_pass_write_index: w.end_of_pass_write_index,
         });
         record(&mut encoder, writes);
         self.finish_timed(label, encoder)
     }
 
-    /// Submits `encoder`, whose one pass wrote timestamps 0 and 1 of the frame's query set, and
-    /// adds its GPU time.
-    pub fn finish_timed(&mut self, label: &str, mut encoder: wgpu::CommandEncoder) -> Result<(), OitError> {
-        if let Some((set, resolve)) = &self.timestamps {
-            encoder.resolve_query_set(set, 0..2, resolve, 0);
-            self.gpu.queue.submit([encoder.finish()]);
-            let t = self.gpu.read_u32(resolve)?;
-            let ticks = (u64::from(t[3]) << 32 | u64::from(t[2]))
-                .saturating_sub(u64::from(t[1]) << 32 | u64::from(t[0]));
-            let ms = ticks as f64 * f64::from(self.gpu.queue.get_timestamp_period()) * 1e-6;
-            self.gpu_ms += ms;
-            match self.pass_ms.iter_mut().find(|(l, _)| l == label) {
-                Some((_, total)) => *total += ms,
-                None => self.pass_ms.push((label.to_string(), ms)),
+    /// Submits `encoder`, whose one pass wrote the timestamp pair [`GpuCtx::render_timestamps`]
+    /// gave it, and labels that pair; its time is read back with the frame's others.
+    pub fn finish_timed(&mut self, label: &str, encoder: wgpu::CommandEncoder) -> Result<(), OitError> {
+        self.gpu.queue.submit([encoder.finish()]);
+        let full = match &mut self.timestamps {
+            Some(ts) => {
+                ts.labels.push(label.to_string());
+                ts.labels.len() as u32 * 2 >= crate::gpu::TIMESTAMP_QUERIES
             }
-        } else {
-            self.gpu.queue.submit([encoder.finish()]);
+            None => false,
+        };
+        if full {
+            // a frame of more than 2,048 timed passes (a deep peel): read these, go on
+            let words = self.resolve_timestamps().map(|t| self.gpu.read_u32(&t)).transpose()?;
+            self.add_timestamps(words.as_deref());
         }
         Ok(())
     }
 
-    /// Timestamp writes for a render pass (hardware driver), or none.
+    /// Records the resolve of the timestamp pairs written so far into the resolve buffer, and
+    /// returns that buffer (to be read back); `None` without timestamps or with none written.
+    fn resolve_timestamps(&mut self) -> Option<wgpu::Buffer> {
+        let ts = self.timestamps.as_ref()?;
+        if ts.labels.is_empty() {
+            return None;
+        }
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        encoder.resolve_query_set(ts.set(), 0..ts.labels.len() as u32 * 2, &ts.resolve, 0);
+        self.gpu.queue.submit([encoder.finish()]);
+        Some(ts.resolve.clone())
+    }
+
+    /// Adds the pairs' times (the resolve buffer's words, read back) to the frame's GPU time and
+    /// per-pass times, and starts the set over.
+    fn add_timestamps(&mut self, words: Option<&[u32]>) {
+        let (Some(ts), Some(t)) = (self.timestamps.as_mut(), words) else { return };
+        let period = f64::from(self.gpu.queue.get_timestamp_period());
+        for (i, label) in ts.labels.drain(..).enumerate() {
+            let at = |q: usize| u64::from(t[2 * q + 1]) << 32 | u64::from(t[2 * q]);
+            let ms = at(2 * i + 1).saturating_sub(at(2 * i)) as f64 * period * 1e-6;
+            self.gpu_ms += ms;
+            match self.pass_ms.iter_mut().find(|(l, _)| *l == label) {
+                Some((_, total)) => *total += ms,
+                None => self.pass_ms.push((label, ms)),
+            }
+        }
+    }
+
+    /// Timestamp writes for the next timed pass (a render pass of the hardware driver, or a
+    /// compute pass through [`GpuCtx::timed`]): its own pair of the frame's query set; or none.
     pub fn render_timestamps(&self) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
-        self.timestamps.as_ref().map(|(set, _)| wgpu::RenderPassTimestampWrites {
-            query_set: set,
-            beginning_of_pass_write_index: Some(0),
-            end_of_pass_write_index: Some(1),
+        self.timestamps.as_ref().map(|ts| {
+            let pair = ts.labels.len() as u32;
+            wgpu::RenderPassTimestampWrites {
+                query_set: ts.set(),
+                beginning_of_pass_write_index: Some(2 * pair),
+                end_of_pass_write_index: Some(2 * pair + 1),
+            }
         })
     }
 
@@ -512,7 +641,10 @@ impl<'a> GpuCtx<'a> {
     /// bytes) come back; the frame's image is then empty (0 × 0) and `lost_pixels` `None`.
     pub fn finish_with(mut self, path: oit_core::RasterPath, readback: bool) -> Result<Frame, OitError> {
         let (image_buf, totals) = (self.image.clone(), self.totals.clone());
-        self.fill(&totals, 0)?;
+        // the four totals finish.wgsl sums (not the fragments word after them)
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        encoder.clear_buffer(&totals, 0, Some(16));
+        self.gpu.queue.submit([encoder.finish()]);
         self.kernel_over(
             FINISH_WGSL,
             "totals_main",
@@ -532,17 +664,33 @@ impl<'a> GpuCtx<'a> {
             "resolve",
         )?;
         let _ = path;
-        let t = self.gpu.read_u32(&totals)?;
+        // one readback at the end of the frame: the totals, the timestamps, and (when asked)
+        // the image and the per-pixel losses
+        let stamps = self.resolve_timestamps();
+        let mut read = vec![&totals];
+        read.extend(stamps.as_ref());
+        if readback {
+            read.push(&image_buf);
+            if self.counts_losses {
+                read.push(&self.acct);
+            }
+        }
+        let mut words = self.gpu.read_u32s(&read)?.into_iter();
+        let t = words.next().unwrap_or_default();
+        if stamps.is_some() {
+            let stamps = words.next();
+            self.add_timestamps(stamps.as_deref());
+        }
         if !readback {
             return self.frame_of(Image { width: 0, height: 0, pixels: Vec::new() }, &t, None);
         }
-        let words = self.gpu.read_u32(&image_buf)?;
+        let pixels = words.next().unwrap_or_default();
         let image = Image {
             width: self.settings.width,
             height: self.settings.height,
-            pixels: words[..self.pixels as usize].iter().map(|w| w.to_le_bytes()).collect(),
+            pixels: pixels[..self.pixels as usize].iter().map(|w| w.to_le_bytes()).collect(),
         };
-        let acct = if self.counts_losses { Some(self.gpu.read_u32(&self.acct)?) } else { None };
+        let acct = words.next();
         self.frame_of(image, &t, acct)
     }
 
@@ -551,9 +699,10 @@ impl<'a> GpuCtx<'a> {
     fn frame_of(self, image: Image, t: &[u32], acct: Option<Vec<u32>>) -> Result<Frame, OitError> {
         let captured = u64::from(t[0]);
         let fragments = match self.fragments {
-            Some(generated) => generated,
-            None if self.fragments_from_captured => captured,
-            None => 0,
+            Fragments::Known(generated) => generated,
+            Fragments::OnDevice => u64::from(t[FRAGMENTS_WORD as usize]),
+            Fragments::Unset if self.fragments_from_captured => captured,
+            Fragments::Unset => 0,
         };
         let (lost, lost_pixels) = if self.counts_losses {
             let px = acct.map(|acct| acct.chunks(3).take(self.pixels as usize).map(|w| w[0]).collect());

@@ -114,7 +114,7 @@ use oit_core::{
     Aabb, BoundsMode, Camera, Frame, Instance, Mesh, OitError, RasterPath, Scene, Settings, Technique,
 };
 
-use crate::ctx::{Driver, GpuCtx};
+use crate::ctx::{Driver, Generated, GpuCtx};
 use crate::gpu::{COMMON_WGSL, Gpu};
 use crate::hardware::{HwGeometry, RASTER_WGSL};
 
@@ -275,7 +275,7 @@ impl Driver for RenderDriver<'_> {
         source: &str,
         layout0: &wgpu::BindGroupLayout,
         group0: &wgpu::BindGroup,
-    ) -> Result<u64, OitError> {
+    ) -> Result<Generated, OitError> {
         let wgsl = format!("{COMMON_WGSL}\n{source}\n{CAPTURE_RENDER_WGSL}");
         let mut h = DefaultHasher::new();
         wgsl.hash(&mut h);
@@ -323,7 +323,7 @@ impl Driver for RenderDriver<'_> {
             pass.dispatch_workgroups(self.size.0.div_ceil(8), self.size.1.div_ceil(8), 1);
         }
         ctx.gpu.queue.submit([encoder.finish()]);
-        Ok(u64::from(ctx.gpu.read_u32(&self.total)?[0]))
+        Ok(Generated(self.total.clone()))
     }
 }
 

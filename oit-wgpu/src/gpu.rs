@@ -41,7 +41,17 @@ pub struct Gpu {
     pub limits: wgpu::Limits,
     pipelines: Mutex<HashMap<u64, Arc<wgpu::ComputePipeline>>>,
     render_pipelines: Mutex<HashMap<u64, Arc<wgpu::RenderPipeline>>>,
+    /// Mappable readback buffers, kept for the next readback of the same size.
+    staging: Mutex<Vec<wgpu::Buffer>>,
+    /// Timestamp query sets, kept for the next frame.
+    queries: Mutex<Vec<wgpu::QuerySet>>,
+    /// Readbacks so far (each a CPU–GPU round trip).
+    readbacks: std::sync::atomic::AtomicU64,
 }
+
+/// Queries in one timestamp query set: two a timed pass, so a frame records 2,048 passes before
+/// it reads their times back (wgpu's most queries in a set is 4,096).
+pub const TIMESTAMP_QUERIES: u32 = 4096;
 
 fn instance() -> wgpu::Instance {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
@@ -119,6 +129,9 @@ impl Gpu {
             limits,
             pipelines: Mutex::new(HashMap::new()),
             render_pipelines: Mutex::new(HashMap::new()),
+            staging: Mutex::new(Vec::new()),
+            queries: Mutex::new(Vec::new()),
+            readbacks: Default::default(),
         }
     }
 
@@ -174,8 +187,11 @@ impl Gpu {
     /// the bunny at 512²: 1.2 ms of GPU time in a 318 ms frame), so `gpu_ms` there would mislead;
     /// wall time is the measure on such devices.
     pub fn has_timestamps(&self) -> bool {
+        // off on CPU devices (lavapipe's timestamps cover under 1 % of a frame's wall time);
+        // OIT_GPU_TIMESTAMPS=1 turns them on there, so tests can run the timed paths
         self.features.contains(wgpu::Features::TIMESTAMP_QUERY)
-            && self.info.device_type != wgpu::DeviceType::Cpu
+            && (self.info.device_type != wgpu::DeviceType::Cpu
+                || std::env::var("OIT_GPU_TIMESTAMPS").is_ok_and(|v| v == "1"))
     }
 
     /// A compute pipeline for `entry` of `COMMON_WGSL + source`, cached by source and entry.
@@ -281,17 +297,31 @@ impl Gpu {
 
     /// Reads a buffer back as u32 words (blocking).
     pub fn read_u32(&self, buffer: &wgpu::Buffer) -> Result<Vec<u32>, OitError> {
-        let size = buffer.size();
-        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let mut words = self.read_u32s(&[buffer])?;
+        Ok(words.pop().unwrap_or_default())
+    }
+
+    /// Reads several buffers back as u32 words with one copy submission and one wait (blocking),
+    /// in the order given: a frame's last readback takes its counters, timestamps and image
+    /// together. The staging buffer comes from a small per-device cache, so a steady-state
+    /// readback creates no buffer.
+    pub fn read_u32s(&self, buffers: &[&wgpu::Buffer]) -> Result<Vec<Vec<u32>>, OitError> {
+        self.readbacks.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        // each buffer at an offset aligned for both the copy and the map
+        let mut offsets = Vec::with_capacity(buffers.len());
+        let mut total = 0u64;
+        for b in buffers {
+            offsets.push(total);
+            total += b.size().next_multiple_of(wgpu::MAP_ALIGNMENT);
+        }
+        let size = total.max(wgpu::MAP_ALIGNMENT).next_power_of_two();
+        let staging = self.staging(size);
         let mut encoder = self.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+        for (b, &offset) in buffers.iter().zip(&offsets) {
+            encoder.copy_buffer_to_buffer(b, 0, &staging, offset, b.size());
+        }
         let index = self.queue.submit([encoder.finish()]);
-        let slice = staging.slice(..);
+        let slice = staging.slice(..total.max(wgpu::MAP_ALIGNMENT));
         // The words are read only once the map callback has said they are there (and has not
         // failed), not merely after a wait on the queue.
         let mapped = std::sync::Arc::new(std::sync::Mutex::new(None));
@@ -313,7 +343,64 @@ impl Gpu {
                 None => std::thread::yield_now(),
             }
         }
-        let data = slice.get_mapped_range().map_err(|e| OitError::Device(format!("readback failed: {e}")))?;
-        Ok(bytemuck::cast_slice(&data).to_vec())
+        let words = {
+            let data =
+                slice.get_mapped_range().map_err(|e| OitError::Device(format!("readback failed: {e}")))?;
+            buffers
+                .iter()
+                .zip(&offsets)
+                .map(|(b, &offset)| {
+                    let range = offset as usize..(offset + b.size()) as usize;
+                    bytemuck::cast_slice(&data[range]).to_vec()
+                })
+                .collect()
+        };
+        staging.unmap();
+        if let Ok(mut free) = self.staging.lock() {
+            free.push(staging);
+        }
+        Ok(words)
+    }
+
+    /// How many readbacks ([`Gpu::read_u32s`], each a wait for the GPU) this device has made: a
+    /// frame's round trips are the difference across it.
+    pub fn readbacks(&self) -> u64 {
+        self.readbacks.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    /// A mappable staging buffer of `size` bytes from the cache, or new.
+    fn staging(&self, size: u64) -> wgpu::Buffer {
+        let found = self.staging.lock().ok().and_then(|mut free| {
+            let i = free.iter().position(|b| b.size() == size)?;
+            Some(free.swap_remove(i))
+        });
+        found.unwrap_or_else(|| {
+            self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("readback"),
+                size,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        })
+    }
+
+    /// A timestamp query set of [`TIMESTAMP_QUERIES`] queries from the per-device cache, or
+    /// new; [`Gpu::give_back_queries`] returns it.
+    pub fn take_queries(&self) -> wgpu::QuerySet {
+        let found = self.queries.lock().ok().and_then(|mut free| free.pop());
+        found.unwrap_or_else(|| {
+            self.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: TIMESTAMP_QUERIES,
+            })
+        })
+    }
+
+    /// Returns a query set taken with [`Gpu::take_queries`].
+    pub fn give_back_queries(&self, set: wgpu::QuerySet) {
+        if let Ok(mut free) = self.queries.lock() {
+            free.push(set);
+        }
     }
 }

@@ -30,7 +30,7 @@ use glam::{Mat3, Vec3, Vec4};
 use oit_core::{Aabb, Camera, OitError, RasterPath, Scene, Settings};
 use wgpu::util::DeviceExt;
 
-use crate::ctx::{Driver, GpuCtx};
+use crate::ctx::{Driver, Generated, GpuCtx};
 use crate::embed::{CaptureShader, GeometryPass, RenderDriver};
 use crate::gpu::Gpu;
 
@@ -566,7 +566,7 @@ impl Driver for HardwareRaster {
         source: &str,
         layout0: &wgpu::BindGroupLayout,
         group0: &wgpu::BindGroup,
-    ) -> Result<u64, OitError> {
+    ) -> Result<Generated, OitError> {
         self.driver.geometry_pass(ctx, source, layout0, group0)
     }
 

@@ -60,12 +60,12 @@ use oit_core::{
     Technique, TechniqueKind,
 };
 
-pub use crate::ctx::{Driver, FrameUniform, GpuCtx, Init, TECHNIQUE_PRELUDE};
+pub use crate::ctx::{Driver, Fragments, FrameUniform, Generated, GpuCtx, Init, TECHNIQUE_PRELUDE};
 pub use crate::embed::{CaptureShader, GeometryPass, OitPass};
 pub use crate::gpu::{COMMON_WGSL, Gpu, adapters, required_features};
 pub use crate::hardware::HardwareRaster;
 pub use crate::pool::BufferPool;
-pub use crate::raster::ComputeRaster;
+pub use crate::raster::{ComputeRaster, setup_on_gpu};
 
 use crate::hardware::HardwareScene;
 use crate::raster::ComputeBuffers;

@@ -32,7 +32,7 @@ use glam::{Mat3, Vec3, Vec4};
 use oit_core::setup::{TRIANGLE_WORDS, TriangleSetup, box_vertices, normal_matrix};
 use oit_core::{Aabb, Camera, OitError, RasterPath, Scene, Settings};
 
-use crate::ctx::{Driver, GpuCtx, dispatch_size};
+use crate::ctx::{Driver, Generated, GpuCtx, dispatch_size};
 use crate::gpu::Gpu;
 
 const RASTER_WGSL: &str = include_str!("shaders/raster_compute.wgsl");
@@ -68,6 +68,9 @@ pub struct ComputeRaster {
     group: wgpu::BindGroup,
     generated: wgpu::Buffer,
     args: wgpu::Buffer,
+    /// Device milliseconds of this frame's setup kernels (GPU setup on a device with
+    /// timestamps), handed to the frame's first geometry pass ([`Driver::take_setup_ms`]).
+    setup_ms: Cell<Option<f64>>,
 }
 
 impl ComputeRaster {
@@ -306,6 +309,8 @@ struct SetupBuffers {
     layout: wgpu::BindGroupLayout,
     /// Bound to the current triangle and work-list buffers (remade when one grows).
     group: Option<wgpu::BindGroup>,
+    /// The setup pass's two timestamps and their resolve buffer, where the device has them.
+    timestamps: Option<(wgpu::QuerySet, wgpu::Buffer)>,
 }
 
 fn storage_buffer(gpu: &Gpu, label: &str, size: u64, made: &Cell<u64>) -> wgpu::Buffer {
@@ -446,16 +451,18 @@ impl ComputeBuffers {
         boxes: bool,
         made: &Cell<u64>,
     ) -> Result<ComputeRaster, OitError> {
-        if setup_on_gpu(gpu) {
-            self.gpu_frame(gpu, scene, camera, settings, boxes, made)?;
+        let setup_ms = if setup_on_gpu(gpu) {
+            self.gpu_frame(gpu, scene, camera, settings, boxes, made)?
         } else {
             self.host_frame(gpu, scene, camera, settings, boxes, made)?;
-        }
+            None
+        };
         Ok(ComputeRaster {
             layout: self.layout.clone(),
             group: self.group.clone(),
             generated: self.generated.clone(),
             args: self.args.clone(),
+            setup_ms: Cell::new(setup_ms),
         })
     }
 
@@ -499,7 +506,8 @@ impl ComputeBuffers {
 
     /// The GPU's setup: the instance table and uniform written, the setup kernel and the
     /// arguments kernel recorded and run, the counters read back; set up again into grown
-    /// buffers when they did not fit.
+    /// buffers when they did not fit. Returns the setup's device milliseconds, where the device
+    /// has timestamps (read back with the counters).
     fn gpu_frame(
         &mut self,
         gpu: &Gpu,
@@ -508,7 +516,7 @@ impl ComputeBuffers {
         settings: &Settings,
         boxes: bool,
         made: &Cell<u64>,
-    ) -> Result<(), OitError> {
+    ) -> Result<Option<f64>, OitError> {
         use wgpu::BufferUsages as U;
         if self.setup.as_ref().is_none_or(|s| s.geometry.boxes != boxes) {
             let geometry = GpuGeometry::new(gpu, scene, boxes, made)?;
@@ -537,6 +545,14 @@ impl ComputeBuffers {
                 counters: buffer(gpu, "setup counters", 16, U::STORAGE | U::COPY_SRC | U::COPY_DST, made),
                 layout,
                 group: None,
+                timestamps: gpu.has_timestamps().then(|| {
+                    let set = gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
+                        label: Some("setup timestamps"),
+                        ty: wgpu::QueryType::Timestamp,
+                        count: 2,
+                    });
+                    (set, buffer(gpu, "setup timestamps", 16, U::QUERY_RESOLVE | U::COPY_SRC, made))
+                }),
             });
             self.reserve(gpu, guess_tris.max(self.tris.size()), guess_items.max(self.items.size()), made)?;
         }
@@ -603,7 +619,13 @@ impl ComputeBuffers {
             {
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("setup"),
-                    timestamp_writes: None,
+                    timestamp_writes: s.timestamps.as_ref().map(|(set, _)| {
+                        wgpu::ComputePassTimestampWrites {
+                            query_set: set,
+                            beginning_of_pass_write_index: Some(0),
+                            end_of_pass_write_index: Some(1),
+                        }
+                    }),
                 });
                 pass.set_bind_group(0, &*group, &[]);
                 let (x, y) = dispatch_size(u64::from(s.geometry.tasks));
@@ -616,11 +638,23 @@ impl ComputeBuffers {
             }
             // the raster uniform's item count, from the arguments kernel
             encoder.copy_buffer_to_buffer(&self.args, 32, &self.uniform, 0, 4);
+            if let Some((set, resolve)) = &s.timestamps {
+                encoder.resolve_query_set(set, 0..2, resolve, 0);
+            }
             gpu.queue.submit([encoder.finish()]);
-            let counts = gpu.read_u32(&s.counters)?;
+            // the counters (and the setup's timestamps) in one readback: the frame's one round
+            // trip before its passes, to check the pieces fit
+            let mut read = vec![&s.counters];
+            read.extend(s.timestamps.as_ref().map(|(_, resolve)| resolve));
+            let words = gpu.read_u32s(&read)?;
+            let counts = &words[0];
             let (pieces, items) = (u64::from(counts[0]), u64::from(counts[1]));
             if pieces <= tri_capacity && items <= item_capacity {
-                return Ok(());
+                return Ok(words.get(1).map(|t| {
+                    let ticks = (u64::from(t[3]) << 32 | u64::from(t[2]))
+                        .saturating_sub(u64::from(t[1]) << 32 | u64::from(t[0]));
+                    ticks as f64 * f64::from(gpu.queue.get_timestamp_period()) * 1e-6
+                }));
             }
             let grew = self.reserve(gpu, pieces * TRIANGLE_WORDS as u64 * 4, items * 8, made)?;
             if !grew {
@@ -637,13 +671,17 @@ impl Driver for ComputeRaster {
         RasterPath::Compute
     }
 
+    fn take_setup_ms(&self) -> Option<f64> {
+        self.setup_ms.take()
+    }
+
     fn geometry_pass(
         &self,
         ctx: &mut GpuCtx<'_>,
         source: &str,
         layout0: &wgpu::BindGroupLayout,
         group0: &wgpu::BindGroup,
-    ) -> Result<u64, OitError> {
+    ) -> Result<Generated, OitError> {
         // A workgroup per item spreads a large triangle over the GPU (measured on the H100, fabs on
         // planes:64 at 1024²: 7.5 ms of GPU time a frame, 2.7 of them the two geometry passes,
         // against 10.9 ms with one invocation walking each 16×16 tile); on a CPU device (lavapipe)
@@ -673,6 +711,6 @@ impl Driver for ComputeRaster {
             pass.dispatch_workgroups_indirect(&self.args, if per_pixel { 0 } else { 16 });
         }
         ctx.finish_timed("geometry", encoder)?;
-        Ok(u64::from(ctx.gpu.read_u32(&self.generated)?[0]))
+        Ok(Generated(self.generated.clone()))
     }
 }

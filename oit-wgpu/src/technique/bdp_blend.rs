@@ -57,7 +57,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     }
     check_texture_size(ctx, "the bdp bucket targets")?;
     let bounds = depth_bounds(ctx, drivers)?;
-    if ctx.fragments.is_none() {
+    if ctx.fragments == crate::ctx::Fragments::Unset {
         count_fragments(ctx, drivers)?;
     }
 
@@ -198,7 +198,7 @@ pub(crate) fn count_fragments(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Re
     let (layout, group) = ctx.group0(&[], 0, 0);
     let source = format!("{TECHNIQUE_PRELUDE}fn capture(f: Fragment) {{}}\n");
     let generated = drivers.scene.geometry_pass(ctx, &source, &layout, &group)?;
-    ctx.fragments = Some(generated);
+    ctx.note_generated(&generated);
     Ok(())
 }
 

@@ -36,7 +36,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         return Err(unsupported("MAX blending into an Rg32Float target: the device lacks FLOAT32_BLENDABLE"));
     }
     check_texture_size(ctx, "the ddp range targets")?;
-    if ctx.fragments.is_none() {
+    if ctx.fragments == crate::ctx::Fragments::Unset {
         count_fragments(ctx, drivers)?;
     }
     let state = ddp::Peel::new(ctx)?;

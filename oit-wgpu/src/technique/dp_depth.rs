@@ -34,7 +34,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     ctx.counts_losses = false;
     let stage = scene_stage(drivers)?;
     check_texture_size(ctx, "the dp depth and layer textures")?;
-    if ctx.fragments.is_none() {
+    if ctx.fragments == crate::ctx::Fragments::Unset {
         count_fragments(ctx, drivers)?;
     }
     let device = ctx.gpu.device.clone();

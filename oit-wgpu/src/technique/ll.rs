@@ -15,7 +15,7 @@ const WGSL: &str = include_str!("ll.wgsl");
 const END: u32 = u32::MAX;
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
-    let generated = ctx.geometry_pass(drivers.scene.as_ref(), SIZE_WGSL, &[], 0, 0)?;
+    let generated = ctx.geometry_pass_read(drivers.scene.as_ref(), SIZE_WGSL, &[], 0, 0)?;
     let nodes = ctx.plan.check_fragments(generated)?;
     let heads = ctx.buffer("ll heads", u64::from(ctx.pixels), Init::Fill(END))?;
     let counter = ctx.buffer("ll node counter", 1, Init::Zero)?;
