@@ -519,14 +519,15 @@ impl TriangleSetup {
         let mut r = TriangleSetup::empty(camera, settings);
         let snap = TriangleSetup::snap(settings);
         let view_proj = camera.view_proj();
+        let mesh_bounds = scene.mesh_bounds();
         for (i, inst) in scene.instances.iter().enumerate() {
             let Some(object) = scene.objects.get(inst.object) else {
                 continue;
             };
-            let Some(mesh) = scene.meshes.get(object.mesh) else {
+            let Some(bounds) = mesh_bounds.get(object.mesh) else {
                 continue;
             };
-            let (corners, normals) = box_vertices(&mesh.bounds(), &inst.transform);
+            let (corners, normals) = box_vertices(bounds, &inst.transform);
             let clip_pos = corners.map(|c| transform_point(&view_proj, c));
             let view = MeshView { normals: &normals, colors: None, indices: &Aabb::TRIANGLES };
             let base_id = u32::try_from(i).unwrap_or(u32::MAX).saturating_mul(12);

@@ -175,7 +175,7 @@ impl<'a> VkCtx<'a> {
         let acct = ctx.acct.clone();
         ctx.rec.fill(&acct, 0);
         let (image, totals) = (ctx.image.clone(), ctx.totals.clone());
-        ctx.kernel_over("finish", "init_main", &[&image, &totals], u64::from(pixels), 0, 0)?;
+        ctx.kernel_over("finish", "init_main", &[&image, &totals], u64::from(pixels), 0, 0, "init")?;
         Ok(ctx)
     }
 
@@ -265,6 +265,7 @@ impl<'a> VkCtx<'a> {
         let raster_set = raster.bindings();
         let uniform = self.uniform;
         self.rec.dispatch(
+            "geometry",
             &pipeline,
             bytemuck::bytes_of(&uniform),
             &storage,
@@ -277,7 +278,7 @@ impl<'a> VkCtx<'a> {
         Ok(generated)
     }
 
-    /// Runs compute `entry` of `module` once per pixel.
+    /// Runs compute `entry` of `module` once per pixel (its GPU time under `entry`).
     pub(crate) fn pixel_kernel(
         &mut self,
         module: &'static str,
@@ -286,10 +287,12 @@ impl<'a> VkCtx<'a> {
         pass_index: u32,
         param: u32,
     ) -> Result<(), OitError> {
-        self.kernel_over(module, entry, buffers, u64::from(self.pixels), pass_index, param)
+        self.kernel_over(module, entry, buffers, u64::from(self.pixels), pass_index, param, entry)
     }
 
-    /// Runs compute `entry` of `module` over `invocations` (in 2D rows of 64 × 65535 when needed).
+    /// Runs compute `entry` of `module` over `invocations` (in 2D rows of 64 × 65535 when needed),
+    /// its GPU time under `label` (oit-wgpu's labels: the entry, or "init", "resolve"...).
+    #[expect(clippy::too_many_arguments, reason = "a dispatch is that many things, as on oit-wgpu")]
     pub(crate) fn kernel_over(
         &mut self,
         module: &'static str,
@@ -298,6 +301,7 @@ impl<'a> VkCtx<'a> {
         invocations: u64,
         pass_index: u32,
         param: u32,
+        label: &str,
     ) -> Result<(), OitError> {
         self.uniform.pass_index = pass_index;
         self.uniform.param = param;
@@ -305,7 +309,8 @@ impl<'a> VkCtx<'a> {
         let (state, acct) = (self.state.clone(), self.acct.clone());
         let storage = Self::storage(&state, &acct, buffers);
         let uniform = self.uniform;
-        self.rec.dispatch(&pipeline, bytemuck::bytes_of(&uniform), &storage, None, dispatch_size(invocations))
+        let groups = dispatch_size(invocations);
+        self.rec.dispatch(label, &pipeline, bytemuck::bytes_of(&uniform), &storage, None, groups)
     }
 
     /// A validation error since the frame began fails it (`OIT_VULKAN_VALIDATION=1`).
@@ -326,8 +331,8 @@ impl<'a> VkCtx<'a> {
         let (image_buf, totals) = (self.image.clone(), self.totals.clone());
         self.rec.fill(&totals, 0);
         let px = u64::from(self.pixels);
-        self.kernel_over("finish", "totals_main", &[&image_buf, &totals], px, 0, 0)?;
-        self.kernel_over("finish", "finish_main", &[&image_buf, &totals], px, 0, 0)?;
+        self.kernel_over("finish", "totals_main", &[&image_buf, &totals], px, 0, 0, "resolve")?;
+        self.kernel_over("finish", "finish_main", &[&image_buf, &totals], px, 0, 0, "resolve")?;
         let words = self.read_u32(&image_buf)?;
         let t = self.read_u32(&totals)?;
         let acct = self.read_u32(&self.acct.clone())?;
@@ -335,6 +340,12 @@ impl<'a> VkCtx<'a> {
             width: self.settings.width,
             height: self.settings.height,
             pixels: words[..self.pixels as usize].iter().map(|w| w.to_le_bytes()).collect(),
+        };
+        // every dispatch's submission has been flushed (the readbacks above), so this is the
+        // whole frame's device time
+        let (gpu_ms, gpu_pass_ms) = match self.rec.gpu_times() {
+            Some((total, passes)) => (Some(total), passes.to_vec()),
+            None => (None, Vec::new()),
         };
         let lost_pixels: Vec<u32> = acct.chunks(3).take(self.pixels as usize).map(|w| w[0]).collect();
         let frame = Frame {
@@ -350,9 +361,9 @@ impl<'a> VkCtx<'a> {
                 tied: u64::from(t[2]),
                 storage_bytes: self.storage_bytes,
                 wall_ms: 0.0,
-                gpu_ms: None,
+                gpu_ms,
                 max_layers: t[1],
-                gpu_pass_ms: Vec::new(),
+                gpu_pass_ms,
                 tiles: 1,
             },
         };
@@ -365,4 +376,45 @@ impl<'a> VkCtx<'a> {
 pub(crate) fn dispatch_size(invocations: u64) -> (u32, u32) {
     let groups = invocations.div_ceil(64);
     if groups <= 65_535 { (groups as u32, 1) } else { (65_535, groups.div_ceil(65_535) as u32) }
+}
+
+#[cfg(test)]
+mod tests {
+    use oit_core::{Camera, RasterPath, Settings, View, load_scene};
+
+    use super::{BufferPool, VkCtx};
+
+    /// More dispatches than a submission's uniform slots (and timestamp pairs) without a readback:
+    /// the recorder flushes in the middle, and the frame's GPU time still adds up.
+    #[test]
+    fn more_dispatches_than_slots_flush_and_add_up() {
+        let Some(vk) = crate::backend_or_skip("more_dispatches_than_slots_flush_and_add_up") else {
+            return;
+        };
+        let gpu = vk.gpu().unwrap();
+        let scene = load_scene("planes:4").unwrap();
+        let camera = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();
+        let settings = Settings { width: 8, height: 8, ..Settings::default() };
+        let pool = BufferPool::default();
+        let mut ctx = VkCtx::new(gpu, &scene, &camera, &settings, &pool).unwrap();
+        let (image, totals) = (ctx.image.clone(), ctx.totals.clone());
+        let n = 2 * crate::record::SLOTS + 44;
+        for _ in 0..n {
+            // the frame's init again: idempotent, so the frame stays an empty one
+            ctx.kernel_over("finish", "init_main", &[&image, &totals], 64, 0, 0, "again").unwrap();
+        }
+        let stats = ctx.finish(RasterPath::Compute).unwrap().stats;
+        assert_eq!((stats.fragments, stats.captured, stats.lost), (0, 0, 0));
+        println!("timestamps {}: {:?} {:?}", gpu.has_timestamps(), stats.gpu_ms, stats.gpu_pass_ms);
+        if gpu.has_timestamps() {
+            let total = stats.gpu_ms.unwrap();
+            let sum: f64 = stats.gpu_pass_ms.iter().map(|(_, ms)| ms).sum();
+            assert!(total > 0.0 && (total - sum).abs() <= 1e-9 * total, "{total} vs {sum}");
+            let labels: Vec<&str> = stats.gpu_pass_ms.iter().map(|(l, _)| l.as_str()).collect();
+            assert_eq!(labels, ["init", "again", "resolve"]);
+        } else {
+            assert_eq!(stats.gpu_ms, None);
+            assert!(stats.gpu_pass_ms.is_empty());
+        }
+    }
 }

@@ -135,8 +135,10 @@ pub struct DeviceInfo {
     pub driver: String,
     /// [`PAPER_EXTENSIONS`], each present or not.
     pub extensions: Vec<(String, bool)>,
-    /// The core limits.
+    /// The core limits (`timestampPeriod`: nanoseconds per timestamp tick).
     pub limits: vk::PhysicalDeviceLimits,
+    /// `timestampValidBits` of the queue family oit uses (0: no timestamps on that queue).
+    pub timestamp_valid_bits: u32,
     /// The `logicOp` feature (adp's histogram by logic-op OR needs it).
     pub logic_op: bool,
     /// The largest device-local heap, bytes.
@@ -285,6 +287,8 @@ struct Candidate {
     name: String,
     device_type: vk::PhysicalDeviceType,
     family: Option<u32>,
+    /// `timestampValidBits` of `family` (0 without one).
+    timestamp_valid_bits: u32,
     missing: Vec<&'static str>,
 }
 
@@ -400,7 +404,7 @@ impl Gpu {
         };
         let physical = chosen.physical;
         let family = chosen.family.expect("usable has a family");
-        let info = Self::info(instance, physical, validation);
+        let info = Self::info(instance, physical, validation, chosen.timestamp_valid_bits);
         let priorities = [1.0f32];
         let queues =
             [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
@@ -452,16 +456,23 @@ impl Gpu {
             .position(|f| f.queue_flags.contains(both))
             .or_else(|| families.iter().position(compute))
             .map(|i| i as u32);
+        let timestamp_valid_bits = family.map_or(0, |f| families[f as usize].timestamp_valid_bits);
         Candidate {
             physical,
             name: c_name(props.device_name_as_c_str()),
             device_type: props.device_type,
             family,
+            timestamp_valid_bits,
             missing,
         }
     }
 
-    fn info(instance: &ash::Instance, physical: vk::PhysicalDevice, validation: bool) -> DeviceInfo {
+    fn info(
+        instance: &ash::Instance,
+        physical: vk::PhysicalDevice,
+        validation: bool,
+        timestamp_valid_bits: u32,
+    ) -> DeviceInfo {
         let mut driver = vk::PhysicalDeviceDriverProperties::default();
         let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
         // SAFETY: plain queries of a physical device of this instance, the chained struct alive.
@@ -502,6 +513,7 @@ impl Gpu {
                 })
                 .collect(),
             limits: props.limits,
+            timestamp_valid_bits,
             logic_op: features.logic_op == vk::TRUE,
             device_heap,
             validation,
@@ -511,6 +523,17 @@ impl Gpu {
     /// True on a CPU device (lavapipe).
     pub fn is_cpu(&self) -> bool {
         self.info.device_type == vk::PhysicalDeviceType::CPU
+    }
+
+    /// True when the queue can write timestamps that mean device time: `timestampValidBits > 0`
+    /// and `timestampPeriod > 0`, and not on a CPU device (lavapipe), as oit-wgpu's
+    /// `Gpu::has_timestamps`: there the compute passes' timestamps cover a sliver of the frame's
+    /// wall time, so `gpu_ms` would mislead. `OIT_GPU_TIMESTAMPS=1` turns them on there, so tests
+    /// can run the timed path.
+    pub fn has_timestamps(&self) -> bool {
+        self.info.timestamp_valid_bits > 0
+            && self.info.limits.timestamp_period > 0.0
+            && (!self.is_cpu() || std::env::var("OIT_GPU_TIMESTAMPS").is_ok_and(|v| v == "1"))
     }
 
     /// A buffer of `size` bytes with its own memory: device-local, or host-visible and coherent

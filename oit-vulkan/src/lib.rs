@@ -7,11 +7,17 @@
 //! oit-cpu's and the images equal oit-wgpu's compute path. Captures use storage-*buffer* atomics,
 //! as on wgpu.
 //!
+//! **GPU time.** Where the device has timestamps ([`Gpu::has_timestamps`]: not on a CPU device
+//! such as lavapipe unless `OIT_GPU_TIMESTAMPS=1`, as on oit-wgpu) every dispatch is timed by a
+//! pair of timestamp queries, and a frame's `gpu_ms` is their sum, `gpu_pass_ms` the same by
+//! label (oit-wgpu's: "geometry", the kernel's entry point, "init", "resolve"); fills, copies and
+//! uploads (transfer commands here, not kernels) are not timed. Without, `gpu_ms` is `None`.
+//!
 //! **What is refused** (`OitError::Unsupported`, naming what is missing): the hardware-raster path
 //! (graphics pipelines, hence the papers' raw operations: MAX blending into 8 ×
 //! R32G32B32A32_SFLOAT for bdp, logic-op OR into 8 × R32G32B32A32_UINT for adp's histogram,
 //! depth textures and occlusion queries for dp/ddp), storage-*image* atomics for mdts/fabs, the
-//! interlock k-buffer, and GPU timestamps (`gpu_ms` is `None`; wall time is measured).
+//! and the interlock k-buffer.
 //!
 //! **Starting without Vulkan.** The entry is loaded at run time (`ash::Entry::load`, feature
 //! `loaded`): a binary runs on a machine without `libvulkan.so.1` and [`VulkanBackend::gpu`]
@@ -131,6 +137,7 @@ impl Backend for VulkanBackend {
             ("maxColorAttachments".into(), l.max_color_attachments.to_string()),
             ("logicOp".into(), info.logic_op.to_string()),
             ("device_local_heap".into(), info.device_heap.to_string()),
+            ("timestamps".into(), gpu.has_timestamps().to_string()),
             ("validation".into(), info.validation.to_string()),
         ]);
         Capabilities {

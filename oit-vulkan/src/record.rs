@@ -8,6 +8,13 @@
 //! write-after-write and (by its execution dependency) write-after-read. The host writes
 //! uniforms and staging buffers before the submission that reads them (made visible by the
 //! submission itself) and reads results only after the fence, behind the barrier's `HOST_READ`.
+//!
+//! GPU time: where the device has timestamps ([`Gpu::has_timestamps`]) a query pool of two
+//! timestamps per uniform slot, reset at the start of every recording (outside any render pass:
+//! only compute and transfer commands are recorded) and written once each per recording: the
+//! top of the pipe before dispatch `i` (query `2i`) and the bottom after it (query `2i + 1`),
+//! before its barrier. The flush reads the pairs written after the fence and adds each one's
+//! time to its label's total and the frame's, as oit-wgpu's `pass_ms` does.
 
 use std::rc::Rc;
 
@@ -17,7 +24,7 @@ use oit_core::OitError;
 use crate::device::{Buffer, Gpu, Pipeline};
 
 /// Uniform slots (and dispatches) per submission before a flush.
-const SLOTS: u32 = 256;
+pub(crate) const SLOTS: u32 = 256;
 /// Bytes between uniform slots (≥ every device's `minUniformBufferOffsetAlignment`).
 const SLOT_BYTES: u64 = 256;
 /// Descriptor sets per submission: one per dispatch, two per geometry pass.
@@ -27,8 +34,44 @@ const MAX_STORAGE_PER_SET: u32 = 16;
 /// How long a submission may run before it counts as hung.
 const TIMEOUT_NS: u64 = 120_000_000_000;
 
-/// The recorder of one frame: a command pool and buffer, a fence, a descriptor pool and a ring
-/// of uniform slots, made at the start and destroyed (newest first) at the end.
+/// Nanoseconds in a millisecond.
+const NS_PER_MS: f64 = 1e6;
+
+/// The frame's timestamp queries: two per uniform slot.
+struct Timestamps {
+    pool: vk::QueryPool,
+    /// `timestampValidBits` as a mask of a timestamp's meaningful bits.
+    mask: u64,
+    /// `timestampPeriod`: nanoseconds per tick.
+    period: f64,
+    /// The label of each dispatch of the current recording (dispatch `i`: queries `2i`, `2i + 1`).
+    labels: Vec<String>,
+    /// Device milliseconds of the frame's dispatches so far.
+    total_ms: f64,
+    /// The same by label, in the order the labels were first seen.
+    pass_ms: Vec<(String, f64)>,
+}
+
+impl Timestamps {
+    /// Adds the pairs of the labels recorded (`ticks`: two per label, as read back), and starts
+    /// the labels over.
+    fn add(&mut self, ticks: &[u64]) {
+        for (label, pair) in self.labels.drain(..).zip(ticks.chunks_exact(2)) {
+            let (start, end) = (pair[0] & self.mask, pair[1] & self.mask);
+            // a counter that wrapped within its valid bits between the two still subtracts right
+            let ms = (end.wrapping_sub(start) & self.mask) as f64 * self.period / NS_PER_MS;
+            self.total_ms += ms;
+            match self.pass_ms.iter_mut().find(|(l, _)| *l == label) {
+                Some((_, total)) => *total += ms,
+                None => self.pass_ms.push((label, ms)),
+            }
+        }
+    }
+}
+
+/// The recorder of one frame: a command pool and buffer, a fence, a descriptor pool, a ring of
+/// uniform slots and (with timestamps) a query pool, made at the start and destroyed (newest
+/// first) at the end.
 pub(crate) struct Recorder<'g> {
     gpu: &'g Gpu,
     pool: vk::CommandPool,
@@ -42,6 +85,8 @@ pub(crate) struct Recorder<'g> {
     sets: u32,
     /// Buffers a recorded command uses that nothing else keeps alive (staging), until the flush.
     keep: Vec<Rc<Buffer>>,
+    /// The timestamp queries, where the device has them.
+    timestamps: Option<Timestamps>,
 }
 
 impl Drop for Recorder<'_> {
@@ -51,6 +96,9 @@ impl Drop for Recorder<'_> {
         unsafe {
             let d = &self.gpu.raw.device;
             let _ = d.queue_wait_idle(self.gpu.queue);
+            if let Some(ts) = &self.timestamps {
+                d.destroy_query_pool(ts.pool, None);
+            }
             d.destroy_descriptor_pool(self.descriptors, None);
             d.destroy_fence(self.fence, None);
             d.destroy_command_pool(self.pool, None);
@@ -115,7 +163,7 @@ impl<'g> Recorder<'g> {
         }
         .map_err(vk_err("creating a recorder"))?;
         let (cmd, fence, descriptors) = made;
-        let r = Recorder {
+        let mut r = Recorder {
             gpu,
             pool,
             cmd,
@@ -126,15 +174,48 @@ impl<'g> Recorder<'g> {
             slot: 0,
             sets: 0,
             keep: Vec::new(),
+            timestamps: None,
         };
+        if gpu.has_timestamps() {
+            let info = vk::QueryPoolCreateInfo::default()
+                .query_type(vk::QueryType::TIMESTAMP)
+                .query_count(2 * SLOTS);
+            // SAFETY: a valid create info on a live device; the pool is destroyed by `drop` (which
+            // also destroys what was made above, should this fail).
+            let pool =
+                unsafe { d.create_query_pool(&info, None) }.map_err(vk_err("creating a query pool"))?;
+            let bits = gpu.info.timestamp_valid_bits;
+            r.timestamps = Some(Timestamps {
+                pool,
+                mask: if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 },
+                period: f64::from(gpu.info.limits.timestamp_period),
+                labels: Vec::new(),
+                total_ms: 0.0,
+                pass_ms: Vec::new(),
+            });
+        }
         r.begin()?;
         Ok(r)
     }
 
+    /// Starts recording, and resets the timestamp queries before anything can write them.
     fn begin(&self) -> Result<(), OitError> {
         let info = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        let d = &self.gpu.raw.device;
         // SAFETY: the command buffer is in the initial state (new, or its pool was just reset).
-        unsafe { self.gpu.raw.device.begin_command_buffer(self.cmd, &info) }.map_err(vk_err("recording"))
+        unsafe { d.begin_command_buffer(self.cmd, &info) }.map_err(vk_err("recording"))?;
+        if let Some(ts) = &self.timestamps {
+            // SAFETY: recording, outside any render pass (none is ever begun); the pool holds
+            // 2 × SLOTS queries, none in use by a pending submission (every flush waits).
+            unsafe { d.cmd_reset_query_pool(self.cmd, ts.pool, 0, 2 * SLOTS) };
+        }
+        Ok(())
+    }
+
+    /// The frame's device time so far, in total and by label (in the order first seen), with
+    /// timestamps; `None` without. Complete once the last dispatch's submission was flushed.
+    pub(crate) fn gpu_times(&self) -> Option<(f64, &[(String, f64)])> {
+        self.timestamps.as_ref().map(|ts| (ts.total_ms, ts.pass_ms.as_slice()))
     }
 
     /// The barrier after every command (see the module docs).
@@ -171,12 +252,26 @@ impl<'g> Recorder<'g> {
         let cmds = [self.cmd];
         let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
         // SAFETY: the command buffer was recorded on this device and everything it references
-        // is alive (the frame's buffers, `keep`, the cached pipelines); the fence is unsignalled;
-        // after the wait nothing is in flight, so the pools may be reset.
+        // is alive (the frame's buffers, `keep`, the cached pipelines, the query pool); the fence
+        // is unsignalled; after the wait nothing is in flight, so the pools may be reset and the
+        // queries read: `ticks` holds 2 × labels u64 results, queries 0.. of those written.
         unsafe {
             d.end_command_buffer(self.cmd).map_err(vk_err("recording"))?;
             d.queue_submit(self.gpu.queue, &submit, self.fence).map_err(vk_err("submitting work"))?;
             d.wait_for_fences(&[self.fence], true, TIMEOUT_NS).map_err(vk_err("waiting for the GPU"))?;
+            if let Some(ts) = self.timestamps.as_mut().filter(|ts| !ts.labels.is_empty()) {
+                // the submission reset every query and then wrote each of these once; it has
+                // completed (the fence), so WAIT returns at once
+                let mut ticks = vec![0u64; 2 * ts.labels.len()];
+                d.get_query_pool_results(
+                    ts.pool,
+                    0,
+                    &mut ticks,
+                    vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                )
+                .map_err(vk_err("reading timestamps"))?;
+                ts.add(&ticks);
+            }
             d.reset_fences(&[self.fence]).map_err(vk_err("resetting a fence"))?;
             d.reset_command_pool(self.pool, vk::CommandPoolResetFlags::empty())
                 .map_err(vk_err("resetting a command pool"))?;
@@ -248,9 +343,11 @@ impl<'g> Recorder<'g> {
 
     /// Records one dispatch of `pipeline`: group 0 with `uniform` (copied into the next slot of
     /// the ring) and `storage` (binding, buffer), group 1 the rasterizer's (binding, buffer) with
-    /// its uniform at binding 2, when given. A barrier follows.
+    /// its uniform at binding 2, when given. With timestamps, its time counts under `label`. A
+    /// barrier follows.
     pub(crate) fn dispatch(
         &mut self,
+        label: &str,
         pipeline: &Pipeline,
         uniform: &[u8],
         storage: &[(u32, &Buffer)],
@@ -279,9 +376,20 @@ impl<'g> Recorder<'g> {
             sets.push(set1);
         }
         let d = &self.gpu.raw.device;
+        // the dispatch's timestamp pair: the next of this recording, so the pairs written are
+        // 0..labels, read by the flush; at most one per slot taken, so below SLOTS (`room`)
+        let timed = self.timestamps.as_mut().map(|ts| {
+            ts.labels.push(label.to_string());
+            (ts.pool, ts.labels.len() as u32 - 1)
+        });
         // SAFETY: recording; the pipeline's layout matches the sets bound (made from its set
-        // layouts); the group counts are within maxComputeWorkGroupCount (x ≤ 65535).
+        // layouts); the group counts are within maxComputeWorkGroupCount (x ≤ 65535); queries
+        // 2 × pair and 2 × pair + 1 (< 2 × SLOTS) were reset at `begin` and are written once each
+        // in this recording (pairs start over only after a flush).
         unsafe {
+            if let Some((pool, pair)) = timed {
+                d.cmd_write_timestamp(self.cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, pool, 2 * pair);
+            }
             d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, pipeline.pipeline);
             d.cmd_bind_descriptor_sets(
                 self.cmd,
@@ -293,6 +401,9 @@ impl<'g> Recorder<'g> {
             );
             if groups.0 > 0 && groups.1 > 0 {
                 d.cmd_dispatch(self.cmd, groups.0, groups.1, 1);
+            }
+            if let Some((pool, pair)) = timed {
+                d.cmd_write_timestamp(self.cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, pool, 2 * pair + 1);
             }
         }
         self.barrier();

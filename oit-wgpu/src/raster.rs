@@ -91,8 +91,10 @@ impl ComputeRaster {
 impl ComputeRaster {
     /// The triangles the compute path sets up for this view, as `TriangleSetup::triangle_words`
     /// lays them out, and the work list ((triangle, tile) pairs), read back: the GPU's setup
-    /// (`on_gpu`, on any device), or the host's. The GPU's come in an order of its choosing. For
+    /// (`on_gpu`, on any device; through its vertex cache when `vertex_cache`, else a transform
+    /// per triangle corner), or the host's. The GPU's come in an order of its choosing. For
     /// tests.
+    #[expect(clippy::too_many_arguments, reason = "a test's every choice")]
     pub fn setup_words(
         gpu: &Gpu,
         scene: &Scene,
@@ -100,9 +102,11 @@ impl ComputeRaster {
         settings: &Settings,
         boxes: bool,
         on_gpu: bool,
+        vertex_cache: bool,
     ) -> Result<(Vec<u32>, Vec<[u32; 2]>), OitError> {
         let made = Cell::new(0);
         let mut buffers = ComputeBuffers::new(gpu, &made);
+        buffers.vertex_cache = vertex_cache;
         if on_gpu {
             buffers.gpu_frame(gpu, scene, camera, settings, boxes, &made)?;
         } else {
@@ -162,10 +166,11 @@ impl GpuGeometry {
         let word = |v: Vec3| v.to_array().map(f32::to_bits);
         if boxes {
             idx.extend(Aabb::TRIANGLES.iter().flatten());
+            let mesh_bounds = scene.mesh_bounds();
             for (i, inst) in scene.instances.iter().enumerate() {
                 let Some(object) = scene.objects.get(inst.object) else { continue };
-                let Some(mesh) = scene.meshes.get(object.mesh) else { continue };
-                let (corners, normals) = box_vertices(&mesh.bounds(), &inst.transform);
+                let Some(bounds) = mesh_bounds.get(object.mesh) else { continue };
+                let (corners, normals) = box_vertices(bounds, &inst.transform);
                 let vertex_base = (pos.len() / 3) as u32;
                 corners.iter().for_each(|&c| pos.extend(word(c)));
                 normals.iter().for_each(|&n| nor.extend(word(n)));
@@ -245,9 +250,16 @@ impl GpuGeometry {
 
     /// The instance table of one frame (setup.wgsl's layout): mvp, normal matrix, base colour,
     /// where the mesh lies, primitive ids.
+    /// Vertices of all instances: the vertex cache's records (setup.wgsl's `vertex_main`).
+    fn vertex_total(&self) -> u64 {
+        self.instances.iter().map(|g| u64::from(g.vertex_count)).sum()
+    }
+
     fn instance_words(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Vec<u32> {
         let view_proj = camera.view_proj();
         let mut out = Vec::with_capacity(self.instances.len().max(1) * INSTANCE_WORDS);
+        // each instance's first record in the vertex cache (setup.wgsl's `I_FIRST_VERT`)
+        let mut first_vert = 0u32;
         let mut live = scene.instances.iter().filter(|inst| {
             scene.objects.get(inst.object).is_some_and(|o| scene.meshes.get(o.mesh).is_some())
         });
@@ -274,8 +286,9 @@ impl GpuGeometry {
                 u32::from(g.raw_normals),
                 self.positions,
                 self.normals,
-                0,
+                first_vert,
             ]);
+            first_vert = first_vert.saturating_add(g.vertex_count);
         }
         if out.is_empty() {
             out.resize(INSTANCE_WORDS, 0);
@@ -298,6 +311,9 @@ pub(crate) struct ComputeBuffers {
     layout: wgpu::BindGroupLayout,
     group: wgpu::BindGroup,
     setup: Option<SetupBuffers>,
+    /// Whether the GPU setup may use its vertex cache (`SetupBuffers::use_verts`): on unless
+    /// `OIT_SETUP_VERTS=0`.
+    vertex_cache: bool,
 }
 
 /// What the GPU setup keeps besides the outputs.
@@ -311,7 +327,16 @@ struct SetupBuffers {
     group: Option<wgpu::BindGroup>,
     /// The setup pass's two timestamps and their resolve buffer, where the device has them.
     timestamps: Option<(wgpu::QuerySet, wgpu::Buffer)>,
+    /// The vertex cache (setup.wgsl's `verts`), or a placeholder where it is off.
+    verts: wgpu::Buffer,
+    /// Whether the setup transforms each vertex once into the cache (`vertex_main`) rather than
+    /// each triangle's three: on unless the cache would exceed the device's binding limit, or
+    /// `OIT_SETUP_VERTS=0` turns it off (to measure the two side by side).
+    use_verts: bool,
 }
+
+/// Bytes of one vertex-cache record (setup.wgsl's `VERT_WORDS`).
+const VERT_BYTES: u64 = 12 * 4;
 
 fn storage_buffer(gpu: &Gpu, label: &str, size: u64, made: &Cell<u64>) -> wgpu::Buffer {
     use wgpu::BufferUsages as U;
@@ -392,7 +417,9 @@ impl ComputeBuffers {
             ],
         });
         let group = bind(gpu, &layout, &[&tris, &items, &uniform, &generated]);
-        ComputeBuffers { tris, items, uniform, generated, args, layout, group, setup: None }
+        let vertex_cache =
+            !std::env::var("OIT_SETUP_VERTS").is_ok_and(|v| v == "0" || v.eq_ignore_ascii_case("false"));
+        ComputeBuffers { tris, items, uniform, generated, args, layout, group, setup: None, vertex_cache }
     }
 
     /// Grows the triangle and work-list buffers to hold `tri_bytes` and `item_bytes` (counted in
@@ -531,6 +558,7 @@ impl ComputeBuffers {
                     layout_entry(4, wgpu::BufferBindingType::Storage { read_only: false }),
                     layout_entry(5, wgpu::BufferBindingType::Storage { read_only: false }),
                     layout_entry(6, wgpu::BufferBindingType::Storage { read_only: false }),
+                    layout_entry(7, wgpu::BufferBindingType::Storage { read_only: false }),
                 ],
             });
             // a first guess at the room the pieces and the work list need (grown if short)
@@ -538,6 +566,10 @@ impl ComputeBuffers {
             let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
             let guess_tris = ((tasks + tasks / 8 + 64) * TRIANGLE_WORDS as u64 * 4).min(limit);
             let guess_items = ((2 * tasks + 4096) * 8).min(limit);
+            let vert_bytes = geometry.vertex_total() * VERT_BYTES;
+            let use_verts = self.vertex_cache && vert_bytes > 0 && vert_bytes <= limit;
+            let verts =
+                storage_buffer(gpu, "setup vertex cache", if use_verts { vert_bytes } else { 16 }, made);
             self.setup = Some(SetupBuffers {
                 geometry,
                 instances: storage_buffer(gpu, "setup instances", instance_bytes, made),
@@ -545,6 +577,8 @@ impl ComputeBuffers {
                 counters: buffer(gpu, "setup counters", 16, U::STORAGE | U::COPY_SRC | U::COPY_DST, made),
                 layout,
                 group: None,
+                verts,
+                use_verts,
                 timestamps: gpu.has_timestamps().then(|| {
                     let set = gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
                         label: Some("setup timestamps"),
@@ -563,6 +597,10 @@ impl ComputeBuffers {
         let finish_pipeline = {
             let s = self.setup.as_ref().expect("made above");
             gpu.compute_pipeline(SETUP_WGSL, "setup_finish_main", &[&s.layout])?
+        };
+        let vertex_pipeline = {
+            let s = self.setup.as_ref().expect("made above");
+            gpu.compute_pipeline(SETUP_WGSL, "vertex_main", &[&s.layout])?
         };
         {
             let s = self.setup.as_ref().expect("made above");
@@ -595,8 +633,8 @@ impl ComputeBuffers {
                 item_capacity.min(u64::from(u32::MAX)) as u32,
                 origin.0,
                 origin.1,
-                0,
-                0,
+                s.geometry.vertex_total().min(u64::from(u32::MAX)) as u32,
+                u32::from(s.use_verts),
             ];
             gpu.queue.write_buffer(&s.uniform, 0, bytemuck::cast_slice(&uniform));
             let group = s.group.get_or_insert_with(|| {
@@ -611,6 +649,7 @@ impl ComputeBuffers {
                         &self.items,
                         &s.counters,
                         &self.args,
+                        &s.verts,
                     ],
                 )
             });
@@ -628,6 +667,13 @@ impl ComputeBuffers {
                     }),
                 });
                 pass.set_bind_group(0, &*group, &[]);
+                if s.use_verts {
+                    let (x, y) = dispatch_size(s.geometry.vertex_total());
+                    if x > 0 {
+                        pass.set_pipeline(&vertex_pipeline);
+                        pass.dispatch_workgroups(x, y, 1);
+                    }
+                }
                 let (x, y) = dispatch_size(u64::from(s.geometry.tasks));
                 if x > 0 {
                     pass.set_pipeline(&setup_pipeline);

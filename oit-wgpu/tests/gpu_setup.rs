@@ -98,17 +98,24 @@ fn gpu_setup_equals_host_setup() {
                 } else {
                     TriangleSetup::new(&scene, &camera, &s)
                 };
-                let view = format!("{view}, region {:?}", s.region);
-                let (words, items) =
-                    oit_wgpu::ComputeRaster::setup_words(gpu, &scene, &camera, &s, boxes, true)
-                        .unwrap_or_else(|e| panic!("{name}, {view}: {e}"));
-                let (gpu_tris, gpu_items) = canonical(&words, &items);
                 let (host_tris, host_list) = canonical(&host.triangle_words(), &host_items(&host));
-                assert_eq!(gpu_tris.len(), host_tris.len(), "{name}, {view}, boxes {boxes}: triangle count");
-                for (g, h) in gpu_tris.iter().zip(&host_tris) {
-                    assert_eq!(g, h, "{name}, {view}, boxes {boxes}: a triangle differs (gpu, host)");
+                // through the vertex cache (each vertex transformed once) and without it
+                for cache in [true, false] {
+                    let view = format!("{view}, region {:?}, vertex cache {cache}", s.region);
+                    let (words, items) =
+                        oit_wgpu::ComputeRaster::setup_words(gpu, &scene, &camera, &s, boxes, true, cache)
+                            .unwrap_or_else(|e| panic!("{name}, {view}: {e}"));
+                    let (gpu_tris, gpu_items) = canonical(&words, &items);
+                    assert_eq!(
+                        gpu_tris.len(),
+                        host_tris.len(),
+                        "{name}, {view}, boxes {boxes}: triangle count"
+                    );
+                    for (g, h) in gpu_tris.iter().zip(&host_tris) {
+                        assert_eq!(g, h, "{name}, {view}, boxes {boxes}: a triangle differs (gpu, host)");
+                    }
+                    assert!(gpu_items == host_list, "{name}, {view}, boxes {boxes}: the work lists differ");
                 }
-                assert!(gpu_items == host_list, "{name}, {view}, boxes {boxes}: the work lists differ");
                 let mut prims: Vec<u32> = host.triangles.iter().map(|t| t.prim).collect();
                 let n = prims.len();
                 prims.dedup();

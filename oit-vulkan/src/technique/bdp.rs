@@ -57,7 +57,7 @@ fn depth(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>, bounds: &Buffer) -> Result<
     let pairs = words * u64::from(run) / 4;
     let colors = ctx.placeholder()?;
     let buffers = [bounds, &*colors, &*arrays];
-    ctx.kernel_over("bdp", "depth_init_main", &buffers, pairs, 0, 0)?;
+    ctx.kernel_over("bdp", "depth_init_main", &buffers, pairs, 0, 0, "depth_init_main")?;
     for p in 0..run {
         ctx.last_pass(p + 1 == run);
         ctx.geometry_pass(&drivers.scene, "bdp", &buffers, p, MODE_DEPTH)?;

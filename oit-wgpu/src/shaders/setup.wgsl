@@ -14,6 +14,13 @@
 // (depth, primitive id)), so only the set of pieces matters, and it is the host's.
 // `setup_finish_main`: one invocation; the raster kernel's indirect dispatch arguments and item
 // count from the counters.
+//
+// `vertex_main` first, where the vertex cache is on (`su.use_verts`): one invocation per
+// (instance, vertex) transforms the vertex once, and keeps its clip position, normal, clip
+// outcode and snapped projection (`VERT_WORDS` words), as oit-core's setup does per vertex:
+// each is a function of the vertex alone, so `setup_main` reads the same bits a per-triangle
+// transform gives, at a sixth of the transforms on a closed mesh (a vertex is shared by about six
+// triangles). Only clipped pieces project in `setup_main`.
 
 struct SetupUniform {
     // the frame's (or the window's, `Settings::region`) width and height: pixel boxes clamp to it
@@ -30,8 +37,9 @@ struct SetupUniform {
     // coordinates (an exact integer shift, as oit-core's setup does); 0 for a whole frame
     origin_x: i32,
     origin_y: i32,
-    pad0: u32,
-    pad1: u32,
+    // vertices of all instances (the vertex cache's records), and 1 when the cache is used
+    vertex_total: u32,
+    use_verts: u32,
 }
 
 // Per instance, INSTANCE_WORDS words: mvp (16, columns), normal matrix (9, columns), base colour
@@ -47,6 +55,7 @@ const I_FIRST_TASK: u32 = 35u;    // tasks (triangles) of the instances before t
 const I_FLAGS: u32 = 36u;         // bit 0: normals are used as given (no normal matrix)
 const I_POSITIONS: u32 = 37u;     // first position word of the geometry
 const I_NORMALS: u32 = 38u;       // first normal word of the geometry
+const I_FIRST_VERT: u32 = 39u;    // vertex-cache records of the instances before this one
 
 const TRI_WORDS: u32 = 44u;
 const SETUP_TILE: u32 = 8u;
@@ -63,6 +72,14 @@ const COORD_LIMIT_BITS: u32 = 0x4e000000u; // 2^29
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>>;
 // 0..3: per-pixel raster dispatch, 4..7: per-item raster dispatch, 8: work items in the list
 @group(0) @binding(6) var<storage, read_write> args: array<u32>;
+// the vertex cache: VERT_WORDS words per (instance, vertex)
+@group(0) @binding(7) var<storage, read_write> verts: array<u32>;
+
+// clip position (4), normal (3), flags (bit 0: position finite; bits 1..6: outside clip plane
+// 0..5; bit 7: projected), projected x, y (i32 bits), z, 1/w
+const VERT_WORDS: u32 = 12u;
+const V_FINITE: u32 = 1u;
+const V_PROJECTED: u32 = 128u;
 
 struct ClipVertex {
     pos: vec4<u32>,
@@ -244,8 +261,7 @@ fn pixel_range(lo: i32, hi: i32, size: u32) -> Range {
 }
 
 // Projects and snaps one (clipped) triangle; keeps it if it has area and touches the viewport.
-fn piece(i: u32, v_in: array<ClipVertex, 3>, prim: u32) {
-    var v = v_in;
+fn piece(i: u32, v: array<ClipVertex, 3>, prim: u32) {
     var p: array<Projected, 3>;
     for (var k = 0u; k < 3u; k++) {
         p[k] = project(v[k].pos);
@@ -253,6 +269,14 @@ fn piece(i: u32, v_in: array<ClipVertex, 3>, prim: u32) {
             return;
         }
     }
+    piece_projected(i, v, p, prim);
+}
+
+// A triangle whose vertices are projected (`p`, all ok): kept if it has area and touches the
+// viewport.
+fn piece_projected(i: u32, v_in: array<ClipVertex, 3>, p_in: array<Projected, 3>, prim: u32) {
+    var v = v_in;
+    var p = p_in;
     let x0 = i64(p[0].x);
     let y0 = i64(p[0].y);
     var area = (i64(p[1].x) - x0) * (i64(p[2].y) - y0) - (i64(p[1].y) - y0) * (i64(p[2].x) - x0);
@@ -348,6 +372,10 @@ fn setup_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     }
     let ib = inst(i, I_INDEX_BASE) + 3u * t;
     let count = inst(i, I_VERTEX_COUNT);
+    if (su.use_verts != 0u) {
+        setup_cached(i, t, ib, count);
+        return;
+    }
     var v: array<ClipVertex, 3>;
     for (var k = 0u; k < 3u; k++) {
         let index = geometry[ib + k];
@@ -383,6 +411,117 @@ fn setup_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     }
     if (outside_any == 0u) {
         piece(i, v, prim);
+        return;
+    }
+    poly[0] = v[0];
+    poly[1] = v[1];
+    poly[2] = v[2];
+    poly_n = 3u;
+    clip_poly(outside_any);
+    for (var k = 1u; k + 1u < poly_n; k++) {
+        piece(i, array<ClipVertex, 3>(poly[0], poly[k], poly[k + 1u]), prim);
+    }
+}
+
+// The instance whose vertex-cache records include `v`: the last with first record ≤ `v`.
+fn find_vertex_instance(v: u32) -> u32 {
+    var lo = 0u;
+    var hi = su.instance_count;
+    while (hi - lo > 1u) {
+        let mid = (lo + hi) / 2u;
+        if (inst(mid, I_FIRST_VERT) <= v) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
+@compute @workgroup_size(64)
+fn vertex_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let g = gid.x + gid.y * groups.x * 64u;
+    if (g >= su.vertex_total) {
+        return;
+    }
+    let i = find_vertex_instance(g);
+    let v = g - inst(i, I_FIRST_VERT);
+    if (v >= inst(i, I_VERTEX_COUNT)) {
+        return;
+    }
+    let cv = load_vertex(i, v);
+    let o = g * VERT_WORDS;
+    var flags = 0u;
+    if (sf_is_finite(cv.pos.x) && sf_is_finite(cv.pos.y) && sf_is_finite(cv.pos.z) && sf_is_finite(cv.pos.w)) {
+        flags = V_FINITE;
+        for (var plane = 0u; plane < 6u; plane++) {
+            if (sf_lt0(plane_distance(cv.pos, plane))) {
+                flags |= 2u << plane;
+            }
+        }
+        let p = project(cv.pos);
+        if (p.ok) {
+            flags |= V_PROJECTED;
+            verts[o + 8u] = bitcast<u32>(p.x);
+            verts[o + 9u] = bitcast<u32>(p.y);
+            verts[o + 10u] = p.z;
+            verts[o + 11u] = p.inv_w;
+        }
+    }
+    for (var c = 0u; c < 4u; c++) {
+        verts[o + c] = cv.pos[c];
+    }
+    for (var c = 0u; c < 3u; c++) {
+        verts[o + 4u + c] = cv.n[c];
+    }
+    verts[o + 7u] = flags;
+}
+
+// setup_main's triangle `t` of instance `i` from the vertex cache: the same tests and pieces as
+// the per-triangle path, on the vertices' kept transforms, outcodes and projections.
+fn setup_cached(i: u32, t: u32, ib: u32, count: u32) {
+    var v: array<ClipVertex, 3>;
+    var rec: array<u32, 3>;
+    var flags: array<u32, 3>;
+    for (var k = 0u; k < 3u; k++) {
+        let index = geometry[ib + k];
+        if (index >= count) {
+            return;
+        }
+        let o = (inst(i, I_FIRST_VERT) + index) * VERT_WORDS;
+        rec[k] = o;
+        flags[k] = verts[o + 7u];
+        v[k].pos = vec4<u32>(verts[o], verts[o + 1u], verts[o + 2u], verts[o + 3u]);
+        v[k].n = vec3<u32>(verts[o + 4u], verts[o + 5u], verts[o + 6u]);
+        let cb = inst(i, I_COLOR_BASE);
+        if (cb != 0xffffffffu) {
+            let c = cb + 3u * index;
+            v[k].c = vec3<u32>(geometry[c], geometry[c + 1u], geometry[c + 2u]);
+        } else {
+            v[k].c = vec3<u32>(0u);
+        }
+    }
+    let pb = inst(i, I_PRIM_BASE);
+    let prim = select(pb + t, 0xffffffffu, pb + t < pb);
+    if ((flags[0] & flags[1] & flags[2] & V_FINITE) == 0u) {
+        return;
+    }
+    // a plane all three vertices are outside of culls the triangle; one any is outside of clips it
+    let all_out = (flags[0] & flags[1] & flags[2]) & 0x7eu;
+    if (all_out != 0u) {
+        return;
+    }
+    let outside_any = ((flags[0] | flags[1] | flags[2]) & 0x7eu) >> 1u;
+    if (outside_any == 0u) {
+        var p: array<Projected, 3>;
+        for (var k = 0u; k < 3u; k++) {
+            if ((flags[k] & V_PROJECTED) == 0u) {
+                return;
+            }
+            let o = rec[k];
+            p[k] = Projected(true, bitcast<i32>(verts[o + 8u]), bitcast<i32>(verts[o + 9u]), verts[o + 10u], verts[o + 11u]);
+        }
+        piece_projected(i, v, p, prim);
         return;
     }
     poly[0] = v[0];

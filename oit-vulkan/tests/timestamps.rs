@@ -1,0 +1,41 @@
+//! GPU time per frame: with timestamps (`Gpu::has_timestamps`; on lavapipe only with
+//! `OIT_GPU_TIMESTAMPS=1`) a frame's `gpu_ms` is positive and the sum of its `gpu_pass_ms`;
+//! without, it is `None` and the per-pass list empty.
+
+use oit_core::{Backend, Camera, Settings, Technique, View, load_scene};
+
+#[test]
+fn gpu_ms_is_the_sum_of_the_passes() {
+    let Some(vk) = oit_vulkan::backend_or_skip("gpu_ms_is_the_sum_of_the_passes") else { return };
+    let timed = vk.gpu().unwrap().has_timestamps();
+    let scene = load_scene("planes:4").unwrap();
+    let cam = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();
+    for t in ["dp", "fabs"] {
+        let s = Settings {
+            width: 24,
+            height: 24,
+            technique: t.parse::<Technique>().unwrap(),
+            ..Settings::default()
+        };
+        let stats = vk.render(&scene, &cam, &s).unwrap_or_else(|e| panic!("{t}: {e}")).stats;
+        println!("{t}: timestamps {timed}, gpu_ms {:?}, gpu_pass_ms {:?}", stats.gpu_ms, stats.gpu_pass_ms);
+        if !timed {
+            assert_eq!(stats.gpu_ms, None, "{t}");
+            assert!(stats.gpu_pass_ms.is_empty(), "{t}: {:?}", stats.gpu_pass_ms);
+            continue;
+        }
+        let total = stats.gpu_ms.unwrap_or_else(|| panic!("{t}: timestamps but no gpu_ms"));
+        assert!(total > 0.0 && total.is_finite(), "{t}: gpu_ms {total}");
+        let sum: f64 = stats.gpu_pass_ms.iter().map(|(_, ms)| ms).sum();
+        assert!((total - sum).abs() <= 1e-9 * total, "{t}: gpu_ms {total} but the passes sum to {sum}");
+        let labels: Vec<&str> = stats.gpu_pass_ms.iter().map(|(l, _)| l.as_str()).collect();
+        for label in ["init", "geometry", "resolve_main", "resolve"] {
+            assert!(labels.contains(&label), "{t}: no '{label}' in {labels:?}");
+        }
+        // each label once
+        let mut unique = labels.clone();
+        unique.sort_unstable();
+        unique.dedup();
+        assert_eq!(unique.len(), labels.len(), "{t}: {labels:?}");
+    }
+}
