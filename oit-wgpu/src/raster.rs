@@ -94,7 +94,6 @@ impl ComputeRaster {
     /// (`on_gpu`, on any device; through its vertex cache when `vertex_cache`, else a transform
     /// per triangle corner), or the host's. The GPU's come in an order of its choosing. For
     /// tests.
-    #[expect(clippy::too_many_arguments, reason = "a test's every choice")]
     pub fn setup_words(
         gpu: &Gpu,
         scene: &Scene,
