@@ -37,7 +37,7 @@ model)
     ;;
 vulkan)
     # oit-vulkan beside wgpu on the compute path (vulkan has no hardware path yet), every
-    # technique dfb and ll included; needs a build with --features wgpu,vulkan
+    # technique dfb and ll included, GPU timestamps on both; needs a build with --features wgpu,vulkan
     run "$OIT" info --json > "$OUT/info-vulkan.json"
     run "$OIT" bench --backend wgpu,vulkan --raster compute --size 1024x1024 --frames 10 --warmup 2 \
         --scenes "$OIT_MODELS/bunny.obj,planes:64" --no-curves --out "$OUT/vulkan-1024"
@@ -46,7 +46,24 @@ grid)
     # issue 10's 10M-triangle frame: grid:12x12:bunny at 1024², fabs on the compute path (setup
     # on the GPU) and the hardware path, and plain as the baseline; steady-state wall beside GPU
     run "$OIT" bench --backend wgpu --raster all --size 1024x1024 --frames 5 --warmup 1 \
-        --scenes "grid:12x12:$OIT_MODELS/bunny.obj" --techniques plain,fabs --no-curves --out "$OUT/grid12-1024"
+        --scenes "grid:12x12:$OIT_MODELS/bunny.obj" --techniques plain,fabs,wavg --no-curves --out "$OUT/grid12-1024"
+    # the GPU setup without its vertex cache (a transform per triangle corner), for the side by side
+    OIT_SETUP_VERTS=0 run "$OIT" bench --backend wgpu --raster compute --size 1024x1024 --frames 5 --warmup 1 \
+        --scenes "grid:12x12:$OIT_MODELS/bunny.obj" --techniques plain,fabs,wavg --no-curves \
+        --out "$OUT/grid12-1024-no-vertex-cache"
+    ;;
+before-after)
+    # issue 10: a binary of an earlier commit ($BEFORE, stripped) and this one ($OIT) on the same
+    # scenes, one after the other per scene (bench/results/h200/issue10/)
+    for scene in "$OIT_MODELS/bunny.obj" planes:64 "grid:4x4:$OIT_MODELS/bunny.obj"; do
+        slug=$(echo "$scene" | sed 's#.*/##; s#\.obj$##; s#:#-#g')
+        [ "${scene#grid:4x4}" != "$scene" ] && slug=grid-4x4-bunny
+        for side in before after; do
+            bin=$([ $side = before ] && echo "$BEFORE" || echo "$OIT")
+            run "$bin" bench --backend wgpu --raster all --size 1024x1024 --frames 10 --warmup 2 \
+                --scenes "$scene" --no-curves --out "$OUT/$side-$slug"
+        done
+    done
     ;;
 big)
     # issue 11 item 2: frames bigger than the device's per-binding limit, run in screen tiles
@@ -92,7 +109,7 @@ criterion)
     done
     ;;
 *)
-    echo "usage: $0 [readme|calibrate|model|vulkan|grid|big|exact|tail|auto|criterion]" >&2
+    echo "usage: $0 [readme|calibrate|model|vulkan|grid|before-after|big|exact|tail|auto|criterion]" >&2
     exit 2
     ;;
 esac
