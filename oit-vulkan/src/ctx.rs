@@ -228,6 +228,13 @@ impl<'a> VkCtx<'a> {
         Ok(words)
     }
 
+    /// Reads several buffers back with one wait.
+    pub(crate) fn read_u32s(&mut self, buffers: &[&Buffer]) -> Result<Vec<Vec<u32>>, OitError> {
+        let words = self.rec.read_u32s(buffers)?;
+        self.check_validation()?;
+        Ok(words)
+    }
+
     /// Marks the passes that follow as the last capture pass the plan allows (or not).
     pub(crate) fn last_pass(&mut self, last: bool) {
         self.uniform.last_pass = u32::from(last);
@@ -325,21 +332,34 @@ impl<'a> VkCtx<'a> {
         Ok(())
     }
 
-    /// Resolves the state into the frame and its stats.
-    pub(crate) fn finish(mut self, path: RasterPath) -> Result<Frame, OitError> {
+    /// Resolves the state into the frame and its stats, reading back the image and the per-pixel
+    /// losses only when `readback` (one wait either way): without, the frame's image is empty
+    /// (0 × 0) and `lost_pixels` `None`, as oit-wgpu's `GpuCtx::finish_with` gives them.
+    pub(crate) fn finish_with(mut self, path: RasterPath, readback: bool) -> Result<Frame, OitError> {
         let _ = path;
         let (image_buf, totals) = (self.image.clone(), self.totals.clone());
         self.rec.fill(&totals, 0);
         let px = u64::from(self.pixels);
         self.kernel_over("finish", "totals_main", &[&image_buf, &totals], px, 0, 0, "resolve")?;
         self.kernel_over("finish", "finish_main", &[&image_buf, &totals], px, 0, 0, "resolve")?;
-        let words = self.read_u32(&image_buf)?;
-        let t = self.read_u32(&totals)?;
-        let acct = self.read_u32(&self.acct.clone())?;
-        let image = Image {
-            width: self.settings.width,
-            height: self.settings.height,
-            pixels: words[..self.pixels as usize].iter().map(|w| w.to_le_bytes()).collect(),
+        let acct_buf = self.acct.clone();
+        let mut read = vec![&*totals];
+        if readback {
+            read.push(&*image_buf);
+            read.push(&*acct_buf);
+        }
+        let mut words = self.read_u32s(&read)?.into_iter();
+        let t = words.next().unwrap_or_default();
+        let (image, acct) = if readback {
+            let pixels = words.next().unwrap_or_default();
+            let image = Image {
+                width: self.settings.width,
+                height: self.settings.height,
+                pixels: pixels[..self.pixels as usize].iter().map(|w| w.to_le_bytes()).collect(),
+            };
+            (image, words.next())
+        } else {
+            (Image { width: 0, height: 0, pixels: Vec::new() }, None)
         };
         // every dispatch's submission has been flushed (the readbacks above), so this is the
         // whole frame's device time
@@ -347,11 +367,12 @@ impl<'a> VkCtx<'a> {
             Some((total, passes)) => (Some(total), passes.to_vec()),
             None => (None, Vec::new()),
         };
-        let lost_pixels: Vec<u32> = acct.chunks(3).take(self.pixels as usize).map(|w| w[0]).collect();
+        let lost_pixels: Option<Vec<u32>> =
+            acct.map(|acct| acct.chunks(3).take(self.pixels as usize).map(|w| w[0]).collect());
         let frame = Frame {
             image,
             layers: None,
-            lost_pixels: Some(lost_pixels),
+            lost_pixels,
             stats: Stats {
                 geometry_passes: self.passes,
                 fragments: self.fragments.unwrap_or(0),
@@ -403,7 +424,7 @@ mod tests {
             // the frame's init again: idempotent, so the frame stays an empty one
             ctx.kernel_over("finish", "init_main", &[&image, &totals], 64, 0, 0, "again").unwrap();
         }
-        let stats = ctx.finish(RasterPath::Compute).unwrap().stats;
+        let stats = ctx.finish_with(RasterPath::Compute, true).unwrap().stats;
         assert_eq!((stats.fragments, stats.captured, stats.lost), (0, 0, 0));
         println!("timestamps {}: {:?} {:?}", gpu.has_timestamps(), stats.gpu_ms, stats.gpu_pass_ms);
         if gpu.has_timestamps() {

@@ -555,9 +555,16 @@ impl Gpu {
             vk::MemoryPropertyFlags::DEVICE_LOCAL
         };
         let types = &self.memory.memory_types[..self.memory.memory_type_count as usize];
-        let Some(index) = (0..types.len())
-            .find(|&i| needs.memory_type_bits & (1 << i) != 0 && types[i].property_flags.contains(wanted))
-            .or_else(|| {
+        let fits = |i: usize, flags: vk::MemoryPropertyFlags| {
+            needs.memory_type_bits & (1 << i) != 0 && types[i].property_flags.contains(flags)
+        };
+        // host buffers are read back (images, counters) as well as written: cached memory where
+        // the device has it (a read of uncached, write-combined memory runs at a small fraction
+        // of memory speed: the H200 took 15–20 ms to read a 1024² frame's image and losses back)
+        let cached =
+            host.then(|| (0..types.len()).find(|&i| fits(i, wanted | vk::MemoryPropertyFlags::HOST_CACHED)));
+        let Some(index) =
+            cached.flatten().or_else(|| (0..types.len()).find(|&i| fits(i, wanted))).or_else(|| {
                 (!host).then(|| (0..types.len()).find(|&i| needs.memory_type_bits & (1 << i) != 0)).flatten()
             })
         else {

@@ -200,7 +200,19 @@ impl Prepared for VulkanPrepared<'_> {
     /// limits ([`oit_core::tiling`]).
     fn frame(&mut self, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
         let scene = self.scene;
-        oit_core::tiling::run("vulkan", scene, settings, |s| self.frame_whole(camera, s))
+        oit_core::tiling::run("vulkan", scene, settings, |s| self.frame_whole(camera, s, true))
+    }
+
+    /// A frame without the image's readback (only its counters come back); a frame that needs
+    /// tiles (`--memory`, or over the device's limits) runs through [`Prepared::frame`].
+    fn frame_stats(&mut self, camera: &Camera, settings: &Settings) -> Result<oit_core::Stats, OitError> {
+        if settings.memory.is_none() {
+            match self.frame_whole(camera, settings, false) {
+                Err(OitError::TooLarge { .. }) => {}
+                other => return other.map(|f| f.stats),
+            }
+        }
+        self.frame(camera, settings).map(|f| f.stats)
     }
 
     fn storage_allocations(&self) -> u64 {
@@ -213,8 +225,14 @@ impl Prepared for VulkanPrepared<'_> {
 }
 
 impl VulkanPrepared<'_> {
-    /// One frame or one window of a frame (`settings.region`, shifted by setup in fixed point).
-    fn frame_whole(&mut self, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
+    /// One frame or one window of a frame (`settings.region`, shifted by setup in fixed point);
+    /// the image and per-pixel losses read back only when `readback`.
+    fn frame_whole(
+        &mut self,
+        camera: &Camera,
+        settings: &Settings,
+        readback: bool,
+    ) -> Result<Frame, OitError> {
         settings.validate()?;
         let start = Instant::now();
         let path = settings.raster.unwrap_or(RasterPath::Compute);
@@ -234,8 +252,8 @@ impl VulkanPrepared<'_> {
         };
         let mut ctx = VkCtx::new(this.gpu, this.scene, camera, settings, &this.pool)?;
         let layers = run_technique(&mut ctx, &drivers)?;
-        let mut frame = ctx.finish(path)?;
-        frame.layers = layers;
+        let mut frame = ctx.finish_with(path, readback)?;
+        frame.layers = layers.filter(|_| readback);
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(frame)
     }

@@ -443,9 +443,19 @@ impl<'g> Recorder<'g> {
 
     /// Reads `buffer` back as u32 words: a copy to a staging buffer, a flush, a map.
     pub(crate) fn read_u32(&mut self, buffer: &Buffer) -> Result<Vec<u32>, OitError> {
-        let staging = self.gpu.buffer(buffer.size, vk::BufferUsageFlags::TRANSFER_DST, true)?;
-        self.copy(buffer, &staging, buffer.size);
+        Ok(self.read_u32s(&[buffer])?.pop().unwrap_or_default())
+    }
+
+    /// Reads several buffers back with one flush (one wait): a copy of each to a staging buffer
+    /// of its own, then the maps, in the order given.
+    pub(crate) fn read_u32s(&mut self, buffers: &[&Buffer]) -> Result<Vec<Vec<u32>>, OitError> {
+        let mut staging = Vec::with_capacity(buffers.len());
+        for b in buffers {
+            let s = self.gpu.buffer(b.size, vk::BufferUsageFlags::TRANSFER_DST, true)?;
+            self.copy(b, &s, b.size);
+            staging.push(s);
+        }
         self.flush()?;
-        staging.read_u32()
+        staging.iter().map(Buffer::read_u32).collect()
     }
 }
