@@ -65,6 +65,22 @@ pub enum Fragments {
 /// no round trip; [`GpuCtx::geometry_pass_read`] reads it where a technique sizes from it).
 pub struct Generated(pub wgpu::Buffer);
 
+/// The compute path's setup, not yet checked: it wrote at most `tri_capacity` pieces and
+/// `item_capacity` work items, and counted how many it needed in `counters` (words 0 and 1). A
+/// prepared scene whose earlier frame fitted does not wait for these mid-frame; the frame reads
+/// them back at its end with everything else ([`GpuCtx::finish_checked`]) and runs again, with
+/// grown buffers, the rare time they did not fit.
+pub struct SetupCheck {
+    /// The setup's counters (pieces, work items).
+    pub counters: wgpu::Buffer,
+    /// The setup pass's resolved timestamps (two u64), where the device has them.
+    pub stamps: Option<wgpu::Buffer>,
+    /// Pieces the triangle buffer holds.
+    pub tri_capacity: u64,
+    /// Work items the work list holds.
+    pub item_capacity: u64,
+}
+
 /// The totals' word that holds the first scene pass's fragments (after finish.wgsl's four).
 const FRAGMENTS_WORD: u64 = 4;
 
@@ -136,6 +152,11 @@ pub trait Driver {
         None
     }
 
+    /// The setup's capacity check this driver left to the end of the frame, once.
+    fn take_setup_check(&self) -> Option<SetupCheck> {
+        None
+    }
+
     /// oit's own vertex stage of the scene, for techniques with their own render pipelines
     /// (`--hardware-capture blend`); `None` where the draws are not oit's (the compute
     /// rasterizer, the embedded pass).
@@ -194,6 +215,16 @@ pub struct GpuCtx<'a> {
     pub fragments_from_captured: bool,
     /// Fragments merged into pixels' tails (`--overflow tail`), read back by the technique.
     pub merged: u64,
+    /// The setup checks the frame's drivers left to its end.
+    checks: Vec<SetupCheck>,
+    /// The deepest pixel an earlier frame of this prepared scene counted at this size and
+    /// technique: the counting pass's result is taken to be this without waiting for it, and
+    /// checked at the frame's end (the frame runs again where it differs).
+    pub speculated_deepest: Option<u32>,
+    /// The deepest pixel this frame's counting pass read back (none when it was speculated).
+    pub deepest_seen: Option<u32>,
+    /// Speculated counts to check at the end: the buffer holding the count, and the value used.
+    sizing_checks: Vec<(wgpu::Buffer, u32)>,
     gpu_ms: f64,
     pass_ms: Vec<(String, f64)>,
     lent: Lent<'a>,
@@ -327,6 +358,10 @@ impl<'a> GpuCtx<'a> {
             counts_losses: true,
             fragments_from_captured: false,
             merged: 0,
+            checks: Vec::new(),
+            speculated_deepest: None,
+            deepest_seen: None,
+            sizing_checks: Vec::new(),
             gpu_ms: 0.0,
             pass_ms: Vec::new(),
             lent,
@@ -487,13 +522,34 @@ impl<'a> GpuCtx<'a> {
 
     /// Adds the driver's setup time (once per driver and frame) to the frame's GPU time.
     pub fn add_setup_ms(&mut self, driver: &dyn Driver) {
-        if let Some(ms) = driver.take_setup_ms().filter(|_| self.timestamps.is_some()) {
-            self.gpu_ms += ms;
-            match self.pass_ms.iter_mut().find(|(l, _)| l == "setup") {
-                Some((_, total)) => *total += ms,
-                None => self.pass_ms.push(("setup".to_string(), ms)),
-            }
+        if let Some(ms) = driver.take_setup_ms() {
+            self.add_pass_ms("setup", ms);
         }
+        self.checks.extend(driver.take_setup_check());
+    }
+
+    /// Adds `ms` of device time under `label`, where the frame measures device time.
+    fn add_pass_ms(&mut self, label: &str, ms: f64) {
+        if self.timestamps.is_none() {
+            return;
+        }
+        self.gpu_ms += ms;
+        match self.pass_ms.iter_mut().find(|(l, _)| l == label) {
+            Some((_, total)) => *total += ms,
+            None => self.pass_ms.push((label.to_string(), ms)),
+        }
+    }
+
+    /// The deepest pixel of a counting pass whose count lies in word 0 of `max`: the speculated
+    /// value where the frame has one (checked at its end), else read back now.
+    pub fn deepest(&mut self, max: &wgpu::Buffer) -> Result<u32, OitError> {
+        if let Some(d) = self.speculated_deepest.take() {
+            self.sizing_checks.push((max.clone(), d));
+            return Ok(d);
+        }
+        let m = self.gpu.read_u32(max)?[0];
+        self.deepest_seen = Some(m);
+        Ok(m)
     }
 
     /// Keeps the first scene pass's count of generated fragments: copied on the device into the
@@ -639,7 +695,22 @@ impl<'a> GpuCtx<'a> {
     /// [`GpuCtx::finish`], reading back the image and per-pixel losses only when `readback`:
     /// without, the resolve still writes the image on the device and only the four totals (16
     /// bytes) come back; the frame's image is then empty (0 × 0) and `lost_pixels` `None`.
-    pub fn finish_with(mut self, path: oit_core::RasterPath, readback: bool) -> Result<Frame, OitError> {
+    pub fn finish_with(self, path: oit_core::RasterPath, readback: bool) -> Result<Frame, OitError> {
+        self.finish_checked(path, readback)?.ok_or_else(|| {
+            OitError::Device(
+                "the compute path's setup needed more room than its buffers had: run the frame again".into(),
+            )
+        })
+    }
+
+    /// [`GpuCtx::finish_with`], or `None` where a setup check the drivers left to the end of the
+    /// frame ([`SetupCheck`]) finds that the setup did not fit: the frame is incomplete and must
+    /// run again, once its buffers have grown (a prepared scene does so).
+    pub fn finish_checked(
+        mut self,
+        path: oit_core::RasterPath,
+        readback: bool,
+    ) -> Result<Option<Frame>, OitError> {
         let (image_buf, totals) = (self.image.clone(), self.totals.clone());
         // the four totals finish.wgsl sums (not the fragments word after them)
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
@@ -667,8 +738,15 @@ impl<'a> GpuCtx<'a> {
         // one readback at the end of the frame: the totals, the timestamps, and (when asked)
         // the image and the per-pixel losses
         let stamps = self.resolve_timestamps();
+        let checks = std::mem::take(&mut self.checks);
+        let sizing = std::mem::take(&mut self.sizing_checks);
         let mut read = vec![&totals];
         read.extend(stamps.as_ref());
+        for c in &checks {
+            read.push(&c.counters);
+            read.extend(c.stamps.as_ref());
+        }
+        read.extend(sizing.iter().map(|(b, _)| b));
         if readback {
             read.push(&image_buf);
             if self.counts_losses {
@@ -677,12 +755,30 @@ impl<'a> GpuCtx<'a> {
         }
         let mut words = self.gpu.read_u32s(&read)?.into_iter();
         let t = words.next().unwrap_or_default();
-        if stamps.is_some() {
-            let stamps = words.next();
-            self.add_timestamps(stamps.as_deref());
+        let stamp_words = if stamps.is_some() { words.next() } else { None };
+        let mut fits = true;
+        for c in &checks {
+            let counts = words.next().unwrap_or_default();
+            fits &= u64::from(counts[0]) <= c.tri_capacity && u64::from(counts[1]) <= c.item_capacity;
+            if let Some(t) = c.stamps.as_ref().and_then(|_| words.next()) {
+                let ticks = (u64::from(t[3]) << 32 | u64::from(t[2]))
+                    .saturating_sub(u64::from(t[1]) << 32 | u64::from(t[0]));
+                self.add_pass_ms(
+                    "setup",
+                    ticks as f64 * f64::from(self.gpu.queue.get_timestamp_period()) * 1e-6,
+                );
+            }
         }
+        for (_, speculated) in &sizing {
+            let counted = words.next().unwrap_or_default();
+            fits &= counted.first() == Some(speculated);
+        }
+        if !fits {
+            return Ok(None);
+        }
+        self.add_timestamps(stamp_words.as_deref());
         if !readback {
-            return self.frame_of(Image { width: 0, height: 0, pixels: Vec::new() }, &t, None);
+            return self.frame_of(Image { width: 0, height: 0, pixels: Vec::new() }, &t, None).map(Some);
         }
         let pixels = words.next().unwrap_or_default();
         let image = Image {
@@ -691,7 +787,7 @@ impl<'a> GpuCtx<'a> {
             pixels: pixels[..self.pixels as usize].iter().map(|w| w.to_le_bytes()).collect(),
         };
         let acct = words.next();
-        self.frame_of(image, &t, acct)
+        self.frame_of(image, &t, acct).map(Some)
     }
 
     /// The frame of `image`, the totals `t` and the per-pixel loss accounting (read back where

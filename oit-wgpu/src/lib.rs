@@ -134,6 +134,7 @@ impl WgpuBackend {
             hardware: None,
             compute: RefCell::new(None),
             compute_boxes: RefCell::new(None),
+            deepest: RefCell::default(),
         })
     }
 }
@@ -238,6 +239,10 @@ pub struct WgpuPrepared<'s> {
     compute: RefCell<Option<ComputeBuffers>>,
     /// The same for the instances' bounding boxes, made on first use.
     compute_boxes: RefCell<Option<ComputeBuffers>>,
+    /// The deepest pixel the last frame's counting pass found, by technique, size, window and
+    /// path: the next such frame sizes its storage from it without waiting for its own counting
+    /// pass, and runs again if that pass finds otherwise ([`GpuCtx::speculated_deepest`]).
+    deepest: RefCell<std::collections::HashMap<String, u32>>,
 }
 
 impl WgpuPrepared<'_> {
@@ -318,7 +323,32 @@ impl WgpuPrepared<'_> {
         if path == RasterPath::Hardware && self.hardware.is_none() {
             self.hardware = Some(HardwareScene::new(gpu, scene, &self.geometry_made)?);
         }
-        let this = &*self;
+        // a frame whose setup check (left to its end) finds the setup did not fit runs again,
+        // waiting for the setup this time and growing its buffers first
+        for _ in 0..2 {
+            if let Some(frame) = self.frame_once(camera, settings, path, readback, start)? {
+                return Ok(frame);
+            }
+            for cell in [&self.compute, &self.compute_boxes] {
+                if let Some(buffers) = cell.borrow_mut().as_mut() {
+                    buffers.trusted = false;
+                }
+            }
+        }
+        Err(OitError::Device("the compute path's setup did not fit its buffers twice in a row".into()))
+    }
+
+    /// One attempt at a frame ([`GpuCtx::finish_checked`]): `None` where the setup must run again.
+    fn frame_once(
+        &self,
+        camera: &Camera,
+        settings: &Settings,
+        path: RasterPath,
+        readback: bool,
+        start: Instant,
+    ) -> Result<Option<Frame>, OitError> {
+        let (gpu, scene) = (self.gpu, self.scene);
+        let this = self;
         let drivers = match (path, &this.hardware) {
             (RasterPath::Compute, _) => Drivers {
                 scene: Box::new(this.compute_raster(&this.compute, camera, settings, false)?),
@@ -344,11 +374,25 @@ impl WgpuPrepared<'_> {
             }
         };
         let mut ctx = GpuCtx::with_pool(gpu, scene, camera, settings, Some(&this.pool))?;
+        let key = format!(
+            "{:?} {}x{} {:?} {path:?}",
+            settings.technique, settings.width, settings.height, settings.region
+        );
+        ctx.speculated_deepest = this.deepest.borrow().get(&key).copied();
         let layers = run_technique(&mut ctx, &drivers)?;
-        let mut frame = ctx.finish_with(path, readback)?;
+        let seen = ctx.deepest_seen;
+        let Some(mut frame) = ctx.finish_checked(path, readback)? else {
+            // counted otherwise than speculated (or the setup did not fit): the next attempt
+            // waits for its counting pass
+            this.deepest.borrow_mut().remove(&key);
+            return Ok(None);
+        };
+        if let Some(d) = seen {
+            this.deepest.borrow_mut().insert(key, d);
+        }
         frame.layers = layers.filter(|_| readback);
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
-        Ok(frame)
+        Ok(Some(frame))
     }
 }
 

@@ -32,7 +32,7 @@ use glam::{Mat3, Vec3, Vec4};
 use oit_core::setup::{TRIANGLE_WORDS, TriangleSetup, box_vertices, normal_matrix};
 use oit_core::{Aabb, Camera, OitError, RasterPath, Scene, Settings};
 
-use crate::ctx::{Driver, Generated, GpuCtx, dispatch_size};
+use crate::ctx::{Driver, Generated, GpuCtx, SetupCheck, dispatch_size};
 use crate::gpu::Gpu;
 
 const RASTER_WGSL: &str = include_str!("shaders/raster_compute.wgsl");
@@ -71,6 +71,8 @@ pub struct ComputeRaster {
     /// Device milliseconds of this frame's setup kernels (GPU setup on a device with
     /// timestamps), handed to the frame's first geometry pass ([`Driver::take_setup_ms`]).
     setup_ms: Cell<Option<f64>>,
+    /// The setup's capacity check, left to the end of the frame ([`Driver::take_setup_check`]).
+    check: std::cell::RefCell<Option<SetupCheck>>,
 }
 
 impl ComputeRaster {
@@ -313,6 +315,9 @@ pub(crate) struct ComputeBuffers {
     /// Whether the GPU setup may use its vertex cache (`SetupBuffers::use_verts`): on unless
     /// `OIT_SETUP_VERTS=0`.
     vertex_cache: bool,
+    /// Whether an earlier frame's setup fitted these buffers: then a frame does not wait for the
+    /// setup's counters before its passes but checks them at its end (`SetupCheck`).
+    pub(crate) trusted: bool,
 }
 
 /// What the GPU setup keeps besides the outputs.
@@ -418,7 +423,18 @@ impl ComputeBuffers {
         let group = bind(gpu, &layout, &[&tris, &items, &uniform, &generated]);
         let vertex_cache =
             !std::env::var("OIT_SETUP_VERTS").is_ok_and(|v| v == "0" || v.eq_ignore_ascii_case("false"));
-        ComputeBuffers { tris, items, uniform, generated, args, layout, group, setup: None, vertex_cache }
+        ComputeBuffers {
+            tris,
+            items,
+            uniform,
+            generated,
+            args,
+            layout,
+            group,
+            setup: None,
+            vertex_cache,
+            trusted: false,
+        }
     }
 
     /// Grows the triangle and work-list buffers to hold `tri_bytes` and `item_bytes` (counted in
@@ -477,11 +493,11 @@ impl ComputeBuffers {
         boxes: bool,
         made: &Cell<u64>,
     ) -> Result<ComputeRaster, OitError> {
-        let setup_ms = if setup_on_gpu(gpu) {
+        let (setup_ms, check) = if setup_on_gpu(gpu) {
             self.gpu_frame(gpu, scene, camera, settings, boxes, made)?
         } else {
             self.host_frame(gpu, scene, camera, settings, boxes, made)?;
-            None
+            (None, None)
         };
         Ok(ComputeRaster {
             layout: self.layout.clone(),
@@ -489,6 +505,7 @@ impl ComputeBuffers {
             generated: self.generated.clone(),
             args: self.args.clone(),
             setup_ms: Cell::new(setup_ms),
+            check: std::cell::RefCell::new(check),
         })
     }
 
@@ -542,9 +559,10 @@ impl ComputeBuffers {
         settings: &Settings,
         boxes: bool,
         made: &Cell<u64>,
-    ) -> Result<Option<f64>, OitError> {
+    ) -> Result<(Option<f64>, Option<SetupCheck>), OitError> {
         use wgpu::BufferUsages as U;
         if self.setup.as_ref().is_none_or(|s| s.geometry.boxes != boxes) {
+            self.trusted = false;
             let geometry = GpuGeometry::new(gpu, scene, boxes, made)?;
             let instance_bytes = (geometry.instances.len().max(1) * INSTANCE_WORDS * 4) as u64;
             let layout = gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -687,19 +705,31 @@ impl ComputeBuffers {
                 encoder.resolve_query_set(set, 0..2, resolve, 0);
             }
             gpu.queue.submit([encoder.finish()]);
-            // the counters (and the setup's timestamps) in one readback: the frame's one round
-            // trip before its passes, to check the pieces fit
+            if self.trusted {
+                // an earlier frame fitted: check at the end of this one, not now
+                let check = SetupCheck {
+                    counters: s.counters.clone(),
+                    stamps: s.timestamps.as_ref().map(|(_, resolve)| resolve.clone()),
+                    tri_capacity,
+                    item_capacity,
+                };
+                return Ok((None, Some(check)));
+            }
+            // the counters (and the setup's timestamps) in one readback: a round trip before the
+            // frame's passes, to check the pieces fit (the first frame, and after a miss)
             let mut read = vec![&s.counters];
             read.extend(s.timestamps.as_ref().map(|(_, resolve)| resolve));
             let words = gpu.read_u32s(&read)?;
             let counts = &words[0];
             let (pieces, items) = (u64::from(counts[0]), u64::from(counts[1]));
             if pieces <= tri_capacity && items <= item_capacity {
-                return Ok(words.get(1).map(|t| {
+                self.trusted = true;
+                let ms = words.get(1).map(|t| {
                     let ticks = (u64::from(t[3]) << 32 | u64::from(t[2]))
                         .saturating_sub(u64::from(t[1]) << 32 | u64::from(t[0]));
                     ticks as f64 * f64::from(gpu.queue.get_timestamp_period()) * 1e-6
-                }));
+                });
+                return Ok((ms, None));
             }
             let grew = self.reserve(gpu, pieces * TRIANGLE_WORDS as u64 * 4, items * 8, made)?;
             if !grew {
@@ -718,6 +748,10 @@ impl Driver for ComputeRaster {
 
     fn take_setup_ms(&self) -> Option<f64> {
         self.setup_ms.take()
+    }
+
+    fn take_setup_check(&self) -> Option<SetupCheck> {
+        self.check.borrow_mut().take()
     }
 
     fn geometry_pass(

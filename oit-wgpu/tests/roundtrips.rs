@@ -1,8 +1,8 @@
-//! CPU–GPU round trips inside a frame (issue 10): a frame whose technique sizes nothing from the
-//! GPU and stops on no GPU count reads back once, at its end (counters, timestamps and, when
-//! asked, the image and per-pixel losses together), plus the compute path's setup check where the
-//! setup runs on the GPU. Before, every geometry pass read its fragment count back and every
-//! timed pass its timestamps.
+//! CPU–GPU round trips inside a frame (issue 10): a steady frame (a prepared scene after its first
+//! frame) whose technique sizes nothing from the GPU and stops on no GPU count reads back once,
+//! at its end (counters, timestamps, the compute path's setup check and, when asked, the image and
+//! per-pixel losses together). Before, every geometry pass read its fragment count back, every
+//! timed pass its timestamps, and every compute-path frame its setup's counters before its passes.
 
 use oit_core::{Backend, Camera, RasterPath, Settings, Technique, View, load_scene};
 
@@ -13,12 +13,7 @@ fn a_steady_frame_reads_back_once() {
     let scene = load_scene("planes:6").unwrap();
     let camera = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();
     for path in [RasterPath::Compute, RasterPath::Hardware] {
-        // the compute path's GPU setup reads its counters back once, to check the pieces fit
-        let on_gpu = u64::from(path == RasterPath::Compute && oit_wgpu::setup_on_gpu(gpu));
         for technique in ["wavg", "wsum", "bdp", "bdp:2", "mdts64:8", "fabs"] {
-            // bdp's depth bounds come from the instances' boxes (the default `BoundsMode`):
-            // a second rasterizer, set up on its own
-            let setup = on_gpu * if technique.starts_with("bdp") { 2 } else { 1 };
             let settings = Settings {
                 width: 48,
                 height: 40,
@@ -29,20 +24,127 @@ fn a_steady_frame_reads_back_once() {
             let mut prepared = backend.prepare(&scene).unwrap();
             let first = prepared.frame(&camera, &settings).unwrap();
             assert!(first.stats.fragments > 0, "{technique} on {path}: the scene has fragments");
-            // fabs sizes K from a counting pass: one readback more, by design (the plan's sizing)
-            let sizing = u64::from(technique == "fabs");
+            // fabs sizes K from a counting pass: the last frame's count, checked at the end
+            let sizing = 0;
             let before = gpu.readbacks();
             let stats = prepared.frame_stats(&camera, &settings).unwrap();
             let steady = gpu.readbacks() - before;
             assert_eq!(stats.fragments, first.stats.fragments, "{technique} on {path}");
-            assert_eq!(steady, 1 + setup + sizing, "{technique} on {path}: readbacks of a steady frame");
+            assert_eq!(steady, 1 + sizing, "{technique} on {path}: readbacks of a steady frame");
             let before = gpu.readbacks();
             let again = prepared.frame(&camera, &settings).unwrap();
-            assert_eq!(gpu.readbacks() - before, 1 + setup + sizing, "{technique} on {path}: with the image");
+            assert_eq!(gpu.readbacks() - before, 1 + sizing, "{technique} on {path}: with the image");
             assert_eq!(again.image, first.image, "{technique} on {path}: the same frame twice");
             assert_eq!(again.stats.fragments, first.stats.fragments);
             assert_eq!(again.stats.captured, first.stats.captured);
             assert_eq!(again.stats.lost, first.stats.lost);
         }
+    }
+}
+
+/// A prepared scene's setup, trusted after a frame that fitted, waits for nothing before its
+/// passes; when a later view needs more room than the kept buffers have (a far view, then one
+/// close enough that each triangle covers thousands of 8×8 tiles), the frame's end finds it and
+/// the frame runs again, waiting for the setup and growing first: the image and counts equal a
+/// one-shot render of that view. On a CPU device (setup on the host by default) the test runs
+/// itself again in a child process with `OIT_HOST_SETUP=0`.
+#[test]
+fn a_setup_that_outgrows_its_buffers_runs_again() {
+    const NAME: &str = "a_setup_that_outgrows_its_buffers_runs_again";
+    let Some(backend) = oit_wgpu::backend_or_skip(NAME) else { return };
+    let gpu = backend.gpu().expect("opened above");
+    if !oit_wgpu::setup_on_gpu(gpu) {
+        if std::env::var_os("OIT_HOST_SETUP").is_some() {
+            return; // the host's setup was asked for: nothing of the GPU's to test
+        }
+        let exe = std::env::current_exe().expect("the test binary");
+        let status = std::process::Command::new(exe)
+            .args([NAME, "--exact", "--test-threads=1"])
+            .env("OIT_HOST_SETUP", "0")
+            .status()
+            .expect("the test binary runs again");
+        assert!(status.success(), "{NAME} with the GPU's setup failed");
+        return;
+    }
+    let scene = load_scene("planes:2").unwrap();
+    let settings = Settings {
+        width: 512,
+        height: 512,
+        technique: "wavg".parse::<Technique>().unwrap(),
+        raster: Some(RasterPath::Compute),
+        ..Settings::default()
+    };
+    let bounds = scene.bounds();
+    let (c, r) = (bounds.center(), (bounds.max - bounds.min).length() * 0.5);
+    let look = |d: f32| {
+        Camera::look_at(c + glam::Vec3::new(0.1, 0.2, 1.0) * d * r, c, 45.0, 1.0, 0.01 * r, 100.0 * r)
+    };
+    // the planes a few pixels across, then filling the frame
+    let (far, near) = (look(60.0), look(1.2));
+    let mut prepared = backend.prepare(&scene).unwrap();
+    prepared.frame(&far, &settings).unwrap();
+    let steady = gpu.readbacks();
+    prepared.frame(&far, &settings).unwrap();
+    assert_eq!(gpu.readbacks() - steady, 1, "a trusted frame waits once, at its end");
+    let before = gpu.readbacks();
+    let frame = prepared.frame(&near, &settings).unwrap();
+    // the end of the first attempt; then the second's setup waits (too small), grows, sets up
+    // again and waits (fits), and its end
+    assert_eq!(gpu.readbacks() - before, 4, "the near view outgrew the buffers and ran again");
+    let one_shot = backend.render(&scene, &near, &settings).unwrap();
+    assert_eq!(frame.image, one_shot.image);
+    assert_eq!(frame.stats.fragments, one_shot.stats.fragments);
+    assert_eq!(frame.stats.captured, one_shot.stats.captured);
+    assert!(frame.stats.fragments > 100_000, "the near view covers the frame: {}", frame.stats.fragments);
+    let before = gpu.readbacks();
+    prepared.frame(&near, &settings).unwrap();
+    assert_eq!(gpu.readbacks() - before, 1, "grown, the near view fits and waits once");
+}
+
+/// A storage size taken from the last frame's counting pass ([`oit_wgpu::GpuCtx::speculated_deepest`])
+/// is checked at the frame's end: a view whose deepest pixel differs runs again and equals a
+/// one-shot render of it (image, counts, storage), and the view after that is sized right away.
+#[test]
+fn a_speculated_size_that_misses_runs_again() {
+    let Some(backend) = oit_wgpu::backend_or_skip("a_speculated_size_that_misses_runs_again") else { return };
+    let gpu = backend.gpu().expect("opened above");
+    let scene = load_scene("planes:5").unwrap();
+    let bounds = scene.bounds();
+    let (c, r) = (bounds.center(), (bounds.max - bounds.min).length() * 0.5);
+    let dir = glam::Vec3::new(0.1, 0.2, 1.0);
+    let at = Camera::look_at(c + dir * 3.0 * r, c, 45.0, 1.0, 0.01 * r, 100.0 * r);
+    // looking away: nothing on screen, the deepest pixel 0
+    let away = Camera::look_at(c + dir * 3.0 * r, c + dir * 6.0 * r, 45.0, 1.0, 0.01 * r, 100.0 * r);
+    for path in [RasterPath::Compute, RasterPath::Hardware] {
+        let on_gpu = u64::from(path == RasterPath::Compute && oit_wgpu::setup_on_gpu(gpu));
+        let settings = Settings {
+            width: 40,
+            height: 40,
+            technique: "fabs".parse::<Technique>().unwrap(),
+            raster: Some(path),
+            ..Settings::default()
+        };
+        let mut prepared = backend.prepare(&scene).unwrap();
+        prepared.frame(&away, &settings).unwrap();
+        let before = gpu.readbacks();
+        let frame = prepared.frame(&at, &settings).unwrap();
+        // the first attempt's end; the second's counting pass and its end (and, on the GPU's
+        // setup, its capacity check: a rerun waits for the setup too)
+        assert_eq!(
+            gpu.readbacks() - before,
+            3 + on_gpu,
+            "{path}: the deepest pixel changed, the frame ran again"
+        );
+        let one_shot = backend.render(&scene, &at, &settings).unwrap();
+        assert_eq!(frame.image, one_shot.image, "{path}");
+        assert_eq!(
+            frame.stats.storage_bytes, one_shot.stats.storage_bytes,
+            "{path}: sized as a one-shot frame"
+        );
+        assert_eq!(frame.stats.captured, one_shot.stats.captured, "{path}");
+        assert!(frame.stats.max_layers >= 2, "{path}: the planes overlap on screen");
+        let before = gpu.readbacks();
+        prepared.frame(&at, &settings).unwrap();
+        assert_eq!(gpu.readbacks() - before, 1, "{path}: the same view again is sized without waiting");
     }
 }

@@ -65,7 +65,7 @@ pub(crate) fn count(ctx: &mut GpuCtx<'_>, driver: &dyn Driver) -> Result<(wgpu::
     ctx.pixel_kernel(COUNT_WGSL, "max_main", &[&counts, &max], 0, 0)?;
     // sizing storage is not the technique's: oit-cpu does not count it either
     ctx.storage_bytes -= u64::from(ctx.pixels) * 4 + 4;
-    let m = ctx.gpu.read_u32(&max)?[0];
+    let m = ctx.deepest(&max)?;
     Ok((counts, m))
 }
 
