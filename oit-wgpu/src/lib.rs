@@ -60,9 +60,11 @@ use oit_core::{
     Technique, TechniqueKind,
 };
 
-pub use crate::ctx::{Driver, Fragments, FrameUniform, Generated, GpuCtx, Init, TECHNIQUE_PRELUDE};
+pub use crate::ctx::{
+    Driver, Fragments, FrameUniform, Generated, GpuCtx, Init, SetupCheck, TECHNIQUE_PRELUDE,
+};
 pub use crate::embed::{CaptureShader, GeometryPass, OitPass};
-pub use crate::gpu::{COMMON_WGSL, Gpu, adapters, required_features};
+pub use crate::gpu::{COMMON_WGSL, Gpu, TIMESTAMP_QUERIES, adapters, required_features};
 pub use crate::hardware::HardwareRaster;
 pub use crate::pool::BufferPool;
 pub use crate::raster::{ComputeRaster, setup_on_gpu};
