@@ -156,6 +156,24 @@ pub fn window(settings: &Settings, full: (u32, u32), rect: Rect) -> Settings {
     }
 }
 
+/// A GPU backend's `Prepared::frame_stats`: the frame untiled without its image read back
+/// (`untiled`), unless it must run in tiles (`--memory` set, or the untiled frame refused as too
+/// large), which `tiled` (the backend's `Prepared::frame`, image and all) runs.
+pub fn frame_stats<P: ?Sized>(
+    settings: &Settings,
+    prepared: &mut P,
+    untiled: impl FnOnce(&mut P) -> Result<Frame, OitError>,
+    tiled: impl FnOnce(&mut P) -> Result<Frame, OitError>,
+) -> Result<Stats, OitError> {
+    if settings.memory.is_none() {
+        match untiled(prepared) {
+            Err(OitError::TooLarge { .. }) => {}
+            other => return other.map(|f| f.stats),
+        }
+    }
+    tiled(prepared).map(|f| f.stats)
+}
+
 /// Runs one frame of `settings` through `frame` (a backend's untiled frame), in as many windows
 /// as its memory budget and the backend's refusals need (module docs), and puts them together.
 /// `backend` names the backend, for messages; `scene` is what the plan sizes storage from.

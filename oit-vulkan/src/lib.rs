@@ -206,13 +206,12 @@ impl Prepared for VulkanPrepared<'_> {
     /// A frame without the image's readback (only its counters come back); a frame that needs
     /// tiles (`--memory`, or over the device's limits) runs through [`Prepared::frame`].
     fn frame_stats(&mut self, camera: &Camera, settings: &Settings) -> Result<oit_core::Stats, OitError> {
-        if settings.memory.is_none() {
-            match self.frame_whole(camera, settings, false) {
-                Err(OitError::TooLarge { .. }) => {}
-                other => return other.map(|f| f.stats),
-            }
-        }
-        self.frame(camera, settings).map(|f| f.stats)
+        oit_core::tiling::frame_stats(
+            settings,
+            self,
+            |p| p.frame_whole(camera, settings, false),
+            |p| p.frame(camera, settings),
+        )
     }
 
     fn storage_allocations(&self) -> u64 {

@@ -489,11 +489,7 @@ impl<'a> GpuCtx<'a> {
         pass_index: u32,
         param: u32,
     ) -> Result<(), OitError> {
-        let (layout, group) = self.group0(buffers, pass_index, param);
-        let full = format!("{TECHNIQUE_PRELUDE}{source}");
-        self.add_setup_ms(driver);
-        let generated = driver.geometry_pass(self, &full, &layout, &group)?;
-        self.passes += 1;
+        let generated = self.run_geometry_pass(driver, source, buffers, pass_index, param)?;
         self.note_generated(&generated);
         Ok(())
     }
@@ -508,16 +504,30 @@ impl<'a> GpuCtx<'a> {
         pass_index: u32,
         param: u32,
     ) -> Result<u64, OitError> {
-        let (layout, group) = self.group0(buffers, pass_index, param);
-        let full = format!("{TECHNIQUE_PRELUDE}{source}");
-        self.add_setup_ms(driver);
-        let generated = driver.geometry_pass(self, &full, &layout, &group)?;
-        self.passes += 1;
+        let generated = self.run_geometry_pass(driver, source, buffers, pass_index, param)?;
         let n = u64::from(self.gpu.read_u32(&generated.0)?[0]);
         if self.fragments == Fragments::Unset {
             self.fragments = Fragments::Known(n);
         }
         Ok(n)
+    }
+
+    /// The pass both of the above run: group 0 bound, the driver's setup time and check taken,
+    /// the pass recorded and counted.
+    fn run_geometry_pass(
+        &mut self,
+        driver: &dyn Driver,
+        source: &str,
+        buffers: &[&wgpu::Buffer],
+        pass_index: u32,
+        param: u32,
+    ) -> Result<Generated, OitError> {
+        let (layout, group) = self.group0(buffers, pass_index, param);
+        let full = format!("{TECHNIQUE_PRELUDE}{source}");
+        self.add_setup_ms(driver);
+        let generated = driver.geometry_pass(self, &full, &layout, &group)?;
+        self.passes += 1;
+        Ok(generated)
     }
 
     /// Adds the driver's setup time (once per driver and frame) to the frame's GPU time.
@@ -662,10 +672,8 @@ impl<'a> GpuCtx<'a> {
     /// per-pass times, and starts the set over.
     fn add_timestamps(&mut self, words: Option<&[u32]>) {
         let (Some(ts), Some(t)) = (self.timestamps.as_mut(), words) else { return };
-        let period = f64::from(self.gpu.queue.get_timestamp_period());
         for (i, label) in ts.labels.drain(..).enumerate() {
-            let at = |q: usize| u64::from(t[2 * q + 1]) << 32 | u64::from(t[2 * q]);
-            let ms = at(2 * i + 1).saturating_sub(at(2 * i)) as f64 * period * 1e-6;
+            let ms = self.gpu.pair_ms(t, i);
             self.gpu_ms += ms;
             match self.pass_ms.iter_mut().find(|(l, _)| *l == label) {
                 Some((_, total)) => *total += ms,
@@ -761,12 +769,7 @@ impl<'a> GpuCtx<'a> {
             let counts = words.next().unwrap_or_default();
             fits &= u64::from(counts[0]) <= c.tri_capacity && u64::from(counts[1]) <= c.item_capacity;
             if let Some(t) = c.stamps.as_ref().and_then(|_| words.next()) {
-                let ticks = (u64::from(t[3]) << 32 | u64::from(t[2]))
-                    .saturating_sub(u64::from(t[1]) << 32 | u64::from(t[0]));
-                self.add_pass_ms(
-                    "setup",
-                    ticks as f64 * f64::from(self.gpu.queue.get_timestamp_period()) * 1e-6,
-                );
+                self.add_pass_ms("setup", self.gpu.pair_ms(&t, 0));
             }
         }
         for (_, speculated) in &sizing {

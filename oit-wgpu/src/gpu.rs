@@ -362,6 +362,14 @@ impl Gpu {
         Ok(words)
     }
 
+    /// Milliseconds between the two timestamps of pair `pair` in `words`, a resolved query set
+    /// read back as u32 words (each timestamp two words, low first).
+    pub fn pair_ms(&self, words: &[u32], pair: usize) -> f64 {
+        let at = |q: usize| u64::from(words[2 * q + 1]) << 32 | u64::from(words[2 * q]);
+        let ticks = at(2 * pair + 1).saturating_sub(at(2 * pair));
+        ticks as f64 * f64::from(self.queue.get_timestamp_period()) * 1e-6
+    }
+
     /// How many readbacks ([`Gpu::read_u32s`], each a wait for the GPU) this device has made: a
     /// frame's round trips are the difference across it.
     pub fn readbacks(&self) -> u64 {

@@ -280,13 +280,12 @@ impl Prepared for WgpuPrepared<'_> {
     /// A frame without the image's readback; a frame that needs tiles (`--memory`, or over the
     /// device's limits) runs through [`Prepared::frame`], image and all.
     fn frame_stats(&mut self, camera: &Camera, settings: &Settings) -> Result<oit_core::Stats, OitError> {
-        if settings.memory.is_none() {
-            match self.frame_with(camera, settings, false) {
-                Err(OitError::TooLarge { .. }) => {}
-                other => return other.map(|f| f.stats),
-            }
-        }
-        self.frame(camera, settings).map(|f| f.stats)
+        oit_core::tiling::frame_stats(
+            settings,
+            self,
+            |p| p.frame_with(camera, settings, false),
+            |p| p.frame(camera, settings),
+        )
     }
 
     fn storage_allocations(&self) -> u64 {

@@ -724,11 +724,7 @@ impl ComputeBuffers {
             let (pieces, items) = (u64::from(counts[0]), u64::from(counts[1]));
             if pieces <= tri_capacity && items <= item_capacity {
                 self.trusted = true;
-                let ms = words.get(1).map(|t| {
-                    let ticks = (u64::from(t[3]) << 32 | u64::from(t[2]))
-                        .saturating_sub(u64::from(t[1]) << 32 | u64::from(t[0]));
-                    ticks as f64 * f64::from(gpu.queue.get_timestamp_period()) * 1e-6
-                });
+                let ms = words.get(1).map(|t| gpu.pair_ms(t, 0));
                 return Ok((ms, None));
             }
             let grew = self.reserve(gpu, pieces * TRIANGLE_WORDS as u64 * 4, items * 8, made)?;

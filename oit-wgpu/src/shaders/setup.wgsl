@@ -126,14 +126,18 @@ fn load_vertex(i: u32, v: u32) -> ClipVertex {
     } else {
         out.n = transform_normal(i, geometry[n], geometry[n + 1u], geometry[n + 2u]);
     }
-    let cb = inst(i, I_COLOR_BASE);
-    if (cb != 0xffffffffu) {
-        let c = cb + 3u * v;
-        out.c = vec3<u32>(geometry[c], geometry[c + 1u], geometry[c + 2u]);
-    } else {
-        out.c = vec3<u32>(0u);
-    }
+    out.c = load_color(i, v);
     return out;
+}
+
+// Vertex `v`'s colour (zero where the mesh has none).
+fn load_color(i: u32, v: u32) -> vec3<u32> {
+    let cb = inst(i, I_COLOR_BASE);
+    if (cb == 0xffffffffu) {
+        return vec3<u32>(0u);
+    }
+    let c = cb + 3u * v;
+    return vec3<u32>(geometry[c], geometry[c + 1u], geometry[c + 2u]);
 }
 
 // self + (other − self)·t, per component.
@@ -359,6 +363,32 @@ fn find_instance(task: u32) -> u32 {
     return lo;
 }
 
+// A vertex's clip flags (V_FINITE, the planes it is outside of, V_PROJECTED) and its snapped
+// projection: what `vertex_main` keeps per vertex and the uncached path computes per corner.
+struct VertexTest {
+    flags: u32,
+    p: Projected,
+}
+
+fn vertex_test(pos: vec4<u32>) -> VertexTest {
+    var r: VertexTest;
+    r.flags = 0u;
+    if (!(sf_is_finite(pos.x) && sf_is_finite(pos.y) && sf_is_finite(pos.z) && sf_is_finite(pos.w))) {
+        return r;
+    }
+    r.flags = V_FINITE;
+    for (var plane = 0u; plane < 6u; plane++) {
+        if (sf_lt0(plane_distance(pos, plane))) {
+            r.flags |= 2u << plane;
+        }
+    }
+    r.p = project(pos);
+    if (r.p.ok) {
+        r.flags |= V_PROJECTED;
+    }
+    return r;
+}
+
 @compute @workgroup_size(64)
 fn setup_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let task = gid.x + gid.y * groups.x * 64u;
@@ -372,45 +402,50 @@ fn setup_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     }
     let ib = inst(i, I_INDEX_BASE) + 3u * t;
     let count = inst(i, I_VERTEX_COUNT);
-    if (su.use_verts != 0u) {
-        setup_cached(i, t, ib, count);
-        return;
-    }
+    // each corner's transform, flags and projection: from the vertex cache, or computed here
     var v: array<ClipVertex, 3>;
+    var tests: array<VertexTest, 3>;
     for (var k = 0u; k < 3u; k++) {
         let index = geometry[ib + k];
         if (index >= count) {
             return;
         }
-        v[k] = load_vertex(i, index);
+        if (su.use_verts != 0u) {
+            let o = (inst(i, I_FIRST_VERT) + index) * VERT_WORDS;
+            v[k].pos = vec4<u32>(verts[o], verts[o + 1u], verts[o + 2u], verts[o + 3u]);
+            v[k].n = vec3<u32>(verts[o + 4u], verts[o + 5u], verts[o + 6u]);
+            v[k].c = load_color(i, index);
+            tests[k].flags = verts[o + 7u];
+            tests[k].p = Projected(
+                (tests[k].flags & V_PROJECTED) != 0u,
+                bitcast<i32>(verts[o + 8u]),
+                bitcast<i32>(verts[o + 9u]),
+                verts[o + 10u],
+                verts[o + 11u],
+            );
+        } else {
+            v[k] = load_vertex(i, index);
+            tests[k] = vertex_test(v[k].pos);
+        }
     }
     let pb = inst(i, I_PRIM_BASE);
     let prim = select(pb + t, 0xffffffffu, pb + t < pb);
-    for (var k = 0u; k < 3u; k++) {
-        for (var c = 0u; c < 4u; c++) {
-            if (!sf_is_finite(v[k].pos[c])) {
-                return;
-            }
-        }
+    let f0 = tests[0].flags;
+    let f1 = tests[1].flags;
+    let f2 = tests[2].flags;
+    if ((f0 & f1 & f2 & V_FINITE) == 0u) {
+        return;
     }
-    var outside_any = 0u;
-    for (var plane = 0u; plane < 6u; plane++) {
-        var all_out = true;
-        var any_out = false;
-        for (var k = 0u; k < 3u; k++) {
-            let out = sf_lt0(plane_distance(v[k].pos, plane));
-            all_out = all_out && out;
-            any_out = any_out || out;
-        }
-        if (all_out) {
+    // a plane all three corners are outside of culls the triangle; one any is outside of clips it
+    if ((f0 & f1 & f2 & 0x7eu) != 0u) {
+        return;
+    }
+    let outside_any = ((f0 | f1 | f2) & 0x7eu) >> 1u;
+    if (outside_any == 0u) {
+        if ((f0 & f1 & f2 & V_PROJECTED) == 0u) {
             return;
         }
-        if (any_out) {
-            outside_any |= 1u << plane;
-        }
-    }
-    if (outside_any == 0u) {
-        piece(i, v, prim);
+        piece_projected(i, v, array<Projected, 3>(tests[0].p, tests[1].p, tests[2].p), prim);
         return;
     }
     poly[0] = v[0];
@@ -450,88 +485,19 @@ fn vertex_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
         return;
     }
     let cv = load_vertex(i, v);
+    let test = vertex_test(cv.pos);
     let o = g * VERT_WORDS;
-    var flags = 0u;
-    if (sf_is_finite(cv.pos.x) && sf_is_finite(cv.pos.y) && sf_is_finite(cv.pos.z) && sf_is_finite(cv.pos.w)) {
-        flags = V_FINITE;
-        for (var plane = 0u; plane < 6u; plane++) {
-            if (sf_lt0(plane_distance(cv.pos, plane))) {
-                flags |= 2u << plane;
-            }
-        }
-        let p = project(cv.pos);
-        if (p.ok) {
-            flags |= V_PROJECTED;
-            verts[o + 8u] = bitcast<u32>(p.x);
-            verts[o + 9u] = bitcast<u32>(p.y);
-            verts[o + 10u] = p.z;
-            verts[o + 11u] = p.inv_w;
-        }
-    }
     for (var c = 0u; c < 4u; c++) {
         verts[o + c] = cv.pos[c];
     }
     for (var c = 0u; c < 3u; c++) {
         verts[o + 4u + c] = cv.n[c];
     }
-    verts[o + 7u] = flags;
-}
-
-// setup_main's triangle `t` of instance `i` from the vertex cache: the same tests and pieces as
-// the per-triangle path, on the vertices' kept transforms, outcodes and projections.
-fn setup_cached(i: u32, t: u32, ib: u32, count: u32) {
-    var v: array<ClipVertex, 3>;
-    var rec: array<u32, 3>;
-    var flags: array<u32, 3>;
-    for (var k = 0u; k < 3u; k++) {
-        let index = geometry[ib + k];
-        if (index >= count) {
-            return;
-        }
-        let o = (inst(i, I_FIRST_VERT) + index) * VERT_WORDS;
-        rec[k] = o;
-        flags[k] = verts[o + 7u];
-        v[k].pos = vec4<u32>(verts[o], verts[o + 1u], verts[o + 2u], verts[o + 3u]);
-        v[k].n = vec3<u32>(verts[o + 4u], verts[o + 5u], verts[o + 6u]);
-        let cb = inst(i, I_COLOR_BASE);
-        if (cb != 0xffffffffu) {
-            let c = cb + 3u * index;
-            v[k].c = vec3<u32>(geometry[c], geometry[c + 1u], geometry[c + 2u]);
-        } else {
-            v[k].c = vec3<u32>(0u);
-        }
-    }
-    let pb = inst(i, I_PRIM_BASE);
-    let prim = select(pb + t, 0xffffffffu, pb + t < pb);
-    if ((flags[0] & flags[1] & flags[2] & V_FINITE) == 0u) {
-        return;
-    }
-    // a plane all three vertices are outside of culls the triangle; one any is outside of clips it
-    let all_out = (flags[0] & flags[1] & flags[2]) & 0x7eu;
-    if (all_out != 0u) {
-        return;
-    }
-    let outside_any = ((flags[0] | flags[1] | flags[2]) & 0x7eu) >> 1u;
-    if (outside_any == 0u) {
-        var p: array<Projected, 3>;
-        for (var k = 0u; k < 3u; k++) {
-            if ((flags[k] & V_PROJECTED) == 0u) {
-                return;
-            }
-            let o = rec[k];
-            p[k] = Projected(true, bitcast<i32>(verts[o + 8u]), bitcast<i32>(verts[o + 9u]), verts[o + 10u], verts[o + 11u]);
-        }
-        piece_projected(i, v, p, prim);
-        return;
-    }
-    poly[0] = v[0];
-    poly[1] = v[1];
-    poly[2] = v[2];
-    poly_n = 3u;
-    clip_poly(outside_any);
-    for (var k = 1u; k + 1u < poly_n; k++) {
-        piece(i, array<ClipVertex, 3>(poly[0], poly[k], poly[k + 1u]), prim);
-    }
+    verts[o + 7u] = test.flags;
+    verts[o + 8u] = bitcast<u32>(test.p.x);
+    verts[o + 9u] = bitcast<u32>(test.p.y);
+    verts[o + 10u] = test.p.z;
+    verts[o + 11u] = test.p.inv_w;
 }
 
 // Workgroups of 64 for `invocations` as (x, y) with x ≤ 65535 (oit-wgpu's `dispatch_size`).
