@@ -6,7 +6,7 @@
 
 use glam::{Mat4, Vec3, Vec4};
 use oit_core::{Aabb, Camera, Frame, Image, OitError, Settings, Technique};
-use oit_wgpu::OitPass;
+use oit_wgpu::{CaptureShader, GeometryPass, OitPass};
 use wgpu::util::DeviceExt;
 
 /// Image side.
@@ -67,174 +67,272 @@ fn user_fs(v: UserOut) -> @location(0) vec4<f32> {
 }
 "#;
 
-/// Renders the user's scene with `technique` through [`OitPass`]: returns oit's frame and the
-/// image read back from the user's target texture, and the adapter's name.
-pub fn render(technique: Technique) -> Result<(Frame, Image, String), OitError> {
-    // The user's device, opened their way, with the features oit needs.
-    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
-    desc.backends = wgpu::Backends::VULKAN;
-    let instance = wgpu::Instance::new(desc);
-    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-        power_preference: wgpu::PowerPreference::HighPerformance,
-        ..Default::default()
-    }))
-    .map_err(|e| OitError::Device(format!("no adapter: {e}")))?;
-    let features = oit_wgpu::required_features() | (adapter.features() & wgpu::Features::FLOAT32_BLENDABLE);
-    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        label: Some("user"),
-        required_features: features,
-        ..Default::default()
-    }))
-    .map_err(|e| OitError::Device(format!("cannot open the device: {e}")))?;
+/// The user's side: their device, vertex buffer, uniform, pipeline layout and target texture.
+pub struct User {
+    /// The user's device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// The adapter's name.
+    pub adapter: String,
+    vertex_buf: wgpu::Buffer,
+    vertex_count: u32,
+    uniform: wgpu::Buffer,
+    user_layout: wgpu::BindGroupLayout,
+    user_group: wgpu::BindGroup,
+    /// The target texture oit's image goes into.
+    pub target: wgpu::Texture,
+}
 
-    // The user's vertex buffer (position, RGBA), uniform and target.
-    let mut vertices: Vec<f32> = Vec::new();
-    for (corners, color) in quads() {
-        for i in QUAD_TRIANGLES.iter().flatten() {
-            vertices.extend(corners[*i as usize].to_array());
-            vertices.extend(color.to_array());
+impl User {
+    /// Opens the device the user's way, with the features oit needs, and makes their buffers and
+    /// a `SIZE × SIZE` target of `format` (usable as a copy destination and a render attachment).
+    pub fn new(format: wgpu::TextureFormat) -> Result<User, OitError> {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        desc.backends = wgpu::Backends::VULKAN;
+        let instance = wgpu::Instance::new(desc);
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            ..Default::default()
+        }))
+        .map_err(|e| OitError::Device(format!("no adapter: {e}")))?;
+        let features =
+            oit_wgpu::required_features() | (adapter.features() & wgpu::Features::FLOAT32_BLENDABLE);
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("user"),
+            required_features: features,
+            ..Default::default()
+        }))
+        .map_err(|e| OitError::Device(format!("cannot open the device: {e}")))?;
+
+        // The user's vertex buffer (position, RGBA), uniform and target.
+        let mut vertices: Vec<f32> = Vec::new();
+        for (corners, color) in quads() {
+            for i in QUAD_TRIANGLES.iter().flatten() {
+                vertices.extend(corners[*i as usize].to_array());
+                vertices.extend(color.to_array());
+            }
         }
-    }
-    let vertex_count = (vertices.len() / 7) as u32;
-    let vertex_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("user vertices"),
-        contents: bytemuck::cast_slice(&vertices),
-        usage: wgpu::BufferUsages::VERTEX,
-    });
-    let camera = camera();
-    let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("user uniform"),
-        contents: bytemuck::cast_slice(&camera.view_proj().to_cols_array()),
-        usage: wgpu::BufferUsages::UNIFORM,
-    });
-    let user_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("user"),
-        entries: &[wgpu::BindGroupLayoutEntry {
-            binding: 0,
-            visibility: wgpu::ShaderStages::VERTEX,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        }],
-    });
-    let user_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("user"),
-        layout: &user_layout,
-        entries: &[wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() }],
-    });
-    let target = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("user target"),
-        size: wgpu::Extent3d { width: SIZE, height: SIZE, depth_or_array_layers: 1 },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba8Unorm,
-        usage: wgpu::TextureUsages::COPY_DST
-            | wgpu::TextureUsages::COPY_SRC
-            | wgpu::TextureUsages::TEXTURE_BINDING,
-        view_formats: &[],
-    });
-    let target_view = target.create_view(&Default::default());
-
-    // oit's pass, and one frame: the user builds a pipeline per capture module and draws. The
-    // quads' world-space boxes are for bdp and adp, whose bounds pass oit draws from them.
-    let settings = Settings { width: SIZE, height: SIZE, technique, ..Settings::default() };
-    let boxes: Vec<Aabb> = quads()
-        .iter()
-        .map(|(corners, _)| {
-            let mut b = Aabb::EMPTY;
-            corners.iter().for_each(|&c| b.include(c));
-            b
-        })
-        .collect();
-    let pass = OitPass::new(&device, &queue, settings, camera)?.with_instance_boxes(&boxes)?;
-    let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4];
-    let frame = pass.frame(
-        Some(&target_view),
-        |capture| {
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("user + oit"),
-                source: wgpu::ShaderSource::Wgsl(format!("{}\n{USER_WGSL}", capture.wgsl).into()),
-            });
-            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("user"),
-                bind_group_layouts: &[Some(capture.bind_group_layout), Some(&user_layout)],
-                immediate_size: 0,
-            });
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("user"),
-                layout: Some(&layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("user_vs"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(wgpu::VertexBufferLayout {
-                        array_stride: 7 * 4,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &attributes,
-                    })],
+        let vertex_count = (vertices.len() / 7) as u32;
+        let vertex_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("user vertices"),
+            contents: bytemuck::cast_slice(&vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("user uniform"),
+            contents: bytemuck::cast_slice(&camera().view_proj().to_cols_array()),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        let user_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("user"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
                 },
-                // no culling: the back faces are seen through the front ones
-                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("user_fs"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(capture.count_target.clone())],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        },
-        |rpass, _pass| {
-            rpass.set_bind_group(1, &user_group, &[]);
-            rpass.set_vertex_buffer(0, vertex_buf.slice(..));
-            rpass.draw(0..vertex_count, 0..1);
-        },
-    )?;
+                count: None,
+            }],
+        });
+        let user_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("user"),
+            layout: &user_layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() }],
+        });
+        let target = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("user target"),
+            size: wgpu::Extent3d { width: SIZE, height: SIZE, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::COPY_DST
+                | wgpu::TextureUsages::COPY_SRC
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        Ok(User {
+            device,
+            queue,
+            adapter: adapter.get_info().name,
+            vertex_buf,
+            vertex_count,
+            uniform,
+            user_layout,
+            user_group,
+            target,
+        })
+    }
 
-    // What the user would sample: read the target back.
-    let readback = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("user readback"),
-        size: u64::from(SIZE * SIZE * 4),
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    encoder.copy_texture_to_buffer(
-        target.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &readback,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(SIZE * 4),
-                rows_per_image: None,
+    /// oit's pass on the user's device for `technique` at `camera`, with the quads' world-space
+    /// boxes (for bdp and adp, whose bounds pass oit draws from them).
+    pub fn pass(&self, technique: Technique, camera: Camera) -> Result<OitPass, OitError> {
+        let settings = Settings { width: SIZE, height: SIZE, technique, ..Settings::default() };
+        let boxes: Vec<Aabb> = quads()
+            .iter()
+            .map(|(corners, _)| {
+                let mut b = Aabb::EMPTY;
+                corners.iter().for_each(|&c| b.include(c));
+                b
+            })
+            .collect();
+        OitPass::new(&self.device, &self.queue, settings, camera)?.with_instance_boxes(&boxes)
+    }
+
+    /// The user's pipeline over one of oit's capture modules.
+    pub fn pipeline(&self, capture: &CaptureShader<'_>) -> wgpu::RenderPipeline {
+        let device = &self.device;
+        let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4];
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("user + oit"),
+            source: wgpu::ShaderSource::Wgsl(format!("{}\n{USER_WGSL}", capture.wgsl).into()),
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("user"),
+            bind_group_layouts: &[Some(capture.bind_group_layout), Some(&self.user_layout)],
+            immediate_size: 0,
+        });
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("user"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("user_vs"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: 7 * 4,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &attributes,
+                })],
             },
-        },
-        target.size(),
-    );
-    queue.submit([encoder.finish()]);
-    readback.slice(..).map_async(wgpu::MapMode::Read, |_| {});
-    device
-        .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
-        .map_err(|e| OitError::Device(format!("waiting for the GPU failed: {e}")))?;
-    let data = readback.slice(..).get_mapped_range().map_err(|e| OitError::Device(e.to_string()))?;
-    let image = Image {
-        width: SIZE,
-        height: SIZE,
-        pixels: data.chunks_exact(4).map(|p| [p[0], p[1], p[2], p[3]]).collect(),
+            // no culling: the back faces are seen through the front ones
+            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("user_fs"),
+                compilation_options: Default::default(),
+                targets: &[Some(capture.count_target.clone())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    }
+
+    /// The user's draws.
+    pub fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _pass: &GeometryPass<'_>) {
+        rpass.set_bind_group(1, &self.user_group, &[]);
+        rpass.set_vertex_buffer(0, self.vertex_buf.slice(..));
+        rpass.draw(0..self.vertex_count, 0..1);
+    }
+
+    /// Moves the user's camera (their uniform, written on the queue).
+    pub fn set_camera(&self, camera: &Camera) {
+        self.queue.write_buffer(&self.uniform, 0, bytemuck::cast_slice(&camera.view_proj().to_cols_array()));
+    }
+
+    /// What the user would sample: the target read back (RGBA byte order whatever its format).
+    pub fn read_target(&self) -> Result<Image, OitError> {
+        let readback = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("user readback"),
+            size: u64::from(SIZE * SIZE * 4),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        encoder.copy_texture_to_buffer(
+            self.target.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &readback,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(SIZE * 4),
+                    rows_per_image: None,
+                },
+            },
+            self.target.size(),
+        );
+        self.queue.submit([encoder.finish()]);
+        readback.slice(..).map_async(wgpu::MapMode::Read, |_| {});
+        self.device
+            .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
+            .map_err(|e| OitError::Device(format!("waiting for the GPU failed: {e}")))?;
+        let data = readback.slice(..).get_mapped_range().map_err(|e| OitError::Device(e.to_string()))?;
+        let bgra = matches!(
+            self.target.format(),
+            wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb
+        );
+        Ok(Image {
+            width: SIZE,
+            height: SIZE,
+            pixels: data
+                .chunks_exact(4)
+                .map(|p| if bgra { [p[2], p[1], p[0], p[3]] } else { [p[0], p[1], p[2], p[3]] })
+                .collect(),
+        })
+    }
+}
+
+/// Renders the user's scene with `technique` through [`OitPass::frame`]: returns oit's frame and
+/// the image read back from the user's target texture, and the adapter's name.
+pub fn render(technique: Technique) -> Result<(Frame, Image, String), OitError> {
+    let user = User::new(wgpu::TextureFormat::Rgba8Unorm)?;
+    let pass = user.pass(technique, camera())?;
+    let view = user.target.create_view(&Default::default());
+    let frame = pass.frame(Some(&view), |c| user.pipeline(c), |r, p| user.draw(r, p))?;
+    Ok((frame, user.read_target()?, user.adapter.clone()))
+}
+
+/// The camera of frame `i` of the loop: orbiting the quads, a degree a frame.
+pub fn orbit(i: u32) -> Camera {
+    let angle = (i as f32).to_radians();
+    let eye = glam::Quat::from_rotation_y(angle) * Vec3::new(0.4, 0.5, 3.5);
+    Camera::look_at(eye, Vec3::ZERO, 45.0, 1.0, 1.0, 8.0)
+}
+
+/// A frame loop as a real application runs it: each frame the camera moves, the user writes
+/// their uniform, oit records into the user's encoder ([`OitPass::record`]: nothing submitted,
+/// nothing read back), the user submits. Returns frames per second over `frames` frames after
+/// one warm-up frame (waited for before and after the timed loop), and the pass's allocations
+/// after the warm-up and at the end.
+pub fn frame_loop(technique: Technique, frames: u32) -> Result<(f64, u64, u64), OitError> {
+    let user = User::new(wgpu::TextureFormat::Rgba8Unorm)?;
+    let mut pass = user.pass(technique, orbit(0))?;
+    let view = user.target.create_view(&Default::default());
+    let one = |pass: &mut OitPass, i: u32| -> Result<(), OitError> {
+        let camera = orbit(i);
+        pass.set_view(pass.settings().clone(), camera)?;
+        user.set_camera(&camera);
+        let mut encoder = user.device.create_command_encoder(&Default::default());
+        pass.record(&mut encoder, &view, |c| user.pipeline(c), |r, p| user.draw(r, p))?;
+        user.queue.submit([encoder.finish()]);
+        Ok(())
     };
-    Ok((frame, image, adapter.get_info().name))
+    let wait = || {
+        user.device
+            .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
+            .map_err(|e| OitError::Device(format!("waiting for the GPU failed: {e}")))
+    };
+    one(&mut pass, 0)?;
+    wait()?;
+    let warm = pass.allocations();
+    let start = std::time::Instant::now();
+    for i in 1..=frames {
+        one(&mut pass, i)?;
+    }
+    wait()?;
+    let fps = f64::from(frames) / start.elapsed().as_secs_f64();
+    Ok((fps, warm, pass.allocations()))
 }
 
 fn main() -> Result<(), OitError> {
     let mut args = std::env::args().skip(1);
-    let technique: Technique = args.next().as_deref().unwrap_or("fabs").parse()?;
+    let technique: Technique = args.next().as_deref().unwrap_or("fabs:8").parse()?;
     let out = args.next().unwrap_or_else(|| "embed.png".into());
     let (frame, image, adapter) = render(technique)?;
     image.save_png(std::path::Path::new(&out))?;
@@ -242,5 +340,13 @@ fn main() -> Result<(), OitError> {
         "{technique} on {adapter}: {} fragments, {} geometry passes, gpu {:?} ms, wrote {out}",
         frame.stats.fragments, frame.stats.geometry_passes, frame.stats.gpu_ms
     );
+    match frame_loop(technique, 120) {
+        Ok((fps, warm, end)) => println!(
+            "{technique}, recorded into the user's encoder, camera orbiting: {fps:.1} frames per second over 120 frames \
+             ({SIZE}×{SIZE}; buffers created: {warm} after the first frame, {end} after the loop)"
+        ),
+        Err(OitError::Unsupported { what, .. }) => println!("no frame loop for {technique}: {what}"),
+        Err(e) => return Err(e),
+    }
     Ok(())
 }

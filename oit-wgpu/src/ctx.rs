@@ -60,6 +60,47 @@ pub enum Fragments {
     Known(u64),
 }
 
+/// The command encoder a frame records into: its own (submitted where the frame must read
+/// something back, and at its end), or the caller's ([`GpuCtx::recording`]: the embedded pass's
+/// `OitPass::record`, which submits nothing and reads nothing back).
+pub enum Enc<'a> {
+    /// The frame's own, created on first use.
+    Own(wgpu::CommandEncoder),
+    /// The caller's.
+    Caller(&'a mut wgpu::CommandEncoder),
+}
+
+impl std::ops::Deref for Enc<'_> {
+    type Target = wgpu::CommandEncoder;
+    fn deref(&self) -> &wgpu::CommandEncoder {
+        match self {
+            Enc::Own(e) => e,
+            Enc::Caller(e) => e,
+        }
+    }
+}
+
+impl std::ops::DerefMut for Enc<'_> {
+    fn deref_mut(&mut self) -> &mut wgpu::CommandEncoder {
+        match self {
+            Enc::Own(e) => e,
+            Enc::Caller(e) => e,
+        }
+    }
+}
+
+/// Slots of the frame uniform's ring: each pass binds its own slot, so the passes of one
+/// submission see their own pass index and parameter (a frame with more passes submits what it
+/// has recorded and starts the ring over).
+const UNIFORM_SLOTS: u64 = 64;
+/// Bytes between slots: the largest `min_uniform_buffer_offset_alignment` wgpu allows.
+const UNIFORM_STRIDE: u64 = 256;
+
+/// The totals' word counting the gated geometry passes that ran ([`GpuCtx::geometry_pass_if`]).
+const GATED_WORD: u64 = 5;
+/// The totals' word holding the fragments merged into tails ([`GpuCtx::note_merged`]).
+const MERGED_WORD: u64 = 6;
+
 /// Where a geometry pass leaves its count of generated fragments: word 0 of this buffer, written
 /// by the pass's submission (a [`Driver`] returns it instead of reading it back, so a pass costs
 /// no round trip; [`GpuCtx::geometry_pass_read`] reads it where a technique sizes from it).
@@ -157,12 +198,30 @@ pub trait Driver {
         None
     }
 
+    /// Where this driver's gated passes take their arguments ([`GpuCtx::geometry_pass_if`]);
+    /// `None` where its draws are not oit's to gate (the user's, in the embedded pass).
+    fn gate(&self) -> Option<Gate> {
+        None
+    }
+
     /// oit's own vertex stage of the scene, for techniques with their own render pipelines
     /// (`--hardware-capture blend`); `None` where the draws are not oit's (the compute
     /// rasterizer, the embedded pass).
     fn scene_stage(&self) -> Option<&crate::hardware::SceneStage> {
         None
     }
+}
+
+/// A driver's indirect arguments for gated passes: `words` words copied from `from` to `to`
+/// where the gate is open, zeros where it is closed; the driver's gated passes dispatch or draw
+/// from `to`.
+pub struct Gate {
+    /// The arguments of an ungated pass.
+    pub from: wgpu::Buffer,
+    /// The gated copy (`STORAGE | INDIRECT`).
+    pub to: wgpu::Buffer,
+    /// Words of arguments.
+    pub words: u32,
 }
 
 /// Initial contents of a storage buffer.
@@ -228,6 +287,22 @@ pub struct GpuCtx<'a> {
     gpu_ms: f64,
     pass_ms: Vec<(String, f64)>,
     lent: Lent<'a>,
+    /// What the frame has recorded and not yet submitted (or the caller's encoder).
+    encoder: Option<Enc<'a>>,
+    /// Whether the frame records into the caller's encoder: nothing is submitted or read back.
+    pub recording: bool,
+    /// The next free slot of the uniform ring.
+    uniform_slot: u64,
+    /// Geometry passes recorded behind a gate ([`GpuCtx::geometry_pass_if`]): whether each ran
+    /// is counted on the device, in the totals.
+    gated_passes: u32,
+    /// Set where a recorded frame ran out of uniform slots (its commands are then wrong).
+    ring_full: bool,
+    /// Whether the geometry pass being recorded is gated: its driver draws or dispatches from
+    /// its gated arguments.
+    pub gated_pass: bool,
+    /// Where the frame's tail pass left the merged count, copied into the totals at the end.
+    merged_from: Option<wgpu::Buffer>,
 }
 
 impl<'a> GpuCtx<'a> {
@@ -239,6 +314,20 @@ impl<'a> GpuCtx<'a> {
         settings: &'a Settings,
     ) -> Result<Self, OitError> {
         GpuCtx::with_pool(gpu, scene, camera, settings, None)
+    }
+
+    /// [`GpuCtx::with_pool`] recording into `encoder`, the caller's: the frame submits nothing
+    /// and reads nothing back (a step that would, a sizing or a peel's stop, is an error), and
+    /// measures no GPU time. [`GpuCtx::finish_recorded`] ends it.
+    pub fn recording(
+        gpu: &'a Gpu,
+        scene: &'a Scene,
+        camera: &'a Camera,
+        settings: &'a Settings,
+        pool: Option<&'a BufferPool>,
+        encoder: &'a mut wgpu::CommandEncoder,
+    ) -> Result<Self, OitError> {
+        GpuCtx::make_ctx(gpu, scene, camera, settings, pool, Some(encoder))
     }
 
     /// A buffer from the pool (or new without one), given back when the frame ends.
@@ -264,6 +353,18 @@ impl<'a> GpuCtx<'a> {
         settings: &'a Settings,
         pool: Option<&'a BufferPool>,
     ) -> Result<Self, OitError> {
+        GpuCtx::make_ctx(gpu, scene, camera, settings, pool, None)
+    }
+
+    fn make_ctx(
+        gpu: &'a Gpu,
+        scene: &'a Scene,
+        camera: &'a Camera,
+        settings: &'a Settings,
+        pool: Option<&'a BufferPool>,
+        caller: Option<&'a mut wgpu::CommandEncoder>,
+    ) -> Result<Self, OitError> {
+        let recording = caller.is_some();
         let plan = Plan::new("wgpu", scene, settings)?;
         let pixels = settings.width * settings.height;
         let state_bytes = u64::from(pixels) * STATE_WORDS * 4;
@@ -306,7 +407,7 @@ impl<'a> GpuCtx<'a> {
         };
         let uniform_buffer = make(
             "frame uniform",
-            std::mem::size_of::<FrameUniform>() as u64,
+            UNIFORM_SLOTS * UNIFORM_STRIDE,
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
         // the resolve state is initialized by `init_main` below, pooled or not
@@ -315,7 +416,7 @@ impl<'a> GpuCtx<'a> {
             state_bytes.max(4),
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         );
-        let timestamps = gpu.has_timestamps().then(|| {
+        let timestamps = (gpu.has_timestamps() && !recording).then(|| {
             let resolve = make(
                 "timestamps",
                 u64::from(crate::gpu::TIMESTAMP_QUERIES) * 8,
@@ -365,12 +466,65 @@ impl<'a> GpuCtx<'a> {
             gpu_ms: 0.0,
             pass_ms: Vec::new(),
             lent,
+            encoder: caller.map(Enc::Caller),
+            recording,
+            uniform_slot: 0,
+            gated_passes: 0,
+            gated_pass: false,
+            merged_from: None,
+            ring_full: false,
         };
         let (image, totals) = (ctx.image.clone(), ctx.totals.clone());
         let acct = ctx.acct.clone();
         ctx.fill(&acct, 0)?;
+        ctx.fill(&totals, 0)?;
         ctx.kernel_over(FINISH_WGSL, "init_main", &[&image, &totals], u64::from(pixels), 0, 0, "init")?;
         Ok(ctx)
+    }
+
+    /// The encoder the frame records into (its own, made on first use, or the caller's).
+    pub fn encoder(&mut self) -> &mut wgpu::CommandEncoder {
+        let gpu = self.gpu;
+        self.encoder.get_or_insert_with(|| Enc::Own(gpu.device.create_command_encoder(&Default::default())))
+    }
+
+    /// The frame's encoder, taken out to record a pass that also borrows the frame (its
+    /// timestamp writes); give it back with [`GpuCtx::put_encoder`] or [`GpuCtx::finish_timed`].
+    pub fn take_encoder(&mut self) -> Enc<'a> {
+        match self.encoder.take() {
+            Some(e) => e,
+            None => Enc::Own(self.gpu.device.create_command_encoder(&Default::default())),
+        }
+    }
+
+    /// Gives back what [`GpuCtx::take_encoder`] took.
+    pub fn put_encoder(&mut self, encoder: Enc<'a>) {
+        self.encoder = Some(encoder);
+    }
+
+    /// Submits what the frame has recorded: before a readback, and at the end. A frame recording
+    /// into the caller's encoder cannot: the step that asked is refused (`OitPass::record`
+    /// checks its techniques up front, so this is a guard, not a path).
+    pub fn flush(&mut self) -> Result<(), OitError> {
+        if self.recording {
+            return Err(OitError::Unsupported {
+                backend: "wgpu (recorded pass)".into(),
+                what: format!(
+                    "{}: this step reads a result back in mid-frame, which a frame recorded into your                      encoder cannot do; use `OitPass::frame`",
+                    self.settings.technique
+                ),
+            });
+        }
+        if let Some(Enc::Own(e)) = self.encoder.take() {
+            self.gpu.queue.submit([e.finish()]);
+        }
+        Ok(())
+    }
+
+    /// Word 0.. of `buffer`, read back after submitting what the frame recorded (a round trip).
+    pub fn read_u32(&mut self, buffer: &wgpu::Buffer) -> Result<Vec<u32>, OitError> {
+        self.flush()?;
+        self.gpu.read_u32(buffer)
     }
 
     /// A storage buffer of `words` 32-bit words for the technique, checked against the limits and
@@ -406,9 +560,7 @@ impl<'a> GpuCtx<'a> {
     /// Sets every word of `buffer` to `value` (a kernel; zero is a plain clear).
     pub fn fill(&mut self, buffer: &wgpu::Buffer, value: u32) -> Result<(), OitError> {
         if value == 0 {
-            let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-            encoder.clear_buffer(buffer, 0, None);
-            self.gpu.queue.submit([encoder.finish()]);
+            self.encoder().clear_buffer(buffer, 0, None);
             return Ok(());
         }
         self.kernel_over(FILL_WGSL, "fill_main", &[buffer], buffer.size() / 4, 0, value, "fill")
@@ -461,10 +613,29 @@ impl<'a> GpuCtx<'a> {
     ) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
         self.uniform.pass_index = pass_index;
         self.uniform.param = param;
-        self.gpu.queue.write_buffer(&self.uniform_buffer, 0, bytemuck::bytes_of(&self.uniform));
+        if self.uniform_slot == UNIFORM_SLOTS {
+            // every slot is bound by a recorded pass: submit those, then write over them (a
+            // queue write lands before the next submission, after the last). A recorded frame of
+            // this many passes cannot: `OitPass::record` takes only short schedules.
+            if self.recording {
+                self.uniform_slot = 0;
+                self.ring_full = true;
+            } else {
+                let _ = self.flush();
+                self.uniform_slot = 0;
+            }
+        }
+        let offset = self.uniform_slot * UNIFORM_STRIDE;
+        self.uniform_slot += 1;
+        self.gpu.queue.write_buffer(&self.uniform_buffer, offset, bytemuck::bytes_of(&self.uniform));
         let layout = self.layout0(buffers.len());
+        let uniform = wgpu::BufferBinding {
+            buffer: &self.uniform_buffer,
+            offset,
+            size: std::num::NonZeroU64::new(std::mem::size_of::<FrameUniform>() as u64),
+        };
         let mut entries = vec![
-            wgpu::BindGroupEntry { binding: 0, resource: self.uniform_buffer.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::Buffer(uniform) },
             wgpu::BindGroupEntry { binding: 1, resource: self.state.as_entire_binding() },
             wgpu::BindGroupEntry { binding: ACCT_BINDING, resource: self.acct.as_entire_binding() },
         ];
@@ -505,11 +676,56 @@ impl<'a> GpuCtx<'a> {
         param: u32,
     ) -> Result<u64, OitError> {
         let generated = self.run_geometry_pass(driver, source, buffers, pass_index, param)?;
-        let n = u64::from(self.gpu.read_u32(&generated.0)?[0]);
+        let n = u64::from(self.read_u32(&generated.0)?[0]);
         if self.fragments == Fragments::Unset {
             self.fragments = Fragments::Known(n);
         }
         Ok(n)
+    }
+
+    /// A geometry pass that has work only where word 0 of `flag` (written by the frame's earlier
+    /// passes) is not zero, as fabs's overflow passes and the tails' pass: no round trip. Where
+    /// the driver can gate its own draws or dispatches ([`Driver::gate`]), a kernel writes its
+    /// arguments from the flag (zero work when it is clear) and counts the pass on the device;
+    /// where it cannot (the user's draws in the embedded pass) the flag is read back, or, in a
+    /// recorded frame, the pass is drawn whatever the flag (such passes leave the pixels without
+    /// work untouched) and counted on the device only where the flag is set, as oit-cpu counts.
+    pub fn geometry_pass_if(
+        &mut self,
+        driver: &dyn Driver,
+        source: &str,
+        buffers: &[&wgpu::Buffer],
+        pass_index: u32,
+        param: u32,
+        flag: &wgpu::Buffer,
+    ) -> Result<(), OitError> {
+        let gate = driver.gate();
+        if gate.is_none() && !self.recording {
+            if self.read_u32(flag)?[0] != 0 {
+                self.geometry_pass(driver, source, buffers, pass_index, param)?;
+            }
+            return Ok(());
+        }
+        let totals = self.totals.clone();
+        let (from, to, words) = match gate {
+            Some(g) => (g.from, g.to, g.words),
+            None => (crate::technique::placeholder(self), crate::technique::placeholder(self), 0),
+        };
+        self.kernel_over(GATE_WGSL, "gate_main", &[flag, &totals, &from, &to], 64, 0, words, "gate")?;
+        let gate = words > 0;
+        self.gated_pass = gate;
+        let run = self.run_geometry_pass(driver, source, buffers, pass_index, param);
+        self.gated_pass = false;
+        let generated = run?;
+        self.note_generated(&generated);
+        self.gated_passes += 1;
+        Ok(())
+    }
+
+    /// Where a tail pass counted the fragments it merged (word 1 of `words`): copied into the
+    /// totals at the end of the frame and read back with them.
+    pub fn note_merged(&mut self, words: &wgpu::Buffer) {
+        self.merged_from = Some(words.clone());
     }
 
     /// The pass both of the above run: group 0 bound, the driver's setup time and check taken,
@@ -557,7 +773,7 @@ impl<'a> GpuCtx<'a> {
             self.sizing_checks.push((max.clone(), d));
             return Ok(d);
         }
-        let m = self.gpu.read_u32(max)?[0];
+        let m = self.read_u32(max)?[0];
         self.deepest_seen = Some(m);
         Ok(m)
     }
@@ -568,9 +784,8 @@ impl<'a> GpuCtx<'a> {
         if self.fragments != Fragments::Unset {
             return;
         }
-        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(&generated.0, 0, &self.totals, FRAGMENTS_WORD * 4, 4);
-        self.gpu.queue.submit([encoder.finish()]);
+        let totals = self.totals.clone();
+        self.encoder().copy_buffer_to_buffer(&generated.0, 0, &totals, FRAGMENTS_WORD * 4, 4);
         self.fragments = Fragments::OnDevice;
     }
 
@@ -626,7 +841,7 @@ impl<'a> GpuCtx<'a> {
         label: &str,
         record: impl FnOnce(&mut wgpu::CommandEncoder, Option<wgpu::ComputePassTimestampWrites<'_>>),
     ) -> Result<(), OitError> {
-        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        let mut encoder = self.take_encoder();
         let writes = self.render_timestamps().map(|w| wgpu::ComputePassTimestampWrites {
             query_set: w.query_set,
             beginning_of_pass_write_index: w.beginning_of_pass_write_index,
@@ -636,10 +851,11 @@ impl<'a> GpuCtx<'a> {
         self.finish_timed(label, encoder)
     }
 
-    /// Submits `encoder`, whose one pass wrote the timestamp pair [`GpuCtx::render_timestamps`]
-    /// gave it, and labels that pair; its time is read back with the frame's others.
-    pub fn finish_timed(&mut self, label: &str, encoder: wgpu::CommandEncoder) -> Result<(), OitError> {
-        self.gpu.queue.submit([encoder.finish()]);
+    /// Gives back `encoder` (from [`GpuCtx::take_encoder`]), whose one pass wrote the timestamp
+    /// pair [`GpuCtx::render_timestamps`] gave it, and labels that pair; its time is read back
+    /// with the frame's others. Nothing is submitted here.
+    pub fn finish_timed(&mut self, label: &str, encoder: Enc<'a>) -> Result<(), OitError> {
+        self.put_encoder(encoder);
         let full = match &mut self.timestamps {
             Some(ts) => {
                 ts.labels.push(label.to_string());
@@ -649,7 +865,10 @@ impl<'a> GpuCtx<'a> {
         };
         if full {
             // a frame of more than 2,048 timed passes (a deep peel): read these, go on
-            let words = self.resolve_timestamps().map(|t| self.gpu.read_u32(&t)).transpose()?;
+            let words = match self.resolve_timestamps() {
+                Some(t) => Some(self.read_u32(&t)?),
+                None => None,
+            };
             self.add_timestamps(words.as_deref());
         }
         Ok(())
@@ -662,10 +881,9 @@ impl<'a> GpuCtx<'a> {
         if ts.labels.is_empty() {
             return None;
         }
-        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        encoder.resolve_query_set(ts.set(), 0..ts.labels.len() as u32 * 2, &ts.resolve, 0);
-        self.gpu.queue.submit([encoder.finish()]);
-        Some(ts.resolve.clone())
+        let (set, n, resolve) = (ts.set().clone(), ts.labels.len() as u32 * 2, ts.resolve.clone());
+        self.encoder().resolve_query_set(&set, 0..n, &resolve, 0);
+        Some(resolve)
     }
 
     /// Adds the pairs' times (the resolve buffer's words, read back) to the frame's GPU time and
@@ -720,32 +938,12 @@ impl<'a> GpuCtx<'a> {
         readback: bool,
     ) -> Result<Option<Frame>, OitError> {
         let (image_buf, totals) = (self.image.clone(), self.totals.clone());
-        // the four totals finish.wgsl sums (not the fragments word after them)
-        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        encoder.clear_buffer(&totals, 0, Some(16));
-        self.gpu.queue.submit([encoder.finish()]);
-        self.kernel_over(
-            FINISH_WGSL,
-            "totals_main",
-            &[&image_buf, &totals],
-            u64::from(self.pixels),
-            0,
-            0,
-            "resolve",
-        )?;
-        self.kernel_over(
-            FINISH_WGSL,
-            "finish_main",
-            &[&image_buf, &totals],
-            u64::from(self.pixels),
-            0,
-            0,
-            "resolve",
-        )?;
+        self.record_finish()?;
         let _ = path;
         // one readback at the end of the frame: the totals, the timestamps, and (when asked)
         // the image and the per-pixel losses
         let stamps = self.resolve_timestamps();
+        self.flush()?;
         let checks = std::mem::take(&mut self.checks);
         let sizing = std::mem::take(&mut self.sizing_checks);
         let mut read = vec![&totals];
@@ -793,6 +991,42 @@ impl<'a> GpuCtx<'a> {
         self.frame_of(image, &t, acct).map(Some)
     }
 
+    /// Records the frame's last kernels: the totals summed (into words 0–3, with the merged count
+    /// copied beside them) and the image written.
+    fn record_finish(&mut self) -> Result<(), OitError> {
+        let (image, totals) = (self.image.clone(), self.totals.clone());
+        // the four totals finish.wgsl sums (not the words after them)
+        let encoder = self.encoder();
+        encoder.clear_buffer(&totals, 0, Some(16));
+        if let Some(words) = self.merged_from.take() {
+            self.encoder().copy_buffer_to_buffer(&words, 4, &totals, MERGED_WORD * 4, 4);
+        }
+        let pixels = u64::from(self.pixels);
+        self.kernel_over(FINISH_WGSL, "totals_main", &[&image, &totals], pixels, 0, 0, "resolve")?;
+        self.kernel_over(FINISH_WGSL, "finish_main", &[&image, &totals], pixels, 0, 0, "resolve")
+    }
+
+    /// Ends a frame recorded into the caller's encoder ([`GpuCtx::recording`]): its last kernels
+    /// recorded, nothing submitted. The image (one sRGB8 RGBA word a pixel) and the totals stay on
+    /// the device in the returned buffers, to be drawn or copied by commands recorded after these.
+    pub fn finish_recorded(mut self) -> Result<RecordedBuffers, OitError> {
+        self.record_finish()?;
+        if self.ring_full {
+            return Err(OitError::Device(format!(
+                "the recorded frame bound more than {UNIFORM_SLOTS} pass uniforms: its commands are wrong, do not submit them"
+            )));
+        }
+        let uniform = self.uniform_buffer.clone();
+        Ok(RecordedBuffers {
+            image: self.image.clone(),
+            totals: self.totals.clone(),
+            uniform,
+            passes: self.passes - self.gated_passes,
+            gated_passes: self.gated_passes,
+            storage_bytes: self.storage_bytes,
+        })
+    }
+
     /// The frame of `image`, the totals `t` and the per-pixel loss accounting (read back where
     /// the technique counts its losses and the caller wants them).
     fn frame_of(self, image: Image, t: &[u32], acct: Option<Vec<u32>>) -> Result<Frame, OitError> {
@@ -815,11 +1049,11 @@ impl<'a> GpuCtx<'a> {
             layers: None,
             lost_pixels,
             stats: Stats {
-                geometry_passes: self.passes,
+                geometry_passes: self.passes - self.gated_passes + t[GATED_WORD as usize],
                 fragments,
                 captured,
                 lost,
-                merged: self.merged,
+                merged: self.merged + u64::from(t[MERGED_WORD as usize]),
                 tied: u64::from(t[2]),
                 storage_bytes: self.storage_bytes,
                 wall_ms: 0.0,
@@ -835,6 +1069,27 @@ impl<'a> GpuCtx<'a> {
         Ok(frame)
     }
 }
+
+/// A frame recorded into the caller's encoder ([`GpuCtx::finish_recorded`]): where its results
+/// lie on the device once the caller has submitted it.
+pub struct RecordedBuffers {
+    /// The image: one RGBA8 word a pixel (sRGB-encoded, red in the low byte), row-major.
+    pub image: wgpu::Buffer,
+    /// The totals (words: captured, deepest captured, tied, lost, fragments, gated passes that
+    /// ran, merged).
+    pub totals: wgpu::Buffer,
+    /// The frame uniform ring: slot 0 starts with the image's width and height.
+    pub uniform: wgpu::Buffer,
+    /// Geometry passes recorded that run whatever the frame finds.
+    pub passes: u32,
+    /// Geometry passes recorded behind a gate (whether each ran is counted in the totals).
+    pub gated_passes: u32,
+    /// Bytes of per-pixel storage the frame uses.
+    pub storage_bytes: u64,
+}
+
+/// The gate kernel of [`GpuCtx::geometry_pass_if`].
+const GATE_WGSL: &str = include_str!("shaders/gate.wgsl");
 
 /// Workgroups of 64 for `invocations`, as (x, y) with x ≤ 65535.
 pub fn dispatch_size(invocations: u64) -> (u32, u32) {

@@ -107,20 +107,24 @@
 
 use std::cell::RefCell;
 use std::hash::{DefaultHasher, Hash, Hasher};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 use std::time::Instant;
 
 use glam::{Vec3, Vec4};
 use oit_core::{
-    Aabb, BoundsMode, Camera, Frame, Instance, Mesh, OitError, RasterPath, Scene, Settings, Technique,
+    Aabb, BoundsMode, Camera, Frame, Instance, Mesh, OitError, RasterPath, Scene, Settings, Stats, Technique,
 };
 
-use crate::ctx::{Driver, Generated, GpuCtx};
+use crate::ctx::{Driver, Gate, Generated, GpuCtx};
 use crate::gpu::{COMMON_WGSL, Gpu};
 use crate::hardware::{HwGeometry, RASTER_WGSL};
+use crate::pool::BufferPool;
 
 /// The fragment side every render-pipeline geometry pass shares (`oit_capture`).
 pub const CAPTURE_RENDER_WGSL: &str = include_str!("shaders/capture_render.wgsl");
 const COUNT_SUM_WGSL: &str = include_str!("shaders/count_sum.wgsl");
+const BLIT_WGSL: &str = include_str!("shaders/blit.wgsl");
 
 /// What the user's pipeline for one capture module is built from.
 pub struct CaptureShader<'a> {
@@ -141,6 +145,9 @@ pub struct GeometryPass<'a> {
     pub index: u32,
     /// Group 0 of this pass (already set at index 0 when the closure is called).
     pub bind_group: &'a wgpu::BindGroup,
+    /// oit's own draws of a gated pass draw from these indirect arguments (the user's draws,
+    /// which oit cannot gate, ignore them: see [`OitPass::record`]).
+    pub(crate) indirect: Option<&'a wgpu::Buffer>,
 }
 
 type PipelineFn<'a> = Box<dyn FnMut(&CaptureShader<'_>) -> wgpu::RenderPipeline + 'a>;
@@ -151,14 +158,11 @@ type DrawFn<'a> = Box<dyn FnMut(&mut wgpu::RenderPass<'_>, &GeometryPass<'_>) + 
 /// hardware path and the embedded pass run.
 pub(crate) struct RenderDriver<'a> {
     salt: &'static str,
-    format: wgpu::TextureFormat,
-    count_view: wgpu::TextureView,
-    sum_layout: wgpu::BindGroupLayout,
-    sum_group: wgpu::BindGroup,
-    total: wgpu::Buffer,
-    size: (u32, u32),
+    target: CountTarget,
     pipeline: RefCell<PipelineFn<'a>>,
     draw: RefCell<DrawFn<'a>>,
+    /// The indirect draw arguments of oit's own draws (the hardware path's), for gated passes.
+    gate: Option<Gate>,
 }
 
 impl<'a> RenderDriver<'a> {
@@ -175,6 +179,41 @@ impl<'a> RenderDriver<'a> {
         pipeline: PipelineFn<'a>,
         draw: DrawFn<'a>,
     ) -> RenderDriver<'a> {
+        RenderDriver::with_target(CountTarget::new(gpu, width, height), salt, pipeline, draw)
+    }
+
+    /// A driver drawing into `target` (kept by its owner between frames of its size).
+    pub(crate) fn with_target(
+        target: CountTarget,
+        salt: &'static str,
+        pipeline: PipelineFn<'a>,
+        draw: DrawFn<'a>,
+    ) -> RenderDriver<'a> {
+        RenderDriver { salt, target, pipeline: RefCell::new(pipeline), draw: RefCell::new(draw), gate: None }
+    }
+
+    /// The driver drawing from `gate.to` in gated passes (oit's own draws: the hardware path).
+    pub(crate) fn with_gate(mut self, gate: Gate) -> Self {
+        self.gate = Some(gate);
+        self
+    }
+}
+
+/// A render-pipeline geometry pass's count target (one channel, additive blending) and the
+/// counter it is summed into: [`RenderDriver::CREATES`] objects, kept between frames of a size.
+#[derive(Clone)]
+pub(crate) struct CountTarget {
+    format: wgpu::TextureFormat,
+    count_view: wgpu::TextureView,
+    sum_layout: wgpu::BindGroupLayout,
+    sum_group: wgpu::BindGroup,
+    total: wgpu::Buffer,
+    size: (u32, u32),
+}
+
+impl CountTarget {
+    /// A count target of `width × height`.
+    pub(crate) fn new(gpu: &Gpu, width: u32, height: u32) -> CountTarget {
         // R16Float counts exactly up to 2048 fragments per pixel and pass; R32Float (blendable
         // only with FLOAT32_BLENDABLE) up to 2^24.
         let format = if gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
@@ -236,17 +275,7 @@ impl<'a> RenderDriver<'a> {
                 wgpu::BindGroupEntry { binding: 1, resource: total.as_entire_binding() },
             ],
         });
-        RenderDriver {
-            salt,
-            format,
-            count_view,
-            sum_layout,
-            sum_group,
-            total,
-            size: (width, height),
-            pipeline: RefCell::new(pipeline),
-            draw: RefCell::new(draw),
-        }
+        CountTarget { format, count_view, sum_layout, sum_group, total, size: (width, height) }
     }
 }
 
@@ -281,21 +310,23 @@ impl Driver for RenderDriver<'_> {
         wgsl.hash(&mut h);
         let module_key = h.finish();
         self.salt.hash(&mut h);
-        self.format.hash(&mut h);
+        self.target.format.hash(&mut h);
         let pipeline = ctx.gpu.render_pipeline(h.finish(), self.salt, || {
             (self.pipeline.borrow_mut())(&CaptureShader {
                 wgsl: &wgsl,
                 bind_group_layout: layout0,
-                count_target: count_target(self.format),
+                count_target: count_target(self.target.format),
                 key: module_key,
             })
         })?;
-        let mut encoder = ctx.gpu.device.create_command_encoder(&Default::default());
+        let index = ctx.passes;
+        let indirect = if ctx.gated_pass { self.gate.as_ref().map(|g| &g.to) } else { None };
+        let mut encoder = ctx.take_encoder();
         {
             let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("geometry"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &self.count_view,
+                    view: &self.target.count_view,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
@@ -310,20 +341,23 @@ impl Driver for RenderDriver<'_> {
             });
             rpass.set_pipeline(&pipeline);
             rpass.set_bind_group(0, group0, &[]);
-            (self.draw.borrow_mut())(&mut rpass, &GeometryPass { index: ctx.passes, bind_group: group0 });
+            (self.draw.borrow_mut())(&mut rpass, &GeometryPass { index, bind_group: group0, indirect });
         }
         ctx.finish_timed("geometry", encoder)?;
-        let sum = ctx.gpu.compute_pipeline(COUNT_SUM_WGSL, "count_sum_main", &[&self.sum_layout])?;
-        let mut encoder = ctx.gpu.device.create_command_encoder(&Default::default());
-        encoder.clear_buffer(&self.total, 0, None);
+        let sum = ctx.gpu.compute_pipeline(COUNT_SUM_WGSL, "count_sum_main", &[&self.target.sum_layout])?;
+        let encoder = ctx.encoder();
+        encoder.clear_buffer(&self.target.total, 0, None);
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             pass.set_pipeline(&sum);
-            pass.set_bind_group(0, &self.sum_group, &[]);
-            pass.dispatch_workgroups(self.size.0.div_ceil(8), self.size.1.div_ceil(8), 1);
+            pass.set_bind_group(0, &self.target.sum_group, &[]);
+            pass.dispatch_workgroups(self.target.size.0.div_ceil(8), self.target.size.1.div_ceil(8), 1);
         }
-        ctx.gpu.queue.submit([encoder.finish()]);
-        Ok(Generated(self.total.clone()))
+        Ok(Generated(self.target.total.clone()))
+    }
+
+    fn gate(&self) -> Option<Gate> {
+        self.gate.as_ref().map(|g| Gate { from: g.from.clone(), to: g.to.clone(), words: g.words })
     }
 }
 
@@ -335,6 +369,30 @@ pub struct OitPass {
     scene: Scene,
     /// The instances' bounding boxes on the device, for the bounds pass of bdp and adp.
     boxes: Option<HwGeometry>,
+    /// Per-pixel storage kept between frames: a frame of a size seen before creates none.
+    pool: BufferPool,
+    /// The count target of the current size, kept between frames.
+    target: Mutex<Option<CountTarget>>,
+    /// Buffers and textures made outside the pool (count targets, the stats buffer).
+    made: AtomicU64,
+    /// Where [`OitPass::record`] leaves the totals of its frame, for [`OitPass::read_stats`],
+    /// and what that frame counted on the host (passes run whatever, storage bytes).
+    stats: wgpu::Buffer,
+    recorded: Mutex<Option<(u32, u64)>>,
+    /// Group 0 of the image blit of [`OitPass::record`].
+    blit_layout: wgpu::BindGroupLayout,
+}
+
+/// What [`OitPass::record`] recorded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Recorded {
+    /// Geometry passes recorded (the user's draw closure was called this many times).
+    pub geometry_passes: u32,
+    /// Of those, the passes that have work only where the frame finds it (fabs's overflow passes,
+    /// the tails'): [`OitPass::read_stats`] says how many did.
+    pub gated_passes: u32,
+    /// Bytes of per-pixel storage the frame uses.
+    pub storage_bytes: u64,
 }
 
 /// A stand-in scene for the frame: what `GpuCtx` reads from a scene (its bounds, which scale the
@@ -359,12 +417,37 @@ impl OitPass {
     ) -> Result<OitPass, OitError> {
         settings.validate()?;
         let gpu = Gpu::from_device(device.clone(), queue.clone())?;
+        let stats = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("recorded totals"),
+            size: 32,
+            usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
+            count: None,
+        };
+        let blit_layout = gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("oit image blit"),
+            entries: &[
+                entry(0, wgpu::BufferBindingType::Uniform),
+                entry(1, wgpu::BufferBindingType::Storage { read_only: true }),
+            ],
+        });
         Ok(OitPass {
             gpu,
             settings,
             camera,
             scene: stand_in(Aabb { min: -Vec3::ONE, max: Vec3::ONE }, 1.0),
             boxes: None,
+            pool: BufferPool::default(),
+            target: Mutex::new(None),
+            made: AtomicU64::new(1),
+            stats,
+            recorded: Mutex::new(None),
+            blit_layout,
         })
     }
 
@@ -427,7 +510,8 @@ impl OitPass {
     /// `pipeline` builds for that pass's capture module; built once per module and kept), its
     /// resolve, and the image written into `target` when given (an `Rgba8Unorm`, `Rgba8UnormSrgb`,
     /// `Bgra8Unorm` or `Bgra8UnormSrgb` texture at least `width × height`, with `COPY_DST`; the
-    /// bytes are sRGB-encoded, as in the PNG oit writes). Returns the frame with its stats.
+    /// bytes are sRGB-encoded, as in the PNG oit writes). Returns the frame with its stats, read
+    /// back (every technique runs here; see [`OitPass::record`] for a frame that reads nothing).
     pub fn frame(
         &self,
         target: Option<&wgpu::TextureView>,
@@ -436,19 +520,186 @@ impl OitPass {
     ) -> Result<Frame, OitError> {
         let start = Instant::now();
         if let Some(view) = target {
-            self.check_target(view.texture())?;
+            self.check_target(view.texture(), wgpu::TextureUsages::COPY_DST)?;
         }
+        self.check_technique()?;
+        let drivers = self.drivers(Box::new(pipeline), Box::new(draw));
+        let mut ctx =
+            GpuCtx::with_pool(&self.gpu, &self.scene, &self.camera, &self.settings, Some(&self.pool))?;
+        let layers = crate::run_technique(&mut ctx, &drivers)?;
+        let mut frame = ctx.finish(RasterPath::Hardware)?;
+        frame.layers = layers;
+        if let Some(view) = target {
+            self.write_target(view.texture(), &frame)?;
+        }
+        frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok(frame)
+    }
+
+    /// One frame recorded into the caller's `encoder`, for a real frame loop: the technique's
+    /// geometry passes (the user's `draw` in each, as in [`OitPass::frame`]), its resolve, and a
+    /// draw of the image into `target` (the first `width × height` texels of an `Rgba8Unorm`,
+    /// `Rgba8UnormSrgb`, `Bgra8Unorm` or `Bgra8UnormSrgb` texture with `RENDER_ATTACHMENT`; the
+    /// rest is kept). It submits nothing and reads nothing back: submit the encoder as usual, then,
+    /// if wanted, [`OitPass::read_stats`]. The image equals [`OitPass::frame`]'s (a `…Srgb`
+    /// target stores the same bytes: the draw decodes them and the target encodes them again).
+    ///
+    /// A frame with no round trip is one whose schedule is known before it runs: `fabs:K`,
+    /// `mdts:K` (with `Settings::alpha`), `mdts64:K`, `wavg`, `wsum`, and `bdp`/`bdp:P` (with the
+    /// instances' boxes). Where such a frame has work that only some frames have (fabs's two
+    /// overflow passes, where a pixel holds more than K fragments; the passes of
+    /// `--overflow tail`), those passes are recorded every frame: oit cannot make the user's draws
+    /// conditional, so they are drawn, and each fragment of a pixel without such work leaves at
+    /// once (the stats count them only where they had work, as oit-cpu does). Every other
+    /// technique sizes storage, stops peeling or picks batches from what an earlier pass found,
+    /// and is refused with [`OitError::Unsupported`]: use [`OitPass::frame`] for those.
+    ///
+    /// Queue writes (the frame's uniforms) take effect at the next submission: submit one recorded
+    /// frame before recording, or rendering, the next with this pass, as with any uniform written
+    /// through `Queue::write_buffer`.
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &wgpu::TextureView,
+        pipeline: impl FnMut(&CaptureShader<'_>) -> wgpu::RenderPipeline,
+        draw: impl FnMut(&mut wgpu::RenderPass<'_>, &GeometryPass<'_>),
+    ) -> Result<Recorded, OitError> {
+        self.check_target(target.texture(), wgpu::TextureUsages::RENDER_ATTACHMENT)?;
+        self.check_technique()?;
+        self.check_recordable()?;
+        let format = target.texture().format();
+        let blit = self.blit_pipeline(format)?;
+        let drivers = self.drivers(Box::new(pipeline), Box::new(draw));
+        let done = {
+            let mut ctx = GpuCtx::recording(
+                &self.gpu,
+                &self.scene,
+                &self.camera,
+                &self.settings,
+                Some(&self.pool),
+                encoder,
+            )?;
+            crate::run_technique(&mut ctx, &drivers)?;
+            ctx.finish_recorded()?
+        };
+        encoder.copy_buffer_to_buffer(&done.totals, 0, &self.stats, 0, 32);
+        let group = self.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("oit image blit"),
+            layout: &self.blit_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &done.uniform,
+                        offset: 0,
+                        size: std::num::NonZeroU64::new(16),
+                    }),
+                },
+                wgpu::BindGroupEntry { binding: 1, resource: done.image.as_entire_binding() },
+            ],
+        });
+        {
+            let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("oit image"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: target,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            let (w, h) = (self.settings.width, self.settings.height);
+            rpass.set_viewport(0.0, 0.0, w as f32, h as f32, 0.0, 1.0);
+            rpass.set_scissor_rect(0, 0, w, h);
+            rpass.set_pipeline(&blit);
+            rpass.set_bind_group(0, &group, &[]);
+            rpass.draw(0..3, 0..1);
+        }
+        let recorded = Recorded {
+            geometry_passes: done.passes + done.gated_passes,
+            gated_passes: done.gated_passes,
+            storage_bytes: done.storage_bytes,
+        };
+        if let Ok(mut last) = self.recorded.lock() {
+            *last = Some((done.passes, done.storage_bytes));
+        }
+        Ok(recorded)
+    }
+
+    /// The stats of the last frame [`OitPass::record`] recorded, once the caller has submitted
+    /// it: its totals read back (one round trip, which the frame itself did not make). Wall and
+    /// GPU times are not measured in a recorded frame; `lost_pixels` is not kept.
+    pub fn read_stats(&self) -> Result<Stats, OitError> {
+        let Some((passes, storage_bytes)) = self.recorded.lock().ok().and_then(|r| *r) else {
+            return Err(OitError::InvalidSettings("no frame has been recorded with this pass".into()));
+        };
+        let t = self.gpu.read_u32(&self.stats)?;
+        let stats = Stats {
+            geometry_passes: passes + t[5],
+            fragments: u64::from(t[4]),
+            captured: u64::from(t[0]),
+            lost: u64::from(t[3]),
+            merged: u64::from(t[6]),
+            tied: u64::from(t[2]),
+            storage_bytes,
+            wall_ms: 0.0,
+            gpu_ms: None,
+            max_layers: t[1],
+            gpu_pass_ms: Vec::new(),
+            tiles: 1,
+        };
+        stats.check_accounting("wgpu (recorded pass)")?;
+        Ok(stats)
+    }
+
+    /// Buffers and textures this pass has created for its frames: its per-pixel storage (a
+    /// [`BufferPool`]'s), its count targets and boxes' rasters, its stats buffer. A frame of a
+    /// size and technique seen before adds none (bdp's bounds pass excepted: its boxes' count
+    /// target is made each frame).
+    pub fn allocations(&self) -> u64 {
+        self.pool.allocations() + self.made.load(Relaxed)
+    }
+
+    /// The count target of the pass's size, kept or made.
+    fn count_target(&self) -> CountTarget {
         let (w, h) = (self.settings.width, self.settings.height);
-        let driver = RenderDriver::new(&self.gpu, w, h, "embedded", Box::new(pipeline), Box::new(draw));
-        let boxes_driver = || -> Result<Box<dyn Driver>, OitError> {
+        let mut kept = self.target.lock().unwrap_or_else(|e| e.into_inner());
+        match &*kept {
+            Some(t) if t.size == (w, h) => t.clone(),
+            _ => {
+                self.made.fetch_add(RenderDriver::CREATES, Relaxed);
+                let t = CountTarget::new(&self.gpu, w, h);
+                *kept = Some(t.clone());
+                t
+            }
+        }
+    }
+
+    /// The drivers of a frame: the user's pipeline and draws for the scene, and oit's own draws
+    /// of the instances' boxes (made when a bounds pass asks).
+    fn drivers<'p>(&'p self, pipeline: PipelineFn<'p>, draw: DrawFn<'p>) -> crate::Drivers<'p> {
+        let (w, h) = (self.settings.width, self.settings.height);
+        let driver = RenderDriver::with_target(self.count_target(), "embedded", pipeline, draw);
+        let boxes_driver = move || -> Result<Box<dyn Driver>, OitError> {
             let Some(boxes) = &self.boxes else {
                 return Err(self.no_boxes());
             };
             boxes.write_boxes_frame(&self.gpu, &self.camera, &self.settings);
-            Ok(Box::new(boxes.raster(&self.gpu, w, h, &std::cell::Cell::new(0))))
+            let made = std::cell::Cell::new(0);
+            let raster = boxes.raster(&self.gpu, w, h, &made);
+            self.made.fetch_add(made.get(), Relaxed);
+            Ok(Box::new(raster))
         };
-        let drivers = crate::Drivers { scene: Box::new(driver), boxes: Box::new(boxes_driver) };
-        // refused before any pass runs, not at the bounds pass
+        crate::Drivers { scene: Box::new(driver), boxes: Box::new(boxes_driver) }
+    }
+
+    /// The techniques the pass refuses whatever the frame: bdp and adp without boxes, mdts
+    /// without an alpha. Checked before any pass runs.
+    fn check_technique(&self) -> Result<(), OitError> {
         if self.boxes.is_none()
             && self.settings.bounds == BoundsMode::Boxes
             && matches!(self.settings.technique, Technique::Bdp { .. } | Technique::Adp)
@@ -465,15 +716,87 @@ impl OitPass {
                     .into(),
             });
         }
-        let mut ctx = GpuCtx::new(&self.gpu, &self.scene, &self.camera, &self.settings)?;
-        let layers = crate::run_technique(&mut ctx, &drivers)?;
-        let mut frame = ctx.finish(RasterPath::Hardware)?;
-        frame.layers = layers;
-        if let Some(view) = target {
-            self.write_target(view.texture(), &frame)?;
+        Ok(())
+    }
+
+    /// Whether the technique's frame can be recorded without a round trip ([`OitPass::record`]).
+    fn check_recordable(&self) -> Result<(), OitError> {
+        let plan = oit_core::plan::Plan::new("wgpu", &self.scene, &self.settings)?;
+        let why = match self.settings.technique {
+            _ if plan.needs_count() => {
+                Some("its storage is sized by a counting pass read back in mid-frame; give K")
+            }
+            Technique::Fabs { .. }
+            | Technique::Mdts { .. }
+            | Technique::Mdts64 { .. }
+            | Technique::WeightedAverage
+            | Technique::WeightedSum
+            | Technique::Bdp { .. } => None,
+            Technique::Dp | Technique::Ddp | Technique::Mlp { .. } => {
+                Some("it stops peeling when a pass read back finds nothing left")
+            }
+            Technique::Adp => Some("its batches are chosen from a histogram read back in mid-frame"),
+            _ => Some("it sizes its storage from counts read back in mid-frame"),
+        };
+        match why {
+            None => Ok(()),
+            Some(why) => Err(OitError::Unsupported {
+                backend: "wgpu (recorded pass)".into(),
+                what: format!(
+                    "{}: {why}, which a frame recorded into your encoder cannot do; use `OitPass::frame`, \
+                     or one of fabs:K, mdts:K, mdts64:K, wavg, wsum, bdp, bdp:P",
+                    self.settings.technique
+                ),
+            }),
         }
-        frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
-        Ok(frame)
+    }
+
+    /// The render pipeline drawing the image into a target of `format` (cached per device).
+    fn blit_pipeline(
+        &self,
+        format: wgpu::TextureFormat,
+    ) -> Result<std::sync::Arc<wgpu::RenderPipeline>, OitError> {
+        let mut h = DefaultHasher::new();
+        BLIT_WGSL.hash(&mut h);
+        format.hash(&mut h);
+        let device = &self.gpu.device;
+        let srgb = format.is_srgb();
+        self.gpu.render_pipeline(h.finish(), "oit image blit", || {
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("oit image blit"),
+                source: wgpu::ShaderSource::Wgsl(BLIT_WGSL.into()),
+            });
+            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("oit image blit"),
+                bind_group_layouts: &[Some(&self.blit_layout)],
+                immediate_size: 0,
+            });
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("oit image blit"),
+                layout: Some(&layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("blit_vs"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(if srgb { "blit_srgb_fs" } else { "blit_fs" }),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        })
     }
 
     /// bdp or adp without the instances' boxes: the error naming what to call.
@@ -489,14 +812,14 @@ impl OitPass {
         }
     }
 
-    fn check_target(&self, texture: &wgpu::Texture) -> Result<(), OitError> {
+    fn check_target(&self, texture: &wgpu::Texture, usage: wgpu::TextureUsages) -> Result<(), OitError> {
         use wgpu::TextureFormat as F;
         let ok_format =
             matches!(texture.format(), F::Rgba8Unorm | F::Rgba8UnormSrgb | F::Bgra8Unorm | F::Bgra8UnormSrgb);
         let big = texture.width() >= self.settings.width && texture.height() >= self.settings.height;
-        if !ok_format || !big || !texture.usage().contains(wgpu::TextureUsages::COPY_DST) {
+        if !ok_format || !big || !texture.usage().contains(usage) || texture.sample_count() != 1 {
             return Err(OitError::Device(format!(
-                "the target texture is {:?} {}×{} with {:?}: it must be Rgba8/Bgra8 (Unorm or UnormSrgb), at least {}×{}, with COPY_DST",
+                "the target texture is {:?} {}×{} with {:?}: it must be Rgba8/Bgra8 (Unorm or UnormSrgb), at least {}×{}, single-sampled, with {usage:?}",
                 texture.format(),
                 texture.width(),
                 texture.height(),

@@ -30,7 +30,7 @@ use glam::{Mat3, Vec3, Vec4};
 use oit_core::{Aabb, Camera, OitError, RasterPath, Scene, Settings};
 use wgpu::util::DeviceExt;
 
-use crate::ctx::{Driver, Generated, GpuCtx};
+use crate::ctx::{Driver, Gate, Generated, GpuCtx};
 use crate::embed::{CaptureShader, GeometryPass, RenderDriver};
 use crate::gpu::Gpu;
 
@@ -126,6 +126,12 @@ impl SceneStage {
         view
     }
 
+    /// [`SceneStage::draw`] from indirect arguments (a gated pass's: every triangle, or none).
+    pub(crate) fn draw_indirect(&self, rpass: &mut wgpu::RenderPass<'_>, args: &wgpu::Buffer) {
+        rpass.set_bind_group(1, &self.group, &[]);
+        rpass.draw_indirect(args, 0);
+    }
+
     /// Sets group 1 and draws every triangle (primitive `t` of the draw is the scene's `t`).
     pub(crate) fn draw(&self, rpass: &mut wgpu::RenderPass<'_>) {
         rpass.set_bind_group(1, &self.group, &[]);
@@ -180,7 +186,7 @@ impl SceneStage {
         target: PassTarget<'_>,
         occlusion: &Occlusion,
     ) -> Result<bool, OitError> {
-        let mut encoder = ctx.gpu.device.create_command_encoder(&Default::default());
+        let mut encoder = ctx.take_encoder();
         {
             let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some(target.label),
@@ -215,7 +221,7 @@ impl SceneStage {
         encoder.resolve_query_set(&occlusion.set, 0..1, &occlusion.buffer, 0);
         ctx.finish_timed("geometry", encoder)?;
         ctx.passes += 1;
-        Ok(ctx.gpu.read_u32(&occlusion.buffer)?.iter().any(|&s| s != 0))
+        Ok(ctx.read_u32(&occlusion.buffer)?.iter().any(|&s| s != 0))
     }
 }
 
@@ -258,6 +264,10 @@ pub(crate) struct HwGeometry {
     layout: wgpu::BindGroupLayout,
     group: wgpu::BindGroup,
     vertex_count: u32,
+    /// The one draw's indirect arguments ([vertices, 1, 0, 0]) and their gated copy, for the
+    /// gated geometry passes ([`GpuCtx::geometry_pass_if`]).
+    draw_args: wgpu::Buffer,
+    gated_args: wgpu::Buffer,
 }
 
 /// A buffer holding `bytes` (at least 64 bytes: a binding may not be empty), counted in `made`.
@@ -402,7 +412,26 @@ impl HwGeometry {
                 wgpu::BindGroupEntry { binding: 3, resource: instances.as_entire_binding() },
             ],
         });
-        Ok(HwGeometry { boxes, instance_count, instances, uniform, layout, group, vertex_count })
+        let args = [vertex_count, 1, 0, 0];
+        let draw_args = buffer_init(gpu, "draw arguments", bytemuck::cast_slice(&args), storage, made);
+        let gated_args = buffer_init(
+            gpu,
+            "gated draw arguments",
+            bytemuck::cast_slice(&args),
+            storage | wgpu::BufferUsages::INDIRECT,
+            made,
+        );
+        Ok(HwGeometry {
+            boxes,
+            instance_count,
+            instances,
+            uniform,
+            layout,
+            group,
+            vertex_count,
+            draw_args,
+            gated_args,
+        })
     }
 
     /// The layout of the vertex stage's group 1.
@@ -498,9 +527,14 @@ impl HwGeometry {
             )
         };
         let draw_stage = stage.clone();
-        let draw = move |rpass: &mut wgpu::RenderPass<'_>, _: &GeometryPass<'_>| draw_stage.draw(rpass);
+        let draw = move |rpass: &mut wgpu::RenderPass<'_>, pass: &GeometryPass<'_>| match pass.indirect {
+            Some(args) => draw_stage.draw_indirect(rpass, args),
+            None => draw_stage.draw(rpass),
+        };
         made.set(made.get() + RenderDriver::CREATES);
-        let driver = RenderDriver::new(gpu, width, height, "hardware", Box::new(pipeline), Box::new(draw));
+        let gate = Gate { from: self.draw_args.clone(), to: self.gated_args.clone(), words: 4 };
+        let driver = RenderDriver::new(gpu, width, height, "hardware", Box::new(pipeline), Box::new(draw))
+            .with_gate(gate);
         HardwareRaster { driver: Rc::new(driver), stage }
     }
 }
@@ -568,6 +602,10 @@ impl Driver for HardwareRaster {
         group0: &wgpu::BindGroup,
     ) -> Result<Generated, OitError> {
         self.driver.geometry_pass(ctx, source, layout0, group0)
+    }
+
+    fn gate(&self) -> Option<Gate> {
+        self.driver.gate()
     }
 
     fn scene_stage(&self) -> Option<&SceneStage> {

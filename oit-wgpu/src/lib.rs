@@ -61,9 +61,10 @@ use oit_core::{
 };
 
 pub use crate::ctx::{
-    Driver, Fragments, FrameUniform, Generated, GpuCtx, Init, SetupCheck, TECHNIQUE_PRELUDE,
+    Driver, Enc, Fragments, FrameUniform, Gate, Generated, GpuCtx, Init, RecordedBuffers, SetupCheck,
+    TECHNIQUE_PRELUDE,
 };
-pub use crate::embed::{CaptureShader, GeometryPass, OitPass};
+pub use crate::embed::{CaptureShader, GeometryPass, OitPass, Recorded};
 pub use crate::gpu::{COMMON_WGSL, Gpu, TIMESTAMP_QUERIES, adapters, required_features};
 pub use crate::hardware::HardwareRaster;
 pub use crate::pool::BufferPool;

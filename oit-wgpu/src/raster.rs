@@ -32,7 +32,7 @@ use glam::{Mat3, Vec3, Vec4};
 use oit_core::setup::{TRIANGLE_WORDS, TriangleSetup, box_vertices, normal_matrix};
 use oit_core::{Aabb, Camera, OitError, RasterPath, Scene, Settings};
 
-use crate::ctx::{Driver, Generated, GpuCtx, SetupCheck, dispatch_size};
+use crate::ctx::{Driver, Gate, Generated, GpuCtx, SetupCheck, dispatch_size};
 use crate::gpu::Gpu;
 
 const RASTER_WGSL: &str = include_str!("shaders/raster_compute.wgsl");
@@ -68,6 +68,8 @@ pub struct ComputeRaster {
     group: wgpu::BindGroup,
     generated: wgpu::Buffer,
     args: wgpu::Buffer,
+    /// The gated copy of `args`, for gated passes.
+    gated: wgpu::Buffer,
     /// Device milliseconds of this frame's setup kernels (GPU setup on a device with
     /// timestamps), handed to the frame's first geometry pass ([`Driver::take_setup_ms`]).
     setup_ms: Cell<Option<f64>>,
@@ -309,6 +311,8 @@ pub(crate) struct ComputeBuffers {
     uniform: wgpu::Buffer,
     generated: wgpu::Buffer,
     args: wgpu::Buffer,
+    /// The gated copy of `args` ([`GpuCtx::geometry_pass_if`]).
+    gated: wgpu::Buffer,
     layout: wgpu::BindGroupLayout,
     group: wgpu::BindGroup,
     setup: Option<SetupBuffers>,
@@ -411,6 +415,7 @@ impl ComputeBuffers {
             U::STORAGE | U::INDIRECT | U::COPY_SRC | U::COPY_DST,
             made,
         );
+        let gated = buffer(gpu, "gated raster dispatch", ARGS_BYTES, U::STORAGE | U::INDIRECT, made);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("compute raster"),
             entries: &[
@@ -429,6 +434,7 @@ impl ComputeBuffers {
             uniform,
             generated,
             args,
+            gated,
             layout,
             group,
             setup: None,
@@ -504,6 +510,7 @@ impl ComputeBuffers {
             group: self.group.clone(),
             generated: self.generated.clone(),
             args: self.args.clone(),
+            gated: self.gated.clone(),
             setup_ms: Cell::new(setup_ms),
             check: std::cell::RefCell::new(check),
         })
@@ -750,6 +757,11 @@ impl Driver for ComputeRaster {
         self.check.borrow_mut().take()
     }
 
+    fn gate(&self) -> Option<Gate> {
+        let words = (self.args.size() / 4) as u32;
+        Some(Gate { from: self.args.clone(), to: self.gated.clone(), words })
+    }
+
     fn geometry_pass(
         &self,
         ctx: &mut GpuCtx<'_>,
@@ -766,7 +778,8 @@ impl Driver for ComputeRaster {
         let entry = if per_pixel { "raster_main" } else { "raster_loop_main" };
         let pipeline =
             ctx.gpu.compute_pipeline(&format!("{source}\n{RASTER_WGSL}"), entry, &[layout0, &self.layout])?;
-        let mut encoder = ctx.gpu.device.create_command_encoder(&Default::default());
+        let args = if ctx.gated_pass { &self.gated } else { &self.args };
+        let mut encoder = ctx.take_encoder();
         encoder.clear_buffer(&self.generated, 0, None);
         let writes = ctx.render_timestamps().map(|w| wgpu::ComputePassTimestampWrites {
             query_set: w.query_set,
@@ -783,7 +796,7 @@ impl Driver for ComputeRaster {
             pass.set_bind_group(1, &self.group, &[]);
             // arguments written by the setup (or the host's): the per-pixel dispatch, then the
             // per-item one
-            pass.dispatch_workgroups_indirect(&self.args, if per_pixel { 0 } else { 16 });
+            pass.dispatch_workgroups_indirect(args, if per_pixel { 0 } else { 16 });
         }
         ctx.finish_timed("geometry", encoder)?;
         Ok(Generated(self.generated.clone()))

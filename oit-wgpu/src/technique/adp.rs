@@ -25,7 +25,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     let buffers = [&bounds, &hist, &buckets, &max_bins, &nearest];
     ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, 0, 0)?;
     ctx.pixel_kernel(WGSL, "count_main", &buffers, 0, 0)?;
-    let bins = ctx.gpu.read_u32(&max_bins)?[0];
+    let bins = ctx.read_u32(&max_bins)?[0];
     let batches = ctx.plan.adp_batches(bins);
     for batch in 0..batches {
         ctx.last_pass(batch + 1 == batches);

@@ -106,7 +106,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
             None,
         )
     })?;
-    let mut encoder = device.create_command_encoder(&Default::default());
+    let mut encoder = ctx.take_encoder();
     {
         let attachments: Vec<Option<wgpu::RenderPassColorAttachment<'_>>> = views
             .iter()

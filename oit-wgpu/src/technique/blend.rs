@@ -137,7 +137,7 @@ fn draw_and_resolve(
             None,
         )
     })?;
-    let mut encoder = device.create_command_encoder(&Default::default());
+    let mut encoder = ctx.take_encoder();
     {
         let attachment = |view, clear| {
             Some(wgpu::RenderPassColorAttachment {

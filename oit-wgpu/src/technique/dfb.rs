@@ -18,9 +18,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     let counts = ctx.buffer("dfb counts", entries, Init::Zero)?;
     ctx.geometry_pass(drivers.scene.as_ref(), COUNT_WGSL, &[&counts], 0, 0)?;
     let offsets = ctx.buffer("dfb offsets", entries, Init::Zero)?;
-    let mut encoder = ctx.gpu.device.create_command_encoder(&Default::default());
-    encoder.copy_buffer_to_buffer(&counts, 0, &offsets, 0, entries * 4);
-    ctx.gpu.queue.submit([encoder.finish()]);
+    ctx.encoder().copy_buffer_to_buffer(&counts, 0, &offsets, 0, entries * 4);
     let total = super::scan(ctx, &offsets, entries)?;
     let total = u64::from(ctx.plan.check_fragments(total)?);
     let keys = ctx.buffer("dfb keys", total * 2, Init::Zero)?;

@@ -27,7 +27,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         ctx.fill(&peeled, 0)?;
         ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, peels, 0)?;
         ctx.pixel_kernel(WGSL, "resolve_main", &buffers, peels, 0)?;
-        if ctx.gpu.read_u32(&peeled)?[0] == 0 {
+        if ctx.read_u32(&peeled)?[0] == 0 {
             break;
         }
         peels += 1;

@@ -32,25 +32,20 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     ctx.storage_bytes -= 4;
     let (tail, tail_words) = super::tail_buffers(ctx)?;
     let buffers = [&counters, &slots, &payloads, &overflowed, &tail, &tail_words];
-    let mut tail_ran = false;
-    ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, FABS_CAPTURE, k)?;
-    // sized from the counting pass, no pixel can overflow: no check, no readback
+    let scene = drivers.scene.as_ref();
+    ctx.geometry_pass(scene, WGSL, &buffers, FABS_CAPTURE, k)?;
+    // sized from the counting pass, no pixel can overflow: no check
     if !ctx.plan.needs_count() {
         ctx.pixel_kernel(WGSL, "overflow_main", &buffers, FABS_CAPTURE, k)?;
-        if ctx.gpu.read_u32(&overflowed)?[0] != 0 {
-            // the K smallest (depth, primitive) keys of each overflowing pixel, then their payloads
-            ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, FABS_KEYS, k)?;
-            ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, FABS_PAYLOADS, k)?;
-            if ctx.plan.tail {
-                ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, FABS_TAIL, k)?;
-                tail_ran = true;
-            }
+        // where a pixel overflowed (the flag stays on the device: the passes are gated by it),
+        // the K smallest (depth, primitive) keys of each overflowing pixel, then their payloads
+        ctx.geometry_pass_if(scene, WGSL, &buffers, FABS_KEYS, k, &overflowed)?;
+        ctx.geometry_pass_if(scene, WGSL, &buffers, FABS_PAYLOADS, k, &overflowed)?;
+        if ctx.plan.tail {
+            ctx.geometry_pass_if(scene, WGSL, &buffers, FABS_TAIL, k, &overflowed)?;
+            super::note_merged(ctx, &tail_words);
         }
     }
     let resolve = if ctx.plan.tail { FABS_WITH_TAIL } else { 0 };
-    ctx.pixel_kernel(WGSL, "resolve_main", &buffers, resolve, k)?;
-    if tail_ran {
-        super::read_merged(ctx, &tail_words)?;
-    }
-    Ok(())
+    ctx.pixel_kernel(WGSL, "resolve_main", &buffers, resolve, k)
 }

@@ -39,15 +39,12 @@ fn passes(
     let buffers = [arrays[0], arrays[1], arrays[2], &unused, &tail, &tail_words];
     let mode = if ctx.plan.tail { mode | MDTS_WITH_TAIL } else { mode };
     ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, mode, k)?;
-    let tail_ran = ctx.plan.tail && ctx.gpu.read_u32(&tail_words)?[0] != 0;
-    if tail_ran {
-        ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, mode | MDTS_TAIL_PASS, k)?;
+    if ctx.plan.tail {
+        // gated by the overflow word the capture raised (on the device, no readback)
+        ctx.geometry_pass_if(drivers.scene.as_ref(), WGSL, &buffers, mode | MDTS_TAIL_PASS, k, &tail_words)?;
+        super::note_merged(ctx, &tail_words);
     }
-    ctx.pixel_kernel(WGSL, "resolve_main", &buffers, mode, k)?;
-    if tail_ran {
-        super::read_merged(ctx, &tail_words)?;
-    }
-    Ok(())
+    ctx.pixel_kernel(WGSL, "resolve_main", &buffers, mode, k)
 }
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {

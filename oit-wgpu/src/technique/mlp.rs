@@ -36,7 +36,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, peels, m)?;
         peels += 1;
         ctx.pixel_kernel(WGSL, "resolve_main", &buffers, peels, m)?;
-        if ctx.gpu.read_u32(&overflowed)?[0] == 0 {
+        if ctx.read_u32(&overflowed)?[0] == 0 {
             break;
         }
     }

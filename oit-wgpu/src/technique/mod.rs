@@ -50,11 +50,9 @@ pub(crate) fn tail_buffers(ctx: &mut GpuCtx<'_>) -> Result<(wgpu::Buffer, wgpu::
     Ok((sums, words))
 }
 
-/// After the resolve of a frame whose tail pass ran: the fragments merged, read back into the
-/// frame's `merged`.
-pub(crate) fn read_merged(ctx: &mut GpuCtx<'_>, words: &wgpu::Buffer) -> Result<(), OitError> {
-    ctx.merged = u64::from(ctx.gpu.read_u32(words)?[1]);
-    Ok(())
+/// The fragments a tail pass merged (word 1 of `words`): read back with the frame's totals.
+pub(crate) fn note_merged(ctx: &mut GpuCtx<'_>, words: &wgpu::Buffer) {
+    ctx.note_merged(words);
 }
 
 /// Fragments per pixel from one counting pass (the buffer), and the deepest pixel's count.
@@ -81,7 +79,7 @@ pub(crate) fn scan(ctx: &mut GpuCtx<'_>, words: &wgpu::Buffer, n: u64) -> Result
     ctx.storage_bytes -= blocks * 4;
     ctx.kernel_over(SCAN_WGSL, "scan_main", &[words, &sums], blocks * 64, 0, param, "scan")?;
     if blocks == 1 {
-        return Ok(u64::from(ctx.gpu.read_u32(&sums)?[0]));
+        return Ok(u64::from(ctx.read_u32(&sums)?[0]));
     }
     let total = scan(ctx, &sums, blocks)?;
     ctx.kernel_over(SCAN_WGSL, "add_main", &[words, &sums], blocks * 64, 0, param, "scan")?;

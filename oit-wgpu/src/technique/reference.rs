@@ -12,7 +12,7 @@ const WGSL: &str = concat!(include_str!("reference.wgsl"), "\n", include_str!("s
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<Vec<u32>, OitError> {
     let (counts, _) = super::count(ctx, drivers.scene.as_ref())?;
-    let counts = ctx.gpu.read_u32(&counts)?;
+    let counts = ctx.read_u32(&counts)?;
     let mut offsets = Vec::with_capacity(counts.len() + 1);
     let mut total = 0u64;
     for &c in &counts {
