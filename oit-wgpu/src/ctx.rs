@@ -282,6 +282,12 @@ pub struct GpuCtx<'a> {
     pub speculated_deepest: Option<u32>,
     /// The deepest pixel this frame's counting pass read back (none when it was speculated).
     pub deepest_seen: Option<u32>,
+    /// The passes an earlier frame of this prepared scene's peel loop ran at this view's kind:
+    /// this frame records as many without reading back in between, and checks at its end
+    /// (`technique::peel`).
+    pub speculated_peels: Option<u32>,
+    /// The passes this frame's peel loop ran, reading back (none when speculated).
+    pub peels_seen: Option<u32>,
     /// Speculated counts to check at the end: the buffer holding the count, and the value used.
     sizing_checks: Vec<(wgpu::Buffer, u32)>,
     gpu_ms: f64,
@@ -462,6 +468,8 @@ impl<'a> GpuCtx<'a> {
             checks: Vec::new(),
             speculated_deepest: None,
             deepest_seen: None,
+            speculated_peels: None,
+            peels_seen: None,
             sizing_checks: Vec::new(),
             gpu_ms: 0.0,
             pass_ms: Vec::new(),
@@ -776,6 +784,12 @@ impl<'a> GpuCtx<'a> {
         let m = self.read_u32(max)?[0];
         self.deepest_seen = Some(m);
         Ok(m)
+    }
+
+    /// Word 0 of `buffer` must equal `expected` at the frame's end (read back with the totals);
+    /// where it does not, the frame is incomplete and runs again without speculating.
+    pub fn check_at_end(&mut self, buffer: &wgpu::Buffer, expected: u32) {
+        self.sizing_checks.push((buffer.clone(), expected));
     }
 
     /// Keeps the first scene pass's count of generated fragments: copied on the device into the

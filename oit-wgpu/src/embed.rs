@@ -19,9 +19,15 @@
 //!   first when a size is not given, as in `reference` and `fabs` without K) call it once per
 //!   geometry pass (`dfb` and `ll` count first too). Then the resolve: the image is returned in the [`Frame`] and, when a target is
 //!   given, written into it.
-//! - oit submits its own command buffers on the queue (techniques read back between passes:
-//!   counts to size storage, a peel's occlusion), so it takes no encoder: submit what the draws
-//!   depend on before calling `frame`.
+//! - Two ways to run a frame. [`OitPass::frame`] submits its own command buffers on the queue
+//!   and reads the image and stats back (every technique: some read back between passes, counts
+//!   to size storage, a peel's stop), so submit what the draws depend on before calling it.
+//!   [`OitPass::record`] records the whole frame into the caller's `CommandEncoder` and draws
+//!   the image into the caller's target, submitting and reading nothing (the techniques whose
+//!   schedule is known up front: `fabs:K`, `mdts:K`, `mdts64:K`, `wavg`, `wsum`, `bdp`, `bdp:P`);
+//!   this is the one for a frame loop (`examples/embed.rs` runs one with an orbiting camera and
+//!   prints frames per second), and [`OitPass::read_stats`] reads its stats after the submit when
+//!   wanted. The pass keeps its storage between frames of a size ([`OitPass::allocations`]).
 //! - Supported: every technique whose geometry passes draw the scene itself (`reference`, `fabs`,
 //!   `mdts64`, `mlp`, `wavg`, `wsum`, `dp`, `ddp`, `dfb`, `ll`; `plain` by sorting each pixel's
 //!   fragments by primitive id, as the compute path does, since the blend units of the user's

@@ -244,7 +244,9 @@ pub struct WgpuPrepared<'s> {
     compute_boxes: RefCell<Option<ComputeBuffers>>,
     /// The deepest pixel the last frame's counting pass found, by technique, size, window and
     /// path: the next such frame sizes its storage from it without waiting for its own counting
-    /// pass, and runs again if that pass finds otherwise ([`GpuCtx::speculated_deepest`]).
+    /// pass, and runs again if that pass finds otherwise ([`GpuCtx::speculated_deepest`]); and
+    /// (key + " peels") the passes its peel loop ran, which the next frame records without a
+    /// round trip between them ([`GpuCtx::speculated_peels`]).
     deepest: RefCell<std::collections::HashMap<String, u32>>,
 }
 
@@ -380,17 +382,23 @@ impl WgpuPrepared<'_> {
             "{:?} {}x{} {:?} {path:?}",
             settings.technique, settings.width, settings.height, settings.region
         );
+        let peels_key = format!("{key} peels");
         ctx.speculated_deepest = this.deepest.borrow().get(&key).copied();
+        ctx.speculated_peels = this.deepest.borrow().get(&peels_key).copied();
         let layers = run_technique(&mut ctx, &drivers)?;
-        let seen = ctx.deepest_seen;
+        let (seen, peels_seen) = (ctx.deepest_seen, ctx.peels_seen);
         let Some(mut frame) = ctx.finish_checked(path, readback)? else {
             // counted otherwise than speculated (or the setup did not fit): the next attempt
-            // waits for its counting pass
+            // waits for its counting pass and reads its peel loop's flag after each pass
             this.deepest.borrow_mut().remove(&key);
+            this.deepest.borrow_mut().remove(&peels_key);
             return Ok(None);
         };
         if let Some(d) = seen {
             this.deepest.borrow_mut().insert(key, d);
+        }
+        if let Some(p) = peels_seen {
+            this.deepest.borrow_mut().insert(peels_key, p);
         }
         frame.layers = layers.filter(|_| readback);
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;

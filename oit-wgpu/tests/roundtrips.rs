@@ -13,7 +13,10 @@ fn a_steady_frame_reads_back_once() {
     let scene = load_scene("planes:6").unwrap();
     let camera = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();
     for path in [RasterPath::Compute, RasterPath::Hardware] {
-        for technique in ["wavg", "wsum", "bdp", "bdp:2", "mdts64:8", "fabs"] {
+        // fabs:2 and mdts64:2 overflow on six planes (their extra passes gated on the device);
+        // dp, ddp and mlp:2 peel with the last frame's pass count, gated likewise
+        for technique in ["wavg", "wsum", "bdp", "bdp:2", "mdts64:8", "fabs", "fabs:2", "dp", "ddp", "mlp:2"]
+        {
             let settings = Settings {
                 width: 48,
                 height: 40,
@@ -38,6 +41,78 @@ fn a_steady_frame_reads_back_once() {
             assert_eq!(again.stats.fragments, first.stats.fragments);
             assert_eq!(again.stats.captured, first.stats.captured);
             assert_eq!(again.stats.lost, first.stats.lost);
+            assert_eq!(again.stats.geometry_passes, first.stats.geometry_passes, "{technique} on {path}");
+        }
+    }
+}
+
+/// A peel loop run with the last frame's pass count ([`oit_wgpu::GpuCtx::speculated_peels`]):
+/// each pass after the first gated on the device by its predecessor's flag, the last flag checked
+/// at the end. A view that needs more passes runs again (and equals a one-shot render of it: image,
+/// passes, losses); a view that needs fewer closes its gates and counts only the passes that ran,
+/// without running again.
+#[test]
+fn a_speculated_peel_count_that_misses_runs_again() {
+    let Some(backend) = oit_wgpu::backend_or_skip("a_speculated_peel_count_that_misses_runs_again") else {
+        return;
+    };
+    let gpu = backend.gpu().expect("opened above");
+    let scene = load_scene("planes:5").unwrap();
+    let bounds = scene.bounds();
+    let (c, r) = (bounds.center(), (bounds.max - bounds.min).length() * 0.5);
+    let dir = glam::Vec3::new(0.1, 0.2, 1.0);
+    let at = Camera::look_at(c + dir * 3.0 * r, c, 45.0, 1.0, 0.01 * r, 100.0 * r);
+    let away = Camera::look_at(c + dir * 3.0 * r, c + dir * 6.0 * r, 45.0, 1.0, 0.01 * r, 100.0 * r);
+    for path in [RasterPath::Compute, RasterPath::Hardware] {
+        let on_gpu = u64::from(path == RasterPath::Compute && oit_wgpu::setup_on_gpu(gpu));
+        for technique in ["dp", "ddp", "mlp:2"] {
+            let settings = Settings {
+                width: 40,
+                height: 40,
+                technique: technique.parse::<Technique>().unwrap(),
+                raster: Some(path),
+                ..Settings::default()
+            };
+            let one_shot_at = backend.render(&scene, &at, &settings).unwrap();
+            let one_shot_away = backend.render(&scene, &away, &settings).unwrap();
+            assert!(one_shot_at.stats.geometry_passes >= 3, "{technique}: the planes need several passes");
+            let mut prepared = backend.prepare(&scene).unwrap();
+            prepared.frame(&away, &settings).unwrap();
+            let before = gpu.readbacks();
+            let frame = prepared.frame(&at, &settings).unwrap();
+            // the first attempt's end; the second's read after each pass, and its end (and on the
+            // GPU's setup, its capacity check)
+            let passes = u64::from(one_shot_at.stats.geometry_passes);
+            let expected = 1 + passes.min(u64::from(u32::MAX)) + on_gpu;
+            assert!(
+                gpu.readbacks() - before >= expected - 1,
+                "{technique} on {path}: the frame needed more passes and ran again ({} readbacks)",
+                gpu.readbacks() - before
+            );
+            for (got, want) in [(&frame, &one_shot_at)] {
+                assert_eq!(got.image, want.image, "{technique} on {path}");
+                assert_eq!(got.stats.geometry_passes, want.stats.geometry_passes, "{technique} on {path}");
+                assert_eq!(got.stats.lost, want.stats.lost, "{technique} on {path}");
+                assert_eq!(got.stats.captured, want.stats.captured, "{technique} on {path}");
+            }
+            // now speculating the deep view's count: the empty view closes the gates at once
+            let before = gpu.readbacks();
+            let frame = prepared.frame(&away, &settings).unwrap();
+            assert_eq!(gpu.readbacks() - before, 1, "{technique} on {path}: fewer passes need no second run");
+            assert_eq!(frame.image, one_shot_away.image, "{technique} on {path}");
+            assert_eq!(
+                frame.stats.geometry_passes, one_shot_away.stats.geometry_passes,
+                "{technique} on {path}"
+            );
+            // and the deep view once more, speculated right (the empty view kept no new count)
+            let before = gpu.readbacks();
+            let frame = prepared.frame(&at, &settings).unwrap();
+            assert_eq!(gpu.readbacks() - before, 1, "{technique} on {path}: the deep view, speculated");
+            assert_eq!(frame.image, one_shot_at.image, "{technique} on {path}");
+            assert_eq!(
+                frame.stats.geometry_passes, one_shot_at.stats.geometry_passes,
+                "{technique} on {path}"
+            );
         }
     }
 }

@@ -19,20 +19,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     check_effect(ctx)?;
     let state = Peel::new(ctx)?;
     let buffers = state.buffers();
-    let limit = ctx.plan.peel_limit;
-    let mut peels = 0;
-    while peels < limit {
-        ctx.last_pass(peels + 1 == limit);
-        ctx.fill(&state.peeled, 0)?;
-        ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, peels, 0)?;
-        ctx.pixel_kernel(WGSL, "resolve_main", &buffers, peels, 0)?;
-        if ctx.read_u32(&state.peeled)?[0] == 0 {
-            break;
-        }
-        peels += 1;
-    }
-    ctx.last_pass(false);
-    Ok(())
+    super::peel(ctx, drivers.scene.as_ref(), WGSL, &buffers, &state.peeled, 0, 0)
 }
 
 /// The effects ddp resolves on the GPU (for both captures, atomics and blend).

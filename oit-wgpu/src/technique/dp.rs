@@ -20,18 +20,5 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     // the loop's counter is not per-pixel storage
     ctx.storage_bytes -= 4;
     let buffers = [&nearest, &previous, &peeled];
-    let limit = ctx.plan.peel_limit;
-    let mut peels = 0;
-    while peels < limit {
-        ctx.last_pass(peels + 1 == limit);
-        ctx.fill(&peeled, 0)?;
-        ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, peels, 0)?;
-        ctx.pixel_kernel(WGSL, "resolve_main", &buffers, peels, 0)?;
-        if ctx.read_u32(&peeled)?[0] == 0 {
-            break;
-        }
-        peels += 1;
-    }
-    ctx.last_pass(false);
-    Ok(())
+    super::peel(ctx, drivers.scene.as_ref(), WGSL, &buffers, &peeled, 0, 0)
 }

@@ -28,17 +28,5 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     // the loop's flag is not per-pixel storage
     ctx.storage_bytes -= 4;
     let buffers = [&slots, &deepest, &overflowed];
-    let limit = ctx.plan.peel_limit;
-    let mut peels = 0;
-    while peels < limit {
-        ctx.last_pass(peels + 1 == limit);
-        ctx.fill(&overflowed, 0)?;
-        ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, peels, m)?;
-        peels += 1;
-        ctx.pixel_kernel(WGSL, "resolve_main", &buffers, peels, m)?;
-        if ctx.read_u32(&overflowed)?[0] == 0 {
-            break;
-        }
-    }
-    Ok(())
+    super::peel(ctx, drivers.scene.as_ref(), WGSL, &buffers, &overflowed, m, 1)
 }

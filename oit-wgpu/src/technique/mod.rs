@@ -55,6 +55,74 @@ pub(crate) fn note_merged(ctx: &mut GpuCtx<'_>, words: &wgpu::Buffer) {
     ctx.note_merged(words);
 }
 
+/// The peel loop of dp, ddp and mlp: until a pass leaves word 0 of `flag` at zero (nothing
+/// peeled, or for mlp nothing overflowed) or the plan's limit, each pass `flag` cleared, the
+/// geometry pass (pass index p, `param`), then the resolve kernel (pass index `p + resolve_step`).
+///
+/// Where the frame has a speculated pass count (a prepared scene's last frame of this view's
+/// kind, [`GpuCtx::speculated_peels`]) it records that many passes with no round trip: each after
+/// the first gated on the flag its predecessor left (a pass that would not have run does
+/// nothing, and is not counted), and the flag checked at the frame's end, where a frame that
+/// needed more passes runs again. Without one, the flag is read after each pass, and the count
+/// kept for the next frame ([`GpuCtx::peels_seen`]).
+pub(crate) fn peel(
+    ctx: &mut GpuCtx<'_>,
+    driver: &dyn Driver,
+    wgsl: &str,
+    buffers: &[&wgpu::Buffer],
+    flag: &wgpu::Buffer,
+    param: u32,
+    resolve_step: u32,
+) -> Result<(), OitError> {
+    let limit = ctx.plan.peel_limit;
+    let speculated = ctx.speculated_peels.take().filter(|&s| s >= 1).map(|s| s.min(limit));
+    let previous = match speculated {
+        Some(_) => Some(ctx.buffer("peel gate", 1, Init::Zero)?),
+        None => None,
+    };
+    if previous.is_some() {
+        // bookkeeping, not per-pixel storage
+        ctx.storage_bytes -= 4;
+    }
+    let mut p = 0;
+    while p < limit {
+        ctx.last_pass(p + 1 == limit);
+        match (&previous, speculated) {
+            (Some(prev), Some(_)) if p > 0 => {
+                ctx.encoder().copy_buffer_to_buffer(flag, 0, prev, 0, 4);
+                ctx.fill(flag, 0)?;
+                ctx.geometry_pass_if(driver, wgsl, buffers, p, param, prev)?;
+            }
+            _ => {
+                ctx.fill(flag, 0)?;
+                ctx.geometry_pass(driver, wgsl, buffers, p, param)?;
+            }
+        }
+        ctx.pixel_kernel(wgsl, "resolve_main", buffers, p + resolve_step, param)?;
+        p += 1;
+        match speculated {
+            Some(s) if p == s => {
+                if p < limit {
+                    // the last speculated pass must have found nothing more
+                    ctx.check_at_end(flag, 0);
+                }
+                break;
+            }
+            Some(_) => {}
+            None => {
+                if ctx.read_u32(flag)?[0] == 0 {
+                    break;
+                }
+            }
+        }
+    }
+    if speculated.is_none() {
+        ctx.peels_seen = Some(p);
+    }
+    ctx.last_pass(false);
+    Ok(())
+}
+
 /// Fragments per pixel from one counting pass (the buffer), and the deepest pixel's count.
 pub(crate) fn count(ctx: &mut GpuCtx<'_>, driver: &dyn Driver) -> Result<(wgpu::Buffer, u32), OitError> {
     let counts = ctx.buffer("fragment counts", u64::from(ctx.pixels), Init::Zero)?;
