@@ -55,7 +55,7 @@ grid)
 before-after)
     # issue 10: a binary of an earlier commit ($BEFORE, stripped) and this one ($OIT) on the same
     # scenes, one after the other per scene (bench/results/h200/issue10/)
-    for scene in "$OIT_MODELS/bunny.obj" planes:64 "grid:4x4:$OIT_MODELS/bunny.obj"; do
+    for scene in ${SCENES:-"$OIT_MODELS/bunny.obj" planes:64 "grid:4x4:$OIT_MODELS/bunny.obj"}; do
         slug=$(echo "$scene" | sed 's#.*/##; s#\.obj$##; s#:#-#g')
         [ "${scene#grid:4x4}" != "$scene" ] && slug=grid-4x4-bunny
         for side in before after; do
@@ -63,6 +63,14 @@ before-after)
             run "$bin" bench --backend wgpu --raster all --size 1024x1024 --frames 10 --warmup 2 \
                 --scenes "$scene" --no-curves --out "$OUT/$side-$slug"
         done
+    done
+    ;;
+embed)
+    # issue 10 item 4: the embeddable pass recorded into the user's encoder, in the example's frame
+    # loop (orbiting camera, 120 frames at 128², nothing read back): frames per second; needs
+    # `cargo build --release -p oit-wgpu --example embed` copied (stripped) to .gpubin/embed
+    for t in fabs:8 fabs:2 mdts64:8 wavg bdp; do
+        run .gpubin/embed "$t" "$OUT/embed-$t.png" | tee -a "$OUT/embed.txt"
     done
     ;;
 big)
@@ -109,7 +117,7 @@ criterion)
     done
     ;;
 *)
-    echo "usage: $0 [readme|calibrate|model|vulkan|grid|before-after|big|exact|tail|auto|criterion]" >&2
+    echo "usage: $0 [readme|calibrate|model|vulkan|grid|before-after|embed|big|exact|tail|auto|criterion]" >&2
     exit 2
     ;;
 esac

@@ -486,6 +486,10 @@ impl<'a> GpuCtx<'a> {
         let acct = ctx.acct.clone();
         ctx.fill(&acct, 0)?;
         ctx.fill(&totals, 0)?;
+        // the gate's pipeline made with the frame, not at the first gated pass: a prepared scene's
+        // first speculated frame (its second) then creates no pipeline (tests/tests/prepared.rs)
+        let gate_layout = ctx.layout0(4);
+        gpu.compute_pipeline(&format!("{TECHNIQUE_PRELUDE}{GATE_WGSL}"), "gate_main", &[&gate_layout])?;
         ctx.kernel_over(FINISH_WGSL, "init_main", &[&image, &totals], u64::from(pixels), 0, 0, "init")?;
         Ok(ctx)
     }
