@@ -172,23 +172,12 @@ pub(crate) struct RenderDriver<'a> {
 }
 
 impl<'a> RenderDriver<'a> {
-    /// The buffers and textures [`RenderDriver::new`] creates (the count target and the
-    /// counter it is summed into), for the counters of prepared scenes.
+    /// The buffers and textures a [`CountTarget`] is (the count target and the counter it is
+    /// summed into), for the counters of prepared scenes.
     pub(crate) const CREATES: u64 = 2;
 
-    /// A driver for `width × height`; `salt` keeps its pipelines apart in the device's cache.
-    pub(crate) fn new(
-        gpu: &Gpu,
-        width: u32,
-        height: u32,
-        salt: &'static str,
-        pipeline: PipelineFn<'a>,
-        draw: DrawFn<'a>,
-    ) -> RenderDriver<'a> {
-        RenderDriver::with_target(CountTarget::new(gpu, width, height), salt, pipeline, draw)
-    }
-
-    /// A driver drawing into `target` (kept by its owner between frames of its size).
+    /// A driver drawing into `target` (kept by its owner between frames of its size); `salt`
+    /// keeps its pipelines apart in the device's cache.
     pub(crate) fn with_target(
         target: CountTarget,
         salt: &'static str,
@@ -218,6 +207,11 @@ pub(crate) struct CountTarget {
 }
 
 impl CountTarget {
+    /// Its size.
+    pub(crate) fn size(&self) -> (u32, u32) {
+        self.size
+    }
+
     /// A count target of `width × height`.
     pub(crate) fn new(gpu: &Gpu, width: u32, height: u32) -> CountTarget {
         // R16Float counts exactly up to 2048 fragments per pixel and pass; R32Float (blendable
@@ -377,8 +371,9 @@ pub struct OitPass {
     boxes: Option<HwGeometry>,
     /// Per-pixel storage kept between frames: a frame of a size seen before creates none.
     pool: BufferPool,
-    /// The count target of the current size, kept between frames.
+    /// The count targets of the current size (the scene's, the boxes'), kept between frames.
     target: Mutex<Option<CountTarget>>,
+    boxes_target: Mutex<Option<CountTarget>>,
     /// Buffers and textures made outside the pool (count targets, the stats buffer).
     made: AtomicU64,
     /// Where [`OitPass::record`] leaves the totals of its frame, for [`OitPass::read_stats`],
@@ -450,6 +445,7 @@ impl OitPass {
             boxes: None,
             pool: BufferPool::default(),
             target: Mutex::new(None),
+            boxes_target: Mutex::new(None),
             made: AtomicU64::new(1),
             stats,
             recorded: Mutex::new(None),
@@ -663,17 +659,20 @@ impl OitPass {
     }
 
     /// Buffers and textures this pass has created for its frames: its per-pixel storage (a
-    /// [`BufferPool`]'s), its count targets and boxes' rasters, its stats buffer. A frame of a
-    /// size and technique seen before adds none (bdp's bounds pass excepted: its boxes' count
-    /// target is made each frame).
+    /// [`BufferPool`]'s), its count targets (the scene's, the boxes'), its stats buffer. A frame
+    /// of a size and technique seen before adds none.
     pub fn allocations(&self) -> u64 {
         self.pool.allocations() + self.made.load(Relaxed)
     }
 
     /// The count target of the pass's size, kept or made.
     fn count_target(&self) -> CountTarget {
-        let (w, h) = (self.settings.width, self.settings.height);
-        let mut kept = self.target.lock().unwrap_or_else(|e| e.into_inner());
+        self.kept_target(&self.target, self.settings.width, self.settings.height)
+    }
+
+    /// The count target of `kept` if it is `w × h`, else a new one kept there.
+    fn kept_target(&self, kept: &Mutex<Option<CountTarget>>, w: u32, h: u32) -> CountTarget {
+        let mut kept = kept.lock().unwrap_or_else(|e| e.into_inner());
         match &*kept {
             Some(t) if t.size == (w, h) => t.clone(),
             _ => {
@@ -695,10 +694,7 @@ impl OitPass {
                 return Err(self.no_boxes());
             };
             boxes.write_boxes_frame(&self.gpu, &self.camera, &self.settings);
-            let made = std::cell::Cell::new(0);
-            let raster = boxes.raster(&self.gpu, w, h, &made);
-            self.made.fetch_add(made.get(), Relaxed);
-            Ok(Box::new(raster))
+            Ok(Box::new(boxes.raster_into(&self.gpu, self.kept_target(&self.boxes_target, w, h))))
         };
         crate::Drivers { scene: Box::new(driver), boxes: Box::new(boxes_driver) }
     }

@@ -31,7 +31,7 @@ use oit_core::{Aabb, Camera, OitError, RasterPath, Scene, Settings};
 use wgpu::util::DeviceExt;
 
 use crate::ctx::{Driver, Gate, Generated, GpuCtx};
-use crate::embed::{CaptureShader, GeometryPass, RenderDriver};
+use crate::embed::{CaptureShader, CountTarget, GeometryPass, RenderDriver};
 use crate::gpu::Gpu;
 
 pub(crate) const RASTER_WGSL: &str = include_str!("shaders/raster_hardware.wgsl");
@@ -504,6 +504,13 @@ impl HwGeometry {
     /// counter buffer, counted in `made`), drawn with whatever [`HwGeometry::write_frame`] wrote
     /// last.
     pub(crate) fn raster(&self, gpu: &Gpu, width: u32, height: u32, made: &Cell<u64>) -> HardwareRaster {
+        made.set(made.get() + RenderDriver::CREATES);
+        self.raster_into(gpu, CountTarget::new(gpu, width, height))
+    }
+
+    /// [`HwGeometry::raster`] into a count target its owner keeps (of the frame's size).
+    pub(crate) fn raster_into(&self, gpu: &Gpu, target: CountTarget) -> HardwareRaster {
+        let (width, height) = target.size();
         // the stage of this size, with render targets of its own
         let stage = SceneStage {
             layout: self.layout.clone(),
@@ -531,10 +538,9 @@ impl HwGeometry {
             Some(args) => draw_stage.draw_indirect(rpass, args),
             None => draw_stage.draw(rpass),
         };
-        made.set(made.get() + RenderDriver::CREATES);
         let gate = Gate { from: self.draw_args.clone(), to: self.gated_args.clone(), words: 4 };
-        let driver = RenderDriver::new(gpu, width, height, "hardware", Box::new(pipeline), Box::new(draw))
-            .with_gate(gate);
+        let driver =
+            RenderDriver::with_target(target, "hardware", Box::new(pipeline), Box::new(draw)).with_gate(gate);
         HardwareRaster { driver: Rc::new(driver), stage }
     }
 }

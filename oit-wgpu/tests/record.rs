@@ -97,18 +97,11 @@ fn a_recorded_frame_equals_the_read_back_frame() {
             assert!(stats.fragments > 0, "{t}: the scene is drawn");
             overflowed |= recorded.gated_passes > 0
                 && stats.geometry_passes > recorded.geometry_passes - recorded.gated_passes;
-            // a second frame of the same size and technique creates no buffer (bdp's bounds pass
-            // makes its boxes' count target each frame, as `OitPass::allocations` says)
+            // a second frame of the same size and technique creates no buffer
             let before = pass.allocations();
             record_once(&user, &pass, &view).unwrap();
             assert_eq!(key(&pass.read_stats().unwrap()), key(&frame.stats), "{t}: the second recorded frame");
-            if !matches!(technique, Technique::Bdp { .. }) {
-                assert_eq!(
-                    pass.allocations(),
-                    before,
-                    "{t} {overflow:?}: the second recorded frame allocated"
-                );
-            }
+            assert_eq!(pass.allocations(), before, "{t} {overflow:?}: the second recorded frame allocated");
         }
     }
     // fabs:2 and mdts64:2 overflow on the quads (three layers): the gated passes ran somewhere
