@@ -603,9 +603,11 @@ impl<'a> GpuCtx<'a> {
         };
         // the state and the technique's buffers, then the per-pixel loss counts
         entries.extend((1..=(n as u32 + 1)).chain([ACCT_BINDING]).map(storage));
-        self.gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("group 0"),
-            entries: &entries,
+        self.gpu.layout(n, || {
+            self.gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("group 0"),
+                entries: &entries,
+            })
         })
     }
 

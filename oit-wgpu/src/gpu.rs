@@ -47,6 +47,8 @@ pub struct Gpu {
     queries: Mutex<Vec<wgpu::QuerySet>>,
     /// Readbacks so far (each a CPU–GPU round trip).
     readbacks: std::sync::atomic::AtomicU64,
+    /// Group 0's layouts by technique-buffer count (`GpuCtx::layout0`), made once.
+    layouts: Mutex<HashMap<usize, wgpu::BindGroupLayout>>,
 }
 
 /// Queries in one timestamp query set: two a timed pass, so a frame records 2,048 passes before
@@ -132,6 +134,7 @@ impl Gpu {
             staging: Mutex::new(Vec::new()),
             queries: Mutex::new(Vec::new()),
             readbacks: Default::default(),
+            layouts: Mutex::new(HashMap::new()),
         }
     }
 
@@ -238,6 +241,13 @@ impl Gpu {
             .map_err(|_| OitError::Device("pipeline cache poisoned".into()))?
             .insert(key, p.clone());
         Ok(p)
+    }
+
+    /// The layout kept under `key`, else the one `make` creates (kept): a frame binds dozens of
+    /// groups, and creating (and validating) their layout each time was host time per pass.
+    pub fn layout(&self, key: usize, make: impl FnOnce() -> wgpu::BindGroupLayout) -> wgpu::BindGroupLayout {
+        let mut layouts = self.layouts.lock().unwrap_or_else(|e| e.into_inner());
+        layouts.entry(key).or_insert_with(make).clone()
     }
 
     /// Checks a storage buffer of `bytes` against the device's limits before allocating it.
