@@ -309,6 +309,8 @@ pub struct GpuCtx<'a> {
     pub gated_pass: bool,
     /// Where the frame's tail pass left the merged count, copied into the totals at the end.
     merged_from: Option<wgpu::Buffer>,
+    /// When the frame began on the host (for `OIT_HOST_TIMES`).
+    started: std::time::Instant,
 }
 
 impl<'a> GpuCtx<'a> {
@@ -481,6 +483,7 @@ impl<'a> GpuCtx<'a> {
             gated_pass: false,
             merged_from: None,
             ring_full: false,
+            started: std::time::Instant::now(),
         };
         let (image, totals) = (ctx.image.clone(), ctx.totals.clone());
         let acct = ctx.acct.clone();
@@ -986,7 +989,19 @@ impl<'a> GpuCtx<'a> {
                 read.push(&self.acct);
             }
         }
+        let recorded = self.started.elapsed();
         let mut words = self.gpu.read_u32s(&read)?.into_iter();
+        if host_times() {
+            // where a frame's host time goes (issue 10's steady/GPU ratio): recording and
+            // submitting, then waiting for the end-of-frame readback
+            eprintln!(
+                "oit host times: {} record+submit {:.3} ms, end readback {:.3} ms, {} passes",
+                self.settings.technique,
+                recorded.as_secs_f64() * 1e3,
+                (self.started.elapsed() - recorded).as_secs_f64() * 1e3,
+                self.passes
+            );
+        }
         let t = words.next().unwrap_or_default();
         let stamp_words = if stamps.is_some() { words.next() } else { None };
         let mut fits = true;
@@ -1113,6 +1128,13 @@ pub struct RecordedBuffers {
     pub gated_passes: u32,
     /// Bytes of per-pixel storage the frame uses.
     pub storage_bytes: u64,
+}
+
+/// Whether `OIT_HOST_TIMES=1`: each frame prints its host time to stderr, split into recording
+/// (from the frame's start to its last submission) and the end-of-frame readback's wait.
+fn host_times() -> bool {
+    static ON: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *ON.get_or_init(|| std::env::var("OIT_HOST_TIMES").is_ok_and(|v| v == "1"))
 }
 
 /// The gate kernel of [`GpuCtx::geometry_pass_if`].
