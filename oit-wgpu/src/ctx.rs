@@ -353,6 +353,12 @@ impl<'a> GpuCtx<'a> {
         buffer
     }
 
+    /// A 16-byte storage buffer for a binding the frame does not use, from the pool where the
+    /// frame has one.
+    pub(crate) fn placeholder(&mut self) -> wgpu::Buffer {
+        self.make("unused binding", 16, wgpu::BufferUsages::STORAGE)
+    }
+
     /// [`GpuCtx::new`] taking its buffers from `pool` (a prepared scene's), where there is one.
     pub fn with_pool(
         gpu: &'a Gpu,
@@ -726,7 +732,7 @@ impl<'a> GpuCtx<'a> {
         let totals = self.totals.clone();
         let (from, to, words) = match gate {
             Some(g) => (g.from, g.to, g.words),
-            None => (crate::technique::placeholder(self), crate::technique::placeholder(self), 0),
+            None => (self.placeholder(), self.placeholder(), 0),
         };
         self.kernel_over(GATE_WGSL, "gate_main", &[flag, &totals, &from, &to], 64, 0, words, "gate")?;
         let gate = words > 0;

@@ -27,14 +27,10 @@ const SCAN_WGSL: &str = include_str!("scan.wgsl");
 /// Words one workgroup of `scan.wgsl` scans.
 const SCAN_BLOCK: u64 = 256;
 
-/// A small buffer bound where a module declares an array the frame does not use (not storage).
-pub(crate) fn placeholder(ctx: &GpuCtx<'_>) -> wgpu::Buffer {
-    ctx.gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("unused binding"),
-        size: 16,
-        usage: wgpu::BufferUsages::STORAGE,
-        mapped_at_creation: false,
-    })
+/// A small buffer bound where a module declares an array the frame does not use (not storage):
+/// from the frame's pool, so a steady frame creates none.
+pub(crate) fn placeholder(ctx: &mut GpuCtx<'_>) -> wgpu::Buffer {
+    ctx.placeholder()
 }
 
 /// The buffers of `tail.wgsl` (`--overflow tail`), bound at 6 and 7: the tail sums (5 u64 a pixel,
