@@ -272,8 +272,6 @@ pub struct GpuCtx<'a> {
     /// count target the resolve reads into `captured` and lose none, so the frame's fragments
     /// are its captured total, read with the totals at the end of the frame.
     pub fragments_from_captured: bool,
-    /// Fragments merged into pixels' tails (`--overflow tail`), read back by the technique.
-    pub merged: u64,
     /// The setup checks the frame's drivers left to its end.
     checks: Vec<SetupCheck>,
     /// The deepest pixel an earlier frame of this prepared scene counted at this size and
@@ -472,7 +470,6 @@ impl<'a> GpuCtx<'a> {
             acct,
             counts_losses: true,
             fragments_from_captured: false,
-            merged: 0,
             checks: Vec::new(),
             speculated_deepest: None,
             deepest_seen: None,
@@ -1092,25 +1089,14 @@ impl<'a> GpuCtx<'a> {
             // NOT COUNTED (issue 16): the blend captures do not count their losses yet
             (fragments.saturating_sub(captured), None)
         };
-        let frame = Frame {
-            image,
-            layers: None,
-            lost_pixels,
-            stats: Stats {
-                geometry_passes: self.passes - self.gated_passes + t[GATED_WORD as usize],
-                fragments,
-                captured,
-                lost,
-                merged: self.merged + u64::from(t[MERGED_WORD as usize]),
-                tied: u64::from(t[2]),
-                storage_bytes: self.storage_bytes,
-                wall_ms: 0.0,
-                gpu_ms: self.timestamps.is_some().then_some(self.gpu_ms),
-                max_layers: t[1],
-                gpu_pass_ms: self.pass_ms,
-                tiles: 1,
-            },
+        let stats = Stats {
+            fragments,
+            lost,
+            gpu_ms: self.timestamps.is_some().then_some(self.gpu_ms),
+            gpu_pass_ms: self.pass_ms,
+            ..totals_stats(t, self.passes - self.gated_passes, self.storage_bytes)
         };
+        let frame = Frame { image, layers: None, lost_pixels, stats };
         if self.counts_losses {
             frame.stats.check_accounting("wgpu")?;
         }
@@ -1141,6 +1127,27 @@ pub struct RecordedBuffers {
 fn host_times() -> bool {
     static ON: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
     *ON.get_or_init(|| std::env::var("OIT_HOST_TIMES").is_ok_and(|v| v == "1"))
+}
+
+/// The stats the frame's totals words give (finish.wgsl's four, the first scene pass's fragments,
+/// the gated passes that ran, the fragments merged), with `passes` geometry passes recorded
+/// ungated and `storage_bytes` of per-pixel storage: what [`GpuCtx::finish_checked`] and a
+/// recorded frame's `OitPass::read_stats` both read.
+pub(crate) fn totals_stats(t: &[u32], passes: u32, storage_bytes: u64) -> Stats {
+    Stats {
+        geometry_passes: passes + t[GATED_WORD as usize],
+        fragments: u64::from(t[FRAGMENTS_WORD as usize]),
+        captured: u64::from(t[0]),
+        lost: u64::from(t[3]),
+        merged: u64::from(t[MERGED_WORD as usize]),
+        tied: u64::from(t[2]),
+        storage_bytes,
+        wall_ms: 0.0,
+        gpu_ms: None,
+        max_layers: t[1],
+        gpu_pass_ms: Vec::new(),
+        tiles: 1,
+    }
 }
 
 /// The gate kernel of [`GpuCtx::geometry_pass_if`].

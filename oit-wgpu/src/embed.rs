@@ -640,20 +640,7 @@ impl OitPass {
             return Err(OitError::InvalidSettings("no frame has been recorded with this pass".into()));
         };
         let t = self.gpu.read_u32(&self.stats)?;
-        let stats = Stats {
-            geometry_passes: passes + t[5],
-            fragments: u64::from(t[4]),
-            captured: u64::from(t[0]),
-            lost: u64::from(t[3]),
-            merged: u64::from(t[6]),
-            tied: u64::from(t[2]),
-            storage_bytes,
-            wall_ms: 0.0,
-            gpu_ms: None,
-            max_layers: t[1],
-            gpu_pass_ms: Vec::new(),
-            tiles: 1,
-        };
+        let stats = crate::ctx::totals_stats(&t, passes, storage_bytes);
         stats.check_accounting("wgpu (recorded pass)")?;
         Ok(stats)
     }

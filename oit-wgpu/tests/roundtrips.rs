@@ -6,6 +6,17 @@
 
 use oit_core::{Backend, Camera, RasterPath, Settings, Technique, View, load_scene};
 
+/// Two views of `scene`: at it (its planes overlapping on screen), and looking away from it
+/// (nothing on screen: no fragment, the deepest pixel 0, one peel).
+fn at_and_away(scene: &oit_core::Scene) -> (Camera, Camera) {
+    let bounds = scene.bounds();
+    let (c, r) = (bounds.center(), (bounds.max - bounds.min).length() * 0.5);
+    let dir = glam::Vec3::new(0.1, 0.2, 1.0);
+    let at = Camera::look_at(c + dir * 3.0 * r, c, 45.0, 1.0, 0.01 * r, 100.0 * r);
+    let away = Camera::look_at(c + dir * 3.0 * r, c + dir * 6.0 * r, 45.0, 1.0, 0.01 * r, 100.0 * r);
+    (at, away)
+}
+
 #[test]
 fn a_steady_frame_reads_back_once() {
     let Some(backend) = oit_wgpu::backend_or_skip("a_steady_frame_reads_back_once") else { return };
@@ -58,11 +69,7 @@ fn a_speculated_peel_count_that_misses_runs_again() {
     };
     let gpu = backend.gpu().expect("opened above");
     let scene = load_scene("planes:5").unwrap();
-    let bounds = scene.bounds();
-    let (c, r) = (bounds.center(), (bounds.max - bounds.min).length() * 0.5);
-    let dir = glam::Vec3::new(0.1, 0.2, 1.0);
-    let at = Camera::look_at(c + dir * 3.0 * r, c, 45.0, 1.0, 0.01 * r, 100.0 * r);
-    let away = Camera::look_at(c + dir * 3.0 * r, c + dir * 6.0 * r, 45.0, 1.0, 0.01 * r, 100.0 * r);
+    let (at, away) = at_and_away(&scene);
     for path in [RasterPath::Compute, RasterPath::Hardware] {
         for technique in ["dp", "ddp", "mlp:2"] {
             let settings = Settings {
@@ -182,12 +189,7 @@ fn a_speculated_size_that_misses_runs_again() {
     let Some(backend) = oit_wgpu::backend_or_skip("a_speculated_size_that_misses_runs_again") else { return };
     let gpu = backend.gpu().expect("opened above");
     let scene = load_scene("planes:5").unwrap();
-    let bounds = scene.bounds();
-    let (c, r) = (bounds.center(), (bounds.max - bounds.min).length() * 0.5);
-    let dir = glam::Vec3::new(0.1, 0.2, 1.0);
-    let at = Camera::look_at(c + dir * 3.0 * r, c, 45.0, 1.0, 0.01 * r, 100.0 * r);
-    // looking away: nothing on screen, the deepest pixel 0
-    let away = Camera::look_at(c + dir * 3.0 * r, c + dir * 6.0 * r, 45.0, 1.0, 0.01 * r, 100.0 * r);
+    let (at, away) = at_and_away(&scene);
     for path in [RasterPath::Compute, RasterPath::Hardware] {
         let on_gpu = u64::from(path == RasterPath::Compute && oit_wgpu::setup_on_gpu(gpu));
         let settings = Settings {

@@ -43,7 +43,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         ctx.geometry_pass_if(scene, WGSL, &buffers, FABS_PAYLOADS, k, &overflowed)?;
         if ctx.plan.tail {
             ctx.geometry_pass_if(scene, WGSL, &buffers, FABS_TAIL, k, &overflowed)?;
-            super::note_merged(ctx, &tail_words);
+            ctx.note_merged(&tail_words);
         }
     }
     let resolve = if ctx.plan.tail { FABS_WITH_TAIL } else { 0 };

@@ -23,8 +23,6 @@ const MDTS_64: u32 = 1;
 const MDTS_WITH_TAIL: u32 = 0x10000;
 const MDTS_TAIL_PASS: u32 = 0x20000;
 
-use super::placeholder;
-
 /// The capture in `mode`, then (where the plan has a tail and a pixel overflowed) the tail pass,
 /// then the resolve: `buffers` are the mode's three arrays.
 fn passes(
@@ -35,14 +33,14 @@ fn passes(
     k: u32,
 ) -> Result<(), OitError> {
     let (tail, tail_words) = super::tail_buffers(ctx)?;
-    let unused = placeholder(ctx);
+    let unused = ctx.placeholder();
     let buffers = [arrays[0], arrays[1], arrays[2], &unused, &tail, &tail_words];
     let mode = if ctx.plan.tail { mode | MDTS_WITH_TAIL } else { mode };
     ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, mode, k)?;
     if ctx.plan.tail {
         // gated by the overflow word the capture raised (on the device, no readback)
         ctx.geometry_pass_if(drivers.scene.as_ref(), WGSL, &buffers, mode | MDTS_TAIL_PASS, k, &tail_words)?;
-        super::note_merged(ctx, &tail_words);
+        ctx.note_merged(&tail_words);
     }
     ctx.pixel_kernel(WGSL, "resolve_main", &buffers, mode, k)
 }
@@ -58,7 +56,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     let k = ctx.plan.slots(deepest);
     let words = u64::from(ctx.pixels) * u64::from(k);
     if wide {
-        let (high, low) = (placeholder(ctx), placeholder(ctx));
+        let (high, low) = (ctx.placeholder(), ctx.placeholder());
         let slots = ctx.buffer("mdts64 slots", words * 2, Init::Fill(u32::MAX))?;
         return passes(ctx, drivers, [&high, &low, &slots], MDTS_64, k);
     }
@@ -66,6 +64,6 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     let alpha8 = ctx.plan.mdts_alpha8;
     let high = ctx.buffer("mdts high words", words, Init::Fill(u32::MAX))?;
     let low = ctx.buffer("mdts low words", words, Init::Fill(u32::MAX))?;
-    let slots = placeholder(ctx);
+    let slots = ctx.placeholder();
     passes(ctx, drivers, [&high, &low, &slots], MDTS_32 | alpha8 << 8, k)
 }

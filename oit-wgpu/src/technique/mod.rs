@@ -27,28 +27,17 @@ const SCAN_WGSL: &str = include_str!("scan.wgsl");
 /// Words one workgroup of `scan.wgsl` scans.
 const SCAN_BLOCK: u64 = 256;
 
-/// A small buffer bound where a module declares an array the frame does not use (not storage):
-/// from the frame's pool, so a steady frame creates none.
-pub(crate) fn placeholder(ctx: &mut GpuCtx<'_>) -> wgpu::Buffer {
-    ctx.placeholder()
-}
-
 /// The buffers of `tail.wgsl` (`--overflow tail`), bound at 6 and 7: the tail sums (5 u64 a pixel,
 /// `Plan::arrays`'s "tail sums") and two bookkeeping words (overflowed, merged; not storage);
 /// placeholders where the plan has no tail.
 pub(crate) fn tail_buffers(ctx: &mut GpuCtx<'_>) -> Result<(wgpu::Buffer, wgpu::Buffer), OitError> {
     if !ctx.plan.tail {
-        return Ok((placeholder(ctx), placeholder(ctx)));
+        return Ok((ctx.placeholder(), ctx.placeholder()));
     }
     let sums = ctx.buffer("tail sums", u64::from(ctx.pixels) * 5 * 2, Init::Zero)?;
     let words = ctx.buffer("tail words", 2, Init::Zero)?;
     ctx.storage_bytes -= 8;
     Ok((sums, words))
-}
-
-/// The fragments a tail pass merged (word 1 of `words`): read back with the frame's totals.
-pub(crate) fn note_merged(ctx: &mut GpuCtx<'_>, words: &wgpu::Buffer) {
-    ctx.note_merged(words);
 }
 
 /// The peel loop of dp, ddp and mlp: until a pass leaves word 0 of `flag` at zero (nothing
