@@ -78,6 +78,7 @@ pub mod metrics;
 mod obj;
 pub mod plan;
 mod procedural;
+pub mod pulled;
 pub mod rules;
 mod scene;
 mod settings;

@@ -12,7 +12,8 @@ use oit_core::plan::Plan;
 use oit_core::{Camera, Effect, Frame, Image, OitError, RasterPath, Scene, Settings, Stats};
 
 use crate::device::{Buffer, Gpu};
-use crate::raster::ComputeRaster;
+use crate::hardware::HardwareRaster;
+use crate::raster::{ComputeRaster, Raster};
 use crate::record::Recorder;
 
 /// Group 0's binding of the loss accounting (`acct` in prelude.wgsl).
@@ -247,11 +248,11 @@ impl<'a> VkCtx<'a> {
         out
     }
 
-    /// One geometry pass of `module`'s `capture` through the compute rasterizer; returns the
-    /// fragments generated.
+    /// One geometry pass of `module`'s `capture` through the frame's rasterizer (either path);
+    /// returns the fragments generated.
     pub(crate) fn geometry_pass(
         &mut self,
-        raster: &ComputeRaster,
+        raster: &Raster,
         module: &'static str,
         buffers: &[&Buffer],
         pass_index: u32,
@@ -259,6 +260,24 @@ impl<'a> VkCtx<'a> {
     ) -> Result<u64, OitError> {
         self.uniform.pass_index = pass_index;
         self.uniform.param = param;
+        let generated = match raster {
+            Raster::Compute(r) => self.compute_pass(r, module, buffers)?,
+            Raster::Hardware(r) => self.hardware_pass(r, module, buffers)?,
+        };
+        let generated = u64::from(self.read_u32(generated)?[0]);
+        self.passes += 1;
+        self.fragments.get_or_insert(generated);
+        Ok(generated)
+    }
+
+    /// Records a geometry pass through the compute rasterizer; returns the word that counts its
+    /// fragments.
+    fn compute_pass<'r>(
+        &mut self,
+        raster: &'r ComputeRaster,
+        module: &'static str,
+        buffers: &[&Buffer],
+    ) -> Result<&'r Buffer, OitError> {
         // as oit-wgpu: a workgroup per (triangle, tile) item on GPUs, an invocation per item on a
         // CPU device (lavapipe), where 64 invocations of one small triangle mostly test nothing
         let per_pixel = !self.gpu.is_cpu();
@@ -279,9 +298,47 @@ impl<'a> VkCtx<'a> {
             Some((&raster_set, &raster.uniform)),
             groups,
         )?;
-        let generated = u64::from(self.read_u32(&raster.generated)?[0]);
-        self.passes += 1;
-        self.fragments.get_or_insert(generated);
+        Ok(&raster.generated)
+    }
+
+    /// Records a geometry pass through the GPU's rasterizer (a draw into the count image, its
+    /// copy, and the kernel that sums it); returns the word that counts its fragments.
+    fn hardware_pass<'r>(
+        &mut self,
+        raster: &'r HardwareRaster,
+        module: &'static str,
+        buffers: &[&Buffer],
+    ) -> Result<&'r Buffer, OitError> {
+        let pipeline = self.gpu.render_pipeline(module, buffers.len())?;
+        let render_pass = self.gpu.count_pass()?;
+        raster.upload(&mut self.rec)?;
+        let (state, acct) = (self.state.clone(), self.acct.clone());
+        let storage = Self::storage(&state, &acct, buffers);
+        let raster_set = raster.bindings();
+        let uniform = self.uniform;
+        self.rec.draw(
+            "geometry",
+            &pipeline,
+            render_pass,
+            raster.target(),
+            bytemuck::bytes_of(&uniform),
+            &storage,
+            (&raster_set, raster.uniform()),
+            raster.vertex_count(),
+        )?;
+        let (counts, generated) = raster.counters();
+        self.rec.copy_image(raster.target(), counts);
+        self.rec.fill(generated, 0);
+        let (w, h) = raster.target().extent;
+        self.kernel_over(
+            "count_sum",
+            "count_sum_main",
+            &[counts, generated],
+            u64::from(w) * u64::from(h),
+            0,
+            0,
+            "count sum",
+        )?;
         Ok(generated)
     }
 

@@ -27,6 +27,10 @@ pub const PAPER_EXTENSIONS: [&CStr; 4] = [
     c"VK_EXT_fragment_shader_interlock",
 ];
 
+/// The hardware raster's fragment counter: one float per pixel, added up by blending (exact to
+/// 2^24 fragments per pixel and pass).
+pub(crate) const COUNT_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
+
 /// What to install when there is no Vulkan at all.
 const INSTALL: &str = "install a Vulkan loader and driver: `apt-get install libvulkan1 mesa-vulkan-drivers` \
                        (lavapipe, a CPU Vulkan device) or your GPU's driver";
@@ -141,6 +145,9 @@ pub struct DeviceInfo {
     pub timestamp_valid_bits: u32,
     /// The `logicOp` feature (adp's histogram by logic-op OR needs it).
     pub logic_op: bool,
+    /// Why the hardware-raster path cannot run here (`None`: it can): it needs a graphics queue,
+    /// `fragmentStoresAndAtomics` and a blendable `R32_SFLOAT` colour attachment (the counter).
+    pub hardware_missing: Option<String>,
     /// The largest device-local heap, bytes.
     pub device_heap: u64,
     /// Whether the validation layer is on.
@@ -219,6 +226,34 @@ impl Buffer {
     }
 }
 
+/// A 2D image with its own memory and a view of it, and (when made for rendering) a framebuffer
+/// of the view in a render pass: destroyed in reverse (framebuffer, view, image, memory).
+pub struct Image {
+    raw: Arc<RawDevice>,
+    pub(crate) image: vk::Image,
+    memory: vk::DeviceMemory,
+    view: vk::ImageView,
+    pub(crate) framebuffer: vk::Framebuffer,
+    /// Width and height, pixels.
+    pub extent: (u32, u32),
+}
+
+impl Drop for Image {
+    fn drop(&mut self) {
+        // SAFETY: all made from `raw` (alive: the Arc); every command that used them has
+        // completed (each frame waits for its last submission); users go before what they use.
+        unsafe {
+            let d = &self.raw.device;
+            if self.framebuffer != vk::Framebuffer::null() {
+                d.destroy_framebuffer(self.framebuffer, None);
+            }
+            d.destroy_image_view(self.view, None);
+            d.destroy_image(self.image, None);
+            d.free_memory(self.memory, None);
+        }
+    }
+}
+
 /// Pipelines and what they are made of, destroyed newest first by [`Gpu`]'s drop.
 #[derive(Default)]
 struct Cache {
@@ -228,9 +263,11 @@ struct Cache {
     raster_set: Option<vk::DescriptorSetLayout>,
     layouts: HashMap<usize, vk::PipelineLayout>,
     pipelines: HashMap<(&'static str, String, usize), vk::Pipeline>,
+    /// The hardware raster's render pass (one `R32_SFLOAT` counter, cleared, then copied out).
+    count_pass: Option<vk::RenderPass>,
 }
 
-/// A compute pipeline and its layout (owned by the [`Gpu`]'s cache).
+/// A compute or graphics pipeline and its layout (owned by the [`Gpu`]'s cache).
 #[derive(Clone, Copy, Debug)]
 pub struct Pipeline {
     pub(crate) pipeline: vk::Pipeline,
@@ -264,6 +301,9 @@ impl Drop for Gpu {
             for (_, l) in cache.layouts.drain() {
                 d.destroy_pipeline_layout(l, None);
             }
+            if let Some(p) = cache.count_pass.take() {
+                d.destroy_render_pass(p, None);
+            }
             if let Some(l) = cache.raster_set.take() {
                 d.destroy_descriptor_set_layout(l, None);
             }
@@ -289,6 +329,8 @@ struct Candidate {
     family: Option<u32>,
     /// `timestampValidBits` of `family` (0 without one).
     timestamp_valid_bits: u32,
+    /// Whether `family` does graphics as well (the hardware-raster path).
+    graphics: bool,
     missing: Vec<&'static str>,
 }
 
@@ -404,11 +446,13 @@ impl Gpu {
         };
         let physical = chosen.physical;
         let family = chosen.family.expect("usable has a family");
-        let info = Self::info(instance, physical, validation, chosen.timestamp_valid_bits);
+        let info = Self::info(instance, physical, validation, chosen.timestamp_valid_bits, chosen.graphics);
         let priorities = [1.0f32];
         let queues =
             [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
-        let core = vk::PhysicalDeviceFeatures::default().shader_int64(true);
+        let core = vk::PhysicalDeviceFeatures::default()
+            .shader_int64(true)
+            .fragment_stores_and_atomics(info.hardware_missing.is_none());
         let mut v12 = vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(true);
         let create = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queues)
@@ -457,12 +501,15 @@ impl Gpu {
             .or_else(|| families.iter().position(compute))
             .map(|i| i as u32);
         let timestamp_valid_bits = family.map_or(0, |f| families[f as usize].timestamp_valid_bits);
+        let graphics =
+            family.is_some_and(|f| families[f as usize].queue_flags.contains(vk::QueueFlags::GRAPHICS));
         Candidate {
             physical,
             name: c_name(props.device_name_as_c_str()),
             device_type: props.device_type,
             family,
             timestamp_valid_bits,
+            graphics,
             missing,
         }
     }
@@ -472,18 +519,33 @@ impl Gpu {
         physical: vk::PhysicalDevice,
         validation: bool,
         timestamp_valid_bits: u32,
+        graphics: bool,
     ) -> DeviceInfo {
         let mut driver = vk::PhysicalDeviceDriverProperties::default();
         let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
         // SAFETY: plain queries of a physical device of this instance, the chained struct alive.
-        let (features, extensions, memory) = unsafe {
+        let (features, extensions, memory, counter) = unsafe {
             instance.get_physical_device_properties2(physical, &mut props2);
             (
                 instance.get_physical_device_features(physical),
                 instance.enumerate_device_extension_properties(physical).unwrap_or_default(),
                 instance.get_physical_device_memory_properties(physical),
+                instance.get_physical_device_format_properties(physical, COUNT_FORMAT),
             )
         };
+        let counter_needs = vk::FormatFeatureFlags::COLOR_ATTACHMENT
+            | vk::FormatFeatureFlags::COLOR_ATTACHMENT_BLEND
+            | vk::FormatFeatureFlags::TRANSFER_SRC;
+        let hardware_missing = [
+            (!graphics).then_some("a queue family with graphics and compute"),
+            (features.fragment_stores_and_atomics == vk::FALSE).then_some("fragmentStoresAndAtomics"),
+            (!counter.optimal_tiling_features.contains(counter_needs))
+                .then_some("a blendable R32_SFLOAT colour attachment"),
+        ]
+        .into_iter()
+        .flatten()
+        .collect::<Vec<_>>();
+        let hardware_missing = (!hardware_missing.is_empty()).then(|| hardware_missing.join(", "));
         let props = props2.properties;
         let names: Vec<String> = extensions.iter().map(|e| c_name(e.extension_name_as_c_str())).collect();
         let device_heap = memory.memory_heaps[..memory.memory_heap_count as usize]
@@ -515,6 +577,7 @@ impl Gpu {
             limits: props.limits,
             timestamp_valid_bits,
             logic_op: features.logic_op == vk::TRUE,
+            hardware_missing,
             device_heap,
             validation,
         }
@@ -597,7 +660,122 @@ impl Gpu {
         Ok(Buffer { raw: self.raw.clone(), buffer, memory, size, usage, host })
     }
 
-    /// Compute pipelines created on this device so far (each is cached until the device drops,
+    /// A device-local `width × height` image of `format` and `usage`, with a view, and a
+    /// framebuffer of that view in `render_pass` when given.
+    pub(crate) fn image(
+        &self,
+        (width, height): (u32, u32),
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+        render_pass: Option<vk::RenderPass>,
+    ) -> Result<Image, OitError> {
+        let d = &self.raw.device;
+        let limit = self.info.limits.max_image_dimension2_d;
+        let max_fb = self.info.limits.max_framebuffer_width.min(self.info.limits.max_framebuffer_height);
+        let side = width.max(height);
+        if side > limit.min(max_fb) {
+            return Err(OitError::TooLarge {
+                what: format!("a {width}×{height} render target"),
+                needed: u64::from(side),
+                limit_name: format!("maxImageDimension2D / maxFramebufferWidth of '{}'", self.info.name),
+                limit: u64::from(limit.min(max_fb)),
+                hint: "use --memory to render in tiles, a smaller --size, or --raster compute".into(),
+            });
+        }
+        let extent = vk::Extent3D { width: width.max(1), height: height.max(1), depth: 1 };
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(format)
+            .extent(extent)
+            .mip_levels(1)
+            .array_layers(1)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: a valid create info on a live device (the size checked above); the image is
+        // owned by the `Image` below, or destroyed here when what follows fails.
+        let image = unsafe { d.create_image(&info, None) }.map_err(vk_error("creating an image"))?;
+        // SAFETY: a plain query of the image just made.
+        let needs = unsafe { d.get_image_memory_requirements(image) };
+        let types = &self.memory.memory_types[..self.memory.memory_type_count as usize];
+        let index = (0..types.len())
+            .find(|&i| {
+                needs.memory_type_bits & (1 << i) != 0
+                    && types[i].property_flags.contains(vk::MemoryPropertyFlags::DEVICE_LOCAL)
+            })
+            .or_else(|| (0..types.len()).find(|&i| needs.memory_type_bits & (1 << i) != 0));
+        let Some(index) = index else {
+            // SAFETY: made above, never used.
+            unsafe { d.destroy_image(image, None) };
+            return Err(OitError::Device(format!("'{}' has no memory type for an image", self.info.name)));
+        };
+        let alloc =
+            vk::MemoryAllocateInfo::default().allocation_size(needs.size).memory_type_index(index as u32);
+        // SAFETY: a memory type the image accepts, bound once at offset 0; on failure what was
+        // made is destroyed before returning.
+        let memory = unsafe {
+            let memory = match d.allocate_memory(&alloc, None) {
+                Ok(m) => m,
+                Err(e) => {
+                    d.destroy_image(image, None);
+                    return Err(vk_error(&format!("allocating {} bytes", needs.size))(e));
+                }
+            };
+            if let Err(e) = d.bind_image_memory(image, memory, 0) {
+                d.destroy_image(image, None);
+                d.free_memory(memory, None);
+                return Err(vk_error("binding image memory")(e));
+            }
+            memory
+        };
+        let range = vk::ImageSubresourceRange::default()
+            .aspect_mask(vk::ImageAspectFlags::COLOR)
+            .level_count(1)
+            .layer_count(1);
+        let view_info = vk::ImageViewCreateInfo::default()
+            .image(image)
+            .view_type(vk::ImageViewType::TYPE_2D)
+            .format(format)
+            .subresource_range(range);
+        // SAFETY: the image is alive and has the format; on failure it is freed.
+        let view = match unsafe { d.create_image_view(&view_info, None) } {
+            Ok(v) => v,
+            Err(e) => {
+                // SAFETY: made above, never used.
+                unsafe {
+                    d.destroy_image(image, None);
+                    d.free_memory(memory, None);
+                }
+                return Err(vk_error("creating an image view")(e));
+            }
+        };
+        let mut out = Image {
+            raw: self.raw.clone(),
+            image,
+            memory,
+            view,
+            framebuffer: vk::Framebuffer::null(),
+            extent: (extent.width, extent.height),
+        };
+        if let Some(pass) = render_pass {
+            let views = [view];
+            let fb_info = vk::FramebufferCreateInfo::default()
+                .render_pass(pass)
+                .attachments(&views)
+                .width(extent.width)
+                .height(extent.height)
+                .layers(1);
+            // SAFETY: the view is of an image compatible with the render pass's one attachment
+            // (its format, one sample); `out`'s drop destroys the framebuffer first.
+            out.framebuffer = unsafe { d.create_framebuffer(&fb_info, None) }
+                .map_err(vk_error("creating a framebuffer"))?;
+        }
+        Ok(out)
+    }
+
+    /// Pipelines (compute and graphics) created on this device so far (each is cached until the device drops,
     /// so the cache's size counts them): a steady-state frame adds none.
     pub fn pipelines_created(&self) -> u64 {
         self.cache.lock().map_or(0, |c| c.pipelines.len() as u64)
@@ -608,10 +786,169 @@ impl Gpu {
     pub fn pipeline(&self, module: &'static str, entry: &str, n: usize) -> Result<Pipeline, OitError> {
         let mut guard = self.cache.lock().map_err(|_| OitError::Device("pipeline cache poisoned".into()))?;
         let cache = &mut *guard;
-        let d = &self.raw.device;
+        let (set0, raster, layout) = self.layouts(cache, n)?;
+        let key = (module, entry.to_string(), n);
+        if let Some(&pipeline) = cache.pipelines.get(&key) {
+            return Ok(Pipeline { pipeline, layout, set0, raster });
+        }
+        let (_, shader) = self.module(cache, module, &[entry])?;
+        let name = std::ffi::CString::new(entry).map_err(|_| OitError::Device("bad entry name".into()))?;
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(shader)
+            .name(&name);
+        let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
+        // SAFETY: the module and layout are alive; the layout declares every binding the entry
+        // point uses (group 0 as `set0`, the rasterizer's group 1).
+        let pipeline =
+            unsafe { self.raw.device.create_compute_pipelines(vk::PipelineCache::null(), &info, None) }
+                .map_err(|(_, e)| vk_error(&format!("building '{module}::{entry}'"))(e))?[0];
+        cache.pipelines.insert(key, pipeline);
+        Ok(Pipeline { pipeline, layout, set0, raster })
+    }
+
+    /// The hardware raster's graphics pipeline for `module`'s capture (`build.rs`'s
+    /// `<module>_hw`: vertex stage `hw_vs`, fragment stage `hw_fs`), whose group 0 has `n`
+    /// technique buffers; made once, then cached. No vertex buffers (the vertex stage pulls its
+    /// vertices), no culling, no depth test; viewport and scissor set per draw; one colour
+    /// attachment, the counter ([`COUNT_FORMAT`]), added to by blending, in
+    /// [`Gpu::count_pass`].
+    pub fn render_pipeline(&self, module: &'static str, n: usize) -> Result<Pipeline, OitError> {
+        if let Some(missing) = &self.info.hardware_missing {
+            return Err(OitError::Unsupported {
+                backend: "vulkan".into(),
+                what: format!("the hardware raster path on '{}' (it lacks {missing})", self.info.name),
+            });
+        }
+        let render_pass = self.count_pass()?;
+        let mut guard = self.cache.lock().map_err(|_| OitError::Device("pipeline cache poisoned".into()))?;
+        let cache = &mut *guard;
+        let (set0, raster, layout) = self.layouts(cache, n)?;
+        let hw = format!("{module}_hw");
+        let (hw_name, shader) = self.module(cache, &hw, &["hw_vs", "hw_fs"])?;
+        let key = (hw_name, "hw_vs+hw_fs".to_string(), n);
+        if let Some(&pipeline) = cache.pipelines.get(&key) {
+            return Ok(Pipeline { pipeline, layout, set0, raster });
+        }
+        let stages = [
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::VERTEX)
+                .module(shader)
+                .name(c"hw_vs"),
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::FRAGMENT)
+                .module(shader)
+                .name(c"hw_fs"),
+        ];
+        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
+        let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
+            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
+        let raster_state = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(vk::CullModeFlags::NONE)
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .line_width(1.0);
+        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
+            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let add = [vk::PipelineColorBlendAttachmentState::default()
+            .blend_enable(true)
+            .src_color_blend_factor(vk::BlendFactor::ONE)
+            .dst_color_blend_factor(vk::BlendFactor::ONE)
+            .color_blend_op(vk::BlendOp::ADD)
+            .src_alpha_blend_factor(vk::BlendFactor::ONE)
+            .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+            .alpha_blend_op(vk::BlendOp::ADD)
+            .color_write_mask(vk::ColorComponentFlags::R)];
+        let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&add);
+        let dynamic = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic);
+        let info = [vk::GraphicsPipelineCreateInfo::default()
+            .stages(&stages)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster_state)
+            .multisample_state(&multisample)
+            .color_blend_state(&blend)
+            .dynamic_state(&dynamic)
+            .layout(layout)
+            .render_pass(render_pass)
+            .subpass(0)];
+        // SAFETY: the module, layout and render pass are alive (cached until the Gpu drops); the
+        // layout declares every binding the entry points use; the render pass's one subpass has
+        // the one colour attachment the blend state describes.
+        let pipeline =
+            unsafe { self.raw.device.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) }
+                .map_err(|(_, e)| vk_error(&format!("building '{hw}'"))(e))?[0];
+        cache.pipelines.insert(key, pipeline);
+        Ok(Pipeline { pipeline, layout, set0, raster })
+    }
+
+    /// The render pass of the hardware raster's geometry passes: one [`COUNT_FORMAT`] colour
+    /// attachment, cleared at the start, stored and left in `TRANSFER_SRC_OPTIMAL` for the copy
+    /// that counts its fragments; its dependencies order it after and before everything else
+    /// (as the recorder's barriers do between commands). Made once, then cached.
+    pub(crate) fn count_pass(&self) -> Result<vk::RenderPass, OitError> {
+        let mut cache = self.cache.lock().map_err(|_| OitError::Device("pipeline cache poisoned".into()))?;
+        if let Some(p) = cache.count_pass {
+            return Ok(p);
+        }
+        let attachments = [vk::AttachmentDescription::default()
+            .format(COUNT_FORMAT)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
+            .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .initial_layout(vk::ImageLayout::UNDEFINED)
+            .final_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)];
+        let color = [vk::AttachmentReference::default()
+            .attachment(0)
+            .layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)];
+        let subpasses = [vk::SubpassDescription::default()
+            .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
+            .color_attachments(&color)];
+        let everything = vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE;
+        let dependencies = [
+            vk::SubpassDependency::default()
+                .src_subpass(vk::SUBPASS_EXTERNAL)
+                .dst_subpass(0)
+                .src_stage_mask(vk::PipelineStageFlags::ALL_COMMANDS)
+                .dst_stage_mask(vk::PipelineStageFlags::ALL_GRAPHICS)
+                .src_access_mask(vk::AccessFlags::MEMORY_WRITE)
+                .dst_access_mask(everything),
+            vk::SubpassDependency::default()
+                .src_subpass(0)
+                .dst_subpass(vk::SUBPASS_EXTERNAL)
+                .src_stage_mask(vk::PipelineStageFlags::ALL_GRAPHICS)
+                .dst_stage_mask(vk::PipelineStageFlags::ALL_COMMANDS)
+                .src_access_mask(vk::AccessFlags::MEMORY_WRITE)
+                .dst_access_mask(everything),
+        ];
+        let info = vk::RenderPassCreateInfo::default()
+            .attachments(&attachments)
+            .subpasses(&subpasses)
+            .dependencies(&dependencies);
+        // SAFETY: a valid create info on a live device; cached and destroyed by `Gpu`'s drop.
+        let pass = unsafe { self.raw.device.create_render_pass(&info, None) }
+            .map_err(vk_error("creating a render pass"))?;
+        cache.count_pass = Some(pass);
+        Ok(pass)
+    }
+
+    /// Group 0's layout for `n` technique buffers, the rasterizer's group 1 and the pipeline
+    /// layout of both; made once each, then cached.
+    fn layouts(
+        &self,
+        cache: &mut Cache,
+        n: usize,
+    ) -> Result<(vk::DescriptorSetLayout, vk::DescriptorSetLayout, vk::PipelineLayout), OitError> {
         let raster = match cache.raster_set {
             Some(l) => l,
             None => {
+                // the compute rasterizer's (triangles, work list, uniform, generated) and the
+                // hardware raster's (vertices, triangles, uniform, instances): the same types
                 let l = self.set_layout(&[
                     (0, vk::DescriptorType::STORAGE_BUFFER),
                     (1, vk::DescriptorType::STORAGE_BUFFER),
@@ -641,48 +978,41 @@ impl Gpu {
                 let sets = [set0, raster];
                 let info = vk::PipelineLayoutCreateInfo::default().set_layouts(&sets);
                 // SAFETY: both set layouts are alive (cached until the Gpu drops).
-                let l = unsafe { d.create_pipeline_layout(&info, None) }
+                let l = unsafe { self.raw.device.create_pipeline_layout(&info, None) }
                     .map_err(vk_error("creating a pipeline layout"))?;
                 cache.layouts.insert(n, l);
                 l
             }
         };
-        let key = (module, entry.to_string(), n);
-        if let Some(&pipeline) = cache.pipelines.get(&key) {
-            return Ok(Pipeline { pipeline, layout, set0, raster });
+        Ok((set0, raster, layout))
+    }
+
+    /// The shader module `name` of `build.rs` (its static name, and the module made once), checked
+    /// to have `entries`.
+    fn module(
+        &self,
+        cache: &mut Cache,
+        name: &str,
+        entries: &[&str],
+    ) -> Result<(&'static str, vk::ShaderModule), OitError> {
+        let (module, bytes, has) = MODULES
+            .iter()
+            .find(|(n, _, _)| *n == name)
+            .ok_or_else(|| OitError::Device(format!("no SPIR-V module '{name}' was built")))?;
+        if let Some(missing) = entries.iter().find(|e| !has.contains(e)) {
+            return Err(OitError::Device(format!("module '{name}' has no entry point '{missing}'")));
         }
-        let shader = match cache.modules.get(module) {
-            Some(&m) => m,
-            None => {
-                let (_, bytes, entries) = MODULES
-                    .iter()
-                    .find(|(name, _, _)| *name == module)
-                    .ok_or_else(|| OitError::Device(format!("no SPIR-V module '{module}' was built")))?;
-                if !entries.contains(&entry) {
-                    return Err(OitError::Device(format!("module '{module}' has no entry point '{entry}'")));
-                }
-                let words = ash::util::read_spv(&mut std::io::Cursor::new(bytes))
-                    .map_err(|e| OitError::Device(format!("module '{module}': bad SPIR-V: {e}")))?;
-                let info = vk::ShaderModuleCreateInfo::default().code(&words);
-                // SAFETY: the words are naga's output for a validated module.
-                let m = unsafe { d.create_shader_module(&info, None) }
-                    .map_err(vk_error("creating a shader module"))?;
-                cache.modules.insert(module, m);
-                m
-            }
-        };
-        let name = std::ffi::CString::new(entry).map_err(|_| OitError::Device("bad entry name".into()))?;
-        let stage = vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::COMPUTE)
-            .module(shader)
-            .name(&name);
-        let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
-        // SAFETY: the module and layout are alive; the layout declares every binding the entry
-        // point uses (group 0 as `set0`, the rasterizer's group 1).
-        let pipeline = unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &info, None) }
-            .map_err(|(_, e)| vk_error(&format!("building '{module}::{entry}'"))(e))?[0];
-        cache.pipelines.insert(key, pipeline);
-        Ok(Pipeline { pipeline, layout, set0, raster })
+        if let Some(&m) = cache.modules.get(module) {
+            return Ok((module, m));
+        }
+        let words = ash::util::read_spv(&mut std::io::Cursor::new(bytes))
+            .map_err(|e| OitError::Device(format!("module '{name}': bad SPIR-V: {e}")))?;
+        let info = vk::ShaderModuleCreateInfo::default().code(&words);
+        // SAFETY: the words are naga's output for a validated module.
+        let m = unsafe { self.raw.device.create_shader_module(&info, None) }
+            .map_err(vk_error("creating a shader module"))?;
+        cache.modules.insert(module, m);
+        Ok((module, m))
     }
 
     fn set_layout(
@@ -696,7 +1026,13 @@ impl Gpu {
                     .binding(b)
                     .descriptor_type(ty)
                     .descriptor_count(1)
-                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+                    // the same layouts serve the compute kernels and the hardware raster's
+                    // vertex and fragment stages
+                    .stage_flags(
+                        vk::ShaderStageFlags::COMPUTE
+                            | vk::ShaderStageFlags::VERTEX
+                            | vk::ShaderStageFlags::FRAGMENT,
+                    )
             })
             .collect();
         let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);

@@ -50,6 +50,7 @@
 
 mod ctx;
 mod device;
+mod hardware;
 mod raster;
 mod record;
 mod technique;
@@ -59,20 +60,21 @@ use std::sync::OnceLock;
 use std::time::Instant;
 
 use oit_core::{
-    Backend, Camera, Capabilities, Frame, OitError, Prepared, RasterPath, Scene, Settings, Technique,
-    TechniqueKind,
+    Backend, Camera, Capabilities, Frame, HardwareCapture, OitError, Prepared, RasterPath, Scene, Settings,
+    Technique, TechniqueKind,
 };
 
 pub use crate::ctx::BufferPool;
 pub use crate::device::{DeviceInfo, Gpu, PAPER_EXTENSIONS, validation_errors, validation_requested};
 
 use crate::ctx::VkCtx;
-use crate::raster::{ComputeBuffers, ComputeRaster};
+use crate::hardware::HardwareScene;
+use crate::raster::{ComputeBuffers, ComputeRaster, Raster};
 
 /// The rasterizers of one frame: the scene's, and (made on demand) the instances' bounding boxes'.
 pub(crate) struct Drivers<'a> {
-    pub(crate) scene: ComputeRaster,
-    pub(crate) boxes: Box<dyn Fn() -> Result<ComputeRaster, OitError> + 'a>,
+    pub(crate) scene: Raster,
+    pub(crate) boxes: Box<dyn Fn() -> Result<Raster, OitError> + 'a>,
 }
 
 /// The Vulkan backend. The device opens on first use.
@@ -81,16 +83,6 @@ pub struct VulkanBackend {
     /// Adapter name filter (substring); `None` reads `OIT_ADAPTER`, else prefers a discrete GPU.
     pub adapter: Option<String>,
     gpu: OnceLock<Result<Gpu, String>>,
-}
-
-/// The message for the hardware path until it exists.
-fn hardware_unsupported() -> OitError {
-    OitError::Unsupported {
-        backend: "vulkan".into(),
-        what: "the hardware raster path (graphics pipelines: MAX blending, logic-op OR, depth peeling \
-               with occlusion queries; issue 9, not written yet): use --raster compute, or --backend wgpu"
-            .into(),
-    }
 }
 
 impl VulkanBackend {
@@ -136,6 +128,10 @@ impl Backend for VulkanBackend {
             ("maxComputeWorkGroupCount".into(), format!("{:?}", l.max_compute_work_group_count)),
             ("maxColorAttachments".into(), l.max_color_attachments.to_string()),
             ("logicOp".into(), info.logic_op.to_string()),
+            (
+                "hardware raster path".into(),
+                info.hardware_missing.as_ref().map_or("yes".into(), |m| format!("no: lacks {m}")),
+            ),
             ("device_local_heap".into(), info.device_heap.to_string()),
             ("timestamps".into(), gpu.has_timestamps().to_string()),
             ("validation".into(), info.validation.to_string()),
@@ -143,7 +139,11 @@ impl Backend for VulkanBackend {
         Capabilities {
             device: format!("{} ({:?}, {})", info.name, info.device_type, info.driver),
             techniques: TechniqueKind::ALL.to_vec(),
-            raster_paths: vec![RasterPath::Compute],
+            raster_paths: if info.hardware_missing.is_none() {
+                vec![RasterPath::Compute, RasterPath::Hardware]
+            } else {
+                vec![RasterPath::Compute]
+            },
             limits,
         }
     }
@@ -162,13 +162,15 @@ impl Backend for VulkanBackend {
             geometry_made: Cell::new(0),
             compute: RefCell::new(None),
             compute_boxes: RefCell::new(None),
+            hardware: RefCell::new(None),
         }))
     }
 }
 
 /// A scene prepared on the Vulkan backend: per-pixel storage from a pool, reused by the next
-/// frame of the same size; the compute rasterizer's buffers kept and grown only when needed;
-/// pipelines cached on the device. [`Prepared::storage_allocations`] counts both.
+/// frame of the same size; the compute rasterizer's buffers kept and grown only when needed; the
+/// hardware path's geometry uploaded on its first frame and its count targets kept by size;
+/// pipelines cached on the device. [`Prepared::storage_allocations`] counts them all.
 pub struct VulkanPrepared<'s> {
     gpu: &'s Gpu,
     scene: &'s Scene,
@@ -176,6 +178,7 @@ pub struct VulkanPrepared<'s> {
     geometry_made: Cell<u64>,
     compute: RefCell<Option<ComputeBuffers>>,
     compute_boxes: RefCell<Option<ComputeBuffers>>,
+    hardware: RefCell<Option<HardwareScene>>,
 }
 
 impl VulkanPrepared<'_> {
@@ -235,19 +238,72 @@ impl VulkanPrepared<'_> {
         settings.validate()?;
         let start = Instant::now();
         let path = settings.raster.unwrap_or(RasterPath::Compute);
-        if path != RasterPath::Compute {
-            return Err(match path {
-                RasterPath::Hardware => hardware_unsupported(),
-                other => OitError::Unsupported {
+        let this = &*self;
+        let drivers = match path {
+            RasterPath::Compute => Drivers {
+                scene: Raster::Compute(this.compute_raster(&this.compute, camera, settings, false)?),
+                boxes: Box::new(move || {
+                    Ok(Raster::Compute(this.compute_raster(&this.compute_boxes, camera, settings, true)?))
+                }),
+            },
+            RasterPath::Hardware => {
+                // a window of the frame (tiles) maps onto the viewport in clip space, as on wgpu
+                let camera = match settings.region {
+                    Some(region) => Camera {
+                        proj: region.clip_matrix(settings.width, settings.height) * camera.proj,
+                        ..*camera
+                    },
+                    None => *camera,
+                };
+                if let Some(missing) = &this.gpu.info.hardware_missing {
+                    return Err(OitError::Unsupported {
+                        backend: "vulkan".into(),
+                        what: format!(
+                            "the hardware raster path on '{}' (it lacks {missing}): use --raster compute",
+                            this.gpu.info.name
+                        ),
+                    });
+                }
+                if settings.hardware_capture == HardwareCapture::Blend
+                    && matches!(
+                        settings.technique,
+                        Technique::Dp
+                            | Technique::Ddp
+                            | Technique::Bdp { .. }
+                            | Technique::WeightedAverage
+                            | Technique::WeightedSum
+                    )
+                {
+                    return Err(OitError::Unsupported {
+                        backend: "vulkan".into(),
+                        what: format!(
+                            "--hardware-capture blend for {} (the papers' blending captures are not \
+                             written yet on vulkan): use --hardware-capture atomics, or --backend wgpu",
+                            settings.technique
+                        ),
+                    });
+                }
+                if this.hardware.borrow().is_none() {
+                    let made = HardwareScene::new(this.gpu, this.scene, &this.geometry_made)?;
+                    *this.hardware.borrow_mut() = Some(made);
+                }
+                let hw = || -> std::cell::Ref<'_, HardwareScene> {
+                    std::cell::Ref::map(this.hardware.borrow(), |h| h.as_ref().expect("made above"))
+                };
+                let (gpu, scene, made) = (this.gpu, this.scene, &this.geometry_made);
+                Drivers {
+                    scene: Raster::Hardware(hw().raster(gpu, scene, &camera, settings, false, made)?),
+                    boxes: Box::new(move || {
+                        Ok(Raster::Hardware(hw().raster(gpu, scene, &camera, settings, true, made)?))
+                    }),
+                }
+            }
+            other => {
+                return Err(OitError::Unsupported {
                     backend: "vulkan".into(),
                     what: format!("the {other} raster path"),
-                },
-            });
-        }
-        let this = &*self;
-        let drivers = Drivers {
-            scene: this.compute_raster(&this.compute, camera, settings, false)?,
-            boxes: Box::new(move || this.compute_raster(&this.compute_boxes, camera, settings, true)),
+                });
+            }
         };
         let mut ctx = VkCtx::new(this.gpu, this.scene, camera, settings, &this.pool)?;
         let layers = run_technique(&mut ctx, &drivers)?;

@@ -24,6 +24,14 @@ const TILE: u32 = 8;
 /// Bytes of the smallest triangle and work-list buffers (a binding may not be empty).
 const MIN_BYTES: u64 = 256;
 
+/// A frame's rasterizer of the scene (or of its instances' bounding boxes), on either path.
+pub(crate) enum Raster {
+    /// The compute rasterizer (this module).
+    Compute(ComputeRaster),
+    /// The GPU's own (`crate::hardware`).
+    Hardware(crate::hardware::HardwareRaster),
+}
+
 /// One frame's triangles and work list, on the GPU once the first geometry pass uploads them.
 pub(crate) struct ComputeRaster {
     tris: Rc<Buffer>,

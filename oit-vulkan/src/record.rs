@@ -1,19 +1,21 @@
 //! Command recording: one command buffer at a time, every command followed by a memory barrier,
 //! submitted and waited for when the host needs a result (a readback) or when the frame ends.
 //!
-//! Synchronization: after every dispatch, fill and copy, one `VkMemoryBarrier` from the compute
-//! and transfer stages' writes to the compute, transfer and host stages' reads and writes. A
+//! Synchronization: after every dispatch, draw, fill and copy, one `VkMemoryBarrier` from every
+//! stage's writes to every stage's (and the host's) reads and writes. A
 //! global memory barrier covers every buffer the previous command touched (Khronos recommends it
 //! over per-buffer barriers when many buffers are involved); it orders read-after-write,
 //! write-after-write and (by its execution dependency) write-after-read. The host writes
 //! uniforms and staging buffers before the submission that reads them (made visible by the
 //! submission itself) and reads results only after the fence, behind the barrier's `HOST_READ`.
 //!
+//! A hardware-raster geometry pass is one render pass (its own dependencies order it after and
+//! before everything, `Gpu::count_pass`) holding one draw, followed by the same barrier.
+//!
 //! GPU time: where the device has timestamps ([`Gpu::has_timestamps`]) a query pool of two
-//! timestamps per uniform slot, reset at the start of every recording (outside any render pass:
-//! only compute and transfer commands are recorded) and written once each per recording: the
-//! top of the pipe before dispatch `i` (query `2i`) and the bottom after it (query `2i + 1`),
-//! before its barrier. The flush reads the pairs written after the fence and adds each one's
+//! timestamps per uniform slot, reset at the start of every recording (outside any render pass)
+//! and written once each per recording, outside render passes: before dispatch or draw `i`
+//! (query `2i`) and after it (query `2i + 1`), before its barrier. The flush reads the pairs written after the fence and adds each one's
 //! time to its label's total and the frame's, as oit-wgpu's `pass_ms` does.
 
 use std::rc::Rc;
@@ -21,7 +23,7 @@ use std::rc::Rc;
 use ash::vk;
 use oit_core::OitError;
 
-use crate::device::{Buffer, Gpu, Pipeline};
+use crate::device::{Buffer, Gpu, Image, Pipeline};
 
 /// Uniform slots (and dispatches) per submission before a flush.
 pub(crate) const SLOTS: u32 = 256;
@@ -220,23 +222,17 @@ impl<'g> Recorder<'g> {
 
     /// The barrier after every command (see the module docs).
     fn barrier(&self) {
-        let barrier = vk::MemoryBarrier::default()
-            .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
-            .dst_access_mask(
-                vk::AccessFlags::SHADER_READ
-                    | vk::AccessFlags::SHADER_WRITE
-                    | vk::AccessFlags::TRANSFER_READ
-                    | vk::AccessFlags::TRANSFER_WRITE
-                    | vk::AccessFlags::HOST_READ,
+        let barrier =
+            vk::MemoryBarrier::default().src_access_mask(vk::AccessFlags::MEMORY_WRITE).dst_access_mask(
+                vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE | vk::AccessFlags::HOST_READ,
             );
-        // SAFETY: the command buffer is recording; the stages exist on a compute queue.
+        // SAFETY: the command buffer is recording, outside a render pass; ALL_COMMANDS is valid
+        // on any queue.
         unsafe {
             self.gpu.raw.device.cmd_pipeline_barrier(
                 self.cmd,
-                vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
-                vk::PipelineStageFlags::COMPUTE_SHADER
-                    | vk::PipelineStageFlags::TRANSFER
-                    | vk::PipelineStageFlags::HOST,
+                vk::PipelineStageFlags::ALL_COMMANDS,
+                vk::PipelineStageFlags::ALL_COMMANDS | vk::PipelineStageFlags::HOST,
                 vk::DependencyFlags::empty(),
                 &[barrier],
                 &[],
@@ -341,19 +337,16 @@ impl<'g> Recorder<'g> {
         unsafe { self.gpu.raw.device.update_descriptor_sets(&writes, &[]) };
     }
 
-    /// Records one dispatch of `pipeline`: group 0 with `uniform` (copied into the next slot of
-    /// the ring) and `storage` (binding, buffer), group 1 the rasterizer's (binding, buffer) with
-    /// its uniform at binding 2, when given. With timestamps, its time counts under `label`. A
-    /// barrier follows.
-    pub(crate) fn dispatch(
+    /// Allocates and writes a command's descriptor sets: group 0 with `uniform` (copied into the
+    /// next slot of the ring) and `storage` (binding, buffer); group 1, when given, the
+    /// rasterizer's (binding, buffer) with its uniform at binding 2.
+    fn sets(
         &mut self,
-        label: &str,
         pipeline: &Pipeline,
         uniform: &[u8],
         storage: &[(u32, &Buffer)],
         raster: Option<(&[(u32, &Buffer)], &Buffer)>,
-        groups: (u32, u32),
-    ) -> Result<(), OitError> {
+    ) -> Result<Vec<vk::DescriptorSet>, OitError> {
         self.room(if raster.is_some() { 2 } else { 1 })?;
         let offset = u64::from(self.slot) * SLOT_BYTES;
         self.uniform_bytes[offset as usize..offset as usize + uniform.len()].copy_from_slice(uniform);
@@ -375,21 +368,53 @@ impl<'g> Recorder<'g> {
             unsafe { self.gpu.raw.device.update_descriptor_sets(&[write], &[]) };
             sets.push(set1);
         }
-        let d = &self.gpu.raw.device;
-        // the dispatch's timestamp pair: the next of this recording, so the pairs written are
-        // 0..labels, read by the flush; at most one per slot taken, so below SLOTS (`room`)
-        let timed = self.timestamps.as_mut().map(|ts| {
+        Ok(sets)
+    }
+
+    /// The next timestamp pair of this recording, counted under `label` (with timestamps): the
+    /// pairs written are 0..labels, read by the flush; at most one per uniform slot taken, so
+    /// below SLOTS (`room`).
+    fn timed(&mut self, label: &str) -> Option<(vk::QueryPool, u32)> {
+        self.timestamps.as_mut().map(|ts| {
             ts.labels.push(label.to_string());
             (ts.pool, ts.labels.len() as u32 - 1)
-        });
-        // SAFETY: recording; the pipeline's layout matches the sets bound (made from its set
-        // layouts); the group counts are within maxComputeWorkGroupCount (x ≤ 65535); queries
-        // 2 × pair and 2 × pair + 1 (< 2 × SLOTS) were reset at `begin` and are written once each
-        // in this recording (pairs start over only after a flush).
-        unsafe {
-            if let Some((pool, pair)) = timed {
-                d.cmd_write_timestamp(self.cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, pool, 2 * pair);
+        })
+    }
+
+    /// Writes query `2 × pair + end` of `timed` (outside any render pass).
+    fn stamp(&self, timed: Option<(vk::QueryPool, u32)>, end: u32) {
+        if let Some((pool, pair)) = timed {
+            // SAFETY: recording; the query (< 2 × SLOTS) was reset at `begin` and is written once
+            // in this recording (pairs start over only after a flush).
+            unsafe {
+                self.gpu.raw.device.cmd_write_timestamp(
+                    self.cmd,
+                    vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                    pool,
+                    2 * pair + end,
+                );
             }
+        }
+    }
+
+    /// Records one dispatch of `pipeline` with the sets of [`Recorder::sets`]. With timestamps,
+    /// its time counts under `label`. A barrier follows.
+    pub(crate) fn dispatch(
+        &mut self,
+        label: &str,
+        pipeline: &Pipeline,
+        uniform: &[u8],
+        storage: &[(u32, &Buffer)],
+        raster: Option<(&[(u32, &Buffer)], &Buffer)>,
+        groups: (u32, u32),
+    ) -> Result<(), OitError> {
+        let sets = self.sets(pipeline, uniform, storage, raster)?;
+        let timed = self.timed(label);
+        self.stamp(timed, 0);
+        let d = &self.gpu.raw.device;
+        // SAFETY: recording; the pipeline's layout matches the sets bound (made from its set
+        // layouts); the group counts are within maxComputeWorkGroupCount (x ≤ 65535).
+        unsafe {
             d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, pipeline.pipeline);
             d.cmd_bind_descriptor_sets(
                 self.cmd,
@@ -402,12 +427,98 @@ impl<'g> Recorder<'g> {
             if groups.0 > 0 && groups.1 > 0 {
                 d.cmd_dispatch(self.cmd, groups.0, groups.1, 1);
             }
-            if let Some((pool, pair)) = timed {
-                d.cmd_write_timestamp(self.cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, pool, 2 * pair + 1);
-            }
         }
+        self.stamp(timed, 1);
         self.barrier();
         Ok(())
+    }
+
+    /// Records one draw of `vertices` vertices by the graphics `pipeline` (made in
+    /// `render_pass`) into `target` (its framebuffer, cleared to 0), with the sets of
+    /// [`Recorder::sets`]; the viewport has a negative height, so row 0 is the top as on wgpu
+    /// (NDC y up). With timestamps, its time counts under `label`. A barrier follows.
+    #[expect(clippy::too_many_arguments, reason = "a draw is that many things")]
+    pub(crate) fn draw(
+        &mut self,
+        label: &str,
+        pipeline: &Pipeline,
+        render_pass: vk::RenderPass,
+        target: &Image,
+        uniform: &[u8],
+        storage: &[(u32, &Buffer)],
+        raster: (&[(u32, &Buffer)], &Buffer),
+        vertices: u32,
+    ) -> Result<(), OitError> {
+        let sets = self.sets(pipeline, uniform, storage, Some(raster))?;
+        let timed = self.timed(label);
+        self.stamp(timed, 0);
+        let (w, h) = target.extent;
+        let area =
+            vk::Rect2D { offset: vk::Offset2D { x: 0, y: 0 }, extent: vk::Extent2D { width: w, height: h } };
+        let clear = [vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } }];
+        let begin = vk::RenderPassBeginInfo::default()
+            .render_pass(render_pass)
+            .framebuffer(target.framebuffer)
+            .render_area(area)
+            .clear_values(&clear);
+        let viewport = vk::Viewport {
+            x: 0.0,
+            y: h as f32,
+            width: w as f32,
+            height: -(h as f32),
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        let d = &self.gpu.raw.device;
+        // SAFETY: recording, outside a render pass; the framebuffer was made for a render pass
+        // compatible with `render_pass` (the same one) at the target's extent; the pipeline was
+        // made in that render pass, its layout matches the sets; a negative viewport height is
+        // core since Vulkan 1.1.
+        unsafe {
+            d.cmd_begin_render_pass(self.cmd, &begin, vk::SubpassContents::INLINE);
+            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.pipeline);
+            d.cmd_bind_descriptor_sets(
+                self.cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                pipeline.layout,
+                0,
+                &sets,
+                &[],
+            );
+            d.cmd_set_viewport(self.cmd, 0, &[viewport]);
+            d.cmd_set_scissor(self.cmd, 0, &[area]);
+            if vertices > 0 {
+                d.cmd_draw(self.cmd, vertices, 1, 0, 0);
+            }
+            d.cmd_end_render_pass(self.cmd);
+        }
+        self.stamp(timed, 1);
+        self.barrier();
+        Ok(())
+    }
+
+    /// Records a copy of `image` (in `TRANSFER_SRC_OPTIMAL`, one 32-bit texel per pixel) into the
+    /// start of `dst`, row by row; a barrier follows.
+    pub(crate) fn copy_image(&mut self, image: &Image, dst: &Buffer) {
+        let (width, height) = image.extent;
+        let region = [vk::BufferImageCopy::default()
+            .image_subresource(
+                vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
+            )
+            .image_extent(vk::Extent3D { width, height, depth: 1 })];
+        // SAFETY: recording, outside a render pass; the image has TRANSFER_SRC usage and is in
+        // that layout (its render pass's final layout); `dst` has TRANSFER_DST usage and holds
+        // width × height × 4 bytes.
+        unsafe {
+            self.gpu.raw.device.cmd_copy_image_to_buffer(
+                self.cmd,
+                image.image,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                dst.buffer,
+                &region,
+            );
+        }
+        self.barrier();
     }
 
     /// Records setting every word of `buffer` to `value`; a barrier follows.

@@ -26,7 +26,7 @@
 use std::cell::{Cell, OnceCell, RefCell};
 use std::rc::Rc;
 
-use glam::{Mat3, Vec3, Vec4};
+use oit_core::pulled::{PulledGeometry, PulledInstance};
 use oit_core::{Aabb, Camera, OitError, RasterPath, Scene, Settings};
 use wgpu::util::DeviceExt;
 
@@ -37,28 +37,6 @@ use crate::gpu::Gpu;
 pub(crate) const RASTER_WGSL: &str = include_str!("shaders/raster_hardware.wgsl");
 /// What to try when the geometry does not fit in one storage binding.
 const GEOMETRY_HINT: &str = "use fewer triangles or instances, or the cpu backend";
-
-/// One vertex of a mesh, in the mesh's own space, as `HwVertex` in raster_hardware.wgsl.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-struct HwVertex {
-    /// xyz: position; w: 1 when the mesh has vertex colours.
-    position: [f32; 4],
-    normal: [f32; 4],
-    color: [f32; 4],
-}
-
-/// One instance's data of one frame, as `HwInstance` in raster_hardware.wgsl.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-struct HwInstance {
-    /// Object to clip space (`view_proj · transform`), column-major.
-    mvp: [f32; 16],
-    /// The normal matrix's columns (w unused).
-    normal: [[f32; 4]; 3],
-    /// The material's base colour.
-    base: [f32; 4],
-}
 
 /// The scene (or its instances' bounding boxes) on the GPU's rasterizer, for one frame: handles
 /// to an `HwGeometry`'s buffers and a count target of the frame's size.
@@ -291,79 +269,20 @@ impl HwGeometry {
     /// Uploads the scene's meshes and triangles (`boxes`: its instances' bounding boxes) and
     /// makes the per-frame buffers; `made` counts the buffers created.
     pub(crate) fn new(gpu: &Gpu, scene: &Scene, boxes: bool, made: &Cell<u64>) -> Result<Self, OitError> {
-        if boxes {
-            let bounds: Vec<Aabb> = scene.instances.iter().map(|inst| scene.instance_bounds(inst)).collect();
-            return HwGeometry::boxes(gpu, &bounds, made);
-        }
-        let too_many = || OitError::Device("over 2^32 vertices in one draw".into());
-        let mut vertices: Vec<HwVertex> = Vec::new();
-        // per triangle: its three vertices and its instance
-        let mut triangles: Vec<[u32; 4]> = Vec::new();
-        // each mesh an instance places, once
-        let mut firsts: Vec<Option<u32>> = vec![None; scene.meshes.len()];
-        for (i, inst) in scene.instances.iter().enumerate() {
-            let (object, mesh) = scene.instance_parts(inst);
-            let first = match firsts[object.mesh] {
-                Some(first) => first,
-                None => {
-                    let first = u32::try_from(vertices.len()).map_err(|_| too_many())?;
-                    let has_color = if mesh.colors.is_some() { 1.0 } else { 0.0 };
-                    for (v, p) in mesh.positions.iter().enumerate() {
-                        let n = mesh.normals.get(v).copied().unwrap_or(Vec3::ZERO);
-                        let c = mesh.colors.as_ref().and_then(|c| c.get(v).copied()).unwrap_or(Vec3::ZERO);
-                        vertices.push(HwVertex {
-                            position: p.extend(has_color).to_array(),
-                            normal: n.extend(0.0).to_array(),
-                            color: c.extend(0.0).to_array(),
-                        });
-                    }
-                    firsts[object.mesh] = Some(first);
-                    first
-                }
-            };
-            let i = i as u32;
-            triangles.extend(mesh.indices.iter().map(|t| [first + t[0], first + t[1], first + t[2], i]));
-        }
-        HwGeometry::upload(gpu, &vertices, &triangles, scene.instances.len(), false, made)
+        HwGeometry::upload(gpu, &PulledGeometry::new(scene, boxes)?, made)
     }
 
-    /// The 12 triangles of each of `bounds` (world-space boxes, one per instance: `Aabb::TRIANGLES`
-    /// over its corners, normals from its centre, as oit-core's `setup::box_vertices`), triangle
-    /// `t` of box `i` primitive `12·i + t`, as oit-cpu's `TriangleSetup::bounding_boxes` orders
-    /// them; `made` counts the buffers created.
+    /// The 12 triangles of each of `bounds` (world-space boxes, one per instance), as
+    /// [`PulledGeometry::boxes`] lays them out; `made` counts the buffers created.
     pub(crate) fn boxes(gpu: &Gpu, bounds: &[Aabb], made: &Cell<u64>) -> Result<Self, OitError> {
-        let too_many = || OitError::Device("over 2^32 vertices in one draw".into());
-        let mut vertices: Vec<HwVertex> = Vec::with_capacity(bounds.len() * 8);
-        let mut triangles: Vec<[u32; 4]> = Vec::with_capacity(bounds.len() * 12);
-        for (i, b) in bounds.iter().enumerate() {
-            let first = u32::try_from(vertices.len()).map_err(|_| too_many())?;
-            for c in b.corners() {
-                vertices.push(HwVertex {
-                    position: c.extend(0.0).to_array(),
-                    normal: (c - b.center()).normalize_or_zero().extend(0.0).to_array(),
-                    color: [0.0; 4],
-                });
-            }
-            let i = u32::try_from(i).map_err(|_| too_many())?;
-            triangles.extend(Aabb::TRIANGLES.iter().map(|t| [first + t[0], first + t[1], first + t[2], i]));
-        }
-        HwGeometry::upload(gpu, &vertices, &triangles, bounds.len(), true, made)
+        HwGeometry::upload(gpu, &PulledGeometry::boxes(bounds)?, made)
     }
 
-    /// Uploads `vertices` and `triangles` (per triangle: three vertex indices and an instance) and
-    /// makes the per-frame buffers for `instance_count` instances.
-    fn upload(
-        gpu: &Gpu,
-        vertices: &[HwVertex],
-        triangles: &[[u32; 4]],
-        instance_count: usize,
-        boxes: bool,
-        made: &Cell<u64>,
-    ) -> Result<Self, OitError> {
-        let too_many = || OitError::Device("over 2^32 vertices in one draw".into());
-        u32::try_from(vertices.len()).map_err(|_| too_many())?;
-        let vertex_count = u32::try_from(triangles.len() * 3).map_err(|_| too_many())?;
-        let instance_bytes = (instance_count * size_of::<HwInstance>()) as u64;
+    /// Uploads `geometry`'s vertices and triangles and makes the per-frame buffers.
+    fn upload(gpu: &Gpu, geometry: &PulledGeometry, made: &Cell<u64>) -> Result<Self, OitError> {
+        let (vertices, triangles) = (&geometry.vertices[..], &geometry.triangles[..]);
+        let vertex_count = geometry.vertex_count();
+        let instance_bytes = geometry.instance_bytes();
         gpu.check_storage_hint("the meshes' vertices", size_of_val(vertices) as u64, GEOMETRY_HINT)?;
         gpu.check_storage_hint("the triangles' indices", size_of_val(triangles) as u64, GEOMETRY_HINT)?;
         gpu.check_storage_hint("the instances' matrices", instance_bytes, GEOMETRY_HINT)?;
@@ -374,7 +293,7 @@ impl HwGeometry {
         made.set(made.get() + 2);
         let instances = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("instances"),
-            size: instance_bytes.max(size_of::<HwInstance>() as u64),
+            size: instance_bytes,
             usage: storage | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -422,8 +341,8 @@ impl HwGeometry {
             made,
         );
         Ok(HwGeometry {
-            boxes,
-            instance_count,
+            boxes: geometry.boxes,
+            instance_count: geometry.instances,
             instances,
             uniform,
             layout,
@@ -454,49 +373,24 @@ impl HwGeometry {
     /// the shading uniform: all a frame sends of the geometry.
     pub(crate) fn write_frame(&self, gpu: &Gpu, scene: &Scene, camera: &Camera, settings: &Settings) {
         debug_assert_eq!(self.instance_count, scene.instances.len(), "the scene uploaded");
-        let view_proj = camera.view_proj();
-        let data: Vec<HwInstance> = scene
-            .instances
-            .iter()
-            .map(|inst| {
-                let (object, _) = scene.instance_parts(inst);
-                let (mvp, nm) = if self.boxes {
-                    (view_proj, Mat3::IDENTITY)
-                } else {
-                    (view_proj * inst.transform, oit_core::setup::normal_matrix(&inst.transform))
-                };
-                HwInstance {
-                    mvp: mvp.to_cols_array(),
-                    normal: [nm.x_axis, nm.y_axis, nm.z_axis].map(|c| c.extend(0.0).to_array()),
-                    base: settings.material_color(object.color).to_array(),
-                }
-            })
-            .collect();
+        let data = oit_core::pulled::instance_data(scene, camera, settings, self.boxes);
         self.write_instances(gpu, &data, camera, settings);
     }
 
     /// Writes the frame's instance data of boxes uploaded by [`HwGeometry::boxes`] without their
-    /// scene: `view_proj` and the identity for each, base colour white (with the settings' alpha).
-    /// The bounds passes the boxes serve read only their fragments' depths, so the colour that
-    /// oit's own scenes give them (their object's) makes no difference to a frame.
+    /// scene ([`oit_core::pulled::boxes_data`]).
     pub(crate) fn write_boxes_frame(&self, gpu: &Gpu, camera: &Camera, settings: &Settings) {
         debug_assert!(self.boxes, "boxes uploaded");
-        let one = HwInstance {
-            mvp: camera.view_proj().to_cols_array(),
-            normal: [Vec3::X, Vec3::Y, Vec3::Z].map(|c| c.extend(0.0).to_array()),
-            base: settings.material_color(Vec4::ONE).to_array(),
-        };
-        self.write_instances(gpu, &vec![one; self.instance_count], camera, settings);
+        let data = oit_core::pulled::boxes_data(self.instance_count, camera, settings);
+        self.write_instances(gpu, &data, camera, settings);
     }
 
     /// Writes `data` into the per-instance buffer and the shading uniform.
-    fn write_instances(&self, gpu: &Gpu, data: &[HwInstance], camera: &Camera, settings: &Settings) {
+    fn write_instances(&self, gpu: &Gpu, data: &[PulledInstance], camera: &Camera, settings: &Settings) {
         if !data.is_empty() {
             gpu.queue.write_buffer(&self.instances, 0, bytemuck::cast_slice(data));
         }
-        let f: Vec4 = camera.forward.extend(0.0);
-        let uniform: [u32; 8] =
-            [settings.shading.code(), 0, 0, 0, f.x.to_bits(), f.y.to_bits(), f.z.to_bits(), f.w.to_bits()];
+        let uniform = oit_core::pulled::raster_uniform(camera, settings);
         gpu.queue.write_buffer(&self.uniform, 0, bytemuck::cast_slice(&uniform));
     }
 

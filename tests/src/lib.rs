@@ -34,13 +34,15 @@ fn backends_labelled(label: &str) -> Vec<Box<dyn Backend>> {
             }));
         }
     }
-    // the compute path only: its hardware path is not written yet (issue 9)
+    // both paths where the device has a graphics queue and fragment-stage atomics
     #[cfg(feature = "vulkan")]
-    if oit_vulkan::backend_or_skip(label).is_some() {
-        out.push(Box::new(oit_core::OnPath {
-            backend: Box::new(oit_vulkan::VulkanBackend::default()),
-            path: oit_core::RasterPath::Compute,
-        }));
+    if let Some(vk) = oit_vulkan::backend_or_skip(label) {
+        for path in oit_core::Backend::capabilities(&vk).raster_paths {
+            out.push(Box::new(oit_core::OnPath {
+                backend: Box::new(oit_vulkan::VulkanBackend::default()),
+                path,
+            }));
+        }
     }
     out
 }

@@ -21,7 +21,7 @@ use oit_core::OitError;
 
 use crate::ctx::{Init, VkCtx};
 use crate::device::Buffer;
-use crate::raster::ComputeRaster;
+use crate::raster::Raster;
 
 /// The buffers of `tail.wgsl` (`--overflow tail`), as oit-wgpu's `tail_buffers`: the tail sums
 /// and two bookkeeping words, or placeholders where the plan has no tail.
@@ -36,7 +36,7 @@ pub(crate) fn tail_buffers(ctx: &mut VkCtx<'_>) -> Result<(Rc<Buffer>, Rc<Buffer
 }
 
 /// Fragments per pixel from one counting pass (the buffer), and the deepest pixel's count.
-pub(crate) fn count(ctx: &mut VkCtx<'_>, raster: &ComputeRaster) -> Result<(Rc<Buffer>, u32), OitError> {
+pub(crate) fn count(ctx: &mut VkCtx<'_>, raster: &Raster) -> Result<(Rc<Buffer>, u32), OitError> {
     let counts = ctx.buffer("fragment counts", u64::from(ctx.pixels), Init::Zero)?;
     let max = ctx.buffer("max count", 1, Init::Zero)?;
     ctx.geometry_pass(raster, "count", &[&counts, &max], 0, 0)?;

@@ -1,0 +1,224 @@
+//! The hardware-raster path: the GPU's own rasterizer through a graphics pipeline, on the WGSL
+//! oit-wgpu's hardware path runs (`raster_hardware.wgsl`'s `hw_vs` and `hw_fs` after the
+//! technique's `capture`, compiled to SPIR-V by `build.rs` as `<module>_hw`).
+//!
+//! What is uploaded once, and what per frame, as on oit-wgpu: the scene's geometry for vertex
+//! pulling ([`oit_core::pulled::PulledGeometry`]: each mesh's vertices once, per triangle its
+//! vertices and instance, in primitive order) when a prepared scene first draws on this path;
+//! per frame only the instances' matrices and the shading uniform, uploaded by the frame's first
+//! geometry pass in its command stream. The instances' bounding boxes (for the bounds passes of
+//! bdp and adp) are a second geometry, uploaded on first use.
+//!
+//! A geometry pass is one draw of every triangle in a render pass whose one colour attachment
+//! counts fragments by additive blending ([`crate::device::COUNT_FORMAT`]); the count image is
+//! copied into a buffer and summed by a kernel (`shaders/count_sum.wgsl`) into the pass's
+//! fragment count. The viewport's height is negative, so pixel rows, depth range and clip space
+//! are wgpu's, and the fragments are those of oit-wgpu's hardware path on the same driver; against
+//! oit-cpu only pixels on triangle edges may differ (the GPU's sub-pixel precision and clipping).
+
+use std::cell::{Cell, OnceCell, RefCell};
+use std::rc::Rc;
+
+use ash::vk;
+use oit_core::pulled::PulledGeometry;
+use oit_core::{Camera, OitError, Scene, Settings};
+
+use crate::ctx::storage_usage;
+use crate::device::{Buffer, COUNT_FORMAT, Gpu, Image};
+use crate::record::Recorder;
+
+/// What to try when the geometry does not fit in one storage binding.
+const GEOMETRY_HINT: &str = "use fewer triangles or instances, or the cpu backend";
+
+/// A scene's (or its instances' boxes') geometry on the GPU: uploaded once, with the per-frame
+/// instance buffer and uniform.
+struct HwGeometry {
+    boxes: bool,
+    instances: usize,
+    vertices: Rc<Buffer>,
+    triangles: Rc<Buffer>,
+    instance_buf: Rc<Buffer>,
+    uniform: Rc<Buffer>,
+    vertex_count: u32,
+}
+
+fn geometry_usage() -> vk::BufferUsageFlags {
+    vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST
+}
+
+impl HwGeometry {
+    /// Uploads the scene's meshes and triangles (`boxes`: its instances' bounding boxes), waiting
+    /// for the upload; `made` counts the buffers created.
+    fn new(gpu: &Gpu, scene: &Scene, boxes: bool, made: &Cell<u64>) -> Result<HwGeometry, OitError> {
+        let g = PulledGeometry::new(scene, boxes)?;
+        let vertex_bytes: &[u8] = bytemuck::cast_slice(&g.vertices);
+        let triangle_bytes: &[u8] = bytemuck::cast_slice(&g.triangles);
+        gpu.check_storage_hint("the meshes' vertices", vertex_bytes.len() as u64, GEOMETRY_HINT)?;
+        gpu.check_storage_hint("the triangles' indices", triangle_bytes.len() as u64, GEOMETRY_HINT)?;
+        gpu.check_storage_hint("the instances' matrices", g.instance_bytes(), GEOMETRY_HINT)?;
+        // a binding may not be empty
+        let sized = |bytes: usize| (bytes as u64).max(64);
+        let vertices = Rc::new(gpu.buffer(sized(vertex_bytes.len()), geometry_usage(), false)?);
+        let triangles = Rc::new(gpu.buffer(sized(triangle_bytes.len()), geometry_usage(), false)?);
+        let instance_buf = Rc::new(gpu.buffer(g.instance_bytes(), geometry_usage(), false)?);
+        let uniform = Rc::new(gpu.buffer(
+            32,
+            vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            false,
+        )?);
+        made.set(made.get() + 4);
+        let mut rec = Recorder::new(gpu)?;
+        rec.upload(&vertices, vertex_bytes)?;
+        rec.upload(&triangles, triangle_bytes)?;
+        rec.flush()?;
+        Ok(HwGeometry {
+            boxes,
+            instances: g.instances,
+            vertices,
+            triangles,
+            instance_buf,
+            uniform,
+            vertex_count: g.vertex_count(),
+        })
+    }
+}
+
+/// A hardware-raster geometry pass's fragment counter: the count image (with its framebuffer),
+/// the buffer it is copied into, and the word the kernel sums it into.
+struct CountTarget {
+    image: Image,
+    counts: Buffer,
+    generated: Buffer,
+}
+
+impl CountTarget {
+    /// Objects a count target makes (for the prepared scene's allocation counter).
+    const CREATES: u64 = 3;
+
+    fn new(gpu: &Gpu, size: (u32, u32)) -> Result<CountTarget, OitError> {
+        let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC;
+        let image = gpu.image(size, COUNT_FORMAT, usage, Some(gpu.count_pass()?))?;
+        let (w, h) = image.extent;
+        let counts_bytes = u64::from(w) * u64::from(h) * 4;
+        gpu.check_storage("the hardware raster's fragment counts", counts_bytes)?;
+        Ok(CountTarget {
+            counts: gpu.buffer(counts_bytes, storage_usage(), false)?,
+            generated: gpu.buffer(16, storage_usage(), false)?,
+            image,
+        })
+    }
+}
+
+/// The scene (or its boxes) on the GPU's rasterizer for one frame: handles to its geometry and to
+/// a count target of the frame's size, and the frame's instance data until uploaded.
+pub(crate) struct HardwareRaster {
+    geometry: Rc<HwGeometry>,
+    target: Rc<CountTarget>,
+    pending: RefCell<Option<[Vec<u8>; 2]>>,
+}
+
+impl HardwareRaster {
+    /// Group 1's storage bindings (the uniform, binding 2, is bound apart).
+    pub(crate) fn bindings(&self) -> Vec<(u32, &Buffer)> {
+        let g = &*self.geometry;
+        vec![(0, &*g.vertices), (1, &*g.triangles), (3, &*g.instance_buf)]
+    }
+
+    /// The vertex and fragment stages' uniform.
+    pub(crate) fn uniform(&self) -> &Buffer {
+        &self.geometry.uniform
+    }
+
+    /// The vertices of the one draw.
+    pub(crate) fn vertex_count(&self) -> u32 {
+        self.geometry.vertex_count
+    }
+
+    /// The count image the draw renders into.
+    pub(crate) fn target(&self) -> &Image {
+        &self.target.image
+    }
+
+    /// The buffer the count image is copied into, and the word it is summed into.
+    pub(crate) fn counters(&self) -> (&Buffer, &Buffer) {
+        (&self.target.counts, &self.target.generated)
+    }
+
+    /// Records the upload of this frame's instance data and uniform, once.
+    pub(crate) fn upload(&self, rec: &mut Recorder<'_>) -> Result<(), OitError> {
+        if let Some([instances, uniform]) = self.pending.borrow_mut().take() {
+            rec.upload(&self.geometry.instance_buf, &instances)?;
+            rec.upload(&self.geometry.uniform, &uniform)?;
+        }
+        Ok(())
+    }
+}
+
+/// The hardware path's part of a prepared scene: the scene's geometry (uploaded when made), the
+/// boxes' (on first use), and count targets by (boxes, size), so a frame of a size seen before
+/// creates nothing.
+pub(crate) struct HardwareScene {
+    scene: Rc<HwGeometry>,
+    boxes: OnceCell<Rc<HwGeometry>>,
+    targets: RefCell<Vec<(bool, (u32, u32), Rc<CountTarget>)>>,
+}
+
+impl HardwareScene {
+    /// Uploads the scene's geometry; `made` counts what is created.
+    pub(crate) fn new(gpu: &Gpu, scene: &Scene, made: &Cell<u64>) -> Result<HardwareScene, OitError> {
+        Ok(HardwareScene {
+            scene: Rc::new(HwGeometry::new(gpu, scene, false, made)?),
+            boxes: OnceCell::new(),
+            targets: RefCell::new(Vec::new()),
+        })
+    }
+
+    /// The frame's rasterizer of the scene (`boxes`: of its instances' bounding boxes), with this
+    /// frame's instance data to upload and a count target of its size.
+    pub(crate) fn raster(
+        &self,
+        gpu: &Gpu,
+        scene: &Scene,
+        camera: &Camera,
+        settings: &Settings,
+        boxes: bool,
+        made: &Cell<u64>,
+    ) -> Result<HardwareRaster, OitError> {
+        let geometry = if boxes {
+            match self.boxes.get() {
+                Some(g) => g.clone(),
+                None => {
+                    let g = Rc::new(HwGeometry::new(gpu, scene, true, made)?);
+                    self.boxes.get_or_init(|| g).clone()
+                }
+            }
+        } else {
+            self.scene.clone()
+        };
+        debug_assert_eq!(geometry.boxes, boxes);
+        debug_assert_eq!(geometry.instances, scene.instances.len());
+        let size = (settings.width, settings.height);
+        let target = {
+            let mut targets = self.targets.borrow_mut();
+            match targets.iter().find(|(b, s, _)| (*b, *s) == (boxes, size)) {
+                Some((.., t)) => t.clone(),
+                None => {
+                    let t = Rc::new(CountTarget::new(gpu, size)?);
+                    made.set(made.get() + CountTarget::CREATES);
+                    targets.push((boxes, size, t.clone()));
+                    t
+                }
+            }
+        };
+        let instances = oit_core::pulled::instance_data(scene, camera, settings, boxes);
+        let uniform = oit_core::pulled::raster_uniform(camera, settings);
+        Ok(HardwareRaster {
+            geometry,
+            target,
+            pending: RefCell::new(Some([
+                bytemuck::cast_slice(&instances).to_vec(),
+                bytemuck::cast_slice(&uniform).to_vec(),
+            ])),
+        })
+    }
+}
