@@ -19,28 +19,48 @@
 
 use std::path::{Path, PathBuf};
 
+/// What follows a module's sources.
+#[derive(Clone, Copy, PartialEq)]
+enum Tail {
+    /// Nothing (kernels only).
+    None,
+    /// The compute rasterizer; and, as `<module>_hw`, the hardware raster (capture_render.wgsl
+    /// and raster_hardware.wgsl).
+    Raster,
+    /// The hardware raster's vertex stage alone (raster_hardware.wgsl up to its fragment entry
+    /// point): a blend capture's module, with fragment entry points and resolves of its own.
+    Stage,
+}
+use Tail::{None as Kernels, Raster, Stage};
+
 /// (module, technique sources relative to oit-wgpu/src, `+`-joined in the order oit-wgpu
-/// concatenates them, whether the rasterizer is appended).
-const MODULES: &[(&str, &str, bool)] = &[
-    ("fill", "shaders/fill.wgsl", false),
-    ("finish", "shaders/finish.wgsl", false),
-    ("count", "technique/count.wgsl", true),
-    ("reference", "technique/reference.wgsl+technique/sort_entries.wgsl", true),
-    ("fabs", "technique/fabs.wgsl+technique/tail.wgsl", true),
-    ("weighted", "technique/weighted.wgsl", true),
-    ("plain", "technique/plain.wgsl", true),
-    ("mdts", "technique/mdts.wgsl+technique/tail.wgsl", true),
-    ("dp", "technique/dp.wgsl", true),
-    ("ddp", "technique/ddp.wgsl", true),
-    ("mlp", "technique/mlp.wgsl", true),
-    ("bounds", "technique/bounds.wgsl", true),
-    ("bdp", "technique/bdp.wgsl", true),
-    ("adp", "technique/adp.wgsl", true),
-    ("dfb_count", "technique/dfb_count.wgsl", true),
-    ("dfb", "technique/dfb.wgsl+technique/sort_entries.wgsl", true),
-    ("ll_size", "technique/ll_size.wgsl", true),
-    ("ll", "technique/ll.wgsl", true),
-    ("count_sum", "vk:shaders/count_sum.wgsl", false),
+/// concatenates them, what follows).
+const MODULES: &[(&str, &str, Tail)] = &[
+    ("fill", "shaders/fill.wgsl", Kernels),
+    ("finish", "shaders/finish.wgsl", Kernels),
+    ("count", "technique/count.wgsl", Raster),
+    ("reference", "technique/reference.wgsl+technique/sort_entries.wgsl", Raster),
+    ("fabs", "technique/fabs.wgsl+technique/tail.wgsl", Raster),
+    ("weighted", "technique/weighted.wgsl", Raster),
+    ("plain", "technique/plain.wgsl", Raster),
+    ("mdts", "technique/mdts.wgsl+technique/tail.wgsl", Raster),
+    ("dp", "technique/dp.wgsl", Raster),
+    ("ddp", "technique/ddp.wgsl", Raster),
+    ("mlp", "technique/mlp.wgsl", Raster),
+    ("bounds", "technique/bounds.wgsl", Raster),
+    ("bdp", "technique/bdp.wgsl", Raster),
+    ("adp", "technique/adp.wgsl", Raster),
+    ("dfb_count", "technique/dfb_count.wgsl", Raster),
+    ("dfb", "technique/dfb.wgsl+technique/sort_entries.wgsl", Raster),
+    ("ll_size", "technique/ll_size.wgsl", Raster),
+    ("ll", "technique/ll.wgsl", Raster),
+    ("count_sum", "vk:shaders/count_sum.wgsl", Kernels),
+    ("nothing", "vk:shaders/no_capture.wgsl", Raster),
+    ("blend", "technique/weighted.wgsl+technique/blend.wgsl", Stage),
+    ("bdp_blend", "technique/bdp_blend.wgsl", Stage),
+    ("dp_depth", "technique/dp_depth.wgsl", Stage),
+    ("ddp_blend", "technique/ddp_blend.wgsl", Stage),
+    ("adp_logic", "technique/adp.wgsl+vk:shaders/adp_logic.wgsl", Stage),
 ];
 
 fn read(dir: &Path, rel: &str) -> String {
@@ -64,6 +84,10 @@ fn main() {
         read(&wgsl, "shaders/raster_hardware.wgsl")
     );
     let own = manifest.join("src");
+    let vertex_stage = {
+        let full = read(&wgsl, "shaders/raster_hardware.wgsl");
+        full.split_once("@fragment").map_or(full.clone(), |(vertex, _)| vertex.to_string())
+    };
 
     use naga::back::spv;
     use naga::valid::{Capabilities, ValidationFlags, Validator};
@@ -77,9 +101,15 @@ fn main() {
         lang_version: (1, 3),
         flags,
         capabilities: Some(
-            [spv::Capability::Shader, spv::Capability::Int64, spv::Capability::Int64Atomics]
-                .into_iter()
-                .collect(),
+            [
+                spv::Capability::Shader,
+                spv::Capability::Int64,
+                spv::Capability::Int64Atomics,
+                // the bounds checks of the blend captures' textureLoad
+                spv::Capability::ImageQuery,
+            ]
+            .into_iter()
+            .collect(),
         ),
         bounds_check_policies: naga::proc::BoundsCheckPolicies {
             index: naga::proc::BoundsCheckPolicy::Restrict,
@@ -108,7 +138,7 @@ fn main() {
             entries.join(", ")
         ));
     };
-    for &(name, rel, with_raster) in MODULES {
+    for &(name, rel, tail) in MODULES {
         let source = rel
             .split('+')
             .map(|r| match r.strip_prefix("vk:") {
@@ -118,11 +148,13 @@ fn main() {
             .collect::<Vec<_>>()
             .join("\n");
         let text = format!("{common}\n{prelude}{source}");
-        if with_raster {
-            emit(name, &format!("{text}\n{raster}"));
-            emit(&format!("{name}_hw"), &format!("{text}\n{hardware}"));
-        } else {
-            emit(name, &text);
+        match tail {
+            Kernels => emit(name, &text),
+            Raster => {
+                emit(name, &format!("{text}\n{raster}"));
+                emit(&format!("{name}_hw"), &format!("{text}\n{hardware}"));
+            }
+            Stage => emit(name, &format!("{text}\n{vertex_stage}")),
         }
     }
     std::fs::write(out.join("modules.rs"), format!("&[\n{index}]\n")).expect("write the module index");

@@ -11,10 +11,11 @@ use bytemuck::{Pod, Zeroable};
 use oit_core::plan::Plan;
 use oit_core::{Camera, Effect, Frame, Image, OitError, RasterPath, Scene, Settings, Stats};
 
-use crate::device::{Buffer, Gpu};
+use crate::device::{Blend, Buffer, Framebuffer, Gpu, GpuImage, GraphicsDesc, PassKey, SetKind};
 use crate::hardware::HardwareRaster;
 use crate::raster::{ComputeRaster, Raster};
 use crate::record::Recorder;
+use crate::record::SetData;
 
 /// Group 0's binding of the loss accounting (`acct` in prelude.wgsl).
 pub(crate) const ACCT_BINDING: u32 = 15;
@@ -47,10 +48,14 @@ pub(crate) fn storage_usage() -> vk::BufferUsageFlags {
         | vk::BufferUsageFlags::TRANSFER_DST
 }
 
-/// Per-pixel buffers kept between the frames of a prepared scene, by size and usage.
+/// Per-pixel buffers and render targets kept between the frames of a prepared scene, by size,
+/// format and usage, and the framebuffers made of those targets.
 #[derive(Default)]
 pub struct BufferPool {
+    /// Dropped before the images they are made of (fields drop in order).
+    framebuffers: RefCell<Vec<(vk::RenderPass, Vec<vk::Image>, Rc<Framebuffer>)>>,
     free: RefCell<Vec<Rc<Buffer>>>,
+    free_images: RefCell<Vec<Rc<GpuImage>>>,
     allocations: Cell<u64>,
 }
 
@@ -70,6 +75,64 @@ impl BufferPool {
         self.allocations.set(self.allocations.get() + 1);
         Ok(Rc::new(gpu.buffer(size, usage, false)?))
     }
+
+    /// A render target of `size`, `format` and `usage`, free or new.
+    fn take_image(
+        &self,
+        gpu: &Gpu,
+        size: (u32, u32),
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+    ) -> Result<Rc<GpuImage>, OitError> {
+        let mut free = self.free_images.borrow_mut();
+        let fits = |i: &Rc<GpuImage>| {
+            i.extent == (size.0.max(1), size.1.max(1)) && i.format == format && i.usage == usage
+        };
+        if let Some(i) = free.iter().position(fits) {
+            return Ok(free.swap_remove(i));
+        }
+        self.allocations.set(self.allocations.get() + 1);
+        Ok(Rc::new(gpu.image(size, format, usage)?))
+    }
+
+    /// The framebuffer of `images` in `pass`, made on first use (the pool keeps the images).
+    fn framebuffer(
+        &self,
+        gpu: &Gpu,
+        pass: vk::RenderPass,
+        images: &[&GpuImage],
+    ) -> Result<Rc<Framebuffer>, OitError> {
+        let handles: Vec<vk::Image> = images.iter().map(|i| i.image).collect();
+        let mut made = self.framebuffers.borrow_mut();
+        if let Some((.., fb)) = made.iter().find(|(p, h, _)| *p == pass && *h == handles) {
+            return Ok(fb.clone());
+        }
+        let fb = Rc::new(gpu.framebuffer(pass, images)?);
+        made.push((pass, handles, fb.clone()));
+        Ok(fb)
+    }
+}
+
+/// One geometry pass of a blend capture ([`VkCtx::blend_pass`]).
+pub(crate) struct BlendPass<'b> {
+    /// The `build.rs` module (with the vertex stage) and its fragment entry point.
+    pub module: &'b str,
+    pub fs: &'b str,
+    /// The colour targets, then the depth target when `depth`.
+    pub targets: &'b [&'b GpuImage],
+    /// One per colour target.
+    pub blends: &'b [Blend],
+    /// One per colour target.
+    pub clears: &'b [vk::ClearValue],
+    /// A depth test (LESS_OR_EQUAL, writing) against the last target, cleared to 1.
+    pub depth: bool,
+    /// Images the fragment stage reads, as group 2.
+    pub previous: &'b [(u32, &'b GpuImage)],
+    /// Whether to count the samples that pass (an occlusion query, read back after the pass).
+    pub occlusion: bool,
+    /// The frame uniform's pass index and parameter for the draw.
+    pub pass_index: u32,
+    pub param: u32,
 }
 
 /// Initial contents of a storage buffer.
@@ -92,6 +155,14 @@ pub(crate) struct VkCtx<'a> {
     pub(crate) storage_bytes: u64,
     /// Fragments merged into pixels' tails (`--overflow tail`), read back by the technique.
     pub(crate) merged: u64,
+    /// Whether the technique's capture counts its losses; the blend captures do not (as on
+    /// oit-wgpu: the blend unit returns no previous value to count by), and their `lost` is
+    /// `fragments − captured`.
+    pub(crate) counts_losses: bool,
+    /// Set by the blend captures of `plain`, `wavg` and `wsum`, whose draw counts every fragment
+    /// into a target the resolve reads into `captured` and loses none: the frame's fragments are
+    /// its captured total.
+    pub(crate) fragments_from_captured: bool,
     uniform: FrameUniform,
     state: Rc<Buffer>,
     image: Rc<Buffer>,
@@ -99,6 +170,7 @@ pub(crate) struct VkCtx<'a> {
     acct: Rc<Buffer>,
     pool: &'a BufferPool,
     lent: Vec<Rc<Buffer>>,
+    lent_images: Vec<Rc<GpuImage>>,
     rec: Recorder<'a>,
     validation_before: u64,
 }
@@ -106,6 +178,7 @@ pub(crate) struct VkCtx<'a> {
 impl Drop for VkCtx<'_> {
     fn drop(&mut self) {
         self.pool.free.borrow_mut().append(&mut self.lent);
+        self.pool.free_images.borrow_mut().append(&mut self.lent_images);
     }
 }
 
@@ -163,6 +236,8 @@ impl<'a> VkCtx<'a> {
             fragments: None,
             storage_bytes: 0,
             merged: 0,
+            counts_losses: true,
+            fragments_from_captured: false,
             uniform,
             state,
             image,
@@ -170,6 +245,7 @@ impl<'a> VkCtx<'a> {
             acct,
             pool,
             lent,
+            lent_images: Vec::new(),
             rec,
             validation_before: crate::device::validation_errors(),
         };
@@ -293,9 +369,10 @@ impl<'a> VkCtx<'a> {
         self.rec.dispatch(
             "geometry",
             &pipeline,
-            bytemuck::bytes_of(&uniform),
-            &storage,
-            Some((&raster_set, &raster.uniform)),
+            &[
+                SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage },
+                SetData::Raster { storage: &raster_set, uniform: &raster.uniform },
+            ],
             groups,
         )?;
         Ok(&raster.generated)
@@ -310,7 +387,7 @@ impl<'a> VkCtx<'a> {
         buffers: &[&Buffer],
     ) -> Result<&'r Buffer, OitError> {
         let pipeline = self.gpu.render_pipeline(module, buffers.len())?;
-        let render_pass = self.gpu.count_pass()?;
+        let render_pass = self.gpu.render_pass(&crate::device::count_pass_key())?;
         raster.upload(&mut self.rec)?;
         let (state, acct) = (self.state.clone(), self.acct.clone());
         let storage = Self::storage(&state, &acct, buffers);
@@ -320,11 +397,14 @@ impl<'a> VkCtx<'a> {
             "geometry",
             &pipeline,
             render_pass,
-            raster.target(),
-            bytemuck::bytes_of(&uniform),
-            &storage,
-            (&raster_set, raster.uniform()),
+            raster.framebuffer(),
+            &[vk::ClearValue::default()],
+            &[
+                SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage },
+                SetData::Raster { storage: &raster_set, uniform: raster.uniform() },
+            ],
             raster.vertex_count(),
+            false,
         )?;
         let (counts, generated) = raster.counters();
         self.rec.copy_image(raster.target(), counts);
@@ -369,12 +449,154 @@ impl<'a> VkCtx<'a> {
     ) -> Result<(), OitError> {
         self.uniform.pass_index = pass_index;
         self.uniform.param = param;
-        let pipeline = self.gpu.pipeline(module, entry, buffers.len())?;
+        self.kernel_with(module, entry, buffers, &[], invocations, label)
+    }
+
+    /// Runs compute `entry` of `module` once per pixel with `images` (binding, image) as group 1
+    /// (a blend capture's targets, read by `textureLoad`).
+    pub(crate) fn image_kernel(
+        &mut self,
+        module: &'static str,
+        entry: &str,
+        buffers: &[&Buffer],
+        images: &[(u32, &GpuImage)],
+        pass_index: u32,
+        param: u32,
+    ) -> Result<(), OitError> {
+        self.uniform.pass_index = pass_index;
+        self.uniform.param = param;
+        self.kernel_with(module, entry, buffers, images, u64::from(self.pixels), entry)
+    }
+
+    /// A dispatch over `invocations` with group 0 and, when any, `images` as group 1.
+    fn kernel_with(
+        &mut self,
+        module: &'static str,
+        entry: &str,
+        buffers: &[&Buffer],
+        images: &[(u32, &GpuImage)],
+        invocations: u64,
+        label: &str,
+    ) -> Result<(), OitError> {
+        let mut kinds = vec![SetKind::Frame(buffers.len())];
+        if !images.is_empty() {
+            kinds.push(SetKind::Images(images.iter().map(|(b, _)| *b).collect()));
+        }
+        let pipeline = self.gpu.compute(module, entry, &kinds)?;
         let (state, acct) = (self.state.clone(), self.acct.clone());
         let storage = Self::storage(&state, &acct, buffers);
         let uniform = self.uniform;
         let groups = dispatch_size(invocations);
-        self.rec.dispatch(label, &pipeline, bytemuck::bytes_of(&uniform), &storage, None, groups)
+        let frame = SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage };
+        if images.is_empty() {
+            self.rec.dispatch(label, &pipeline, &[frame], groups)
+        } else {
+            self.rec.dispatch(label, &pipeline, &[frame, SetData::Images(images)], groups)
+        }
+    }
+
+    /// A render target of the frame's size for a blend capture, from the pool (a steady frame
+    /// makes none), readable by kernels afterwards; counted in `storage_bytes` (`texel` bytes a
+    /// pixel).
+    pub(crate) fn target(
+        &mut self,
+        format: vk::Format,
+        texel: u64,
+        depth: bool,
+    ) -> Result<Rc<GpuImage>, OitError> {
+        let attachment = if depth {
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+        } else {
+            vk::ImageUsageFlags::COLOR_ATTACHMENT
+        };
+        let usage = attachment | vk::ImageUsageFlags::SAMPLED;
+        let image =
+            self.pool.take_image(self.gpu, (self.settings.width, self.settings.height), format, usage)?;
+        self.lent_images.push(image.clone());
+        self.storage_bytes += u64::from(self.pixels) * texel;
+        Ok(image)
+    }
+
+    /// Leaves `image` in the layout kernels and fragment stages read it in (its contents
+    /// undefined): for a target bound before anything rendered into it.
+    pub(crate) fn make_readable(&mut self, image: &GpuImage) {
+        self.rec.make_readable(image);
+    }
+
+    /// One geometry pass of a blend capture: `pass.fs` of `pass.module` over the scene (the
+    /// hardware raster's vertex stage) into `pass.targets` (colour attachments, then the depth
+    /// attachment when `pass.depth`), with `pass.blends`, group 0's `buffers` and, as group 2,
+    /// `pass.previous` (images the fragment stage reads); inside an occlusion query when
+    /// `pass.occlusion`. Counted as a geometry pass. Returns the samples that passed (a wait),
+    /// or `None` without the query.
+    pub(crate) fn blend_pass(
+        &mut self,
+        raster: &HardwareRaster,
+        pass: BlendPass<'_>,
+        buffers: &[&Buffer],
+    ) -> Result<Option<u64>, OitError> {
+        let colors: Vec<vk::Format> = pass
+            .targets
+            .iter()
+            .take(pass.targets.len() - usize::from(pass.depth))
+            .map(|i| i.format)
+            .collect();
+        let key = PassKey {
+            colors,
+            depth: pass.depth.then(|| pass.targets.last().map(|i| i.format)).flatten(),
+            final_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+        };
+        let mut kinds = vec![SetKind::Frame(buffers.len()), SetKind::Raster];
+        if !pass.previous.is_empty() {
+            kinds.push(SetKind::Images(pass.previous.iter().map(|(b, _)| *b).collect()));
+        }
+        let pipeline = self.gpu.graphics(&GraphicsDesc {
+            module: pass.module,
+            fs: pass.fs,
+            sets: &kinds,
+            pass: &key,
+            blends: pass.blends,
+            depth_test: pass.depth,
+        })?;
+        let render_pass = self.gpu.render_pass(&key)?;
+        let framebuffer = self.pool.framebuffer(self.gpu, render_pass, pass.targets)?;
+        self.uniform.pass_index = pass.pass_index;
+        self.uniform.param = pass.param;
+        raster.upload(&mut self.rec)?;
+        let (state, acct) = (self.state.clone(), self.acct.clone());
+        let storage = Self::storage(&state, &acct, buffers);
+        let raster_set = raster.bindings();
+        let uniform = self.uniform;
+        let mut sets = vec![
+            SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage },
+            SetData::Raster { storage: &raster_set, uniform: raster.uniform() },
+        ];
+        if !pass.previous.is_empty() {
+            sets.push(SetData::Images(pass.previous));
+        }
+        let mut clear: Vec<vk::ClearValue> = pass.clears.to_vec();
+        if pass.depth {
+            clear.push(vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 },
+            });
+        }
+        self.rec.draw(
+            "geometry",
+            &pipeline,
+            render_pass,
+            &framebuffer,
+            &clear,
+            &sets,
+            raster.vertex_count(),
+            pass.occlusion,
+        )?;
+        self.passes += 1;
+        if pass.occlusion {
+            let samples = self.rec.occlusion()?;
+            self.check_validation()?;
+            return Ok(Some(samples));
+        }
+        Ok(None)
     }
 
     /// A validation error since the frame began fails it (`OIT_VULKAN_VALIDATION=1`).
@@ -424,17 +646,28 @@ impl<'a> VkCtx<'a> {
             Some((total, passes)) => (Some(total), passes.to_vec()),
             None => (None, Vec::new()),
         };
-        let lost_pixels: Option<Vec<u32>> =
-            acct.map(|acct| acct.chunks(3).take(self.pixels as usize).map(|w| w[0]).collect());
+        let captured = u64::from(t[0]);
+        let fragments = match self.fragments {
+            Some(generated) => generated,
+            None if self.fragments_from_captured => captured,
+            None => 0,
+        };
+        let (lost, lost_pixels) = if self.counts_losses {
+            let px = acct.map(|acct| acct.chunks(3).take(self.pixels as usize).map(|w| w[0]).collect());
+            (u64::from(t[3]), px)
+        } else {
+            // NOT COUNTED: the blend captures do not count their losses (see `counts_losses`)
+            (fragments.saturating_sub(captured), None)
+        };
         let frame = Frame {
             image,
             layers: None,
             lost_pixels,
             stats: Stats {
                 geometry_passes: self.passes,
-                fragments: self.fragments.unwrap_or(0),
-                captured: u64::from(t[0]),
-                lost: u64::from(t[3]),
+                fragments,
+                captured,
+                lost,
                 merged: self.merged,
                 tied: u64::from(t[2]),
                 storage_bytes: self.storage_bytes,
@@ -445,7 +678,9 @@ impl<'a> VkCtx<'a> {
                 tiles: 1,
             },
         };
-        frame.stats.check_accounting("vulkan")?;
+        if self.counts_losses {
+            frame.stats.check_accounting("vulkan")?;
+        }
         Ok(frame)
     }
 }

@@ -145,6 +145,11 @@ pub struct DeviceInfo {
     pub timestamp_valid_bits: u32,
     /// The `logicOp` feature (adp's histogram by logic-op OR needs it).
     pub logic_op: bool,
+    /// The `independentBlend` feature (plain's and wavg's two targets blend differently).
+    pub independent_blend: bool,
+    /// The float formats the blend captures blend into that the device can blend into (optimal
+    /// tiling, `COLOR_ATTACHMENT_BLEND` and `SAMPLED_IMAGE`).
+    pub blendable: Vec<vk::Format>,
     /// Why the hardware-raster path cannot run here (`None`: it can): it needs a graphics queue,
     /// `fragmentStoresAndAtomics` and a blendable `R32_SFLOAT` colour attachment (the counter).
     pub hardware_missing: Option<String>,
@@ -226,27 +231,26 @@ impl Buffer {
     }
 }
 
-/// A 2D image with its own memory and a view of it, and (when made for rendering) a framebuffer
-/// of the view in a render pass: destroyed in reverse (framebuffer, view, image, memory).
-pub struct Image {
+/// A 2D image with its own memory and a view of it: destroyed in reverse (view, image, memory).
+pub struct GpuImage {
     raw: Arc<RawDevice>,
     pub(crate) image: vk::Image,
     memory: vk::DeviceMemory,
-    view: vk::ImageView,
-    pub(crate) framebuffer: vk::Framebuffer,
+    pub(crate) view: vk::ImageView,
     /// Width and height, pixels.
     pub extent: (u32, u32),
+    /// Its format.
+    pub format: vk::Format,
+    /// How it may be used.
+    pub usage: vk::ImageUsageFlags,
 }
 
-impl Drop for Image {
+impl Drop for GpuImage {
     fn drop(&mut self) {
         // SAFETY: all made from `raw` (alive: the Arc); every command that used them has
         // completed (each frame waits for its last submission); users go before what they use.
         unsafe {
             let d = &self.raw.device;
-            if self.framebuffer != vk::Framebuffer::null() {
-                d.destroy_framebuffer(self.framebuffer, None);
-            }
             d.destroy_image_view(self.view, None);
             d.destroy_image(self.image, None);
             d.free_memory(self.memory, None);
@@ -258,22 +262,94 @@ impl Drop for Image {
 #[derive(Default)]
 struct Cache {
     modules: HashMap<&'static str, vk::ShaderModule>,
-    /// Group 0's layout by the number of technique buffers.
-    set0: HashMap<usize, vk::DescriptorSetLayout>,
-    raster_set: Option<vk::DescriptorSetLayout>,
-    layouts: HashMap<usize, vk::PipelineLayout>,
-    pipelines: HashMap<(&'static str, String, usize), vk::Pipeline>,
-    /// The hardware raster's render pass (one `R32_SFLOAT` counter, cleared, then copied out).
-    count_pass: Option<vk::RenderPass>,
+    set_layouts: HashMap<SetKind, vk::DescriptorSetLayout>,
+    layouts: HashMap<Vec<SetKind>, vk::PipelineLayout>,
+    /// By (module, entry points and state, set kinds).
+    pipelines: HashMap<(&'static str, String, Vec<SetKind>), vk::Pipeline>,
+    render_passes: HashMap<PassKey, vk::RenderPass>,
+}
+
+/// What a descriptor set of a pipeline holds.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub(crate) enum SetKind {
+    /// Group 0 of every module: the frame uniform (binding 0), the resolve state (1), `n`
+    /// technique buffers (2..) and the loss accounting (15).
+    Frame(usize),
+    /// Group 1 of a rasterizer: storage at 0, 1 and 3, its uniform at 2 (the compute
+    /// rasterizer's triangles, work list and counter; the hardware raster's vertices, triangles
+    /// and instances).
+    Raster,
+    /// Sampled images (read with `textureLoad`) at these bindings: a blend capture's targets.
+    Images(Vec<u32>),
+}
+
+/// A render pass's attachments: colour formats, an optional depth format, and the layout the
+/// colour attachments are left in (`TRANSFER_SRC_OPTIMAL` to be copied out, else
+/// `SHADER_READ_ONLY_OPTIMAL` to be read by a kernel; a depth attachment is always left
+/// readable).
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub(crate) struct PassKey {
+    pub colors: Vec<vk::Format>,
+    pub depth: Option<vk::Format>,
+    pub final_layout: vk::ImageLayout,
+}
+
+/// How a graphics pipeline writes one colour attachment.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(crate) enum Blend {
+    /// No blending: the fragment's value replaces the texel's (every channel).
+    Replace,
+    /// src + dst, every channel.
+    Add,
+    /// src + dst into the red channel only (a fragment counter).
+    AddRed,
+    /// The over operator on premultiplied colour: rgb `src + (1 − αs)·dst`, α `(1 − αs)·dst`
+    /// (the product of transmittances).
+    Over,
+    /// max(src, dst), every channel.
+    Max,
+    /// No blending: the pipeline's logic op (OR) combines src and dst (integer formats).
+    LogicOr,
+}
+
+/// A graphics pipeline over oit's scene vertex stage (`hw_vs` of the module, which pulls its
+/// vertices: no vertex buffers), no culling, viewport and scissor set per draw.
+#[derive(Clone, Debug)]
+pub(crate) struct GraphicsDesc<'a> {
+    /// The `build.rs` module.
+    pub module: &'a str,
+    /// Its fragment entry point.
+    pub fs: &'a str,
+    pub sets: &'a [SetKind],
+    pub pass: &'a PassKey,
+    /// One per colour attachment of `pass`.
+    pub blends: &'a [Blend],
+    /// A depth test (LESS_OR_EQUAL, writing) against `pass`'s depth attachment.
+    pub depth_test: bool,
 }
 
 /// A compute or graphics pipeline and its layout (owned by the [`Gpu`]'s cache).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Pipeline {
     pub(crate) pipeline: vk::Pipeline,
     pub(crate) layout: vk::PipelineLayout,
-    pub(crate) set0: vk::DescriptorSetLayout,
-    pub(crate) raster: vk::DescriptorSetLayout,
+    /// The layout of each set, in set order.
+    pub(crate) sets: Vec<vk::DescriptorSetLayout>,
+}
+
+/// A framebuffer of some images in a render pass, destroyed on drop (before the images, which
+/// its owner keeps alive).
+pub(crate) struct Framebuffer {
+    raw: Arc<RawDevice>,
+    pub(crate) framebuffer: vk::Framebuffer,
+    pub(crate) extent: (u32, u32),
+}
+
+impl Drop for Framebuffer {
+    fn drop(&mut self) {
+        // SAFETY: made from `raw`; every command that used it has completed.
+        unsafe { self.raw.device.destroy_framebuffer(self.framebuffer, None) };
+    }
 }
 
 /// An open device.
@@ -301,13 +377,10 @@ impl Drop for Gpu {
             for (_, l) in cache.layouts.drain() {
                 d.destroy_pipeline_layout(l, None);
             }
-            if let Some(p) = cache.count_pass.take() {
+            for (_, p) in cache.render_passes.drain() {
                 d.destroy_render_pass(p, None);
             }
-            if let Some(l) = cache.raster_set.take() {
-                d.destroy_descriptor_set_layout(l, None);
-            }
-            for (_, l) in cache.set0.drain() {
+            for (_, l) in cache.set_layouts.drain() {
                 d.destroy_descriptor_set_layout(l, None);
             }
             for (_, m) in cache.modules.drain() {
@@ -452,7 +525,9 @@ impl Gpu {
             [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
         let core = vk::PhysicalDeviceFeatures::default()
             .shader_int64(true)
-            .fragment_stores_and_atomics(info.hardware_missing.is_none());
+            .fragment_stores_and_atomics(info.hardware_missing.is_none())
+            .logic_op(info.logic_op)
+            .independent_blend(info.independent_blend);
         let mut v12 = vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(true);
         let create = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queues)
@@ -546,6 +621,16 @@ impl Gpu {
         .flatten()
         .collect::<Vec<_>>();
         let hardware_missing = (!hardware_missing.is_empty()).then(|| hardware_missing.join(", "));
+        let blend_needs =
+            vk::FormatFeatureFlags::COLOR_ATTACHMENT_BLEND | vk::FormatFeatureFlags::SAMPLED_IMAGE;
+        let blendable = [vk::Format::R32G32B32A32_SFLOAT, vk::Format::R32G32_SFLOAT, vk::Format::R32_SFLOAT]
+            .into_iter()
+            .filter(|&f| {
+                // SAFETY: a plain query of a physical device of this instance.
+                let props = unsafe { instance.get_physical_device_format_properties(physical, f) };
+                props.optimal_tiling_features.contains(blend_needs)
+            })
+            .collect();
         let props = props2.properties;
         let names: Vec<String> = extensions.iter().map(|e| c_name(e.extension_name_as_c_str())).collect();
         let device_heap = memory.memory_heaps[..memory.memory_heap_count as usize]
@@ -577,10 +662,17 @@ impl Gpu {
             limits: props.limits,
             timestamp_valid_bits,
             logic_op: features.logic_op == vk::TRUE,
+            independent_blend: features.independent_blend == vk::TRUE,
             hardware_missing,
+            blendable,
             device_heap,
             validation,
         }
+    }
+
+    /// Whether the device blends into `format` (one of [`DeviceInfo::blendable`]'s candidates).
+    pub fn blendable(&self, format: vk::Format) -> bool {
+        self.info.blendable.contains(&format)
     }
 
     /// True on a CPU device (lavapipe).
@@ -660,15 +752,13 @@ impl Gpu {
         Ok(Buffer { raw: self.raw.clone(), buffer, memory, size, usage, host })
     }
 
-    /// A device-local `width × height` image of `format` and `usage`, with a view, and a
-    /// framebuffer of that view in `render_pass` when given.
+    /// A device-local `width × height` image of `format` and `usage`, with a view.
     pub(crate) fn image(
         &self,
         (width, height): (u32, u32),
         format: vk::Format,
         usage: vk::ImageUsageFlags,
-        render_pass: Option<vk::RenderPass>,
-    ) -> Result<Image, OitError> {
+    ) -> Result<GpuImage, OitError> {
         let d = &self.raw.device;
         let limit = self.info.limits.max_image_dimension2_d;
         let max_fb = self.info.limits.max_framebuffer_width.min(self.info.limits.max_framebuffer_height);
@@ -695,7 +785,7 @@ impl Gpu {
             .sharing_mode(vk::SharingMode::EXCLUSIVE)
             .initial_layout(vk::ImageLayout::UNDEFINED);
         // SAFETY: a valid create info on a live device (the size checked above); the image is
-        // owned by the `Image` below, or destroyed here when what follows fails.
+        // owned by the `GpuImage` below, or destroyed here when what follows fails.
         let image = unsafe { d.create_image(&info, None) }.map_err(vk_error("creating an image"))?;
         // SAFETY: a plain query of the image just made.
         let needs = unsafe { d.get_image_memory_requirements(image) };
@@ -730,10 +820,8 @@ impl Gpu {
             }
             memory
         };
-        let range = vk::ImageSubresourceRange::default()
-            .aspect_mask(vk::ImageAspectFlags::COLOR)
-            .level_count(1)
-            .layer_count(1);
+        let range =
+            vk::ImageSubresourceRange::default().aspect_mask(aspect(format)).level_count(1).layer_count(1);
         let view_info = vk::ImageViewCreateInfo::default()
             .image(image)
             .view_type(vk::ImageViewType::TYPE_2D)
@@ -751,28 +839,37 @@ impl Gpu {
                 return Err(vk_error("creating an image view")(e));
             }
         };
-        let mut out = Image {
+        Ok(GpuImage {
             raw: self.raw.clone(),
             image,
             memory,
             view,
-            framebuffer: vk::Framebuffer::null(),
             extent: (extent.width, extent.height),
-        };
-        if let Some(pass) = render_pass {
-            let views = [view];
-            let fb_info = vk::FramebufferCreateInfo::default()
-                .render_pass(pass)
-                .attachments(&views)
-                .width(extent.width)
-                .height(extent.height)
-                .layers(1);
-            // SAFETY: the view is of an image compatible with the render pass's one attachment
-            // (its format, one sample); `out`'s drop destroys the framebuffer first.
-            out.framebuffer = unsafe { d.create_framebuffer(&fb_info, None) }
-                .map_err(vk_error("creating a framebuffer"))?;
-        }
-        Ok(out)
+            format,
+            usage,
+        })
+    }
+
+    /// A framebuffer of `images` (all of one size, in `pass`'s attachment order) in `pass`.
+    pub(crate) fn framebuffer(
+        &self,
+        pass: vk::RenderPass,
+        images: &[&GpuImage],
+    ) -> Result<Framebuffer, OitError> {
+        let extent = images.first().map_or((1, 1), |i| i.extent);
+        debug_assert!(images.iter().all(|i| i.extent == extent), "one size");
+        let views: Vec<vk::ImageView> = images.iter().map(|i| i.view).collect();
+        let info = vk::FramebufferCreateInfo::default()
+            .render_pass(pass)
+            .attachments(&views)
+            .width(extent.0)
+            .height(extent.1)
+            .layers(1);
+        // SAFETY: the views are of images compatible with the pass's attachments (their formats,
+        // one sample, in order: the caller's contract); the owner keeps the images alive longer.
+        let framebuffer = unsafe { self.raw.device.create_framebuffer(&info, None) }
+            .map_err(vk_error("creating a framebuffer"))?;
+        Ok(Framebuffer { raw: self.raw.clone(), framebuffer, extent })
     }
 
     /// Pipelines (compute and graphics) created on this device so far (each is cached until the device drops,
@@ -782,54 +879,87 @@ impl Gpu {
     }
 
     /// The compute pipeline of `entry` in `module` (a module of `build.rs`) whose group 0 has `n`
-    /// technique buffers; made once, then cached.
+    /// technique buffers and group 1 is the rasterizer's; made once, then cached.
     pub fn pipeline(&self, module: &'static str, entry: &str, n: usize) -> Result<Pipeline, OitError> {
+        self.compute(module, entry, &[SetKind::Frame(n), SetKind::Raster])
+    }
+
+    /// The compute pipeline of `entry` in `module` with descriptor sets `sets`; made once, then
+    /// cached.
+    pub(crate) fn compute(&self, module: &str, entry: &str, sets: &[SetKind]) -> Result<Pipeline, OitError> {
         let mut guard = self.cache.lock().map_err(|_| OitError::Device("pipeline cache poisoned".into()))?;
         let cache = &mut *guard;
-        let (set0, raster, layout) = self.layouts(cache, n)?;
-        let key = (module, entry.to_string(), n);
+        let (set_layouts, layout) = self.layouts(cache, sets)?;
+        let (name, shader) = self.module(cache, module, &[entry])?;
+        let key = (name, entry.to_string(), sets.to_vec());
         if let Some(&pipeline) = cache.pipelines.get(&key) {
-            return Ok(Pipeline { pipeline, layout, set0, raster });
+            return Ok(Pipeline { pipeline, layout, sets: set_layouts });
         }
-        let (_, shader) = self.module(cache, module, &[entry])?;
-        let name = std::ffi::CString::new(entry).map_err(|_| OitError::Device("bad entry name".into()))?;
+        let entry_c = std::ffi::CString::new(entry).map_err(|_| OitError::Device("bad entry name".into()))?;
         let stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(shader)
-            .name(&name);
+            .name(&entry_c);
         let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
         // SAFETY: the module and layout are alive; the layout declares every binding the entry
-        // point uses (group 0 as `set0`, the rasterizer's group 1).
+        // point uses (the caller names the sets its module declares for it).
         let pipeline =
             unsafe { self.raw.device.create_compute_pipelines(vk::PipelineCache::null(), &info, None) }
                 .map_err(|(_, e)| vk_error(&format!("building '{module}::{entry}'"))(e))?[0];
         cache.pipelines.insert(key, pipeline);
-        Ok(Pipeline { pipeline, layout, set0, raster })
+        Ok(Pipeline { pipeline, layout, sets: set_layouts })
     }
 
-    /// The hardware raster's graphics pipeline for `module`'s capture (`build.rs`'s
-    /// `<module>_hw`: vertex stage `hw_vs`, fragment stage `hw_fs`), whose group 0 has `n`
-    /// technique buffers; made once, then cached. No vertex buffers (the vertex stage pulls its
-    /// vertices), no culling, no depth test; viewport and scissor set per draw; one colour
-    /// attachment, the counter ([`COUNT_FORMAT`]), added to by blending, in
-    /// [`Gpu::count_pass`].
+    /// The hardware raster's pipeline for `module`'s capture (`build.rs`'s `<module>_hw`:
+    /// `hw_vs`, then `hw_fs`, which calls the technique's `capture`), whose group 0 has `n`
+    /// technique buffers: one colour attachment, the fragment counter ([`COUNT_FORMAT`]), added
+    /// to by blending.
     pub fn render_pipeline(&self, module: &'static str, n: usize) -> Result<Pipeline, OitError> {
+        self.graphics(&GraphicsDesc {
+            module: &format!("{module}_hw"),
+            fs: "hw_fs",
+            sets: &[SetKind::Frame(n), SetKind::Raster],
+            pass: &count_pass_key(),
+            blends: &[Blend::AddRed],
+            depth_test: false,
+        })
+    }
+
+    /// A graphics pipeline as `desc` says (see [`GraphicsDesc`]); made once, then cached.
+    pub(crate) fn graphics(&self, desc: &GraphicsDesc<'_>) -> Result<Pipeline, OitError> {
         if let Some(missing) = &self.info.hardware_missing {
             return Err(OitError::Unsupported {
                 backend: "vulkan".into(),
                 what: format!("the hardware raster path on '{}' (it lacks {missing})", self.info.name),
             });
         }
-        let render_pass = self.count_pass()?;
+        let logic_or = desc.blends.contains(&Blend::LogicOr);
+        if logic_or && !self.info.logic_op {
+            return Err(OitError::Unsupported {
+                backend: "vulkan".into(),
+                what: format!("logic-op OR on '{}': the device lacks the logicOp feature", self.info.name),
+            });
+        }
+        if desc.blends.windows(2).any(|w| w[0] != w[1]) && !self.info.independent_blend {
+            return Err(OitError::Unsupported {
+                backend: "vulkan".into(),
+                what: format!(
+                    "targets blended differently in one pass on '{}': the device lacks the independentBlend feature; use --hardware-capture atomics",
+                    self.info.name
+                ),
+            });
+        }
+        let render_pass = self.render_pass(desc.pass)?;
         let mut guard = self.cache.lock().map_err(|_| OitError::Device("pipeline cache poisoned".into()))?;
         let cache = &mut *guard;
-        let (set0, raster, layout) = self.layouts(cache, n)?;
-        let hw = format!("{module}_hw");
-        let (hw_name, shader) = self.module(cache, &hw, &["hw_vs", "hw_fs"])?;
-        let key = (hw_name, "hw_vs+hw_fs".to_string(), n);
+        let (set_layouts, layout) = self.layouts(cache, desc.sets)?;
+        let (name, shader) = self.module(cache, desc.module, &["hw_vs", desc.fs])?;
+        let state = format!("hw_vs+{} {:?} {:?} {}", desc.fs, desc.pass, desc.blends, desc.depth_test);
+        let key = (name, state, desc.sets.to_vec());
         if let Some(&pipeline) = cache.pipelines.get(&key) {
-            return Ok(Pipeline { pipeline, layout, set0, raster });
+            return Ok(Pipeline { pipeline, layout, sets: set_layouts });
         }
+        let fs = std::ffi::CString::new(desc.fs).map_err(|_| OitError::Device("bad entry name".into()))?;
         let stages = [
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::VERTEX)
@@ -838,7 +968,7 @@ impl Gpu {
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::FRAGMENT)
                 .module(shader)
-                .name(c"hw_fs"),
+                .name(&fs),
         ];
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
         let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
@@ -851,19 +981,19 @@ impl Gpu {
             .line_width(1.0);
         let multisample = vk::PipelineMultisampleStateCreateInfo::default()
             .rasterization_samples(vk::SampleCountFlags::TYPE_1);
-        let add = [vk::PipelineColorBlendAttachmentState::default()
-            .blend_enable(true)
-            .src_color_blend_factor(vk::BlendFactor::ONE)
-            .dst_color_blend_factor(vk::BlendFactor::ONE)
-            .color_blend_op(vk::BlendOp::ADD)
-            .src_alpha_blend_factor(vk::BlendFactor::ONE)
-            .dst_alpha_blend_factor(vk::BlendFactor::ONE)
-            .alpha_blend_op(vk::BlendOp::ADD)
-            .color_write_mask(vk::ColorComponentFlags::R)];
-        let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&add);
+        let attachments: Vec<vk::PipelineColorBlendAttachmentState> =
+            desc.blends.iter().map(|&b| blend_state(b)).collect();
+        let mut blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
+        if logic_or {
+            blend = blend.logic_op_enable(true).logic_op(vk::LogicOp::OR);
+        }
+        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(desc.depth_test)
+            .depth_write_enable(desc.depth_test)
+            .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL);
         let dynamic = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic);
-        let info = [vk::GraphicsPipelineCreateInfo::default()
+        let mut info = vk::GraphicsPipelineCreateInfo::default()
             .stages(&stages)
             .vertex_input_state(&vertex_input)
             .input_assembly_state(&assembly)
@@ -874,41 +1004,62 @@ impl Gpu {
             .dynamic_state(&dynamic)
             .layout(layout)
             .render_pass(render_pass)
-            .subpass(0)];
+            .subpass(0);
+        if desc.pass.depth.is_some() {
+            info = info.depth_stencil_state(&depth);
+        }
         // SAFETY: the module, layout and render pass are alive (cached until the Gpu drops); the
-        // layout declares every binding the entry points use; the render pass's one subpass has
-        // the one colour attachment the blend state describes.
+        // layout declares every binding the entry points use (the caller's sets); the blend state
+        // has one entry per colour attachment of the render pass's one subpass; logic ops only
+        // where the device has the feature (enabled at device creation).
         let pipeline =
-            unsafe { self.raw.device.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) }
-                .map_err(|(_, e)| vk_error(&format!("building '{hw}'"))(e))?[0];
+            unsafe { self.raw.device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) }
+                .map_err(|(_, e)| vk_error(&format!("building '{}::{}'", desc.module, desc.fs))(e))?[0];
         cache.pipelines.insert(key, pipeline);
-        Ok(Pipeline { pipeline, layout, set0, raster })
+        Ok(Pipeline { pipeline, layout, sets: set_layouts })
     }
 
-    /// The render pass of the hardware raster's geometry passes: one [`COUNT_FORMAT`] colour
-    /// attachment, cleared at the start, stored and left in `TRANSFER_SRC_OPTIMAL` for the copy
-    /// that counts its fragments; its dependencies order it after and before everything else
-    /// (as the recorder's barriers do between commands). Made once, then cached.
-    pub(crate) fn count_pass(&self) -> Result<vk::RenderPass, OitError> {
+    /// The render pass of `key` (see [`PassKey`]): every attachment cleared at the start and
+    /// stored; its dependencies order it after and before everything else, as the recorder's
+    /// barriers do between commands. Made once, then cached.
+    pub(crate) fn render_pass(&self, key: &PassKey) -> Result<vk::RenderPass, OitError> {
         let mut cache = self.cache.lock().map_err(|_| OitError::Device("pipeline cache poisoned".into()))?;
-        if let Some(p) = cache.count_pass {
+        if let Some(&p) = cache.render_passes.get(key) {
             return Ok(p);
         }
-        let attachments = [vk::AttachmentDescription::default()
-            .format(COUNT_FORMAT)
-            .samples(vk::SampleCountFlags::TYPE_1)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
-            .store_op(vk::AttachmentStoreOp::STORE)
-            .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
-            .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
-            .initial_layout(vk::ImageLayout::UNDEFINED)
-            .final_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)];
-        let color = [vk::AttachmentReference::default()
-            .attachment(0)
-            .layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)];
-        let subpasses = [vk::SubpassDescription::default()
+        let attachment = |format: vk::Format, final_layout: vk::ImageLayout| {
+            vk::AttachmentDescription::default()
+                .format(format)
+                .samples(vk::SampleCountFlags::TYPE_1)
+                .load_op(vk::AttachmentLoadOp::CLEAR)
+                .store_op(vk::AttachmentStoreOp::STORE)
+                .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
+                .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+                .initial_layout(vk::ImageLayout::UNDEFINED)
+                .final_layout(final_layout)
+        };
+        let mut attachments: Vec<vk::AttachmentDescription> =
+            key.colors.iter().map(|&f| attachment(f, key.final_layout)).collect();
+        let color: Vec<vk::AttachmentReference> = (0..key.colors.len() as u32)
+            .map(|i| {
+                vk::AttachmentReference::default()
+                    .attachment(i)
+                    .layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+            })
+            .collect();
+        let depth_ref = key.depth.map(|f| {
+            attachments.push(attachment(f, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL));
+            vk::AttachmentReference::default()
+                .attachment(key.colors.len() as u32)
+                .layout(vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL)
+        });
+        let mut subpass = vk::SubpassDescription::default()
             .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
-            .color_attachments(&color)];
+            .color_attachments(&color);
+        if let Some(d) = depth_ref.as_ref() {
+            subpass = subpass.depth_stencil_attachment(d);
+        }
+        let subpasses = [subpass];
         let everything = vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE;
         let dependencies = [
             vk::SubpassDependency::default()
@@ -933,58 +1084,58 @@ impl Gpu {
         // SAFETY: a valid create info on a live device; cached and destroyed by `Gpu`'s drop.
         let pass = unsafe { self.raw.device.create_render_pass(&info, None) }
             .map_err(vk_error("creating a render pass"))?;
-        cache.count_pass = Some(pass);
+        cache.render_passes.insert(key.clone(), pass);
         Ok(pass)
     }
 
-    /// Group 0's layout for `n` technique buffers, the rasterizer's group 1 and the pipeline
-    /// layout of both; made once each, then cached.
+    /// The set layouts of `sets` and the pipeline layout of them; made once each, then cached.
     fn layouts(
         &self,
         cache: &mut Cache,
-        n: usize,
-    ) -> Result<(vk::DescriptorSetLayout, vk::DescriptorSetLayout, vk::PipelineLayout), OitError> {
-        let raster = match cache.raster_set {
-            Some(l) => l,
-            None => {
-                // the compute rasterizer's (triangles, work list, uniform, generated) and the
-                // hardware raster's (vertices, triangles, uniform, instances): the same types
-                let l = self.set_layout(&[
-                    (0, vk::DescriptorType::STORAGE_BUFFER),
-                    (1, vk::DescriptorType::STORAGE_BUFFER),
-                    (2, vk::DescriptorType::UNIFORM_BUFFER),
-                    (3, vk::DescriptorType::STORAGE_BUFFER),
-                ])?;
-                *cache.raster_set.insert(l)
-            }
-        };
-        let set0 = match cache.set0.get(&n) {
+        sets: &[SetKind],
+    ) -> Result<(Vec<vk::DescriptorSetLayout>, vk::PipelineLayout), OitError> {
+        let mut set_layouts = Vec::with_capacity(sets.len());
+        for kind in sets {
+            let l = match cache.set_layouts.get(kind) {
+                Some(&l) => l,
+                None => {
+                    let bindings: Vec<(u32, vk::DescriptorType)> = match kind {
+                        SetKind::Frame(n) => std::iter::once((0, vk::DescriptorType::UNIFORM_BUFFER))
+                            .chain(
+                                (1..=*n as u32 + 1)
+                                    .chain([crate::ctx::ACCT_BINDING])
+                                    .map(|b| (b, vk::DescriptorType::STORAGE_BUFFER)),
+                            )
+                            .collect(),
+                        SetKind::Raster => vec![
+                            (0, vk::DescriptorType::STORAGE_BUFFER),
+                            (1, vk::DescriptorType::STORAGE_BUFFER),
+                            (2, vk::DescriptorType::UNIFORM_BUFFER),
+                            (3, vk::DescriptorType::STORAGE_BUFFER),
+                        ],
+                        SetKind::Images(at) => {
+                            at.iter().map(|&b| (b, vk::DescriptorType::SAMPLED_IMAGE)).collect()
+                        }
+                    };
+                    let l = self.set_layout(&bindings)?;
+                    cache.set_layouts.insert(kind.clone(), l);
+                    l
+                }
+            };
+            set_layouts.push(l);
+        }
+        let layout = match cache.layouts.get(sets) {
             Some(&l) => l,
             None => {
-                let mut bindings = vec![(0, vk::DescriptorType::UNIFORM_BUFFER)];
-                bindings.extend(
-                    (1..=n as u32 + 1)
-                        .chain([crate::ctx::ACCT_BINDING])
-                        .map(|b| (b, vk::DescriptorType::STORAGE_BUFFER)),
-                );
-                let l = self.set_layout(&bindings)?;
-                cache.set0.insert(n, l);
-                l
-            }
-        };
-        let layout = match cache.layouts.get(&n) {
-            Some(&l) => l,
-            None => {
-                let sets = [set0, raster];
-                let info = vk::PipelineLayoutCreateInfo::default().set_layouts(&sets);
-                // SAFETY: both set layouts are alive (cached until the Gpu drops).
+                let info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+                // SAFETY: the set layouts are alive (cached until the Gpu drops).
                 let l = unsafe { self.raw.device.create_pipeline_layout(&info, None) }
                     .map_err(vk_error("creating a pipeline layout"))?;
-                cache.layouts.insert(n, l);
+                cache.layouts.insert(sets.to_vec(), l);
                 l
             }
         };
-        Ok((set0, raster, layout))
+        Ok((set_layouts, layout))
     }
 
     /// The shader module `name` of `build.rs` (its static name, and the module made once), checked
@@ -1076,5 +1227,48 @@ impl Gpu {
             }
         }
         heap
+    }
+}
+
+/// The aspect of an image of `format`: depth for the depth formats oit uses, else colour.
+pub(crate) fn aspect(format: vk::Format) -> vk::ImageAspectFlags {
+    match format {
+        vk::Format::D32_SFLOAT | vk::Format::D16_UNORM => vk::ImageAspectFlags::DEPTH,
+        _ => vk::ImageAspectFlags::COLOR,
+    }
+}
+
+/// The hardware raster's render pass: one [`COUNT_FORMAT`] counter, left to be copied out.
+pub(crate) fn count_pass_key() -> PassKey {
+    PassKey { colors: vec![COUNT_FORMAT], depth: None, final_layout: vk::ImageLayout::TRANSFER_SRC_OPTIMAL }
+}
+
+/// The colour blend state of `blend`.
+fn blend_state(blend: Blend) -> vk::PipelineColorBlendAttachmentState {
+    use vk::BlendFactor as F;
+    let all = vk::ColorComponentFlags::RGBA;
+    let on = |color: (F, F), alpha: (F, F), op: vk::BlendOp| {
+        vk::PipelineColorBlendAttachmentState::default()
+            .blend_enable(true)
+            .src_color_blend_factor(color.0)
+            .dst_color_blend_factor(color.1)
+            .color_blend_op(op)
+            .src_alpha_blend_factor(alpha.0)
+            .dst_alpha_blend_factor(alpha.1)
+            .alpha_blend_op(op)
+            .color_write_mask(all)
+    };
+    let one = (F::ONE, F::ONE);
+    match blend {
+        Blend::Replace | Blend::LogicOr => {
+            vk::PipelineColorBlendAttachmentState::default().blend_enable(false).color_write_mask(all)
+        }
+        Blend::Add => on(one, one, vk::BlendOp::ADD),
+        Blend::AddRed => on(one, one, vk::BlendOp::ADD).color_write_mask(vk::ColorComponentFlags::R),
+        Blend::Over => {
+            on((F::ONE, F::ONE_MINUS_SRC_ALPHA), (F::ZERO, F::ONE_MINUS_SRC_ALPHA), vk::BlendOp::ADD)
+        }
+        // the factors are ignored by MAX
+        Blend::Max => on(one, one, vk::BlendOp::MAX),
     }
 }

@@ -24,7 +24,7 @@ use oit_core::pulled::PulledGeometry;
 use oit_core::{Camera, OitError, Scene, Settings};
 
 use crate::ctx::storage_usage;
-use crate::device::{Buffer, COUNT_FORMAT, Gpu, Image};
+use crate::device::{Buffer, COUNT_FORMAT, Framebuffer, Gpu, GpuImage, count_pass_key};
 use crate::record::Recorder;
 
 /// What to try when the geometry does not fit in one storage binding.
@@ -86,7 +86,9 @@ impl HwGeometry {
 /// A hardware-raster geometry pass's fragment counter: the count image (with its framebuffer),
 /// the buffer it is copied into, and the word the kernel sums it into.
 struct CountTarget {
-    image: Image,
+    /// Dropped before the image it is made of (fields drop in order).
+    framebuffer: Framebuffer,
+    image: GpuImage,
     counts: Buffer,
     generated: Buffer,
 }
@@ -97,11 +99,13 @@ impl CountTarget {
 
     fn new(gpu: &Gpu, size: (u32, u32)) -> Result<CountTarget, OitError> {
         let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC;
-        let image = gpu.image(size, COUNT_FORMAT, usage, Some(gpu.count_pass()?))?;
+        let image = gpu.image(size, COUNT_FORMAT, usage)?;
+        let framebuffer = gpu.framebuffer(gpu.render_pass(&count_pass_key())?, &[&image])?;
         let (w, h) = image.extent;
         let counts_bytes = u64::from(w) * u64::from(h) * 4;
         gpu.check_storage("the hardware raster's fragment counts", counts_bytes)?;
         Ok(CountTarget {
+            framebuffer,
             counts: gpu.buffer(counts_bytes, storage_usage(), false)?,
             generated: gpu.buffer(16, storage_usage(), false)?,
             image,
@@ -135,8 +139,13 @@ impl HardwareRaster {
     }
 
     /// The count image the draw renders into.
-    pub(crate) fn target(&self) -> &Image {
+    pub(crate) fn target(&self) -> &GpuImage {
         &self.target.image
+    }
+
+    /// The count image's framebuffer.
+    pub(crate) fn framebuffer(&self) -> &Framebuffer {
+        &self.target.framebuffer
     }
 
     /// The buffer the count image is copied into, and the word it is summed into.

@@ -264,25 +264,6 @@ impl VulkanPrepared<'_> {
                         ),
                     });
                 }
-                if settings.hardware_capture == HardwareCapture::Blend
-                    && matches!(
-                        settings.technique,
-                        Technique::Dp
-                            | Technique::Ddp
-                            | Technique::Bdp { .. }
-                            | Technique::WeightedAverage
-                            | Technique::WeightedSum
-                    )
-                {
-                    return Err(OitError::Unsupported {
-                        backend: "vulkan".into(),
-                        what: format!(
-                            "--hardware-capture blend for {} (the papers' blending captures are not \
-                             written yet on vulkan): use --hardware-capture atomics, or --backend wgpu",
-                            settings.technique
-                        ),
-                    });
-                }
                 if this.hardware.borrow().is_none() {
                     let made = HardwareScene::new(this.gpu, this.scene, &this.geometry_made)?;
                     *this.hardware.borrow_mut() = Some(made);
@@ -317,7 +298,19 @@ impl VulkanPrepared<'_> {
 /// Runs the frame's technique; the reference returns its per-pixel fragment counts.
 fn run_technique(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<Option<Vec<u32>>, OitError> {
     let mut layers = None;
+    let hardware = matches!(drivers.scene, Raster::Hardware(_));
+    // the graphics pipeline's own captures, asked for on the hardware path
+    let blend = hardware && ctx.settings.hardware_capture == HardwareCapture::Blend;
     match ctx.settings.technique {
+        // the blender composites one draw in primitive order: plain's definition
+        Technique::Plain if hardware => technique::blend::plain(ctx, drivers)?,
+        Technique::Dp if blend => technique::blend::dp(ctx, drivers)?,
+        Technique::Ddp if blend => technique::blend::ddp(ctx, drivers)?,
+        Technique::Bdp { .. } if blend => technique::blend::bdp(ctx, drivers)?,
+        Technique::WeightedAverage | Technique::WeightedSum if blend => {
+            technique::blend::weighted(ctx, drivers)?
+        }
+        Technique::Adp => technique::adp::render(ctx, drivers, blend)?,
         Technique::Reference => layers = Some(technique::reference::render(ctx, drivers)?),
         Technique::Plain => technique::plain::render(ctx, drivers)?,
         Technique::Fabs { .. } => technique::fabs::render(ctx, drivers)?,
@@ -325,7 +318,6 @@ fn run_technique(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<Option<Ve
         Technique::Ddp => technique::ddp::render(ctx, drivers)?,
         Technique::WeightedAverage | Technique::WeightedSum => technique::weighted::render(ctx, drivers)?,
         Technique::Bdp { .. } => technique::bdp::render(ctx, drivers)?,
-        Technique::Adp => technique::adp::render(ctx, drivers)?,
         Technique::Mdts { .. } | Technique::Mdts64 { .. } => technique::mdts::render(ctx, drivers)?,
         Technique::Mlp { .. } => technique::mlp::render(ctx, drivers)?,
         Technique::Dfb => technique::dfb::render(ctx, drivers)?,

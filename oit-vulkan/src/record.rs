@@ -23,14 +23,16 @@ use std::rc::Rc;
 use ash::vk;
 use oit_core::OitError;
 
-use crate::device::{Buffer, Gpu, Image, Pipeline};
+use crate::device::{Buffer, Framebuffer, Gpu, GpuImage, Pipeline};
 
 /// Uniform slots (and dispatches) per submission before a flush.
 pub(crate) const SLOTS: u32 = 256;
 /// Bytes between uniform slots (≥ every device's `minUniformBufferOffsetAlignment`).
 const SLOT_BYTES: u64 = 256;
-/// Descriptor sets per submission: one per dispatch, two per geometry pass.
-const MAX_SETS: u32 = 2 * SLOTS;
+/// Descriptor sets per submission: up to three per command (group 0, a rasterizer's, images).
+const MAX_SETS: u32 = 3 * SLOTS;
+/// Sampled images of one set at most (bdp's 8 bucket targets).
+const MAX_IMAGES_PER_SET: u32 = 8;
 /// Storage bindings of one set at most (group 0: state, up to 6 technique buffers, acct).
 const MAX_STORAGE_PER_SET: u32 = 16;
 /// How long a submission may run before it counts as hung.
@@ -38,6 +40,17 @@ const TIMEOUT_NS: u64 = 120_000_000_000;
 
 /// Nanoseconds in a millisecond.
 const NS_PER_MS: f64 = 1e6;
+
+/// What one descriptor set of a command holds.
+pub(crate) enum SetData<'b> {
+    /// Group 0: the frame uniform (copied into the next slot of the ring, bound at 0) and the
+    /// storage buffers (binding, buffer).
+    Frame { uniform: &'b [u8], storage: &'b [(u32, &'b Buffer)] },
+    /// A rasterizer's group 1: storage (binding, buffer) and its uniform at binding 2.
+    Raster { storage: &'b [(u32, &'b Buffer)], uniform: &'b Buffer },
+    /// Sampled images (binding, image), each in `SHADER_READ_ONLY_OPTIMAL`.
+    Images(&'b [(u32, &'b GpuImage)]),
+}
 
 /// The frame's timestamp queries: two per uniform slot.
 struct Timestamps {
@@ -89,6 +102,8 @@ pub(crate) struct Recorder<'g> {
     keep: Vec<Rc<Buffer>>,
     /// The timestamp queries, where the device has them.
     timestamps: Option<Timestamps>,
+    /// One occlusion query, for the draws that ask (`Recorder::draw`).
+    occlusion: vk::QueryPool,
 }
 
 impl Drop for Recorder<'_> {
@@ -101,6 +116,7 @@ impl Drop for Recorder<'_> {
             if let Some(ts) = &self.timestamps {
                 d.destroy_query_pool(ts.pool, None);
             }
+            d.destroy_query_pool(self.occlusion, None);
             d.destroy_descriptor_pool(self.descriptors, None);
             d.destroy_fence(self.fence, None);
             d.destroy_command_pool(self.pool, None);
@@ -142,6 +158,10 @@ impl<'g> Recorder<'g> {
                 ty: vk::DescriptorType::STORAGE_BUFFER,
                 descriptor_count: MAX_SETS * MAX_STORAGE_PER_SET,
             },
+            vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::SAMPLED_IMAGE,
+                descriptor_count: MAX_SETS * MAX_IMAGES_PER_SET,
+            },
         ];
         let dp_info = vk::DescriptorPoolCreateInfo::default().max_sets(MAX_SETS).pool_sizes(&sizes);
         // SAFETY: as above; on failure the objects made so far are destroyed before returning.
@@ -177,7 +197,13 @@ impl<'g> Recorder<'g> {
             sets: 0,
             keep: Vec::new(),
             timestamps: None,
+            // made below; destroying a null handle (should that fail) is a no-op
+            occlusion: vk::QueryPool::null(),
         };
+        let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::OCCLUSION).query_count(1);
+        // SAFETY: a valid create info on a live device; destroyed by `drop`.
+        r.occlusion = unsafe { d.create_query_pool(&info, None) }
+            .map_err(vk_err("creating an occlusion query pool"))?;
         if gpu.has_timestamps() {
             let info = vk::QueryPoolCreateInfo::default()
                 .query_type(vk::QueryType::TIMESTAMP)
@@ -337,38 +363,70 @@ impl<'g> Recorder<'g> {
         unsafe { self.gpu.raw.device.update_descriptor_sets(&writes, &[]) };
     }
 
-    /// Allocates and writes a command's descriptor sets: group 0 with `uniform` (copied into the
-    /// next slot of the ring) and `storage` (binding, buffer); group 1, when given, the
-    /// rasterizer's (binding, buffer) with its uniform at binding 2.
+    /// Allocates and writes a command's descriptor sets, one per entry of `sets`, in set order
+    /// (see [`SetData`]).
     fn sets(
         &mut self,
         pipeline: &Pipeline,
-        uniform: &[u8],
-        storage: &[(u32, &Buffer)],
-        raster: Option<(&[(u32, &Buffer)], &Buffer)>,
+        sets: &[SetData<'_>],
     ) -> Result<Vec<vk::DescriptorSet>, OitError> {
-        self.room(if raster.is_some() { 2 } else { 1 })?;
-        let offset = u64::from(self.slot) * SLOT_BYTES;
-        self.uniform_bytes[offset as usize..offset as usize + uniform.len()].copy_from_slice(uniform);
-        self.slot += 1;
-        let set0 = self.allocate(pipeline.set0)?;
-        self.write_set(set0, Some((0, &self.uniforms, offset)), storage);
-        let mut sets = vec![set0];
-        if let Some((buffers, ru)) = raster {
-            let set1 = self.allocate(pipeline.raster)?;
-            // the raster uniform is a whole (small) buffer of its own
-            let info = [vk::DescriptorBufferInfo { buffer: ru.buffer, offset: 0, range: vk::WHOLE_SIZE }];
-            self.write_set(set1, None, buffers);
-            let write = vk::WriteDescriptorSet::default()
-                .dst_set(set1)
-                .dst_binding(2)
-                .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
-                .buffer_info(&info);
-            // SAFETY: as in `write_set`.
-            unsafe { self.gpu.raw.device.update_descriptor_sets(&[write], &[]) };
-            sets.push(set1);
+        debug_assert_eq!(pipeline.sets.len(), sets.len(), "one SetData per set of the pipeline");
+        self.room(sets.len() as u32)?;
+        let mut out = Vec::with_capacity(sets.len());
+        for (data, &layout) in sets.iter().zip(&pipeline.sets) {
+            let set = self.allocate(layout)?;
+            match data {
+                SetData::Frame { uniform, storage } => {
+                    let offset = u64::from(self.slot) * SLOT_BYTES;
+                    self.uniform_bytes[offset as usize..offset as usize + uniform.len()]
+                        .copy_from_slice(uniform);
+                    self.slot += 1;
+                    self.write_set(set, Some((0, &self.uniforms, offset)), storage);
+                }
+                SetData::Raster { storage, uniform } => {
+                    self.write_set(set, None, storage);
+                    // the raster uniform is a whole (small) buffer of its own
+                    let info = [vk::DescriptorBufferInfo {
+                        buffer: uniform.buffer,
+                        offset: 0,
+                        range: vk::WHOLE_SIZE,
+                    }];
+                    let write = vk::WriteDescriptorSet::default()
+                        .dst_set(set)
+                        .dst_binding(2)
+                        .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
+                        .buffer_info(&info);
+                    // SAFETY: as in `write_set`.
+                    unsafe { self.gpu.raw.device.update_descriptor_sets(&[write], &[]) };
+                }
+                SetData::Images(images) => {
+                    let infos: Vec<[vk::DescriptorImageInfo; 1]> = images
+                        .iter()
+                        .map(|(_, image)| {
+                            [vk::DescriptorImageInfo::default()
+                                .image_view(image.view)
+                                .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)]
+                        })
+                        .collect();
+                    let writes: Vec<vk::WriteDescriptorSet<'_>> = images
+                        .iter()
+                        .zip(&infos)
+                        .map(|((binding, _), info)| {
+                            vk::WriteDescriptorSet::default()
+                                .dst_set(set)
+                                .dst_binding(*binding)
+                                .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
+                                .image_info(info)
+                        })
+                        .collect();
+                    // SAFETY: as in `write_set`; every image has SAMPLED usage and is in
+                    // SHADER_READ_ONLY_OPTIMAL when the command runs (its render pass left it so).
+                    unsafe { self.gpu.raw.device.update_descriptor_sets(&writes, &[]) };
+                }
+            }
+            out.push(set);
         }
-        Ok(sets)
+        Ok(out)
     }
 
     /// The next timestamp pair of this recording, counted under `label` (with timestamps): the
@@ -397,18 +455,16 @@ impl<'g> Recorder<'g> {
         }
     }
 
-    /// Records one dispatch of `pipeline` with the sets of [`Recorder::sets`]. With timestamps,
-    /// its time counts under `label`. A barrier follows.
+    /// Records one dispatch of `pipeline` with `sets`. With timestamps, its time counts under
+    /// `label`. A barrier follows.
     pub(crate) fn dispatch(
         &mut self,
         label: &str,
         pipeline: &Pipeline,
-        uniform: &[u8],
-        storage: &[(u32, &Buffer)],
-        raster: Option<(&[(u32, &Buffer)], &Buffer)>,
+        sets: &[SetData<'_>],
         groups: (u32, u32),
     ) -> Result<(), OitError> {
-        let sets = self.sets(pipeline, uniform, storage, raster)?;
+        let sets = self.sets(pipeline, sets)?;
         let timed = self.timed(label);
         self.stamp(timed, 0);
         let d = &self.gpu.raw.device;
@@ -434,33 +490,33 @@ impl<'g> Recorder<'g> {
     }
 
     /// Records one draw of `vertices` vertices by the graphics `pipeline` (made in
-    /// `render_pass`) into `target` (its framebuffer, cleared to 0), with the sets of
-    /// [`Recorder::sets`]; the viewport has a negative height, so row 0 is the top as on wgpu
-    /// (NDC y up). With timestamps, its time counts under `label`. A barrier follows.
+    /// `render_pass`) into `target`, its attachments cleared to `clear`, with `sets`, inside the
+    /// recorder's occlusion query when `occlusion` (read by [`Recorder::occlusion`] after a
+    /// flush); the viewport has a negative height, so row 0 is the top as on wgpu (NDC y up).
+    /// With timestamps, its time counts under `label`. A barrier follows.
     #[expect(clippy::too_many_arguments, reason = "a draw is that many things")]
     pub(crate) fn draw(
         &mut self,
         label: &str,
         pipeline: &Pipeline,
         render_pass: vk::RenderPass,
-        target: &Image,
-        uniform: &[u8],
-        storage: &[(u32, &Buffer)],
-        raster: (&[(u32, &Buffer)], &Buffer),
+        target: &Framebuffer,
+        clear: &[vk::ClearValue],
+        sets: &[SetData<'_>],
         vertices: u32,
+        occlusion: bool,
     ) -> Result<(), OitError> {
-        let sets = self.sets(pipeline, uniform, storage, Some(raster))?;
+        let sets = self.sets(pipeline, sets)?;
         let timed = self.timed(label);
         self.stamp(timed, 0);
         let (w, h) = target.extent;
         let area =
             vk::Rect2D { offset: vk::Offset2D { x: 0, y: 0 }, extent: vk::Extent2D { width: w, height: h } };
-        let clear = [vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } }];
         let begin = vk::RenderPassBeginInfo::default()
             .render_pass(render_pass)
             .framebuffer(target.framebuffer)
             .render_area(area)
-            .clear_values(&clear);
+            .clear_values(clear);
         let viewport = vk::Viewport {
             x: 0.0,
             y: h as f32,
@@ -471,10 +527,14 @@ impl<'g> Recorder<'g> {
         };
         let d = &self.gpu.raw.device;
         // SAFETY: recording, outside a render pass; the framebuffer was made for a render pass
-        // compatible with `render_pass` (the same one) at the target's extent; the pipeline was
-        // made in that render pass, its layout matches the sets; a negative viewport height is
-        // core since Vulkan 1.1.
+        // compatible with `render_pass` at its extent, with one clear value per attachment; the
+        // pipeline was made in that render pass, its layout matches the sets; a negative
+        // viewport height is core since Vulkan 1.1; the occlusion query is reset (outside the
+        // render pass) before it begins, and ends inside the same subpass.
         unsafe {
+            if occlusion {
+                d.cmd_reset_query_pool(self.cmd, self.occlusion, 0, 1);
+            }
             d.cmd_begin_render_pass(self.cmd, &begin, vk::SubpassContents::INLINE);
             d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.pipeline);
             d.cmd_bind_descriptor_sets(
@@ -487,8 +547,14 @@ impl<'g> Recorder<'g> {
             );
             d.cmd_set_viewport(self.cmd, 0, &[viewport]);
             d.cmd_set_scissor(self.cmd, 0, &[area]);
+            if occlusion {
+                d.cmd_begin_query(self.cmd, self.occlusion, 0, vk::QueryControlFlags::empty());
+            }
             if vertices > 0 {
                 d.cmd_draw(self.cmd, vertices, 1, 0, 0);
+            }
+            if occlusion {
+                d.cmd_end_query(self.cmd, self.occlusion, 0);
             }
             d.cmd_end_render_pass(self.cmd);
         }
@@ -497,9 +563,59 @@ impl<'g> Recorder<'g> {
         Ok(())
     }
 
+    /// Records a transition of `image` from an undefined layout to `SHADER_READ_ONLY_OPTIMAL`
+    /// (its contents discarded), after everything before it.
+    pub(crate) fn make_readable(&mut self, image: &GpuImage) {
+        let barrier = vk::ImageMemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::MEMORY_WRITE)
+            .dst_access_mask(vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE)
+            .old_layout(vk::ImageLayout::UNDEFINED)
+            .new_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(image.image)
+            .subresource_range(
+                vk::ImageSubresourceRange::default()
+                    .aspect_mask(crate::device::aspect(image.format))
+                    .level_count(1)
+                    .layer_count(1),
+            );
+        // SAFETY: recording, outside a render pass; the image is alive (the frame's) and no
+        // command after this reads it before a command that writes it or this transition.
+        unsafe {
+            self.gpu.raw.device.cmd_pipeline_barrier(
+                self.cmd,
+                vk::PipelineStageFlags::ALL_COMMANDS,
+                vk::PipelineStageFlags::ALL_COMMANDS,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &[barrier],
+            );
+        }
+    }
+
+    /// The samples that passed in the last draw with an occlusion query: flushes first (waits).
+    pub(crate) fn occlusion(&mut self) -> Result<u64, OitError> {
+        self.flush()?;
+        let mut samples = [0u64; 1];
+        // SAFETY: the query was reset, begun and ended in the submission just waited for
+        // (a draw with `occlusion` came before this call), so its result is available.
+        unsafe {
+            self.gpu.raw.device.get_query_pool_results(
+                self.occlusion,
+                0,
+                &mut samples,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }
+        .map_err(vk_err("reading an occlusion query"))?;
+        Ok(samples[0])
+    }
+
     /// Records a copy of `image` (in `TRANSFER_SRC_OPTIMAL`, one 32-bit texel per pixel) into the
     /// start of `dst`, row by row; a barrier follows.
-    pub(crate) fn copy_image(&mut self, image: &Image, dst: &Buffer) {
+    pub(crate) fn copy_image(&mut self, image: &GpuImage, dst: &Buffer) {
         let (width, height) = image.extent;
         let region = [vk::BufferImageCopy::default()
             .image_subresource(

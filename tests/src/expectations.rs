@@ -44,6 +44,12 @@ pub const EXPECTED: &[Expected] = &[
               to oit-cpu in vulkan.rs",
     },
     Expected {
+        test: "effects_run_on_sorting_techniques",
+        backend: "vulkan",
+        path: RasterPath::Hardware,
+        why: "as on the compute path: oit-vulkan runs oit-wgpu's ddp resolve, which refuses translucency",
+    },
+    Expected {
         test: "exact_schemes_on_separated_layers",
         backend: "wgpu",
         path: RasterPath::Hardware,

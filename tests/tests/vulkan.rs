@@ -39,7 +39,8 @@ fn vulkan_compute_path_equals_cpu() {
 
 /// The hardware path runs oit-wgpu's hardware-path WGSL on the same driver's rasterizer: every
 /// technique's fragments, counters and image equal wgpu's hardware path (the images within 1 in 8
-/// bits, as between the compute paths), and the reference's per-pixel layers too.
+/// bits, as between the compute paths), and the reference's per-pixel layers too; `plain` blends
+/// in one draw on both.
 #[cfg(feature = "wgpu")]
 #[test]
 fn vulkan_hardware_path_equals_wgpu_hardware_path() {
@@ -58,40 +59,47 @@ fn vulkan_hardware_path_equals_wgpu_hardware_path() {
             let v = render(&vk, &scene, &cam, &s);
             let w = render(&wgpu, &scene, &cam, &s);
             let what = format!("{t} on {name}");
-            if t == Technique::Plain {
-                // wgpu blends plain in one pass of a blending pipeline; here its fragments are
-                // kept and sorted by primitive id (a counting pass and a capture pass), as on the
-                // compute path: the same picture, one pass more
-                assert_eq!((v.stats.fragments, v.stats.geometry_passes), (w.stats.fragments, 2), "{what}");
-                checks::off_edges_equal(&v.image, &w.image, &vec![false; v.image.pixels.len()])
-                    .unwrap_or_else(|e| panic!("{what}: {e}"));
-                continue;
-            }
             checks::same_fragments(&v, &w).unwrap_or_else(|e| panic!("{what}: {e}"));
             assert_eq!(v.layers, w.layers, "{what}: per-pixel layers");
         }
     }
 }
 
-/// What the hardware path does not do yet is refused by name, never run another way in silence:
-/// the blend captures (`--hardware-capture blend`).
+/// The graphics pipeline's own captures (`--hardware-capture blend`) against wgpu's on the same
+/// driver: dp (depth test, occlusion queries), ddp and bdp (MAX blending), wavg and wsum
+/// (additive blending) run the same WGSL, so their fragments, counters and images are equal; adp's
+/// histogram by logic-op OR into 8 R32G32B32A32_UINT targets (wgpu has no logic ops and keeps its
+/// atomics histogram there) sets the same bins, so adp is equal too.
+#[cfg(feature = "wgpu")]
 #[test]
-fn vulkan_hardware_blend_capture_is_refused_by_name() {
-    let Some(vk) = oit_vulkan::backend_or_skip("vulkan_hardware_blend_capture_is_refused_by_name") else {
+fn vulkan_blend_captures_equal_wgpu_blend_captures() {
+    let Some(vk) = oit_vulkan::backend_or_skip("vulkan_blend_captures_equal_wgpu_blend_captures") else {
         return;
     };
-    let scene = scene("planes:4");
-    let s = Settings {
-        raster: Some(RasterPath::Hardware),
-        hardware_capture: oit_core::HardwareCapture::Blend,
-        ..settings(16, "dp")
+    let Some(wgpu) = oit_wgpu::backend_or_skip("vulkan_blend_captures_equal_wgpu_blend_captures") else {
+        return;
     };
-    let cam = camera(&scene, &s, View::default());
-    match oit_core::Backend::render(&vk, &scene, &cam, &s) {
-        Err(oit_core::OitError::Unsupported { backend, what }) => {
-            assert_eq!(backend, "vulkan");
-            assert!(what.contains("blend"), "{what}");
+    for name in ["planes:8", "knot", "ties:5", "grid:2x2:spheres:2"] {
+        let scene = scene(name);
+        let base = Settings {
+            raster: Some(RasterPath::Hardware),
+            hardware_capture: oit_core::HardwareCapture::Blend,
+            ..settings(64, "reference")
+        };
+        let cam = camera(&scene, &base, View::default());
+        for t in ["dp", "ddp", "bdp", "wavg", "wsum", "adp"] {
+            let t: Technique = t.parse().unwrap();
+            for max_peels in [None, Some(2)] {
+                let s = Settings { technique: t, max_peels, ..base.clone() };
+                let what = format!("{t} --max-peels {max_peels:?} on {name}");
+                let v = render(&vk, &scene, &cam, &s);
+                let w = render(&wgpu, &scene, &cam, &s);
+                checks::same_fragments(&v, &w).unwrap_or_else(|e| panic!("{what}: {e}"));
+                assert_eq!(v.stats.captured, w.stats.captured, "{what}");
+                // adp's logic-op histogram adds its 8 targets (128 bytes a pixel) to the storage
+                let targets = if t == Technique::Adp { 128 * u64::from(s.width * s.height) } else { 0 };
+                assert_eq!(v.stats.storage_bytes, w.stats.storage_bytes + targets, "{what}");
+            }
         }
-        other => panic!("expected Unsupported, got {:?}", other.map(|f| f.stats)),
     }
 }

@@ -1,7 +1,8 @@
 //! `adp` (see oit-wgpu's `technique/adp.rs`) by storage-buffer atomics on the compute path: bounds
 //! pass, histogram pass (atomicOr), the deepest pixel's set-bin count (one readback) for the
-//! number of batches, then one bucket pass and one resolve per batch of 32. The paper's capture
-//! (logic-op OR into 8 × R32G32B32A32_UINT targets) needs the hardware path, not written yet.
+//! number of batches, then one bucket pass and one resolve per batch of 32. On the hardware path
+//! with `--hardware-capture blend`, the histogram pass is the paper's own: logic-op OR into 8 ×
+//! R32G32B32A32_UINT targets (`technique::blend::adp_histogram`), copied into the same histogram.
 
 use oit_core::OitError;
 use oit_core::rules::{BUCKETS, HISTOGRAM_WORDS};
@@ -9,7 +10,7 @@ use oit_core::rules::{BUCKETS, HISTOGRAM_WORDS};
 use crate::Drivers;
 use crate::ctx::{Init, VkCtx};
 
-pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
+pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>, logic_or: bool) -> Result<(), OitError> {
     let bounds = super::bdp::depth_bounds(ctx, drivers)?;
     let px = u64::from(ctx.pixels);
     let hist = ctx.buffer("adp histogram", px * HISTOGRAM_WORDS as u64, Init::Zero)?;
@@ -18,7 +19,11 @@ pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), O
     let buckets = ctx.buffer("adp buckets", px * BUCKETS as u64 * 2, Init::Zero)?;
     let nearest = ctx.buffer("adp nearest", px * BUCKETS as u64 * 2, Init::Fill(u32::MAX))?;
     let buffers = [&*bounds, &*hist, &*buckets, &*max_bins, &*nearest];
-    ctx.geometry_pass(&drivers.scene, "adp", &buffers, 0, 0)?;
+    if logic_or {
+        super::blend::adp_histogram(ctx, drivers, &buffers)?;
+    } else {
+        ctx.geometry_pass(&drivers.scene, "adp", &buffers, 0, 0)?;
+    }
     ctx.pixel_kernel("adp", "count_main", &buffers, 0, 0)?;
     let bins = ctx.read_u32(&max_bins)?[0];
     let batches = ctx.plan.adp_batches(bins);

@@ -4,6 +4,7 @@
 
 pub(crate) mod adp;
 pub(crate) mod bdp;
+pub(crate) mod blend;
 pub(crate) mod ddp;
 pub(crate) mod dfb;
 pub(crate) mod dp;

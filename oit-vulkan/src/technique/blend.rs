@@ -1,0 +1,305 @@
+//! The graphics pipeline's own captures on the hardware path: oit-wgpu's blend captures
+//! (`technique/{blend, bdp_blend, dp_depth, ddp_blend}.rs`, the same WGSL) and, beyond them, adp's
+//! histogram by logic-op OR, which wgpu cannot express (`shaders/adp_logic.wgsl`).
+//!
+//! - `plain` always blends on the hardware path (the over operator in one draw, primitive order);
+//!   `wavg`/`wsum` with `--hardware-capture blend` (additive blending of the 8-bit integers,
+//!   exact while a sum stays below 2^24). Two targets: colour and an additive fragment count.
+//! - `bdp` (colour mode) with `--hardware-capture blend`: MAX blending into 8 ×
+//!   `R32G32B32A32_SFLOAT` (Liu et al., HPG 2009), then a resolve reading the targets.
+//! - `dp` with `--hardware-capture blend`: Everitt's depth peeling (2001) with a depth test into a
+//!   `D32_SFLOAT` attachment, the previous peel's depth read by pixel, and an occlusion query per
+//!   peel that ends the loop.
+//! - `ddp` with `--hardware-capture blend`: Bavoil and Myers' dual depth peeling (2008), (−d, d)
+//!   MAX-blended into `R32G32_SFLOAT`, an occlusion query per pass.
+//! - `adp` with `--hardware-capture blend`: the histogram pass by logic-op OR into 8 ×
+//!   `R32G32B32A32_UINT` (the HPG 2009 paper's capture), copied into the storage histogram; the
+//!   bucket passes are the atomics capture's.
+//!
+//! The blend unit returns no previous value, so these captures cannot count where they lose a
+//! fragment: their `lost` is `fragments − captured` (as on oit-wgpu); adp's is still counted (its
+//! bucket passes are atomics).
+
+use std::rc::Rc;
+
+use ash::vk;
+use oit_core::{OitError, Technique};
+
+use crate::Drivers;
+use crate::ctx::{BlendPass, VkCtx};
+use crate::device::{Blend, GpuImage};
+use crate::hardware::HardwareRaster;
+use crate::raster::Raster;
+
+const RGBA32F: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+const RGBA32U: vk::Format = vk::Format::R32G32B32A32_UINT;
+const RG32F: vk::Format = vk::Format::R32G32_SFLOAT;
+const RG32U: vk::Format = vk::Format::R32G32_UINT;
+const R32F: vk::Format = vk::Format::R32_SFLOAT;
+const DEPTH: vk::Format = vk::Format::D32_SFLOAT;
+
+fn unsupported(what: String) -> OitError {
+    OitError::Unsupported { backend: "vulkan".into(), what }
+}
+
+/// The frame's hardware rasterizer (the blend captures draw oit's own vertex stage).
+fn hardware<'d>(drivers: &'d Drivers<'_>) -> Result<&'d HardwareRaster, OitError> {
+    match &drivers.scene {
+        Raster::Hardware(h) => Ok(h),
+        Raster::Compute(_) => Err(unsupported("a blend capture on the compute path".into())),
+    }
+}
+
+/// Refuses a target format the device cannot blend into (or render to) before anything is made.
+fn check_blendable(ctx: &VkCtx<'_>, format: vk::Format, what: &str) -> Result<(), OitError> {
+    if ctx.gpu.blendable(format) {
+        return Ok(());
+    }
+    Err(unsupported(format!(
+        "{what}: '{}' cannot blend into {format:?}; use --hardware-capture atomics",
+        ctx.gpu.info.name
+    )))
+}
+
+fn clear_f(v: [f32; 4]) -> vk::ClearValue {
+    vk::ClearValue { color: vk::ClearColorValue { float32: v } }
+}
+
+/// Counts the scene's fragments with one count-only draw (the hardware raster's additive counter,
+/// a capture that keeps nothing), for passes that cannot count themselves; not a geometry pass.
+fn count_fragments(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
+    if ctx.fragments.is_none() {
+        ctx.geometry_pass(&drivers.scene, "nothing", &[], 0, 0)?;
+        ctx.passes -= 1;
+    }
+    Ok(())
+}
+
+/// `plain` on the blender (`blend.wgsl`'s `plain_blend_fs`): the over operator, primitive order.
+pub(crate) fn plain(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
+    check_blendable(ctx, RGBA32F, "plain's blending")?;
+    draw_and_resolve(
+        ctx,
+        drivers,
+        Blend::Over,
+        [0.0, 0.0, 0.0, 1.0],
+        ("plain_blend_fs", "plain_blend_resolve_main"),
+        0,
+    )
+}
+
+/// `wavg` or `wsum` by additive blending (`blend.wgsl`'s `weighted_blend_fs`).
+pub(crate) fn weighted(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
+    let average = match ctx.settings.technique {
+        Technique::WeightedAverage => true,
+        Technique::WeightedSum => false,
+        other => return Err(OitError::InvalidSettings(format!("{other} is not wavg or wsum"))),
+    };
+    check_blendable(ctx, RGBA32F, "additive blending for wavg/wsum")?;
+    draw_and_resolve(
+        ctx,
+        drivers,
+        Blend::Add,
+        [0.0; 4],
+        ("weighted_blend_fs", "weighted_blend_resolve_main"),
+        u32::from(average),
+    )
+}
+
+/// One draw into a colour target (`color` blending, cleared to `clear`) and an additive count
+/// target, then the resolve `entries.1` reading both (blend.wgsl's bindings 8 and 9).
+fn draw_and_resolve(
+    ctx: &mut VkCtx<'_>,
+    drivers: &Drivers<'_>,
+    color: Blend,
+    clear: [f32; 4],
+    entries: (&str, &str),
+    param: u32,
+) -> Result<(), OitError> {
+    let raster = hardware(drivers)?;
+    let color_target = ctx.target(RGBA32F, 16, false)?;
+    let count_target = ctx.target(R32F, 4, false)?;
+    ctx.fragments_from_captured = true;
+    ctx.blend_pass(
+        raster,
+        BlendPass {
+            module: "blend",
+            fs: entries.0,
+            targets: &[&color_target, &count_target],
+            blends: &[color, Blend::AddRed],
+            clears: &[clear_f(clear), clear_f([0.0; 4])],
+            depth: false,
+            previous: &[],
+            occlusion: false,
+            pass_index: 0,
+            param,
+        },
+        &[],
+    )?;
+    ctx.image_kernel("blend", entries.1, &[], &[(8, &color_target), (9, &count_target)], 0, param)
+}
+
+/// `bdp`'s colour mode by MAX blending into 8 × `R32G32B32A32_SFLOAT` (`bdp_blend.wgsl`).
+pub(crate) fn bdp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
+    ctx.counts_losses = false;
+    if !ctx.plan.bdp_color {
+        return Err(unsupported(
+            "bdp's depth mode with --hardware-capture blend (float blending holds depths, not the (depth, colour) pairs): use --hardware-capture atomics".into(),
+        ));
+    }
+    check_blendable(ctx, RGBA32F, "bdp's MAX blending")?;
+    let raster = hardware(drivers)?;
+    let limit = ctx.gpu.info.limits.max_color_attachments;
+    if limit < 8 {
+        return Err(unsupported(format!("8 colour targets for bdp: maxColorAttachments is {limit}")));
+    }
+    let bounds = super::bdp::depth_bounds(ctx, drivers)?;
+    count_fragments(ctx, drivers)?;
+    let targets: Vec<Rc<GpuImage>> =
+        (0..8).map(|_| ctx.target(RGBA32F, 16, false)).collect::<Result<_, _>>()?;
+    let views: Vec<&GpuImage> = targets.iter().map(|t| &**t).collect();
+    ctx.blend_pass(
+        raster,
+        BlendPass {
+            module: "bdp_blend",
+            fs: "bdp_blend_fs",
+            targets: &views,
+            blends: &[Blend::Max; 8],
+            clears: &[clear_f([0.0; 4]); 8],
+            depth: false,
+            previous: &[],
+            occlusion: false,
+            pass_index: 0,
+            param: 0,
+        },
+        &[&bounds],
+    )?;
+    let images: Vec<(u32, &GpuImage)> = views.iter().enumerate().map(|(i, t)| (3 + i as u32, *t)).collect();
+    ctx.image_kernel("bdp_blend", "bdp_blend_resolve_main", &[&bounds], &images, 0, 0)
+}
+
+/// `dp` by depth test and occlusion queries (`dp_depth.wgsl`): peel p renders into depth target
+/// p % 2 and reads the other; the loop ends at the first peel that draws nothing, or at the
+/// plan's limit.
+pub(crate) fn dp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
+    ctx.counts_losses = false;
+    let raster = hardware(drivers)?;
+    count_fragments(ctx, drivers)?;
+    let depths = [ctx.target(DEPTH, 4, true)?, ctx.target(DEPTH, 4, true)?];
+    let layer = ctx.target(RG32U, 8, false)?;
+    // the first peel's "previous" depth is never read, but is bound: readable, if undefined
+    ctx.make_readable(&depths[1]);
+    let limit = ctx.plan.peel_limit;
+    let mut peels = 0;
+    while peels < limit {
+        let slot = (peels % 2) as usize;
+        let samples = ctx.blend_pass(
+            raster,
+            BlendPass {
+                module: "dp_depth",
+                fs: "dp_peel_fs",
+                targets: &[&layer, &depths[slot]],
+                blends: &[Blend::Replace],
+                clears: &[vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } }],
+                depth: true,
+                previous: &[(0, &depths[1 - slot])],
+                occlusion: true,
+                pass_index: peels,
+                param: 0,
+            },
+            &[],
+        )?;
+        if samples == Some(0) {
+            break;
+        }
+        ctx.image_kernel("dp_depth", "dp_composite_main", &[], &[(3, &layer), (4, &depths[slot])], peels, 0)?;
+        peels += 1;
+    }
+    Ok(())
+}
+
+/// `ddp` by MAX blending of (−d, d) and occlusion queries (`ddp_blend.wgsl`), its layers
+/// composited by `ddp.wgsl`'s resolve.
+pub(crate) fn ddp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
+    ctx.counts_losses = false;
+    super::ddp::check_effect(ctx)?;
+    check_blendable(ctx, RG32F, "ddp's MAX blending")?;
+    let raster = hardware(drivers)?;
+    count_fragments(ctx, drivers)?;
+    let peel = super::ddp::Peel::new(ctx)?;
+    let buffers = peel.buffers();
+    let ranges = [ctx.target(RG32F, 8, false)?, ctx.target(RG32F, 8, false)?];
+    ctx.make_readable(&ranges[1]);
+    let limit = ctx.plan.peel_limit;
+    let mut pass = 0u32;
+    loop {
+        let slot = (pass % 2) as usize;
+        let left = ctx.blend_pass(
+            raster,
+            BlendPass {
+                module: "ddp_blend",
+                fs: "ddp_peel_fs",
+                targets: &[&ranges[slot]],
+                blends: &[Blend::Max],
+                clears: &[clear_f([-2.0, -2.0, 0.0, 0.0])],
+                depth: false,
+                previous: &[(0, &ranges[1 - slot])],
+                occlusion: true,
+                pass_index: pass,
+                param: 0,
+            },
+            &buffers,
+        )?;
+        if pass > 0 {
+            ctx.pixel_kernel("ddp", "resolve_main", &buffers, pass, 0)?;
+        }
+        if left == Some(0) || pass >= limit {
+            break;
+        }
+        pass += 1;
+    }
+    Ok(())
+}
+
+/// `adp`'s histogram pass by logic-op OR into 8 × `R32G32B32A32_UINT` (`adp_logic.wgsl`), copied
+/// into `hist`; the caller runs the bucket passes as the atomics capture does.
+pub(crate) fn adp_histogram(
+    ctx: &mut VkCtx<'_>,
+    drivers: &Drivers<'_>,
+    buffers: &[&crate::device::Buffer],
+) -> Result<(), OitError> {
+    let raster = hardware(drivers)?;
+    if !ctx.gpu.info.logic_op {
+        return Err(unsupported(format!(
+            "adp's histogram by logic-op OR: '{}' lacks the logicOp feature; use --hardware-capture atomics",
+            ctx.gpu.info.name
+        )));
+    }
+    let limit = ctx.gpu.info.limits.max_color_attachments;
+    if limit < 8 {
+        return Err(unsupported(format!(
+            "8 colour targets for adp's histogram: maxColorAttachments is {limit}"
+        )));
+    }
+    let targets: Vec<Rc<GpuImage>> =
+        (0..8).map(|_| ctx.target(RGBA32U, 16, false)).collect::<Result<_, _>>()?;
+    let views: Vec<&GpuImage> = targets.iter().map(|t| &**t).collect();
+    ctx.blend_pass(
+        raster,
+        BlendPass {
+            module: "adp_logic",
+            fs: "adp_hist_fs",
+            targets: &views,
+            blends: &[Blend::LogicOr; 8],
+            clears: &[vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } }; 8],
+            depth: false,
+            previous: &[],
+            occlusion: false,
+            pass_index: 0,
+            param: 0,
+        },
+        buffers,
+    )?;
+    let images: Vec<(u32, &GpuImage)> = views.iter().enumerate().map(|(i, t)| (3 + i as u32, *t)).collect();
+    ctx.image_kernel("adp_logic", "adp_hist_copy_main", buffers, &images, 0, 0)
+}
