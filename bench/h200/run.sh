@@ -36,11 +36,28 @@ model)
         --scenes "$OIT_MODELS/bunny.obj,$OIT_MODELS/armadillo.obj,grid:4x4:bunny" --out "$OUT/model-1024"
     ;;
 vulkan)
-    # oit-vulkan beside wgpu on the compute path (vulkan has no hardware path yet), every
-    # technique dfb and ll included, GPU timestamps on both; needs a build with --features wgpu,vulkan
+    # issue 9: oit-vulkan beside wgpu, both raster paths, every technique, GPU timestamps on both
+    # (bench/results/h200/vulkan-1024/); needs a build with --features wgpu,vulkan
     run "$OIT" info --json > "$OUT/info-vulkan.json"
-    run "$OIT" bench --backend wgpu,vulkan --raster compute --size 1024x1024 --frames 10 --warmup 2 \
-        --scenes "$OIT_MODELS/bunny.obj,planes:64" --no-curves --out "$OUT/vulkan-1024"
+    for scene in ${SCENES:-"$OIT_MODELS/bunny.obj" "$OIT_MODELS/armadillo.obj" "grid:4x4:$OIT_MODELS/bunny.obj" planes:64}; do
+        slug=$(echo "$scene" | sed 's#.*/##; s#\.obj$##; s#:#-#g')
+        [ "${scene#grid:4x4}" != "$scene" ] && slug=grid-4x4-bunny
+        run "$OIT" bench --backend wgpu,vulkan --raster all --size 1024x1024 --frames 10 --warmup 2 \
+            --scenes "$scene" --no-curves --out "$OUT/vulkan-$slug"
+    done
+    ;;
+vulkan-blend)
+    # issue 9's raw operations: the graphics pipeline's own captures on both GPU backends (adp's
+    # histogram by logic-op OR on vulkan only; wgpu keeps its atomics histogram), against the
+    # atomics captures of the same run (the `vulkan` mode)
+    for scene in "$OIT_MODELS/bunny.obj" planes:64; do
+        slug=$(echo "$scene" | sed 's#.*/##; s#\.obj$##; s#:#-#g')
+        run "$OIT" bench --backend wgpu,vulkan --raster hardware --hardware-capture blend --size 1024x1024 \
+            --frames 10 --warmup 2 --scenes "$scene" --techniques plain,dp,ddp,bdp,wavg,wsum,adp \
+            --no-curves --out "$OUT/blend-$slug"
+        run "$OIT" bench --backend vulkan --raster hardware --size 1024x1024 --frames 10 --warmup 2 \
+            --scenes "$scene" --techniques plain,dp,ddp,bdp,wavg,wsum,adp --no-curves --out "$OUT/atomics-$slug"
+    done
     ;;
 grid)
     # issue 10's 10M-triangle frame: grid:12x12:bunny at 1024², fabs on the compute path (setup

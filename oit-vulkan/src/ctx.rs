@@ -580,8 +580,10 @@ impl<'a> VkCtx<'a> {
                 depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 },
             });
         }
+        // timed under its fragment entry point (`adp_hist_fs`, `bdp_blend_fs`...), so each
+        // capture's pass can be told apart from the rest of its frame
         self.rec.draw(
-            "geometry",
+            pass.fs,
             &pipeline,
             render_pass,
             &framebuffer,
