@@ -39,11 +39,17 @@ vulkan)
     # issue 9: oit-vulkan beside wgpu, both raster paths, every technique, GPU timestamps on both
     # (bench/results/h200/vulkan-1024/); needs a build with --features wgpu,vulkan
     run "$OIT" info --json > "$OUT/info-vulkan.json"
+    # PATHS=hardware (or compute) runs one path a report: the GPU clocks down while the host
+    # works between passes (oit-vulkan's compute path sets triangles up on the host), and rows
+    # of one path run next to rows of the other otherwise
     for scene in ${SCENES:-"$OIT_MODELS/bunny.obj" "$OIT_MODELS/armadillo.obj" "grid:4x4:$OIT_MODELS/bunny.obj" planes:64}; do
         slug=$(echo "$scene" | sed 's#.*/##; s#\.obj$##; s#:#-#g')
         [ "${scene#grid:4x4}" != "$scene" ] && slug=grid-4x4-bunny
-        run "$OIT" bench --backend wgpu,vulkan --raster all --size 1024x1024 --frames 10 --warmup 2 \
-            --scenes "$scene" --no-curves --out "$OUT/vulkan-$slug"
+        for path in ${PATHS:-all}; do
+            suffix=$([ "$path" = all ] && echo "" || echo "-$path")
+            run "$OIT" bench --backend wgpu,vulkan --raster "$path" --size 1024x1024 --frames 10 --warmup 2 \
+                --scenes "$scene" --no-curves --out "$OUT/vulkan-$slug$suffix"
+        done
     done
     ;;
 vulkan-blend)

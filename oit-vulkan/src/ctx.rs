@@ -113,6 +113,19 @@ impl BufferPool {
     }
 }
 
+/// What the frame knows of the fragments it generates: a frame's count is its first geometry
+/// pass's (over the scene), kept on the device and read with the totals at the end, so a pass
+/// needs no wait of its own.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Fragments {
+    /// No geometry pass over the scene yet.
+    Unset,
+    /// Read back (a pass that sizes storage by it).
+    Known(u64),
+    /// In the frame's first-count word, read at the end.
+    OnDevice,
+}
+
 /// One geometry pass of a blend capture ([`VkCtx::blend_pass`]).
 pub(crate) struct BlendPass<'b> {
     /// The `build.rs` module (with the vertex stage) and its fragment entry point.
@@ -151,7 +164,7 @@ pub(crate) struct VkCtx<'a> {
     pub(crate) plan: Plan,
     pub(crate) pixels: u32,
     pub(crate) passes: u32,
-    pub(crate) fragments: Option<u64>,
+    pub(crate) fragments: Fragments,
     pub(crate) storage_bytes: u64,
     /// Fragments merged into pixels' tails (`--overflow tail`), read back by the technique.
     pub(crate) merged: u64,
@@ -168,6 +181,8 @@ pub(crate) struct VkCtx<'a> {
     image: Rc<Buffer>,
     totals: Rc<Buffer>,
     acct: Rc<Buffer>,
+    /// The first geometry pass's fragment count ([`Fragments::OnDevice`]).
+    first_count: Rc<Buffer>,
     pool: &'a BufferPool,
     lent: Vec<Rc<Buffer>>,
     lent_images: Vec<Rc<GpuImage>>,
@@ -226,6 +241,7 @@ impl<'a> VkCtx<'a> {
         let image = take(u64::from(pixels).max(1) * 4)?;
         let acct = take(u64::from(pixels).max(1) * 12)?;
         let totals = take(16)?;
+        let first_count = take(16)?;
         let rec = Recorder::new(gpu)?;
         let mut ctx = VkCtx {
             gpu,
@@ -233,7 +249,7 @@ impl<'a> VkCtx<'a> {
             plan,
             pixels,
             passes: 0,
-            fragments: None,
+            fragments: Fragments::Unset,
             storage_bytes: 0,
             merged: 0,
             counts_losses: true,
@@ -243,6 +259,7 @@ impl<'a> VkCtx<'a> {
             image,
             totals,
             acct,
+            first_count,
             pool,
             lent,
             lent_images: Vec::new(),
@@ -324,8 +341,9 @@ impl<'a> VkCtx<'a> {
         out
     }
 
-    /// One geometry pass of `module`'s `capture` through the frame's rasterizer (either path);
-    /// returns the fragments generated.
+    /// One geometry pass of `module`'s `capture` through the frame's rasterizer (either path),
+    /// recorded without a wait: the first pass over the scene leaves its fragment count on the
+    /// device for the end of the frame ([`Fragments::OnDevice`]).
     pub(crate) fn geometry_pass(
         &mut self,
         raster: &Raster,
@@ -333,16 +351,52 @@ impl<'a> VkCtx<'a> {
         buffers: &[&Buffer],
         pass_index: u32,
         param: u32,
+    ) -> Result<(), OitError> {
+        let first = self.fragments == Fragments::Unset;
+        let generated = self.record_pass(raster, module, buffers, pass_index, param, first)?;
+        if first {
+            let first_count = self.first_count.clone();
+            self.rec.copy(generated, &first_count, 4);
+            self.fragments = Fragments::OnDevice;
+        }
+        Ok(())
+    }
+
+    /// [`VkCtx::geometry_pass`], waiting for the fragments it generated (storage sized by them).
+    pub(crate) fn geometry_pass_counted(
+        &mut self,
+        raster: &Raster,
+        module: &'static str,
+        buffers: &[&Buffer],
+        pass_index: u32,
+        param: u32,
     ) -> Result<u64, OitError> {
+        let generated = self.record_pass(raster, module, buffers, pass_index, param, true)?;
+        let generated = u64::from(self.read_u32(generated)?[0]);
+        if matches!(self.fragments, Fragments::Unset | Fragments::OnDevice) {
+            self.fragments = Fragments::Known(generated);
+        }
+        Ok(generated)
+    }
+
+    /// Records one geometry pass, counting its fragments (on the hardware path: the count
+    /// image's copy and sum) only when `count`; returns the word that counts them.
+    fn record_pass<'r>(
+        &mut self,
+        raster: &'r Raster,
+        module: &'static str,
+        buffers: &[&Buffer],
+        pass_index: u32,
+        param: u32,
+        count: bool,
+    ) -> Result<&'r Buffer, OitError> {
         self.uniform.pass_index = pass_index;
         self.uniform.param = param;
         let generated = match raster {
             Raster::Compute(r) => self.compute_pass(r, module, buffers)?,
-            Raster::Hardware(r) => self.hardware_pass(r, module, buffers)?,
+            Raster::Hardware(r) => self.hardware_pass(r, module, buffers, count)?,
         };
-        let generated = u64::from(self.read_u32(generated)?[0]);
         self.passes += 1;
-        self.fragments.get_or_insert(generated);
         Ok(generated)
     }
 
@@ -385,6 +439,7 @@ impl<'a> VkCtx<'a> {
         raster: &'r HardwareRaster,
         module: &'static str,
         buffers: &[&Buffer],
+        count: bool,
     ) -> Result<&'r Buffer, OitError> {
         let pipeline = self.gpu.render_pipeline(module, buffers.len())?;
         let render_pass = self.gpu.render_pass(&crate::device::count_pass_key())?;
@@ -407,6 +462,9 @@ impl<'a> VkCtx<'a> {
             false,
         )?;
         let (counts, generated) = raster.counters();
+        if !count {
+            return Ok(generated);
+        }
         self.rec.copy_image(raster.target(), counts);
         self.rec.fill(generated, 0);
         let (w, h) = raster.target().extent;
@@ -624,13 +682,15 @@ impl<'a> VkCtx<'a> {
         self.kernel_over("finish", "totals_main", &[&image_buf, &totals], px, 0, 0, "resolve")?;
         self.kernel_over("finish", "finish_main", &[&image_buf, &totals], px, 0, 0, "resolve")?;
         let acct_buf = self.acct.clone();
-        let mut read = vec![&*totals];
+        let first_count = self.first_count.clone();
+        let mut read = vec![&*totals, &*first_count];
         if readback {
             read.push(&*image_buf);
             read.push(&*acct_buf);
         }
         let mut words = self.read_u32s(&read)?.into_iter();
         let t = words.next().unwrap_or_default();
+        let first = words.next().unwrap_or_default();
         let (image, acct) = if readback {
             let pixels = words.next().unwrap_or_default();
             let image = Image {
@@ -650,9 +710,10 @@ impl<'a> VkCtx<'a> {
         };
         let captured = u64::from(t[0]);
         let fragments = match self.fragments {
-            Some(generated) => generated,
-            None if self.fragments_from_captured => captured,
-            None => 0,
+            Fragments::Known(generated) => generated,
+            Fragments::OnDevice => u64::from(first[0]),
+            Fragments::Unset if self.fragments_from_captured => captured,
+            Fragments::Unset => 0,
         };
         let (lost, lost_pixels) = if self.counts_losses {
             let px = acct.map(|acct| acct.chunks(3).take(self.pixels as usize).map(|w| w[0]).collect());

@@ -68,7 +68,7 @@ fn clear_f(v: [f32; 4]) -> vk::ClearValue {
 /// Counts the scene's fragments with one count-only draw (the hardware raster's additive counter,
 /// a capture that keeps nothing), for passes that cannot count themselves; not a geometry pass.
 fn count_fragments(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
-    if ctx.fragments.is_none() {
+    if ctx.fragments == crate::ctx::Fragments::Unset {
         ctx.geometry_pass(&drivers.scene, "nothing", &[], 0, 0)?;
         ctx.passes -= 1;
     }

@@ -11,7 +11,7 @@ use crate::ctx::{Init, VkCtx};
 const END: u32 = u32::MAX;
 
 pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
-    let generated = ctx.geometry_pass(&drivers.scene, "ll_size", &[], 0, 0)?;
+    let generated = ctx.geometry_pass_counted(&drivers.scene, "ll_size", &[], 0, 0)?;
     let nodes = ctx.plan.check_fragments(generated)?;
     let heads = ctx.buffer("ll heads", u64::from(ctx.pixels), Init::Fill(END))?;
     let counter = ctx.buffer("ll node counter", 1, Init::Zero)?;
