@@ -30,7 +30,7 @@ def main(paths):
                 pairs = [(t, b) for t, b in by.items() if "wgpu" in b and "vulkan" in b]
                 if not pairs:
                     continue
-                name = scene.split("/")[-1]
+                name = scene.replace(".gpu/models/", "").replace(".obj", "")
                 print(f"\n### {name}, {raster} path ({report['width']}x{report['height']})\n")
                 print("| technique | wgpu GPU ms | vulkan GPU ms | vulkan/wgpu | wgpu steady ms | vulkan steady ms |")
                 print("|---|---|---|---|---|---|")

@@ -355,6 +355,8 @@ impl Drop for Framebuffer {
 /// An open device.
 pub struct Gpu {
     cache: Mutex<Cache>,
+    /// Recorders' parts left by finished frames, for the next (see `record::Parts`).
+    recorders: Mutex<Vec<crate::record::Parts>>,
     /// What the device is.
     pub info: DeviceInfo,
     pub(crate) queue: vk::Queue,
@@ -365,6 +367,9 @@ pub struct Gpu {
 
 impl Drop for Gpu {
     fn drop(&mut self) {
+        if let Ok(kept) = self.recorders.get_mut() {
+            kept.clear();
+        }
         let Ok(cache) = self.cache.get_mut() else { return };
         // SAFETY: every handle was made from this device; the wait leaves none in use; each is
         // destroyed once, pipelines before the layouts and modules they were made from.
@@ -542,7 +547,15 @@ impl Gpu {
             (device.get_device_queue(family, 0), instance.get_physical_device_memory_properties(physical))
         };
         let raw = Arc::new(RawDevice { device, _instance: raw_instance });
-        Ok(Gpu { cache: Mutex::new(Cache::default()), info, queue, family, memory, raw })
+        Ok(Gpu {
+            cache: Mutex::new(Cache::default()),
+            recorders: Mutex::new(Vec::new()),
+            info,
+            queue,
+            family,
+            memory,
+            raw,
+        })
     }
 
     fn candidate(instance: &ash::Instance, physical: vk::PhysicalDevice) -> Candidate {
@@ -673,6 +686,20 @@ impl Gpu {
     /// Whether the device blends into `format` (one of [`DeviceInfo::blendable`]'s candidates).
     pub fn blendable(&self, format: vk::Format) -> bool {
         self.info.blendable.contains(&format)
+    }
+
+    /// A finished recorder's parts, if one left any.
+    pub(crate) fn take_recorder_parts(&self) -> Option<crate::record::Parts> {
+        self.recorders.lock().ok()?.pop()
+    }
+
+    /// Keeps a finished recorder's (reset) parts for the next frame (a few at most).
+    pub(crate) fn give_recorder_parts(&self, parts: crate::record::Parts) {
+        if let Ok(mut kept) = self.recorders.lock()
+            && kept.len() < 4
+        {
+            kept.push(parts);
+        }
     }
 
     /// True on a CPU device (lavapipe).

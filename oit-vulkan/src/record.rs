@@ -84,16 +84,53 @@ impl Timestamps {
     }
 }
 
-/// The recorder of one frame: a command pool and buffer, a fence, a descriptor pool, a ring of
-/// uniform slots and (with timestamps) a query pool, made at the start and destroyed (newest
-/// first) at the end.
-pub(crate) struct Recorder<'g> {
-    gpu: &'g Gpu,
+/// What a recorder is made of on the device: a command pool and buffer, a fence, a descriptor
+/// pool, the uniform ring, the query pools, and host buffers (staging, readback) free for reuse.
+/// A recorder's drop leaves them, reset, in its [`Gpu`]'s cache for the next frame
+/// (`Gpu::recorder_parts`), so a steady frame creates none; they are destroyed (newest first)
+/// when the cache drops them.
+pub(crate) struct Parts {
+    raw: std::sync::Arc<crate::device::RawDevice>,
     pool: vk::CommandPool,
     cmd: vk::CommandBuffer,
     fence: vk::Fence,
     descriptors: vk::DescriptorPool,
     uniforms: Buffer,
+    /// The timestamp query pool, where the device has timestamps.
+    ts_pool: Option<vk::QueryPool>,
+    /// One occlusion query, for the draws that ask (`Recorder::draw`).
+    occlusion: vk::QueryPool,
+    /// Host-visible buffers free for reuse (staging and readback), newest last.
+    spare: Vec<Rc<Buffer>>,
+}
+
+impl Drop for Parts {
+    fn drop(&mut self) {
+        // SAFETY: all made from this device; nothing is in flight (a recorder waits for its
+        // queue before it gives its parts up, and every flush waits); destroying a null handle
+        // is a no-op.
+        unsafe {
+            let d = &self.raw.device;
+            if let Some(pool) = self.ts_pool {
+                d.destroy_query_pool(pool, None);
+            }
+            d.destroy_query_pool(self.occlusion, None);
+            d.destroy_descriptor_pool(self.descriptors, None);
+            d.destroy_fence(self.fence, None);
+            d.destroy_command_pool(self.pool, None);
+        }
+    }
+}
+
+/// Spare host buffers a recorder's parts keep at most.
+const MAX_SPARE: usize = 32;
+
+/// The recorder of one frame: its [`Parts`] (taken from the device's cache or made), and the
+/// frame's uniform ring contents, descriptor and timestamp bookkeeping.
+pub(crate) struct Recorder<'g> {
+    gpu: &'g Gpu,
+    /// Given back to the device's cache by `drop` (taken out there, never used after).
+    p: std::mem::ManuallyDrop<Parts>,
     /// The ring's contents, written to `uniforms` before each submission.
     uniform_bytes: Vec<u8>,
     slot: u32,
@@ -102,24 +139,25 @@ pub(crate) struct Recorder<'g> {
     keep: Vec<Rc<Buffer>>,
     /// The timestamp queries, where the device has them.
     timestamps: Option<Timestamps>,
-    /// One occlusion query, for the draws that ask (`Recorder::draw`).
-    occlusion: vk::QueryPool,
 }
 
 impl Drop for Recorder<'_> {
     fn drop(&mut self) {
-        // SAFETY: all made from this device; the wait leaves nothing in flight (a flush always
-        // waits, so at most an unsubmitted recording is left, which may be freed as it is).
-        unsafe {
+        // SAFETY: `p` is taken once, here, and the recorder is not used after.
+        let mut parts = unsafe { std::mem::ManuallyDrop::take(&mut self.p) };
+        parts.spare.append(&mut self.keep);
+        // SAFETY: the parts are this device's; after the wait nothing they hold is in flight, so
+        // the pools may be reset (the command buffer back to its initial state, every set freed)
+        // and handed to the next recorder.
+        let reset = unsafe {
             let d = &self.gpu.raw.device;
-            let _ = d.queue_wait_idle(self.gpu.queue);
-            if let Some(ts) = &self.timestamps {
-                d.destroy_query_pool(ts.pool, None);
-            }
-            d.destroy_query_pool(self.occlusion, None);
-            d.destroy_descriptor_pool(self.descriptors, None);
-            d.destroy_fence(self.fence, None);
-            d.destroy_command_pool(self.pool, None);
+            d.queue_wait_idle(self.gpu.queue).is_ok()
+                && d.reset_command_pool(parts.pool, vk::CommandPoolResetFlags::empty()).is_ok()
+                && d.reset_descriptor_pool(parts.descriptors, vk::DescriptorPoolResetFlags::empty()).is_ok()
+                && d.reset_fences(&[parts.fence]).is_ok()
+        };
+        if reset {
+            self.gpu.give_recorder_parts(parts);
         }
     }
 }
@@ -138,20 +176,54 @@ fn vk_err(what: &'static str) -> impl Fn(vk::Result) -> OitError {
 }
 
 impl<'g> Recorder<'g> {
-    /// A recorder, recording.
+    /// A recorder, recording: on the parts of an earlier one where the device kept them.
     pub(crate) fn new(gpu: &'g Gpu) -> Result<Self, OitError> {
+        let parts = match gpu.take_recorder_parts() {
+            Some(parts) => parts,
+            None => Self::make_parts(gpu)?,
+        };
+        let timestamps = parts.ts_pool.map(|pool| {
+            let bits = gpu.info.timestamp_valid_bits;
+            Timestamps {
+                pool,
+                mask: if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 },
+                period: f64::from(gpu.info.limits.timestamp_period),
+                labels: Vec::new(),
+                total_ms: 0.0,
+                pass_ms: Vec::new(),
+            }
+        });
+        let r = Recorder {
+            gpu,
+            p: std::mem::ManuallyDrop::new(parts),
+            uniform_bytes: vec![0; (u64::from(SLOTS) * SLOT_BYTES) as usize],
+            slot: 0,
+            sets: 0,
+            keep: Vec::new(),
+            timestamps,
+        };
+        r.begin()?;
+        Ok(r)
+    }
+
+    /// New parts: every object made, each destroyed by `Parts`' drop (also when a later one
+    /// fails: null handles are skipped).
+    fn make_parts(gpu: &Gpu) -> Result<Parts, OitError> {
         let d = &gpu.raw.device;
         let uniforms =
             gpu.buffer(u64::from(SLOTS) * SLOT_BYTES, vk::BufferUsageFlags::UNIFORM_BUFFER, true)?;
+        let mut parts = Parts {
+            raw: gpu.raw.clone(),
+            pool: vk::CommandPool::null(),
+            cmd: vk::CommandBuffer::null(),
+            fence: vk::Fence::null(),
+            descriptors: vk::DescriptorPool::null(),
+            uniforms,
+            ts_pool: None,
+            occlusion: vk::QueryPool::null(),
+            spare: Vec::new(),
+        };
         let pool_info = vk::CommandPoolCreateInfo::default().queue_family_index(gpu.family);
-        // SAFETY: a valid create info on a live device; the pool is destroyed by `drop`, or
-        // below if what follows fails.
-        let pool =
-            unsafe { d.create_command_pool(&pool_info, None) }.map_err(vk_err("creating a command pool"))?;
-        let alloc = vk::CommandBufferAllocateInfo::default()
-            .command_pool(pool)
-            .level(vk::CommandBufferLevel::PRIMARY)
-            .command_buffer_count(1);
         let sizes = [
             vk::DescriptorPoolSize { ty: vk::DescriptorType::UNIFORM_BUFFER, descriptor_count: MAX_SETS },
             vk::DescriptorPoolSize {
@@ -164,66 +236,50 @@ impl<'g> Recorder<'g> {
             },
         ];
         let dp_info = vk::DescriptorPoolCreateInfo::default().max_sets(MAX_SETS).pool_sizes(&sizes);
-        // SAFETY: as above; on failure the objects made so far are destroyed before returning.
-        let made = unsafe {
-            let cmd = d.allocate_command_buffers(&alloc);
-            let fence = d.create_fence(&vk::FenceCreateInfo::default(), None);
-            let descriptors = d.create_descriptor_pool(&dp_info, None);
-            match (cmd, fence, descriptors) {
-                (Ok(cmd), Ok(fence), Ok(descriptors)) => Ok((cmd[0], fence, descriptors)),
-                (cmd, fence, descriptors) => {
-                    if let Ok(dp) = descriptors {
-                        d.destroy_descriptor_pool(dp, None);
-                    }
-                    if let Ok(f) = fence {
-                        d.destroy_fence(f, None);
-                    }
-                    d.destroy_command_pool(pool, None);
-                    Err(cmd.err().or(fence.err()).unwrap_or(vk::Result::ERROR_OUT_OF_HOST_MEMORY))
-                }
+        let occlusion =
+            vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::OCCLUSION).query_count(1);
+        // SAFETY: valid create infos on a live device; each object is stored in `parts` as soon
+        // as it is made, so `Parts`' drop destroys what was made should a later step fail.
+        unsafe {
+            parts.pool =
+                d.create_command_pool(&pool_info, None).map_err(vk_err("creating a command pool"))?;
+            let alloc = vk::CommandBufferAllocateInfo::default()
+                .command_pool(parts.pool)
+                .level(vk::CommandBufferLevel::PRIMARY)
+                .command_buffer_count(1);
+            parts.cmd = d.allocate_command_buffers(&alloc).map_err(vk_err("allocating a command buffer"))?[0];
+            parts.fence =
+                d.create_fence(&vk::FenceCreateInfo::default(), None).map_err(vk_err("creating a fence"))?;
+            parts.descriptors =
+                d.create_descriptor_pool(&dp_info, None).map_err(vk_err("creating a descriptor pool"))?;
+            parts.occlusion =
+                d.create_query_pool(&occlusion, None).map_err(vk_err("creating an occlusion query pool"))?;
+            if gpu.has_timestamps() {
+                let info = vk::QueryPoolCreateInfo::default()
+                    .query_type(vk::QueryType::TIMESTAMP)
+                    .query_count(2 * SLOTS);
+                parts.ts_pool =
+                    Some(d.create_query_pool(&info, None).map_err(vk_err("creating a query pool"))?);
             }
         }
-        .map_err(vk_err("creating a recorder"))?;
-        let (cmd, fence, descriptors) = made;
-        let mut r = Recorder {
-            gpu,
-            pool,
-            cmd,
-            fence,
-            descriptors,
-            uniforms,
-            uniform_bytes: vec![0; (u64::from(SLOTS) * SLOT_BYTES) as usize],
-            slot: 0,
-            sets: 0,
-            keep: Vec::new(),
-            timestamps: None,
-            // made below; destroying a null handle (should that fail) is a no-op
-            occlusion: vk::QueryPool::null(),
-        };
-        let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::OCCLUSION).query_count(1);
-        // SAFETY: a valid create info on a live device; destroyed by `drop`.
-        r.occlusion = unsafe { d.create_query_pool(&info, None) }
-            .map_err(vk_err("creating an occlusion query pool"))?;
-        if gpu.has_timestamps() {
-            let info = vk::QueryPoolCreateInfo::default()
-                .query_type(vk::QueryType::TIMESTAMP)
-                .query_count(2 * SLOTS);
-            // SAFETY: a valid create info on a live device; the pool is destroyed by `drop` (which
-            // also destroys what was made above, should this fail).
-            let pool =
-                unsafe { d.create_query_pool(&info, None) }.map_err(vk_err("creating a query pool"))?;
-            let bits = gpu.info.timestamp_valid_bits;
-            r.timestamps = Some(Timestamps {
-                pool,
-                mask: if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 },
-                period: f64::from(gpu.info.limits.timestamp_period),
-                labels: Vec::new(),
-                total_ms: 0.0,
-                pass_ms: Vec::new(),
-            });
+        Ok(parts)
+    }
+
+    /// A host-visible buffer of at least `size` bytes and `usage`: a spare one of about that size,
+    /// or a new one.
+    fn host_buffer(&mut self, size: u64, usage: vk::BufferUsageFlags) -> Result<Rc<Buffer>, OitError> {
+        let fits = |b: &Rc<Buffer>| b.usage == usage && b.size >= size && b.size <= size.max(4096) * 2;
+        if let Some(i) = self.p.spare.iter().rposition(fits) {
+            return Ok(self.p.spare.swap_remove(i));
         }
-        r.begin()?;
-        Ok(r)
+        Ok(Rc::new(self.gpu.buffer(size, usage, true)?))
+    }
+
+    /// Gives host buffers back for reuse (the oldest dropped past [`MAX_SPARE`]).
+    fn spare(&mut self, buffers: impl IntoIterator<Item = Rc<Buffer>>) {
+        self.p.spare.extend(buffers);
+        let over = self.p.spare.len().saturating_sub(MAX_SPARE);
+        self.p.spare.drain(..over);
     }
 
     /// Starts recording, and resets the timestamp queries before anything can write them.
@@ -231,11 +287,11 @@ impl<'g> Recorder<'g> {
         let info = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
         let d = &self.gpu.raw.device;
         // SAFETY: the command buffer is in the initial state (new, or its pool was just reset).
-        unsafe { d.begin_command_buffer(self.cmd, &info) }.map_err(vk_err("recording"))?;
+        unsafe { d.begin_command_buffer(self.p.cmd, &info) }.map_err(vk_err("recording"))?;
         if let Some(ts) = &self.timestamps {
             // SAFETY: recording, outside any render pass (none is ever begun); the pool holds
             // 2 × SLOTS queries, none in use by a pending submission (every flush waits).
-            unsafe { d.cmd_reset_query_pool(self.cmd, ts.pool, 0, 2 * SLOTS) };
+            unsafe { d.cmd_reset_query_pool(self.p.cmd, ts.pool, 0, 2 * SLOTS) };
         }
         Ok(())
     }
@@ -256,7 +312,7 @@ impl<'g> Recorder<'g> {
         // on any queue.
         unsafe {
             self.gpu.raw.device.cmd_pipeline_barrier(
-                self.cmd,
+                self.p.cmd,
                 vk::PipelineStageFlags::ALL_COMMANDS,
                 vk::PipelineStageFlags::ALL_COMMANDS | vk::PipelineStageFlags::HOST,
                 vk::DependencyFlags::empty(),
@@ -270,17 +326,17 @@ impl<'g> Recorder<'g> {
     /// Submits what was recorded, waits for it, and starts recording again.
     pub(crate) fn flush(&mut self) -> Result<(), OitError> {
         let d = &self.gpu.raw.device;
-        self.uniforms.write(&self.uniform_bytes[..(u64::from(self.slot) * SLOT_BYTES) as usize])?;
-        let cmds = [self.cmd];
+        self.p.uniforms.write(&self.uniform_bytes[..(u64::from(self.slot) * SLOT_BYTES) as usize])?;
+        let cmds = [self.p.cmd];
         let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
         // SAFETY: the command buffer was recorded on this device and everything it references
         // is alive (the frame's buffers, `keep`, the cached pipelines, the query pool); the fence
         // is unsignalled; after the wait nothing is in flight, so the pools may be reset and the
         // queries read: `ticks` holds 2 × labels u64 results, queries 0.. of those written.
         unsafe {
-            d.end_command_buffer(self.cmd).map_err(vk_err("recording"))?;
-            d.queue_submit(self.gpu.queue, &submit, self.fence).map_err(vk_err("submitting work"))?;
-            d.wait_for_fences(&[self.fence], true, TIMEOUT_NS).map_err(vk_err("waiting for the GPU"))?;
+            d.end_command_buffer(self.p.cmd).map_err(vk_err("recording"))?;
+            d.queue_submit(self.gpu.queue, &submit, self.p.fence).map_err(vk_err("submitting work"))?;
+            d.wait_for_fences(&[self.p.fence], true, TIMEOUT_NS).map_err(vk_err("waiting for the GPU"))?;
             if let Some(ts) = self.timestamps.as_mut().filter(|ts| !ts.labels.is_empty()) {
                 // the submission reset every query and then wrote each of these once; it has
                 // completed (the fence), so WAIT returns at once
@@ -294,15 +350,16 @@ impl<'g> Recorder<'g> {
                 .map_err(vk_err("reading timestamps"))?;
                 ts.add(&ticks);
             }
-            d.reset_fences(&[self.fence]).map_err(vk_err("resetting a fence"))?;
-            d.reset_command_pool(self.pool, vk::CommandPoolResetFlags::empty())
+            d.reset_fences(&[self.p.fence]).map_err(vk_err("resetting a fence"))?;
+            d.reset_command_pool(self.p.pool, vk::CommandPoolResetFlags::empty())
                 .map_err(vk_err("resetting a command pool"))?;
-            d.reset_descriptor_pool(self.descriptors, vk::DescriptorPoolResetFlags::empty())
+            d.reset_descriptor_pool(self.p.descriptors, vk::DescriptorPoolResetFlags::empty())
                 .map_err(vk_err("resetting a descriptor pool"))?;
         }
         self.slot = 0;
         self.sets = 0;
-        self.keep.clear();
+        let kept = std::mem::take(&mut self.keep);
+        self.spare(kept);
         self.begin()
     }
 
@@ -316,8 +373,9 @@ impl<'g> Recorder<'g> {
 
     fn allocate(&mut self, layout: vk::DescriptorSetLayout) -> Result<vk::DescriptorSet, OitError> {
         let layouts = [layout];
-        let info =
-            vk::DescriptorSetAllocateInfo::default().descriptor_pool(self.descriptors).set_layouts(&layouts);
+        let info = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(self.p.descriptors)
+            .set_layouts(&layouts);
         self.sets += 1;
         // SAFETY: the pool has room (`room`) and the layout is alive (cached in the Gpu).
         Ok(unsafe { self.gpu.raw.device.allocate_descriptor_sets(&info) }
@@ -381,7 +439,7 @@ impl<'g> Recorder<'g> {
                     self.uniform_bytes[offset as usize..offset as usize + uniform.len()]
                         .copy_from_slice(uniform);
                     self.slot += 1;
-                    self.write_set(set, Some((0, &self.uniforms, offset)), storage);
+                    self.write_set(set, Some((0, &self.p.uniforms, offset)), storage);
                 }
                 SetData::Raster { storage, uniform } => {
                     self.write_set(set, None, storage);
@@ -446,7 +504,7 @@ impl<'g> Recorder<'g> {
             // in this recording (pairs start over only after a flush).
             unsafe {
                 self.gpu.raw.device.cmd_write_timestamp(
-                    self.cmd,
+                    self.p.cmd,
                     vk::PipelineStageFlags::BOTTOM_OF_PIPE,
                     pool,
                     2 * pair + end,
@@ -471,9 +529,9 @@ impl<'g> Recorder<'g> {
         // SAFETY: recording; the pipeline's layout matches the sets bound (made from its set
         // layouts); the group counts are within maxComputeWorkGroupCount (x ≤ 65535).
         unsafe {
-            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, pipeline.pipeline);
+            d.cmd_bind_pipeline(self.p.cmd, vk::PipelineBindPoint::COMPUTE, pipeline.pipeline);
             d.cmd_bind_descriptor_sets(
-                self.cmd,
+                self.p.cmd,
                 vk::PipelineBindPoint::COMPUTE,
                 pipeline.layout,
                 0,
@@ -481,7 +539,7 @@ impl<'g> Recorder<'g> {
                 &[],
             );
             if groups.0 > 0 && groups.1 > 0 {
-                d.cmd_dispatch(self.cmd, groups.0, groups.1, 1);
+                d.cmd_dispatch(self.p.cmd, groups.0, groups.1, 1);
             }
         }
         self.stamp(timed, 1);
@@ -533,30 +591,30 @@ impl<'g> Recorder<'g> {
         // render pass) before it begins, and ends inside the same subpass.
         unsafe {
             if occlusion {
-                d.cmd_reset_query_pool(self.cmd, self.occlusion, 0, 1);
+                d.cmd_reset_query_pool(self.p.cmd, self.p.occlusion, 0, 1);
             }
-            d.cmd_begin_render_pass(self.cmd, &begin, vk::SubpassContents::INLINE);
-            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.pipeline);
+            d.cmd_begin_render_pass(self.p.cmd, &begin, vk::SubpassContents::INLINE);
+            d.cmd_bind_pipeline(self.p.cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.pipeline);
             d.cmd_bind_descriptor_sets(
-                self.cmd,
+                self.p.cmd,
                 vk::PipelineBindPoint::GRAPHICS,
                 pipeline.layout,
                 0,
                 &sets,
                 &[],
             );
-            d.cmd_set_viewport(self.cmd, 0, &[viewport]);
-            d.cmd_set_scissor(self.cmd, 0, &[area]);
+            d.cmd_set_viewport(self.p.cmd, 0, &[viewport]);
+            d.cmd_set_scissor(self.p.cmd, 0, &[area]);
             if occlusion {
-                d.cmd_begin_query(self.cmd, self.occlusion, 0, vk::QueryControlFlags::empty());
+                d.cmd_begin_query(self.p.cmd, self.p.occlusion, 0, vk::QueryControlFlags::empty());
             }
             if vertices > 0 {
-                d.cmd_draw(self.cmd, vertices, 1, 0, 0);
+                d.cmd_draw(self.p.cmd, vertices, 1, 0, 0);
             }
             if occlusion {
-                d.cmd_end_query(self.cmd, self.occlusion, 0);
+                d.cmd_end_query(self.p.cmd, self.p.occlusion, 0);
             }
-            d.cmd_end_render_pass(self.cmd);
+            d.cmd_end_render_pass(self.p.cmd);
         }
         self.stamp(timed, 1);
         self.barrier();
@@ -584,7 +642,7 @@ impl<'g> Recorder<'g> {
         // command after this reads it before a command that writes it or this transition.
         unsafe {
             self.gpu.raw.device.cmd_pipeline_barrier(
-                self.cmd,
+                self.p.cmd,
                 vk::PipelineStageFlags::ALL_COMMANDS,
                 vk::PipelineStageFlags::ALL_COMMANDS,
                 vk::DependencyFlags::empty(),
@@ -603,7 +661,7 @@ impl<'g> Recorder<'g> {
         // (a draw with `occlusion` came before this call), so its result is available.
         unsafe {
             self.gpu.raw.device.get_query_pool_results(
-                self.occlusion,
+                self.p.occlusion,
                 0,
                 &mut samples,
                 vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
@@ -627,7 +685,7 @@ impl<'g> Recorder<'g> {
         // width × height × 4 bytes.
         unsafe {
             self.gpu.raw.device.cmd_copy_image_to_buffer(
-                self.cmd,
+                self.p.cmd,
                 image.image,
                 vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                 dst.buffer,
@@ -640,7 +698,7 @@ impl<'g> Recorder<'g> {
     /// Records setting every word of `buffer` to `value`; a barrier follows.
     pub(crate) fn fill(&mut self, buffer: &Buffer, value: u32) {
         // SAFETY: recording; the buffer has TRANSFER_DST usage and a size that is a multiple of 4.
-        unsafe { self.gpu.raw.device.cmd_fill_buffer(self.cmd, buffer.buffer, 0, vk::WHOLE_SIZE, value) };
+        unsafe { self.gpu.raw.device.cmd_fill_buffer(self.p.cmd, buffer.buffer, 0, vk::WHOLE_SIZE, value) };
         self.barrier();
     }
 
@@ -651,7 +709,7 @@ impl<'g> Recorder<'g> {
         }
         let region = [vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes }];
         // SAFETY: recording; src has TRANSFER_SRC, dst TRANSFER_DST usage, both hold `bytes`.
-        unsafe { self.gpu.raw.device.cmd_copy_buffer(self.cmd, src.buffer, dst.buffer, &region) };
+        unsafe { self.gpu.raw.device.cmd_copy_buffer(self.p.cmd, src.buffer, dst.buffer, &region) };
         self.barrier();
     }
 
@@ -660,8 +718,7 @@ impl<'g> Recorder<'g> {
         if bytes.is_empty() {
             return Ok(());
         }
-        let staging =
-            Rc::new(self.gpu.buffer(bytes.len() as u64, vk::BufferUsageFlags::TRANSFER_SRC, true)?);
+        let staging = self.host_buffer(bytes.len() as u64, vk::BufferUsageFlags::TRANSFER_SRC)?;
         staging.write(bytes)?;
         self.copy(&staging, dst, bytes.len() as u64);
         self.keep.push(staging);
@@ -678,11 +735,23 @@ impl<'g> Recorder<'g> {
     pub(crate) fn read_u32s(&mut self, buffers: &[&Buffer]) -> Result<Vec<Vec<u32>>, OitError> {
         let mut staging = Vec::with_capacity(buffers.len());
         for b in buffers {
-            let s = self.gpu.buffer(b.size, vk::BufferUsageFlags::TRANSFER_DST, true)?;
+            let s = self.host_buffer(b.size, vk::BufferUsageFlags::TRANSFER_DST)?;
             self.copy(b, &s, b.size);
             staging.push(s);
         }
         self.flush()?;
-        staging.iter().map(Buffer::read_u32).collect()
+        let words = staging
+            .iter()
+            .zip(buffers)
+            .map(|(s, b)| {
+                // a spare staging buffer may be larger than what was copied into it
+                s.read_u32().map(|mut w| {
+                    w.truncate((b.size / 4) as usize);
+                    w
+                })
+            })
+            .collect();
+        self.spare(staging);
+        words
     }
 }
