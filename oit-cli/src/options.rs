@@ -79,11 +79,12 @@ pub struct SceneArgs {
     #[arg(long, value_name = "MODE", default_value = "auto")]
     pub bdp_mode: String,
 
-    /// How bdp, dp and ddp capture on the hardware raster path of GPU backends: atomics
-    /// (fragment-stage storage-buffer atomics, the same capture as the compute path; faster on
-    /// the GPUs measured) or blend (the papers' graphics pipeline: MAX blending into 8 RGBA32F
-    /// targets for bdp's colour mode, depth textures and occlusion queries for dp, MAX blending
-    /// of (-d, d) into an RG32F target for ddp).
+    /// How bdp, dp, ddp, wavg/wsum (and adp on vulkan) capture on the hardware raster path of GPU
+    /// backends: atomics (fragment-stage storage-buffer atomics, the same capture as the compute
+    /// path; faster on the GPUs measured) or blend (the papers' graphics pipeline: MAX blending
+    /// into 8 RGBA32F targets for bdp's colour mode, depth textures and occlusion queries for dp,
+    /// MAX blending of (-d, d) into an RG32F target for ddp, additive float blending for
+    /// wavg/wsum; on vulkan, adp's histogram by logic-op OR into 8 RGBA32UI targets).
     #[arg(long, value_name = "atomics|blend", default_value = "atomics")]
     pub hardware_capture: String,
 

@@ -191,7 +191,9 @@ pub enum HardwareCapture {
     /// The papers' graphics-pipeline mechanisms: MAX blending into 8 `Rgba32Float` targets for
     /// bdp's colour mode (HPG 2009), a depth test against a fresh depth attachment, the previous
     /// layer read from a depth texture and an occlusion query per peel for dp (Everitt 2001), MAX
-    /// blending of (−d, d) into an `Rg32Float` target per pass for ddp (Bavoil & Myers 2008).
+    /// blending of (−d, d) into an `Rg32Float` target per pass for ddp (Bavoil & Myers 2008),
+    /// additive blending into float targets for wavg/wsum; on oit-vulkan also adp's histogram by
+    /// logic-op OR into 8 `R32G32B32A32_UINT` targets (HPG 2009; wgpu has no logic ops).
     Blend,
 }
 

@@ -48,12 +48,15 @@ pub(crate) fn storage_usage() -> vk::BufferUsageFlags {
         | vk::BufferUsageFlags::TRANSFER_DST
 }
 
+/// A framebuffer the pool keeps: its render pass, its images (in attachment order), itself.
+type KeptFramebuffer = (vk::RenderPass, Vec<vk::Image>, Rc<Framebuffer>);
+
 /// Per-pixel buffers and render targets kept between the frames of a prepared scene, by size,
 /// format and usage, and the framebuffers made of those targets.
 #[derive(Default)]
 pub struct BufferPool {
     /// Dropped before the images they are made of (fields drop in order).
-    framebuffers: RefCell<Vec<(vk::RenderPass, Vec<vk::Image>, Rc<Framebuffer>)>>,
+    framebuffers: RefCell<Vec<KeptFramebuffer>>,
     free: RefCell<Vec<Rc<Buffer>>>,
     free_images: RefCell<Vec<Rc<GpuImage>>>,
     allocations: Cell<u64>,

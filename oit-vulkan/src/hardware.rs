@@ -163,13 +163,16 @@ impl HardwareRaster {
     }
 }
 
+/// A count target a prepared scene keeps: for the boxes or the scene, its size, itself.
+type KeptTarget = (bool, (u32, u32), Rc<CountTarget>);
+
 /// The hardware path's part of a prepared scene: the scene's geometry (uploaded when made), the
 /// boxes' (on first use), and count targets by (boxes, size), so a frame of a size seen before
 /// creates nothing.
 pub(crate) struct HardwareScene {
     scene: Rc<HwGeometry>,
     boxes: OnceCell<Rc<HwGeometry>>,
-    targets: RefCell<Vec<(bool, (u32, u32), Rc<CountTarget>)>>,
+    targets: RefCell<Vec<KeptTarget>>,
 }
 
 impl HardwareScene {

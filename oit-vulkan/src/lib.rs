@@ -1,29 +1,42 @@
 //! oit-vulkan: oit's techniques on raw Vulkan through [ash](https://docs.rs/ash).
 //!
-//! **What runs today.** Every technique of the catalogue (`reference`, `dp`, `ddp`, `wavg`,
-//! `wsum`, `bdp`/`bdp:P`, `adp`, `mdts:K`, `mdts64:K`, `fabs:K`, `mlp:M`) on the
-//! **compute-raster path** (`RasterPath::Compute`): oit-wgpu's compute rasterizer and technique
-//! WGSL, compiled to SPIR-V by naga in `build.rs`, with oit-core's setup, so the fragments equal
-//! oit-cpu's and the images equal oit-wgpu's compute path. Captures use storage-*buffer* atomics,
-//! as on wgpu.
+//! **What runs today.** Every technique of the catalogue (`reference`, `plain`, `dp`, `ddp`,
+//! `wavg`, `wsum`, `bdp`/`bdp:P`, `adp`, `mdts:K`, `mdts64:K`, `fabs:K`, `mlp:M`, `dfb`, `ll`) on
+//! both raster paths, on oit-wgpu's WGSL compiled to SPIR-V by naga in `build.rs`:
+//! - the **compute-raster path** (`RasterPath::Compute`, the default here): oit-wgpu's compute
+//!   rasterizer with oit-core's setup (on the host), so the fragments equal oit-cpu's and the
+//!   images oit-wgpu's compute path's;
+//! - the **hardware-raster path** (`RasterPath::Hardware`, where the device has a graphics queue,
+//!   `fragmentStoresAndAtomics` and a blendable `R32_SFLOAT`): a graphics pipeline over the
+//!   scene's vertices pulled from storage (`oit_core::pulled`), oit-wgpu's `hw_vs`/`hw_fs`, a
+//!   render pass whose one attachment counts fragments by additive blending, and a negative
+//!   viewport height for wgpu's conventions, so the fragments are oit-wgpu's hardware path's on
+//!   the same driver (against oit-cpu, only pixels on triangle edges may differ).
+//!
+//! Captures use storage-buffer atomics, as on wgpu. With `--hardware-capture blend` on the
+//! hardware path, the papers' own operations (`technique::blend`): MAX blending into 8 ×
+//! `R32G32B32A32_SFLOAT` for bdp, a depth test into `D32_SFLOAT` with occlusion queries for dp,
+//! MAX blending of (−d, d) into `R32G32_SFLOAT` with occlusion queries for ddp, additive float
+//! blending for wavg/wsum, and, beyond wgpu, adp's histogram by logic-op OR into 8 ×
+//! `R32G32B32A32_UINT`. `plain` always blends on the hardware path (the over operator in one draw).
 //!
 //! **GPU time.** Where the device has timestamps ([`Gpu::has_timestamps`]: not on a CPU device
-//! such as lavapipe unless `OIT_GPU_TIMESTAMPS=1`, as on oit-wgpu) every dispatch is timed by a
-//! pair of timestamp queries, and a frame's `gpu_ms` is their sum, `gpu_pass_ms` the same by
-//! label (oit-wgpu's: "geometry", the kernel's entry point, "init", "resolve"); fills, copies and
-//! uploads (transfer commands here, not kernels) are not timed. Without, `gpu_ms` is `None`.
+//! such as lavapipe unless `OIT_GPU_TIMESTAMPS=1`, as on oit-wgpu) every dispatch and draw is
+//! timed by a pair of timestamp queries, and a frame's `gpu_ms` is their sum, `gpu_pass_ms` the
+//! same by label (oit-wgpu's: "geometry", the kernel's entry point, "init", "resolve"; a blend
+//! capture's draw under its fragment entry point); fills, copies and uploads are not timed.
 //!
-//! **What is refused** (`OitError::Unsupported`, naming what is missing): the hardware-raster path
-//! (graphics pipelines, hence the papers' raw operations: MAX blending into 8 ×
-//! R32G32B32A32_SFLOAT for bdp, logic-op OR into 8 × R32G32B32A32_UINT for adp's histogram,
-//! depth textures and occlusion queries for dp/ddp), storage-*image* atomics for mdts/fabs, the
-//! and the interlock k-buffer.
+//! **What is refused** (`OitError::Unsupported`, naming what is missing): the hardware path on a
+//! device without what it needs; a blend capture into a format the device cannot blend into, or
+//! without `logicOp` / `independentBlend` / 8 colour attachments; storage-*image* atomics for
+//! mdts/fabs and the interlock k-buffer are not written.
 //!
 //! **Starting without Vulkan.** The entry is loaded at run time (`ash::Entry::load`, feature
 //! `loaded`): a binary runs on a machine without `libvulkan.so.1` and [`VulkanBackend::gpu`]
 //! says what to install. The device: the adapter whose name contains the filter (or
 //! `OIT_ADAPTER`), else a discrete GPU, else integrated, else any (lavapipe); it needs Vulkan 1.2,
-//! `shaderInt64` and `shaderBufferInt64Atomics`, and one compute queue.
+//! `shaderInt64` and `shaderBufferInt64Atomics`, and one compute queue (graphics and compute for
+//! the hardware path).
 //!
 //! **Correctness aids.** `OIT_VULKAN_VALIDATION=1` enables `VK_LAYER_KHRONOS_validation` with
 //! synchronization validation and a debug-utils messenger; any error it reports fails the frame.

@@ -1,7 +1,7 @@
-//! `bdp` and `bdp:P` (see oit-wgpu's `technique/bdp.rs`) by storage-buffer atomics on the compute
+//! `bdp` and `bdp:P` (see oit-wgpu's `technique/bdp.rs`) by storage-buffer atomics on either
 //! path, and the per-pixel depth bounds pass bdp and adp share (`bounds.wgsl`). The paper's
-//! capture, MAX blending into 8 × R32G32B32A32_SFLOAT targets, needs the hardware path, which is
-//! not written yet.
+//! capture, MAX blending into 8 × R32G32B32A32_SFLOAT targets, is `technique::blend::bdp`
+//! (`--hardware-capture blend` on the hardware path).
 
 use std::rc::Rc;
 
