@@ -939,7 +939,7 @@ impl Gpu {
 
     /// The hardware raster's pipeline for `module`'s capture (`build.rs`'s `<module>_hw`:
     /// `hw_vs`, then `hw_fs`, which calls the technique's `capture`), whose group 0 has `n`
-    /// technique buffers: one colour attachment, the fragment counter ([`COUNT_FORMAT`]), added
+    /// technique buffers: one colour attachment, the fragment counter (`R32_SFLOAT`), added
     /// to by blending.
     pub fn render_pipeline(&self, module: &'static str, n: usize) -> Result<Pipeline, OitError> {
         self.graphics(&GraphicsDesc {
