@@ -55,6 +55,7 @@ const MODULES: &[(&str, &str, Tail)] = &[
     ("ll_size", "technique/ll_size.wgsl", Raster),
     ("ll", "technique/ll.wgsl", Raster),
     ("count_sum", "vk:shaders/count_sum.wgsl", Kernels),
+    ("scan", "technique/scan.wgsl", Kernels),
     ("nothing", "vk:shaders/no_capture.wgsl", Raster),
     ("blend", "technique/weighted.wgsl+technique/blend.wgsl", Stage),
     ("bdp_blend", "technique/bdp_blend.wgsl", Stage),

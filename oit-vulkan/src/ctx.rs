@@ -313,6 +313,11 @@ impl<'a> VkCtx<'a> {
         self.rec.fill(buffer, value);
     }
 
+    /// Copies the first `bytes` of `src` to the start of `dst` (in the frame's command stream).
+    pub(crate) fn copy(&mut self, src: &Buffer, dst: &Buffer, bytes: u64) {
+        self.rec.copy(src, dst, bytes);
+    }
+
     /// Writes `bytes` to the start of `buffer` (through staging, in the frame's command stream).
     pub(crate) fn upload(&mut self, buffer: &Buffer, bytes: &[u8]) -> Result<(), OitError> {
         self.rec.upload(buffer, bytes)
