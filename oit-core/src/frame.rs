@@ -132,3 +132,58 @@ pub struct Frame {
     /// How it was made.
     pub stats: Stats,
 }
+
+/// Where a GPU frame knows the fragments of its first geometry pass over the scene (a frame's
+/// fragments are that pass's), the same on every GPU backend.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GpuFragments {
+    /// No geometry pass of the scene has run.
+    Unset,
+    /// Left on the device, read with the frame's totals at its end.
+    OnDevice,
+    /// Read back.
+    Known(u64),
+}
+
+/// What the end of a GPU frame read back, made into its fragment and loss counts by one rule for
+/// every GPU backend ([`GpuTotals::counts`]).
+#[derive(Clone, Copy, Debug)]
+pub struct GpuTotals<'a> {
+    /// Where the first pass's fragments are.
+    pub fragments: GpuFragments,
+    /// The first pass's count as read at the end (used for [`GpuFragments::OnDevice`]).
+    pub on_device: u64,
+    /// Fragments the resolve composited.
+    pub captured: u64,
+    /// The totals' counted losses where the capture counts them (`None`: the blend captures,
+    /// whose blend unit returns no previous value to count by).
+    pub counted_lost: Option<u64>,
+    /// The frame counts every fragment it draws into `captured` and loses none (plain's and the
+    /// weighted blends' captures), so with no geometry pass its fragments are `captured`.
+    pub fragments_from_captured: bool,
+    /// The per-pixel loss accounting where read back: 3 words a pixel, fragments lost first
+    /// (`acct` in the GPU prelude).
+    pub acct: Option<&'a [u32]>,
+    /// Pixels of the frame.
+    pub pixels: usize,
+}
+
+impl GpuTotals<'_> {
+    /// (fragments, lost, per-pixel losses). Without counted losses, `lost` is
+    /// `fragments − captured` and there are no per-pixel losses.
+    pub fn counts(&self) -> (u64, u64, Option<Vec<u32>>) {
+        let fragments = match self.fragments {
+            GpuFragments::Known(generated) => generated,
+            GpuFragments::OnDevice => self.on_device,
+            GpuFragments::Unset if self.fragments_from_captured => self.captured,
+            GpuFragments::Unset => 0,
+        };
+        match self.counted_lost {
+            Some(lost) => {
+                let px = self.acct.map(|acct| acct.chunks(3).take(self.pixels).map(|w| w[0]).collect());
+                (fragments, lost, px)
+            }
+            None => (fragments, fragments.saturating_sub(self.captured), None),
+        }
+    }
+}

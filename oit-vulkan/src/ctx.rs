@@ -116,18 +116,10 @@ impl BufferPool {
     }
 }
 
-/// What the frame knows of the fragments it generates: a frame's count is its first geometry
-/// pass's (over the scene), kept on the device and read with the totals at the end, so a pass
-/// needs no wait of its own.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Fragments {
-    /// No geometry pass over the scene yet.
-    Unset,
-    /// Read back (a pass that sizes storage by it).
-    Known(u64),
-    /// In the frame's first-count word, read at the end.
-    OnDevice,
-}
+/// What the frame knows of the fragments it generates (oit-core's rule, as on oit-wgpu): a
+/// frame's count is its first geometry pass's (over the scene), kept on the device in the frame's
+/// first-count word and read with the totals at the end, so a pass needs no wait of its own.
+pub(crate) use oit_core::GpuFragments as Fragments;
 
 /// One geometry pass of a blend capture ([`VkCtx::blend_pass`]).
 pub(crate) struct BlendPass<'b> {
@@ -362,12 +354,30 @@ impl<'a> VkCtx<'a> {
     ) -> Result<(), OitError> {
         let first = self.fragments == Fragments::Unset;
         let generated = self.record_pass(raster, module, buffers, pass_index, param, first)?;
+        self.passes += 1;
         if first {
-            let first_count = self.first_count.clone();
-            self.rec.copy(generated, &first_count, 4);
-            self.fragments = Fragments::OnDevice;
+            self.keep_first_count(generated);
         }
         Ok(())
+    }
+
+    /// Counts the scene's fragments with one count-only draw (a capture that keeps nothing,
+    /// `shaders/no_capture.wgsl`) where no pass has yet, for captures whose passes cannot count
+    /// them (a depth test kills fragments before the counter); not a geometry pass of the
+    /// technique.
+    pub(crate) fn count_fragments(&mut self, raster: &Raster) -> Result<(), OitError> {
+        if self.fragments == Fragments::Unset {
+            let generated = self.record_pass(raster, "nothing", &[], 0, 0, true)?;
+            self.keep_first_count(generated);
+        }
+        Ok(())
+    }
+
+    /// Copies the frame's first pass's fragment count aside, for the end of the frame.
+    fn keep_first_count(&mut self, generated: &Buffer) {
+        let first_count = self.first_count.clone();
+        self.rec.copy(generated, &first_count, 4);
+        self.fragments = Fragments::OnDevice;
     }
 
     /// [`VkCtx::geometry_pass`], waiting for the fragments it generated (storage sized by them).
@@ -380,6 +390,7 @@ impl<'a> VkCtx<'a> {
         param: u32,
     ) -> Result<u64, OitError> {
         let generated = self.record_pass(raster, module, buffers, pass_index, param, true)?;
+        self.passes += 1;
         let generated = u64::from(self.read_u32(generated)?[0]);
         if matches!(self.fragments, Fragments::Unset | Fragments::OnDevice) {
             self.fragments = Fragments::Known(generated);
@@ -387,7 +398,8 @@ impl<'a> VkCtx<'a> {
         Ok(generated)
     }
 
-    /// Records one geometry pass, counting its fragments (on the hardware path: the count
+    /// Records one draw or dispatch of the scene (the caller counts it as a geometry pass or not),
+    /// counting its fragments (on the hardware path: the count
     /// image's copy and sum) only when `count`; returns the word that counts them.
     fn record_pass<'r>(
         &mut self,
@@ -404,7 +416,6 @@ impl<'a> VkCtx<'a> {
             Raster::Compute(r) => self.compute_pass(r, module, buffers)?,
             Raster::Hardware(r) => self.hardware_pass(r, module, buffers, count)?,
         };
-        self.passes += 1;
         Ok(generated)
     }
 
@@ -717,19 +728,17 @@ impl<'a> VkCtx<'a> {
             None => (None, Vec::new()),
         };
         let captured = u64::from(t[0]);
-        let fragments = match self.fragments {
-            Fragments::Known(generated) => generated,
-            Fragments::OnDevice => u64::from(first[0]),
-            Fragments::Unset if self.fragments_from_captured => captured,
-            Fragments::Unset => 0,
-        };
-        let (lost, lost_pixels) = if self.counts_losses {
-            let px = acct.map(|acct| acct.chunks(3).take(self.pixels as usize).map(|w| w[0]).collect());
-            (u64::from(t[3]), px)
-        } else {
-            // NOT COUNTED: the blend captures do not count their losses (see `counts_losses`)
-            (fragments.saturating_sub(captured), None)
-        };
+        // NOT COUNTED where `counts_losses` is off: the blend captures
+        let (fragments, lost, lost_pixels) = oit_core::GpuTotals {
+            fragments: self.fragments,
+            on_device: u64::from(first[0]),
+            captured,
+            counted_lost: self.counts_losses.then(|| u64::from(t[3])),
+            fragments_from_captured: self.fragments_from_captured,
+            acct: acct.as_deref(),
+            pixels: self.pixels as usize,
+        }
+        .counts();
         let frame = Frame {
             image,
             layers: None,

@@ -49,16 +49,9 @@ impl Drop for Timestamps<'_> {
     }
 }
 
-/// Where the fragments of the frame's first scene pass are known (`GpuCtx::fragments`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Fragments {
-    /// No geometry pass of the scene has run.
-    Unset,
-    /// Copied on the device into the frame's totals, read with them at the end of the frame.
-    OnDevice,
-    /// Read back.
-    Known(u64),
-}
+/// Where the fragments of the frame's first scene pass are known (`GpuCtx::fragments`): oit-core's
+/// rule, shared with oit-vulkan.
+pub use oit_core::GpuFragments as Fragments;
 
 /// The command encoder a frame records into: its own (submitted where the frame must read
 /// something back, and at its end), or the caller's ([`GpuCtx::recording`]: the embedded pass's
@@ -1075,20 +1068,17 @@ impl<'a> GpuCtx<'a> {
     /// The frame of `image`, the totals `t` and the per-pixel loss accounting (read back where
     /// the technique counts its losses and the caller wants them).
     fn frame_of(self, image: Image, t: &[u32], acct: Option<Vec<u32>>) -> Result<Frame, OitError> {
-        let captured = u64::from(t[0]);
-        let fragments = match self.fragments {
-            Fragments::Known(generated) => generated,
-            Fragments::OnDevice => u64::from(t[FRAGMENTS_WORD as usize]),
-            Fragments::Unset if self.fragments_from_captured => captured,
-            Fragments::Unset => 0,
-        };
-        let (lost, lost_pixels) = if self.counts_losses {
-            let px = acct.map(|acct| acct.chunks(3).take(self.pixels as usize).map(|w| w[0]).collect());
-            (u64::from(t[3]), px)
-        } else {
-            // NOT COUNTED (issue 16): the blend captures do not count their losses yet
-            (fragments.saturating_sub(captured), None)
-        };
+        // NOT COUNTED (issue 16) where `counts_losses` is off: the blend captures
+        let (fragments, lost, lost_pixels) = oit_core::GpuTotals {
+            fragments: self.fragments,
+            on_device: u64::from(t[FRAGMENTS_WORD as usize]),
+            captured: u64::from(t[0]),
+            counted_lost: self.counts_losses.then(|| u64::from(t[3])),
+            fragments_from_captured: self.fragments_from_captured,
+            acct: acct.as_deref(),
+            pixels: self.pixels as usize,
+        }
+        .counts();
         let stats = Stats {
             fragments,
             lost,

@@ -65,16 +65,6 @@ fn clear_f(v: [f32; 4]) -> vk::ClearValue {
     vk::ClearValue { color: vk::ClearColorValue { float32: v } }
 }
 
-/// Counts the scene's fragments with one count-only draw (the hardware raster's additive counter,
-/// a capture that keeps nothing), for passes that cannot count themselves; not a geometry pass.
-fn count_fragments(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
-    if ctx.fragments == crate::ctx::Fragments::Unset {
-        ctx.geometry_pass(&drivers.scene, "nothing", &[], 0, 0)?;
-        ctx.passes -= 1;
-    }
-    Ok(())
-}
-
 /// `plain` on the blender (`blend.wgsl`'s `plain_blend_fs`): the over operator, primitive order.
 pub(crate) fn plain(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     check_blendable(ctx, RGBA32F, "plain's blending")?;
@@ -154,7 +144,7 @@ pub(crate) fn bdp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
         return Err(unsupported(format!("8 colour targets for bdp: maxColorAttachments is {limit}")));
     }
     let bounds = super::bdp::depth_bounds(ctx, drivers)?;
-    count_fragments(ctx, drivers)?;
+    ctx.count_fragments(&drivers.scene)?;
     let targets: Vec<Rc<GpuImage>> =
         (0..8).map(|_| ctx.target(RGBA32F, 16, false)).collect::<Result<_, _>>()?;
     let views: Vec<&GpuImage> = targets.iter().map(|t| &**t).collect();
@@ -184,7 +174,7 @@ pub(crate) fn bdp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
 pub(crate) fn dp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     ctx.counts_losses = false;
     let raster = hardware(drivers)?;
-    count_fragments(ctx, drivers)?;
+    ctx.count_fragments(&drivers.scene)?;
     let depths = [ctx.target(DEPTH, 4, true)?, ctx.target(DEPTH, 4, true)?];
     let layer = ctx.target(RG32U, 8, false)?;
     // the first peel's "previous" depth is never read, but is bound: readable, if undefined
@@ -225,7 +215,7 @@ pub(crate) fn ddp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
     super::ddp::check_effect(ctx)?;
     check_blendable(ctx, RG32F, "ddp's MAX blending")?;
     let raster = hardware(drivers)?;
-    count_fragments(ctx, drivers)?;
+    ctx.count_fragments(&drivers.scene)?;
     let peel = super::ddp::Peel::new(ctx)?;
     let buffers = peel.buffers();
     let ranges = [ctx.target(RG32F, 8, false)?, ctx.target(RG32F, 8, false)?];
