@@ -248,33 +248,34 @@ impl Snap {
         Some(Projected { x: sx as i32 - self.origin.0, y: sy as i32 - self.origin.1, z: nz, inv_w })
     }
 
-    /// Clips one triangle and appends the pieces that touch the viewport. `pre` holds its
-    /// vertices' [`outcode`]s and [`Snap::project`]ions, made once per vertex:
-    /// a triangle inside every plane is snapped from those (the projection is a function of the
+    /// Clips one triangle and appends the pieces that touch the viewport. Its vertices come with
+    /// their [`outcode`]s and [`Snap::project`]ions, made once per vertex ([`SetupVertex`]): a
+    /// triangle inside every plane is snapped from those (the projection is a function of the
     /// clip-space position alone, so this is what projecting it here would give, bit for bit).
+    #[inline]
     fn triangle(
         &self,
         out: &mut Vec<Triangle>,
-        v: [ClipVertex; 3],
-        pre: [(u8, Option<Projected>); 3],
+        v: [&SetupVertex; 3],
         base: Vec4,
         has_color: bool,
         prim: u32,
     ) {
-        let (codes, projected) = (pre.map(|p| p.0), pre.map(|p| p.1));
-        let (any, all) = (codes[0] | codes[1] | codes[2], codes[0] & codes[1] & codes[2]);
+        let any = v[0].code | v[1].code | v[2].code;
+        let all = v[0].code & v[1].code & v[2].code;
         // a vertex not finite, or all three outside one plane
         if any & NOT_FINITE != 0 || all != 0 {
             return;
         }
         if any == 0 {
-            let (Some(p0), Some(p1), Some(p2)) = (projected[0], projected[1], projected[2]) else {
+            if !(v[0].placed && v[1].placed && v[2].placed) {
                 return;
-            };
-            self.snapped(out, v, [p0, p1, p2], base, has_color, prim);
+            }
+            let p = v.map(|v| v.projected);
+            self.snapped(out, v.map(|v| v.normal), v.map(|v| v.color), p, base, has_color, prim);
             return;
         }
-        let poly = clip(v, u32::from(any));
+        let poly = clip(v.map(SetupVertex::clip_vertex), u32::from(any));
         for i in 1..poly.n.saturating_sub(1) {
             self.piece(out, [poly.v[0], poly.v[i], poly.v[i + 1]], base, has_color, prim);
         }
@@ -287,14 +288,21 @@ impl Snap {
         else {
             return;
         };
-        self.snapped(out, v, [p0, p1, p2], base, has_color, prim);
+        self.snapped(out, v.map(|v| v.normal), v.map(|v| v.color), [p0, p1, p2], base, has_color, prim);
     }
 
-    /// [`Snap::piece`] once its vertices are projected (`p`, in the order of `v`).
+    /// [`Snap::piece`] once its vertices are projected (`p`, in the order of the normals and
+    /// colours).
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "the triangle's parts, passed apart so the fast path builds no ClipVertex"
+    )]
+    #[inline]
     fn snapped(
         &self,
         out: &mut Vec<Triangle>,
-        mut v: [ClipVertex; 3],
+        mut normal: [Vec3; 3],
+        mut color: [Vec3; 3],
         mut p: [Projected; 3],
         base: Vec4,
         has_color: bool,
@@ -310,7 +318,8 @@ impl Snap {
         // inside, which is what the fill rule below assumes.
         if area < 0 {
             p.swap(1, 2);
-            v.swap(1, 2);
+            normal.swap(1, 2);
+            color.swap(1, 2);
         }
         let area = area.abs();
         let pixel_range = |lo: i32, hi: i32, size: u32| -> Option<(u32, u32)> {
@@ -341,8 +350,8 @@ impl Snap {
             y: ys,
             z: p.map(|p| p.z),
             inv_w: p.map(|p| p.inv_w),
-            normal: v.map(|v| v.normal),
-            color: v.map(|v| v.color),
+            normal,
+            color,
             inv_area: 1.0 / area as f32,
             base,
             has_color,
@@ -351,43 +360,89 @@ impl Snap {
         });
     }
 
-    /// Sets up the triangles of one instance, in order, in parallel.
-    fn instance(&self, clip_pos: &[Vec4], mesh: MeshView<'_>, base: Vec4, prim_base: u32) -> Vec<Triangle> {
-        // Once per vertex rather than once per triangle that uses it (about six on a closed
-        // mesh): which planes it lies outside, and where it lands on screen.
-        let codes: Vec<u8> = map_all(clip_pos, |p| outcode(*p));
-        let projected: Vec<Option<Projected>> = map_all(clip_pos, |p| self.project(*p));
-        let chunks: Vec<Vec<Triangle>> = map_chunks(mesh.indices, SETUP_CHUNK, |c, chunk| {
-            let mut out = Vec::with_capacity(chunk.len());
+    /// The per-vertex half of setup for one instance: clip-space position, world normal and
+    /// vertex colour (zero where the mesh has none), outcode and projection, once per vertex
+    /// rather than once per triangle that uses it (about six on a closed mesh).
+    fn vertices(&self, out: &mut Vec<SetupVertex>, mvp: &Mat4, normal_matrix: &Mat3, mesh: &crate::Mesh) {
+        let colors = mesh.colors.as_deref();
+        out.clear();
+        extend_indexed(out, &mesh.positions, |i, p| {
+            self.vertex(
+                transform_point(mvp, *p),
+                mesh.normals.get(i).map_or(Vec3::ZERO, |n| transform_normal(normal_matrix, *n)),
+                colors.and_then(|c| c.get(i).copied()).unwrap_or(Vec3::ZERO),
+            )
+        });
+    }
+
+    /// One vertex's [`SetupVertex`]: its outcode and projection beside its attributes.
+    #[inline]
+    fn vertex(&self, clip: Vec4, normal: Vec3, color: Vec3) -> SetupVertex {
+        let projected = self.project(clip);
+        SetupVertex {
+            clip,
+            normal,
+            color,
+            projected: projected.unwrap_or(Projected { x: 0, y: 0, z: 0.0, inv_w: 0.0 }),
+            code: outcode(clip),
+            placed: projected.is_some(),
+        }
+    }
+
+    /// Sets up the triangles of one instance, in order, in parallel, from its vertices
+    /// ([`Snap::vertices`]), and appends them to `out`; `chunks` holds each task's triangles on
+    /// the way (kept between frames, as `out` is, so a warm setup allocates nothing).
+    #[allow(clippy::too_many_arguments, reason = "an instance's parts, and the two buffers it fills")]
+    fn instance(
+        &self,
+        out: &mut Vec<Triangle>,
+        chunks: &mut Vec<Vec<Triangle>>,
+        vertices: &[SetupVertex],
+        indices: &[[u32; 3]],
+        has_color: bool,
+        base: Vec4,
+        prim_base: u32,
+    ) {
+        let n = indices.len().div_ceil(SETUP_CHUNK);
+        if chunks.len() < n {
+            chunks.resize_with(n, Vec::new);
+        }
+        let chunks = &mut chunks[..n];
+        for_each_chunk(chunks, indices, SETUP_CHUNK, |c, out, chunk| {
+            out.clear();
+            let first = prim_base.saturating_add(u32::try_from(c * SETUP_CHUNK).unwrap_or(u32::MAX));
             for (j, tri) in chunk.iter().enumerate() {
-                let t = c * SETUP_CHUNK + j;
-                let vertex = |i: u32| -> Option<ClipVertex> {
-                    let i = i as usize;
-                    Some(ClipVertex {
-                        pos: *clip_pos.get(i)?,
-                        normal: mesh.normals.get(i).copied().unwrap_or(Vec3::ZERO),
-                        color: mesh.colors.and_then(|c| c.get(i).copied()).unwrap_or(Vec3::ZERO),
-                    })
-                };
-                let (Some(a), Some(b), Some(c)) = (vertex(tri[0]), vertex(tri[1]), vertex(tri[2])) else {
+                let (Some(a), Some(b), Some(c)) = (
+                    vertices.get(tri[0] as usize),
+                    vertices.get(tri[1] as usize),
+                    vertices.get(tri[2] as usize),
+                ) else {
                     continue;
                 };
-                let prim = prim_base.saturating_add(u32::try_from(t).unwrap_or(u32::MAX));
-                let pre = tri.map(|i| (codes[i as usize], projected[i as usize]));
-                self.triangle(&mut out, [a, b, c], pre, base, mesh.colors.is_some(), prim);
+                let prim = first.saturating_add(j as u32);
+                self.triangle(out, [a, b, c], base, has_color, prim);
             }
-            out
         });
-        chunks.concat()
+        append_chunks(out, chunks);
     }
 }
 
-/// The parts of a mesh setup reads, with normals already in world space.
+/// A vertex after the per-vertex half of setup ([`Snap::vertices`]).
 #[derive(Clone, Copy)]
-struct MeshView<'a> {
-    normals: &'a [Vec3],
-    colors: Option<&'a [Vec3]>,
-    indices: &'a [[u32; 3]],
+struct SetupVertex {
+    clip: Vec4,
+    normal: Vec3,
+    color: Vec3,
+    /// [`Snap::project`]'s result, meaningful when `placed`.
+    projected: Projected,
+    code: u8,
+    placed: bool,
+}
+
+impl SetupVertex {
+    fn clip_vertex(&self) -> ClipVertex {
+        ClipVertex { pos: self.clip, normal: self.normal, color: self.color }
+    }
 }
 
 /// The normal matrix of `transform`: its inverse transpose (the matrix itself when singular), up
@@ -431,25 +486,64 @@ pub fn box_vertices(mesh_bounds: &Aabb, transform: &Mat4) -> ([Vec3; 8], [Vec3; 
     (corners, corners.map(|c| (c - bounds.center()).normalize_or_zero()))
 }
 
-/// `f` over the chunks of `items` (chunk index, chunk), results in chunk order: in parallel with
-/// the `rayon` feature.
-fn map_chunks<T: Sync, R: Send>(
+/// `f(chunk index, out, chunk)` over the chunks of `items` of `size`, each with its own `out`
+/// (`outs` has one per chunk): in parallel with the `rayon` feature.
+fn for_each_chunk<T: Sync, R: Send>(
+    outs: &mut [R],
     items: &[T],
     size: usize,
-    f: impl Fn(usize, &[T]) -> R + Sync + Send,
-) -> Vec<R> {
+    f: impl Fn(usize, &mut R, &[T]) + Sync + Send,
+) {
     #[cfg(feature = "rayon")]
-    return items.par_chunks(size).enumerate().map(|(c, chunk)| f(c, chunk)).collect();
+    outs.par_iter_mut()
+        .zip(items.par_chunks(size))
+        .enumerate()
+        .for_each(|(c, (out, chunk))| f(c, out, chunk));
     #[cfg(not(feature = "rayon"))]
-    return items.chunks(size).enumerate().map(|(c, chunk)| f(c, chunk)).collect();
+    outs.iter_mut().zip(items.chunks(size)).enumerate().for_each(|(c, (out, chunk))| f(c, out, chunk));
 }
 
-/// `f` over `items`, in order: in parallel with the `rayon` feature.
-fn map_all<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync + Send) -> Vec<R> {
+/// Appends the chunks' triangles to `out` in chunk order: in parallel with the `rayon` feature,
+/// each output triangle copied from the chunk that holds it.
+fn append_chunks(out: &mut Vec<Triangle>, chunks: &[Vec<Triangle>]) {
     #[cfg(feature = "rayon")]
-    return items.par_iter().map(f).collect();
+    {
+        let mut offsets = Vec::with_capacity(chunks.len() + 1);
+        let mut total = 0;
+        for c in chunks {
+            offsets.push(total);
+            total += c.len();
+        }
+        offsets.push(total);
+        out.par_extend((0..total).into_par_iter().with_min_len(4096).map(|i| {
+            // the last chunk starting at or before i (empty chunks start where the next does)
+            let c = offsets.partition_point(|&o| o <= i) - 1;
+            chunks[c][i - offsets[c]]
+        }));
+    }
     #[cfg(not(feature = "rayon"))]
-    return items.iter().map(f).collect();
+    for c in chunks {
+        out.extend_from_slice(c);
+    }
+}
+
+/// `out` extended by `f(index, item)` over `items`, in order: in parallel with the `rayon`
+/// feature.
+fn extend_indexed<T: Sync, R: Send>(out: &mut Vec<R>, items: &[T], f: impl Fn(usize, &T) -> R + Sync + Send) {
+    #[cfg(feature = "rayon")]
+    out.par_extend(items.par_iter().enumerate().map(|(i, x)| f(i, x)));
+    #[cfg(not(feature = "rayon"))]
+    out.extend(items.iter().enumerate().map(|(i, x)| f(i, x)));
+}
+
+/// What setup keeps from one frame to the next: its per-vertex records and each task's triangle
+/// list, so that a persistent renderer's setup ([`TriangleSetup::rebuild`]) allocates nothing
+/// once warm (fresh memory is page faults, and the bunny's 11 MB of triangles made setup's
+/// largest cost on a small host).
+#[derive(Default)]
+pub struct SetupScratch {
+    vertices: Vec<SetupVertex>,
+    chunks: Vec<Vec<Triangle>>,
 }
 
 impl TriangleSetup {
@@ -489,6 +583,23 @@ impl TriangleSetup {
     /// data are skipped (Scene::validate rejects them earlier).
     pub fn new(scene: &Scene, camera: &Camera, settings: &Settings) -> TriangleSetup {
         let mut r = TriangleSetup::empty(camera, settings);
+        r.rebuild(scene, camera, settings, &mut SetupScratch::default());
+        r
+    }
+
+    /// [`TriangleSetup::new`] into this setup's storage, with `scratch` kept from an earlier
+    /// frame: the same triangles, bit for bit, and no allocation once the storage is as large
+    /// as the scene needs.
+    pub fn rebuild(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        settings: &Settings,
+        scratch: &mut SetupScratch,
+    ) {
+        let mut triangles = std::mem::take(&mut self.triangles);
+        triangles.clear();
+        *self = TriangleSetup { triangles, ..TriangleSetup::empty(camera, settings) };
         let snap = TriangleSetup::snap(settings);
         let view_proj = camera.view_proj();
         let mut prim_base = 0u32;
@@ -502,14 +613,18 @@ impl TriangleSetup {
             let base_id = prim_base;
             prim_base = prim_base.saturating_add(u32::try_from(mesh.indices.len()).unwrap_or(u32::MAX));
             let mvp = view_proj * inst.transform;
-            let clip_pos: Vec<Vec4> = map_all(&mesh.positions, |p| transform_point(&mvp, *p));
-            let nm = normal_matrix(&inst.transform);
-            let normals: Vec<Vec3> = map_all(&mesh.normals, |n| transform_normal(&nm, *n));
-            let view = MeshView { normals: &normals, colors: mesh.colors.as_deref(), indices: &mesh.indices };
+            snap.vertices(&mut scratch.vertices, &mvp, &normal_matrix(&inst.transform), mesh);
             let base = settings.material_color(object.color);
-            r.triangles.extend(snap.instance(&clip_pos, view, base, base_id));
+            snap.instance(
+                &mut self.triangles,
+                &mut scratch.chunks,
+                &scratch.vertices,
+                &mesh.indices,
+                mesh.colors.is_some(),
+                base,
+                base_id,
+            );
         }
-        r
     }
 
     /// The 12 triangles of each instance's world bounding box (`Aabb::TRIANGLES` over
@@ -520,6 +635,7 @@ impl TriangleSetup {
         let snap = TriangleSetup::snap(settings);
         let view_proj = camera.view_proj();
         let mesh_bounds = scene.mesh_bounds();
+        let mut chunks = Vec::new();
         for (i, inst) in scene.instances.iter().enumerate() {
             let Some(object) = scene.objects.get(inst.object) else {
                 continue;
@@ -528,11 +644,12 @@ impl TriangleSetup {
                 continue;
             };
             let (corners, normals) = box_vertices(bounds, &inst.transform);
-            let clip_pos = corners.map(|c| transform_point(&view_proj, c));
-            let view = MeshView { normals: &normals, colors: None, indices: &Aabb::TRIANGLES };
+            let vertices: Vec<SetupVertex> = (0..8)
+                .map(|k| snap.vertex(transform_point(&view_proj, corners[k]), normals[k], Vec3::ZERO))
+                .collect();
             let base_id = u32::try_from(i).unwrap_or(u32::MAX).saturating_mul(12);
             let base = settings.material_color(object.color);
-            r.triangles.extend(snap.instance(&clip_pos, view, base, base_id));
+            snap.instance(&mut r.triangles, &mut chunks, &vertices, &Aabb::TRIANGLES, false, base, base_id);
         }
         r
     }

@@ -89,6 +89,9 @@ pub struct CpuPrepared<'s> {
     scene: &'s Scene,
     threads: Option<rayon::ThreadPool>,
     pool: Pool,
+    /// The last frame's rasterizer, set up again for the next ([`Rasterizer::rebuild`]) so
+    /// steady frames reuse its storage.
+    raster: std::sync::Mutex<Option<Rasterizer>>,
 }
 
 impl CpuPrepared<'_> {
@@ -107,12 +110,21 @@ impl CpuPrepared<'_> {
             (&budget.0, budget.1),
         )?;
         let start = Instant::now();
-        let mut raster = Rasterizer::new(self.scene, camera, settings);
-        if let Some(mode) = self.backend.mode {
+        // the lock is never contended (frames run one at a time); a poisoned one (a panic in an
+        // earlier frame) only loses the storage
+        let kept = self.raster.lock().ok().and_then(|mut r| r.take());
+        let mut raster = match kept {
+            Some(mut r) => {
+                r.rebuild(self.scene, camera, settings);
+                r
+            }
+            None => Rasterizer::new(self.scene, camera, settings),
+        };
+        if let Some(mode) = self.backend.mode.filter(|&m| m != raster.mode()) {
             raster = raster.with_mode(mode);
         }
         let mut ctx = Ctx::new(self.scene, camera, settings, &raster, &self.pool, plan);
-        let mut frame = match settings.technique {
+        let frame = match settings.technique {
             Technique::Reference => technique::reference::render(&mut ctx),
             Technique::Plain => technique::plain::render(&mut ctx),
             Technique::Dp => technique::dp::render(&mut ctx),
@@ -127,7 +139,12 @@ impl CpuPrepared<'_> {
             Technique::Mlp { m } => technique::mlp::render(&mut ctx, m),
             Technique::Dfb => technique::dfb::render(&mut ctx),
             Technique::Ll => technique::ll::render(&mut ctx),
-        }?;
+        };
+        drop(ctx);
+        if let Ok(mut kept) = self.raster.lock() {
+            *kept = Some(raster);
+        }
+        let mut frame = frame?;
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(frame)
     }
@@ -177,6 +194,7 @@ impl Backend for CpuBackend {
             scene,
             threads: self.thread_pool()?,
             pool: Pool::default(),
+            raster: std::sync::Mutex::new(None),
         }))
     }
 

@@ -9,6 +9,29 @@ use oit_core::{AtomicFragmentList, BucketArray, DepthHistogram};
 
 use crate::pool::Pooled;
 
+/// `word.swap(empty, Relaxed)` for the sweep between passes, where one thread alone touches a
+/// pixel's words and no pass runs: a plain load, and a store only where the word is not empty
+/// already. An atomic swap is a locked read-modify-write, and a sweep does one or more per pixel,
+/// most of them on pixels with nothing to take.
+#[inline]
+pub(crate) fn take_u32(word: &AtomicU32, empty: u32) -> u32 {
+    let v = word.load(Relaxed);
+    if v != empty {
+        word.store(empty, Relaxed);
+    }
+    v
+}
+
+/// [`take_u32`] for 64-bit words.
+#[inline]
+pub(crate) fn take_u64(word: &AtomicU64, empty: u64) -> u64 {
+    let v = word.load(Relaxed);
+    if v != empty {
+        word.store(empty, Relaxed);
+    }
+    v
+}
+
 /// K buckets of `W` per pixel, row after row.
 pub(crate) struct Buckets<'p, A> {
     words: Pooled<'p, A>,
@@ -23,7 +46,7 @@ impl<'p, A> Buckets<'p, A> {
 }
 
 macro_rules! buckets {
-    ($atomic:ty, $word:ty) => {
+    ($atomic:ty, $word:ty, $take:ident) => {
         impl BucketArray for Buckets<'_, $atomic> {
             type Word = $word;
             fn buckets(&self) -> usize {
@@ -35,7 +58,8 @@ macro_rules! buckets {
             }
             #[inline]
             fn take(&self, pixel: usize, k: usize) -> $word {
-                self.words[pixel * self.k + k].swap(0, Relaxed)
+                // between passes (the trait's contract): no writer races the sweep
+                $take(&self.words[pixel * self.k + k], 0)
             }
             fn read(&self, pixel: usize, out: &mut [$word]) {
                 for (o, w) in out.iter_mut().zip(&self.words[pixel * self.k..(pixel + 1) * self.k]) {
@@ -45,8 +69,8 @@ macro_rules! buckets {
         }
     };
 }
-buckets!(AtomicU32, u32);
-buckets!(AtomicU64, u64);
+buckets!(AtomicU32, u32, take_u32);
+buckets!(AtomicU64, u64, take_u64);
 
 /// 1024 bits per pixel.
 pub(crate) struct Histogram<'p> {
@@ -97,7 +121,7 @@ impl MinList<'_> {
     pub fn take_sorted(&self, pixel: usize, out: &mut Vec<u64>) {
         out.clear();
         for slot in &self.slots[pixel * self.k..(pixel + 1) * self.k] {
-            let key = slot.swap(Self::EMPTY, Relaxed);
+            let key = take_u64(slot, Self::EMPTY);
             if key == Self::EMPTY {
                 break;
             }

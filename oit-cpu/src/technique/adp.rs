@@ -75,7 +75,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         states.par_iter_mut().enumerate().for_each(|(px, s)| {
             for k in 0..buckets.buckets() {
                 let key = buckets.take(px, k);
-                let near = nearest[px * BUCKETS + k].swap(u64::MAX, Relaxed);
+                let near = crate::storage::take_u64(&nearest[px * BUCKETS + k], u64::MAX);
                 if key != 0 {
                     let far = key & !(1 << 63);
                     if near != far {

@@ -129,7 +129,7 @@ fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
             (0..ctx.pixels).into_par_iter().for_each(|px| {
                 let taken =
                     previous.map_or(0, |prev| kept(prev, px)) + if last { kept(&array, px) } else { 0 };
-                ctx_ref.settle_ties(px, seen[px].swap(0, Relaxed), taken);
+                ctx_ref.settle_ties(px, crate::storage::take_u32(&seen[px], 0), taken);
             });
         }
         arrays.push(array);

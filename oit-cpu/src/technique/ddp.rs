@@ -20,6 +20,7 @@ use oit_core::{Frame, OitError};
 use rayon::prelude::*;
 
 use super::Ctx;
+use crate::storage::{take_u32, take_u64};
 
 pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     const EMPTY_MIN: u64 = u64::MAX;
@@ -75,7 +76,12 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
             .zip(peeled_at.par_iter_mut())
             .enumerate()
             .map(|(px, (((s, range), (n, f)), at))| {
-                let (n, f) = (n.swap(EMPTY_MIN, Relaxed), f.swap(0, Relaxed));
+                if *range == (0, 0) && *at == 0 {
+                    // finished (or never reached): no fragment lies in an empty range, none was
+                    // peeled at its depths, so the pass touched none of this pixel's words
+                    return 0;
+                }
+                let (n, f) = (take_u64(n, EMPTY_MIN), take_u64(f, 0));
                 let count = if n == EMPTY_MIN {
                     0
                 } else if f != n {
@@ -85,7 +91,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
                 };
                 // ties at the previous pass's depths, or (last pass) what it left behind
                 let taken = if last { count + *at } else { *at };
-                ctx_ref.settle_ties(px, seen[px].swap(0, Relaxed), taken);
+                ctx_ref.settle_ties(px, take_u32(&seen[px], 0), taken);
                 *at = count;
                 if n == EMPTY_MIN {
                     *range = (0, 0);

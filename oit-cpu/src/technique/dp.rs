@@ -71,10 +71,14 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
             .zip(nearest.par_iter())
             .enumerate()
             .map(|(px, ((s, prev), slot))| {
-                if (0..i64::MAX).contains(prev) {
-                    ctx_ref.settle_ties(px, at_prev[px].swap(0, Relaxed), 1);
+                if *prev == i64::MAX {
+                    // done: no depth is above it or equal to it, so the pass touched nothing here
+                    return 0;
                 }
-                let key = slot.swap(EMPTY, Relaxed);
+                if (0..i64::MAX).contains(prev) {
+                    ctx_ref.settle_ties(px, crate::storage::take_u32(&at_prev[px], 0), 1);
+                }
+                let key = crate::storage::take_u64(slot, EMPTY);
                 if key == EMPTY {
                     // nothing behind: done (no depth matches i64::MAX, so no tie is counted twice)
                     *prev = i64::MAX;

@@ -64,7 +64,11 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
             .zip(captured_at.par_iter_mut())
             .enumerate()
             .for_each_init(Vec::new, |keys, (px, ((s, deep), at))| {
-                ctx_ref.settle_ties(px, at_prev[px].swap(0, Relaxed), *at);
+                if *deep == i64::MAX {
+                    // done: no depth is above it or equal to it, so the pass touched nothing here
+                    return;
+                }
+                ctx_ref.settle_ties(px, crate::storage::take_u32(&at_prev[px], 0), *at);
                 list.take_sorted(px, keys);
                 if keys.is_empty() {
                     // nothing left behind the deepest: done (no depth matches i64::MAX)

@@ -94,7 +94,10 @@ impl<'a> Ctx<'a> {
     /// uncounted, so the frame's `captured + lost == fragments` check catches it.
     #[inline]
     pub fn settle_ties(&self, pixel: usize, seen: u32, peeled: u32) {
-        self.lost[pixel].fetch_add(seen.saturating_sub(peeled), Relaxed);
+        let lost = seen.saturating_sub(peeled);
+        if lost > 0 {
+            self.lost[pixel].fetch_add(lost, Relaxed);
+        }
     }
 
     /// [`Ctx::pass`] for shaders that count losses: `shader` gets the per-pixel lost counters.
