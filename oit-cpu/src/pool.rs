@@ -35,6 +35,9 @@ pub(crate) struct Pool {
     pub u32s: Shelf<AtomicU32>,
     pub u64s: Shelf<AtomicU64>,
     pub states: Shelf<PixelState>,
+    /// Resolve states already back to their default (the resolve resets each as it finishes
+    /// it, while it is in cache: [`Pooled::mark_clean`]), lent without another sweep.
+    clean_states: Shelf<PixelState>,
     allocations: AtomicU64,
 }
 
@@ -138,8 +141,27 @@ impl Pool {
         self.lend(&self.u64s, len, || AtomicU64::new(0), |_| {})
     }
 
-    /// `len` fresh resolve states.
+    /// `len` fresh resolve states: a clean array where the last resolve left one of that length
+    /// (no sweep), else one reset (or made).
     pub fn states(&self, len: usize) -> Pooled<'_, PixelState> {
+        if let Ok(mut clean) = self.clean_states.free.lock() {
+            if let Some(i) = clean.iter().position(|a| a.len() == len) {
+                return Pooled { array: clean.swap_remove(i), shelf: &self.states };
+            }
+            // none of that length: the others go back to be reset, under the shelf's limits
+            if let Ok(mut free) = self.states.free.lock() {
+                free.append(&mut clean);
+            }
+        }
         self.lend(&self.states, len, PixelState::default, |s| *s = PixelState::default())
+    }
+}
+
+impl<'p> Pooled<'p, PixelState> {
+    /// Says every state holds its default again (the resolve reset each as it finished it), so
+    /// the array goes back to `pool`'s clean shelf and the next frame's [`Pool::states`] lends it
+    /// without a sweep.
+    pub fn mark_clean(&mut self, pool: &'p Pool) {
+        self.shelf = &pool.clean_states;
     }
 }

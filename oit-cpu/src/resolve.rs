@@ -149,8 +149,12 @@ impl<'a> Resolve<'a> {
     /// Finishes every pixel into an sRGB image; returns it, the fragments captured in all and
     /// those counted tied, and the most fragments one pixel captured. Each pixel is finished, converted to sRGB and counted in one parallel
     /// sweep (the heat map, which needs the deepest pixel first, takes a second).
+    ///
+    /// Every state is back to its default when this returns (each reset as it is finished, while
+    /// it is in cache), so its array can be lent again without a sweep.
     pub fn image(&self, width: u32, height: u32, states: &mut [PixelState]) -> (Image, u64, u64, u32) {
         use rayon::prelude::*;
+        let complexity = self.effect == Effect::Complexity;
         let mut image = Image::new(width, height, [0, 0, 0, 255]);
         let (captured, tied, deepest) = image
             .pixels
@@ -158,14 +162,20 @@ impl<'a> Resolve<'a> {
             .zip(states.par_iter_mut())
             .map(|(px, s)| {
                 *px = srgb(self.finish(s));
-                (u64::from(s.captured), u64::from(s.tied()), s.captured)
+                let counts = (u64::from(s.captured), u64::from(s.tied()), s.captured);
+                if !complexity {
+                    // reset while in cache: the states go back clean (see the doc)
+                    *s = PixelState::default();
+                }
+                counts
             })
             .reduce(|| (0, 0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2.max(b.2)));
-        if self.effect == Effect::Complexity {
+        if complexity {
             let max = deepest.max(1);
-            image.pixels.par_iter_mut().zip(states.par_iter()).for_each(|(px, s)| {
+            image.pixels.par_iter_mut().zip(states.par_iter_mut()).for_each(|(px, s)| {
                 let c = if s.captured == 0 { self.background } else { heat(s.captured as f32 / max as f32) };
                 *px = srgb(c);
+                *s = PixelState::default();
             });
         }
         (image, captured, tied, deepest)

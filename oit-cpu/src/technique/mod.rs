@@ -321,9 +321,11 @@ where
 }
 
 /// Resolves the states into the frame (the common ending).
-pub(crate) fn finish(ctx: &Ctx<'_>, mut states: Pooled<'_, PixelState>) -> oit_core::Frame {
+pub(crate) fn finish<'a>(ctx: &Ctx<'a>, mut states: Pooled<'a, PixelState>) -> oit_core::Frame {
     let (image, captured, tied, deepest) =
         ctx.resolve.image(ctx.settings.width, ctx.settings.height, &mut states);
+    // Resolve::image leaves every state at its default
+    states.mark_clean(ctx.pool);
     let mut frame = frame(ctx, image, captured);
     frame.stats.tied = tied;
     frame.stats.max_layers = deepest;

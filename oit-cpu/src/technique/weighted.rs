@@ -28,29 +28,34 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, average: bool) -> Result<Frame, OitError
         sums[base + 4].fetch_add(1, Relaxed);
     });
     let bg = ctx.settings.background;
-    let mut states = ctx.states();
-    let colors: Vec<Vec3> = sums
-        .par_chunks(5)
-        .zip(states.par_iter_mut())
-        .map(|(s, state)| {
-            let l = |i: usize| s[i].load(Relaxed) as f32;
-            let w = WeightedSums {
-                premultiplied: Vec3::new(l(0), l(1), l(2)) / (255.0 * 255.0),
-                alpha: l(3) / 255.0,
-                count: s[4].load(Relaxed) as u32,
-            };
-            state.captured = w.count;
-            if average { weighted_average(&w, bg) } else { weighted_sum(&w, bg) }
-        })
-        .collect();
+    let weighted = |s: &[std::sync::atomic::AtomicU64]| {
+        let l = |i: usize| s[i].load(Relaxed) as f32;
+        let w = WeightedSums {
+            premultiplied: Vec3::new(l(0), l(1), l(2)) / (255.0 * 255.0),
+            alpha: l(3) / 255.0,
+            count: s[4].load(Relaxed) as u32,
+        };
+        let c = if average { weighted_average(&w, bg) } else { weighted_sum(&w, bg) };
+        (c, w.count)
+    };
     if effect == Effect::Complexity {
+        let mut states = ctx.states();
+        states.par_iter_mut().zip(sums.par_chunks(5)).for_each(|(state, s)| state.captured = weighted(s).1);
         return Ok(super::finish(ctx, states));
     }
-    let captured = states.iter().map(|s| u64::from(s.captured)).sum();
+    // each pixel's colour straight into the image, with the counts: no state array
     let mut image = oit_core::Image::new(ctx.settings.width, ctx.settings.height, [0, 0, 0, 255]);
-    // three powf a pixel: in parallel
-    image.pixels.par_iter_mut().zip(colors.par_iter()).for_each(|(px, &c)| *px = crate::resolve::srgb(c));
+    let (captured, deepest) = image
+        .pixels
+        .par_iter_mut()
+        .zip(sums.par_chunks(5))
+        .map(|(px, s)| {
+            let (c, count) = weighted(s);
+            *px = crate::resolve::srgb(c);
+            (u64::from(count), count)
+        })
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1.max(b.1)));
     let mut frame = super::frame(ctx, image, captured);
-    frame.stats.max_layers = states.iter().map(|s| s.captured).max().unwrap_or(0);
+    frame.stats.max_layers = deepest;
     Ok(frame)
 }
