@@ -115,6 +115,33 @@ mod tests {
         let e = image.save_png(Path::new("/dev/full")).expect_err("/dev/full must fail");
         assert!(matches!(e, OitError::Write { .. }), "{e}");
     }
+
+    fn totals(fragments: GpuFragments, counted_lost: Option<u64>, from_captured: bool) -> GpuTotals<'static> {
+        const ACCT: [u32; 6] = [2, 9, 9, 1, 9, 9];
+        GpuTotals {
+            fragments,
+            on_device: 40,
+            captured: 37,
+            counted_lost,
+            fragments_from_captured: from_captured,
+            acct: Some(&ACCT),
+            pixels: 2,
+        }
+    }
+
+    /// Each source of the fragment count, counted and derived losses. Mutations caught: the
+    /// on-device word ignored, losses derived where they are counted, the per-pixel words read
+    /// from the wrong column.
+    #[test]
+    fn gpu_totals_take_each_count_from_where_it_is() {
+        use GpuFragments::*;
+        assert_eq!(totals(Known(50), Some(3), false).counts(), (50, 3, Some(vec![2, 1])));
+        assert_eq!(totals(OnDevice, Some(3), false).counts(), (40, 3, Some(vec![2, 1])));
+        // the blend captures: losses derived, no per-pixel losses
+        assert_eq!(totals(OnDevice, None, false).counts(), (40, 3, None));
+        assert_eq!(totals(Unset, None, true).counts(), (37, 0, None));
+        assert_eq!(totals(Unset, None, false).counts(), (0, 0, None));
+    }
 }
 
 /// One rendered frame.

@@ -142,17 +142,26 @@ pub struct Rasterizer {
 impl Rasterizer {
     /// A rasterizer over triangles already set up (a persistent renderer keeps its setup).
     pub fn from_setup(setup: TriangleSetup) -> Rasterizer {
-        let edges = setup.triangles.par_iter().map(SmallEdges::new).collect();
-        let r = Rasterizer {
+        let mut r = Rasterizer {
             setup,
             scratch: SetupScratch::default(),
-            edges,
+            edges: Vec::new(),
             mode: DEFAULT_MODE,
             bins: OnceLock::new(),
             fragments: OnceLock::new(),
         };
-        r.warm_bins();
+        r.derive();
         r
+    }
+
+    /// What the traversal derives from the set-up triangles, made again: their [`SmallEdges`]
+    /// (into the storage the last frame's used), the bins of [`RasterMode::Tiled`], the count.
+    fn derive(&mut self) {
+        self.edges.clear();
+        self.edges.par_extend(self.setup.triangles.par_iter().map(SmallEdges::new));
+        self.bins = OnceLock::new();
+        self.fragments = OnceLock::new();
+        self.warm_bins();
     }
 
     /// Sets up every instance's triangles ([`TriangleSetup::new`]).
@@ -165,11 +174,7 @@ impl Rasterizer {
     /// nothing for their triangles once the storage has grown to the scene.
     pub fn rebuild(&mut self, scene: &Scene, camera: &Camera, settings: &Settings) {
         self.setup.rebuild(scene, camera, settings, &mut self.scratch);
-        self.edges.clear();
-        self.edges.par_extend(self.setup.triangles.par_iter().map(SmallEdges::new));
-        self.bins = OnceLock::new();
-        self.fragments = OnceLock::new();
-        self.warm_bins();
+        self.derive();
     }
 
     /// The triangles of each instance's bounding box ([`TriangleSetup::bounding_boxes`]).
