@@ -27,11 +27,14 @@ enum Tail {
     /// The compute rasterizer; and, as `<module>_hw`, the hardware raster (capture_render.wgsl
     /// and raster_hardware.wgsl).
     Raster,
+    /// Nothing, and nothing before: the module's sources alone, without the common part
+    /// (the compute path's setup kernels, which bind a group 0 of their own).
+    Alone,
     /// The hardware raster's vertex stage alone (raster_hardware.wgsl up to its fragment entry
     /// point): a blend capture's module, with fragment entry points and resolves of its own.
     Stage,
 }
-use Tail::{None as Kernels, Raster, Stage};
+use Tail::{Alone, None as Kernels, Raster, Stage};
 
 /// (module, technique sources relative to oit-wgpu/src, `+`-joined in the order oit-wgpu
 /// concatenates them, what follows).
@@ -55,6 +58,8 @@ const MODULES: &[(&str, &str, Tail)] = &[
     ("ll_size", "technique/ll_size.wgsl", Raster),
     ("ll", "technique/ll.wgsl", Raster),
     ("count_sum", "vk:shaders/count_sum.wgsl", Kernels),
+    // oit-wgpu's raster.rs SETUP_WGSL: the integer f32, then the setup kernels
+    ("setup", "shaders/softfloat.wgsl+shaders/setup.wgsl", Alone),
     ("scan", "technique/scan.wgsl", Kernels),
     ("nothing", "vk:shaders/no_capture.wgsl", Raster),
     ("blend", "technique/weighted.wgsl+technique/blend.wgsl", Stage),
@@ -151,6 +156,7 @@ fn main() {
         let text = format!("{common}\n{prelude}{source}");
         match tail {
             Kernels => emit(name, &text),
+            Alone => emit(name, &source),
             Raster => {
                 emit(name, &format!("{text}\n{raster}"));
                 emit(&format!("{name}_hw"), &format!("{text}\n{hardware}"));

@@ -74,6 +74,7 @@ mod camera;
 pub mod composite;
 mod error;
 mod frame;
+pub mod gpu_setup;
 pub mod metrics;
 mod obj;
 pub mod plan;

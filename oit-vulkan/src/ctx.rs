@@ -183,6 +183,8 @@ pub(crate) struct VkCtx<'a> {
     lent_images: Vec<Rc<GpuImage>>,
     rec: Recorder<'a>,
     validation_before: u64,
+    /// The compute path's setup checks left to the frame's end (`raster::SetupCheck`).
+    setup_checks: Vec<crate::raster::SetupCheck>,
 }
 
 impl Drop for VkCtx<'_> {
@@ -260,6 +262,7 @@ impl<'a> VkCtx<'a> {
             lent_images: Vec::new(),
             rec,
             validation_before: crate::device::validation_errors(),
+            setup_checks: Vec::new(),
         };
         let acct = ctx.acct.clone();
         ctx.rec.fill(&acct, 0);
@@ -432,21 +435,22 @@ impl<'a> VkCtx<'a> {
         let per_pixel = !self.gpu.is_cpu();
         let entry = if per_pixel { "raster_main" } else { "raster_loop_main" };
         let pipeline = self.gpu.pipeline(module, entry, buffers.len())?;
-        let groups = dispatch_size(if per_pixel { raster.items * 64 } else { raster.items });
-        raster.upload(&mut self.rec)?;
+        if let Some(check) = raster.upload(&mut self.rec)? {
+            self.setup_checks.push(check);
+        }
         self.rec.fill(&raster.generated, 0);
         let (state, acct) = (self.state.clone(), self.acct.clone());
         let storage = Self::storage(&state, &acct, buffers);
         let raster_set = raster.bindings();
         let uniform = self.uniform;
-        self.rec.dispatch(
-            "geometry",
+        raster.dispatch(
+            &mut self.rec,
             &pipeline,
             &[
                 SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage },
                 SetData::Raster { storage: &raster_set, uniform: &raster.uniform },
             ],
-            groups,
+            per_pixel,
         )?;
         Ok(&raster.generated)
     }
@@ -693,7 +697,22 @@ impl<'a> VkCtx<'a> {
     /// Resolves the state into the frame and its stats, reading back the image and the per-pixel
     /// losses only when `readback` (one wait either way): without, the frame's image is empty
     /// (0 × 0) and `lost_pixels` `None`, as oit-wgpu's `GpuCtx::finish_with` gives them.
-    pub(crate) fn finish_with(mut self, path: RasterPath, readback: bool) -> Result<Frame, OitError> {
+    #[cfg(test)]
+    pub(crate) fn finish_with(self, path: RasterPath, readback: bool) -> Result<Frame, OitError> {
+        self.finish_checked(path, readback)?.ok_or_else(|| {
+            OitError::Device("the compute path's setup outgrew its buffers in mid-frame".into())
+        })
+    }
+
+    /// [`VkCtx::finish_with`], reading the compute path's setup counters left to the frame's end
+    /// (`raster::SetupCheck`) in the same wait: `None` where they did not fit the buffers the
+    /// frame was set up into (the frame is incomplete; the caller runs it again, and its setup
+    /// then sizes first).
+    pub(crate) fn finish_checked(
+        mut self,
+        path: RasterPath,
+        readback: bool,
+    ) -> Result<Option<Frame>, OitError> {
         let _ = path;
         let (image_buf, totals) = (self.image.clone(), self.totals.clone());
         self.rec.fill(&totals, 0);
@@ -702,7 +721,9 @@ impl<'a> VkCtx<'a> {
         self.kernel_over("finish", "finish_main", &[&image_buf, &totals], px, 0, 0, "resolve")?;
         let acct_buf = self.acct.clone();
         let first_count = self.first_count.clone();
+        let checks = std::mem::take(&mut self.setup_checks);
         let mut read = vec![&*totals, &*first_count];
+        read.extend(checks.iter().map(|c| &*c.counters));
         if readback {
             read.push(&*image_buf);
             read.push(&*acct_buf);
@@ -710,6 +731,13 @@ impl<'a> VkCtx<'a> {
         let mut words = self.read_u32s(&read)?.into_iter();
         let t = words.next().unwrap_or_default();
         let first = words.next().unwrap_or_default();
+        let mut fits = true;
+        for c in &checks {
+            fits &= c.fits(&words.next().unwrap_or_default());
+        }
+        if !fits {
+            return Ok(None);
+        }
         let (image, acct) = if readback {
             let pixels = words.next().unwrap_or_default();
             let image = Image {
@@ -761,7 +789,7 @@ impl<'a> VkCtx<'a> {
         if self.counts_losses {
             frame.stats.check_accounting("vulkan")?;
         }
-        Ok(frame)
+        Ok(Some(frame))
     }
 }
 

@@ -95,13 +95,23 @@ pub(crate) struct Drivers<'a> {
 pub struct VulkanBackend {
     /// Adapter name filter (substring); `None` reads `OIT_ADAPTER`, else prefers a discrete GPU.
     pub adapter: Option<String>,
+    /// Where the compute path sets triangles up: `Some(true)` on the GPU, `Some(false)` on the
+    /// host; `None` reads `OIT_HOST_SETUP`, else the GPU unless the device is a CPU (lavapipe).
+    pub gpu_setup: Option<bool>,
     gpu: OnceLock<Result<Gpu, String>>,
 }
 
 impl VulkanBackend {
     /// A backend for the adapter whose name contains `filter`.
     pub fn new(adapter: Option<String>) -> Self {
-        VulkanBackend { adapter, gpu: OnceLock::new() }
+        VulkanBackend { adapter, gpu_setup: None, gpu: OnceLock::new() }
+    }
+
+    /// This backend with the compute path's setup on the GPU (`true`) or the host (`false`),
+    /// whatever the device and `OIT_HOST_SETUP` say.
+    pub fn with_gpu_setup(mut self, on_gpu: bool) -> Self {
+        self.gpu_setup = Some(on_gpu);
+        self
     }
 
     /// The device, opened on first use.
@@ -176,6 +186,7 @@ impl Backend for VulkanBackend {
             compute: RefCell::new(None),
             compute_boxes: RefCell::new(None),
             hardware: RefCell::new(None),
+            gpu_setup: self.gpu_setup,
         }))
     }
 }
@@ -192,6 +203,8 @@ pub struct VulkanPrepared<'s> {
     compute: RefCell<Option<ComputeBuffers>>,
     compute_boxes: RefCell<Option<ComputeBuffers>>,
     hardware: RefCell<Option<HardwareScene>>,
+    /// `VulkanBackend::gpu_setup`.
+    gpu_setup: Option<bool>,
 }
 
 impl VulkanPrepared<'_> {
@@ -204,7 +217,7 @@ impl VulkanPrepared<'_> {
     ) -> Result<ComputeRaster, OitError> {
         let mut kept = cell.borrow_mut();
         if kept.is_none() {
-            *kept = Some(ComputeBuffers::new(self.gpu, &self.geometry_made)?);
+            *kept = Some(ComputeBuffers::new(self.gpu, self.gpu_setup, &self.geometry_made)?);
         }
         let buffers = kept.as_mut().expect("just made");
         buffers.frame(self.gpu, self.scene, camera, settings, boxes, &self.geometry_made)
@@ -248,6 +261,23 @@ impl VulkanPrepared<'_> {
         settings: &Settings,
         readback: bool,
     ) -> Result<Frame, OitError> {
+        // a frame whose GPU setup outgrew the kept buffers (seen at its end) runs again: its
+        // setup then reads the counters first and grows them
+        match self.frame_once(camera, settings, readback)? {
+            Some(frame) => Ok(frame),
+            None => self.frame_once(camera, settings, readback)?.ok_or_else(|| {
+                OitError::Device("the compute path's setup outgrew its buffers twice in a row".into())
+            }),
+        }
+    }
+
+    /// [`VulkanPrepared::frame_whole`] once: `None` where the setup did not fit.
+    fn frame_once(
+        &mut self,
+        camera: &Camera,
+        settings: &Settings,
+        readback: bool,
+    ) -> Result<Option<Frame>, OitError> {
         settings.validate()?;
         let start = Instant::now();
         let path = settings.raster.unwrap_or(RasterPath::Compute);
@@ -301,10 +331,10 @@ impl VulkanPrepared<'_> {
         };
         let mut ctx = VkCtx::new(this.gpu, this.scene, camera, settings, &this.pool)?;
         let layers = run_technique(&mut ctx, &drivers)?;
-        let mut frame = ctx.finish_with(path, readback)?;
+        let Some(mut frame) = ctx.finish_checked(path, readback)? else { return Ok(None) };
         frame.layers = layers.filter(|_| readback);
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
-        Ok(frame)
+        Ok(Some(frame))
     }
 }
 

@@ -1,28 +1,58 @@
 //! The compute-raster path: oit-wgpu's compute rasterizer (`raster_compute.wgsl`, compiled into
-//! every technique's SPIR-V module by `build.rs`) on Vulkan. Setup (transform, clipping, snapping)
-//! is oit-core's `setup`, shared with oit-cpu and oit-wgpu, so the triangles are the same bits and
-//! the fragments equal oit-cpu's.
+//! every technique's SPIR-V module by `build.rs`) on Vulkan. Setup (transform, clipping, snapping,
+//! triangle setup, binning into 8×8 tiles) follows oit-core's `setup` rule for rule, so the
+//! triangles are the same bits and the fragments equal oit-cpu's.
 //!
-//! As on wgpu, the setup runs on the host every frame; a prepared scene keeps the buffers it goes
-//! into ([`ComputeBuffers`]), grown only when a frame needs more. The words are uploaded through
-//! a staging buffer by the frame's first geometry pass that uses them, recorded in the frame's
-//! command stream behind a barrier.
+//! Where setup runs ([`setup_on_gpu`]), as on oit-wgpu:
+//! - **on the GPU** (the default on a GPU): oit-wgpu's `setup.wgsl` over its integer f32
+//!   (`softfloat.wgsl`), compiled to SPIR-V in `build.rs`. A prepared scene uploads its
+//!   world-space geometry once (oit-core's [`SetupGeometry`]: the layout shared with oit-wgpu);
+//!   a frame uploads the instance table and records `vertex_main`, `setup_main` and
+//!   `setup_finish_main`, which writes the raster kernel's indirect arguments; the item count is
+//!   copied into the raster uniform on the device, and every geometry pass dispatches indirectly.
+//!   The frame does no per-triangle work on the host. The setup's counters (pieces, work items)
+//!   are read back before the frame's passes only while the kept buffers have not yet been seen
+//!   to fit (a scene's first frame, or after a miss); a later frame reads them with the frame's
+//!   end and runs again with grown buffers the rare time they did not fit ([`SetupCheck`]);
+//! - **on the host** on a CPU device (lavapipe), where the integer f32 costs many times the host's
+//!   float unit: oit-core's `TriangleSetup`, its words uploaded through a staging buffer by the
+//!   frame's first geometry pass, behind a barrier. `OIT_HOST_SETUP=1` forces the host's setup,
+//!   `OIT_HOST_SETUP=0` the GPU's, on any device; `VulkanBackend::gpu_setup` says it per backend.
+//!
+//! A prepared scene keeps the buffers ([`ComputeBuffers`]), grown only when a frame needs more.
 
 use std::cell::{Cell, RefCell};
 use std::rc::Rc;
 
 use ash::vk;
+use oit_core::gpu_setup::{ARGS_ITEMS, ARGS_PER_ITEM, ARGS_WORDS, COUNTER_WORDS, SetupGeometry, VERT_WORDS};
 use oit_core::setup::{TRIANGLE_WORDS, TriangleSetup};
 use oit_core::{Camera, OitError, Scene, Settings};
 
-use crate::ctx::storage_usage;
-use crate::device::{Buffer, Gpu};
-use crate::record::Recorder;
+use crate::ctx::{dispatch_size, storage_usage};
+use crate::device::{Buffer, Gpu, SetKind};
+use crate::record::{Recorder, SetData};
 
 /// Pixels on a side of the tile one work item covers.
 const TILE: u32 = 8;
 /// Bytes of the smallest triangle and work-list buffers (a binding may not be empty).
 const MIN_BYTES: u64 = 256;
+
+/// Whether the compute path sets triangles up on the GPU: `choice` where the backend says,
+/// else `OIT_HOST_SETUP=1` (or `true`) says no and `OIT_HOST_SETUP=0` (or `false`) yes;
+/// otherwise yes unless the device is a CPU (module docs).
+pub(crate) fn setup_on_gpu(gpu: &Gpu, choice: Option<bool>) -> bool {
+    if let Some(on_gpu) = choice {
+        return on_gpu;
+    }
+    match std::env::var("OIT_HOST_SETUP").as_deref() {
+        Ok("1") => false,
+        Ok("0") => true,
+        Ok(v) if v.eq_ignore_ascii_case("true") => false,
+        Ok(v) if v.eq_ignore_ascii_case("false") => true,
+        _ => !gpu.is_cpu(),
+    }
+}
 
 /// A frame's rasterizer of the scene (or of its instances' bounding boxes), on either path.
 pub(crate) enum Raster {
@@ -32,16 +62,56 @@ pub(crate) enum Raster {
     Hardware(crate::hardware::HardwareRaster),
 }
 
-/// One frame's triangles and work list, on the GPU once the first geometry pass uploads them.
+/// The setup's capacity check left to the end of a frame: the counters, the capacities they were
+/// set up against, and the flag to clear (so the next frame sizes first) when they did not fit.
+pub(crate) struct SetupCheck {
+    pub(crate) counters: Rc<Buffer>,
+    tri_capacity: u64,
+    item_capacity: u64,
+    trusted: Rc<Cell<bool>>,
+}
+
+impl SetupCheck {
+    /// Whether the counters read back (`words`) fit; where not, the buffers are no longer trusted.
+    pub(crate) fn fits(&self, words: &[u32]) -> bool {
+        let pieces = u64::from(words.first().copied().unwrap_or(u32::MAX));
+        let items = u64::from(words.get(1).copied().unwrap_or(u32::MAX));
+        let fits = pieces <= self.tri_capacity && items <= self.item_capacity;
+        if !fits {
+            self.trusted.set(false);
+        }
+        fits
+    }
+}
+
+/// What the first geometry pass of a frame records before its dispatch.
+enum Pending {
+    /// The host's triangle words, work items and raster uniform, to upload.
+    Host([Vec<u8>; 3]),
+    /// The GPU's setup: the instance table and the raster uniform to upload, the setup's uniform.
+    Gpu { instances: Vec<u8>, raster_uniform: Vec<u8>, setup_uniform: [u32; 12], check: Option<SetupCheck> },
+}
+
+/// How many work items a geometry pass dispatches.
+#[derive(Clone, Copy)]
+enum Work {
+    /// Known on the host.
+    Items(u64),
+    /// Written by the GPU's setup into the indirect arguments.
+    Indirect,
+}
+
+/// One frame's triangles and work list, on the GPU once the first geometry pass sets them up or
+/// uploads them.
 pub(crate) struct ComputeRaster {
     tris: Rc<Buffer>,
     item_list: Rc<Buffer>,
     pub(crate) uniform: Rc<Buffer>,
     pub(crate) generated: Rc<Buffer>,
-    /// Work items: (triangle, 8×8 tile of its box).
-    pub(crate) items: u64,
-    /// Triangle words, work items and the raster uniform, until uploaded.
-    pending: RefCell<Option<[Vec<u8>; 3]>>,
+    args: Rc<Buffer>,
+    setup: Option<Rc<SetupBuffers>>,
+    work: Work,
+    pending: RefCell<Option<Pending>>,
 }
 
 impl ComputeRaster {
@@ -50,15 +120,100 @@ impl ComputeRaster {
         vec![(0, &*self.tris), (1, &*self.item_list), (3, &*self.generated)]
     }
 
-    /// Records the upload of this frame's words, once.
-    pub(crate) fn upload(&self, rec: &mut Recorder<'_>) -> Result<(), OitError> {
-        if let Some([tris, items, uniform]) = self.pending.borrow_mut().take() {
-            rec.upload(&self.tris, &tris)?;
-            rec.upload(&self.item_list, &items)?;
-            rec.upload(&self.uniform, &uniform)?;
+    /// Records, once, what this frame's passes need first: the upload of the host's words, or
+    /// the GPU's setup. Returns the setup's end-of-frame check, where it left one.
+    pub(crate) fn upload(&self, rec: &mut Recorder<'_>) -> Result<Option<SetupCheck>, OitError> {
+        match self.pending.borrow_mut().take() {
+            Some(Pending::Host([tris, items, uniform])) => {
+                rec.upload(&self.tris, &tris)?;
+                rec.upload(&self.item_list, &items)?;
+                rec.upload(&self.uniform, &uniform)?;
+                Ok(None)
+            }
+            Some(Pending::Gpu { instances, raster_uniform, setup_uniform, check }) => {
+                let s = self.setup.as_ref().expect("a GPU setup has its buffers");
+                rec.upload(&self.uniform, &raster_uniform)?;
+                record_setup(rec, s, &self.tris, &self.item_list, &self.args, &instances, &setup_uniform)?;
+                // the raster uniform's item count, from the arguments kernel
+                rec.copy_at(&self.args, ARGS_ITEMS, &self.uniform, 0, 4);
+                Ok(check)
+            }
+            None => Ok(None),
         }
-        Ok(())
     }
+
+    /// Records the geometry pass's dispatch of `pipeline` (`raster_main`, a workgroup per item,
+    /// where `per_pixel`; else `raster_loop_main`, an invocation per item) with `sets`.
+    pub(crate) fn dispatch(
+        &self,
+        rec: &mut Recorder<'_>,
+        pipeline: &crate::device::Pipeline,
+        sets: &[SetData<'_>],
+        per_pixel: bool,
+    ) -> Result<(), OitError> {
+        match self.work {
+            Work::Items(items) => {
+                let groups = dispatch_size(if per_pixel { items * 64 } else { items });
+                rec.dispatch("geometry", pipeline, sets, groups)
+            }
+            Work::Indirect => rec.dispatch_indirect(
+                "geometry",
+                pipeline,
+                sets,
+                &self.args,
+                if per_pixel { 0 } else { ARGS_PER_ITEM },
+            ),
+        }
+    }
+}
+
+/// What the GPU setup keeps besides its outputs: the geometry (uploaded once), the instance
+/// table, the counters and the vertex cache.
+struct SetupBuffers {
+    layout: SetupGeometry,
+    geometry: Buffer,
+    instances: Buffer,
+    counters: Rc<Buffer>,
+    verts: Buffer,
+    use_verts: bool,
+}
+
+/// Records the setup kernels into `rec`: the instance table's upload, the counters cleared, then
+/// `vertex_main` (with the vertex cache), `setup_main` and `setup_finish_main`, each behind the
+/// recorder's barrier. Binding order is setup.wgsl's group 0.
+fn record_setup(
+    rec: &mut Recorder<'_>,
+    s: &SetupBuffers,
+    tris: &Buffer,
+    items: &Buffer,
+    args: &Buffer,
+    instances: &[u8],
+    uniform: &[u32; 12],
+) -> Result<(), OitError> {
+    rec.upload(&s.instances, instances)?;
+    rec.fill(&s.counters, 0);
+    let storage: [(u32, &Buffer); 8] = [
+        (1, &s.instances),
+        (2, &s.geometry),
+        (3, tris),
+        (4, items),
+        (5, &s.counters),
+        (6, args),
+        (7, &s.verts),
+        // group 0's layout always has the accounting binding; setup.wgsl does not use it
+        (crate::ctx::ACCT_BINDING, &s.counters),
+    ];
+    let gpu = rec.gpu();
+    let sets = [SetData::Frame { uniform: bytemuck::cast_slice(uniform), storage: &storage }];
+    let kinds = [SetKind::Frame(6)];
+    if s.use_verts {
+        let pipeline = gpu.compute("setup", "vertex_main", &kinds)?;
+        rec.dispatch("setup", &pipeline, &sets, dispatch_size(s.layout.vertex_total()))?;
+    }
+    let pipeline = gpu.compute("setup", "setup_main", &kinds)?;
+    rec.dispatch("setup", &pipeline, &sets, dispatch_size(u64::from(s.layout.tasks)))?;
+    let pipeline = gpu.compute("setup", "setup_finish_main", &kinds)?;
+    rec.dispatch("setup", &pipeline, &sets, (1, 1))
 }
 
 /// The compute rasterizer's buffers, kept between the frames of a prepared scene.
@@ -67,6 +222,12 @@ pub(crate) struct ComputeBuffers {
     items: Rc<Buffer>,
     uniform: Rc<Buffer>,
     generated: Rc<Buffer>,
+    args: Rc<Buffer>,
+    setup: Option<Rc<SetupBuffers>>,
+    on_gpu: bool,
+    /// Whether an earlier frame's setup was seen to fit these buffers: then a frame does not read
+    /// the counters before its passes but checks them at its end.
+    trusted: Rc<Cell<bool>>,
 }
 
 fn geometry_usage() -> vk::BufferUsageFlags {
@@ -75,8 +236,9 @@ fn geometry_usage() -> vk::BufferUsageFlags {
 
 impl ComputeBuffers {
     /// Small buffers (grown by the first frame that needs more); `made` counts the buffers.
-    pub(crate) fn new(gpu: &Gpu, made: &Cell<u64>) -> Result<ComputeBuffers, OitError> {
-        made.set(made.get() + 4);
+    /// Setup runs on the GPU where [`setup_on_gpu`] says (`choice`: the backend's).
+    pub(crate) fn new(gpu: &Gpu, choice: Option<bool>, made: &Cell<u64>) -> Result<ComputeBuffers, OitError> {
+        made.set(made.get() + 5);
         Ok(ComputeBuffers {
             tris: Rc::new(gpu.buffer(MIN_BYTES, geometry_usage(), false)?),
             items: Rc::new(gpu.buffer(MIN_BYTES, geometry_usage(), false)?),
@@ -86,11 +248,50 @@ impl ComputeBuffers {
                 false,
             )?),
             generated: Rc::new(gpu.buffer(16, storage_usage(), false)?),
+            args: Rc::new(gpu.buffer(
+                ARGS_WORDS as u64 * 4,
+                storage_usage() | vk::BufferUsageFlags::INDIRECT_BUFFER,
+                false,
+            )?),
+            setup: None,
+            on_gpu: setup_on_gpu(gpu, choice),
+            trusted: Rc::new(Cell::new(false)),
         })
     }
 
-    /// Sets up this frame's triangles of the scene (or of its instances' bounding boxes) on the
-    /// host, growing a buffer first where they do not fit (counted in `made`).
+    /// Grows the triangle and work-list buffers to hold `tri_bytes` and `item_bytes` (counted in
+    /// `made`), after checking both against the device's limits; true when one was made.
+    fn reserve(
+        &mut self,
+        gpu: &Gpu,
+        tri_bytes: u64,
+        item_bytes: u64,
+        made: &Cell<u64>,
+    ) -> Result<bool, OitError> {
+        gpu.check_storage_hint(
+            "the triangles",
+            tri_bytes,
+            "use fewer triangles or instances (176 bytes each on the compute rasterizer), or the cpu backend",
+        )?;
+        gpu.check_storage("the raster work list", item_bytes)?;
+        let limit = u64::from(gpu.info.limits.max_storage_buffer_range);
+        let grown = |old: u64, needed: u64| needed.max(old.saturating_mul(2).min(limit)).next_multiple_of(4);
+        let mut grew = false;
+        if tri_bytes > self.tris.size {
+            self.tris = Rc::new(gpu.buffer(grown(self.tris.size, tri_bytes), geometry_usage(), false)?);
+            made.set(made.get() + 1);
+            grew = true;
+        }
+        if item_bytes > self.items.size {
+            self.items = Rc::new(gpu.buffer(grown(self.items.size, item_bytes), geometry_usage(), false)?);
+            made.set(made.get() + 1);
+            grew = true;
+        }
+        Ok(grew)
+    }
+
+    /// This frame's triangles of the scene (or of its instances' bounding boxes): set up on the
+    /// GPU or the host (module docs), growing a buffer first where they do not fit.
     pub(crate) fn frame(
         &mut self,
         gpu: &Gpu,
@@ -99,6 +300,127 @@ impl ComputeBuffers {
         settings: &Settings,
         boxes: bool,
         made: &Cell<u64>,
+    ) -> Result<ComputeRaster, OitError> {
+        let forward = camera.forward;
+        let raster_uniform = |items: u32| -> Vec<u8> {
+            let words: [u32; 8] = [
+                items,
+                settings.width,
+                settings.height,
+                settings.shading.code(),
+                forward.x.to_bits(),
+                forward.y.to_bits(),
+                forward.z.to_bits(),
+                0,
+            ];
+            bytemuck::cast_slice(&words).to_vec()
+        };
+        if !self.on_gpu {
+            return self.host_frame(gpu, scene, camera, settings, boxes, made, raster_uniform);
+        }
+        if self.setup.as_ref().is_none_or(|s| s.layout.boxes != boxes) {
+            self.trusted.set(false);
+            self.setup = Some(Rc::new(Self::setup_buffers(gpu, scene, boxes, made)?));
+            let s = self.setup.as_ref().expect("made above");
+            let limit = u64::from(gpu.info.limits.max_storage_buffer_range);
+            let (tris, items) = s.layout.first_guess(limit);
+            let (tris, items) = (tris.max(self.tris.size), items.max(self.items.size));
+            self.reserve(gpu, tris, items, made)?;
+        }
+        let s = self.setup.clone().expect("made above");
+        let instances = bytemuck::cast_slice(&s.layout.instance_words(scene, camera, settings)).to_vec();
+        let capacities = |b: &Self| (b.tris.size / (TRIANGLE_WORDS as u64 * 4), b.items.size / 8);
+        // until these buffers were seen to fit, set up and read the counters before the frame:
+        // one round trip, grown and set up again while short
+        while !self.trusted.get() {
+            let (tri_capacity, item_capacity) = capacities(self);
+            let uniform = s.layout.uniform_words(settings, tri_capacity, item_capacity, s.use_verts);
+            let mut rec = Recorder::new(gpu)?;
+            record_setup(&mut rec, &s, &self.tris, &self.items, &self.args, &instances, &uniform)?;
+            let counts = rec.read_u32(&s.counters)?;
+            let (pieces, items) = (u64::from(counts[0]), u64::from(counts[1]));
+            if pieces <= tri_capacity && items <= item_capacity {
+                self.trusted.set(true);
+            } else if !self.reserve(gpu, pieces * TRIANGLE_WORDS as u64 * 4, items * 8, made)? {
+                return Err(OitError::Device(format!(
+                    "the compute path's setup needs {pieces} triangles and {items} work items, more than its buffers hold"
+                )));
+            }
+        }
+        let (tri_capacity, item_capacity) = capacities(self);
+        let check = SetupCheck {
+            counters: s.counters.clone(),
+            tri_capacity,
+            item_capacity,
+            trusted: self.trusted.clone(),
+        };
+        Ok(ComputeRaster {
+            tris: self.tris.clone(),
+            item_list: self.items.clone(),
+            uniform: self.uniform.clone(),
+            generated: self.generated.clone(),
+            args: self.args.clone(),
+            work: Work::Indirect,
+            pending: RefCell::new(Some(Pending::Gpu {
+                instances,
+                raster_uniform: raster_uniform(0),
+                setup_uniform: s.layout.uniform_words(settings, tri_capacity, item_capacity, s.use_verts),
+                check: Some(check),
+            })),
+            setup: Some(s),
+        })
+    }
+
+    /// The setup's own buffers for the scene (or its boxes), its geometry uploaded.
+    fn setup_buffers(
+        gpu: &Gpu,
+        scene: &Scene,
+        boxes: bool,
+        made: &Cell<u64>,
+    ) -> Result<SetupBuffers, OitError> {
+        let mut layout = SetupGeometry::new(scene, boxes)?;
+        let words = std::mem::take(&mut layout.words);
+        let bytes = (words.len() as u64 * 4).max(MIN_BYTES);
+        gpu.check_storage_hint(
+            "the scene's geometry for the compute path's setup",
+            bytes,
+            "use a smaller mesh, or the cpu backend",
+        )?;
+        let limit = u64::from(gpu.info.limits.max_storage_buffer_range);
+        let vert_bytes = layout.vertex_total() * VERT_WORDS as u64 * 4;
+        let use_verts = vert_bytes > 0 && vert_bytes <= limit;
+        made.set(made.get() + 4);
+        let geometry = gpu.buffer(bytes, geometry_usage(), false)?;
+        {
+            let mut rec = Recorder::new(gpu)?;
+            rec.upload(&geometry, bytemuck::cast_slice(&words))?;
+            rec.flush()?;
+        }
+        Ok(SetupBuffers {
+            instances: gpu.buffer(layout.instance_bytes(), geometry_usage(), false)?,
+            counters: Rc::new(gpu.buffer(COUNTER_WORDS as u64 * 4, storage_usage(), false)?),
+            verts: gpu.buffer(
+                if use_verts { vert_bytes } else { 16 },
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                false,
+            )?,
+            use_verts,
+            geometry,
+            layout,
+        })
+    }
+
+    /// The host's setup (oit-core's `TriangleSetup`), its words and work list to upload.
+    #[expect(clippy::too_many_arguments, reason = "a frame's inputs and the uniform's maker")]
+    fn host_frame(
+        &mut self,
+        gpu: &Gpu,
+        scene: &Scene,
+        camera: &Camera,
+        settings: &Settings,
+        boxes: bool,
+        made: &Cell<u64>,
+        raster_uniform: impl Fn(u32) -> Vec<u8>,
     ) -> Result<ComputeRaster, OitError> {
         let r = if boxes {
             TriangleSetup::bounding_boxes(scene, camera, settings)
@@ -115,45 +437,20 @@ impl ComputeBuffers {
                 }
             }
         }
-        let (tri_bytes, item_bytes) = (words.len() as u64 * 4, items.len() as u64 * 8);
-        gpu.check_storage_hint(
-            "the triangles",
-            tri_bytes,
-            "use fewer triangles or instances (176 bytes each on the compute rasterizer), or the cpu backend",
-        )?;
-        gpu.check_storage("the raster work list", item_bytes)?;
-        let limit = u64::from(gpu.info.limits.max_storage_buffer_range);
-        let grown = |old: u64, needed: u64| needed.max(old.saturating_mul(2).min(limit)).next_multiple_of(4);
-        if tri_bytes > self.tris.size {
-            self.tris = Rc::new(gpu.buffer(grown(self.tris.size, tri_bytes), geometry_usage(), false)?);
-            made.set(made.get() + 1);
-        }
-        if item_bytes > self.items.size {
-            self.items = Rc::new(gpu.buffer(grown(self.items.size, item_bytes), geometry_usage(), false)?);
-            made.set(made.get() + 1);
-        }
-        let forward = camera.forward;
-        let uniform: [u32; 8] = [
-            items.len() as u32,
-            settings.width,
-            settings.height,
-            settings.shading.code(),
-            forward.x.to_bits(),
-            forward.y.to_bits(),
-            forward.z.to_bits(),
-            0,
-        ];
+        self.reserve(gpu, words.len() as u64 * 4, items.len() as u64 * 8, made)?;
         Ok(ComputeRaster {
             tris: self.tris.clone(),
             item_list: self.items.clone(),
             uniform: self.uniform.clone(),
             generated: self.generated.clone(),
-            items: items.len() as u64,
-            pending: RefCell::new(Some([
+            args: self.args.clone(),
+            setup: None,
+            work: Work::Items(items.len() as u64),
+            pending: RefCell::new(Some(Pending::Host([
                 bytemuck::cast_slice(&words).to_vec(),
                 bytemuck::cast_slice(&items).to_vec(),
-                bytemuck::cast_slice(&uniform).to_vec(),
-            ])),
+                raster_uniform(items.len() as u32),
+            ]))),
         })
     }
 }

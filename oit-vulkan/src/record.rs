@@ -282,6 +282,11 @@ impl<'g> Recorder<'g> {
         self.p.spare.drain(..over);
     }
 
+    /// The device this recorder records for.
+    pub(crate) fn gpu(&self) -> &'g Gpu {
+        self.gpu
+    }
+
     /// Starts recording, and resets the timestamp queries before anything can write them.
     fn begin(&self) -> Result<(), OitError> {
         let info = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
@@ -547,6 +552,43 @@ impl<'g> Recorder<'g> {
         Ok(())
     }
 
+    /// Records one dispatch of `pipeline` with `sets` whose group counts the device reads from
+    /// `args` at byte `offset` (three u32, written by an earlier command: the compute path's
+    /// setup). With timestamps, its time counts under `label`. A barrier follows.
+    pub(crate) fn dispatch_indirect(
+        &mut self,
+        label: &str,
+        pipeline: &Pipeline,
+        sets: &[SetData<'_>],
+        args: &Buffer,
+        offset: u64,
+    ) -> Result<(), OitError> {
+        let sets = self.sets(pipeline, sets)?;
+        let timed = self.timed(label);
+        self.stamp(timed, 0);
+        let d = &self.gpu.raw.device;
+        // SAFETY: recording; the pipeline's layout matches the sets bound; `args` has
+        // INDIRECT_BUFFER usage and holds three u32 at `offset` (a multiple of 4), made visible to
+        // the indirect read by the barrier after the command that wrote them (MEMORY_WRITE to
+        // MEMORY_READ, which includes INDIRECT_COMMAND_READ, over ALL_COMMANDS); the kernel
+        // that writes them keeps each count within maxComputeWorkGroupCount (x ≤ 65535).
+        unsafe {
+            d.cmd_bind_pipeline(self.p.cmd, vk::PipelineBindPoint::COMPUTE, pipeline.pipeline);
+            d.cmd_bind_descriptor_sets(
+                self.p.cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                pipeline.layout,
+                0,
+                &sets,
+                &[],
+            );
+            d.cmd_dispatch_indirect(self.p.cmd, args.buffer, offset);
+        }
+        self.stamp(timed, 1);
+        self.barrier();
+        Ok(())
+    }
+
     /// Records one draw of `vertices` vertices by the graphics `pipeline` (made in
     /// `render_pass`) into `target`, its attachments cleared to `clear`, with `sets`, inside the
     /// recorder's occlusion query when `occlusion` (read by [`Recorder::occlusion`] after a
@@ -709,6 +751,23 @@ impl<'g> Recorder<'g> {
         }
         let region = [vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes }];
         // SAFETY: recording; src has TRANSFER_SRC, dst TRANSFER_DST usage, both hold `bytes`.
+        unsafe { self.gpu.raw.device.cmd_copy_buffer(self.p.cmd, src.buffer, dst.buffer, &region) };
+        self.barrier();
+    }
+
+    /// Records a copy of `bytes` from byte `src_offset` of `src` to byte `dst_offset` of `dst`;
+    /// a barrier follows.
+    pub(crate) fn copy_at(
+        &mut self,
+        src: &Buffer,
+        src_offset: u64,
+        dst: &Buffer,
+        dst_offset: u64,
+        bytes: u64,
+    ) {
+        let region = [vk::BufferCopy { src_offset, dst_offset, size: bytes }];
+        // SAFETY: recording; src has TRANSFER_SRC, dst TRANSFER_DST usage, and each holds the
+        // range copied (the callers' offsets are within their fixed layouts).
         unsafe { self.gpu.raw.device.cmd_copy_buffer(self.p.cmd, src.buffer, dst.buffer, &region) };
         self.barrier();
     }

@@ -28,9 +28,9 @@
 
 use std::cell::Cell;
 
-use glam::{Mat3, Vec3, Vec4};
-use oit_core::setup::{TRIANGLE_WORDS, TriangleSetup, box_vertices, normal_matrix};
-use oit_core::{Aabb, Camera, OitError, RasterPath, Scene, Settings};
+use oit_core::gpu_setup::{ARGS_ITEMS, ARGS_PER_ITEM, ARGS_WORDS, SetupGeometry, VERT_WORDS};
+use oit_core::setup::{TRIANGLE_WORDS, TriangleSetup};
+use oit_core::{Camera, OitError, RasterPath, Scene, Settings};
 
 use crate::ctx::{Driver, Gate, Generated, GpuCtx, SetupCheck, dispatch_size};
 use crate::gpu::Gpu;
@@ -43,11 +43,9 @@ pub const SETUP_WGSL: &str =
 const TILE: u32 = 8;
 /// Bytes of the smallest triangle and work-list buffers (a binding may not be empty).
 const MIN_BYTES: u64 = 256;
-/// Words per instance in the setup kernel's instance table (setup.wgsl's `INSTANCE_WORDS`).
-const INSTANCE_WORDS: usize = 40;
 /// Bytes of the indirect-argument buffer: the per-pixel and per-item raster dispatches (4 words
 /// each) and the item count.
-const ARGS_BYTES: u64 = 48;
+const ARGS_BYTES: u64 = ARGS_WORDS as u64 * 4;
 
 /// Whether the compute path sets triangles up on the GPU: `OIT_HOST_SETUP=1` (or `true`) says no,
 /// `OIT_HOST_SETUP=0` (or `false`) yes; otherwise yes unless the device is a CPU (module docs).
@@ -130,174 +128,22 @@ impl ComputeRaster {
     }
 }
 
-/// Where one instance's mesh lies in [`GpuGeometry`]'s buffer, and its primitive ids.
-#[derive(Clone, Copy)]
-struct InstanceGeometry {
-    vertex_base: u32,
-    vertex_count: u32,
-    /// First colour word, `u32::MAX` without vertex colours.
-    color_base: u32,
-    index_base: u32,
-    tri_count: u32,
-    prim_base: u32,
-    first_task: u32,
-    /// Normals used as given (the boxes' are world-space already), not through a normal matrix.
-    raw_normals: bool,
-    /// The instance's object colour.
-    color: Vec4,
-}
-
-/// A scene's world-space geometry on the GPU for the setup kernel, uploaded once: all positions,
-/// then all normals, all vertex colours and all indices in one buffer of words, each mesh once
-/// (the instances of a mesh share it); or, for the bounds passes, each instance's box.
+/// A scene's world-space geometry on the GPU for the setup kernel, uploaded once
+/// ([`SetupGeometry`]'s words; the layout is oit-core's, shared with oit-vulkan).
 pub(crate) struct GpuGeometry {
     buffer: wgpu::Buffer,
-    instances: Vec<InstanceGeometry>,
-    positions: u32,
-    normals: u32,
-    tasks: u32,
-    boxes: bool,
+    layout: SetupGeometry,
 }
 
 impl GpuGeometry {
     fn new(gpu: &Gpu, scene: &Scene, boxes: bool, made: &Cell<u64>) -> Result<GpuGeometry, OitError> {
-        let (mut pos, mut nor, mut col, mut idx): (Vec<u32>, Vec<u32>, Vec<u32>, Vec<u32>) =
-            Default::default();
-        let mut instances = Vec::with_capacity(scene.instances.len());
-        let mut colors_at = Vec::new();
-        let mut tasks = 0u32;
-        let word = |v: Vec3| v.to_array().map(f32::to_bits);
-        if boxes {
-            idx.extend(Aabb::TRIANGLES.iter().flatten());
-            let mesh_bounds = scene.mesh_bounds();
-            for (i, inst) in scene.instances.iter().enumerate() {
-                let Some(object) = scene.objects.get(inst.object) else { continue };
-                let Some(bounds) = mesh_bounds.get(object.mesh) else { continue };
-                let (corners, normals) = box_vertices(bounds, &inst.transform);
-                let vertex_base = (pos.len() / 3) as u32;
-                corners.iter().for_each(|&c| pos.extend(word(c)));
-                normals.iter().for_each(|&n| nor.extend(word(n)));
-                instances.push(InstanceGeometry {
-                    vertex_base,
-                    vertex_count: 8,
-                    color_base: u32::MAX,
-                    index_base: 0,
-                    tri_count: 12,
-                    prim_base: u32::try_from(i).unwrap_or(u32::MAX).saturating_mul(12),
-                    first_task: tasks,
-                    raw_normals: true,
-                    color: object.color,
-                });
-                colors_at.push(None);
-                tasks = tasks.saturating_add(12);
-            }
-        } else {
-            // each mesh once: (vertex base, colour offset in `col`, index base)
-            let mut meshes: Vec<Option<(u32, Option<u32>, u32)>> = vec![None; scene.meshes.len()];
-            let mut prim_base = 0u32;
-            for inst in &scene.instances {
-                let Some(object) = scene.objects.get(inst.object) else { continue };
-                let Some(mesh) = scene.meshes.get(object.mesh) else { continue };
-                let tri_count = u32::try_from(mesh.indices.len()).unwrap_or(u32::MAX);
-                let (vertex_base, color_at, index_base) = *meshes[object.mesh].get_or_insert_with(|| {
-                    let (vertex_base, index_base) = ((pos.len() / 3) as u32, idx.len() as u32);
-                    mesh.positions.iter().for_each(|&p| pos.extend(word(p)));
-                    // Scene::validate holds one normal per position; a short list reads as zero
-                    for k in 0..mesh.positions.len() {
-                        nor.extend(word(mesh.normals.get(k).copied().unwrap_or(Vec3::ZERO)));
-                    }
-                    idx.extend(mesh.indices.iter().flatten());
-                    let color_at = mesh.colors.as_ref().map(|c| {
-                        let at = col.len() as u32;
-                        c.iter().for_each(|&c| col.extend(word(c)));
-                        at
-                    });
-                    (vertex_base, color_at, index_base)
-                });
-                instances.push(InstanceGeometry {
-                    vertex_base,
-                    vertex_count: mesh.positions.len() as u32,
-                    color_base: u32::MAX,
-                    index_base,
-                    tri_count,
-                    prim_base,
-                    first_task: tasks,
-                    raw_normals: false,
-                    color: object.color,
-                });
-                colors_at.push(color_at);
-                prim_base = prim_base.saturating_add(tri_count);
-                tasks = tasks.checked_add(tri_count).ok_or_else(|| {
-                    OitError::InvalidScene("more than 2^32 triangles for the compute path's setup".into())
-                })?;
-            }
-        }
-        let positions = 0u32;
-        let normals = pos.len() as u32;
-        let colors = normals + nor.len() as u32;
-        let indices = colors + col.len() as u32;
-        for (g, at) in instances.iter_mut().zip(colors_at) {
-            g.color_base = at.map_or(u32::MAX, |at| colors + at);
-            g.index_base += indices;
-        }
-        let mut words = pos;
-        words.extend(nor);
-        words.extend(col);
-        words.extend(idx);
+        let mut layout = SetupGeometry::new(scene, boxes)?;
+        let words = std::mem::take(&mut layout.words);
         let bytes = (words.len() as u64 * 4).max(MIN_BYTES);
         gpu.check_scene_storage("the scene's geometry for the compute path's setup", bytes)?;
         let buffer = storage_buffer(gpu, "setup geometry", bytes, made);
         gpu.queue.write_buffer(&buffer, 0, bytemuck::cast_slice(&words));
-        Ok(GpuGeometry { buffer, instances, positions, normals, tasks, boxes })
-    }
-
-    /// The instance table of one frame (setup.wgsl's layout): mvp, normal matrix, base colour,
-    /// where the mesh lies, primitive ids.
-    /// Vertices of all instances: the vertex cache's records (setup.wgsl's `vertex_main`).
-    fn vertex_total(&self) -> u64 {
-        self.instances.iter().map(|g| u64::from(g.vertex_count)).sum()
-    }
-
-    fn instance_words(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Vec<u32> {
-        let view_proj = camera.view_proj();
-        let mut out = Vec::with_capacity(self.instances.len().max(1) * INSTANCE_WORDS);
-        // each instance's first record in the vertex cache (setup.wgsl's `I_FIRST_VERT`)
-        let mut first_vert = 0u32;
-        let mut live = scene.instances.iter().filter(|inst| {
-            scene.objects.get(inst.object).is_some_and(|o| scene.meshes.get(o.mesh).is_some())
-        });
-        for g in &self.instances {
-            let Some(inst) = live.next() else { break };
-            // as TriangleSetup::new and ::bounding_boxes compute them
-            let (mvp, nm) = if self.boxes {
-                (view_proj, Mat3::IDENTITY)
-            } else {
-                (view_proj * inst.transform, normal_matrix(&inst.transform))
-            };
-            let base = settings.material_color(g.color);
-            out.extend(mvp.to_cols_array().map(f32::to_bits));
-            out.extend(nm.to_cols_array().map(f32::to_bits));
-            out.extend(base.to_array().map(f32::to_bits));
-            out.extend([
-                g.vertex_base,
-                g.vertex_count,
-                g.color_base,
-                g.index_base,
-                g.tri_count,
-                g.prim_base,
-                g.first_task,
-                u32::from(g.raw_normals),
-                self.positions,
-                self.normals,
-                first_vert,
-            ]);
-            first_vert = first_vert.saturating_add(g.vertex_count);
-        }
-        if out.is_empty() {
-            out.resize(INSTANCE_WORDS, 0);
-        }
-        debug_assert_eq!(out.len() % INSTANCE_WORDS, 0);
-        out
+        Ok(GpuGeometry { buffer, layout })
     }
 }
 
@@ -344,7 +190,7 @@ struct SetupBuffers {
 }
 
 /// Bytes of one vertex-cache record (setup.wgsl's `VERT_WORDS`).
-const VERT_BYTES: u64 = 12 * 4;
+const VERT_BYTES: u64 = VERT_WORDS as u64 * 4;
 
 fn storage_buffer(gpu: &Gpu, label: &str, size: u64, made: &Cell<u64>) -> wgpu::Buffer {
     use wgpu::BufferUsages as U;
@@ -568,10 +414,10 @@ impl ComputeBuffers {
         made: &Cell<u64>,
     ) -> Result<(Option<f64>, Option<SetupCheck>), OitError> {
         use wgpu::BufferUsages as U;
-        if self.setup.as_ref().is_none_or(|s| s.geometry.boxes != boxes) {
+        if self.setup.as_ref().is_none_or(|s| s.geometry.layout.boxes != boxes) {
             self.trusted = false;
             let geometry = GpuGeometry::new(gpu, scene, boxes, made)?;
-            let instance_bytes = (geometry.instances.len().max(1) * INSTANCE_WORDS * 4) as u64;
+            let instance_bytes = geometry.layout.instance_bytes();
             let layout = gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("setup"),
                 entries: &[
@@ -586,11 +432,9 @@ impl ComputeBuffers {
                 ],
             });
             // a first guess at the room the pieces and the work list need (grown if short)
-            let tasks = u64::from(geometry.tasks);
             let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
-            let guess_tris = ((tasks + tasks / 8 + 64) * TRIANGLE_WORDS as u64 * 4).min(limit);
-            let guess_items = ((2 * tasks + 4096) * 8).min(limit);
-            let vert_bytes = geometry.vertex_total() * VERT_BYTES;
+            let (guess_tris, guess_items) = geometry.layout.first_guess(limit);
+            let vert_bytes = geometry.layout.vertex_total() * VERT_BYTES;
             let use_verts = self.vertex_cache && vert_bytes > 0 && vert_bytes <= limit;
             let verts =
                 storage_buffer(gpu, "setup vertex cache", if use_verts { vert_bytes } else { 16 }, made);
@@ -628,7 +472,7 @@ impl ComputeBuffers {
         };
         {
             let s = self.setup.as_ref().expect("made above");
-            let words = s.geometry.instance_words(scene, camera, settings);
+            let words = s.geometry.layout.instance_words(scene, camera, settings);
             gpu.queue.write_buffer(&s.instances, 0, bytemuck::cast_slice(&words));
         }
         self.write_uniform(gpu, camera, settings, 0);
@@ -636,30 +480,7 @@ impl ComputeBuffers {
             let tri_capacity = self.tris.size() / (TRIANGLE_WORDS as u64 * 4);
             let item_capacity = self.items.size() / 8;
             let s = self.setup.as_mut().expect("made above");
-            // a window of a larger frame (`Settings::region`, a screen tile) snaps in the full
-            // frame's viewport and shifts by its origin, as oit-core's setup does
-            let (full, origin) = match settings.region {
-                Some(r) => ((r.full_width, r.full_height), (r.x << 8, r.y << 8)),
-                None => ((settings.width, settings.height), (0, 0)),
-            };
-            let (full, origin) = (
-                (full.0.min(oit_core::MAX_SIZE), full.1.min(oit_core::MAX_SIZE)),
-                (origin.0.min(oit_core::MAX_SIZE << 8), origin.1.min(oit_core::MAX_SIZE << 8)),
-            );
-            let uniform: [u32; 12] = [
-                settings.width.min(oit_core::MAX_SIZE),
-                settings.height.min(oit_core::MAX_SIZE),
-                (full.0 as f32).to_bits(),
-                (full.1 as f32).to_bits(),
-                s.geometry.instances.len() as u32,
-                s.geometry.tasks,
-                tri_capacity.min(u64::from(u32::MAX)) as u32,
-                item_capacity.min(u64::from(u32::MAX)) as u32,
-                origin.0,
-                origin.1,
-                s.geometry.vertex_total().min(u64::from(u32::MAX)) as u32,
-                u32::from(s.use_verts),
-            ];
+            let uniform = s.geometry.layout.uniform_words(settings, tri_capacity, item_capacity, s.use_verts);
             gpu.queue.write_buffer(&s.uniform, 0, bytemuck::cast_slice(&uniform));
             let group = s.group.get_or_insert_with(|| {
                 bind(
@@ -692,13 +513,13 @@ impl ComputeBuffers {
                 });
                 pass.set_bind_group(0, &*group, &[]);
                 if s.use_verts {
-                    let (x, y) = dispatch_size(s.geometry.vertex_total());
+                    let (x, y) = dispatch_size(s.geometry.layout.vertex_total());
                     if x > 0 {
                         pass.set_pipeline(&vertex_pipeline);
                         pass.dispatch_workgroups(x, y, 1);
                     }
                 }
-                let (x, y) = dispatch_size(u64::from(s.geometry.tasks));
+                let (x, y) = dispatch_size(u64::from(s.geometry.layout.tasks));
                 if x > 0 {
                     pass.set_pipeline(&setup_pipeline);
                     pass.dispatch_workgroups(x, y, 1);
@@ -707,7 +528,7 @@ impl ComputeBuffers {
                 pass.dispatch_workgroups(1, 1, 1);
             }
             // the raster uniform's item count, from the arguments kernel
-            encoder.copy_buffer_to_buffer(&self.args, 32, &self.uniform, 0, 4);
+            encoder.copy_buffer_to_buffer(&self.args, ARGS_ITEMS, &self.uniform, 0, 4);
             if let Some((set, resolve)) = &s.timestamps {
                 encoder.resolve_query_set(set, 0..2, resolve, 0);
             }
@@ -796,7 +617,7 @@ impl Driver for ComputeRaster {
             pass.set_bind_group(1, &self.group, &[]);
             // arguments written by the setup (or the host's): the per-pixel dispatch, then the
             // per-item one
-            pass.dispatch_workgroups_indirect(args, if per_pixel { 0 } else { 16 });
+            pass.dispatch_workgroups_indirect(args, if per_pixel { 0 } else { ARGS_PER_ITEM });
         }
         ctx.finish_timed("geometry", encoder)?;
         Ok(Generated(self.generated.clone()))
