@@ -4,8 +4,10 @@
 //! `wavg`, `wsum`, `bdp`/`bdp:P`, `adp`, `mdts:K`, `mdts64:K`, `fabs:K`, `mlp:M`, `dfb`, `ll`) on
 //! both raster paths, on oit-wgpu's WGSL compiled to SPIR-V by naga in `build.rs`:
 //! - the **compute-raster path** (`RasterPath::Compute`, the default here): oit-wgpu's compute
-//!   rasterizer with oit-core's setup (on the host), so the fragments equal oit-cpu's and the
-//!   images oit-wgpu's compute path's;
+//!   rasterizer after oit-core's setup, run on the GPU by oit-wgpu's `setup.wgsl` (bit for bit
+//!   the host's; on the host on a CPU device, see `raster`'s docs and
+//!   [`VulkanBackend::with_gpu_setup`]), so the fragments equal oit-cpu's and the images
+//!   oit-wgpu's compute path's;
 //! - the **hardware-raster path** (`RasterPath::Hardware`, where the device has a graphics queue,
 //!   `fragmentStoresAndAtomics` and a blendable `R32_SFLOAT`): a graphics pipeline over the
 //!   scene's vertices pulled from storage (`oit_core::pulled`), oit-wgpu's `hw_vs`/`hw_fs`, a
