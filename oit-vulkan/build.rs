@@ -43,10 +43,26 @@ const MODULES: &[(&str, &str, Tail)] = &[
     ("finish", "shaders/finish.wgsl", Kernels),
     ("count", "technique/count.wgsl", Raster),
     ("reference", "technique/reference.wgsl+technique/sort_entries.wgsl", Raster),
-    ("fabs", "technique/fabs.wgsl+technique/tail.wgsl", Raster),
+    ("fabs", "technique/fabs_counters.wgsl+technique/fabs.wgsl+technique/tail.wgsl", Raster),
+    // `--atomic-storage image`: the same technique sources over storage images (src/shaders/)
+    (
+        "fabs_image",
+        "vk:shaders/atomic_result.wgsl+vk:shaders/fabs_counters_image.wgsl+technique/fabs.wgsl+technique/tail.wgsl",
+        Raster,
+    ),
     ("weighted", "technique/weighted.wgsl", Raster),
     ("plain", "technique/plain.wgsl", Raster),
-    ("mdts", "technique/mdts.wgsl+technique/tail.wgsl", Raster),
+    ("mdts", "technique/mdts_words.wgsl+technique/mdts_keys.wgsl+technique/mdts.wgsl+technique/tail.wgsl", Raster),
+    (
+        "mdts_image",
+        "vk:shaders/atomic_result.wgsl+vk:shaders/mdts_words_image.wgsl+technique/mdts_keys.wgsl+technique/mdts.wgsl+technique/tail.wgsl",
+        Raster,
+    ),
+    (
+        "mdts64_image",
+        "vk:shaders/atomic_result.wgsl+technique/mdts_words.wgsl+vk:shaders/mdts_keys_image.wgsl+technique/mdts.wgsl+technique/tail.wgsl",
+        Raster,
+    ),
     ("dp", "technique/dp.wgsl", Raster),
     ("ddp", "technique/ddp.wgsl", Raster),
     ("mlp", "technique/mlp.wgsl", Raster),
@@ -75,6 +91,89 @@ fn read(dir: &Path, rel: &str) -> String {
     std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()))
 }
 
+/// SPIR-V opcodes `atomic_results` reads and writes.
+mod op {
+    pub const NAME: u32 = 5;
+    pub const FUNCTION: u32 = 54;
+    pub const FUNCTION_CALL: u32 = 57;
+    pub const IMAGE_TEXEL_POINTER: u32 = 60;
+    pub const COPY_OBJECT: u32 = 83;
+    /// OpAtomicExchange ..= OpAtomicXor (229 ..= 242): every atomic with a result and a pointer
+    /// at word 3.
+    pub const ATOMICS: std::ops::RangeInclusive<u32> = 229..=242;
+    pub const LABEL: u32 = 248;
+}
+
+/// Rewrites every call of `vk_atomic_result` / `vk_atomic_result64` (src/shaders/atomic_result.wgsl)
+/// into `OpCopyObject` of the result of the image atomic just before it in the same block (an
+/// `OpAtomic*` on a pointer from `OpImageTexelPointer`), so WGSL's result-less `textureAtomic*`
+/// give the texel's old value, as GLSL's `imageAtomic*` do. Returns the calls rewritten; fails
+/// on a call with arguments, one with no image atomic before it in its block, or one whose type
+/// differs from the atomic's. The words keep their length (both instructions are 4 words).
+fn atomic_results(words: &mut [u32]) -> Result<usize, String> {
+    const HEADER: usize = 5;
+    let instructions = |words: &[u32]| {
+        let mut at = HEADER;
+        let mut out = Vec::new();
+        while at < words.len() {
+            let count = (words[at] >> 16) as usize;
+            if count == 0 || at + count > words.len() {
+                return Err(format!("malformed SPIR-V at word {at}"));
+            }
+            out.push((at, words[at] & 0xffff, count));
+            at += count;
+        }
+        Ok(out)
+    };
+    let list = instructions(words)?;
+    let mut markers = Vec::new();
+    for &(at, opcode, count) in &list {
+        if opcode == op::NAME && count >= 3 {
+            let bytes: Vec<u8> = words[at + 2..at + count].iter().flat_map(|w| w.to_le_bytes()).collect();
+            let name = bytes.split(|&b| b == 0).next().unwrap_or_default();
+            if name == b"vk_atomic_result" || name == b"vk_atomic_result64" {
+                markers.push(words[at + 1]);
+            }
+        }
+    }
+    if markers.is_empty() {
+        return Ok(0);
+    }
+    let mut texel_pointers = std::collections::HashSet::new();
+    // (result type, result id) of the last image atomic of the current block
+    let mut last: Option<(u32, u32)> = None;
+    let mut copied = 0;
+    for &(at, opcode, count) in &list {
+        match opcode {
+            op::FUNCTION | op::LABEL => last = None,
+            op::IMAGE_TEXEL_POINTER => {
+                texel_pointers.insert(words[at + 2]);
+            }
+            o if op::ATOMICS.contains(&o) && count >= 4 && texel_pointers.contains(&words[at + 3]) => {
+                last = Some((words[at + 1], words[at + 2]));
+            }
+            op::FUNCTION_CALL if count >= 4 && markers.contains(&words[at + 3]) => {
+                if count != 4 {
+                    return Err(format!("a call of an atomic-result marker with arguments at word {at}"));
+                }
+                let Some((ty, result)) = last.take() else {
+                    return Err(format!(
+                        "a call of an atomic-result marker at word {at} with no image atomic before it in its block"
+                    ));
+                };
+                if ty != words[at + 1] {
+                    return Err(format!("an atomic-result marker at word {at} of another type than its atomic"));
+                }
+                words[at] = (4 << 16) | op::COPY_OBJECT;
+                words[at + 3] = result;
+                copied += 1;
+            }
+            _ => {}
+        }
+    }
+    Ok(copied)
+}
+
 fn main() {
     let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets it"));
     let wgsl = manifest.join("../oit-wgpu/src");
@@ -99,7 +198,9 @@ fn main() {
     use naga::valid::{Capabilities, ValidationFlags, Validator};
     let capabilities = Capabilities::SHADER_INT64
         | Capabilities::SHADER_INT64_ATOMIC_MIN_MAX
-        | Capabilities::SHADER_INT64_ATOMIC_ALL_OPS;
+        | Capabilities::SHADER_INT64_ATOMIC_ALL_OPS
+        | Capabilities::TEXTURE_ATOMIC
+        | Capabilities::TEXTURE_INT64_ATOMIC;
     let mut flags = spv::WriterFlags::empty();
     flags.set(spv::WriterFlags::DEBUG, true);
     flags.set(spv::WriterFlags::ADJUST_COORDINATE_SPACE, false);
@@ -113,6 +214,9 @@ fn main() {
                 spv::Capability::Int64Atomics,
                 // the bounds checks of the blend captures' textureLoad
                 spv::Capability::ImageQuery,
+                // R64_UINT storage images (mdts64_image only; naga asks for it where one is
+                // declared, and the backend runs that module only where the device has it)
+                spv::Capability::Int64ImageEXT,
             ]
             .into_iter()
             .collect(),
@@ -134,8 +238,12 @@ fn main() {
         let info = Validator::new(ValidationFlags::all(), capabilities)
             .validate(&module)
             .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(text)));
-        let words =
+        let mut words =
             spv::write_vec(&module, &info, &options, None).unwrap_or_else(|e| panic!("{name}: SPIR-V: {e}"));
+        let copied = atomic_results(&mut words).unwrap_or_else(|e| panic!("{name}: {e}"));
+        if text.contains("vk_atomic_result") && text.contains("textureAtomic") && copied == 0 {
+            panic!("{name}: calls vk_atomic_result but no call was rewritten");
+        }
         let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
         std::fs::write(out.join(format!("{name}.spv")), bytes).expect("write SPIR-V");
         let entries: Vec<String> = module.entry_points.iter().map(|e| format!("{:?}", e.name)).collect();

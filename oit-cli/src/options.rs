@@ -88,6 +88,13 @@ pub struct SceneArgs {
     #[arg(long, value_name = "atomics|blend", default_value = "atomics")]
     pub hardware_capture: String,
 
+    /// Where mdts, mdts64 and fabs keep their atomic words: buffer (storage buffers, every
+    /// backend) or image (storage images by imageAtomicMin / imageAtomicAdd, as the papers'
+    /// OpenGL ports did; vulkan only, mdts64 where the device has 64-bit image atomics). Other
+    /// techniques ignore it.
+    #[arg(long, value_name = "buffer|image", default_value = "buffer")]
+    pub atomic_storage: String,
+
     /// Stops the peeling techniques (dp, ddp, mlp, adp batches) after N capture passes; deeper
     /// layers count as lost [default: peel until no layer is left].
     #[arg(long, value_name = "N")]
@@ -176,6 +183,7 @@ impl SceneArgs {
             region: None,
             memory: self.memory.as_deref().map(parse_memory).transpose()?,
             overflow: self.overflow.parse::<Overflow>()?,
+            atomic_storage: self.atomic_storage.parse::<oit_core::AtomicStorage>()?,
         };
         settings.validate()?;
         check_planes(self.near, self.far)?;

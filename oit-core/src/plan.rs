@@ -123,6 +123,11 @@ pub struct Plan {
     /// pass where a pixel overflowed) instead of dropped. False where K comes from a counting
     /// pass: nothing can overflow there.
     pub tail: bool,
+    /// `--atomic-storage image` on `mdts:K`, `mdts64:K` or `fabs:K`: their atomic words live in
+    /// storage images ([`crate::AtomicStorage::Image`]; a backend without them refuses, see
+    /// [`Plan::refuse_image_atomics`]). False for every other technique, which ignores the
+    /// setting (the reference a comparison renders beside them runs under the same settings).
+    pub image_atomics: bool,
 }
 
 impl Plan {
@@ -197,6 +202,8 @@ impl Plan {
             mdts_alpha8: (alpha.clamp(0.0, 1.0) * 255.0 + 0.5) as u32,
             blender: false,
             tail: fixed_k && settings.overflow == crate::Overflow::Tail,
+            image_atomics: settings.atomic_storage == crate::AtomicStorage::Image
+                && matches!(technique, Technique::Fabs { .. } | Technique::Mdts { .. } | Technique::Mdts64 { .. }),
             count_ties: match technique {
                 Technique::Dp
                 | Technique::Ddp
@@ -207,6 +214,23 @@ impl Plan {
                 Technique::Bdp { .. } => !bdp_color,
                 _ => false,
             },
+        })
+    }
+
+    /// The refusal of a backend that keeps its atomic words in buffers only, where the plan asks
+    /// for storage images (`Ok` where it does not).
+    pub fn refuse_image_atomics(&self, backend: &str) -> Result<(), OitError> {
+        if !self.image_atomics {
+            return Ok(());
+        }
+        Err(OitError::Unsupported {
+            backend: backend.into(),
+            what: format!(
+                "--atomic-storage image for {}: storage-image atomics run on the vulkan backend only \
+                 (WGSL's textureAtomic* return no value; the CPU has no images); use --atomic-storage \
+                 buffer or --backend vulkan",
+                self.technique
+            ),
         })
     }
 

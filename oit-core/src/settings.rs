@@ -107,6 +107,38 @@ pub struct Settings {
     /// What `fabs:K`, `mdts:K` and `mdts64:K` make of the fragments a pixel has beyond its K
     /// (`--overflow`); other techniques, and those three sized from a counting pass, ignore it.
     pub overflow: Overflow,
+    /// Where `mdts:K`, `mdts64:K` and `fabs:K` keep the words they update atomically
+    /// (`--atomic-storage`); other techniques ignore it.
+    pub atomic_storage: AtomicStorage,
+}
+
+/// Where the atomic-array techniques (`mdts:K`, `mdts64:K`, `fabs:K`) keep the words they update
+/// atomically.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AtomicStorage {
+    /// Storage buffers (std atomics on oit-cpu): every backend.
+    #[default]
+    Buffer,
+    /// Storage images, as the CUDA-rasterizer papers' OpenGL ports used them (Liu et al. 2009's
+    /// `imageAtomicMin` on `R32_UINT` for mdts, `R64_UINT` for mdts64 where the device has
+    /// `VK_EXT_shader_image_atomic_int64`; Huang et al. 2011's per-pixel counter by
+    /// `imageAtomicAdd` for fabs): oit-vulkan only. WGSL's `textureAtomic*` return no value, and
+    /// every one of these captures needs the old value, so oit-wgpu cannot write them.
+    Image,
+}
+
+impl FromStr for AtomicStorage {
+    type Err = OitError;
+    fn from_str(s: &str) -> Result<AtomicStorage, OitError> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "buffer" | "buffers" => Ok(AtomicStorage::Buffer),
+            "image" | "images" => Ok(AtomicStorage::Image),
+            other => Err(OitError::InvalidSettings(format!(
+                "unknown atomic storage '{other}': use buffer or image"
+            ))),
+        }
+    }
 }
 
 /// What the fixed-size techniques (`fabs:K`, `mdts:K`, `mdts64:K`) make of a pixel's fragments
@@ -256,6 +288,7 @@ impl Default for Settings {
             region: None,
             memory: None,
             overflow: Overflow::Drop,
+            atomic_storage: AtomicStorage::Buffer,
         }
     }
 }

@@ -101,6 +101,7 @@ impl CpuPrepared<'_> {
             return Err(OitError::InvalidSettings("camera matrices are not finite".into()));
         }
         let plan = oit_core::plan::Plan::new("cpu", self.scene, settings)?;
+        plan.refuse_image_atomics("cpu")?;
         // the whole frame's storage against the host's memory, before anything is allocated
         // (sizes from a counting pass are checked again as they are allocated)
         let budget = cpu_budget(settings);

@@ -89,13 +89,36 @@ impl BufferPool {
     ) -> Result<Rc<GpuImage>, OitError> {
         let mut free = self.free_images.borrow_mut();
         let fits = |i: &Rc<GpuImage>| {
-            i.extent == (size.0.max(1), size.1.max(1)) && i.format == format && i.usage == usage
+            i.extent == (size.0.max(1), size.1.max(1)) && i.layers == 1 && i.format == format && i.usage == usage
         };
         if let Some(i) = free.iter().position(fits) {
             return Ok(free.swap_remove(i));
         }
         self.allocations.set(self.allocations.get() + 1);
         Ok(Rc::new(gpu.image(size, format, usage)?))
+    }
+
+    /// A storage image of `size`, `layers` and `format` ([`Gpu::storage_image`]), free or new.
+    fn take_storage_image(
+        &self,
+        gpu: &Gpu,
+        what: &str,
+        size: (u32, u32),
+        layers: u32,
+        format: vk::Format,
+    ) -> Result<Rc<GpuImage>, OitError> {
+        let mut free = self.free_images.borrow_mut();
+        let fits = |i: &Rc<GpuImage>| {
+            i.extent == (size.0.max(1), size.1.max(1))
+                && i.layers == layers.max(1)
+                && i.format == format
+                && i.usage.contains(vk::ImageUsageFlags::STORAGE)
+        };
+        if let Some(i) = free.iter().position(fits) {
+            return Ok(free.swap_remove(i));
+        }
+        self.allocations.set(self.allocations.get() + 1);
+        Ok(Rc::new(gpu.storage_image(what, size, layers, format)?))
     }
 
     /// The framebuffer of `images` in `pass`, made on first use (the pool keeps the images).
@@ -181,6 +204,9 @@ pub(crate) struct VkCtx<'a> {
     pool: &'a BufferPool,
     lent: Vec<Rc<Buffer>>,
     lent_images: Vec<Rc<GpuImage>>,
+    /// The frame's storage images (binding, image), bound in group 0 of every command from
+    /// their creation on ([`VkCtx::storage_image`]).
+    images: Vec<(u32, Rc<GpuImage>)>,
     rec: Recorder<'a>,
     validation_before: u64,
     /// The compute path's setup checks left to the frame's end (`raster::SetupCheck`).
@@ -260,6 +286,7 @@ impl<'a> VkCtx<'a> {
             pool,
             lent,
             lent_images: Vec::new(),
+            images: Vec::new(),
             rec,
             validation_before: crate::device::validation_errors(),
             setup_checks: Vec::new(),
@@ -294,6 +321,41 @@ impl<'a> VkCtx<'a> {
             },
         );
         Ok(buffer)
+    }
+
+    /// A storage image of the frame's size with `layers` layers of `format` (`R32_UINT` or
+    /// `R64_UINT`) for the technique's atomics, bound at `binding` of group 0 of every command
+    /// from now on: checked against the limits, counted in `storage_bytes` (`texel` bytes a pixel
+    /// and layer), from the pool (a steady frame makes none), and every texel set to `fill` in
+    /// each of its 32-bit halves.
+    pub(crate) fn storage_image(
+        &mut self,
+        label: &str,
+        binding: u32,
+        layers: u32,
+        format: vk::Format,
+        fill: u32,
+    ) -> Result<Rc<GpuImage>, OitError> {
+        let texel: u64 = if format == vk::Format::R64_UINT { 8 } else { 4 };
+        let bytes = u64::from(self.pixels) * u64::from(layers) * texel;
+        let budget = self.settings.memory_budget(self.gpu.memory_budget());
+        oit_core::plan::check_total(
+            &format!("{} storage of a frame of {} pixels", self.settings.technique, self.pixels),
+            self.storage_bytes.saturating_add(u64::from(self.pixels) * STATE_WORDS * 4).saturating_add(bytes),
+            (&budget.0, budget.1),
+        )?;
+        let image =
+            self.pool.take_storage_image(self.gpu, label, (self.settings.width, self.settings.height), layers, format)?;
+        self.storage_bytes += bytes;
+        self.lent_images.push(image.clone());
+        self.rec.clear_image(&image, fill);
+        self.images.push((binding, image.clone()));
+        Ok(image)
+    }
+
+    /// The bindings of the frame's storage images, and the images, for group 0.
+    fn image_bindings(&self) -> (Vec<u32>, Vec<(u32, Rc<GpuImage>)>) {
+        (self.images.iter().map(|(b, _)| *b).collect(), self.images.clone())
     }
 
     /// A small buffer bound where a mode's WGSL declares an array it does not use (not storage).
@@ -434,7 +496,9 @@ impl<'a> VkCtx<'a> {
         // CPU device (lavapipe), where 64 invocations of one small triangle mostly test nothing
         let per_pixel = !self.gpu.is_cpu();
         let entry = if per_pixel { "raster_main" } else { "raster_loop_main" };
-        let pipeline = self.gpu.pipeline(module, entry, buffers.len())?;
+        let (bindings, images) = self.image_bindings();
+        let images: Vec<(u32, &GpuImage)> = images.iter().map(|(b, i)| (*b, &**i)).collect();
+        let pipeline = self.gpu.pipeline(module, entry, buffers.len(), &bindings)?;
         if let Some(check) = raster.upload(&mut self.rec)? {
             self.setup_checks.push(check);
         }
@@ -447,7 +511,7 @@ impl<'a> VkCtx<'a> {
             &mut self.rec,
             &pipeline,
             &[
-                SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage },
+                SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage, images: &images },
                 SetData::Raster { storage: &raster_set, uniform: &raster.uniform },
             ],
             per_pixel,
@@ -464,7 +528,9 @@ impl<'a> VkCtx<'a> {
         buffers: &[&Buffer],
         count: bool,
     ) -> Result<&'r Buffer, OitError> {
-        let pipeline = self.gpu.render_pipeline(module, buffers.len())?;
+        let (bindings, images) = self.image_bindings();
+        let images: Vec<(u32, &GpuImage)> = images.iter().map(|(b, i)| (*b, &**i)).collect();
+        let pipeline = self.gpu.render_pipeline(module, buffers.len(), &bindings)?;
         let render_pass = self.gpu.render_pass(&crate::device::count_pass_key())?;
         raster.upload(&mut self.rec)?;
         let (state, acct) = (self.state.clone(), self.acct.clone());
@@ -478,7 +544,7 @@ impl<'a> VkCtx<'a> {
             raster.framebuffer(),
             &[vk::ClearValue::default()],
             &[
-                SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage },
+                SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage, images: &images },
                 SetData::Raster { storage: &raster_set, uniform: raster.uniform() },
             ],
             raster.vertex_count(),
@@ -559,7 +625,9 @@ impl<'a> VkCtx<'a> {
         invocations: u64,
         label: &str,
     ) -> Result<(), OitError> {
-        let mut kinds = vec![SetKind::Frame(buffers.len())];
+        let (bindings, storage_images) = self.image_bindings();
+        let storage_images: Vec<(u32, &GpuImage)> = storage_images.iter().map(|(b, i)| (*b, &**i)).collect();
+        let mut kinds = vec![SetKind::Frame(buffers.len(), bindings)];
         if !images.is_empty() {
             kinds.push(SetKind::Images(images.iter().map(|(b, _)| *b).collect()));
         }
@@ -568,7 +636,8 @@ impl<'a> VkCtx<'a> {
         let storage = Self::storage(&state, &acct, buffers);
         let uniform = self.uniform;
         let groups = dispatch_size(invocations);
-        let frame = SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage };
+        let frame =
+            SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage, images: &storage_images };
         if images.is_empty() {
             self.rec.dispatch(label, &pipeline, &[frame], groups)
         } else {
@@ -627,7 +696,9 @@ impl<'a> VkCtx<'a> {
             depth: pass.depth.then(|| pass.targets.last().map(|i| i.format)).flatten(),
             final_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
         };
-        let mut kinds = vec![SetKind::Frame(buffers.len()), SetKind::Raster];
+        let (bindings, storage_images) = self.image_bindings();
+        let storage_images: Vec<(u32, &GpuImage)> = storage_images.iter().map(|(b, i)| (*b, &**i)).collect();
+        let mut kinds = vec![SetKind::Frame(buffers.len(), bindings), SetKind::Raster];
         if !pass.previous.is_empty() {
             kinds.push(SetKind::Images(pass.previous.iter().map(|(b, _)| *b).collect()));
         }
@@ -649,7 +720,7 @@ impl<'a> VkCtx<'a> {
         let raster_set = raster.bindings();
         let uniform = self.uniform;
         let mut sets = vec![
-            SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage },
+            SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage, images: &storage_images },
             SetData::Raster { storage: &raster_set, uniform: raster.uniform() },
         ];
         if !pass.previous.is_empty() {

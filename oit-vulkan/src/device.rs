@@ -153,6 +153,13 @@ pub struct DeviceInfo {
     /// Why the hardware-raster path cannot run here (`None`: it can): it needs a graphics queue,
     /// `fragmentStoresAndAtomics` and a blendable `R32_SFLOAT` colour attachment (the counter).
     pub hardware_missing: Option<String>,
+    /// `R32_UINT` storage images with atomics (`STORAGE_IMAGE_ATOMIC`, mandatory in Vulkan):
+    /// `--atomic-storage image` for mdts and fabs.
+    pub image_atomics_32: bool,
+    /// `R64_UINT` storage images with atomics: `VK_EXT_shader_image_atomic_int64`'s
+    /// `shaderImageInt64Atomics` and the format's `STORAGE_IMAGE_ATOMIC` (the H200 has them,
+    /// lavapipe not): `--atomic-storage image` for mdts64. Enabled at device creation when present.
+    pub image_atomics_64: bool,
     /// The largest device-local heap, bytes.
     pub device_heap: u64,
     /// Whether the validation layer is on.
@@ -239,6 +246,8 @@ pub struct GpuImage {
     pub(crate) view: vk::ImageView,
     /// Width and height, pixels.
     pub extent: (u32, u32),
+    /// Array layers (1 but for the storage images of `--atomic-storage image`: one a slot).
+    pub layers: u32,
     /// Its format.
     pub format: vk::Format,
     /// How it may be used.
@@ -273,8 +282,9 @@ struct Cache {
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub(crate) enum SetKind {
     /// Group 0 of every module: the frame uniform (binding 0), the resolve state (1), `n`
-    /// technique buffers (2..) and the loss accounting (15).
-    Frame(usize),
+    /// technique buffers (2..), the loss accounting (15) and storage images at these bindings
+    /// (8.., `--atomic-storage image`; none elsewhere).
+    Frame(usize, Vec<u32>),
     /// Group 1 of a rasterizer: storage at 0, 1 and 3, its uniform at 2 (the compute
     /// rasterizer's triangles, work list and counter; the hardware raster's vertices, triangles
     /// and instances).
@@ -534,10 +544,21 @@ impl Gpu {
             .logic_op(info.logic_op)
             .independent_blend(info.independent_blend);
         let mut v12 = vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(true);
-        let create = vk::DeviceCreateInfo::default()
+        let mut int64_images =
+            vk::PhysicalDeviceShaderImageAtomicInt64FeaturesEXT::default().shader_image_int64_atomics(true);
+        let extensions: Vec<*const std::ffi::c_char> = if info.image_atomics_64 {
+            vec![ash::ext::shader_image_atomic_int64::NAME.as_ptr()]
+        } else {
+            Vec::new()
+        };
+        let mut create = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queues)
             .enabled_features(&core)
+            .enabled_extension_names(&extensions)
             .push_next(&mut v12);
+        if info.image_atomics_64 {
+            create = create.push_next(&mut int64_images);
+        }
         // SAFETY: the physical device belongs to the instance; the features asked for were
         // checked present (`candidate`); the create info outlives the call.
         let device = unsafe { instance.create_device(physical, &create, None) }
@@ -621,6 +642,23 @@ impl Gpu {
                 instance.get_physical_device_format_properties(physical, COUNT_FORMAT),
             )
         };
+        let atomic_format = |format: vk::Format| {
+            // SAFETY: a plain query of a physical device of this instance.
+            let props = unsafe { instance.get_physical_device_format_properties(physical, format) };
+            props.optimal_tiling_features.contains(
+                vk::FormatFeatureFlags::STORAGE_IMAGE | vk::FormatFeatureFlags::STORAGE_IMAGE_ATOMIC,
+            )
+        };
+        let has_image_int64 = extensions
+            .iter()
+            .any(|e| e.extension_name_as_c_str() == Ok(ash::ext::shader_image_atomic_int64::NAME));
+        let image_int64_feature = has_image_int64 && {
+            let mut int64 = vk::PhysicalDeviceShaderImageAtomicInt64FeaturesEXT::default();
+            let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut int64);
+            // SAFETY: a plain query; the extension is present, the chained struct alive.
+            unsafe { instance.get_physical_device_features2(physical, &mut features2) };
+            int64.shader_image_int64_atomics == vk::TRUE
+        };
         let counter_needs = vk::FormatFeatureFlags::COLOR_ATTACHMENT
             | vk::FormatFeatureFlags::COLOR_ATTACHMENT_BLEND
             | vk::FormatFeatureFlags::TRANSFER_SRC;
@@ -678,6 +716,8 @@ impl Gpu {
             independent_blend: features.independent_blend == vk::TRUE,
             hardware_missing,
             blendable,
+            image_atomics_32: atomic_format(vk::Format::R32_UINT),
+            image_atomics_64: image_int64_feature && atomic_format(vk::Format::R64_UINT),
             device_heap,
             validation,
         }
@@ -786,7 +826,6 @@ impl Gpu {
         format: vk::Format,
         usage: vk::ImageUsageFlags,
     ) -> Result<GpuImage, OitError> {
-        let d = &self.raw.device;
         let limit = self.info.limits.max_image_dimension2_d;
         let max_fb = self.info.limits.max_framebuffer_width.min(self.info.limits.max_framebuffer_height);
         let side = width.max(height);
@@ -799,13 +838,60 @@ impl Gpu {
                 hint: "use --memory to render in tiles, a smaller --size, or --raster compute".into(),
             });
         }
+        self.image_layers((width, height), 1, format, usage)
+    }
+
+    /// A device-local `width × height × layers` storage image of `format` for atomics (a 2D
+    /// array, cleared by transfers), with its view; the size checked against
+    /// `maxImageDimension2D` and the layers against `maxImageArrayLayers` first.
+    pub(crate) fn storage_image(
+        &self,
+        what: &str,
+        (width, height): (u32, u32),
+        layers: u32,
+        format: vk::Format,
+    ) -> Result<GpuImage, OitError> {
+        let l = &self.info.limits;
+        let side = width.max(height);
+        if side > l.max_image_dimension2_d {
+            return Err(OitError::TooLarge {
+                what: format!("{what}: a {width}×{height} storage image"),
+                needed: u64::from(side),
+                limit_name: format!("maxImageDimension2D of '{}'", self.info.name),
+                limit: u64::from(l.max_image_dimension2_d),
+                hint: "use --memory to render in tiles, a smaller --size, or --atomic-storage buffer".into(),
+            });
+        }
+        if layers > l.max_image_array_layers {
+            return Err(OitError::TooLarge {
+                what: format!("{what}: {layers} slots a pixel, one image layer each"),
+                needed: u64::from(layers),
+                limit_name: format!("maxImageArrayLayers of '{}'", self.info.name),
+                limit: u64::from(l.max_image_array_layers),
+                hint: "use a smaller K or --atomic-storage buffer".into(),
+            });
+        }
+        let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST;
+        self.image_layers((width, height), layers.max(1), format, usage)
+    }
+
+    /// The image of [`Gpu::image`] and [`Gpu::storage_image`]: `layers` of 2D, viewed as a 2D
+    /// array where there are several or it is a storage image.
+    fn image_layers(
+        &self,
+        (width, height): (u32, u32),
+        layers: u32,
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+    ) -> Result<GpuImage, OitError> {
+        let d = &self.raw.device;
         let extent = vk::Extent3D { width: width.max(1), height: height.max(1), depth: 1 };
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
             .format(format)
             .extent(extent)
             .mip_levels(1)
-            .array_layers(1)
+            .array_layers(layers)
             .samples(vk::SampleCountFlags::TYPE_1)
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(usage)
@@ -848,10 +934,11 @@ impl Gpu {
             memory
         };
         let range =
-            vk::ImageSubresourceRange::default().aspect_mask(aspect(format)).level_count(1).layer_count(1);
+            vk::ImageSubresourceRange::default().aspect_mask(aspect(format)).level_count(1).layer_count(layers);
+        let array = layers > 1 || usage.contains(vk::ImageUsageFlags::STORAGE);
         let view_info = vk::ImageViewCreateInfo::default()
             .image(image)
-            .view_type(vk::ImageViewType::TYPE_2D)
+            .view_type(if array { vk::ImageViewType::TYPE_2D_ARRAY } else { vk::ImageViewType::TYPE_2D })
             .format(format)
             .subresource_range(range);
         // SAFETY: the image is alive and has the format; on failure it is freed.
@@ -872,6 +959,7 @@ impl Gpu {
             memory,
             view,
             extent: (extent.width, extent.height),
+            layers,
             format,
             usage,
         })
@@ -906,9 +994,16 @@ impl Gpu {
     }
 
     /// The compute pipeline of `entry` in `module` (a module of `build.rs`) whose group 0 has `n`
-    /// technique buffers and group 1 is the rasterizer's; made once, then cached.
-    pub fn pipeline(&self, module: &'static str, entry: &str, n: usize) -> Result<Pipeline, OitError> {
-        self.compute(module, entry, &[SetKind::Frame(n), SetKind::Raster])
+    /// technique buffers and storage images at `images`, and group 1 is the rasterizer's; made
+    /// once, then cached.
+    pub fn pipeline(
+        &self,
+        module: &'static str,
+        entry: &str,
+        n: usize,
+        images: &[u32],
+    ) -> Result<Pipeline, OitError> {
+        self.compute(module, entry, &[SetKind::Frame(n, images.to_vec()), SetKind::Raster])
     }
 
     /// The compute pipeline of `entry` in `module` with descriptor sets `sets`; made once, then
@@ -941,11 +1036,11 @@ impl Gpu {
     /// `hw_vs`, then `hw_fs`, which calls the technique's `capture`), whose group 0 has `n`
     /// technique buffers: one colour attachment, the fragment counter (`R32_SFLOAT`), added
     /// to by blending.
-    pub fn render_pipeline(&self, module: &'static str, n: usize) -> Result<Pipeline, OitError> {
+    pub fn render_pipeline(&self, module: &'static str, n: usize, images: &[u32]) -> Result<Pipeline, OitError> {
         self.graphics(&GraphicsDesc {
             module: &format!("{module}_hw"),
             fs: "hw_fs",
-            sets: &[SetKind::Frame(n), SetKind::Raster],
+            sets: &[SetKind::Frame(n, images.to_vec()), SetKind::Raster],
             pass: &count_pass_key(),
             blends: &[Blend::AddRed],
             depth_test: false,
@@ -1127,12 +1222,13 @@ impl Gpu {
                 Some(&l) => l,
                 None => {
                     let bindings: Vec<(u32, vk::DescriptorType)> = match kind {
-                        SetKind::Frame(n) => std::iter::once((0, vk::DescriptorType::UNIFORM_BUFFER))
+                        SetKind::Frame(n, images) => std::iter::once((0, vk::DescriptorType::UNIFORM_BUFFER))
                             .chain(
                                 (1..=*n as u32 + 1)
                                     .chain([crate::ctx::ACCT_BINDING])
                                     .map(|b| (b, vk::DescriptorType::STORAGE_BUFFER)),
                             )
+                            .chain(images.iter().map(|&b| (b, vk::DescriptorType::STORAGE_IMAGE)))
                             .collect(),
                         SetKind::Raster => vec![
                             (0, vk::DescriptorType::STORAGE_BUFFER),

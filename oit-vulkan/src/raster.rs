@@ -204,8 +204,8 @@ fn record_setup(
         (crate::ctx::ACCT_BINDING, &s.counters),
     ];
     let gpu = rec.gpu();
-    let sets = [SetData::Frame { uniform: bytemuck::cast_slice(uniform), storage: &storage }];
-    let kinds = [SetKind::Frame(6)];
+    let sets = [SetData::Frame { uniform: bytemuck::cast_slice(uniform), storage: &storage, images: &[] }];
+    let kinds = [SetKind::Frame(6, Vec::new())];
     if s.use_verts {
         let pipeline = gpu.compute("setup", "vertex_main", &kinds)?;
         rec.dispatch("setup", &pipeline, &sets, dispatch_size(s.layout.vertex_total()))?;

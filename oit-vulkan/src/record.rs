@@ -33,6 +33,8 @@ const SLOT_BYTES: u64 = 256;
 const MAX_SETS: u32 = 3 * SLOTS;
 /// Sampled images of one set at most (bdp's 8 bucket targets).
 const MAX_IMAGES_PER_SET: u32 = 8;
+/// Storage images of one set at most (group 0 under `--atomic-storage image`: mdts's two).
+const MAX_STORAGE_IMAGES_PER_SET: u32 = 2;
 /// Storage bindings of one set at most (group 0: state, up to 6 technique buffers, acct).
 const MAX_STORAGE_PER_SET: u32 = 16;
 /// How long a submission may run before it counts as hung.
@@ -43,9 +45,10 @@ const NS_PER_MS: f64 = 1e6;
 
 /// What one descriptor set of a command holds.
 pub(crate) enum SetData<'b> {
-    /// Group 0: the frame uniform (copied into the next slot of the ring, bound at 0) and the
-    /// storage buffers (binding, buffer).
-    Frame { uniform: &'b [u8], storage: &'b [(u32, &'b Buffer)] },
+    /// Group 0: the frame uniform (copied into the next slot of the ring, bound at 0), the
+    /// storage buffers (binding, buffer) and the storage images (binding, image; each in
+    /// `GENERAL`, [`Recorder::clear_image`]).
+    Frame { uniform: &'b [u8], storage: &'b [(u32, &'b Buffer)], images: &'b [(u32, &'b GpuImage)] },
     /// A rasterizer's group 1: storage (binding, buffer) and its uniform at binding 2.
     Raster { storage: &'b [(u32, &'b Buffer)], uniform: &'b Buffer },
     /// Sampled images (binding, image), each in `SHADER_READ_ONLY_OPTIMAL`.
@@ -233,6 +236,10 @@ impl<'g> Recorder<'g> {
             vk::DescriptorPoolSize {
                 ty: vk::DescriptorType::SAMPLED_IMAGE,
                 descriptor_count: MAX_SETS * MAX_IMAGES_PER_SET,
+            },
+            vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::STORAGE_IMAGE,
+                descriptor_count: MAX_SETS * MAX_STORAGE_IMAGES_PER_SET,
             },
         ];
         let dp_info = vk::DescriptorPoolCreateInfo::default().max_sets(MAX_SETS).pool_sizes(&sizes);
@@ -426,6 +433,70 @@ impl<'g> Recorder<'g> {
         unsafe { self.gpu.raw.device.update_descriptor_sets(&writes, &[]) };
     }
 
+    /// Writes storage images (binding, image), in `GENERAL`, into `set`.
+    fn write_storage_images(&self, set: vk::DescriptorSet, images: &[(u32, &GpuImage)]) {
+        if images.is_empty() {
+            return;
+        }
+        let infos: Vec<[vk::DescriptorImageInfo; 1]> = images
+            .iter()
+            .map(|(_, image)| {
+                [vk::DescriptorImageInfo::default().image_view(image.view).image_layout(vk::ImageLayout::GENERAL)]
+            })
+            .collect();
+        let writes: Vec<vk::WriteDescriptorSet<'_>> = images
+            .iter()
+            .zip(&infos)
+            .map(|((binding, _), info)| {
+                vk::WriteDescriptorSet::default()
+                    .dst_set(set)
+                    .dst_binding(*binding)
+                    .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
+                    .image_info(info)
+            })
+            .collect();
+        // SAFETY: as in `write_set`; every image has STORAGE usage and is in GENERAL when the
+        // command runs (`clear_image` put it there, first of the frame's commands that use it).
+        unsafe { self.gpu.raw.device.update_descriptor_sets(&writes, &[]) };
+    }
+
+    /// Records `image` (a storage image of the frame) taken to `GENERAL`, its contents
+    /// discarded, then every texel of every layer set to `value` in each 32 bits (all ones or
+    /// zero: the same in any texel width); a barrier follows.
+    pub(crate) fn clear_image(&mut self, image: &GpuImage, value: u32) {
+        let range = vk::ImageSubresourceRange::default()
+            .aspect_mask(vk::ImageAspectFlags::COLOR)
+            .level_count(1)
+            .layer_count(image.layers);
+        let to_general = vk::ImageMemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE)
+            .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+            .old_layout(vk::ImageLayout::UNDEFINED)
+            .new_layout(vk::ImageLayout::GENERAL)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(image.image)
+            .subresource_range(range);
+        let color = vk::ClearColorValue { uint32: [value; 4] };
+        // SAFETY: recording, outside a render pass; the image is alive (the frame's), has
+        // TRANSFER_DST usage and is in GENERAL for the clear (the barrier before it, which also
+        // orders it after every earlier use of the image: a pooled image's last frame).
+        unsafe {
+            let d = &self.gpu.raw.device;
+            d.cmd_pipeline_barrier(
+                self.p.cmd,
+                vk::PipelineStageFlags::ALL_COMMANDS,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &[to_general],
+            );
+            d.cmd_clear_color_image(self.p.cmd, image.image, vk::ImageLayout::GENERAL, &color, &[range]);
+        }
+        self.barrier();
+    }
+
     /// Allocates and writes a command's descriptor sets, one per entry of `sets`, in set order
     /// (see [`SetData`]).
     fn sets(
@@ -439,12 +510,13 @@ impl<'g> Recorder<'g> {
         for (data, &layout) in sets.iter().zip(&pipeline.sets) {
             let set = self.allocate(layout)?;
             match data {
-                SetData::Frame { uniform, storage } => {
+                SetData::Frame { uniform, storage, images } => {
                     let offset = u64::from(self.slot) * SLOT_BYTES;
                     self.uniform_bytes[offset as usize..offset as usize + uniform.len()]
                         .copy_from_slice(uniform);
                     self.slot += 1;
                     self.write_set(set, Some((0, &self.p.uniforms, offset)), storage);
+                    self.write_storage_images(set, images);
                 }
                 SetData::Raster { storage, uniform } => {
                     self.write_set(set, None, storage);

@@ -711,6 +711,7 @@ impl OitPass {
     /// Whether the technique's frame can be recorded without a round trip ([`OitPass::record`]).
     fn check_recordable(&self) -> Result<(), OitError> {
         let plan = oit_core::plan::Plan::new("wgpu", &self.scene, &self.settings)?;
+        plan.refuse_image_atomics("wgpu")?;
         let why = match self.settings.technique {
             _ if plan.needs_count() => {
                 Some("its storage is sized by a counting pass read back in mid-frame; give K")

@@ -1,8 +1,12 @@
 //! `mdts:K` and `mdts64:K` (see oit-wgpu's `technique/mdts.rs`): one geometry pass of atomic-min
 //! insertion into K sorted words per pixel (the paper's 20 + 12-bit packing in two u32 arrays, or
-//! one u64 array), then a resolve kernel. On storage *buffers*: the image-atomic capture the paper
-//! used (R32_UINT / R64_UINT storage images) is not written yet.
+//! one u64 array), then a resolve kernel. On storage buffers, or with `--atomic-storage image` on
+//! the paper's storage images: two `R32_UINT` 2D arrays of K layers (`imageAtomicMin`), or one
+//! `R64_UINT` where the device has `VK_EXT_shader_image_atomic_int64` (refused elsewhere, naming
+//! it), in the modules `mdts_image` / `mdts64_image` (the same mdts.wgsl over
+//! `shaders/mdts_*_image.wgsl`).
 
+use ash::vk;
 use oit_core::{OitError, Technique};
 
 use crate::Drivers;
@@ -19,6 +23,7 @@ const MDTS_TAIL_PASS: u32 = 0x20000;
 fn passes(
     ctx: &mut VkCtx<'_>,
     drivers: &Drivers<'_>,
+    module: &'static str,
     arrays: [&Buffer; 3],
     mode: u32,
     k: u32,
@@ -27,12 +32,12 @@ fn passes(
     let unused = ctx.placeholder()?;
     let buffers = [arrays[0], arrays[1], arrays[2], &*unused, &*tail, &*tail_words];
     let mode = if ctx.plan.tail { mode | MDTS_WITH_TAIL } else { mode };
-    ctx.geometry_pass(&drivers.scene, "mdts", &buffers, mode, k)?;
+    ctx.geometry_pass(&drivers.scene, module, &buffers, mode, k)?;
     let tail_ran = ctx.plan.tail && ctx.read_u32(&tail_words)?[0] != 0;
     if tail_ran {
-        ctx.geometry_pass(&drivers.scene, "mdts", &buffers, mode | MDTS_TAIL_PASS, k)?;
+        ctx.geometry_pass(&drivers.scene, module, &buffers, mode | MDTS_TAIL_PASS, k)?;
     }
-    ctx.pixel_kernel("mdts", "resolve_main", &buffers, mode, k)?;
+    ctx.pixel_kernel(module, "resolve_main", &buffers, mode, k)?;
     if tail_ran {
         ctx.merged = u64::from(ctx.read_u32(&tail_words)?[1]);
     }
@@ -48,14 +53,40 @@ pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), O
     let deepest = if ctx.plan.needs_count() { super::count(ctx, &drivers.scene)?.1 } else { 0 };
     let k = ctx.plan.slots(deepest);
     let words = u64::from(ctx.pixels) * u64::from(k);
+    let alpha8 = ctx.plan.mdts_alpha8;
+    if ctx.plan.image_atomics {
+        let info = &ctx.gpu.info;
+        let (has, what) = if wide {
+            (info.image_atomics_64, "64-bit storage-image atomics (VK_EXT_shader_image_atomic_int64's shaderImageInt64Atomics on R64_UINT)")
+        } else {
+            (info.image_atomics_32, "storage-image atomics on R32_UINT")
+        };
+        if !has {
+            return Err(OitError::Unsupported {
+                backend: "vulkan".into(),
+                what: format!(
+                    "--atomic-storage image for {}: '{}' lacks {what}; use --atomic-storage buffer",
+                    ctx.settings.technique, info.name
+                ),
+            });
+        }
+        let unused = [ctx.placeholder()?, ctx.placeholder()?, ctx.placeholder()?];
+        let arrays = [&*unused[0], &*unused[1], &*unused[2]];
+        if wide {
+            ctx.storage_image("mdts64 keys", 8, k, vk::Format::R64_UINT, u32::MAX)?;
+            return passes(ctx, drivers, "mdts64_image", arrays, MDTS_64, k);
+        }
+        ctx.storage_image("mdts high words", 8, k, vk::Format::R32_UINT, u32::MAX)?;
+        ctx.storage_image("mdts low words", 9, k, vk::Format::R32_UINT, u32::MAX)?;
+        return passes(ctx, drivers, "mdts_image", arrays, MDTS_32 | alpha8 << 8, k);
+    }
     if wide {
         let (high, low) = (ctx.placeholder()?, ctx.placeholder()?);
         let slots = ctx.buffer("mdts64 slots", words * 2, Init::Fill(u32::MAX))?;
-        return passes(ctx, drivers, [&*high, &*low, &*slots], MDTS_64, k);
+        return passes(ctx, drivers, "mdts", [&*high, &*low, &*slots], MDTS_64, k);
     }
-    let alpha8 = ctx.plan.mdts_alpha8;
     let high = ctx.buffer("mdts high words", words, Init::Fill(u32::MAX))?;
     let low = ctx.buffer("mdts low words", words, Init::Fill(u32::MAX))?;
     let slots = ctx.placeholder()?;
-    passes(ctx, drivers, [&*high, &*low, &*slots], MDTS_32 | alpha8 << 8, k)
+    passes(ctx, drivers, "mdts", [&*high, &*low, &*slots], MDTS_32 | alpha8 << 8, k)
 }

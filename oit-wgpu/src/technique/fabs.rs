@@ -9,7 +9,13 @@ use oit_core::OitError;
 use crate::Drivers;
 use crate::ctx::{GpuCtx, Init};
 
-const WGSL: &str = concat!(include_str!("fabs.wgsl"), "\n", include_str!("tail.wgsl"));
+const WGSL: &str = concat!(
+    include_str!("fabs_counters.wgsl"),
+    "\n",
+    include_str!("fabs.wgsl"),
+    "\n",
+    include_str!("tail.wgsl")
+);
 
 /// The passes of `fabs.wgsl` (pass_index).
 const FABS_CAPTURE: u32 = 0;

@@ -22,7 +22,9 @@
 // `--overflow tail` (tail.wgsl, appended): after those passes an overflowing pixel's slots hold
 // its K smallest keys sorted, and FABS_TAIL adds every fragment whose key is larger than the last
 // into the pixel's tail; the resolve (pass_index FABS_WITH_TAIL) puts the tail behind the K.
-@group(0) @binding(2) var<storage, read_write> counters: array<atomic<u32>>;
+//
+// The counters are reached only through fabs_counters.wgsl's fabs_count_add and fabs_count
+// (storage buffer); oit-vulkan's `--atomic-storage image` defines them over a storage image.
 @group(0) @binding(3) var<storage, read_write> slots: array<atomic<u64>>;
 @group(0) @binding(4) var<storage, read_write> payloads: array<u32>;
 @group(0) @binding(5) var<storage, read_write> overflowed: array<atomic<u32>>;
@@ -40,7 +42,7 @@ fn capture(f: Fragment) {
     let stride = fu.pixel_count;
     let key = (u64(depth_bits(f.depth)) << 32u) | u64(f.prim);
     if (fu.pass_index == FABS_CAPTURE) {
-        let i = atomicAdd(&counters[f.pixel], 1u);
+        let i = fabs_count_add(f.pixel, 1u);
         if (i < k) {
             atomicStore(&slots[i * stride + f.pixel], key);
             payloads[i * stride + f.pixel] = payload(f, fu.effect);
@@ -51,7 +53,7 @@ fn capture(f: Fragment) {
         }
         return;
     }
-    if (atomicLoad(&counters[f.pixel]) <= k) {
+    if (fabs_count(f.pixel) <= k) {
         return;
     }
     if (fu.pass_index == FABS_TAIL) {
@@ -83,7 +85,7 @@ fn capture(f: Fragment) {
 @compute @workgroup_size(64)
 fn overflow_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let px = kernel_pixel(gid, groups);
-    if (px >= fu.pixel_count || atomicLoad(&counters[px]) <= fu.param) {
+    if (px >= fu.pixel_count || fabs_count(px) <= fu.param) {
         return;
     }
     for (var i = 0u; i < fu.param; i++) {
@@ -99,7 +101,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         return;
     }
     var s = state[px];
-    let n = min(atomicLoad(&counters[px]), fu.param);
+    let n = min(fabs_count(px), fu.param);
     let stride = fu.pixel_count;
     if (n <= LOCAL_SLOTS) {
         var list: array<u64, LOCAL_SLOTS>;

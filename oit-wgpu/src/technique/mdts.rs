@@ -14,7 +14,15 @@ use oit_core::{OitError, Technique};
 use crate::Drivers;
 use crate::ctx::{GpuCtx, Init};
 
-const WGSL: &str = concat!(include_str!("mdts.wgsl"), "\n", include_str!("tail.wgsl"));
+const WGSL: &str = concat!(
+    include_str!("mdts_words.wgsl"),
+    "\n",
+    include_str!("mdts_keys.wgsl"),
+    "\n",
+    include_str!("mdts.wgsl"),
+    "\n",
+    include_str!("tail.wgsl")
+);
 
 /// The modes of `mdts.wgsl` (low byte of pass_index).
 const MDTS_32: u32 = 0;

@@ -12,9 +12,11 @@
 // tail_words[0] when it carries a word off a full array, and the resolve puts the pixel's tail
 // behind its K; the pass MDTS_TAIL_PASS adds every fragment whose word is larger than the pixel's
 // K-th into the tail (one equal to it that was carried off stays lost).
-@group(0) @binding(2) var<storage, read_write> mdts_high: array<atomic<u32>>;
-@group(0) @binding(3) var<storage, read_write> mdts_low: array<atomic<u32>>;
-@group(0) @binding(4) var<storage, read_write> mdts_slots: array<atomic<u64>>;
+//
+// The words are reached only through mdts_words.wgsl's (32-bit: mdts_min_high, mdts_min_low,
+// mdts_load_high, mdts_load_low) and mdts_keys.wgsl's (64-bit: mdts_min64, mdts_load64)
+// functions of (pixel, slot), over storage buffers; oit-vulkan's `--atomic-storage image` puts
+// its own definitions over storage images in their place (oit-vulkan/src/shaders/).
 
 const MDTS_EMPTY32: u32 = 0xffffffffu;
 const MDTS_EMPTY64: u64 = 0xfffffffffffffffflu;
@@ -23,11 +25,11 @@ const MDTS_64: u32 = 1u;
 const MDTS_WITH_TAIL: u32 = 0x10000u;
 const MDTS_TAIL_PASS: u32 = 0x20000u;
 
-// insert_min32 into the high array at `base` (K words); true when a word fell off the end
-fn mdts_insert_high(base: u32, key: u32) -> bool {
+// insert_min32 into pixel px's K high words; true when a word fell off the end
+fn mdts_insert_high(px: u32, key: u32) -> bool {
     var carry = key;
     for (var i = 0u; i < fu.param; i++) {
-        let old = atomicMin(&mdts_high[base + i], carry);
+        let old = mdts_min_high(px, i, carry);
         if (old == MDTS_EMPTY32) {
             return false;
         }
@@ -36,10 +38,10 @@ fn mdts_insert_high(base: u32, key: u32) -> bool {
     return true;
 }
 
-fn mdts_insert_low(base: u32, key: u32) -> bool {
+fn mdts_insert_low(px: u32, key: u32) -> bool {
     var carry = key;
     for (var i = 0u; i < fu.param; i++) {
-        let old = atomicMin(&mdts_low[base + i], carry);
+        let old = mdts_min_low(px, i, carry);
         if (old == MDTS_EMPTY32) {
             return false;
         }
@@ -48,10 +50,10 @@ fn mdts_insert_low(base: u32, key: u32) -> bool {
     return true;
 }
 
-fn mdts_insert64(base: u32, key: u64) -> bool {
+fn mdts_insert64(px: u32, key: u64) -> bool {
     var carry = key;
     for (var i = 0u; i < fu.param; i++) {
-        let old = atomicMin(&mdts_slots[base + i], carry);
+        let old = mdts_min64(px, i, carry);
         if (old == MDTS_EMPTY64) {
             return false;
         }
@@ -70,15 +72,14 @@ fn mdts_lose(px: u32) {
 }
 
 fn capture(f: Fragment) {
-    let base = f.pixel * fu.param;
-    let last = base + fu.param - 1u;
+    let last = fu.param - 1u;
     if ((fu.pass_index & 0xffu) == MDTS_64) {
         let key = (u64(depth_bits(f.depth)) << 32u) | u64(payload(f, fu.effect));
         if ((fu.pass_index & MDTS_TAIL_PASS) != 0u) {
-            if (key > atomicLoad(&mdts_slots[last])) {
+            if (key > mdts_load64(f.pixel, last)) {
                 tail_add(f.pixel, pack_rgba8(f.color));
             }
-        } else if (mdts_insert64(base, key)) {
+        } else if (mdts_insert64(f.pixel, key)) {
             // a key carried off the end of the full array
             mdts_lose(f.pixel);
         }
@@ -87,17 +88,17 @@ fn capture(f: Fragment) {
     // All ones is the empty word: a fragment at d ≈ 1 with that colour gives up its last bit.
     let w = min(mdts_pack(f.depth, pack_rgba8(f.color)), vec2<u32>(MDTS_EMPTY32 - 1u));
     if ((fu.pass_index & MDTS_TAIL_PASS) != 0u) {
-        if (w.x > atomicLoad(&mdts_high[last])) {
+        if (w.x > mdts_load_high(f.pixel, last)) {
             // the fragment's 8-bit RGB with the plan's alpha, as the kept words get
             tail_add(f.pixel, (pack_rgba8(f.color) & 0xffffffu) | (((fu.pass_index >> 8u) & 0xffu) << 24u));
         }
         return;
     }
     // both arrays hold the same number of words: one carried off the high array is one lost
-    if (mdts_insert_high(base, w.x)) {
+    if (mdts_insert_high(f.pixel, w.x)) {
         mdts_lose(f.pixel);
     }
-    _ = mdts_insert_low(base, w.y);
+    _ = mdts_insert_low(f.pixel, w.y);
 }
 
 @compute @workgroup_size(64)
@@ -107,11 +108,10 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         return;
     }
     var s = state[px];
-    let base = px * fu.param;
     let mode = fu.pass_index & 0xffu;
     if (mode == MDTS_64) {
         for (var i = 0u; i < fu.param; i++) {
-            let key = atomicLoad(&mdts_slots[base + i]);
+            let key = mdts_load64(px, i);
             if (key == MDTS_EMPTY64) {
                 break;
             }
@@ -125,8 +125,8 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     }
     let alpha8 = (fu.pass_index >> 8u) & 0xffu;
     for (var i = 0u; i < fu.param; i++) {
-        let h = atomicLoad(&mdts_high[base + i]);
-        let l = atomicLoad(&mdts_low[base + i]);
+        let h = mdts_load_high(px, i);
+        let l = mdts_load_low(px, i);
         if (h == MDTS_EMPTY32 || l == MDTS_EMPTY32) {
             break;
         }

@@ -1,0 +1,13 @@
+// mdts64:K's array of 64-bit keys in a storage buffer (mdts.wgsl's accessors): key `slot` of
+// pixel `px` is element px · K + slot. oit-vulkan's `shaders/mdts_keys_image.wgsl` defines the
+// same functions over a 64-bit storage image.
+@group(0) @binding(4) var<storage, read_write> mdts_slots: array<atomic<u64>>;
+
+// atomicMin of key `slot` of pixel `px` with `v`: the key before
+fn mdts_min64(px: u32, slot: u32, v: u64) -> u64 {
+    return atomicMin(&mdts_slots[px * fu.param + slot], v);
+}
+
+fn mdts_load64(px: u32, slot: u32) -> u64 {
+    return atomicLoad(&mdts_slots[px * fu.param + slot]);
+}
