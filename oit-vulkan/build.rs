@@ -52,7 +52,11 @@ const MODULES: &[(&str, &str, Tail)] = &[
     ),
     ("weighted", "technique/weighted.wgsl", Raster),
     ("plain", "technique/plain.wgsl", Raster),
-    ("mdts", "technique/mdts_words.wgsl+technique/mdts_keys.wgsl+technique/mdts.wgsl+technique/tail.wgsl", Raster),
+    (
+        "mdts",
+        "technique/mdts_words.wgsl+technique/mdts_keys.wgsl+technique/mdts.wgsl+technique/tail.wgsl",
+        Raster,
+    ),
     (
         "mdts_image",
         "vk:shaders/atomic_result.wgsl+vk:shaders/mdts_words_image.wgsl+technique/mdts_keys.wgsl+technique/mdts.wgsl+technique/tail.wgsl",
@@ -162,7 +166,9 @@ fn atomic_results(words: &mut [u32]) -> Result<usize, String> {
                     ));
                 };
                 if ty != words[at + 1] {
-                    return Err(format!("an atomic-result marker at word {at} of another type than its atomic"));
+                    return Err(format!(
+                        "an atomic-result marker at word {at} of another type than its atomic"
+                    ));
                 }
                 words[at] = (4 << 16) | op::COPY_OBJECT;
                 words[at + 3] = result;

@@ -203,7 +203,10 @@ impl Plan {
             blender: false,
             tail: fixed_k && settings.overflow == crate::Overflow::Tail,
             image_atomics: settings.atomic_storage == crate::AtomicStorage::Image
-                && matches!(technique, Technique::Fabs { .. } | Technique::Mdts { .. } | Technique::Mdts64 { .. }),
+                && matches!(
+                    technique,
+                    Technique::Fabs { .. } | Technique::Mdts { .. } | Technique::Mdts64 { .. }
+                ),
             count_ties: match technique {
                 Technique::Dp
                 | Technique::Ddp
@@ -540,6 +543,26 @@ mod tests {
         assert!(plan("bdp2", |s| s.bdp_mode = crate::BdpMode::Color).is_err());
         assert!(plan("bdp", |s| s.bdp_mode = crate::BdpMode::Color).unwrap().bdp_color);
         assert!(!plan("bdp", |s| s.effect = Effect::Fresnel).unwrap().bdp_color);
+    }
+
+    #[test]
+    fn image_atomics_apply_to_the_atomic_arrays_only() {
+        let image = |s: &mut Settings| s.atomic_storage = crate::AtomicStorage::Image;
+        for t in ["mdts", "mdts:4", "mdts64:2", "fabs", "fabs:8"] {
+            let p = plan(t, image).unwrap();
+            assert!(p.image_atomics, "{t}");
+            let err = p.refuse_image_atomics("wgpu").unwrap_err().to_string();
+            assert!(err.contains("wgpu") && err.contains("vulkan backend only"), "{t}: {err}");
+            assert!(!plan(t, |_| {}).unwrap().image_atomics, "{t} on buffers");
+        }
+        // the reference a comparison renders beside them runs under the same settings
+        for t in ["reference", "dp", "bdp", "dfb", "plain"] {
+            let p = plan(t, image).unwrap();
+            assert!(!p.image_atomics && p.refuse_image_atomics("cpu").is_ok(), "{t}");
+        }
+        assert_eq!("Image".parse::<crate::AtomicStorage>().unwrap(), crate::AtomicStorage::Image);
+        assert_eq!(" buffer".parse::<crate::AtomicStorage>().unwrap(), crate::AtomicStorage::Buffer);
+        assert!("texture".parse::<crate::AtomicStorage>().is_err());
     }
 
     #[test]

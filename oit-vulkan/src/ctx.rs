@@ -89,7 +89,10 @@ impl BufferPool {
     ) -> Result<Rc<GpuImage>, OitError> {
         let mut free = self.free_images.borrow_mut();
         let fits = |i: &Rc<GpuImage>| {
-            i.extent == (size.0.max(1), size.1.max(1)) && i.layers == 1 && i.format == format && i.usage == usage
+            i.extent == (size.0.max(1), size.1.max(1))
+                && i.layers == 1
+                && i.format == format
+                && i.usage == usage
         };
         if let Some(i) = free.iter().position(fits) {
             return Ok(free.swap_remove(i));
@@ -344,8 +347,13 @@ impl<'a> VkCtx<'a> {
             self.storage_bytes.saturating_add(u64::from(self.pixels) * STATE_WORDS * 4).saturating_add(bytes),
             (&budget.0, budget.1),
         )?;
-        let image =
-            self.pool.take_storage_image(self.gpu, label, (self.settings.width, self.settings.height), layers, format)?;
+        let image = self.pool.take_storage_image(
+            self.gpu,
+            label,
+            (self.settings.width, self.settings.height),
+            layers,
+            format,
+        )?;
         self.storage_bytes += bytes;
         self.lent_images.push(image.clone());
         self.rec.clear_image(&image, fill);
@@ -636,8 +644,11 @@ impl<'a> VkCtx<'a> {
         let storage = Self::storage(&state, &acct, buffers);
         let uniform = self.uniform;
         let groups = dispatch_size(invocations);
-        let frame =
-            SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage, images: &storage_images };
+        let frame = SetData::Frame {
+            uniform: bytemuck::bytes_of(&uniform),
+            storage: &storage,
+            images: &storage_images,
+        };
         if images.is_empty() {
             self.rec.dispatch(label, &pipeline, &[frame], groups)
         } else {
@@ -720,7 +731,11 @@ impl<'a> VkCtx<'a> {
         let raster_set = raster.bindings();
         let uniform = self.uniform;
         let mut sets = vec![
-            SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage, images: &storage_images },
+            SetData::Frame {
+                uniform: bytemuck::bytes_of(&uniform),
+                storage: &storage,
+                images: &storage_images,
+            },
             SetData::Raster { storage: &raster_set, uniform: raster.uniform() },
         ];
         if !pass.previous.is_empty() {

@@ -933,8 +933,10 @@ impl Gpu {
             }
             memory
         };
-        let range =
-            vk::ImageSubresourceRange::default().aspect_mask(aspect(format)).level_count(1).layer_count(layers);
+        let range = vk::ImageSubresourceRange::default()
+            .aspect_mask(aspect(format))
+            .level_count(1)
+            .layer_count(layers);
         let array = layers > 1 || usage.contains(vk::ImageUsageFlags::STORAGE);
         let view_info = vk::ImageViewCreateInfo::default()
             .image(image)
@@ -1036,7 +1038,12 @@ impl Gpu {
     /// `hw_vs`, then `hw_fs`, which calls the technique's `capture`), whose group 0 has `n`
     /// technique buffers: one colour attachment, the fragment counter (`R32_SFLOAT`), added
     /// to by blending.
-    pub fn render_pipeline(&self, module: &'static str, n: usize, images: &[u32]) -> Result<Pipeline, OitError> {
+    pub fn render_pipeline(
+        &self,
+        module: &'static str,
+        n: usize,
+        images: &[u32],
+    ) -> Result<Pipeline, OitError> {
         self.graphics(&GraphicsDesc {
             module: &format!("{module}_hw"),
             fs: "hw_fs",

@@ -441,7 +441,9 @@ impl<'g> Recorder<'g> {
         let infos: Vec<[vk::DescriptorImageInfo; 1]> = images
             .iter()
             .map(|(_, image)| {
-                [vk::DescriptorImageInfo::default().image_view(image.view).image_layout(vk::ImageLayout::GENERAL)]
+                [vk::DescriptorImageInfo::default()
+                    .image_view(image.view)
+                    .image_layout(vk::ImageLayout::GENERAL)]
             })
             .collect();
         let writes: Vec<vk::WriteDescriptorSet<'_>> = images

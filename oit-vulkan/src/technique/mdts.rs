@@ -57,7 +57,10 @@ pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), O
     if ctx.plan.image_atomics {
         let info = &ctx.gpu.info;
         let (has, what) = if wide {
-            (info.image_atomics_64, "64-bit storage-image atomics (VK_EXT_shader_image_atomic_int64's shaderImageInt64Atomics on R64_UINT)")
+            (
+                info.image_atomics_64,
+                "64-bit storage-image atomics (VK_EXT_shader_image_atomic_int64's shaderImageInt64Atomics on R64_UINT)",
+            )
         } else {
             (info.image_atomics_32, "storage-image atomics on R32_UINT")
         };
