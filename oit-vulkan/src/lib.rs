@@ -15,7 +15,9 @@
 //!   viewport height for wgpu's conventions, so the fragments are oit-wgpu's hardware path's on
 //!   the same driver (against oit-cpu, only pixels on triangle edges may differ).
 //!
-//! Captures use storage-buffer atomics, as on wgpu. With `--hardware-capture blend` on the
+//! Captures use storage-buffer atomics, as on wgpu; with `--atomic-storage image`
+//! ([`oit_core::AtomicStorage::Image`]) mdts, mdts64 and fabs use the papers' storage-image
+//! atomics instead (see `technique::mdts` and `technique::fabs`). With `--hardware-capture blend` on the
 //! hardware path, the papers' own operations (`technique::blend`): MAX blending into 8 ×
 //! `R32G32B32A32_SFLOAT` for bdp, a depth test into `D32_SFLOAT` with occlusion queries for dp,
 //! MAX blending of (−d, d) into `R32G32_SFLOAT` with occlusion queries for ddp, additive float
@@ -30,8 +32,9 @@
 //!
 //! **What is refused** (`OitError::Unsupported`, naming what is missing): the hardware path on a
 //! device without what it needs; a blend capture into a format the device cannot blend into, or
-//! without `logicOp` / `independentBlend` / 8 colour attachments; storage-*image* atomics for
-//! mdts/fabs and the interlock k-buffer are not written.
+//! without `logicOp` / `independentBlend` / 8 colour attachments; mdts64 on storage images
+//! without `VK_EXT_shader_image_atomic_int64`'s 64-bit image atomics (lavapipe); the interlock
+//! k-buffer is not written.
 //!
 //! **Starting without Vulkan.** The entry is loaded at run time (`ash::Entry::load`, feature
 //! `loaded`): a binary runs on a machine without `libvulkan.so.1` and [`VulkanBackend::gpu`]
@@ -153,6 +156,8 @@ impl Backend for VulkanBackend {
             ("maxComputeWorkGroupCount".into(), format!("{:?}", l.max_compute_work_group_count)),
             ("maxColorAttachments".into(), l.max_color_attachments.to_string()),
             ("logicOp".into(), info.logic_op.to_string()),
+            ("R32_UINT image atomics".into(), info.image_atomics_32.to_string()),
+            ("R64_UINT image atomics".into(), info.image_atomics_64.to_string()),
             (
                 "hardware raster path".into(),
                 info.hardware_missing.as_ref().map_or("yes".into(), |m| format!("no: lacks {m}")),
