@@ -79,6 +79,26 @@ impl BufferPool {
         Ok(Rc::new(gpu.buffer(size, usage, false)?))
     }
 
+    /// A free image of `size`, `layers`, `format` and `usage`, else a new one from `make`.
+    fn take_image_with(
+        &self,
+        (size, layers, format, usage): ((u32, u32), u32, vk::Format, vk::ImageUsageFlags),
+        make: impl FnOnce() -> Result<GpuImage, OitError>,
+    ) -> Result<Rc<GpuImage>, OitError> {
+        let mut free = self.free_images.borrow_mut();
+        let fits = |i: &Rc<GpuImage>| {
+            i.extent == (size.0.max(1), size.1.max(1))
+                && i.layers == layers.max(1)
+                && i.format == format
+                && i.usage == usage
+        };
+        if let Some(i) = free.iter().position(fits) {
+            return Ok(free.swap_remove(i));
+        }
+        self.allocations.set(self.allocations.get() + 1);
+        Ok(Rc::new(make()?))
+    }
+
     /// A render target of `size`, `format` and `usage`, free or new.
     fn take_image(
         &self,
@@ -87,18 +107,7 @@ impl BufferPool {
         format: vk::Format,
         usage: vk::ImageUsageFlags,
     ) -> Result<Rc<GpuImage>, OitError> {
-        let mut free = self.free_images.borrow_mut();
-        let fits = |i: &Rc<GpuImage>| {
-            i.extent == (size.0.max(1), size.1.max(1))
-                && i.layers == 1
-                && i.format == format
-                && i.usage == usage
-        };
-        if let Some(i) = free.iter().position(fits) {
-            return Ok(free.swap_remove(i));
-        }
-        self.allocations.set(self.allocations.get() + 1);
-        Ok(Rc::new(gpu.image(size, format, usage)?))
+        self.take_image_with((size, 1, format, usage), || gpu.image(size, format, usage))
     }
 
     /// A storage image of `size`, `layers` and `format` ([`Gpu::storage_image`]), free or new.
@@ -110,18 +119,9 @@ impl BufferPool {
         layers: u32,
         format: vk::Format,
     ) -> Result<Rc<GpuImage>, OitError> {
-        let mut free = self.free_images.borrow_mut();
-        let fits = |i: &Rc<GpuImage>| {
-            i.extent == (size.0.max(1), size.1.max(1))
-                && i.layers == layers.max(1)
-                && i.format == format
-                && i.usage.contains(vk::ImageUsageFlags::STORAGE)
-        };
-        if let Some(i) = free.iter().position(fits) {
-            return Ok(free.swap_remove(i));
-        }
-        self.allocations.set(self.allocations.get() + 1);
-        Ok(Rc::new(gpu.storage_image(what, size, layers, format)?))
+        self.take_image_with((size, layers, format, crate::device::STORAGE_IMAGE_USAGE), || {
+            gpu.storage_image(what, size, layers, format)
+        })
     }
 
     /// The framebuffer of `images` in `pass`, made on first use (the pool keeps the images).
@@ -301,17 +301,23 @@ impl<'a> VkCtx<'a> {
         Ok(ctx)
     }
 
-    /// A storage buffer of `words` 32-bit words for the technique, checked against the limits and
-    /// counted in `storage_bytes`.
-    pub(crate) fn buffer(&mut self, label: &str, words: u64, init: Init) -> Result<Rc<Buffer>, OitError> {
-        let bytes = words.max(MIN_BUFFER_WORDS) * 4;
-        self.gpu.check_storage(label, bytes)?;
+    /// Checks the frame's storage so far, its resolve state and `bytes` more against the memory
+    /// budget (`--memory`, else the device's), before they are allocated.
+    fn check_budget(&self, bytes: u64) -> Result<(), OitError> {
         let budget = self.settings.memory_budget(self.gpu.memory_budget());
         oit_core::plan::check_total(
             &format!("{} storage of a frame of {} pixels", self.settings.technique, self.pixels),
             self.storage_bytes.saturating_add(u64::from(self.pixels) * STATE_WORDS * 4).saturating_add(bytes),
             (&budget.0, budget.1),
-        )?;
+        )
+    }
+
+    /// A storage buffer of `words` 32-bit words for the technique, checked against the limits and
+    /// counted in `storage_bytes`.
+    pub(crate) fn buffer(&mut self, label: &str, words: u64, init: Init) -> Result<Rc<Buffer>, OitError> {
+        let bytes = words.max(MIN_BUFFER_WORDS) * 4;
+        self.gpu.check_storage(label, bytes)?;
+        self.check_budget(bytes)?;
         self.storage_bytes += words * 4;
         let buffer = self.pool.take(self.gpu, bytes, storage_usage())?;
         self.lent.push(buffer.clone());
@@ -341,12 +347,7 @@ impl<'a> VkCtx<'a> {
     ) -> Result<Rc<GpuImage>, OitError> {
         let texel: u64 = if format == vk::Format::R64_UINT { 8 } else { 4 };
         let bytes = u64::from(self.pixels) * u64::from(layers) * texel;
-        let budget = self.settings.memory_budget(self.gpu.memory_budget());
-        oit_core::plan::check_total(
-            &format!("{} storage of a frame of {} pixels", self.settings.technique, self.pixels),
-            self.storage_bytes.saturating_add(u64::from(self.pixels) * STATE_WORDS * 4).saturating_add(bytes),
-            (&budget.0, budget.1),
-        )?;
+        self.check_budget(bytes)?;
         let image = self.pool.take_storage_image(
             self.gpu,
             label,
@@ -361,9 +362,9 @@ impl<'a> VkCtx<'a> {
         Ok(image)
     }
 
-    /// The bindings of the frame's storage images, and the images, for group 0.
-    fn image_bindings(&self) -> (Vec<u32>, Vec<(u32, Rc<GpuImage>)>) {
-        (self.images.iter().map(|(b, _)| *b).collect(), self.images.clone())
+    /// The bindings of the frame's storage images (group 0's layout).
+    fn image_bindings(&self) -> Vec<u32> {
+        self.images.iter().map(|(b, _)| *b).collect()
     }
 
     /// A small buffer bound where a mode's WGSL declares an array it does not use (not storage).
@@ -504,8 +505,7 @@ impl<'a> VkCtx<'a> {
         // CPU device (lavapipe), where 64 invocations of one small triangle mostly test nothing
         let per_pixel = !self.gpu.is_cpu();
         let entry = if per_pixel { "raster_main" } else { "raster_loop_main" };
-        let (bindings, images) = self.image_bindings();
-        let images: Vec<(u32, &GpuImage)> = images.iter().map(|(b, i)| (*b, &**i)).collect();
+        let bindings = self.image_bindings();
         let pipeline = self.gpu.pipeline(module, entry, buffers.len(), &bindings)?;
         if let Some(check) = raster.upload(&mut self.rec)? {
             self.setup_checks.push(check);
@@ -519,7 +519,11 @@ impl<'a> VkCtx<'a> {
             &mut self.rec,
             &pipeline,
             &[
-                SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage, images: &images },
+                SetData::Frame {
+                    uniform: bytemuck::bytes_of(&uniform),
+                    storage: &storage,
+                    images: &self.images,
+                },
                 SetData::Raster { storage: &raster_set, uniform: &raster.uniform },
             ],
             per_pixel,
@@ -536,8 +540,7 @@ impl<'a> VkCtx<'a> {
         buffers: &[&Buffer],
         count: bool,
     ) -> Result<&'r Buffer, OitError> {
-        let (bindings, images) = self.image_bindings();
-        let images: Vec<(u32, &GpuImage)> = images.iter().map(|(b, i)| (*b, &**i)).collect();
+        let bindings = self.image_bindings();
         let pipeline = self.gpu.render_pipeline(module, buffers.len(), &bindings)?;
         let render_pass = self.gpu.render_pass(&crate::device::count_pass_key())?;
         raster.upload(&mut self.rec)?;
@@ -552,7 +555,11 @@ impl<'a> VkCtx<'a> {
             raster.framebuffer(),
             &[vk::ClearValue::default()],
             &[
-                SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage, images: &images },
+                SetData::Frame {
+                    uniform: bytemuck::bytes_of(&uniform),
+                    storage: &storage,
+                    images: &self.images,
+                },
                 SetData::Raster { storage: &raster_set, uniform: raster.uniform() },
             ],
             raster.vertex_count(),
@@ -633,8 +640,7 @@ impl<'a> VkCtx<'a> {
         invocations: u64,
         label: &str,
     ) -> Result<(), OitError> {
-        let (bindings, storage_images) = self.image_bindings();
-        let storage_images: Vec<(u32, &GpuImage)> = storage_images.iter().map(|(b, i)| (*b, &**i)).collect();
+        let bindings = self.image_bindings();
         let mut kinds = vec![SetKind::Frame(buffers.len(), bindings)];
         if !images.is_empty() {
             kinds.push(SetKind::Images(images.iter().map(|(b, _)| *b).collect()));
@@ -644,11 +650,8 @@ impl<'a> VkCtx<'a> {
         let storage = Self::storage(&state, &acct, buffers);
         let uniform = self.uniform;
         let groups = dispatch_size(invocations);
-        let frame = SetData::Frame {
-            uniform: bytemuck::bytes_of(&uniform),
-            storage: &storage,
-            images: &storage_images,
-        };
+        let frame =
+            SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage, images: &self.images };
         if images.is_empty() {
             self.rec.dispatch(label, &pipeline, &[frame], groups)
         } else {
@@ -707,8 +710,7 @@ impl<'a> VkCtx<'a> {
             depth: pass.depth.then(|| pass.targets.last().map(|i| i.format)).flatten(),
             final_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
         };
-        let (bindings, storage_images) = self.image_bindings();
-        let storage_images: Vec<(u32, &GpuImage)> = storage_images.iter().map(|(b, i)| (*b, &**i)).collect();
+        let bindings = self.image_bindings();
         let mut kinds = vec![SetKind::Frame(buffers.len(), bindings), SetKind::Raster];
         if !pass.previous.is_empty() {
             kinds.push(SetKind::Images(pass.previous.iter().map(|(b, _)| *b).collect()));
@@ -731,11 +733,7 @@ impl<'a> VkCtx<'a> {
         let raster_set = raster.bindings();
         let uniform = self.uniform;
         let mut sets = vec![
-            SetData::Frame {
-                uniform: bytemuck::bytes_of(&uniform),
-                storage: &storage,
-                images: &storage_images,
-            },
+            SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage, images: &self.images },
             SetData::Raster { storage: &raster_set, uniform: raster.uniform() },
         ];
         if !pass.previous.is_empty() {

@@ -267,6 +267,12 @@ impl Drop for GpuImage {
     }
 }
 
+/// The usage of the storage images of `--atomic-storage image` ([`Gpu::storage_image`]): atomics,
+/// and clears by transfer.
+pub(crate) const STORAGE_IMAGE_USAGE: vk::ImageUsageFlags = vk::ImageUsageFlags::from_raw(
+    vk::ImageUsageFlags::STORAGE.as_raw() | vk::ImageUsageFlags::TRANSFER_DST.as_raw(),
+);
+
 /// Pipelines and what they are made of, destroyed newest first by [`Gpu`]'s drop.
 #[derive(Default)]
 struct Cache {
@@ -871,8 +877,7 @@ impl Gpu {
                 hint: "use a smaller K or --atomic-storage buffer".into(),
             });
         }
-        let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST;
-        self.image_layers((width, height), layers.max(1), format, usage)
+        self.image_layers((width, height), layers.max(1), format, STORAGE_IMAGE_USAGE)
     }
 
     /// The image of [`Gpu::image`] and [`Gpu::storage_image`]: `layers` of 2D, viewed as a 2D
@@ -1036,8 +1041,8 @@ impl Gpu {
 
     /// The hardware raster's pipeline for `module`'s capture (`build.rs`'s `<module>_hw`:
     /// `hw_vs`, then `hw_fs`, which calls the technique's `capture`), whose group 0 has `n`
-    /// technique buffers: one colour attachment, the fragment counter (`R32_SFLOAT`), added
-    /// to by blending.
+    /// technique buffers and storage images at `images`: one colour attachment, the fragment
+    /// counter (`R32_SFLOAT`), added to by blending.
     pub fn render_pipeline(
         &self,
         module: &'static str,

@@ -48,7 +48,7 @@ pub(crate) enum SetData<'b> {
     /// Group 0: the frame uniform (copied into the next slot of the ring, bound at 0), the
     /// storage buffers (binding, buffer) and the storage images (binding, image; each in
     /// `GENERAL`, [`Recorder::clear_image`]).
-    Frame { uniform: &'b [u8], storage: &'b [(u32, &'b Buffer)], images: &'b [(u32, &'b GpuImage)] },
+    Frame { uniform: &'b [u8], storage: &'b [(u32, &'b Buffer)], images: &'b [(u32, Rc<GpuImage>)] },
     /// A rasterizer's group 1: storage (binding, buffer) and its uniform at binding 2.
     Raster { storage: &'b [(u32, &'b Buffer)], uniform: &'b Buffer },
     /// Sampled images (binding, image), each in `SHADER_READ_ONLY_OPTIMAL`.
@@ -433,32 +433,37 @@ impl<'g> Recorder<'g> {
         unsafe { self.gpu.raw.device.update_descriptor_sets(&writes, &[]) };
     }
 
-    /// Writes storage images (binding, image), in `GENERAL`, into `set`.
-    fn write_storage_images(&self, set: vk::DescriptorSet, images: &[(u32, &GpuImage)]) {
+    /// Writes `images` (binding, image) into `set` as descriptors of `kind`, each image in
+    /// `layout` when the command runs.
+    fn write_images<'i>(
+        &self,
+        set: vk::DescriptorSet,
+        images: impl Iterator<Item = (u32, &'i GpuImage)>,
+        kind: vk::DescriptorType,
+        layout: vk::ImageLayout,
+    ) {
+        let images: Vec<(u32, [vk::DescriptorImageInfo; 1])> = images
+            .map(|(binding, image)| {
+                (binding, [vk::DescriptorImageInfo::default().image_view(image.view).image_layout(layout)])
+            })
+            .collect();
         if images.is_empty() {
             return;
         }
-        let infos: Vec<[vk::DescriptorImageInfo; 1]> = images
-            .iter()
-            .map(|(_, image)| {
-                [vk::DescriptorImageInfo::default()
-                    .image_view(image.view)
-                    .image_layout(vk::ImageLayout::GENERAL)]
-            })
-            .collect();
         let writes: Vec<vk::WriteDescriptorSet<'_>> = images
             .iter()
-            .zip(&infos)
-            .map(|((binding, _), info)| {
+            .map(|(binding, info)| {
                 vk::WriteDescriptorSet::default()
                     .dst_set(set)
                     .dst_binding(*binding)
-                    .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
+                    .descriptor_type(kind)
                     .image_info(info)
             })
             .collect();
-        // SAFETY: as in `write_set`; every image has STORAGE usage and is in GENERAL when the
-        // command runs (`clear_image` put it there, first of the frame's commands that use it).
+        // SAFETY: as in `write_set`; the callers' images have the usage `kind` needs and are in
+        // `layout` when the command runs: a sampled image in SHADER_READ_ONLY_OPTIMAL (its
+        // render pass left it so), a storage image in GENERAL (`clear_image` put it there, first
+        // of the frame's commands that use it).
         unsafe { self.gpu.raw.device.update_descriptor_sets(&writes, &[]) };
     }
 
@@ -518,7 +523,12 @@ impl<'g> Recorder<'g> {
                         .copy_from_slice(uniform);
                     self.slot += 1;
                     self.write_set(set, Some((0, &self.p.uniforms, offset)), storage);
-                    self.write_storage_images(set, images);
+                    self.write_images(
+                        set,
+                        images.iter().map(|(b, i)| (*b, &**i)),
+                        vk::DescriptorType::STORAGE_IMAGE,
+                        vk::ImageLayout::GENERAL,
+                    );
                 }
                 SetData::Raster { storage, uniform } => {
                     self.write_set(set, None, storage);
@@ -536,30 +546,12 @@ impl<'g> Recorder<'g> {
                     // SAFETY: as in `write_set`.
                     unsafe { self.gpu.raw.device.update_descriptor_sets(&[write], &[]) };
                 }
-                SetData::Images(images) => {
-                    let infos: Vec<[vk::DescriptorImageInfo; 1]> = images
-                        .iter()
-                        .map(|(_, image)| {
-                            [vk::DescriptorImageInfo::default()
-                                .image_view(image.view)
-                                .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)]
-                        })
-                        .collect();
-                    let writes: Vec<vk::WriteDescriptorSet<'_>> = images
-                        .iter()
-                        .zip(&infos)
-                        .map(|((binding, _), info)| {
-                            vk::WriteDescriptorSet::default()
-                                .dst_set(set)
-                                .dst_binding(*binding)
-                                .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
-                                .image_info(info)
-                        })
-                        .collect();
-                    // SAFETY: as in `write_set`; every image has SAMPLED usage and is in
-                    // SHADER_READ_ONLY_OPTIMAL when the command runs (its render pass left it so).
-                    unsafe { self.gpu.raw.device.update_descriptor_sets(&writes, &[]) };
-                }
+                SetData::Images(images) => self.write_images(
+                    set,
+                    images.iter().copied(),
+                    vk::DescriptorType::SAMPLED_IMAGE,
+                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                ),
             }
             out.push(set);
         }
