@@ -77,6 +77,9 @@ const MODULES: &[(&str, &str, Tail)] = &[
     ("dfb", "technique/dfb.wgsl+technique/sort_entries.wgsl", Raster),
     ("ll_size", "technique/ll_size.wgsl", Raster),
     ("ll", "technique/ll.wgsl", Raster),
+    // kbuf: its `_hw` twin's fragment stage in an ordered interlock (`interlock` below); the
+    // compute twin is only its resolve (the compute path refuses kbuf)
+    ("kbuf", "vk:shaders/kbuf.wgsl", Raster),
     ("count_sum", "vk:shaders/count_sum.wgsl", Kernels),
     // oit-wgpu's raster.rs SETUP_WGSL: the integer f32, then the setup kernels
     ("setup", "shaders/softfloat.wgsl+shaders/setup.wgsl", Alone),
@@ -88,6 +91,10 @@ const MODULES: &[(&str, &str, Tail)] = &[
     ("ddp_blend", "technique/ddp_blend.wgsl", Stage),
     ("adp_logic", "technique/adp.wgsl+vk:shaders/adp_logic.wgsl", Stage),
 ];
+
+/// Hardware-raster modules whose fragment entry point `hw_fs` runs in an ordered interlock
+/// ([`interlock`]).
+const INTERLOCKED: &[&str] = &["kbuf_hw"];
 
 fn read(dir: &Path, rel: &str) -> String {
     let path = dir.join(rel);
@@ -180,6 +187,112 @@ fn atomic_results(words: &mut [u32]) -> Result<usize, String> {
     Ok(copied)
 }
 
+/// SPIR-V words `interlock` writes.
+mod interlock_op {
+    pub const EXTENSION: u32 = 10;
+    pub const ENTRY_POINT: u32 = 15;
+    pub const EXECUTION_MODE: u32 = 16;
+    pub const CAPABILITY: u32 = 17;
+    pub const FUNCTION: u32 = 54;
+    pub const FUNCTION_END: u32 = 56;
+    pub const VARIABLE: u32 = 59;
+    pub const LINE: u32 = 8;
+    pub const NO_LINE: u32 = 317;
+    pub const LABEL: u32 = 248;
+    pub const KILL: u32 = 252;
+    pub const RETURN: u32 = 253;
+    pub const RETURN_VALUE: u32 = 254;
+    pub const TERMINATE_INVOCATION: u32 = 4416;
+    pub const BEGIN_INTERLOCK: u32 = 5364;
+    pub const END_INTERLOCK: u32 = 5365;
+    /// Execution mode `PixelInterlockOrderedEXT`.
+    pub const PIXEL_INTERLOCK_ORDERED: u32 = 5366;
+    /// Capability `FragmentShaderPixelInterlockEXT`.
+    pub const PIXEL_INTERLOCK_CAPABILITY: u32 = 5378;
+}
+
+/// Puts fragment entry point `entry`'s whole body in `VK_EXT_fragment_shader_interlock`'s ordered
+/// per-pixel critical section, which WGSL cannot express: the capability
+/// `FragmentShaderPixelInterlockEXT`, the extension, the execution mode
+/// `PixelInterlockOrderedEXT`, `OpBeginInvocationInterlockEXT` after the entry's first block's
+/// variables and `OpEndInvocationInterlockEXT` before its one return, so each is executed once,
+/// in the entry function's outermost control flow (the shape GLSL's `beginInvocationInterlockARB`
+/// requires). Fails on an entry with no body, more than one return, or a discard (a fragment
+/// discarded inside the section would never end it).
+fn interlock(words: &[u32], entry: &str) -> Result<Vec<u32>, String> {
+    use interlock_op as op;
+    const HEADER: usize = 5;
+    let mut list = Vec::new();
+    let mut at = HEADER;
+    while at < words.len() {
+        let count = (words[at] >> 16) as usize;
+        if count == 0 || at + count > words.len() {
+            return Err(format!("malformed SPIR-V at word {at}"));
+        }
+        list.push((at, words[at] & 0xffff, count));
+        at += count;
+    }
+    let string = |w: &[u32]| -> Vec<u8> {
+        let bytes: Vec<u8> = w.iter().flat_map(|x| x.to_le_bytes()).collect();
+        bytes.split(|&b| b == 0).next().unwrap_or_default().to_vec()
+    };
+    let function = list
+        .iter()
+        .find(|&&(at, o, count)| {
+            o == op::ENTRY_POINT && count >= 4 && string(&words[at + 3..at + count]) == entry.as_bytes()
+        })
+        .map(|&(at, _, _)| words[at + 2])
+        .ok_or_else(|| format!("no entry point '{entry}'"))?;
+    let last_of = |o: u32| list.iter().rposition(|&(_, x, _)| x == o);
+    let capability_at = last_of(op::CAPABILITY).ok_or("no OpCapability")?;
+    let mode_at = last_of(op::EXECUTION_MODE).or(last_of(op::ENTRY_POINT)).ok_or("no OpEntryPoint")?;
+    let extension: Vec<u32> = {
+        let mut bytes = b"SPV_EXT_fragment_shader_interlock".to_vec();
+        bytes.resize(bytes.len() / 4 * 4 + 4, 0);
+        let text: Vec<u32> =
+            bytes.chunks(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+        let mut w = vec![((text.len() as u32 + 1) << 16) | op::EXTENSION];
+        w.extend(text);
+        w
+    };
+    let mut out = words[..HEADER].to_vec();
+    let (mut in_entry, mut begun, mut returns) = (false, false, 0);
+    for (i, &(at, o, count)) in list.iter().enumerate() {
+        if in_entry {
+            if !begun && !matches!(o, op::LABEL | op::VARIABLE | op::LINE | op::NO_LINE) {
+                out.push((1 << 16) | op::BEGIN_INTERLOCK);
+                begun = true;
+            }
+            match o {
+                op::RETURN | op::RETURN_VALUE => {
+                    out.push((1 << 16) | op::END_INTERLOCK);
+                    returns += 1;
+                }
+                op::KILL | op::TERMINATE_INVOCATION => {
+                    return Err(format!("'{entry}' discards inside its interlocked body"));
+                }
+                op::FUNCTION_END => in_entry = false,
+                _ => {}
+            }
+        }
+        if o == op::FUNCTION && count >= 3 && words[at + 2] == function {
+            in_entry = true;
+        }
+        out.extend_from_slice(&words[at..at + count]);
+        if i == capability_at {
+            out.extend([(2 << 16) | op::CAPABILITY, op::PIXEL_INTERLOCK_CAPABILITY]);
+            out.extend(&extension);
+        }
+        if i == mode_at {
+            out.extend([(3 << 16) | op::EXECUTION_MODE, function, op::PIXEL_INTERLOCK_ORDERED]);
+        }
+    }
+    if !begun || returns != 1 {
+        return Err(format!("'{entry}': {returns} returns (one is needed), body begun: {begun}"));
+    }
+    Ok(out)
+}
+
 fn main() {
     let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets it"));
     let wgsl = manifest.join("../oit-wgpu/src");
@@ -249,6 +362,9 @@ fn main() {
         let copied = atomic_results(&mut words).unwrap_or_else(|e| panic!("{name}: {e}"));
         if text.contains("vk_atomic_result") && text.contains("textureAtomic") && copied == 0 {
             panic!("{name}: calls vk_atomic_result but no call was rewritten");
+        }
+        if INTERLOCKED.contains(&name) {
+            words = interlock(&words, "hw_fs").unwrap_or_else(|e| panic!("{name}: {e}"));
         }
         let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
         std::fs::write(out.join(format!("{name}.spv")), bytes).expect("write SPIR-V");

@@ -52,6 +52,26 @@ vulkan)
         done
     done
     ;;
+kbuf)
+    # issue 9: the ordered k-buffer (fragment shader interlock) beside fabs on vulkan's hardware
+    # path (every technique of the row on the same path), its error against the reference, and
+    # the conformance test that holds it to fabs bit for bit (KBUF_TEST: the tests crate's kbuf
+    # test binary, target/release/deps/kbuf-*)
+    run "$OIT" info --json > "$OUT/info.json"
+    if [ -n "${KBUF_TEST:-}" ]; then
+        OIT_REQUIRE_GPU=1 run "$KBUF_TEST" --nocapture > "$OUT/kbuf-test.txt" 2>&1
+        echo "kbuf test exit $?" >> "$OUT/kbuf-test.txt"
+    fi
+    for scene in planes:64 "$OIT_MODELS/bunny.obj" "$OIT_MODELS/armadillo.obj" "grid:4x4:$OIT_MODELS/bunny.obj"; do
+        slug=$(echo "$scene" | sed 's#.*/##; s#\.obj$##; s#:#-#g')
+        [ "${scene#grid:4x4}" != "$scene" ] && slug=grid-4x4-bunny
+        run "$OIT" compare --backend vulkan --raster hardware --size 1024x1024 --scene "$scene" \
+            --techniques kbuf,fabs,kbuf:4,fabs:4,kbuf:8,fabs:8 --json > "$OUT/compare-$slug.json" 2> "$OUT/compare-$slug.txt"
+        run "$OIT" bench --backend vulkan --raster hardware --size 1024x1024 --frames 10 --warmup 2 \
+            --scenes "$scene" --techniques plain,fabs,kbuf,fabs:4,kbuf:4,fabs:8,kbuf:8,mdts64:8 \
+            --no-curves --out "$OUT/bench-$slug"
+    done
+    ;;
 vulkan-blend)
     # issue 9's raw operations: the graphics pipeline's own captures on both GPU backends (adp's
     # histogram by logic-op OR on vulkan only; wgpu keeps its atomics histogram), against the
@@ -140,7 +160,7 @@ criterion)
     done
     ;;
 *)
-    echo "usage: $0 [readme|calibrate|model|vulkan|grid|before-after|embed|big|exact|tail|auto|criterion]" >&2
+    echo "usage: $0 [readme|calibrate|model|vulkan|kbuf|grid|before-after|embed|big|exact|tail|auto|criterion]" >&2
     exit 2
     ;;
 esac

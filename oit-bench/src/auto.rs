@@ -260,7 +260,8 @@ pub fn epr_bound(plan: &Plan, stats: &SceneStats) -> (f64, String) {
         Technique::Reference | Technique::Dfb | Technique::Ll => {
             (0.0, "exact: every fragment kept, sorted by (depth, primitive id) as the reference".into())
         }
-        Technique::Fabs { .. } => match fixed {
+        // kbuf keeps the same K nearest by (depth, primitive id) as fabs:K
+        Technique::Fabs { .. } | Technique::Kbuf { .. } => match fixed {
             Some(k) if k < n => (
                 share_deeper(stats, k),
                 format!(

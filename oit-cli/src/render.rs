@@ -40,8 +40,9 @@ use crate::output::{self, CameraJson};
 pub struct RenderArgs {
     /// The technique: reference, plain (unsorted alpha blending in primitive order, the
     /// baseline), dp, ddp, wavg, wsum, bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K],
-    /// fabs[:K], mlp:M, dfb (dynamic fragment buffer, Maule et al. 2012) or ll (per-pixel linked
-    /// lists, Yang et al. 2010) (K, M, P from 1 to 65536; K left out is sized from the scene; dfb
+    /// fabs[:K], mlp:M, dfb (dynamic fragment buffer, Maule et al. 2012), ll (per-pixel linked
+    /// lists, Yang et al. 2010) or kbuf[:K] (the ordered k-buffer: --backend vulkan --raster
+    /// hardware on a device with fragment shader interlock) (K, M, P from 1 to 65536; K left out is sized from the scene; dfb
     /// and ll allocate exactly the frame's fragments, counted first), or auto (chosen for this
     /// scene and device under --max-epr and --memory).
     #[arg(short, long, value_name = "T", default_value = "reference")]

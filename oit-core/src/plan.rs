@@ -152,6 +152,17 @@ impl Plan {
                 ),
             });
         }
+        if let Technique::Kbuf { k: Some(_) } = technique {
+            if settings.overflow == crate::Overflow::Tail {
+                return Err(OitError::Unsupported {
+                    backend: backend.into(),
+                    what: "--overflow tail with kbuf:K: the k-buffer drops what lies behind its K \
+                           (counted as lost); use fabs:K for a tail, or kbuf without K (sized from \
+                           the scene)"
+                        .into(),
+                });
+            }
+        }
         let fixed_k = matches!(
             technique,
             Technique::Fabs { k: Some(_) }
@@ -175,7 +186,7 @@ impl Plan {
             _ => false,
         };
         let sizing = match technique {
-            Technique::Fabs { k } | Technique::Mdts { k } | Technique::Mdts64 { k } => {
+            Technique::Fabs { k } | Technique::Mdts { k } | Technique::Mdts64 { k } | Technique::Kbuf { k } => {
                 k.map_or(Sizing::FromCount, Sizing::Fixed)
             }
             Technique::Mlp { m } => Sizing::Fixed(m),
@@ -235,6 +246,31 @@ impl Plan {
                 self.technique
             ),
         })
+    }
+
+    /// The refusal of a backend or raster path without an ordered fragment-stage interlock
+    /// (`VK_EXT_fragment_shader_interlock`'s `fragmentShaderPixelInterlock`), where the plan's
+    /// technique needs one (`kbuf`); `Ok` for every other technique. `why` says what this backend
+    /// or path lacks.
+    pub fn refuse_interlock(&self, backend: &str, why: &str) -> Result<(), OitError> {
+        if !self.needs_interlock() {
+            return Ok(());
+        }
+        Err(OitError::Unsupported {
+            backend: backend.into(),
+            what: format!(
+                "{}: the k-buffer keeps its slots sorted inside the fragment shader's ordered critical \
+                 section (VK_EXT_fragment_shader_interlock), and {why}; use --backend vulkan --raster \
+                 hardware on a device with fragmentShaderPixelInterlock, or fabs:K, which keeps the \
+                 same K nearest fragments",
+                self.technique
+            ),
+        })
+    }
+
+    /// Whether the technique runs inside a fragment-stage interlock (`kbuf`).
+    pub fn needs_interlock(&self) -> bool {
+        matches!(self.technique, Technique::Kbuf { .. })
     }
 
     /// The plan as a backend's `path` runs it: on a hardware raster path `plain` is the blender's
@@ -356,6 +392,10 @@ impl Plan {
                 per_pixel("slots (depth key, primitive id)", 8, k),
                 per_pixel("payloads", 4, k),
             ],
+            // sorted in place, an empty slot all ones: no counter
+            Technique::Kbuf { .. } => {
+                vec![per_pixel("sorted slots (depth key, primitive id)", 8, k), per_pixel("payloads", 4, k)]
+            }
             Technique::Dfb => vec![
                 Array { name: "counts", element_bytes: 4, per_pixel: 1, per_fragment: 0, fixed: 1 },
                 Array { name: "offsets", element_bytes: 4, per_pixel: 1, per_fragment: 0, fixed: 1 },
@@ -421,7 +461,8 @@ impl Plan {
             | Technique::WeightedAverage
             | Technique::WeightedSum
             | Technique::Mdts { .. }
-            | Technique::Mdts64 { .. } => passes.push((PassKind::Capture, 1)),
+            | Technique::Mdts64 { .. }
+            | Technique::Kbuf { .. } => passes.push((PassKind::Capture, 1)),
             Technique::Fabs { .. } => {
                 passes.push((PassKind::Capture, 1));
                 // a pixel past K keeps its K nearest by (depth, primitive id): two more passes,
@@ -563,6 +604,28 @@ mod tests {
         assert_eq!("Image".parse::<crate::AtomicStorage>().unwrap(), crate::AtomicStorage::Image);
         assert_eq!(" buffer".parse::<crate::AtomicStorage>().unwrap(), crate::AtomicStorage::Buffer);
         assert!("texture".parse::<crate::AtomicStorage>().is_err());
+    }
+
+    /// `kbuf`: fabs's K and its storage without the counter, one capture pass, refused where there
+    /// is no interlock (by every backend's call of the one rule) and with a tail.
+    #[test]
+    fn kbuf_plan() {
+        let counted = Counted { deepest: 9, fragments: 25 };
+        let fixed = plan("kbuf:4", |_| {}).unwrap();
+        assert!(fixed.needs_interlock() && !fixed.count_ties && !fixed.needs_count());
+        assert_eq!(fixed.sizing, Sizing::Fixed(4));
+        assert_eq!(fixed.storage_bytes(10, counted), 10 * (48 + 92));
+        assert_eq!(fixed.schedule(7, 7), vec![(PassKind::Capture, 1)]);
+        let sized = plan("kbuf", |_| {}).unwrap();
+        assert_eq!(sized.schedule(7, 7), vec![(PassKind::Count, 1), (PassKind::Capture, 1)]);
+        assert_eq!(sized.storage_bytes(10, counted), 10 * (9 * 12 + 92));
+        let e = fixed.refuse_interlock("cpu", "the CPU has no fragment stage").unwrap_err().to_string();
+        assert!(e.contains("cpu") && e.contains("VK_EXT_fragment_shader_interlock") && e.contains("fabs:K"), "{e}");
+        assert!(plan("fabs:4", |_| {}).unwrap().refuse_interlock("cpu", "none").is_ok());
+        let e = plan("kbuf:4", |s| s.overflow = crate::Overflow::Tail).unwrap_err().to_string();
+        assert!(e.contains("--overflow tail"), "{e}");
+        // without K nothing overflows: the setting is ignored, as for fabs
+        assert!(!plan("kbuf", |s| s.overflow = crate::Overflow::Tail).unwrap().tail);
     }
 
     #[test]

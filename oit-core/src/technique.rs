@@ -67,6 +67,16 @@ pub enum Technique {
     /// Per-pixel linked lists (Yang et al. 2010): a head per pixel and a node pool sized from a
     /// counting pass, filled by atomic counter and exchange; each list sorted at resolve.
     Ll,
+    /// The ordered k-buffer: K (depth, primitive id) slots per pixel kept sorted by a plain
+    /// read-modify-write inside the fragment shader's ordered critical section
+    /// (`VK_EXT_fragment_shader_interlock`). The k-buffer of Bavoil et al. 2007 without its
+    /// read-modify-write hazards, which the HPG 2009 bucket paper compared against; it keeps a
+    /// pixel's K nearest fragments, as `fabs:K` does, and counts the rest as lost. Runs only where
+    /// the fragment stage has an ordered interlock (oit-vulkan's hardware path on such a device).
+    Kbuf {
+        /// Slots per pixel; `None` sizes them from the scene.
+        k: Option<u32>,
+    },
 }
 
 /// The kind of a technique, parameters dropped: what a backend's capabilities list.
@@ -88,11 +98,12 @@ pub enum TechniqueKind {
     Mlp,
     Dfb,
     Ll,
+    Kbuf,
 }
 
 impl TechniqueKind {
     /// Every kind, in catalogue order.
-    pub const ALL: [TechniqueKind; 14] = [
+    pub const ALL: [TechniqueKind; 15] = [
         TechniqueKind::Reference,
         TechniqueKind::Plain,
         TechniqueKind::Dp,
@@ -107,17 +118,20 @@ impl TechniqueKind {
         TechniqueKind::Mlp,
         TechniqueKind::Dfb,
         TechniqueKind::Ll,
+        TechniqueKind::Kbuf,
     ];
 }
 
 /// The names `parse` accepts, for messages.
-pub const KNOWN_TECHNIQUES: &str = "reference, plain, dp, ddp, wavg, wsum, bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K], fabs[:K], mlp:M, dfb, ll";
+pub const KNOWN_TECHNIQUES: &str = "reference, plain, dp, ddp, wavg, wsum, bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K], fabs[:K], mlp:M, dfb, ll, kbuf[:K]";
 
 /// Largest K or M accepted (a pixel with this many layers is already far past any real scene).
 pub const MAX_PARAMETER: u32 = 65_536;
 
 impl Technique {
-    /// The techniques `--techniques all` runs, reference excluded, in catalogue order.
+    /// The techniques `--techniques all` runs, reference excluded, in catalogue order. Not `kbuf`:
+    /// it needs a fragment-stage interlock that most backends and devices lack, so it is asked for
+    /// by name.
     pub fn all() -> Vec<Technique> {
         vec![
             Technique::Plain,
@@ -174,6 +188,7 @@ impl Technique {
             Technique::Mlp { .. } => TechniqueKind::Mlp,
             Technique::Dfb => TechniqueKind::Dfb,
             Technique::Ll => TechniqueKind::Ll,
+            Technique::Kbuf { .. } => TechniqueKind::Kbuf,
         }
     }
 
@@ -189,6 +204,7 @@ impl Technique {
                 | Technique::Mlp { .. }
                 | Technique::Dfb
                 | Technique::Ll
+                | Technique::Kbuf { .. }
         )
     }
 }
@@ -216,6 +232,7 @@ impl fmt::Display for Technique {
             Technique::Mlp { m } => write!(f, "mlp:{m}"),
             Technique::Dfb => write!(f, "dfb"),
             Technique::Ll => write!(f, "ll"),
+            Technique::Kbuf { k } => opt(f, "kbuf", k),
         }
     }
 }
@@ -266,6 +283,7 @@ impl FromStr for Technique {
             "mlp" => Ok(Technique::Mlp { m: param.map(number).transpose()?.unwrap_or(4) }),
             "dfb" => none(Technique::Dfb),
             "ll" => none(Technique::Ll),
+            "kbuf" => Ok(Technique::Kbuf { k: param.map(number).transpose()? }),
             _ => Err(err("not in the catalogue".into())),
         }
     }
@@ -384,6 +402,8 @@ mod tests {
             "mlp:4",
             "dfb",
             "ll",
+            "kbuf",
+            "kbuf:8",
         ] {
             let t: Technique = name.parse().unwrap();
             assert_eq!(t.to_string(), name);
@@ -395,7 +415,7 @@ mod tests {
     #[test]
     fn bad_names_are_errors() {
         for bad in
-            ["", "nope", "fabs:0", "fabs:x", "dp:3", "mlp:-1", "bdp:99999999", "dfb:4", "ll:2", "plain:2"]
+            ["", "nope", "fabs:0", "fabs:x", "dp:3", "mlp:-1", "bdp:99999999", "dfb:4", "ll:2", "plain:2", "kbuf:0"]
         {
             assert!(bad.parse::<Technique>().is_err(), "{bad}");
         }

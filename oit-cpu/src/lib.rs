@@ -102,6 +102,7 @@ impl CpuPrepared<'_> {
         }
         let plan = oit_core::plan::Plan::new("cpu", self.scene, settings)?;
         plan.refuse_image_atomics("cpu")?;
+        plan.refuse_interlock("cpu", "the CPU's rasterizer has no fragment stage to interlock")?;
         // the whole frame's storage against the host's memory, before anything is allocated
         // (sizes from a counting pass are checked again as they are allocated)
         let budget = cpu_budget(settings);
@@ -140,6 +141,11 @@ impl CpuPrepared<'_> {
             Technique::Mlp { m } => technique::mlp::render(&mut ctx, m),
             Technique::Dfb => technique::dfb::render(&mut ctx),
             Technique::Ll => technique::ll::render(&mut ctx),
+            // refused above with the plan's reason (Plan::refuse_interlock); never reached
+            Technique::Kbuf { .. } => Err(OitError::Unsupported {
+                backend: "cpu".into(),
+                what: "kbuf: no fragment-stage interlock".into(),
+            }),
         };
         drop(ctx);
         if let Ok(mut kept) = self.raster.lock() {
@@ -182,7 +188,8 @@ impl Backend for CpuBackend {
     fn capabilities(&self) -> Capabilities {
         Capabilities {
             device: format!("CPU, {} rayon threads", self.threads.unwrap_or_else(rayon::current_num_threads)),
-            techniques: TechniqueKind::ALL.to_vec(),
+            // all but kbuf, which needs a fragment-stage interlock
+            techniques: TechniqueKind::ALL.into_iter().filter(|&t| t != TechniqueKind::Kbuf).collect(),
             raster_paths: vec![RasterPath::Cpu],
             limits: vec![("max image side".into(), oit_core::MAX_SIZE.to_string())],
         }

@@ -160,6 +160,10 @@ pub struct DeviceInfo {
     /// `shaderImageInt64Atomics` and the format's `STORAGE_IMAGE_ATOMIC` (the H200 has them,
     /// lavapipe not): `--atomic-storage image` for mdts64. Enabled at device creation when present.
     pub image_atomics_64: bool,
+    /// An ordered fragment-stage critical section per pixel: `VK_EXT_fragment_shader_interlock`'s
+    /// `fragmentShaderPixelInterlock` (the H200 has it, lavapipe not), with the hardware raster
+    /// path: `kbuf`. Enabled at device creation when present.
+    pub interlock: bool,
     /// The largest device-local heap, bytes.
     pub device_heap: u64,
     /// Whether the validation layer is on.
@@ -552,11 +556,15 @@ impl Gpu {
         let mut v12 = vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(true);
         let mut int64_images =
             vk::PhysicalDeviceShaderImageAtomicInt64FeaturesEXT::default().shader_image_int64_atomics(true);
-        let extensions: Vec<*const std::ffi::c_char> = if info.image_atomics_64 {
-            vec![ash::ext::shader_image_atomic_int64::NAME.as_ptr()]
-        } else {
-            Vec::new()
-        };
+        let mut interlock =
+            vk::PhysicalDeviceFragmentShaderInterlockFeaturesEXT::default().fragment_shader_pixel_interlock(true);
+        let mut extensions: Vec<*const std::ffi::c_char> = Vec::new();
+        if info.image_atomics_64 {
+            extensions.push(ash::ext::shader_image_atomic_int64::NAME.as_ptr());
+        }
+        if info.interlock {
+            extensions.push(ash::ext::fragment_shader_interlock::NAME.as_ptr());
+        }
         let mut create = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queues)
             .enabled_features(&core)
@@ -564,6 +572,9 @@ impl Gpu {
             .push_next(&mut v12);
         if info.image_atomics_64 {
             create = create.push_next(&mut int64_images);
+        }
+        if info.interlock {
+            create = create.push_next(&mut interlock);
         }
         // SAFETY: the physical device belongs to the instance; the features asked for were
         // checked present (`candidate`); the create info outlives the call.
@@ -665,6 +676,16 @@ impl Gpu {
             unsafe { instance.get_physical_device_features2(physical, &mut features2) };
             int64.shader_image_int64_atomics == vk::TRUE
         };
+        let has_interlock = extensions
+            .iter()
+            .any(|e| e.extension_name_as_c_str() == Ok(ash::ext::fragment_shader_interlock::NAME));
+        let interlock_feature = has_interlock && {
+            let mut interlock = vk::PhysicalDeviceFragmentShaderInterlockFeaturesEXT::default();
+            let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut interlock);
+            // SAFETY: a plain query; the extension is present, the chained struct alive.
+            unsafe { instance.get_physical_device_features2(physical, &mut features2) };
+            interlock.fragment_shader_pixel_interlock == vk::TRUE
+        };
         let counter_needs = vk::FormatFeatureFlags::COLOR_ATTACHMENT
             | vk::FormatFeatureFlags::COLOR_ATTACHMENT_BLEND
             | vk::FormatFeatureFlags::TRANSFER_SRC;
@@ -677,6 +698,7 @@ impl Gpu {
         .into_iter()
         .flatten()
         .collect::<Vec<_>>();
+        let hardware_missing_none = hardware_missing.is_empty();
         let hardware_missing = (!hardware_missing.is_empty()).then(|| hardware_missing.join(", "));
         let blend_needs =
             vk::FormatFeatureFlags::COLOR_ATTACHMENT_BLEND | vk::FormatFeatureFlags::SAMPLED_IMAGE;
@@ -724,6 +746,7 @@ impl Gpu {
             blendable,
             image_atomics_32: atomic_format(vk::Format::R32_UINT),
             image_atomics_64: image_int64_feature && atomic_format(vk::Format::R64_UINT),
+            interlock: interlock_feature && hardware_missing_none,
             device_heap,
             validation,
         }

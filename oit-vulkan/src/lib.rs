@@ -158,6 +158,7 @@ impl Backend for VulkanBackend {
             ("logicOp".into(), info.logic_op.to_string()),
             ("R32_UINT image atomics".into(), info.image_atomics_32.to_string()),
             ("R64_UINT image atomics".into(), info.image_atomics_64.to_string()),
+            ("fragmentShaderPixelInterlock (kbuf)".into(), info.interlock.to_string()),
             (
                 "hardware raster path".into(),
                 info.hardware_missing.as_ref().map_or("yes".into(), |m| format!("no: lacks {m}")),
@@ -168,7 +169,8 @@ impl Backend for VulkanBackend {
         ]);
         Capabilities {
             device: format!("{} ({:?}, {})", info.name, info.device_type, info.driver),
-            techniques: TechniqueKind::ALL.to_vec(),
+            // kbuf only where the fragment stage has an ordered interlock
+            techniques: TechniqueKind::ALL.into_iter().filter(|&t| t != TechniqueKind::Kbuf || info.interlock).collect(),
             raster_paths: if info.hardware_missing.is_none() {
                 vec![RasterPath::Compute, RasterPath::Hardware]
             } else {
@@ -289,6 +291,15 @@ impl VulkanPrepared<'_> {
         let start = Instant::now();
         let path = settings.raster.unwrap_or(RasterPath::Compute);
         let this = &*self;
+        // kbuf's interlock, refused before the frame's setup and storage
+        let plan = oit_core::plan::Plan::new("vulkan", this.scene, settings)?;
+        if path != RasterPath::Hardware {
+            plan.refuse_interlock("vulkan", "the compute raster path has no fragment stage; use --raster hardware")?;
+        }
+        if !this.gpu.info.interlock {
+            let why = format!("'{}' lacks fragmentShaderPixelInterlock", this.gpu.info.name);
+            plan.refuse_interlock("vulkan", &why)?;
+        }
         let drivers = match path {
             RasterPath::Compute => Drivers {
                 scene: Raster::Compute(this.compute_raster(&this.compute, camera, settings, false)?),
@@ -372,6 +383,7 @@ fn run_technique(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<Option<Ve
         Technique::Mlp { .. } => technique::mlp::render(ctx, drivers)?,
         Technique::Dfb => technique::dfb::render(ctx, drivers)?,
         Technique::Ll => technique::ll::render(ctx, drivers)?,
+        Technique::Kbuf { .. } => technique::kbuf::render(ctx, drivers)?,
     }
     Ok(layers)
 }

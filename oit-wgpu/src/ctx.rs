@@ -372,6 +372,7 @@ impl<'a> GpuCtx<'a> {
         let recording = caller.is_some();
         let plan = Plan::new("wgpu", scene, settings)?;
         plan.refuse_image_atomics("wgpu")?;
+        plan.refuse_interlock("wgpu", "WGSL has no fragment shader interlock")?;
         let pixels = settings.width * settings.height;
         let state_bytes = u64::from(pixels) * STATE_WORDS * 4;
         gpu.check_storage("the per-pixel resolve state", state_bytes)?;

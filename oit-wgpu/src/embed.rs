@@ -712,6 +712,7 @@ impl OitPass {
     fn check_recordable(&self) -> Result<(), OitError> {
         let plan = oit_core::plan::Plan::new("wgpu", &self.scene, &self.settings)?;
         plan.refuse_image_atomics("wgpu")?;
+        plan.refuse_interlock("wgpu", "WGSL has no fragment shader interlock")?;
         let why = match self.settings.technique {
             _ if plan.needs_count() => {
                 Some("its storage is sized by a counting pass read back in mid-frame; give K")

@@ -151,7 +151,8 @@ impl Backend for WgpuBackend {
         match self.gpu() {
             Ok(gpu) => Capabilities {
                 device: format!("{} ({:?}, {})", gpu.info.name, gpu.info.device_type, gpu.info.driver),
-                techniques: TechniqueKind::ALL.to_vec(),
+                // all but kbuf: WGSL has no fragment shader interlock
+                techniques: TechniqueKind::ALL.into_iter().filter(|&t| t != TechniqueKind::Kbuf).collect(),
                 raster_paths: vec![RasterPath::Hardware, RasterPath::Compute],
                 limits: vec![
                     ("max_buffer_size".into(), gpu.limits.max_buffer_size.to_string()),
@@ -436,6 +437,14 @@ pub(crate) fn run_technique(
         Technique::Mlp { .. } => technique::mlp::render(ctx, drivers)?,
         Technique::Dfb => technique::dfb::render(ctx, drivers)?,
         Technique::Ll => technique::ll::render(ctx, drivers)?,
+        // refused by the frame's context with the plan's reason (Plan::refuse_interlock); never
+        // reached
+        Technique::Kbuf { .. } => {
+            return Err(OitError::Unsupported {
+                backend: "wgpu".into(),
+                what: "kbuf: no fragment-stage interlock".into(),
+            });
+        }
     }
     Ok(layers)
 }

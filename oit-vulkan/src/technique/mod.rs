@@ -9,6 +9,7 @@ pub(crate) mod ddp;
 pub(crate) mod dfb;
 pub(crate) mod dp;
 pub(crate) mod fabs;
+pub(crate) mod kbuf;
 pub(crate) mod ll;
 pub(crate) mod mdts;
 pub(crate) mod mlp;
