@@ -249,8 +249,7 @@ fn interlock(words: &[u32], entry: &str) -> Result<Vec<u32>, String> {
     let extension: Vec<u32> = {
         let mut bytes = b"SPV_EXT_fragment_shader_interlock".to_vec();
         bytes.resize(bytes.len() / 4 * 4 + 4, 0);
-        let text: Vec<u32> =
-            bytes.chunks(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+        let text: Vec<u32> = bytes.chunks(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
         let mut w = vec![((text.len() as u32 + 1) << 16) | op::EXTENSION];
         w.extend(text);
         w

@@ -152,16 +152,14 @@ impl Plan {
                 ),
             });
         }
-        if let Technique::Kbuf { k: Some(_) } = technique {
-            if settings.overflow == crate::Overflow::Tail {
-                return Err(OitError::Unsupported {
-                    backend: backend.into(),
-                    what: "--overflow tail with kbuf:K: the k-buffer drops what lies behind its K \
-                           (counted as lost); use fabs:K for a tail, or kbuf without K (sized from \
-                           the scene)"
-                        .into(),
-                });
-            }
+        if matches!(technique, Technique::Kbuf { k: Some(_) }) && settings.overflow == crate::Overflow::Tail {
+            return Err(OitError::Unsupported {
+                backend: backend.into(),
+                what: "--overflow tail with kbuf:K: the k-buffer drops what lies behind its K \
+                       (counted as lost); use fabs:K for a tail, or kbuf without K (sized from \
+                       the scene)"
+                    .into(),
+            });
         }
         let fixed_k = matches!(
             technique,
@@ -186,9 +184,10 @@ impl Plan {
             _ => false,
         };
         let sizing = match technique {
-            Technique::Fabs { k } | Technique::Mdts { k } | Technique::Mdts64 { k } | Technique::Kbuf { k } => {
-                k.map_or(Sizing::FromCount, Sizing::Fixed)
-            }
+            Technique::Fabs { k }
+            | Technique::Mdts { k }
+            | Technique::Mdts64 { k }
+            | Technique::Kbuf { k } => k.map_or(Sizing::FromCount, Sizing::Fixed),
             Technique::Mlp { m } => Sizing::Fixed(m),
             Technique::Dfb | Technique::Ll => Sizing::Exact,
             // where no blender keeps submission order (a CPU, a compute rasterizer), each pixel's
@@ -620,7 +619,10 @@ mod tests {
         assert_eq!(sized.schedule(7, 7), vec![(PassKind::Count, 1), (PassKind::Capture, 1)]);
         assert_eq!(sized.storage_bytes(10, counted), 10 * (9 * 12 + 92));
         let e = fixed.refuse_interlock("cpu", "the CPU has no fragment stage").unwrap_err().to_string();
-        assert!(e.contains("cpu") && e.contains("VK_EXT_fragment_shader_interlock") && e.contains("fabs:K"), "{e}");
+        assert!(
+            e.contains("cpu") && e.contains("VK_EXT_fragment_shader_interlock") && e.contains("fabs:K"),
+            "{e}"
+        );
         assert!(plan("fabs:4", |_| {}).unwrap().refuse_interlock("cpu", "none").is_ok());
         let e = plan("kbuf:4", |s| s.overflow = crate::Overflow::Tail).unwrap_err().to_string();
         assert!(e.contains("--overflow tail"), "{e}");

@@ -414,9 +414,19 @@ mod tests {
 
     #[test]
     fn bad_names_are_errors() {
-        for bad in
-            ["", "nope", "fabs:0", "fabs:x", "dp:3", "mlp:-1", "bdp:99999999", "dfb:4", "ll:2", "plain:2", "kbuf:0"]
-        {
+        for bad in [
+            "",
+            "nope",
+            "fabs:0",
+            "fabs:x",
+            "dp:3",
+            "mlp:-1",
+            "bdp:99999999",
+            "dfb:4",
+            "ll:2",
+            "plain:2",
+            "kbuf:0",
+        ] {
             assert!(bad.parse::<Technique>().is_err(), "{bad}");
         }
     }

@@ -19,6 +19,13 @@ use oit_core::OitError;
 /// The SPIR-V `build.rs` compiled from oit-wgpu's WGSL: (module, words as bytes, entry points).
 const MODULES: &[(&str, &[u8], &[&str])] = include!(concat!(env!("OUT_DIR"), "/modules.rs"));
 
+/// Every SPIR-V module `build.rs` compiled (after its rewrites: image atomics' results, kbuf's
+/// interlock), by name, with its entry points: for checking them with outside tools (the
+/// `spirv` test runs `spirv-val` over each).
+pub fn spirv_modules() -> impl Iterator<Item = (&'static str, &'static [u8], &'static [&'static str])> {
+    MODULES.iter().copied()
+}
+
 /// The extensions the papers' raw operations need, reported by `oit info`.
 pub const PAPER_EXTENSIONS: [&CStr; 4] = [
     c"VK_EXT_shader_atomic_float",
@@ -556,8 +563,8 @@ impl Gpu {
         let mut v12 = vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(true);
         let mut int64_images =
             vk::PhysicalDeviceShaderImageAtomicInt64FeaturesEXT::default().shader_image_int64_atomics(true);
-        let mut interlock =
-            vk::PhysicalDeviceFragmentShaderInterlockFeaturesEXT::default().fragment_shader_pixel_interlock(true);
+        let mut interlock = vk::PhysicalDeviceFragmentShaderInterlockFeaturesEXT::default()
+            .fragment_shader_pixel_interlock(true);
         let mut extensions: Vec<*const std::ffi::c_char> = Vec::new();
         if info.image_atomics_64 {
             extensions.push(ash::ext::shader_image_atomic_int64::NAME.as_ptr());

@@ -23,6 +23,9 @@
 //! MAX blending of (−d, d) into `R32G32_SFLOAT` with occlusion queries for ddp, additive float
 //! blending for wavg/wsum, and, beyond wgpu, adp's histogram by logic-op OR into 8 ×
 //! `R32G32B32A32_UINT`. `plain` always blends on the hardware path (the over operator in one draw).
+//! Beyond the papers and wgpu, `kbuf[:K]` on the hardware path (`technique::kbuf`): the ordered
+//! k-buffer, whose fragment stage runs in `VK_EXT_fragment_shader_interlock`'s ordered per-pixel
+//! critical section (WGSL cannot say it: `build.rs` adds it to the SPIR-V of `kbuf_hw`'s `hw_fs`).
 //!
 //! **GPU time.** Where the device has timestamps ([`Gpu::has_timestamps`]: not on a CPU device
 //! such as lavapipe unless `OIT_GPU_TIMESTAMPS=1`, as on oit-wgpu) every dispatch and draw is
@@ -33,8 +36,9 @@
 //! **What is refused** (`OitError::Unsupported`, naming what is missing): the hardware path on a
 //! device without what it needs; a blend capture into a format the device cannot blend into, or
 //! without `logicOp` / `independentBlend` / 8 colour attachments; mdts64 on storage images
-//! without `VK_EXT_shader_image_atomic_int64`'s 64-bit image atomics (lavapipe); the interlock
-//! k-buffer is not written.
+//! without `VK_EXT_shader_image_atomic_int64`'s 64-bit image atomics (lavapipe); `kbuf` on the
+//! compute path (no fragment stage) and on a device without `fragmentShaderPixelInterlock`
+//! (lavapipe), before anything is allocated.
 //!
 //! **Starting without Vulkan.** The entry is loaded at run time (`ash::Entry::load`, feature
 //! `loaded`): a binary runs on a machine without `libvulkan.so.1` and [`VulkanBackend::gpu`]
@@ -83,7 +87,9 @@ use oit_core::{
 };
 
 pub use crate::ctx::BufferPool;
-pub use crate::device::{DeviceInfo, Gpu, PAPER_EXTENSIONS, validation_errors, validation_requested};
+pub use crate::device::{
+    DeviceInfo, Gpu, PAPER_EXTENSIONS, spirv_modules, validation_errors, validation_requested,
+};
 
 use crate::ctx::VkCtx;
 use crate::hardware::HardwareScene;
@@ -170,7 +176,10 @@ impl Backend for VulkanBackend {
         Capabilities {
             device: format!("{} ({:?}, {})", info.name, info.device_type, info.driver),
             // kbuf only where the fragment stage has an ordered interlock
-            techniques: TechniqueKind::ALL.into_iter().filter(|&t| t != TechniqueKind::Kbuf || info.interlock).collect(),
+            techniques: TechniqueKind::ALL
+                .into_iter()
+                .filter(|&t| t != TechniqueKind::Kbuf || info.interlock)
+                .collect(),
             raster_paths: if info.hardware_missing.is_none() {
                 vec![RasterPath::Compute, RasterPath::Hardware]
             } else {
@@ -294,7 +303,10 @@ impl VulkanPrepared<'_> {
         // kbuf's interlock, refused before the frame's setup and storage
         let plan = oit_core::plan::Plan::new("vulkan", this.scene, settings)?;
         if path != RasterPath::Hardware {
-            plan.refuse_interlock("vulkan", "the compute raster path has no fragment stage; use --raster hardware")?;
+            plan.refuse_interlock(
+                "vulkan",
+                "the compute raster path has no fragment stage; use --raster hardware",
+            )?;
         }
         if !this.gpu.info.interlock {
             let why = format!("'{}' lacks fragmentShaderPixelInterlock", this.gpu.info.name);

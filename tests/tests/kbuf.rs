@@ -1,12 +1,14 @@
 //! `kbuf[:K]`, the ordered k-buffer, on every backend × raster path compiled in. Where it runs
 //! (oit-vulkan's hardware path on a device with `fragmentShaderPixelInterlock`: the H200, not
 //! lavapipe) a frame is `fabs:K`'s to the bit: both keep each pixel's K smallest (depth bits,
-//! primitive id) keys and lose the rest, so image, fragments, captured, lost, ties and passes are
-//! the same, with pixels past K (lost > 0) and with equal depths (`ties:5`); sized from the scene it
+//! primitive id) keys and lose the rest, so image, fragments, captured, lost and ties are the
+//! same, with pixels past K (lost > 0) and with equal depths (`ties:5`), in one capture pass where
+//! fabs:K takes three (the plan's schedule) and in the plan's storage; sized from the scene it
 //! equals the reference (EPR 0). Everywhere else the frame is refused, naming the interlock, and no
 //! frame is drawn.
 
 use oit_core::metrics::accuracy;
+use oit_core::plan::{Counted, Plan, RESOLVE_STATE_BYTES};
 use oit_core::{Backend, RasterPath, Settings, Technique, TechniqueKind, View};
 use oit_tests::*;
 
@@ -34,24 +36,43 @@ fn kbuf_equals_fabs_where_it_runs_and_is_refused_elsewhere() {
                 if !runs {
                     let e = result.err().unwrap_or_else(|| panic!("{what}: ran without an interlock"));
                     let e = e.to_string();
-                    assert!(e.contains("VK_EXT_fragment_shader_interlock") && e.contains("fabs:K"), "{what}: {e}");
+                    assert!(
+                        e.contains("VK_EXT_fragment_shader_interlock") && e.contains("fabs:K"),
+                        "{what}: {e}"
+                    );
                     continue;
                 }
                 let kbuf = result.unwrap_or_else(|e| panic!("{what}: {e}"));
-                let fabs = render(b, &scene, &cam, &Settings { technique: Technique::Fabs { k }, ..s.clone() });
+                let fabs =
+                    render(b, &scene, &cam, &Settings { technique: Technique::Fabs { k }, ..s.clone() });
                 let key = |f: &oit_core::Frame| {
                     let s = &f.stats;
-                    (s.fragments, s.captured, s.lost, s.merged, s.tied, s.geometry_passes)
+                    (s.fragments, s.captured, s.lost, s.merged, s.tied)
                 };
-                assert_eq!(key(&kbuf), key(&fabs), "{what}: (fragments, captured, lost, merged, tied, passes) vs fabs");
+                assert_eq!(
+                    key(&kbuf),
+                    key(&fabs),
+                    "{what}: (fragments, captured, lost, merged, tied) vs fabs"
+                );
                 let differ = kbuf.image.pixels.iter().zip(&fabs.image.pixels).filter(|(a, b)| a != b).count();
                 assert_eq!(differ, 0, "{what}: {differ} pixels differ from fabs's");
                 if name == "planes:8" && k.is_some() {
                     assert!(kbuf.stats.lost > 0, "{what}: 8 layers into 3 slots lose fragments");
                 }
+                // the plan's schedule and arrays: one capture pass (fabs:K adds two where a pixel
+                // overflows), after a counting pass where K comes from the scene
+                let reference =
+                    render(b, &scene, &cam, &Settings { technique: Technique::Reference, ..s.clone() });
+                let deepest = reference.layers.as_ref().and_then(|l| l.iter().copied().max()).unwrap_or(0);
+                let plan = Plan::new(b.name(), &scene, &s).expect("planned").on_path(b.raster_path(&s));
+                let total: u32 = plan.schedule(deepest, deepest).iter().map(|(_, n)| n).sum();
+                assert_eq!(kbuf.stats.geometry_passes, total, "{what}: passes vs the plan's schedule");
+                assert_eq!(total, if k.is_some() { 1 } else { 2 }, "{what}");
+                let pixels = u64::from(s.width) * u64::from(s.height);
+                let counted = Counted { deepest, fragments: reference.stats.fragments };
+                let arrays = plan.storage_bytes(pixels, counted) - pixels * RESOLVE_STATE_BYTES;
+                assert_eq!(kbuf.stats.storage_bytes, arrays, "{what}: storage vs the plan's arrays");
                 if k.is_none() {
-                    let reference =
-                        render(b, &scene, &cam, &Settings { technique: Technique::Reference, ..s.clone() });
                     let a = accuracy(&reference, &kbuf.image).expect("same size");
                     assert_eq!((kbuf.stats.lost, a.epr), (0, 0.0), "{what}: against the reference");
                 }
