@@ -84,8 +84,19 @@ impl Fragment<'_> {
 
 /// Side of a screen tile of [`RasterMode::Tiled`], in pixels.
 pub const TILE_SIZE: u32 = 32;
-/// Triangles per task of [`RasterMode::Scatter`].
+/// Triangles per task of [`RasterMode::Scatter`], at most: a scene of fewer than
+/// [`SCATTER_TASKS_PER_THREAD`] × 64 triangles a thread is cut finer ([`scatter_chunk`]).
 const SCATTER_CHUNK: usize = 64;
+/// Tasks a thread gets at least in [`RasterMode::Scatter`] where the triangles allow.
+const SCATTER_TASKS_PER_THREAD: usize = 4;
+
+/// Triangles per Scatter task for `triangles` triangles over `threads` threads: 64, or fewer when
+/// that would leave threads idle. A scene of a few large triangles (`planes:8`: 16 triangles)
+/// was one task of 64, so one thread walked every fragment of the frame; now each thread gets
+/// about four tasks. The fragments are the same (each task walks whole triangles).
+fn scatter_chunk(triangles: usize, threads: usize) -> usize {
+    triangles.div_ceil(threads.max(1) * SCATTER_TASKS_PER_THREAD).clamp(1, SCATTER_CHUNK)
+}
 
 /// How a geometry pass spreads its work over threads. Both give the same fragments.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -280,22 +291,24 @@ impl Rasterizer {
     /// returns the number of covered (pixel, triangle) pairs.
     fn for_each_covered<F: Fn(&Triangle, &SmallEdges, u32, u32, [i64; 3]) + Sync>(&self, f: F) -> u64 {
         match self.mode {
-            RasterMode::Scatter => self
-                .setup
-                .triangles
-                .par_chunks(SCATTER_CHUNK)
-                .zip(self.edges.par_chunks(SCATTER_CHUNK))
-                .map(|(chunk, edges)| {
-                    let mut n = 0u64;
-                    for (t, edges) in chunk.iter().zip(edges) {
-                        walk_tile(t, edges, t.bbox, |x, y, e| {
-                            f(t, edges, x, y, e);
-                            n += 1;
-                        });
-                    }
-                    n
-                })
-                .sum(),
+            RasterMode::Scatter => {
+                let chunk = scatter_chunk(self.setup.triangles.len(), rayon::current_num_threads());
+                self.setup
+                    .triangles
+                    .par_chunks(chunk)
+                    .zip(self.edges.par_chunks(chunk))
+                    .map(|(chunk, edges)| {
+                        let mut n = 0u64;
+                        for (t, edges) in chunk.iter().zip(edges) {
+                            walk_tile(t, edges, t.bbox, |x, y, e| {
+                                f(t, edges, x, y, e);
+                                n += 1;
+                            });
+                        }
+                        n
+                    })
+                    .sum()
+            }
             RasterMode::Tiled => {
                 let bins = self.bins();
                 let tiles = bins.start.len() - 1;
