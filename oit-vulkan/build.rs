@@ -102,17 +102,59 @@ fn read(dir: &Path, rel: &str) -> String {
     std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()))
 }
 
-/// SPIR-V opcodes `atomic_results` reads and writes.
+/// SPIR-V opcodes (and the two operand values) `atomic_results` and `interlock` read and write.
 mod op {
     pub const NAME: u32 = 5;
+    pub const LINE: u32 = 8;
+    pub const EXTENSION: u32 = 10;
+    pub const ENTRY_POINT: u32 = 15;
+    pub const EXECUTION_MODE: u32 = 16;
+    pub const CAPABILITY: u32 = 17;
     pub const FUNCTION: u32 = 54;
+    pub const FUNCTION_END: u32 = 56;
     pub const FUNCTION_CALL: u32 = 57;
+    pub const VARIABLE: u32 = 59;
     pub const IMAGE_TEXEL_POINTER: u32 = 60;
     pub const COPY_OBJECT: u32 = 83;
     /// OpAtomicExchange ..= OpAtomicXor (229 ..= 242): every atomic with a result and a pointer
     /// at word 3.
     pub const ATOMICS: std::ops::RangeInclusive<u32> = 229..=242;
     pub const LABEL: u32 = 248;
+    pub const KILL: u32 = 252;
+    pub const RETURN: u32 = 253;
+    pub const RETURN_VALUE: u32 = 254;
+    pub const NO_LINE: u32 = 317;
+    pub const TERMINATE_INVOCATION: u32 = 4416;
+    pub const BEGIN_INTERLOCK: u32 = 5364;
+    pub const END_INTERLOCK: u32 = 5365;
+    /// Execution mode `PixelInterlockOrderedEXT`.
+    pub const PIXEL_INTERLOCK_ORDERED: u32 = 5366;
+    /// Capability `FragmentShaderPixelInterlockEXT`.
+    pub const PIXEL_INTERLOCK_CAPABILITY: u32 = 5378;
+}
+
+/// Words of a SPIR-V module's header, before its first instruction.
+const HEADER: usize = 5;
+
+/// A module's instructions: (first word, opcode, word count) each; fails on a malformed one.
+fn instructions(words: &[u32]) -> Result<Vec<(usize, u32, usize)>, String> {
+    let mut at = HEADER;
+    let mut out = Vec::new();
+    while at < words.len() {
+        let count = (words[at] >> 16) as usize;
+        if count == 0 || at + count > words.len() {
+            return Err(format!("malformed SPIR-V at word {at}"));
+        }
+        out.push((at, words[at] & 0xffff, count));
+        at += count;
+    }
+    Ok(out)
+}
+
+/// A literal string operand (nul-terminated UTF-8 in little-endian words), without its nul.
+fn literal(words: &[u32]) -> Vec<u8> {
+    let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+    bytes.split(|&b| b == 0).next().unwrap_or_default().to_vec()
 }
 
 /// Rewrites every call of `vk_atomic_result` / `vk_atomic_result64` (src/shaders/atomic_result.wgsl)
@@ -122,26 +164,11 @@ mod op {
 /// on a call with arguments, one with no image atomic before it in its block, or one whose type
 /// differs from the atomic's. The words keep their length (both instructions are 4 words).
 fn atomic_results(words: &mut [u32]) -> Result<usize, String> {
-    const HEADER: usize = 5;
-    let instructions = |words: &[u32]| {
-        let mut at = HEADER;
-        let mut out = Vec::new();
-        while at < words.len() {
-            let count = (words[at] >> 16) as usize;
-            if count == 0 || at + count > words.len() {
-                return Err(format!("malformed SPIR-V at word {at}"));
-            }
-            out.push((at, words[at] & 0xffff, count));
-            at += count;
-        }
-        Ok(out)
-    };
     let list = instructions(words)?;
     let mut markers = Vec::new();
     for &(at, opcode, count) in &list {
         if opcode == op::NAME && count >= 3 {
-            let bytes: Vec<u8> = words[at + 2..at + count].iter().flat_map(|w| w.to_le_bytes()).collect();
-            let name = bytes.split(|&b| b == 0).next().unwrap_or_default();
+            let name = literal(&words[at + 2..at + count]);
             if name == b"vk_atomic_result" || name == b"vk_atomic_result64" {
                 markers.push(words[at + 1]);
             }
@@ -187,30 +214,6 @@ fn atomic_results(words: &mut [u32]) -> Result<usize, String> {
     Ok(copied)
 }
 
-/// SPIR-V words `interlock` writes.
-mod interlock_op {
-    pub const EXTENSION: u32 = 10;
-    pub const ENTRY_POINT: u32 = 15;
-    pub const EXECUTION_MODE: u32 = 16;
-    pub const CAPABILITY: u32 = 17;
-    pub const FUNCTION: u32 = 54;
-    pub const FUNCTION_END: u32 = 56;
-    pub const VARIABLE: u32 = 59;
-    pub const LINE: u32 = 8;
-    pub const NO_LINE: u32 = 317;
-    pub const LABEL: u32 = 248;
-    pub const KILL: u32 = 252;
-    pub const RETURN: u32 = 253;
-    pub const RETURN_VALUE: u32 = 254;
-    pub const TERMINATE_INVOCATION: u32 = 4416;
-    pub const BEGIN_INTERLOCK: u32 = 5364;
-    pub const END_INTERLOCK: u32 = 5365;
-    /// Execution mode `PixelInterlockOrderedEXT`.
-    pub const PIXEL_INTERLOCK_ORDERED: u32 = 5366;
-    /// Capability `FragmentShaderPixelInterlockEXT`.
-    pub const PIXEL_INTERLOCK_CAPABILITY: u32 = 5378;
-}
-
 /// Puts fragment entry point `entry`'s whole body in `VK_EXT_fragment_shader_interlock`'s ordered
 /// per-pixel critical section, which WGSL cannot express: the capability
 /// `FragmentShaderPixelInterlockEXT`, the extension, the execution mode
@@ -220,26 +223,11 @@ mod interlock_op {
 /// requires). Fails on an entry with no body, more than one return, or a discard (a fragment
 /// discarded inside the section would never end it).
 fn interlock(words: &[u32], entry: &str) -> Result<Vec<u32>, String> {
-    use interlock_op as op;
-    const HEADER: usize = 5;
-    let mut list = Vec::new();
-    let mut at = HEADER;
-    while at < words.len() {
-        let count = (words[at] >> 16) as usize;
-        if count == 0 || at + count > words.len() {
-            return Err(format!("malformed SPIR-V at word {at}"));
-        }
-        list.push((at, words[at] & 0xffff, count));
-        at += count;
-    }
-    let string = |w: &[u32]| -> Vec<u8> {
-        let bytes: Vec<u8> = w.iter().flat_map(|x| x.to_le_bytes()).collect();
-        bytes.split(|&b| b == 0).next().unwrap_or_default().to_vec()
-    };
+    let list = instructions(words)?;
     let function = list
         .iter()
         .find(|&&(at, o, count)| {
-            o == op::ENTRY_POINT && count >= 4 && string(&words[at + 3..at + count]) == entry.as_bytes()
+            o == op::ENTRY_POINT && count >= 4 && literal(&words[at + 3..at + count]) == entry.as_bytes()
         })
         .map(|&(at, _, _)| words[at + 2])
         .ok_or_else(|| format!("no entry point '{entry}'"))?;

@@ -673,26 +673,37 @@ impl Gpu {
                 vk::FormatFeatureFlags::STORAGE_IMAGE | vk::FormatFeatureFlags::STORAGE_IMAGE_ATOMIC,
             )
         };
-        let has_image_int64 = extensions
-            .iter()
-            .any(|e| e.extension_name_as_c_str() == Ok(ash::ext::shader_image_atomic_int64::NAME));
-        let image_int64_feature = has_image_int64 && {
-            let mut int64 = vk::PhysicalDeviceShaderImageAtomicInt64FeaturesEXT::default();
-            let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut int64);
-            // SAFETY: a plain query; the extension is present, the chained struct alive.
-            unsafe { instance.get_physical_device_features2(physical, &mut features2) };
-            int64.shader_image_int64_atomics == vk::TRUE
-        };
-        let has_interlock = extensions
-            .iter()
-            .any(|e| e.extension_name_as_c_str() == Ok(ash::ext::fragment_shader_interlock::NAME));
-        let interlock_feature = has_interlock && {
-            let mut interlock = vk::PhysicalDeviceFragmentShaderInterlockFeaturesEXT::default();
-            let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut interlock);
-            // SAFETY: a plain query; the extension is present, the chained struct alive.
-            unsafe { instance.get_physical_device_features2(physical, &mut features2) };
-            interlock.fragment_shader_pixel_interlock == vk::TRUE
-        };
+        // an extension's feature struct, queried only where the device lists the extension
+        fn extension_feature<T: vk::ExtendsPhysicalDeviceFeatures2>(
+            instance: &ash::Instance,
+            physical: vk::PhysicalDevice,
+            extensions: &[vk::ExtensionProperties],
+            name: &CStr,
+            mut feature: T,
+        ) -> Option<T> {
+            extensions.iter().any(|e| e.extension_name_as_c_str() == Ok(name)).then(|| {
+                let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut feature);
+                // SAFETY: a plain query; the extension is present, the chained struct alive.
+                unsafe { instance.get_physical_device_features2(physical, &mut features2) };
+                feature
+            })
+        }
+        let image_int64_feature = extension_feature(
+            instance,
+            physical,
+            &extensions,
+            ash::ext::shader_image_atomic_int64::NAME,
+            vk::PhysicalDeviceShaderImageAtomicInt64FeaturesEXT::default(),
+        )
+        .is_some_and(|f| f.shader_image_int64_atomics == vk::TRUE);
+        let interlock_feature = extension_feature(
+            instance,
+            physical,
+            &extensions,
+            ash::ext::fragment_shader_interlock::NAME,
+            vk::PhysicalDeviceFragmentShaderInterlockFeaturesEXT::default(),
+        )
+        .is_some_and(|f| f.fragment_shader_pixel_interlock == vk::TRUE);
         let counter_needs = vk::FormatFeatureFlags::COLOR_ATTACHMENT
             | vk::FormatFeatureFlags::COLOR_ATTACHMENT_BLEND
             | vk::FormatFeatureFlags::TRANSFER_SRC;
