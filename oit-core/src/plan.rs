@@ -267,9 +267,10 @@ impl Plan {
         })
     }
 
-    /// Whether the technique runs inside a fragment-stage interlock (`kbuf`).
+    /// Whether the technique runs inside a fragment-stage interlock
+    /// ([`crate::TechniqueKind::needs_interlock`]).
     pub fn needs_interlock(&self) -> bool {
-        matches!(self.technique, Technique::Kbuf { .. })
+        self.technique.kind().needs_interlock()
     }
 
     /// The plan as a backend's `path` runs it: on a hardware raster path `plain` is the blender's

@@ -120,6 +120,13 @@ impl TechniqueKind {
         TechniqueKind::Ll,
         TechniqueKind::Kbuf,
     ];
+
+    /// Whether the technique runs inside an ordered fragment-stage interlock
+    /// (`VK_EXT_fragment_shader_interlock`): `kbuf`. A backend or device without one leaves it out
+    /// of its capabilities and refuses it ([`crate::plan::Plan::refuse_interlock`]).
+    pub fn needs_interlock(self) -> bool {
+        self == TechniqueKind::Kbuf
+    }
 }
 
 /// The names `parse` accepts, for messages.

@@ -188,8 +188,8 @@ impl Backend for CpuBackend {
     fn capabilities(&self) -> Capabilities {
         Capabilities {
             device: format!("CPU, {} rayon threads", self.threads.unwrap_or_else(rayon::current_num_threads)),
-            // all but kbuf, which needs a fragment-stage interlock
-            techniques: TechniqueKind::ALL.into_iter().filter(|&t| t != TechniqueKind::Kbuf).collect(),
+            // no fragment stage: nothing that needs an interlock
+            techniques: TechniqueKind::ALL.into_iter().filter(|t| !t.needs_interlock()).collect(),
             raster_paths: vec![RasterPath::Cpu],
             limits: vec![("max image side".into(), oit_core::MAX_SIZE.to_string())],
         }

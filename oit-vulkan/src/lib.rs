@@ -175,10 +175,10 @@ impl Backend for VulkanBackend {
         ]);
         Capabilities {
             device: format!("{} ({:?}, {})", info.name, info.device_type, info.driver),
-            // kbuf only where the fragment stage has an ordered interlock
+            // what needs an ordered fragment-stage interlock only where the device has one
             techniques: TechniqueKind::ALL
                 .into_iter()
-                .filter(|&t| t != TechniqueKind::Kbuf || info.interlock)
+                .filter(|t| !t.needs_interlock() || info.interlock)
                 .collect(),
             raster_paths: if info.hardware_missing.is_none() {
                 vec![RasterPath::Compute, RasterPath::Hardware]

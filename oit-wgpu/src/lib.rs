@@ -151,8 +151,8 @@ impl Backend for WgpuBackend {
         match self.gpu() {
             Ok(gpu) => Capabilities {
                 device: format!("{} ({:?}, {})", gpu.info.name, gpu.info.device_type, gpu.info.driver),
-                // all but kbuf: WGSL has no fragment shader interlock
-                techniques: TechniqueKind::ALL.into_iter().filter(|&t| t != TechniqueKind::Kbuf).collect(),
+                // WGSL has no fragment shader interlock
+                techniques: TechniqueKind::ALL.into_iter().filter(|t| !t.needs_interlock()).collect(),
                 raster_paths: vec![RasterPath::Hardware, RasterPath::Compute],
                 limits: vec![
                     ("max_buffer_size".into(), gpu.limits.max_buffer_size.to_string()),
