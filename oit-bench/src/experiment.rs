@@ -82,9 +82,14 @@ pub struct Measured {
     /// where it keeps one, else the time around the call): `readback_wall_ms` in the report.
     pub wall_ms: Vec<f64>,
     /// Wall milliseconds of each steady-state frame: the same prepared scene after the warm-up,
-    /// through [`Prepared::frame_stats`] (the frame waited for, its counters read back, not its
-    /// image): `steady_wall_ms` in the report. Empty for a single untimed render.
+    /// in a frame loop ([`Prepared::frame_loop`]: frames in flight where the backend keeps them,
+    /// counters read back, no image), the time between one frame's completion and the next's:
+    /// `steady_wall_ms` in the report. Empty for a single untimed render.
     pub steady_wall_ms: Vec<f64>,
+    /// Wall milliseconds of each frame rendered on its own and waited for before the next
+    /// starts ([`Prepared::frame_stats`]): the steady state's latency, `latency_wall_ms` in the
+    /// report; the steady figures themselves where the backend keeps one frame in flight.
+    pub latency_wall_ms: Vec<f64>,
     /// Device milliseconds of each timed frame that measured them.
     pub gpu_ms: Vec<f64>,
     /// The deepest pixel, where the frame counted layers (the reference does).
@@ -118,16 +123,19 @@ pub(crate) struct Timed {
     pub frame: Frame,
     /// Wall milliseconds per timed frame, image read back.
     pub wall: Vec<f64>,
-    /// Wall milliseconds per steady-state frame, no image read back.
+    /// Wall milliseconds per steady-state frame of a frame loop, no image read back.
     pub steady: Vec<f64>,
+    /// Wall milliseconds per frame rendered and waited for on its own, no image read back.
+    pub latency: Vec<f64>,
     /// Device milliseconds per timed frame that has them.
     pub gpu: Vec<f64>,
 }
 
 /// Renders `warmup` untimed frames, then `frames` (at least 1) timed steady-state frames without
-/// their image ([`Prepared::frame_stats`]), then `frames` timed frames with it, all of one
-/// prepared scene: the timed frames reuse the storage and pipelines the warm-up or an earlier
-/// technique made, as a frame loop does.
+/// their image in a frame loop ([`Prepared::frame_loop`], frames in flight where the backend keeps
+/// them), then as many one at a time where it does ([`Prepared::frame_stats`]), then `frames`
+/// timed frames with their image, all of one prepared scene: the timed frames reuse the storage
+/// and pipelines the warm-up or an earlier technique made, as a frame loop does.
 pub(crate) fn measure(
     prepared: &mut dyn Prepared,
     camera: &Camera,
@@ -138,12 +146,23 @@ pub(crate) fn measure(
     for _ in 0..warmup {
         prepared.frame(camera, settings)?;
     }
-    let mut steady = Vec::new();
-    for _ in 0..frames.max(1) {
-        let start = Instant::now();
-        let stats = prepared.frame_stats(camera, settings)?;
-        steady.push(if stats.wall_ms > 0.0 { stats.wall_ms } else { start.elapsed().as_secs_f64() * 1e3 });
-    }
+    let cameras = vec![*camera; frames.max(1) as usize];
+    let mut done = Vec::with_capacity(cameras.len());
+    let start = Instant::now();
+    prepared.frame_loop(&cameras, settings, &mut |_, _| done.push(Instant::now()))?;
+    let steady = loop_frame_ms(start, &done, prepared.frames_in_flight());
+    let latency = if prepared.frames_in_flight() > 1 {
+        let mut latency = Vec::with_capacity(cameras.len());
+        for camera in &cameras {
+            let start = Instant::now();
+            let stats = prepared.frame_stats(camera, settings)?;
+            latency.push(if stats.wall_ms > 0.0 { stats.wall_ms } else { start.elapsed().as_secs_f64() * 1e3 });
+        }
+        latency
+    } else {
+        // one frame at a time: the loop's frames are these
+        steady.clone()
+    };
     let (mut wall, mut gpu) = (Vec::new(), Vec::new());
     let mut last = None;
     for _ in 0..frames.max(1) {
@@ -159,7 +178,27 @@ pub(crate) fn measure(
         last = Some(frame);
     }
     let frame = last.ok_or_else(|| OitError::InvalidSettings("no frame was timed".into()))?;
-    Ok(Timed { frame, wall, steady, gpu })
+    Ok(Timed { frame, wall, steady, latency, gpu })
+}
+
+/// Wall milliseconds per frame of a frame loop that started at `start` and whose frames completed
+/// at `done`, with `in_flight` frames submitted at once. One at a time, each frame's time is the
+/// interval since the previous completion (the first, since the start). In flight, completions
+/// come in bunches (waiting for one frame may find the next done too), so each figure is the
+/// mean interval over `in_flight` consecutive completions, from the first completion on: the
+/// loop's filling, the first frame's latency, is left out.
+pub(crate) fn loop_frame_ms(start: Instant, done: &[Instant], in_flight: usize) -> Vec<f64> {
+    let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
+    let w = in_flight.max(1);
+    if w == 1 {
+        return std::iter::once(start).chain(done.iter().copied()).zip(done).map(|(a, &b)| ms(a, b)).collect();
+    }
+    if done.len() > w {
+        done.windows(w + 1).map(|pair| ms(pair[0], pair[w]) / w as f64).collect()
+    } else {
+        // too few frames to leave the filling out
+        done.last().map(|&end| vec![ms(start, end) / done.len() as f64]).unwrap_or_default()
+    }
 }
 
 impl Experiment<'_> {
@@ -241,6 +280,7 @@ impl Experiment<'_> {
                         let acc = accuracy(&reference, &t.frame.image)?;
                         let mut numbers = self.numbers(&t.frame, Some(acc), t.wall, t.gpu);
                         numbers.steady_wall_ms = t.steady;
+                        numbers.latency_wall_ms = t.latency;
                         Ok(numbers)
                     });
                     out.push(row(technique, raster, false, result.map_err(|e| e.to_string())));
@@ -263,6 +303,7 @@ impl Experiment<'_> {
             accuracy,
             wall_ms: wall,
             steady_wall_ms: Vec::new(),
+            latency_wall_ms: Vec::new(),
             gpu_ms: gpu,
             max_depth: frame.layers.as_ref().and_then(|l| l.iter().copied().max()),
             image: self.keep_images.then(|| frame.image.clone()),
@@ -274,6 +315,23 @@ impl Experiment<'_> {
 #[cfg(all(test, feature = "cpu"))]
 mod tests {
     use super::*;
+
+    /// A loop's frame times: one at a time, the intervals from the start; in flight, the mean
+    /// over each two completions, so a bunch (two frames done at one wait) reads as two frames of
+    /// half its time, and the first frame's latency is left out.
+    #[test]
+    fn loop_frame_times() {
+        let t0 = Instant::now();
+        let at = |ms: u64| t0 + std::time::Duration::from_millis(ms);
+        let one = loop_frame_ms(t0, &[at(5), at(9), at(14)], 1);
+        assert_eq!(one.iter().map(|x| x.round() as u64).collect::<Vec<_>>(), [5, 4, 5]);
+        // completions bunched in pairs 8 ms apart: 4 ms a frame
+        let two = loop_frame_ms(t0, &[at(10), at(10), at(18), at(18), at(26), at(26)], 2);
+        assert_eq!(two.iter().map(|x| x.round() as u64).collect::<Vec<_>>(), [4, 4, 4, 4]);
+        // too few frames: the whole loop's mean
+        assert_eq!(loop_frame_ms(t0, &[at(6), at(8)], 2).iter().map(|x| x.round() as u64).collect::<Vec<_>>(), [4]);
+        assert!(loop_frame_ms(t0, &[], 2).is_empty());
+    }
 
     #[test]
     fn reference_once_per_view_and_backend_then_each_technique() {

@@ -230,11 +230,18 @@ pub struct Row {
     /// Wall milliseconds per frame, the image read back to the host (as `readback_wall_ms`; the
     /// name reports before the steady state was measured used).
     pub wall_ms: Spread,
-    /// Wall milliseconds per steady-state frame: the same prepared scene after the warm-up, the
-    /// frame waited for and its counters read back, not its image (`Prepared::frame_stats`).
-    /// `None` in reports written before it was measured.
+    /// Wall milliseconds per steady-state frame: the same prepared scene after the warm-up, in a
+    /// frame loop (`Prepared::frame_loop`: frames in flight where the backend keeps them, each
+    /// frame's counters read back, not its image), the time between completions. `None` in
+    /// reports written before it was measured; in reports before frames in flight, one frame at a
+    /// time (as `latency_wall_ms` is now).
     #[serde(default)]
     pub steady_wall_ms: Option<Spread>,
+    /// Wall milliseconds per frame rendered on its own and waited for before the next
+    /// (`Prepared::frame_stats`): the steady state's latency. `None` in reports written before
+    /// frames in flight.
+    #[serde(default)]
+    pub latency_wall_ms: Option<Spread>,
     /// Wall milliseconds per frame plus the readback of its image: `wall_ms` under its own name.
     #[serde(default)]
     pub readback_wall_ms: Option<Spread>,
@@ -794,6 +801,7 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
                     tiles: s.tiles.max(1),
                     wall_ms: wall_spread(&r.wall_ms),
                     steady_wall_ms: Spread::of(&r.steady_wall_ms),
+                    latency_wall_ms: Spread::of(&r.latency_wall_ms),
                     readback_wall_ms: Spread::of(&r.wall_ms),
                     gpu_ms: gpu_spread(&r.wall_ms, &r.gpu_ms),
                     time_ms,

@@ -461,9 +461,12 @@ fn markdown(
          did, but tie in depth with another colour that the technique ordered by colour, not by \
          primitive as the reference; **storage**: per-pixel storage the technique allocated.\n\
          - **steady wall ms**: wall time per steady-state frame: the same prepared scene after the \
-         warm-up, the frame waited for and only its counters read back, not its image \
-         (`Prepared::frame_stats`; median of the timed frames, then min–max), what a frame loop \
-         that presents on the device waits. **wall ms + readback**: the same frame with its image \
+         warm-up in a frame loop, each frame's counters read back, not its image, the time between \
+         one frame's completion and the next's (`Prepared::frame_loop`, which keeps two frames in \
+         flight on wgpu: the host records one while the device runs the other; median of the \
+         timed frames, then min–max): what a frame loop that presents on the device waits per \
+         frame. **latency ms**: the same frame rendered on its own and waited for before the next \
+         starts (`Prepared::frame_stats`; `latency_wall_ms` in report.json). **wall ms + readback**: the same frame with its image \
          read back to the host (`Prepared::frame`; `readback_wall_ms`, and `wall_ms`, in \
          report.json). **GPU ms**: the sum of the frame's GPU timestamp intervals (device time, no \
          readbacks or pipeline creation), where the backend has timestamps.\n\
@@ -495,9 +498,9 @@ fn markdown(
         }
         let _ = writeln!(
             w,
-            "| technique | backend | raster | passes | fragments | lost | tied | storage | GPU ms (min–max) | steady wall ms (min–max) | wall ms + readback (min–max) | Gfrag/s | EPR (%) | PSNR (dB) |"
+            "| technique | backend | raster | passes | fragments | lost | tied | storage | GPU ms (min–max) | steady wall ms (min–max) | latency ms (min–max) | wall ms + readback (min–max) | Gfrag/s | EPR (%) | PSNR (dB) |"
         );
-        let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+        let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
         for r in report.rows.iter().filter(|r| r.scene == scene.name) {
             let gpu = r
                 .gpu_ms
@@ -506,7 +509,7 @@ fn markdown(
             let spread = |s: &Spread| format!("{} ({}–{})", ms(s.median), ms(s.min), ms(s.max));
             let _ = writeln!(
                 w,
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.3} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.3} | {} | {} |",
                 r.technique,
                 r.backend,
                 r.raster,
@@ -517,6 +520,7 @@ fn markdown(
                 bytes(r.storage_bytes),
                 gpu,
                 r.steady_wall_ms.as_ref().map_or("-".into(), spread),
+                r.latency_wall_ms.as_ref().map_or("-".into(), spread),
                 spread(r.readback_wall_ms.as_ref().unwrap_or(&r.wall_ms)),
                 r.gfrag_per_s,
                 percent(r.epr),

@@ -59,6 +59,44 @@ pub trait Prepared {
     fn frame_stats(&mut self, camera: &Camera, settings: &Settings) -> Result<crate::Stats, OitError> {
         self.frame(camera, settings).map(|f| f.stats)
     }
+    /// A frame loop: one frame per camera, in order, each as [`Prepared::frame_stats`] renders it
+    /// (its counters, not its image); `done(i, stats)` hears of frame `i` as it completes. A
+    /// backend may keep [`Prepared::frames_in_flight`] frames submitted at once, recording frame
+    /// `i + 1` while the device runs frame `i`, as a renderer's frame loop does; the wall time per
+    /// frame of such a loop is what `oit bench` reports as the steady state. The default renders
+    /// the frames one at a time.
+    ///
+    /// ```
+    /// use oit_core::{Backend, Camera, OitError, Scene, Settings, View};
+    ///
+    /// /// Frames per second of a turntable of `steps` views.
+    /// fn fps(backend: &dyn Backend, scene: &Scene, settings: &Settings, steps: u32) -> Result<f64, OitError> {
+    ///     let cameras = (0..steps)
+    ///         .map(|i| Camera::orbit_scene(scene, View { azimuth: 3.0 * i as f32, ..View::default() }, 1.0))
+    ///         .collect::<Result<Vec<_>, _>>()?;
+    ///     let mut prepared = backend.prepare(scene)?;
+    ///     let start = std::time::Instant::now();
+    ///     let mut fragments = 0;
+    ///     prepared.frame_loop(&cameras, settings, &mut |_, stats| fragments += stats.fragments)?;
+    ///     assert!(fragments > 0);
+    ///     Ok(f64::from(steps) / start.elapsed().as_secs_f64())
+    /// }
+    /// ```
+    fn frame_loop(
+        &mut self,
+        cameras: &[Camera],
+        settings: &Settings,
+        done: &mut dyn FnMut(usize, crate::Stats),
+    ) -> Result<(), OitError> {
+        for (i, camera) in cameras.iter().enumerate() {
+            done(i, self.frame_stats(camera, settings)?);
+        }
+        Ok(())
+    }
+    /// How many frames [`Prepared::frame_loop`] keeps submitted at once (1: one at a time).
+    fn frames_in_flight(&self) -> usize {
+        1
+    }
     /// How many per-pixel storage allocations (buffers, arrays, resolve state) this prepared
     /// scene has made so far: the backend's own counter. A frame that reuses what an earlier
     /// frame of the same size made adds nothing.
@@ -149,6 +187,17 @@ impl Prepared for PreparedOnPath<'_> {
     }
     fn frame_stats(&mut self, camera: &Camera, settings: &Settings) -> Result<crate::Stats, OitError> {
         self.inner.frame_stats(camera, &Settings { raster: Some(self.path), ..settings.clone() })
+    }
+    fn frame_loop(
+        &mut self,
+        cameras: &[Camera],
+        settings: &Settings,
+        done: &mut dyn FnMut(usize, crate::Stats),
+    ) -> Result<(), OitError> {
+        self.inner.frame_loop(cameras, &Settings { raster: Some(self.path), ..settings.clone() }, done)
+    }
+    fn frames_in_flight(&self) -> usize {
+        self.inner.frames_in_flight()
     }
     fn storage_allocations(&self) -> u64 {
         self.inner.storage_allocations()

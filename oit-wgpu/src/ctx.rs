@@ -961,10 +961,19 @@ impl<'a> GpuCtx<'a> {
     /// frame ([`SetupCheck`]) finds that the setup did not fit: the frame is incomplete and must
     /// run again, once its buffers have grown (a prepared scene does so).
     pub fn finish_checked(
-        mut self,
+        self,
         path: oit_core::RasterPath,
         readback: bool,
     ) -> Result<Option<Frame>, OitError> {
+        self.finish_start(path, readback)?.wait()
+    }
+
+    /// The first half of [`GpuCtx::finish_checked`]: the frame's last kernels recorded, everything
+    /// submitted and its one readback (totals, timestamps, the checks, and the image and losses
+    /// when `readback`) under way, nothing waited for. [`Finishing::wait`] ends the frame; until
+    /// then the frame keeps its buffers, so a frame recorded meanwhile (frames in flight) takes
+    /// others from the pool.
+    pub fn finish_start(mut self, path: oit_core::RasterPath, readback: bool) -> Result<Finishing<'a>, OitError> {
         let (image_buf, totals) = (self.image.clone(), self.totals.clone());
         self.record_finish()?;
         let _ = path;
@@ -988,47 +997,9 @@ impl<'a> GpuCtx<'a> {
             }
         }
         let recorded = self.started.elapsed();
-        let mut words = self.gpu.read_u32s(&read)?.into_iter();
-        if host_times() {
-            // where a frame's host time goes (issue 10's steady/GPU ratio): recording and
-            // submitting, then waiting for the end-of-frame readback
-            eprintln!(
-                "oit host times: {} record+submit {:.3} ms, end readback {:.3} ms, {} passes",
-                self.settings.technique,
-                recorded.as_secs_f64() * 1e3,
-                (self.started.elapsed() - recorded).as_secs_f64() * 1e3,
-                self.passes
-            );
-        }
-        let t = words.next().unwrap_or_default();
-        let stamp_words = if stamps.is_some() { words.next() } else { None };
-        let mut fits = true;
-        for c in &checks {
-            let counts = words.next().unwrap_or_default();
-            fits &= u64::from(counts[0]) <= c.tri_capacity && u64::from(counts[1]) <= c.item_capacity;
-            if let Some(t) = c.stamps.as_ref().and_then(|_| words.next()) {
-                self.add_pass_ms("setup", self.gpu.pair_ms(&t, 0));
-            }
-        }
-        for (_, speculated) in &sizing {
-            let counted = words.next().unwrap_or_default();
-            fits &= counted.first() == Some(speculated);
-        }
-        if !fits {
-            return Ok(None);
-        }
-        self.add_timestamps(stamp_words.as_deref());
-        if !readback {
-            return self.frame_of(Image { width: 0, height: 0, pixels: Vec::new() }, &t, None).map(Some);
-        }
-        let pixels = words.next().unwrap_or_default();
-        let image = Image {
-            width: self.settings.width,
-            height: self.settings.height,
-            pixels: pixels[..self.pixels as usize].iter().map(|w| w.to_le_bytes()).collect(),
-        };
-        let acct = words.next();
-        self.frame_of(image, &t, acct).map(Some)
+        let reading = self.gpu.start_read(&read);
+        let speculated = sizing.iter().map(|&(_, s)| s).collect();
+        Ok(Finishing { ctx: self, reading, stamped: stamps.is_some(), checks, speculated, readback, recorded })
     }
 
     /// Records the frame's last kernels: the totals summed (into words 0–3, with the merged count
@@ -1093,6 +1064,70 @@ impl<'a> GpuCtx<'a> {
             frame.stats.check_accounting("wgpu")?;
         }
         Ok(frame)
+    }
+}
+
+/// A frame submitted with its readback under way ([`GpuCtx::finish_start`]).
+pub struct Finishing<'a> {
+    ctx: GpuCtx<'a>,
+    reading: crate::gpu::Reading,
+    /// Whether the readback holds the frame's timestamps (after the totals).
+    stamped: bool,
+    checks: Vec<SetupCheck>,
+    /// The values the frame's speculated sizes took, in the order of their counts in the readback.
+    speculated: Vec<u32>,
+    readback: bool,
+    /// Host time from the frame's start to its last submission.
+    recorded: std::time::Duration,
+}
+
+impl Finishing<'_> {
+    /// Waits for the frame's readback and makes the frame, or `None` where a check left to the
+    /// end failed ([`GpuCtx::finish_checked`]).
+    pub fn wait(self) -> Result<Option<Frame>, OitError> {
+        let Finishing { mut ctx, reading, stamped, checks, speculated, readback, recorded } = self;
+        let waiting = std::time::Instant::now();
+        let mut words = reading.wait(ctx.gpu)?.into_iter();
+        if host_times() {
+            // where a frame's host time goes (issue 10's steady/GPU ratio): recording and
+            // submitting, then waiting for the end-of-frame readback
+            eprintln!(
+                "oit host times: {} record+submit {:.3} ms, end readback {:.3} ms, {} passes",
+                ctx.settings.technique,
+                recorded.as_secs_f64() * 1e3,
+                waiting.elapsed().as_secs_f64() * 1e3,
+                ctx.passes
+            );
+        }
+        let t = words.next().unwrap_or_default();
+        let stamp_words = if stamped { words.next() } else { None };
+        let mut fits = true;
+        for c in &checks {
+            let counts = words.next().unwrap_or_default();
+            fits &= u64::from(counts[0]) <= c.tri_capacity && u64::from(counts[1]) <= c.item_capacity;
+            if let Some(t) = c.stamps.as_ref().and_then(|_| words.next()) {
+                ctx.add_pass_ms("setup", ctx.gpu.pair_ms(&t, 0));
+            }
+        }
+        for speculated in &speculated {
+            let counted = words.next().unwrap_or_default();
+            fits &= counted.first() == Some(speculated);
+        }
+        if !fits {
+            return Ok(None);
+        }
+        ctx.add_timestamps(stamp_words.as_deref());
+        if !readback {
+            return ctx.frame_of(Image { width: 0, height: 0, pixels: Vec::new() }, &t, None).map(Some);
+        }
+        let pixels = words.next().unwrap_or_default();
+        let image = Image {
+            width: ctx.settings.width,
+            height: ctx.settings.height,
+            pixels: pixels[..ctx.pixels as usize].iter().map(|w| w.to_le_bytes()).collect(),
+        };
+        let acct = words.next();
+        ctx.frame_of(image, &t, acct).map(Some)
     }
 }
 

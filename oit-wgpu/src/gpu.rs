@@ -316,60 +316,39 @@ impl Gpu {
     /// together. The staging buffer comes from a small per-device cache, so a steady-state
     /// readback creates no buffer.
     pub fn read_u32s(&self, buffers: &[&wgpu::Buffer]) -> Result<Vec<Vec<u32>>, OitError> {
+        self.start_read(buffers).wait(self)
+    }
+
+    /// The first half of [`Gpu::read_u32s`]: the copies into a staging buffer submitted and its
+    /// map asked for, nothing waited for. The host can record and submit more work (the next
+    /// frame of a frame loop) before [`Reading::wait`] collects the words.
+    pub fn start_read(&self, buffers: &[&wgpu::Buffer]) -> Reading {
         self.readbacks.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         // each buffer at an offset aligned for both the copy and the map
-        let mut offsets = Vec::with_capacity(buffers.len());
+        let mut ranges = Vec::with_capacity(buffers.len());
         let mut total = 0u64;
         for b in buffers {
-            offsets.push(total);
+            ranges.push((total, b.size()));
             total += b.size().next_multiple_of(wgpu::MAP_ALIGNMENT);
         }
         let size = total.max(wgpu::MAP_ALIGNMENT).next_power_of_two();
         let staging = self.staging(size);
         let mut encoder = self.device.create_command_encoder(&Default::default());
-        for (b, &offset) in buffers.iter().zip(&offsets) {
-            encoder.copy_buffer_to_buffer(b, 0, &staging, offset, b.size());
+        for (b, &(offset, len)) in buffers.iter().zip(&ranges) {
+            encoder.copy_buffer_to_buffer(b, 0, &staging, offset, len);
         }
         let index = self.queue.submit([encoder.finish()]);
-        let slice = staging.slice(..total.max(wgpu::MAP_ALIGNMENT));
+        let mapped_len = total.max(wgpu::MAP_ALIGNMENT);
         // The words are read only once the map callback has said they are there (and has not
         // failed), not merely after a wait on the queue.
         let mapped = std::sync::Arc::new(std::sync::Mutex::new(None));
         let signal = mapped.clone();
-        slice.map_async(wgpu::MapMode::Read, move |result| {
+        staging.slice(..mapped_len).map_async(wgpu::MapMode::Read, move |result| {
             if let Ok(mut slot) = signal.lock() {
                 *slot = Some(result);
             }
         });
-        let mut index = Some(index);
-        loop {
-            self.device
-                .poll(wgpu::PollType::Wait { submission_index: index.take(), timeout: None })
-                .map_err(|e| OitError::Device(format!("waiting for the GPU failed: {e}")))?;
-            let done = mapped.lock().map_err(|_| OitError::Device("readback flag poisoned".into()))?.take();
-            match done {
-                Some(Ok(())) => break,
-                Some(Err(e)) => return Err(OitError::Device(format!("reading a buffer back failed: {e}"))),
-                None => std::thread::yield_now(),
-            }
-        }
-        let words = {
-            let data =
-                slice.get_mapped_range().map_err(|e| OitError::Device(format!("readback failed: {e}")))?;
-            buffers
-                .iter()
-                .zip(&offsets)
-                .map(|(b, &offset)| {
-                    let range = offset as usize..(offset + b.size()) as usize;
-                    bytemuck::cast_slice(&data[range]).to_vec()
-                })
-                .collect()
-        };
-        staging.unmap();
-        if let Ok(mut free) = self.staging.lock() {
-            free.push(staging);
-        }
-        Ok(words)
+        Reading { staging, ranges, mapped_len, index, mapped }
     }
 
     /// Milliseconds between the two timestamps of pair `pair` in `words`, a resolved query set
@@ -420,5 +399,50 @@ impl Gpu {
         if let Ok(mut free) = self.queries.lock() {
             free.push(set);
         }
+    }
+}
+
+/// A readback under way ([`Gpu::start_read`]): the copies are submitted and the staging buffer's
+/// map asked for.
+pub struct Reading {
+    staging: wgpu::Buffer,
+    /// Each buffer's offset in the staging buffer and its length, in bytes.
+    ranges: Vec<(u64, u64)>,
+    mapped_len: u64,
+    index: wgpu::SubmissionIndex,
+    mapped: std::sync::Arc<std::sync::Mutex<Option<Result<(), wgpu::BufferAsyncError>>>>,
+}
+
+impl Reading {
+    /// Waits for the copies (only their submission and those before it, not work submitted
+    /// since) and returns each buffer's words, in the order [`Gpu::start_read`] was given them.
+    pub fn wait(self, gpu: &Gpu) -> Result<Vec<Vec<u32>>, OitError> {
+        loop {
+            // this submission's index every time: without one, a wait is for the latest
+            // submission, which may be a later frame's
+            gpu.device
+                .poll(wgpu::PollType::Wait { submission_index: Some(self.index.clone()), timeout: None })
+                .map_err(|e| OitError::Device(format!("waiting for the GPU failed: {e}")))?;
+            let done = self.mapped.lock().map_err(|_| OitError::Device("readback flag poisoned".into()))?.take();
+            match done {
+                Some(Ok(())) => break,
+                Some(Err(e)) => return Err(OitError::Device(format!("reading a buffer back failed: {e}"))),
+                None => std::thread::yield_now(),
+            }
+        }
+        let slice = self.staging.slice(..self.mapped_len);
+        let words = {
+            let data =
+                slice.get_mapped_range().map_err(|e| OitError::Device(format!("readback failed: {e}")))?;
+            self.ranges
+                .iter()
+                .map(|&(offset, len)| bytemuck::cast_slice(&data[offset as usize..(offset + len) as usize]).to_vec())
+                .collect()
+        };
+        self.staging.unmap();
+        if let Ok(mut free) = gpu.staging.lock() {
+            free.push(self.staging);
+        }
+        Ok(words)
     }
 }

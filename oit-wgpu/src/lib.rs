@@ -61,11 +61,11 @@ use oit_core::{
 };
 
 pub use crate::ctx::{
-    Driver, Enc, Fragments, FrameUniform, Gate, Generated, GpuCtx, Init, RecordedBuffers, SetupCheck,
-    TECHNIQUE_PRELUDE,
+    Driver, Enc, Finishing, Fragments, FrameUniform, Gate, Generated, GpuCtx, Init, RecordedBuffers,
+    SetupCheck, TECHNIQUE_PRELUDE,
 };
 pub use crate::embed::{CaptureShader, GeometryPass, OitPass, Recorded};
-pub use crate::gpu::{COMMON_WGSL, Gpu, TIMESTAMP_QUERIES, adapters, required_features};
+pub use crate::gpu::{COMMON_WGSL, Gpu, Reading, TIMESTAMP_QUERIES, adapters, required_features};
 pub use crate::hardware::HardwareRaster;
 pub use crate::pool::BufferPool;
 pub use crate::raster::{ComputeRaster, setup_on_gpu};
@@ -292,6 +292,39 @@ impl Prepared for WgpuPrepared<'_> {
         )
     }
 
+    /// Frames in flight ([`FRAMES_IN_FLIGHT`]): each frame is recorded and submitted while the
+    /// device runs the one before, and its counters are waited for only then. A frame whose end
+    /// finds a speculation wrong (a sizing count or a peel count that changed with the view, a
+    /// compute setup that outgrew its buffers) runs again on its own after the others, and
+    /// `done` hears of it last; windows (`--memory`, a region) run one at a time.
+    fn frame_loop(
+        &mut self,
+        cameras: &[Camera],
+        settings: &Settings,
+        done: &mut dyn FnMut(usize, oit_core::Stats),
+    ) -> Result<(), OitError> {
+        settings.validate()?;
+        if settings.memory.is_some() || settings.region.is_some() {
+            for (i, camera) in cameras.iter().enumerate() {
+                done(i, self.frame_stats(camera, settings)?);
+            }
+            return Ok(());
+        }
+        let path = settings.raster.unwrap_or(WgpuBackend::default_path(settings.technique));
+        if path == RasterPath::Hardware && self.hardware.is_none() {
+            self.hardware = Some(HardwareScene::new(self.gpu, self.scene, &self.geometry_made)?);
+        }
+        let LoopEnd { again, from } = self.frame_loop_in_flight(cameras, settings, path, done)?;
+        for i in again.into_iter().chain(from.into_iter().flat_map(|from| from..cameras.len())) {
+            done(i, self.frame_stats(&cameras[i], settings)?);
+        }
+        Ok(())
+    }
+
+    fn frames_in_flight(&self) -> usize {
+        FRAMES_IN_FLIGHT
+    }
+
     fn storage_allocations(&self) -> u64 {
         self.pool.allocations() + self.geometry_made.get()
     }
@@ -352,6 +385,20 @@ impl WgpuPrepared<'_> {
         readback: bool,
         start: Instant,
     ) -> Result<Option<Frame>, OitError> {
+        let flight = self.frame_start(camera, settings, path, readback, start)?;
+        self.frame_end(flight)
+    }
+
+    /// The first half of [`WgpuPrepared::frame_once`]: the frame recorded and submitted, its
+    /// readback under way ([`GpuCtx::finish_start`]).
+    fn frame_start<'c>(
+        &'c self,
+        camera: &'c Camera,
+        settings: &'c Settings,
+        path: RasterPath,
+        readback: bool,
+        start: Instant,
+    ) -> Result<InFlight<'c>, OitError> {
         let (gpu, scene) = (self.gpu, self.scene);
         let this = self;
         let drivers = match (path, &this.hardware) {
@@ -383,28 +430,101 @@ impl WgpuPrepared<'_> {
             "{:?} {}x{} {:?} {path:?}",
             settings.technique, settings.width, settings.height, settings.region
         );
-        let peels_key = format!("{key} peels");
         ctx.speculated_deepest = this.deepest.borrow().get(&key).copied();
-        ctx.speculated_peels = this.deepest.borrow().get(&peels_key).copied();
+        ctx.speculated_peels = this.deepest.borrow().get(&format!("{key} peels")).copied();
         let layers = run_technique(&mut ctx, &drivers)?;
         let (seen, peels_seen) = (ctx.deepest_seen, ctx.peels_seen);
-        let Some(mut frame) = ctx.finish_checked(path, readback)? else {
+        let finishing = ctx.finish_start(path, readback)?;
+        Ok(InFlight { finishing, key, seen, peels_seen, layers, readback, start })
+    }
+
+    /// The second half of [`WgpuPrepared::frame_once`]: waits for the frame's readback and
+    /// keeps what it counted for the next frame's speculation.
+    fn frame_end(&self, flight: InFlight<'_>) -> Result<Option<Frame>, OitError> {
+        let InFlight { finishing, key, seen, peels_seen, layers, readback, start } = flight;
+        let peels_key = format!("{key} peels");
+        let Some(mut frame) = finishing.wait()? else {
             // counted otherwise than speculated (or the setup did not fit): the next attempt
             // waits for its counting pass and reads its peel loop's flag after each pass
-            this.deepest.borrow_mut().remove(&key);
-            this.deepest.borrow_mut().remove(&peels_key);
+            self.deepest.borrow_mut().remove(&key);
+            self.deepest.borrow_mut().remove(&peels_key);
             return Ok(None);
         };
         if let Some(d) = seen {
-            this.deepest.borrow_mut().insert(key, d);
+            self.deepest.borrow_mut().insert(key, d);
         }
         if let Some(p) = peels_seen {
-            this.deepest.borrow_mut().insert(peels_key, p);
+            self.deepest.borrow_mut().insert(peels_key, p);
         }
         frame.layers = layers.filter(|_| readback);
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(Some(frame))
     }
+
+    /// [`Prepared::frame_loop`] with up to [`FRAMES_IN_FLIGHT`] frames submitted at once: frame
+    /// i + 1 is recorded and submitted before frame i's counters are waited for.
+    fn frame_loop_in_flight(
+        &self,
+        cameras: &[Camera],
+        settings: &Settings,
+        path: RasterPath,
+        done: &mut dyn FnMut(usize, oit_core::Stats),
+    ) -> Result<LoopEnd, OitError> {
+        let mut flight: std::collections::VecDeque<(usize, InFlight<'_>)> = Default::default();
+        let mut again = Vec::new();
+        let mut end = |(i, f): (usize, InFlight<'_>), again: &mut Vec<usize>| -> Result<(), OitError> {
+            match self.frame_end(f)? {
+                Some(frame) => done(i, frame.stats),
+                None => again.push(i),
+            }
+            Ok(())
+        };
+        for (i, camera) in cameras.iter().enumerate() {
+            if flight.len() >= FRAMES_IN_FLIGHT {
+                let oldest = flight.pop_front().expect("the queue is full");
+                end(oldest, &mut again)?;
+            }
+            match self.frame_start(camera, settings, path, false, Instant::now()) {
+                Ok(f) => flight.push_back((i, f)),
+                // over the device's limits or the budget: the frames from here run in tiles,
+                // one at a time, as `frame_stats` does
+                Err(OitError::TooLarge { .. }) => {
+                    for f in flight.drain(..) {
+                        end(f, &mut again)?;
+                    }
+                    return Ok(LoopEnd { again, from: Some(i) });
+                }
+                Err(e) => return Err(e),
+            }
+        }
+        for f in flight.drain(..) {
+            end(f, &mut again)?;
+        }
+        Ok(LoopEnd { again, from: None })
+    }
+}
+
+/// Frames [`WgpuPrepared`]'s frame loop keeps submitted at once: the host records one while the
+/// device runs the other.
+pub const FRAMES_IN_FLIGHT: usize = 2;
+
+/// A frame submitted and not yet waited for.
+struct InFlight<'c> {
+    finishing: Finishing<'c>,
+    /// The frame's speculation key (technique, size, window, path).
+    key: String,
+    seen: Option<u32>,
+    peels_seen: Option<u32>,
+    layers: Option<Vec<u32>>,
+    readback: bool,
+    start: Instant,
+}
+
+/// How a frame loop in flight ended: the frames to run again one at a time (a speculation the
+/// frame's end found wrong), and the first frame that must run in tiles, if one did.
+struct LoopEnd {
+    again: Vec<usize>,
+    from: Option<usize>,
 }
 
 /// Runs the frame's technique (geometry passes through `drivers`, kernels, resolve into the

@@ -3,7 +3,7 @@
 //! counter, `Prepared::storage_allocations`: per-pixel storage, and on wgpu the geometry's
 //! buffers too), on every backend and raster path.
 
-use oit_core::{Frame, HardwareCapture, OitError, Settings, Shading, Technique, View};
+use oit_core::{Camera, Frame, HardwareCapture, OitError, Settings, Shading, Technique, View};
 use oit_tests::*;
 
 /// Everything of a frame that does not depend on the clock.
@@ -212,6 +212,55 @@ fn frame_stats_counts_what_frame_counts() {
             };
             assert_eq!(key(&stats), key(&frame.stats), "{who} {technique}");
             assert!(stats.fragments > 0, "{who} {technique}");
+        }
+    }
+}
+
+/// `Prepared::frame_loop` (the frame loop `oit bench` times as the steady state, frames in flight
+/// on wgpu) renders each view's frame: its counters equal `frame_stats`' for that view, each frame
+/// is reported once, and the views differ in depth complexity, so a frame whose speculation
+/// (sizing, peel count) the previous view set wrong runs again. In the steady state (one view,
+/// looped twice) the second loop allocates nothing: the frames in flight take turns with the
+/// storage the first made.
+#[test]
+fn frame_loop_counts_what_frame_stats_counts() {
+    let scene = scene("knot");
+    let views: Vec<View> =
+        (0..5).map(|i| View { azimuth: 40.0 * i as f32, elevation: 15.0, ..View::default() }).collect();
+    for backend in backends_for("frame_loop_counts_what_frame_stats_counts") {
+        let b = backend.as_ref();
+        let who = label(b);
+        for technique in ["reference", "plain", "dp", "ddp", "wavg", "bdp", "fabs", "mdts", "adp", "mlp:2", "dfb", "ll"] {
+            let s = settings(40, technique);
+            let cameras: Vec<Camera> = views.iter().map(|&v| camera(&scene, &s, v)).collect();
+            let key = |t: &oit_core::Stats| {
+                (t.geometry_passes, t.fragments, t.captured, t.lost, t.tied, t.storage_bytes, t.max_layers)
+            };
+            let expected: Vec<_> = {
+                let mut prepared = b.prepare(&scene).unwrap();
+                cameras
+                    .iter()
+                    .map(|c| key(&prepared.frame_stats(c, &s).unwrap_or_else(|e| panic!("{who} {technique}: {e}"))))
+                    .collect()
+            };
+            assert!(expected.windows(2).any(|w| w[0].1 != w[1].1), "{who} {technique}: the views differ");
+            let mut prepared = b.prepare(&scene).unwrap();
+            let mut run = |cameras: &[Camera]| {
+                let mut got = vec![None; cameras.len()];
+                prepared
+                    .frame_loop(cameras, &s, &mut |i, stats| {
+                        assert!(got[i].is_none(), "{who} {technique}: frame {i} reported twice");
+                        got[i] = Some(key(&stats));
+                    })
+                    .unwrap_or_else(|e| panic!("{who} {technique}: {e}"));
+                got.into_iter().map(|g| g.expect("every frame reported")).collect::<Vec<_>>()
+            };
+            assert_eq!(run(&cameras), expected, "{who} {technique}: a loop over the views");
+            let steady = vec![cameras[0]; 4];
+            assert_eq!(run(&steady), vec![expected[0]; 4], "{who} {technique}: one view");
+            let allocations = prepared.storage_allocations();
+            let mut run = |cameras: &[Camera]| prepared.frame_loop(cameras, &s, &mut |_, _| {}).map(|()| prepared.storage_allocations());
+            assert_eq!(run(&steady).unwrap(), allocations, "{who} {technique}: a second loop at one view");
         }
     }
 }
