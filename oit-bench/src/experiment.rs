@@ -156,7 +156,11 @@ pub(crate) fn measure(
         for camera in &cameras {
             let start = Instant::now();
             let stats = prepared.frame_stats(camera, settings)?;
-            latency.push(if stats.wall_ms > 0.0 { stats.wall_ms } else { start.elapsed().as_secs_f64() * 1e3 });
+            latency.push(if stats.wall_ms > 0.0 {
+                stats.wall_ms
+            } else {
+                start.elapsed().as_secs_f64() * 1e3
+            });
         }
         latency
     } else {
@@ -191,7 +195,11 @@ pub(crate) fn loop_frame_ms(start: Instant, done: &[Instant], in_flight: usize) 
     let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
     let w = in_flight.max(1);
     if w == 1 {
-        return std::iter::once(start).chain(done.iter().copied()).zip(done).map(|(a, &b)| ms(a, b)).collect();
+        return std::iter::once(start)
+            .chain(done.iter().copied())
+            .zip(done)
+            .map(|(a, &b)| ms(a, b))
+            .collect();
     }
     if done.len() > w {
         done.windows(w + 1).map(|pair| ms(pair[0], pair[w]) / w as f64).collect()
@@ -329,7 +337,10 @@ mod tests {
         let two = loop_frame_ms(t0, &[at(10), at(10), at(18), at(18), at(26), at(26)], 2);
         assert_eq!(two.iter().map(|x| x.round() as u64).collect::<Vec<_>>(), [4, 4, 4, 4]);
         // too few frames: the whole loop's mean
-        assert_eq!(loop_frame_ms(t0, &[at(6), at(8)], 2).iter().map(|x| x.round() as u64).collect::<Vec<_>>(), [4]);
+        assert_eq!(
+            loop_frame_ms(t0, &[at(6), at(8)], 2).iter().map(|x| x.round() as u64).collect::<Vec<_>>(),
+            [4]
+        );
         assert!(loop_frame_ms(t0, &[], 2).is_empty());
     }
 

@@ -973,7 +973,11 @@ impl<'a> GpuCtx<'a> {
     /// when `readback`) under way, nothing waited for. [`Finishing::wait`] ends the frame; until
     /// then the frame keeps its buffers, so a frame recorded meanwhile (frames in flight) takes
     /// others from the pool.
-    pub fn finish_start(mut self, path: oit_core::RasterPath, readback: bool) -> Result<Finishing<'a>, OitError> {
+    pub fn finish_start(
+        mut self,
+        path: oit_core::RasterPath,
+        readback: bool,
+    ) -> Result<Finishing<'a>, OitError> {
         let (image_buf, totals) = (self.image.clone(), self.totals.clone());
         self.record_finish()?;
         let _ = path;
@@ -999,7 +1003,15 @@ impl<'a> GpuCtx<'a> {
         let recorded = self.started.elapsed();
         let reading = self.gpu.start_read(&read);
         let speculated = sizing.iter().map(|&(_, s)| s).collect();
-        Ok(Finishing { ctx: self, reading, stamped: stamps.is_some(), checks, speculated, readback, recorded })
+        Ok(Finishing {
+            ctx: self,
+            reading,
+            stamped: stamps.is_some(),
+            checks,
+            speculated,
+            readback,
+            recorded,
+        })
     }
 
     /// Records the frame's last kernels: the totals summed (into words 0–3, with the merged count

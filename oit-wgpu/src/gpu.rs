@@ -423,7 +423,8 @@ impl Reading {
             gpu.device
                 .poll(wgpu::PollType::Wait { submission_index: Some(self.index.clone()), timeout: None })
                 .map_err(|e| OitError::Device(format!("waiting for the GPU failed: {e}")))?;
-            let done = self.mapped.lock().map_err(|_| OitError::Device("readback flag poisoned".into()))?.take();
+            let done =
+                self.mapped.lock().map_err(|_| OitError::Device("readback flag poisoned".into()))?.take();
             match done {
                 Some(Ok(())) => break,
                 Some(Err(e)) => return Err(OitError::Device(format!("reading a buffer back failed: {e}"))),
@@ -436,7 +437,9 @@ impl Reading {
                 slice.get_mapped_range().map_err(|e| OitError::Device(format!("readback failed: {e}")))?;
             self.ranges
                 .iter()
-                .map(|&(offset, len)| bytemuck::cast_slice(&data[offset as usize..(offset + len) as usize]).to_vec())
+                .map(|&(offset, len)| {
+                    bytemuck::cast_slice(&data[offset as usize..(offset + len) as usize]).to_vec()
+                })
                 .collect()
         };
         self.staging.unmap();

@@ -230,7 +230,9 @@ fn frame_loop_counts_what_frame_stats_counts() {
     for backend in backends_for("frame_loop_counts_what_frame_stats_counts") {
         let b = backend.as_ref();
         let who = label(b);
-        for technique in ["reference", "plain", "dp", "ddp", "wavg", "bdp", "fabs", "mdts", "adp", "mlp:2", "dfb", "ll"] {
+        for technique in
+            ["reference", "plain", "dp", "ddp", "wavg", "bdp", "fabs", "mdts", "adp", "mlp:2", "dfb", "ll"]
+        {
             let s = settings(40, technique);
             let cameras: Vec<Camera> = views.iter().map(|&v| camera(&scene, &s, v)).collect();
             let key = |t: &oit_core::Stats| {
@@ -240,7 +242,9 @@ fn frame_loop_counts_what_frame_stats_counts() {
                 let mut prepared = b.prepare(&scene).unwrap();
                 cameras
                     .iter()
-                    .map(|c| key(&prepared.frame_stats(c, &s).unwrap_or_else(|e| panic!("{who} {technique}: {e}"))))
+                    .map(|c| {
+                        key(&prepared.frame_stats(c, &s).unwrap_or_else(|e| panic!("{who} {technique}: {e}")))
+                    })
                     .collect()
             };
             assert!(expected.windows(2).any(|w| w[0].1 != w[1].1), "{who} {technique}: the views differ");
@@ -259,7 +263,9 @@ fn frame_loop_counts_what_frame_stats_counts() {
             let steady = vec![cameras[0]; 4];
             assert_eq!(run(&steady), vec![expected[0]; 4], "{who} {technique}: one view");
             let allocations = prepared.storage_allocations();
-            let mut run = |cameras: &[Camera]| prepared.frame_loop(cameras, &s, &mut |_, _| {}).map(|()| prepared.storage_allocations());
+            let mut run = |cameras: &[Camera]| {
+                prepared.frame_loop(cameras, &s, &mut |_, _| {}).map(|()| prepared.storage_allocations())
+            };
             assert_eq!(run(&steady).unwrap(), allocations, "{who} {technique}: a second loop at one view");
         }
     }
