@@ -281,6 +281,15 @@ pub struct GpuCtx<'a> {
     pub peels_seen: Option<u32>,
     /// Speculated counts to check at the end: the buffer holding the count, and the value used.
     sizing_checks: Vec<(wgpu::Buffer, u32)>,
+    /// The fragment total an earlier frame of this prepared scene counted at this size,
+    /// technique and view kind: `dfb`'s and `ll`'s arrays are sized from it without waiting for
+    /// this frame's count ([`GpuCtx::fragment_capacity`]).
+    pub speculated_fragments: Option<u32>,
+    /// The fragment total this frame read back (none when speculated).
+    pub fragments_seen: Option<u32>,
+    /// Speculated capacities to check at the end: the buffer holding the count, the capacity
+    /// allocated, and the bytes a counted element takes.
+    capacity_checks: Vec<(wgpu::Buffer, u32, u64)>,
     gpu_ms: f64,
     pass_ms: Vec<(String, f64)>,
     lent: Lent<'a>,
@@ -471,6 +480,9 @@ impl<'a> GpuCtx<'a> {
             speculated_peels: None,
             peels_seen: None,
             sizing_checks: Vec::new(),
+            speculated_fragments: None,
+            fragments_seen: None,
+            capacity_checks: Vec::new(),
             gpu_ms: 0.0,
             pass_ms: Vec::new(),
             lent,
@@ -680,6 +692,25 @@ impl<'a> GpuCtx<'a> {
         Ok(())
     }
 
+    /// [`GpuCtx::geometry_pass`], its count of generated fragments left on the device, in word 0
+    /// of the buffer returned (a copy the frame's later passes do not touch).
+    pub fn geometry_pass_counted(
+        &mut self,
+        driver: &dyn Driver,
+        source: &str,
+        buffers: &[&wgpu::Buffer],
+        pass_index: u32,
+        param: u32,
+    ) -> Result<wgpu::Buffer, OitError> {
+        let generated = self.run_geometry_pass(driver, source, buffers, pass_index, param)?;
+        self.note_generated(&generated);
+        let count = self.buffer("fragment count", 1, Init::Zero)?;
+        // sizing storage is not the technique's (as `technique::count`'s)
+        self.storage_bytes -= 4;
+        self.encoder().copy_buffer_to_buffer(&generated.0, 0, &count, 0, 4);
+        Ok(count)
+    }
+
     /// [`GpuCtx::geometry_pass`], then the fragments it generated, read back (a round trip:
     /// for the techniques that size storage from them).
     pub fn geometry_pass_read(
@@ -798,6 +829,24 @@ impl<'a> GpuCtx<'a> {
         let m = self.read_u32(max)?[0];
         self.deepest_seen = Some(m);
         Ok(m)
+    }
+
+    /// The capacity, in elements of `bytes` bytes, of arrays sized by a count that lies in word 0
+    /// of `count` on the device (`dfb`'s and `ll`'s fragment total). Where the frame speculates
+    /// ([`GpuCtx::speculated_fragments`]) the earlier count rounded up to its size class
+    /// ([`size_class`]: at most 1/8 more, so the nearby views of a moving camera reuse one set of
+    /// buffers), not waited for, and checked at the end: a frame whose count exceeds it runs
+    /// again. Its `storage_bytes` are then set from the count, as a frame that read the count
+    /// reports them. Else the count, read back now (a round trip).
+    pub fn fragment_capacity(&mut self, count: &wgpu::Buffer, bytes: u64) -> Result<u32, OitError> {
+        if let Some(earlier) = self.speculated_fragments.take() {
+            let capacity = size_class(earlier);
+            self.capacity_checks.push((count.clone(), capacity, bytes));
+            return Ok(capacity);
+        }
+        let n = self.read_u32(count)?[0];
+        self.fragments_seen = Some(n);
+        Ok(n)
     }
 
     /// Word 0 of `buffer` must equal `expected` at the frame's end (read back with the totals);
@@ -994,6 +1043,8 @@ impl<'a> GpuCtx<'a> {
             read.extend(c.stamps.as_ref());
         }
         read.extend(sizing.iter().map(|(b, _)| b));
+        let capacities = std::mem::take(&mut self.capacity_checks);
+        read.extend(capacities.iter().map(|(b, _, _)| b));
         if readback {
             read.push(&image_buf);
             if self.counts_losses {
@@ -1009,6 +1060,7 @@ impl<'a> GpuCtx<'a> {
             stamped: stamps.is_some(),
             checks,
             speculated,
+            capacities: capacities.into_iter().map(|(_, capacity, bytes)| (capacity, bytes)).collect(),
             readback,
             recorded,
         })
@@ -1088,6 +1140,9 @@ pub struct Finishing<'a> {
     checks: Vec<SetupCheck>,
     /// The values the frame's speculated sizes took, in the order of their counts in the readback.
     speculated: Vec<u32>,
+    /// The capacities the frame's speculated totals took and the bytes an element takes, in the
+    /// order of their counts in the readback, after the sizes'.
+    capacities: Vec<(u32, u64)>,
     readback: bool,
     /// Host time from the frame's start to its last submission.
     recorded: std::time::Duration,
@@ -1097,7 +1152,8 @@ impl Finishing<'_> {
     /// Waits for the frame's readback and makes the frame, or `None` where a check left to the
     /// end failed ([`GpuCtx::finish_checked`]).
     pub fn wait(self) -> Result<Option<Frame>, OitError> {
-        let Finishing { mut ctx, reading, stamped, checks, speculated, readback, recorded } = self;
+        let Finishing { mut ctx, reading, stamped, checks, speculated, capacities, readback, recorded } =
+            self;
         let waiting = std::time::Instant::now();
         let mut words = reading.wait(ctx.gpu)?.into_iter();
         if host_times() {
@@ -1124,6 +1180,13 @@ impl Finishing<'_> {
         for speculated in &speculated {
             let counted = words.next().unwrap_or_default();
             fits &= counted.first() == Some(speculated);
+        }
+        for &(capacity, bytes) in &capacities {
+            let counted = words.next().unwrap_or_default().first().copied().unwrap_or(u32::MAX);
+            fits &= counted <= capacity;
+            // the storage of the count, as a frame that read it back reports it
+            ctx.storage_bytes =
+                ctx.storage_bytes - u64::from(capacity) * bytes + u64::from(counted.min(capacity)) * bytes;
         }
         if !fits {
             return Ok(None);
@@ -1196,4 +1259,32 @@ const GATE_WGSL: &str = include_str!("shaders/gate.wgsl");
 pub fn dispatch_size(invocations: u64) -> (u32, u32) {
     let groups = invocations.div_ceil(64);
     if groups <= 65_535 { (groups as u32, 1) } else { (65_535, groups.div_ceil(65_535) as u32) }
+}
+
+/// The capacity allocated for `n` elements counted by an earlier frame: `n` rounded up to a
+/// multiple of an eighth of its power of two (at most 1/8 more; 8 classes an octave), so counts
+/// that differ a little from frame to frame take the same buffers from the pool.
+pub fn size_class(n: u32) -> u32 {
+    if n <= 8 {
+        return n;
+    }
+    let step = 1u32 << (31 - n.leading_zeros() - 3);
+    n.div_ceil(step).saturating_mul(step)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::size_class;
+
+    #[test]
+    fn size_classes_hold_the_count_within_an_eighth() {
+        for n in (0..5000).chain([u32::MAX / 2, u32::MAX / 2 + 1, 1 << 31]) {
+            let c = size_class(n);
+            assert!(c >= n && u64::from(c) * 8 <= u64::from(n) * 9, "{n} -> {c}");
+        }
+        assert_eq!(size_class(1000), 1024);
+        assert_eq!(size_class(1025), 1152);
+        // neighbours share a class
+        assert_eq!(size_class(1_000_001), size_class(1_020_000));
+    }
 }

@@ -432,29 +432,38 @@ impl WgpuPrepared<'_> {
         );
         ctx.speculated_deepest = this.deepest.borrow().get(&key).copied();
         ctx.speculated_peels = this.deepest.borrow().get(&format!("{key} peels")).copied();
+        ctx.speculated_fragments = this.deepest.borrow().get(&format!("{key} fragments")).copied();
         let layers = run_technique(&mut ctx, &drivers)?;
-        let (seen, peels_seen) = (ctx.deepest_seen, ctx.peels_seen);
+        let seen = [ctx.deepest_seen, ctx.peels_seen, ctx.fragments_seen];
         let finishing = ctx.finish_start(path, readback)?;
-        Ok(InFlight { finishing, key, seen, peels_seen, layers, readback, start })
+        Ok(InFlight { finishing, key, seen, layers, readback, start })
     }
 
     /// The second half of [`WgpuPrepared::frame_once`]: waits for the frame's readback and
     /// keeps what it counted for the next frame's speculation.
     fn frame_end(&self, flight: InFlight<'_>) -> Result<Option<Frame>, OitError> {
-        let InFlight { finishing, key, seen, peels_seen, layers, readback, start } = flight;
-        let peels_key = format!("{key} peels");
+        let InFlight { finishing, key, seen, layers, readback, start } = flight;
+        // the deepest pixel, the peel count, the fragment total
+        let keys = [key.clone(), format!("{key} peels"), format!("{key} fragments")];
         let Some(mut frame) = finishing.wait()? else {
             // counted otherwise than speculated (or the setup did not fit): the next attempt
-            // waits for its counting pass and reads its peel loop's flag after each pass
-            self.deepest.borrow_mut().remove(&key);
-            self.deepest.borrow_mut().remove(&peels_key);
+            // waits for its counting pass, reads its peel loop's flag after each pass and reads
+            // its fragment total
+            for k in &keys {
+                self.deepest.borrow_mut().remove(k);
+            }
             return Ok(None);
         };
-        if let Some(d) = seen {
-            self.deepest.borrow_mut().insert(key, d);
-        }
-        if let Some(p) = peels_seen {
-            self.deepest.borrow_mut().insert(peels_key, p);
+        // a frame that speculated its fragment total (dfb, ll) counted it all the same: the next
+        // frame's capacity follows the view, and shrinks with it
+        let fragments = match seen[2] {
+            None if self.deepest.borrow().contains_key(&keys[2]) => u32::try_from(frame.stats.fragments).ok(),
+            other => other,
+        };
+        for (k, seen) in keys.into_iter().zip([seen[0], seen[1], fragments]) {
+            if let Some(v) = seen {
+                self.deepest.borrow_mut().insert(k, v);
+            }
         }
         frame.layers = layers.filter(|_| readback);
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
@@ -513,8 +522,9 @@ struct InFlight<'c> {
     finishing: Finishing<'c>,
     /// The frame's speculation key (technique, size, window, path).
     key: String,
-    seen: Option<u32>,
-    peels_seen: Option<u32>,
+    /// What the frame read back instead of speculating: the deepest pixel, the peel count, the
+    /// fragment total.
+    seen: [Option<u32>; 3],
     layers: Option<Vec<u32>>,
     readback: bool,
     start: Instant,

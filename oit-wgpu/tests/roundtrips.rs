@@ -26,7 +26,9 @@ fn a_steady_frame_reads_back_once() {
     for path in [RasterPath::Compute, RasterPath::Hardware] {
         // fabs:2 and mdts64:2 overflow on six planes (their extra passes gated on the device);
         // dp, ddp and mlp:2 peel with the last frame's pass count, gated likewise
-        for technique in ["wavg", "wsum", "bdp", "bdp:2", "mdts64:8", "fabs", "fabs:2", "dp", "ddp", "mlp:2"]
+        // dfb and ll size their arrays from the last frame's fragment total, checked at the end
+        for technique in
+            ["wavg", "wsum", "bdp", "bdp:2", "mdts64:8", "fabs", "fabs:2", "dp", "ddp", "mlp:2", "dfb", "ll"]
         {
             let settings = Settings {
                 width: 48,
@@ -221,5 +223,61 @@ fn a_speculated_size_that_misses_runs_again() {
         let before = gpu.readbacks();
         prepared.frame(&at, &settings).unwrap();
         assert_eq!(gpu.readbacks() - before, 1, "{path}: the same view again is sized without waiting");
+    }
+}
+
+/// `dfb`'s and `ll`'s arrays sized from the last frame's fragment total
+/// ([`oit_wgpu::GpuCtx::fragment_capacity`], rounded up to its size class) without waiting: a view
+/// with more fragments than that capacity runs again and equals a one-shot render of it (image,
+/// counts, storage); a view with fewer fits, reports the storage of its own count (as a one-shot
+/// render does) and waits once; and the view after a miss is sized right away.
+#[test]
+fn a_speculated_fragment_total_that_misses_runs_again() {
+    let Some(backend) = oit_wgpu::backend_or_skip("a_speculated_fragment_total_that_misses_runs_again")
+    else {
+        return;
+    };
+    let gpu = backend.gpu().expect("opened above");
+    let scene = load_scene("planes:5").unwrap();
+    let (at, away) = at_and_away(&scene);
+    for path in [RasterPath::Compute, RasterPath::Hardware] {
+        let on_gpu = u64::from(path == RasterPath::Compute && oit_wgpu::setup_on_gpu(gpu));
+        for technique in ["dfb", "ll"] {
+            let what = format!("{technique} on {path}");
+            let settings = Settings {
+                width: 40,
+                height: 40,
+                technique: technique.parse::<Technique>().unwrap(),
+                raster: Some(path),
+                ..Settings::default()
+            };
+            let mut prepared = backend.prepare(&scene).unwrap();
+            let empty = prepared.frame(&away, &settings).unwrap();
+            assert_eq!(empty.stats.fragments, 0, "{what}: nothing on screen looking away");
+            let before = gpu.readbacks();
+            let frame = prepared.frame(&at, &settings).unwrap();
+            // the first attempt's end; the second's sizing readback and its end (and, on the GPU's
+            // setup, its capacity check: a rerun waits for the setup too)
+            assert_eq!(gpu.readbacks() - before, 3 + on_gpu, "{what}: the total grew, the frame ran again");
+            let one_shot = backend.render(&scene, &at, &settings).unwrap();
+            assert_eq!(frame.image, one_shot.image, "{what}");
+            assert_eq!(
+                frame.stats.storage_bytes, one_shot.stats.storage_bytes,
+                "{what}: sized as a one-shot frame"
+            );
+            assert_eq!(frame.stats.captured, one_shot.stats.captured, "{what}");
+            assert!(frame.stats.fragments > 0, "{what}");
+            let before = gpu.readbacks();
+            prepared.frame(&at, &settings).unwrap();
+            assert_eq!(gpu.readbacks() - before, 1, "{what}: the same view again is sized without waiting");
+            // fewer fragments than the capacity: no rerun, the storage of its own count
+            let before = gpu.readbacks();
+            let fewer = prepared.frame(&away, &settings).unwrap();
+            assert_eq!(gpu.readbacks() - before, 1, "{what}: fewer fragments fit");
+            assert_eq!(
+                fewer.stats.storage_bytes, empty.stats.storage_bytes,
+                "{what}: its own count's storage"
+            );
+        }
     }
 }

@@ -1,7 +1,8 @@
 //! `dfb` on the GPU (see oit-cpu's `technique/dfb.rs` and `dfb.wgsl`): a counting pass, the
-//! exclusive prefix sum of the counts on the GPU (`scan.wgsl`, whose total is the one word read
-//! back, to size the fragment buffer), a fill pass into exactly the frame's fragments, and a
-//! per-pixel sort by (depth, primitive id) and composite.
+//! exclusive prefix sum of the counts on the GPU (`scan.wgsl`, whose total sizes the fragment
+//! buffer: read back on a first frame, an earlier frame's where a prepared scene has one,
+//! [`GpuCtx::fragment_capacity`]), a fill pass into the frame's fragments, and a per-pixel sort by
+//! (depth, primitive id) and composite.
 
 use oit_core::OitError;
 
@@ -20,7 +21,9 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     let offsets = ctx.buffer("dfb offsets", entries, Init::Zero)?;
     ctx.encoder().copy_buffer_to_buffer(&counts, 0, &offsets, 0, entries * 4);
     let total = super::scan(ctx, &offsets, entries)?;
-    let total = u64::from(ctx.plan.check_fragments(total)?);
+    // a u64 key and a u32 payload a fragment
+    let total = ctx.fragment_capacity(&total, 12)?;
+    let total = u64::from(ctx.plan.check_fragments(u64::from(total))?);
     let keys = ctx.buffer("dfb keys", total * 2, Init::Zero)?;
     let payloads = ctx.buffer("dfb payloads", total, Init::Zero)?;
     let buffers = [&counts, &offsets, &keys, &payloads];

@@ -1,6 +1,7 @@
 //! `ll` on the GPU (see oit-cpu's `technique/ll.rs` and `ll.wgsl`): a sizing pass that stores
-//! nothing (the geometry pass counts its fragments, read back as every pass's count is), a pool
-//! of exactly that many nodes, the capture by atomic counter and head exchange, and a per-pixel
+//! nothing (the geometry pass counts its fragments: read back on a first frame, an earlier
+//! frame's count where a prepared scene has one, [`GpuCtx::fragment_capacity`]), a pool of that
+//! many nodes, the capture by atomic counter and head exchange, and a per-pixel
 //! walk, sort by (depth, primitive id) and composite.
 
 use oit_core::OitError;
@@ -15,8 +16,10 @@ const WGSL: &str = include_str!("ll.wgsl");
 const END: u32 = u32::MAX;
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
-    let generated = ctx.geometry_pass_read(drivers.scene.as_ref(), SIZE_WGSL, &[], 0, 0)?;
-    let nodes = ctx.plan.check_fragments(generated)?;
+    let generated = ctx.geometry_pass_counted(drivers.scene.as_ref(), SIZE_WGSL, &[], 0, 0)?;
+    // a u64 key, a u32 payload and a u32 link a node
+    let nodes = ctx.fragment_capacity(&generated, 16)?;
+    let nodes = ctx.plan.check_fragments(u64::from(nodes))?;
     let heads = ctx.buffer("ll heads", u64::from(ctx.pixels), Init::Fill(END))?;
     let counter = ctx.buffer("ll node counter", 1, Init::Zero)?;
     let keys = ctx.buffer("ll keys", u64::from(nodes) * 2, Init::Zero)?;

@@ -122,17 +122,18 @@ pub(crate) fn count(ctx: &mut GpuCtx<'_>, driver: &dyn Driver) -> Result<(wgpu::
 
 /// The exclusive prefix sum of the first `n` words of `words`, in place, on the GPU
 /// (`scan.wgsl`): each block of 256 words scanned by one workgroup, the blocks' totals scanned
-/// the same way one level up, and added back. Returns the total, read back from the top level's
-/// one block total (a single word: no round trip sized by the image). The block totals are
-/// bookkeeping, not counted in `storage_bytes` (the plan's figure leaves them out likewise).
-pub(crate) fn scan(ctx: &mut GpuCtx<'_>, words: &wgpu::Buffer, n: u64) -> Result<u64, OitError> {
+/// the same way one level up, and added back. Returns the buffer whose word 0 holds the total
+/// (the top level's one block total), on the device: [`GpuCtx::fragment_capacity`] sizes from it
+/// without a round trip where an earlier frame counted. The block totals are bookkeeping, not
+/// counted in `storage_bytes` (the plan's figure leaves them out likewise).
+pub(crate) fn scan(ctx: &mut GpuCtx<'_>, words: &wgpu::Buffer, n: u64) -> Result<wgpu::Buffer, OitError> {
     let blocks = n.div_ceil(SCAN_BLOCK).max(1);
     let param = u32::try_from(n).map_err(|_| OitError::Device(format!("a prefix sum over {n} words")))?;
     let sums = ctx.buffer("scan block sums", blocks, Init::Zero)?;
     ctx.storage_bytes -= blocks * 4;
     ctx.kernel_over(SCAN_WGSL, "scan_main", &[words, &sums], blocks * 64, 0, param, "scan")?;
     if blocks == 1 {
-        return Ok(u64::from(ctx.read_u32(&sums)?[0]));
+        return Ok(sums);
     }
     let total = scan(ctx, &sums, blocks)?;
     ctx.kernel_over(SCAN_WGSL, "add_main", &[words, &sums], blocks * 64, 0, param, "scan")?;
