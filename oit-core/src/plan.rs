@@ -547,17 +547,37 @@ pub fn check_total(what: &str, needed: u64, budget: (&str, u64)) -> Result<(), O
     Ok(())
 }
 
+/// How long [`host_memory_budget`] keeps a reading of `/proc/meminfo`.
+pub const MEMINFO_TTL: std::time::Duration = std::time::Duration::from_millis(100);
+
 /// The memory budget of a frame's technique storage on this host: half of `MemAvailable` of
 /// `/proc/meminfo`, else a fixed 4 GiB where the host does not say (not Linux). Half, because the
 /// storage is not all a frame holds: the set-up triangles, the image and its per-pixel outputs
 /// (layers, losses) and the allocator's slack come on top (an 8192² `fabs` frame of the armadillo
 /// whose storage was just under all of `MemAvailable` was killed by the kernel at 24 GB).
+///
+/// Read at most every [`MEMINFO_TTL`]: a read of `/proc/meminfo` costs about 16 µs of a core on
+/// this project's 2-core VM, and a frame asks several times (its plan's check, its context, each
+/// array its pool makes), which a 64² frame of a few hundred microseconds felt.
 pub fn host_memory_budget() -> (&'static str, u64) {
-    let available = std::fs::read_to_string("/proc/meminfo").ok().and_then(|text| {
-        let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-        let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-        Some(kib.saturating_mul(1024))
-    });
+    static LAST: std::sync::Mutex<Option<(std::time::Instant, Option<u64>)>> = std::sync::Mutex::new(None);
+    let now = std::time::Instant::now();
+    let cached =
+        LAST.lock().ok().and_then(|last| last.filter(|(at, _)| now.duration_since(*at) < MEMINFO_TTL));
+    let available = match cached {
+        Some((_, available)) => available,
+        None => {
+            let available = std::fs::read_to_string("/proc/meminfo").ok().and_then(|text| {
+                let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+                let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+                Some(kib.saturating_mul(1024))
+            });
+            if let Ok(mut last) = LAST.lock() {
+                *last = Some((now, available));
+            }
+            available
+        }
+    };
     match available {
         Some(bytes) => ("half the host's available memory (MemAvailable / 2)", bytes / 2),
         None => ("oit's fixed memory budget (the host does not report its available memory)", 4 << 30),

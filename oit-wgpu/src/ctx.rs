@@ -280,7 +280,7 @@ pub struct GpuCtx<'a> {
     /// The passes this frame's peel loop ran, reading back (none when speculated).
     pub peels_seen: Option<u32>,
     /// Speculated counts to check at the end: the buffer holding the count, and the value used.
-    sizing_checks: Vec<(wgpu::Buffer, u32)>,
+    sizing_checks: Vec<(wgpu::Buffer, SizeCheck)>,
     /// The fragment total an earlier frame of this prepared scene counted at this size,
     /// technique and view kind: `dfb`'s and `ll`'s arrays are sized from it without waiting for
     /// this frame's count ([`GpuCtx::fragment_capacity`]).
@@ -822,8 +822,19 @@ impl<'a> GpuCtx<'a> {
     /// The deepest pixel of a counting pass whose count lies in word 0 of `max`: the speculated
     /// value where the frame has one (checked at its end), else read back now.
     pub fn deepest(&mut self, max: &wgpu::Buffer) -> Result<u32, OitError> {
+        self.deepest_alike(max, |speculated, counted| speculated == counted)
+    }
+
+    /// [`GpuCtx::deepest`] for a count the frame uses only through a coarser figure: a speculated
+    /// value passes the end's check where `alike(speculated, counted)` (adp's batch count, the
+    /// same for every set-bin count of a batch of 32), not only where the two are equal.
+    pub fn deepest_alike(
+        &mut self,
+        max: &wgpu::Buffer,
+        alike: impl Fn(u32, u32) -> bool + 'static,
+    ) -> Result<u32, OitError> {
         if let Some(d) = self.speculated_deepest.take() {
-            self.sizing_checks.push((max.clone(), d));
+            self.sizing_checks.push((max.clone(), Box::new(move |counted| alike(d, counted))));
             return Ok(d);
         }
         let m = self.read_u32(max)?[0];
@@ -852,7 +863,7 @@ impl<'a> GpuCtx<'a> {
     /// Word 0 of `buffer` must equal `expected` at the frame's end (read back with the totals);
     /// where it does not, the frame is incomplete and runs again without speculating.
     pub fn check_at_end(&mut self, buffer: &wgpu::Buffer, expected: u32) {
-        self.sizing_checks.push((buffer.clone(), expected));
+        self.sizing_checks.push((buffer.clone(), Box::new(move |counted| counted == expected)));
     }
 
     /// Keeps the first scene pass's count of generated fragments: copied on the device into the
@@ -1053,7 +1064,7 @@ impl<'a> GpuCtx<'a> {
         }
         let recorded = self.started.elapsed();
         let reading = self.gpu.start_read(&read);
-        let speculated = sizing.iter().map(|&(_, s)| s).collect();
+        let speculated = sizing.into_iter().map(|(_, check)| check).collect();
         Ok(Finishing {
             ctx: self,
             reading,
@@ -1138,8 +1149,8 @@ pub struct Finishing<'a> {
     /// Whether the readback holds the frame's timestamps (after the totals).
     stamped: bool,
     checks: Vec<SetupCheck>,
-    /// The values the frame's speculated sizes took, in the order of their counts in the readback.
-    speculated: Vec<u32>,
+    /// The checks of the frame's speculated sizes, in the order of their counts in the readback.
+    speculated: Vec<SizeCheck>,
     /// The capacities the frame's speculated totals took and the bytes an element takes, in the
     /// order of their counts in the readback, after the sizes'.
     capacities: Vec<(u32, u64)>,
@@ -1177,9 +1188,9 @@ impl Finishing<'_> {
                 ctx.add_pass_ms("setup", ctx.gpu.pair_ms(&t, 0));
             }
         }
-        for speculated in &speculated {
+        for check in &speculated {
             let counted = words.next().unwrap_or_default();
-            fits &= counted.first() == Some(speculated);
+            fits &= counted.first().is_some_and(|&c| check(c));
         }
         for &(capacity, bytes) in &capacities {
             let counted = words.next().unwrap_or_default().first().copied().unwrap_or(u32::MAX);
@@ -1260,6 +1271,10 @@ pub fn dispatch_size(invocations: u64) -> (u32, u32) {
     let groups = invocations.div_ceil(64);
     if groups <= 65_535 { (groups as u32, 1) } else { (65_535, groups.div_ceil(65_535) as u32) }
 }
+
+/// A speculated size's check at the end of its frame: true where the count the frame made
+/// sizes it as the speculated value did.
+type SizeCheck = Box<dyn Fn(u32) -> bool>;
 
 /// The capacity allocated for `n` elements counted by an earlier frame: `n` rounded up to a
 /// multiple of an eighth of its power of two (at most 1/8 more; 8 classes an octave), so counts

@@ -26,10 +26,12 @@ fn a_steady_frame_reads_back_once() {
     for path in [RasterPath::Compute, RasterPath::Hardware] {
         // fabs:2 and mdts64:2 overflow on six planes (their extra passes gated on the device);
         // dp, ddp and mlp:2 peel with the last frame's pass count, gated likewise
-        // dfb and ll size their arrays from the last frame's fragment total, checked at the end
-        for technique in
-            ["wavg", "wsum", "bdp", "bdp:2", "mdts64:8", "fabs", "fabs:2", "dp", "ddp", "mlp:2", "dfb", "ll"]
-        {
+        // dfb and ll size their arrays from the last frame's fragment total, adp its batches from
+        // the last frame's set-bin count, each checked at the end
+        for technique in [
+            "wavg", "wsum", "bdp", "bdp:2", "mdts64:8", "fabs", "fabs:2", "dp", "ddp", "mlp:2", "dfb", "ll",
+            "adp",
+        ] {
             let settings = Settings {
                 width: 48,
                 height: 40,

@@ -1,7 +1,8 @@
 //! `adp` on the GPU: adaptive bucket depth peeling (Liu et al., HPG 2009, section 3.3), the same
 //! passes, storage and resolve as oit-cpu's `technique/adp.rs` (see its docs), in `adp.wgsl`:
-//! bounds pass, histogram pass (atomicOr), the deepest pixel's set-bin count (one readback) for the
-//! number of batches, then one bucket pass and one resolve per batch of 32. Each bucket keeps its
+//! bounds pass, histogram pass (atomicOr), the deepest pixel's set-bin count for the number of
+//! batches (read back on a first frame; an earlier frame's, checked at the end, where a prepared
+//! scene has one), then one bucket pass and one resolve per batch of 32. Each bucket keeps its
 //! bin's farthest (MAX) and nearest (MIN) words, so a bin of two fragments is captured whole.
 
 use oit_core::OitError;
@@ -25,7 +26,10 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     let buffers = [&bounds, &hist, &buckets, &max_bins, &nearest];
     ctx.geometry_pass(drivers.scene.as_ref(), WGSL, &buffers, 0, 0)?;
     ctx.pixel_kernel(WGSL, "count_main", &buffers, 0, 0)?;
-    let bins = ctx.read_u32(&max_bins)?[0];
+    // the last frame's count where a prepared scene has one, checked at the end by the batches
+    // it makes
+    let plan = ctx.plan.clone();
+    let bins = ctx.deepest_alike(&max_bins, move |a, b| plan.adp_batches(a) == plan.adp_batches(b))?;
     let batches = ctx.plan.adp_batches(bins);
     for batch in 0..batches {
         ctx.last_pass(batch + 1 == batches);
