@@ -290,6 +290,9 @@ pub struct GpuCtx<'a> {
     /// Speculated capacities to check at the end: the buffer holding the count, the capacity
     /// allocated, and the bytes a counted element takes.
     capacity_checks: Vec<(wgpu::Buffer, u32, u64)>,
+    /// Bytes allocated past the counts of the arrays [`GpuCtx::fragment_capacity`] sized from a
+    /// count read back: left out of the frame's `storage_bytes` at its end.
+    storage_slack: u64,
     gpu_ms: f64,
     pass_ms: Vec<(String, f64)>,
     lent: Lent<'a>,
@@ -483,6 +486,7 @@ impl<'a> GpuCtx<'a> {
             speculated_fragments: None,
             fragments_seen: None,
             capacity_checks: Vec::new(),
+            storage_slack: 0,
             gpu_ms: 0.0,
             pass_ms: Vec::new(),
             lent,
@@ -843,12 +847,13 @@ impl<'a> GpuCtx<'a> {
     }
 
     /// The capacity, in elements of `bytes` bytes, of arrays sized by a count that lies in word 0
-    /// of `count` on the device (`dfb`'s and `ll`'s fragment total). Where the frame speculates
-    /// ([`GpuCtx::speculated_fragments`]) the earlier count rounded up to its size class
-    /// ([`size_class`]: at most 1/8 more, so the nearby views of a moving camera reuse one set of
-    /// buffers), not waited for, and checked at the end: a frame whose count exceeds it runs
-    /// again. Its `storage_bytes` are then set from the count, as a frame that read the count
-    /// reports them. Else the count, read back now (a round trip).
+    /// of `count` on the device (`dfb`'s and `ll`'s fragment total): the count rounded up to its
+    /// size class ([`size_class`]: at most 1/8 more, so the frames of one view, and the nearby
+    /// views of a moving camera, take the same buffers from the pool). Where the frame speculates
+    /// ([`GpuCtx::speculated_fragments`]) the count is the earlier frame's, not waited for, and
+    /// checked at the end: a frame whose count exceeds the capacity runs again. Else it is read
+    /// back now (a round trip). Either way the frame's `storage_bytes` are those of its count, as
+    /// oit-cpu, which allocates exactly, reports them.
     pub fn fragment_capacity(&mut self, count: &wgpu::Buffer, bytes: u64) -> Result<u32, OitError> {
         if let Some(earlier) = self.speculated_fragments.take() {
             let capacity = size_class(earlier);
@@ -857,7 +862,9 @@ impl<'a> GpuCtx<'a> {
         }
         let n = self.read_u32(count)?[0];
         self.fragments_seen = Some(n);
-        Ok(n)
+        let capacity = size_class(n);
+        self.storage_slack += u64::from(capacity - n) * bytes;
+        Ok(capacity)
     }
 
     /// Word 0 of `buffer` must equal `expected` at the frame's end (read back with the totals);
@@ -1202,6 +1209,7 @@ impl Finishing<'_> {
         if !fits {
             return Ok(None);
         }
+        ctx.storage_bytes -= ctx.storage_slack;
         ctx.add_timestamps(stamp_words.as_deref());
         if !readback {
             return ctx.frame_of(Image { width: 0, height: 0, pixels: Vec::new() }, &t, None).map(Some);

@@ -454,10 +454,14 @@ impl WgpuPrepared<'_> {
             }
             return Ok(None);
         };
-        // a frame that speculated its fragment total (dfb, ll) counted it all the same: the next
-        // frame's capacity follows the view, and shrinks with it
+        // a frame that speculated its fragment total (dfb, ll) and fitted keeps the capacity for
+        // the next (the views it fits take the same buffers), unless its own total fell under
+        // half of it: then the next frame is sized from this one's (a smaller class, made once)
         let fragments = match seen[2] {
-            None if self.deepest.borrow().contains_key(&keys[2]) => u32::try_from(frame.stats.fragments).ok(),
+            None => self.deepest.borrow().get(&keys[2]).copied().and_then(|earlier| {
+                let counted = u32::try_from(frame.stats.fragments).ok()?;
+                (u64::from(counted) * 2 < u64::from(ctx::size_class(earlier))).then_some(counted)
+            }),
             other => other,
         };
         for (k, seen) in keys.into_iter().zip([seen[0], seen[1], fragments]) {
