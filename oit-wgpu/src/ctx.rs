@@ -848,7 +848,7 @@ impl<'a> GpuCtx<'a> {
 
     /// The capacity, in elements of `bytes` bytes, of arrays sized by a count that lies in word 0
     /// of `count` on the device (`dfb`'s and `ll`'s fragment total): the count rounded up to its
-    /// size class ([`size_class`]: at most 1/8 more, so the frames of one view, and the nearby
+    /// size class ([`size_class`](crate::size_class): at most 1/8 more, so the frames of one view, and the nearby
     /// views of a moving camera, take the same buffers from the pool). Where the frame speculates
     /// ([`GpuCtx::speculated_fragments`]) the count is the earlier frame's, not waited for, and
     /// checked at the end: a frame whose count exceeds the capacity runs again. Else it is read

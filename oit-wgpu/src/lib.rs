@@ -62,7 +62,7 @@ use oit_core::{
 
 pub use crate::ctx::{
     Driver, Enc, Finishing, Fragments, FrameUniform, Gate, Generated, GpuCtx, Init, RecordedBuffers,
-    SetupCheck, TECHNIQUE_PRELUDE,
+    SetupCheck, TECHNIQUE_PRELUDE, size_class,
 };
 pub use crate::embed::{CaptureShader, GeometryPass, OitPass, Recorded};
 pub use crate::gpu::{COMMON_WGSL, Gpu, Reading, TIMESTAMP_QUERIES, adapters, required_features};
