@@ -46,8 +46,9 @@ pub struct BenchArgs {
     #[arg(short, long, value_name = "LIST|all", default_value = "all")]
     pub techniques: String,
 
-    /// Timed frames per run (medians want 10 or more), twice: without the image's readback (the
-    /// steady state) and with it.
+    /// Timed frames per run (medians want 10 or more): in a frame loop without the image's
+    /// readback (the steady state; frames in flight where the backend keeps them), one at a time
+    /// without it (the latency; only where the loop kept frames in flight), and with it.
     #[arg(long, value_name = "N", default_value_t = 10)]
     pub frames: u32,
 
