@@ -156,11 +156,7 @@ pub(crate) fn measure(
         for camera in &cameras {
             let start = Instant::now();
             let stats = prepared.frame_stats(camera, settings)?;
-            latency.push(if stats.wall_ms > 0.0 {
-                stats.wall_ms
-            } else {
-                start.elapsed().as_secs_f64() * 1e3
-            });
+            latency.push(wall_of(&stats, start));
         }
         latency
     } else {
@@ -172,10 +168,7 @@ pub(crate) fn measure(
     for _ in 0..frames.max(1) {
         let start = Instant::now();
         let frame = prepared.frame(camera, settings)?;
-        // the backend's own wall time where it keeps one, else ours around the call
-        let ms =
-            if frame.stats.wall_ms > 0.0 { frame.stats.wall_ms } else { start.elapsed().as_secs_f64() * 1e3 };
-        wall.push(ms);
+        wall.push(wall_of(&frame.stats, start));
         if let Some(g) = frame.stats.gpu_ms {
             gpu.push(g);
         }
@@ -183,6 +176,12 @@ pub(crate) fn measure(
     }
     let frame = last.ok_or_else(|| OitError::InvalidSettings("no frame was timed".into()))?;
     Ok(Timed { frame, wall, steady, latency, gpu })
+}
+
+/// A frame's wall milliseconds: the backend's own where it keeps one, else ours since `start`,
+/// around the call.
+fn wall_of(stats: &oit_core::Stats, start: Instant) -> f64 {
+    if stats.wall_ms > 0.0 { stats.wall_ms } else { start.elapsed().as_secs_f64() * 1e3 }
 }
 
 /// Wall milliseconds per frame of a frame loop that started at `start` and whose frames completed

@@ -88,10 +88,7 @@ pub trait Prepared {
         settings: &Settings,
         done: &mut dyn FnMut(usize, crate::Stats),
     ) -> Result<(), OitError> {
-        for (i, camera) in cameras.iter().enumerate() {
-            done(i, self.frame_stats(camera, settings)?);
-        }
-        Ok(())
+        frames_one_at_a_time(self, cameras, settings, done)
     }
     /// How many frames [`Prepared::frame_loop`] keeps submitted at once (1: one at a time).
     fn frames_in_flight(&self) -> usize {
@@ -107,6 +104,20 @@ pub trait Prepared {
     fn pipelines_created(&self) -> Option<u64> {
         None
     }
+}
+
+/// [`Prepared::frame_loop`] one frame at a time: the default, and what a backend that keeps frames
+/// in flight falls back to where it cannot (frames in screen tiles).
+pub fn frames_one_at_a_time<P: Prepared + ?Sized>(
+    prepared: &mut P,
+    cameras: &[Camera],
+    settings: &Settings,
+    done: &mut dyn FnMut(usize, crate::Stats),
+) -> Result<(), OitError> {
+    for (i, camera) in cameras.iter().enumerate() {
+        done(i, prepared.frame_stats(camera, settings)?);
+    }
+    Ok(())
 }
 
 /// A renderer of every technique in its capabilities.

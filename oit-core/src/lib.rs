@@ -89,6 +89,7 @@ pub mod tiling;
 
 pub use backend::{
     AtomicFragmentList, Backend, BucketArray, Capabilities, Compositor, DepthHistogram, OnPath, Prepared,
+    frames_one_at_a_time,
 };
 pub use camera::{Camera, View};
 pub use error::OitError;

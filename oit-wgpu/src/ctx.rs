@@ -96,7 +96,7 @@ const MERGED_WORD: u64 = 6;
 
 /// Where a geometry pass leaves its count of generated fragments: word 0 of this buffer, written
 /// by the pass's submission (a [`Driver`] returns it instead of reading it back, so a pass costs
-/// no round trip; [`GpuCtx::geometry_pass_read`] reads it where a technique sizes from it).
+/// no round trip; [`GpuCtx::geometry_pass_with_count`] keeps it for a technique that sizes from it).
 pub struct Generated(pub wgpu::Buffer);
 
 /// The compute path's setup, not yet checked: it wrote at most `tri_capacity` pieces and
@@ -287,12 +287,9 @@ pub struct GpuCtx<'a> {
     pub speculated_fragments: Option<u32>,
     /// The fragment total this frame read back (none when speculated).
     pub fragments_seen: Option<u32>,
-    /// Speculated capacities to check at the end: the buffer holding the count, the capacity
-    /// allocated, and the bytes a counted element takes.
+    /// Capacities to check at the end ([`GpuCtx::fragment_capacity`]): the buffer holding the
+    /// count, the capacity allocated, and the bytes a counted element takes.
     capacity_checks: Vec<(wgpu::Buffer, u32, u64)>,
-    /// Bytes allocated past the counts of the arrays [`GpuCtx::fragment_capacity`] sized from a
-    /// count read back: left out of the frame's `storage_bytes` at its end.
-    storage_slack: u64,
     gpu_ms: f64,
     pass_ms: Vec<(String, f64)>,
     lent: Lent<'a>,
@@ -486,7 +483,6 @@ impl<'a> GpuCtx<'a> {
             speculated_fragments: None,
             fragments_seen: None,
             capacity_checks: Vec::new(),
-            storage_slack: 0,
             gpu_ms: 0.0,
             pass_ms: Vec::new(),
             lent,
@@ -698,7 +694,7 @@ impl<'a> GpuCtx<'a> {
 
     /// [`GpuCtx::geometry_pass`], its count of generated fragments left on the device, in word 0
     /// of the buffer returned (a copy the frame's later passes do not touch).
-    pub fn geometry_pass_counted(
+    pub fn geometry_pass_with_count(
         &mut self,
         driver: &dyn Driver,
         source: &str,
@@ -713,24 +709,6 @@ impl<'a> GpuCtx<'a> {
         self.storage_bytes -= 4;
         self.encoder().copy_buffer_to_buffer(&generated.0, 0, &count, 0, 4);
         Ok(count)
-    }
-
-    /// [`GpuCtx::geometry_pass`], then the fragments it generated, read back (a round trip:
-    /// for the techniques that size storage from them).
-    pub fn geometry_pass_read(
-        &mut self,
-        driver: &dyn Driver,
-        source: &str,
-        buffers: &[&wgpu::Buffer],
-        pass_index: u32,
-        param: u32,
-    ) -> Result<u64, OitError> {
-        let generated = self.run_geometry_pass(driver, source, buffers, pass_index, param)?;
-        let n = u64::from(self.read_u32(&generated.0)?[0]);
-        if self.fragments == Fragments::Unset {
-            self.fragments = Fragments::Known(n);
-        }
-        Ok(n)
     }
 
     /// A geometry pass that has work only where word 0 of `flag` (written by the frame's earlier
@@ -852,18 +830,20 @@ impl<'a> GpuCtx<'a> {
     /// views of a moving camera, take the same buffers from the pool). Where the frame speculates
     /// ([`GpuCtx::speculated_fragments`]) the count is the earlier frame's, not waited for, and
     /// checked at the end: a frame whose count exceeds the capacity runs again. Else it is read
-    /// back now (a round trip). Either way the frame's `storage_bytes` are those of its count, as
-    /// oit-cpu, which allocates exactly, reports them.
+    /// back now (a round trip). Either way the count comes back again with the frame's end, and
+    /// the frame's `storage_bytes` are set from it there, as oit-cpu, which allocates exactly,
+    /// reports them.
     pub fn fragment_capacity(&mut self, count: &wgpu::Buffer, bytes: u64) -> Result<u32, OitError> {
-        if let Some(earlier) = self.speculated_fragments.take() {
-            let capacity = size_class(earlier);
-            self.capacity_checks.push((count.clone(), capacity, bytes));
-            return Ok(capacity);
-        }
-        let n = self.read_u32(count)?[0];
-        self.fragments_seen = Some(n);
-        let capacity = size_class(n);
-        self.storage_slack += u64::from(capacity - n) * bytes;
+        let counted = match self.speculated_fragments.take() {
+            Some(earlier) => earlier,
+            None => {
+                let n = self.read_u32(count)?[0];
+                self.fragments_seen = Some(n);
+                n
+            }
+        };
+        let capacity = size_class(counted);
+        self.capacity_checks.push((count.clone(), capacity, bytes));
         Ok(capacity)
     }
 
@@ -1158,7 +1138,7 @@ pub struct Finishing<'a> {
     checks: Vec<SetupCheck>,
     /// The checks of the frame's speculated sizes, in the order of their counts in the readback.
     speculated: Vec<SizeCheck>,
-    /// The capacities the frame's speculated totals took and the bytes an element takes, in the
+    /// The capacities the frame's counted totals took and the bytes an element takes, in the
     /// order of their counts in the readback, after the sizes'.
     capacities: Vec<(u32, u64)>,
     readback: bool,
@@ -1209,7 +1189,6 @@ impl Finishing<'_> {
         if !fits {
             return Ok(None);
         }
-        ctx.storage_bytes -= ctx.storage_slack;
         ctx.add_timestamps(stamp_words.as_deref());
         if !readback {
             return ctx.frame_of(Image { width: 0, height: 0, pixels: Vec::new() }, &t, None).map(Some);

@@ -305,10 +305,7 @@ impl Prepared for WgpuPrepared<'_> {
     ) -> Result<(), OitError> {
         settings.validate()?;
         if settings.memory.is_some() || settings.region.is_some() {
-            for (i, camera) in cameras.iter().enumerate() {
-                done(i, self.frame_stats(camera, settings)?);
-            }
-            return Ok(());
+            return oit_core::frames_one_at_a_time(self, cameras, settings, done);
         }
         let path = settings.raster.unwrap_or(WgpuBackend::default_path(settings.technique));
         if path == RasterPath::Hardware && self.hardware.is_none() {

@@ -17,6 +17,17 @@ fn at_and_away(scene: &oit_core::Scene) -> (Camera, Camera) {
     (at, away)
 }
 
+/// Settings of `width` × `height` for `technique` on `path`.
+fn on_path(width: u32, height: u32, technique: &str, path: RasterPath) -> Settings {
+    Settings {
+        width,
+        height,
+        technique: technique.parse::<Technique>().unwrap(),
+        raster: Some(path),
+        ..Settings::default()
+    }
+}
+
 #[test]
 fn a_steady_frame_reads_back_once() {
     let Some(backend) = oit_wgpu::backend_or_skip("a_steady_frame_reads_back_once") else { return };
@@ -32,13 +43,7 @@ fn a_steady_frame_reads_back_once() {
             "wavg", "wsum", "bdp", "bdp:2", "mdts64:8", "fabs", "fabs:2", "dp", "ddp", "mlp:2", "dfb", "ll",
             "adp",
         ] {
-            let settings = Settings {
-                width: 48,
-                height: 40,
-                technique: technique.parse::<Technique>().unwrap(),
-                raster: Some(path),
-                ..Settings::default()
-            };
+            let settings = on_path(48, 40, technique, path);
             let mut prepared = backend.prepare(&scene).unwrap();
             let first = prepared.frame(&camera, &settings).unwrap();
             assert!(first.stats.fragments > 0, "{technique} on {path}: the scene has fragments");
@@ -76,13 +81,7 @@ fn a_speculated_peel_count_that_misses_runs_again() {
     let (at, away) = at_and_away(&scene);
     for path in [RasterPath::Compute, RasterPath::Hardware] {
         for technique in ["dp", "ddp", "mlp:2"] {
-            let settings = Settings {
-                width: 40,
-                height: 40,
-                technique: technique.parse::<Technique>().unwrap(),
-                raster: Some(path),
-                ..Settings::default()
-            };
+            let settings = on_path(40, 40, technique, path);
             let one_shot_at = backend.render(&scene, &at, &settings).unwrap();
             let one_shot_away = backend.render(&scene, &away, &settings).unwrap();
             assert!(one_shot_at.stats.geometry_passes >= 3, "{technique}: the planes need several passes");
@@ -151,13 +150,7 @@ fn a_setup_that_outgrows_its_buffers_runs_again() {
         return;
     }
     let scene = load_scene("planes:2").unwrap();
-    let settings = Settings {
-        width: 512,
-        height: 512,
-        technique: "wavg".parse::<Technique>().unwrap(),
-        raster: Some(RasterPath::Compute),
-        ..Settings::default()
-    };
+    let settings = on_path(512, 512, "wavg", RasterPath::Compute);
     let bounds = scene.bounds();
     let (c, r) = (bounds.center(), (bounds.max - bounds.min).length() * 0.5);
     let look = |d: f32| {
@@ -196,13 +189,7 @@ fn a_speculated_size_that_misses_runs_again() {
     let (at, away) = at_and_away(&scene);
     for path in [RasterPath::Compute, RasterPath::Hardware] {
         let on_gpu = u64::from(path == RasterPath::Compute && oit_wgpu::setup_on_gpu(gpu));
-        let settings = Settings {
-            width: 40,
-            height: 40,
-            technique: "fabs".parse::<Technique>().unwrap(),
-            raster: Some(path),
-            ..Settings::default()
-        };
+        let settings = on_path(40, 40, "fabs", path);
         let mut prepared = backend.prepare(&scene).unwrap();
         prepared.frame(&away, &settings).unwrap();
         let before = gpu.readbacks();
@@ -246,13 +233,7 @@ fn a_speculated_fragment_total_that_misses_runs_again() {
         let on_gpu = u64::from(path == RasterPath::Compute && oit_wgpu::setup_on_gpu(gpu));
         for technique in ["dfb", "ll"] {
             let what = format!("{technique} on {path}");
-            let settings = Settings {
-                width: 40,
-                height: 40,
-                technique: technique.parse::<Technique>().unwrap(),
-                raster: Some(path),
-                ..Settings::default()
-            };
+            let settings = on_path(40, 40, technique, path);
             let mut prepared = backend.prepare(&scene).unwrap();
             let empty = prepared.frame(&away, &settings).unwrap();
             assert_eq!(empty.stats.fragments, 0, "{what}: nothing on screen looking away");

@@ -16,7 +16,7 @@ const WGSL: &str = include_str!("ll.wgsl");
 const END: u32 = u32::MAX;
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
-    let generated = ctx.geometry_pass_counted(drivers.scene.as_ref(), SIZE_WGSL, &[], 0, 0)?;
+    let generated = ctx.geometry_pass_with_count(drivers.scene.as_ref(), SIZE_WGSL, &[], 0, 0)?;
     // a u64 key, a u32 payload and a u32 link a node
     let nodes = ctx.fragment_capacity(&generated, 16)?;
     let nodes = ctx.plan.check_fragments(u64::from(nodes))?;
