@@ -27,6 +27,7 @@
 use glam::{Mat3, Mat4, Vec3, Vec4};
 #[cfg(feature = "rayon")]
 use rayon::prelude::*;
+use wide::{CmpGt, CmpLt, f32x8};
 
 use crate::{Aabb, Camera, MAX_SIZE, Scene, Settings, Shading};
 
@@ -48,6 +49,83 @@ pub const HALF_PIXEL: i64 = SUBPIXEL / 2;
 const COORD_LIMIT: f32 = (1u32 << 29) as f32;
 /// Triangles per task of the setup.
 const SETUP_CHUNK: usize = 1024;
+
+/// Fragments [`TriangleSetup::colors_at`] and [`headlight_colors`] shade at once.
+pub const SHADE_LANES: usize = 8;
+
+/// What the headlight shading of a fragment reads of its triangle, in one 64-byte line: a pass
+/// that shades every fragment reads this instead of the triangle's three lines (a bunny pass is
+/// bound by the memory it touches more than by its arithmetic).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C, align(64))]
+pub struct ShadeRecord {
+    /// [`Triangle::inv_w`].
+    pub inv_w: [f32; 3],
+    /// [`Triangle::normal`], vertex by vertex.
+    pub normal: [[f32; 3]; 3],
+    /// [`Triangle::base`].
+    pub base: Vec4,
+}
+
+impl ShadeRecord {
+    /// The record of `t`.
+    #[inline]
+    pub fn new(t: &Triangle) -> ShadeRecord {
+        ShadeRecord { inv_w: t.inv_w, normal: t.normal.map(|n| n.to_array()), base: t.base }
+    }
+}
+
+/// [`TriangleSetup::color_at`] under [`Shading::Headlight`] for [`SHADE_LANES`] fragments at
+/// once, bit for bit: lane `i` is the colour of the fragment of the triangle of `records[i]`
+/// with barycentrics `b[i]`, lit from `forward`.
+///
+/// A fragment's shaded colour is a chain of dependent operations (two divisions and a square
+/// root among them) too long for one fragment's worth of independent work to hide. Here each
+/// step runs for every lane before the next (structure of arrays), each lane the very IEEE
+/// operations of [`TriangleSetup::color_at`] in its order: a vector division, square root or
+/// product rounds each lane as the scalar one does, and Rust contracts nothing into fused
+/// multiply-adds, so the compiler may run the lanes in vector registers and the bits stay.
+#[inline]
+pub fn headlight_colors(
+    records: [&ShadeRecord; SHADE_LANES],
+    b: [[f32; 3]; SHADE_LANES],
+    forward: Vec3,
+) -> [Vec4; SHADE_LANES] {
+    const N: usize = SHADE_LANES;
+    #[inline(always)]
+    fn gather(records: &[&ShadeRecord; SHADE_LANES], value: impl Fn(&ShadeRecord) -> f32) -> f32x8 {
+        f32x8::new(std::array::from_fn(|i| value(records[i])))
+    }
+    let bs: [f32x8; 3] = std::array::from_fn(|k| f32x8::new(b.map(|b| b[k])));
+    let iw: [f32x8; 3] = std::array::from_fn(|k| gather(&records, |r| r.inv_w[k]));
+    // perspective(): q = b·(1/w), normalized by their sum ((q0 + q1) + q2)
+    let q: [f32x8; 3] = std::array::from_fn(|k| bs[k] * iw[k]);
+    let inv_q = f32x8::splat(1.0) / (q[0] + q[1] + q[2]);
+    let p: [f32x8; 3] = q.map(|q| q * inv_q);
+    // interpolated_normal(): n0·p0 + n1·p1 + n2·p2, per component
+    let n: [f32x8; 3] = std::array::from_fn(|c| {
+        gather(&records, |r| r.normal[0][c]) * p[0]
+            + gather(&records, |r| r.normal[1][c]) * p[1]
+            + gather(&records, |r| r.normal[2][c]) * p[2]
+    });
+    // Shading::shade(): normalize_or_zero (1 / sqrt of the dot product, used where it is finite
+    // and positive, else the zero vector), then base · (0.3 + 0.7·|n·forward|), clamped to [0, 1]
+    let zero = f32x8::splat(0.0);
+    let rcp = f32x8::splat(1.0) / (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    let unit = rcp.is_finite() & rcp.cmp_gt(zero);
+    let u = n.map(|n| unit.blend(n * rcp, zero));
+    let along =
+        u[0] * f32x8::splat(forward.x) + u[1] * f32x8::splat(forward.y) + u[2] * f32x8::splat(forward.z);
+    let light = f32x8::splat(0.3) + f32x8::splat(0.7) * along.abs();
+    // glam's Vec3::clamp: the larger by `>` with 0, then the smaller by `<` with 1
+    let clamp = |v: f32x8| {
+        let v = v.cmp_gt(zero).blend(v, zero);
+        v.cmp_lt(f32x8::splat(1.0)).blend(v, f32x8::splat(1.0))
+    };
+    let rgb: [[f32; N]; 3] =
+        std::array::from_fn(|c| clamp(gather(&records, |r| r.base[c]) * light).to_array());
+    std::array::from_fn(|i| Vec4::new(rgb[0][i], rgb[1][i], rgb[2][i], records[i].base.w.clamp(0.0, 1.0)))
+}
 
 /// One covered (pixel, triangle) pair.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -680,6 +758,24 @@ impl TriangleSetup {
         let vertex_color = t.has_color.then(|| t.color[0] * p[0] + t.color[1] * p[1] + t.color[2] * p[2]);
         self.shading.shade(t.base, normal, vertex_color, self.forward)
     }
+    /// [`TriangleSetup::color_at`] of [`SHADE_LANES`] fragments at once, bit for bit: lane `i` is
+    /// the colour of the fragment of `tris[i]` with barycentrics `b[i]`. The headlight shading
+    /// (the default) runs in lanes ([`headlight_colors`]); the others call
+    /// [`TriangleSetup::color_at`] per lane.
+    #[inline]
+    pub fn colors_at(
+        &self,
+        tris: [&Triangle; SHADE_LANES],
+        b: [[f32; 3]; SHADE_LANES],
+    ) -> [Vec4; SHADE_LANES] {
+        if self.shading == Shading::Headlight {
+            let records = tris.map(ShadeRecord::new);
+            headlight_colors(std::array::from_fn(|i| &records[i]), b, self.forward)
+        } else {
+            std::array::from_fn(|i| self.color_at(tris[i], b[i]))
+        }
+    }
+
     /// The set-up triangles as 32-bit words, [`TRIANGLE_WORDS`] per triangle, for a GPU rasterizer
     /// that walks and interpolates them with the same rules (oit-wgpu's compute path), so both
     /// produce the same fragments. Layout per triangle: `x[3]` (i32, 1/256 px), `y[3]` (i32),
@@ -812,4 +908,120 @@ pub fn covers(t: &Triangle, x: u32, y: u32) -> Option<[i64; 3]> {
     let (px, py) = (i64::from(x) * SUBPIXEL + HALF_PIXEL, i64::from(y) * SUBPIXEL + HALF_PIXEL);
     let e = [0, 1, 2].map(|k| edge(t, k, px, py));
     e.iter().all(|&(v, _, _, above)| v > above).then(|| e.map(|e| e.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small deterministic generator (xorshift64*), so a failure names its case.
+    struct Rng(u64);
+
+    impl Rng {
+        fn next(&mut self) -> u64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+        }
+
+        fn unit(&mut self) -> f32 {
+            (self.next() >> 40) as f32 / (1u64 << 24) as f32
+        }
+
+        /// A float of any sign and of magnitudes from 2^-140 (subnormal squares) to 2^70 (squares
+        /// past f32::MAX), or one of the values where the rules branch.
+        fn wild(&mut self) -> f32 {
+            match self.next() % 8 {
+                0 => [0.0, -0.0, 1.0, -1.0, f32::MIN_POSITIVE, 1e-30, 1e30][(self.next() % 7) as usize],
+                _ => {
+                    let magnitude = 2f32.powi((self.next() % 211) as i32 - 140) * (1.0 + self.unit());
+                    if self.next().is_multiple_of(2) { magnitude } else { -magnitude }
+                }
+            }
+        }
+
+        fn vec3(&mut self, wild: bool) -> Vec3 {
+            if wild {
+                Vec3::new(self.wild(), self.wild(), self.wild())
+            } else {
+                Vec3::new(self.unit() * 2.0 - 1.0, self.unit() * 2.0 - 1.0, self.unit() * 2.0 - 1.0)
+            }
+        }
+    }
+
+    fn triangle(rng: &mut Rng) -> Triangle {
+        let wild = rng.next().is_multiple_of(3);
+        let normal = match rng.next() % 6 {
+            // a mesh without normals, and a normal cancelled by interpolation
+            0 => [Vec3::ZERO; 3],
+            1 => {
+                let n = rng.vec3(false);
+                [n, -n, n]
+            }
+            _ => [rng.vec3(wild), rng.vec3(wild), rng.vec3(wild)],
+        };
+        Triangle {
+            x: [0; 3],
+            y: [0; 3],
+            z: [0.0; 3],
+            inv_w: [0; 3].map(|_| if wild { rng.wild().abs() } else { 0.05 + rng.unit() * 10.0 }),
+            normal,
+            color: [rng.vec3(false), rng.vec3(false), rng.vec3(false)],
+            inv_area: 1.0,
+            // colours and alphas past [0, 1] too: the clamps decide
+            base: Vec4::new(
+                rng.unit() * 1.4 - 0.2,
+                rng.unit() * 1.4 - 0.2,
+                rng.unit(),
+                rng.unit() * 1.4 - 0.2,
+            ),
+            has_color: rng.next().is_multiple_of(2),
+            prim: 0,
+            bbox: [0; 4],
+        }
+    }
+
+    fn barycentrics(rng: &mut Rng) -> [f32; 3] {
+        let mut b = [rng.unit(), rng.unit(), rng.unit()];
+        // on an edge, at a vertex
+        match rng.next() % 6 {
+            0 => b[(rng.next() % 3) as usize] = 0.0,
+            1 => b = [0.0, 0.0, 1.0],
+            _ => {}
+        }
+        let sum = b[0] + b[1] + b[2];
+        if sum > 0.0 { b.map(|v| v / sum) } else { [1.0, 0.0, 0.0] }
+    }
+
+    /// The lanes give [`TriangleSetup::color_at`]'s bits in every lane, under every shading, for
+    /// ordinary triangles and for the ones where the rules branch: zero and cancelling normals,
+    /// normals whose squared length underflows or overflows, colours and alphas outside [0, 1],
+    /// fragments on an edge or a vertex. A lane computed in another order (a sum regrouped, a
+    /// reciprocal multiplied instead of a division, a max for the `>` clamp) fails it.
+    #[test]
+    fn lanes_give_color_at_bits() {
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        let mut checked = 0;
+        for case in 0..4000 {
+            let shading = [Shading::Headlight, Shading::Flat, Shading::Vertex, Shading::Normal][case % 4];
+            let forward = rng.vec3(false).normalize_or(Vec3::NEG_Z);
+            let setup = TriangleSetup { triangles: Vec::new(), width: 1, height: 1, shading, forward };
+            let tris: [Triangle; SHADE_LANES] = std::array::from_fn(|_| triangle(&mut rng));
+            let b: [[f32; 3]; SHADE_LANES] = std::array::from_fn(|_| barycentrics(&mut rng));
+            let refs = std::array::from_fn(|i| &tris[i]);
+            let got = setup.colors_at(refs, b);
+            let records = tris.map(|t| ShadeRecord::new(&t));
+            let lanes = headlight_colors(std::array::from_fn(|i| &records[i]), b, forward);
+            for i in 0..SHADE_LANES {
+                let want = setup.color_at(&tris[i], b[i]).to_array().map(f32::to_bits);
+                assert_eq!(got[i].to_array().map(f32::to_bits), want, "case {case} lane {i} ({shading:?})");
+                if shading == Shading::Headlight {
+                    assert_eq!(lanes[i].to_array().map(f32::to_bits), want, "case {case} lane {i}");
+                    checked += 1;
+                }
+            }
+        }
+        assert_eq!(checked, 1000 * SHADE_LANES);
+    }
 }

@@ -62,7 +62,7 @@ fn pass(c: &mut Criterion) {
             group.bench_function(format!("{mode}/coverage"), |b| b.iter(|| r.coverage_pass()));
             group.bench_function(format!("{mode}/pass"), |b| {
                 b.iter(|| {
-                    r.for_each_fragment(|f| {
+                    r.for_each_shaded_fragment(|f| {
                         // what a capture of the transparency effect reads: depth, id and colour
                         // (colour and normal are computed only where read; none reads both)
                         black_box((f.depth, f.prim, f.color()));

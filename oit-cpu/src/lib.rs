@@ -221,7 +221,7 @@ impl Backend for CpuBackend {
             }
             let counts: Vec<AtomicU32> = (0..settings.pixel_count()).map(|_| AtomicU32::new(0)).collect();
             let pass = || {
-                raster.for_each_fragment(|f| {
+                raster.for_each_shaded_fragment(|f| {
                     std::hint::black_box((f.depth, f.prim, f.color()));
                     counts[f.pixel as usize].fetch_add(1, Ordering::Relaxed);
                 })

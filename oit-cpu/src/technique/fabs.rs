@@ -66,9 +66,10 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let slots = ctx.scratch64(k)?;
     let payloads = ctx.scratch32(k)?;
     let tail = ctx.tail_sums()?;
+    let shade = ctx.payload_shade();
     let payload = |f: &crate::raster::Fragment<'_>| ctx.payload(f);
     let lost = &*ctx;
-    let generated = ctx.raster.for_each_fragment(|f| {
+    let generated = ctx.raster.for_each_fragment_with(shade, |f| {
         let px = f.pixel as usize;
         let i = counters[px].fetch_add(1, Relaxed) as usize;
         if i < k {

@@ -47,8 +47,9 @@ pub(crate) fn render64(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let k = capacity(ctx)?;
     let list = MinList::new(ctx.alloc64(k, MinList::EMPTY)?, k);
     let tail = ctx.tail_sums()?;
+    let shade = ctx.payload_shade();
     let payload = |f: &crate::raster::Fragment<'_>| ctx.payload(f);
-    let generated = ctx.raster.for_each_fragment(|f| {
+    let generated = ctx.raster.for_each_fragment_with(shade, |f| {
         if list.insert(f.pixel as usize, depth_key64(f.depth, payload(f))).is_some() {
             // a key carried off the end of the full array
             ctx.lose(f.pixel as usize);

@@ -12,6 +12,8 @@ use oit_core::Compositor as _;
 use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
 
 use oit_core::rules::{depth_bits, depth_key64, split_key64};
+
+use crate::raster::Shade;
 use oit_core::{AtomicFragmentList, Frame, OitError};
 use rayon::prelude::*;
 
@@ -36,7 +38,9 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
         let payload = |f: &crate::raster::Fragment<'_>| ctx.payload(f);
         let last = peels + 1 == limit;
         let (at_prev, lost) = (&at_prev, &*ctx);
-        let generated = ctx.raster.for_each_fragment(|f| {
+        // the first pass takes every fragment's payload, later ones only the deeper fragments'
+        let shade = if peels == 0 { ctx.payload_shade() } else { Shade::OnDemand };
+        let generated = ctx.raster.for_each_fragment_with(shade, |f| {
             let px = f.pixel as usize;
             let d = i64::from(depth_bits(f.depth));
             if d > prev[px] {

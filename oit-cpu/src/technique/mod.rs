@@ -9,7 +9,7 @@ use oit_core::rules::{depth_bits, pack_normal, pack_rgba8};
 use oit_core::{Camera, Effect, OitError, Scene, Settings};
 
 use crate::pool::{Pool, Pooled};
-use crate::raster::{Fragment, Rasterizer};
+use crate::raster::{Fragment, Rasterizer, Shade};
 use crate::resolve::{PixelState, Resolve};
 
 pub(crate) mod adp;
@@ -100,18 +100,39 @@ impl<'a> Ctx<'a> {
         }
     }
 
-    /// [`Ctx::pass`] for shaders that count losses: `shader` gets the per-pixel lost counters.
+    /// A capture pass for shaders that count losses: `shader` gets the per-pixel lost counters,
+    /// and every fragment's payload ([`Ctx::payload`]) is made ahead ([`Ctx::payload_shade`]).
     pub fn pass_lossy<F: Fn(&Fragment<'_>, &Ctx<'_>) + Sync>(&mut self, shader: F) {
-        let generated = self.raster.for_each_fragment(|f| shader(f, self));
+        let generated = self.raster.for_each_fragment_with(self.payload_shade(), |f| shader(f, self));
         self.passes += 1;
         self.fragments.get_or_insert(generated);
     }
 
-    /// One geometry pass over the scene: `shader` runs for every fragment, concurrently.
+    /// One geometry pass over the scene: `shader` runs for every fragment, concurrently; colour
+    /// and normal are made where it asks.
     pub fn pass<F: Fn(&Fragment<'_>) + Sync>(&mut self, shader: F) {
-        let generated = self.raster.for_each_fragment(shader);
+        self.pass_with(Shade::OnDemand, shader);
+    }
+
+    /// [`Ctx::pass`] for a shader that reads every fragment's colour: the colours are made
+    /// ahead, several at once ([`Shade::Color`]).
+    pub fn pass_shaded<F: Fn(&Fragment<'_>) + Sync>(&mut self, shader: F) {
+        self.pass_with(Shade::Color, shader);
+    }
+
+    fn pass_with<F: Fn(&Fragment<'_>) + Sync>(&mut self, shade: Shade, shader: F) {
+        let generated = self.raster.for_each_fragment_with(shade, shader);
         self.passes += 1;
         self.fragments.get_or_insert(generated);
+    }
+
+    /// How a pass that reads every fragment's [`Ctx::payload`] shades: colours ahead
+    /// ([`Shade::Color`]) unless the payload is the normal (Fresnel), made on demand.
+    pub fn payload_shade(&self) -> Shade {
+        match self.resolve.effect {
+            Effect::Fresnel => Shade::OnDemand,
+            _ => Shade::Color,
+        }
     }
 
     /// The word a fragment carries for the chosen effect: its RGBA8 colour, or its packed normal.

@@ -35,9 +35,10 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let counters = ctx.alloc32(1, 0)?;
     // below each pixel's counter every slot is written before the resolve reads it
     let slots = ctx.scratch64(k)?;
+    let shade = ctx.payload_shade();
     let payload = |f: &crate::raster::Fragment<'_>| ctx.payload(f);
     let lost = &*ctx;
-    let generated = ctx.raster.for_each_fragment(|f| {
+    let generated = ctx.raster.for_each_fragment_with(shade, |f| {
         let px = f.pixel as usize;
         let i = counters[px].fetch_add(1, Relaxed) as usize;
         if i < k {

@@ -34,9 +34,10 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let cursor: Vec<AtomicU32> = (0..counts.len()).map(|_| AtomicU32::new(0)).collect();
     let keys: Vec<AtomicU64> = (0..total).map(|_| AtomicU64::new(0)).collect();
     let payloads: Vec<AtomicU32> = (0..total).map(|_| AtomicU32::new(0)).collect();
+    let shade = ctx.payload_shade();
     let resolve_payload = |f: &crate::raster::Fragment<'_>| ctx.payload(f);
     let raster = ctx.raster;
-    raster.for_each_fragment(|f| {
+    raster.for_each_fragment_with(shade, |f| {
         let px = f.pixel as usize;
         let slot = offsets[px] + cursor[px].fetch_add(1, Relaxed) as usize;
         keys[slot].store((depth_bits(f.depth) as u64) << 32 | f.prim as u64, Relaxed);
@@ -52,23 +53,24 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let per_length = ctx.scene.absorption_per_length();
     let forward = camera.forward.as_dvec3();
     let deepest = counts.iter().copied().max().unwrap_or(0).max(1);
-    let depth = |i: usize| f32::from_bits((keys[i] >> 32) as u32);
     let pixels: Vec<[u8; 4]> = (0..counts.len())
         .into_par_iter()
-        .map(|px| {
-            let mut order: Vec<usize> = (offsets[px]..offsets[px + 1]).collect();
-            order.sort_unstable_by_key(|&i| keys[i]);
-            let layers = order.iter().copied();
+        // one list a task, reused pixel after pixel: (key, payload) pairs sorted by key, which is
+        // (depth, primitive id) and unique at a pixel (one fragment a primitive)
+        .map_init(Vec::new, |list: &mut Vec<(u64, u32)>, px| {
+            list.clear();
+            list.extend((offsets[px]..offsets[px + 1]).map(|i| (keys[i], payloads[i])));
+            list.sort_unstable_by_key(|&(key, _)| key);
+            let layers = list.iter().copied();
+            let depth = |key: u64| f32::from_bits((key >> 32) as u32);
             let c: DVec3 = match effect {
-                Effect::Transparency => front_to_back_f64(layers.map(|i| unpack_rgba8_f64(payloads[i])), bg),
+                Effect::Transparency => front_to_back_f64(layers.map(|(_, p)| unpack_rgba8_f64(p)), bg),
                 Effect::Translucency => translucency_f64(
-                    layers.map(|i| (camera.linear_depth_f64(depth(i)), unpack_rgba8_f64(payloads[i]))),
+                    layers.map(|(key, p)| (camera.linear_depth_f64(depth(key)), unpack_rgba8_f64(p))),
                     per_length,
                     bg,
                 ),
-                Effect::Fresnel => {
-                    fresnel_f64(layers.map(|i| unpack_normal_f64(payloads[i]).dot(forward)), bg)
-                }
+                Effect::Fresnel => fresnel_f64(layers.map(|(_, p)| unpack_normal_f64(p).dot(forward)), bg),
                 Effect::Complexity if counts[px] == 0 => bg,
                 Effect::Complexity => heat_f64(f64::from(counts[px]) / f64::from(deepest)),
             };

@@ -17,7 +17,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, average: bool) -> Result<Frame, OitError
     let effect = ctx.resolve.effect;
     // r, g, b premultiplied sums, alpha sum, count
     let sums = ctx.alloc64(5, 0)?;
-    ctx.pass(|f| {
+    ctx.pass_shaded(|f| {
         let c = pack_rgba8(f.color());
         let a = u64::from(c >> 24);
         let base = f.pixel as usize * 5;
