@@ -170,6 +170,15 @@ impl Prepared for CpuPrepared<'_> {
         let this = &*self;
         let run = || oit_core::tiling::run("cpu", this.scene, settings, |s| this.frame_inner(camera, s));
         match &self.threads {
+            // The whole frame on one of the global pool's threads, as `install` runs it on a
+            // pool of its own: called from outside a pool, each of a frame's parallel steps
+            // (setup, passes, resolve) would otherwise be handed over to the pool and waited for
+            // on a lock, a sleep and a wake-up of the calling thread apiece.
+            None if rayon::current_thread_index().is_none() => {
+                let mut frame = None;
+                rayon::scope(|_| frame = Some(run()));
+                frame.unwrap_or_else(|| Err(OitError::Device("the frame did not run".into())))
+            }
             None => run(),
             Some(pool) => pool.install(run),
         }

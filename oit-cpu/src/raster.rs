@@ -198,11 +198,17 @@ impl Rasterizer {
     /// What the traversal derives from the set-up triangles, made again: their [`SmallEdges`]
     /// (into the storage the last frame's used), the bins of [`RasterMode::Tiled`], the count.
     fn derive(&mut self) {
-        self.edges.clear();
-        self.edges.par_extend(self.setup.triangles.par_iter().map(SmallEdges::new));
-        self.shades.clear();
+        // one parallel sweep for both (each sweep wakes every thread: on many cores a small
+        // frame feels each one)
         if self.setup.shading == Shading::Headlight {
-            self.shades.par_extend(self.setup.triangles.par_iter().map(ShadeRecord::new));
+            self.setup
+                .triangles
+                .par_iter()
+                .map(|t| (SmallEdges::new(t), ShadeRecord::new(t)))
+                .unzip_into_vecs(&mut self.edges, &mut self.shades);
+        } else {
+            self.shades.clear();
+            self.setup.triangles.par_iter().map(SmallEdges::new).collect_into_vec(&mut self.edges);
         }
         self.bins = OnceLock::new();
         self.fragments = OnceLock::new();
