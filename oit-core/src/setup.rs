@@ -914,79 +914,66 @@ pub fn covers(t: &Triangle, x: u32, y: u32) -> Option<[i64; 3]> {
 mod tests {
     use super::*;
 
-    /// A small deterministic generator (xorshift64*), so a failure names its case.
-    struct Rng(u64);
+    use crate::procedural::Rng;
 
-    impl Rng {
-        fn next(&mut self) -> u64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-        }
-
-        fn unit(&mut self) -> f32 {
-            (self.next() >> 40) as f32 / (1u64 << 24) as f32
-        }
-
-        /// A float of any sign and of magnitudes from 2^-140 (subnormal squares) to 2^70 (squares
-        /// past f32::MAX), or one of the values where the rules branch.
-        fn wild(&mut self) -> f32 {
-            match self.next() % 8 {
-                0 => [0.0, -0.0, 1.0, -1.0, f32::MIN_POSITIVE, 1e-30, 1e30][(self.next() % 7) as usize],
-                _ => {
-                    let magnitude = 2f32.powi((self.next() % 211) as i32 - 140) * (1.0 + self.unit());
-                    if self.next().is_multiple_of(2) { magnitude } else { -magnitude }
-                }
-            }
-        }
-
-        fn vec3(&mut self, wild: bool) -> Vec3 {
-            if wild {
-                Vec3::new(self.wild(), self.wild(), self.wild())
-            } else {
-                Vec3::new(self.unit() * 2.0 - 1.0, self.unit() * 2.0 - 1.0, self.unit() * 2.0 - 1.0)
+    /// A float of any sign and of magnitudes from 2^-140 (subnormal squares) to 2^70 (squares
+    /// past f32::MAX), or one of the values where the rules branch.
+    fn wild(rng: &mut Rng) -> f32 {
+        match rng.next_u64() % 8 {
+            0 => [0.0, -0.0, 1.0, -1.0, f32::MIN_POSITIVE, 1e-30, 1e30][(rng.next_u64() % 7) as usize],
+            _ => {
+                let magnitude = 2f32.powi((rng.next_u64() % 211) as i32 - 140) * (1.0 + rng.next_f32());
+                if rng.next_u64().is_multiple_of(2) { magnitude } else { -magnitude }
             }
         }
     }
 
+    /// Three [`wild`] floats, or three in [-1, 1).
+    fn vec3(rng: &mut Rng, wild_ones: bool) -> Vec3 {
+        if wild_ones {
+            Vec3::new(wild(rng), wild(rng), wild(rng))
+        } else {
+            Vec3::new(rng.next_f32() * 2.0 - 1.0, rng.next_f32() * 2.0 - 1.0, rng.next_f32() * 2.0 - 1.0)
+        }
+    }
+
     fn triangle(rng: &mut Rng) -> Triangle {
-        let wild = rng.next().is_multiple_of(3);
-        let normal = match rng.next() % 6 {
+        let extreme = rng.next_u64().is_multiple_of(3);
+        let normal = match rng.next_u64() % 6 {
             // a mesh without normals, and a normal cancelled by interpolation
             0 => [Vec3::ZERO; 3],
             1 => {
-                let n = rng.vec3(false);
+                let n = vec3(rng, false);
                 [n, -n, n]
             }
-            _ => [rng.vec3(wild), rng.vec3(wild), rng.vec3(wild)],
+            _ => [vec3(rng, extreme), vec3(rng, extreme), vec3(rng, extreme)],
         };
         Triangle {
             x: [0; 3],
             y: [0; 3],
             z: [0.0; 3],
-            inv_w: [0; 3].map(|_| if wild { rng.wild().abs() } else { 0.05 + rng.unit() * 10.0 }),
+            inv_w: [0; 3].map(|_| if extreme { wild(rng).abs() } else { 0.05 + rng.next_f32() * 10.0 }),
             normal,
-            color: [rng.vec3(false), rng.vec3(false), rng.vec3(false)],
+            color: [vec3(rng, false), vec3(rng, false), vec3(rng, false)],
             inv_area: 1.0,
             // colours and alphas past [0, 1] too: the clamps decide
             base: Vec4::new(
-                rng.unit() * 1.4 - 0.2,
-                rng.unit() * 1.4 - 0.2,
-                rng.unit(),
-                rng.unit() * 1.4 - 0.2,
+                rng.next_f32() * 1.4 - 0.2,
+                rng.next_f32() * 1.4 - 0.2,
+                rng.next_f32(),
+                rng.next_f32() * 1.4 - 0.2,
             ),
-            has_color: rng.next().is_multiple_of(2),
+            has_color: rng.next_u64().is_multiple_of(2),
             prim: 0,
             bbox: [0; 4],
         }
     }
 
     fn barycentrics(rng: &mut Rng) -> [f32; 3] {
-        let mut b = [rng.unit(), rng.unit(), rng.unit()];
+        let mut b = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
         // on an edge, at a vertex
-        match rng.next() % 6 {
-            0 => b[(rng.next() % 3) as usize] = 0.0,
+        match rng.next_u64() % 6 {
+            0 => b[(rng.next_u64() % 3) as usize] = 0.0,
             1 => b = [0.0, 0.0, 1.0],
             _ => {}
         }
@@ -997,15 +984,15 @@ mod tests {
     /// The lanes give [`TriangleSetup::color_at`]'s bits in every lane, under every shading, for
     /// ordinary triangles and for the ones where the rules branch: zero and cancelling normals,
     /// normals whose squared length underflows or overflows, colours and alphas outside [0, 1],
-    /// fragments on an edge or a vertex. A lane computed in another order (a sum regrouped, a
-    /// reciprocal multiplied instead of a division, a max for the `>` clamp) fails it.
+    /// fragments on an edge or a vertex. A sum regrouped, or `is_finite` dropped from the
+    /// normalization's test, fails it (both tried).
     #[test]
     fn lanes_give_color_at_bits() {
         let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
         let mut checked = 0;
         for case in 0..4000 {
             let shading = [Shading::Headlight, Shading::Flat, Shading::Vertex, Shading::Normal][case % 4];
-            let forward = rng.vec3(false).normalize_or(Vec3::NEG_Z);
+            let forward = vec3(&mut rng, false).normalize_or(Vec3::NEG_Z);
             let setup = TriangleSetup { triangles: Vec::new(), width: 1, height: 1, shading, forward };
             let tris: [Triangle; SHADE_LANES] = std::array::from_fn(|_| triangle(&mut rng));
             let b: [[f32; 3]; SHADE_LANES] = std::array::from_fn(|_| barycentrics(&mut rng));

@@ -174,11 +174,7 @@ impl Prepared for CpuPrepared<'_> {
             // pool of its own: called from outside a pool, each of a frame's parallel steps
             // (setup, passes, resolve) would otherwise be handed over to the pool and waited for
             // on a lock, a sleep and a wake-up of the calling thread apiece.
-            None if rayon::current_thread_index().is_none() => {
-                let mut frame = None;
-                rayon::scope(|_| frame = Some(run()));
-                frame.unwrap_or_else(|| Err(OitError::Device("the frame did not run".into())))
-            }
+            None if rayon::current_thread_index().is_none() => rayon::scope(|_| run()),
             None => run(),
             Some(pool) => pool.install(run),
         }

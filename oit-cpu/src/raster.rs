@@ -349,10 +349,11 @@ impl Rasterizer {
     /// calls `f` for each in the order walked. Walking, shading and the technique's capture each
     /// run as a loop of their own, so a colour's long chain of dependent operations runs in
     /// vector lanes beside its neighbours' instead of stalling between the walk's branches and
-    /// the capture's atomics. Measured side by side (`cargo bench -p oit-cpu --bench raster`,
-    /// bunny at 512², 2 threads, `bench/results/cpu/issue12/`): the shaded pass from 8.4–9.0 ms
-    /// to 6.2 ms. A pass that shades on demand walks without the batch: gathering costs a
-    /// depth-only pass more than it gives it.
+    /// the capture's atomics. A pass that shades on demand walks without the batch: gathering
+    /// measured slower for a depth-only pass (3.99–4.16 ms against 3.56–3.82 on the bunny).
+    /// Measured side by side with the lanes and the row test in `wide`, the whole shaded bunny
+    /// pass went from 7.20–7.35 ms to 4.76–5.16 (`cargo bench -p oit-cpu --bench raster`, 512²,
+    /// 2 threads; `bench/results/cpu/issue12/`).
     fn scatter_shaded<F: Fn(&Fragment<'_>) + Sync>(&self, f: &F) -> u64 {
         let setup = &self.setup;
         let chunk = scatter_chunk(self.setup.triangles.len(), rayon::current_num_threads());
