@@ -132,7 +132,7 @@ const KNOWN: &[(&str, &str)] = &[("cpu", "cpu"), ("wgpu", "wgpu"), ("vulkan", "v
 
 #[cfg(feature = "cpu")]
 fn cpu(options: &BackendOptions) -> Result<Box<dyn Backend>, OitError> {
-    Ok(Box::new(oit_cpu::CpuBackend { threads: options.threads, ..Default::default() }))
+    Ok(Box::new(oit_cpu::CpuBackend::with_threads(options.threads)))
 }
 
 #[cfg(feature = "wgpu")]

@@ -161,6 +161,29 @@ impl Mesh {
     /// Checks that every number is finite, every coordinate within ±[`Mesh::MAX_COORDINATE`] and
     /// every index in range.
     pub fn validate(&self) -> Result<(), OitError> {
+        self.validated_bounds().map(drop)
+    }
+
+    /// [`Mesh::validate`], returning the mesh's bounds ([`Mesh::bounds`]) when it passes: the
+    /// positions are read once for both (a one-shot frame validates its scene, and on a many-core
+    /// host a small frame's serial scans over the vertices were a tenth of it).
+    pub fn validated_bounds(&self) -> Result<Aabb, OitError> {
+        // one pass: every coordinate within the limit (NaN fails every comparison) and the box;
+        // the passes below find the first bad vertex only when one is there
+        let limit = Mesh::MAX_COORDINATE;
+        let (in_range, bounds) = self.positions.iter().fold((true, Aabb::EMPTY), |(ok, mut b), &p| {
+            b.include(p);
+            (ok & (p.x.abs() <= limit) & (p.y.abs() <= limit) & (p.z.abs() <= limit), b)
+        });
+        if !in_range {
+            self.positions_error()?;
+        }
+        self.attributes_error()?;
+        Ok(bounds)
+    }
+
+    /// The error for the first vertex with a non-finite or out-of-range coordinate, if any.
+    fn positions_error(&self) -> Result<(), OitError> {
         if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
             return Err(OitError::InvalidScene(format!(
                 "mesh '{}': vertex {} has a NaN or infinite coordinate ({:?})",
@@ -178,6 +201,11 @@ impl Mesh {
                 Mesh::MAX_COORDINATE
             )));
         }
+        Ok(())
+    }
+
+    /// The error for normals, colours or indices that do not fit the positions, if any.
+    fn attributes_error(&self) -> Result<(), OitError> {
         if self.normals.len() != self.positions.len() {
             return Err(OitError::InvalidScene(format!(
                 "mesh '{}': {} normals for {} positions",
@@ -195,6 +223,12 @@ impl Mesh {
             )));
         }
         let n = self.positions.len() as u32;
+        // the largest index first (a loop the compiler vectorizes), the first bad triangle only
+        // when there is one
+        let largest = self.indices.iter().fold(0u32, |m, t| m.max(t[0]).max(t[1]).max(t[2]));
+        if self.indices.is_empty() || largest < n {
+            return Ok(());
+        }
         if let Some(t) = self.indices.iter().position(|t| t.iter().any(|&i| i >= n)) {
             return Err(OitError::InvalidScene(format!(
                 "mesh '{}': triangle {} indexes past the {} vertices",
@@ -319,7 +353,11 @@ impl Scene {
     /// share it: every frame of a GPU backend asks (translucency's absorption), and a grid of
     /// 144 bunnies walked 5 million vertices for it.
     pub fn bounds(&self) -> Aabb {
-        let mesh_bounds = self.mesh_bounds();
+        self.bounds_of(&self.mesh_bounds())
+    }
+
+    /// The world bounds of the instances, given each mesh's own bounds.
+    fn bounds_of(&self, mesh_bounds: &[Aabb]) -> Aabb {
         self.instances.iter().fold(Aabb::EMPTY, |b, inst| {
             let local = mesh_bounds[self.objects[inst.object].mesh];
             b.union(&local.transformed(&inst.transform))
@@ -336,19 +374,29 @@ impl Scene {
     /// σ (1 without objects) per 1/8 of the scene's bounding radius, so a scene of any scale
     /// absorbs alike. One value for the whole scene: the effect does not tell objects apart.
     pub fn absorption_per_length(&self) -> f64 {
+        self.absorption_per_length_in(&self.bounds())
+    }
+
+    /// [`Scene::absorption_per_length`] for the scene's bounds already at hand (those
+    /// [`Scene::validated_bounds`] returns), without another walk over the vertices.
+    pub fn absorption_per_length_in(&self, bounds: &Aabb) -> f64 {
         let sigma = if self.objects.is_empty() {
             1.0
         } else {
             self.objects.iter().map(|o| f64::from(o.absorption)).sum::<f64>() / self.objects.len() as f64
         };
-        sigma / (f64::from(self.bounds().radius()).max(1e-6) / 8.0)
+        sigma / (f64::from(bounds.radius()).max(1e-6) / 8.0)
     }
 
     /// Checks the scene before any raster: finite data, valid references, something to draw.
     pub fn validate(&self) -> Result<(), OitError> {
-        for m in &self.meshes {
-            m.validate()?;
-        }
+        self.validated_bounds().map(drop)
+    }
+
+    /// [`Scene::validate`], returning the scene's world bounds ([`Scene::bounds`]) when it passes,
+    /// from the same walk over each mesh's vertices.
+    pub fn validated_bounds(&self) -> Result<Aabb, OitError> {
+        let mesh_bounds = self.meshes.iter().map(Mesh::validated_bounds).collect::<Result<Vec<_>, _>>()?;
         for o in &self.objects {
             if o.mesh >= self.meshes.len() {
                 return Err(OitError::InvalidScene(format!("object '{}' names a missing mesh", o.name)));
@@ -372,7 +420,7 @@ impl Scene {
             return Err(OitError::InvalidScene(format!("scene '{}' has no triangles", self.name)));
         }
         Scene::check_size(&self.name, self.triangle_count(), self.instances.len() as u64)?;
-        let bounds = self.bounds();
+        let bounds = self.bounds_of(&mesh_bounds);
         let extent = bounds.min.abs().max(bounds.max.abs()).max_element();
         if extent.is_nan() || extent > Mesh::MAX_COORDINATE {
             return Err(OitError::InvalidScene(format!(
@@ -381,7 +429,7 @@ impl Scene {
                 Mesh::MAX_COORDINATE
             )));
         }
-        Ok(())
+        Ok(bounds)
     }
 }
 

@@ -18,6 +18,9 @@ use crate::resolve::PixelState;
 /// ever-new shapes does not hoard them.
 const SHELF_ARRAYS: usize = 8;
 
+/// Elements a task of the reset sweep takes at least: an array of fewer is reset serially.
+const RESET_GRAIN: usize = 1 << 14;
+
 /// Free arrays of one element type.
 pub(crate) struct Shelf<T> {
     free: Mutex<Vec<Vec<T>>>,
@@ -82,7 +85,7 @@ impl Pool {
         shelf: &'p Shelf<T>,
         len: usize,
         make: impl Fn() -> T + Sync + Send,
-        reset: impl Fn(&mut T) + Sync + Send,
+        reset: Option<&(dyn Fn(&mut T) + Sync)>,
     ) -> Pooled<'p, T> {
         let found = shelf.free.lock().ok().and_then(|mut free| {
             let Some(i) = free.iter().position(|a| a.len() == len) else {
@@ -108,7 +111,11 @@ impl Pool {
         });
         let array = match found {
             Some(mut array) => {
-                array.par_iter_mut().for_each(reset);
+                // a scratch array goes out as it came back; a small one is reset on this thread
+                // (a parallel sweep wakes every thread: on many cores a small frame feels it)
+                if let Some(reset) = reset {
+                    array.par_iter_mut().with_min_len(RESET_GRAIN).for_each(reset);
+                }
                 array
             }
             None => {
@@ -122,23 +129,23 @@ impl Pool {
 
     /// `len` 32-bit atomics set to `init`.
     pub fn u32s(&self, len: usize, init: u32) -> Pooled<'_, AtomicU32> {
-        self.lend(&self.u32s, len, || AtomicU32::new(init), |a| *a.get_mut() = init)
+        self.lend(&self.u32s, len, || AtomicU32::new(init), Some(&|a: &mut AtomicU32| *a.get_mut() = init))
     }
 
     /// `len` 64-bit atomics set to `init`.
     pub fn u64s(&self, len: usize, init: u64) -> Pooled<'_, AtomicU64> {
-        self.lend(&self.u64s, len, || AtomicU64::new(init), |a| *a.get_mut() = init)
+        self.lend(&self.u64s, len, || AtomicU64::new(init), Some(&|a: &mut AtomicU64| *a.get_mut() = init))
     }
 
     /// `len` 32-bit atomics holding whatever their last user left (0 when newly made): for arrays
     /// every element of which is written before it is read.
     pub fn u32s_scratch(&self, len: usize) -> Pooled<'_, AtomicU32> {
-        self.lend(&self.u32s, len, || AtomicU32::new(0), |_| {})
+        self.lend(&self.u32s, len, || AtomicU32::new(0), None)
     }
 
     /// [`Pool::u32s_scratch`] in 64-bit atomics.
     pub fn u64s_scratch(&self, len: usize) -> Pooled<'_, AtomicU64> {
-        self.lend(&self.u64s, len, || AtomicU64::new(0), |_| {})
+        self.lend(&self.u64s, len, || AtomicU64::new(0), None)
     }
 
     /// `len` fresh resolve states: a clean array where the last resolve left one of that length
@@ -153,7 +160,12 @@ impl Pool {
                 free.append(&mut clean);
             }
         }
-        self.lend(&self.states, len, PixelState::default, |s| *s = PixelState::default())
+        self.lend(
+            &self.states,
+            len,
+            PixelState::default,
+            Some(&|s: &mut PixelState| *s = PixelState::default()),
+        )
     }
 }
 

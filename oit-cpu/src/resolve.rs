@@ -12,7 +12,7 @@
 use glam::{Vec3, Vec4};
 use oit_core::composite::{FrontToBack, heat, linear_to_srgb8, schlick_transmittance};
 use oit_core::rules::{depth_bits, unpack_normal, unpack_rgba8};
-use oit_core::{Camera, Compositor, Effect, Image, Scene, Settings};
+use oit_core::{Camera, Compositor, Effect, Image, Settings};
 
 /// The run of equal depths a sequence of pushes ends in.
 #[derive(Clone, Copy, Debug, Default)]
@@ -109,19 +109,21 @@ pub(crate) struct Resolve<'a> {
     pub camera: &'a Camera,
     pub background: Vec3,
     /// Translucency: absorption per unit of view-space distance
-    /// ([`Scene::absorption_per_length`]).
+    /// ([`oit_core::Scene::absorption_per_length`]).
     per_length: f32,
     /// Whether ties are counted (the plan's `count_ties`).
     pub count_ties: bool,
 }
 
 impl<'a> Resolve<'a> {
-    pub fn new(scene: &Scene, camera: &'a Camera, settings: &Settings) -> Self {
+    /// The resolve of a frame; `per_length` is the scene's [`oit_core::Scene::absorption_per_length`]
+    /// (worked out once per prepared scene, not per frame).
+    pub fn new(per_length: f64, camera: &'a Camera, settings: &Settings) -> Self {
         Resolve {
             effect: settings.effect,
             camera,
             background: settings.background,
-            per_length: scene.absorption_per_length() as f32,
+            per_length: per_length as f32,
             count_ties: false,
         }
     }
@@ -334,7 +336,7 @@ mod tests {
 
     fn resolve<'a>(scene: &Scene, camera: &'a Camera, effect: Effect, count_ties: bool) -> Resolve<'a> {
         let settings = Settings { effect, background: BG, ..Settings::default() };
-        let mut r = Resolve::new(scene, camera, &settings);
+        let mut r = Resolve::new(scene.absorption_per_length(), camera, &settings);
         r.count_ties = count_ties;
         r
     }

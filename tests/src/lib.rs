@@ -73,7 +73,7 @@ pub fn label(backend: &dyn Backend) -> String {
 /// The CPU backend with a fixed number of threads.
 #[cfg(feature = "cpu")]
 pub fn cpu_with_threads(threads: usize) -> Box<dyn Backend> {
-    Box::new(oit_cpu::CpuBackend { threads: Some(threads), mode: None })
+    Box::new(oit_cpu::CpuBackend::with_threads(Some(threads)))
 }
 
 /// A built-in scene (panics on a bad name: tests name only good ones).

@@ -94,7 +94,8 @@ mod tests {
         let raster = Rasterizer::new(&scene, &camera, &settings);
         let pool = Pool::default();
         let plan = Plan::new("cpu", &scene, &settings).unwrap();
-        let mut ctx = Ctx::new(&scene, &camera, &settings, &raster, &pool, plan);
+        let mut ctx =
+            Ctx::new(&scene, &camera, &settings, &raster, &pool, plan, scene.absorption_per_length());
         let frame = capture_and_resolve(&mut ctx, 40).unwrap();
         let s = &frame.stats;
         assert!(s.fragments > 200, "the case needs far more fragments than nodes: {}", s.fragments);

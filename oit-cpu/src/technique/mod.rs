@@ -43,6 +43,8 @@ pub(crate) struct Ctx<'a> {
     pub pool: &'a Pool,
     /// The frame's plan: refusals, sizing and stop rules, oit-core's.
     pub plan: Plan,
+    /// Translucency's absorption per unit of length ([`Scene::absorption_per_length`]).
+    pub per_length: f64,
     /// The memory budget of the frame's storage, all allocations together (issue 13.9).
     pub budget: (String, u64),
     /// Fragments lost per pixel, counted where each is lost (a bucket collision, a key carried
@@ -61,8 +63,9 @@ impl<'a> Ctx<'a> {
         raster: &'a Rasterizer,
         pool: &'a Pool,
         plan: Plan,
+        per_length: f64,
     ) -> Self {
-        let mut resolve = Resolve::new(scene, camera, settings);
+        let mut resolve = Resolve::new(per_length, camera, settings);
         resolve.count_ties = plan.count_ties;
         Ctx {
             scene,
@@ -76,6 +79,7 @@ impl<'a> Ctx<'a> {
             storage_bytes: 0,
             pool,
             plan,
+            per_length,
             budget: crate::cpu_budget(settings),
             lost: pool.u32s(settings.pixel_count(), 0),
             merged: 0,
@@ -180,6 +184,19 @@ impl<'a> Ctx<'a> {
     pub fn words64(&mut self, len: u64, init: u64) -> Result<Pooled<'a, AtomicU64>, OitError> {
         let n = self.checked(len, 8)?;
         Ok(self.pool.u64s(n, init))
+    }
+
+    /// `len` words of 64 bits left as an earlier frame left them (zero when newly made), counting
+    /// the bytes: for an array sized from a count whose every slot is written before it is read.
+    pub fn scratch_words64(&mut self, len: u64) -> Result<Pooled<'a, AtomicU64>, OitError> {
+        let n = self.checked(len, 8)?;
+        Ok(self.pool.u64s_scratch(n))
+    }
+
+    /// [`Ctx::scratch_words64`] in words of 32 bits.
+    pub fn scratch_words32(&mut self, len: u64) -> Result<Pooled<'a, AtomicU32>, OitError> {
+        let n = self.checked(len, 4)?;
+        Ok(self.pool.u32s_scratch(n))
     }
 
     fn checked(&mut self, len: u64, word: u64) -> Result<usize, OitError> {

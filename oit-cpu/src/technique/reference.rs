@@ -6,7 +6,7 @@
 //! functions), not through the techniques' f32 [`Resolve`](crate::resolve::Resolve), so the
 //! ground truth and the resolve it judges are two implementations of one definition.
 
-use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
+use std::sync::atomic::Ordering::Relaxed;
 
 use glam::DVec3;
 use oit_core::composite::{fresnel_f64, front_to_back_f64, heat_f64, linear_to_srgb8_f64, translucency_f64};
@@ -29,11 +29,13 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         total += c as usize;
     }
     offsets.push(total);
-    // the plan's arrays: the counts above serve as the fill cursors; the offsets and the entries
-    ctx.storage_bytes += total as u64 * 12 + offsets.len() as u64 * 4;
-    let cursor: Vec<AtomicU32> = (0..counts.len()).map(|_| AtomicU32::new(0)).collect();
-    let keys: Vec<AtomicU64> = (0..total).map(|_| AtomicU64::new(0)).collect();
-    let payloads: Vec<AtomicU32> = (0..total).map(|_| AtomicU32::new(0)).collect();
+    // the plan's arrays: the counts above serve as the fill cursors (a second array here, not
+    // counted, as a GPU clears and reuses the counts); the offsets and the entries (counted as
+    // they are lent), every slot of which the fill pass writes
+    ctx.storage_bytes += offsets.len() as u64 * 4;
+    let cursor = ctx.pool.u32s(counts.len(), 0);
+    let keys = ctx.scratch_words64(total as u64)?;
+    let payloads = ctx.scratch_words32(total as u64)?;
     let shade = ctx.payload_shade();
     let resolve_payload = |f: &crate::raster::Fragment<'_>| ctx.payload(f);
     let raster = ctx.raster;
@@ -44,13 +46,13 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         payloads[slot].store(resolve_payload(f), Relaxed);
     });
     ctx.passes += 1;
-    let keys: Vec<u64> = keys.into_iter().map(AtomicU64::into_inner).collect();
-    let payloads: Vec<u32> = payloads.into_iter().map(AtomicU32::into_inner).collect();
+    drop(cursor);
+    let (keys, payloads) = (&*keys, &*payloads);
 
     let (w, h) = (ctx.settings.width, ctx.settings.height);
     let bg = ctx.settings.background.as_dvec3();
     let (camera, effect) = (ctx.camera, ctx.settings.effect);
-    let per_length = ctx.scene.absorption_per_length();
+    let per_length = ctx.per_length;
     let forward = camera.forward.as_dvec3();
     let deepest = counts.iter().copied().max().unwrap_or(0).max(1);
     let pixels: Vec<[u8; 4]> = (0..counts.len())
@@ -59,7 +61,9 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         // (depth, primitive id) and unique at a pixel (one fragment a primitive)
         .map_init(Vec::new, |list: &mut Vec<(u64, u32)>, px| {
             list.clear();
-            list.extend((offsets[px]..offsets[px + 1]).map(|i| (keys[i], payloads[i])));
+            list.extend(
+                (offsets[px]..offsets[px + 1]).map(|i| (keys[i].load(Relaxed), payloads[i].load(Relaxed))),
+            );
             list.sort_unstable_by_key(|&(key, _)| key);
             let layers = list.iter().copied();
             let depth = |key: u64| f32::from_bits((key >> 32) as u32);
