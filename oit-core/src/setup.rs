@@ -471,9 +471,9 @@ impl Snap {
     /// ([`Snap::vertices`]), and appends them to `out`; `chunks` holds each task's triangles on
     /// the way (kept between frames, as `out` is, so a warm setup allocates nothing).
     #[allow(clippy::too_many_arguments, reason = "an instance's parts, and the two buffers it fills")]
-    fn instance(
+    fn instance<T: Send, E: RecordSink<T>>(
         &self,
-        out: &mut Vec<Triangle>,
+        (out, records, record): (&mut Vec<Triangle>, &mut E, &(impl Fn(&Triangle) -> T + Sync + Send)),
         chunks: &mut Vec<Vec<Triangle>>,
         vertices: &[SetupVertex],
         indices: &[[u32; 3]],
@@ -501,7 +501,7 @@ impl Snap {
                 self.triangle(out, [a, b, c], base, has_color, prim);
             }
         });
-        append_chunks(out, chunks);
+        append_chunks(out, chunks, records, record);
     }
 }
 
@@ -581,9 +581,14 @@ fn for_each_chunk<T: Sync, R: Send>(
     outs.iter_mut().zip(items.chunks(size)).enumerate().for_each(|(c, (out, chunk))| f(c, out, chunk));
 }
 
-/// Appends the chunks' triangles to `out` in chunk order: in parallel with the `rayon` feature,
-/// each output triangle copied from the chunk that holds it.
-fn append_chunks(out: &mut Vec<Triangle>, chunks: &[Vec<Triangle>]) {
+/// Appends the chunks' triangles to `out` in chunk order, and the `record` of each to `records`:
+/// in parallel with the `rayon` feature, each output triangle copied from the chunk that holds it.
+fn append_chunks<T: Send, E: RecordSink<T>>(
+    out: &mut Vec<Triangle>,
+    chunks: &[Vec<Triangle>],
+    records: &mut E,
+    record: &(impl Fn(&Triangle) -> T + Sync + Send),
+) {
     #[cfg(feature = "rayon")]
     {
         let mut offsets = Vec::with_capacity(chunks.len() + 1);
@@ -593,17 +598,39 @@ fn append_chunks(out: &mut Vec<Triangle>, chunks: &[Vec<Triangle>]) {
             total += c.len();
         }
         offsets.push(total);
-        out.par_extend((0..total).into_par_iter().with_min_len(4096).map(|i| {
+        // both collections extended in one sweep (rayon extends a pair from pairs), keeping
+        // their storage: taken out and put back
+        let mut both = (std::mem::take(out), std::mem::take(records));
+        both.par_extend((0..total).into_par_iter().with_min_len(4096).map(|i| {
             // the last chunk starting at or before i (empty chunks start where the next does)
             let c = offsets.partition_point(|&o| o <= i) - 1;
-            chunks[c][i - offsets[c]]
+            let t = chunks[c][i - offsets[c]];
+            let r = record(&t);
+            (t, r)
         }));
+        (*out, *records) = both;
     }
     #[cfg(not(feature = "rayon"))]
     for c in chunks {
         out.extend_from_slice(c);
+        records.extend(c.iter().map(record));
     }
 }
+
+/// Where [`TriangleSetup::rebuild_with`] appends its records: a collection rayon extends in
+/// parallel (with the `rayon` feature; else one `Extend` extends), such as a `Vec`, a pair of
+/// them, or `()` for none.
+#[cfg(feature = "rayon")]
+pub trait RecordSink<T: Send>: ParallelExtend<T> + Default + Send {}
+#[cfg(feature = "rayon")]
+impl<T: Send, E: ParallelExtend<T> + Default + Send> RecordSink<T> for E {}
+/// Where [`TriangleSetup::rebuild_with`] appends its records: a collection rayon extends in
+/// parallel (with the `rayon` feature; else one `Extend` extends), such as a `Vec`, a pair of
+/// them, or `()` for none.
+#[cfg(not(feature = "rayon"))]
+pub trait RecordSink<T>: Extend<T> + Default {}
+#[cfg(not(feature = "rayon"))]
+impl<T, E: Extend<T> + Default> RecordSink<T> for E {}
 
 /// `out` extended by `f(index, item)` over `items`, in order: in parallel with the `rayon`
 /// feature.
@@ -625,7 +652,9 @@ pub struct SetupScratch {
 }
 
 impl TriangleSetup {
-    fn empty(camera: &Camera, settings: &Settings) -> TriangleSetup {
+    /// A setup of no triangles for `settings`' frame, to be filled by
+    /// [`TriangleSetup::rebuild`] or [`TriangleSetup::rebuild_with`].
+    pub fn empty(camera: &Camera, settings: &Settings) -> TriangleSetup {
         TriangleSetup {
             triangles: Vec::new(),
             // Settings::validate rejects larger sizes; clamping keeps the fixed point in range
@@ -675,6 +704,23 @@ impl TriangleSetup {
         settings: &Settings,
         scratch: &mut SetupScratch,
     ) {
+        self.rebuild_with(scene, camera, settings, scratch, &mut (), |_| ());
+    }
+
+    /// [`TriangleSetup::rebuild`], appending `record(t)` for each set-up triangle `t`, in order,
+    /// to `records` as each is copied into place: a renderer's own per-triangle data (oit-cpu's
+    /// traversal and shading records) made while the triangle is in cache, in the same parallel
+    /// step, rather than in another sweep over every triangle. `records` is appended to (clear
+    /// it first); a pair of collections takes a pair of records.
+    pub fn rebuild_with<T: Send, E: RecordSink<T>>(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        settings: &Settings,
+        scratch: &mut SetupScratch,
+        records: &mut E,
+        record: impl Fn(&Triangle) -> T + Sync + Send,
+    ) {
         let mut triangles = std::mem::take(&mut self.triangles);
         triangles.clear();
         *self = TriangleSetup { triangles, ..TriangleSetup::empty(camera, settings) };
@@ -694,7 +740,7 @@ impl TriangleSetup {
             snap.vertices(&mut scratch.vertices, &mvp, &normal_matrix(&inst.transform), mesh);
             let base = settings.material_color(object.color);
             snap.instance(
-                &mut self.triangles,
+                (&mut self.triangles, records, &record),
                 &mut scratch.chunks,
                 &scratch.vertices,
                 &mesh.indices,
@@ -727,7 +773,15 @@ impl TriangleSetup {
                 .collect();
             let base_id = u32::try_from(i).unwrap_or(u32::MAX).saturating_mul(12);
             let base = settings.material_color(object.color);
-            snap.instance(&mut r.triangles, &mut chunks, &vertices, &Aabb::TRIANGLES, false, base, base_id);
+            snap.instance(
+                (&mut r.triangles, &mut (), &|_: &Triangle| ()),
+                &mut chunks,
+                &vertices,
+                &Aabb::TRIANGLES,
+                false,
+                base,
+                base_id,
+            );
         }
         r
     }

@@ -215,17 +215,43 @@ impl Rasterizer {
         self.warm_bins();
     }
 
-    /// Sets up every instance's triangles ([`TriangleSetup::new`]).
+    /// Sets up every instance's triangles ([`TriangleSetup::new`]), with the traversal's records
+    /// ([`Rasterizer::rebuild`]).
     pub fn new(scene: &Scene, camera: &Camera, settings: &Settings) -> Rasterizer {
-        Rasterizer::from_setup(TriangleSetup::new(scene, camera, settings))
+        let mut r = Rasterizer::from_setup(TriangleSetup::empty(camera, settings));
+        r.rebuild(scene, camera, settings);
+        r
     }
 
     /// Sets up another frame (another camera, size or scene) in this rasterizer's storage, as
     /// [`Rasterizer::new`] would, keeping the mode: a persistent renderer's frames then allocate
     /// nothing for their triangles once the storage has grown to the scene.
     pub fn rebuild(&mut self, scene: &Scene, camera: &Camera, settings: &Settings) {
-        self.setup.rebuild(scene, camera, settings, &mut self.scratch);
-        self.derive();
+        // the traversal's records made as setup copies each triangle into place
+        // ([`TriangleSetup::rebuild_with`]): one parallel step fewer than setting up and then
+        // deriving, and the triangles read while in cache
+        self.edges.clear();
+        self.shades.clear();
+        if settings.shading == Shading::Headlight {
+            let mut records = (std::mem::take(&mut self.edges), std::mem::take(&mut self.shades));
+            self.setup.rebuild_with(scene, camera, settings, &mut self.scratch, &mut records, |t| {
+                (SmallEdges::new(t), ShadeRecord::new(t))
+            });
+            (self.edges, self.shades) = records;
+        } else {
+            self.setup.rebuild_with(
+                scene,
+                camera,
+                settings,
+                &mut self.scratch,
+                &mut self.edges,
+                SmallEdges::new,
+            );
+        }
+        debug_assert_eq!(self.edges.len(), self.setup.triangles.len());
+        self.bins = OnceLock::new();
+        self.fragments = OnceLock::new();
+        self.warm_bins();
     }
 
     /// The triangles of each instance's bounding box ([`TriangleSetup::bounding_boxes`]).
