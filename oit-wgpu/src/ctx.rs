@@ -160,7 +160,8 @@ pub struct FrameUniform {
     /// Background (rgb).
     pub background: [f32; 4],
     /// near, far, translucency's absorption per unit of length
-    /// ([`Scene::absorption_per_length`](oit_core::Scene::absorption_per_length)), unused.
+    /// ([`Scene::absorption_per_length`](oit_core::Scene::absorption_per_length); 0 under the
+    /// other effects, which do not read it), unused.
     pub lens: [f32; 4],
 }
 
@@ -405,7 +406,18 @@ impl<'a> GpuCtx<'a> {
             last_pass: 0,
             forward: camera.forward.extend(0.0).to_array(),
             background: settings.background.extend(1.0).to_array(),
-            lens: [camera.near, camera.far, scene.absorption_per_length() as f32, 0.0],
+            // the absorption walks every vertex for the scene's bounds: worked out only for the
+            // effect that reads it (the resolve's translucency branch), not every frame
+            lens: [
+                camera.near,
+                camera.far,
+                if settings.effect == Effect::Translucency {
+                    scene.absorption_per_length() as f32
+                } else {
+                    0.0
+                },
+                0.0,
+            ],
         };
         let mut lent = Lent { pool, buffers: Vec::new() };
         let mut make = |label: &str, size: u64, usage: wgpu::BufferUsages| {
