@@ -377,6 +377,13 @@ impl Scene {
         self.absorption_per_length_in(&self.bounds())
     }
 
+    /// What a frame under `effect` reads of [`Scene::absorption_per_length`]: the value under
+    /// translucency, 0 under the effects that do not read it (so a GPU frame's uniforms skip the
+    /// walk over every vertex that the value costs).
+    pub fn absorption_for(&self, effect: crate::Effect) -> f64 {
+        if effect == crate::Effect::Translucency { self.absorption_per_length() } else { 0.0 }
+    }
+
     /// [`Scene::absorption_per_length`] for the scene's bounds already at hand (those
     /// [`Scene::validated_bounds`] returns), without another walk over the vertices.
     pub fn absorption_per_length_in(&self, bounds: &Aabb) -> f64 {

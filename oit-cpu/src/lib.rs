@@ -64,8 +64,9 @@ use crate::technique::Ctx;
 /// per-pixel arrays, its thread pool) for the next [`Backend::prepare`], so one-shot
 /// [`Backend::render`]s in a loop reuse their storage as a prepared scene's frames do, rather
 /// than asking the allocator for fresh pages every frame (whether it hands back warm memory
-/// depends on its trimming heuristics, and on a 16-core host a 64² frame took 1 or 2 ms by
-/// that alone). [`CpuBackend::release_storage`] frees it; dropping the backend does too.
+/// depends on its trimming heuristics, and on a 16-core host a 64² `adp` frame took about 2 or
+/// about 4 ms by that alone). [`CpuBackend::release_storage`] frees it; dropping the backend
+/// does too.
 ///
 /// ```
 /// use oit_core::{load_scene, Backend, Camera, Settings, View};

@@ -108,6 +108,11 @@ impl Fragment<'_> {
     }
 }
 
+/// A triangle's traversal and headlight-shading records, made together (one read of it).
+fn records_of(t: &Triangle) -> (SmallEdges, ShadeRecord) {
+    (SmallEdges::new(t), ShadeRecord::new(t))
+}
+
 /// Side of a screen tile of [`RasterMode::Tiled`], in pixels.
 pub const TILE_SIZE: u32 = 32;
 /// Triangles per task of [`RasterMode::Scatter`], at most: a scene of fewer than
@@ -204,12 +209,18 @@ impl Rasterizer {
             self.setup
                 .triangles
                 .par_iter()
-                .map(|t| (SmallEdges::new(t), ShadeRecord::new(t)))
+                .map(records_of)
                 .unzip_into_vecs(&mut self.edges, &mut self.shades);
         } else {
             self.shades.clear();
             self.setup.triangles.par_iter().map(SmallEdges::new).collect_into_vec(&mut self.edges);
         }
+        self.records_changed();
+    }
+
+    /// The bins and the fragment count of the records before, dropped; Tiled's bins made again.
+    fn records_changed(&mut self) {
+        debug_assert_eq!(self.edges.len(), self.setup.triangles.len());
         self.bins = OnceLock::new();
         self.fragments = OnceLock::new();
         self.warm_bins();
@@ -234,9 +245,7 @@ impl Rasterizer {
         self.shades.clear();
         if settings.shading == Shading::Headlight {
             let mut records = (std::mem::take(&mut self.edges), std::mem::take(&mut self.shades));
-            self.setup.rebuild_with(scene, camera, settings, &mut self.scratch, &mut records, |t| {
-                (SmallEdges::new(t), ShadeRecord::new(t))
-            });
+            self.setup.rebuild_with(scene, camera, settings, &mut self.scratch, &mut records, records_of);
             (self.edges, self.shades) = records;
         } else {
             self.setup.rebuild_with(
@@ -248,10 +257,7 @@ impl Rasterizer {
                 SmallEdges::new,
             );
         }
-        debug_assert_eq!(self.edges.len(), self.setup.triangles.len());
-        self.bins = OnceLock::new();
-        self.fragments = OnceLock::new();
-        self.warm_bins();
+        self.records_changed();
     }
 
     /// The triangles of each instance's bounding box ([`TriangleSetup::bounding_boxes`]).

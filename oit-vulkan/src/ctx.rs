@@ -255,18 +255,7 @@ impl<'a> VkCtx<'a> {
             last_pass: 0,
             forward: camera.forward.extend(0.0).to_array(),
             background: settings.background.extend(1.0).to_array(),
-            // the absorption walks every vertex for the scene's bounds: worked out only for the
-            // effect that reads it (the resolve's translucency branch), not every frame
-            lens: [
-                camera.near,
-                camera.far,
-                if settings.effect == Effect::Translucency {
-                    scene.absorption_per_length() as f32
-                } else {
-                    0.0
-                },
-                0.0,
-            ],
+            lens: [camera.near, camera.far, scene.absorption_for(settings.effect) as f32, 0.0],
         };
         let mut lent = Vec::new();
         let mut take = |bytes: u64| -> Result<Rc<Buffer>, OitError> {
