@@ -468,19 +468,25 @@ impl Snap {
     }
 
     /// Sets up the triangles of one instance, in order, in parallel, from its vertices
-    /// ([`Snap::vertices`]), and appends them to `out`; `chunks` holds each task's triangles on
-    /// the way (kept between frames, as `out` is, so a warm setup allocates nothing).
+    /// ([`Snap::vertices`]), and writes them to `out` from slot `start` on ([`copy_chunks`]);
+    /// returns the slot after the last. `chunks` holds each task's triangles on the way (kept
+    /// between frames, as `out` is, so a warm setup allocates nothing for them).
     #[allow(clippy::too_many_arguments, reason = "an instance's parts, and the two buffers it fills")]
     fn instance<T: Send, E: RecordSink<T>>(
         &self,
-        (out, records, record): (&mut Vec<Triangle>, &mut E, &(impl Fn(&Triangle) -> T + Sync + Send)),
+        (out, start, records, record): (
+            &mut Vec<Triangle>,
+            usize,
+            &mut E,
+            &(impl Fn(&Triangle) -> T + Sync + Send),
+        ),
         chunks: &mut Vec<Vec<Triangle>>,
         vertices: &[SetupVertex],
         indices: &[[u32; 3]],
         has_color: bool,
         base: Vec4,
         prim_base: u32,
-    ) {
+    ) -> usize {
         let n = indices.len().div_ceil(SETUP_CHUNK);
         if chunks.len() < n {
             chunks.resize_with(n, Vec::new);
@@ -501,7 +507,7 @@ impl Snap {
                 self.triangle(out, [a, b, c], base, has_color, prim);
             }
         });
-        append_chunks(out, chunks, records, record);
+        copy_chunks(out, start, chunks, records, record)
     }
 }
 
@@ -581,56 +587,130 @@ fn for_each_chunk<T: Sync, R: Send>(
     outs.iter_mut().zip(items.chunks(size)).enumerate().for_each(|(c, (out, chunk))| f(c, out, chunk));
 }
 
-/// Appends the chunks' triangles to `out` in chunk order, and the `record` of each to `records`:
-/// in parallel with the `rayon` feature, each output triangle copied from the chunk that holds it.
-fn append_chunks<T: Send, E: RecordSink<T>>(
+/// Triangles a task of [`copy_chunks`] copies at most: pieces this size spread a small frame's
+/// copy over many cores (a task a chunk left 16 cores waiting on two).
+const COPY_PIECE: usize = 256;
+
+/// Writes the chunks' triangles, in chunk order, to `out` from slot `start` on, and the `record`
+/// of each to the same slots of `records`; returns the slot after the last. Each task copies a
+/// piece of a chunk straight to its place (disjoint slices of the output), so the copy is spread
+/// over every core; `out` and `records` only grow (by `fill` copies) where the frame is larger
+/// than any before, so a warm setup writes each slot once.
+fn copy_chunks<T: Send, E: RecordSink<T>>(
     out: &mut Vec<Triangle>,
+    start: usize,
     chunks: &[Vec<Triangle>],
     records: &mut E,
     record: &(impl Fn(&Triangle) -> T + Sync + Send),
-) {
-    #[cfg(feature = "rayon")]
-    {
-        let mut offsets = Vec::with_capacity(chunks.len() + 1);
-        let mut total = 0;
-        for c in chunks {
-            offsets.push(total);
-            total += c.len();
-        }
-        offsets.push(total);
-        // both collections extended in one sweep (rayon extends a pair from pairs), keeping
-        // their storage: taken out and put back
-        let mut both = (std::mem::take(out), std::mem::take(records));
-        both.par_extend((0..total).into_par_iter().with_min_len(4096).map(|i| {
-            // the last chunk starting at or before i (empty chunks start where the next does)
-            let c = offsets.partition_point(|&o| o <= i) - 1;
-            let t = chunks[c][i - offsets[c]];
-            let r = record(&t);
-            (t, r)
-        }));
-        (*out, *records) = both;
+) -> usize {
+    let pieces: Vec<&[Triangle]> = chunks.iter().flat_map(|c| c.chunks(COPY_PIECE)).collect();
+    let Some(first) = pieces.first().and_then(|p| p.first()) else {
+        return start;
+    };
+    let lens: Vec<usize> = pieces.iter().map(|p| p.len()).collect();
+    let end = start + lens.iter().sum::<usize>();
+    if out.len() < end {
+        out.resize(end, *first);
     }
+    records.grow_to(end, &record(first));
+    let targets = split_parts(&mut out[start..end], &lens);
+    let slots = records.parts(start, &lens);
+    let copy = |((src, dst), mut slots): ((&[Triangle], &mut [Triangle]), E::Part<'_>)| {
+        dst.copy_from_slice(src);
+        for (i, t) in src.iter().enumerate() {
+            E::put(&mut slots, i, record(t));
+        }
+    };
+    #[cfg(feature = "rayon")]
+    pieces.into_par_iter().zip(targets).zip(slots).for_each(copy);
     #[cfg(not(feature = "rayon"))]
-    for c in chunks {
-        out.extend_from_slice(c);
-        records.extend(c.iter().map(record));
+    pieces.into_iter().zip(targets).zip(slots).for_each(copy);
+    end
+}
+
+/// `slice` cut into consecutive parts of `lens` (which sum to at most its length).
+fn split_parts<'a, T>(mut slice: &'a mut [T], lens: &[usize]) -> Vec<&'a mut [T]> {
+    let mut parts = Vec::with_capacity(lens.len());
+    for &n in lens {
+        let (part, rest) = std::mem::take(&mut slice).split_at_mut(n);
+        parts.push(part);
+        slice = rest;
+    }
+    parts
+}
+
+/// Where [`TriangleSetup::rebuild_with`] writes its records, one a triangle in the triangles'
+/// order: a `Vec`, a pair of `Vec`s (for a pair of records), or `()` for none. Its storage is
+/// kept from frame to frame; each task writes its own part of it.
+pub trait RecordSink<T>: Send {
+    /// The consecutive slots one task writes.
+    type Part<'a>: Send
+    where
+        Self: 'a;
+    /// At least `len` slots: new ones hold `fill` until written; existing ones are kept.
+    fn grow_to(&mut self, len: usize, fill: &T);
+    /// Exactly `len` slots: the first `len` kept.
+    fn truncate(&mut self, len: usize);
+    /// Slots from `start` on, cut into consecutive parts of `lens` (in range after
+    /// [`RecordSink::grow_to`]).
+    fn parts(&mut self, start: usize, lens: &[usize]) -> Vec<Self::Part<'_>>;
+    /// Writes `record` to slot `i` of `part`.
+    fn put(part: &mut Self::Part<'_>, i: usize, record: T);
+}
+
+impl<T: Send + Clone> RecordSink<T> for Vec<T> {
+    type Part<'a>
+        = &'a mut [T]
+    where
+        T: 'a;
+    fn grow_to(&mut self, len: usize, fill: &T) {
+        if self.len() < len {
+            self.resize(len, fill.clone());
+        }
+    }
+    fn truncate(&mut self, len: usize) {
+        Vec::truncate(self, len);
+    }
+    fn parts(&mut self, start: usize, lens: &[usize]) -> Vec<&mut [T]> {
+        split_parts(&mut self[start..], lens)
+    }
+    fn put(part: &mut &mut [T], i: usize, record: T) {
+        part[i] = record;
     }
 }
 
-/// Where [`TriangleSetup::rebuild_with`] appends its records: a collection rayon extends in
-/// parallel (with the `rayon` feature; else one `Extend` extends), such as a `Vec`, a pair of
-/// them, or `()` for none.
-#[cfg(feature = "rayon")]
-pub trait RecordSink<T: Send>: ParallelExtend<T> + Default + Send {}
-#[cfg(feature = "rayon")]
-impl<T: Send, E: ParallelExtend<T> + Default + Send> RecordSink<T> for E {}
-/// Where [`TriangleSetup::rebuild_with`] appends its records: a collection rayon extends in
-/// parallel (with the `rayon` feature; else one `Extend` extends), such as a `Vec`, a pair of
-/// them, or `()` for none.
-#[cfg(not(feature = "rayon"))]
-pub trait RecordSink<T>: Extend<T> + Default {}
-#[cfg(not(feature = "rayon"))]
-impl<T, E: Extend<T> + Default> RecordSink<T> for E {}
+impl<A: Send + Clone, B: Send + Clone> RecordSink<(A, B)> for (Vec<A>, Vec<B>) {
+    type Part<'a>
+        = (&'a mut [A], &'a mut [B])
+    where
+        A: 'a,
+        B: 'a;
+    fn grow_to(&mut self, len: usize, fill: &(A, B)) {
+        self.0.grow_to(len, &fill.0);
+        self.1.grow_to(len, &fill.1);
+    }
+    fn truncate(&mut self, len: usize) {
+        self.0.truncate(len);
+        self.1.truncate(len);
+    }
+    fn parts(&mut self, start: usize, lens: &[usize]) -> Vec<Self::Part<'_>> {
+        self.0.parts(start, lens).into_iter().zip(self.1.parts(start, lens)).collect()
+    }
+    fn put(part: &mut Self::Part<'_>, i: usize, (a, b): (A, B)) {
+        part.0[i] = a;
+        part.1[i] = b;
+    }
+}
+
+impl RecordSink<()> for () {
+    type Part<'a> = ();
+    fn grow_to(&mut self, _: usize, _: &()) {}
+    fn truncate(&mut self, _: usize) {}
+    fn parts(&mut self, _: usize, lens: &[usize]) -> Vec<()> {
+        vec![(); lens.len()]
+    }
+    fn put(_: &mut (), _: usize, _: ()) {}
+}
 
 /// `out` extended by `f(index, item)` over `items`, in order: in parallel with the `rayon`
 /// feature.
@@ -707,11 +787,12 @@ impl TriangleSetup {
         self.rebuild_with(scene, camera, settings, scratch, &mut (), |_| ());
     }
 
-    /// [`TriangleSetup::rebuild`], appending `record(t)` for each set-up triangle `t`, in order,
-    /// to `records` as each is copied into place: a renderer's own per-triangle data (oit-cpu's
+    /// [`TriangleSetup::rebuild`], writing `record(t)` for each set-up triangle `t`, in order, to
+    /// `records` as each is copied into place: a renderer's own per-triangle data (oit-cpu's
     /// traversal and shading records) made while the triangle is in cache, in the same parallel
-    /// step, rather than in another sweep over every triangle. `records` is appended to (clear
-    /// it first); a pair of collections takes a pair of records.
+    /// step, rather than in another sweep over every triangle. `records` ends with one record a
+    /// triangle, whatever it held before (its storage is reused); a pair of `Vec`s takes a pair
+    /// of records.
     pub fn rebuild_with<T: Send, E: RecordSink<T>>(
         &mut self,
         scene: &Scene,
@@ -721,9 +802,11 @@ impl TriangleSetup {
         records: &mut E,
         record: impl Fn(&Triangle) -> T + Sync + Send,
     ) {
-        let mut triangles = std::mem::take(&mut self.triangles);
-        triangles.clear();
+        // the last frame's triangles stay until overwritten (and are cut to this frame's count
+        // at the end), so a frame no larger than the last writes each slot once
+        let triangles = std::mem::take(&mut self.triangles);
         *self = TriangleSetup { triangles, ..TriangleSetup::empty(camera, settings) };
+        let mut filled = 0;
         let snap = TriangleSetup::snap(settings);
         let view_proj = camera.view_proj();
         let mut prim_base = 0u32;
@@ -739,8 +822,8 @@ impl TriangleSetup {
             let mvp = view_proj * inst.transform;
             snap.vertices(&mut scratch.vertices, &mvp, &normal_matrix(&inst.transform), mesh);
             let base = settings.material_color(object.color);
-            snap.instance(
-                (&mut self.triangles, records, &record),
+            filled = snap.instance(
+                (&mut self.triangles, filled, records, &record),
                 &mut scratch.chunks,
                 &scratch.vertices,
                 &mesh.indices,
@@ -749,6 +832,8 @@ impl TriangleSetup {
                 base_id,
             );
         }
+        self.triangles.truncate(filled);
+        records.truncate(filled);
     }
 
     /// The 12 triangles of each instance's world bounding box (`Aabb::TRIANGLES` over
@@ -773,8 +858,9 @@ impl TriangleSetup {
                 .collect();
             let base_id = u32::try_from(i).unwrap_or(u32::MAX).saturating_mul(12);
             let base = settings.material_color(object.color);
+            let filled = r.triangles.len();
             snap.instance(
-                (&mut r.triangles, &mut (), &|_: &Triangle| ()),
+                (&mut r.triangles, filled, &mut (), &|_: &Triangle| ()),
                 &mut chunks,
                 &vertices,
                 &Aabb::TRIANGLES,

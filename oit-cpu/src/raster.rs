@@ -240,14 +240,14 @@ impl Rasterizer {
     pub fn rebuild(&mut self, scene: &Scene, camera: &Camera, settings: &Settings) {
         // the traversal's records made as setup copies each triangle into place
         // ([`TriangleSetup::rebuild_with`]): one parallel step fewer than setting up and then
-        // deriving, and the triangles read while in cache
-        self.edges.clear();
-        self.shades.clear();
+        // deriving, and the triangles read while in cache; the last frame's records are
+        // overwritten in place
         if settings.shading == Shading::Headlight {
             let mut records = (std::mem::take(&mut self.edges), std::mem::take(&mut self.shades));
             self.setup.rebuild_with(scene, camera, settings, &mut self.scratch, &mut records, records_of);
             (self.edges, self.shades) = records;
         } else {
+            self.shades.clear();
             self.setup.rebuild_with(
                 scene,
                 camera,
@@ -1094,29 +1094,40 @@ mod tests {
     }
 
     /// A rasterizer set up again ([`Rasterizer::rebuild`], the persistent renderer's path) for a
-    /// sequence of cameras, sizes, windows and scenes gives what a new one gives: the same
-    /// triangles, words and fragments, in both modes. Mutation caught: storage not cleared
-    /// between frames (the previous frame's triangles kept), bins or the fragment count kept.
+    /// sequence of cameras, sizes, windows, shadings and scenes gives what a new one gives: the
+    /// same triangles, words and fragments (shaded on demand and ahead), in both modes. The
+    /// sequence grows and shrinks the triangle count, and one scene's mesh spans several setup
+    /// chunks and copy pieces. Mutation caught: storage not cleared between frames (the previous
+    /// frame's triangles kept), bins or the fragment count kept, a headlight frame's shading
+    /// records kept for a flat-shaded one.
     #[test]
     fn rebuild_is_new() {
-        let scenes = [random_scene(), scene_of(vec![random_scene().meshes[0].clone()])];
+        // the knot's 18,432 triangles: 18 setup chunks
+        let mut meshes = random_scene().meshes;
+        meshes.extend(oit_core::load_scene("knot").expect("built in").meshes);
+        let with_knot = scene_of(meshes);
+        let scenes = [random_scene(), scene_of(vec![random_scene().meshes[0].clone()]), with_knot];
         let views = [
-            (Vec3::new(0.0, 0.0, 2.5), 120u32, 90u32, None),
-            (Vec3::new(1.5, 0.5, 1.0), 64, 64, None),
+            (Vec3::new(0.0, 0.0, 2.5), 120u32, 90u32, None, Shading::Headlight),
+            (Vec3::new(1.5, 0.5, 1.0), 64, 64, None, Shading::Headlight),
+            (Vec3::new(0.0, 0.3, 2.5), 100, 100, None, Shading::Headlight),
             (
                 Vec3::new(0.0, 0.2, 2.5),
                 50,
                 40,
                 Some(oit_core::Region { x: 30, y: 20, full_width: 120, full_height: 90 }),
+                // after a larger scene's headlight frame
+                Shading::Flat,
             ),
-            (Vec3::new(0.2, 0.1, 0.9), 200, 150, None),
+            (Vec3::new(0.2, 0.1, 0.9), 200, 150, None, Shading::Headlight),
+            (Vec3::new(0.0, 0.0, 2.5), 90, 90, None, Shading::Headlight),
         ];
         for mode in [RasterMode::Scatter, RasterMode::Tiled] {
             let mut kept: Option<Rasterizer> = None;
-            for (i, (eye, w, h, region)) in views.iter().enumerate() {
-                let scene = &scenes[i % 2];
+            for (i, (eye, w, h, region, shading)) in views.iter().enumerate() {
+                let scene = &scenes[i % scenes.len()];
                 let cam = Camera::look_at(*eye, Vec3::ZERO, 70.0, *w as f32 / *h as f32, 0.1, 8.0);
-                let s = Settings { region: *region, ..settings(*w, *h) };
+                let s = Settings { region: *region, shading: *shading, ..settings(*w, *h) };
                 let fresh = Rasterizer::new(scene, &cam, &s).with_mode(mode);
                 let r = match kept.take() {
                     Some(mut r) => {
@@ -1130,6 +1141,11 @@ mod tests {
                 assert_eq!(r.triangle_words(), fresh.triangle_words(), "view {i} {mode:?}");
                 assert_eq!(r.fragment_count(), fresh.fragment_count(), "view {i} {mode:?}");
                 assert_eq!(sorted_fragments(&r), sorted_fragments(&fresh), "view {i} {mode:?}");
+                assert_eq!(
+                    sorted_fragments_with(&r, Shade::Color),
+                    sorted_fragments_with(&fresh, Shade::Color),
+                    "view {i} {mode:?}"
+                );
                 kept = Some(r);
             }
         }
