@@ -592,10 +592,12 @@ fn for_each_chunk<T: Sync, R: Send>(
 const COPY_PIECE: usize = 256;
 
 /// Writes the chunks' triangles, in chunk order, to `out` from slot `start` on, and the `record`
-/// of each to the same slots of `records`; returns the slot after the last. Each task copies a
-/// piece of a chunk straight to its place (disjoint slices of the output), so the copy is spread
-/// over every core; `out` and `records` only grow (by `fill` copies) where the frame is larger
-/// than any before, so a warm setup writes each slot once.
+/// of each to the same slots of `records`; returns the slot after the last. Where both already
+/// hold the slots (a frame no larger than one before: a persistent renderer's steady state),
+/// each task copies a piece of a chunk straight to its place (disjoint slices of the output), so
+/// the copy is spread over every core and each slot written once. Where they must grow, they
+/// are extended in parallel instead, item by item from the chunk that holds it (growing by
+/// filler and then overwriting would write a fresh setup's storage twice).
 fn copy_chunks<T: Send, E: RecordSink<T>>(
     out: &mut Vec<Triangle>,
     start: usize,
@@ -603,16 +605,16 @@ fn copy_chunks<T: Send, E: RecordSink<T>>(
     records: &mut E,
     record: &(impl Fn(&Triangle) -> T + Sync + Send),
 ) -> usize {
-    let pieces: Vec<&[Triangle]> = chunks.iter().flat_map(|c| c.chunks(COPY_PIECE)).collect();
-    let Some(first) = pieces.first().and_then(|p| p.first()) else {
-        return start;
-    };
-    let lens: Vec<usize> = pieces.iter().map(|p| p.len()).collect();
-    let end = start + lens.iter().sum::<usize>();
-    if out.len() < end {
-        out.resize(end, *first);
+    let total: usize = chunks.iter().map(Vec::len).sum();
+    let end = start + total;
+    if out.len() < end || records.slots() < end {
+        out.truncate(start);
+        records.truncate(start);
+        extend_from_chunks(out, chunks, records, record);
+        return end;
     }
-    records.grow_to(end, &record(first));
+    let pieces: Vec<&[Triangle]> = chunks.iter().flat_map(|c| c.chunks(COPY_PIECE)).collect();
+    let lens: Vec<usize> = pieces.iter().map(|p| p.len()).collect();
     let targets = split_parts(&mut out[start..end], &lens);
     let slots = records.parts(start, &lens);
     let copy = |((src, dst), mut slots): ((&[Triangle], &mut [Triangle]), E::Part<'_>)| {
@@ -626,6 +628,42 @@ fn copy_chunks<T: Send, E: RecordSink<T>>(
     #[cfg(not(feature = "rayon"))]
     pieces.into_iter().zip(targets).zip(slots).for_each(copy);
     end
+}
+
+/// Appends the chunks' triangles to `out` in chunk order, and the `record` of each to
+/// `records`: in parallel with the `rayon` feature, [`COPY_PIECE`] items a task at least.
+fn extend_from_chunks<T: Send, E: RecordSink<T>>(
+    out: &mut Vec<Triangle>,
+    chunks: &[Vec<Triangle>],
+    records: &mut E,
+    record: &(impl Fn(&Triangle) -> T + Sync + Send),
+) {
+    #[cfg(feature = "rayon")]
+    {
+        let mut offsets = Vec::with_capacity(chunks.len() + 1);
+        let mut total = 0;
+        for c in chunks {
+            offsets.push(total);
+            total += c.len();
+        }
+        offsets.push(total);
+        // both collections extended in one sweep (rayon extends a pair from pairs), keeping
+        // their storage: taken out and put back
+        let mut both = (std::mem::take(out), std::mem::take(records));
+        both.par_extend((0..total).into_par_iter().with_min_len(COPY_PIECE).map(|i| {
+            // the last chunk starting at or before i (empty chunks start where the next does)
+            let c = offsets.partition_point(|&o| o <= i) - 1;
+            let t = chunks[c][i - offsets[c]];
+            let r = record(&t);
+            (t, r)
+        }));
+        (*out, *records) = both;
+    }
+    #[cfg(not(feature = "rayon"))]
+    for c in chunks {
+        out.extend_from_slice(c);
+        records.extend(c.iter().map(record));
+    }
 }
 
 /// `slice` cut into consecutive parts of `lens` (which sum to at most its length).
@@ -642,31 +680,47 @@ fn split_parts<'a, T>(mut slice: &'a mut [T], lens: &[usize]) -> Vec<&'a mut [T]
 /// Where [`TriangleSetup::rebuild_with`] writes its records, one a triangle in the triangles'
 /// order: a `Vec`, a pair of `Vec`s (for a pair of records), or `()` for none. Its storage is
 /// kept from frame to frame; each task writes its own part of it.
-pub trait RecordSink<T>: Send {
+#[cfg(feature = "rayon")]
+pub trait RecordSink<T: Send>: ParallelExtend<T> + Default + Send {
     /// The consecutive slots one task writes.
     type Part<'a>: Send
     where
         Self: 'a;
-    /// At least `len` slots: new ones hold `fill` until written; existing ones are kept.
-    fn grow_to(&mut self, len: usize, fill: &T);
-    /// Exactly `len` slots: the first `len` kept.
+    /// The number of slots.
+    fn slots(&self) -> usize;
+    /// Exactly `len` slots where there were more: the first `len` kept.
     fn truncate(&mut self, len: usize);
-    /// Slots from `start` on, cut into consecutive parts of `lens` (in range after
-    /// [`RecordSink::grow_to`]).
+    /// Slots from `start` on, cut into consecutive parts of `lens` (which must be in range).
+    fn parts(&mut self, start: usize, lens: &[usize]) -> Vec<Self::Part<'_>>;
+    /// Writes `record` to slot `i` of `part`.
+    fn put(part: &mut Self::Part<'_>, i: usize, record: T);
+}
+/// Where [`TriangleSetup::rebuild_with`] writes its records, one a triangle in the triangles'
+/// order: a `Vec`, a pair of `Vec`s (for a pair of records), or `()` for none. Its storage is
+/// kept from frame to frame; each part of it is written in turn.
+#[cfg(not(feature = "rayon"))]
+pub trait RecordSink<T: Send>: Extend<T> + Default + Send {
+    /// The consecutive slots one task writes.
+    type Part<'a>: Send
+    where
+        Self: 'a;
+    /// The number of slots.
+    fn slots(&self) -> usize;
+    /// Exactly `len` slots where there were more: the first `len` kept.
+    fn truncate(&mut self, len: usize);
+    /// Slots from `start` on, cut into consecutive parts of `lens` (which must be in range).
     fn parts(&mut self, start: usize, lens: &[usize]) -> Vec<Self::Part<'_>>;
     /// Writes `record` to slot `i` of `part`.
     fn put(part: &mut Self::Part<'_>, i: usize, record: T);
 }
 
-impl<T: Send + Clone> RecordSink<T> for Vec<T> {
+impl<T: Send> RecordSink<T> for Vec<T> {
     type Part<'a>
         = &'a mut [T]
     where
         T: 'a;
-    fn grow_to(&mut self, len: usize, fill: &T) {
-        if self.len() < len {
-            self.resize(len, fill.clone());
-        }
+    fn slots(&self) -> usize {
+        self.len()
     }
     fn truncate(&mut self, len: usize) {
         Vec::truncate(self, len);
@@ -679,15 +733,14 @@ impl<T: Send + Clone> RecordSink<T> for Vec<T> {
     }
 }
 
-impl<A: Send + Clone, B: Send + Clone> RecordSink<(A, B)> for (Vec<A>, Vec<B>) {
+impl<A: Send, B: Send> RecordSink<(A, B)> for (Vec<A>, Vec<B>) {
     type Part<'a>
         = (&'a mut [A], &'a mut [B])
     where
         A: 'a,
         B: 'a;
-    fn grow_to(&mut self, len: usize, fill: &(A, B)) {
-        self.0.grow_to(len, &fill.0);
-        self.1.grow_to(len, &fill.1);
+    fn slots(&self) -> usize {
+        self.0.len().min(self.1.len())
     }
     fn truncate(&mut self, len: usize) {
         self.0.truncate(len);
@@ -704,7 +757,9 @@ impl<A: Send + Clone, B: Send + Clone> RecordSink<(A, B)> for (Vec<A>, Vec<B>) {
 
 impl RecordSink<()> for () {
     type Part<'a> = ();
-    fn grow_to(&mut self, _: usize, _: &()) {}
+    fn slots(&self) -> usize {
+        usize::MAX
+    }
     fn truncate(&mut self, _: usize) {}
     fn parts(&mut self, _: usize, lens: &[usize]) -> Vec<()> {
         vec![(); lens.len()]

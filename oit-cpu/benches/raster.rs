@@ -2,7 +2,9 @@
 //! span walk of every triangle in parallel chunks ([`RasterMode::Scatter`], the rasterizer before
 //! issue 12 and still the default) against the tiled walk with the vectorized coverage test of
 //! small triangles ([`RasterMode::Tiled`]), side by side in one run. Each mode is timed twice:
-//! `coverage` is the traversal alone ([`Rasterizer::coverage_pass`]), `pass` the whole geometry
+//! `setup` is [`Rasterizer::new`] (transform, clipping, snapping and the traversal's records, in
+//! fresh storage), `setup/warm` the same into the storage of the frame before
+//! ([`Rasterizer::rebuild`], a prepared scene's frames); `coverage` is the traversal alone ([`Rasterizer::coverage_pass`]), `pass` the whole geometry
 //! pass (each fragment's depth, id and shaded colour, what a capture pass of the transparency
 //! effect stores) with a per-fragment relaxed atomic add into a per-pixel counter, about the cheapest a technique does, so the rasterizer's own cost
 //! dominates; `depth` the same pass reading only depth and primitive id, as a counting pass or a
@@ -56,6 +58,10 @@ fn pass(c: &mut Criterion) {
         );
         group.throughput(Throughput::Elements(base.fragment_count()));
         group.bench_function("setup", |b| b.iter(|| Rasterizer::new(black_box(&scene), &camera, &settings)));
+        // a persistent renderer's setup: the same frame again in the storage of the last
+        let mut warm = Rasterizer::new(&scene, &camera, &settings);
+        group
+            .bench_function("setup/warm", |b| b.iter(|| warm.rebuild(black_box(&scene), &camera, &settings)));
         for mode in [RasterMode::Scatter, RasterMode::Tiled] {
             let r = Rasterizer::new(&scene, &camera, &settings).with_mode(mode);
             let mode = format!("{mode:?}").to_lowercase();
