@@ -677,29 +677,23 @@ fn split_parts<'a, T>(mut slice: &'a mut [T], lens: &[usize]) -> Vec<&'a mut [T]
     parts
 }
 
+/// A collection a setup extends with records where its storage must grow: rayon's
+/// `ParallelExtend` with the `rayon` feature, `Extend` without.
+#[cfg(feature = "rayon")]
+pub trait ExtendRecords<T: Send>: ParallelExtend<T> {}
+#[cfg(feature = "rayon")]
+impl<T: Send, E: ParallelExtend<T>> ExtendRecords<T> for E {}
+/// A collection a setup extends with records where its storage must grow: rayon's
+/// `ParallelExtend` with the `rayon` feature, `Extend` without.
+#[cfg(not(feature = "rayon"))]
+pub trait ExtendRecords<T: Send>: Extend<T> {}
+#[cfg(not(feature = "rayon"))]
+impl<T: Send, E: Extend<T>> ExtendRecords<T> for E {}
+
 /// Where [`TriangleSetup::rebuild_with`] writes its records, one a triangle in the triangles'
 /// order: a `Vec`, a pair of `Vec`s (for a pair of records), or `()` for none. Its storage is
 /// kept from frame to frame; each task writes its own part of it.
-#[cfg(feature = "rayon")]
-pub trait RecordSink<T: Send>: ParallelExtend<T> + Default + Send {
-    /// The consecutive slots one task writes.
-    type Part<'a>: Send
-    where
-        Self: 'a;
-    /// The number of slots.
-    fn slots(&self) -> usize;
-    /// Exactly `len` slots where there were more: the first `len` kept.
-    fn truncate(&mut self, len: usize);
-    /// Slots from `start` on, cut into consecutive parts of `lens` (which must be in range).
-    fn parts(&mut self, start: usize, lens: &[usize]) -> Vec<Self::Part<'_>>;
-    /// Writes `record` to slot `i` of `part`.
-    fn put(part: &mut Self::Part<'_>, i: usize, record: T);
-}
-/// Where [`TriangleSetup::rebuild_with`] writes its records, one a triangle in the triangles'
-/// order: a `Vec`, a pair of `Vec`s (for a pair of records), or `()` for none. Its storage is
-/// kept from frame to frame; each part of it is written in turn.
-#[cfg(not(feature = "rayon"))]
-pub trait RecordSink<T: Send>: Extend<T> + Default + Send {
+pub trait RecordSink<T: Send>: ExtendRecords<T> + Default + Send {
     /// The consecutive slots one task writes.
     type Part<'a>: Send
     where

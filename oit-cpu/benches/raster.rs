@@ -1,14 +1,16 @@
 //! One geometry pass of the software rasterizer at 512×512, on the bunny and `planes:64`: the
 //! span walk of every triangle in parallel chunks ([`RasterMode::Scatter`], the rasterizer before
 //! issue 12 and still the default) against the tiled walk with the vectorized coverage test of
-//! small triangles ([`RasterMode::Tiled`]), side by side in one run. Each mode is timed twice:
-//! `setup` is [`Rasterizer::new`] (transform, clipping, snapping and the traversal's records, in
-//! fresh storage), `setup/warm` the same into the storage of the frame before
-//! ([`Rasterizer::rebuild`], a prepared scene's frames); `coverage` is the traversal alone ([`Rasterizer::coverage_pass`]), `pass` the whole geometry
-//! pass (each fragment's depth, id and shaded colour, what a capture pass of the transparency
-//! effect stores) with a per-fragment relaxed atomic add into a per-pixel counter, about the cheapest a technique does, so the rasterizer's own cost
-//! dominates; `depth` the same pass reading only depth and primitive id, as a counting pass or a
-//! peel's depth test does (colour and normal are computed only where a shader reads them).
+//! small triangles ([`RasterMode::Tiled`]), side by side in one run. `setup` is
+//! [`Rasterizer::new`] (transform, clipping, snapping and the traversal's records, in fresh
+//! storage), `setup/warm` the same into the storage of the frame before ([`Rasterizer::rebuild`],
+//! a prepared scene's frames). Each mode is timed twice: `coverage` is the traversal alone
+//! ([`Rasterizer::coverage_pass`]), `pass` the whole geometry pass (each fragment's depth, id and
+//! shaded colour, what a capture pass of the transparency effect stores) with a per-fragment
+//! relaxed atomic add into a per-pixel counter, about the cheapest a technique does, so the
+//! rasterizer's own cost dominates; `depth` the same pass reading only depth and primitive id, as
+//! a counting pass or a peel's depth test does (colour and normal are computed only where a
+//! shader reads them).
 //! Throughput is in fragments.
 //!
 //! `cargo bench -p oit-cpu --bench raster -- --warm-up-time 1 --measurement-time 3`

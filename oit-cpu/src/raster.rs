@@ -176,8 +176,9 @@ pub struct Rasterizer {
     scratch: SetupScratch,
     /// [`SmallEdges`] of each of `setup.triangles`, made with the setup ([`RasterMode::Scatter`]'s).
     edges: Vec<SmallEdges>,
-    /// [`ShadeRecord`] of each of `setup.triangles` under the headlight shading (empty under the
-    /// others).
+    /// [`ShadeRecord`] of each of `setup.triangles`, read where the shading is the headlight
+    /// (made under every shading, so that no frame can read another shading's records: 64 bytes
+    /// a triangle the other shadings do not need).
     shades: Vec<ShadeRecord>,
     mode: RasterMode,
     bins: OnceLock<Bins>,
@@ -205,16 +206,7 @@ impl Rasterizer {
     fn derive(&mut self) {
         // one parallel sweep for both (each sweep wakes every thread: on many cores a small
         // frame feels each one)
-        if self.setup.shading == Shading::Headlight {
-            self.setup
-                .triangles
-                .par_iter()
-                .map(records_of)
-                .unzip_into_vecs(&mut self.edges, &mut self.shades);
-        } else {
-            self.shades.clear();
-            self.setup.triangles.par_iter().map(SmallEdges::new).collect_into_vec(&mut self.edges);
-        }
+        self.setup.triangles.par_iter().map(records_of).unzip_into_vecs(&mut self.edges, &mut self.shades);
         self.records_changed();
     }
 
@@ -242,21 +234,9 @@ impl Rasterizer {
         // ([`TriangleSetup::rebuild_with`]): one parallel step fewer than setting up and then
         // deriving, and the triangles read while in cache; the last frame's records are
         // overwritten in place
-        if settings.shading == Shading::Headlight {
-            let mut records = (std::mem::take(&mut self.edges), std::mem::take(&mut self.shades));
-            self.setup.rebuild_with(scene, camera, settings, &mut self.scratch, &mut records, records_of);
-            (self.edges, self.shades) = records;
-        } else {
-            self.shades.clear();
-            self.setup.rebuild_with(
-                scene,
-                camera,
-                settings,
-                &mut self.scratch,
-                &mut self.edges,
-                SmallEdges::new,
-            );
-        }
+        let mut records = (std::mem::take(&mut self.edges), std::mem::take(&mut self.shades));
+        self.setup.rebuild_with(scene, camera, settings, &mut self.scratch, &mut records, records_of);
+        (self.edges, self.shades) = records;
         self.records_changed();
     }
 
@@ -396,7 +376,7 @@ impl Rasterizer {
             .enumerate()
             .map(|(task, (tris, edges))| {
                 let first = task * chunk;
-                let shades = self.shades.get(first..first + tris.len()).unwrap_or(&[]);
+                let shades = &self.shades[first..first + tris.len()];
                 let flush = |batch: &[Candidate]| {
                     let mut colors = [Vec4::ZERO; BATCH];
                     for (start, out) in
@@ -407,7 +387,7 @@ impl Rasterizer {
                         let b = std::array::from_fn(|i| {
                             edges[lane(i).tri as usize].plane.barycentrics(lane(i).e)
                         });
-                        let shaded = if shades.is_empty() {
+                        let shaded = if setup.shading != Shading::Headlight {
                             setup.colors_at(std::array::from_fn(|i| &tris[lane(i).tri as usize]), b)
                         } else {
                             headlight_colors(
@@ -1098,8 +1078,9 @@ mod tests {
     /// same triangles, words and fragments (shaded on demand and ahead), in both modes. The
     /// sequence grows and shrinks the triangle count, and one scene's mesh spans several setup
     /// chunks and copy pieces. Mutation caught: storage not cleared between frames (the previous
-    /// frame's triangles kept), bins or the fragment count kept, a headlight frame's shading
-    /// records kept for a flat-shaded one.
+    /// frame's triangles kept), bins or the fragment count kept. (A frame coloured under the
+    /// wrong shading is caught by `fragments_are_the_setups`, which checks colours against
+    /// oit-core's.)
     #[test]
     fn rebuild_is_new() {
         // the knot's 18,432 triangles: 18 setup chunks
