@@ -120,6 +120,81 @@ pub fn frames_one_at_a_time<P: Prepared + ?Sized>(
     Ok(())
 }
 
+/// How [`frames_in_flight`] ended: the frames to render again one at a time (a frame whose end
+/// found a speculation wrong: a sizing count, a peel count, a setup that outgrew its buffers), and
+/// the first frame that must run in tiles (over the device's limits or the memory budget), if one
+/// did.
+#[derive(Debug, Default)]
+#[must_use = "the frames it names have not been rendered yet: call `LoopEnd::finish`"]
+pub struct LoopEnd {
+    /// Frames to render again, in the order their ends found them wrong.
+    pub again: Vec<usize>,
+    /// The first frame that did not start: it and every frame after it render one at a time.
+    pub from: Option<usize>,
+}
+
+impl LoopEnd {
+    /// Renders the frames the loop left ([`Prepared::frame_stats`] each, in tiles where they
+    /// need them); `done` hears of them after the others.
+    pub fn finish<P: Prepared + ?Sized>(
+        self,
+        prepared: &mut P,
+        cameras: &[Camera],
+        settings: &Settings,
+        done: &mut dyn FnMut(usize, crate::Stats),
+    ) -> Result<(), OitError> {
+        let rest = self.from.map_or(0..0, |from| from..cameras.len());
+        for i in self.again.into_iter().chain(rest) {
+            done(i, prepared.frame_stats(&cameras[i], settings)?);
+        }
+        Ok(())
+    }
+}
+
+/// A frame loop with up to `depth` frames submitted at once: frame `i + 1` is started (recorded
+/// and submitted) by `start` before frame `i`'s end is waited for by `end`, as a renderer's frame
+/// loop does. `end` gives `None` for a frame to render again (its speculation was wrong; it is
+/// named in [`LoopEnd::again`]). A start that fails with [`OitError::TooLarge`] ends the loop
+/// there: the frames in flight are ended, and that frame and those after it are left to
+/// [`LoopEnd::finish`], which renders them in tiles. Any other error ends the loop with it.
+pub fn frames_in_flight<'c, F>(
+    cameras: &'c [Camera],
+    depth: usize,
+    mut start: impl FnMut(&'c Camera) -> Result<F, OitError>,
+    mut end: impl FnMut(F) -> Result<Option<crate::Stats>, OitError>,
+    done: &mut dyn FnMut(usize, crate::Stats),
+) -> Result<LoopEnd, OitError> {
+    let depth = depth.max(1);
+    let mut flight = std::collections::VecDeque::with_capacity(depth);
+    let mut out = LoopEnd::default();
+    let mut finish = |(i, f): (usize, F), out: &mut LoopEnd| -> Result<(), OitError> {
+        match end(f)? {
+            Some(stats) => done(i, stats),
+            None => out.again.push(i),
+        }
+        Ok(())
+    };
+    for (i, camera) in cameras.iter().enumerate() {
+        if flight.len() >= depth
+            && let Some(oldest) = flight.pop_front()
+        {
+            finish(oldest, &mut out)?;
+        }
+        match start(camera) {
+            Ok(f) => flight.push_back((i, f)),
+            Err(OitError::TooLarge { .. }) => {
+                out.from = Some(i);
+                break;
+            }
+            Err(e) => return Err(e),
+        }
+    }
+    for f in flight.drain(..) {
+        finish(f, &mut out)?;
+    }
+    Ok(out)
+}
+
 /// A renderer of every technique in its capabilities.
 pub trait Backend {
     /// A short name (`cpu`, `wgpu`, `vulkan`).

@@ -88,8 +88,8 @@ mod technique;
 pub mod tiling;
 
 pub use backend::{
-    AtomicFragmentList, Backend, BucketArray, Capabilities, Compositor, DepthHistogram, OnPath, Prepared,
-    frames_one_at_a_time,
+    AtomicFragmentList, Backend, BucketArray, Capabilities, Compositor, DepthHistogram, LoopEnd, OnPath,
+    Prepared, frames_in_flight, frames_one_at_a_time,
 };
 pub use camera::{Camera, View};
 pub use error::OitError;

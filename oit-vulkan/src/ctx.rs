@@ -9,7 +9,7 @@ use std::rc::Rc;
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use oit_core::plan::Plan;
-use oit_core::{Camera, Effect, Frame, Image, OitError, RasterPath, Scene, Settings, Stats};
+use oit_core::{Camera, Effect, Frame, Image, OitError, Scene, Settings, Stats};
 
 use crate::device::{Blend, Buffer, Framebuffer, Gpu, GpuImage, GraphicsDesc, PassKey, SetKind};
 use crate::hardware::HardwareRaster;
@@ -396,13 +396,6 @@ impl<'a> VkCtx<'a> {
         Ok(words)
     }
 
-    /// Reads several buffers back with one wait.
-    pub(crate) fn read_u32s(&mut self, buffers: &[&Buffer]) -> Result<Vec<Vec<u32>>, OitError> {
-        let words = self.rec.read_u32s(buffers)?;
-        self.check_validation()?;
-        Ok(words)
-    }
-
     /// Marks the passes that follow as the last capture pass the plan allows (or not).
     pub(crate) fn last_pass(&mut self, last: bool) {
         self.uniform.last_pass = u32::from(last);
@@ -782,22 +775,16 @@ impl<'a> VkCtx<'a> {
     /// losses only when `readback` (one wait either way): without, the frame's image is empty
     /// (0 × 0) and `lost_pixels` `None`, as oit-wgpu's `GpuCtx::finish_with` gives them.
     #[cfg(test)]
-    pub(crate) fn finish_with(self, path: RasterPath, readback: bool) -> Result<Frame, OitError> {
-        self.finish_checked(path, readback)?.ok_or_else(|| {
+    pub(crate) fn finish_with(self, readback: bool) -> Result<Frame, OitError> {
+        self.finish_start(readback)?.wait()?.ok_or_else(|| {
             OitError::Device("the compute path's setup outgrew its buffers in mid-frame".into())
         })
     }
 
-    /// [`VkCtx::finish_with`], reading the compute path's setup counters left to the frame's end
-    /// (`raster::SetupCheck`) in the same wait: `None` where they did not fit the buffers the
-    /// frame was set up into (the frame is incomplete; the caller runs it again, and its setup
-    /// then sizes first).
-    pub(crate) fn finish_checked(
-        mut self,
-        path: RasterPath,
-        readback: bool,
-    ) -> Result<Option<Frame>, OitError> {
-        let _ = path;
+    /// Records the frame's resolve and its one readback (the totals, the first pass's count, the
+    /// setup's counters; the image and per-pixel losses when `readback`) and submits them without
+    /// waiting: the frame is in flight until [`Finishing::wait`].
+    pub(crate) fn finish_start(mut self, readback: bool) -> Result<Finishing<'a>, OitError> {
         let (image_buf, totals) = (self.image.clone(), self.totals.clone());
         self.rec.fill(&totals, 0);
         let px = u64::from(self.pixels);
@@ -812,11 +799,47 @@ impl<'a> VkCtx<'a> {
             read.push(&*image_buf);
             read.push(&*acct_buf);
         }
-        let mut words = self.read_u32s(&read)?.into_iter();
+        let reading = self.rec.read_start(&read)?;
+        Ok(Finishing { ctx: self, reading, checks, readback })
+    }
+}
+
+/// A frame submitted with its one readback and not yet waited for ([`VkCtx::finish_start`]): its
+/// context (the storage it borrowed from the pool, its recorder) stays with it until the wait.
+pub(crate) struct Finishing<'a> {
+    ctx: VkCtx<'a>,
+    reading: crate::record::Reading,
+    checks: Vec<crate::raster::SetupCheck>,
+    readback: bool,
+}
+
+impl Finishing<'_> {
+    /// Waits for the frame and makes its [`Frame`]; reads the compute path's setup counters left
+    /// to the frame's end (`raster::SetupCheck`) in the same wait: `None` where they did not fit
+    /// the buffers the frame was set up into (the frame is incomplete; the caller runs it again,
+    /// and its setup then sizes first).
+    pub(crate) fn wait(self) -> Result<Option<Frame>, OitError> {
+        let Finishing { mut ctx, reading, checks, readback } = self;
+        let words = ctx.rec.read_wait(reading)?;
+        ctx.check_validation()?;
+        ctx.resolve_counts(words, &checks, readback)
+    }
+}
+
+impl VkCtx<'_> {
+    /// The frame's [`Frame`] from its end-of-frame readback's `words` (in
+    /// [`VkCtx::finish_start`]'s order).
+    fn resolve_counts(
+        &self,
+        words: Vec<Vec<u32>>,
+        checks: &[crate::raster::SetupCheck],
+        readback: bool,
+    ) -> Result<Option<Frame>, OitError> {
+        let mut words = words.into_iter();
         let t = words.next().unwrap_or_default();
         let first = words.next().unwrap_or_default();
         let mut fits = true;
-        for c in &checks {
+        for c in checks {
             fits &= c.fits(&words.next().unwrap_or_default());
         }
         if !fits {
@@ -885,7 +908,7 @@ pub(crate) fn dispatch_size(invocations: u64) -> (u32, u32) {
 
 #[cfg(test)]
 mod tests {
-    use oit_core::{Camera, RasterPath, Settings, View, load_scene};
+    use oit_core::{Camera, Settings, View, load_scene};
 
     use super::{BufferPool, VkCtx};
 
@@ -908,7 +931,7 @@ mod tests {
             // the frame's init again: idempotent, so the frame stays an empty one
             ctx.kernel_over("finish", "init_main", &[&image, &totals], 64, 0, 0, "again").unwrap();
         }
-        let stats = ctx.finish_with(RasterPath::Compute, true).unwrap().stats;
+        let stats = ctx.finish_with(true).unwrap().stats;
         assert_eq!((stats.fragments, stats.captured, stats.lost), (0, 0, 0));
         println!("timestamps {}: {:?} {:?}", gpu.has_timestamps(), stats.gpu_ms, stats.gpu_pass_ms);
         if gpu.has_timestamps() {

@@ -384,6 +384,9 @@ pub struct Gpu {
     cache: Mutex<Cache>,
     /// Recorders' parts left by finished frames, for the next (see `record::Parts`).
     recorders: Mutex<Vec<crate::record::Parts>>,
+    /// Submissions on the queue that no wait has collected, and the most there have been at once
+    /// ([`Gpu::most_in_flight`]).
+    in_flight: (std::sync::atomic::AtomicUsize, std::sync::atomic::AtomicUsize),
     /// What the device is.
     pub info: DeviceInfo,
     pub(crate) queue: vk::Queue,
@@ -595,6 +598,7 @@ impl Gpu {
         Ok(Gpu {
             cache: Mutex::new(Cache::default()),
             recorders: Mutex::new(Vec::new()),
+            in_flight: Default::default(),
             info,
             queue,
             family,
@@ -773,6 +777,13 @@ impl Gpu {
     /// Whether the device blends into `format` (one of [`DeviceInfo::blendable`]'s candidates).
     pub fn blendable(&self, format: vk::Format) -> bool {
         self.info.blendable.contains(&format)
+    }
+
+    /// Waits until the queue has nothing in flight: before a kept buffer that a frame in flight
+    /// may still read is replaced (its drop destroys it).
+    pub(crate) fn queue_idle(&self) -> Result<(), OitError> {
+        // SAFETY: the queue is this device's; the wait has no other requirement.
+        unsafe { self.raw.device.queue_wait_idle(self.queue) }.map_err(vk_error("waiting for the GPU"))
     }
 
     /// A finished recorder's parts, if one left any.
@@ -1033,6 +1044,24 @@ impl Gpu {
         let framebuffer = unsafe { self.raw.device.create_framebuffer(&info, None) }
             .map_err(vk_error("creating a framebuffer"))?;
         Ok(Framebuffer { raw: self.raw.clone(), framebuffer, extent })
+    }
+
+    /// The most submissions this device has had on its queue at once, none yet waited for: 1 where
+    /// every frame is waited for before the next is recorded, [`crate::FRAMES_IN_FLIGHT`] in a
+    /// frame loop that keeps frames in flight. For tests and diagnostics.
+    pub fn most_in_flight(&self) -> usize {
+        self.in_flight.1.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    /// A recorder submitted (`up`) or its submission was waited for.
+    pub(crate) fn count_in_flight(&self, up: bool) {
+        use std::sync::atomic::Ordering::Relaxed;
+        if up {
+            let now = self.in_flight.0.fetch_add(1, Relaxed) + 1;
+            self.in_flight.1.fetch_max(now, Relaxed);
+        } else {
+            self.in_flight.0.fetch_sub(1, Relaxed);
+        }
     }
 
     /// Pipelines (compute and graphics) created on this device so far (each is cached until the device drops,

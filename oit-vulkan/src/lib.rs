@@ -261,6 +261,37 @@ impl Prepared for VulkanPrepared<'_> {
         )
     }
 
+    /// Frames in flight ([`FRAMES_IN_FLIGHT`]): each frame is recorded and submitted while the
+    /// device runs the one before, and waited for only then. A frame whose end finds its compute
+    /// setup outgrew its buffers runs again on its own after the others, and `done` hears of it
+    /// last; windows (`--memory`, a region) and frames over the device's limits run one at a time.
+    /// A technique that reads a count back in mid-frame (a peel's stop, a sizing pass) still
+    /// waits there, for the frames before it too.
+    fn frame_loop(
+        &mut self,
+        cameras: &[Camera],
+        settings: &Settings,
+        done: &mut dyn FnMut(usize, oit_core::Stats),
+    ) -> Result<(), OitError> {
+        settings.validate()?;
+        if settings.memory.is_some() || settings.region.is_some() {
+            return oit_core::frames_one_at_a_time(self, cameras, settings, done);
+        }
+        let this = &*self;
+        let end = oit_core::frames_in_flight(
+            cameras,
+            FRAMES_IN_FLIGHT,
+            |camera| this.frame_start(camera, settings, false, Instant::now()),
+            |f| Ok(f.end()?.map(|frame| frame.stats)),
+            done,
+        )?;
+        end.finish(self, cameras, settings, done)
+    }
+
+    fn frames_in_flight(&self) -> usize {
+        FRAMES_IN_FLIGHT
+    }
+
     fn storage_allocations(&self) -> u64 {
         self.pool.allocations() + self.geometry_made.get()
     }
@@ -296,10 +327,22 @@ impl VulkanPrepared<'_> {
         settings: &Settings,
         readback: bool,
     ) -> Result<Option<Frame>, OitError> {
+        let started = self.frame_start(camera, settings, readback, Instant::now())?;
+        started.end()
+    }
+
+    /// Records and submits one frame (its one readback included) without waiting for it:
+    /// [`InFlight::end`] waits.
+    fn frame_start<'c>(
+        &'c self,
+        camera: &'c Camera,
+        settings: &'c Settings,
+        readback: bool,
+        start: Instant,
+    ) -> Result<InFlight<'c>, OitError> {
         settings.validate()?;
-        let start = Instant::now();
         let path = settings.raster.unwrap_or(RasterPath::Compute);
-        let this = &*self;
+        let this = self;
         // kbuf's interlock, refused before the frame's setup and storage
         let plan = oit_core::plan::Plan::new("vulkan", this.scene, settings)?;
         if path != RasterPath::Hardware {
@@ -361,9 +404,30 @@ impl VulkanPrepared<'_> {
         };
         let mut ctx = VkCtx::new(this.gpu, this.scene, camera, settings, &this.pool)?;
         let layers = run_technique(&mut ctx, &drivers)?;
-        let Some(mut frame) = ctx.finish_checked(path, readback)? else { return Ok(None) };
-        frame.layers = layers.filter(|_| readback);
-        frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
+        let finishing = ctx.finish_start(readback)?;
+        Ok(InFlight { finishing, layers: layers.filter(|_| readback), start })
+    }
+}
+
+/// Frames [`VulkanPrepared`]'s frame loop keeps submitted at once: the host records one while the
+/// device runs the other.
+pub const FRAMES_IN_FLIGHT: usize = 2;
+
+/// A frame submitted and not yet waited for ([`VulkanPrepared::frame_start`]).
+struct InFlight<'c> {
+    finishing: ctx::Finishing<'c>,
+    /// The reference's per-pixel fragment counts, where the frame reads back its image.
+    layers: Option<Vec<u32>>,
+    start: Instant,
+}
+
+impl InFlight<'_> {
+    /// Waits for the frame: `None` where its compute setup did not fit the buffers it was set up
+    /// into (the frame must run again; the next setup sizes first).
+    fn end(self) -> Result<Option<Frame>, OitError> {
+        let Some(mut frame) = self.finishing.wait()? else { return Ok(None) };
+        frame.layers = self.layers;
+        frame.stats.wall_ms = self.start.elapsed().as_secs_f64() * 1e3;
         Ok(Some(frame))
     }
 }

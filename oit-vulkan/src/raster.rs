@@ -277,6 +277,10 @@ impl ComputeBuffers {
         let limit = u64::from(gpu.info.limits.max_storage_buffer_range);
         let grown = |old: u64, needed: u64| needed.max(old.saturating_mul(2).min(limit)).next_multiple_of(4);
         let mut grew = false;
+        if tri_bytes > self.tris.size || item_bytes > self.items.size {
+            // a frame in flight (`Prepared::frame_loop`) may still read the buffers replaced here
+            gpu.queue_idle()?;
+        }
         if tri_bytes > self.tris.size {
             self.tris = Rc::new(gpu.buffer(grown(self.tris.size, tri_bytes), geometry_usage(), false)?);
             made.set(made.get() + 1);

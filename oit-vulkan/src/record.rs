@@ -110,7 +110,7 @@ pub(crate) struct Parts {
 impl Drop for Parts {
     fn drop(&mut self) {
         // SAFETY: all made from this device; nothing is in flight (a recorder waits for its
-        // queue before it gives its parts up, and every flush waits); destroying a null handle
+        // own submission before it gives its parts up, or idles the queue); destroying a null handle
         // is a no-op.
         unsafe {
             let d = &self.raw.device;
@@ -142,6 +142,8 @@ pub(crate) struct Recorder<'g> {
     keep: Vec<Rc<Buffer>>,
     /// The timestamp queries, where the device has them.
     timestamps: Option<Timestamps>,
+    /// A submission is on the queue that no wait has collected (`submit` without `wait`).
+    submitted: bool,
 }
 
 impl Drop for Recorder<'_> {
@@ -149,13 +151,21 @@ impl Drop for Recorder<'_> {
         // SAFETY: `p` is taken once, here, and the recorder is not used after.
         let mut parts = unsafe { std::mem::ManuallyDrop::take(&mut self.p) };
         parts.spare.append(&mut self.keep);
-        // SAFETY: the parts are this device's; after the wait nothing they hold is in flight, so
-        // the pools may be reset (the command buffer back to its initial state, every set freed)
-        // and handed to the next recorder.
+        // SAFETY: the parts are this device's; after the wait for their own submission (not the
+        // whole queue's: another frame may be in flight) nothing they hold is in flight, so the
+        // pools may be reset (the command buffer back to its initial state, every set freed) and
+        // handed to the next recorder. A failed wait falls back to the queue's idle, and the
+        // parts are not reused.
         let reset = unsafe {
             let d = &self.gpu.raw.device;
-            d.queue_wait_idle(self.gpu.queue).is_ok()
-                && d.reset_command_pool(parts.pool, vk::CommandPoolResetFlags::empty()).is_ok()
+            let idle = !self.submitted || d.wait_for_fences(&[parts.fence], true, TIMEOUT_NS).is_ok();
+            if self.submitted {
+                self.gpu.count_in_flight(false);
+            }
+            if !idle {
+                let _ = d.queue_wait_idle(self.gpu.queue);
+            }
+            idle && d.reset_command_pool(parts.pool, vk::CommandPoolResetFlags::empty()).is_ok()
                 && d.reset_descriptor_pool(parts.descriptors, vk::DescriptorPoolResetFlags::empty()).is_ok()
                 && d.reset_fences(&[parts.fence]).is_ok()
         };
@@ -204,6 +214,7 @@ impl<'g> Recorder<'g> {
             sets: 0,
             keep: Vec::new(),
             timestamps,
+            submitted: false,
         };
         r.begin()?;
         Ok(r)
@@ -302,7 +313,8 @@ impl<'g> Recorder<'g> {
         unsafe { d.begin_command_buffer(self.p.cmd, &info) }.map_err(vk_err("recording"))?;
         if let Some(ts) = &self.timestamps {
             // SAFETY: recording, outside any render pass (none is ever begun); the pool holds
-            // 2 × SLOTS queries, none in use by a pending submission (every flush waits).
+            // 2 × SLOTS queries, none in use by a pending submission (recording begins only
+            // after the last submission's wait).
             unsafe { d.cmd_reset_query_pool(self.p.cmd, ts.pool, 0, 2 * SLOTS) };
         }
         Ok(())
@@ -337,18 +349,39 @@ impl<'g> Recorder<'g> {
 
     /// Submits what was recorded, waits for it, and starts recording again.
     pub(crate) fn flush(&mut self) -> Result<(), OitError> {
+        self.submit()?;
+        self.wait()
+    }
+
+    /// Ends recording and submits what was recorded, without waiting for it: [`Recorder::wait`]
+    /// does (a frame in flight is a recorder submitted and not yet waited for).
+    fn submit(&mut self) -> Result<(), OitError> {
         let d = &self.gpu.raw.device;
         self.p.uniforms.write(&self.uniform_bytes[..(u64::from(self.slot) * SLOT_BYTES) as usize])?;
         let cmds = [self.p.cmd];
         let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
         // SAFETY: the command buffer was recorded on this device and everything it references
-        // is alive (the frame's buffers, `keep`, the cached pipelines, the query pool); the fence
-        // is unsignalled; after the wait nothing is in flight, so the pools may be reset and the
-        // queries read: `ticks` holds 2 × labels u64 results, queries 0.. of those written.
+        // is alive (the frame's buffers, `keep`, the cached pipelines, the query pool) until the
+        // wait; the fence is unsignalled (reset by the last wait, or new).
         unsafe {
             d.end_command_buffer(self.p.cmd).map_err(vk_err("recording"))?;
             d.queue_submit(self.gpu.queue, &submit, self.p.fence).map_err(vk_err("submitting work"))?;
+        }
+        self.submitted = true;
+        self.gpu.count_in_flight(true);
+        Ok(())
+    }
+
+    /// Waits for the last submission, reads its timestamps, and starts recording again.
+    fn wait(&mut self) -> Result<(), OitError> {
+        let d = &self.gpu.raw.device;
+        // SAFETY: the fence belongs to the submission `submit` made; after the wait nothing is in
+        // flight, so the pools may be reset and the queries read: `ticks` holds 2 × labels u64
+        // results, queries 0.. of those written.
+        unsafe {
             d.wait_for_fences(&[self.p.fence], true, TIMEOUT_NS).map_err(vk_err("waiting for the GPU"))?;
+            self.submitted = false;
+            self.gpu.count_in_flight(false);
             if let Some(ts) = self.timestamps.as_mut().filter(|ts| !ts.labels.is_empty()) {
                 // the submission reset every query and then wrote each of these once; it has
                 // completed (the fence), so WAIT returns at once
@@ -858,25 +891,45 @@ impl<'g> Recorder<'g> {
     /// Reads several buffers back with one flush (one wait): a copy of each to a staging buffer
     /// of its own, then the maps, in the order given.
     pub(crate) fn read_u32s(&mut self, buffers: &[&Buffer]) -> Result<Vec<Vec<u32>>, OitError> {
+        let reading = self.read_start(buffers)?;
+        self.read_wait(reading)
+    }
+
+    /// Starts reading `buffers` back: records a copy of each to a staging buffer of its own and
+    /// submits, without waiting ([`Recorder::read_wait`] waits and maps). Nothing may be recorded
+    /// in between.
+    pub(crate) fn read_start(&mut self, buffers: &[&Buffer]) -> Result<Reading, OitError> {
         let mut staging = Vec::with_capacity(buffers.len());
         for b in buffers {
             let s = self.host_buffer(b.size, vk::BufferUsageFlags::TRANSFER_DST)?;
             self.copy(b, &s, b.size);
-            staging.push(s);
+            staging.push((s, b.size));
         }
-        self.flush()?;
-        let words = staging
+        self.submit()?;
+        Ok(Reading { staging })
+    }
+
+    /// Waits for a [`Recorder::read_start`]'s submission and maps its copies, in the order given.
+    pub(crate) fn read_wait(&mut self, reading: Reading) -> Result<Vec<Vec<u32>>, OitError> {
+        self.wait()?;
+        let words = reading
+            .staging
             .iter()
-            .zip(buffers)
-            .map(|(s, b)| {
+            .map(|(s, size)| {
                 // a spare staging buffer may be larger than what was copied into it
                 s.read_u32().map(|mut w| {
-                    w.truncate((b.size / 4) as usize);
+                    w.truncate((size / 4) as usize);
                     w
                 })
             })
             .collect();
-        self.spare(staging);
+        self.spare(reading.staging.into_iter().map(|(s, _)| s));
         words
     }
+}
+
+/// A readback submitted and not yet waited for ([`Recorder::read_start`]): the staging buffers
+/// and how many bytes of each were copied.
+pub(crate) struct Reading {
+    staging: Vec<(Rc<Buffer>, u64)>,
 }

@@ -311,11 +311,15 @@ impl Prepared for WgpuPrepared<'_> {
         if path == RasterPath::Hardware && self.hardware.is_none() {
             self.hardware = Some(HardwareScene::new(self.gpu, self.scene, &self.geometry_made)?);
         }
-        let LoopEnd { again, from } = self.frame_loop_in_flight(cameras, settings, path, done)?;
-        for i in again.into_iter().chain(from.into_iter().flat_map(|from| from..cameras.len())) {
-            done(i, self.frame_stats(&cameras[i], settings)?);
-        }
-        Ok(())
+        let this = &*self;
+        let end = oit_core::frames_in_flight(
+            cameras,
+            FRAMES_IN_FLIGHT,
+            |camera| this.frame_start(camera, settings, path, false, Instant::now()),
+            |f| Ok(this.frame_end(f)?.map(|frame| frame.stats)),
+            done,
+        )?;
+        end.finish(self, cameras, settings, done)
     }
 
     fn frames_in_flight(&self) -> usize {
@@ -470,48 +474,6 @@ impl WgpuPrepared<'_> {
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(Some(frame))
     }
-
-    /// [`Prepared::frame_loop`] with up to [`FRAMES_IN_FLIGHT`] frames submitted at once: frame
-    /// i + 1 is recorded and submitted before frame i's counters are waited for.
-    fn frame_loop_in_flight(
-        &self,
-        cameras: &[Camera],
-        settings: &Settings,
-        path: RasterPath,
-        done: &mut dyn FnMut(usize, oit_core::Stats),
-    ) -> Result<LoopEnd, OitError> {
-        let mut flight: std::collections::VecDeque<(usize, InFlight<'_>)> = Default::default();
-        let mut again = Vec::new();
-        let mut end = |(i, f): (usize, InFlight<'_>), again: &mut Vec<usize>| -> Result<(), OitError> {
-            match self.frame_end(f)? {
-                Some(frame) => done(i, frame.stats),
-                None => again.push(i),
-            }
-            Ok(())
-        };
-        for (i, camera) in cameras.iter().enumerate() {
-            if flight.len() >= FRAMES_IN_FLIGHT {
-                let oldest = flight.pop_front().expect("the queue is full");
-                end(oldest, &mut again)?;
-            }
-            match self.frame_start(camera, settings, path, false, Instant::now()) {
-                Ok(f) => flight.push_back((i, f)),
-                // over the device's limits or the budget: the frames from here run in tiles,
-                // one at a time, as `frame_stats` does
-                Err(OitError::TooLarge { .. }) => {
-                    for f in flight.drain(..) {
-                        end(f, &mut again)?;
-                    }
-                    return Ok(LoopEnd { again, from: Some(i) });
-                }
-                Err(e) => return Err(e),
-            }
-        }
-        for f in flight.drain(..) {
-            end(f, &mut again)?;
-        }
-        Ok(LoopEnd { again, from: None })
-    }
 }
 
 /// Frames [`WgpuPrepared`]'s frame loop keeps submitted at once: the host records one while the
@@ -529,13 +491,6 @@ struct InFlight<'c> {
     layers: Option<Vec<u32>>,
     readback: bool,
     start: Instant,
-}
-
-/// How a frame loop in flight ended: the frames to run again one at a time (a speculation the
-/// frame's end found wrong), and the first frame that must run in tiles, if one did.
-struct LoopEnd {
-    again: Vec<usize>,
-    from: Option<usize>,
 }
 
 /// Runs the frame's technique (geometry passes through `drivers`, kernels, resolve into the
