@@ -41,6 +41,7 @@ use Tail::{Alone, None as Kernels, Raster, Stage};
 const MODULES: &[(&str, &str, Tail)] = &[
     ("fill", "shaders/fill.wgsl", Kernels),
     ("finish", "shaders/finish.wgsl", Kernels),
+    ("gate", "shaders/gate.wgsl", Kernels),
     ("count", "technique/count.wgsl", Raster),
     ("reference", "technique/reference.wgsl+technique/sort_entries.wgsl", Raster),
     ("fabs", "technique/fabs_counters.wgsl+technique/fabs.wgsl+technique/tail.wgsl", Raster),

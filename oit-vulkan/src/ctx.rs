@@ -14,8 +14,8 @@ use oit_core::{Camera, Effect, Frame, Image, OitError, Scene, Settings, Stats};
 use crate::device::{Blend, Buffer, Framebuffer, Gpu, GpuImage, GraphicsDesc, PassKey, SetKind};
 use crate::hardware::HardwareRaster;
 use crate::raster::{ComputeRaster, Raster};
-use crate::record::Recorder;
 use crate::record::SetData;
+use crate::record::{Recorder, Vertices};
 
 /// Group 0's binding of the loss accounting (`acct` in prelude.wgsl).
 pub(crate) const ACCT_BINDING: u32 = 15;
@@ -214,6 +214,17 @@ pub(crate) struct VkCtx<'a> {
     validation_before: u64,
     /// The compute path's setup checks left to the frame's end (`raster::SetupCheck`).
     setup_checks: Vec<crate::raster::SetupCheck>,
+    /// The peel count to run without a readback per peel, from an earlier frame of the same
+    /// settings (`technique::peel`); set by the prepared scene before the technique runs.
+    pub(crate) speculated_peels: Option<u32>,
+    /// The peel count this frame found by reading back each peel's flag (none speculated).
+    pub(crate) peels_seen: Option<u32>,
+    /// Whether the geometry pass being recorded is gated ([`VkCtx::geometry_pass_if`]).
+    gated_pass: bool,
+    /// Word 5: the gated geometry passes whose gate was open (`gate.wgsl`), read at the end.
+    gated_counter: Rc<Buffer>,
+    /// Flags that must read 0 at the frame's end ([`VkCtx::check_at_end`]).
+    end_checks: Vec<Rc<Buffer>>,
 }
 
 impl Drop for VkCtx<'_> {
@@ -268,6 +279,7 @@ impl<'a> VkCtx<'a> {
         let acct = take(u64::from(pixels).max(1) * 12)?;
         let totals = take(16)?;
         let first_count = take(16)?;
+        let gated_counter = take(32)?;
         let rec = Recorder::new(gpu)?;
         let mut ctx = VkCtx {
             gpu,
@@ -293,9 +305,15 @@ impl<'a> VkCtx<'a> {
             rec,
             validation_before: crate::device::validation_errors(),
             setup_checks: Vec::new(),
+            speculated_peels: None,
+            peels_seen: None,
+            gated_pass: false,
+            gated_counter,
+            end_checks: Vec::new(),
         };
-        let acct = ctx.acct.clone();
+        let (acct, gated_counter) = (ctx.acct.clone(), ctx.gated_counter.clone());
         ctx.rec.fill(&acct, 0);
+        ctx.rec.fill(&gated_counter, 0);
         let (image, totals) = (ctx.image.clone(), ctx.totals.clone());
         ctx.kernel_over("finish", "init_main", &[&image, &totals], u64::from(pixels), 0, 0, "init")?;
         Ok(ctx)
@@ -428,6 +446,44 @@ impl<'a> VkCtx<'a> {
         Ok(())
     }
 
+    /// A geometry pass that has work only where word 0 of `flag` (written by the frame's earlier
+    /// passes) is not zero, with no round trip: `gate.wgsl` copies the raster's arguments into
+    /// their gated copy (zeros where the flag is clear) and counts the pass on the device where it
+    /// runs; the pass dispatches or draws from the gated copy. Only for a raster with a gate
+    /// ([`Raster::gate`]); the first geometry pass of a frame is never gated.
+    pub(crate) fn geometry_pass_if(
+        &mut self,
+        raster: &Raster,
+        module: &'static str,
+        buffers: &[&Buffer],
+        pass_index: u32,
+        param: u32,
+        flag: &Buffer,
+    ) -> Result<(), OitError> {
+        let Some((from, to, words)) = raster.gate() else {
+            return Err(OitError::Device("a gated geometry pass on a raster without a gate".into()));
+        };
+        debug_assert_ne!(self.fragments, Fragments::Unset, "the first pass is ungated");
+        let counter = self.gated_counter.clone();
+        self.kernel_over("gate", "gate_main", &[flag, &counter, from, to], 64, 0, words, "gate")?;
+        self.gated_pass = true;
+        let run = self.record_pass(raster, module, buffers, pass_index, param, false);
+        self.gated_pass = false;
+        run.map(|_| ())
+    }
+
+    /// Makes the gate's pipeline ([`VkCtx::geometry_pass_if`]) where it is not yet cached: a frame
+    /// that reads its peels back makes it, so the next one, which gates, creates no pipeline.
+    pub(crate) fn make_gate_pipeline(&self) -> Result<(), OitError> {
+        self.gpu.compute("gate", "gate_main", &[SetKind::Frame(4, self.image_bindings())]).map(|_| ())
+    }
+
+    /// Leaves word 0 of `flag` to be checked at the frame's end: a frame where it is not 0 ran
+    /// on a wrong speculation and must run again ([`Ended::missed`]).
+    pub(crate) fn check_at_end(&mut self, flag: &Rc<Buffer>) {
+        self.end_checks.push(flag.clone());
+    }
+
     /// Counts the scene's fragments with one count-only draw (a capture that keeps nothing,
     /// `shaders/no_capture.wgsl`) where no pass has yet, for captures whose passes cannot count
     /// them (a depth test kills fragments before the counter); not a geometry pass of the
@@ -520,6 +576,7 @@ impl<'a> VkCtx<'a> {
                 SetData::Raster { storage: &raster_set, uniform: &raster.uniform },
             ],
             per_pixel,
+            self.gated_pass,
         )?;
         Ok(&raster.generated)
     }
@@ -555,7 +612,11 @@ impl<'a> VkCtx<'a> {
                 },
                 SetData::Raster { storage: &raster_set, uniform: raster.uniform() },
             ],
-            raster.vertex_count(),
+            if self.gated_pass {
+                Vertices::Indirect(raster.gate().1)
+            } else {
+                Vertices::Count(raster.vertex_count())
+            },
             false,
         )?;
         let (counts, generated) = raster.counters();
@@ -747,7 +808,7 @@ impl<'a> VkCtx<'a> {
             &framebuffer,
             &clear,
             &sets,
-            raster.vertex_count(),
+            Vertices::Count(raster.vertex_count()),
             pass.occlusion,
         )?;
         self.passes += 1;
@@ -776,7 +837,7 @@ impl<'a> VkCtx<'a> {
     /// (0 × 0) and `lost_pixels` `None`, as oit-wgpu's `GpuCtx::finish_with` gives them.
     #[cfg(test)]
     pub(crate) fn finish_with(self, readback: bool) -> Result<Frame, OitError> {
-        self.finish_start(readback)?.wait()?.ok_or_else(|| {
+        self.finish_start(readback)?.wait()?.frame.ok_or_else(|| {
             OitError::Device("the compute path's setup outgrew its buffers in mid-frame".into())
         })
     }
@@ -793,15 +854,28 @@ impl<'a> VkCtx<'a> {
         let acct_buf = self.acct.clone();
         let first_count = self.first_count.clone();
         let checks = std::mem::take(&mut self.setup_checks);
-        let mut read = vec![&*totals, &*first_count];
+        let (gated_counter, end_checks) = (self.gated_counter.clone(), std::mem::take(&mut self.end_checks));
+        let mut read = vec![&*totals, &*first_count, &*gated_counter];
+        read.extend(end_checks.iter().map(|b| &**b));
         read.extend(checks.iter().map(|c| &*c.counters));
         if readback {
             read.push(&*image_buf);
             read.push(&*acct_buf);
         }
         let reading = self.rec.read_start(&read)?;
-        Ok(Finishing { ctx: self, reading, checks, readback })
+        Ok(Finishing { ctx: self, reading, checks, end_checks: end_checks.len(), readback })
     }
+}
+
+/// How a frame ended ([`Finishing::wait`]).
+pub(crate) struct Ended {
+    /// The frame; `None` where it is incomplete (its compute setup outgrew its buffers, or a
+    /// speculation missed) and must run again.
+    pub(crate) frame: Option<Frame>,
+    /// A speculated count was wrong ([`VkCtx::check_at_end`]): the next frame must not speculate.
+    pub(crate) missed: bool,
+    /// The peel count the frame read back, where it speculated none.
+    pub(crate) peels_seen: Option<u32>,
 }
 
 /// A frame submitted with its one readback and not yet waited for ([`VkCtx::finish_start`]): its
@@ -810,6 +884,8 @@ pub(crate) struct Finishing<'a> {
     ctx: VkCtx<'a>,
     reading: crate::record::Reading,
     checks: Vec<crate::raster::SetupCheck>,
+    /// How many flags [`VkCtx::check_at_end`] left, read after the gated counter.
+    end_checks: usize,
     readback: bool,
 }
 
@@ -818,11 +894,27 @@ impl Finishing<'_> {
     /// to the frame's end (`raster::SetupCheck`) in the same wait: `None` where they did not fit
     /// the buffers the frame was set up into (the frame is incomplete; the caller runs it again,
     /// and its setup then sizes first).
-    pub(crate) fn wait(self) -> Result<Option<Frame>, OitError> {
-        let Finishing { mut ctx, reading, checks, readback } = self;
-        let words = ctx.rec.read_wait(reading)?;
+    pub(crate) fn wait(self) -> Result<Ended, OitError> {
+        let Finishing { mut ctx, reading, checks, end_checks, readback } = self;
+        let mut words = ctx.rec.read_wait(reading)?;
         ctx.check_validation()?;
-        ctx.resolve_counts(words, &checks, readback)
+        // totals, first count, gated counter, the end checks, then the rest in order
+        let flags: Vec<Vec<u32>> = words.drain(3..3 + end_checks).collect();
+        let missed = flags.iter().any(|f| f.first().copied().unwrap_or(1) != 0);
+        let gated_ran = words[2].get(5).copied().unwrap_or(0);
+        words.remove(2);
+        let peels_seen = ctx.peels_seen;
+        // every check runs (one that does not fit clears its buffers' trust for the next frame)
+        let fits = checks.iter().enumerate().fold(true, |ok, (i, c)| {
+            let fit = c.fits(words.get(2 + i).map_or(&[][..], |w| w.as_slice()));
+            fit && ok
+        });
+        let frame = if missed || !fits {
+            None
+        } else {
+            Some(ctx.resolve_counts(words, checks.len(), readback, gated_ran)?)
+        };
+        Ok(Ended { frame, missed, peels_seen })
     }
 }
 
@@ -832,19 +924,14 @@ impl VkCtx<'_> {
     fn resolve_counts(
         &self,
         words: Vec<Vec<u32>>,
-        checks: &[crate::raster::SetupCheck],
+        checks: usize,
         readback: bool,
-    ) -> Result<Option<Frame>, OitError> {
+        gated_ran: u32,
+    ) -> Result<Frame, OitError> {
         let mut words = words.into_iter();
         let t = words.next().unwrap_or_default();
         let first = words.next().unwrap_or_default();
-        let mut fits = true;
-        for c in checks {
-            fits &= c.fits(&words.next().unwrap_or_default());
-        }
-        if !fits {
-            return Ok(None);
-        }
+        let mut words = words.skip(checks);
         let (image, acct) = if readback {
             let pixels = words.next().unwrap_or_default();
             let image = Image {
@@ -879,7 +966,7 @@ impl VkCtx<'_> {
             layers: None,
             lost_pixels,
             stats: Stats {
-                geometry_passes: self.passes,
+                geometry_passes: self.passes + gated_ran,
                 fragments,
                 captured,
                 lost,
@@ -896,7 +983,7 @@ impl VkCtx<'_> {
         if self.counts_losses {
             frame.stats.check_accounting("vulkan")?;
         }
-        Ok(Some(frame))
+        Ok(frame)
     }
 }
 

@@ -387,6 +387,8 @@ pub struct Gpu {
     /// Submissions on the queue that no wait has collected, and the most there have been at once
     /// ([`Gpu::most_in_flight`]).
     in_flight: (std::sync::atomic::AtomicUsize, std::sync::atomic::AtomicUsize),
+    /// Waits for a submission ([`Gpu::waits`]).
+    waits: std::sync::atomic::AtomicU64,
     /// What the device is.
     pub info: DeviceInfo,
     pub(crate) queue: vk::Queue,
@@ -599,6 +601,7 @@ impl Gpu {
             cache: Mutex::new(Cache::default()),
             recorders: Mutex::new(Vec::new()),
             in_flight: Default::default(),
+            waits: Default::default(),
             info,
             queue,
             family,
@@ -1053,6 +1056,13 @@ impl Gpu {
         self.in_flight.1.load(std::sync::atomic::Ordering::Relaxed)
     }
 
+    /// How many times the host has waited for a submission on this device (a frame's end, a
+    /// readback in mid-frame, an upload): a steady frame whose technique reads nothing back in
+    /// mid-frame waits once. For tests and diagnostics.
+    pub fn waits(&self) -> u64 {
+        self.waits.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
     /// A recorder submitted (`up`) or its submission was waited for.
     pub(crate) fn count_in_flight(&self, up: bool) {
         use std::sync::atomic::Ordering::Relaxed;
@@ -1061,6 +1071,7 @@ impl Gpu {
             self.in_flight.1.fetch_max(now, Relaxed);
         } else {
             self.in_flight.0.fetch_sub(1, Relaxed);
+            self.waits.fetch_add(1, Relaxed);
         }
     }
 

@@ -40,6 +40,10 @@ struct HwGeometry {
     instance_buf: Rc<Buffer>,
     uniform: Rc<Buffer>,
     vertex_count: u32,
+    /// The one draw's indirect arguments ([vertices, 1, 0, 0]) and their gated copy, for gated
+    /// passes (`Raster::gate`).
+    draw_args: Buffer,
+    gated_args: Buffer,
 }
 
 fn geometry_usage() -> vk::BufferUsageFlags {
@@ -66,10 +70,14 @@ impl HwGeometry {
             vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
             false,
         )?);
-        made.set(made.get() + 4);
+        let indirect = storage_usage() | vk::BufferUsageFlags::INDIRECT_BUFFER;
+        let draw_args = gpu.buffer(16, indirect, false)?;
+        let gated_args = gpu.buffer(16, indirect, false)?;
+        made.set(made.get() + 6);
         let mut rec = Recorder::new(gpu)?;
         rec.upload(&vertices, vertex_bytes)?;
         rec.upload(&triangles, triangle_bytes)?;
+        rec.upload(&draw_args, bytemuck::cast_slice(&[g.vertex_count(), 1, 0, 0]))?;
         rec.flush()?;
         Ok(HwGeometry {
             boxes,
@@ -79,6 +87,8 @@ impl HwGeometry {
             instance_buf,
             uniform,
             vertex_count: g.vertex_count(),
+            draw_args,
+            gated_args,
         })
     }
 }
@@ -136,6 +146,11 @@ impl HardwareRaster {
     /// The vertices of the one draw.
     pub(crate) fn vertex_count(&self) -> u32 {
         self.geometry.vertex_count
+    }
+
+    /// The draw's indirect arguments, their gated copy, and their words (`Raster::gate`).
+    pub(crate) fn gate(&self) -> (&Buffer, &Buffer, u32) {
+        (&self.geometry.draw_args, &self.geometry.gated_args, 4)
     }
 
     /// The count image the draw renders into.

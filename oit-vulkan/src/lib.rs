@@ -205,6 +205,7 @@ impl Backend for VulkanBackend {
             compute_boxes: RefCell::new(None),
             hardware: RefCell::new(None),
             gpu_setup: self.gpu_setup,
+            peels: Default::default(),
         }))
     }
 }
@@ -223,6 +224,10 @@ pub struct VulkanPrepared<'s> {
     hardware: RefCell<Option<HardwareScene>>,
     /// `VulkanBackend::gpu_setup`.
     gpu_setup: Option<bool>,
+    /// The peel count an earlier frame found, by its settings: the next frame of those settings
+    /// runs that many passes gated on the device instead of reading a flag back per peel
+    /// (`technique::peel`), and is checked at its end.
+    peels: RefCell<std::collections::HashMap<String, u32>>,
 }
 
 impl VulkanPrepared<'_> {
@@ -403,9 +408,12 @@ impl VulkanPrepared<'_> {
             }
         };
         let mut ctx = VkCtx::new(this.gpu, this.scene, camera, settings, &this.pool)?;
+        // every setting can change the peel count (the camera too: checked at the frame's end)
+        let key = format!("{settings:?}");
+        ctx.speculated_peels = this.peels.borrow().get(&key).copied();
         let layers = run_technique(&mut ctx, &drivers)?;
         let finishing = ctx.finish_start(readback)?;
-        Ok(InFlight { finishing, layers: layers.filter(|_| readback), start })
+        Ok(InFlight { finishing, layers: layers.filter(|_| readback), start, peels: (&this.peels, key) })
     }
 }
 
@@ -419,13 +427,23 @@ struct InFlight<'c> {
     /// The reference's per-pixel fragment counts, where the frame reads back its image.
     layers: Option<Vec<u32>>,
     start: Instant,
+    /// The prepared scene's peel counts, and this frame's key in them.
+    peels: (&'c RefCell<std::collections::HashMap<String, u32>>, String),
 }
 
 impl InFlight<'_> {
     /// Waits for the frame: `None` where its compute setup did not fit the buffers it was set up
-    /// into (the frame must run again; the next setup sizes first).
+    /// into (the next setup sizes first), or where it ran too few speculated peels (the next
+    /// frame of its settings reads its peels back): the frame must run again.
     fn end(self) -> Result<Option<Frame>, OitError> {
-        let Some(mut frame) = self.finishing.wait()? else { return Ok(None) };
+        let ended = self.finishing.wait()?;
+        let (peels, key) = self.peels;
+        if ended.missed {
+            peels.borrow_mut().remove(&key);
+        } else if let Some(seen) = ended.peels_seen {
+            peels.borrow_mut().insert(key, seen);
+        }
+        let Some(mut frame) = ended.frame else { return Ok(None) };
         frame.layers = self.layers;
         frame.stats.wall_ms = self.start.elapsed().as_secs_f64() * 1e3;
         Ok(Some(frame))

@@ -62,6 +62,21 @@ pub(crate) enum Raster {
     Hardware(crate::hardware::HardwareRaster),
 }
 
+impl Raster {
+    /// Where this frame's gated geometry passes take their arguments: (the ungated pass's
+    /// arguments, their gated copy, words), copied by `gate.wgsl` (zeros where the gate is closed);
+    /// `None` where the work is counted on the host (the host's setup), so a pass cannot be gated
+    /// on the device.
+    pub(crate) fn gate(&self) -> Option<(&Buffer, &Buffer, u32)> {
+        match self {
+            Raster::Compute(r) => {
+                matches!(r.work, Work::Indirect).then(|| (&*r.args, &*r.gated, ARGS_WORDS as u32))
+            }
+            Raster::Hardware(r) => Some(r.gate()),
+        }
+    }
+}
+
 /// The setup's capacity check left to the end of a frame: the counters, the capacities they were
 /// set up against, and the flag to clear (so the next frame sizes first) when they did not fit.
 pub(crate) struct SetupCheck {
@@ -109,6 +124,7 @@ pub(crate) struct ComputeRaster {
     pub(crate) uniform: Rc<Buffer>,
     pub(crate) generated: Rc<Buffer>,
     args: Rc<Buffer>,
+    gated: Rc<Buffer>,
     setup: Option<Rc<SetupBuffers>>,
     work: Work,
     pending: RefCell<Option<Pending>>,
@@ -150,6 +166,7 @@ impl ComputeRaster {
         pipeline: &crate::device::Pipeline,
         sets: &[SetData<'_>],
         per_pixel: bool,
+        gated: bool,
     ) -> Result<(), OitError> {
         match self.work {
             Work::Items(items) => {
@@ -160,7 +177,7 @@ impl ComputeRaster {
                 "geometry",
                 pipeline,
                 sets,
-                &self.args,
+                if gated { &self.gated } else { &self.args },
                 if per_pixel { 0 } else { ARGS_PER_ITEM },
             ),
         }
@@ -223,6 +240,8 @@ pub(crate) struct ComputeBuffers {
     uniform: Rc<Buffer>,
     generated: Rc<Buffer>,
     args: Rc<Buffer>,
+    /// The gated copy of `args`, for gated passes ([`Raster::gate`]).
+    gated: Rc<Buffer>,
     setup: Option<Rc<SetupBuffers>>,
     on_gpu: bool,
     /// Whether an earlier frame's setup was seen to fit these buffers: then a frame does not read
@@ -238,7 +257,10 @@ impl ComputeBuffers {
     /// Small buffers (grown by the first frame that needs more); `made` counts the buffers.
     /// Setup runs on the GPU where [`setup_on_gpu`] says (`choice`: the backend's).
     pub(crate) fn new(gpu: &Gpu, choice: Option<bool>, made: &Cell<u64>) -> Result<ComputeBuffers, OitError> {
-        made.set(made.get() + 5);
+        made.set(made.get() + 6);
+        let args = || {
+            gpu.buffer(ARGS_WORDS as u64 * 4, storage_usage() | vk::BufferUsageFlags::INDIRECT_BUFFER, false)
+        };
         Ok(ComputeBuffers {
             tris: Rc::new(gpu.buffer(MIN_BYTES, geometry_usage(), false)?),
             items: Rc::new(gpu.buffer(MIN_BYTES, geometry_usage(), false)?),
@@ -248,11 +270,8 @@ impl ComputeBuffers {
                 false,
             )?),
             generated: Rc::new(gpu.buffer(16, storage_usage(), false)?),
-            args: Rc::new(gpu.buffer(
-                ARGS_WORDS as u64 * 4,
-                storage_usage() | vk::BufferUsageFlags::INDIRECT_BUFFER,
-                false,
-            )?),
+            args: Rc::new(args()?),
+            gated: Rc::new(args()?),
             setup: None,
             on_gpu: setup_on_gpu(gpu, choice),
             trusted: Rc::new(Cell::new(false)),
@@ -364,6 +383,7 @@ impl ComputeBuffers {
             uniform: self.uniform.clone(),
             generated: self.generated.clone(),
             args: self.args.clone(),
+            gated: self.gated.clone(),
             work: Work::Indirect,
             pending: RefCell::new(Some(Pending::Gpu {
                 instances,
@@ -448,6 +468,7 @@ impl ComputeBuffers {
             uniform: self.uniform.clone(),
             generated: self.generated.clone(),
             args: self.args.clone(),
+            gated: self.gated.clone(),
             setup: None,
             work: Work::Items(items.len() as u64),
             pending: RefCell::new(Some(Pending::Host([

@@ -688,7 +688,7 @@ impl<'g> Recorder<'g> {
         Ok(())
     }
 
-    /// Records one draw of `vertices` vertices by the graphics `pipeline` (made in
+    /// Records one draw of `vertices` (a count, or indirect arguments the device reads) by the graphics `pipeline` (made in
     /// `render_pass`) into `target`, its attachments cleared to `clear`, with `sets`, inside the
     /// recorder's occlusion query when `occlusion` (read by [`Recorder::occlusion`] after a
     /// flush); the viewport has a negative height, so row 0 is the top as on wgpu (NDC y up).
@@ -702,7 +702,7 @@ impl<'g> Recorder<'g> {
         target: &Framebuffer,
         clear: &[vk::ClearValue],
         sets: &[SetData<'_>],
-        vertices: u32,
+        vertices: Vertices<'_>,
         occlusion: bool,
     ) -> Result<(), OitError> {
         let sets = self.sets(pipeline, sets)?;
@@ -749,8 +749,13 @@ impl<'g> Recorder<'g> {
             if occlusion {
                 d.cmd_begin_query(self.p.cmd, self.p.occlusion, 0, vk::QueryControlFlags::empty());
             }
-            if vertices > 0 {
-                d.cmd_draw(self.p.cmd, vertices, 1, 0, 0);
+            match vertices {
+                Vertices::Count(0) => {}
+                Vertices::Count(n) => d.cmd_draw(self.p.cmd, n, 1, 0, 0),
+                // the arguments' buffer has INDIRECT_BUFFER usage and holds four u32 (vertices,
+                // 1, 0, 0, or zeros), made visible by the barrier after the command that wrote
+                // them
+                Vertices::Indirect(args) => d.cmd_draw_indirect(self.p.cmd, args.buffer, 0, 1, 16),
             }
             if occlusion {
                 d.cmd_end_query(self.p.cmd, self.p.occlusion, 0);
@@ -926,6 +931,15 @@ impl<'g> Recorder<'g> {
         self.spare(reading.staging.into_iter().map(|(s, _)| s));
         words
     }
+}
+
+/// The vertices of a draw ([`Recorder::draw`]).
+#[derive(Clone, Copy)]
+pub(crate) enum Vertices<'b> {
+    /// This many, one instance.
+    Count(u32),
+    /// Four u32 indirect draw arguments in the buffer (a gated pass's: every vertex, or none).
+    Indirect(&'b Buffer),
 }
 
 /// A readback submitted and not yet waited for ([`Recorder::read_start`]): the staging buffers

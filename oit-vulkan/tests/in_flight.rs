@@ -105,3 +105,75 @@ fn a_loop_whose_setup_grows_counts_what_frames_alone_count() {
         assert_eq!(got, want, "{technique}");
     }
 }
+
+/// Two views of `scene`: at it (its planes overlapping on screen), and looking away from it
+/// (nothing on screen: one peel).
+fn at_and_away(scene: &oit_core::Scene) -> (Camera, Camera) {
+    let bounds = scene.bounds();
+    let (c, r) = (bounds.center(), (bounds.max - bounds.min).length() * 0.5);
+    let dir = glam::Vec3::new(0.1, 0.2, 1.0);
+    let at = Camera::look_at(c + dir * 3.0 * r, c, 45.0, 1.0, 0.01 * r, 100.0 * r);
+    let away = Camera::look_at(c + dir * 3.0 * r, c + dir * 6.0 * r, 45.0, 1.0, 0.01 * r, 100.0 * r);
+    (at, away)
+}
+
+/// A peel loop run with the last frame's pass count (`technique::peel`): each pass after the
+/// first gated on the device by its predecessor's flag, the last flag checked at the end, so a
+/// steady frame waits once. A view that needs more passes runs again (and equals a one-shot render
+/// of it: image, passes, losses); a view that needs fewer closes its gates and counts only the
+/// passes that ran, without running again. The compute path's setup is on the GPU here (on a CPU
+/// device it is on the host by default, and the host's work list cannot be gated).
+#[test]
+fn a_speculated_peel_count_that_misses_runs_again() {
+    let Some(vk) = oit_vulkan::backend_or_skip("a_speculated_peel_count_that_misses_runs_again") else {
+        return;
+    };
+    let vk = vk.with_gpu_setup(true);
+    let gpu = vk.gpu().expect("opened above");
+    let scene = load_scene("planes:5").unwrap();
+    let (at, away) = at_and_away(&scene);
+    for path in vk.capabilities().raster_paths {
+        for technique in ["dp", "ddp", "mlp:2"] {
+            let s = Settings { width: 40, ..settings(technique, path) };
+            let one_shot_at = vk.render(&scene, &at, &s).unwrap();
+            let one_shot_away = vk.render(&scene, &away, &s).unwrap();
+            assert!(one_shot_at.stats.geometry_passes >= 3, "{technique}: the planes need several passes");
+            let mut prepared = vk.prepare(&scene).unwrap();
+            prepared.frame(&away, &s).unwrap();
+            let before = gpu.waits();
+            let frame = prepared.frame(&at, &s).unwrap();
+            // the first attempt's end; then the second's wait after each pass, and its end
+            let passes = u64::from(one_shot_at.stats.geometry_passes);
+            let waits = gpu.waits() - before;
+            assert!(
+                waits > passes,
+                "{technique} on {path}: the frame needed more passes and ran again ({waits} waits)"
+            );
+            assert_eq!(frame.image, one_shot_at.image, "{technique} on {path}");
+            assert_eq!(
+                frame.stats.geometry_passes, one_shot_at.stats.geometry_passes,
+                "{technique} on {path}"
+            );
+            assert_eq!(frame.stats.lost, one_shot_at.stats.lost, "{technique} on {path}");
+            assert_eq!(frame.stats.captured, one_shot_at.stats.captured, "{technique} on {path}");
+            // the deep view again, speculated right: one wait
+            let before = gpu.waits();
+            let frame = prepared.frame(&at, &s).unwrap();
+            assert_eq!(gpu.waits() - before, 1, "{technique} on {path}: the deep view, speculated");
+            assert_eq!(frame.image, one_shot_at.image, "{technique} on {path}");
+            assert_eq!(
+                frame.stats.geometry_passes, one_shot_at.stats.geometry_passes,
+                "{technique} on {path}"
+            );
+            // speculating the deep view's count, the empty view closes the gates at once
+            let before = gpu.waits();
+            let frame = prepared.frame(&away, &s).unwrap();
+            assert_eq!(gpu.waits() - before, 1, "{technique} on {path}: fewer passes need no second run");
+            assert_eq!(frame.image, one_shot_away.image, "{technique} on {path}");
+            assert_eq!(
+                frame.stats.geometry_passes, one_shot_away.stats.geometry_passes,
+                "{technique} on {path}"
+            );
+        }
+    }
+}

@@ -56,18 +56,5 @@ pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), O
     check_effect(ctx)?;
     let peel = Peel::new(ctx)?;
     let buffers = peel.buffers();
-    let limit = ctx.plan.peel_limit;
-    let mut peels = 0;
-    while peels < limit {
-        ctx.last_pass(peels + 1 == limit);
-        ctx.fill(&peel.peeled, 0);
-        ctx.geometry_pass(&drivers.scene, "ddp", &buffers, peels, 0)?;
-        ctx.pixel_kernel("ddp", "resolve_main", &buffers, peels, 0)?;
-        if ctx.read_u32(&peel.peeled)?[0] == 0 {
-            break;
-        }
-        peels += 1;
-    }
-    ctx.last_pass(false);
-    Ok(())
+    super::peel(ctx, &drivers.scene, "ddp", &buffers, &peel.peeled, 0, 0)
 }

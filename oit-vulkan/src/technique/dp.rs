@@ -1,6 +1,6 @@
 //! `dp` (see oit-wgpu's `technique/dp.rs`): per peel a geometry pass (u64 atomicMin strictly
-//! behind the previous layer) and a resolve kernel counting the pixels it peeled; one readback
-//! per peel ends the loop after the pass that peels nothing, or after `--max-peels`.
+//! behind the previous layer) and a resolve kernel counting the pixels it peeled; the loop
+//! (`technique::peel`) ends after the pass that peels nothing, or after `--max-peels`.
 
 use oit_core::OitError;
 
@@ -14,18 +14,5 @@ pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), O
     let peeled = ctx.buffer("dp peeled count", 1, Init::Zero)?;
     ctx.storage_bytes -= 4;
     let buffers = [&*nearest, &*previous, &*peeled];
-    let limit = ctx.plan.peel_limit;
-    let mut peels = 0;
-    while peels < limit {
-        ctx.last_pass(peels + 1 == limit);
-        ctx.fill(&peeled, 0);
-        ctx.geometry_pass(&drivers.scene, "dp", &buffers, peels, 0)?;
-        ctx.pixel_kernel("dp", "resolve_main", &buffers, peels, 0)?;
-        if ctx.read_u32(&peeled)?[0] == 0 {
-            break;
-        }
-        peels += 1;
-    }
-    ctx.last_pass(false);
-    Ok(())
+    super::peel(ctx, &drivers.scene, "dp", &buffers, &peeled, 0, 0)
 }

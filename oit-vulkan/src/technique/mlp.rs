@@ -1,6 +1,6 @@
 //! `mlp:M` (see oit-wgpu's `technique/mlp.rs`): per pass a geometry pass of atomic-min insertion
 //! into M u64 words per pixel, strictly behind the previous pass's deepest, and a resolve kernel;
-//! one readback of the "overflowed" flag per pass ends the loop.
+//! the loop (`technique::peel`) ends after the pass that leaves the "overflowed" flag clear.
 
 use oit_core::{OitError, Technique};
 
@@ -21,17 +21,5 @@ pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), O
     let overflowed = ctx.buffer("mlp overflowed", 1, Init::Zero)?;
     ctx.storage_bytes -= 4;
     let buffers = [&*slots, &*deepest, &*overflowed];
-    let limit = ctx.plan.peel_limit;
-    let mut peels = 0;
-    while peels < limit {
-        ctx.last_pass(peels + 1 == limit);
-        ctx.fill(&overflowed, 0);
-        ctx.geometry_pass(&drivers.scene, "mlp", &buffers, peels, m)?;
-        peels += 1;
-        ctx.pixel_kernel("mlp", "resolve_main", &buffers, peels, m)?;
-        if ctx.read_u32(&overflowed)?[0] == 0 {
-            break;
-        }
-    }
-    Ok(())
+    super::peel(ctx, &drivers.scene, "mlp", &buffers, &overflowed, m, 1)
 }

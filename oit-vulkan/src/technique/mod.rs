@@ -37,6 +37,82 @@ pub(crate) fn tail_buffers(ctx: &mut VkCtx<'_>) -> Result<(Rc<Buffer>, Rc<Buffer
     Ok((sums, words))
 }
 
+/// A peel loop (dp, ddp, mlp), as oit-wgpu's `technique::peel`: per pass `module`'s geometry pass
+/// (pass index p) and its `resolve_main` (pass index p + `resolve_step`), with `flag` cleared
+/// before each pass and set by it where the pass found more to peel; the loop ends after the pass
+/// that leaves it clear, or at the plan's peel limit.
+///
+/// With no speculated count the flag is read back after each pass (one round trip a peel), and
+/// the count found is kept for the next frame (`VkCtx::peels_seen`). With one (an earlier frame's
+/// count), every pass after the first is gated on the device by its predecessor's flag
+/// (`VkCtx::geometry_pass_if`: a closed gate runs nothing and counts no pass), and the last
+/// speculated pass's flag is checked at the frame's end: set, the frame ran too few passes and
+/// runs again without speculating. A raster without a gate (the host's setup) always reads back.
+pub(crate) fn peel(
+    ctx: &mut VkCtx<'_>,
+    raster: &Raster,
+    module: &'static str,
+    buffers: &[&Buffer],
+    flag: &Rc<Buffer>,
+    param: u32,
+    resolve_step: u32,
+) -> Result<(), OitError> {
+    let limit = ctx.plan.peel_limit;
+    let gate = raster.gate().is_some();
+    let speculated = ctx.speculated_peels.take().filter(|&s| s >= 1 && gate).map(|s| s.min(limit));
+    let previous = match speculated {
+        Some(_) => {
+            let b = ctx.buffer("peel gate", 1, Init::Zero)?;
+            // bookkeeping, not per-pixel storage
+            ctx.storage_bytes -= 4;
+            Some(b)
+        }
+        None => {
+            if gate {
+                ctx.make_gate_pipeline()?;
+            }
+            None
+        }
+    };
+    let mut p = 0;
+    while p < limit {
+        ctx.last_pass(p + 1 == limit);
+        match &previous {
+            Some(prev) if p > 0 => {
+                ctx.copy(flag, prev, 4);
+                ctx.fill(flag, 0);
+                ctx.geometry_pass_if(raster, module, buffers, p, param, prev)?;
+            }
+            _ => {
+                ctx.fill(flag, 0);
+                ctx.geometry_pass(raster, module, buffers, p, param)?;
+            }
+        }
+        ctx.pixel_kernel(module, "resolve_main", buffers, p + resolve_step, param)?;
+        p += 1;
+        match speculated {
+            Some(s) if p == s => {
+                if p < limit {
+                    // the last speculated pass must have found nothing more
+                    ctx.check_at_end(flag);
+                }
+                break;
+            }
+            Some(_) => {}
+            None => {
+                if ctx.read_u32(flag)?[0] == 0 {
+                    break;
+                }
+            }
+        }
+    }
+    if speculated.is_none() {
+        ctx.peels_seen = Some(p);
+    }
+    ctx.last_pass(false);
+    Ok(())
+}
+
 /// Fragments per pixel from one counting pass (the buffer), and the deepest pixel's count.
 pub(crate) fn count(ctx: &mut VkCtx<'_>, raster: &Raster) -> Result<(Rc<Buffer>, u32), OitError> {
     let counts = ctx.buffer("fragment counts", u64::from(ctx.pixels), Init::Zero)?;
