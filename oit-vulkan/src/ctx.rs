@@ -219,12 +219,17 @@ pub(crate) struct VkCtx<'a> {
     pub(crate) speculated_peels: Option<u32>,
     /// The peel count this frame found by reading back each peel's flag (none speculated).
     pub(crate) peels_seen: Option<u32>,
+    /// The deepest pixel's count (or set-bin count) to size from without a readback, from an
+    /// earlier frame of the same settings ([`VkCtx::deepest`]).
+    pub(crate) speculated_deepest: Option<u32>,
+    /// The deepest pixel's count this frame read back (none speculated).
+    pub(crate) deepest_seen: Option<u32>,
     /// Whether the geometry pass being recorded is gated ([`VkCtx::geometry_pass_if`]).
     gated_pass: bool,
     /// Word 5: the gated geometry passes whose gate was open (`gate.wgsl`), read at the end.
     gated_counter: Rc<Buffer>,
-    /// Flags that must read 0 at the frame's end ([`VkCtx::check_at_end`]).
-    end_checks: Vec<Rc<Buffer>>,
+    /// Words 0 that must pass their test at the frame's end ([`VkCtx::check_at_end`]).
+    end_checks: Vec<EndCheck>,
 }
 
 impl Drop for VkCtx<'_> {
@@ -307,6 +312,8 @@ impl<'a> VkCtx<'a> {
             setup_checks: Vec::new(),
             speculated_peels: None,
             peels_seen: None,
+            speculated_deepest: None,
+            deepest_seen: None,
             gated_pass: false,
             gated_counter,
             end_checks: Vec::new(),
@@ -481,7 +488,31 @@ impl<'a> VkCtx<'a> {
     /// Leaves word 0 of `flag` to be checked at the frame's end: a frame where it is not 0 ran
     /// on a wrong speculation and must run again ([`Ended::missed`]).
     pub(crate) fn check_at_end(&mut self, flag: &Rc<Buffer>) {
-        self.end_checks.push(flag.clone());
+        self.end_checks.push((flag.clone(), Box::new(|word| word == 0)));
+    }
+
+    /// The deepest pixel of a counting pass whose count lies in word 0 of `max`: the speculated
+    /// value where the frame has one (checked at its end, a frame whose count differs runs
+    /// again), else read back now and kept for the next frame ([`Ended::deepest_seen`]).
+    pub(crate) fn deepest(&mut self, max: &Rc<Buffer>) -> Result<u32, OitError> {
+        self.deepest_alike(max, |speculated, counted| speculated == counted)
+    }
+
+    /// [`VkCtx::deepest`] for a count the frame uses only through a coarser figure: a speculated
+    /// value passes the end's check where `alike(speculated, counted)` (adp's batch count, the
+    /// same for every set-bin count of a batch of 32), not only where the two are equal.
+    pub(crate) fn deepest_alike(
+        &mut self,
+        max: &Rc<Buffer>,
+        alike: impl Fn(u32, u32) -> bool + 'static,
+    ) -> Result<u32, OitError> {
+        if let Some(d) = self.speculated_deepest.take() {
+            self.end_checks.push((max.clone(), Box::new(move |counted| alike(d, counted))));
+            return Ok(d);
+        }
+        let m = self.read_u32(max)?[0];
+        self.deepest_seen = Some(m);
+        Ok(m)
     }
 
     /// Counts the scene's fragments with one count-only draw (a capture that keeps nothing,
@@ -856,14 +887,15 @@ impl<'a> VkCtx<'a> {
         let checks = std::mem::take(&mut self.setup_checks);
         let (gated_counter, end_checks) = (self.gated_counter.clone(), std::mem::take(&mut self.end_checks));
         let mut read = vec![&*totals, &*first_count, &*gated_counter];
-        read.extend(end_checks.iter().map(|b| &**b));
+        read.extend(end_checks.iter().map(|(b, _)| &**b));
         read.extend(checks.iter().map(|c| &*c.counters));
         if readback {
             read.push(&*image_buf);
             read.push(&*acct_buf);
         }
         let reading = self.rec.read_start(&read)?;
-        Ok(Finishing { ctx: self, reading, checks, end_checks: end_checks.len(), readback })
+        let end_checks = end_checks.into_iter().map(|(_, test)| test).collect();
+        Ok(Finishing { ctx: self, reading, checks, end_checks, readback })
     }
 }
 
@@ -876,7 +908,12 @@ pub(crate) struct Ended {
     pub(crate) missed: bool,
     /// The peel count the frame read back, where it speculated none.
     pub(crate) peels_seen: Option<u32>,
+    /// The deepest pixel's count the frame read back, where it speculated none.
+    pub(crate) deepest_seen: Option<u32>,
 }
+
+/// A word the frame's end reads back and tests ([`VkCtx::check_at_end`], [`VkCtx::deepest`]).
+type EndCheck = (Rc<Buffer>, Box<dyn Fn(u32) -> bool>);
 
 /// A frame submitted with its one readback and not yet waited for ([`VkCtx::finish_start`]): its
 /// context (the storage it borrowed from the pool, its recorder) stays with it until the wait.
@@ -884,8 +921,9 @@ pub(crate) struct Finishing<'a> {
     ctx: VkCtx<'a>,
     reading: crate::record::Reading,
     checks: Vec<crate::raster::SetupCheck>,
-    /// How many flags [`VkCtx::check_at_end`] left, read after the gated counter.
-    end_checks: usize,
+    /// The tests of the words [`VkCtx::check_at_end`] and [`VkCtx::deepest`] left, read after
+    /// the gated counter.
+    end_checks: Vec<Box<dyn Fn(u32) -> bool>>,
     readback: bool,
 }
 
@@ -899,11 +937,11 @@ impl Finishing<'_> {
         let mut words = ctx.rec.read_wait(reading)?;
         ctx.check_validation()?;
         // totals, first count, gated counter, the end checks, then the rest in order
-        let flags: Vec<Vec<u32>> = words.drain(3..3 + end_checks).collect();
-        let missed = flags.iter().any(|f| f.first().copied().unwrap_or(1) != 0);
+        let flags: Vec<Vec<u32>> = words.drain(3..3 + end_checks.len()).collect();
+        let missed = flags.iter().zip(&end_checks).any(|(f, test)| f.first().is_none_or(|&w| !test(w)));
         let gated_ran = words[2].get(5).copied().unwrap_or(0);
         words.remove(2);
-        let peels_seen = ctx.peels_seen;
+        let (peels_seen, deepest_seen) = (ctx.peels_seen, ctx.deepest_seen);
         // every check runs (one that does not fit clears its buffers' trust for the next frame)
         let fits = checks.iter().enumerate().fold(true, |ok, (i, c)| {
             let fit = c.fits(words.get(2 + i).map_or(&[][..], |w| w.as_slice()));
@@ -914,7 +952,7 @@ impl Finishing<'_> {
         } else {
             Some(ctx.resolve_counts(words, checks.len(), readback, gated_ran)?)
         };
-        Ok(Ended { frame, missed, peels_seen })
+        Ok(Ended { frame, missed, peels_seen, deepest_seen })
     }
 }
 

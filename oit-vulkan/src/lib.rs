@@ -224,9 +224,10 @@ pub struct VulkanPrepared<'s> {
     hardware: RefCell<Option<HardwareScene>>,
     /// `VulkanBackend::gpu_setup`.
     gpu_setup: Option<bool>,
-    /// The peel count an earlier frame found, by its settings: the next frame of those settings
-    /// runs that many passes gated on the device instead of reading a flag back per peel
-    /// (`technique::peel`), and is checked at its end.
+    /// What an earlier frame read back, by its settings (`"<settings> peels"`, `"<settings>
+    /// deepest"`): the next frame of those settings runs that many peels gated on the device
+    /// instead of reading a flag back per peel (`technique::peel`), and sizes from that deepest
+    /// pixel instead of waiting for its counting pass (`VkCtx::deepest`); both checked at its end.
     peels: RefCell<std::collections::HashMap<String, u32>>,
 }
 
@@ -408,9 +409,10 @@ impl VulkanPrepared<'_> {
             }
         };
         let mut ctx = VkCtx::new(this.gpu, this.scene, camera, settings, &this.pool)?;
-        // every setting can change the peel count (the camera too: checked at the frame's end)
+        // every setting can change what a frame reads back (the camera too: checked at its end)
         let key = format!("{settings:?}");
-        ctx.speculated_peels = this.peels.borrow().get(&key).copied();
+        ctx.speculated_peels = this.peels.borrow().get(&format!("{key} peels")).copied();
+        ctx.speculated_deepest = this.peels.borrow().get(&format!("{key} deepest")).copied();
         let layers = run_technique(&mut ctx, &drivers)?;
         let finishing = ctx.finish_start(readback)?;
         Ok(InFlight { finishing, layers: layers.filter(|_| readback), start, peels: (&this.peels, key) })
@@ -438,11 +440,17 @@ impl InFlight<'_> {
     fn end(self) -> Result<Option<Frame>, OitError> {
         let ended = self.finishing.wait()?;
         let (peels, key) = self.peels;
-        if ended.missed {
-            peels.borrow_mut().remove(&key);
-        } else if let Some(seen) = ended.peels_seen {
-            peels.borrow_mut().insert(key, seen);
+        let mut kept = peels.borrow_mut();
+        for (what, seen) in [("peels", ended.peels_seen), ("deepest", ended.deepest_seen)] {
+            let key = format!("{key} {what}");
+            if ended.missed {
+                // the frame runs again reading back what it speculated
+                kept.remove(&key);
+            } else if let Some(seen) = seen {
+                kept.insert(key, seen);
+            }
         }
+        drop(kept);
         let Some(mut frame) = ended.frame else { return Ok(None) };
         frame.layers = self.layers;
         frame.stats.wall_ms = self.start.elapsed().as_secs_f64() * 1e3;

@@ -177,3 +177,50 @@ fn a_speculated_peel_count_that_misses_runs_again() {
         }
     }
 }
+
+/// Techniques that size storage from a counting pass's deepest pixel (`fabs`, `mdts`, and `plain`
+/// on the compute path)
+/// or batch by it (`adp`) take an earlier frame's count instead of waiting for it, and check it at
+/// the end (`VkCtx::deepest`): a view whose count differs runs again and equals a one-shot render
+/// of it; one speculated right waits once.
+#[test]
+fn a_speculated_deepest_pixel_that_misses_runs_again() {
+    let Some(vk) = oit_vulkan::backend_or_skip("a_speculated_deepest_pixel_that_misses_runs_again") else {
+        return;
+    };
+    let gpu = vk.gpu().expect("opened above");
+    let scene = load_scene("planes:5").unwrap();
+    let (at, away) = at_and_away(&scene);
+    for path in vk.capabilities().raster_paths {
+        for technique in ["plain", "fabs", "mdts", "adp"] {
+            if technique == "plain" && path == RasterPath::Hardware {
+                // blended in submission order: no counting pass
+                continue;
+            }
+            let s = Settings { width: 40, ..settings(technique, path) };
+            let one_shot_at = vk.render(&scene, &at, &s).unwrap();
+            assert!(one_shot_at.stats.max_layers >= 3, "{technique}: the planes overlap");
+            let mut prepared = vk.prepare(&scene).unwrap();
+            prepared.frame(&away, &s).unwrap();
+            let before = gpu.waits();
+            let frame = prepared.frame(&at, &s).unwrap();
+            let waits = gpu.waits() - before;
+            assert!(
+                waits >= 3,
+                "{technique} on {path}: the speculation missed, the frame ran again ({waits} waits)"
+            );
+            assert_eq!(frame.image, one_shot_at.image, "{technique} on {path}");
+            assert_eq!(frame.stats.storage_bytes, one_shot_at.stats.storage_bytes, "{technique} on {path}");
+            assert_eq!(frame.stats.lost, one_shot_at.stats.lost, "{technique} on {path}");
+            assert_eq!(
+                frame.stats.geometry_passes, one_shot_at.stats.geometry_passes,
+                "{technique} on {path}"
+            );
+            let before = gpu.waits();
+            let frame = prepared.frame(&at, &s).unwrap();
+            assert_eq!(gpu.waits() - before, 1, "{technique} on {path}: speculated right, one wait");
+            assert_eq!(frame.image, one_shot_at.image, "{technique} on {path}");
+            assert_eq!(frame.stats.storage_bytes, one_shot_at.stats.storage_bytes, "{technique} on {path}");
+        }
+    }
+}

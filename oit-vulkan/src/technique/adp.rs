@@ -1,5 +1,5 @@
 //! `adp` (see oit-wgpu's `technique/adp.rs`) by storage-buffer atomics on the compute path: bounds
-//! pass, histogram pass (atomicOr), the deepest pixel's set-bin count (one readback) for the
+//! pass, histogram pass (atomicOr), the deepest pixel's set-bin count (`VkCtx::deepest_alike`) for the
 //! number of batches, then one bucket pass and one resolve per batch of 32. On the hardware path
 //! with `--hardware-capture blend`, the histogram pass is the paper's own: logic-op OR into 8 ×
 //! R32G32B32A32_UINT targets (`technique::blend::adp_histogram`), copied into the same histogram.
@@ -25,7 +25,9 @@ pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>, logic_or: bool)
         ctx.geometry_pass(&drivers.scene, "adp", &buffers, 0, 0)?;
     }
     ctx.pixel_kernel("adp", "count_main", &buffers, 0, 0)?;
-    let bins = ctx.read_u32(&max_bins)?[0];
+    // an earlier frame's count where it makes as many batches (checked at the end), else read back
+    let plan = ctx.plan.clone();
+    let bins = ctx.deepest_alike(&max_bins, move |a, b| plan.adp_batches(a) == plan.adp_batches(b))?;
     let batches = ctx.plan.adp_batches(bins);
     for batch in 0..batches {
         ctx.last_pass(batch + 1 == batches);

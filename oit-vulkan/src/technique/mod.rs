@@ -113,7 +113,8 @@ pub(crate) fn peel(
     Ok(())
 }
 
-/// Fragments per pixel from one counting pass (the buffer), and the deepest pixel's count.
+/// Fragments per pixel from one counting pass (the buffer), and the deepest pixel's count (an
+/// earlier frame's where it speculates, checked at the end: `VkCtx::deepest`).
 pub(crate) fn count(ctx: &mut VkCtx<'_>, raster: &Raster) -> Result<(Rc<Buffer>, u32), OitError> {
     let counts = ctx.buffer("fragment counts", u64::from(ctx.pixels), Init::Zero)?;
     let max = ctx.buffer("max count", 1, Init::Zero)?;
@@ -121,7 +122,7 @@ pub(crate) fn count(ctx: &mut VkCtx<'_>, raster: &Raster) -> Result<(Rc<Buffer>,
     ctx.pixel_kernel("count", "max_main", &[&counts, &max], 0, 0)?;
     // sizing storage is not the technique's: oit-cpu does not count it either
     ctx.storage_bytes -= u64::from(ctx.pixels) * 4 + 4;
-    let m = ctx.read_u32(&max)?[0];
+    let m = ctx.deepest(&max)?;
     Ok((counts, m))
 }
 
