@@ -224,6 +224,14 @@ pub(crate) struct VkCtx<'a> {
     pub(crate) speculated_deepest: Option<u32>,
     /// The deepest pixel's count this frame read back (none speculated).
     pub(crate) deepest_seen: Option<u32>,
+    /// The fragment total to size `dfb`'s and `ll`'s arrays from without a readback, from an
+    /// earlier frame of the same settings ([`VkCtx::fragment_capacity`]).
+    pub(crate) speculated_fragments: Option<u32>,
+    /// The fragment total this frame read back (none speculated).
+    pub(crate) fragments_seen: Option<u32>,
+    /// Counts on the device that must fit the capacity sized from them, and the bytes an element
+    /// takes ([`VkCtx::fragment_capacity`]).
+    capacity_checks: Vec<(Rc<Buffer>, u32, u64)>,
     /// Whether the geometry pass being recorded is gated ([`VkCtx::geometry_pass_if`]).
     gated_pass: bool,
     /// Word 5: the gated geometry passes whose gate was open (`gate.wgsl`), read at the end.
@@ -314,6 +322,9 @@ impl<'a> VkCtx<'a> {
             peels_seen: None,
             speculated_deepest: None,
             deepest_seen: None,
+            speculated_fragments: None,
+            fragments_seen: None,
+            capacity_checks: Vec::new(),
             gated_pass: false,
             gated_counter,
             end_checks: Vec::new(),
@@ -515,6 +526,50 @@ impl<'a> VkCtx<'a> {
         Ok(m)
     }
 
+    /// The capacity, in elements of `bytes` bytes, of arrays sized by a count in word 0 of `count`
+    /// on the device (`dfb`'s and `ll`'s fragment total), as oit-wgpu's: the count rounded up to
+    /// its size class (`oit_core::plan::size_class`: at most 1/8 more, so nearby views take the
+    /// same buffers from the pool). Where the frame speculates the count is an earlier frame's, not
+    /// waited for; else it is read back now. Either way it is read again at the frame's end: a
+    /// count over the capacity makes the frame run again, and the frame's `storage_bytes` are set
+    /// from the count there, as oit-cpu, which allocates exactly, reports them.
+    pub(crate) fn fragment_capacity(&mut self, count: &Rc<Buffer>, bytes: u64) -> Result<u32, OitError> {
+        let counted = match self.speculated_fragments.take() {
+            Some(earlier) => earlier,
+            None => {
+                let n = self.read_u32(count)?[0];
+                self.fragments_seen = Some(n);
+                n
+            }
+        };
+        let capacity = oit_core::plan::size_class(counted);
+        self.capacity_checks.push((count.clone(), capacity, bytes));
+        Ok(capacity)
+    }
+
+    /// [`VkCtx::geometry_pass`] counting its fragments into a word of its own, left on the device
+    /// for [`VkCtx::fragment_capacity`] (ll's sizing pass).
+    pub(crate) fn geometry_pass_kept_count(
+        &mut self,
+        raster: &Raster,
+        module: &'static str,
+        buffers: &[&Buffer],
+        pass_index: u32,
+        param: u32,
+    ) -> Result<Rc<Buffer>, OitError> {
+        let kept = self.buffer("pass fragment count", 1, Init::Zero)?;
+        // bookkeeping, not per-pixel storage
+        self.storage_bytes -= 4;
+        let first = self.fragments == Fragments::Unset;
+        let generated = self.record_pass(raster, module, buffers, pass_index, param, true)?;
+        self.passes += 1;
+        if first {
+            self.keep_first_count(generated);
+        }
+        self.rec.copy(generated, &kept, 4);
+        Ok(kept)
+    }
+
     /// Counts the scene's fragments with one count-only draw (a capture that keeps nothing,
     /// `shaders/no_capture.wgsl`) where no pass has yet, for captures whose passes cannot count
     /// them (a depth test kills fragments before the counter); not a geometry pass of the
@@ -532,24 +587,6 @@ impl<'a> VkCtx<'a> {
         let first_count = self.first_count.clone();
         self.rec.copy(generated, &first_count, 4);
         self.fragments = Fragments::OnDevice;
-    }
-
-    /// [`VkCtx::geometry_pass`], waiting for the fragments it generated (storage sized by them).
-    pub(crate) fn geometry_pass_counted(
-        &mut self,
-        raster: &Raster,
-        module: &'static str,
-        buffers: &[&Buffer],
-        pass_index: u32,
-        param: u32,
-    ) -> Result<u64, OitError> {
-        let generated = self.record_pass(raster, module, buffers, pass_index, param, true)?;
-        self.passes += 1;
-        let generated = u64::from(self.read_u32(generated)?[0]);
-        if matches!(self.fragments, Fragments::Unset | Fragments::OnDevice) {
-            self.fragments = Fragments::Known(generated);
-        }
-        Ok(generated)
     }
 
     /// Records one draw or dispatch of the scene (the caller counts it as a geometry pass or not),
@@ -888,6 +925,8 @@ impl<'a> VkCtx<'a> {
         let (gated_counter, end_checks) = (self.gated_counter.clone(), std::mem::take(&mut self.end_checks));
         let mut read = vec![&*totals, &*first_count, &*gated_counter];
         read.extend(end_checks.iter().map(|(b, _)| &**b));
+        let capacities = std::mem::take(&mut self.capacity_checks);
+        read.extend(capacities.iter().map(|(b, _, _)| &**b));
         read.extend(checks.iter().map(|c| &*c.counters));
         if readback {
             read.push(&*image_buf);
@@ -895,7 +934,8 @@ impl<'a> VkCtx<'a> {
         }
         let reading = self.rec.read_start(&read)?;
         let end_checks = end_checks.into_iter().map(|(_, test)| test).collect();
-        Ok(Finishing { ctx: self, reading, checks, end_checks, readback })
+        let capacities = capacities.into_iter().map(|(_, capacity, bytes)| (capacity, bytes)).collect();
+        Ok(Finishing { ctx: self, reading, checks, end_checks, capacities, readback })
     }
 }
 
@@ -910,6 +950,8 @@ pub(crate) struct Ended {
     pub(crate) peels_seen: Option<u32>,
     /// The deepest pixel's count the frame read back, where it speculated none.
     pub(crate) deepest_seen: Option<u32>,
+    /// The fragment total the frame read back, where it speculated none.
+    pub(crate) fragments_seen: Option<u32>,
 }
 
 /// A word the frame's end reads back and tests ([`VkCtx::check_at_end`], [`VkCtx::deepest`]).
@@ -924,6 +966,9 @@ pub(crate) struct Finishing<'a> {
     /// The tests of the words [`VkCtx::check_at_end`] and [`VkCtx::deepest`] left, read after
     /// the gated counter.
     end_checks: Vec<Box<dyn Fn(u32) -> bool>>,
+    /// The capacities [`VkCtx::fragment_capacity`] sized, with their element bytes, read after
+    /// the end checks.
+    capacities: Vec<(u32, u64)>,
     readback: bool,
 }
 
@@ -933,15 +978,23 @@ impl Finishing<'_> {
     /// the buffers the frame was set up into (the frame is incomplete; the caller runs it again,
     /// and its setup then sizes first).
     pub(crate) fn wait(self) -> Result<Ended, OitError> {
-        let Finishing { mut ctx, reading, checks, end_checks, readback } = self;
+        let Finishing { mut ctx, reading, checks, end_checks, capacities, readback } = self;
         let mut words = ctx.rec.read_wait(reading)?;
         ctx.check_validation()?;
         // totals, first count, gated counter, the end checks, then the rest in order
         let flags: Vec<Vec<u32>> = words.drain(3..3 + end_checks.len()).collect();
-        let missed = flags.iter().zip(&end_checks).any(|(f, test)| f.first().is_none_or(|&w| !test(w)));
+        let mut missed = flags.iter().zip(&end_checks).any(|(f, test)| f.first().is_none_or(|&w| !test(w)));
+        for (counted, &(capacity, bytes)) in words.drain(3..3 + capacities.len()).zip(&capacities) {
+            let counted = counted.first().copied().unwrap_or(u32::MAX);
+            missed |= counted > capacity;
+            // the storage of the count, as a frame that read it back reports it
+            ctx.storage_bytes =
+                ctx.storage_bytes - u64::from(capacity) * bytes + u64::from(counted.min(capacity)) * bytes;
+        }
         let gated_ran = words[2].get(5).copied().unwrap_or(0);
         words.remove(2);
-        let (peels_seen, deepest_seen) = (ctx.peels_seen, ctx.deepest_seen);
+        let (peels_seen, deepest_seen, fragments_seen) =
+            (ctx.peels_seen, ctx.deepest_seen, ctx.fragments_seen);
         // every check runs (one that does not fit clears its buffers' trust for the next frame)
         let fits = checks.iter().enumerate().fold(true, |ok, (i, c)| {
             let fit = c.fits(words.get(2 + i).map_or(&[][..], |w| w.as_slice()));
@@ -952,7 +1005,7 @@ impl Finishing<'_> {
         } else {
             Some(ctx.resolve_counts(words, checks.len(), readback, gated_ran)?)
         };
-        Ok(Ended { frame, missed, peels_seen, deepest_seen })
+        Ok(Ended { frame, missed, peels_seen, deepest_seen, fragments_seen })
     }
 }
 

@@ -225,9 +225,11 @@ pub struct VulkanPrepared<'s> {
     /// `VulkanBackend::gpu_setup`.
     gpu_setup: Option<bool>,
     /// What an earlier frame read back, by its settings (`"<settings> peels"`, `"<settings>
-    /// deepest"`): the next frame of those settings runs that many peels gated on the device
-    /// instead of reading a flag back per peel (`technique::peel`), and sizes from that deepest
-    /// pixel instead of waiting for its counting pass (`VkCtx::deepest`); both checked at its end.
+    /// deepest"`, `"<settings> fragments"`): the next frame of those settings runs that many
+    /// peels gated on the device instead of reading a flag back per peel (`technique::peel`),
+    /// sizes from that deepest pixel instead of waiting for its counting pass (`VkCtx::deepest`)
+    /// and its fragment arrays from that total (`VkCtx::fragment_capacity`); each checked at its
+    /// end.
     peels: RefCell<std::collections::HashMap<String, u32>>,
 }
 
@@ -413,6 +415,7 @@ impl VulkanPrepared<'_> {
         let key = format!("{settings:?}");
         ctx.speculated_peels = this.peels.borrow().get(&format!("{key} peels")).copied();
         ctx.speculated_deepest = this.peels.borrow().get(&format!("{key} deepest")).copied();
+        ctx.speculated_fragments = this.peels.borrow().get(&format!("{key} fragments")).copied();
         let layers = run_technique(&mut ctx, &drivers)?;
         let finishing = ctx.finish_start(readback)?;
         Ok(InFlight { finishing, layers: layers.filter(|_| readback), start, peels: (&this.peels, key) })
@@ -441,7 +444,19 @@ impl InFlight<'_> {
         let ended = self.finishing.wait()?;
         let (peels, key) = self.peels;
         let mut kept = peels.borrow_mut();
-        for (what, seen) in [("peels", ended.peels_seen), ("deepest", ended.deepest_seen)] {
+        // a frame that speculated its fragment total (dfb, ll) and fitted keeps the capacity for
+        // the next (the views it fits take the same buffers), unless its own total fell under
+        // half of it: then the next frame is sized from this one's
+        let fragments = match (ended.fragments_seen, &ended.frame) {
+            (None, Some(frame)) => kept.get(&format!("{key} fragments")).copied().and_then(|earlier| {
+                let counted = u32::try_from(frame.stats.fragments).ok()?;
+                (u64::from(counted) * 2 < u64::from(oit_core::plan::size_class(earlier))).then_some(counted)
+            }),
+            (seen, _) => seen,
+        };
+        for (what, seen) in
+            [("peels", ended.peels_seen), ("deepest", ended.deepest_seen), ("fragments", fragments)]
+        {
             let key = format!("{key} {what}");
             if ended.missed {
                 // the frame runs again reading back what it speculated

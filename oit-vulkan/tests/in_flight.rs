@@ -224,3 +224,48 @@ fn a_speculated_deepest_pixel_that_misses_runs_again() {
         }
     }
 }
+
+/// `dfb` and `ll` size their fragment arrays from an earlier frame's fragment total rounded up to
+/// its size class (`VkCtx::fragment_capacity`), checked at the end: a view with more fragments
+/// than the capacity runs again and equals a one-shot render (image, counts, storage); one with
+/// fewer fits, waits once and reports its own count's storage, as a one-shot render does.
+#[test]
+fn a_speculated_fragment_total_that_misses_runs_again() {
+    let Some(vk) = oit_vulkan::backend_or_skip("a_speculated_fragment_total_that_misses_runs_again") else {
+        return;
+    };
+    let gpu = vk.gpu().expect("opened above");
+    let scene = load_scene("planes:5").unwrap();
+    let (at, away) = at_and_away(&scene);
+    for path in vk.capabilities().raster_paths {
+        for technique in ["dfb", "ll"] {
+            let s = Settings { width: 40, ..settings(technique, path) };
+            let one_shot_at = vk.render(&scene, &at, &s).unwrap();
+            let one_shot_away = vk.render(&scene, &away, &s).unwrap();
+            assert!(one_shot_at.stats.fragments > 0 && one_shot_away.stats.fragments == 0);
+            let mut prepared = vk.prepare(&scene).unwrap();
+            prepared.frame(&away, &s).unwrap();
+            let before = gpu.waits();
+            let frame = prepared.frame(&at, &s).unwrap();
+            let waits = gpu.waits() - before;
+            assert!(
+                waits >= 3,
+                "{technique} on {path}: more fragments than the capacity ran again ({waits} waits)"
+            );
+            assert_eq!(frame.image, one_shot_at.image, "{technique} on {path}");
+            assert_eq!(frame.stats.storage_bytes, one_shot_at.stats.storage_bytes, "{technique} on {path}");
+            assert_eq!(frame.stats.fragments, one_shot_at.stats.fragments, "{technique} on {path}");
+            assert_eq!(frame.stats.lost, one_shot_at.stats.lost, "{technique} on {path}");
+            let before = gpu.waits();
+            let frame = prepared.frame(&at, &s).unwrap();
+            assert_eq!(gpu.waits() - before, 1, "{technique} on {path}: speculated right, one wait");
+            assert_eq!(frame.image, one_shot_at.image, "{technique} on {path}");
+            assert_eq!(frame.stats.storage_bytes, one_shot_at.stats.storage_bytes, "{technique} on {path}");
+            let before = gpu.waits();
+            let frame = prepared.frame(&away, &s).unwrap();
+            assert_eq!(gpu.waits() - before, 1, "{technique} on {path}: fewer fragments fit, one wait");
+            assert_eq!(frame.image, one_shot_away.image, "{technique} on {path}");
+            assert_eq!(frame.stats.storage_bytes, one_shot_away.stats.storage_bytes, "{technique} on {path}");
+        }
+    }
+}

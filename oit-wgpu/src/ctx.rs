@@ -1264,30 +1264,4 @@ pub fn dispatch_size(invocations: u64) -> (u32, u32) {
 /// sizes it as the speculated value did.
 type SizeCheck = Box<dyn Fn(u32) -> bool>;
 
-/// The capacity allocated for `n` elements counted by an earlier frame: `n` rounded up to a
-/// multiple of an eighth of its power of two (at most 1/8 more; 8 classes an octave), so counts
-/// that differ a little from frame to frame take the same buffers from the pool.
-pub fn size_class(n: u32) -> u32 {
-    if n <= 8 {
-        return n;
-    }
-    let step = 1u32 << (31 - n.leading_zeros() - 3);
-    n.div_ceil(step).saturating_mul(step)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::size_class;
-
-    #[test]
-    fn size_classes_hold_the_count_within_an_eighth() {
-        for n in (0..5000).chain([u32::MAX / 2, u32::MAX / 2 + 1, 1 << 31]) {
-            let c = size_class(n);
-            assert!(c >= n && u64::from(c) * 8 <= u64::from(n) * 9, "{n} -> {c}");
-        }
-        assert_eq!(size_class(1000), 1024);
-        assert_eq!(size_class(1025), 1152);
-        // neighbours share a class
-        assert_eq!(size_class(1_000_001), size_class(1_020_000));
-    }
-}
+pub use oit_core::plan::size_class;

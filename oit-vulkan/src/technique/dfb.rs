@@ -1,6 +1,6 @@
 //! `dfb` (see oit-wgpu's `technique/dfb.rs` and `dfb.wgsl`): a counting pass, the exclusive
-//! prefix sum of the counts on the GPU (`scan.wgsl`, as oit-wgpu: the total is the one word read
-//! back, to size the fragment buffer), a fill pass into exactly the frame's fragments, and a
+//! prefix sum of the counts on the GPU (`scan.wgsl`, as oit-wgpu; the fragment buffer sized from the
+//! total's size class, `VkCtx::fragment_capacity`), a fill pass, and a
 //! per-pixel sort by (depth, primitive id) and composite.
 
 use oit_core::OitError;
@@ -16,7 +16,9 @@ pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), O
     let offsets = ctx.buffer("dfb offsets", entries, Init::Zero)?;
     ctx.copy(&counts, &offsets, entries * 4);
     let total = super::scan(ctx, &offsets, entries)?;
-    let total = u64::from(ctx.plan.check_fragments(total)?);
+    // a u64 key and a u32 payload a fragment
+    let total = ctx.fragment_capacity(&total, 12)?;
+    let total = u64::from(ctx.plan.check_fragments(u64::from(total))?);
     let keys = ctx.buffer("dfb keys", total * 2, Init::Zero)?;
     let payloads = ctx.buffer("dfb payloads", total, Init::Zero)?;
     let buffers = [&*counts, &*offsets, &*keys, &*payloads];

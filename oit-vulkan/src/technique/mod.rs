@@ -131,16 +131,16 @@ const SCAN_BLOCK: u64 = 256;
 
 /// An exclusive prefix sum of the first `n` words of `words`, in place, on the GPU (`scan.wgsl`,
 /// as oit-wgpu's `technique::scan`: each block scanned in its workgroup, the block totals scanned
-/// the same way, one level per 256× fewer words, then added back); returns the total, the one
-/// word read back.
-pub(crate) fn scan(ctx: &mut VkCtx<'_>, words: &Buffer, n: u64) -> Result<u64, OitError> {
+/// the same way, one level per 256× fewer words, then added back); returns the buffer whose word
+/// 0 holds the total (the top level's one block total), on the device.
+pub(crate) fn scan(ctx: &mut VkCtx<'_>, words: &Buffer, n: u64) -> Result<Rc<Buffer>, OitError> {
     let blocks = n.div_ceil(SCAN_BLOCK).max(1);
     let param = u32::try_from(n).map_err(|_| OitError::Device(format!("a prefix sum over {n} words")))?;
     let sums = ctx.buffer("scan block sums", blocks, Init::Zero)?;
     ctx.storage_bytes -= blocks * 4;
     ctx.kernel_over("scan", "scan_main", &[words, &sums], blocks * 64, 0, param, "scan")?;
     if blocks == 1 {
-        return Ok(u64::from(ctx.read_u32(&sums)?[0]));
+        return Ok(sums);
     }
     let total = scan(ctx, &sums, blocks)?;
     ctx.kernel_over("scan", "add_main", &[words, &sums], blocks * 64, 0, param, "scan")?;
