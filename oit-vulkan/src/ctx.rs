@@ -232,6 +232,9 @@ pub(crate) struct VkCtx<'a> {
     /// Counts on the device that must fit the capacity sized from them, and the bytes an element
     /// takes ([`VkCtx::fragment_capacity`]).
     capacity_checks: Vec<(Rc<Buffer>, u32, u64)>,
+    /// Where a gated tail pass counts the fragments it merged (word 1), read at the end
+    /// ([`VkCtx::note_merged`]).
+    merged_from: Option<Rc<Buffer>>,
     /// Whether the geometry pass being recorded is gated ([`VkCtx::geometry_pass_if`]).
     gated_pass: bool,
     /// Word 5: the gated geometry passes whose gate was open (`gate.wgsl`), read at the end.
@@ -325,6 +328,7 @@ impl<'a> VkCtx<'a> {
             speculated_fragments: None,
             fragments_seen: None,
             capacity_checks: Vec::new(),
+            merged_from: None,
             gated_pass: false,
             gated_counter,
             end_checks: Vec::new(),
@@ -488,6 +492,12 @@ impl<'a> VkCtx<'a> {
         let run = self.record_pass(raster, module, buffers, pass_index, param, false);
         self.gated_pass = false;
         run.map(|_| ())
+    }
+
+    /// Where a gated tail pass counted the fragments it merged (word 1 of `words`, 0 where it did
+    /// not run): read back with the frame's end into [`VkCtx::merged`].
+    pub(crate) fn note_merged(&mut self, words: &Rc<Buffer>) {
+        self.merged_from = Some(words.clone());
     }
 
     /// Makes the gate's pipeline ([`VkCtx::geometry_pass_if`]) where it is not yet cached: a frame
@@ -927,6 +937,8 @@ impl<'a> VkCtx<'a> {
         read.extend(end_checks.iter().map(|(b, _)| &**b));
         let capacities = std::mem::take(&mut self.capacity_checks);
         read.extend(capacities.iter().map(|(b, _, _)| &**b));
+        let merged_from = self.merged_from.take();
+        read.extend(merged_from.as_deref());
         read.extend(checks.iter().map(|c| &*c.counters));
         if readback {
             read.push(&*image_buf);
@@ -935,7 +947,8 @@ impl<'a> VkCtx<'a> {
         let reading = self.rec.read_start(&read)?;
         let end_checks = end_checks.into_iter().map(|(_, test)| test).collect();
         let capacities = capacities.into_iter().map(|(_, capacity, bytes)| (capacity, bytes)).collect();
-        Ok(Finishing { ctx: self, reading, checks, end_checks, capacities, readback })
+        let merged = merged_from.is_some();
+        Ok(Finishing { ctx: self, reading, checks, end_checks, capacities, merged, readback })
     }
 }
 
@@ -969,6 +982,8 @@ pub(crate) struct Finishing<'a> {
     /// The capacities [`VkCtx::fragment_capacity`] sized, with their element bytes, read after
     /// the end checks.
     capacities: Vec<(u32, u64)>,
+    /// Whether [`VkCtx::note_merged`]'s words are read, after the capacities.
+    merged: bool,
     readback: bool,
 }
 
@@ -978,7 +993,7 @@ impl Finishing<'_> {
     /// the buffers the frame was set up into (the frame is incomplete; the caller runs it again,
     /// and its setup then sizes first).
     pub(crate) fn wait(self) -> Result<Ended, OitError> {
-        let Finishing { mut ctx, reading, checks, end_checks, capacities, readback } = self;
+        let Finishing { mut ctx, reading, checks, end_checks, capacities, merged, readback } = self;
         let mut words = ctx.rec.read_wait(reading)?;
         ctx.check_validation()?;
         // totals, first count, gated counter, the end checks, then the rest in order
@@ -990,6 +1005,10 @@ impl Finishing<'_> {
             // the storage of the count, as a frame that read it back reports it
             ctx.storage_bytes =
                 ctx.storage_bytes - u64::from(capacity) * bytes + u64::from(counted.min(capacity)) * bytes;
+        }
+        if merged {
+            let words = words.remove(3);
+            ctx.merged = u64::from(words.get(1).copied().unwrap_or(0));
         }
         let gated_ran = words[2].get(5).copied().unwrap_or(0);
         words.remove(2);

@@ -269,3 +269,33 @@ fn a_speculated_fragment_total_that_misses_runs_again() {
         }
     }
 }
+
+/// `fabs:K`'s overflow passes (and the tail's, `--overflow tail`) are gated on the device by the
+/// overflow flag where the raster has a gate: a steady frame waits once, and counts what the
+/// host's setup (whose passes read the flag back) counts, image, passes, losses and merged
+/// fragments included.
+#[test]
+fn fabs_overflow_passes_are_gated_on_the_device() {
+    let Some(vk) = oit_vulkan::backend_or_skip("fabs_overflow_passes_are_gated_on_the_device") else {
+        return;
+    };
+    let (gated, read_back) =
+        (oit_vulkan::VulkanBackend::default().with_gpu_setup(true), vk.with_gpu_setup(false));
+    let gpu = gated.gpu().expect("opened above");
+    let scene = load_scene("planes:5").unwrap();
+    let (at, _) = at_and_away(&scene);
+    for overflow in [oit_core::Overflow::Drop, oit_core::Overflow::Tail] {
+        let s = Settings { width: 40, overflow, ..settings("fabs:2", RasterPath::Compute) };
+        let want = read_back.render(&scene, &at, &s).unwrap();
+        assert!(want.stats.lost > 0 || want.stats.merged > 0, "{overflow:?}: two slots overflow");
+        assert!(want.stats.geometry_passes >= 3, "{overflow:?}: the overflow passes ran");
+        let mut prepared = gated.prepare(&scene).unwrap();
+        prepared.frame(&at, &s).unwrap();
+        let before = gpu.waits();
+        let got = prepared.frame(&at, &s).unwrap();
+        assert_eq!(gpu.waits() - before, 1, "{overflow:?}: a steady frame waits once");
+        assert_eq!(got.image, want.image, "{overflow:?}");
+        let key = |t: &Stats| (key(t), t.merged);
+        assert_eq!(key(&got.stats), key(&want.stats), "{overflow:?}");
+    }
+}

@@ -46,10 +46,21 @@ pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), O
     let buffers = [&*counters, &*slots, &*payloads, &*overflowed, &*tail, &*tail_words];
     let mut tail_ran = false;
     ctx.geometry_pass(&drivers.scene, module, &buffers, FABS_CAPTURE, k)?;
-    // sized from the counting pass, no pixel can overflow: no check, no readback
+    // sized from the counting pass, no pixel can overflow: no check
     if !ctx.plan.needs_count() {
         ctx.pixel_kernel(module, "overflow_main", &buffers, FABS_CAPTURE, k)?;
-        if ctx.read_u32(&overflowed)?[0] != 0 {
+        if drivers.scene.gate().is_some() {
+            // where a pixel overflowed (the flag stays on the device: the passes are gated by
+            // it), the K smallest keys of each overflowing pixel, then their payloads
+            for pass in [FABS_KEYS, FABS_PAYLOADS] {
+                ctx.geometry_pass_if(&drivers.scene, module, &buffers, pass, k, &overflowed)?;
+            }
+            if ctx.plan.tail {
+                ctx.geometry_pass_if(&drivers.scene, module, &buffers, FABS_TAIL, k, &overflowed)?;
+                ctx.note_merged(&tail_words);
+            }
+        } else if ctx.read_u32(&overflowed)?[0] != 0 {
+            // the host's setup: its work list cannot be gated, so the flag is read back
             ctx.geometry_pass(&drivers.scene, module, &buffers, FABS_KEYS, k)?;
             ctx.geometry_pass(&drivers.scene, module, &buffers, FABS_PAYLOADS, k)?;
             if ctx.plan.tail {
