@@ -36,10 +36,12 @@ const WEIGHTED_WGSL: &str = include_str!("weighted.wgsl");
 /// `plain` on the blender.
 pub(crate) fn plain(ctx: &mut GpuCtx<'_>, stage: &SceneStage) -> Result<(), OitError> {
     let f32_blend = ctx.gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE);
-    let formats = if f32_blend {
-        (wgpu::TextureFormat::Rgba32Float, wgpu::TextureFormat::R32Float)
-    } else {
-        (wgpu::TextureFormat::Rgba16Float, wgpu::TextureFormat::R16Float)
+    let formats = match (plain_colour_target(), f32_blend) {
+        // a measurement of the blender's rate in a narrower colour target, the count kept in f32
+        // (`OIT_PLAIN_TARGET`: not bit-equal to oit-cpu, so outside the conformance suite)
+        (Some(colour), true) => (colour, wgpu::TextureFormat::R32Float),
+        (_, true) => (wgpu::TextureFormat::Rgba32Float, wgpu::TextureFormat::R32Float),
+        (_, false) => (wgpu::TextureFormat::Rgba16Float, wgpu::TextureFormat::R16Float),
     };
     let over = wgpu::BlendState {
         color: wgpu::BlendComponent {
@@ -55,6 +57,17 @@ pub(crate) fn plain(ctx: &mut GpuCtx<'_>, stage: &SceneStage) -> Result<(), OitE
     };
     let clear = wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: 1.0 };
     draw_and_resolve(ctx, stage, formats, over, clear, ("plain_blend_fs", "plain_blend_resolve_main"), 0)
+}
+
+/// `OIT_PLAIN_TARGET=rgba16f` or `rgba8`: `plain`'s colour target on the blender, for measuring
+/// the blending rate users get from a narrower target (a speed baseline; its image differs from
+/// oit-cpu's by the target's rounding). Unset or anything else: RGBA32F, bit-equal to oit-cpu.
+fn plain_colour_target() -> Option<wgpu::TextureFormat> {
+    match std::env::var("OIT_PLAIN_TARGET").ok()?.to_ascii_lowercase().as_str() {
+        "rgba16f" => Some(wgpu::TextureFormat::Rgba16Float),
+        "rgba8" => Some(wgpu::TextureFormat::Rgba8Unorm),
+        _ => None,
+    }
 }
 
 /// `wavg` (`average`) or `wsum` on the blender.
