@@ -157,13 +157,19 @@ impl LoopEnd {
 /// named in [`LoopEnd::again`]). A start that fails with [`OitError::TooLarge`] ends the loop
 /// there: the frames in flight are ended, and that frame and those after it are left to
 /// [`LoopEnd::finish`], which renders them in tiles. Any other error ends the loop with it.
+/// Windows of a frame (`--memory`, a region) are never in flight: with either set, every frame is
+/// left to [`LoopEnd::finish`], one at a time.
 pub fn frames_in_flight<'c, F>(
     cameras: &'c [Camera],
+    settings: &Settings,
     depth: usize,
     mut start: impl FnMut(&'c Camera) -> Result<F, OitError>,
     mut end: impl FnMut(F) -> Result<Option<crate::Stats>, OitError>,
     done: &mut dyn FnMut(usize, crate::Stats),
 ) -> Result<LoopEnd, OitError> {
+    if settings.memory.is_some() || settings.region.is_some() {
+        return Ok(LoopEnd { again: Vec::new(), from: Some(0) });
+    }
     let depth = depth.max(1);
     let mut flight = std::collections::VecDeque::with_capacity(depth);
     let mut out = LoopEnd::default();

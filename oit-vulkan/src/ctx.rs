@@ -214,21 +214,11 @@ pub(crate) struct VkCtx<'a> {
     validation_before: u64,
     /// The compute path's setup checks left to the frame's end (`raster::SetupCheck`).
     setup_checks: Vec<crate::raster::SetupCheck>,
-    /// The peel count to run without a readback per peel, from an earlier frame of the same
-    /// settings (`technique::peel`); set by the prepared scene before the technique runs.
-    pub(crate) speculated_peels: Option<u32>,
-    /// The peel count this frame found by reading back each peel's flag (none speculated).
-    pub(crate) peels_seen: Option<u32>,
-    /// The deepest pixel's count (or set-bin count) to size from without a readback, from an
-    /// earlier frame of the same settings ([`VkCtx::deepest`]).
-    pub(crate) speculated_deepest: Option<u32>,
-    /// The deepest pixel's count this frame read back (none speculated).
-    pub(crate) deepest_seen: Option<u32>,
-    /// The fragment total to size `dfb`'s and `ll`'s arrays from without a readback, from an
-    /// earlier frame of the same settings ([`VkCtx::fragment_capacity`]).
-    pub(crate) speculated_fragments: Option<u32>,
-    /// The fragment total this frame read back (none speculated).
-    pub(crate) fragments_seen: Option<u32>,
+    /// What an earlier frame of the same settings read back, taken instead of waiting (each
+    /// value once); set by the prepared scene before the technique runs.
+    pub(crate) speculated: ReadBack,
+    /// What this frame read back where it speculated nothing.
+    seen: ReadBack,
     /// Counts on the device that must fit the capacity sized from them, and the bytes an element
     /// takes ([`VkCtx::fragment_capacity`]).
     capacity_checks: Vec<(Rc<Buffer>, u32, u64)>,
@@ -321,12 +311,8 @@ impl<'a> VkCtx<'a> {
             rec,
             validation_before: crate::device::validation_errors(),
             setup_checks: Vec::new(),
-            speculated_peels: None,
-            peels_seen: None,
-            speculated_deepest: None,
-            deepest_seen: None,
-            speculated_fragments: None,
-            fragments_seen: None,
+            speculated: ReadBack::default(),
+            seen: ReadBack::default(),
             capacity_checks: Vec::new(),
             merged_from: None,
             gated_pass: false,
@@ -459,13 +445,27 @@ impl<'a> VkCtx<'a> {
         pass_index: u32,
         param: u32,
     ) -> Result<(), OitError> {
+        self.scene_pass(raster, module, buffers, pass_index, param, false).map(|_| ())
+    }
+
+    /// [`VkCtx::geometry_pass`], its fragments counted also where it is not the first (`count`);
+    /// returns the word that counts them.
+    fn scene_pass<'r>(
+        &mut self,
+        raster: &'r Raster,
+        module: &'static str,
+        buffers: &[&Buffer],
+        pass_index: u32,
+        param: u32,
+        count: bool,
+    ) -> Result<&'r Buffer, OitError> {
         let first = self.fragments == Fragments::Unset;
-        let generated = self.record_pass(raster, module, buffers, pass_index, param, first)?;
+        let generated = self.record_pass(raster, module, buffers, pass_index, param, first || count)?;
         self.passes += 1;
         if first {
             self.keep_first_count(generated);
         }
-        Ok(())
+        Ok(generated)
     }
 
     /// A geometry pass that has work only where word 0 of `flag` (written by the frame's earlier
@@ -506,6 +506,11 @@ impl<'a> VkCtx<'a> {
         self.gpu.compute("gate", "gate_main", &[SetKind::Frame(4, self.image_bindings())]).map(|_| ())
     }
 
+    /// The peel count a peel loop found by reading its flags back, for the next frame.
+    pub(crate) fn note_peels(&mut self, peels: u32) {
+        self.seen.peels = Some(peels);
+    }
+
     /// Leaves word 0 of `flag` to be checked at the frame's end: a frame where it is not 0 ran
     /// on a wrong speculation and must run again ([`Ended::missed`]).
     pub(crate) fn check_at_end(&mut self, flag: &Rc<Buffer>) {
@@ -514,7 +519,7 @@ impl<'a> VkCtx<'a> {
 
     /// The deepest pixel of a counting pass whose count lies in word 0 of `max`: the speculated
     /// value where the frame has one (checked at its end, a frame whose count differs runs
-    /// again), else read back now and kept for the next frame ([`Ended::deepest_seen`]).
+    /// again), else read back now and kept for the next frame ([`Ended::seen`]).
     pub(crate) fn deepest(&mut self, max: &Rc<Buffer>) -> Result<u32, OitError> {
         self.deepest_alike(max, |speculated, counted| speculated == counted)
     }
@@ -527,12 +532,12 @@ impl<'a> VkCtx<'a> {
         max: &Rc<Buffer>,
         alike: impl Fn(u32, u32) -> bool + 'static,
     ) -> Result<u32, OitError> {
-        if let Some(d) = self.speculated_deepest.take() {
+        if let Some(d) = self.speculated.deepest.take() {
             self.end_checks.push((max.clone(), Box::new(move |counted| alike(d, counted))));
             return Ok(d);
         }
         let m = self.read_u32(max)?[0];
-        self.deepest_seen = Some(m);
+        self.seen.deepest = Some(m);
         Ok(m)
     }
 
@@ -544,11 +549,11 @@ impl<'a> VkCtx<'a> {
     /// count over the capacity makes the frame run again, and the frame's `storage_bytes` are set
     /// from the count there, as oit-cpu, which allocates exactly, reports them.
     pub(crate) fn fragment_capacity(&mut self, count: &Rc<Buffer>, bytes: u64) -> Result<u32, OitError> {
-        let counted = match self.speculated_fragments.take() {
+        let counted = match self.speculated.fragments.take() {
             Some(earlier) => earlier,
             None => {
                 let n = self.read_u32(count)?[0];
-                self.fragments_seen = Some(n);
+                self.seen.fragments = Some(n);
                 n
             }
         };
@@ -570,12 +575,7 @@ impl<'a> VkCtx<'a> {
         let kept = self.buffer("pass fragment count", 1, Init::Zero)?;
         // bookkeeping, not per-pixel storage
         self.storage_bytes -= 4;
-        let first = self.fragments == Fragments::Unset;
-        let generated = self.record_pass(raster, module, buffers, pass_index, param, true)?;
-        self.passes += 1;
-        if first {
-            self.keep_first_count(generated);
-        }
+        let generated = self.scene_pass(raster, module, buffers, pass_index, param, true)?;
         self.rec.copy(generated, &kept, 4);
         Ok(kept)
     }
@@ -959,12 +959,39 @@ pub(crate) struct Ended {
     pub(crate) frame: Option<Frame>,
     /// A speculated count was wrong ([`VkCtx::check_at_end`]): the next frame must not speculate.
     pub(crate) missed: bool,
-    /// The peel count the frame read back, where it speculated none.
-    pub(crate) peels_seen: Option<u32>,
-    /// The deepest pixel's count the frame read back, where it speculated none.
-    pub(crate) deepest_seen: Option<u32>,
-    /// The fragment total the frame read back, where it speculated none.
-    pub(crate) fragments_seen: Option<u32>,
+    /// What the frame read back where it speculated nothing.
+    pub(crate) seen: ReadBack,
+}
+
+/// The counts a frame reads back that the next frame of the same settings may take instead of
+/// waiting for them, each checked at that frame's end: a peel loop's pass count
+/// (`technique::peel`), a counting pass's deepest pixel ([`VkCtx::deepest`]) and a fragment total
+/// ([`VkCtx::fragment_capacity`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct ReadBack {
+    pub(crate) peels: Option<u32>,
+    pub(crate) deepest: Option<u32>,
+    pub(crate) fragments: Option<u32>,
+}
+
+impl ReadBack {
+    /// What the next frame of these settings takes after a frame that ended fitting (`self`: what
+    /// was kept): each value it read back replaces the kept one. A speculated fragment total that
+    /// fitted keeps its capacity (the views it fits take the same buffers) unless the frame's own
+    /// `fragments` fell under half of it: then the next frame is sized from this one's.
+    pub(crate) fn after(self, seen: ReadBack, fragments: Option<u64>) -> ReadBack {
+        let shrunk = match (seen.fragments, self.fragments, fragments) {
+            (None, Some(earlier), Some(counted)) => u32::try_from(counted)
+                .ok()
+                .filter(|&c| u64::from(c) * 2 < u64::from(oit_core::plan::size_class(earlier))),
+            _ => None,
+        };
+        ReadBack {
+            peels: seen.peels.or(self.peels),
+            deepest: seen.deepest.or(self.deepest),
+            fragments: seen.fragments.or(shrunk).or(self.fragments),
+        }
+    }
 }
 
 /// A word the frame's end reads back and tests ([`VkCtx::check_at_end`], [`VkCtx::deepest`]).
@@ -1012,8 +1039,7 @@ impl Finishing<'_> {
         }
         let gated_ran = words[2].get(5).copied().unwrap_or(0);
         words.remove(2);
-        let (peels_seen, deepest_seen, fragments_seen) =
-            (ctx.peels_seen, ctx.deepest_seen, ctx.fragments_seen);
+        let seen = ctx.seen;
         // every check runs (one that does not fit clears its buffers' trust for the next frame)
         let fits = checks.iter().enumerate().fold(true, |ok, (i, c)| {
             let fit = c.fits(words.get(2 + i).map_or(&[][..], |w| w.as_slice()));
@@ -1024,7 +1050,7 @@ impl Finishing<'_> {
         } else {
             Some(ctx.resolve_counts(words, checks.len(), readback, gated_ran)?)
         };
-        Ok(Ended { frame, missed, peels_seen, deepest_seen, fragments_seen })
+        Ok(Ended { frame, missed, seen })
     }
 }
 

@@ -91,7 +91,7 @@ pub use crate::device::{
     DeviceInfo, Gpu, PAPER_EXTENSIONS, spirv_modules, validation_errors, validation_requested,
 };
 
-use crate::ctx::VkCtx;
+use crate::ctx::{ReadBack, VkCtx};
 use crate::hardware::HardwareScene;
 use crate::raster::{ComputeBuffers, ComputeRaster, Raster};
 
@@ -205,7 +205,7 @@ impl Backend for VulkanBackend {
             compute_boxes: RefCell::new(None),
             hardware: RefCell::new(None),
             gpu_setup: self.gpu_setup,
-            peels: Default::default(),
+            read_back: Default::default(),
         }))
     }
 }
@@ -224,13 +224,12 @@ pub struct VulkanPrepared<'s> {
     hardware: RefCell<Option<HardwareScene>>,
     /// `VulkanBackend::gpu_setup`.
     gpu_setup: Option<bool>,
-    /// What an earlier frame read back, by its settings (`"<settings> peels"`, `"<settings>
-    /// deepest"`, `"<settings> fragments"`): the next frame of those settings runs that many
-    /// peels gated on the device instead of reading a flag back per peel (`technique::peel`),
-    /// sizes from that deepest pixel instead of waiting for its counting pass (`VkCtx::deepest`)
-    /// and its fragment arrays from that total (`VkCtx::fragment_capacity`); each checked at its
-    /// end.
-    peels: RefCell<std::collections::HashMap<String, u32>>,
+    /// What an earlier frame read back, by its settings (`ctx::ReadBack`): the next frame of
+    /// those settings runs that many peels gated on the device instead of reading a flag back per
+    /// peel (`technique::peel`), sizes from that deepest pixel instead of waiting for its counting
+    /// pass (`VkCtx::deepest`) and its fragment arrays from that total
+    /// (`VkCtx::fragment_capacity`); each checked at its end.
+    read_back: RefCell<std::collections::HashMap<String, ReadBack>>,
 }
 
 impl VulkanPrepared<'_> {
@@ -282,12 +281,10 @@ impl Prepared for VulkanPrepared<'_> {
         done: &mut dyn FnMut(usize, oit_core::Stats),
     ) -> Result<(), OitError> {
         settings.validate()?;
-        if settings.memory.is_some() || settings.region.is_some() {
-            return oit_core::frames_one_at_a_time(self, cameras, settings, done);
-        }
         let this = &*self;
         let end = oit_core::frames_in_flight(
             cameras,
+            settings,
             FRAMES_IN_FLIGHT,
             |camera| this.frame_start(camera, settings, false, Instant::now()),
             |f| Ok(f.end()?.map(|frame| frame.stats)),
@@ -413,12 +410,15 @@ impl VulkanPrepared<'_> {
         let mut ctx = VkCtx::new(this.gpu, this.scene, camera, settings, &this.pool)?;
         // every setting can change what a frame reads back (the camera too: checked at its end)
         let key = format!("{settings:?}");
-        ctx.speculated_peels = this.peels.borrow().get(&format!("{key} peels")).copied();
-        ctx.speculated_deepest = this.peels.borrow().get(&format!("{key} deepest")).copied();
-        ctx.speculated_fragments = this.peels.borrow().get(&format!("{key} fragments")).copied();
+        ctx.speculated = this.read_back.borrow().get(&key).copied().unwrap_or_default();
         let layers = run_technique(&mut ctx, &drivers)?;
         let finishing = ctx.finish_start(readback)?;
-        Ok(InFlight { finishing, layers: layers.filter(|_| readback), start, peels: (&this.peels, key) })
+        Ok(InFlight {
+            finishing,
+            layers: layers.filter(|_| readback),
+            start,
+            read_back: (&this.read_back, key),
+        })
     }
 }
 
@@ -432,8 +432,8 @@ struct InFlight<'c> {
     /// The reference's per-pixel fragment counts, where the frame reads back its image.
     layers: Option<Vec<u32>>,
     start: Instant,
-    /// The prepared scene's peel counts, and this frame's key in them.
-    peels: (&'c RefCell<std::collections::HashMap<String, u32>>, String),
+    /// The prepared scene's read-back counts, and this frame's key in them.
+    read_back: (&'c RefCell<std::collections::HashMap<String, ReadBack>>, String),
 }
 
 impl InFlight<'_> {
@@ -442,28 +442,15 @@ impl InFlight<'_> {
     /// frame of its settings reads its peels back): the frame must run again.
     fn end(self) -> Result<Option<Frame>, OitError> {
         let ended = self.finishing.wait()?;
-        let (peels, key) = self.peels;
-        let mut kept = peels.borrow_mut();
-        // a frame that speculated its fragment total (dfb, ll) and fitted keeps the capacity for
-        // the next (the views it fits take the same buffers), unless its own total fell under
-        // half of it: then the next frame is sized from this one's
-        let fragments = match (ended.fragments_seen, &ended.frame) {
-            (None, Some(frame)) => kept.get(&format!("{key} fragments")).copied().and_then(|earlier| {
-                let counted = u32::try_from(frame.stats.fragments).ok()?;
-                (u64::from(counted) * 2 < u64::from(oit_core::plan::size_class(earlier))).then_some(counted)
-            }),
-            (seen, _) => seen,
-        };
-        for (what, seen) in
-            [("peels", ended.peels_seen), ("deepest", ended.deepest_seen), ("fragments", fragments)]
-        {
-            let key = format!("{key} {what}");
-            if ended.missed {
-                // the frame runs again reading back what it speculated
-                kept.remove(&key);
-            } else if let Some(seen) = seen {
-                kept.insert(key, seen);
-            }
+        let (kept, key) = self.read_back;
+        let mut kept = kept.borrow_mut();
+        if ended.missed {
+            // the frame runs again reading back what it speculated
+            kept.remove(&key);
+        } else {
+            let fragments = ended.frame.as_ref().map(|f| f.stats.fragments);
+            let entry = kept.entry(key).or_default();
+            *entry = entry.after(ended.seen, fragments);
         }
         drop(kept);
         let Some(mut frame) = ended.frame else { return Ok(None) };

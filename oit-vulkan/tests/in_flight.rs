@@ -2,7 +2,7 @@
 //! frame i + 1 before it waits for frame i, as a renderer's frame loop does, and counts what the
 //! same frames one at a time count; one frame at a time never has two submissions on the queue.
 
-use oit_core::{Backend, Camera, Prepared, RasterPath, Settings, Stats, Technique, View, load_scene};
+use oit_core::{Backend, Camera, Frame, Prepared, RasterPath, Settings, Stats, Technique, View, load_scene};
 
 /// The counters a frame loop reports, as compared with one frame at a time.
 fn key(t: &Stats) -> (u32, u64, u64, u64, u64, u64, u32) {
@@ -117,80 +117,88 @@ fn at_and_away(scene: &oit_core::Scene) -> (Camera, Camera) {
     (at, away)
 }
 
+/// `got`, a prepared scene's frame, is what a one-shot render makes (`want`).
+fn assert_frame_eq(got: &Frame, want: &Frame, what: &str) {
+    assert_eq!(got.image, want.image, "{what}");
+    assert_eq!(got.stats.geometry_passes, want.stats.geometry_passes, "{what}");
+    assert_eq!(got.stats.fragments, want.stats.fragments, "{what}");
+    assert_eq!(got.stats.captured, want.stats.captured, "{what}");
+    assert_eq!(got.stats.lost, want.stats.lost, "{what}");
+    assert_eq!(got.stats.storage_bytes, want.stats.storage_bytes, "{what}");
+}
+
+/// A speculation made to miss and to fit on `vk`: after a frame of the view `away`, a frame of
+/// `at` (whose count differs) runs again, taking at least `missed_waits` waits, and equals a
+/// one-shot render; `at` again, speculated right, waits once; and, where `fewer_fits`, `away`
+/// speculated from `at` fits, waits once and equals its one-shot render.
+fn miss_then_fit(
+    vk: &oit_vulkan::VulkanBackend,
+    scene: &oit_core::Scene,
+    s: &Settings,
+    missed_waits: u64,
+    fewer_fits: bool,
+    what: &str,
+) {
+    let gpu = vk.gpu().expect("opened by the caller");
+    let (at, away) = at_and_away(scene);
+    let one_shot_at = vk.render(scene, &at, s).unwrap();
+    let one_shot_away = vk.render(scene, &away, s).unwrap();
+    let mut prepared = vk.prepare(scene).unwrap();
+    let mut frame = |camera: &Camera| {
+        let before = gpu.waits();
+        let frame = prepared.frame(camera, s).unwrap();
+        (frame, gpu.waits() - before)
+    };
+    frame(&away);
+    let (got, waits) = frame(&at);
+    assert!(waits >= missed_waits, "{what}: the speculation missed, the frame ran again ({waits} waits)");
+    assert_frame_eq(&got, &one_shot_at, what);
+    let (got, waits) = frame(&at);
+    assert_eq!(waits, 1, "{what}: speculated right, one wait");
+    assert_frame_eq(&got, &one_shot_at, what);
+    if fewer_fits {
+        let (got, waits) = frame(&away);
+        assert_eq!(waits, 1, "{what}: a view that needs less fits, one wait");
+        assert_frame_eq(&got, &one_shot_away, what);
+    }
+}
+
 /// A peel loop run with the last frame's pass count (`technique::peel`): each pass after the
 /// first gated on the device by its predecessor's flag, the last flag checked at the end, so a
-/// steady frame waits once. A view that needs more passes runs again (and equals a one-shot render
-/// of it: image, passes, losses); a view that needs fewer closes its gates and counts only the
-/// passes that ran, without running again. The compute path's setup is on the GPU here (on a CPU
-/// device it is on the host by default, and the host's work list cannot be gated).
+/// steady frame waits once. A view that needs more passes runs again (the first attempt's end,
+/// then the second's wait after each pass, and its end); a view that needs fewer closes its gates
+/// and counts only the passes that ran, without running again. The compute path's setup is on
+/// the GPU here (on a CPU device it is on the host by default, and the host's work list cannot
+/// be gated).
 #[test]
 fn a_speculated_peel_count_that_misses_runs_again() {
     let Some(vk) = oit_vulkan::backend_or_skip("a_speculated_peel_count_that_misses_runs_again") else {
         return;
     };
     let vk = vk.with_gpu_setup(true);
-    let gpu = vk.gpu().expect("opened above");
     let scene = load_scene("planes:5").unwrap();
-    let (at, away) = at_and_away(&scene);
+    let (at, _) = at_and_away(&scene);
     for path in vk.capabilities().raster_paths {
         for technique in ["dp", "ddp", "mlp:2"] {
             let s = Settings { width: 40, ..settings(technique, path) };
-            let one_shot_at = vk.render(&scene, &at, &s).unwrap();
-            let one_shot_away = vk.render(&scene, &away, &s).unwrap();
-            assert!(one_shot_at.stats.geometry_passes >= 3, "{technique}: the planes need several passes");
-            let mut prepared = vk.prepare(&scene).unwrap();
-            prepared.frame(&away, &s).unwrap();
-            let before = gpu.waits();
-            let frame = prepared.frame(&at, &s).unwrap();
-            // the first attempt's end; then the second's wait after each pass, and its end
-            let passes = u64::from(one_shot_at.stats.geometry_passes);
-            let waits = gpu.waits() - before;
-            assert!(
-                waits > passes,
-                "{technique} on {path}: the frame needed more passes and ran again ({waits} waits)"
-            );
-            assert_eq!(frame.image, one_shot_at.image, "{technique} on {path}");
-            assert_eq!(
-                frame.stats.geometry_passes, one_shot_at.stats.geometry_passes,
-                "{technique} on {path}"
-            );
-            assert_eq!(frame.stats.lost, one_shot_at.stats.lost, "{technique} on {path}");
-            assert_eq!(frame.stats.captured, one_shot_at.stats.captured, "{technique} on {path}");
-            // the deep view again, speculated right: one wait
-            let before = gpu.waits();
-            let frame = prepared.frame(&at, &s).unwrap();
-            assert_eq!(gpu.waits() - before, 1, "{technique} on {path}: the deep view, speculated");
-            assert_eq!(frame.image, one_shot_at.image, "{technique} on {path}");
-            assert_eq!(
-                frame.stats.geometry_passes, one_shot_at.stats.geometry_passes,
-                "{technique} on {path}"
-            );
-            // speculating the deep view's count, the empty view closes the gates at once
-            let before = gpu.waits();
-            let frame = prepared.frame(&away, &s).unwrap();
-            assert_eq!(gpu.waits() - before, 1, "{technique} on {path}: fewer passes need no second run");
-            assert_eq!(frame.image, one_shot_away.image, "{technique} on {path}");
-            assert_eq!(
-                frame.stats.geometry_passes, one_shot_away.stats.geometry_passes,
-                "{technique} on {path}"
-            );
+            let passes = vk.render(&scene, &at, &s).unwrap().stats.geometry_passes;
+            assert!(passes >= 3, "{technique}: the planes need several passes");
+            miss_then_fit(&vk, &scene, &s, u64::from(passes) + 1, true, &format!("{technique} on {path}"));
         }
     }
 }
 
 /// Techniques that size storage from a counting pass's deepest pixel (`fabs`, `mdts`, and `plain`
-/// on the compute path)
-/// or batch by it (`adp`) take an earlier frame's count instead of waiting for it, and check it at
-/// the end (`VkCtx::deepest`): a view whose count differs runs again and equals a one-shot render
-/// of it; one speculated right waits once.
+/// on the compute path) or batch by it (`adp`) take an earlier frame's count instead of waiting
+/// for it, and check it at the end (`VkCtx::deepest`): a view whose count differs runs again and
+/// equals a one-shot render of it; one speculated right waits once.
 #[test]
 fn a_speculated_deepest_pixel_that_misses_runs_again() {
     let Some(vk) = oit_vulkan::backend_or_skip("a_speculated_deepest_pixel_that_misses_runs_again") else {
         return;
     };
-    let gpu = vk.gpu().expect("opened above");
     let scene = load_scene("planes:5").unwrap();
-    let (at, away) = at_and_away(&scene);
+    let (at, _) = at_and_away(&scene);
     for path in vk.capabilities().raster_paths {
         for technique in ["plain", "fabs", "mdts", "adp"] {
             if technique == "plain" && path == RasterPath::Hardware {
@@ -198,29 +206,9 @@ fn a_speculated_deepest_pixel_that_misses_runs_again() {
                 continue;
             }
             let s = Settings { width: 40, ..settings(technique, path) };
-            let one_shot_at = vk.render(&scene, &at, &s).unwrap();
-            assert!(one_shot_at.stats.max_layers >= 3, "{technique}: the planes overlap");
-            let mut prepared = vk.prepare(&scene).unwrap();
-            prepared.frame(&away, &s).unwrap();
-            let before = gpu.waits();
-            let frame = prepared.frame(&at, &s).unwrap();
-            let waits = gpu.waits() - before;
-            assert!(
-                waits >= 3,
-                "{technique} on {path}: the speculation missed, the frame ran again ({waits} waits)"
-            );
-            assert_eq!(frame.image, one_shot_at.image, "{technique} on {path}");
-            assert_eq!(frame.stats.storage_bytes, one_shot_at.stats.storage_bytes, "{technique} on {path}");
-            assert_eq!(frame.stats.lost, one_shot_at.stats.lost, "{technique} on {path}");
-            assert_eq!(
-                frame.stats.geometry_passes, one_shot_at.stats.geometry_passes,
-                "{technique} on {path}"
-            );
-            let before = gpu.waits();
-            let frame = prepared.frame(&at, &s).unwrap();
-            assert_eq!(gpu.waits() - before, 1, "{technique} on {path}: speculated right, one wait");
-            assert_eq!(frame.image, one_shot_at.image, "{technique} on {path}");
-            assert_eq!(frame.stats.storage_bytes, one_shot_at.stats.storage_bytes, "{technique} on {path}");
+            let layers = vk.render(&scene, &at, &s).unwrap().stats.max_layers;
+            assert!(layers >= 3, "{technique}: the planes overlap");
+            miss_then_fit(&vk, &scene, &s, 3, false, &format!("{technique} on {path}"));
         }
     }
 }
@@ -234,38 +222,17 @@ fn a_speculated_fragment_total_that_misses_runs_again() {
     let Some(vk) = oit_vulkan::backend_or_skip("a_speculated_fragment_total_that_misses_runs_again") else {
         return;
     };
-    let gpu = vk.gpu().expect("opened above");
     let scene = load_scene("planes:5").unwrap();
     let (at, away) = at_and_away(&scene);
     for path in vk.capabilities().raster_paths {
         for technique in ["dfb", "ll"] {
             let s = Settings { width: 40, ..settings(technique, path) };
-            let one_shot_at = vk.render(&scene, &at, &s).unwrap();
-            let one_shot_away = vk.render(&scene, &away, &s).unwrap();
-            assert!(one_shot_at.stats.fragments > 0 && one_shot_away.stats.fragments == 0);
-            let mut prepared = vk.prepare(&scene).unwrap();
-            prepared.frame(&away, &s).unwrap();
-            let before = gpu.waits();
-            let frame = prepared.frame(&at, &s).unwrap();
-            let waits = gpu.waits() - before;
+            let fragments = |c: &Camera| vk.render(&scene, c, &s).unwrap().stats.fragments;
             assert!(
-                waits >= 3,
-                "{technique} on {path}: more fragments than the capacity ran again ({waits} waits)"
+                fragments(&at) > 0 && fragments(&away) == 0,
+                "{technique}: a view at the planes, one away"
             );
-            assert_eq!(frame.image, one_shot_at.image, "{technique} on {path}");
-            assert_eq!(frame.stats.storage_bytes, one_shot_at.stats.storage_bytes, "{technique} on {path}");
-            assert_eq!(frame.stats.fragments, one_shot_at.stats.fragments, "{technique} on {path}");
-            assert_eq!(frame.stats.lost, one_shot_at.stats.lost, "{technique} on {path}");
-            let before = gpu.waits();
-            let frame = prepared.frame(&at, &s).unwrap();
-            assert_eq!(gpu.waits() - before, 1, "{technique} on {path}: speculated right, one wait");
-            assert_eq!(frame.image, one_shot_at.image, "{technique} on {path}");
-            assert_eq!(frame.stats.storage_bytes, one_shot_at.stats.storage_bytes, "{technique} on {path}");
-            let before = gpu.waits();
-            let frame = prepared.frame(&away, &s).unwrap();
-            assert_eq!(gpu.waits() - before, 1, "{technique} on {path}: fewer fragments fit, one wait");
-            assert_eq!(frame.image, one_shot_away.image, "{technique} on {path}");
-            assert_eq!(frame.stats.storage_bytes, one_shot_away.stats.storage_bytes, "{technique} on {path}");
+            miss_then_fit(&vk, &scene, &s, 3, true, &format!("{technique} on {path}"));
         }
     }
 }

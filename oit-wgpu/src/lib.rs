@@ -304,9 +304,6 @@ impl Prepared for WgpuPrepared<'_> {
         done: &mut dyn FnMut(usize, oit_core::Stats),
     ) -> Result<(), OitError> {
         settings.validate()?;
-        if settings.memory.is_some() || settings.region.is_some() {
-            return oit_core::frames_one_at_a_time(self, cameras, settings, done);
-        }
         let path = settings.raster.unwrap_or(WgpuBackend::default_path(settings.technique));
         if path == RasterPath::Hardware && self.hardware.is_none() {
             self.hardware = Some(HardwareScene::new(self.gpu, self.scene, &self.geometry_made)?);
@@ -314,6 +311,7 @@ impl Prepared for WgpuPrepared<'_> {
         let this = &*self;
         let end = oit_core::frames_in_flight(
             cameras,
+            settings,
             FRAMES_IN_FLIGHT,
             |camera| this.frame_start(camera, settings, path, false, Instant::now()),
             |f| Ok(this.frame_end(f)?.map(|frame| frame.stats)),

@@ -43,7 +43,7 @@ pub(crate) fn tail_buffers(ctx: &mut VkCtx<'_>) -> Result<(Rc<Buffer>, Rc<Buffer
 /// that leaves it clear, or at the plan's peel limit.
 ///
 /// With no speculated count the flag is read back after each pass (one round trip a peel), and
-/// the count found is kept for the next frame (`VkCtx::peels_seen`). With one (an earlier frame's
+/// the count found is kept for the next frame (`ctx::ReadBack`). With one (an earlier frame's
 /// count), every pass after the first is gated on the device by its predecessor's flag
 /// (`VkCtx::geometry_pass_if`: a closed gate runs nothing and counts no pass), and the last
 /// speculated pass's flag is checked at the frame's end: set, the frame ran too few passes and
@@ -59,7 +59,7 @@ pub(crate) fn peel(
 ) -> Result<(), OitError> {
     let limit = ctx.plan.peel_limit;
     let gate = raster.gate().is_some();
-    let speculated = ctx.speculated_peels.take().filter(|&s| s >= 1 && gate).map(|s| s.min(limit));
+    let speculated = ctx.speculated.peels.take().filter(|&s| s >= 1 && gate).map(|s| s.min(limit));
     let previous = match speculated {
         Some(_) => {
             let b = ctx.buffer("peel gate", 1, Init::Zero)?;
@@ -107,7 +107,7 @@ pub(crate) fn peel(
         }
     }
     if speculated.is_none() {
-        ctx.peels_seen = Some(p);
+        ctx.note_peels(p);
     }
     ctx.last_pass(false);
     Ok(())
