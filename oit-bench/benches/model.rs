@@ -32,6 +32,7 @@ fn config(scenes: Vec<String>, size: u32, frames: u32, model: Option<ModelFile>)
         command_line: "cargo bench -p oit-bench --bench model".into(),
         model,
         model_source: Some("calibrated by this bench on the procedural scenes".into()),
+        blend_targets: Vec::new(),
     }
 }
 

@@ -83,8 +83,8 @@ use experiment::{Experiment, Measurement, Step, label_of, measure};
 use oit_core::metrics::accuracy;
 use oit_core::plan::Plan;
 use oit_core::{
-    Backend, Camera, Frame, HardwareCapture, Image, OitError, RasterPath, Scene, Settings, Technique, View,
-    load_scene,
+    Backend, BlendTarget, Camera, Frame, HardwareCapture, Image, OitError, RasterPath, Scene, Settings,
+    Technique, View, load_scene,
 };
 use serde::{Deserialize, Serialize};
 
@@ -116,6 +116,10 @@ pub struct Config {
     pub model: Option<ModelFile>,
     /// Where the model came from, for the report.
     pub model_source: Option<String>,
+    /// Narrower blend targets (`--blend-targets`) measured beside the default on the hardware
+    /// path: rows of backend `NAME+f16` (`plain`, and `wavg`/`wsum` with the blend capture) and
+    /// `NAME+unorm8` (`plain`), each against the reference like every row.
+    pub blend_targets: Vec<BlendTarget>,
 }
 
 /// The scenes and runs of the two curves.
@@ -585,31 +589,57 @@ pub fn run_bench(config: &Config) -> Result<Report, OitError> {
 /// Issue 10.5: `wavg` and `wsum` on the hardware path by additive blending into float targets
 /// (`--hardware-capture blend`, the form real renderers use) beside the default atomics capture,
 /// so the report compares the two, time and error: rows of backend `NAME+blend` on the hardware
-/// path, timed and measured against that backend/path's reference like every row. None when the
-/// bench runs neither technique, no backend takes the hardware path for them, or the settings ask
-/// for the blend capture already.
+/// path, timed and measured against that backend/path's reference like every row. Then, for each
+/// of `--blend-targets`, rows of backend `NAME+f16` or `NAME+unorm8`: the blender's techniques
+/// (`plain`; `wavg`/`wsum` by blending where the target holds their sums) into that target.
+/// None of the first when the bench runs neither weighted technique, no backend takes the
+/// hardware path for them, or the settings ask for the blend capture already.
 fn blend_rows(
     config: &Config,
     base: &Settings,
     scene_name: &str,
     scene: &Scene,
 ) -> Result<Vec<Measurement>, OitError> {
-    let techniques: Vec<Technique> = config
-        .techniques
-        .iter()
-        .copied()
-        .filter(|t| matches!(t, Technique::WeightedAverage | Technique::WeightedSum))
-        .collect();
+    let weighted_only = |t: &Technique| matches!(t, Technique::WeightedAverage | Technique::WeightedSum);
+    let techniques: Vec<Technique> = config.techniques.iter().copied().filter(weighted_only).collect();
     let weighted = Settings { technique: Technique::WeightedAverage, ..base.clone() };
     let on_hardware = config.backends.iter().any(|b| b.raster_path(&weighted) == RasterPath::Hardware);
-    if techniques.is_empty() || !on_hardware || base.hardware_capture == HardwareCapture::Blend {
-        return Ok(Vec::new());
+    let mut rows = Vec::new();
+    if !techniques.is_empty() && on_hardware && base.hardware_capture != HardwareCapture::Blend {
+        let settings = Settings { hardware_capture: HardwareCapture::Blend, ..base.clone() };
+        rows.extend(hardware_rows(config, &settings, &techniques, scene_name, scene, "blend")?);
     }
-    let settings = Settings { hardware_capture: HardwareCapture::Blend, ..base.clone() };
+    for &target in config.blend_targets.iter().filter(|&&t| t != base.blend_target) {
+        let techniques: Vec<Technique> = config
+            .techniques
+            .iter()
+            .copied()
+            .filter(|t| *t == Technique::Plain || (weighted_only(t) && target != BlendTarget::Unorm8))
+            .collect();
+        if techniques.is_empty() {
+            continue;
+        }
+        let settings =
+            Settings { hardware_capture: HardwareCapture::Blend, blend_target: target, ..base.clone() };
+        rows.extend(hardware_rows(config, &settings, &techniques, scene_name, scene, &target.to_string())?);
+    }
+    Ok(rows)
+}
+
+/// `techniques` under `settings` on each backend's hardware path, as rows of backend
+/// `NAME+suffix` (the rows each backend's reference measures are dropped: the main rows have them).
+fn hardware_rows(
+    config: &Config,
+    settings: &Settings,
+    techniques: &[Technique],
+    scene_name: &str,
+    scene: &Scene,
+    suffix: &str,
+) -> Result<Vec<Measurement>, OitError> {
     let experiment = Experiment {
         backends: &config.backends,
-        settings: &settings,
-        techniques: &techniques,
+        settings,
+        techniques,
         warmup: config.warmup,
         frames: config.frames,
         keep_images: true,
@@ -619,7 +649,7 @@ fn blend_rows(
         .into_iter()
         .filter(|m| !m.baseline && m.raster == RasterPath::Hardware)
         .map(|mut m| {
-            m.backend = format!("{}+blend", m.backend);
+            m.backend = format!("{}+{suffix}", m.backend);
             m
         })
         .collect())

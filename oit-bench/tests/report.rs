@@ -29,6 +29,7 @@ fn report_holds_every_technique() {
         command_line: "report test".into(),
         model: None,
         model_source: None,
+        blend_targets: vec![oit_core::BlendTarget::F16, oit_core::BlendTarget::Unorm8],
     };
     let mut report = run_bench(&config).unwrap();
     assert!(report.failures.is_empty(), "{:?}", report.failures);
@@ -95,6 +96,20 @@ fn report_holds_every_technique() {
         let blend = on("wgpu+blend").expect("a wgpu+blend row for wavg");
         assert_eq!(blend["epr"], atomics["epr"]);
         assert_eq!(blend["fragments"], atomics["fragments"]);
+    }
+    // --blend-targets: the blender's techniques into RGBA16F and RGBA8 beside the default, the
+    // same fragments, their error measured; wavg has no RGBA8 row (its sums leave [0, 1])
+    let row = |technique: &str, backend: &str| {
+        rows.iter()
+            .find(|r| r["technique"] == technique && r["backend"] == backend && r["raster"] == "hardware")
+    };
+    if let Some(plain) = row("plain", "wgpu") {
+        for (technique, backend) in [("plain", "wgpu+f16"), ("plain", "wgpu+unorm8"), ("wavg", "wgpu+f16")] {
+            let r = row(technique, backend).unwrap_or_else(|| panic!("a {backend} row for {technique}"));
+            assert_eq!(r["fragments"], plain["fragments"], "{backend} {technique}");
+            assert!(r["epr"].as_f64().is_some_and(f64::is_finite), "{backend} {technique}");
+        }
+        assert!(row("wavg", "wgpu+unorm8").is_none());
     }
     // planes:4 is 4 layers deep: dp peels 4 and finds none left
     let dp = rows.iter().find(|r| r["technique"] == "dp").unwrap();

@@ -74,6 +74,11 @@ pub struct BenchArgs {
     #[arg(long)]
     pub no_curves: bool,
 
+    /// Narrower blend targets measured beside the default on the hardware path, e.g. f16,unorm8:
+    /// rows NAME+f16 (plain, and wavg/wsum by blending) and NAME+unorm8 (plain).
+    #[arg(long, value_name = "LIST", default_value = "")]
+    pub blend_targets: String,
+
     /// Techniques drawn on the curves.
     #[arg(long, value_name = "LIST", default_value = "dp,bdp,adp,fabs,mdts64")]
     pub curve_techniques: String,
@@ -225,6 +230,12 @@ pub fn check(args: &BenchArgs) -> Result<Checked, OitError> {
     let mut scene_args = args.scene.clone();
     scene_args.scene = first.clone();
     let prepared = scene_args.prepare()?;
+    let blend_targets = args
+        .blend_targets
+        .split(',')
+        .filter(|t| !t.trim().is_empty())
+        .map(str::parse::<oit_core::BlendTarget>)
+        .collect::<Result<Vec<_>, _>>()?;
     let config = Config {
         scenes,
         backends: prepared.backends,
@@ -237,6 +248,7 @@ pub fn check(args: &BenchArgs) -> Result<Checked, OitError> {
         command_line: std::env::args().collect::<Vec<_>>().join(" "),
         model: if args.cost.calibrate { None } else { model },
         model_source,
+        blend_targets,
     };
     config.validate()?;
     Ok(Checked::Measure(config))

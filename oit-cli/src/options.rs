@@ -95,6 +95,12 @@ pub struct SceneArgs {
     #[arg(long, value_name = "buffer|image", default_value = "buffer")]
     pub atomic_storage: String,
 
+    /// The blender's colour target on the hardware path, for plain and (with
+    /// --hardware-capture blend) wavg/wsum: f32 (exact), f16 (what weighted blended OIT uses),
+    /// unorm8 (plain only: an 8-bit colour buffer). The compute path and cpu ignore it.
+    #[arg(long, value_name = "f32|f16|unorm8", default_value = "f32")]
+    pub blend_target: String,
+
     /// Stops the peeling techniques (dp, ddp, mlp, adp batches) after N capture passes; deeper
     /// layers count as lost [default: peel until no layer is left].
     #[arg(long, value_name = "N")]
@@ -184,6 +190,7 @@ impl SceneArgs {
             memory: self.memory.as_deref().map(parse_memory).transpose()?,
             overflow: self.overflow.parse::<Overflow>()?,
             atomic_storage: self.atomic_storage.parse::<oit_core::AtomicStorage>()?,
+            blend_target: self.blend_target.parse::<oit_core::BlendTarget>()?,
         };
         settings.validate()?;
         check_planes(self.near, self.far)?;

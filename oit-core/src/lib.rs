@@ -98,8 +98,8 @@ pub use obj::{load_obj, parse_obj};
 pub use procedural::{BUILTIN_SCENES, DEFAULT_SCENE, builtin_scene, is_procedural, load_scene};
 pub use scene::{Aabb, Instance, Mesh, Object, Scene};
 pub use settings::{
-    AtomicStorage, BdpMode, HardwareCapture, MAX_SIZE, Overflow, Region, Settings, Shading, check_threads,
-    max_threads, parse_memory, parse_rgb, parse_size,
+    AtomicStorage, BdpMode, BlendTarget, HardwareCapture, MAX_SIZE, Overflow, Region, Settings, Shading,
+    check_threads, max_threads, parse_memory, parse_rgb, parse_size,
 };
 pub use technique::{
     BoundsMode, Effect, KNOWN_TECHNIQUES, MAX_PARAMETER, RasterPath, Technique, TechniqueKind,

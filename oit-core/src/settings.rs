@@ -110,6 +110,54 @@ pub struct Settings {
     /// Where `mdts:K`, `mdts64:K` and `fabs:K` keep the words they update atomically
     /// (`--atomic-storage`); other techniques ignore it.
     pub atomic_storage: AtomicStorage,
+    /// The blender's colour target on the hardware raster path (`--blend-target`): `plain`, and
+    /// `wavg`/`wsum` with `--hardware-capture blend`. The compute path and oit-cpu have no blender
+    /// and ignore it (their captures are exact).
+    pub blend_target: BlendTarget,
+}
+
+/// The colour target the blender writes on the hardware path, for `plain` and (with
+/// `--hardware-capture blend`) `wavg`/`wsum`. The per-pixel fragment count beside it stays in
+/// f32 (R16F on a device without `FLOAT32_BLENDABLE`). Narrower targets are what renderers use
+/// and what the speed baseline should be measured with; their rounding is measured against the
+/// reference like any approximation (`tests/tests/blend_target.rs` bounds it).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BlendTarget {
+    /// RGBA32F: `plain` equals oit-cpu up to f32 rounding; `wavg`/`wsum` add the 8-bit
+    /// integers α·c and α exactly (while a pixel's sum stays below 2^24).
+    #[default]
+    F32,
+    /// RGBA16F, the accumulation target of McGuire & Bavoil's weighted blended OIT (JCGT 2013):
+    /// `wavg`/`wsum` add α·c and α in [0, 1], each addition rounded to 11 significant bits.
+    F16,
+    /// RGBA8 unorm, what a renderer blending into an 8-bit colour buffer gets: `plain` only
+    /// (the weighted sums leave [0, 1]).
+    Unorm8,
+}
+
+impl std::fmt::Display for BlendTarget {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            BlendTarget::F32 => "f32",
+            BlendTarget::F16 => "f16",
+            BlendTarget::Unorm8 => "unorm8",
+        })
+    }
+}
+
+impl FromStr for BlendTarget {
+    type Err = OitError;
+    fn from_str(s: &str) -> Result<BlendTarget, OitError> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "f32" | "rgba32f" => Ok(BlendTarget::F32),
+            "f16" | "rgba16f" => Ok(BlendTarget::F16),
+            "unorm8" | "rgba8" => Ok(BlendTarget::Unorm8),
+            other => Err(OitError::InvalidSettings(format!(
+                "unknown blend target '{other}': use f32, f16 or unorm8"
+            ))),
+        }
+    }
 }
 
 /// Where the atomic-array techniques (`mdts:K`, `mdts64:K`, `fabs:K`) keep the words they update
@@ -289,6 +337,7 @@ impl Default for Settings {
             memory: None,
             overflow: Overflow::Drop,
             atomic_storage: AtomicStorage::Buffer,
+            blend_target: BlendTarget::F32,
         }
     }
 }
@@ -366,6 +415,14 @@ impl Settings {
             return Err(OitError::InvalidSettings(
                 "--memory must be at least 1 byte, e.g. --memory 512M".into(),
             ));
+        }
+        if self.blend_target == BlendTarget::Unorm8
+            && matches!(self.technique, Technique::WeightedAverage | Technique::WeightedSum)
+        {
+            return Err(OitError::InvalidSettings(format!(
+                "--blend-target unorm8 holds [0, 1] and {}'s sums leave it: use f16 or f32",
+                self.technique
+            )));
         }
         if let Some(r) = self.region {
             let inside =

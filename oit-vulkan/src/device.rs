@@ -727,14 +727,20 @@ impl Gpu {
         let hardware_missing = (!hardware_missing.is_empty()).then(|| hardware_missing.join(", "));
         let blend_needs =
             vk::FormatFeatureFlags::COLOR_ATTACHMENT_BLEND | vk::FormatFeatureFlags::SAMPLED_IMAGE;
-        let blendable = [vk::Format::R32G32B32A32_SFLOAT, vk::Format::R32G32_SFLOAT, vk::Format::R32_SFLOAT]
-            .into_iter()
-            .filter(|&f| {
-                // SAFETY: a plain query of a physical device of this instance.
-                let props = unsafe { instance.get_physical_device_format_properties(physical, f) };
-                props.optimal_tiling_features.contains(blend_needs)
-            })
-            .collect();
+        let blendable = [
+            vk::Format::R32G32B32A32_SFLOAT,
+            vk::Format::R32G32_SFLOAT,
+            vk::Format::R32_SFLOAT,
+            vk::Format::R16G16B16A16_SFLOAT,
+            vk::Format::R8G8B8A8_UNORM,
+        ]
+        .into_iter()
+        .filter(|&f| {
+            // SAFETY: a plain query of a physical device of this instance.
+            let props = unsafe { instance.get_physical_device_format_properties(physical, f) };
+            props.optimal_tiling_features.contains(blend_needs)
+        })
+        .collect();
         let props = props2.properties;
         let names: Vec<String> = extensions.iter().map(|e| c_name(e.extension_name_as_c_str())).collect();
         let device_heap = memory.memory_heaps[..memory.memory_heap_count as usize]

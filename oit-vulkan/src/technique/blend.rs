@@ -4,7 +4,8 @@
 //!
 //! - `plain` always blends on the hardware path (the over operator in one draw, primitive order);
 //!   `wavg`/`wsum` with `--hardware-capture blend` (additive blending of the 8-bit integers,
-//!   exact while a sum stays below 2^24). Two targets: colour and an additive fragment count.
+//!   exact while a sum stays below 2^24). Two targets: colour (`--blend-target`: RGBA32F, RGBA16F,
+//!   or RGBA8 for plain) and an additive fragment count.
 //! - `bdp` (colour mode) with `--hardware-capture blend`: MAX blending into 8 ×
 //!   `R32G32B32A32_SFLOAT` (Liu et al., HPG 2009), then a resolve reading the targets.
 //! - `dp` with `--hardware-capture blend`: Everitt's depth peeling (2001) with a depth test into a
@@ -23,7 +24,7 @@
 use std::rc::Rc;
 
 use ash::vk;
-use oit_core::{OitError, Technique};
+use oit_core::{BlendTarget, OitError, Technique};
 
 use crate::Drivers;
 use crate::ctx::{BlendPass, VkCtx};
@@ -65,12 +66,15 @@ fn clear_f(v: [f32; 4]) -> vk::ClearValue {
     vk::ClearValue { color: vk::ClearColorValue { float32: v } }
 }
 
-/// `plain` on the blender (`blend.wgsl`'s `plain_blend_fs`): the over operator, primitive order.
+/// `plain` on the blender (`blend.wgsl`'s `plain_blend_fs`): the over operator, primitive order,
+/// into `--blend-target`'s colour target.
 pub(crate) fn plain(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
-    check_blendable(ctx, RGBA32F, "plain's blending")?;
+    let colour = colour_target(ctx.settings.blend_target);
+    check_blendable(ctx, colour.0, "plain's blending")?;
     draw_and_resolve(
         ctx,
         drivers,
+        colour,
         Blend::Over,
         [0.0, 0.0, 0.0, 1.0],
         ("plain_blend_fs", "plain_blend_resolve_main"),
@@ -78,36 +82,59 @@ pub(crate) fn plain(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), Oi
     )
 }
 
-/// `wavg` or `wsum` by additive blending (`blend.wgsl`'s `weighted_blend_fs`).
+/// `--blend-target`'s colour format and its bytes a texel.
+fn colour_target(target: BlendTarget) -> (vk::Format, u64) {
+    match target {
+        BlendTarget::F32 => (RGBA32F, 16),
+        BlendTarget::F16 => (vk::Format::R16G16B16A16_SFLOAT, 8),
+        BlendTarget::Unorm8 => (vk::Format::R8G8B8A8_UNORM, 4),
+    }
+}
+
+/// `wavg` or `wsum` by additive blending (`blend.wgsl`'s `weighted_blend_fs`): the 8-bit integers
+/// into RGBA32F, or α·c and α in [0, 1] into RGBA16F (`--blend-target f16`, param bit 1).
 pub(crate) fn weighted(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     let average = match ctx.settings.technique {
         Technique::WeightedAverage => true,
         Technique::WeightedSum => false,
         other => return Err(OitError::InvalidSettings(format!("{other} is not wavg or wsum"))),
     };
-    check_blendable(ctx, RGBA32F, "additive blending for wavg/wsum")?;
+    let normalized = match ctx.settings.blend_target {
+        BlendTarget::F32 => 0,
+        BlendTarget::F16 => 2,
+        BlendTarget::Unorm8 => {
+            return Err(OitError::InvalidSettings(
+                "--blend-target unorm8 cannot hold wavg/wsum's sums".into(),
+            ));
+        }
+    };
+    let colour = colour_target(ctx.settings.blend_target);
+    check_blendable(ctx, colour.0, "additive blending for wavg/wsum")?;
     draw_and_resolve(
         ctx,
         drivers,
+        colour,
         Blend::Add,
         [0.0; 4],
         ("weighted_blend_fs", "weighted_blend_resolve_main"),
-        u32::from(average),
+        u32::from(average) | normalized,
     )
 }
 
-/// One draw into a colour target (`color` blending, cleared to `clear`) and an additive count
-/// target, then the resolve `entries.1` reading both (blend.wgsl's bindings 8 and 9).
+/// One draw into a colour target (`colour`: format and bytes a texel; `color` blending, cleared
+/// to `clear`) and an additive count target, then the resolve `entries.1` reading both
+/// (blend.wgsl's bindings 8 and 9).
 fn draw_and_resolve(
     ctx: &mut VkCtx<'_>,
     drivers: &Drivers<'_>,
+    colour: (vk::Format, u64),
     color: Blend,
     clear: [f32; 4],
     entries: (&str, &str),
     param: u32,
 ) -> Result<(), OitError> {
     let raster = hardware(drivers)?;
-    let color_target = ctx.target(RGBA32F, 16, false)?;
+    let color_target = ctx.target(colour.0, colour.1, false)?;
     let count_target = ctx.target(R32F, 4, false)?;
     ctx.fragments_from_captured = true;
     ctx.blend_pass(

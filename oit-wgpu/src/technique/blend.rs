@@ -5,10 +5,13 @@
 //!
 //! - `plain` always blends on the hardware path: the blender composites one draw in primitive
 //!   order, which is the definition of its submission order (oit-cpu's `technique/plain.rs`), so
-//!   there is nothing to sort; `--hardware-capture` does not apply. `Rgba32Float` targets with
-//!   `FLOAT32_BLENDABLE`, else `Rgba16Float`. The over operator in f32, back to front, against
-//!   oit-cpu's f32 resolve front to back: the same sum in another association, equal up to f32
-//!   rounding (within 1 in 8 bits; `tests/tests/plain.rs`).
+//!   there is nothing to sort; `--hardware-capture` does not apply. The colour target is
+//!   `--blend-target`'s: `Rgba32Float` by default (with `FLOAT32_BLENDABLE`, else `Rgba16Float`),
+//!   `Rgba16Float` or `Rgba8Unorm` (an 8-bit colour buffer, the speed baseline users know). The
+//!   over operator in f32, back to front, against oit-cpu's f32 resolve front to back: the same
+//!   sum in another association, equal up to f32 rounding (within 1 in 8 bits;
+//!   `tests/tests/plain.rs`); the narrower targets' rounding is bounded in
+//!   `tests/tests/blend_target.rs`.
 //! - `wavg` and `wsum` blend with `--hardware-capture blend` (the atomics capture, 64-bit integer
 //!   atomics, stays the default where bit-equality with oit-cpu matters). Additive blending of the
 //!   8-bit integers α·r, α·g, α·b and α into `Rgba32Float` (needs `FLOAT32_BLENDABLE`): every
@@ -16,14 +19,17 @@
 //!   2^24, so up to 258 full-alpha white layers at a pixel the sums equal the atomics capture's
 //!   whatever order the blender adds them in, and so does the image. Beyond, each addition rounds
 //!   by at most half an ulp: the relative error of a pixel's sum is below n · 2^-24 for n layers.
+//!   `--blend-target f16` adds α·c and α in [0, 1] into `Rgba16Float` instead, the accumulation
+//!   target of McGuire & Bavoil's weighted blended OIT (JCGT 2013): a relative error below
+//!   n · 2^-11 a sum.
 //!
-//! Storage per pixel: the two targets (20 bytes in f32, 10 in f16). The blender loses no
+//! Storage per pixel: the two targets (20 bytes in f32; 8 + 4 with RGBA16F or RGBA8 colour). The blender loses no
 //! fragment: every fragment drawn is counted in the count target and composited, so the frame's
 //! fragments are its captured total (read with the totals at the end of the frame: no readback
 //! between the draw and the resolve). The targets are kept by the frame's rasterizer
 //! ([`SceneStage::target`]), made once per image size.
 
-use oit_core::{OitError, Technique};
+use oit_core::{BlendTarget, OitError, Technique};
 
 use crate::ctx::{GpuCtx, TECHNIQUE_PRELUDE};
 use crate::gpu::COMMON_WGSL;
@@ -33,16 +39,9 @@ use crate::technique::bdp_blend::{check_texture_size, key, unsupported};
 const WGSL: &str = include_str!("blend.wgsl");
 const WEIGHTED_WGSL: &str = include_str!("weighted.wgsl");
 
-/// `plain` on the blender.
+/// `plain` on the blender, into the colour target `--blend-target` names.
 pub(crate) fn plain(ctx: &mut GpuCtx<'_>, stage: &SceneStage) -> Result<(), OitError> {
-    let f32_blend = ctx.gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE);
-    let formats = match (plain_colour_target(), f32_blend) {
-        // a measurement of the blender's rate in a narrower colour target, the count kept in f32
-        // (`OIT_PLAIN_TARGET`: not bit-equal to oit-cpu, so outside the conformance suite)
-        (Some(colour), true) => (colour, wgpu::TextureFormat::R32Float),
-        (_, true) => (wgpu::TextureFormat::Rgba32Float, wgpu::TextureFormat::R32Float),
-        (_, false) => (wgpu::TextureFormat::Rgba16Float, wgpu::TextureFormat::R16Float),
-    };
+    let formats = (colour_target(ctx, "plain's blending")?, count_target(ctx));
     let over = wgpu::BlendState {
         color: wgpu::BlendComponent {
             src_factor: wgpu::BlendFactor::One,
@@ -59,29 +58,51 @@ pub(crate) fn plain(ctx: &mut GpuCtx<'_>, stage: &SceneStage) -> Result<(), OitE
     draw_and_resolve(ctx, stage, formats, over, clear, ("plain_blend_fs", "plain_blend_resolve_main"), 0)
 }
 
-/// `OIT_PLAIN_TARGET=rgba16f` or `rgba8`: `plain`'s colour target on the blender, for measuring
-/// the blending rate users get from a narrower target (a speed baseline; its image differs from
-/// oit-cpu's by the target's rounding). Unset or anything else: RGBA32F, bit-equal to oit-cpu.
-fn plain_colour_target() -> Option<wgpu::TextureFormat> {
-    match std::env::var("OIT_PLAIN_TARGET").ok()?.to_ascii_lowercase().as_str() {
-        "rgba16f" => Some(wgpu::TextureFormat::Rgba16Float),
-        "rgba8" => Some(wgpu::TextureFormat::Rgba8Unorm),
-        _ => None,
+/// The colour target of `--blend-target`. RGBA32F needs `FLOAT32_BLENDABLE`; without it
+/// `plain` falls back to RGBA16F (as it always has) and `wavg`/`wsum` refuse.
+fn colour_target(ctx: &GpuCtx<'_>, what: &str) -> Result<wgpu::TextureFormat, OitError> {
+    let f32_blend = ctx.gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE);
+    Ok(match ctx.settings.blend_target {
+        BlendTarget::F32 if f32_blend => wgpu::TextureFormat::Rgba32Float,
+        BlendTarget::F32 if ctx.settings.technique == Technique::Plain => wgpu::TextureFormat::Rgba16Float,
+        BlendTarget::F32 => {
+            return Err(unsupported(&format!(
+                "{what} into Rgba32Float targets: the device lacks FLOAT32_BLENDABLE; use --blend-target f16 or --hardware-capture atomics"
+            )));
+        }
+        BlendTarget::F16 => wgpu::TextureFormat::Rgba16Float,
+        BlendTarget::Unorm8 => wgpu::TextureFormat::Rgba8Unorm,
+    })
+}
+
+/// The per-pixel fragment count: R32F (exact to 2^24 a pixel) where the device blends f32, else
+/// R16F (exact to 2048).
+fn count_target(ctx: &GpuCtx<'_>) -> wgpu::TextureFormat {
+    if ctx.gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
+        wgpu::TextureFormat::R32Float
+    } else {
+        wgpu::TextureFormat::R16Float
     }
 }
 
-/// `wavg` (`average`) or `wsum` on the blender.
+/// `wavg` (`average`) or `wsum` on the blender. RGBA32F adds the 8-bit integers (param bit 1
+/// clear); RGBA16F adds α·c and α in [0, 1] (bit 1 set), the form weighted blended OIT uses.
 pub(crate) fn weighted(ctx: &mut GpuCtx<'_>, stage: &SceneStage) -> Result<(), OitError> {
     let average = match ctx.settings.technique {
         Technique::WeightedAverage => true,
         Technique::WeightedSum => false,
         other => return Err(OitError::InvalidSettings(format!("{other} is not wavg or wsum"))),
     };
-    if !ctx.gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
-        return Err(unsupported(
-            "additive blending into Rgba32Float targets for wavg/wsum: the device lacks FLOAT32_BLENDABLE; use --hardware-capture atomics",
-        ));
-    }
+    let colour = colour_target(ctx, "additive blending for wavg/wsum")?;
+    let normalized = match ctx.settings.blend_target {
+        BlendTarget::F32 => 0,
+        BlendTarget::F16 => WEIGHTED_NORMALIZED,
+        BlendTarget::Unorm8 => {
+            return Err(OitError::InvalidSettings(
+                "--blend-target unorm8 cannot hold wavg/wsum's sums".into(),
+            ));
+        }
+    };
     let add = wgpu::BlendComponent {
         src_factor: wgpu::BlendFactor::One,
         dst_factor: wgpu::BlendFactor::One,
@@ -90,13 +111,16 @@ pub(crate) fn weighted(ctx: &mut GpuCtx<'_>, stage: &SceneStage) -> Result<(), O
     draw_and_resolve(
         ctx,
         stage,
-        (wgpu::TextureFormat::Rgba32Float, wgpu::TextureFormat::R32Float),
+        (colour, count_target(ctx)),
         wgpu::BlendState { color: add, alpha: add },
         wgpu::Color::TRANSPARENT,
         ("weighted_blend_fs", "weighted_blend_resolve_main"),
-        u32::from(average),
+        u32::from(average) | normalized,
     )
 }
+
+/// `param`'s bit for weighted sums in [0, 1] units (`blend.wgsl`), beside bit 0 (average).
+pub(crate) const WEIGHTED_NORMALIZED: u32 = 2;
 
 /// The draw into the colour and count targets, and the resolve `entries.1` reading them.
 fn draw_and_resolve(

@@ -12,6 +12,8 @@
 //   additive, as the atomics capture's u64 sums (weighted.wgsl); integer-valued floats add exactly
 //   while a sum stays below 2^24, i.e. up to 258 layers of full-alpha white at one pixel, so the
 //   blend equals the atomics capture there, in any summation order (see technique/blend.rs).
+//   With `--blend-target f16` (param bit 1) the target is RGBA16F and holds (Σα·r, Σα·g, Σα·b, Σα)
+//   in [0, 1] units instead, each addition rounded to f16, as weighted blended OIT accumulates.
 //
 // Module: COMMON_WGSL, TECHNIQUE_PRELUDE (group 0: fu, state), this, then the hardware raster's
 // vertex stage (group 1 bindings 0..3; `HwOut`, `hw_vs`, `shade`). The resolve's targets are
@@ -47,9 +49,15 @@ fn plain_blend_fs(in: HwOut) -> BlendOut {
 @fragment
 fn weighted_blend_fs(in: HwOut) -> BlendOut {
     var out: BlendOut;
-    // the 8-bit integers themselves: a·r in units of 1/255², a in units of 1/255
-    let q = round(blend_fragment(in, &out) * 255.0);
-    out.color = vec4<f32>(q.xyz * q.w, q.w);
+    let c = blend_fragment(in, &out);
+    if ((fu.param & 2u) != 0u) {
+        // RGBA16F (--blend-target f16): α·r and α in [0, 1], as weighted blended OIT adds them
+        out.color = vec4<f32>(c.xyz * c.w, c.w);
+    } else {
+        // the 8-bit integers themselves: a·r in units of 1/255², a in units of 1/255
+        let q = round(c * 255.0);
+        out.color = vec4<f32>(q.xyz * q.w, q.w);
+    }
     return out;
 }
 
@@ -83,5 +91,9 @@ fn weighted_blend_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @b
     let xy = blend_texel(px);
     let sums = textureLoad(blend_color, xy, 0);
     let count = u32(textureLoad(blend_count, xy, 0).x + 0.5);
-    weighted_composite(px, sums.xyz / (255.0 * 255.0), sums.w / 255.0, count);
+    if ((fu.param & 2u) != 0u) {
+        weighted_composite(px, sums.xyz, sums.w, count);
+    } else {
+        weighted_composite(px, sums.xyz / (255.0 * 255.0), sums.w / 255.0, count);
+    }
 }

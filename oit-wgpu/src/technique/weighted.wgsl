@@ -2,7 +2,8 @@
 // geometry pass adds, per pixel, Σα·r, Σα·g, Σα·b (in units of 1/255²), Σα (in units of 1/255) and
 // the count, as u64 integers of the RGBA8 colour, so the sums do not depend on arrival order; the
 // composite kernel writes the final linear colour into the resolve state (front colour, zero
-// transmittance, captured = count) for the common finish. param: 1 = weighted average, 0 = sum.
+// transmittance, captured = count) for the common finish. param bit 0: 1 = weighted average, 0 = sum (bit 1:
+// blend.wgsl's RGBA16F units).
 @group(0) @binding(2) var<storage, read_write> sums: array<atomic<u64>>;
 
 fn capture(f: Fragment) {
@@ -37,7 +38,7 @@ fn composite_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
 fn weighted_composite(px: u32, premultiplied: vec3<f32>, alpha: f32, count: u32) {
     let bg = fu.background.xyz;
     var c: vec3<f32>;
-    if (fu.param == 1u) {
+    if ((fu.param & 1u) == 1u) {
         // composite::weighted_average
         if (count == 0u || alpha <= 0.0) {
             c = bg;
