@@ -351,7 +351,8 @@ pub struct Side<'a> {
 /// hardware path may differ only on pixels within a pixel of a projected edge (`edges`, from
 /// [`oit_core::metrics::edge_mask`]), and off them by at most 1. Not held: a technique that keeps
 /// fragments in arrival order when it overflows (`fabs:K` with losses), whose survivors depend on
-/// the device's scheduling. Returns (largest difference off the edges, a note, failed).
+/// the device's scheduling, nor a pair of different `--blend-targets`. Returns (largest
+/// difference off the edges, a note, failed).
 pub fn cross_check(
     technique: Technique,
     a: &Side<'_>,
@@ -367,6 +368,16 @@ pub fn cross_check(
         let note =
             "not held: fabs:K keeps the first K fragments to arrive, and arrival order is the device's";
         return (worst, Some(note.into()), false);
+    }
+    // rows of `--blend-targets` (`NAME+f16`, `NAME+unorm8`) round into a narrower target: held
+    // only against rows of the same target
+    let target = |label: &str| ["+f16", "+unorm8"].into_iter().find(|t| label.contains(t));
+    if target(&a.label) != target(&b.label) && worst > 1 {
+        let note = format!(
+            "not held: {} and {} blend into different colour targets (the rounding is bounded in tests/tests/blend_target.rs)",
+            a.label, b.label
+        );
+        return (worst, Some(note), false);
     }
     if worst <= 1 {
         return (worst, None, false);
@@ -1071,5 +1082,24 @@ mod cross_check_tests {
         assert!(check(&b, RasterPath::Compute).2);
         b.pixels[2][2] = 101; // 1 step: float order
         assert!(!check(&b, RasterPath::Hardware).2);
+    }
+
+    /// Rows of different `--blend-targets` are not held to each other; rows of one target are.
+    #[test]
+    fn cross_check_holds_blend_targets_to_their_own() {
+        let a = image(vec![[100, 100, 100, 255]; 2]);
+        let b = image(vec![[100, 104, 100, 255]; 2]);
+        let edges = [false; 2];
+        let check = |x: &str, y: &str| {
+            let sa = Side { label: x, raster: RasterPath::Hardware, image: &a, lost: 0 };
+            let sb = Side { label: y, raster: RasterPath::Hardware, image: &b, lost: 0 };
+            cross_check(Technique::Plain, &sa, &sb, &edges)
+        };
+        let (_, note, failed) = check("wgpu/hardware", "wgpu+unorm8/hardware");
+        assert!(!failed && note.is_some_and(|n| n.contains("not held")));
+        assert!(!check("wgpu+f16/hardware", "vulkan+unorm8/hardware").2);
+        assert!(check("wgpu+unorm8/hardware", "vulkan+unorm8/hardware").2);
+        assert!(check("wgpu+f16/hardware", "vulkan+f16/hardware").2);
+        assert!(check("wgpu/hardware", "vulkan/hardware").2);
     }
 }
