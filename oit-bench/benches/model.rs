@@ -27,6 +27,7 @@ fn config(scenes: Vec<String>, size: u32, frames: u32, model: Option<ModelFile>)
         view: View::default(),
         techniques: Technique::all(),
         warmup: 1,
+        warmup_ms: 0,
         frames,
         curves: None,
         command_line: "cargo bench -p oit-bench --bench model".into(),

@@ -30,6 +30,10 @@ pub struct Experiment<'a> {
     pub techniques: &'a [Technique],
     /// Untimed frames before each technique's timed ones (the reference is rendered once).
     pub warmup: u32,
+    /// After them, untimed frame loops until this many milliseconds have passed: a GPU that idled
+    /// between rows (the bench's own CPU work) clocks down, and a few frames do not bring it back
+    /// up (on the H200, a bunny row's every pass measured 2.2× slower after such a gap).
+    pub warmup_ms: u32,
     /// Timed frames per technique (at least 1); the last one is measured.
     pub frames: u32,
     /// Keep each measured frame's image (and the reference's per-pixel layer counts), for contact
@@ -131,7 +135,7 @@ pub(crate) struct Timed {
     pub gpu: Vec<f64>,
 }
 
-/// Renders `warmup` untimed frames, then `frames` (at least 1) timed steady-state frames without
+/// Renders `warmup.0` untimed frames and untimed frame loops for `warmup.1` ms, then `frames` (at least 1) timed steady-state frames without
 /// their image in a frame loop ([`Prepared::frame_loop`], frames in flight where the backend keeps
 /// them), then as many one at a time where it does ([`Prepared::frame_stats`]), then `frames`
 /// timed frames with their image, all of one prepared scene: the timed frames reuse the storage
@@ -140,13 +144,17 @@ pub(crate) fn measure(
     prepared: &mut dyn Prepared,
     camera: &Camera,
     settings: &Settings,
-    warmup: u32,
+    warmup: (u32, u32),
     frames: u32,
 ) -> Result<Timed, OitError> {
-    for _ in 0..warmup {
+    for _ in 0..warmup.0 {
         prepared.frame(camera, settings)?;
     }
     let cameras = vec![*camera; frames.max(1) as usize];
+    let warming = Instant::now();
+    while warming.elapsed().as_secs_f64() * 1e3 < f64::from(warmup.1) {
+        prepared.frame_loop(&cameras, settings, &mut |_, _| {})?;
+    }
     let mut done = Vec::with_capacity(cameras.len());
     let start = Instant::now();
     prepared.frame_loop(&cameras, settings, &mut |_, _| done.push(Instant::now()))?;
@@ -283,13 +291,15 @@ impl Experiment<'_> {
                         "{at}{technique} on {}",
                         label_of(backend.name(), raster)
                     )));
-                    let result = measure(ready, camera, &settings, self.warmup, self.frames).and_then(|t| {
-                        let acc = accuracy(&reference, &t.frame.image)?;
-                        let mut numbers = self.numbers(&t.frame, Some(acc), t.wall, t.gpu);
-                        numbers.steady_wall_ms = t.steady;
-                        numbers.latency_wall_ms = t.latency;
-                        Ok(numbers)
-                    });
+                    let result =
+                        measure(ready, camera, &settings, (self.warmup, self.warmup_ms), self.frames)
+                            .and_then(|t| {
+                                let acc = accuracy(&reference, &t.frame.image)?;
+                                let mut numbers = self.numbers(&t.frame, Some(acc), t.wall, t.gpu);
+                                numbers.steady_wall_ms = t.steady;
+                                numbers.latency_wall_ms = t.latency;
+                                Ok(numbers)
+                            });
                     out.push(row(technique, raster, false, result.map_err(|e| e.to_string())));
                     on_step(Step::Measured(out.last().expect("just pushed")));
                 }
@@ -353,6 +363,7 @@ mod tests {
             settings: &settings,
             techniques: &techniques,
             warmup: 0,
+            warmup_ms: 0,
             frames: 1,
             keep_images: false,
         };
@@ -392,6 +403,7 @@ mod tests {
             settings: &settings,
             techniques: &techniques,
             warmup: 0,
+            warmup_ms: 0,
             frames: 1,
             keep_images: true,
         };
@@ -413,6 +425,7 @@ mod tests {
             settings: &settings,
             techniques: &[Technique::Dp],
             warmup: 0,
+            warmup_ms: 0,
             frames: 1,
             keep_images: false,
         };

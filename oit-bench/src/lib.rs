@@ -47,6 +47,7 @@
 //!     settings: &settings,
 //!     techniques: &techniques,
 //!     warmup: 0,
+//!     warmup_ms: 0,
 //!     frames: 1,
 //!     keep_images: false,
 //! };
@@ -106,6 +107,9 @@ pub struct Config {
     pub techniques: Vec<Technique>,
     /// Untimed frames before the timed ones.
     pub warmup: u32,
+    /// Untimed frame loops after them, for at least this many milliseconds (`--warmup-ms`):
+    /// lets a GPU that idled between rows clock up again ([`Experiment::warmup_ms`]).
+    pub warmup_ms: u32,
     /// Timed frames (at least 1; the report asks for 10 or more).
     pub frames: u32,
     /// The two curves, or none.
@@ -453,6 +457,9 @@ pub struct Report {
     pub view: View,
     /// Untimed frames per run.
     pub warmup: u32,
+    /// Untimed frame loops per run after them, in milliseconds (`--warmup-ms`).
+    #[serde(default)]
+    pub warmup_ms: u32,
     /// Timed frames per run.
     pub frames: u32,
     /// The backend/paths.
@@ -652,6 +659,7 @@ fn hardware_rows(
         settings,
         techniques,
         warmup: config.warmup,
+        warmup_ms: config.warmup_ms,
         frames: config.frames,
         keep_images: true,
     };
@@ -711,6 +719,7 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
         height: base.height,
         view: config.view,
         warmup: config.warmup,
+        warmup_ms: config.warmup_ms,
         frames: config.frames,
         backends: config
             .backends
@@ -744,6 +753,7 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
         settings: &base,
         techniques: &config.techniques,
         warmup: config.warmup,
+        warmup_ms: config.warmup_ms,
         frames: config.frames,
         keep_images: true,
     };
@@ -1023,7 +1033,7 @@ fn run_curves(
                 let l = label(backend.as_ref(), &s);
                 on_step(&format!("{curve} curve: {name}, {technique} on {l}"));
                 let timed = match &mut prepared {
-                    Ok(p) => measure(p.as_mut(), &camera, &s, 1, curves.frames),
+                    Ok(p) => measure(p.as_mut(), &camera, &s, (1, config.warmup_ms), curves.frames),
                     Err(e) => Err(OitError::InvalidSettings(e.to_string())),
                 };
                 match timed {

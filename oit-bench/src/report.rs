@@ -445,8 +445,14 @@ fn markdown(
     );
     let _ = writeln!(
         w,
-        "- per run: {} untimed warm-up frames, then {} timed frames",
-        report.warmup, report.frames
+        "- per run: {} untimed warm-up frames{}, then {} timed frames",
+        report.warmup,
+        if report.warmup_ms > 0 {
+            format!(" and {} ms of untimed frame loops", report.warmup_ms)
+        } else {
+            String::new()
+        },
+        report.frames
     );
     if report.frames < 10 {
         let _ = writeln!(w, "- **fewer than 10 timed frames: medians and spreads are rough**");

@@ -24,6 +24,7 @@ fn report_holds_every_technique() {
         view: View::default(),
         techniques: techniques.clone(),
         warmup: 1,
+        warmup_ms: 0,
         frames: 2,
         curves: Some(curves),
         command_line: "report test".into(),

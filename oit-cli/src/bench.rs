@@ -56,6 +56,11 @@ pub struct BenchArgs {
     #[arg(long, value_name = "N", default_value_t = 2)]
     pub warmup: u32,
 
+    /// After the warm-up frames, untimed frame loops for at least this many milliseconds per
+    /// row: a GPU that idled between rows clocks down, and a few frames do not bring it back.
+    #[arg(long, value_name = "MS", default_value_t = 0)]
+    pub warmup_ms: u32,
+
     /// Folder for report.md, report.json and the plots (made if missing).
     #[arg(long, value_name = "DIR", default_value = "bench-report")]
     pub out: PathBuf,
@@ -243,6 +248,7 @@ pub fn check(args: &BenchArgs) -> Result<Checked, OitError> {
         view: prepared.view,
         techniques,
         warmup: args.warmup,
+        warmup_ms: args.warmup_ms,
         frames: args.frames,
         curves,
         command_line: std::env::args().collect::<Vec<_>>().join(" "),

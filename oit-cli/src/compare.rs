@@ -112,6 +112,7 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
         settings: &prepared.settings,
         techniques: &techniques,
         warmup: 0,
+        warmup_ms: 0,
         frames: 1,
         keep_images: args.sheet.is_some(),
     };

@@ -126,6 +126,7 @@ pub fn run(args: &SweepArgs) -> Result<Outcome, OitError> {
         settings: &prepared.settings,
         techniques: &techniques,
         warmup: 0,
+        warmup_ms: 0,
         frames: 1,
         keep_images: false,
     };
