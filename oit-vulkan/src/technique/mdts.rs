@@ -33,9 +33,16 @@ fn passes(
     let buffers = [arrays[0], arrays[1], arrays[2], &*unused, &*tail, &*tail_words];
     let mode = if ctx.plan.tail { mode | MDTS_WITH_TAIL } else { mode };
     ctx.geometry_pass(&drivers.scene, module, &buffers, mode, k)?;
-    let tail_ran = ctx.plan.tail && ctx.read_u32(&tail_words)?[0] != 0;
-    if tail_ran {
+    let mut tail_ran = false;
+    if ctx.plan.tail && drivers.scene.gate().is_some() {
+        // gated by the overflow word the capture raised (on the device, no readback); the merged
+        // count is read with the frame's end
+        ctx.geometry_pass_if(&drivers.scene, module, &buffers, mode | MDTS_TAIL_PASS, k, &tail_words)?;
+        ctx.note_merged(&tail_words);
+    } else if ctx.plan.tail && ctx.read_u32(&tail_words)?[0] != 0 {
+        // the host's setup: its work list cannot be gated, so the flag is read back
         ctx.geometry_pass(&drivers.scene, module, &buffers, mode | MDTS_TAIL_PASS, k)?;
+        tail_ran = true;
     }
     ctx.pixel_kernel(module, "resolve_main", &buffers, mode, k)?;
     if tail_ran {

@@ -6,8 +6,8 @@
 //!
 //! The arrays end as the K smallest words inserted, sorted, whatever the arrival order, so the
 //! result equals oit-cpu's exactly (mdts's packing losses included). `--overflow tail` adds one
-//! pass where a pixel overflowed (the capture raises a flag, read back), merging what lies behind
-//! the K into a tail (`tail.wgsl`).
+//! pass where a pixel overflowed (gated on the device by the flag the capture raises), merging
+//! what lies behind the K into a tail (`tail.wgsl`).
 
 use oit_core::{OitError, Technique};
 
