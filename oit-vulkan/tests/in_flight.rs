@@ -237,8 +237,8 @@ fn a_speculated_fragment_total_that_misses_runs_again() {
     }
 }
 
-/// `fabs:K`'s overflow passes (and the tail's, `--overflow tail`) are gated on the device by the
-/// overflow flag where the raster has a gate: a steady frame waits once, and counts what the
+/// `fabs:K`'s overflow passes (and the tail's, `--overflow tail`), and `mdts:K`'s tail pass, are
+/// gated on the device by the overflow flag where the raster has a gate: a steady frame waits once, and counts what the
 /// host's setup (whose passes read the flag back) counts, image, passes, losses and merged
 /// fragments included.
 #[test]
@@ -251,18 +251,25 @@ fn fabs_overflow_passes_are_gated_on_the_device() {
     let gpu = gated.gpu().expect("opened above");
     let scene = load_scene("planes:5").unwrap();
     let (at, _) = at_and_away(&scene);
-    for overflow in [oit_core::Overflow::Drop, oit_core::Overflow::Tail] {
-        let s = Settings { width: 40, overflow, ..settings("fabs:2", RasterPath::Compute) };
+    let cases = [
+        ("fabs:2", oit_core::Overflow::Drop, 3),
+        ("fabs:2", oit_core::Overflow::Tail, 4),
+        // mdts:K's one tail pass, gated by the same word
+        ("mdts:2", oit_core::Overflow::Tail, 2),
+    ];
+    for (technique, overflow, passes) in cases {
+        let s = Settings { width: 40, overflow, ..settings(technique, RasterPath::Compute) };
         let want = read_back.render(&scene, &at, &s).unwrap();
-        assert!(want.stats.lost > 0 || want.stats.merged > 0, "{overflow:?}: two slots overflow");
-        assert!(want.stats.geometry_passes >= 3, "{overflow:?}: the overflow passes ran");
+        let overflow = format!("{technique} {overflow:?}");
+        assert!(want.stats.lost > 0 || want.stats.merged > 0, "{overflow}: two slots overflow");
+        assert!(want.stats.geometry_passes >= passes, "{overflow}: the overflow passes ran");
         let mut prepared = gated.prepare(&scene).unwrap();
         prepared.frame(&at, &s).unwrap();
         let before = gpu.waits();
         let got = prepared.frame(&at, &s).unwrap();
-        assert_eq!(gpu.waits() - before, 1, "{overflow:?}: a steady frame waits once");
-        assert_eq!(got.image, want.image, "{overflow:?}");
+        assert_eq!(gpu.waits() - before, 1, "{overflow}: a steady frame waits once");
+        assert_eq!(got.image, want.image, "{overflow}");
         let key = |t: &Stats| (key(t), t.merged);
-        assert_eq!(key(&got.stats), key(&want.stats), "{overflow:?}");
+        assert_eq!(key(&got.stats), key(&want.stats), "{overflow}");
     }
 }
