@@ -33,7 +33,7 @@ def main(paths):
                 continue
             t, e = min(exact, key=lambda x: x[1])
             f = lambda xs: " / ".join(f"{x:.2f}" for x in xs)
-            print(f"| {scene.split('/')[-1]} | {be} | {f(plain)} | {f(wavg)} | {t} {e:.2f} | **{plain[2] / e:.2f}** | {plain[0] / e:.2f} "
+            print(f"| {scene.replace('.gpu/models/', '')} | {be} | {f(plain)} | {f(wavg)} | {t} {e:.2f} | **{plain[2] / e:.2f}** | {plain[0] / e:.2f} "
                   f"| **{plain[2] / wavg[2]:.2f}** | {plain[1] / wavg[2]:.2f} |")
 
 

@@ -751,6 +751,28 @@ impl<'a> GpuCtx<'a> {
         Ok(())
     }
 
+    /// The blend captures' peel loops: folds `occlusion` (a query's 64-bit result, resolved on the
+    /// device) into word 0 of `flag`, 1 where any sample passed, else 0. No readback.
+    pub(crate) fn fold_occlusion(
+        &mut self,
+        occlusion: &wgpu::Buffer,
+        flag: &wgpu::Buffer,
+    ) -> Result<(), OitError> {
+        let totals = self.totals.clone();
+        self.kernel_over(GATE_WGSL, "occlusion_main", &[flag, &totals, occlusion], 1, 0, 0, "gate")
+    }
+
+    /// Opens `gate` for the pass recorded next where word 0 of `flag` is set (the arguments
+    /// copied, else zeros: the pass does nothing) and counts that pass on the device where it
+    /// runs, as [`GpuCtx::geometry_pass_if`] does; the pass counts itself in `passes` as usual.
+    pub(crate) fn open_gate(&mut self, flag: &wgpu::Buffer, gate: &Gate) -> Result<(), OitError> {
+        let totals = self.totals.clone();
+        let buffers = [flag, &totals, &gate.from, &gate.to];
+        self.kernel_over(GATE_WGSL, "gate_main", &buffers, 64, 0, gate.words, "gate")?;
+        self.gated_passes += 1;
+        Ok(())
+    }
+
     /// Where a tail pass counted the fragments it merged (word 1 of `words`): copied into the
     /// totals at the end of the frame and read back with them.
     pub fn note_merged(&mut self, words: &wgpu::Buffer) {

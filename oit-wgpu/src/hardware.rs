@@ -59,6 +59,7 @@ pub struct SceneStage {
     /// captures drew into, kept for the next frame of that size ([`SceneStage::target`]).
     size: (u32, u32),
     targets: Rc<RefCell<Vec<KeptTarget>>>,
+    occlusion: Rc<RefCell<Option<Occlusion>>>,
 }
 
 /// A render target a [`SceneStage`] keeps: its label, format and view.
@@ -128,14 +129,17 @@ pub(crate) struct PassTarget<'a> {
     pub depth: Option<&'a wgpu::TextureView>,
 }
 
-/// An occlusion query over one pass, and the buffer its result resolves into.
+/// An occlusion query over one pass, and the buffer its result resolves into (storage too: a
+/// gated peel loop folds it into a flag on the device). Made once per [`SceneStage`] and kept.
+#[derive(Clone)]
 pub(crate) struct Occlusion {
     set: wgpu::QuerySet,
     buffer: wgpu::Buffer,
 }
 
 impl Occlusion {
-    pub(crate) fn new(device: &wgpu::Device, label: &str) -> Occlusion {
+    fn new(device: &wgpu::Device) -> Occlusion {
+        let label = "blend capture occlusion";
         let set = device.create_query_set(&wgpu::QuerySetDescriptor {
             label: Some(label),
             ty: wgpu::QueryType::Occlusion,
@@ -144,18 +148,35 @@ impl Occlusion {
         let buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),
             size: 8,
-            usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            usage: wgpu::BufferUsages::QUERY_RESOLVE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::STORAGE,
             mapped_at_creation: false,
         });
         Occlusion { set, buffer }
     }
+
+    /// The last pass's result, resolved on the device.
+    pub(crate) fn buffer(&self) -> &wgpu::Buffer {
+        &self.buffer
+    }
+
+    /// Whether any sample of the last pass passed: read back now (a round trip).
+    pub(crate) fn drew(&self, ctx: &mut GpuCtx<'_>) -> Result<bool, OitError> {
+        Ok(ctx.read_u32(&self.buffer)?.iter().any(|&s| s != 0))
+    }
 }
 
 impl SceneStage {
+    /// This stage's occlusion query and its result buffer, made on first use and kept.
+    pub(crate) fn occlusion(&self, device: &wgpu::Device) -> Occlusion {
+        self.occlusion.borrow_mut().get_or_insert_with(|| Occlusion::new(device)).clone()
+    }
+
     /// One geometry pass of a blend capture (`technique::{dp_depth, ddp_blend}`): `pipeline`
     /// draws the scene into `target` with `groups` set as groups 0 and 2, inside `occlusion`'s
-    /// query; it is timed and counted as a geometry pass. Returns whether any sample passed: zero
-    /// or not is all an occlusion query promises on every backend.
+    /// query, resolved into its buffer; timed and counted as a geometry pass. `gated`: the draw's
+    /// indirect arguments, where a gate left them (every triangle, or none).
     pub(crate) fn occlusion_pass(
         &self,
         ctx: &mut GpuCtx<'_>,
@@ -163,7 +184,8 @@ impl SceneStage {
         groups: (&wgpu::BindGroup, &wgpu::BindGroup),
         target: PassTarget<'_>,
         occlusion: &Occlusion,
-    ) -> Result<bool, OitError> {
+        gated: Option<&wgpu::Buffer>,
+    ) -> Result<(), OitError> {
         let mut encoder = ctx.take_encoder();
         {
             let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -193,13 +215,16 @@ impl SceneStage {
             rpass.set_bind_group(0, groups.0, &[]);
             rpass.set_bind_group(2, groups.1, &[]);
             rpass.begin_occlusion_query(0);
-            self.draw(&mut rpass);
+            match gated {
+                Some(args) => self.draw_indirect(&mut rpass, args),
+                None => self.draw(&mut rpass),
+            }
             rpass.end_occlusion_query();
         }
         encoder.resolve_query_set(&occlusion.set, 0..1, &occlusion.buffer, 0);
         ctx.finish_timed("geometry", encoder)?;
         ctx.passes += 1;
-        Ok(ctx.read_u32(&occlusion.buffer)?.iter().any(|&s| s != 0))
+        Ok(())
     }
 }
 
@@ -412,6 +437,7 @@ impl HwGeometry {
             vertex_count: self.vertex_count,
             size: (width, height),
             targets: Rc::default(),
+            occlusion: Rc::default(),
         };
         let layout1 = stage.layout.clone();
         let pipeline_device = gpu.device.clone();

@@ -4,7 +4,7 @@
 //! per-pixel losses together). Before, every geometry pass read its fragment count back, every
 //! timed pass its timestamps, and every compute-path frame its setup's counters before its passes.
 
-use oit_core::{Backend, Camera, RasterPath, Settings, Technique, View, load_scene};
+use oit_core::{Backend, Camera, HardwareCapture, RasterPath, Settings, Technique, View, load_scene};
 
 /// Two views of `scene`: at it (its planes overlapping on screen), and looking away from it
 /// (nothing on screen: no fragment, the deepest pixel 0, one peel).
@@ -39,11 +39,19 @@ fn a_steady_frame_reads_back_once() {
         // dp, ddp and mlp:2 peel with the last frame's pass count, gated likewise
         // dfb and ll size their arrays from the last frame's fragment total, adp its batches from
         // the last frame's set-bin count, each checked at the end
-        for technique in [
+        // and on the hardware path dp and ddp by the blend capture, their occlusion-query loops
+        // gated likewise
+        let blend = if path == RasterPath::Hardware { &["dp", "ddp"][..] } else { &[] };
+        let runs = [
             "wavg", "wsum", "bdp", "bdp:2", "mdts64:8", "fabs", "fabs:2", "dp", "ddp", "mlp:2", "dfb", "ll",
             "adp",
-        ] {
-            let settings = on_path(48, 40, technique, path);
+        ]
+        .map(|t| (t, HardwareCapture::Atomics))
+        .into_iter()
+        .chain(blend.iter().map(|&t| (t, HardwareCapture::Blend)));
+        for (technique, hardware_capture) in runs {
+            let settings = Settings { hardware_capture, ..on_path(48, 40, technique, path) };
+            let technique = format!("{technique} ({hardware_capture:?})");
             let mut prepared = backend.prepare(&scene).unwrap();
             let first = prepared.frame(&camera, &settings).unwrap();
             assert!(first.stats.fragments > 0, "{technique} on {path}: the scene has fragments");
@@ -80,8 +88,14 @@ fn a_speculated_peel_count_that_misses_runs_again() {
     let scene = load_scene("planes:5").unwrap();
     let (at, away) = at_and_away(&scene);
     for path in [RasterPath::Compute, RasterPath::Hardware] {
-        for technique in ["dp", "ddp", "mlp:2"] {
-            let settings = on_path(40, 40, technique, path);
+        let blend = if path == RasterPath::Hardware { &["dp", "ddp"][..] } else { &[] };
+        let runs = ["dp", "ddp", "mlp:2"]
+            .map(|t| (t, HardwareCapture::Atomics))
+            .into_iter()
+            .chain(blend.iter().map(|&t| (t, HardwareCapture::Blend)));
+        for (technique, hardware_capture) in runs {
+            let settings = Settings { hardware_capture, ..on_path(40, 40, technique, path) };
+            let technique = format!("{technique} ({hardware_capture:?})");
             let one_shot_at = backend.render(&scene, &at, &settings).unwrap();
             let one_shot_away = backend.render(&scene, &away, &settings).unwrap();
             assert!(one_shot_at.stats.geometry_passes >= 3, "{technique}: the planes need several passes");

@@ -17,3 +17,11 @@ fn gate_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         gate_to[gid.x] = select(0u, gate_from[gid.x], open);
     }
 }
+
+// An occlusion query's 64-bit result (`gate_from`, as resolved) folded into word 0 of `gate_flag`:
+// 1 where any sample passed (either word non-zero: zero or not is all a query promises), else 0,
+// the flag a gated pass and a frame-end check read (the blend captures' peel loops).
+@compute @workgroup_size(1)
+fn occlusion_main() {
+    gate_flag[0] = select(0u, 1u, (gate_from[0] | gate_from[1]) != 0u);
+}

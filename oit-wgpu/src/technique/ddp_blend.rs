@@ -20,7 +20,8 @@ use oit_core::OitError;
 use crate::Drivers;
 use crate::ctx::{GpuCtx, TECHNIQUE_PRELUDE};
 use crate::gpu::COMMON_WGSL;
-use crate::hardware::{Occlusion, PassTarget, scene_pipeline};
+use crate::hardware::{PassTarget, scene_pipeline};
+use crate::technique::OcclusionPeel;
 use crate::technique::bdp_blend::{check_texture_size, count_fragments, key, scene_stage, unsupported};
 use crate::technique::ddp;
 
@@ -44,24 +45,10 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     let px = u64::from(ctx.pixels);
 
     let device = ctx.gpu.device.clone();
-    let (w, h) = (ctx.settings.width, ctx.settings.height);
-    let targets: Vec<wgpu::Texture> = (0..2)
-        .map(|i| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(&format!("ddp range target {i}")),
-                size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: RANGE,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
-        })
-        .collect();
+    // kept by the stage: a frame of a size seen before makes none
+    let views = [stage.target(&device, "ddp range 0", RANGE), stage.target(&device, "ddp range 1", RANGE)];
     ctx.storage_bytes += px * 16;
-    let views: Vec<wgpu::TextureView> = targets.iter().map(|t| t.create_view(&Default::default())).collect();
-    let occlusion = Occlusion::new(&device, "ddp pass occlusion");
+    let occlusion = stage.occlusion(&device);
     // group 2: the previous pass's range; pass p renders into views[p % 2] and reads the other
     let previous_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("ddp previous range"),
@@ -95,7 +82,9 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         dst_factor: wgpu::BlendFactor::One,
         operation: wgpu::BlendOperation::Max,
     };
+    // the loop ends after the first pass whose query saw nothing, or after pass `limit`
     let limit = ctx.plan.peel_limit;
+    let control = OcclusionPeel::new(ctx, drivers.scene.as_ref(), limit.saturating_add(1))?;
     let mut pass = 0u32;
     loop {
         let slot = (pass % 2) as usize;
@@ -115,7 +104,8 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
                 None,
             )
         })?;
-        let left = stage.occlusion_pass(
+        let gated = control.gate(ctx, pass)?;
+        stage.occlusion_pass(
             ctx,
             &pipeline,
             (&group0, &previous_groups[slot]),
@@ -126,12 +116,13 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
                 depth: None,
             },
             &occlusion,
+            gated.as_ref(),
         )?;
         if pass > 0 {
             // the pair the previous pass found, handed over in this one
             ctx.pixel_kernel(ddp::WGSL, "resolve_main", &buffers, pass, 0)?;
         }
-        if !left || pass >= limit {
+        if !control.go_on(ctx, &occlusion, pass + 1)? {
             break;
         }
         pass += 1;

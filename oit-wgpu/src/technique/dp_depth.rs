@@ -4,9 +4,11 @@
 //! discards what lies at or in front of the previous peel's depth (two depth textures,
 //! ping-ponged: one is this peel's attachment, the other the previous peel's, read by pixel),
 //! writing the surviving fragment's payload to an Rg32Uint target; an occlusion query over the
-//! pass, read back after it, ends the loop at the first peel that draws nothing (N + 1 passes as
-//! oit-cpu, or `settings.max_peels`); a compute step composites each peeled layer under the
-//! layers before (`push`, depth from the attachment).
+//! pass ends the loop at the first peel that draws nothing (N + 1 passes as oit-cpu, or
+//! `settings.max_peels`): read back after each pass, or, where a prepared scene's frame knows
+//! the last frame's count, gated on the device with no round trip ([`OcclusionPeel`]). A compute
+//! step composites each peeled layer under the layers before (`push`, depth from the attachment).
+//! The textures and the query are kept by the frame's rasterizer.
 //!
 //! The same layers, passes and losses as the atomics capture (`dp.rs`); equal depths within a
 //! pixel keep the last drawn fragment here and the smallest payload there (the other is lost in
@@ -22,7 +24,8 @@ use oit_core::OitError;
 use crate::Drivers;
 use crate::ctx::{GpuCtx, TECHNIQUE_PRELUDE};
 use crate::gpu::COMMON_WGSL;
-use crate::hardware::{Occlusion, PassTarget, scene_pipeline};
+use crate::hardware::{PassTarget, scene_pipeline};
+use crate::technique::OcclusionPeel;
 use crate::technique::bdp_blend::{check_texture_size, count_fragments, key, scene_stage};
 
 const WGSL: &str = include_str!("dp_depth.wgsl");
@@ -38,26 +41,12 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         count_fragments(ctx, drivers)?;
     }
     let device = ctx.gpu.device.clone();
-    let (w, h) = (ctx.settings.width, ctx.settings.height);
-    let texture = |label: &str, format| {
-        device.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        })
-    };
-    let depths = [texture("dp depth 0", DEPTH), texture("dp depth 1", DEPTH)];
-    let layer = texture("dp layer", LAYER);
+    // kept by the stage: a frame of a size seen before makes none
+    let depth_views =
+        [stage.target(&device, "dp depth 0", DEPTH), stage.target(&device, "dp depth 1", DEPTH)];
+    let layer_view = stage.target(&device, "dp layer", LAYER);
     ctx.storage_bytes += u64::from(ctx.pixels) * (4 + 4 + 8);
-    let depth_views: Vec<wgpu::TextureView> =
-        depths.iter().map(|t| t.create_view(&Default::default())).collect();
-    let layer_view = layer.create_view(&Default::default());
-    let occlusion = Occlusion::new(&device, "dp peel occlusion");
+    let occlusion = stage.occlusion(&device);
 
     let depth_entry = |binding: u32, visibility| wgpu::BindGroupLayoutEntry {
         binding,
@@ -125,11 +114,13 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     let module_source = format!("{COMMON_WGSL}\n{TECHNIQUE_PRELUDE}{WGSL}\n{}", stage.wgsl());
     let composite_source = format!("{TECHNIQUE_PRELUDE}{WGSL}\n{}", stage.wgsl());
     let (x, y) = crate::ctx::dispatch_size(u64::from(ctx.pixels));
+    // the loop ends at the first peel that draws nothing (N + 1 passes), or at the limit
     let limit = ctx.plan.peel_limit;
-    let mut peels = 0;
-    while peels < limit {
-        let slot = (peels % 2) as usize;
-        let (layout0, group0) = ctx.group0(&[], peels, 0);
+    let control = OcclusionPeel::new(ctx, drivers.scene.as_ref(), limit)?;
+    let mut run = 0;
+    loop {
+        let slot = (run % 2) as usize;
+        let (layout0, group0) = ctx.group0(&[], run, 0);
         let pipeline =
             ctx.gpu.render_pipeline(key(&module_source, "dp depth peel"), "dp depth peel", || {
                 scene_pipeline(
@@ -152,7 +143,8 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
                     }),
                 )
             })?;
-        let drew = stage.occlusion_pass(
+        let gated = control.gate(ctx, run)?;
+        stage.occlusion_pass(
             ctx,
             &pipeline,
             (&group0, &previous_groups[slot]),
@@ -163,11 +155,11 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
                 depth: Some(&depth_views[slot]),
             },
             &occlusion,
+            gated.as_ref(),
         )?;
-        if !drew {
-            break;
-        }
-        let (layout0, group0) = ctx.group0(&[], peels, 0);
+        run += 1;
+        // a peel that drew nothing left its layer clear: its composite adds nothing
+        let (layout0, group0) = ctx.group0(&[], run - 1, 0);
         let composite = ctx.gpu.compute_pipeline(
             &composite_source,
             "dp_composite_main",
@@ -184,7 +176,9 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
             pass.set_bind_group(1, group1, &[]);
             pass.dispatch_workgroups(x, y, 1);
         })?;
-        peels += 1;
+        if !control.go_on(ctx, &occlusion, run)? {
+            break;
+        }
     }
     Ok(())
 }

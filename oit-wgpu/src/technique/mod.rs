@@ -20,7 +20,8 @@ pub(crate) mod weighted;
 
 use oit_core::OitError;
 
-use crate::ctx::{Driver, GpuCtx, Init};
+use crate::ctx::{Driver, Gate, GpuCtx, Init};
+use crate::hardware::Occlusion;
 
 const COUNT_WGSL: &str = include_str!("count.wgsl");
 const SCAN_WGSL: &str = include_str!("scan.wgsl");
@@ -106,6 +107,75 @@ pub(crate) fn peel(
     }
     ctx.last_pass(false);
     Ok(())
+}
+
+/// The pass count of the blend captures' peel loops (`dp_depth`, `ddp_blend`), which end at the
+/// first pass whose occlusion query saw no sample. As [`peel`] does for the atomics captures:
+/// where the frame has a speculated pass count and the raster a gate, that many passes are
+/// recorded with no round trip, each after the first gated on the query of the one before
+/// (folded into a flag on the device), and the last pass's query checked at the frame's end (a
+/// frame that needed more passes runs again). Else the query is read after each pass and the
+/// count kept for the next frame.
+pub(crate) struct OcclusionPeel {
+    /// The most passes the loop may run.
+    cap: u32,
+    /// The speculated count, the flag folded from the last query and the raster's gate.
+    speculated: Option<(u32, wgpu::Buffer, Gate)>,
+}
+
+impl OcclusionPeel {
+    pub(crate) fn new(ctx: &mut GpuCtx<'_>, driver: &dyn Driver, cap: u32) -> Result<Self, OitError> {
+        let speculated = match (ctx.speculated_peels.take().filter(|&s| s >= 1), driver.gate()) {
+            (Some(s), Some(gate)) => {
+                let flag = ctx.buffer("peel gate", 1, Init::Zero)?;
+                // bookkeeping, not per-pixel storage
+                ctx.storage_bytes -= 4;
+                Some((s.min(cap), flag, gate))
+            }
+            _ => None,
+        };
+        Ok(OcclusionPeel { cap, speculated })
+    }
+
+    /// Before pass `run` (from 0): the gated draw arguments it draws with, where it is gated.
+    pub(crate) fn gate(&self, ctx: &mut GpuCtx<'_>, run: u32) -> Result<Option<wgpu::Buffer>, OitError> {
+        match &self.speculated {
+            Some((_, flag, gate)) if run > 0 => {
+                ctx.open_gate(flag, gate)?;
+                Ok(Some(gate.to.clone()))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// After `run` passes, the last one's query in `occlusion`: whether the loop goes on.
+    pub(crate) fn go_on(
+        &self,
+        ctx: &mut GpuCtx<'_>,
+        occlusion: &Occlusion,
+        run: u32,
+    ) -> Result<bool, OitError> {
+        match &self.speculated {
+            Some((s, flag, _)) => {
+                ctx.fold_occlusion(occlusion.buffer(), flag)?;
+                if run < *s {
+                    return Ok(true);
+                }
+                if run < self.cap {
+                    // the last speculated pass must have seen nothing
+                    ctx.check_at_end(flag, 0);
+                }
+                Ok(false)
+            }
+            None => {
+                let drew = run < self.cap && occlusion.drew(ctx)?;
+                if !drew {
+                    ctx.peels_seen = Some(run);
+                }
+                Ok(drew)
+            }
+        }
+    }
 }
 
 /// Fragments per pixel from one counting pass (the buffer), and the deepest pixel's count.
