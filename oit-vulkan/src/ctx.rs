@@ -162,8 +162,13 @@ pub(crate) struct BlendPass<'b> {
     pub depth: bool,
     /// Images the fragment stage reads, as group 2.
     pub previous: &'b [(u32, &'b GpuImage)],
-    /// Whether to count the samples that pass (an occlusion query, read back after the pass).
+    /// Whether to count the samples that pass in the recorder's occlusion query, for
+    /// [`VkCtx::read_occlusion`] (a round trip) or [`VkCtx::fold_occlusion`] (none).
     pub occlusion: bool,
+    /// A pass of a speculated peel loop after its first: drawn from the hardware raster's gated
+    /// arguments (the gate [`VkCtx::open_gate`] left: every triangle, or none) and counted on the
+    /// device where it runs, not here.
+    pub gated: bool,
     /// The frame uniform's pass index and parameter for the draw.
     pub pass_index: u32,
     pub param: u32,
@@ -500,10 +505,29 @@ impl<'a> VkCtx<'a> {
         self.merged_from = Some(words.clone());
     }
 
+    /// Opens the hardware raster's gate for the blend pass recorded next ([`BlendPass::gated`])
+    /// where word 0 of `flag` is set, and counts that pass on the device, as
+    /// [`VkCtx::geometry_pass_if`] does for a geometry pass.
+    pub(crate) fn open_gate(&mut self, raster: &HardwareRaster, flag: &Buffer) -> Result<(), OitError> {
+        let (from, to, words) = raster.gate();
+        let counter = self.gated_counter.clone();
+        self.kernel_over("gate", "gate_main", &[flag, &counter, from, to], 64, 0, words, "gate")
+    }
+
+    /// Folds the occlusion query of the last blend pass into word 0 of `flag` on the device (1
+    /// where any sample passed, else 0), through `scratch` (8 bytes). No readback.
+    pub(crate) fn fold_occlusion(&mut self, scratch: &Buffer, flag: &Buffer) -> Result<(), OitError> {
+        self.rec.copy_occlusion(scratch);
+        let counter = self.gated_counter.clone();
+        self.kernel_over("gate", "occlusion_main", &[flag, &counter, scratch], 1, 0, 0, "gate")
+    }
+
     /// Makes the gate's pipeline ([`VkCtx::geometry_pass_if`]) where it is not yet cached: a frame
     /// that reads its peels back makes it, so the next one, which gates, creates no pipeline.
     pub(crate) fn make_gate_pipeline(&self) -> Result<(), OitError> {
-        self.gpu.compute("gate", "gate_main", &[SetKind::Frame(4, self.image_bindings())]).map(|_| ())
+        self.gpu.compute("gate", "gate_main", &[SetKind::Frame(4, self.image_bindings())])?;
+        // and the blend captures' fold of their occlusion queries
+        self.gpu.compute("gate", "occlusion_main", &[SetKind::Frame(3, self.image_bindings())]).map(|_| ())
     }
 
     /// The peel count a peel loop found by reading its flags back, for the next frame.
@@ -830,7 +854,7 @@ impl<'a> VkCtx<'a> {
         raster: &HardwareRaster,
         pass: BlendPass<'_>,
         buffers: &[&Buffer],
-    ) -> Result<Option<u64>, OitError> {
+    ) -> Result<(), OitError> {
         let colors: Vec<vk::Format> = pass
             .targets
             .iter()
@@ -886,16 +910,25 @@ impl<'a> VkCtx<'a> {
             &framebuffer,
             &clear,
             &sets,
-            Vertices::Count(raster.vertex_count()),
+            if pass.gated {
+                Vertices::Indirect(raster.gate().1)
+            } else {
+                Vertices::Count(raster.vertex_count())
+            },
             pass.occlusion,
         )?;
-        self.passes += 1;
-        if pass.occlusion {
-            let samples = self.rec.occlusion()?;
-            self.check_validation()?;
-            return Ok(Some(samples));
+        if !pass.gated {
+            self.passes += 1;
         }
-        Ok(None)
+        Ok(())
+    }
+
+    /// The samples that passed in the last blend pass with `occlusion`: waits for it (a round
+    /// trip inside the frame).
+    pub(crate) fn read_occlusion(&mut self) -> Result<u64, OitError> {
+        let samples = self.rec.occlusion()?;
+        self.check_validation()?;
+        Ok(samples)
     }
 
     /// A validation error since the frame began fails it (`OIT_VULKAN_VALIDATION=1`).

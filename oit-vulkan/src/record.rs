@@ -817,6 +817,27 @@ impl<'g> Recorder<'g> {
         Ok(samples[0])
     }
 
+    /// Records a copy of the occlusion query's 64-bit result (the last draw with `occlusion` began
+    /// and ended it, earlier in this recorder's order) into the first 8 bytes of `dst`, waiting on
+    /// the device for it to be available; a barrier follows. No host wait.
+    pub(crate) fn copy_occlusion(&mut self, dst: &Buffer) {
+        // SAFETY: recording, outside a render pass; the query of this recorder's pool was reset,
+        // begun and ended by an earlier command; dst has TRANSFER_DST usage and holds 8 bytes.
+        unsafe {
+            self.gpu.raw.device.cmd_copy_query_pool_results(
+                self.p.cmd,
+                self.p.occlusion,
+                0,
+                1,
+                dst.buffer,
+                0,
+                8,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            );
+        }
+        self.barrier();
+    }
+
     /// Records a copy of `image` (in `TRANSFER_SRC_OPTIMAL`, one 32-bit texel per pixel) into the
     /// start of `dst`, row by row; a barrier follows.
     pub(crate) fn copy_image(&mut self, image: &GpuImage, dst: &Buffer) {

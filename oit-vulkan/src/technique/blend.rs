@@ -27,8 +27,8 @@ use ash::vk;
 use oit_core::{BlendTarget, OitError, Technique};
 
 use crate::Drivers;
-use crate::ctx::{BlendPass, VkCtx};
-use crate::device::{Blend, GpuImage};
+use crate::ctx::{BlendPass, Init, VkCtx};
+use crate::device::{Blend, Buffer, GpuImage};
 use crate::hardware::HardwareRaster;
 use crate::raster::Raster;
 
@@ -148,6 +148,7 @@ fn draw_and_resolve(
             depth: false,
             previous: &[],
             occlusion: false,
+            gated: false,
             pass_index: 0,
             param,
         },
@@ -186,6 +187,7 @@ pub(crate) fn bdp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
             depth: false,
             previous: &[],
             occlusion: false,
+            gated: false,
             pass_index: 0,
             param: 0,
         },
@@ -195,9 +197,77 @@ pub(crate) fn bdp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
     ctx.image_kernel("bdp_blend", "bdp_blend_resolve_main", &[&bounds], &images, 0, 0)
 }
 
-/// `dp` by depth test and occlusion queries (`dp_depth.wgsl`): peel p renders into depth target
-/// p % 2 and reads the other; the loop ends at the first peel that draws nothing, or at the
-/// plan's limit.
+/// The pass count of the occlusion-query peel loops (dp, ddp), as oit-wgpu's `OcclusionPeel`:
+/// where the frame has a speculated count (an earlier frame's), that many passes are recorded
+/// with no round trip, each after the first drawn through the raster's gate, opened by the
+/// query of the pass before it (folded into a flag on the device), and the last pass's flag is
+/// checked at the frame's end (set: the frame needed more passes and runs again). Else each
+/// pass's query is read back, and the count kept for the next frame.
+struct OcclusionPeel {
+    /// The most passes the loop may run.
+    cap: u32,
+    /// The speculated count, the flag folded from the last query, and the query's 8 bytes.
+    speculated: Option<(u32, Rc<Buffer>, Rc<Buffer>)>,
+}
+
+impl OcclusionPeel {
+    fn new(ctx: &mut VkCtx<'_>, cap: u32) -> Result<Self, OitError> {
+        let speculated = match ctx.speculated.peels.take().filter(|&s| s >= 1) {
+            Some(s) => {
+                let flag = ctx.buffer("peel gate", 1, Init::Zero)?;
+                let query = ctx.buffer("peel query", 2, Init::Zero)?;
+                // bookkeeping, not per-pixel storage
+                ctx.storage_bytes -= 12;
+                Some((s.min(cap), flag, query))
+            }
+            None => {
+                // the next frame gates: its pipelines made now
+                ctx.make_gate_pipeline()?;
+                None
+            }
+        };
+        Ok(OcclusionPeel { cap, speculated })
+    }
+
+    /// Before pass `run` (from 0): whether it is gated (its gate opened here).
+    fn gate(&self, ctx: &mut VkCtx<'_>, raster: &HardwareRaster, run: u32) -> Result<bool, OitError> {
+        match &self.speculated {
+            Some((_, flag, _)) if run > 0 => {
+                ctx.open_gate(raster, flag)?;
+                Ok(true)
+            }
+            _ => Ok(false),
+        }
+    }
+
+    /// After `run` passes, the last one's query recorded: whether the loop goes on.
+    fn go_on(&self, ctx: &mut VkCtx<'_>, run: u32) -> Result<bool, OitError> {
+        match &self.speculated {
+            Some((s, flag, query)) => {
+                ctx.fold_occlusion(query, flag)?;
+                if run < *s {
+                    return Ok(true);
+                }
+                if run < self.cap {
+                    // the last speculated pass must have seen nothing
+                    ctx.check_at_end(flag);
+                }
+                Ok(false)
+            }
+            None => {
+                let drew = run < self.cap && ctx.read_occlusion()? != 0;
+                if !drew {
+                    ctx.note_peels(run);
+                }
+                Ok(drew)
+            }
+        }
+    }
+}
+
+/// `dp` by Everitt's depth peeling: a depth test into `D32_SFLOAT` against the previous peel's
+/// depth (read by pixel, `dp_depth.wgsl`), the layer composited by a kernel; the loop ends at the
+/// first peel whose occlusion query sees nothing ([`OcclusionPeel`]).
 pub(crate) fn dp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     ctx.counts_losses = false;
     let raster = hardware(drivers)?;
@@ -207,10 +277,12 @@ pub(crate) fn dp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitEr
     // the first peel's "previous" depth is never read, but is bound: readable, if undefined
     ctx.make_readable(&depths[1]);
     let limit = ctx.plan.peel_limit;
-    let mut peels = 0;
-    while peels < limit {
-        let slot = (peels % 2) as usize;
-        let samples = ctx.blend_pass(
+    let control = OcclusionPeel::new(ctx, limit)?;
+    let mut run = 0;
+    loop {
+        let slot = (run % 2) as usize;
+        let gated = control.gate(ctx, raster, run)?;
+        ctx.blend_pass(
             raster,
             BlendPass {
                 module: "dp_depth",
@@ -221,22 +293,25 @@ pub(crate) fn dp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitEr
                 depth: true,
                 previous: &[(0, &depths[1 - slot])],
                 occlusion: true,
-                pass_index: peels,
+                gated,
+                pass_index: run,
                 param: 0,
             },
             &[],
         )?;
-        if samples == Some(0) {
+        // a peel that drew nothing left its layer clear: its composite adds nothing
+        ctx.image_kernel("dp_depth", "dp_composite_main", &[], &[(3, &layer), (4, &depths[slot])], run, 0)?;
+        run += 1;
+        if !control.go_on(ctx, run)? {
             break;
         }
-        ctx.image_kernel("dp_depth", "dp_composite_main", &[], &[(3, &layer), (4, &depths[slot])], peels, 0)?;
-        peels += 1;
     }
     Ok(())
 }
 
 /// `ddp` by MAX blending of (−d, d) and occlusion queries (`ddp_blend.wgsl`), its layers
-/// composited by `ddp.wgsl`'s resolve.
+/// composited by `ddp.wgsl`'s resolve; the loop ends after the first pass whose query sees
+/// nothing, or after pass `limit` ([`OcclusionPeel`]).
 pub(crate) fn ddp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     ctx.counts_losses = false;
     super::ddp::check_effect(ctx)?;
@@ -248,10 +323,12 @@ pub(crate) fn ddp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
     let ranges = [ctx.target(RG32F, 8, false)?, ctx.target(RG32F, 8, false)?];
     ctx.make_readable(&ranges[1]);
     let limit = ctx.plan.peel_limit;
+    let control = OcclusionPeel::new(ctx, limit.saturating_add(1))?;
     let mut pass = 0u32;
     loop {
         let slot = (pass % 2) as usize;
-        let left = ctx.blend_pass(
+        let gated = control.gate(ctx, raster, pass)?;
+        ctx.blend_pass(
             raster,
             BlendPass {
                 module: "ddp_blend",
@@ -262,6 +339,7 @@ pub(crate) fn ddp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
                 depth: false,
                 previous: &[(0, &ranges[1 - slot])],
                 occlusion: true,
+                gated,
                 pass_index: pass,
                 param: 0,
             },
@@ -270,7 +348,7 @@ pub(crate) fn ddp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
         if pass > 0 {
             ctx.pixel_kernel("ddp", "resolve_main", &buffers, pass, 0)?;
         }
-        if left == Some(0) || pass >= limit {
+        if !control.go_on(ctx, pass + 1)? {
             break;
         }
         pass += 1;
@@ -312,6 +390,7 @@ pub(crate) fn adp_histogram(
             depth: false,
             previous: &[],
             occlusion: false,
+            gated: false,
             pass_index: 0,
             param: 0,
         },
