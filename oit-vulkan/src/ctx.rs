@@ -233,6 +233,9 @@ pub(crate) struct VkCtx<'a> {
     /// Whether the geometry pass being recorded is gated ([`VkCtx::geometry_pass_if`]).
     gated_pass: bool,
     /// Word 5: the gated geometry passes whose gate was open (`gate.wgsl`), read at the end.
+    /// Per-pixel fragment counts the frame hands the caller as its `layers` (the reference's),
+    /// read back with the image at the end.
+    pub(crate) layers_from: Option<Rc<Buffer>>,
     gated_counter: Rc<Buffer>,
     /// Words 0 that must pass their test at the frame's end ([`VkCtx::check_at_end`]).
     end_checks: Vec<EndCheck>,
@@ -322,6 +325,7 @@ impl<'a> VkCtx<'a> {
             merged_from: None,
             gated_pass: false,
             gated_counter,
+            layers_from: None,
             end_checks: Vec::new(),
         };
         let (acct, gated_counter) = (ctx.acct.clone(), ctx.gated_counter.clone());
@@ -413,11 +417,6 @@ impl<'a> VkCtx<'a> {
     /// Copies the first `bytes` of `src` to the start of `dst` (in the frame's command stream).
     pub(crate) fn copy(&mut self, src: &Buffer, dst: &Buffer, bytes: u64) {
         self.rec.copy(src, dst, bytes);
-    }
-
-    /// Writes `bytes` to the start of `buffer` (through staging, in the frame's command stream).
-    pub(crate) fn upload(&mut self, buffer: &Buffer, bytes: &[u8]) -> Result<(), OitError> {
-        self.rec.upload(buffer, bytes)
     }
 
     /// Reads a buffer back (waits for everything recorded so far).
@@ -973,9 +972,11 @@ impl<'a> VkCtx<'a> {
         let merged_from = self.merged_from.take();
         read.extend(merged_from.as_deref());
         read.extend(checks.iter().map(|c| &*c.counters));
+        let layers_buf = self.layers_from.clone();
         if readback {
             read.push(&*image_buf);
             read.push(&*acct_buf);
+            read.extend(layers_buf.as_deref());
         }
         let reading = self.rec.read_start(&read)?;
         let end_checks = end_checks.into_iter().map(|(_, test)| test).collect();
@@ -1112,6 +1113,10 @@ impl VkCtx<'_> {
         } else {
             (Image { width: 0, height: 0, pixels: Vec::new() }, None)
         };
+        let layers = (readback && self.layers_from.is_some()).then(|| words.next()).flatten().map(|mut l| {
+            l.truncate(self.pixels as usize);
+            l
+        });
         // every dispatch's submission has been flushed (the readbacks above), so this is the
         // whole frame's device time
         let (gpu_ms, gpu_pass_ms) = match self.rec.gpu_times() {
@@ -1132,7 +1137,7 @@ impl VkCtx<'_> {
         .counts();
         let frame = Frame {
             image,
-            layers: None,
+            layers,
             lost_pixels,
             stats: Stats {
                 geometry_passes: self.passes + gated_ran,

@@ -411,14 +411,9 @@ impl VulkanPrepared<'_> {
         // every setting can change what a frame reads back (the camera too: checked at its end)
         let key = format!("{settings:?}");
         ctx.speculated = this.read_back.borrow().get(&key).copied().unwrap_or_default();
-        let layers = run_technique(&mut ctx, &drivers)?;
+        run_technique(&mut ctx, &drivers)?;
         let finishing = ctx.finish_start(readback)?;
-        Ok(InFlight {
-            finishing,
-            layers: layers.filter(|_| readback),
-            start,
-            read_back: (&this.read_back, key),
-        })
+        Ok(InFlight { finishing, start, read_back: (&this.read_back, key) })
     }
 }
 
@@ -429,8 +424,6 @@ pub const FRAMES_IN_FLIGHT: usize = 2;
 /// A frame submitted and not yet waited for ([`VulkanPrepared::frame_start`]).
 struct InFlight<'c> {
     finishing: ctx::Finishing<'c>,
-    /// The reference's per-pixel fragment counts, where the frame reads back its image.
-    layers: Option<Vec<u32>>,
     start: Instant,
     /// The prepared scene's read-back counts, and this frame's key in them.
     read_back: (&'c RefCell<std::collections::HashMap<String, ReadBack>>, String),
@@ -454,15 +447,14 @@ impl InFlight<'_> {
         }
         drop(kept);
         let Some(mut frame) = ended.frame else { return Ok(None) };
-        frame.layers = self.layers;
         frame.stats.wall_ms = self.start.elapsed().as_secs_f64() * 1e3;
         Ok(Some(frame))
     }
 }
 
-/// Runs the frame's technique; the reference returns its per-pixel fragment counts.
-fn run_technique(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<Option<Vec<u32>>, OitError> {
-    let mut layers = None;
+/// Runs the frame's technique (the reference leaves its per-pixel fragment counts to be read with
+/// the frame's end).
+fn run_technique(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     let hardware = matches!(drivers.scene, Raster::Hardware(_));
     // the graphics pipeline's own captures, asked for on the hardware path
     let blend = hardware && ctx.settings.hardware_capture == HardwareCapture::Blend;
@@ -476,7 +468,7 @@ fn run_technique(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<Option<Ve
             technique::blend::weighted(ctx, drivers)?
         }
         Technique::Adp => technique::adp::render(ctx, drivers, blend)?,
-        Technique::Reference => layers = Some(technique::reference::render(ctx, drivers)?),
+        Technique::Reference => technique::reference::render(ctx, drivers)?,
         Technique::Plain => technique::plain::render(ctx, drivers)?,
         Technique::Fabs { .. } => technique::fabs::render(ctx, drivers)?,
         Technique::Dp => technique::dp::render(ctx, drivers)?,
@@ -489,7 +481,7 @@ fn run_technique(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<Option<Ve
         Technique::Ll => technique::ll::render(ctx, drivers)?,
         Technique::Kbuf { .. } => technique::kbuf::render(ctx, drivers)?,
     }
-    Ok(layers)
+    Ok(())
 }
 
 /// For test suites: the backend when a Vulkan device can be opened, else `None` after one line on

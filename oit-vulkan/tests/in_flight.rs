@@ -125,6 +125,7 @@ fn assert_frame_eq(got: &Frame, want: &Frame, what: &str) {
     assert_eq!(got.stats.captured, want.stats.captured, "{what}");
     assert_eq!(got.stats.lost, want.stats.lost, "{what}");
     assert_eq!(got.stats.storage_bytes, want.stats.storage_bytes, "{what}");
+    assert_eq!(got.layers, want.layers, "{what}: the reference's layers");
 }
 
 /// A speculation made to miss and to fit on `vk`: after a frame of the view `away`, a frame of
@@ -222,7 +223,7 @@ fn a_speculated_deepest_pixel_that_misses_runs_again() {
     }
 }
 
-/// `dfb` and `ll` size their fragment arrays from an earlier frame's fragment total rounded up to
+/// `dfb`, `ll` and the reference size their fragment arrays from an earlier frame's fragment total rounded up to
 /// its size class (`VkCtx::fragment_capacity`), checked at the end: a view with more fragments
 /// than the capacity runs again and equals a one-shot render (image, counts, storage); one with
 /// fewer fits, waits once and reports its own count's storage, as a one-shot render does.
@@ -234,7 +235,7 @@ fn a_speculated_fragment_total_that_misses_runs_again() {
     let scene = load_scene("planes:5").unwrap();
     let (at, away) = at_and_away(&scene);
     for path in vk.capabilities().raster_paths {
-        for technique in ["dfb", "ll"] {
+        for technique in ["dfb", "ll", "reference"] {
             let s = Settings { width: 40, ..settings(technique, path) };
             let fragments = |c: &Camera| vk.render(&scene, c, &s).unwrap().stats.fragments;
             assert!(

@@ -310,6 +310,9 @@ pub struct GpuCtx<'a> {
     pub gated_pass: bool,
     /// Where the frame's tail pass left the merged count, copied into the totals at the end.
     merged_from: Option<wgpu::Buffer>,
+    /// Per-pixel fragment counts the frame hands the caller as its `layers` (the reference's),
+    /// read back with the image at the end.
+    pub(crate) layers_from: Option<wgpu::Buffer>,
     /// When the frame began on the host (for `OIT_HOST_TIMES`).
     started: std::time::Instant,
 }
@@ -493,6 +496,7 @@ impl<'a> GpuCtx<'a> {
             gated_passes: 0,
             gated_pass: false,
             merged_from: None,
+            layers_from: None,
             ring_full: false,
             started: std::time::Instant::now(),
         };
@@ -1066,11 +1070,13 @@ impl<'a> GpuCtx<'a> {
         read.extend(sizing.iter().map(|(b, _)| b));
         let capacities = std::mem::take(&mut self.capacity_checks);
         read.extend(capacities.iter().map(|(b, _, _)| b));
+        let layers_buf = self.layers_from.clone();
         if readback {
             read.push(&image_buf);
             if self.counts_losses {
                 read.push(&self.acct);
             }
+            read.extend(layers_buf.as_ref());
         }
         let recorded = self.started.elapsed();
         let reading = self.gpu.start_read(&read);
@@ -1222,8 +1228,15 @@ impl Finishing<'_> {
             height: ctx.settings.height,
             pixels: pixels[..ctx.pixels as usize].iter().map(|w| w.to_le_bytes()).collect(),
         };
-        let acct = words.next();
-        ctx.frame_of(image, &t, acct).map(Some)
+        let acct = if ctx.counts_losses { words.next() } else { None };
+        let layers = ctx.layers_from.is_some().then(|| words.next()).flatten();
+        let pixels = ctx.pixels as usize;
+        let mut frame = ctx.frame_of(image, &t, acct)?;
+        frame.layers = layers.map(|mut l| {
+            l.truncate(pixels);
+            l
+        });
+        Ok(Some(frame))
     }
 }
 

@@ -528,9 +528,8 @@ impl OitPass {
         let drivers = self.drivers(Box::new(pipeline), Box::new(draw));
         let mut ctx =
             GpuCtx::with_pool(&self.gpu, &self.scene, &self.camera, &self.settings, Some(&self.pool))?;
-        let layers = crate::run_technique(&mut ctx, &drivers)?;
+        crate::run_technique(&mut ctx, &drivers)?;
         let mut frame = ctx.finish(RasterPath::Hardware)?;
-        frame.layers = layers;
         if let Some(view) = target {
             self.write_target(view.texture(), &frame)?;
         }

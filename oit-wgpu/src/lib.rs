@@ -432,16 +432,16 @@ impl WgpuPrepared<'_> {
         ctx.speculated_deepest = this.deepest.borrow().get(&key).copied();
         ctx.speculated_peels = this.deepest.borrow().get(&format!("{key} peels")).copied();
         ctx.speculated_fragments = this.deepest.borrow().get(&format!("{key} fragments")).copied();
-        let layers = run_technique(&mut ctx, &drivers)?;
+        run_technique(&mut ctx, &drivers)?;
         let seen = [ctx.deepest_seen, ctx.peels_seen, ctx.fragments_seen];
         let finishing = ctx.finish_start(path, readback)?;
-        Ok(InFlight { finishing, key, seen, layers, readback, start })
+        Ok(InFlight { finishing, key, seen, start })
     }
 
     /// The second half of [`WgpuPrepared::frame_once`]: waits for the frame's readback and
     /// keeps what it counted for the next frame's speculation.
     fn frame_end(&self, flight: InFlight<'_>) -> Result<Option<Frame>, OitError> {
-        let InFlight { finishing, key, seen, layers, readback, start } = flight;
+        let InFlight { finishing, key, seen, start } = flight;
         // the deepest pixel, the peel count, the fragment total
         let keys = [key.clone(), format!("{key} peels"), format!("{key} fragments")];
         let Some(mut frame) = finishing.wait()? else {
@@ -468,7 +468,6 @@ impl WgpuPrepared<'_> {
                 self.deepest.borrow_mut().insert(k, v);
             }
         }
-        frame.layers = layers.filter(|_| readback);
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(Some(frame))
     }
@@ -486,19 +485,13 @@ struct InFlight<'c> {
     /// What the frame read back instead of speculating: the deepest pixel, the peel count, the
     /// fragment total.
     seen: [Option<u32>; 3],
-    layers: Option<Vec<u32>>,
-    readback: bool,
     start: Instant,
 }
 
 /// Runs the frame's technique (geometry passes through `drivers`, kernels, resolve into the
-/// state); the reference returns its per-pixel fragment counts. `Backend::render` and the
-/// embedded pass (`embed::OitPass::frame`) both run this.
-pub(crate) fn run_technique(
-    ctx: &mut GpuCtx<'_>,
-    drivers: &Drivers<'_>,
-) -> Result<Option<Vec<u32>>, OitError> {
-    let mut layers = None;
+/// state; the reference leaves its per-pixel fragment counts to be read with the frame's end).
+/// `Backend::render` and the embedded pass (`embed::OitPass::frame`) both run this.
+pub(crate) fn run_technique(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     // the papers' graphics-pipeline capture of bdp and dp, when asked for on the hardware path
     let blend = drivers.scene.path() == RasterPath::Hardware
         && ctx.settings.hardware_capture == HardwareCapture::Blend;
@@ -510,7 +503,7 @@ pub(crate) fn run_technique(
             technique::blend::weighted(ctx, technique::bdp_blend::scene_stage(drivers)?)?
         }
         Technique::Plain => technique::plain::render(ctx, drivers)?,
-        Technique::Reference => layers = Some(technique::reference::render(ctx, drivers)?),
+        Technique::Reference => technique::reference::render(ctx, drivers)?,
         Technique::Fabs { .. } => technique::fabs::render(ctx, drivers)?,
         Technique::Dp => technique::dp::render(ctx, drivers)?,
         Technique::Ddp => technique::ddp::render(ctx, drivers)?,
@@ -530,7 +523,7 @@ pub(crate) fn run_technique(
             });
         }
     }
-    Ok(layers)
+    Ok(())
 }
 
 /// For test suites and examples: the backend when a Vulkan adapter can be opened, else `None`

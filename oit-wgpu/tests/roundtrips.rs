@@ -43,8 +43,20 @@ fn a_steady_frame_reads_back_once() {
         // gated likewise
         let blend = if path == RasterPath::Hardware { &["dp", "ddp"][..] } else { &[] };
         let runs = [
-            "wavg", "wsum", "bdp", "bdp:2", "mdts64:8", "fabs", "fabs:2", "dp", "ddp", "mlp:2", "dfb", "ll",
+            "wavg",
+            "wsum",
+            "bdp",
+            "bdp:2",
+            "mdts64:8",
+            "fabs",
+            "fabs:2",
+            "dp",
+            "ddp",
+            "mlp:2",
+            "dfb",
+            "ll",
             "adp",
+            "reference",
         ]
         .map(|t| (t, HardwareCapture::Atomics))
         .into_iter()
@@ -66,6 +78,7 @@ fn a_steady_frame_reads_back_once() {
             let again = prepared.frame(&camera, &settings).unwrap();
             assert_eq!(gpu.readbacks() - before, 1 + sizing, "{technique} on {path}: with the image");
             assert_eq!(again.image, first.image, "{technique} on {path}: the same frame twice");
+            assert_eq!(again.layers, first.layers, "{technique} on {path}: the reference's layers");
             assert_eq!(again.stats.fragments, first.stats.fragments);
             assert_eq!(again.stats.captured, first.stats.captured);
             assert_eq!(again.stats.lost, first.stats.lost);
@@ -229,7 +242,7 @@ fn a_speculated_size_that_misses_runs_again() {
     }
 }
 
-/// `dfb`'s and `ll`'s arrays sized from the last frame's fragment total
+/// `dfb`'s, `ll`'s and the reference's arrays sized from the last frame's fragment total
 /// ([`oit_wgpu::GpuCtx::fragment_capacity`], rounded up to its size class) without waiting: a view
 /// with more fragments than that capacity runs again and equals a one-shot render of it (image,
 /// counts, storage); a view with fewer fits, reports the storage of its own count (as a one-shot
@@ -245,7 +258,7 @@ fn a_speculated_fragment_total_that_misses_runs_again() {
     let (at, away) = at_and_away(&scene);
     for path in [RasterPath::Compute, RasterPath::Hardware] {
         let on_gpu = u64::from(path == RasterPath::Compute && oit_wgpu::setup_on_gpu(gpu));
-        for technique in ["dfb", "ll"] {
+        for technique in ["dfb", "ll", "reference"] {
             let what = format!("{technique} on {path}");
             let settings = on_path(40, 40, technique, path);
             let mut prepared = backend.prepare(&scene).unwrap();
@@ -258,6 +271,7 @@ fn a_speculated_fragment_total_that_misses_runs_again() {
             assert_eq!(gpu.readbacks() - before, 3 + on_gpu, "{what}: the total grew, the frame ran again");
             let one_shot = backend.render(&scene, &at, &settings).unwrap();
             assert_eq!(frame.image, one_shot.image, "{what}");
+            assert_eq!(frame.layers, one_shot.layers, "{what}: the reference's layers");
             assert_eq!(
                 frame.stats.storage_bytes, one_shot.stats.storage_bytes,
                 "{what}: sized as a one-shot frame"

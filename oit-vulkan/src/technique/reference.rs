@@ -1,31 +1,32 @@
-//! `reference`: a counting pass, a prefix sum (on the host: one readback), a fill pass into
-//! exactly-sized per-pixel lists, a per-pixel sort by (depth, primitive id) and composite.
+//! `reference` (see oit-wgpu's `technique/reference.rs`): a counting pass, the exclusive prefix
+//! sum of the counts on the GPU (`scan.wgsl`; the fragment lists sized from the total's size
+//! class, `VkCtx::fragment_capacity`, so a steady frame waits for nothing), a fill pass into
+//! per-pixel lists, a per-pixel sort by (depth, primitive id) and composite. The per-pixel counts
+//! are the frame's `layers`, read back with its image at the end.
 
 use oit_core::OitError;
 
 use crate::Drivers;
 use crate::ctx::{Init, VkCtx};
 
-pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<Vec<u32>, OitError> {
-    let (counts, _) = super::count(ctx, &drivers.scene)?;
-    let counts = ctx.read_u32(&counts)?;
-    let counts = &counts[..ctx.pixels as usize];
-    let mut offsets = Vec::with_capacity(counts.len() + 1);
-    let mut total = 0u64;
-    let too_many = || OitError::Device("over 2^32 fragments".into());
-    for &c in counts {
-        offsets.push(u32::try_from(total).map_err(|_| too_many())?);
-        total += u64::from(c);
-    }
-    offsets.push(u32::try_from(total).map_err(|_| too_many())?);
-    ctx.gpu.check_storage("the reference's fragment lists", total * 8)?;
-    let offsets_buf = ctx.buffer("reference offsets", offsets.len() as u64, Init::Zero)?;
-    ctx.upload(&offsets_buf, bytemuck::cast_slice(&offsets))?;
+pub(crate) fn render(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
+    let entries = u64::from(ctx.pixels) + 1;
+    // fragments per pixel; the last entry stays 0, so the offsets end in the total
+    let counts = ctx.buffer("reference counts", entries, Init::Zero)?;
+    ctx.geometry_pass(&drivers.scene, "dfb_count", &[&counts], 0, 0)?;
+    // the counts are the frame's layers, not the technique's storage (oit-cpu counts none)
+    ctx.storage_bytes -= entries * 4;
+    ctx.layers_from = Some(counts.clone());
+    let offsets = ctx.buffer("reference offsets", entries, Init::Zero)?;
+    ctx.copy(&counts, &offsets, entries * 4);
+    let total = super::scan(ctx, &offsets, entries)?;
+    // a u64 key and a u32 payload a fragment
+    let total = ctx.fragment_capacity(&total, 12)?;
+    let total = u64::from(ctx.plan.check_fragments(u64::from(total))?);
     let cursor = ctx.buffer("reference cursor", u64::from(ctx.pixels), Init::Zero)?;
     let keys = ctx.buffer("reference keys", total * 2, Init::Zero)?;
     let payloads = ctx.buffer("reference payloads", total, Init::Zero)?;
-    let buffers = [&*offsets_buf, &*cursor, &*keys, &*payloads];
+    let buffers = [&*offsets, &*cursor, &*keys, &*payloads];
     ctx.geometry_pass(&drivers.scene, "reference", &buffers, 0, 0)?;
-    ctx.pixel_kernel("reference", "resolve_main", &buffers, 0, 0)?;
-    Ok(counts.to_vec())
+    ctx.pixel_kernel("reference", "resolve_main", &buffers, 0, 0)
 }
