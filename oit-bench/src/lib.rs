@@ -376,7 +376,7 @@ pub fn cross_check(
     // rows of `--blend-targets` (`NAME+f16`, `NAME+unorm8`) round into a narrower target: held
     // only against rows of the same target
     let target = |label: &str| ["+f16", "+unorm8"].into_iter().find(|t| label.contains(t));
-    if target(&a.label) != target(&b.label) && worst > 1 {
+    if target(a.label) != target(b.label) && worst > 1 {
         let note = format!(
             "not held: {} and {} blend into different colour targets (the rounding is bounded in tests/tests/blend_target.rs)",
             a.label, b.label

@@ -24,6 +24,10 @@ use oit_tests::*;
 
 const U: f64 = 1.0 / 2048.0;
 
+/// A case: the technique, the narrower target, the colour bytes a pixel it saves against
+/// RGBA32F, and the bound on a pixel's linear error for its layer count.
+type Case<'a> = (Technique, BlendTarget, u64, &'a dyn Fn(f64) -> f64);
+
 /// The f32 sRGB decode of an 8-bit code's value (clamped to [0, 1]).
 fn linear(code: f64) -> f64 {
     let v = (code / 255.0).clamp(0.0, 1.0);
@@ -69,7 +73,7 @@ fn narrower_blend_targets_stay_within_their_rounding() {
             let layers = reference.layers.as_ref().expect("the reference counts layers");
             let deepest = layers.iter().copied().max().unwrap_or(0);
             assert!(deepest >= 2, "{name}: at least two layers somewhere");
-            let cases: [(Technique, BlendTarget, u64, &dyn Fn(f64) -> f64); 4] = [
+            let cases: [Case<'_>; 4] = [
                 (Technique::Plain, BlendTarget::F16, 8, &|n| 4.0 * n * U),
                 (Technique::Plain, BlendTarget::Unorm8, 12, &|n| 2.0 * n / 255.0),
                 (Technique::WeightedAverage, BlendTarget::F16, 8, &|n| 3.0 * (n + 1.0) * U),
