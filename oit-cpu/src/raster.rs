@@ -75,6 +75,30 @@ pub enum Shade {
 /// Covered pixels a [`RasterMode::Scatter`] task gathers before it shades and hands them on.
 const BATCH: usize = 64;
 
+#[cfg(target_arch = "x86_64")]
+mod avx2;
+
+/// Which code runs [`RasterMode::Scatter`]'s shaded pass: the same fragments either way.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kernel {
+    /// The build's own instructions (SSE2 on x86-64).
+    Portable,
+    /// AVX2 (with `popcnt`), where the host has it.
+    #[cfg(target_arch = "x86_64")]
+    Avx2,
+}
+
+impl Kernel {
+    /// The fastest the host runs.
+    fn detect() -> Kernel {
+        #[cfg(target_arch = "x86_64")]
+        if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("popcnt") {
+            return Kernel::Avx2;
+        }
+        Kernel::Portable
+    }
+}
+
 /// A covered pixel waiting in a batch: the task's triangle, the pixel, the edge functions.
 #[derive(Clone, Copy, Default)]
 struct Candidate {
@@ -343,7 +367,7 @@ impl Rasterizer {
     pub fn for_each_fragment_with<F: Fn(&Fragment<'_>) + Sync>(&self, shade: Shade, f: F) -> u64 {
         let setup = &self.setup;
         let n = match (self.mode, shade) {
-            (RasterMode::Scatter, Shade::Color) => self.scatter_shaded(&f),
+            (RasterMode::Scatter, Shade::Color) => self.scatter_shaded(Kernel::detect(), &f),
             _ => self.for_each_covered(|t, s, x, y, e| {
                 // depth from the traversal's own record: the triangle is read only for colour or
                 // normal, here where `f` asks for it
@@ -366,7 +390,7 @@ impl Rasterizer {
     /// Measured side by side with the lanes and the row test in `wide`, the whole shaded bunny
     /// pass went from 7.20–7.35 ms to 4.76–5.16 (`cargo bench -p oit-cpu --bench raster`, 512²,
     /// 2 threads; `bench/results/cpu/issue12/`).
-    fn scatter_shaded<F: Fn(&Fragment<'_>) + Sync>(&self, f: &F) -> u64 {
+    fn scatter_shaded<F: Fn(&Fragment<'_>) + Sync>(&self, kernel: Kernel, f: &F) -> u64 {
         let setup = &self.setup;
         let chunk = scatter_chunk(self.setup.triangles.len(), rayon::current_num_threads());
         self.setup
@@ -377,6 +401,13 @@ impl Rasterizer {
             .map(|(task, (tris, edges))| {
                 let first = task * chunk;
                 let shades = &self.shades[first..first + tris.len()];
+                #[cfg(target_arch = "x86_64")]
+                if kernel == Kernel::Avx2 {
+                    #[expect(unsafe_code, reason = "the one call into code compiled for AVX2")]
+                    // SAFETY: `Kernel::Avx2` is made only where the host has AVX2 and popcnt
+                    // (`Kernel::detect`), all that `shaded_task` is compiled to need
+                    return unsafe { avx2::shaded_task(setup, tris, edges, shades, f) };
+                }
                 let flush = |batch: &[Candidate]| {
                     let mut colors = [Vec4::ZERO; BATCH];
                     for (start, out) in
@@ -1167,6 +1198,162 @@ mod tests {
                     assert_eq!(sorted_fragments_with(&r, shade), expected, "{shading:?} {mode:?} {shade:?}");
                 }
             }
+        }
+    }
+
+    /// Triangles that probe the shaded Scatter kernels' corners, in pixels on a 128×96 screen: tiny
+    /// ones of every box width and height to 12 (each layout of the AVX2 walk, and its column
+    /// steps), random small ones, slivers, boxes at [`SMALL_EXTENT`] and one sub-pixel past it
+    /// (vertices on the 1/256 grid, so they snap exactly there), triangles cut by each border of
+    /// the image (clamped boxes), and some reaching into the guard band (the span walk).
+    fn kernel_probe_meshes(cam: &Camera) -> Vec<Mesh> {
+        let (w, h) = (128, 96);
+        let mut rng = Lcg(12);
+        let mut grid = |scale: f32| (rng.next_f32() * scale * 256.0).round() / 256.0;
+        let mut pts = Vec::new();
+        let quad = |pts: &mut Vec<(f32, f32)>, x: f32, y: f32, dx: f32, dy: f32| {
+            pts.extend([(x, y), (x + dx, y), (x + dx, y + dy), (x, y), (x + dx, y + dy), (x, y + dy)]);
+        };
+        // every box size to 12×12, at pixel-centre and off-grid offsets
+        for bw in 1..=12 {
+            for bh in 1..=12 {
+                let (x, y) = (1.0 + (bw * 10) as f32 % 120.0, (bh * 7) as f32 % 88.0);
+                let off = if (bw + bh) % 2 == 0 { 0.5 } else { 0.2 };
+                quad(&mut pts, x + off, y + off, bw as f32 - 0.3, bh as f32 - 0.3);
+            }
+        }
+        // random small triangles, some on pixel centres
+        for i in 0..400 {
+            let (cx, cy) = (grid(132.0) - 2.0, grid(100.0) - 2.0);
+            let size = [0.6, 1.5, 3.0, 7.0][i % 4];
+            for _ in 0..3 {
+                let (mut x, mut y) = (cx + (grid(1.0) - 0.5) * size, cy + (grid(1.0) - 0.5) * size);
+                if i % 5 == 0 {
+                    (x, y) = (x.floor() + 0.5, y.floor() + 0.5);
+                }
+                pts.push((x, y));
+            }
+        }
+        // slivers
+        for i in 0..20 {
+            let (x, y) = (grid(100.0), grid(90.0));
+            let thin = 0.05 + 0.05 * i as f32;
+            pts.extend([(x, y), (x + 30.0, y + thin), (x + 15.0, y + thin / 3.0)]);
+            pts.extend([(x, y), (x + thin, y + 20.0), (x + thin / 2.0, y + 9.0)]);
+        }
+        // 64 pixels across (SMALL_EXTENT), then one sub-pixel more, both axes, both windings
+        for (i, extent) in [64.0, 64.0 + 1.0 / 256.0, 64.0 - 1.0 / 256.0].into_iter().enumerate() {
+            let (x, y) = (3.0 + 20.0 * i as f32 + 0.25, 2.0 + 10.0 * i as f32);
+            pts.extend([(x, y), (x + extent, y + 3.0), (x + 5.0, y + extent.min(90.0 - y))]);
+            pts.extend([(x, y + 10.0), (x + 2.0, y + 11.0), (x + extent, y + 12.0)]);
+            pts.extend([(x, y), (x + 5.0, y + 80.0), (x + extent, y + 3.0)]);
+        }
+        // cut by the borders: small ones straddling each edge and corner, and large ones
+        for (x, y) in [(0.0, 40.0), (128.0, 30.0), (60.0, 0.0), (70.0, 96.0), (0.0, 0.0), (128.0, 96.0)] {
+            for size in [2.5f32, 5.0, 11.0] {
+                pts.extend([
+                    (x - size, y - size * 0.7),
+                    (x + size, y - size * 0.2),
+                    (x + size * 0.3, y + size),
+                ]);
+            }
+        }
+        // into the guard band (clipped there), and across the whole screen
+        pts.extend([(-500.0, -300.0), (900.0, 40.0), (50.0, 800.0)]);
+        pts.extend([(-9000.0, 20.0), (60.0, -7000.0), (64.3, 50.7)]);
+        let n = pts.len() as u32 / 3;
+        // depths all over (0, 1), so that a regrouped sum in the depth changes bits
+        let positions = pts
+            .iter()
+            .enumerate()
+            .map(|(i, &(x, y))| unproject(cam, w, h, x, y, 0.05 + 0.9 * (i as f32 * 0.618_034).fract()))
+            .collect();
+        let mut flat =
+            Mesh::new("probes", positions, (0..n).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect());
+        flat.normals = (0..pts.len()).map(|i| Vec3::new(i as f32 % 7.0 - 3.0, 1.0, (i % 3) as f32)).collect();
+        let mut colored = flat.clone();
+        colored.colors = Some((0..pts.len()).map(|i| Vec3::new((i % 5) as f32 / 4.0, 0.3, 0.9)).collect());
+        vec![flat, colored]
+    }
+
+    /// The shaded Scatter pass of each kernel ([`Kernel`]) against the per-pixel rule and
+    /// [`TriangleSetup::fragment`], bit for bit (pixel, primitive id, depth, colour, normal), under
+    /// every shading, on [`kernel_probe_meshes`]; and the two kernels' fragments in the same order
+    /// on one thread. Where the host lacks AVX2 only the portable kernel is checked.
+    /// Mutations caught: the AVX2 walk's mask of valid columns one too wide (fragments past the
+    /// box, at the image's right border), and its depth's sum regrouped.
+    #[test]
+    fn kernels_give_the_setups_fragments() {
+        let (w, h) = (128u32, 96u32);
+        let cam = camera(w, h);
+        let scene = scene_of(kernel_probe_meshes(&cam));
+        let kernels = if Kernel::detect() == Kernel::Portable {
+            eprintln!("no AVX2 on this host: the portable kernel alone");
+            vec![Kernel::Portable]
+        } else {
+            vec![Kernel::Portable, Kernel::detect()]
+        };
+        for shading in [Shading::Headlight, Shading::Vertex, Shading::Flat, Shading::Normal] {
+            let s = Settings { shading, ..settings(w, h) };
+            let r = Rasterizer::new(&scene, &cam, &s);
+            let extents: Vec<(i32, bool)> = r
+                .setup()
+                .triangles
+                .iter()
+                .map(|t| {
+                    let extent = |v: [i32; 3]| v[0].max(v[1]).max(v[2]) - v[0].min(v[1]).min(v[2]);
+                    (extent(t.x).max(extent(t.y)), SmallEdges::new(t).small)
+                })
+                .collect();
+            assert!(extents.contains(&(SMALL_EXTENT, true)), "no triangle at the limit");
+            assert!(extents.contains(&(SMALL_EXTENT + 1, false)), "none just past it");
+            assert!(extents.iter().filter(|e| e.1).count() > 500);
+            let mut expected = Vec::new();
+            for t in &r.setup().triangles {
+                let [x0, y0, x1, y1] = t.bbox;
+                for y in y0..=y1 {
+                    for x in x0..=x1 {
+                        if let Some(e) = covers(t, x, y) {
+                            let f = r.setup().fragment(t, x, y, e);
+                            expected.push((
+                                f.pixel,
+                                f.prim,
+                                f.depth.to_bits(),
+                                f.color.to_array().map(f32::to_bits),
+                                f.normal.to_array().map(f32::to_bits),
+                            ));
+                        }
+                    }
+                }
+            }
+            expected.sort_unstable();
+            assert!(expected.len() > 10_000, "{} fragments", expected.len());
+            let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+            let mut orders = Vec::new();
+            for &kernel in &kernels {
+                let all = Mutex::new(Vec::new());
+                let n = one_thread.install(|| {
+                    r.scatter_shaded(kernel, &|f: &Fragment<'_>| {
+                        assert!(f.color.is_some());
+                        let f = f.full();
+                        let key = (
+                            f.pixel,
+                            f.prim,
+                            f.depth.to_bits(),
+                            f.color.to_array().map(f32::to_bits),
+                            f.normal.to_array().map(f32::to_bits),
+                        );
+                        all.lock().unwrap().push(key);
+                    })
+                });
+                let all = all.into_inner().unwrap();
+                assert_eq!(n, all.len() as u64, "{shading:?} {kernel:?}");
+                let mut sorted = all.clone();
+                sorted.sort_unstable();
+                assert!(sorted == expected, "{shading:?} {kernel:?}: not the setup's fragments");
+                orders.push(all);
+            }
+            assert!(orders.windows(2).all(|o| o[0] == o[1]), "{shading:?}: the kernels' orders differ");
         }
     }
 

@@ -1,0 +1,247 @@
+//! [`RasterMode::Scatter`](super::RasterMode::Scatter)'s shaded pass in AVX2, for hosts that have
+//! it (the build targets SSE2; [`super::Kernel`] picks at run time). The same fragments as the
+//! portable pass, bit for bit, in the same order within a task:
+//! - a small triangle's box is tested eight pixels at a time as two, four or eight columns of as
+//!   many rows (the narrowest that holds its width), so a box of 2×4 or 4×2 pixels, most of the
+//!   bunny's, is one test; the edge functions are [`super::walk_small`]'s, in 32-bit lanes;
+//! - each test's covered pixels are packed to the front of the lanes by one permutation
+//!   (`vpermd`, its indices from a table by the coverage mask) and stored at the end of the
+//!   batch whatever the mask, so the walk has no branch on coverage;
+//! - barycentrics and depth are made in the test's lanes, by the very operations of
+//!   [`DepthPlane`](oit_core::setup::DepthPlane) (an exact integer converted with
+//!   round-to-nearest, then IEEE products and sums in the same order, no fused multiply-add);
+//! - the batch is kept by component, shaded eight at a time
+//!   ([`headlight_colors_by_component`]), then handed to the shader fragment by fragment.
+
+use std::arch::x86_64::*;
+
+use glam::Vec4;
+use oit_core::Shading;
+use oit_core::setup::{SHADE_LANES, ShadeRecord, Triangle, TriangleSetup, headlight_colors_by_component};
+
+use super::{Fragment, SmallEdges, walk};
+
+/// Fragments a batch holds (a multiple of [`SHADE_LANES`]).
+const CAP: usize = 128;
+
+/// A task's covered pixels waiting to be shaded, by component.
+struct Batch {
+    /// The task's triangle of each.
+    tri: [u32; CAP],
+    pixel: [u32; CAP],
+    depth: [f32; CAP],
+    b: [[f32; CAP]; 3],
+    color: [Vec4; CAP],
+}
+
+/// For each 8-bit coverage mask, the lanes that are set, in order, a byte each (the first
+/// `popcount` bytes meaningful): the indices of the permutation that packs them to the front.
+const PACK: [u64; 256] = {
+    let mut table = [0u64; 256];
+    let mut mask = 0;
+    while mask < 256 {
+        let (mut lane, mut packed) = (0, 0);
+        while lane < 8 {
+            if mask >> lane & 1 != 0 {
+                table[mask] |= (lane as u64) << (8 * packed);
+                packed += 1;
+            }
+            lane += 1;
+        }
+        mask += 1;
+    }
+    table
+};
+
+/// Lanes per row of each layout ([`layout`]): 2, 4 or 8 columns.
+const COLUMNS: [u32; 3] = [2, 4, 8];
+/// The lanes of one row of each layout, as a mask bit pattern repeated for every row.
+const ROW_PATTERN: [u32; 3] = [0x55, 0x11, 0x01];
+
+/// The narrowest layout whose rows hold a box `width` pixels wide (the widest steps along).
+#[inline]
+fn layout(width: u32) -> usize {
+    usize::from(width > 2) + usize::from(width > 4)
+}
+
+#[inline]
+#[target_feature(enable = "avx2,popcnt")]
+fn store_u32(dst: &mut [u32; CAP], at: usize, v: __m256i) {
+    let lanes: [u32; 8] = bytemuck::cast(v);
+    dst[at..at + 8].copy_from_slice(&lanes);
+}
+
+#[inline]
+#[target_feature(enable = "avx2,popcnt")]
+fn store_f32(dst: &mut [f32; CAP], at: usize, v: __m256) {
+    let lanes: [f32; 8] = bytemuck::cast(v);
+    dst[at..at + 8].copy_from_slice(&lanes);
+}
+
+/// One shaded Scatter task: the triangles `tris` (with their records `edges` and `shades`) walked,
+/// shaded and handed to `f`; returns the fragments.
+#[target_feature(enable = "avx2,popcnt")]
+pub(super) fn shaded_task<F: Fn(&Fragment<'_>) + Sync>(
+    setup: &TriangleSetup,
+    tris: &[Triangle],
+    edges: &[SmallEdges],
+    shades: &[ShadeRecord],
+    f: &F,
+) -> u64 {
+    let width = setup.width;
+    let mut batch = Batch {
+        tri: [0; CAP],
+        pixel: [0; CAP],
+        depth: [0.0; CAP],
+        b: [[0.0; CAP]; 3],
+        color: [Vec4::ZERO; CAP],
+    };
+    let (mut len, mut n) = (0usize, 0u64);
+    // lane i of each layout: its column and row in the box
+    let columns = [
+        _mm256_setr_epi32(0, 1, 0, 1, 0, 1, 0, 1),
+        _mm256_setr_epi32(0, 1, 2, 3, 0, 1, 2, 3),
+        _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
+    ];
+    let rows = [
+        _mm256_setr_epi32(0, 0, 1, 1, 2, 2, 3, 3),
+        _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1),
+        _mm256_setzero_si256(),
+    ];
+    let pixel_offsets = std::array::from_fn::<_, 3, _>(|l| {
+        _mm256_add_epi32(columns[l], _mm256_mullo_epi32(rows[l], _mm256_set1_epi32(width as i32)))
+    });
+    let (zero, one) = (_mm256_setzero_ps(), _mm256_set1_ps(1.0));
+    for (i, (t, s)) in tris.iter().zip(edges).enumerate() {
+        let [x0, y0, x1, y1] = s.bbox;
+        if !s.small {
+            walk(t, s.bbox, |x, y, e| {
+                if len == CAP {
+                    flush(setup, tris, edges, shades, &mut batch, len, f);
+                    len = 0;
+                }
+                let b = s.plane.barycentrics(e);
+                batch.tri[len] = i as u32;
+                batch.pixel[len] = y * width + x;
+                batch.depth[len] = s.plane.depth(b);
+                for (lanes, b) in batch.b.iter_mut().zip(b) {
+                    lanes[len] = b;
+                }
+                len += 1;
+                n += 1;
+            });
+            continue;
+        }
+        if x0 > x1 || y0 > y1 {
+            continue;
+        }
+        let (w, h) = (x1 - x0 + 1, y1 - y0 + 1);
+        let l = layout(w);
+        let (lanes_x, lanes_y) = (COLUMNS[l], 8 / COLUMNS[l]);
+        // as in walk_small: the lanes hold e − (above + 1), covered where the sign bit is clear
+        let bias: [i32; 3] = std::array::from_fn(|k| s.above[k] + 1);
+        let offsets: [__m256i; 3] = std::array::from_fn(|k| {
+            _mm256_add_epi32(
+                _mm256_mullo_epi32(columns[l], _mm256_set1_epi32(s.step_x[k])),
+                _mm256_mullo_epi32(rows[l], _mm256_set1_epi32(s.step_y[k])),
+            )
+        });
+        let bias_lanes = bias.map(|v| _mm256_set1_epi32(v));
+        let column_step: [i32; 3] = std::array::from_fn(|k| s.step_x[k].wrapping_mul(lanes_x as i32));
+        let row_step: [i32; 3] = std::array::from_fn(|k| s.step_y[k].wrapping_mul(lanes_y as i32));
+        let inv_area = _mm256_set1_ps(s.plane.inv_area);
+        let (z0, dz1, dz2) =
+            (_mm256_set1_ps(s.plane.z0), _mm256_set1_ps(s.plane.dz1), _mm256_set1_ps(s.plane.dz2));
+        let tri = _mm256_set1_epi32(i as i32);
+        let mut row: [i32; 3] = std::array::from_fn(|k| s.origin[k].wrapping_sub(bias[k]));
+        let mut row_pixel = y0 * width + x0;
+        let mut by = 0;
+        while by < h {
+            let rows_valid = (1u32 << (lanes_x * (h - by).min(lanes_y))) - 1;
+            let mut base = row;
+            let mut bx = 0;
+            while bx < w {
+                let valid = (((1u32 << (w - bx).min(lanes_x)) - 1) * ROW_PATTERN[l]) & rows_valid;
+                if len > CAP - 8 {
+                    flush(setup, tris, edges, shades, &mut batch, len, f);
+                    len = 0;
+                }
+                let e: [__m256i; 3] =
+                    std::array::from_fn(|k| _mm256_add_epi32(_mm256_set1_epi32(base[k]), offsets[k]));
+                let sign = _mm256_or_si256(_mm256_or_si256(e[0], e[1]), e[2]);
+                let covered = !(_mm256_movemask_ps(_mm256_castsi256_ps(sign)) as u32) & valid;
+                let pack = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(PACK[covered as usize] as i64));
+                let pixel = _mm256_add_epi32(_mm256_set1_epi32((row_pixel + bx) as i32), pixel_offsets[l]);
+                store_u32(&mut batch.pixel, len, _mm256_permutevar8x32_epi32(pixel, pack));
+                store_u32(&mut batch.tri, len, tri);
+                // DepthPlane::barycentrics: the edge function (exact in the covered lanes) as f32,
+                // times 1 / area
+                let b: [__m256; 3] = std::array::from_fn(|k| {
+                    _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_add_epi32(e[k], bias_lanes[k])), inv_area)
+                });
+                for (lanes, b) in batch.b.iter_mut().zip(b) {
+                    store_f32(lanes, len, _mm256_permutevar8x32_ps(b, pack));
+                }
+                // DepthPlane::depth: (z0 + b1·dz1) + b2·dz2, then f32::clamp(0, 1): below 0 is 0,
+                // then above 1 is 1 (NaN kept)
+                let d = _mm256_add_ps(_mm256_add_ps(z0, _mm256_mul_ps(b[1], dz1)), _mm256_mul_ps(b[2], dz2));
+                let d = _mm256_blendv_ps(d, zero, _mm256_cmp_ps::<_CMP_LT_OQ>(d, zero));
+                let d = _mm256_blendv_ps(d, one, _mm256_cmp_ps::<_CMP_GT_OQ>(d, one));
+                store_f32(&mut batch.depth, len, _mm256_permutevar8x32_ps(d, pack));
+                len += covered.count_ones() as usize;
+                n += u64::from(covered.count_ones());
+                bx += lanes_x;
+                for k in 0..3 {
+                    base[k] = base[k].wrapping_add(column_step[k]);
+                }
+            }
+            by += lanes_y;
+            row_pixel += lanes_y * width;
+            for k in 0..3 {
+                row[k] = row[k].wrapping_add(row_step[k]);
+            }
+        }
+    }
+    flush(setup, tris, edges, shades, &mut batch, len, f);
+    n
+}
+
+/// Shades the first `len` fragments of `batch` [`SHADE_LANES`] at a time, then hands each to `f`
+/// in the order walked.
+#[inline]
+#[target_feature(enable = "avx2,popcnt")]
+fn flush<F: Fn(&Fragment<'_>) + Sync>(
+    setup: &TriangleSetup,
+    tris: &[Triangle],
+    edges: &[SmallEdges],
+    shades: &[ShadeRecord],
+    batch: &mut Batch,
+    len: usize,
+    f: &F,
+) {
+    // a short last group shades what the lanes past `len` hold from before (a triangle of the
+    // task, its colour not read)
+    for at in (0..len).step_by(SHADE_LANES) {
+        let lane = |k: usize| -> [f32; SHADE_LANES] { std::array::from_fn(|i| batch.b[k][at + i]) };
+        let b = [lane(0), lane(1), lane(2)];
+        let tri: [usize; SHADE_LANES] = std::array::from_fn(|i| batch.tri[at + i] as usize);
+        let colors = if setup.shading == Shading::Headlight {
+            headlight_colors_by_component(tri.map(|t| &shades[t]), b, setup.forward)
+        } else {
+            setup.colors_at(tri.map(|t| &tris[t]), std::array::from_fn(|i| [b[0][i], b[1][i], b[2][i]]))
+        };
+        batch.color[at..at + SHADE_LANES].copy_from_slice(&colors);
+    }
+    for i in 0..len {
+        let tri = batch.tri[i] as usize;
+        f(&Fragment {
+            pixel: batch.pixel[i],
+            depth: batch.depth[i],
+            prim: edges[tri].prim,
+            b: [batch.b[0][i], batch.b[1][i], batch.b[2][i]],
+            t: &tris[tri],
+            setup,
+            color: Some(batch.color[i]),
+        });
+    }
+}
