@@ -91,23 +91,12 @@ pub fn headlight_colors(
     b: [[f32; 3]; SHADE_LANES],
     forward: Vec3,
 ) -> [Vec4; SHADE_LANES] {
-    headlight_colors_by_component(records, std::array::from_fn(|k| b.map(|b| b[k])), forward)
-}
-
-/// [`headlight_colors`] with the barycentrics by component (`b[k][i]` is lane `i`'s `b[k]`), as a
-/// traversal that keeps its fragments by component has them: the same colours, bit for bit.
-#[inline]
-pub fn headlight_colors_by_component(
-    records: [&ShadeRecord; SHADE_LANES],
-    b: [[f32; SHADE_LANES]; 3],
-    forward: Vec3,
-) -> [Vec4; SHADE_LANES] {
     const N: usize = SHADE_LANES;
     #[inline(always)]
     fn gather(records: &[&ShadeRecord; SHADE_LANES], value: impl Fn(&ShadeRecord) -> f32) -> f32x8 {
         f32x8::new(std::array::from_fn(|i| value(records[i])))
     }
-    let bs: [f32x8; 3] = b.map(f32x8::new);
+    let bs: [f32x8; 3] = std::array::from_fn(|k| f32x8::new(b.map(|b| b[k])));
     let iw: [f32x8; 3] = std::array::from_fn(|k| gather(&records, |r| r.inv_w[k]));
     // perspective(): q = b·(1/w), normalized by their sum ((q0 + q1) + q2)
     let q: [f32x8; 3] = std::array::from_fn(|k| bs[k] * iw[k]);

@@ -11,13 +11,14 @@
 //!   [`DepthPlane`](oit_core::setup::DepthPlane) (an exact integer converted with
 //!   round-to-nearest, then IEEE products and sums in the same order, no fused multiply-add);
 //! - the batch is kept by component, shaded eight at a time
-//!   ([`headlight_colors_by_component`]), then handed to the shader fragment by fragment.
+//!   (the headlight shading by [`headlight`], the operations of
+//!   [`oit_core::setup::headlight_colors`] in AVX2), then handed to the shader fragment by fragment.
 
 use std::arch::x86_64::*;
 
 use glam::Vec4;
 use oit_core::Shading;
-use oit_core::setup::{SHADE_LANES, ShadeRecord, Triangle, TriangleSetup, headlight_colors_by_component};
+use oit_core::setup::{SHADE_LANES, ShadeRecord, Triangle, TriangleSetup};
 
 use super::{Fragment, SmallEdges, walk};
 
@@ -31,7 +32,8 @@ struct Batch {
     pixel: [u32; CAP],
     depth: [f32; CAP],
     b: [[f32; CAP]; 3],
-    color: [Vec4; CAP],
+    /// RGBA after one another.
+    color: [f32; 4 * CAP],
 }
 
 /// For each 8-bit coverage mask, the lanes that are set, in order, a byte each (the first
@@ -94,7 +96,7 @@ pub(super) fn shaded_task<F: Fn(&Fragment<'_>) + Sync>(
         pixel: [0; CAP],
         depth: [0.0; CAP],
         b: [[0.0; CAP]; 3],
-        color: [Vec4::ZERO; CAP],
+        color: [0.0; 4 * CAP],
     };
     let (mut len, mut n) = (0usize, 0u64);
     // lane i of each layout: its column and row in the box
@@ -225,12 +227,14 @@ fn flush<F: Fn(&Fragment<'_>) + Sync>(
         let lane = |k: usize| -> [f32; SHADE_LANES] { std::array::from_fn(|i| batch.b[k][at + i]) };
         let b = [lane(0), lane(1), lane(2)];
         let tri: [usize; SHADE_LANES] = std::array::from_fn(|i| batch.tri[at + i] as usize);
-        let colors = if setup.shading == Shading::Headlight {
-            headlight_colors_by_component(tri.map(|t| &shades[t]), b, setup.forward)
+        let colors: [f32; 4 * SHADE_LANES] = if setup.shading == Shading::Headlight {
+            headlight(tri.map(|t| &shades[t]), b.map(bytemuck::cast), setup.forward)
         } else {
-            setup.colors_at(tri.map(|t| &tris[t]), std::array::from_fn(|i| [b[0][i], b[1][i], b[2][i]]))
+            let colors =
+                setup.colors_at(tri.map(|t| &tris[t]), std::array::from_fn(|i| [b[0][i], b[1][i], b[2][i]]));
+            bytemuck::cast(colors.map(|c| c.to_array()))
         };
-        batch.color[at..at + SHADE_LANES].copy_from_slice(&colors);
+        batch.color[4 * at..4 * (at + SHADE_LANES)].copy_from_slice(&colors);
     }
     for i in 0..len {
         let tri = batch.tri[i] as usize;
@@ -241,7 +245,106 @@ fn flush<F: Fn(&Fragment<'_>) + Sync>(
             b: [batch.b[0][i], batch.b[1][i], batch.b[2][i]],
             t: &tris[tri],
             setup,
-            color: Some(batch.color[i]),
+            color: Some(Vec4::from_slice(&batch.color[4 * i..4 * i + 4])),
         });
     }
+}
+
+/// Columns of the 8×8 matrix whose rows are `rows`.
+#[inline]
+#[target_feature(enable = "avx2,popcnt")]
+fn transpose(rows: [__m256; 8]) -> [__m256; 8] {
+    let t: [__m256; 8] = std::array::from_fn(|i| {
+        let (a, b) = (rows[i & !1], rows[i | 1]);
+        if i % 2 == 0 { _mm256_unpacklo_ps(a, b) } else { _mm256_unpackhi_ps(a, b) }
+    });
+    // s[4h + j]: column j (low half) and j + 4 (high half) of rows 4h..4h + 4
+    let s: [__m256; 8] = std::array::from_fn(|i| {
+        let (h, j) = (i / 4, i % 4);
+        let (a, b) = (t[4 * h + j / 2], t[4 * h + 2 + j / 2]);
+        if j % 2 == 0 { _mm256_shuffle_ps::<0x44>(a, b) } else { _mm256_shuffle_ps::<0xEE>(a, b) }
+    });
+    std::array::from_fn(|j| {
+        if j < 4 {
+            _mm256_permute2f128_ps::<0x20>(s[j], s[4 + j])
+        } else {
+            _mm256_permute2f128_ps::<0x31>(s[j - 4], s[j])
+        }
+    })
+}
+
+/// [`oit_core::setup::headlight_colors`] in AVX2, the same operations in the same order (so the same
+/// bits): lane `i` shaded from `records[i]` at barycentrics `b[k]`'s lane `i`; the colours
+/// RGBA after one another.
+#[inline]
+#[target_feature(enable = "avx2,popcnt")]
+fn headlight(
+    records: [&ShadeRecord; SHADE_LANES],
+    b: [__m256; 3],
+    forward: glam::Vec3,
+) -> [f32; 4 * SHADE_LANES] {
+    // each record's 16 words as two rows, turned into one vector of lanes per word
+    let low = transpose(records.map(|r| {
+        let [n0, n1, _] = r.normal;
+        bytemuck::cast::<[f32; 8], __m256>([
+            r.inv_w[0], r.inv_w[1], r.inv_w[2], n0[0], n0[1], n0[2], n1[0], n1[1],
+        ])
+    }));
+    let high = transpose(records.map(|r| {
+        let [_, n1, n2] = r.normal;
+        bytemuck::cast::<[f32; 8], __m256>([
+            n1[2], n2[0], n2[1], n2[2], r.base.x, r.base.y, r.base.z, r.base.w,
+        ])
+    }));
+    let iw = [low[0], low[1], low[2]];
+    let normal = [[low[3], low[4], low[5]], [low[6], low[7], high[0]], [high[1], high[2], high[3]]];
+    let base = [high[4], high[5], high[6], high[7]];
+    let (zero, one) = (_mm256_setzero_ps(), _mm256_set1_ps(1.0));
+    let (add, mul) = (|a, b| _mm256_add_ps(a, b), |a, b| _mm256_mul_ps(a, b));
+    // perspective(): q = b·(1/w), normalized by their sum ((q0 + q1) + q2)
+    let q: [__m256; 3] = std::array::from_fn(|k| mul(b[k], iw[k]));
+    let inv_q = _mm256_div_ps(one, add(add(q[0], q[1]), q[2]));
+    let p = q.map(|q| mul(q, inv_q));
+    // interpolated_normal(): (n0·p0 + n1·p1) + n2·p2, per component
+    let n: [__m256; 3] = std::array::from_fn(|c| {
+        add(add(mul(normal[0][c], p[0]), mul(normal[1][c], p[1])), mul(normal[2][c], p[2]))
+    });
+    // normalize_or_zero: 1 / sqrt of the dot product where it is finite and positive
+    let rcp = _mm256_div_ps(one, _mm256_sqrt_ps(add(add(mul(n[0], n[0]), mul(n[1], n[1])), mul(n[2], n[2]))));
+    let unit = _mm256_and_ps(
+        _mm256_cmp_ps::<_CMP_GT_OQ>(rcp, zero),
+        _mm256_cmp_ps::<_CMP_LT_OQ>(rcp, _mm256_set1_ps(f32::INFINITY)),
+    );
+    let u = n.map(|n| _mm256_and_ps(mul(n, rcp), unit));
+    let along = add(
+        add(mul(u[0], _mm256_set1_ps(forward.x)), mul(u[1], _mm256_set1_ps(forward.y))),
+        mul(u[2], _mm256_set1_ps(forward.z)),
+    );
+    let magnitude = _mm256_andnot_ps(_mm256_set1_ps(-0.0), along);
+    let light = add(_mm256_set1_ps(0.3), mul(_mm256_set1_ps(0.7), magnitude));
+    // glam's Vec3::clamp: the larger by `>` with 0, then the smaller by `<` with 1
+    let rgb = [0, 1, 2].map(|c| {
+        let v = mul(base[c], light);
+        let v = _mm256_and_ps(v, _mm256_cmp_ps::<_CMP_GT_OQ>(v, zero));
+        _mm256_blendv_ps(one, v, _mm256_cmp_ps::<_CMP_LT_OQ>(v, one))
+    });
+    // f32::clamp(0, 1) of the alpha: below 0 is 0, then above 1 is 1 (NaN kept)
+    let a = base[3];
+    let a = _mm256_blendv_ps(a, zero, _mm256_cmp_ps::<_CMP_LT_OQ>(a, zero));
+    let a = _mm256_blendv_ps(a, one, _mm256_cmp_ps::<_CMP_GT_OQ>(a, one));
+    // RGBA of lanes (0, 4), (1, 5), (2, 6), (3, 7), then in lane order
+    let (rg_low, rg_high) = (_mm256_unpacklo_ps(rgb[0], rgb[1]), _mm256_unpackhi_ps(rgb[0], rgb[1]));
+    let (ba_low, ba_high) = (_mm256_unpacklo_ps(rgb[2], a), _mm256_unpackhi_ps(rgb[2], a));
+    let c = [
+        _mm256_shuffle_ps::<0x44>(rg_low, ba_low),
+        _mm256_shuffle_ps::<0xEE>(rg_low, ba_low),
+        _mm256_shuffle_ps::<0x44>(rg_high, ba_high),
+        _mm256_shuffle_ps::<0xEE>(rg_high, ba_high),
+    ];
+    bytemuck::cast([
+        _mm256_permute2f128_ps::<0x20>(c[0], c[1]),
+        _mm256_permute2f128_ps::<0x20>(c[2], c[3]),
+        _mm256_permute2f128_ps::<0x31>(c[0], c[1]),
+        _mm256_permute2f128_ps::<0x31>(c[2], c[3]),
+    ])
 }
