@@ -19,7 +19,11 @@
 //! is walked eight pixels of a row at a time in 32-bit lanes (`walk_small`, its edge functions set
 //! up once per frame), a larger one by the span walk, which visits row by row the exact span of covered pixels
 //! ([`oit_core::setup::covers`]), found by integer division of the edge functions. Both walks are
-//! tested against the per-pixel rule and against each other.
+//! tested against the per-pixel rule and against each other. Scatter's shaded pass runs in AVX2
+//! where the host has it (`avx2`, picked at run time: the build targets SSE2), a small triangle's
+//! box tested eight pixels at once in two, four or eight columns and its covered pixels packed by
+//! one permutation; its fragments are the portable pass's, bit for bit, in the same order within
+//! a task.
 //!
 //! A pass reads one compact record per triangle (its edge functions, its [`DepthPlane`] and its
 //! primitive id): depth and id are all a [`Fragment`] holds at once; colour and normal are
@@ -389,7 +393,8 @@ impl Rasterizer {
     /// measured slower for a depth-only pass (3.99–4.16 ms against 3.56–3.82 on the bunny).
     /// Measured side by side with the lanes and the row test in `wide`, the whole shaded bunny
     /// pass went from 7.20–7.35 ms to 4.76–5.16 (`cargo bench -p oit-cpu --bench raster`, 512²,
-    /// 2 threads; `bench/results/cpu/issue12/`).
+    /// 2 threads; `bench/results/cpu/issue12/`). With `kernel` [`Kernel::Avx2`] each task runs
+    /// `avx2::shaded_task` instead (the same fragments; see that module for how).
     fn scatter_shaded<F: Fn(&Fragment<'_>) + Sync>(&self, kernel: Kernel, f: &F) -> u64 {
         let setup = &self.setup;
         let chunk = scatter_chunk(self.setup.triangles.len(), rayon::current_num_threads());
