@@ -136,6 +136,30 @@ pub enum BlendTarget {
     Unorm8,
 }
 
+impl BlendTarget {
+    /// The parameter `blend.wgsl`'s weighted blend and resolve read for `technique` (`wavg` or
+    /// `wsum`) blended into this target, on every GPU backend: bit 0 set for the weighted average,
+    /// bit 1 for sums of α·c and α in [0, 1] (RGBA16F) rather than of the 8-bit integers
+    /// (RGBA32F). An 8-bit target cannot hold the sums, nor is any other technique weighted.
+    pub fn weighted_param(self, technique: Technique) -> Result<u32, OitError> {
+        let average = match technique {
+            Technique::WeightedAverage => 1,
+            Technique::WeightedSum => 0,
+            other => return Err(OitError::InvalidSettings(format!("{other} is not wavg or wsum"))),
+        };
+        let units = match self {
+            BlendTarget::F32 => 0,
+            BlendTarget::F16 => 2,
+            BlendTarget::Unorm8 => {
+                return Err(OitError::InvalidSettings(format!(
+                    "--blend-target unorm8 holds [0, 1] and {technique}'s sums leave it: use f16 or f32"
+                )));
+            }
+        };
+        Ok(average | units)
+    }
+}
+
 impl std::fmt::Display for BlendTarget {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
@@ -416,13 +440,8 @@ impl Settings {
                 "--memory must be at least 1 byte, e.g. --memory 512M".into(),
             ));
         }
-        if self.blend_target == BlendTarget::Unorm8
-            && matches!(self.technique, Technique::WeightedAverage | Technique::WeightedSum)
-        {
-            return Err(OitError::InvalidSettings(format!(
-                "--blend-target unorm8 holds [0, 1] and {}'s sums leave it: use f16 or f32",
-                self.technique
-            )));
+        if matches!(self.technique, Technique::WeightedAverage | Technique::WeightedSum) {
+            self.blend_target.weighted_param(self.technique)?;
         }
         if let Some(r) = self.region {
             let inside =

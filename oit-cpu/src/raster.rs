@@ -1168,6 +1168,32 @@ mod tests {
         }
     }
 
+    /// What every traversal must give: [`TriangleSetup::fragment`] at each pixel of
+    /// `pixels(triangle)` (an inclusive `[x0, y0, x1, y1]`) that the per-pixel rule covers, of
+    /// every triangle of `r`, sorted.
+    fn setup_fragments(r: &Rasterizer, pixels: impl Fn(&Triangle) -> [u32; 4]) -> Vec<Key> {
+        let mut expected = Vec::new();
+        for t in &r.setup().triangles {
+            let [x0, y0, x1, y1] = pixels(t);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    if let Some(e) = covers(t, x, y) {
+                        let f = r.setup().fragment(t, x, y, e);
+                        expected.push((
+                            f.pixel,
+                            f.prim,
+                            f.depth.to_bits(),
+                            f.color.to_array().map(f32::to_bits),
+                            f.normal.to_array().map(f32::to_bits),
+                        ));
+                    }
+                }
+            }
+        }
+        expected.sort_unstable();
+        expected
+    }
+
     /// The fragments of a pass, in both modes, under every shading, shaded on demand and ahead,
     /// against [`TriangleSetup::fragment`] at every pixel the per-pixel rule covers: the same
     /// set, bit for bit (depth at once, colour on demand or in lanes, normal on demand).
@@ -1178,24 +1204,8 @@ mod tests {
         for shading in [Shading::Headlight, Shading::Vertex, Shading::Flat, Shading::Normal] {
             let s = Settings { shading, ..settings(90, 90) };
             let r = Rasterizer::new(&scene, &cam, &s);
-            let mut expected = Vec::new();
-            for t in &r.setup().triangles {
-                for y in 0..90 {
-                    for x in 0..90 {
-                        if let Some(e) = covers(t, x, y) {
-                            let f = r.setup().fragment(t, x, y, e);
-                            expected.push((
-                                f.pixel,
-                                f.prim,
-                                f.depth.to_bits(),
-                                f.color.to_array().map(f32::to_bits),
-                                f.normal.to_array().map(f32::to_bits),
-                            ));
-                        }
-                    }
-                }
-            }
-            expected.sort_unstable();
+            // every pixel of the image, not only the boxes: no fragment may lie outside them
+            let expected = setup_fragments(&r, |_| [0, 0, 89, 89]);
             assert!(expected.len() > 1000, "{} fragments", expected.len());
             for mode in [RasterMode::Scatter, RasterMode::Tiled] {
                 let r = Rasterizer::new(&scene, &cam, &s).with_mode(mode);
@@ -1313,25 +1323,7 @@ mod tests {
             assert!(extents.contains(&(SMALL_EXTENT, true)), "no triangle at the limit");
             assert!(extents.contains(&(SMALL_EXTENT + 1, false)), "none just past it");
             assert!(extents.iter().filter(|e| e.1).count() > 500);
-            let mut expected = Vec::new();
-            for t in &r.setup().triangles {
-                let [x0, y0, x1, y1] = t.bbox;
-                for y in y0..=y1 {
-                    for x in x0..=x1 {
-                        if let Some(e) = covers(t, x, y) {
-                            let f = r.setup().fragment(t, x, y, e);
-                            expected.push((
-                                f.pixel,
-                                f.prim,
-                                f.depth.to_bits(),
-                                f.color.to_array().map(f32::to_bits),
-                                f.normal.to_array().map(f32::to_bits),
-                            ));
-                        }
-                    }
-                }
-            }
-            expected.sort_unstable();
+            let expected = setup_fragments(&r, |t| t.bbox);
             assert!(expected.len() > 10_000, "{} fragments", expected.len());
             let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
             let mut orders = Vec::new();

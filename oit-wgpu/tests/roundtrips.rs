@@ -28,6 +28,14 @@ fn on_path(width: u32, height: u32, technique: &str, path: RasterPath) -> Settin
     }
 }
 
+/// `techniques` with the default (atomics) capture, then, on the hardware path, `dp` and `ddp` by
+/// the blend capture, whose loops end on occlusion queries.
+fn with_blend_peels<'t>(techniques: &[&'t str], path: RasterPath) -> Vec<(&'t str, HardwareCapture)> {
+    let blend: &[&str] = if path == RasterPath::Hardware { &["dp", "ddp"] } else { &[] };
+    let atomics = techniques.iter().map(|&t| (t, HardwareCapture::Atomics));
+    atomics.chain(blend.iter().map(|&t| (t, HardwareCapture::Blend))).collect()
+}
+
 #[test]
 fn a_steady_frame_reads_back_once() {
     let Some(backend) = oit_wgpu::backend_or_skip("a_steady_frame_reads_back_once") else { return };
@@ -41,8 +49,7 @@ fn a_steady_frame_reads_back_once() {
         // the last frame's set-bin count, each checked at the end
         // and on the hardware path dp and ddp by the blend capture, their occlusion-query loops
         // gated likewise
-        let blend = if path == RasterPath::Hardware { &["dp", "ddp"][..] } else { &[] };
-        let runs = [
+        let techniques = [
             "wavg",
             "wsum",
             "bdp",
@@ -57,11 +64,8 @@ fn a_steady_frame_reads_back_once() {
             "ll",
             "adp",
             "reference",
-        ]
-        .map(|t| (t, HardwareCapture::Atomics))
-        .into_iter()
-        .chain(blend.iter().map(|&t| (t, HardwareCapture::Blend)));
-        for (technique, hardware_capture) in runs {
+        ];
+        for (technique, hardware_capture) in with_blend_peels(&techniques, path) {
             let settings = Settings { hardware_capture, ..on_path(48, 40, technique, path) };
             let technique = format!("{technique} ({hardware_capture:?})");
             let mut prepared = backend.prepare(&scene).unwrap();
@@ -101,12 +105,7 @@ fn a_speculated_peel_count_that_misses_runs_again() {
     let scene = load_scene("planes:5").unwrap();
     let (at, away) = at_and_away(&scene);
     for path in [RasterPath::Compute, RasterPath::Hardware] {
-        let blend = if path == RasterPath::Hardware { &["dp", "ddp"][..] } else { &[] };
-        let runs = ["dp", "ddp", "mlp:2"]
-            .map(|t| (t, HardwareCapture::Atomics))
-            .into_iter()
-            .chain(blend.iter().map(|&t| (t, HardwareCapture::Blend)));
-        for (technique, hardware_capture) in runs {
+        for (technique, hardware_capture) in with_blend_peels(&["dp", "ddp", "mlp:2"], path) {
             let settings = Settings { hardware_capture, ..on_path(40, 40, technique, path) };
             let technique = format!("{technique} ({hardware_capture:?})");
             let one_shot_at = backend.render(&scene, &at, &settings).unwrap();

@@ -24,7 +24,7 @@
 use std::rc::Rc;
 
 use ash::vk;
-use oit_core::{BlendTarget, OitError, Technique};
+use oit_core::{BlendTarget, OitError};
 
 use crate::Drivers;
 use crate::ctx::{BlendPass, Init, VkCtx};
@@ -92,22 +92,9 @@ fn colour_target(target: BlendTarget) -> (vk::Format, u64) {
 }
 
 /// `wavg` or `wsum` by additive blending (`blend.wgsl`'s `weighted_blend_fs`): the 8-bit integers
-/// into RGBA32F, or α·c and α in [0, 1] into RGBA16F (`--blend-target f16`, param bit 1).
+/// into RGBA32F, or α·c and α in [0, 1] into RGBA16F ([`BlendTarget::weighted_param`]).
 pub(crate) fn weighted(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
-    let average = match ctx.settings.technique {
-        Technique::WeightedAverage => true,
-        Technique::WeightedSum => false,
-        other => return Err(OitError::InvalidSettings(format!("{other} is not wavg or wsum"))),
-    };
-    let normalized = match ctx.settings.blend_target {
-        BlendTarget::F32 => 0,
-        BlendTarget::F16 => 2,
-        BlendTarget::Unorm8 => {
-            return Err(OitError::InvalidSettings(
-                "--blend-target unorm8 cannot hold wavg/wsum's sums".into(),
-            ));
-        }
-    };
+    let param = ctx.settings.blend_target.weighted_param(ctx.settings.technique)?;
     let colour = colour_target(ctx.settings.blend_target);
     check_blendable(ctx, colour.0, "additive blending for wavg/wsum")?;
     draw_and_resolve(
@@ -117,7 +104,7 @@ pub(crate) fn weighted(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(),
         Blend::Add,
         [0.0; 4],
         ("weighted_blend_fs", "weighted_blend_resolve_main"),
-        u32::from(average) | normalized,
+        param,
     )
 }
 

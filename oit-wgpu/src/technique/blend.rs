@@ -85,24 +85,18 @@ fn count_target(ctx: &GpuCtx<'_>) -> wgpu::TextureFormat {
     }
 }
 
-/// `wavg` (`average`) or `wsum` on the blender. RGBA32F adds the 8-bit integers (param bit 1
-/// clear); RGBA16F adds α·c and α in [0, 1] (bit 1 set), the form weighted blended OIT uses.
+/// `wavg` or `wsum` on the blender, its parameter from [`BlendTarget::weighted_param`]:
+/// RGBA32F adds the 8-bit integers, RGBA16F α·c and α in [0, 1], the form weighted blended OIT
+/// uses. Either way the count is R32F, exact to 2^24 a pixel (the composite reads it): a device
+/// without `FLOAT32_BLENDABLE` is refused rather than given an R16F count that stops at 2048.
 pub(crate) fn weighted(ctx: &mut GpuCtx<'_>, stage: &SceneStage) -> Result<(), OitError> {
-    let average = match ctx.settings.technique {
-        Technique::WeightedAverage => true,
-        Technique::WeightedSum => false,
-        other => return Err(OitError::InvalidSettings(format!("{other} is not wavg or wsum"))),
-    };
+    let param = ctx.settings.blend_target.weighted_param(ctx.settings.technique)?;
+    if !ctx.gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
+        return Err(unsupported(
+            "additive blending of wavg/wsum's count into an R32Float target: the device lacks FLOAT32_BLENDABLE; use --hardware-capture atomics",
+        ));
+    }
     let colour = colour_target(ctx, "additive blending for wavg/wsum")?;
-    let normalized = match ctx.settings.blend_target {
-        BlendTarget::F32 => 0,
-        BlendTarget::F16 => WEIGHTED_NORMALIZED,
-        BlendTarget::Unorm8 => {
-            return Err(OitError::InvalidSettings(
-                "--blend-target unorm8 cannot hold wavg/wsum's sums".into(),
-            ));
-        }
-    };
     let add = wgpu::BlendComponent {
         src_factor: wgpu::BlendFactor::One,
         dst_factor: wgpu::BlendFactor::One,
@@ -115,12 +109,9 @@ pub(crate) fn weighted(ctx: &mut GpuCtx<'_>, stage: &SceneStage) -> Result<(), O
         wgpu::BlendState { color: add, alpha: add },
         wgpu::Color::TRANSPARENT,
         ("weighted_blend_fs", "weighted_blend_resolve_main"),
-        u32::from(average) | normalized,
+        param,
     )
 }
-
-/// `param`'s bit for weighted sums in [0, 1] units (`blend.wgsl`), beside bit 0 (average).
-pub(crate) const WEIGHTED_NORMALIZED: u32 = 2;
 
 /// The draw into the colour and count targets, and the resolve `entries.1` reading them.
 fn draw_and_resolve(
