@@ -369,9 +369,11 @@ mod tests {
     /// The storage a prepared scene keeps between frames (its rasterizer, the resolve states the
     /// resolve hands back reset) changes nothing: under every effect, frames of two views in turn
     /// equal one-shot renders bit for bit, stats included, for the techniques that keep a state
-    /// array across passes and for wavg's complexity path. Mutations caught: a state left as its
-    /// last frame left it (the complexity sweep not resetting, a peel's back layers kept), a
-    /// rasterizer not set up again for the new view.
+    /// array across passes, for bdp:P's buckets (which its resolve empties for the next frame)
+    /// and for wavg's complexity path. The one-shot renders come from a backend of their own, so
+    /// they share no storage with the prepared scene. Mutations caught: a state left as its last
+    /// frame left it (the complexity sweep not resetting, a peel's back layers kept), a bdp bucket
+    /// pair's max not emptied by the resolve, a rasterizer not set up again for the new view.
     #[test]
     fn kept_storage_changes_no_frame() {
         let scene = load_scene("knot").unwrap();
@@ -380,14 +382,21 @@ mod tests {
             .map(|azimuth| Camera::orbit_scene(&scene, View { azimuth, ..View::default() }, 1.0).unwrap())
             .collect();
         let backend = crate::CpuBackend::default();
-        let techniques = [Technique::Dp, Technique::Ddp, Technique::Mlp { m: 2 }, Technique::Adp];
+        let techniques = [
+            Technique::Dp,
+            Technique::Ddp,
+            Technique::Mlp { m: 2 },
+            Technique::Adp,
+            Technique::Bdp { passes: 2 },
+            Technique::Bdp { passes: 3 },
+        ];
         let mut compared = 0;
         for effect in [Effect::Transparency, Effect::Translucency, Effect::Fresnel, Effect::Complexity] {
             for technique in techniques.into_iter().chain([Technique::WeightedAverage]) {
                 let s = Settings { width: 48, height: 40, technique, effect, ..Settings::default() };
                 let mut prepared = backend.prepare(&scene).unwrap();
                 for camera in views.iter().chain(&views) {
-                    let one_shot = backend.render(&scene, camera, &s);
+                    let one_shot = crate::CpuBackend::default().render(&scene, camera, &s);
                     let kept = prepared.frame(camera, &s);
                     match (one_shot, kept) {
                         (Ok(mut a), Ok(mut b)) => {
@@ -404,6 +413,6 @@ mod tests {
             }
         }
         // every peeling technique under every effect, wavg under transparency and complexity
-        assert!(compared >= 4 * 18, "{compared} frames compared");
+        assert!(compared >= 4 * 26, "{compared} frames compared");
     }
 }

@@ -11,6 +11,8 @@ use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
 
 use rayon::prelude::*;
 
+use oit_core::rules::BDP_EMPTY_MIN;
+
 use crate::resolve::PixelState;
 
 /// The most arrays a shelf keeps: enough for the few lengths a prepared scene's frames take (a
@@ -38,6 +40,9 @@ pub(crate) struct Pool {
     pub u32s: Shelf<AtomicU32>,
     pub u64s: Shelf<AtomicU64>,
     pub states: Shelf<PixelState>,
+    /// (min, max) pairs already back to [`BDP_EMPTY_MIN`], 0 (the resolve that read them reset
+    /// each: [`Pooled::mark_clean_pairs`]), lent by [`Pool::empty_min_max`] without a sweep.
+    clean_pairs: Shelf<AtomicU64>,
     /// Resolve states already back to their default (the resolve resets each as it finishes
     /// it, while it is in cache: [`Pooled::mark_clean`]), lent without another sweep.
     clean_states: Shelf<PixelState>,
@@ -137,6 +142,28 @@ impl Pool {
         self.lend(&self.u64s, len, || AtomicU64::new(init), Some(&|a: &mut AtomicU64| *a.get_mut() = init))
     }
 
+    /// `len` 64-bit atomics as (min, max) pairs, each [`BDP_EMPTY_MIN`], 0 (bucket depth peeling's
+    /// empty buckets): a clean array where a resolve left one of that length
+    /// ([`Pooled::mark_clean_pairs`]; no sweep), else one set by a single sweep.
+    pub fn empty_min_max(&self, len: usize) -> Pooled<'_, AtomicU64> {
+        if let Ok(mut clean) = self.clean_pairs.free.lock() {
+            if let Some(i) = clean.iter().position(|a| a.len() == len) {
+                return Pooled { array: clean.swap_remove(i), shelf: &self.u64s };
+            }
+            // none of that length: the others go back to be swept, under the shelf's limits
+            if let Ok(mut free) = self.u64s.free.lock() {
+                free.append(&mut clean);
+            }
+        }
+        let mut array = self.lend(&self.u64s, len, || AtomicU64::new(0), None);
+        array.par_chunks_mut(2).with_min_len(RESET_GRAIN / 2).for_each(|pair| {
+            for (word, v) in pair.iter_mut().zip([BDP_EMPTY_MIN, 0]) {
+                *word.get_mut() = v;
+            }
+        });
+        array
+    }
+
     /// `len` 32-bit atomics holding whatever their last user left (0 when newly made): for arrays
     /// every element of which is written before it is read.
     pub fn u32s_scratch(&self, len: usize) -> Pooled<'_, AtomicU32> {
@@ -166,6 +193,18 @@ impl Pool {
             PixelState::default,
             Some(&|s: &mut PixelState| *s = PixelState::default()),
         )
+    }
+}
+
+impl<'p> Pooled<'p, AtomicU64> {
+    /// Says every pair holds [`BDP_EMPTY_MIN`], 0 again (whoever read the array reset each pair
+    /// it found written), so the array goes back to `pool`'s clean shelf and the next
+    /// [`Pool::empty_min_max`] of its length lends it without a sweep. A pair left written would
+    /// be read by the next frame as a fragment of its own: `kept_storage_changes_no_frame` (in
+    /// lib.rs) renders each view into the other view's arrays and compares it with a one-shot
+    /// render of a backend of its own.
+    pub fn mark_clean_pairs(&mut self, pool: &'p Pool) {
+        self.shelf = &pool.clean_pairs;
     }
 }
 

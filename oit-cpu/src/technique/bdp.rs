@@ -92,10 +92,7 @@ fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
     };
     for pass in 0..passes {
         let last = pass + 1 == passes;
-        let array = ctx.alloc64(2 * n, 0)?;
-        for slot in array.iter().step_by(2) {
-            slot.store(BDP_EMPTY_MIN, Relaxed);
-        }
+        let array = ctx.alloc_min_max(2 * n)?;
         {
             let previous = arrays.last();
             let payload = |f: &crate::raster::Fragment<'_>| ctx.payload(f);
@@ -126,17 +123,24 @@ fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
             ctx.passes += 1;
             ctx.fragments.get_or_insert(generated);
             let ctx_ref = &*ctx;
-            (0..ctx.pixels).into_par_iter().for_each(|px| {
-                let taken =
-                    previous.map_or(0, |prev| kept(prev, px)) + if last { kept(&array, px) } else { 0 };
-                ctx_ref.settle_ties(px, crate::storage::take_u32(&seen[px], 0), taken);
+            (0..ctx.pixels).into_par_iter().with_min_len(1 << 12).for_each(|px| {
+                // nothing seen, nothing lost: the buckets of most pixels are not read
+                let seen = crate::storage::take_u32(&seen[px], 0);
+                if seen > 0 {
+                    let taken =
+                        previous.map_or(0, |prev| kept(prev, px)) + if last { kept(&array, px) } else { 0 };
+                    ctx_ref.settle_ties(px, seen, taken);
+                }
             });
         }
         arrays.push(array);
     }
     let mut states = ctx.states();
     let resolve = &ctx.resolve;
-    // one list of back layers per rayon task, not one per pixel and bucket
+    // one list of back layers per rayon task, not one per pixel and bucket; each pair read is
+    // reset to empty while in cache, so the next frame takes the arrays without a sweep (a pass
+    // writes a subinterval only where the previous pass's is written (eq. 5), so the first empty
+    // pair of the passes ends the written ones)
     states.par_iter_mut().enumerate().for_each_init(Vec::new, |backs, (px, s)| {
         for k in 0..n {
             let slot = px * 2 * n + 2 * k;
@@ -146,6 +150,8 @@ fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
                 if lo == BDP_EMPTY_MIN {
                     break;
                 }
+                array[slot].store(BDP_EMPTY_MIN, Relaxed);
+                array[slot + 1].store(0, Relaxed);
                 let (d, p) = split_key64(lo);
                 resolve.push(s, d, p);
                 if hi != lo {
@@ -157,5 +163,8 @@ fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
             }
         }
     });
+    for array in &mut arrays {
+        array.mark_clean_pairs(ctx.pool);
+    }
     Ok(super::finish(ctx, states))
 }

@@ -158,6 +158,13 @@ impl<'a> Ctx<'a> {
         self.words64((self.pixels as u64).saturating_mul(per_pixel as u64), init)
     }
 
+    /// Allocates `per_pixel` words of 64 bits per pixel as empty (min, max) pairs
+    /// ([`Pool::empty_min_max`](crate::pool::Pool::empty_min_max)), counting the bytes.
+    pub fn alloc_min_max(&mut self, per_pixel: usize) -> Result<Pooled<'a, AtomicU64>, OitError> {
+        let n = self.checked((self.pixels as u64).saturating_mul(per_pixel as u64), 8)?;
+        Ok(self.pool.empty_min_max(n))
+    }
+
     /// Allocates `per_pixel` words of 64 bits per pixel whose contents are left as an earlier
     /// frame left them (zero when newly made), counting the bytes: for slots written before they
     /// are read (below a per-pixel counter), where resetting them would be a frame's largest
