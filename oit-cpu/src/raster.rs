@@ -369,19 +369,58 @@ impl Rasterizer {
 
     /// [`Rasterizer::for_each_fragment`], shading as `shade` says.
     pub fn for_each_fragment_with<F: Fn(&Fragment<'_>) + Sync>(&self, shade: Shade, f: F) -> u64 {
-        let setup = &self.setup;
         let n = match (self.mode, shade) {
             (RasterMode::Scatter, Shade::Color) => self.scatter_shaded(Kernel::detect(), &f),
-            _ => self.for_each_covered(|t, s, x, y, e| {
-                // depth from the traversal's own record: the triangle is read only for colour or
-                // normal, here where `f` asks for it
-                let b = s.plane.barycentrics(e);
-                let depth = s.plane.depth(b);
-                f(&Fragment { pixel: y * setup.width + x, depth, prim: s.prim, b, t, setup, color: None })
-            }),
+            (RasterMode::Scatter, Shade::OnDemand) => self.scatter_on_demand(Kernel::detect(), &f),
+            (RasterMode::Tiled, _) => self.covered_on_demand(&f),
         };
         self.fragments.get_or_init(|| n);
         n
+    }
+
+    /// Every covered pixel handed to `f` with its colour and normal left to be made where `f`
+    /// asks, by [`Rasterizer::for_each_covered`]'s traversal.
+    fn covered_on_demand<F: Fn(&Fragment<'_>) + Sync>(&self, f: &F) -> u64 {
+        let setup = &self.setup;
+        self.for_each_covered(|t, s, x, y, e| {
+            // depth from the traversal's own record: the triangle is read only for colour or
+            // normal, here where `f` asks for it
+            let b = s.plane.barycentrics(e);
+            let depth = s.plane.depth(b);
+            f(&Fragment { pixel: y * setup.width + x, depth, prim: s.prim, b, t, setup, color: None })
+        })
+    }
+
+    /// [`RasterMode::Scatter`]'s pass with [`Shade::OnDemand`]: the portable walk, or on an AVX2
+    /// host the tasks of [`Rasterizer::scatter_shaded`], each `avx2::scatter_task` without its
+    /// shading (a depth-only pass, a count or a peel, took as long on the portable walk as a
+    /// shaded pass in AVX2: the bunny's 1.34–2.15 ms against 0.99 in AVX2, `cargo bench -p
+    /// oit-cpu --bench raster`, `bench/results/cpu/issue12/`). The same fragments either way.
+    fn scatter_on_demand<F: Fn(&Fragment<'_>) + Sync>(&self, kernel: Kernel, f: &F) -> u64 {
+        #[cfg(target_arch = "x86_64")]
+        if kernel == Kernel::Avx2 {
+            let setup = &self.setup;
+            let chunk = scatter_chunk(self.setup.triangles.len(), rayon::current_num_threads());
+            return self
+                .setup
+                .triangles
+                .par_chunks(chunk)
+                .zip(self.edges.par_chunks(chunk))
+                .enumerate()
+                .map(|(task, (tris, edges))| {
+                    let first = task * chunk;
+                    let shades = &self.shades[first..first + tris.len()];
+                    #[expect(unsafe_code, reason = "the one call into code compiled for AVX2")]
+                    // SAFETY: `Kernel::Avx2` is made only where the host has AVX2 and popcnt
+                    // (`Kernel::detect`), all that `scatter_task` is compiled to need
+                    unsafe {
+                        avx2::scatter_task::<false, F>(setup, tris, edges, shades, f)
+                    }
+                })
+                .sum();
+        }
+        let _ = kernel;
+        self.covered_on_demand(f)
     }
 
     /// [`RasterMode::Scatter`]'s pass with [`Shade::Color`]: each task walks its triangles into a
@@ -389,12 +428,13 @@ impl Rasterizer {
     /// calls `f` for each in the order walked. Walking, shading and the technique's capture each
     /// run as a loop of their own, so a colour's long chain of dependent operations runs in
     /// vector lanes beside its neighbours' instead of stalling between the walk's branches and
-    /// the capture's atomics. A pass that shades on demand walks without the batch: gathering
-    /// measured slower for a depth-only pass (3.99–4.16 ms against 3.56–3.82 on the bunny).
+    /// the capture's atomics. A pass that shades on demand walks without the portable batch:
+    /// gathering measured slower for a depth-only pass (3.99–4.16 ms against 3.56–3.82 on the
+    /// bunny); the AVX2 batch without its shading is faster ([`Rasterizer::scatter_on_demand`]).
     /// Measured side by side with the lanes and the row test in `wide`, the whole shaded bunny
     /// pass went from 7.20–7.35 ms to 4.76–5.16 (`cargo bench -p oit-cpu --bench raster`, 512²,
     /// 2 threads; `bench/results/cpu/issue12/`). With `kernel` [`Kernel::Avx2`] each task runs
-    /// `avx2::shaded_task` instead (the same fragments; see that module for how).
+    /// `avx2::scatter_task` instead (the same fragments; see that module for how).
     fn scatter_shaded<F: Fn(&Fragment<'_>) + Sync>(&self, kernel: Kernel, f: &F) -> u64 {
         let setup = &self.setup;
         let chunk = scatter_chunk(self.setup.triangles.len(), rayon::current_num_threads());
@@ -410,8 +450,8 @@ impl Rasterizer {
                 if kernel == Kernel::Avx2 {
                     #[expect(unsafe_code, reason = "the one call into code compiled for AVX2")]
                     // SAFETY: `Kernel::Avx2` is made only where the host has AVX2 and popcnt
-                    // (`Kernel::detect`), all that `shaded_task` is compiled to need
-                    return unsafe { avx2::shaded_task(setup, tris, edges, shades, f) };
+                    // (`Kernel::detect`), all that `scatter_task` is compiled to need
+                    return unsafe { avx2::scatter_task::<true, F>(setup, tris, edges, shades, f) };
                 }
                 let flush = |batch: &[Candidate]| {
                     let mut colors = [Vec4::ZERO; BATCH];
@@ -1293,8 +1333,9 @@ mod tests {
 
     /// The shaded Scatter pass of each kernel ([`Kernel`]) against the per-pixel rule and
     /// [`TriangleSetup::fragment`], bit for bit (pixel, primitive id, depth, colour, normal), under
-    /// every shading, on [`kernel_probe_meshes`]; and the two kernels' fragments in the same order
-    /// on one thread. Where the host lacks AVX2 only the portable kernel is checked.
+    /// every shading, on [`kernel_probe_meshes`]; the two kernels' fragments in the same order
+    /// on one thread; and each kernel's pass that shades on demand giving those fragments in that
+    /// order. Where the host lacks AVX2 only the portable kernel is checked.
     /// Mutations caught: the AVX2 walk's mask of valid columns one too wide (fragments past the
     /// box, at the image's right border), and its depth's sum regrouped.
     #[test]
@@ -1351,6 +1392,31 @@ mod tests {
                 orders.push(all);
             }
             assert!(orders.windows(2).all(|o| o[0] == o[1]), "{shading:?}: the kernels' orders differ");
+            // the pass that shades on demand: no colour made ahead, the same fragments (made
+            // from the barycentrics it hands out) in the same order
+            for &kernel in &kernels {
+                let all = Mutex::new(Vec::new());
+                let n = one_thread.install(|| {
+                    r.scatter_on_demand(kernel, &|f: &Fragment<'_>| {
+                        assert!(f.color.is_none());
+                        let f = f.full();
+                        let key = (
+                            f.pixel,
+                            f.prim,
+                            f.depth.to_bits(),
+                            f.color.to_array().map(f32::to_bits),
+                            f.normal.to_array().map(f32::to_bits),
+                        );
+                        all.lock().unwrap().push(key);
+                    })
+                });
+                let all = all.into_inner().unwrap();
+                assert_eq!(n, all.len() as u64, "{shading:?} {kernel:?} on demand");
+                assert!(
+                    all == orders[0],
+                    "{shading:?} {kernel:?} on demand: not the shaded pass's fragments"
+                );
+            }
         }
     }
 

@@ -80,10 +80,12 @@ fn store_f32(dst: &mut [f32; CAP], at: usize, v: __m256) {
     dst[at..at + 8].copy_from_slice(&lanes);
 }
 
-/// One shaded Scatter task: the triangles `tris` (with their records `edges` and `shades`) walked,
-/// shaded and handed to `f`; returns the fragments.
+/// One Scatter task: the triangles `tris` (with their records `edges` and `shades`) walked,
+/// shaded where `SHADE` (else each fragment's colour is left to be made where `f` asks, as
+/// [`Shade::OnDemand`](super::Shade::OnDemand) passes do) and handed to `f`; returns the
+/// fragments.
 #[target_feature(enable = "avx2,popcnt")]
-pub(super) fn shaded_task<F: Fn(&Fragment<'_>) + Sync>(
+pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>) + Sync>(
     setup: &TriangleSetup,
     tris: &[Triangle],
     edges: &[SmallEdges],
@@ -119,7 +121,7 @@ pub(super) fn shaded_task<F: Fn(&Fragment<'_>) + Sync>(
         if !s.small {
             walk(t, s.bbox, |x, y, e| {
                 if len == CAP {
-                    flush(setup, tris, edges, shades, &mut batch, len, f);
+                    flush::<SHADE, F>(setup, tris, edges, shades, &mut batch, len, f);
                     len = 0;
                 }
                 let b = s.plane.barycentrics(e);
@@ -165,7 +167,7 @@ pub(super) fn shaded_task<F: Fn(&Fragment<'_>) + Sync>(
             while bx < w {
                 let valid = (((1u32 << (w - bx).min(lanes_x)) - 1) * ROW_PATTERN[l]) & rows_valid;
                 if len > CAP - 8 {
-                    flush(setup, tris, edges, shades, &mut batch, len, f);
+                    flush::<SHADE, F>(setup, tris, edges, shades, &mut batch, len, f);
                     len = 0;
                 }
                 let e: [__m256i; 3] =
@@ -204,15 +206,15 @@ pub(super) fn shaded_task<F: Fn(&Fragment<'_>) + Sync>(
             }
         }
     }
-    flush(setup, tris, edges, shades, &mut batch, len, f);
+    flush::<SHADE, F>(setup, tris, edges, shades, &mut batch, len, f);
     n
 }
 
-/// Shades the first `len` fragments of `batch` [`SHADE_LANES`] at a time, then hands each to `f`
-/// in the order walked.
+/// Shades the first `len` fragments of `batch` [`SHADE_LANES`] at a time (where `SHADE`), then
+/// hands each to `f` in the order walked.
 #[inline]
 #[target_feature(enable = "avx2,popcnt")]
-fn flush<F: Fn(&Fragment<'_>) + Sync>(
+fn flush<const SHADE: bool, F: Fn(&Fragment<'_>) + Sync>(
     setup: &TriangleSetup,
     tris: &[Triangle],
     edges: &[SmallEdges],
@@ -223,7 +225,8 @@ fn flush<F: Fn(&Fragment<'_>) + Sync>(
 ) {
     // a short last group shades what the lanes past `len` hold from before (a triangle of the
     // task, its colour not read)
-    for at in (0..len).step_by(SHADE_LANES) {
+    let shaded = if SHADE { len } else { 0 };
+    for at in (0..shaded).step_by(SHADE_LANES) {
         let lane = |k: usize| -> [f32; SHADE_LANES] { std::array::from_fn(|i| batch.b[k][at + i]) };
         let b = [lane(0), lane(1), lane(2)];
         let tri: [usize; SHADE_LANES] = std::array::from_fn(|i| batch.tri[at + i] as usize);
@@ -245,7 +248,7 @@ fn flush<F: Fn(&Fragment<'_>) + Sync>(
             b: [batch.b[0][i], batch.b[1][i], batch.b[2][i]],
             t: &tris[tri],
             setup,
-            color: Some(Vec4::from_slice(&batch.color[4 * i..4 * i + 4])),
+            color: SHADE.then(|| Vec4::from_slice(&batch.color[4 * i..4 * i + 4])),
         });
     }
 }
