@@ -43,6 +43,11 @@ impl<'p, A> Buckets<'p, A> {
     pub fn new(words: Pooled<'p, A>, k: usize) -> Self {
         Buckets { words, k }
     }
+
+    /// Says every bucket has been taken (all empty again): the words go back to the pool clean.
+    pub fn mark_empty(&mut self) {
+        self.words.mark_clean(crate::pool::Clean::Word(0));
+    }
 }
 
 macro_rules! buckets {
@@ -81,6 +86,16 @@ impl<'p> Histogram<'p> {
     /// A histogram over `words` (pixels × [`HISTOGRAM_WORDS`], all zero).
     pub fn new(words: Pooled<'p, AtomicU32>) -> Self {
         Histogram { words }
+    }
+
+    /// [`DepthHistogram::read`], leaving the pixel's histogram empty.
+    pub fn take(&self, pixel: usize) -> [u32; HISTOGRAM_WORDS] {
+        std::array::from_fn(|i| take_u32(&self.words[pixel * HISTOGRAM_WORDS + i], 0))
+    }
+
+    /// Says every pixel has been taken (all empty again): the words go back to the pool clean.
+    pub fn mark_empty(&mut self) {
+        self.words.mark_clean(crate::pool::Clean::Word(0));
     }
 }
 

@@ -30,17 +30,20 @@ use crate::storage::{Buckets, Histogram};
 
 pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let bounds = ctx.depth_bounds()?;
-    let histogram = Histogram::new(ctx.alloc32(HISTOGRAM_WORDS, 0)?);
+    let mut histogram = Histogram::new(ctx.alloc32(HISTOGRAM_WORDS, 0)?);
     ctx.pass(|f| {
         let px = f.pixel as usize;
         let (zn, zf) = bounds[px];
         histogram.set(px, histogram_bin(f.depth, zn, zf));
     });
+    // each pixel's histogram emptied as it is read: the next frame lends the array without a
+    // sweep
     let hist: Vec<[u32; HISTOGRAM_WORDS]> =
-        (0..ctx.pixels).into_par_iter().map(|px| histogram.read(px)).collect();
+        (0..ctx.pixels).into_par_iter().map(|px| histogram.take(px)).collect();
+    histogram.mark_empty();
     let batches = ctx.plan.adp_batches(hist.iter().map(histogram_count).max().unwrap_or(0));
-    let buckets = Buckets::new(ctx.alloc64(BUCKETS, 0)?, BUCKETS);
-    let nearest = ctx.alloc64(BUCKETS, u64::MAX)?;
+    let mut buckets = Buckets::new(ctx.alloc64(BUCKETS, 0)?, BUCKETS);
+    let mut nearest = ctx.alloc64(BUCKETS, u64::MAX)?;
     let mut states = ctx.states();
     for batch in 0..batches {
         let payload = |f: &crate::raster::Fragment<'_>| ctx.payload(f);
@@ -90,5 +93,9 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
             }
         });
     }
+    // every batch's resolve took every bucket and every nearest key of every pixel (and with no
+    // batch none was written): both are as they were lent
+    buckets.mark_empty();
+    nearest.mark_clean(crate::pool::Clean::Word(u64::MAX));
     Ok(super::finish(ctx, states))
 }

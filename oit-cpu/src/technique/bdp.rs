@@ -35,7 +35,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
 
 fn color(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
     let n = BDP_COLOR_SUBINTERVALS as usize;
-    let buckets = Buckets::new(ctx.alloc32(n, 0)?, n);
+    let mut buckets = Buckets::new(ctx.alloc32(n, 0)?, n);
     ctx.pass_lossy(|f, ctx| {
         let px = f.pixel as usize;
         let (zn, zf) = bounds[px];
@@ -48,11 +48,14 @@ fn color(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
     });
     let mut states = ctx.states();
     let resolve = &ctx.resolve;
-    let buckets = &buckets;
+    let taken = &buckets;
+    // each bucket emptied as it is read, so the next frame lends the array without a sweep
     states.par_iter_mut().zip(bounds.par_iter()).enumerate().for_each_init(
         || vec![0u32; n],
         |words, (px, (s, &(zn, zf)))| {
-            buckets.read(px, words);
+            for (k, word) in words.iter_mut().enumerate() {
+                *word = taken.take(px, k);
+            }
             for (k, &v) in words.iter().enumerate() {
                 if v != 0 {
                     // The bucket's subinterval midpoint stands for its depth.
@@ -62,6 +65,7 @@ fn color(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
             }
         },
     );
+    buckets.mark_empty();
     Ok(super::finish(ctx, states))
 }
 
@@ -164,7 +168,7 @@ fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
         }
     });
     for array in &mut arrays {
-        array.mark_clean_pairs(ctx.pool);
+        array.mark_clean(crate::pool::Clean::EmptyMinMax);
     }
     Ok(super::finish(ctx, states))
 }

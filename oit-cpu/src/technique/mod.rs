@@ -370,7 +370,7 @@ pub(crate) fn finish<'a>(ctx: &Ctx<'a>, mut states: Pooled<'a, PixelState>) -> o
     let (image, captured, tied, deepest) =
         ctx.resolve.image(ctx.settings.width, ctx.settings.height, &mut states);
     // Resolve::image leaves every state at its default
-    states.mark_clean(ctx.pool);
+    states.mark_clean(crate::pool::Clean::Default);
     let mut frame = frame(ctx, image, captured);
     frame.stats.tied = tied;
     frame.stats.max_layers = deepest;
