@@ -103,6 +103,27 @@ impl Kernel {
     }
 }
 
+/// `avx2::scatter_task` over one Scatter task's triangles (shading them where `SHADE`), where
+/// `kernel` is [`Kernel::Avx2`]; `None` elsewhere.
+#[cfg(target_arch = "x86_64")]
+fn avx2_task<const SHADE: bool, F: Fn(&Fragment<'_>) + Sync>(
+    kernel: Kernel,
+    setup: &TriangleSetup,
+    tris: &[Triangle],
+    edges: &[SmallEdges],
+    shades: &[ShadeRecord],
+    f: &F,
+) -> Option<u64> {
+    if kernel != Kernel::Avx2 {
+        return None;
+    }
+    #[expect(unsafe_code, reason = "the one call into code compiled for AVX2")]
+    // SAFETY: `Kernel::Avx2` is made only where the host has AVX2 and popcnt (`Kernel::detect`),
+    // all that `scatter_task` is compiled to need
+    let n = unsafe { avx2::scatter_task::<SHADE, F>(setup, tris, edges, shades, f) };
+    Some(n)
+}
+
 /// A covered pixel waiting in a batch: the task's triangle, the pixel, the edge functions.
 #[derive(Clone, Copy, Default)]
 struct Candidate {
@@ -399,28 +420,29 @@ impl Rasterizer {
     fn scatter_on_demand<F: Fn(&Fragment<'_>) + Sync>(&self, kernel: Kernel, f: &F) -> u64 {
         #[cfg(target_arch = "x86_64")]
         if kernel == Kernel::Avx2 {
-            let setup = &self.setup;
-            let chunk = scatter_chunk(self.setup.triangles.len(), rayon::current_num_threads());
-            return self
-                .setup
-                .triangles
-                .par_chunks(chunk)
-                .zip(self.edges.par_chunks(chunk))
-                .enumerate()
-                .map(|(task, (tris, edges))| {
-                    let first = task * chunk;
-                    let shades = &self.shades[first..first + tris.len()];
-                    #[expect(unsafe_code, reason = "the one call into code compiled for AVX2")]
-                    // SAFETY: `Kernel::Avx2` is made only where the host has AVX2 and popcnt
-                    // (`Kernel::detect`), all that `scatter_task` is compiled to need
-                    unsafe {
-                        avx2::scatter_task::<false, F>(setup, tris, edges, shades, f)
-                    }
-                })
-                .sum();
+            return self.scatter_tasks(|tris, edges, shades| {
+                avx2_task::<false, F>(kernel, &self.setup, tris, edges, shades, f).unwrap_or(0)
+            });
         }
         let _ = kernel;
         self.covered_on_demand(f)
+    }
+
+    /// [`RasterMode::Scatter`]'s tasks: the triangles cut into one run per thread
+    /// ([`scatter_chunk`]), each given to `task` with its traversal and shading records; returns
+    /// the sum of what the tasks return (their fragments).
+    fn scatter_tasks(&self, task: impl Fn(&[Triangle], &[SmallEdges], &[ShadeRecord]) -> u64 + Sync) -> u64 {
+        let chunk = scatter_chunk(self.setup.triangles.len(), rayon::current_num_threads());
+        self.setup
+            .triangles
+            .par_chunks(chunk)
+            .zip(self.edges.par_chunks(chunk))
+            .enumerate()
+            .map(|(i, (tris, edges))| {
+                let first = i * chunk;
+                task(tris, edges, &self.shades[first..first + tris.len()])
+            })
+            .sum()
     }
 
     /// [`RasterMode::Scatter`]'s pass with [`Shade::Color`]: each task walks its triangles into a
@@ -437,99 +459,77 @@ impl Rasterizer {
     /// `avx2::scatter_task` instead (the same fragments; see that module for how).
     fn scatter_shaded<F: Fn(&Fragment<'_>) + Sync>(&self, kernel: Kernel, f: &F) -> u64 {
         let setup = &self.setup;
-        let chunk = scatter_chunk(self.setup.triangles.len(), rayon::current_num_threads());
-        self.setup
-            .triangles
-            .par_chunks(chunk)
-            .zip(self.edges.par_chunks(chunk))
-            .enumerate()
-            .map(|(task, (tris, edges))| {
-                let first = task * chunk;
-                let shades = &self.shades[first..first + tris.len()];
-                #[cfg(target_arch = "x86_64")]
-                if kernel == Kernel::Avx2 {
-                    #[expect(unsafe_code, reason = "the one call into code compiled for AVX2")]
-                    // SAFETY: `Kernel::Avx2` is made only where the host has AVX2 and popcnt
-                    // (`Kernel::detect`), all that `scatter_task` is compiled to need
-                    return unsafe { avx2::scatter_task::<true, F>(setup, tris, edges, shades, f) };
-                }
-                let flush = |batch: &[Candidate]| {
-                    let mut colors = [Vec4::ZERO; BATCH];
-                    for (start, out) in
-                        (0..batch.len()).step_by(SHADE_LANES).zip(colors.chunks_mut(SHADE_LANES))
-                    {
-                        // a short last group repeats its last fragment in the spare lanes
-                        let lane = |i: usize| &batch[(start + i).min(batch.len() - 1)];
-                        let b = std::array::from_fn(|i| {
-                            edges[lane(i).tri as usize].plane.barycentrics(lane(i).e)
-                        });
-                        let shaded = if setup.shading != Shading::Headlight {
-                            setup.colors_at(std::array::from_fn(|i| &tris[lane(i).tri as usize]), b)
-                        } else {
-                            headlight_colors(
-                                std::array::from_fn(|i| &shades[lane(i).tri as usize]),
-                                b,
-                                setup.forward,
-                            )
-                        };
-                        out.copy_from_slice(&shaded);
-                    }
-                    for (c, &color) in batch.iter().zip(&colors) {
-                        let (t, s) = (&tris[c.tri as usize], &edges[c.tri as usize]);
-                        let b = s.plane.barycentrics(c.e);
-                        let color = Some(color);
-                        f(&Fragment {
-                            pixel: c.pixel,
-                            depth: s.plane.depth(b),
-                            prim: s.prim,
+        self.scatter_tasks(|tris, edges, shades| {
+            #[cfg(target_arch = "x86_64")]
+            if let Some(n) = avx2_task::<true, F>(kernel, setup, tris, edges, shades, f) {
+                return n;
+            }
+            let flush = |batch: &[Candidate]| {
+                let mut colors = [Vec4::ZERO; BATCH];
+                for (start, out) in (0..batch.len()).step_by(SHADE_LANES).zip(colors.chunks_mut(SHADE_LANES))
+                {
+                    // a short last group repeats its last fragment in the spare lanes
+                    let lane = |i: usize| &batch[(start + i).min(batch.len() - 1)];
+                    let b =
+                        std::array::from_fn(|i| edges[lane(i).tri as usize].plane.barycentrics(lane(i).e));
+                    let shaded = if setup.shading != Shading::Headlight {
+                        setup.colors_at(std::array::from_fn(|i| &tris[lane(i).tri as usize]), b)
+                    } else {
+                        headlight_colors(
+                            std::array::from_fn(|i| &shades[lane(i).tri as usize]),
                             b,
-                            t,
-                            setup,
-                            color,
-                        });
-                    }
-                };
-                let mut batch = [Candidate::default(); BATCH];
-                let (mut len, mut n) = (0usize, 0u64);
-                for (i, (t, s)) in tris.iter().zip(edges).enumerate() {
-                    walk_tile(t, s, s.bbox, |x, y, e| {
-                        if len == BATCH {
-                            flush(&batch);
-                            len = 0;
-                        }
-                        batch[len] = Candidate { tri: i as u32, pixel: y * setup.width + x, e };
-                        len += 1;
-                        n += 1;
+                            setup.forward,
+                        )
+                    };
+                    out.copy_from_slice(&shaded);
+                }
+                for (c, &color) in batch.iter().zip(&colors) {
+                    let (t, s) = (&tris[c.tri as usize], &edges[c.tri as usize]);
+                    let b = s.plane.barycentrics(c.e);
+                    let color = Some(color);
+                    f(&Fragment {
+                        pixel: c.pixel,
+                        depth: s.plane.depth(b),
+                        prim: s.prim,
+                        b,
+                        t,
+                        setup,
+                        color,
                     });
                 }
-                flush(&batch[..len]);
-                n
-            })
-            .sum()
+            };
+            let mut batch = [Candidate::default(); BATCH];
+            let (mut len, mut n) = (0usize, 0u64);
+            for (i, (t, s)) in tris.iter().zip(edges).enumerate() {
+                walk_tile(t, s, s.bbox, |x, y, e| {
+                    if len == BATCH {
+                        flush(&batch);
+                        len = 0;
+                    }
+                    batch[len] = Candidate { tri: i as u32, pixel: y * setup.width + x, e };
+                    len += 1;
+                    n += 1;
+                });
+            }
+            flush(&batch[..len]);
+            n
+        })
     }
 
     /// The coverage pass under [`Rasterizer::for_each_fragment`], before any interpolation;
     /// returns the number of covered (pixel, triangle) pairs.
     fn for_each_covered<F: Fn(&Triangle, &SmallEdges, u32, u32, [i64; 3]) + Sync>(&self, f: F) -> u64 {
         match self.mode {
-            RasterMode::Scatter => {
-                let chunk = scatter_chunk(self.setup.triangles.len(), rayon::current_num_threads());
-                self.setup
-                    .triangles
-                    .par_chunks(chunk)
-                    .zip(self.edges.par_chunks(chunk))
-                    .map(|(chunk, edges)| {
-                        let mut n = 0u64;
-                        for (t, edges) in chunk.iter().zip(edges) {
-                            walk_tile(t, edges, edges.bbox, |x, y, e| {
-                                f(t, edges, x, y, e);
-                                n += 1;
-                            });
-                        }
-                        n
-                    })
-                    .sum()
-            }
+            RasterMode::Scatter => self.scatter_tasks(|tris, edges, _| {
+                let mut n = 0u64;
+                for (t, edges) in tris.iter().zip(edges) {
+                    walk_tile(t, edges, edges.bbox, |x, y, e| {
+                        f(t, edges, x, y, e);
+                        n += 1;
+                    });
+                }
+                n
+            }),
             RasterMode::Tiled => {
                 let bins = self.bins();
                 let tiles = bins.start.len() - 1;
@@ -836,6 +836,33 @@ mod tests {
 
     type Key = (u32, u32, u32, [u32; 4], [u32; 3]);
 
+    /// A fragment bit for bit: pixel, primitive id, depth, colour, normal.
+    fn key(f: &oit_core::setup::Fragment) -> Key {
+        (
+            f.pixel,
+            f.prim,
+            f.depth.to_bits(),
+            f.color.to_array().map(f32::to_bits),
+            f.normal.to_array().map(f32::to_bits),
+        )
+    }
+
+    /// The keys of a pass's fragments in the order it hands them out on `pool`, and the count it
+    /// returns; each fragment must come with its colour made ahead exactly where `ahead`.
+    fn keys_in_order(
+        pool: &rayon::ThreadPool,
+        ahead: bool,
+        pass: impl FnOnce(&(dyn Fn(&Fragment<'_>) + Sync)) -> u64 + Send,
+    ) -> (u64, Vec<Key>) {
+        let all = Mutex::new(Vec::new());
+        let sink = |f: &Fragment<'_>| {
+            assert_eq!(f.color.is_some(), ahead);
+            all.lock().unwrap().push(key(&f.full()));
+        };
+        let n = pool.install(|| pass(&sink));
+        (n, all.into_inner().unwrap())
+    }
+
     fn sorted_fragments(r: &Rasterizer) -> Vec<Key> {
         sorted_fragments_with(r, Shade::OnDemand)
     }
@@ -846,15 +873,7 @@ mod tests {
             // Scatter shades ahead where asked; Tiled always on demand
             let ahead = shade == Shade::Color && r.mode() == RasterMode::Scatter;
             assert_eq!(f.color.is_some(), ahead, "{shade:?} {:?}", r.mode());
-            let f = f.full();
-            let key = (
-                f.pixel,
-                f.prim,
-                f.depth.to_bits(),
-                f.color.to_array().map(f32::to_bits),
-                f.normal.to_array().map(f32::to_bits),
-            );
-            all.lock().unwrap().push(key);
+            all.lock().unwrap().push(key(&f.full()));
         });
         let mut all = all.into_inner().unwrap();
         all.sort_unstable();
@@ -1218,14 +1237,7 @@ mod tests {
             for y in y0..=y1 {
                 for x in x0..=x1 {
                     if let Some(e) = covers(t, x, y) {
-                        let f = r.setup().fragment(t, x, y, e);
-                        expected.push((
-                            f.pixel,
-                            f.prim,
-                            f.depth.to_bits(),
-                            f.color.to_array().map(f32::to_bits),
-                            f.normal.to_array().map(f32::to_bits),
-                        ));
+                        expected.push(key(&r.setup().fragment(t, x, y, e)));
                     }
                 }
             }
@@ -1369,22 +1381,8 @@ mod tests {
             let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
             let mut orders = Vec::new();
             for &kernel in &kernels {
-                let all = Mutex::new(Vec::new());
-                let n = one_thread.install(|| {
-                    r.scatter_shaded(kernel, &|f: &Fragment<'_>| {
-                        assert!(f.color.is_some());
-                        let f = f.full();
-                        let key = (
-                            f.pixel,
-                            f.prim,
-                            f.depth.to_bits(),
-                            f.color.to_array().map(f32::to_bits),
-                            f.normal.to_array().map(f32::to_bits),
-                        );
-                        all.lock().unwrap().push(key);
-                    })
-                });
-                let all = all.into_inner().unwrap();
+                let (n, all) =
+                    keys_in_order(&one_thread, true, |sink| r.scatter_shaded(kernel, &|f| sink(f)));
                 assert_eq!(n, all.len() as u64, "{shading:?} {kernel:?}");
                 let mut sorted = all.clone();
                 sorted.sort_unstable();
@@ -1395,22 +1393,8 @@ mod tests {
             // the pass that shades on demand: no colour made ahead, the same fragments (made
             // from the barycentrics it hands out) in the same order
             for &kernel in &kernels {
-                let all = Mutex::new(Vec::new());
-                let n = one_thread.install(|| {
-                    r.scatter_on_demand(kernel, &|f: &Fragment<'_>| {
-                        assert!(f.color.is_none());
-                        let f = f.full();
-                        let key = (
-                            f.pixel,
-                            f.prim,
-                            f.depth.to_bits(),
-                            f.color.to_array().map(f32::to_bits),
-                            f.normal.to_array().map(f32::to_bits),
-                        );
-                        all.lock().unwrap().push(key);
-                    })
-                });
-                let all = all.into_inner().unwrap();
+                let (n, all) =
+                    keys_in_order(&one_thread, false, |sink| r.scatter_on_demand(kernel, &|f| sink(f)));
                 assert_eq!(n, all.len() as u64, "{shading:?} {kernel:?} on demand");
                 assert!(
                     all == orders[0],
