@@ -346,11 +346,14 @@ impl Snap {
             return;
         }
         if any == 0 {
-            if !(v[0].placed && v[1].placed && v[2].placed) {
+            let [a, b, c] = v;
+            if !(a.placed && b.placed && c.placed) {
                 return;
             }
-            let p = v.map(|v| v.projected);
-            self.snapped(out, v.map(|v| v.normal), v.map(|v| v.color), p, base, has_color, prim);
+            self.snapped(out, [a.projected, b.projected, c.projected], base, has_color, prim, |[i, j, k]| {
+                let v = [a, b, c];
+                ([v[i].normal, v[j].normal, v[k].normal], [v[i].color, v[j].color, v[k].color])
+            });
             return;
         }
         let poly = clip(v.map(SetupVertex::clip_vertex), u32::from(any));
@@ -366,25 +369,24 @@ impl Snap {
         else {
             return;
         };
-        self.snapped(out, v.map(|v| v.normal), v.map(|v| v.color), [p0, p1, p2], base, has_color, prim);
+        self.snapped(out, [p0, p1, p2], base, has_color, prim, |[i, j, k]| {
+            ([v[i].normal, v[j].normal, v[k].normal], [v[i].color, v[j].color, v[k].color])
+        });
     }
 
-    /// [`Snap::piece`] once its vertices are projected (`p`, in the order of the normals and
-    /// colours).
-    #[allow(
-        clippy::too_many_arguments,
-        reason = "the triangle's parts, passed apart so the fast path builds no ClipVertex"
-    )]
+    /// [`Snap::piece`] once its vertices are projected (`p`). `attributes(order)` gives the
+    /// normals and colours of the vertices in `order` (indices into `p`); it is called only for a
+    /// triangle that is kept, so a triangle that setup drops (most of a dense mesh far away: no
+    /// area, or no pixel centre in its box) never gathers them.
     #[inline]
     fn snapped(
         &self,
         out: &mut Vec<Triangle>,
-        mut normal: [Vec3; 3],
-        mut color: [Vec3; 3],
         mut p: [Projected; 3],
         base: Vec4,
         has_color: bool,
         prim: u32,
+        attributes: impl FnOnce([usize; 3]) -> ([Vec3; 3], [Vec3; 3]),
     ) {
         let (x0, y0) = (i64::from(p[0].x), i64::from(p[0].y));
         let area = (i64::from(p[1].x) - x0) * (i64::from(p[2].y) - y0)
@@ -394,11 +396,12 @@ impl Snap {
         }
         // No culling: a clockwise triangle is turned round so every edge function is positive
         // inside, which is what the fill rule below assumes.
-        if area < 0 {
+        let order = if area < 0 {
             p.swap(1, 2);
-            normal.swap(1, 2);
-            color.swap(1, 2);
-        }
+            [0, 2, 1]
+        } else {
+            [0, 1, 2]
+        };
         let area = area.abs();
         let pixel_range = |lo: i32, hi: i32, size: u32| -> Option<(u32, u32)> {
             // Pixel k's centre is at 256k + 128: the first centre at or after `lo`, the last at or
@@ -407,27 +410,20 @@ impl Snap {
             let last = (i64::from(hi) - HALF_PIXEL).div_euclid(SUBPIXEL).min(i64::from(size) - 1);
             (first <= last).then_some((first as u32, last as u32))
         };
-        let xs = p.map(|p| p.x);
-        let ys = p.map(|p| p.y);
+        let xs = [p[0].x, p[1].x, p[2].x];
+        let ys = [p[0].y, p[1].y, p[2].y];
         let (Some((bx0, bx1)), Some((by0, by1))) = (
-            pixel_range(
-                xs.iter().copied().min().unwrap_or(0),
-                xs.iter().copied().max().unwrap_or(-1),
-                self.region.0,
-            ),
-            pixel_range(
-                ys.iter().copied().min().unwrap_or(0),
-                ys.iter().copied().max().unwrap_or(-1),
-                self.region.1,
-            ),
+            pixel_range(xs[0].min(xs[1]).min(xs[2]), xs[0].max(xs[1]).max(xs[2]), self.region.0),
+            pixel_range(ys[0].min(ys[1]).min(ys[2]), ys[0].max(ys[1]).max(ys[2]), self.region.1),
         ) else {
             return;
         };
+        let (normal, color) = attributes(order);
         out.push(Triangle {
             x: xs,
             y: ys,
-            z: p.map(|p| p.z),
-            inv_w: p.map(|p| p.inv_w),
+            z: [p[0].z, p[1].z, p[2].z],
+            inv_w: [p[0].inv_w, p[1].inv_w, p[2].inv_w],
             normal,
             color,
             inv_area: 1.0 / area as f32,
