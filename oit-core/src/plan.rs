@@ -114,10 +114,14 @@ pub struct Plan {
     /// primitive id and sorts by (depth, id) as the reference does, nor `dfb` and `ll`, whose
     /// entries carry it likewise; not the colour mode of `bdp` nor the order-free `wavg`/`wsum`.
     pub count_ties: bool,
-    /// `plain` composited by a hardware blender in submission order (a backend's hardware raster
-    /// path, [`Plan::on_path`]): float render targets, no counting pass. Elsewhere `plain` keeps each
-    /// pixel's fragments and sorts them by primitive id.
-    pub blender: bool,
+    /// `plain` composited as its fragments arrive, by a rasterizer that hands each pixel its
+    /// fragments in submission order ([`Plan::on_path`]): a hardware path's blender (one draw,
+    /// back to front) or oit-cpu's banded pass (each pixel's fragments from one thread, highest
+    /// primitive first, front to back). Per pixel a running colour and transmittance and a
+    /// fragment count; one geometry pass, no counting pass. Elsewhere (a compute rasterizer,
+    /// whose threads reach a pixel in no fixed order) `plain` keeps each pixel's fragments and
+    /// sorts them by primitive id.
+    pub in_order: bool,
     /// `--overflow tail` on a fixed-size `fabs:K`, `mdts:K` or `mdts64:K`: a pixel's fragments
     /// behind its K nearest are merged into a tail (5 sums of 64 bits a pixel, one more geometry
     /// pass where a pixel overflowed) instead of dropped. False where K comes from a counting
@@ -190,8 +194,9 @@ impl Plan {
             | Technique::Kbuf { k } => k.map_or(Sizing::FromCount, Sizing::Fixed),
             Technique::Mlp { m } => Sizing::Fixed(m),
             Technique::Dfb | Technique::Ll => Sizing::Exact,
-            // where no blender keeps submission order (a CPU, a compute rasterizer), each pixel's
+            // where no rasterizer keeps submission order (a compute rasterizer), each pixel's
             // fragments are kept and sorted by primitive id: as many slots as the deepest pixel
+            // (none where one does: Plan::on_path)
             Technique::Plain => Sizing::FromCount,
             _ => Sizing::None,
         };
@@ -210,7 +215,7 @@ impl Plan {
             sizing,
             peel_limit: settings.max_peels.unwrap_or(u32::MAX),
             mdts_alpha8: (alpha.clamp(0.0, 1.0) * 255.0 + 0.5) as u32,
-            blender: false,
+            in_order: false,
             tail: fixed_k && settings.overflow == crate::Overflow::Tail,
             image_atomics: settings.atomic_storage == crate::AtomicStorage::Image
                 && matches!(
@@ -274,11 +279,15 @@ impl Plan {
     }
 
     /// The plan as a backend's `path` runs it: on a hardware raster path `plain` is the blender's
-    /// (one draw in submission order into float targets); every other technique is the same on
-    /// every path.
+    /// (one draw in submission order into float targets), and on oit-cpu's (`RasterPath::Cpu`)
+    /// its banded pass's (each pixel's fragments from one thread, in reverse submission order,
+    /// composited as they come): [`Plan::in_order`]. Every other technique is the same on every
+    /// path.
     pub fn on_path(mut self, path: crate::RasterPath) -> Plan {
-        if self.technique == Technique::Plain && path == crate::RasterPath::Hardware {
-            self.blender = true;
+        if self.technique == Technique::Plain
+            && matches!(path, crate::RasterPath::Hardware | crate::RasterPath::Cpu)
+        {
+            self.in_order = true;
             self.sizing = Sizing::None;
         }
         self
@@ -346,13 +355,16 @@ impl Plan {
                     fixed: 0,
                 },
             ],
-            // where no blender keeps submission order (a CPU, a compute rasterizer): a counter and
-            // K slots of (primitive id, payload), sorted by id; the blender needs none of it
-            // the blender's: a premultiplied colour target and a fragment-count target, 32-bit
-            // floats (a device without 32-bit float blending gets 16-bit ones, half the bytes)
-            Technique::Plain if self.blender => {
-                vec![per_pixel("colour target (RGBA float)", 16, 1), per_pixel("count target (float)", 4, 1)]
-            }
+            // composited in submission order as the fragments come (a blender, oit-cpu's banded
+            // pass): the running premultiplied colour and transmittance, 32-bit floats (the
+            // blender's colour target; a device without 32-bit float blending gets 16-bit ones,
+            // half the bytes), and the fragment count (the blender's count target)
+            Technique::Plain if self.in_order => vec![
+                per_pixel("colour and transmittance (RGBA float)", 16, 1),
+                per_pixel("fragment count", 4, 1),
+            ],
+            // where no rasterizer keeps submission order (a compute rasterizer): a counter and
+            // K slots of (primitive id, payload), sorted by id
             Technique::Plain => {
                 vec![per_pixel("counter", 4, 1), per_pixel("slots (primitive id, payload)", 8, k)]
             }

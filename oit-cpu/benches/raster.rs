@@ -11,6 +11,9 @@
 //! rasterizer's own cost dominates; `depth` the same pass reading only depth and primitive id, as
 //! a counting pass or a peel's depth test does (colour and normal are computed only where a
 //! shader reads them).
+//! `in_order/pass` is the banded pass of `plain` ([`Rasterizer::for_each_fragment_in_order`]: each
+//! pixel's fragments from one thread, highest primitive first), shaded, with the pixel's count
+//! read and written back.
 //! Throughput is in fragments.
 //!
 //! `cargo bench -p oit-cpu --bench raster -- --warm-up-time 1 --measurement-time 3`
@@ -23,7 +26,7 @@ use std::time::Duration;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use oit_core::{Camera, Scene, Settings, View, builtin_scene, load_scene};
-use oit_cpu::raster::{RasterMode, Rasterizer};
+use oit_cpu::raster::{RasterMode, Rasterizer, Shade};
 
 const SIZE: u32 = 512;
 const BUNNY: &str = "../shared/models/bunny.obj";
@@ -88,6 +91,19 @@ fn pass(c: &mut Criterion) {
                 })
             });
         }
+        // the banded pass that keeps each pixel's fragments in order (plain's), with the cheapest
+        // in-order capture: the pixel's count read and written back, no atomic add (the pixel's
+        // band is one thread)
+        let r = Rasterizer::new(&scene, &camera, &settings);
+        group.bench_function("in_order/pass", |b| {
+            b.iter(|| {
+                r.for_each_fragment_in_order(Shade::Color, |f| {
+                    black_box((f.depth, f.prim, f.color()));
+                    let c = &counts[f.pixel as usize];
+                    c.store(c.load(Ordering::Relaxed) + 1, Ordering::Relaxed);
+                })
+            })
+        });
         group.finish();
     }
     black_box(&counts);

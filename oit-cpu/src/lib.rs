@@ -168,7 +168,7 @@ impl CpuPrepared<'_> {
         if !(camera.view_proj().is_finite()) {
             return Err(OitError::InvalidSettings("camera matrices are not finite".into()));
         }
-        let plan = oit_core::plan::Plan::new("cpu", self.scene, settings)?;
+        let plan = oit_core::plan::Plan::new("cpu", self.scene, settings)?.on_path(RasterPath::Cpu);
         plan.refuse_image_atomics("cpu")?;
         plan.refuse_interlock("cpu", "the CPU's rasterizer has no fragment stage to interlock")?;
         // the whole frame's storage against the host's memory, before anything is allocated

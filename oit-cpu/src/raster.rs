@@ -103,15 +103,18 @@ impl Kernel {
     }
 }
 
-/// `avx2::scatter_task` over one Scatter task's triangles (shading them where `SHADE`), where
-/// `kernel` is [`Kernel::Avx2`]; `None` elsewhere.
+/// A task's triangles: the frame's triangles, their traversal and their shading records.
+type Records<'a> = (&'a [Triangle], &'a [SmallEdges], &'a [ShadeRecord]);
+
+/// `avx2::scatter_task` over the triangles of `order` in the rows `rows` (shading them where
+/// `SHADE`), where `kernel` is [`Kernel::Avx2`]; `None` elsewhere.
 #[cfg(target_arch = "x86_64")]
 fn avx2_task<const SHADE: bool, F: Fn(&Fragment<'_>) + Sync>(
     kernel: Kernel,
     setup: &TriangleSetup,
-    tris: &[Triangle],
-    edges: &[SmallEdges],
-    shades: &[ShadeRecord],
+    records: Records<'_>,
+    order: impl Iterator<Item = usize>,
+    rows: [u32; 2],
     f: &F,
 ) -> Option<u64> {
     if kernel != Kernel::Avx2 {
@@ -120,9 +123,38 @@ fn avx2_task<const SHADE: bool, F: Fn(&Fragment<'_>) + Sync>(
     #[expect(unsafe_code, reason = "the one call into code compiled for AVX2")]
     // SAFETY: `Kernel::Avx2` is made only where the host has AVX2 and popcnt (`Kernel::detect`),
     // all that `scatter_task` is compiled to need
-    let n = unsafe { avx2::scatter_task::<SHADE, F>(setup, tris, edges, shades, f) };
+    let n = unsafe { avx2::scatter_task::<SHADE, F>(setup, records, order, rows, f) };
     Some(n)
 }
+
+/// Triangles ahead of the walk whose traversal records the banded pass asks for from memory
+/// ([`Rasterizer::for_each_fragment_in_order`]).
+const PREFETCH: usize = 16;
+
+/// Asks for the cache lines of `record` ahead of their use (nothing where the target has no
+/// prefetch instruction).
+#[inline(always)]
+fn prefetch<T>(record: &T) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        let p = std::ptr::from_ref(record).cast::<i8>();
+        #[expect(unsafe_code, reason = "a prefetch hint")]
+        // SAFETY: every x86-64 has SSE, all `_mm_prefetch` needs; a prefetch is a hint that
+        // neither reads into the program nor faults, whatever the address (`wrapping_add`: the
+        // record's last byte, in the same allocation)
+        unsafe {
+            _mm_prefetch::<_MM_HINT_T0>(p);
+            // a record may end in the next line
+            _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(size_of::<T>() - 1));
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = record;
+}
+
+/// Every row: a Scatter task walks its triangles' whole boxes.
+const ALL_ROWS: [u32; 2] = [0, u32::MAX];
 
 /// A covered pixel waiting in a batch: the task's triangle, the pixel, the edge functions.
 #[derive(Clone, Copy, Default)]
@@ -218,6 +250,97 @@ struct Bins {
     tris: Vec<u32>,
 }
 
+/// [`Rasterizer::for_each_fragment_in_order`]'s bands: rows of the image, `rows` apiece, and the
+/// triangles whose boxes reach into each, in primitive order: band `b` holds triangle
+/// `tris[i]` for `i` in `start[b]..start[b + 1]`. Kept from frame to frame (made again into the
+/// same storage), so a steady frame allocates nothing for them.
+#[derive(Default)]
+struct Bands {
+    rows: u32,
+    start: Vec<u32>,
+    tris: Vec<u32>,
+    /// The per-run counts the parallel binning adds up (kept with the rest).
+    counts: Vec<u32>,
+}
+
+/// Rows of a band: the image cut into about eight bands a thread (rayon balances them), each a
+/// multiple of 8 rows (the AVX2 walk's tallest group of lanes) from 8 to 64.
+fn band_rows(height: u32, threads: usize) -> u32 {
+    let bands = u32::try_from(threads.max(1) * 8).unwrap_or(u32::MAX);
+    height.div_ceil(bands).next_multiple_of(8).clamp(8, 64)
+}
+
+impl Bands {
+    /// The bands of the triangles whose traversal records are `edges`, for an image `height`
+    /// rows tall, made in place: each of `threads` runs of triangles counts its triangles per
+    /// band, the counts become each run's first slot per band, and the runs write their
+    /// triangles there, so every band lists its triangles in primitive order.
+    fn make(&mut self, edges: &[SmallEdges], height: u32, threads: usize) {
+        let rows = band_rows(height, threads);
+        let bands = height.div_ceil(rows) as usize;
+        let run = edges.len().div_ceil(threads.max(1)).max(1);
+        let runs = edges.len().div_ceil(run);
+        // (a box past the last row, which setup never makes, is cut to the last band)
+        let last = bands.saturating_sub(1);
+        let span = |s: &SmallEdges| {
+            ((s.bbox[1] / rows) as usize).min(last)..=((s.bbox[3] / rows) as usize).min(last)
+        };
+        self.rows = rows;
+        self.counts.clear();
+        self.counts.resize(runs * bands, 0);
+        self.counts.par_chunks_mut(bands).zip(edges.par_chunks(run)).for_each(|(counts, edges)| {
+            for s in edges {
+                for b in span(s) {
+                    counts[b] += 1;
+                }
+            }
+        });
+        // band-major: band b's slots hold run 0's triangles of it, then run 1's, ...
+        self.start.clear();
+        self.start.resize(bands + 1, 0);
+        let mut total = 0u32;
+        for b in 0..bands {
+            self.start[b] = total;
+            for r in 0..runs {
+                let n = self.counts[r * bands + b];
+                self.counts[r * bands + b] = total;
+                total += n;
+            }
+        }
+        self.start[bands] = total;
+        self.tris.clear();
+        self.tris.resize(total as usize, 0);
+        // each run's slots, band by band: disjoint parts of `tris`, cut in slot order
+        let mut parts: Vec<Vec<&mut [u32]>> = (0..runs).map(|_| Vec::with_capacity(bands)).collect();
+        let mut rest = &mut self.tris[..];
+        for b in 0..bands {
+            for (r, part) in parts.iter_mut().enumerate() {
+                let end = if r + 1 < runs { self.counts[(r + 1) * bands + b] } else { self.start[b + 1] };
+                let (slots, tail) =
+                    std::mem::take(&mut rest).split_at_mut((end - self.counts[r * bands + b]) as usize);
+                part.push(slots);
+                rest = tail;
+            }
+        }
+        parts.into_par_iter().zip(edges.par_chunks(run)).enumerate().for_each(|(r, (mut slots, edges))| {
+            let mut filled = vec![0usize; bands];
+            for (j, s) in edges.iter().enumerate() {
+                for b in span(s) {
+                    slots[b][filled[b]] = (r * run + j) as u32;
+                    filled[b] += 1;
+                }
+            }
+        });
+    }
+
+    /// Band `b`'s rows (inclusive) and its triangles' indices.
+    fn band(&self, b: usize, height: u32) -> ([u32; 2], &[u32]) {
+        let first = b as u32 * self.rows;
+        let rows = [first, (first + self.rows - 1).min(height.saturating_sub(1))];
+        (rows, &self.tris[self.start[b] as usize..self.start[b + 1] as usize])
+    }
+}
+
 /// The triangles of one frame, ready for any number of geometry passes.
 pub struct Rasterizer {
     setup: TriangleSetup,
@@ -231,6 +354,10 @@ pub struct Rasterizer {
     shades: Vec<ShadeRecord>,
     mode: RasterMode,
     bins: OnceLock<Bins>,
+    /// [`Rasterizer::for_each_fragment_in_order`]'s bands, made by its first pass of a frame.
+    bands: OnceLock<Bands>,
+    /// The last frame's bands, their storage kept for the next.
+    spare_bands: std::sync::Mutex<Bands>,
     fragments: OnceLock<u64>,
 }
 
@@ -244,6 +371,8 @@ impl Rasterizer {
             shades: Vec::new(),
             mode: DEFAULT_MODE,
             bins: OnceLock::new(),
+            bands: OnceLock::new(),
+            spare_bands: std::sync::Mutex::default(),
             fragments: OnceLock::new(),
         };
         r.derive();
@@ -263,6 +392,9 @@ impl Rasterizer {
     fn records_changed(&mut self) {
         debug_assert_eq!(self.edges.len(), self.setup.triangles.len());
         self.bins = OnceLock::new();
+        if let Some(bands) = self.bands.take() {
+            *self.spare_bands.get_mut().unwrap_or_else(std::sync::PoisonError::into_inner) = bands;
+        }
         self.fragments = OnceLock::new();
         self.warm_bins();
     }
@@ -388,6 +520,52 @@ impl Rasterizer {
         self.for_each_fragment_with(Shade::Color, f)
     }
 
+    /// A geometry pass in which each pixel's fragments come from one thread, **highest primitive
+    /// id first**: the image is cut into bands of rows, each band run by one rayon task over the
+    /// triangles that reach into it, in descending primitive order, each walked in the band's
+    /// rows only. A pixel's fragments (one per primitive: the pieces of a clipped triangle do not
+    /// overlap) thus arrive in the reverse of submission order, which a shader composites front
+    /// to back with no storage but the pixel's running colour and no sort: `plain` on oit-cpu
+    /// (what a GPU's blender gets from one draw). The same fragments as every other pass, bit
+    /// for bit; the AVX2 walk where the host has it. Shading as `shade` says. The bands are
+    /// made by the first such pass of a frame (and kept for the next).
+    pub fn for_each_fragment_in_order<F: Fn(&Fragment<'_>) + Sync>(&self, shade: Shade, f: F) -> u64 {
+        self.in_order(Kernel::detect(), shade, &f)
+    }
+
+    /// [`Rasterizer::for_each_fragment_in_order`] on `kernel`.
+    fn in_order<F: Fn(&Fragment<'_>) + Sync>(&self, kernel: Kernel, shade: Shade, f: &F) -> u64 {
+        let height = self.setup.height;
+        let bands = self.bands.get_or_init(|| {
+            let mut bands = std::mem::take(
+                &mut *self.spare_bands.lock().unwrap_or_else(std::sync::PoisonError::into_inner),
+            );
+            bands.make(&self.edges, height, rayon::current_num_threads());
+            bands
+        });
+        let n = (0..bands.start.len() - 1)
+            .into_par_iter()
+            .map(|b| {
+                let (rows, tris) = bands.band(b, height);
+                // highest primitive first; a band's triangles lie all over the frame's records
+                // (every row of a grid of meshes is in every band's list), so each record is
+                // asked for from memory a few triangles ahead of its walk
+                let order = (0..tris.len()).rev().map(|k| {
+                    if let Some(&ahead) = k.checked_sub(PREFETCH).and_then(|a| tris.get(a)) {
+                        prefetch(&self.edges[ahead as usize]);
+                    }
+                    tris[k] as usize
+                });
+                match shade {
+                    Shade::Color => self.shaded_task(kernel, order, rows, f),
+                    Shade::OnDemand => self.on_demand_task(kernel, order, rows, f),
+                }
+            })
+            .sum();
+        self.fragments.get_or_init(|| n);
+        n
+    }
+
     /// [`Rasterizer::for_each_fragment`], shading as `shade` says.
     pub fn for_each_fragment_with<F: Fn(&Fragment<'_>) + Sync>(&self, shade: Shade, f: F) -> u64 {
         let n = match (self.mode, shade) {
@@ -420,29 +598,72 @@ impl Rasterizer {
     fn scatter_on_demand<F: Fn(&Fragment<'_>) + Sync>(&self, kernel: Kernel, f: &F) -> u64 {
         #[cfg(target_arch = "x86_64")]
         if kernel == Kernel::Avx2 {
-            return self.scatter_tasks(|tris, edges, shades| {
-                avx2_task::<false, F>(kernel, &self.setup, tris, edges, shades, f).unwrap_or(0)
+            return self.scatter_tasks(|run| {
+                avx2_task::<false, F>(kernel, &self.setup, self.records(), run, ALL_ROWS, f).unwrap_or(0)
             });
         }
         let _ = kernel;
         self.covered_on_demand(f)
     }
 
-    /// [`RasterMode::Scatter`]'s tasks: the triangles cut into one run per thread
-    /// ([`scatter_chunk`]), each given to `task` with its traversal and shading records; returns
-    /// the sum of what the tasks return (their fragments).
-    fn scatter_tasks(&self, task: impl Fn(&[Triangle], &[SmallEdges], &[ShadeRecord]) -> u64 + Sync) -> u64 {
-        let chunk = scatter_chunk(self.setup.triangles.len(), rayon::current_num_threads());
-        self.setup
-            .triangles
-            .par_chunks(chunk)
-            .zip(self.edges.par_chunks(chunk))
-            .enumerate()
-            .map(|(i, (tris, edges))| {
-                let first = i * chunk;
-                task(tris, edges, &self.shades[first..first + tris.len()])
-            })
-            .sum()
+    /// The frame's triangles with their traversal and shading records.
+    fn records(&self) -> Records<'_> {
+        (&self.setup.triangles, &self.edges, &self.shades)
+    }
+
+    /// [`RasterMode::Scatter`]'s tasks: the triangles cut into runs, several per thread
+    /// ([`scatter_chunk`]), each run's indices given to `task`; returns the sum of what the tasks
+    /// return (their fragments).
+    fn scatter_tasks(&self, task: impl Fn(std::ops::Range<usize>) -> u64 + Sync) -> u64 {
+        let n = self.setup.triangles.len();
+        let chunk = scatter_chunk(n, rayon::current_num_threads());
+        (0..n.div_ceil(chunk)).into_par_iter().map(|i| task(i * chunk..((i + 1) * chunk).min(n))).sum()
+    }
+
+    /// One task's shaded walk: the triangles of `order` in the rows `rows`, in AVX2 where
+    /// `kernel` is [`Kernel::Avx2`], else by the portable batch ([`Rasterizer::portable_shaded`]).
+    fn shaded_task<F: Fn(&Fragment<'_>) + Sync>(
+        &self,
+        kernel: Kernel,
+        order: impl Iterator<Item = usize>,
+        rows: [u32; 2],
+        f: &F,
+    ) -> u64 {
+        #[cfg(target_arch = "x86_64")]
+        if kernel == Kernel::Avx2 {
+            return avx2_task::<true, F>(kernel, &self.setup, self.records(), order, rows, f).unwrap_or(0);
+        }
+        let _ = kernel;
+        self.portable_shaded(order, rows, f)
+    }
+
+    /// One task's walk with colour and normal made where `f` asks: the triangles of `order` in
+    /// the rows `rows`, in AVX2 where `kernel` is [`Kernel::Avx2`], else by the portable walk.
+    fn on_demand_task<F: Fn(&Fragment<'_>) + Sync>(
+        &self,
+        kernel: Kernel,
+        order: impl Iterator<Item = usize>,
+        rows: [u32; 2],
+        f: &F,
+    ) -> u64 {
+        #[cfg(target_arch = "x86_64")]
+        if kernel == Kernel::Avx2 {
+            return avx2_task::<false, F>(kernel, &self.setup, self.records(), order, rows, f).unwrap_or(0);
+        }
+        let _ = kernel;
+        let setup = &self.setup;
+        let mut n = 0u64;
+        for i in order {
+            let (t, s) = (&setup.triangles[i], &self.edges[i]);
+            let [x0, y0, x1, y1] = s.bbox;
+            walk_tile(t, s, [x0, y0.max(rows[0]), x1, y1.min(rows[1])], |x, y, e| {
+                let b = s.plane.barycentrics(e);
+                let depth = s.plane.depth(b);
+                f(&Fragment { pixel: y * setup.width + x, depth, prim: s.prim, b, t, setup, color: None });
+                n += 1;
+            });
+        }
+        n
     }
 
     /// [`RasterMode::Scatter`]'s pass with [`Shade::Color`]: each task walks its triangles into a
@@ -458,71 +679,67 @@ impl Rasterizer {
     /// 2 threads; `bench/results/cpu/issue12/`). With `kernel` [`Kernel::Avx2`] each task runs
     /// `avx2::scatter_task` instead (the same fragments; see that module for how).
     fn scatter_shaded<F: Fn(&Fragment<'_>) + Sync>(&self, kernel: Kernel, f: &F) -> u64 {
+        self.scatter_tasks(|run| self.shaded_task(kernel, run, ALL_ROWS, f))
+    }
+
+    /// The portable shaded walk of one task: the triangles of `order` in the rows `rows`, walked
+    /// into a batch of up to [`BATCH`] covered pixels, coloured [`SHADE_LANES`] at a time, then
+    /// handed to `f` in the order walked ([`Rasterizer::scatter_shaded`] says why).
+    fn portable_shaded<F: Fn(&Fragment<'_>) + Sync>(
+        &self,
+        order: impl Iterator<Item = usize>,
+        rows: [u32; 2],
+        f: &F,
+    ) -> u64 {
         let setup = &self.setup;
-        self.scatter_tasks(|tris, edges, shades| {
-            #[cfg(target_arch = "x86_64")]
-            if let Some(n) = avx2_task::<true, F>(kernel, setup, tris, edges, shades, f) {
-                return n;
+        let (tris, edges, shades) = self.records();
+        let flush = |batch: &[Candidate]| {
+            let mut colors = [Vec4::ZERO; BATCH];
+            for (start, out) in (0..batch.len()).step_by(SHADE_LANES).zip(colors.chunks_mut(SHADE_LANES)) {
+                // a short last group repeats its last fragment in the spare lanes
+                let lane = |i: usize| &batch[(start + i).min(batch.len() - 1)];
+                let b = std::array::from_fn(|i| edges[lane(i).tri as usize].plane.barycentrics(lane(i).e));
+                let shaded = if setup.shading != Shading::Headlight {
+                    setup.colors_at(std::array::from_fn(|i| &tris[lane(i).tri as usize]), b)
+                } else {
+                    headlight_colors(std::array::from_fn(|i| &shades[lane(i).tri as usize]), b, setup.forward)
+                };
+                out.copy_from_slice(&shaded);
             }
-            let flush = |batch: &[Candidate]| {
-                let mut colors = [Vec4::ZERO; BATCH];
-                for (start, out) in (0..batch.len()).step_by(SHADE_LANES).zip(colors.chunks_mut(SHADE_LANES))
-                {
-                    // a short last group repeats its last fragment in the spare lanes
-                    let lane = |i: usize| &batch[(start + i).min(batch.len() - 1)];
-                    let b =
-                        std::array::from_fn(|i| edges[lane(i).tri as usize].plane.barycentrics(lane(i).e));
-                    let shaded = if setup.shading != Shading::Headlight {
-                        setup.colors_at(std::array::from_fn(|i| &tris[lane(i).tri as usize]), b)
-                    } else {
-                        headlight_colors(
-                            std::array::from_fn(|i| &shades[lane(i).tri as usize]),
-                            b,
-                            setup.forward,
-                        )
-                    };
-                    out.copy_from_slice(&shaded);
-                }
-                for (c, &color) in batch.iter().zip(&colors) {
-                    let (t, s) = (&tris[c.tri as usize], &edges[c.tri as usize]);
-                    let b = s.plane.barycentrics(c.e);
-                    let color = Some(color);
-                    f(&Fragment {
-                        pixel: c.pixel,
-                        depth: s.plane.depth(b),
-                        prim: s.prim,
-                        b,
-                        t,
-                        setup,
-                        color,
-                    });
-                }
-            };
-            let mut batch = [Candidate::default(); BATCH];
-            let (mut len, mut n) = (0usize, 0u64);
-            for (i, (t, s)) in tris.iter().zip(edges).enumerate() {
-                walk_tile(t, s, s.bbox, |x, y, e| {
-                    if len == BATCH {
-                        flush(&batch);
-                        len = 0;
-                    }
-                    batch[len] = Candidate { tri: i as u32, pixel: y * setup.width + x, e };
-                    len += 1;
-                    n += 1;
-                });
+            for (c, &color) in batch.iter().zip(&colors) {
+                let (t, s) = (&tris[c.tri as usize], &edges[c.tri as usize]);
+                let b = s.plane.barycentrics(c.e);
+                let color = Some(color);
+                f(&Fragment { pixel: c.pixel, depth: s.plane.depth(b), prim: s.prim, b, t, setup, color });
             }
-            flush(&batch[..len]);
-            n
-        })
+        };
+        let mut batch = [Candidate::default(); BATCH];
+        let (mut len, mut n) = (0usize, 0u64);
+        for i in order {
+            let (t, s) = (&tris[i], &edges[i]);
+            let [x0, y0, x1, y1] = s.bbox;
+            walk_tile(t, s, [x0, y0.max(rows[0]), x1, y1.min(rows[1])], |x, y, e| {
+                if len == BATCH {
+                    flush(&batch);
+                    len = 0;
+                }
+                batch[len] = Candidate { tri: i as u32, pixel: y * setup.width + x, e };
+                len += 1;
+                n += 1;
+            });
+        }
+        flush(&batch[..len]);
+        n
     }
 
     /// The coverage pass under [`Rasterizer::for_each_fragment`], before any interpolation;
     /// returns the number of covered (pixel, triangle) pairs.
     fn for_each_covered<F: Fn(&Triangle, &SmallEdges, u32, u32, [i64; 3]) + Sync>(&self, f: F) -> u64 {
         match self.mode {
-            RasterMode::Scatter => self.scatter_tasks(|tris, edges, _| {
+            RasterMode::Scatter => self.scatter_tasks(|run| {
                 let mut n = 0u64;
-                for (t, edges) in tris.iter().zip(edges) {
+                for i in run {
+                    let (t, edges) = (&self.setup.triangles[i], &self.edges[i]);
                     walk_tile(t, edges, edges.bbox, |x, y, e| {
                         f(t, edges, x, y, e);
                         n += 1;
@@ -1400,6 +1617,66 @@ mod tests {
                     all == orders[0],
                     "{shading:?} {kernel:?} on demand: not the shaded pass's fragments"
                 );
+            }
+        }
+    }
+
+    /// The banded pass ([`Rasterizer::for_each_fragment_in_order`]) on each kernel, shaded
+    /// ahead and on demand, on 1 and 3 threads (bands of 16 and 8 rows, which cut the large and
+    /// the small triangles): the setup's fragments, bit for bit, and each pixel's from one
+    /// thread, highest primitive first. Mutations caught: a band's triangles walked in primitive
+    /// order (not reversed), the AVX2 walk starting a cut box at its own first row instead of the
+    /// band's, and a box's last band left out of the binning.
+    #[test]
+    fn in_order_pass_gives_each_pixel_its_fragments_highest_first() {
+        let scene = random_scene();
+        let (w, h) = (128u32, 96u32);
+        let cam = Camera::look_at(Vec3::new(0.0, 0.0, 2.5), Vec3::ZERO, 70.0, w as f32 / h as f32, 0.3, 8.0);
+        let kernels = if Kernel::detect() == Kernel::Portable {
+            eprintln!("no AVX2 on this host: the portable kernel alone");
+            vec![Kernel::Portable]
+        } else {
+            vec![Kernel::Portable, Kernel::detect()]
+        };
+        for shading in [Shading::Headlight, Shading::Vertex] {
+            let s = Settings { shading, ..settings(w, h) };
+            for threads in [1, 3] {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                // set up and binned on the pool, so the bands are cut for its threads
+                let r = pool.install(|| Rasterizer::new(&scene, &cam, &s));
+                let expected = setup_fragments(&r, |t| t.bbox);
+                assert!(expected.len() > 1000, "{} fragments", expected.len());
+                for &kernel in &kernels {
+                    for shade in [Shade::Color, Shade::OnDemand] {
+                        let what = format!("{shading:?}, {threads} threads, {kernel:?}, {shade:?}");
+                        let all = Mutex::new(Vec::new());
+                        let n = pool.install(|| {
+                            r.in_order(kernel, shade, &|f: &Fragment<'_>| {
+                                assert_eq!(f.color.is_some(), shade == Shade::Color, "{what}");
+                                let thread = rayon::current_thread_index();
+                                all.lock().unwrap().push((key(&f.full()), thread));
+                            })
+                        });
+                        let all = all.into_inner().unwrap();
+                        assert_eq!(n, all.len() as u64, "{what}");
+                        let mut sorted: Vec<Key> = all.iter().map(|a| a.0).collect();
+                        sorted.sort_unstable();
+                        assert!(sorted == expected, "{what}: not the setup's fragments");
+                        // per pixel, in arrival order: one thread, descending primitive ids
+                        let mut last: std::collections::HashMap<u32, (u32, Option<usize>)> =
+                            std::collections::HashMap::new();
+                        let mut deep = 0;
+                        for (k, thread) in &all {
+                            if let Some(&(prim, t)) = last.get(&k.0) {
+                                assert!(k.1 < prim, "{what}: pixel {} got {} after {prim}", k.0, k.1);
+                                assert_eq!(*thread, t, "{what}: pixel {} from two threads", k.0);
+                                deep += 1;
+                            }
+                            last.insert(k.0, (k.1, *thread));
+                        }
+                        assert!(deep > 500, "{what}: only {deep} fragments behind another");
+                    }
+                }
             }
         }
     }

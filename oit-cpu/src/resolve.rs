@@ -86,6 +86,28 @@ impl PixelState {
     }
 }
 
+impl PixelState {
+    /// Whether nothing was pushed, put behind or composited into the state: it is the default
+    /// one (fields no fragment reached compared, not assumed).
+    fn is_empty(&self) -> bool {
+        self.captured == 0
+            && self.back.is_none()
+            && self.back_stack.is_empty()
+            && self.front.color == Vec3::ZERO
+            && self.front.transmittance == 1.0
+            && self.optical == Vec3::ZERO
+            && self.entry.is_none()
+            && self.fresnel == 1.0
+    }
+
+    /// The state of a pixel whose fragments were composited front to back as they came
+    /// (`plain`'s banded pass): `front` of the transparency effect after `captured` fragments,
+    /// what [`Resolve::push`] of the same fragments in the same order leaves.
+    pub fn composited(front: FrontToBack, captured: u32) -> PixelState {
+        PixelState { front, captured, ..PixelState::default() }
+    }
+}
+
 impl Default for PixelState {
     fn default() -> Self {
         PixelState {
@@ -202,11 +224,13 @@ impl Resolve<'_> {
         // the heat map's scale is the deepest pixel: there a pixel keeps its count for a second
         // sweep (the pixel's bytes hold it, as `captured` fits no colour until the max is known)
         let mut counts = if complexity { vec![0u32; image.pixels.len()] } else { Vec::new() };
+        // a pixel nothing reached finishes to the background under every effect (the heat map's
+        // is drawn below): made once, not once per empty pixel
+        let empty = srgb(self.finish(&mut PixelState::default()));
         let sums = |px: usize, scratch: &mut S, out: &mut [u8; 4]| {
             let mut state = PixelState::default();
             feed(px, scratch, &mut state);
-            let c = self.finish(&mut state);
-            *out = srgb(c);
+            *out = if state.is_empty() { empty } else { srgb(self.finish(&mut state)) };
             (u64::from(state.captured), u64::from(state.tied()), state.captured)
         };
         let add = |a: (u64, u64, u32), b: (u64, u64, u32)| (a.0 + b.0, a.1 + b.1, a.2.max(b.2));

@@ -86,13 +86,25 @@ pub fn errors_within_losses(reference: &Frame, f: &Frame) -> Result<bool, String
 /// fragments, losses, ties and passes, the same per-pixel counts where both report them, and no
 /// channel off by more than 1 (the order of float operations may differ).
 pub fn same_fragments(a: &Frame, b: &Frame) -> Result<(), String> {
+    same_fragments_but_passes(a, b, 0)
+}
+
+/// A compute path's frame `gpu` against oit-cpu's `cpu` of `technique`: [`same_fragments`], but
+/// for `plain`, which oit-cpu composites as each pixel's fragments come, in order (the plan's
+/// `in_order`: one pass), where a compute path counts first, then keeps and sorts them (two).
+pub fn same_fragments_as_cpu(gpu: &Frame, cpu: &Frame, technique: oit_core::Technique) -> Result<(), String> {
+    same_fragments_but_passes(gpu, cpu, u32::from(technique == oit_core::Technique::Plain))
+}
+
+/// [`same_fragments`] where `b` runs `fewer` geometry passes than `a`.
+pub fn same_fragments_but_passes(a: &Frame, b: &Frame, fewer: u32) -> Result<(), String> {
     let (x, y) = (&a.stats, &b.stats);
     let pairs = [
         ("fragments", x.fragments, y.fragments),
         ("lost", x.lost, y.lost),
         ("merged", x.merged, y.merged),
         ("tied", x.tied, y.tied),
-        ("passes", u64::from(x.geometry_passes), u64::from(y.geometry_passes)),
+        ("passes", u64::from(x.geometry_passes), u64::from(y.geometry_passes) + u64::from(fewer)),
     ];
     for (what, p, q) in pairs {
         if p != q {

@@ -80,16 +80,19 @@ fn store_f32(dst: &mut [f32; CAP], at: usize, v: __m256) {
     dst[at..at + 8].copy_from_slice(&lanes);
 }
 
-/// One Scatter task: the triangles `tris` (with their records `edges` and `shades`) walked,
-/// shaded where `SHADE` (else each fragment's colour is left to be made where `f` asks, as
+/// One task: the triangles of `order` (indices into `tris` and their records `edges` and
+/// `shades`), in that order, walked in the rows `window` (inclusive; the whole box where it holds
+/// it), shaded where `SHADE` (else each fragment's colour is left to be made where `f` asks, as
 /// [`Shade::OnDemand`](super::Shade::OnDemand) passes do) and handed to `f`; returns the
-/// fragments.
+/// fragments. A Scatter task is a run of triangles over every row; a band of
+/// [`Rasterizer::for_each_fragment_in_order`](super::Rasterizer::for_each_fragment_in_order) is
+/// the band's triangles, highest primitive first, over the band's rows.
 #[target_feature(enable = "avx2,popcnt")]
 pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>) + Sync>(
     setup: &TriangleSetup,
-    tris: &[Triangle],
-    edges: &[SmallEdges],
-    shades: &[ShadeRecord],
+    (tris, edges, shades): (&[Triangle], &[SmallEdges], &[ShadeRecord]),
+    order: impl Iterator<Item = usize>,
+    window: [u32; 2],
     f: &F,
 ) -> u64 {
     let width = setup.width;
@@ -116,10 +119,13 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>) + Sync>(
         _mm256_add_epi32(columns[l], _mm256_mullo_epi32(rows[l], _mm256_set1_epi32(width as i32)))
     });
     let (zero, one) = (_mm256_setzero_ps(), _mm256_set1_ps(1.0));
-    for (i, (t, s)) in tris.iter().zip(edges).enumerate() {
-        let [x0, y0, x1, y1] = s.bbox;
+    for i in order {
+        let (t, s) = (&tris[i], &edges[i]);
+        let [x0, box_y0, x1, box_y1] = s.bbox;
+        // the box's rows inside the task's
+        let (y0, y1) = (box_y0.max(window[0]), box_y1.min(window[1]));
         if !s.small {
-            walk(t, s.bbox, |x, y, e| {
+            walk(t, [x0, y0, x1, y1], |x, y, e| {
                 if len == CAP {
                     flush::<SHADE, F>(setup, tris, edges, shades, &mut batch, len, f);
                     len = 0;
@@ -157,7 +163,12 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>) + Sync>(
         let (z0, dz1, dz2) =
             (_mm256_set1_ps(s.plane.z0), _mm256_set1_ps(s.plane.dz1), _mm256_set1_ps(s.plane.dz2));
         let tri = _mm256_set1_epi32(i as i32);
-        let mut row: [i32; 3] = std::array::from_fn(|k| s.origin[k].wrapping_sub(bias[k]));
+        // the edge functions at the first row walked, `y0 − box_y0` rows below the box's top
+        // (exact modulo 2^32, as every lane is: see walk_small)
+        let skipped = (y0 - box_y0) as i32;
+        let mut row: [i32; 3] = std::array::from_fn(|k| {
+            s.origin[k].wrapping_add(s.step_y[k].wrapping_mul(skipped)).wrapping_sub(bias[k])
+        });
         let mut row_pixel = y0 * width + x0;
         let mut by = 0;
         while by < h {
