@@ -282,7 +282,7 @@ fn clip(tri: [ClipVertex; 3], planes: u32) -> Polygon {
 }
 
 /// A vertex in screen space.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Default)]
 struct Projected {
     x: i32,
     y: i32,
@@ -439,14 +439,29 @@ impl Snap {
     /// rather than once per triangle that uses it (about six on a closed mesh).
     fn vertices(&self, out: &mut Vec<SetupVertex>, mvp: &Mat4, normal_matrix: &Mat3, mesh: &crate::Mesh) {
         let colors = mesh.colors.as_deref();
-        out.clear();
-        extend_indexed(out, &mesh.positions, |i, p| {
-            self.vertex(
-                transform_point(mvp, *p),
-                mesh.normals.get(i).map_or(Vec3::ZERO, |n| transform_normal(normal_matrix, *n)),
-                colors.and_then(|c| c.get(i).copied()).unwrap_or(Vec3::ZERO),
-            )
-        });
+        // every slot is written below; growing writes only the new tail first (a frame as large
+        // as the last writes each slot once)
+        out.resize(mesh.positions.len(), SetupVertex::default());
+        // each vertex written into its slot by a loop, so the compiler builds it there: made by a
+        // closure and collected, it came back through the stack and was copied again (about a
+        // sixth of a frame of grid:4x4:bunny, in stalls reading the copy back)
+        let fill = |first: usize, slots: &mut [SetupVertex], positions: &[Vec3]| {
+            for (j, (slot, p)) in slots.iter_mut().zip(positions).enumerate() {
+                let i = first + j;
+                *slot = self.vertex(
+                    transform_point(mvp, *p),
+                    mesh.normals.get(i).map_or(Vec3::ZERO, |n| transform_normal(normal_matrix, *n)),
+                    colors.and_then(|c| c.get(i).copied()).unwrap_or(Vec3::ZERO),
+                );
+            }
+        };
+        #[cfg(feature = "rayon")]
+        out.par_chunks_mut(SETUP_CHUNK)
+            .zip(mesh.positions.par_chunks(SETUP_CHUNK))
+            .enumerate()
+            .for_each(|(c, (slots, positions))| fill(c * SETUP_CHUNK, slots, positions));
+        #[cfg(not(feature = "rayon"))]
+        fill(0, out, &mesh.positions);
     }
 
     /// One vertex's [`SetupVertex`]: its outcode and projection beside its attributes.
@@ -508,7 +523,7 @@ impl Snap {
 }
 
 /// A vertex after the per-vertex half of setup ([`Snap::vertices`]).
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Default)]
 struct SetupVertex {
     clip: Vec4,
     normal: Vec3,
@@ -755,15 +770,6 @@ impl RecordSink<()> for () {
         vec![(); lens.len()]
     }
     fn put(_: &mut (), _: usize, _: ()) {}
-}
-
-/// `out` extended by `f(index, item)` over `items`, in order: in parallel with the `rayon`
-/// feature.
-fn extend_indexed<T: Sync, R: Send>(out: &mut Vec<R>, items: &[T], f: impl Fn(usize, &T) -> R + Sync + Send) {
-    #[cfg(feature = "rayon")]
-    out.par_extend(items.par_iter().enumerate().map(|(i, x)| f(i, x)));
-    #[cfg(not(feature = "rayon"))]
-    out.extend(items.iter().enumerate().map(|(i, x)| f(i, x)));
 }
 
 /// What setup keeps from one frame to the next: its per-vertex records and each task's triangle

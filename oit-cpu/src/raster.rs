@@ -25,6 +25,12 @@
 //! one permutation; its fragments are the portable pass's, bit for bit, in the same order within
 //! a task.
 //!
+//! [`Rasterizer::for_each_fragment_in_order`] is the pass that keeps order: the image cut into
+//! bands of rows, one rayon task a band, each walking the triangles that reach into its band
+//! highest primitive first (the same walks, in AVX2 where the host has it, cut to the band's
+//! rows), so that each pixel's fragments come from one thread in reverse submission order:
+//! `plain` composites them as they come, with no storage but a running colour and no sort.
+//!
 //! A pass reads one compact record per triangle (its edge functions, its [`DepthPlane`] and its
 //! primitive id): depth and id are all a [`Fragment`] holds at once; colour and normal are
 //! interpolated from the full [`Triangle`] only when a shader asks ([`Fragment::color`],
