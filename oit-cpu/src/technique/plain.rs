@@ -28,7 +28,7 @@ use oit_core::{Effect, Frame, OitError};
 
 use super::Ctx;
 use crate::raster::Fragment;
-use crate::resolve::PixelState;
+use crate::resolve::{PixelState, srgb};
 
 pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     // translucency and Fresnel are refused by the plan (oit_core::plan::Plan::new); the heat map
@@ -54,6 +54,11 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     });
     ctx.passes += 1;
     ctx.fragments.get_or_insert(generated);
+    if colour {
+        let frame = finish_transparency(ctx, &counts, &fronts);
+        counts.mark_clean(crate::pool::Clean::Word(0));
+        return Ok(frame);
+    }
     let frame = super::finish_with(ctx, |px, _: &mut (), s: &mut PixelState| {
         // each count read once, and left at zero for the next frame
         let n = counts[px].swap(0, Relaxed);
@@ -64,6 +69,33 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     });
     counts.mark_clean(crate::pool::Clean::Word(0));
     Ok(frame)
+}
+
+/// The transparency effect's ending: each pixel's running composite over the background, as the
+/// shared resolve finishes a state holding only it ([`PixelState::composited`]: the front over
+/// the background, to sRGB), without making that state; the counts read once and left at zero.
+fn finish_transparency(
+    ctx: &Ctx<'_>,
+    counts: &[std::sync::atomic::AtomicU32],
+    fronts: &[std::sync::atomic::AtomicU32],
+) -> Frame {
+    use rayon::prelude::*;
+    let background = ctx.settings.background;
+    let empty = srgb(FrontToBack::default().over(background));
+    let mut image = oit_core::Image::new(ctx.settings.width, ctx.settings.height, [0, 0, 0, 255]);
+    let (captured, deepest) = image
+        .pixels
+        .par_iter_mut()
+        .enumerate()
+        .map(|(px, out)| {
+            let n = counts[px].swap(0, Relaxed);
+            *out = if n == 0 { empty } else { srgb(load(&fronts[4 * px..4 * px + 4]).over(background)) };
+            (u64::from(n), n)
+        })
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1.max(b.1)));
+    let mut frame = super::frame(ctx, image, captured);
+    frame.stats.max_layers = deepest;
+    frame
 }
 
 /// A pixel's running composite from its four words (colour, then transmittance, as f32 bits).
@@ -134,6 +166,9 @@ mod tests {
                     assert_eq!(f.stats.fragments, all.len() as u64, "{name}");
                     assert_eq!(f.stats.captured, all.len() as u64, "{name}");
                     assert_eq!(f.stats.geometry_passes, 1, "{name}");
+                    // a count left set by the last frame's resolve would come back as another
+                    // array of the pool (the loss counters are lent first)
+                    assert_eq!(f.stats.lost, 0, "{name}, {threads} threads, frame {frame}");
                     let differ = f.image.pixels.iter().zip(&expected).filter(|(a, b)| a != b).count();
                     assert_eq!(differ, 0, "{name}, {threads} threads, frame {frame}: pixels differ");
                 }
