@@ -349,6 +349,30 @@ pub(crate) fn frame(ctx: &Ctx<'_>, image: oit_core::Image, captured: u64) -> oit
     }
 }
 
+/// The ending of a technique that finishes each pixel without a resolve state: `pixel(px)` gives
+/// pixel `px`'s sRGB colour and the fragments it took, in parallel; the image, the fragments
+/// captured and the deepest pixel go into the frame.
+pub(crate) fn finish_pixels(
+    ctx: &Ctx<'_>,
+    pixel: impl Fn(usize) -> ([u8; 4], u32) + Sync,
+) -> oit_core::Frame {
+    use rayon::prelude::*;
+    let mut image = oit_core::Image::new(ctx.settings.width, ctx.settings.height, [0, 0, 0, 255]);
+    let (captured, deepest) = image
+        .pixels
+        .par_iter_mut()
+        .enumerate()
+        .map(|(px, out)| {
+            let (colour, n) = pixel(px);
+            *out = colour;
+            (u64::from(n), n)
+        })
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1.max(b.1)));
+    let mut frame = frame(ctx, image, captured);
+    frame.stats.max_layers = deepest;
+    frame
+}
+
 /// Resolves each pixel from a state in the resolving thread's locals, fed by `feed` (the ending
 /// of a technique that captures every fragment before its one resolve;
 /// [`Resolve::image_with`](crate::resolve::Resolve::image_with)).

@@ -79,23 +79,13 @@ fn finish_transparency(
     counts: &[std::sync::atomic::AtomicU32],
     fronts: &[std::sync::atomic::AtomicU32],
 ) -> Frame {
-    use rayon::prelude::*;
     let background = ctx.settings.background;
     let empty = srgb(FrontToBack::default().over(background));
-    let mut image = oit_core::Image::new(ctx.settings.width, ctx.settings.height, [0, 0, 0, 255]);
-    let (captured, deepest) = image
-        .pixels
-        .par_iter_mut()
-        .enumerate()
-        .map(|(px, out)| {
-            let n = counts[px].swap(0, Relaxed);
-            *out = if n == 0 { empty } else { srgb(load(&fronts[4 * px..4 * px + 4]).over(background)) };
-            (u64::from(n), n)
-        })
-        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1.max(b.1)));
-    let mut frame = super::frame(ctx, image, captured);
-    frame.stats.max_layers = deepest;
-    frame
+    super::finish_pixels(ctx, |px| {
+        let n = counts[px].swap(0, Relaxed);
+        let colour = if n == 0 { empty } else { srgb(load(&fronts[4 * px..4 * px + 4]).over(background)) };
+        (colour, n)
+    })
 }
 
 /// A pixel's running composite from its four words (colour, then transmittance, as f32 bits).

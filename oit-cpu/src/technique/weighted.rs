@@ -44,18 +44,8 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, average: bool) -> Result<Frame, OitError
         return Ok(super::finish(ctx, states));
     }
     // each pixel's colour straight into the image, with the counts: no state array
-    let mut image = oit_core::Image::new(ctx.settings.width, ctx.settings.height, [0, 0, 0, 255]);
-    let (captured, deepest) = image
-        .pixels
-        .par_iter_mut()
-        .zip(sums.par_chunks(5))
-        .map(|(px, s)| {
-            let (c, count) = weighted(s);
-            *px = crate::resolve::srgb(c);
-            (u64::from(count), count)
-        })
-        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1.max(b.1)));
-    let mut frame = super::frame(ctx, image, captured);
-    frame.stats.max_layers = deepest;
-    Ok(frame)
+    Ok(super::finish_pixels(ctx, |px| {
+        let (c, count) = weighted(&sums[5 * px..5 * px + 5]);
+        (crate::resolve::srgb(c), count)
+    }))
 }
