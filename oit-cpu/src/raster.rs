@@ -159,6 +159,12 @@ fn prefetch<T>(record: &T) {
     let _ = record;
 }
 
+/// The part of the pixel box `bbox` in the rows `rows` (inclusive; empty where they miss it).
+#[inline]
+fn in_rows([x0, y0, x1, y1]: [u32; 4], rows: [u32; 2]) -> [u32; 4] {
+    [x0, y0.max(rows[0]), x1, y1.min(rows[1])]
+}
+
 /// Every row: a Scatter task walks its triangles' whole boxes.
 const ALL_ROWS: [u32; 2] = [0, u32::MAX];
 
@@ -562,10 +568,7 @@ impl Rasterizer {
                     }
                     tris[k] as usize
                 });
-                match shade {
-                    Shade::Color => self.shaded_task(kernel, order, rows, f),
-                    Shade::OnDemand => self.on_demand_task(kernel, order, rows, f),
-                }
+                self.task(kernel, shade, order, rows, f)
             })
             .sum();
         self.fragments.get_or_init(|| n);
@@ -586,14 +589,9 @@ impl Rasterizer {
     /// Every covered pixel handed to `f` with its colour and normal left to be made where `f`
     /// asks, by [`Rasterizer::for_each_covered`]'s traversal.
     fn covered_on_demand<F: Fn(&Fragment<'_>) + Sync>(&self, f: &F) -> u64 {
-        let setup = &self.setup;
-        self.for_each_covered(|t, s, x, y, e| {
-            // depth from the traversal's own record: the triangle is read only for colour or
-            // normal, here where `f` asks for it
-            let b = s.plane.barycentrics(e);
-            let depth = s.plane.depth(b);
-            f(&Fragment { pixel: y * setup.width + x, depth, prim: s.prim, b, t, setup, color: None })
-        })
+        // depth from the traversal's own record: the triangle is read only for colour or
+        // normal, where `f` asks for it
+        self.for_each_covered(|t, s, x, y, e| f(&self.on_demand_fragment(t, s, x, y, e)))
     }
 
     /// [`RasterMode::Scatter`]'s pass with [`Shade::OnDemand`]: the portable walk, or on an AVX2
@@ -602,14 +600,7 @@ impl Rasterizer {
     /// shaded pass in AVX2: the bunny's 1.34–2.15 ms against 0.99 in AVX2, `cargo bench -p
     /// oit-cpu --bench raster`, `bench/results/cpu/issue12/`). The same fragments either way.
     fn scatter_on_demand<F: Fn(&Fragment<'_>) + Sync>(&self, kernel: Kernel, f: &F) -> u64 {
-        #[cfg(target_arch = "x86_64")]
-        if kernel == Kernel::Avx2 {
-            return self.scatter_tasks(|run| {
-                avx2_task::<false, F>(kernel, &self.setup, self.records(), run, ALL_ROWS, f).unwrap_or(0)
-            });
-        }
-        let _ = kernel;
-        self.covered_on_demand(f)
+        self.scatter_tasks(|run| self.task(kernel, Shade::OnDemand, run, ALL_ROWS, f))
     }
 
     /// The frame's triangles with their traversal and shading records.
@@ -626,50 +617,57 @@ impl Rasterizer {
         (0..n.div_ceil(chunk)).into_par_iter().map(|i| task(i * chunk..((i + 1) * chunk).min(n))).sum()
     }
 
-    /// One task's shaded walk: the triangles of `order` in the rows `rows`, in AVX2 where
-    /// `kernel` is [`Kernel::Avx2`], else by the portable batch ([`Rasterizer::portable_shaded`]).
-    fn shaded_task<F: Fn(&Fragment<'_>) + Sync>(
+    /// One task's walk: the triangles of `order` in the rows `rows`, shaded as `shade` says, in
+    /// AVX2 where `kernel` is [`Kernel::Avx2`], else by the portable batch
+    /// ([`Rasterizer::portable_shaded`]) or the portable walk with colour made where `f` asks.
+    /// Scatter's tasks are runs of triangles over every row, the banded pass's a band's
+    /// triangles, highest first, over its rows.
+    fn task<F: Fn(&Fragment<'_>) + Sync>(
         &self,
         kernel: Kernel,
+        shade: Shade,
         order: impl Iterator<Item = usize>,
         rows: [u32; 2],
         f: &F,
     ) -> u64 {
         #[cfg(target_arch = "x86_64")]
         if kernel == Kernel::Avx2 {
-            return avx2_task::<true, F>(kernel, &self.setup, self.records(), order, rows, f).unwrap_or(0);
+            let n = match shade {
+                Shade::Color => avx2_task::<true, F>(kernel, &self.setup, self.records(), order, rows, f),
+                Shade::OnDemand => avx2_task::<false, F>(kernel, &self.setup, self.records(), order, rows, f),
+            };
+            return n.unwrap_or(0);
         }
         let _ = kernel;
-        self.portable_shaded(order, rows, f)
-    }
-
-    /// One task's walk with colour and normal made where `f` asks: the triangles of `order` in
-    /// the rows `rows`, in AVX2 where `kernel` is [`Kernel::Avx2`], else by the portable walk.
-    fn on_demand_task<F: Fn(&Fragment<'_>) + Sync>(
-        &self,
-        kernel: Kernel,
-        order: impl Iterator<Item = usize>,
-        rows: [u32; 2],
-        f: &F,
-    ) -> u64 {
-        #[cfg(target_arch = "x86_64")]
-        if kernel == Kernel::Avx2 {
-            return avx2_task::<false, F>(kernel, &self.setup, self.records(), order, rows, f).unwrap_or(0);
+        if shade == Shade::Color {
+            return self.portable_shaded(order, rows, f);
         }
-        let _ = kernel;
-        let setup = &self.setup;
         let mut n = 0u64;
         for i in order {
-            let (t, s) = (&setup.triangles[i], &self.edges[i]);
-            let [x0, y0, x1, y1] = s.bbox;
-            walk_tile(t, s, [x0, y0.max(rows[0]), x1, y1.min(rows[1])], |x, y, e| {
-                let b = s.plane.barycentrics(e);
-                let depth = s.plane.depth(b);
-                f(&Fragment { pixel: y * setup.width + x, depth, prim: s.prim, b, t, setup, color: None });
+            let (t, s) = (&self.setup.triangles[i], &self.edges[i]);
+            walk_tile(t, s, in_rows(s.bbox, rows), |x, y, e| {
+                f(&self.on_demand_fragment(t, s, x, y, e));
                 n += 1;
             });
         }
         n
+    }
+
+    /// The fragment of `t` (traversal record `s`) at pixel (`x`, `y`) with edge functions `e`,
+    /// its depth from the record, colour and normal left to be made where a shader asks.
+    #[inline]
+    fn on_demand_fragment<'a>(
+        &'a self,
+        t: &'a Triangle,
+        s: &SmallEdges,
+        x: u32,
+        y: u32,
+        e: [i64; 3],
+    ) -> Fragment<'a> {
+        let b = s.plane.barycentrics(e);
+        let depth = s.plane.depth(b);
+        let setup = &self.setup;
+        Fragment { pixel: y * setup.width + x, depth, prim: s.prim, b, t, setup, color: None }
     }
 
     /// [`RasterMode::Scatter`]'s pass with [`Shade::Color`]: each task walks its triangles into a
@@ -685,7 +683,7 @@ impl Rasterizer {
     /// 2 threads; `bench/results/cpu/issue12/`). With `kernel` [`Kernel::Avx2`] each task runs
     /// `avx2::scatter_task` instead (the same fragments; see that module for how).
     fn scatter_shaded<F: Fn(&Fragment<'_>) + Sync>(&self, kernel: Kernel, f: &F) -> u64 {
-        self.scatter_tasks(|run| self.shaded_task(kernel, run, ALL_ROWS, f))
+        self.scatter_tasks(|run| self.task(kernel, Shade::Color, run, ALL_ROWS, f))
     }
 
     /// The portable shaded walk of one task: the triangles of `order` in the rows `rows`, walked
@@ -723,8 +721,7 @@ impl Rasterizer {
         let (mut len, mut n) = (0usize, 0u64);
         for i in order {
             let (t, s) = (&tris[i], &edges[i]);
-            let [x0, y0, x1, y1] = s.bbox;
-            walk_tile(t, s, [x0, y0.max(rows[0]), x1, y1.min(rows[1])], |x, y, e| {
+            walk_tile(t, s, in_rows(s.bbox, rows), |x, y, e| {
                 if len == BATCH {
                     flush(&batch);
                     len = 0;

@@ -20,7 +20,7 @@ use glam::Vec4;
 use oit_core::Shading;
 use oit_core::setup::{SHADE_LANES, ShadeRecord, Triangle, TriangleSetup};
 
-use super::{Fragment, SmallEdges, walk};
+use super::{Fragment, SmallEdges, in_rows, walk};
 
 /// Fragments a batch holds (a multiple of [`SHADE_LANES`]).
 const CAP: usize = 128;
@@ -121,9 +121,9 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>) + Sync>(
     let (zero, one) = (_mm256_setzero_ps(), _mm256_set1_ps(1.0));
     for i in order {
         let (t, s) = (&tris[i], &edges[i]);
-        let [x0, box_y0, x1, box_y1] = s.bbox;
+        let box_y0 = s.bbox[1];
         // the box's rows inside the task's
-        let (y0, y1) = (box_y0.max(window[0]), box_y1.min(window[1]));
+        let [x0, y0, x1, y1] = in_rows(s.bbox, window);
         if !s.small {
             walk(t, [x0, y0, x1, y1], |x, y, e| {
                 if len == CAP {
