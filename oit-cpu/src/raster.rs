@@ -269,10 +269,13 @@ struct Bins {
 #[derive(Default)]
 struct Bands {
     rows: u32,
-    start: Vec<u32>,
+    /// In `usize`: a scene of many large triangles lists more (triangle, band) pairs than a
+    /// `u32` counts (70M triangles across 64 bands), and a wrapped count would drop fragments in
+    /// silence.
+    start: Vec<usize>,
     tris: Vec<u32>,
     /// The per-run counts the parallel binning adds up (kept with the rest).
-    counts: Vec<u32>,
+    counts: Vec<usize>,
 }
 
 /// Rows of a band: the image cut into about eight bands a thread (rayon balances them), each a
@@ -310,7 +313,7 @@ impl Bands {
         // band-major: band b's slots hold run 0's triangles of it, then run 1's, ...
         self.start.clear();
         self.start.resize(bands + 1, 0);
-        let mut total = 0u32;
+        let mut total = 0usize;
         for b in 0..bands {
             self.start[b] = total;
             for r in 0..runs {
@@ -321,15 +324,14 @@ impl Bands {
         }
         self.start[bands] = total;
         self.tris.clear();
-        self.tris.resize(total as usize, 0);
+        self.tris.resize(total, 0);
         // each run's slots, band by band: disjoint parts of `tris`, cut in slot order
         let mut parts: Vec<Vec<&mut [u32]>> = (0..runs).map(|_| Vec::with_capacity(bands)).collect();
         let mut rest = &mut self.tris[..];
         for b in 0..bands {
             for (r, part) in parts.iter_mut().enumerate() {
                 let end = if r + 1 < runs { self.counts[(r + 1) * bands + b] } else { self.start[b + 1] };
-                let (slots, tail) =
-                    std::mem::take(&mut rest).split_at_mut((end - self.counts[r * bands + b]) as usize);
+                let (slots, tail) = std::mem::take(&mut rest).split_at_mut(end - self.counts[r * bands + b]);
                 part.push(slots);
                 rest = tail;
             }
@@ -349,7 +351,7 @@ impl Bands {
     fn band(&self, b: usize, height: u32) -> ([u32; 2], &[u32]) {
         let first = b as u32 * self.rows;
         let rows = [first, (first + self.rows - 1).min(height.saturating_sub(1))];
-        (rows, &self.tris[self.start[b] as usize..self.start[b + 1] as usize])
+        (rows, &self.tris[self.start[b]..self.start[b + 1]])
     }
 }
 
