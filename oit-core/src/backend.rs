@@ -322,8 +322,10 @@ pub trait BucketArray: Sync {
 /// A 1024-bit presence histogram per pixel, updated concurrently with OR: adp's first pass
 /// (Liu et al., HPG 2009: logic-op OR into 8 RGBA32UI targets).
 pub trait DepthHistogram: Sync {
-    /// Sets bit `bin` of `pixel`'s histogram.
-    fn set(&self, pixel: usize, bin: u32);
+    /// Sets bit `bin` of `pixel`'s histogram; true where the bit was clear before (from the OR's
+    /// old value, as an atomic OR returns it), so a pixel's set bins can be counted as they are
+    /// set.
+    fn set(&self, pixel: usize, bin: u32) -> bool;
     /// The histogram of one pixel.
     fn read(&self, pixel: usize) -> [u32; HISTOGRAM_WORDS];
 }

@@ -115,7 +115,7 @@ type Records<'a> = (&'a [Triangle], &'a [SmallEdges], &'a [ShadeRecord]);
 /// `avx2::scatter_task` over the triangles of `order` in the rows `rows` (shading them where
 /// `SHADE`), where `kernel` is [`Kernel::Avx2`]; `None` elsewhere.
 #[cfg(target_arch = "x86_64")]
-fn avx2_task<const SHADE: bool, F: Fn(&Fragment<'_>) + Sync>(
+fn avx2_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
     kernel: Kernel,
     setup: &TriangleSetup,
     records: Records<'_>,
@@ -549,6 +549,31 @@ impl Rasterizer {
 
     /// [`Rasterizer::for_each_fragment_in_order`] on `kernel`.
     fn in_order<F: Fn(&Fragment<'_>) + Sync>(&self, kernel: Kernel, shade: Shade, f: &F) -> u64 {
+        self.by_band(kernel, shade, |_| f).iter().sum()
+    }
+
+    /// The banded pass of [`Rasterizer::for_each_fragment_in_order`] with a shader per band:
+    /// `make(b)` gives band `b`'s, which runs on the one task that walks the band. No other
+    /// task writes a fragment to the band's pixels, so a shader may update its pixels' words by
+    /// plain loads and stores instead of locked atomics, and may keep counts of its own (`ll`'s
+    /// nodes, taken a band's block at a time). Returns each band's fragments, top band first;
+    /// the bands, and so the split of the fragments between them, are the same for every pass
+    /// of a frame.
+    pub fn for_each_fragment_by_band<F: Fn(&Fragment<'_>)>(
+        &self,
+        shade: Shade,
+        make: impl Fn(usize) -> F + Sync,
+    ) -> Vec<u64> {
+        self.by_band(Kernel::detect(), shade, make)
+    }
+
+    /// [`Rasterizer::for_each_fragment_by_band`] on `kernel`.
+    fn by_band<F: Fn(&Fragment<'_>)>(
+        &self,
+        kernel: Kernel,
+        shade: Shade,
+        make: impl Fn(usize) -> F + Sync,
+    ) -> Vec<u64> {
         let height = self.setup.height;
         let bands = self.bands.get_or_init(|| {
             let mut bands = std::mem::take(
@@ -557,24 +582,29 @@ impl Rasterizer {
             bands.make(&self.edges, height, rayon::current_num_threads());
             bands
         });
-        let n = (0..bands.start.len() - 1)
+        let per_band: Vec<u64> = (0..bands.start.len() - 1)
             .into_par_iter()
             .map(|b| {
                 let (rows, tris) = bands.band(b, height);
                 // highest primitive first; a band's triangles lie all over the frame's records
-                // (every row of a grid of meshes is in every band's list), so each record is
-                // asked for from memory a few triangles ahead of its walk
+                // (every row of a grid of meshes is in every band's list), so each record (and
+                // its shading record, where the pass shades by the headlight) is asked for from
+                // memory a few triangles ahead of its walk
+                let shaded = shade == Shade::Color && self.setup.shading == Shading::Headlight;
                 let order = (0..tris.len()).rev().map(|k| {
                     if let Some(&ahead) = k.checked_sub(PREFETCH).and_then(|a| tris.get(a)) {
                         prefetch(&self.edges[ahead as usize]);
+                        if shaded {
+                            prefetch(&self.shades[ahead as usize]);
+                        }
                     }
                     tris[k] as usize
                 });
-                self.task(kernel, shade, order, rows, f)
+                self.task(kernel, shade, order, rows, &make(b))
             })
-            .sum();
-        self.fragments.get_or_init(|| n);
-        n
+            .collect();
+        self.fragments.get_or_init(|| per_band.iter().sum());
+        per_band
     }
 
     /// [`Rasterizer::for_each_fragment`], shading as `shade` says.
@@ -624,7 +654,7 @@ impl Rasterizer {
     /// ([`Rasterizer::portable_shaded`]) or the portable walk with colour made where `f` asks.
     /// Scatter's tasks are runs of triangles over every row, the banded pass's a band's
     /// triangles, highest first, over its rows.
-    fn task<F: Fn(&Fragment<'_>) + Sync>(
+    fn task<F: Fn(&Fragment<'_>)>(
         &self,
         kernel: Kernel,
         shade: Shade,
@@ -691,7 +721,7 @@ impl Rasterizer {
     /// The portable shaded walk of one task: the triangles of `order` in the rows `rows`, walked
     /// into a batch of up to [`BATCH`] covered pixels, coloured [`SHADE_LANES`] at a time, then
     /// handed to `f` in the order walked ([`Rasterizer::scatter_shaded`] says why).
-    fn portable_shaded<F: Fn(&Fragment<'_>) + Sync>(
+    fn portable_shaded<F: Fn(&Fragment<'_>)>(
         &self,
         order: impl Iterator<Item = usize>,
         rows: [u32; 2],
@@ -1684,6 +1714,46 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Each band's shader sees only the band's rows, the bands' counts add up to the pass's
+    /// fragments, and every pass of a frame splits them alike (what `ll`'s blocks of nodes,
+    /// sized by one pass and taken in the next, rest on).
+    #[test]
+    fn by_band_passes_split_the_fragments_alike() {
+        let scene = random_scene();
+        let (w, h) = (128u32, 96u32);
+        let cam = Camera::look_at(Vec3::new(0.0, 0.0, 2.5), Vec3::ZERO, 70.0, w as f32 / h as f32, 0.3, 8.0);
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+        let r = pool.install(|| Rasterizer::new(&scene, &cam, &settings(w, h)));
+        let expected = setup_fragments(&r, |t| t.bbox).len() as u64;
+        let mut splits = Vec::new();
+        for shade in [Shade::OnDemand, Shade::Color, Shade::OnDemand] {
+            let seen = Mutex::new(Vec::new());
+            let per_band = pool.install(|| {
+                r.for_each_fragment_by_band(shade, |b| {
+                    let seen = &seen;
+                    let mine = std::cell::Cell::new(0u64);
+                    move |f: &Fragment<'_>| {
+                        mine.set(mine.get() + 1);
+                        seen.lock().unwrap().push((b, f.pixel / w, mine.get()));
+                    }
+                })
+            });
+            let bands = r.bands.get().expect("made by the pass");
+            assert_eq!(per_band.len(), bands.start.len() - 1);
+            assert!(per_band.len() > 2, "{} bands", per_band.len());
+            assert_eq!(per_band.iter().sum::<u64>(), expected, "{shade:?}");
+            let mut last = vec![0u64; per_band.len()];
+            for (b, row, count) in seen.into_inner().unwrap() {
+                let (rows, _) = bands.band(b, h);
+                assert!((rows[0]..=rows[1]).contains(&row), "band {b} ({rows:?}) got row {row}");
+                last[b] = last[b].max(count);
+            }
+            assert_eq!(last, per_band, "{shade:?}: each band's own count is its share");
+            splits.push(per_band);
+        }
+        assert!(splits.windows(2).all(|p| p[0] == p[1]), "passes split the fragments apart: {splits:?}");
     }
 
     #[test]

@@ -4,7 +4,7 @@
 
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
 
-use oit_core::rules::HISTOGRAM_WORDS;
+use oit_core::rules::{HISTOGRAM_WORDS, histogram_rank};
 use oit_core::{AtomicFragmentList, BucketArray, DepthHistogram};
 
 use crate::pool::Pooled;
@@ -47,6 +47,13 @@ impl<'p, A> Buckets<'p, A> {
     /// Says every bucket has been taken (all empty again): the words go back to the pool clean.
     pub fn mark_empty(&mut self) {
         self.words.mark_clean(crate::pool::Clean::Word(0));
+    }
+
+    /// The buckets, pixel after pixel, to take between passes by plain reads and writes
+    /// (`get_mut`: no pass runs, so the caller has them to itself), which the compiler may do
+    /// several at a time, where [`BucketArray::take`] is a load a bucket.
+    pub fn words_mut(&mut self) -> &mut [A] {
+        &mut self.words
     }
 }
 
@@ -97,12 +104,25 @@ impl<'p> Histogram<'p> {
     pub fn mark_empty(&mut self) {
         self.words.mark_clean(crate::pool::Clean::Word(0));
     }
+
+    /// [`histogram_rank`] of the pixel's histogram, reading only the words at and below the
+    /// bin's.
+    #[inline]
+    pub fn rank(&self, pixel: usize, bin: u32) -> u32 {
+        let mut words = [0; HISTOGRAM_WORDS];
+        let upto = (bin / 32) as usize;
+        for (w, a) in words[..=upto].iter_mut().zip(&self.words[pixel * HISTOGRAM_WORDS..]) {
+            *w = a.load(Relaxed);
+        }
+        histogram_rank(&words, bin)
+    }
 }
 
 impl DepthHistogram for Histogram<'_> {
     #[inline]
-    fn set(&self, pixel: usize, bin: u32) {
-        self.words[pixel * HISTOGRAM_WORDS + (bin / 32) as usize].fetch_or(1 << (bin % 32), Relaxed);
+    fn set(&self, pixel: usize, bin: u32) -> bool {
+        let bit = 1 << (bin % 32);
+        self.words[pixel * HISTOGRAM_WORDS + (bin / 32) as usize].fetch_or(bit, Relaxed) & bit == 0
     }
     fn read(&self, pixel: usize) -> [u32; HISTOGRAM_WORDS] {
         std::array::from_fn(|i| self.words[pixel * HISTOGRAM_WORDS + i].load(Relaxed))
@@ -217,7 +237,12 @@ mod tests {
         let pool = Pool::default();
         let h = Histogram::new(pool.u32s(2 * HISTOGRAM_WORDS, 0));
         for bin in [0, 31, 32, 1023] {
-            h.set(1, bin);
+            assert!(h.set(1, bin), "bin {bin} was clear");
+        }
+        assert!(!h.set(1, 31), "bin 31 was set already");
+        // the rank reads only the words up to the bin's: the set bins below it, in any word
+        for (bin, below) in [(0, 0), (31, 1), (32, 2), (33, 3), (1023, 3)] {
+            assert_eq!(h.rank(1, bin), below, "set bins below {bin}");
         }
         let words = h.read(1);
         assert_eq!((words[0], words[1], words[31]), (1 | 1 << 31, 1, 1 << 31));

@@ -88,7 +88,7 @@ fn store_f32(dst: &mut [f32; CAP], at: usize, v: __m256) {
 /// [`Rasterizer::for_each_fragment_in_order`](super::Rasterizer::for_each_fragment_in_order) is
 /// the band's triangles, highest primitive first, over the band's rows.
 #[target_feature(enable = "avx2,popcnt")]
-pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>) + Sync>(
+pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
     setup: &TriangleSetup,
     (tris, edges, shades): (&[Triangle], &[SmallEdges], &[ShadeRecord]),
     order: impl Iterator<Item = usize>,
@@ -225,7 +225,7 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>) + Sync>(
 /// hands each to `f` in the order walked.
 #[inline]
 #[target_feature(enable = "avx2,popcnt")]
-fn flush<const SHADE: bool, F: Fn(&Fragment<'_>) + Sync>(
+fn flush<const SHADE: bool, F: Fn(&Fragment<'_>)>(
     setup: &TriangleSetup,
     tris: &[Triangle],
     edges: &[SmallEdges],

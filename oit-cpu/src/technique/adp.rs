@@ -18,9 +18,7 @@
 //! primitive id: the resolve counts them in `tied`.
 
 use oit_core::Compositor as _;
-use oit_core::rules::{
-    BUCKETS, HISTOGRAM_WORDS, depth_key64, histogram_bin, histogram_count, histogram_rank, split_key64,
-};
+use oit_core::rules::{BUCKETS, HISTOGRAM_WORDS, depth_key64, histogram_bin, split_key64};
 use oit_core::{BucketArray, DepthHistogram, Frame, OitError};
 use rayon::prelude::*;
 use std::sync::atomic::Ordering::Relaxed;
@@ -31,28 +29,33 @@ use crate::storage::{Buckets, Histogram};
 pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let bounds = ctx.depth_bounds()?;
     let mut histogram = Histogram::new(ctx.alloc32(HISTOGRAM_WORDS, 0)?);
+    // Each pixel's set bins, counted as they are set: the batches come from the deepest pixel,
+    // and batch b fills buckets 0 .. min(32, bins − 32·b) of a pixel and no other, so each
+    // batch's resolve reads those and skips the rest (most pixels have a few bins, the
+    // background none: reading all 32 buckets and 32 nearest keys of every pixel was 128 MiB a
+    // batch). The histogram stays where the pass set it (a copy was a fresh 32 MiB every frame,
+    // faulted in page by page).
+    let bins = ctx.pool.u32s(ctx.pixels, 0);
     ctx.pass(|f| {
         let px = f.pixel as usize;
         let (zn, zf) = bounds[px];
-        histogram.set(px, histogram_bin(f.depth, zn, zf));
+        if histogram.set(px, histogram_bin(f.depth, zn, zf)) {
+            bins[px].fetch_add(1, Relaxed);
+        }
     });
-    // each pixel's histogram emptied as it is read: the next frame lends the array without a
-    // sweep
-    let hist: Vec<[u32; HISTOGRAM_WORDS]> =
-        (0..ctx.pixels).into_par_iter().map(|px| histogram.take(px)).collect();
-    histogram.mark_empty();
-    let batches = ctx.plan.adp_batches(hist.iter().map(histogram_count).max().unwrap_or(0));
+    let deepest = bins.par_iter().map(|n| n.load(Relaxed)).max().unwrap_or(0);
+    let batches = ctx.plan.adp_batches(deepest);
     let mut buckets = Buckets::new(ctx.alloc64(BUCKETS, 0)?, BUCKETS);
     let mut nearest = ctx.alloc64(BUCKETS, u64::MAX)?;
     let mut states = ctx.states();
     for batch in 0..batches {
         let payload = |f: &crate::raster::Fragment<'_>| ctx.payload(f);
-        let hist = &hist;
+        let histogram = &histogram;
         let lost = &*ctx;
         let generated = ctx.raster.for_each_fragment(|f| {
             let px = f.pixel as usize;
             let (zn, zf) = bounds[px];
-            let rank = histogram_rank(&hist[px], histogram_bin(f.depth, zn, zf));
+            let rank = histogram.rank(px, histogram_bin(f.depth, zn, zf));
             if rank / BUCKETS as u32 == batch {
                 let bucket = (rank % BUCKETS as u32) as usize;
                 let key = depth_key64(f.depth, payload(f));
@@ -75,8 +78,10 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         let resolve = &ctx.resolve;
         let buckets = &buckets;
         let (nearest, lost) = (&nearest, &ctx.lost);
+        let bins = &bins;
         states.par_iter_mut().enumerate().for_each(|(px, s)| {
-            for k in 0..buckets.buckets() {
+            let filled = bins[px].load(Relaxed).saturating_sub(batch * BUCKETS as u32).min(BUCKETS as u32);
+            for k in 0..filled as usize {
                 let key = buckets.take(px, k);
                 let near = crate::storage::take_u64(&nearest[px * BUCKETS + k], u64::MAX);
                 if key != 0 {
@@ -93,8 +98,16 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
             }
         });
     }
-    // every batch's resolve took every bucket and every nearest key of every pixel (and with no
-    // batch none was written): both are as they were lent
+    // the histograms emptied where a bin was set, so the next frame lends the array without a
+    // sweep
+    (0..ctx.pixels).into_par_iter().with_min_len(1 << 12).for_each(|px| {
+        if bins[px].load(Relaxed) > 0 {
+            histogram.take(px);
+        }
+    });
+    histogram.mark_empty();
+    // every batch's resolve took every bucket and every nearest key its batch could have
+    // written (and with no batch none was written): both are as they were lent
     buckets.mark_empty();
     nearest.mark_clean(crate::pool::Clean::Word(u64::MAX));
     Ok(super::finish(ctx, states))

@@ -48,15 +48,22 @@ fn color(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
     });
     let mut states = ctx.states();
     let resolve = &ctx.resolve;
-    let taken = &buckets;
-    // each bucket emptied as it is read, so the next frame lends the array without a sweep
-    states.par_iter_mut().zip(bounds.par_iter()).enumerate().for_each_init(
-        || vec![0u32; n],
-        |words, (px, (s, &(zn, zf)))| {
-            for (k, word) in words.iter_mut().enumerate() {
-                *word = taken.take(px, k);
+    // each pixel's buckets read and emptied whole, by plain loads and stores several at a time
+    // (most pixels' are all empty: nothing else is done for them), so the next frame lends the
+    // array without a sweep
+    states.par_iter_mut().zip(bounds.par_iter()).zip(buckets.words_mut().par_chunks_mut(n)).for_each(
+        |((s, &(zn, zf)), words)| {
+            let mut taken = [0u32; BDP_COLOR_SUBINTERVALS as usize];
+            for (t, w) in taken.iter_mut().zip(words.iter_mut()) {
+                *t = *w.get_mut();
             }
-            for (k, &v) in words.iter().enumerate() {
+            if taken.iter().fold(0, |any, &v| any | v) == 0 {
+                return;
+            }
+            for w in words.iter_mut() {
+                *w.get_mut() = 0;
+            }
+            for (k, &v) in taken.iter().enumerate() {
                 if v != 0 {
                     // The bucket's subinterval midpoint stands for its depth.
                     let d = bucket_midpoint(k as u32, n as u32, zn, zf);

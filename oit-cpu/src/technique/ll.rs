@@ -10,6 +10,15 @@
 //! fragments than the sizing pass, which oit's repeatable rasterizers never do) is counted in
 //! `lost` at its pixel, never dropped in silence.
 //!
+//! On oit-cpu both passes run by bands of rows
+//! ([`Rasterizer::for_each_fragment_by_band`](crate::raster::Rasterizer::for_each_fragment_by_band)),
+//! each band walked by one task. The sizing pass counts each band's fragments; in the capture each
+//! band takes that many nodes from the counter by one atomic add (as GPU code aggregates a warp's
+//! increments into one) and links them into its own pixels' lists with a plain load
+//! and store of the head, which no other task writes. The lists, the sort and the image are the
+//! same; what goes is a locked increment of one shared word per fragment, which on the 2-core VM
+//! of issue 12 doubled the armadillo's frame in some processes and not in others.
+//!
 //! Storage: a 4-byte head a pixel, the counter, and 16 bytes a node: the 64-bit key (depth bits,
 //! primitive id), the 32-bit payload and the 32-bit link. Carrying the id, `ll` orders ties as
 //! the reference does and never counts `tied`.
@@ -17,6 +26,7 @@
 //! oit-wgpu's `technique/ll.rs` runs the same passes.
 
 use oit_core::Compositor as _;
+use std::cell::Cell;
 use std::sync::atomic::Ordering::Relaxed;
 
 use oit_core::rules::{depth_bits, depth_from_bits};
@@ -25,37 +35,60 @@ use rayon::prelude::*;
 
 use super::Ctx;
 use super::fabs::sort_keys;
+use crate::raster::{Fragment, Shade};
 
 /// The link of a list's last node, and the head of an empty list.
 pub(crate) const END: u32 = u32::MAX;
 
 pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
-    // the sizing pass: the frame's fragments, counted by the pass itself
-    ctx.pass(|_| {});
+    // the sizing pass: the frame's fragments, counted by the pass itself, band by band
+    let per_band = ctx.raster.for_each_fragment_by_band(Shade::OnDemand, |_| |_: &Fragment<'_>| {});
+    ctx.ran_pass(per_band.iter().sum());
     let nodes = ctx.plan.check_fragments(ctx.fragments.unwrap_or(0))?;
-    capture_and_resolve(ctx, nodes)
+    capture_and_resolve(ctx, &per_band, nodes)
 }
 
-/// The capture into a pool of `nodes` nodes, and the resolve.
-fn capture_and_resolve(ctx: &mut Ctx<'_>, nodes: u32) -> Result<Frame, OitError> {
+/// The capture into a pool of `nodes` nodes, band by band (`per_band`: each band's fragments,
+/// as the sizing pass counted them), and the resolve.
+fn capture_and_resolve(ctx: &mut Ctx<'_>, per_band: &[u64], nodes: u32) -> Result<Frame, OitError> {
     let heads = ctx.alloc32(1, END)?;
     let counter = ctx.words32(1, 0)?;
     let keys = ctx.words64(u64::from(nodes), 0)?;
     let payloads = ctx.words32(u64::from(nodes), 0)?;
     let links = ctx.words32(u64::from(nodes), END)?;
-    ctx.pass_lossy(|f, ctx| {
-        let px = f.pixel as usize;
-        let node = counter[0].fetch_add(1, Relaxed);
-        if node >= nodes {
-            // the pool is used up: no node for this fragment
-            ctx.lose(px);
-            return;
+    let shade = ctx.payload_shade();
+    let raster = ctx.raster;
+    let shared = &*ctx;
+    let (heads, keys, payloads, links) = (&heads, &keys, &payloads, &links);
+    // By bands of rows (the banded pass): each band takes its nodes from the counter in one
+    // block, as many as the sizing pass counted in it, and links them into its own pixels'
+    // lists, which no other task writes, by a plain load and store of the head. An atomic
+    // increment a fragment had both threads fight over the counter's cache line: on the 2-core
+    // VM of issue 12 the armadillo's frame ran 11–13 ms in one process and 23–24 ms in another,
+    // the same binary. Past its block (or the pool) a fragment is counted lost.
+    let generated = raster.for_each_fragment_by_band(shade, |b| {
+        let want = u32::try_from(per_band.get(b).copied().unwrap_or(0)).unwrap_or(u32::MAX);
+        let first = counter[0].fetch_add(want, Relaxed);
+        let end = first.saturating_add(want).min(nodes);
+        let next = Cell::new(first);
+        move |f: &Fragment<'_>| {
+            let px = f.pixel as usize;
+            let node = next.get();
+            if node >= end {
+                // the band's block, or the pool, is used up: no node for this fragment
+                shared.lose(px);
+                return;
+            }
+            next.set(node + 1);
+            let n = node as usize;
+            keys[n].store(u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim), Relaxed);
+            payloads[n].store(shared.payload(f), Relaxed);
+            // the band's own pixel: no other thread writes this head during the pass
+            links[n].store(heads[px].load(Relaxed), Relaxed);
+            heads[px].store(node, Relaxed);
         }
-        let n = node as usize;
-        keys[n].store(u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim), Relaxed);
-        payloads[n].store(ctx.payload(f), Relaxed);
-        links[n].store(heads[px].swap(node, Relaxed), Relaxed);
     });
+    ctx.ran_pass(generated.iter().sum());
     let mut states = ctx.states();
     let resolve = &ctx.resolve;
     states.par_iter_mut().zip(heads.par_iter()).for_each_init(Vec::new, |list, (s, head)| {
@@ -96,7 +129,10 @@ mod tests {
         let plan = Plan::new("cpu", &scene, &settings).unwrap();
         let mut ctx =
             Ctx::new(&scene, &camera, &settings, &raster, &pool, plan, scene.absorption_per_length());
-        let frame = capture_and_resolve(&mut ctx, 40).unwrap();
+        let per_band =
+            raster.for_each_fragment_by_band(crate::raster::Shade::OnDemand, |_| |_: &Fragment<'_>| {});
+        assert!(per_band.len() > 1, "the case wants several bands, each taking its block");
+        let frame = capture_and_resolve(&mut ctx, &per_band, 40).unwrap();
         let s = &frame.stats;
         assert!(s.fragments > 200, "the case needs far more fragments than nodes: {}", s.fragments);
         assert_eq!((s.captured, s.lost), (40, s.fragments - 40));

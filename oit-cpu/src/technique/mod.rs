@@ -108,8 +108,7 @@ impl<'a> Ctx<'a> {
     /// and every fragment's payload ([`Ctx::payload`]) is made ahead ([`Ctx::payload_shade`]).
     pub fn pass_lossy<F: Fn(&Fragment<'_>, &Ctx<'_>) + Sync>(&mut self, shader: F) {
         let generated = self.raster.for_each_fragment_with(self.payload_shade(), |f| shader(f, self));
-        self.passes += 1;
-        self.fragments.get_or_insert(generated);
+        self.ran_pass(generated);
     }
 
     /// One geometry pass over the scene: `shader` runs for every fragment, concurrently; colour
@@ -126,6 +125,12 @@ impl<'a> Ctx<'a> {
 
     fn pass_with<F: Fn(&Fragment<'_>) + Sync>(&mut self, shade: Shade, shader: F) {
         let generated = self.raster.for_each_fragment_with(shade, shader);
+        self.ran_pass(generated);
+    }
+
+    /// Counts a geometry pass a technique ran on [`Ctx::raster`] itself, which generated
+    /// `generated` fragments.
+    pub fn ran_pass(&mut self, generated: u64) {
         self.passes += 1;
         self.fragments.get_or_insert(generated);
     }

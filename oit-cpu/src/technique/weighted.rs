@@ -11,12 +11,13 @@ use oit_core::{Effect, Frame, OitError};
 use rayon::prelude::*;
 
 use super::Ctx;
+use crate::storage::take_u64;
 
 pub(crate) fn render(ctx: &mut Ctx<'_>, average: bool) -> Result<Frame, OitError> {
     // translucency and Fresnel are refused by the plan (oit_core::plan::Plan::new)
     let effect = ctx.resolve.effect;
     // r, g, b premultiplied sums, alpha sum, count
-    let sums = ctx.alloc64(5, 0)?;
+    let mut sums = ctx.alloc64(5, 0)?;
     ctx.pass_shaded(|f| {
         let c = pack_rgba8(f.color());
         let a = u64::from(c >> 24);
@@ -28,24 +29,35 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, average: bool) -> Result<Frame, OitError
         sums[base + 4].fetch_add(1, Relaxed);
     });
     let bg = ctx.settings.background;
+    // a pixel's sums, emptied as they are read (only where a fragment came: the count), so the
+    // next frame lends the array without a sweep
     let weighted = |s: &[std::sync::atomic::AtomicU64]| {
-        let l = |i: usize| s[i].load(Relaxed) as f32;
+        let count = take_u64(&s[4], 0);
+        let mut l = [0.0f32; 4];
+        if count > 0 {
+            for (v, word) in l.iter_mut().zip(s) {
+                *v = take_u64(word, 0) as f32;
+            }
+        }
         let w = WeightedSums {
-            premultiplied: Vec3::new(l(0), l(1), l(2)) / (255.0 * 255.0),
-            alpha: l(3) / 255.0,
-            count: s[4].load(Relaxed) as u32,
+            premultiplied: Vec3::new(l[0], l[1], l[2]) / (255.0 * 255.0),
+            alpha: l[3] / 255.0,
+            count: count as u32,
         };
         let c = if average { weighted_average(&w, bg) } else { weighted_sum(&w, bg) };
         (c, w.count)
     };
-    if effect == Effect::Complexity {
+    let frame = if effect == Effect::Complexity {
         let mut states = ctx.states();
         states.par_iter_mut().zip(sums.par_chunks(5)).for_each(|(state, s)| state.captured = weighted(s).1);
-        return Ok(super::finish(ctx, states));
-    }
-    // each pixel's colour straight into the image, with the counts: no state array
-    Ok(super::finish_pixels(ctx, |px| {
-        let (c, count) = weighted(&sums[5 * px..5 * px + 5]);
-        (crate::resolve::srgb(c), count)
-    }))
+        super::finish(ctx, states)
+    } else {
+        // each pixel's colour straight into the image, with the counts: no state array
+        super::finish_pixels(ctx, |px| {
+            let (c, count) = weighted(&sums[5 * px..5 * px + 5]);
+            (crate::resolve::srgb(c), count)
+        })
+    };
+    sums.mark_clean(crate::pool::Clean::Word(0));
+    Ok(frame)
 }
