@@ -130,7 +130,8 @@ fn weighted_bytes(t: Technique, own: &[([f64; 3], f64)], bg: DVec3, ch: usize) -
     (srgb8(r.min(other) - EPS), srgb8(r.max(other) + EPS))
 }
 
-/// Pixels of a `wavg`/`wsum` image outside [`weighted_bytes`], as messages.
+/// Pixels of a `wavg`/`wsum` image outside [`weighted_bytes`] (the background's byte where no
+/// fragment came), as messages.
 fn weighted_violations(
     t: Technique,
     layers: &[u32],
@@ -138,10 +139,17 @@ fn weighted_violations(
     fragments: &[([f64; 3], f64)],
     bg: DVec3,
 ) -> Vec<String> {
+    const EPS: f64 = 1e-5;
     let mut out = Vec::new();
-    for (i, &k) in layers.iter().enumerate().filter(|&(_, &k)| k > 0) {
+    assert!(layers.contains(&0), "the case wants pixels no fragment reaches");
+    for (i, &k) in layers.iter().enumerate() {
         for ch in 0..3 {
-            let (lo, hi) = weighted_bytes(t, &fragments[..k as usize], bg, ch);
+            let (lo, hi) = if k == 0 {
+                // a pixel no fragment reached: the background (made once for all of them)
+                (srgb8(bg[ch] - EPS), srgb8(bg[ch] + EPS))
+            } else {
+                weighted_bytes(t, &fragments[..k as usize], bg, ch)
+            };
             let got = image.pixels[i][ch];
             if !(lo..=hi).contains(&got) {
                 out.push(format!("px {i} ({k} layers) ch {ch}: {got} outside {lo}..={hi}"));

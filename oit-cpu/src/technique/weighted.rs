@@ -29,33 +29,35 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, average: bool) -> Result<Frame, OitError
         sums[base + 4].fetch_add(1, Relaxed);
     });
     let bg = ctx.settings.background;
-    // a pixel's sums, emptied as they are read (only where a fragment came: the count), so the
-    // next frame lends the array without a sweep
-    let weighted = |s: &[std::sync::atomic::AtomicU64]| {
-        let count = take_u64(&s[4], 0);
+    let composite = |w: &WeightedSums| if average { weighted_average(w, bg) } else { weighted_sum(w, bg) };
+    // a pixel's sums and count, emptied as they are read (only where a fragment came: the
+    // count), so the next frame lends the array without a sweep
+    let take = |s: &[std::sync::atomic::AtomicU64]| {
+        let count = take_u64(&s[4], 0) as u32;
         let mut l = [0.0f32; 4];
         if count > 0 {
             for (v, word) in l.iter_mut().zip(s) {
                 *v = take_u64(word, 0) as f32;
             }
         }
-        let w = WeightedSums {
+        WeightedSums {
             premultiplied: Vec3::new(l[0], l[1], l[2]) / (255.0 * 255.0),
             alpha: l[3] / 255.0,
-            count: count as u32,
-        };
-        let c = if average { weighted_average(&w, bg) } else { weighted_sum(&w, bg) };
-        (c, w.count)
+            count,
+        }
     };
     let frame = if effect == Effect::Complexity {
         let mut states = ctx.states();
-        states.par_iter_mut().zip(sums.par_chunks(5)).for_each(|(state, s)| state.captured = weighted(s).1);
+        states.par_iter_mut().zip(sums.par_chunks(5)).for_each(|(state, s)| state.captured = take(s).count);
         super::finish(ctx, states)
     } else {
-        // each pixel's colour straight into the image, with the counts: no state array
+        // each pixel's colour straight into the image, with the counts: no state array; a pixel
+        // no fragment reached gets the empty sums' colour, made once (most of a frame's pixels,
+        // each three sRGB conversions)
+        let empty = crate::resolve::srgb(composite(&WeightedSums::default()));
         super::finish_pixels(ctx, |px| {
-            let (c, count) = weighted(&sums[5 * px..5 * px + 5]);
-            (crate::resolve::srgb(c), count)
+            let w = take(&sums[5 * px..5 * px + 5]);
+            if w.count == 0 { (empty, 0) } else { (crate::resolve::srgb(composite(&w)), w.count) }
         })
     };
     sums.mark_clean(crate::pool::Clean::Word(0));
