@@ -122,6 +122,7 @@ fn avx2_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
     order: impl Iterator<Item = usize>,
     rows: [u32; 2],
     f: &F,
+    ahead: Ahead<'_>,
 ) -> Option<u64> {
     if kernel != Kernel::Avx2 {
         return None;
@@ -129,9 +130,17 @@ fn avx2_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
     #[expect(unsafe_code, reason = "the one call into code compiled for AVX2")]
     // SAFETY: `Kernel::Avx2` is made only where the host has AVX2 and popcnt (`Kernel::detect`),
     // all that `scatter_task` is compiled to need
-    let n = unsafe { avx2::scatter_task::<SHADE, F>(setup, records, order, rows, f) };
+    let n = unsafe { avx2::scatter_task::<SHADE, F>(setup, records, order, rows, f, ahead) };
     Some(n)
 }
+
+/// A pass's request to fetch a pixel's storage from memory a few fragments before the
+/// fragment reaches its capture ([`Rasterizer::for_each_shaded_fragment_ahead`]).
+pub(crate) type Ahead<'a> = Option<&'a (dyn Fn(u32) + Sync)>;
+
+/// Fragments between a pixel's [`Ahead`] request and its fragment's capture: enough for a
+/// few memory accesses to be in flight together.
+const AHEAD: usize = 8;
 
 /// Triangles ahead of the walk whose traversal records the banded pass asks for from memory
 /// ([`Rasterizer::for_each_fragment_in_order`]).
@@ -140,7 +149,7 @@ const PREFETCH: usize = 16;
 /// Asks for the cache lines of `record` ahead of their use (nothing where the target has no
 /// prefetch instruction).
 #[inline(always)]
-fn prefetch<T>(record: &T) {
+pub(crate) fn prefetch<T: ?Sized>(record: &T) {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
@@ -152,7 +161,7 @@ fn prefetch<T>(record: &T) {
         unsafe {
             _mm_prefetch::<_MM_HINT_T0>(p);
             // a record may end in the next line
-            _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(size_of::<T>() - 1));
+            _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(size_of_val(record).saturating_sub(1)));
         }
     }
     #[cfg(not(target_arch = "x86_64"))]
@@ -534,6 +543,25 @@ impl Rasterizer {
         self.for_each_fragment_with(Shade::Color, f)
     }
 
+    /// [`Rasterizer::for_each_shaded_fragment`] that calls `ahead(pixel)` a few fragments
+    /// before each fragment of `pixel` reaches `f`, where the walk knows them that early (the
+    /// AVX2 walk's batches): for a capture whose atomics go to memory all over a large array,
+    /// `ahead` asks for the pixel's words (a prefetch), so that several of those fetches are in
+    /// flight together instead of each locked instruction waiting on its own. The same
+    /// fragments in the same order; `ahead` changes nothing that `f` sees.
+    pub fn for_each_shaded_fragment_ahead<F: Fn(&Fragment<'_>) + Sync>(
+        &self,
+        ahead: &(dyn Fn(u32) + Sync),
+        f: F,
+    ) -> u64 {
+        let n = match self.mode {
+            RasterMode::Scatter => self.scatter_shaded(Kernel::detect(), &f, Some(ahead)),
+            RasterMode::Tiled => self.covered_on_demand(&f),
+        };
+        self.fragments.get_or_init(|| n);
+        n
+    }
+
     /// A geometry pass in which each pixel's fragments come from one thread, **highest primitive
     /// id first**: the image is cut into bands of rows, each band run by one rayon task over the
     /// triangles that reach into it, in descending primitive order, each walked in the band's
@@ -600,7 +628,7 @@ impl Rasterizer {
                     }
                     tris[k] as usize
                 });
-                self.task(kernel, shade, order, rows, &make(b))
+                self.task(kernel, shade, order, rows, &make(b), None)
             })
             .collect();
         self.fragments.get_or_init(|| per_band.iter().sum());
@@ -610,7 +638,7 @@ impl Rasterizer {
     /// [`Rasterizer::for_each_fragment`], shading as `shade` says.
     pub fn for_each_fragment_with<F: Fn(&Fragment<'_>) + Sync>(&self, shade: Shade, f: F) -> u64 {
         let n = match (self.mode, shade) {
-            (RasterMode::Scatter, Shade::Color) => self.scatter_shaded(Kernel::detect(), &f),
+            (RasterMode::Scatter, Shade::Color) => self.scatter_shaded(Kernel::detect(), &f, None),
             (RasterMode::Scatter, Shade::OnDemand) => self.scatter_on_demand(Kernel::detect(), &f),
             (RasterMode::Tiled, _) => self.covered_on_demand(&f),
         };
@@ -632,7 +660,7 @@ impl Rasterizer {
     /// shaded pass in AVX2: the bunny's 1.34–2.15 ms against 0.99 in AVX2, `cargo bench -p
     /// oit-cpu --bench raster`, `bench/results/cpu/issue12/`). The same fragments either way.
     fn scatter_on_demand<F: Fn(&Fragment<'_>) + Sync>(&self, kernel: Kernel, f: &F) -> u64 {
-        self.scatter_tasks(|run| self.task(kernel, Shade::OnDemand, run, ALL_ROWS, f))
+        self.scatter_tasks(|run| self.task(kernel, Shade::OnDemand, run, ALL_ROWS, f, None))
     }
 
     /// The frame's triangles with their traversal and shading records.
@@ -661,16 +689,19 @@ impl Rasterizer {
         order: impl Iterator<Item = usize>,
         rows: [u32; 2],
         f: &F,
+        ahead: Ahead<'_>,
     ) -> u64 {
         #[cfg(target_arch = "x86_64")]
         if kernel == Kernel::Avx2 {
+            let (setup, records) = (&self.setup, self.records());
             let n = match shade {
-                Shade::Color => avx2_task::<true, F>(kernel, &self.setup, self.records(), order, rows, f),
-                Shade::OnDemand => avx2_task::<false, F>(kernel, &self.setup, self.records(), order, rows, f),
+                Shade::Color => avx2_task::<true, F>(kernel, setup, records, order, rows, f, ahead),
+                Shade::OnDemand => avx2_task::<false, F>(kernel, setup, records, order, rows, f, ahead),
             };
             return n.unwrap_or(0);
         }
-        let _ = kernel;
+        // the portable walks hand each fragment over as it is found: nothing to ask for ahead
+        let _ = (kernel, ahead);
         if shade == Shade::Color {
             return self.portable_shaded(order, rows, f);
         }
@@ -714,8 +745,8 @@ impl Rasterizer {
     /// pass went from 7.20–7.35 ms to 4.76–5.16 (`cargo bench -p oit-cpu --bench raster`, 512²,
     /// 2 threads; `bench/results/cpu/issue12/`). With `kernel` [`Kernel::Avx2`] each task runs
     /// `avx2::scatter_task` instead (the same fragments; see that module for how).
-    fn scatter_shaded<F: Fn(&Fragment<'_>) + Sync>(&self, kernel: Kernel, f: &F) -> u64 {
-        self.scatter_tasks(|run| self.task(kernel, Shade::Color, run, ALL_ROWS, f))
+    fn scatter_shaded<F: Fn(&Fragment<'_>) + Sync>(&self, kernel: Kernel, f: &F, ahead: Ahead<'_>) -> u64 {
+        self.scatter_tasks(|run| self.task(kernel, Shade::Color, run, ALL_ROWS, f, ahead))
     }
 
     /// The portable shaded walk of one task: the triangles of `order` in the rows `rows`, walked
@@ -1634,7 +1665,7 @@ mod tests {
             let mut orders = Vec::new();
             for &kernel in &kernels {
                 let (n, all) =
-                    keys_in_order(&one_thread, true, |sink| r.scatter_shaded(kernel, &|f| sink(f)));
+                    keys_in_order(&one_thread, true, |sink| r.scatter_shaded(kernel, &|f| sink(f), None));
                 assert_eq!(n, all.len() as u64, "{shading:?} {kernel:?}");
                 let mut sorted = all.clone();
                 sorted.sort_unstable();
@@ -1714,6 +1745,60 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The pass with a request ahead gives the same fragments in the same order, and on the
+    /// AVX2 walk asks for each fragment's pixel before the fragment comes, never more than a
+    /// batch early.
+    #[test]
+    fn ahead_asks_for_each_pixel_before_its_fragment() {
+        let scene = random_scene();
+        let (w, h) = (128u32, 96u32);
+        let cam = Camera::look_at(Vec3::new(0.0, 0.0, 2.5), Vec3::ZERO, 70.0, w as f32 / h as f32, 0.3, 8.0);
+        let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let r = one_thread.install(|| Rasterizer::new(&scene, &cam, &settings(w, h)));
+        #[derive(Clone, Copy, Debug, PartialEq)]
+        enum Event {
+            Ahead(u32),
+            Fragment(u32, u32),
+        }
+        let plain = Mutex::new(Vec::new());
+        one_thread.install(|| r.for_each_shaded_fragment(|f| plain.lock().unwrap().push((f.pixel, f.prim))));
+        let events = Mutex::new(Vec::new());
+        let ahead = |p: u32| events.lock().unwrap().push(Event::Ahead(p));
+        one_thread.install(|| {
+            r.for_each_shaded_fragment_ahead(&ahead, |f| {
+                events.lock().unwrap().push(Event::Fragment(f.pixel, f.prim));
+            })
+        });
+        let events = events.into_inner().unwrap();
+        let fragments: Vec<(u32, u32)> = events
+            .iter()
+            .filter_map(|e| if let Event::Fragment(p, t) = *e { Some((p, t)) } else { None })
+            .collect();
+        let plain = plain.into_inner().unwrap();
+        assert!(plain.len() > 1000, "{} fragments", plain.len());
+        assert_eq!(fragments, plain, "the request ahead changed the fragments or their order");
+        if Kernel::detect() != Kernel::Avx2 {
+            eprintln!("no AVX2 on this host: the portable walk asks for nothing ahead");
+            return;
+        }
+        // requests not yet met by their fragment, oldest first
+        let mut pending = std::collections::VecDeque::new();
+        for e in &events {
+            match *e {
+                Event::Ahead(p) => pending.push_back(p),
+                Event::Fragment(p, _) => {
+                    assert_eq!(
+                        pending.pop_front(),
+                        Some(p),
+                        "a fragment whose pixel was not asked for first"
+                    );
+                    assert!(pending.len() <= AHEAD, "asked {} fragments ahead", pending.len());
+                }
+            }
+        }
+        assert!(pending.is_empty());
     }
 
     /// Each band's shader sees only the band's rows, the bands' counts add up to the pass's

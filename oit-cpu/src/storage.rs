@@ -49,6 +49,11 @@ impl<'p, A> Buckets<'p, A> {
         self.words.mark_clean(crate::pool::Clean::Word(0));
     }
 
+    /// The buckets of `pixel` (for a prefetch ahead of a pass's fragments).
+    pub fn of_pixel(&self, pixel: usize) -> &[A] {
+        &self.words[pixel * self.k..(pixel + 1) * self.k]
+    }
+
     /// The buckets, pixel after pixel, to take between passes by plain reads and writes
     /// (`get_mut`: no pass runs, so the caller has them to itself), which the compiler may do
     /// several at a time, where [`BucketArray::take`] is a load a bucket.

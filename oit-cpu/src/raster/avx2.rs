@@ -20,7 +20,7 @@ use glam::Vec4;
 use oit_core::Shading;
 use oit_core::setup::{SHADE_LANES, ShadeRecord, Triangle, TriangleSetup};
 
-use super::{Fragment, SmallEdges, in_rows, walk};
+use super::{AHEAD, Ahead, Fragment, SmallEdges, in_rows, walk};
 
 /// Fragments a batch holds (a multiple of [`SHADE_LANES`]).
 const CAP: usize = 128;
@@ -94,6 +94,7 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
     order: impl Iterator<Item = usize>,
     window: [u32; 2],
     f: &F,
+    ahead: Ahead<'_>,
 ) -> u64 {
     let width = setup.width;
     let mut batch = Batch {
@@ -127,7 +128,7 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
         if !s.small {
             walk(t, [x0, y0, x1, y1], |x, y, e| {
                 if len == CAP {
-                    flush::<SHADE, F>(setup, tris, edges, shades, &mut batch, len, f);
+                    flush::<SHADE, F>(setup, (tris, edges, shades), &mut batch, len, f, ahead);
                     len = 0;
                 }
                 let b = s.plane.barycentrics(e);
@@ -178,7 +179,7 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
             while bx < w {
                 let valid = (((1u32 << (w - bx).min(lanes_x)) - 1) * ROW_PATTERN[l]) & rows_valid;
                 if len > CAP - 8 {
-                    flush::<SHADE, F>(setup, tris, edges, shades, &mut batch, len, f);
+                    flush::<SHADE, F>(setup, (tris, edges, shades), &mut batch, len, f, ahead);
                     len = 0;
                 }
                 let e: [__m256i; 3] =
@@ -217,7 +218,7 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
             }
         }
     }
-    flush::<SHADE, F>(setup, tris, edges, shades, &mut batch, len, f);
+    flush::<SHADE, F>(setup, (tris, edges, shades), &mut batch, len, f, ahead);
     n
 }
 
@@ -227,12 +228,11 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
 #[target_feature(enable = "avx2,popcnt")]
 fn flush<const SHADE: bool, F: Fn(&Fragment<'_>)>(
     setup: &TriangleSetup,
-    tris: &[Triangle],
-    edges: &[SmallEdges],
-    shades: &[ShadeRecord],
+    (tris, edges, shades): (&[Triangle], &[SmallEdges], &[ShadeRecord]),
     batch: &mut Batch,
     len: usize,
     f: &F,
+    ahead: Ahead<'_>,
 ) {
     // a short last group shades what the lanes past `len` hold from before (a triangle of the
     // task, its colour not read)
@@ -250,7 +250,7 @@ fn flush<const SHADE: bool, F: Fn(&Fragment<'_>)>(
         };
         batch.color[4 * at..4 * (at + SHADE_LANES)].copy_from_slice(&colors);
     }
-    for i in 0..len {
+    let emit = |i: usize| {
         let tri = batch.tri[i] as usize;
         f(&Fragment {
             pixel: batch.pixel[i],
@@ -261,6 +261,20 @@ fn flush<const SHADE: bool, F: Fn(&Fragment<'_>)>(
             setup,
             color: SHADE.then(|| Vec4::from_slice(&batch.color[4 * i..4 * i + 4])),
         });
+    };
+    let pixels = &batch.pixel[..len];
+    match ahead {
+        Some(ahead) => {
+            // the first few asked for together, then each AHEAD fragments before its turn
+            pixels.iter().take(AHEAD).for_each(|&p| ahead(p));
+            for i in 0..len {
+                if let Some(&p) = pixels.get(i + AHEAD) {
+                    ahead(p);
+                }
+                emit(i);
+            }
+        }
+        None => (0..len).for_each(emit),
     }
 }
 

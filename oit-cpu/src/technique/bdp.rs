@@ -36,16 +36,21 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
 fn color(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
     let n = BDP_COLOR_SUBINTERVALS as usize;
     let mut buckets = Buckets::new(ctx.alloc32(n, 0)?, n);
-    ctx.pass_lossy(|f, ctx| {
+    // colour mode is transparency's: every fragment's colour is read, so made ahead; each
+    // pixel's 32 buckets (two cache lines) asked for a few fragments before their turn
+    let ahead = |px: u32| crate::raster::prefetch(buckets.of_pixel(px as usize));
+    let shared = &*ctx;
+    let generated = ctx.raster.for_each_shaded_fragment_ahead(&ahead, |f| {
         let px = f.pixel as usize;
         let (zn, zf) = bounds[px];
         let k = bucket_index(f.depth, zn, zf, BDP_COLOR_SUBINTERVALS) as usize;
         let word = bdp_pack_color(oit_core::rules::pack_rgba8(f.color()));
         // a full bucket: one of the two fragments is gone; a zero word is never read back
         if buckets.update_max(px, k, word) != 0 || word == 0 {
-            ctx.lose(px);
+            shared.lose(px);
         }
     });
+    ctx.ran_pass(generated);
     let mut states = ctx.states();
     let resolve = &ctx.resolve;
     // each pixel's buckets read and emptied whole, by plain loads and stores several at a time

@@ -117,10 +117,13 @@ impl<'a> Ctx<'a> {
         self.pass_with(Shade::OnDemand, shader);
     }
 
-    /// [`Ctx::pass`] for a shader that reads every fragment's colour: the colours are made
-    /// ahead, several at once ([`Shade::Color`]).
-    pub fn pass_shaded<F: Fn(&Fragment<'_>) + Sync>(&mut self, shader: F) {
-        self.pass_with(Shade::Color, shader);
+    /// A pass whose shader reads every fragment's colour (made ahead, several at once:
+    /// [`Shade::Color`]), with `ahead(pixel)` called a few fragments before each fragment of the
+    /// pixel comes ([`Rasterizer::for_each_shaded_fragment_ahead`]): for a shader whose atomics
+    /// miss the cache, `ahead` prefetches the pixel's words.
+    pub fn pass_shaded_ahead<F: Fn(&Fragment<'_>) + Sync>(&mut self, ahead: impl Fn(u32) + Sync, shader: F) {
+        let generated = self.raster.for_each_shaded_fragment_ahead(&ahead, shader);
+        self.ran_pass(generated);
     }
 
     fn pass_with<F: Fn(&Fragment<'_>) + Sync>(&mut self, shade: Shade, shader: F) {

@@ -11,6 +11,7 @@ use oit_core::{Effect, Frame, OitError};
 use rayon::prelude::*;
 
 use super::Ctx;
+use crate::raster::prefetch;
 use crate::storage::take_u64;
 
 pub(crate) fn render(ctx: &mut Ctx<'_>, average: bool) -> Result<Frame, OitError> {
@@ -18,7 +19,10 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, average: bool) -> Result<Frame, OitError
     let effect = ctx.resolve.effect;
     // r, g, b premultiplied sums, alpha sum, count
     let mut sums = ctx.alloc64(5, 0)?;
-    ctx.pass_shaded(|f| {
+    // each pixel's 40 bytes of sums asked for a few fragments before its turn: the five
+    // locked adds of a fragment otherwise wait on memory one fragment at a time
+    let ahead = |px: u32| prefetch(&sums[5 * px as usize..5 * px as usize + 5]);
+    ctx.pass_shaded_ahead(ahead, |f| {
         let c = pack_rgba8(f.color());
         let a = u64::from(c >> 24);
         let base = f.pixel as usize * 5;
