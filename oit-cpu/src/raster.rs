@@ -1687,6 +1687,13 @@ mod tests {
         }
     }
 
+    /// [`random_scene`] seen whole by a 128×96 camera: the case of the pass-order tests.
+    fn random_view() -> (Scene, Camera, u32, u32) {
+        let (w, h) = (128u32, 96u32);
+        let cam = Camera::look_at(Vec3::new(0.0, 0.0, 2.5), Vec3::ZERO, 70.0, w as f32 / h as f32, 0.3, 8.0);
+        (random_scene(), cam, w, h)
+    }
+
     /// The banded pass ([`Rasterizer::for_each_fragment_in_order`]) on each kernel, shaded
     /// ahead and on demand, on 1 and 3 threads (bands of 16 and 8 rows, which cut the large and
     /// the small triangles): the setup's fragments, bit for bit, and each pixel's from one
@@ -1695,9 +1702,7 @@ mod tests {
     /// band's, and a box's last band left out of the binning.
     #[test]
     fn in_order_pass_gives_each_pixel_its_fragments_highest_first() {
-        let scene = random_scene();
-        let (w, h) = (128u32, 96u32);
-        let cam = Camera::look_at(Vec3::new(0.0, 0.0, 2.5), Vec3::ZERO, 70.0, w as f32 / h as f32, 0.3, 8.0);
+        let (scene, cam, w, h) = random_view();
         let kernels = if Kernel::detect() == Kernel::Portable {
             eprintln!("no AVX2 on this host: the portable kernel alone");
             vec![Kernel::Portable]
@@ -1752,9 +1757,7 @@ mod tests {
     /// batch early.
     #[test]
     fn ahead_asks_for_each_pixel_before_its_fragment() {
-        let scene = random_scene();
-        let (w, h) = (128u32, 96u32);
-        let cam = Camera::look_at(Vec3::new(0.0, 0.0, 2.5), Vec3::ZERO, 70.0, w as f32 / h as f32, 0.3, 8.0);
+        let (scene, cam, w, h) = random_view();
         let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
         let r = one_thread.install(|| Rasterizer::new(&scene, &cam, &settings(w, h)));
         #[derive(Clone, Copy, Debug, PartialEq)]
@@ -1806,9 +1809,7 @@ mod tests {
     /// sized by one pass and taken in the next, rest on).
     #[test]
     fn by_band_passes_split_the_fragments_alike() {
-        let scene = random_scene();
-        let (w, h) = (128u32, 96u32);
-        let cam = Camera::look_at(Vec3::new(0.0, 0.0, 2.5), Vec3::ZERO, 70.0, w as f32 / h as f32, 0.3, 8.0);
+        let (scene, cam, w, h) = random_view();
         let pool = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
         let r = pool.install(|| Rasterizer::new(&scene, &cam, &settings(w, h)));
         let expected = setup_fragments(&r, |t| t.bbox).len() as u64;

@@ -73,8 +73,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
                 lost.lose(px);
             }
         });
-        ctx.passes += 1;
-        ctx.fragments.get_or_insert(generated);
+        ctx.ran_pass(generated);
         let resolve = &ctx.resolve;
         let buckets = &buckets;
         let (nearest, lost) = (&nearest, &ctx.lost);

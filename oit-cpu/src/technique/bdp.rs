@@ -136,8 +136,7 @@ fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
                     seen[px].fetch_add(1, Relaxed);
                 }
             });
-            ctx.passes += 1;
-            ctx.fragments.get_or_insert(generated);
+            ctx.ran_pass(generated);
             let ctx_ref = &*ctx;
             (0..ctx.pixels).into_par_iter().with_min_len(1 << 12).for_each(|px| {
                 // nothing seen, nothing lost: the buckets of most pixels are not read

@@ -61,8 +61,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
                 at_prev[px].fetch_add(1, Relaxed);
             }
         });
-        ctx.passes += 1;
-        ctx.fragments.get_or_insert(generated);
+        ctx.ran_pass(generated);
         let resolve = &ctx.resolve;
         let ctx_ref = &*ctx;
         let peeled: u64 = states

@@ -55,8 +55,7 @@ pub(crate) fn render64(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
             ctx.lose(f.pixel as usize);
         }
     });
-    ctx.passes += 1;
-    ctx.fragments.get_or_insert(generated);
+    ctx.ran_pass(generated);
     if let Some(sums) = &tail
         && overflowed(ctx)
     {

@@ -56,8 +56,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
                 at_prev[px].fetch_add(1, Relaxed);
             }
         });
-        ctx.passes += 1;
-        ctx.fragments.get_or_insert(generated);
+        ctx.ran_pass(generated);
         peels += 1;
         let resolve = &ctx.resolve;
         let list = &list;

@@ -52,8 +52,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         front.under(unpack_rgba8(ctx.payload(f)));
         store(words, front);
     });
-    ctx.passes += 1;
-    ctx.fragments.get_or_insert(generated);
+    ctx.ran_pass(generated);
     if colour {
         let frame = finish_transparency(ctx, &counts, &fronts);
         counts.mark_clean(crate::pool::Clean::Word(0));
