@@ -30,12 +30,16 @@ pub enum OitError {
     #[error("invalid scene: {0}")]
     InvalidScene(String),
     /// A scene name that is neither built in nor a file.
-    #[error("unknown scene '{name}': expected a path to an .obj file or one of {known}")]
+    #[error(
+        "unknown scene '{name}': not a built-in scene, an .obj file, or {name}.obj in {searched}; built-in scenes: {known}"
+    )]
     UnknownScene {
         /// What was asked for.
         name: String,
         /// The built-in names.
         known: &'static str,
+        /// Where else a bare name was looked for.
+        searched: &'static str,
     },
     /// A technique name that is not in the catalogue.
     #[error("unknown technique '{name}': {reason}; known techniques: {known}")]

@@ -69,6 +69,7 @@
 //! A [`Backend`] (oit-cpu's `CpuBackend`, oit-wgpu's `WgpuBackend`, oit-vulkan's `VulkanBackend`)
 //! turns the three into a [`Frame`]: see those crates' examples.
 
+pub mod assets;
 mod backend;
 mod camera;
 pub mod composite;

@@ -11,6 +11,10 @@
 //! | `near:N` | `ties:N` with the quads 10⁻⁷ apart in depth (equal after projection to f32) | up to N |
 //! | `scale:S:SCENE` | SCENE with every coordinate multiplied by S (e.g. `scale:1e-20:planes:8`) | SCENE's |
 //! | `default` | a see-through torus knot inside two glass spheres | 10 at the default view, up to 16 |
+//! | `bunny`, `armadillo` | the Stanford scans, embedded ([`crate::assets`]) | varies |
+//!
+//! Any other bare name (no extension, not a file) is looked up as `NAME.obj` in
+//! [`MODEL_SEARCH`]'s folders.
 
 use std::f32::consts::TAU;
 use std::path::Path;
@@ -20,8 +24,11 @@ use glam::{Mat4, Vec3, Vec4};
 use crate::{Instance, Mesh, Object, OitError, Scene};
 
 /// The built-in names, for messages.
-pub const BUILTIN_SCENES: &str =
-    "default, planes:N, spheres:N, cluster:N, knot, coplanar, ties:N, near:N, grid:RxC:MESH, scale:S:SCENE";
+pub const BUILTIN_SCENES: &str = "default, bunny, armadillo, planes:N, spheres:N, cluster:N, knot, coplanar, ties:N, near:N, grid:RxC:MESH, scale:S:SCENE";
+
+/// Where a bare name that is not built in (`--scene dragon`, `grid:2x2:dragon`) is looked for, as
+/// `NAME.obj`, in order: for messages. [`find_model`] is the lookup.
+pub const MODEL_SEARCH: &str = "$OIT_MODELS, then models/ in the working directory";
 
 /// The scene rendered when none is named.
 pub const DEFAULT_SCENE: &str = "default";
@@ -32,8 +39,9 @@ const MAX_COUNT: u32 = 100_000;
 /// Largest N accepted by `ties` and `near`: their alphas must stay distinct in 8 bits.
 const MAX_TIES: u32 = 128;
 
-/// A built-in scene or an OBJ file: names in [`BUILTIN_SCENES`] are built, anything else is read as a
-/// path.
+/// A built-in scene or an OBJ file: names in [`BUILTIN_SCENES`] are built, a path to an `.obj` (or
+/// any existing file) is read, and any other bare name is looked up as `NAME.obj` in
+/// [`MODEL_SEARCH`]'s folders.
 pub fn load_scene(name: &str) -> Result<Scene, OitError> {
     match builtin_scene(name) {
         Some(scene) => scene,
@@ -41,8 +49,14 @@ pub fn load_scene(name: &str) -> Result<Scene, OitError> {
             let path = Path::new(name);
             if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) || path.exists() {
                 crate::load_obj(path)
+            } else if let Some(found) = find_model(name) {
+                crate::load_obj(&found)
             } else {
-                Err(OitError::UnknownScene { name: name.to_string(), known: BUILTIN_SCENES })
+                Err(OitError::UnknownScene {
+                    name: name.to_string(),
+                    known: BUILTIN_SCENES,
+                    searched: MODEL_SEARCH,
+                })
             }
         }
     }
@@ -86,6 +100,9 @@ fn builtin_unchecked(name: &str) -> Option<Result<Scene, OitError>> {
     if let Some(rest) = name.strip_prefix("scale:") {
         return Some(scaled(rest));
     }
+    if let Some(mesh) = crate::assets::BuiltinMesh::find(name) {
+        return Some(mesh.scene());
+    }
     let (base, param) = match name.split_once(':') {
         Some((b, p)) => (b, Some(p)),
         None => (name, None),
@@ -124,15 +141,20 @@ fn builtin_unchecked(name: &str) -> Option<Result<Scene, OitError>> {
     })
 }
 
-/// Where a bare mesh name (`bunny`) of `grid:RxC:bunny` is looked for, as `<name>.obj`, in order:
-/// `$OIT_MODELS`, `models/`, `../shared/models/`, `.gpu/models/`.
+/// Where a bare mesh name that is not built in (`dragon` of `grid:RxC:dragon`) is looked for, as
+/// `<name>.obj`, in order: `$OIT_MODELS`, then `models/` in the working directory
+/// ([`MODEL_SEARCH`]). Names with an extension or a path separator are paths, not looked up.
 fn find_model(name: &str) -> Option<std::path::PathBuf> {
+    let path = Path::new(name);
+    if name.is_empty() || path.extension().is_some() || path.components().count() != 1 {
+        return None;
+    }
     let file = format!("{name}.obj");
     let mut dirs: Vec<std::path::PathBuf> = Vec::new();
     if let Ok(d) = std::env::var("OIT_MODELS") {
         dirs.push(d.into());
     }
-    dirs.extend(["models", "../shared/models", ".gpu/models"].map(std::path::PathBuf::from));
+    dirs.push("models".into());
     dirs.into_iter().map(|d| d.join(&file)).find(|p| p.is_file())
 }
 
@@ -204,10 +226,7 @@ fn grid(spec: &str) -> Result<Scene, OitError> {
 fn inner_scene(name: &str) -> Result<Scene, OitError> {
     match builtin_scene(name) {
         Some(s) => s,
-        None => match find_model(name) {
-            Some(path) if Path::new(name).extension().is_none() => crate::load_obj(&path),
-            _ => load_scene(name),
-        },
+        None => load_scene(name),
     }
 }
 
@@ -525,6 +544,23 @@ mod tests {
         assert!(load_scene("ties:0").is_err());
         assert!(load_scene("ties:129").is_err());
         assert!(matches!(load_scene("nothing-like-this"), Err(OitError::UnknownScene { .. })));
+    }
+
+    /// `bunny` and `armadillo` need no file, also inside `grid:` and `scale:`; an unknown bare name's
+    /// error lists the built-in names and where bare names are looked up.
+    /// Fails if the built-in meshes are dropped from `builtin_unchecked`, or the error loses either
+    /// list (e.g. `searched` printed as the old "expected a path to an .obj file").
+    #[test]
+    fn builtin_meshes_resolve_without_a_path() {
+        assert_eq!(load_scene("bunny").unwrap().triangle_count(), 69_666);
+        assert_eq!(load_scene("grid:2x2:bunny").unwrap().triangle_count(), 4 * 69_666);
+        assert_eq!(load_scene("scale:2:armadillo").unwrap().triangle_count(), 52_000);
+        let err = load_scene("no-such-mesh").unwrap_err().to_string();
+        for needed in ["no-such-mesh.obj", "bunny", "armadillo", "$OIT_MODELS", "models/"] {
+            assert!(err.contains(needed), "{needed} missing from: {err}");
+        }
+        let err = load_scene("grid:2x2:no-such-mesh").unwrap_err().to_string();
+        assert!(err.contains("built-in scenes: default, bunny, armadillo"), "{err}");
     }
 
     #[test]
