@@ -1,107 +1,24 @@
-//! Compiles oit-wgpu's WGSL to SPIR-V with naga, at build time, so a shader error fails the build.
+//! Compiles the GPU shader tree to SPIR-V with naga, at build time, so a shader error fails the
+//! build.
 //!
-//! The modules are assembled exactly as oit-wgpu assembles them at run time (`gpu.rs`'s
-//! `COMMON_WGSL`, `ctx.rs`'s `TECHNIQUE_PRELUDE`, `raster.rs`'s appended rasterizer): common and
-//! fragment contract, then resolve and prelude, then the technique's source, then (for a technique
-//! with a `capture` function) the compute rasterizer. One SPIR-V module per technique holds every
-//! entry point: the rasterizer's (`raster_main`, `raster_loop_main`) and the technique's kernels.
-//!
-//! A module with the rasterizer also comes as `<module>_hw`, its hardware-raster twin, assembled as
-//! oit-wgpu's `RenderDriver` and `HardwareRaster` assemble a render pipeline's source: common and
-//! prelude, the technique, `capture_render.wgsl`, then `raster_hardware.wgsl` (entry points
-//! `hw_vs` and `hw_fs`). Modules whose source starts with `vk:` are oit-vulkan's own
-//! (`src/shaders/`), after the same common part.
+//! The modules and their texts are oit-shaders' (`oit_shaders::MODULES`, the one manifest oit-wgpu
+//! builds its pipelines from at run time): `Module::compute_text` for each, and for a module
+//! with a rasterizer also its hardware-raster twin, `Module::hardware_text`, as `<module>_hw`
+//! (entry points `hw_vs` and `hw_fs`). One SPIR-V module per name holds every entry point: the
+//! rasterizer's (`raster_main`, `raster_loop_main`) and the technique's kernels. What only raw
+//! Vulkan needs is done here, on the SPIR-V: the image atomics' results (`atomic_results`) and
+//! the ordered interlock (`interlock`).
 //!
 //! naga as wgpu-hal's Vulkan backend sets it up: explicit validator capabilities (64-bit integers
 //! and 64-bit atomics; naga's default has neither), `ADJUST_COORDINATE_SPACE` off (wgpu's
 //! convention: the hardware path will flip with a negative viewport height), restricted bounds
 //! checks, bounded loops, polyfilled workgroup zeroing. SPIR-V 1.3 (Vulkan 1.1 and later).
 
-use std::path::{Path, PathBuf};
-
-/// What follows a module's sources.
-#[derive(Clone, Copy, PartialEq)]
-enum Tail {
-    /// Nothing (kernels only).
-    None,
-    /// The compute rasterizer; and, as `<module>_hw`, the hardware raster (capture_render.wgsl
-    /// and raster_hardware.wgsl).
-    Raster,
-    /// Nothing, and nothing before: the module's sources alone, without the common part
-    /// (the compute path's setup kernels, which bind a group 0 of their own).
-    Alone,
-    /// The hardware raster's vertex stage alone (raster_hardware.wgsl up to its fragment entry
-    /// point): a blend capture's module, with fragment entry points and resolves of its own.
-    Stage,
-}
-use Tail::{Alone, None as Kernels, Raster, Stage};
-
-/// (module, technique sources relative to oit-wgpu/src, `+`-joined in the order oit-wgpu
-/// concatenates them, what follows).
-const MODULES: &[(&str, &str, Tail)] = &[
-    ("fill", "shaders/fill.wgsl", Kernels),
-    ("finish", "shaders/finish.wgsl", Kernels),
-    ("gate", "shaders/gate.wgsl", Kernels),
-    ("count", "technique/count.wgsl", Raster),
-    ("reference", "technique/reference.wgsl+technique/sort_entries.wgsl", Raster),
-    ("fabs", "technique/fabs_counters.wgsl+technique/fabs.wgsl+technique/tail.wgsl", Raster),
-    // `--atomic-storage image`: the same technique sources over storage images (src/shaders/)
-    (
-        "fabs_image",
-        "vk:shaders/atomic_result.wgsl+vk:shaders/fabs_counters_image.wgsl+technique/fabs.wgsl+technique/tail.wgsl",
-        Raster,
-    ),
-    ("weighted", "technique/weighted.wgsl", Raster),
-    ("plain", "technique/plain.wgsl", Raster),
-    (
-        "mdts",
-        "technique/mdts_words.wgsl+technique/mdts_keys.wgsl+technique/mdts.wgsl+technique/tail.wgsl",
-        Raster,
-    ),
-    (
-        "mdts_image",
-        "vk:shaders/atomic_result.wgsl+vk:shaders/mdts_words_image.wgsl+technique/mdts_keys.wgsl+technique/mdts.wgsl+technique/tail.wgsl",
-        Raster,
-    ),
-    (
-        "mdts64_image",
-        "vk:shaders/atomic_result.wgsl+technique/mdts_words.wgsl+vk:shaders/mdts_keys_image.wgsl+technique/mdts.wgsl+technique/tail.wgsl",
-        Raster,
-    ),
-    ("dp", "technique/dp.wgsl", Raster),
-    ("ddp", "technique/ddp.wgsl", Raster),
-    ("mlp", "technique/mlp.wgsl", Raster),
-    ("bounds", "technique/bounds.wgsl", Raster),
-    ("bdp", "technique/bdp.wgsl", Raster),
-    ("adp", "technique/adp.wgsl", Raster),
-    ("dfb_count", "technique/dfb_count.wgsl", Raster),
-    ("dfb", "technique/dfb.wgsl+technique/sort_entries.wgsl", Raster),
-    ("ll_size", "technique/ll_size.wgsl", Raster),
-    ("ll", "technique/ll.wgsl", Raster),
-    // kbuf: its `_hw` twin's fragment stage in an ordered interlock (`interlock` below); the
-    // compute twin is only its resolve (the compute path refuses kbuf)
-    ("kbuf", "vk:shaders/kbuf.wgsl", Raster),
-    ("count_sum", "vk:shaders/count_sum.wgsl", Kernels),
-    // oit-wgpu's raster.rs SETUP_WGSL: the integer f32, then the setup kernels
-    ("setup", "shaders/softfloat.wgsl+shaders/setup.wgsl", Alone),
-    ("scan", "technique/scan.wgsl", Kernels),
-    ("nothing", "vk:shaders/no_capture.wgsl", Raster),
-    ("blend", "technique/weighted.wgsl+technique/blend.wgsl", Stage),
-    ("bdp_blend", "technique/bdp_blend.wgsl", Stage),
-    ("dp_depth", "technique/dp_depth.wgsl", Stage),
-    ("ddp_blend", "technique/ddp_blend.wgsl", Stage),
-    ("adp_logic", "technique/adp.wgsl+vk:shaders/adp_logic.wgsl", Stage),
-];
+use std::path::PathBuf;
 
 /// Hardware-raster modules whose fragment entry point `hw_fs` runs in an ordered interlock
 /// ([`interlock`]).
 const INTERLOCKED: &[&str] = &["kbuf_hw"];
-
-fn read(dir: &Path, rel: &str) -> String {
-    let path = dir.join(rel);
-    println!("cargo:rerun-if-changed={}", path.display());
-    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()))
-}
 
 /// SPIR-V opcodes (and the two operand values) `atomic_results` and `interlock` read and write.
 mod op {
@@ -282,24 +199,7 @@ fn interlock(words: &[u32], entry: &str) -> Result<Vec<u32>, String> {
 }
 
 fn main() {
-    let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets it"));
-    let wgsl = manifest.join("../oit-wgpu/src");
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets it"));
-    // oit-wgpu's COMMON_WGSL and TECHNIQUE_PRELUDE, concatenated as there
-    let common = format!("{}\n{}", read(&wgsl, "shaders/common.wgsl"), read(&wgsl, "shaders/fragment.wgsl"));
-    let prelude =
-        format!("{}\n{}\n", read(&wgsl, "shaders/resolve.wgsl"), read(&wgsl, "shaders/prelude.wgsl"));
-    let raster = read(&wgsl, "shaders/raster_compute.wgsl");
-    let hardware = format!(
-        "{}\n{}",
-        read(&wgsl, "shaders/capture_render.wgsl"),
-        read(&wgsl, "shaders/raster_hardware.wgsl")
-    );
-    let own = manifest.join("src");
-    let vertex_stage = {
-        let full = read(&wgsl, "shaders/raster_hardware.wgsl");
-        full.split_once("@fragment").map_or(full.clone(), |(vertex, _)| vertex.to_string())
-    };
 
     use naga::back::spv;
     use naga::valid::{Capabilities, ValidationFlags, Validator};
@@ -362,24 +262,10 @@ fn main() {
             entries.join(", ")
         ));
     };
-    for &(name, rel, tail) in MODULES {
-        let source = rel
-            .split('+')
-            .map(|r| match r.strip_prefix("vk:") {
-                Some(own_rel) => read(&own, own_rel),
-                None => read(&wgsl, r),
-            })
-            .collect::<Vec<_>>()
-            .join("\n");
-        let text = format!("{common}\n{prelude}{source}");
-        match tail {
-            Kernels => emit(name, &text),
-            Alone => emit(name, &source),
-            Raster => {
-                emit(name, &format!("{text}\n{raster}"));
-                emit(&format!("{name}_hw"), &format!("{text}\n{hardware}"));
-            }
-            Stage => emit(name, &format!("{text}\n{vertex_stage}")),
+    for module in oit_shaders::MODULES {
+        emit(module.name, &module.compute_text());
+        if let Some(hardware) = module.hardware_text() {
+            emit(&format!("{}_hw", module.name), &hardware);
         }
     }
     std::fs::write(out.join("modules.rs"), format!("&[\n{index}]\n")).expect("write the module index");

@@ -7,7 +7,6 @@ use std::cell::{Cell, RefCell};
 use std::rc::Rc;
 
 use ash::vk;
-use bytemuck::{Pod, Zeroable};
 use oit_core::plan::Plan;
 use oit_core::{Camera, Effect, Frame, Image, OitError, Scene, Settings, Stats};
 
@@ -17,29 +16,8 @@ use crate::raster::{ComputeRaster, Raster};
 use crate::record::SetData;
 use crate::record::{Recorder, Vertices};
 
-/// Group 0's binding of the loss accounting (`acct` in prelude.wgsl).
-pub(crate) const ACCT_BINDING: u32 = 15;
-/// The fewest words a storage buffer holds (as oit-wgpu: one of the widest elements).
-const MIN_BUFFER_WORDS: u64 = 16;
-/// Words of one `PixelState` (resolve.wgsl).
-const STATE_WORDS: u64 = 23;
-
-/// The frame uniform (`FrameUniform` in fragment.wgsl; oit-wgpu's `FrameUniform`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub(crate) struct FrameUniform {
-    width: u32,
-    height: u32,
-    pass_index: u32,
-    param: u32,
-    effect: u32,
-    pixel_count: u32,
-    ties: u32,
-    last_pass: u32,
-    forward: [f32; 4],
-    background: [f32; 4],
-    lens: [f32; 4],
-}
+pub(crate) use oit_gpu::{ACCT_BINDING, FrameUniform};
+use oit_gpu::{MIN_BUFFER_WORDS, STATE_WORDS};
 
 /// Usage of every storage buffer.
 pub(crate) fn storage_usage() -> vk::BufferUsageFlags {
@@ -174,14 +152,7 @@ pub(crate) struct BlendPass<'b> {
     pub param: u32,
 }
 
-/// Initial contents of a storage buffer.
-#[derive(Clone, Copy, Debug)]
-pub(crate) enum Init {
-    /// All zero bits.
-    Zero,
-    /// Every 32-bit word set to this.
-    Fill(u32),
-}
+pub(crate) use oit_gpu::Init;
 
 /// Everything a technique needs for one frame.
 pub(crate) struct VkCtx<'a> {
@@ -350,20 +321,34 @@ impl<'a> VkCtx<'a> {
     /// A storage buffer of `words` 32-bit words for the technique, checked against the limits and
     /// counted in `storage_bytes`.
     pub(crate) fn buffer(&mut self, label: &str, words: u64, init: Init) -> Result<Rc<Buffer>, OitError> {
+        self.make_buffer(label, words, init, true)
+    }
+
+    /// A storage buffer of `words` words of bookkeeping (a flag, a counter, a sizing count),
+    /// checked against the device's limits but not counted in `storage_bytes` (oit-cpu counts
+    /// none).
+    pub(crate) fn scratch(&mut self, label: &str, words: u64, init: Init) -> Result<Rc<Buffer>, OitError> {
+        self.make_buffer(label, words, init, false)
+    }
+
+    /// [`VkCtx::buffer`] (`counted`) or [`VkCtx::scratch`].
+    fn make_buffer(
+        &mut self,
+        label: &str,
+        words: u64,
+        init: Init,
+        counted: bool,
+    ) -> Result<Rc<Buffer>, OitError> {
         let bytes = words.max(MIN_BUFFER_WORDS) * 4;
         self.gpu.check_storage(label, bytes)?;
-        self.check_budget(bytes)?;
-        self.storage_bytes += words * 4;
+        if counted {
+            self.check_budget(bytes)?;
+            self.storage_bytes += words * 4;
+        }
         let buffer = self.pool.take(self.gpu, bytes, storage_usage())?;
         self.lent.push(buffer.clone());
         // a pooled buffer holds the last frame's words, a new one garbage: always initialise
-        self.rec.fill(
-            &buffer,
-            match init {
-                Init::Zero => 0,
-                Init::Fill(v) => v,
-            },
-        );
+        self.rec.fill(&buffer, init.word());
         Ok(buffer)
     }
 
@@ -487,7 +472,11 @@ impl<'a> VkCtx<'a> {
         flag: &Buffer,
     ) -> Result<(), OitError> {
         let Some((from, to, words)) = raster.gate() else {
-            return Err(OitError::Device("a gated geometry pass on a raster without a gate".into()));
+            // the host's setup: its work list cannot be gated, so the flag is read back
+            if self.read_u32(flag)?[0] != 0 {
+                self.geometry_pass(raster, module, buffers, pass_index, param)?;
+            }
+            return Ok(());
         };
         debug_assert_ne!(self.fragments, Fragments::Unset, "the first pass is ungated");
         let counter = self.gated_counter.clone();
@@ -540,14 +529,8 @@ impl<'a> VkCtx<'a> {
         self.end_checks.push((flag.clone(), Box::new(|word| word == 0)));
     }
 
-    /// The deepest pixel of a counting pass whose count lies in word 0 of `max`: the speculated
-    /// value where the frame has one (checked at its end, a frame whose count differs runs
-    /// again), else read back now and kept for the next frame ([`Ended::seen`]).
-    pub(crate) fn deepest(&mut self, max: &Rc<Buffer>) -> Result<u32, OitError> {
-        self.deepest_alike(max, |speculated, counted| speculated == counted)
-    }
-
-    /// [`VkCtx::deepest`] for a count the frame uses only through a coarser figure: a speculated
+    /// The deepest pixel of a counting pass whose count lies in word 0 of `max` (as
+    /// `oit_gpu::Frame::deepest_alike`), for a count the frame uses only through a coarser figure: a speculated
     /// value passes the end's check where `alike(speculated, counted)` (adp's batch count, the
     /// same for every set-bin count of a batch of 32), not only where the two are equal.
     pub(crate) fn deepest_alike(
@@ -595,9 +578,7 @@ impl<'a> VkCtx<'a> {
         pass_index: u32,
         param: u32,
     ) -> Result<Rc<Buffer>, OitError> {
-        let kept = self.buffer("pass fragment count", 1, Init::Zero)?;
-        // bookkeeping, not per-pixel storage
-        self.storage_bytes -= 4;
+        let kept = self.scratch("pass fragment count", 1, Init::Zero)?;
         let generated = self.scene_pass(raster, module, buffers, pass_index, param, true)?;
         self.rec.copy(generated, &kept, 4);
         Ok(kept)

@@ -72,6 +72,7 @@
 
 mod ctx;
 mod device;
+mod frame;
 mod hardware;
 mod raster;
 mod record;
@@ -460,28 +461,27 @@ fn run_technique(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitEr
     let blend = hardware && ctx.settings.hardware_capture == HardwareCapture::Blend;
     match ctx.settings.technique {
         // the blender composites one draw in primitive order: plain's definition
-        Technique::Plain if hardware => technique::blend::plain(ctx, drivers)?,
-        Technique::Dp if blend => technique::blend::dp(ctx, drivers)?,
-        Technique::Ddp if blend => technique::blend::ddp(ctx, drivers)?,
-        Technique::Bdp { .. } if blend => technique::blend::bdp(ctx, drivers)?,
+        Technique::Plain if hardware => technique::blend::plain(ctx, drivers),
+        Technique::Dp if blend => technique::blend::dp(ctx, drivers),
+        Technique::Ddp if blend => technique::blend::ddp(ctx, drivers),
+        Technique::Bdp { .. } if blend => technique::blend::bdp(ctx, drivers),
         Technique::WeightedAverage | Technique::WeightedSum if blend => {
-            technique::blend::weighted(ctx, drivers)?
+            technique::blend::weighted(ctx, drivers)
         }
-        Technique::Adp => technique::adp::render(ctx, drivers, blend)?,
-        Technique::Reference => technique::reference::render(ctx, drivers)?,
-        Technique::Plain => technique::plain::render(ctx, drivers)?,
-        Technique::Fabs { .. } => technique::fabs::render(ctx, drivers)?,
-        Technique::Dp => technique::dp::render(ctx, drivers)?,
-        Technique::Ddp => technique::ddp::render(ctx, drivers)?,
-        Technique::WeightedAverage | Technique::WeightedSum => technique::weighted::render(ctx, drivers)?,
-        Technique::Bdp { .. } => technique::bdp::render(ctx, drivers)?,
-        Technique::Mdts { .. } | Technique::Mdts64 { .. } => technique::mdts::render(ctx, drivers)?,
-        Technique::Mlp { .. } => technique::mlp::render(ctx, drivers)?,
-        Technique::Dfb => technique::dfb::render(ctx, drivers)?,
-        Technique::Ll => technique::ll::render(ctx, drivers)?,
-        Technique::Kbuf { .. } => technique::kbuf::render(ctx, drivers)?,
+        // the rest (adp's histogram by logic-op OR included: `Frame::histogram_capture`) as
+        // every GPU backend runs them
+        _ => oit_gpu::technique::render(ctx, drivers),
     }
-    Ok(())
+}
+
+impl oit_gpu::Rasters<Raster> for Drivers<'_> {
+    fn scene(&self) -> &Raster {
+        &self.scene
+    }
+
+    fn with_boxes(&self, pass: &mut dyn FnMut(&Raster) -> Result<(), OitError>) -> Result<(), OitError> {
+        pass(&(self.boxes)()?)
+    }
 }
 
 /// For test suites: the backend when a Vulkan device can be opened, else `None` after one line on

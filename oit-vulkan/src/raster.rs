@@ -32,9 +32,8 @@ use oit_core::{Camera, OitError, Scene, Settings};
 use crate::ctx::{dispatch_size, storage_usage};
 use crate::device::{Buffer, Gpu, SetKind};
 use crate::record::{Recorder, SetData};
+use oit_gpu::TILE;
 
-/// Pixels on a side of the tile one work item covers.
-const TILE: u32 = 8;
 /// Bytes of the smallest triangle and work-list buffers (a binding may not be empty).
 const MIN_BYTES: u64 = 256;
 

@@ -2,7 +2,6 @@
 //! against the limits, geometry passes through a [`Driver`] (compute or hardware rasterizer),
 //! per-pixel kernels, GPU timestamps, and the final image — the GPU twin of oit-cpu's `Ctx`.
 
-use bytemuck::{Pod, Zeroable};
 use oit_core::plan::Plan;
 use oit_core::{Camera, Effect, Frame, Image, OitError, Scene, Settings, Stats};
 
@@ -120,50 +119,14 @@ const FRAGMENTS_WORD: u64 = 4;
 
 /// WGSL every technique module starts with (after `COMMON_WGSL`): bindings 0 and 1 of group 0 and
 /// the resolve functions.
-pub const TECHNIQUE_PRELUDE: &str =
-    concat!(include_str!("shaders/resolve.wgsl"), "\n", include_str!("shaders/prelude.wgsl"), "\n");
+pub const TECHNIQUE_PRELUDE: &str = oit_shaders::PRELUDE;
 
-/// Group 0's binding of the loss accounting (`acct` in prelude.wgsl).
-const ACCT_BINDING: u32 = 15;
+const FINISH_WGSL: &str = oit_shaders::text("core/finish.wgsl");
+const FILL_WGSL: &str = oit_shaders::text("core/fill.wgsl");
 
-const FINISH_WGSL: &str = include_str!("shaders/finish.wgsl");
-const FILL_WGSL: &str = include_str!("shaders/fill.wgsl");
-/// The fewest words a storage buffer of [`GpuCtx::buffer`] holds: 64 bytes, one of the widest
-/// element any technique binds, so that an array sized from zero fragments still binds.
-const MIN_BUFFER_WORDS: u64 = 16;
+use oit_gpu::{ACCT_BINDING, MIN_BUFFER_WORDS, STATE_WORDS};
 
-/// Words of one `PixelState` (resolve.wgsl): 16 for the composite, 7 for the ties.
-const STATE_WORDS: u64 = 23;
-
-/// The frame uniform (`FrameUniform` in fragment.wgsl).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct FrameUniform {
-    /// Image width.
-    pub width: u32,
-    /// Image height.
-    pub height: u32,
-    /// Which pass of the technique this is.
-    pub pass_index: u32,
-    /// A technique parameter (K, M, a batch, a fill value...).
-    pub param: u32,
-    /// The effect, as `EFFECT_*` in fragment.wgsl.
-    pub effect: u32,
-    /// width × height.
-    pub pixel_count: u32,
-    /// 1 when the resolve counts ties (the plan's `count_ties`).
-    pub ties: u32,
-    /// 1 in the last capture pass the plan allows (`--max-peels`): what it leaves behind is lost.
-    pub last_pass: u32,
-    /// Camera forward (xyz).
-    pub forward: [f32; 4],
-    /// Background (rgb).
-    pub background: [f32; 4],
-    /// near, far, translucency's absorption per unit of length
-    /// ([`Scene::absorption_per_length`](oit_core::Scene::absorption_per_length); 0 under the
-    /// other effects, which do not read it), unused.
-    pub lens: [f32; 4],
-}
+pub use oit_gpu::FrameUniform;
 
 /// A rasterizer that runs one geometry pass: every fragment of the scene calls the technique's
 /// `capture` function (WGSL in `source`, which starts with [`TECHNIQUE_PRELUDE`]'s bindings).
@@ -218,14 +181,7 @@ pub struct Gate {
     pub words: u32,
 }
 
-/// Initial contents of a storage buffer.
-#[derive(Clone, Copy, Debug)]
-pub enum Init {
-    /// All zero bits.
-    Zero,
-    /// Every 32-bit word set to this.
-    Fill(u32),
-}
+pub use oit_gpu::Init;
 
 /// Everything a technique needs for one frame on the GPU.
 pub struct GpuCtx<'a> {
@@ -560,18 +516,40 @@ impl<'a> GpuCtx<'a> {
     /// A storage buffer of `words` 32-bit words for the technique, checked against the limits and
     /// counted in `storage_bytes`.
     pub fn buffer(&mut self, label: &str, words: u64, init: Init) -> Result<wgpu::Buffer, OitError> {
+        self.make_buffer(label, words, init, true)
+    }
+
+    /// A storage buffer of `words` words of bookkeeping (a flag, a counter, a sizing count),
+    /// checked against the device's limits but not counted in `storage_bytes` (oit-cpu counts
+    /// none).
+    pub fn scratch(&mut self, label: &str, words: u64, init: Init) -> Result<wgpu::Buffer, OitError> {
+        self.make_buffer(label, words, init, false)
+    }
+
+    /// [`GpuCtx::buffer`] (`counted`) or [`GpuCtx::scratch`].
+    fn make_buffer(
+        &mut self,
+        label: &str,
+        words: u64,
+        init: Init,
+        counted: bool,
+    ) -> Result<wgpu::Buffer, OitError> {
         // never smaller than the widest element a shader binds (u64 keys, vec4s, fabs' slots):
         // a frame with no fragments sizes its arrays to zero, and wgpu refuses a binding smaller
         // than one element ("bound with size 4 where the shader expects 8", issue 13.8)
         let bytes = words.max(MIN_BUFFER_WORDS) * 4;
         self.gpu.check_storage(label, bytes)?;
-        let budget = self.settings.memory_budget(self.gpu.memory_budget());
-        oit_core::plan::check_total(
-            &format!("{} storage of a frame of {} pixels", self.settings.technique, self.pixels),
-            self.storage_bytes.saturating_add(u64::from(self.pixels) * STATE_WORDS * 4).saturating_add(bytes),
-            (&budget.0, budget.1),
-        )?;
-        self.storage_bytes += words * 4;
+        if counted {
+            let budget = self.settings.memory_budget(self.gpu.memory_budget());
+            oit_core::plan::check_total(
+                &format!("{} storage of a frame of {} pixels", self.settings.technique, self.pixels),
+                self.storage_bytes
+                    .saturating_add(u64::from(self.pixels) * STATE_WORDS * 4)
+                    .saturating_add(bytes),
+                (&budget.0, budget.1),
+            )?;
+            self.storage_bytes += words * 4;
+        }
         let pooled = self.lent.pool.is_some();
         let buffer = self.make(
             label,
@@ -709,9 +687,7 @@ impl<'a> GpuCtx<'a> {
     ) -> Result<wgpu::Buffer, OitError> {
         let generated = self.run_geometry_pass(driver, source, buffers, pass_index, param)?;
         self.note_generated(&generated);
-        let count = self.buffer("fragment count", 1, Init::Zero)?;
-        // sizing storage is not the technique's (as `technique::count`'s)
-        self.storage_bytes -= 4;
+        let count = self.scratch("fragment count", 1, Init::Zero)?;
         self.encoder().copy_buffer_to_buffer(&generated.0, 0, &count, 0, 4);
         Ok(count)
     }
@@ -1287,7 +1263,7 @@ pub(crate) fn totals_stats(t: &[u32], passes: u32, storage_bytes: u64) -> Stats 
 }
 
 /// The gate kernel of [`GpuCtx::geometry_pass_if`].
-const GATE_WGSL: &str = include_str!("shaders/gate.wgsl");
+const GATE_WGSL: &str = oit_shaders::text("core/gate.wgsl");
 
 /// Workgroups of 64 for `invocations`, as (x, y) with x ≤ 65535.
 pub fn dispatch_size(invocations: u64) -> (u32, u32) {

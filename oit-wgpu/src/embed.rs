@@ -128,9 +128,9 @@ use crate::hardware::{HwGeometry, RASTER_WGSL};
 use crate::pool::BufferPool;
 
 /// The fragment side every render-pipeline geometry pass shares (`oit_capture`).
-pub const CAPTURE_RENDER_WGSL: &str = include_str!("shaders/capture_render.wgsl");
-const COUNT_SUM_WGSL: &str = include_str!("shaders/count_sum.wgsl");
-const BLIT_WGSL: &str = include_str!("shaders/blit.wgsl");
+pub const CAPTURE_RENDER_WGSL: &str = oit_shaders::CAPTURE_RENDER;
+const COUNT_SUM_WGSL: &str = oit_shaders::text("core/count_sum_texture.wgsl");
+const BLIT_WGSL: &str = oit_shaders::text("core/blit.wgsl");
 
 /// What the user's pipeline for one capture module is built from.
 pub struct CaptureShader<'a> {

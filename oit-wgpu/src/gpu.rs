@@ -9,8 +9,7 @@ use std::sync::{Arc, Mutex};
 use oit_core::OitError;
 
 /// The WGSL every module starts with: oit-core's rules and the fragment contract.
-pub const COMMON_WGSL: &str =
-    concat!(include_str!("shaders/common.wgsl"), "\n", include_str!("shaders/fragment.wgsl"));
+pub const COMMON_WGSL: &str = oit_shaders::COMMON;
 
 /// Features oit needs on every adapter.
 pub fn required_features() -> wgpu::Features {

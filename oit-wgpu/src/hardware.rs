@@ -34,7 +34,7 @@ use crate::ctx::{Driver, Gate, Generated, GpuCtx};
 use crate::embed::{CaptureShader, CountTarget, GeometryPass, RenderDriver};
 use crate::gpu::Gpu;
 
-pub(crate) const RASTER_WGSL: &str = include_str!("shaders/raster_hardware.wgsl");
+pub(crate) const RASTER_WGSL: &str = oit_shaders::HARDWARE_RASTER;
 /// What to try when the geometry does not fit in one storage binding.
 const GEOMETRY_HINT: &str = "use fewer triangles or instances, or the cpu backend";
 

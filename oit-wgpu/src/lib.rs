@@ -45,6 +45,7 @@
 
 mod ctx;
 pub mod embed;
+mod frame;
 mod gpu;
 mod hardware;
 mod pool;
@@ -202,10 +203,10 @@ impl Backend for WgpuBackend {
             }
         };
         let mut ctx = GpuCtx::new(gpu, scene, camera, settings)?;
-        technique::count(&mut ctx, driver.as_ref())?;
+        oit_gpu::technique::count(&mut ctx, driver.as_ref())?;
         let first = ctx.pass_ms("geometry");
         let start = Instant::now();
-        technique::count(&mut ctx, driver.as_ref())?;
+        oit_gpu::technique::count(&mut ctx, driver.as_ref())?;
         let wall = start.elapsed().as_secs_f64() * 1e3;
         let second = ctx.pass_ms("geometry") - first;
         let timed = gpu.has_timestamps();
@@ -492,38 +493,37 @@ struct InFlight<'c> {
 /// state; the reference leaves its per-pixel fragment counts to be read with the frame's end).
 /// `Backend::render` and the embedded pass (`embed::OitPass::frame`) both run this.
 pub(crate) fn run_technique(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
+    let hardware = drivers.scene.path() == RasterPath::Hardware;
     // the papers' graphics-pipeline capture of bdp and dp, when asked for on the hardware path
-    let blend = drivers.scene.path() == RasterPath::Hardware
-        && ctx.settings.hardware_capture == HardwareCapture::Blend;
+    let blend = hardware && ctx.settings.hardware_capture == HardwareCapture::Blend;
     match ctx.settings.technique {
-        Technique::Dp if blend => technique::dp_depth::render(ctx, drivers)?,
-        Technique::Ddp if blend => technique::ddp_blend::render(ctx, drivers)?,
-        Technique::Bdp { .. } if blend => technique::bdp_blend::render(ctx, drivers)?,
+        Technique::Dp if blend => technique::dp_depth::render(ctx, drivers),
+        Technique::Ddp if blend => technique::ddp_blend::render(ctx, drivers),
+        Technique::Bdp { .. } if blend => technique::bdp_blend::render(ctx, drivers),
         Technique::WeightedAverage | Technique::WeightedSum if blend => {
-            technique::blend::weighted(ctx, technique::bdp_blend::scene_stage(drivers)?)?
+            technique::blend::weighted(ctx, technique::bdp_blend::scene_stage(drivers)?)
         }
-        Technique::Plain => technique::plain::render(ctx, drivers)?,
-        Technique::Reference => technique::reference::render(ctx, drivers)?,
-        Technique::Fabs { .. } => technique::fabs::render(ctx, drivers)?,
-        Technique::Dp => technique::dp::render(ctx, drivers)?,
-        Technique::Ddp => technique::ddp::render(ctx, drivers)?,
-        Technique::WeightedAverage | Technique::WeightedSum => technique::weighted::render(ctx, drivers)?,
-        Technique::Bdp { .. } => technique::bdp::render(ctx, drivers)?,
-        Technique::Adp => technique::adp::render(ctx, drivers)?,
-        Technique::Mdts { .. } | Technique::Mdts64 { .. } => technique::mdts::render(ctx, drivers)?,
-        Technique::Mlp { .. } => technique::mlp::render(ctx, drivers)?,
-        Technique::Dfb => technique::dfb::render(ctx, drivers)?,
-        Technique::Ll => technique::ll::render(ctx, drivers)?,
-        // refused by the frame's context with the plan's reason (Plan::refuse_interlock); never
-        // reached
-        Technique::Kbuf { .. } => {
-            return Err(OitError::Unsupported {
-                backend: "wgpu".into(),
-                what: "kbuf: no fragment-stage interlock".into(),
-            });
+        // the blender composites one draw in primitive order: plain's definition, where the
+        // draws are oit's own
+        Technique::Plain if hardware && drivers.scene.scene_stage().is_some() => {
+            technique::blend::plain(ctx, technique::bdp_blend::scene_stage(drivers)?)
         }
+        // kbuf is refused by the frame's context with the plan's reason (Plan::refuse_interlock)
+        _ => oit_gpu::technique::render(ctx, drivers),
     }
-    Ok(())
+}
+
+impl<'a> oit_gpu::Rasters<dyn Driver + 'a> for Drivers<'a> {
+    fn scene(&self) -> &(dyn Driver + 'a) {
+        self.scene.as_ref()
+    }
+
+    fn with_boxes(
+        &self,
+        pass: &mut dyn FnMut(&(dyn Driver + 'a)) -> Result<(), OitError>,
+    ) -> Result<(), OitError> {
+        pass((self.boxes)()?.as_ref())
+    }
 }
 
 /// For test suites and examples: the backend when a Vulkan adapter can be opened, else `None`

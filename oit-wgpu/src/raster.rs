@@ -34,13 +34,11 @@ use oit_core::{Camera, OitError, RasterPath, Scene, Settings};
 
 use crate::ctx::{Driver, Gate, Generated, GpuCtx, SetupCheck, dispatch_size};
 use crate::gpu::Gpu;
+use oit_gpu::TILE;
 
-const RASTER_WGSL: &str = include_str!("shaders/raster_compute.wgsl");
+const RASTER_WGSL: &str = oit_shaders::COMPUTE_RASTER;
 /// The setup kernels: softfloat.wgsl's integer f32, then setup.wgsl.
-pub const SETUP_WGSL: &str =
-    concat!(include_str!("shaders/softfloat.wgsl"), "\n", include_str!("shaders/setup.wgsl"));
-/// Pixels on a side of the tile one workgroup of 64 covers (one invocation per pixel).
-const TILE: u32 = 8;
+pub const SETUP_WGSL: &str = oit_shaders::SETUP;
 /// Bytes of the smallest triangle and work-list buffers (a binding may not be empty).
 const MIN_BYTES: u64 = 256;
 /// Bytes of the indirect-argument buffer: the per-pixel and per-item raster dispatches (4 words

@@ -9,7 +9,7 @@ use glam::Vec3;
 use oit_core::setup::{TRIANGLE_WORDS, TriangleSetup};
 use oit_core::{Camera, RasterPath, Scene, Settings, View, load_scene};
 
-const BUNNY: &str = "/work/shared/models/bunny.obj";
+const BUNNY: &str = "bunny";
 
 fn settings() -> Settings {
     Settings { width: 203, height: 150, raster: Some(RasterPath::Compute), ..Settings::default() }
@@ -75,10 +75,8 @@ fn gpu_setup_equals_host_setup() {
         "scale:1e20:knot".into(),
         "scale:1e-30:spheres:3".into(),
     ];
-    if std::path::Path::new(BUNNY).exists() {
-        scenes.push(BUNNY.into());
-        scenes.push(format!("grid:2x2:{BUNNY}"));
-    }
+    scenes.push(BUNNY.into());
+    scenes.push(format!("grid:2x2:{BUNNY}"));
     let mut split = 0;
     for name in &scenes {
         let scene = load_scene(name).unwrap();

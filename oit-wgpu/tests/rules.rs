@@ -202,7 +202,7 @@ fn wgsl_rules_equal_rust_rules() {
 fn wgsl_histogram_rank_equals_rust() {
     let Some(backend) = oit_wgpu::backend_or_skip("wgsl_histogram_rank_equals_rust") else { return };
     let gpu = backend.gpu().expect("opened by backend_or_skip");
-    let adp = include_str!("../src/technique/adp.wgsl");
+    let adp = oit_shaders::text("technique/adp.wgsl");
     let start = adp.find("fn adp_rank(").expect("adp.wgsl defines adp_rank");
     let end = start + adp[start..].find("\n}\n").expect("adp_rank ends") + 3;
     let kernel = format!(

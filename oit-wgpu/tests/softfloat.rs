@@ -6,7 +6,7 @@
 
 use std::hint::black_box;
 
-const SOFTFLOAT: &str = include_str!("../src/shaders/softfloat.wgsl");
+const SOFTFLOAT: &str = oit_shaders::text("core/softfloat.wgsl");
 
 const KERNEL: &str = r#"
 @group(0) @binding(0) var<storage, read_write> cases: array<vec4<u32>>;

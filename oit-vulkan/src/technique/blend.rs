@@ -45,7 +45,12 @@ fn unsupported(what: String) -> OitError {
 
 /// The frame's hardware rasterizer (the blend captures draw oit's own vertex stage).
 fn hardware<'d>(drivers: &'d Drivers<'_>) -> Result<&'d HardwareRaster, OitError> {
-    match &drivers.scene {
+    hardware_raster(&drivers.scene)
+}
+
+/// The hardware raster `raster` is, or a refusal.
+fn hardware_raster(raster: &Raster) -> Result<&HardwareRaster, OitError> {
+    match raster {
         Raster::Hardware(h) => Ok(h),
         Raster::Compute(_) => Err(unsupported("a blend capture on the compute path".into())),
     }
@@ -158,7 +163,7 @@ pub(crate) fn bdp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
     if limit < 8 {
         return Err(unsupported(format!("8 colour targets for bdp: maxColorAttachments is {limit}")));
     }
-    let bounds = super::bdp::depth_bounds(ctx, drivers)?;
+    let bounds = oit_gpu::technique::depth_bounds(ctx, drivers)?;
     ctx.count_fragments(&drivers.scene)?;
     let targets: Vec<Rc<GpuImage>> =
         (0..8).map(|_| ctx.target(RGBA32F, 16, false)).collect::<Result<_, _>>()?;
@@ -301,12 +306,12 @@ pub(crate) fn dp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitEr
 /// nothing, or after pass `limit` ([`OcclusionPeel`]).
 pub(crate) fn ddp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     ctx.counts_losses = false;
-    super::ddp::check_effect(ctx)?;
+    oit_gpu::technique::check_ddp_effect("vulkan", ctx.settings.effect)?;
     check_blendable(ctx, RG32F, "ddp's MAX blending")?;
     let raster = hardware(drivers)?;
     ctx.count_fragments(&drivers.scene)?;
-    let peel = super::ddp::Peel::new(ctx)?;
-    let buffers = peel.buffers();
+    let [near, far, range, peeled] = oit_gpu::technique::ddp_state(ctx)?;
+    let buffers: [&crate::device::Buffer; 4] = [&near, &far, &range, &peeled];
     let ranges = [ctx.target(RG32F, 8, false)?, ctx.target(RG32F, 8, false)?];
     ctx.make_readable(&ranges[1]);
     let limit = ctx.plan.peel_limit;
@@ -347,10 +352,10 @@ pub(crate) fn ddp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
 /// into `hist`; the caller runs the bucket passes as the atomics capture does.
 pub(crate) fn adp_histogram(
     ctx: &mut VkCtx<'_>,
-    drivers: &Drivers<'_>,
+    raster: &Raster,
     buffers: &[&crate::device::Buffer],
 ) -> Result<(), OitError> {
-    let raster = hardware(drivers)?;
+    let raster = hardware_raster(raster)?;
     if !ctx.gpu.info.logic_op {
         return Err(unsupported(format!(
             "adp's histogram by logic-op OR: '{}' lacks the logicOp feature; use --hardware-capture atomics",

@@ -26,9 +26,8 @@ use crate::ctx::{GpuCtx, TECHNIQUE_PRELUDE};
 use crate::gpu::COMMON_WGSL;
 use crate::hardware::SceneStage;
 use crate::hardware::scene_pipeline;
-use crate::technique::bdp::depth_bounds;
 
-const WGSL: &str = include_str!("bdp_blend.wgsl");
+const WGSL: &str = oit_shaders::text("technique/bdp_blend.wgsl");
 const TARGETS: u32 = 8;
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
@@ -56,7 +55,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         )));
     }
     check_texture_size(ctx, "the bdp bucket targets")?;
-    let bounds = depth_bounds(ctx, drivers)?;
+    let bounds = oit_gpu::technique::depth_bounds(ctx, drivers)?;
     if ctx.fragments == crate::ctx::Fragments::Unset {
         count_fragments(ctx, drivers)?;
     }

@@ -36,8 +36,8 @@ use crate::gpu::COMMON_WGSL;
 use crate::hardware::{SceneStage, scene_pipeline};
 use crate::technique::bdp_blend::{check_texture_size, key, unsupported};
 
-const WGSL: &str = include_str!("blend.wgsl");
-const WEIGHTED_WGSL: &str = include_str!("weighted.wgsl");
+const WGSL: &str = oit_shaders::text("technique/blend.wgsl");
+const WEIGHTED_WGSL: &str = oit_shaders::text("technique/weighted.wgsl");
 
 /// `plain` on the blender, into the colour target `--blend-target` names.
 pub(crate) fn plain(ctx: &mut GpuCtx<'_>, stage: &SceneStage) -> Result<(), OitError> {

@@ -23,15 +23,16 @@ use crate::gpu::COMMON_WGSL;
 use crate::hardware::{PassTarget, scene_pipeline};
 use crate::technique::OcclusionPeel;
 use crate::technique::bdp_blend::{check_texture_size, count_fragments, key, scene_stage, unsupported};
-use crate::technique::ddp;
 
-const WGSL: &str = include_str!("ddp_blend.wgsl");
+const WGSL: &str = oit_shaders::text("technique/ddp_blend.wgsl");
+/// ddp.wgsl, whose resolve composites the layers the blend capture peels.
+const DDP_WGSL: &str = oit_shaders::text("technique/ddp.wgsl");
 const RANGE: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     // NOT COUNTED yet (issue 16): the blend unit returns no previous value to count losses by
     ctx.counts_losses = false;
-    ddp::check_effect(ctx)?;
+    oit_gpu::technique::check_ddp_effect("wgpu", ctx.settings.effect)?;
     let stage = scene_stage(drivers)?;
     if !ctx.gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
         return Err(unsupported("MAX blending into an Rg32Float target: the device lacks FLOAT32_BLENDABLE"));
@@ -40,8 +41,8 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     if ctx.fragments == crate::ctx::Fragments::Unset {
         count_fragments(ctx, drivers)?;
     }
-    let state = ddp::Peel::new(ctx)?;
-    let buffers = state.buffers();
+    let [near, far, range, peeled] = oit_gpu::technique::ddp_state(ctx)?;
+    let buffers = [&near, &far, &range, &peeled];
     let px = u64::from(ctx.pixels);
 
     let device = ctx.gpu.device.clone();
@@ -120,7 +121,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         )?;
         if pass > 0 {
             // the pair the previous pass found, handed over in this one
-            ctx.pixel_kernel(ddp::WGSL, "resolve_main", &buffers, pass, 0)?;
+            ctx.pixel_kernel(DDP_WGSL, "resolve_main", &buffers, pass, 0)?;
         }
         if !control.go_on(ctx, &occlusion, pass + 1)? {
             break;

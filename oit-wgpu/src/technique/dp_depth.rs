@@ -28,7 +28,7 @@ use crate::hardware::{PassTarget, scene_pipeline};
 use crate::technique::OcclusionPeel;
 use crate::technique::bdp_blend::{check_texture_size, count_fragments, key, scene_stage};
 
-const WGSL: &str = include_str!("dp_depth.wgsl");
+const WGSL: &str = oit_shaders::text("technique/dp_depth.wgsl");
 const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 const LAYER: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
 

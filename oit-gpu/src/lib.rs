@@ -1,0 +1,283 @@
+//! oit's one GPU layer: the frame contract both GPU backends implement ([`Frame`]), and every
+//! technique's GPU frame written once against it ([`technique`]).
+//!
+//! oit-wgpu and oit-vulkan run the same WGSL (oit-shaders) through two device APIs. What a
+//! technique does on the GPU — which per-pixel arrays it allocates, which geometry passes and
+//! pixel kernels it runs in which order, what it reads back or leaves on the device for the
+//! frame's end — is the same on both, so it is written here once: [`technique::render`] runs the
+//! frame of the settings' technique on any [`Frame`]. A backend implements [`Frame`] (storage,
+//! passes, kernels, read-backs, the speculation it keeps between frames) and runs, beside this,
+//! only what its API alone can do: the hardware path's blend, depth-test and logic-op captures,
+//! storage-image atomics, the interlock. Those are reached through the contract too
+//! ([`Frame::storage_image`], [`Frame::histogram_capture`]), so a technique chooses them here and
+//! a backend that lacks one refuses by name.
+//!
+//! Static dispatch: a technique is generic over `F: Frame<R>`, where `R` is the backend's
+//! rasterizer type (the compute path's or the GPU's own), so nothing is boxed per pass.
+//!
+//! Adding a technique: its plan (`oit_core::plan`), its WGSL and a manifest line in oit-shaders,
+//! its CPU capture in oit-cpu, and its GPU frame as one function in [`technique`] with its line
+//! in [`technique::render`]'s match; `docs/architecture.md` works one through.
+
+pub mod technique;
+
+use bytemuck::{Pod, Zeroable};
+use oit_core::plan::Plan;
+use oit_core::{GpuFragments, OitError, Settings};
+
+/// Group 0's binding of the loss accounting (`acct` in prelude.wgsl).
+pub const ACCT_BINDING: u32 = 15;
+
+/// Words of one `PixelState` (resolve.wgsl): 16 for the composite, 7 for the ties.
+pub const STATE_WORDS: u64 = 23;
+
+/// The fewest words a storage buffer holds: 64 bytes, one of the widest elements any technique
+/// binds, so that an array sized from zero fragments still binds.
+pub const MIN_BUFFER_WORDS: u64 = 16;
+
+/// The compute rasterizer's screen tile (pixels a side): `raster_compute.wgsl`'s `TILE`.
+pub const TILE: u32 = 8;
+
+/// The frame uniform (`FrameUniform` in fragment.wgsl), group 0, binding 0.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct FrameUniform {
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Which pass of the technique this is.
+    pub pass_index: u32,
+    /// A technique parameter (K, M, a batch, a fill value...).
+    pub param: u32,
+    /// The effect, as `EFFECT_*` in fragment.wgsl.
+    pub effect: u32,
+    /// width × height.
+    pub pixel_count: u32,
+    /// 1 when the resolve counts ties (the plan's `count_ties`).
+    pub ties: u32,
+    /// 1 in the last capture pass the plan allows (`--max-peels`): what it leaves behind is lost.
+    pub last_pass: u32,
+    /// Camera forward (xyz).
+    pub forward: [f32; 4],
+    /// Background (rgb).
+    pub background: [f32; 4],
+    /// near, far, translucency's absorption per unit of length
+    /// ([`Scene::absorption_per_length`](oit_core::Scene::absorption_per_length); 0 under the
+    /// other effects, which do not read it), unused.
+    pub lens: [f32; 4],
+}
+
+/// Initial contents of a storage buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Init {
+    /// All zero bits.
+    Zero,
+    /// Every 32-bit word set to this.
+    Fill(u32),
+}
+
+impl Init {
+    /// The word every 32-bit word of the buffer starts as.
+    pub fn word(self) -> u32 {
+        match self {
+            Init::Zero => 0,
+            Init::Fill(v) => v,
+        }
+    }
+}
+
+/// The texel format of a storage image a technique keeps its atomic words in
+/// (`--atomic-storage image`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// One 32-bit unsigned word a texel.
+    R32Uint,
+    /// One 64-bit unsigned word a texel.
+    R64Uint,
+}
+
+impl ImageFormat {
+    /// Bytes of one texel.
+    pub fn bytes(self) -> u64 {
+        match self {
+            ImageFormat::R32Uint => 4,
+            ImageFormat::R64Uint => 8,
+        }
+    }
+}
+
+/// One frame on a GPU, as a technique sees it: storage, passes, kernels, read-backs. `R` is the
+/// backend's rasterizer (a geometry pass runs the technique's `capture` over every fragment it
+/// generates).
+///
+/// Storage comes in two kinds, so that a frame's `storage_bytes` is what the plan counts and
+/// nothing else: [`Frame::array`] is the technique's storage (counted, checked against the
+/// memory budget; `Plan::arrays` names it), [`Frame::scratch`] is bookkeeping (a flag, a
+/// counter, a sizing count: not counted, as oit-cpu counts none).
+pub trait Frame<R: ?Sized> {
+    /// A storage buffer of the frame (a handle: cheap to clone).
+    type Buffer: Clone;
+
+    /// The frame's plan: refusals, sizing and stop rules (oit-core's).
+    fn plan(&self) -> &Plan;
+    /// The frame's settings.
+    fn settings(&self) -> &Settings;
+    /// Pixels of the frame (its width × height).
+    fn pixels(&self) -> u32;
+    /// The backend's name, for refusals (`"wgpu"`, `"vulkan"`).
+    fn backend(&self) -> &'static str;
+
+    /// A storage buffer of `words` 32-bit words of the technique's storage, initialised to
+    /// `init`: counted in the frame's storage and checked against its budget and the device's
+    /// limits.
+    fn array(&mut self, label: &str, words: u64, init: Init) -> Result<Self::Buffer, OitError>;
+    /// A small storage buffer of `words` words of bookkeeping (flags, counters), initialised to
+    /// `init`; not the technique's storage.
+    fn scratch(&mut self, label: &str, words: u64, init: Init) -> Result<Self::Buffer, OitError>;
+    /// A small buffer bound where a pass's WGSL declares an array this mode does not use.
+    fn placeholder(&mut self) -> Result<Self::Buffer, OitError>;
+    /// Sets every word of `buffer` to `value` (in the frame's command stream).
+    fn fill(&mut self, buffer: &Self::Buffer, value: u32) -> Result<(), OitError>;
+    /// Copies the first `bytes` of `src` to the start of `dst` (in the frame's command stream).
+    fn copy(&mut self, src: &Self::Buffer, dst: &Self::Buffer, bytes: u64) -> Result<(), OitError>;
+    /// Reads `buffer` back (waits for everything recorded so far: a round trip).
+    fn read_u32(&mut self, buffer: &Self::Buffer) -> Result<Vec<u32>, OitError>;
+
+    /// A storage image of the frame's size with `layers` layers of `format`, bound at `binding`
+    /// of group 0 from now on, every 32-bit half of every texel set to `fill`: the technique's
+    /// storage, counted as [`Frame::array`]'s. For `--atomic-storage image`; a backend or device
+    /// without storage-image atomics refuses by name (the default).
+    fn storage_image(
+        &mut self,
+        label: &str,
+        binding: u32,
+        layers: u32,
+        format: ImageFormat,
+        fill: u32,
+    ) -> Result<(), OitError> {
+        let _ = (label, binding, layers, fill);
+        Err(OitError::Unsupported {
+            backend: self.backend().into(),
+            what: format!(
+                "--atomic-storage image ({format:?} storage-image atomics) for {}; use --atomic-storage buffer",
+                self.settings().technique
+            ),
+        })
+    }
+
+    /// Marks the passes that follow as the last capture pass the plan allows (or not).
+    fn last_pass(&mut self, last: bool);
+
+    /// One geometry pass of `module`'s `capture` (pass index `pass`, parameter `param`,
+    /// `buffers` bound from binding 2 of group 0) through `raster`. The frame's first geometry
+    /// pass over the scene counts the scene's fragments.
+    fn geometry_pass(
+        &mut self,
+        raster: &R,
+        module: &'static str,
+        buffers: &[&Self::Buffer],
+        pass: u32,
+        param: u32,
+    ) -> Result<(), OitError>;
+    /// [`Frame::geometry_pass`], counting the fragments it generates into a word of scratch it
+    /// returns, left on the device (ll's sizing pass, for [`Frame::fragment_capacity`]).
+    fn geometry_pass_counted(
+        &mut self,
+        raster: &R,
+        module: &'static str,
+        buffers: &[&Self::Buffer],
+        pass: u32,
+        param: u32,
+    ) -> Result<Self::Buffer, OitError>;
+    /// A geometry pass that has work only where word 0 of `flag` (left by the frame's earlier
+    /// passes) is not zero: gated on the device where the raster can gate its work (no round
+    /// trip, the pass counted on the device where it runs), else the flag is read back first.
+    #[expect(clippy::too_many_arguments, reason = "a geometry pass and its gate")]
+    fn geometry_pass_if(
+        &mut self,
+        raster: &R,
+        module: &'static str,
+        buffers: &[&Self::Buffer],
+        pass: u32,
+        param: u32,
+        flag: &Self::Buffer,
+    ) -> Result<(), OitError>;
+    /// Whether the fragments of the scene are counted yet (the frame's first scene pass ran).
+    fn fragments(&self) -> GpuFragments;
+    /// Sets what [`Frame::fragments`] says: a pass over something else than the scene (the
+    /// bounding boxes of bdp's and adp's bounds) leaves the scene's count as it was.
+    fn set_fragments(&mut self, fragments: GpuFragments);
+
+    /// Runs compute `entry` of `module` once per pixel.
+    fn pixel_kernel(
+        &mut self,
+        module: &'static str,
+        entry: &'static str,
+        buffers: &[&Self::Buffer],
+        pass: u32,
+        param: u32,
+    ) -> Result<(), OitError> {
+        let pixels = u64::from(self.pixels());
+        self.kernel_over(module, entry, buffers, pixels, pass, param, entry)
+    }
+    /// Runs compute `entry` of `module` over `invocations` invocations, timed under `label`.
+    #[expect(clippy::too_many_arguments, reason = "a dispatch is that many things")]
+    fn kernel_over(
+        &mut self,
+        module: &'static str,
+        entry: &'static str,
+        buffers: &[&Self::Buffer],
+        invocations: u64,
+        pass: u32,
+        param: u32,
+        label: &'static str,
+    ) -> Result<(), OitError>;
+
+    /// The deepest pixel of a counting pass whose count lies in word 0 of `max`: an earlier
+    /// frame's where the frame speculates (checked at its end, where a frame whose count is not
+    /// `alike` runs again), else read back now and kept for the next frame.
+    fn deepest_alike(
+        &mut self,
+        max: &Self::Buffer,
+        alike: Box<dyn Fn(u32, u32) -> bool>,
+    ) -> Result<u32, OitError>;
+    /// [`Frame::deepest_alike`] where only an equal count will do.
+    fn deepest(&mut self, max: &Self::Buffer) -> Result<u32, OitError> {
+        self.deepest_alike(max, Box::new(|speculated, counted| speculated == counted))
+    }
+    /// The capacity, in elements of `bytes` bytes, of arrays sized by the count in word 0 of
+    /// `count` (dfb's and ll's fragment total): that count rounded up to its size class, an
+    /// earlier frame's where the frame speculates (checked at the end), else read back now.
+    fn fragment_capacity(&mut self, count: &Self::Buffer, bytes: u64) -> Result<u32, OitError>;
+    /// The passes an earlier frame's peel loop ran at this view's kind, where this frame may
+    /// record that many without reading back in between (taken: the next call gives `None`).
+    fn take_speculated_peels(&mut self, raster: &R) -> Result<Option<u32>, OitError>;
+    /// The passes this frame's peel loop ran reading back, kept for the next frame.
+    fn note_peels(&mut self, peels: u32);
+    /// Word 0 of `flag` must be 0 at the frame's end; where it is not, the frame ran on a wrong
+    /// speculation and runs again.
+    fn check_at_end(&mut self, flag: &Self::Buffer);
+    /// Where a tail pass counts the fragments it merged (word 1 of `words`), read with the
+    /// frame's end.
+    fn note_merged(&mut self, words: &Self::Buffer);
+    /// The per-pixel fragment counts the frame hands back as its `layers` (the reference's).
+    fn note_layers(&mut self, counts: &Self::Buffer);
+
+    /// adp's histogram pass by a capture of the backend's own (logic-op OR into render targets
+    /// on Vulkan's hardware path under `--hardware-capture blend`), over adp's `buffers`: `true`
+    /// where it ran, `false` where the backend has none and the atomic capture runs instead.
+    fn histogram_capture(&mut self, raster: &R, buffers: &[&Self::Buffer]) -> Result<bool, OitError> {
+        let _ = (raster, buffers);
+        Ok(false)
+    }
+}
+
+/// The rasterizers of a frame: the scene's, and one over the instances' bounding boxes (bdp's and
+/// adp's `--bounds boxes`), made where a frame asks for it.
+pub trait Rasters<R: ?Sized> {
+    /// Rasterizes the scene.
+    fn scene(&self) -> &R;
+    /// Makes a rasterizer of the instances' bounding boxes and runs `pass` with it.
+    fn with_boxes(&self, pass: &mut dyn FnMut(&R) -> Result<(), OitError>) -> Result<(), OitError>;
+}

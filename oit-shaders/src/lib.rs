@@ -1,0 +1,385 @@
+//! oit's GPU shader tree, and the one manifest of how its modules are put together.
+//!
+//! Every technique runs on the GPU as WGSL. Both GPU backends run the same text: oit-wgpu hands
+//! it to wgpu at run time, oit-vulkan's build script compiles it to SPIR-V with naga. This crate
+//! holds the tree (`wgsl/`) and says, once, what each module is made of:
+//!
+//! - `wgsl/core/`: what every module shares ([`COMMON`]: oit-core's rules and the fragment
+//!   contract; [`PRELUDE`]: group 0's frame bindings and the resolve), the two rasterizers
+//!   ([`COMPUTE_RASTER`], [`HARDWARE_RASTER`] over [`CAPTURE_RENDER`]), the compute path's setup
+//!   ([`SETUP`]) and the small kernels of the frame (fill, finish, gate).
+//! - `wgsl/technique/`: one file per technique, and the accessor files through which a
+//!   technique reaches its atomic arrays. An accessor is one storage kind of an array: over a
+//!   buffer (`fabs_counters.wgsl`, `mdts_words.wgsl`, `mdts_keys.wgsl`) or over a storage image
+//!   (the same functions in `*_image.wgsl`). A module names the accessor its storage kind needs
+//!   ([`Module::sources`]); the technique's own file is the same in both.
+//! - `wgsl/vulkan/`: captures only raw Vulkan can run (adp's histogram by logic-op OR, the
+//!   ordered k-buffer inside the fragment shader interlock).
+//!
+//! [`MODULES`] lists every module: its sources, in the order they are joined, and what follows
+//! them ([`Tail`]). A module's full text is [`Module::compute_text`] (or, for its hardware-raster
+//! twin, [`Module::hardware_text`]); oit-wgpu builds its pipelines from exactly these, and
+//! oit-vulkan's build script compiles exactly these.
+//!
+//! ```
+//! let fabs = oit_shaders::module("fabs").expect("a module of the manifest");
+//! // the buffer accessor, the technique, its tail
+//! assert_eq!(fabs.sources, ["technique/fabs_counters.wgsl", "technique/fabs.wgsl", "technique/tail.wgsl"]);
+//! assert!(fabs.compute_text().contains("fn raster_main"));
+//! ```
+//!
+//! The crate has no dependencies: oit-vulkan's build script depends on it, and a build
+//! dependency is compiled a second time for the build.
+
+/// `(path under wgsl/, text)` of every file of the tree.
+macro_rules! files {
+    ($($path:literal),* $(,)?) => {
+        /// Every WGSL file of the tree: its path under `wgsl/` and its text.
+        pub const FILES: &[(&str, &str)] = &[$(($path, include_str!(concat!("../wgsl/", $path)))),*];
+    };
+}
+
+files!(
+    "core/atomic_result.wgsl",
+    "core/blit.wgsl",
+    "core/capture_render.wgsl",
+    "core/common.wgsl",
+    "core/count_sum_texture.wgsl",
+    "core/fill.wgsl",
+    "core/finish.wgsl",
+    "core/fragment.wgsl",
+    "core/gate.wgsl",
+    "core/prelude.wgsl",
+    "core/raster_compute.wgsl",
+    "core/raster_hardware.wgsl",
+    "core/resolve.wgsl",
+    "core/setup.wgsl",
+    "core/softfloat.wgsl",
+    "technique/adp.wgsl",
+    "technique/bdp.wgsl",
+    "technique/bdp_blend.wgsl",
+    "technique/blend.wgsl",
+    "technique/bounds.wgsl",
+    "technique/count.wgsl",
+    "technique/ddp.wgsl",
+    "technique/ddp_blend.wgsl",
+    "technique/dfb.wgsl",
+    "technique/dfb_count.wgsl",
+    "technique/dp.wgsl",
+    "technique/dp_depth.wgsl",
+    "technique/fabs.wgsl",
+    "technique/fabs_counters.wgsl",
+    "technique/fabs_counters_image.wgsl",
+    "technique/ll.wgsl",
+    "technique/ll_size.wgsl",
+    "technique/mdts.wgsl",
+    "technique/mdts_keys.wgsl",
+    "technique/mdts_keys_image.wgsl",
+    "technique/mdts_words.wgsl",
+    "technique/mdts_words_image.wgsl",
+    "technique/mlp.wgsl",
+    "technique/plain.wgsl",
+    "technique/reference.wgsl",
+    "technique/scan.wgsl",
+    "technique/sort_entries.wgsl",
+    "technique/tail.wgsl",
+    "technique/weighted.wgsl",
+    "vulkan/adp_logic.wgsl",
+    "vulkan/count_sum.wgsl",
+    "vulkan/kbuf.wgsl",
+    "vulkan/no_capture.wgsl",
+);
+
+/// The text of the tree's file at `path` (under `wgsl/`), if there is one.
+pub fn file(path: &str) -> Option<&'static str> {
+    FILES.iter().find(|(p, _)| *p == path).map(|(_, text)| *text)
+}
+
+/// The text of the tree's file at `path`, in a constant: a path not in the tree fails the build
+/// that evaluates it.
+pub const fn text(path: &str) -> &'static str {
+    let mut i = 0;
+    while i < FILES.len() {
+        if same(FILES[i].0, path) {
+            return FILES[i].1;
+        }
+        i += 1;
+    }
+    panic!("oit-shaders has no file of that path")
+}
+
+/// `a == b`, in a constant.
+const fn same(a: &str, b: &str) -> bool {
+    let (a, b) = (a.as_bytes(), b.as_bytes());
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut i = 0;
+    while i < a.len() {
+        if a[i] != b[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
+}
+
+/// The text of the tree's file at `path`; for paths written in the code (a missing one is a bug,
+/// which the manifest's test finds for every module).
+fn known(path: &str) -> &'static str {
+    file(path).unwrap_or_else(|| panic!("oit-shaders has no file {path}"))
+}
+
+/// What every module starts with: oit-core's rules (`common.wgsl`) and the fragment contract
+/// (`fragment.wgsl`).
+pub const COMMON: &str =
+    concat!(include_str!("../wgsl/core/common.wgsl"), "\n", include_str!("../wgsl/core/fragment.wgsl"));
+
+/// What a technique module has after [`COMMON`]: group 0's frame bindings (uniform, resolve
+/// state, loss accounting) and the resolve's functions.
+pub const PRELUDE: &str =
+    concat!(include_str!("../wgsl/core/resolve.wgsl"), "\n", include_str!("../wgsl/core/prelude.wgsl"), "\n");
+
+/// The compute rasterizer (the papers' "CUDA rasterizer"), appended to a technique module.
+pub const COMPUTE_RASTER: &str = include_str!("../wgsl/core/raster_compute.wgsl");
+
+/// The GPU's own rasterizer: the vertex stage over the pulled geometry and the fragment stage
+/// that calls the technique's `capture` (entry points `hw_vs`, `hw_fs`).
+pub const HARDWARE_RASTER: &str = include_str!("../wgsl/core/raster_hardware.wgsl");
+
+/// The fragment contract of a render pipeline's capture (what `hw_fs` hands `capture`).
+pub const CAPTURE_RENDER: &str = include_str!("../wgsl/core/capture_render.wgsl");
+
+/// The compute path's setup kernels: the integer f32 of `softfloat.wgsl`, then `setup.wgsl`.
+/// They bind a group 0 of their own: nothing goes before them.
+pub const SETUP: &str =
+    concat!(include_str!("../wgsl/core/softfloat.wgsl"), "\n", include_str!("../wgsl/core/setup.wgsl"));
+
+/// [`HARDWARE_RASTER`]'s vertex stage alone (up to its fragment entry point): the blend
+/// captures put their own fragment stages after it.
+pub fn vertex_stage() -> &'static str {
+    HARDWARE_RASTER.split_once("@fragment").map_or(HARDWARE_RASTER, |(vertex, _)| vertex)
+}
+
+/// What follows a module's sources.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Tail {
+    /// Nothing: the module is kernels only.
+    Kernels,
+    /// The compute rasterizer; and, as the module's hardware-raster twin (`<name>_hw` in
+    /// oit-vulkan), [`CAPTURE_RENDER`] and [`HARDWARE_RASTER`].
+    Raster,
+    /// Nothing, and nothing before: the sources alone, without [`COMMON`] (the setup kernels,
+    /// which bind a group 0 of their own).
+    Alone,
+    /// [`vertex_stage`] alone: a blend capture's module, with fragment entry points of its own.
+    Stage,
+}
+
+/// One module of the manifest.
+#[derive(Clone, Copy, Debug)]
+pub struct Module {
+    /// The module's name, by which a technique asks for it.
+    pub name: &'static str,
+    /// Its sources under `wgsl/`, in the order they are joined (by a newline).
+    pub sources: &'static [&'static str],
+    /// What follows them.
+    pub tail: Tail,
+}
+
+impl Module {
+    /// The module's own sources, joined: what a technique's passes add after [`COMMON`] and
+    /// [`PRELUDE`].
+    pub fn source(&self) -> String {
+        self.sources.iter().map(|p| known(p)).collect::<Vec<_>>().join("\n")
+    }
+
+    /// The module's text up to its tail: [`COMMON`], [`PRELUDE`] and [`Module::source`] (the
+    /// sources alone for [`Tail::Alone`]).
+    pub fn kernels_text(&self) -> String {
+        match self.tail {
+            Tail::Alone => self.source(),
+            _ => format!("{COMMON}\n{PRELUDE}{}", self.source()),
+        }
+    }
+
+    /// The module's full text for compute pipelines: [`Module::kernels_text`], then the compute
+    /// rasterizer where its tail is [`Tail::Raster`], or the vertex stage for [`Tail::Stage`].
+    pub fn compute_text(&self) -> String {
+        let text = self.kernels_text();
+        match self.tail {
+            Tail::Kernels | Tail::Alone => text,
+            Tail::Raster => format!("{text}\n{COMPUTE_RASTER}"),
+            Tail::Stage => format!("{text}\n{}", vertex_stage()),
+        }
+    }
+
+    /// The module's hardware-raster twin (for [`Tail::Raster`] modules): [`Module::kernels_text`],
+    /// [`CAPTURE_RENDER`] and [`HARDWARE_RASTER`].
+    pub fn hardware_text(&self) -> Option<String> {
+        (self.tail == Tail::Raster)
+            .then(|| format!("{}\n{CAPTURE_RENDER}\n{HARDWARE_RASTER}", self.kernels_text()))
+    }
+}
+
+/// The module called `name`.
+pub fn module(name: &str) -> Option<&'static Module> {
+    MODULES.iter().find(|m| m.name == name)
+}
+
+const fn m(name: &'static str, sources: &'static [&'static str], tail: Tail) -> Module {
+    Module { name, sources, tail }
+}
+
+use Tail::{Alone, Kernels, Raster, Stage};
+
+/// Every module both GPU backends build, each written once.
+pub const MODULES: &[Module] = &[
+    m("fill", &["core/fill.wgsl"], Kernels),
+    m("finish", &["core/finish.wgsl"], Kernels),
+    m("gate", &["core/gate.wgsl"], Kernels),
+    m("count", &["technique/count.wgsl"], Raster),
+    m("reference", &["technique/reference.wgsl", "technique/sort_entries.wgsl"], Raster),
+    m("fabs", &["technique/fabs_counters.wgsl", "technique/fabs.wgsl", "technique/tail.wgsl"], Raster),
+    // `--atomic-storage image`: the same technique over the storage-image accessor
+    m(
+        "fabs_image",
+        &[
+            "core/atomic_result.wgsl",
+            "technique/fabs_counters_image.wgsl",
+            "technique/fabs.wgsl",
+            "technique/tail.wgsl",
+        ],
+        Raster,
+    ),
+    m("weighted", &["technique/weighted.wgsl"], Raster),
+    m("plain", &["technique/plain.wgsl"], Raster),
+    m(
+        "mdts",
+        &[
+            "technique/mdts_words.wgsl",
+            "technique/mdts_keys.wgsl",
+            "technique/mdts.wgsl",
+            "technique/tail.wgsl",
+        ],
+        Raster,
+    ),
+    m(
+        "mdts_image",
+        &[
+            "core/atomic_result.wgsl",
+            "technique/mdts_words_image.wgsl",
+            "technique/mdts_keys.wgsl",
+            "technique/mdts.wgsl",
+            "technique/tail.wgsl",
+        ],
+        Raster,
+    ),
+    m(
+        "mdts64_image",
+        &[
+            "core/atomic_result.wgsl",
+            "technique/mdts_words.wgsl",
+            "technique/mdts_keys_image.wgsl",
+            "technique/mdts.wgsl",
+            "technique/tail.wgsl",
+        ],
+        Raster,
+    ),
+    m("dp", &["technique/dp.wgsl"], Raster),
+    m("ddp", &["technique/ddp.wgsl"], Raster),
+    m("mlp", &["technique/mlp.wgsl"], Raster),
+    m("bounds", &["technique/bounds.wgsl"], Raster),
+    m("bdp", &["technique/bdp.wgsl"], Raster),
+    m("adp", &["technique/adp.wgsl"], Raster),
+    m("dfb_count", &["technique/dfb_count.wgsl"], Raster),
+    m("dfb", &["technique/dfb.wgsl", "technique/sort_entries.wgsl"], Raster),
+    m("ll_size", &["technique/ll_size.wgsl"], Raster),
+    m("ll", &["technique/ll.wgsl"], Raster),
+    // kbuf (oit-vulkan): its hardware twin's fragment stage runs in an ordered interlock (the
+    // build script's rewrite); the compute twin is only its resolve (the compute path refuses
+    // kbuf)
+    m("kbuf", &["vulkan/kbuf.wgsl"], Raster),
+    m("count_sum", &["vulkan/count_sum.wgsl"], Kernels),
+    m("setup", &["core/softfloat.wgsl", "core/setup.wgsl"], Alone),
+    m("scan", &["technique/scan.wgsl"], Kernels),
+    m("nothing", &["vulkan/no_capture.wgsl"], Raster),
+    // the blend captures: the hardware raster's vertex stage and fragment stages of their own
+    m("blend", &["technique/weighted.wgsl", "technique/blend.wgsl"], Stage),
+    m("bdp_blend", &["technique/bdp_blend.wgsl"], Stage),
+    m("dp_depth", &["technique/dp_depth.wgsl"], Stage),
+    m("ddp_blend", &["technique/ddp_blend.wgsl"], Stage),
+    m("adp_logic", &["technique/adp.wgsl", "vulkan/adp_logic.wgsl"], Stage),
+];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every source a module names is a file of the tree, every file of the tree is on disk
+    /// under `wgsl/` and listed, and no module name repeats. Fails when a module names a
+    /// misspelt path, a file is added to `wgsl/` without a `files!` line, or a module is listed
+    /// twice.
+    #[test]
+    fn manifest_names_the_tree() {
+        for m in MODULES {
+            for s in m.sources {
+                assert!(file(s).is_some(), "module {} names {s}, which is not in FILES", m.name);
+            }
+            assert_eq!(MODULES.iter().filter(|n| n.name == m.name).count(), 1, "{} twice", m.name);
+        }
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("wgsl");
+        let mut on_disk = Vec::new();
+        for dir in std::fs::read_dir(&root).expect("wgsl/") {
+            let dir = dir.expect("entry").path();
+            for f in std::fs::read_dir(&dir).expect("a folder of wgsl/") {
+                let f = f.expect("entry").path();
+                let rel = f.strip_prefix(&root).expect("under wgsl/").to_string_lossy().replace('\\', "/");
+                on_disk.push(rel);
+            }
+        }
+        on_disk.sort();
+        let mut listed: Vec<String> = FILES.iter().map(|(p, _)| p.to_string()).collect();
+        listed.sort();
+        assert_eq!(on_disk, listed, "wgsl/ and FILES differ");
+    }
+
+    /// The two storage kinds of an accessor define the same functions: every `fn` of the buffer
+    /// file is a `fn` of its image twin. Fails when one side gains or renames a function.
+    #[test]
+    fn accessor_twins_define_the_same_functions() {
+        let fns = |path: &str| -> Vec<String> {
+            let mut names: Vec<String> = known(path)
+                .lines()
+                .filter_map(|l| l.trim_start().strip_prefix("fn "))
+                .map(|rest| rest.split('(').next().unwrap_or("").trim().to_string())
+                .collect();
+            names.sort();
+            names
+        };
+        for (buffer, image) in [
+            ("technique/fabs_counters.wgsl", "technique/fabs_counters_image.wgsl"),
+            ("technique/mdts_words.wgsl", "technique/mdts_words_image.wgsl"),
+            ("technique/mdts_keys.wgsl", "technique/mdts_keys_image.wgsl"),
+        ] {
+            assert_eq!(fns(buffer), fns(image), "{buffer} and {image}");
+            assert!(!fns(buffer).is_empty(), "{buffer} defines no function");
+        }
+    }
+
+    /// The texts are assembled as documented: common, prelude, sources, tail. Fails when a tail
+    /// is dropped or the order changes.
+    #[test]
+    fn texts_are_assembled_in_order() {
+        let fabs = module("fabs").expect("fabs");
+        let text = fabs.compute_text();
+        let at = |needle: &str| text.find(needle).unwrap_or_else(|| panic!("{needle} missing"));
+        assert!(at(COMMON) < at(PRELUDE));
+        assert!(at(PRELUDE) < at(&fabs.source()));
+        assert!(at(&fabs.source()) < at(COMPUTE_RASTER));
+        let hw = fabs.hardware_text().expect("a raster module has a hardware twin");
+        assert!(hw.ends_with(HARDWARE_RASTER) && hw.contains(CAPTURE_RENDER));
+        assert!(module("scan").and_then(Module::hardware_text).is_none());
+        assert_eq!(module("setup").expect("setup").compute_text(), SETUP);
+    }
+}
