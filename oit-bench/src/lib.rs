@@ -263,7 +263,9 @@ pub struct Row {
     /// Scene fragments resolved per second: `fragments / time_ms`, in 10⁹ per second.
     pub gfrag_per_s: f64,
     /// Error pixel rate against the same backend/path's reference, a fraction in [0, 1]
-    /// (`report.md` and the plots show it in per cent).
+    /// (`report.md` and the plots show it in per cent); NaN, written `null`, when the frame
+    /// covered no pixel (`n/a` in `report.md`, left out of the plots).
+    #[serde(deserialize_with = "nan_if_null")]
     pub epr: f64,
     /// PSNR in dB against it; null when identical.
     pub psnr: Option<f64>,
@@ -277,6 +279,12 @@ pub struct Row {
     /// ([`model::geometry_passes`]); 0 in reports written before the model.
     #[serde(default)]
     pub model_passes: u32,
+}
+
+/// Reads a number that may be `null`: serde_json writes a NaN (an EPR over no covered pixel) as
+/// `null`, so a report with such a row reads back as it was written.
+fn nan_if_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 /// A run that failed.
@@ -320,7 +328,8 @@ pub struct MatrixEntry {
     /// The largest channel difference between the two images, 8-bit steps.
     pub max_diff: u32,
     /// The share of covered pixels that differ by more than 1 step, a fraction in [0, 1]
-    /// (`report.md` shows it in per cent).
+    /// (`report.md` shows it in per cent); NaN, written `null`, when no pixel is covered.
+    #[serde(deserialize_with = "nan_if_null")]
     pub epr: f64,
     /// The largest channel difference over pixels off projected triangle edges (more than a pixel
     /// from every edge), 8-bit steps: where a hardware rasterizer may cover other fragments than

@@ -86,3 +86,53 @@ fn absurd_numbers_are_refused_when_read_back() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn a_row_that_covered_nothing_round_trips_as_not_available() {
+    // Issue 41.4: a frame that covers no pixel has no EPR (NaN, written `null`); the replot once
+    // refused its own report ("invalid type: null, expected f64") and report.md printed PSNR
+    // `inf`, a perfect score. Mutations caught: dropping `nan_if_null` from `Row::epr` (the read
+    // fails), `check_numbers` checking a NaN EPR's range (the read fails), `psnr_cell` without
+    // its NaN arm (`inf` in the row), `percent` without its NaN arm (`NaN` in the row).
+    let dir = scratch("empty");
+    let mut empty = report(f64::NAN, 1.0, 2.0);
+    write_report(&mut empty, &dir).unwrap();
+    let json = std::fs::read_to_string(dir.join("report.json")).unwrap();
+    assert!(json.contains("\"epr\": null"), "the empty row's EPR is written as null");
+    let again = read_report(&dir).expect("a report with an empty row reads back");
+    assert!(again.rows[1].epr.is_nan() && again.rows[0].epr == 0.0);
+    // and draws again (`--replot`), the empty row shown as n/a, never as a number
+    let mut again = again;
+    again.files.clear();
+    write_report(&mut again, &dir).unwrap();
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    let line = md.lines().find(|l| l.starts_with("| wavg | cpu |")).expect("the empty row's line");
+    assert!(line.ends_with("| n/a | n/a |"), "{line}");
+    assert!(!md.contains("NaN"), "{md}");
+    read_report(&dir).expect("the redrawn report reads back too");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn every_timing_field_is_checked_when_read_back() {
+    // Issue 41.4: ±1e308 in the steady, latency and readback wall times was accepted and printed
+    // as 309-digit numbers. Mutation caught: leaving any of the three (or gpu_ms) out of
+    // `check_numbers`' list of spreads; `check_spread` without its order check (the last case).
+    let dir = scratch("timing");
+    std::fs::create_dir_all(&dir).unwrap();
+    let spread = |median: f64, min: f64, max: f64| serde_json::json!({"median": median, "min": min, "max": max, "q1": median, "q3": median, "samples": 3});
+    for (field, value, named) in [
+        ("steady_wall_ms", spread(1e308, 1e308, 1e308), "rows[1].steady_wall_ms.median"),
+        ("latency_wall_ms", spread(-1e308, -1e308, -1e308), "rows[1].latency_wall_ms.median"),
+        ("readback_wall_ms", spread(1.0, 1.0, 1e308), "rows[1].readback_wall_ms.max"),
+        ("gpu_ms", spread(1.0, -1.0, 1.0), "rows[1].gpu_ms.min"),
+        ("steady_wall_ms", spread(5.0, 1.0, 2.0), "rows[1].steady_wall_ms is out of order"),
+    ] {
+        let mut value_report = serde_json::to_value(report(0.1, 1.0, 2.0)).unwrap();
+        value_report["rows"][1][field] = value;
+        std::fs::write(dir.join("report.json"), value_report.to_string()).unwrap();
+        let message = read_report(&dir).expect_err(named).to_string();
+        assert!(message.contains(named) && message.contains("report.json"), "{named}: {message}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -42,15 +42,25 @@ pub fn bytes(n: u64) -> String {
     if unit == 0 { format!("{n} B") } else { format!("{v:.1} {}", UNITS[unit]) }
 }
 
-/// A PSNR in dB, `inf` for identical images.
+/// A PSNR in dB, `inf` for identical images, `n/a` for the NaN of a frame that covered no pixel.
 pub fn psnr(db: f64) -> String {
-    if db.is_infinite() { "inf".into() } else { format!("{db:.2}") }
+    if db.is_nan() {
+        NOT_MEASURED.into()
+    } else if db.is_infinite() {
+        "inf".into()
+    } else {
+        format!("{db:.2}")
+    }
 }
 
-/// A fraction as a percentage.
+/// A fraction as a percentage; `n/a` for the NaN of a frame that covered no pixel (an error rate
+/// over no pixel is no score, least of all a perfect one).
 pub fn percent(fraction: f64) -> String {
-    format!("{:.3}", fraction * 100.0)
+    if fraction.is_nan() { NOT_MEASURED.into() } else { format!("{:.3}", fraction * 100.0) }
 }
+
+/// What a table shows for an EPR or PSNR over no covered pixel.
+pub const NOT_MEASURED: &str = "n/a";
 
 /// A left-aligned first columns, right-aligned numbers table that prints row by row.
 pub struct Table {

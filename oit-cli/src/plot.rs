@@ -22,7 +22,9 @@ type Line = (String, String, Vec<(f64, f64)>);
 pub fn epr_plot(path: &Path, records: &[Record], scene: &str, elevation: f32) -> Result<(), OitError> {
     // Series in first-seen order: the order of --techniques.
     let mut series: Vec<Line> = Vec::new();
-    for r in records {
+    // a view that covered no pixel has no EPR (NaN): left out, not drawn at the floor as a perfect
+    // score
+    for r in records.iter().filter(|r| !r.epr.is_nan()) {
         let point = (f64::from(r.azimuth), (r.epr * 100.0).max(FLOOR_PERCENT));
         let label = r.label();
         match series.iter_mut().find(|(t, b, _)| *t == r.technique && *b == label) {

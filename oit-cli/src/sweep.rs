@@ -225,13 +225,19 @@ fn summary(records: &[Record], techniques: &[Technique]) -> String {
                 .collect();
             let n = rows.len() as f64;
             let mean = |f: fn(&Record) -> f64| rows.iter().map(|r| f(r)).sum::<f64>() / n;
-            let max_epr = rows.iter().map(|r| r.epr).fold(0.0, f64::max);
+            // EPR over the views that covered a pixel (NaN: none covered); n/a when none did
+            let eprs: Vec<f64> = rows.iter().map(|r| r.epr).filter(|e| !e.is_nan()).collect();
+            let (mean_epr, max_epr) = if eprs.is_empty() {
+                (f64::NAN, f64::NAN)
+            } else {
+                (eprs.iter().sum::<f64>() / eprs.len() as f64, eprs.iter().copied().fold(0.0, f64::max))
+            };
             text.push_str(&table.row(&[
                 key.0.clone(),
                 key.1.clone(),
                 key.2.clone(),
                 rows.len().to_string(),
-                output::percent(mean(|r| r.epr)),
+                output::percent(mean_epr),
                 output::percent(max_epr),
                 format!("{:.1}", mean(|r| r.stats.lost as f64)),
                 format!("{:.2}", mean(|r| r.stats.wall_ms)),
@@ -240,4 +246,39 @@ fn summary(records: &[Record], techniques: &[Technique]) -> String {
         }
     }
     text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(azimuth: f32, epr: f64) -> Record {
+        Record {
+            azimuth,
+            technique: "dp".into(),
+            backend: "cpu".into(),
+            raster: "cpu".into(),
+            stats: Stats::default(),
+            epr,
+            psnr: None,
+            max_error: 0.0,
+        }
+    }
+
+    #[test]
+    fn views_that_cover_nothing_are_not_available_not_scores() {
+        // Issue 41.4: a view that covers no pixel has a NaN EPR; the summary printed mean EPR
+        // `NaN` and, when every view was empty, max EPR 0.000 (a perfect score). Mutations caught:
+        // averaging over every view (NaN in the mean), folding the max from 0 over every view
+        // (0.000 when all are empty), `output::percent` without its NaN arm.
+        let techniques = Technique::parse_list("dp").unwrap();
+        let all_empty = summary(&[record(0.0, f64::NAN), record(90.0, f64::NAN)], &techniques);
+        let row = all_empty.lines().last().unwrap();
+        assert!(row.contains("n/a") && !row.contains("NaN") && !row.contains("0.000"), "{row}");
+        let some_empty = summary(&[record(0.0, f64::NAN), record(90.0, 0.5)], &techniques);
+        let row = some_empty.lines().last().unwrap();
+        // mean and max over the one view that covered pixels: 50 %
+        assert_eq!(row.matches("50.000").count(), 2, "{row}");
+        assert!(!row.contains("NaN") && !row.contains("n/a"), "{row}");
+    }
 }
