@@ -68,6 +68,13 @@ pub struct FrameUniform {
     pub lens: [f32; 4],
 }
 
+/// Workgroups of 64 for `invocations` invocations, as (x, y) with x ≤ 65535 (a kernel finds its
+/// invocation's index from both: `kernel_pixel` in prelude.wgsl).
+pub fn dispatch_size(invocations: u64) -> (u32, u32) {
+    let groups = invocations.div_ceil(64);
+    if groups <= 65_535 { (groups as u32, 1) } else { (65_535, groups.div_ceil(65_535) as u32) }
+}
+
 /// Initial contents of a storage buffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Init {

@@ -10,21 +10,17 @@ use ash::vk;
 use oit_core::plan::Plan;
 use oit_core::{Camera, Effect, Frame, Image, OitError, Scene, Settings, Stats};
 
-use crate::device::{Blend, Buffer, Framebuffer, Gpu, GpuImage, GraphicsDesc, PassKey, SetKind};
+use crate::device::{
+    Blend, Buffer, Framebuffer, Gpu, GpuImage, GraphicsDesc, PassKey, SetKind, storage_usage,
+};
 use crate::hardware::HardwareRaster;
 use crate::raster::{ComputeRaster, Raster};
 use crate::record::SetData;
 use crate::record::{Recorder, Vertices};
+use oit_gpu::dispatch_size;
 
 pub(crate) use oit_gpu::{ACCT_BINDING, FrameUniform};
 use oit_gpu::{MIN_BUFFER_WORDS, STATE_WORDS};
-
-/// Usage of every storage buffer.
-pub(crate) fn storage_usage() -> vk::BufferUsageFlags {
-    vk::BufferUsageFlags::STORAGE_BUFFER
-        | vk::BufferUsageFlags::TRANSFER_SRC
-        | vk::BufferUsageFlags::TRANSFER_DST
-}
 
 /// A framebuffer the pool keeps: its render pass, its images (in attachment order), itself.
 type KeptFramebuffer = (vk::RenderPass, Vec<vk::Image>, Rc<Framebuffer>);
@@ -1140,12 +1136,6 @@ impl VkCtx<'_> {
         }
         Ok(frame)
     }
-}
-
-/// Workgroups of 64 for `invocations`, as (x, y) with x ≤ 65535.
-pub(crate) fn dispatch_size(invocations: u64) -> (u32, u32) {
-    let groups = invocations.div_ceil(64);
-    if groups <= 65_535 { (groups as u32, 1) } else { (65_535, groups.div_ceil(65_535) as u32) }
 }
 
 #[cfg(test)]

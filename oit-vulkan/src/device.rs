@@ -383,7 +383,7 @@ impl Drop for Framebuffer {
 pub struct Gpu {
     cache: Mutex<Cache>,
     /// Recorders' parts left by finished frames, for the next (see `record::Parts`).
-    recorders: Mutex<Vec<crate::record::Parts>>,
+    recorders: Mutex<Vec<Parts>>,
     /// Submissions on the queue that no wait has collected, and the most there have been at once
     /// ([`Gpu::most_in_flight`]).
     in_flight: (std::sync::atomic::AtomicUsize, std::sync::atomic::AtomicUsize),
@@ -796,12 +796,12 @@ impl Gpu {
     }
 
     /// A finished recorder's parts, if one left any.
-    pub(crate) fn take_recorder_parts(&self) -> Option<crate::record::Parts> {
+    pub(crate) fn take_recorder_parts(&self) -> Option<Parts> {
         self.recorders.lock().ok()?.pop()
     }
 
     /// Keeps a finished recorder's (reset) parts for the next frame (a few at most).
-    pub(crate) fn give_recorder_parts(&self, parts: crate::record::Parts) {
+    pub(crate) fn give_recorder_parts(&self, parts: Parts) {
         if let Ok(mut kept) = self.recorders.lock()
             && kept.len() < 4
         {
@@ -1324,7 +1324,7 @@ impl Gpu {
                         SetKind::Frame(n, images) => std::iter::once((0, vk::DescriptorType::UNIFORM_BUFFER))
                             .chain(
                                 (1..=*n as u32 + 1)
-                                    .chain([crate::ctx::ACCT_BINDING])
+                                    .chain([oit_gpu::ACCT_BINDING])
                                     .map(|b| (b, vk::DescriptorType::STORAGE_BUFFER)),
                             )
                             .chain(images.iter().map(|&b| (b, vk::DescriptorType::STORAGE_IMAGE)))
@@ -1492,5 +1492,50 @@ fn blend_state(blend: Blend) -> vk::PipelineColorBlendAttachmentState {
         }
         // the factors are ignored by MAX
         Blend::Max => on(one, one, vk::BlendOp::MAX),
+    }
+}
+
+/// Usage of every storage buffer.
+pub(crate) fn storage_usage() -> vk::BufferUsageFlags {
+    vk::BufferUsageFlags::STORAGE_BUFFER
+        | vk::BufferUsageFlags::TRANSFER_SRC
+        | vk::BufferUsageFlags::TRANSFER_DST
+}
+
+/// What a recorder is made of on the device: a command pool and buffer, a fence, a descriptor
+/// pool, the uniform ring, the query pools, and host buffers (staging, readback) free for reuse.
+/// A recorder's drop leaves them, reset, in its [`Gpu`]'s cache for the next frame
+/// (`Gpu::take_recorder_parts`; `record.rs`'s `Recorder` uses them), so a steady frame creates none; they are destroyed (newest first)
+/// when the cache drops them.
+pub(crate) struct Parts {
+    pub(crate) raw: std::sync::Arc<RawDevice>,
+    pub(crate) pool: vk::CommandPool,
+    pub(crate) cmd: vk::CommandBuffer,
+    pub(crate) fence: vk::Fence,
+    pub(crate) descriptors: vk::DescriptorPool,
+    pub(crate) uniforms: Buffer,
+    /// The timestamp query pool, where the device has timestamps.
+    pub(crate) ts_pool: Option<vk::QueryPool>,
+    /// One occlusion query, for the draws that ask (`Recorder::draw`).
+    pub(crate) occlusion: vk::QueryPool,
+    /// Host-visible buffers free for reuse (staging and readback), newest last.
+    pub(crate) spare: Vec<std::rc::Rc<Buffer>>,
+}
+
+impl Drop for Parts {
+    fn drop(&mut self) {
+        // SAFETY: all made from this device; nothing is in flight (a recorder waits for its
+        // own submission before it gives its parts up, or idles the queue); destroying a null handle
+        // is a no-op.
+        unsafe {
+            let d = &self.raw.device;
+            if let Some(pool) = self.ts_pool {
+                d.destroy_query_pool(pool, None);
+            }
+            d.destroy_query_pool(self.occlusion, None);
+            d.destroy_descriptor_pool(self.descriptors, None);
+            d.destroy_fence(self.fence, None);
+            d.destroy_command_pool(self.pool, None);
+        }
     }
 }

@@ -23,8 +23,7 @@ use ash::vk;
 use oit_core::pulled::PulledGeometry;
 use oit_core::{Camera, OitError, Scene, Settings};
 
-use crate::ctx::storage_usage;
-use crate::device::{Buffer, COUNT_FORMAT, Framebuffer, Gpu, GpuImage, count_pass_key};
+use crate::device::{Buffer, COUNT_FORMAT, Framebuffer, Gpu, GpuImage, count_pass_key, storage_usage};
 use crate::record::Recorder;
 
 /// What to try when the geometry does not fit in one storage binding.

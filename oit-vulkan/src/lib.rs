@@ -94,13 +94,7 @@ pub use crate::device::{
 
 use crate::ctx::{ReadBack, VkCtx};
 use crate::hardware::HardwareScene;
-use crate::raster::{ComputeBuffers, ComputeRaster, Raster};
-
-/// The rasterizers of one frame: the scene's, and (made on demand) the instances' bounding boxes'.
-pub(crate) struct Drivers<'a> {
-    pub(crate) scene: Raster,
-    pub(crate) boxes: Box<dyn Fn() -> Result<Raster, OitError> + 'a>,
-}
+use crate::raster::{ComputeBuffers, ComputeRaster, Drivers, Raster};
 
 /// The Vulkan backend. The device opens on first use.
 #[derive(Default)]
@@ -471,16 +465,6 @@ fn run_technique(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitEr
         // the rest (adp's histogram by logic-op OR included: `Frame::histogram_capture`) as
         // every GPU backend runs them
         _ => oit_gpu::technique::render(ctx, drivers),
-    }
-}
-
-impl oit_gpu::Rasters<Raster> for Drivers<'_> {
-    fn scene(&self) -> &Raster {
-        &self.scene
-    }
-
-    fn with_boxes(&self, pass: &mut dyn FnMut(&Raster) -> Result<(), OitError>) -> Result<(), OitError> {
-        pass(&(self.boxes)()?)
     }
 }
 

@@ -29,10 +29,10 @@ use oit_core::gpu_setup::{ARGS_ITEMS, ARGS_PER_ITEM, ARGS_WORDS, COUNTER_WORDS, 
 use oit_core::setup::{TRIANGLE_WORDS, TriangleSetup};
 use oit_core::{Camera, OitError, Scene, Settings};
 
-use crate::ctx::{dispatch_size, storage_usage};
-use crate::device::{Buffer, Gpu, SetKind};
+use crate::device::{Buffer, Gpu, SetKind, storage_usage};
 use crate::record::{Recorder, SetData};
 use oit_gpu::TILE;
+use oit_gpu::dispatch_size;
 
 /// Bytes of the smallest triangle and work-list buffers (a binding may not be empty).
 const MIN_BYTES: u64 = 256;
@@ -217,7 +217,7 @@ fn record_setup(
         (6, args),
         (7, &s.verts),
         // group 0's layout always has the accounting binding; setup.wgsl does not use it
-        (crate::ctx::ACCT_BINDING, &s.counters),
+        (oit_gpu::ACCT_BINDING, &s.counters),
     ];
     let gpu = rec.gpu();
     let sets = [SetData::Frame { uniform: bytemuck::cast_slice(uniform), storage: &storage, images: &[] }];
@@ -476,5 +476,21 @@ impl ComputeBuffers {
                 raster_uniform(items.len() as u32),
             ]))),
         })
+    }
+}
+
+/// The rasterizers of one frame: the scene's, and (made on demand) the instances' bounding boxes'.
+pub(crate) struct Drivers<'a> {
+    pub(crate) scene: Raster,
+    pub(crate) boxes: Box<dyn Fn() -> Result<Raster, OitError> + 'a>,
+}
+
+impl oit_gpu::Rasters<Raster> for Drivers<'_> {
+    fn scene(&self) -> &Raster {
+        &self.scene
+    }
+
+    fn with_boxes(&self, pass: &mut dyn FnMut(&Raster) -> Result<(), OitError>) -> Result<(), OitError> {
+        pass(&(self.boxes)()?)
     }
 }

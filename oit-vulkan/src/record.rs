@@ -23,7 +23,7 @@ use std::rc::Rc;
 use ash::vk;
 use oit_core::OitError;
 
-use crate::device::{Buffer, Framebuffer, Gpu, GpuImage, Pipeline};
+use crate::device::{Buffer, Framebuffer, Gpu, GpuImage, Parts, Pipeline};
 
 /// Uniform slots (and dispatches) per submission before a flush.
 pub(crate) const SLOTS: u32 = 256;
@@ -83,44 +83,6 @@ impl Timestamps {
                 Some((_, total)) => *total += ms,
                 None => self.pass_ms.push((label, ms)),
             }
-        }
-    }
-}
-
-/// What a recorder is made of on the device: a command pool and buffer, a fence, a descriptor
-/// pool, the uniform ring, the query pools, and host buffers (staging, readback) free for reuse.
-/// A recorder's drop leaves them, reset, in its [`Gpu`]'s cache for the next frame
-/// (`Gpu::recorder_parts`), so a steady frame creates none; they are destroyed (newest first)
-/// when the cache drops them.
-pub(crate) struct Parts {
-    raw: std::sync::Arc<crate::device::RawDevice>,
-    pool: vk::CommandPool,
-    cmd: vk::CommandBuffer,
-    fence: vk::Fence,
-    descriptors: vk::DescriptorPool,
-    uniforms: Buffer,
-    /// The timestamp query pool, where the device has timestamps.
-    ts_pool: Option<vk::QueryPool>,
-    /// One occlusion query, for the draws that ask (`Recorder::draw`).
-    occlusion: vk::QueryPool,
-    /// Host-visible buffers free for reuse (staging and readback), newest last.
-    spare: Vec<Rc<Buffer>>,
-}
-
-impl Drop for Parts {
-    fn drop(&mut self) {
-        // SAFETY: all made from this device; nothing is in flight (a recorder waits for its
-        // own submission before it gives its parts up, or idles the queue); destroying a null handle
-        // is a no-op.
-        unsafe {
-            let d = &self.raw.device;
-            if let Some(pool) = self.ts_pool {
-                d.destroy_query_pool(pool, None);
-            }
-            d.destroy_query_pool(self.occlusion, None);
-            d.destroy_descriptor_pool(self.descriptors, None);
-            d.destroy_fence(self.fence, None);
-            d.destroy_command_pool(self.pool, None);
         }
     }
 }

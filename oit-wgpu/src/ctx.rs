@@ -164,8 +164,30 @@ pub trait Driver {
     /// oit's own vertex stage of the scene, for techniques with their own render pipelines
     /// (`--hardware-capture blend`); `None` where the draws are not oit's (the compute
     /// rasterizer, the embedded pass).
-    fn scene_stage(&self) -> Option<&crate::hardware::SceneStage> {
+    fn scene_stage(&self) -> Option<&crate::stage::SceneStage> {
         None
+    }
+}
+
+/// The rasterizers of one frame: the scene's, and (made on demand) one for the instances'
+/// bounding boxes, on the same path (bdp and adp render boxes for each pixel's depth range).
+pub struct Drivers<'a> {
+    /// Rasterizes the scene.
+    pub scene: Box<dyn Driver + 'a>,
+    /// Makes a rasterizer of the instances' bounding boxes.
+    pub boxes: Box<dyn Fn() -> Result<Box<dyn Driver + 'a>, OitError> + 'a>,
+}
+
+impl<'a> oit_gpu::Rasters<dyn Driver + 'a> for Drivers<'a> {
+    fn scene(&self) -> &(dyn Driver + 'a) {
+        self.scene.as_ref()
+    }
+
+    fn with_boxes(
+        &self,
+        pass: &mut dyn FnMut(&(dyn Driver + 'a)) -> Result<(), OitError>,
+    ) -> Result<(), OitError> {
+        pass((self.boxes)()?.as_ref())
     }
 }
 

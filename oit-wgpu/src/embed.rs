@@ -111,7 +111,6 @@
 //! # Ok(()) }
 //! ```
 
-use std::cell::RefCell;
 use std::hash::{DefaultHasher, Hash, Hasher};
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
@@ -122,244 +121,13 @@ use oit_core::{
     Aabb, BoundsMode, Camera, Frame, Instance, Mesh, OitError, RasterPath, Scene, Settings, Stats, Technique,
 };
 
-use crate::ctx::{Driver, Gate, Generated, GpuCtx};
-use crate::gpu::{COMMON_WGSL, Gpu};
-use crate::hardware::{HwGeometry, RASTER_WGSL};
+use crate::ctx::{Driver, GpuCtx};
+use crate::gpu::Gpu;
+pub use crate::hardware::{CAPTURE_RENDER_WGSL, CaptureShader, GeometryPass};
+use crate::hardware::{CountTarget, DrawFn, HwGeometry, PipelineFn, RASTER_WGSL, RenderDriver};
 use crate::pool::BufferPool;
 
-/// The fragment side every render-pipeline geometry pass shares (`oit_capture`).
-pub const CAPTURE_RENDER_WGSL: &str = oit_shaders::CAPTURE_RENDER;
-const COUNT_SUM_WGSL: &str = oit_shaders::text("core/count_sum_texture.wgsl");
 const BLIT_WGSL: &str = oit_shaders::text("core/blit.wgsl");
-
-/// What the user's pipeline for one capture module is built from.
-pub struct CaptureShader<'a> {
-    /// oit's WGSL: the shared rules, the technique's storage (group 0) and `capture`, and
-    /// `oit_capture` / `oit_capture_full`. Put it in front of the user's own WGSL.
-    pub wgsl: &'a str,
-    /// The layout of group 0 (first in the user's pipeline layout).
-    pub bind_group_layout: &'a wgpu::BindGroupLayout,
-    /// The pipeline's colour target 0: oit's fragment counter (one channel, additive blending).
-    pub count_target: wgpu::ColorTargetState,
-    /// Which module of the technique this is (passes with the same module share a pipeline).
-    pub key: u64,
-}
-
-/// One geometry pass, as the user's draw closure sees it.
-pub struct GeometryPass<'a> {
-    /// 0 for the first geometry pass of the frame, then 1, 2, ...
-    pub index: u32,
-    /// Group 0 of this pass (already set at index 0 when the closure is called).
-    pub bind_group: &'a wgpu::BindGroup,
-    /// oit's own draws of a gated pass draw from these indirect arguments (the user's draws,
-    /// which oit cannot gate, ignore them: see [`OitPass::record`]).
-    pub(crate) indirect: Option<&'a wgpu::Buffer>,
-}
-
-type PipelineFn<'a> = Box<dyn FnMut(&CaptureShader<'_>) -> wgpu::RenderPipeline + 'a>;
-type DrawFn<'a> = Box<dyn FnMut(&mut wgpu::RenderPass<'_>, &GeometryPass<'_>) + 'a>;
-
-/// A geometry pass on a render pipeline: the user's (or oit's own hardware raster's) pipeline
-/// over the capture module, drawn into a one-channel count target. The [`Driver`] both the
-/// hardware path and the embedded pass run.
-pub(crate) struct RenderDriver<'a> {
-    salt: &'static str,
-    target: CountTarget,
-    pipeline: RefCell<PipelineFn<'a>>,
-    draw: RefCell<DrawFn<'a>>,
-    /// The indirect draw arguments of oit's own draws (the hardware path's), for gated passes.
-    gate: Option<Gate>,
-}
-
-impl<'a> RenderDriver<'a> {
-    /// The buffers and textures a [`CountTarget`] is (the count target and the counter it is
-    /// summed into), for the counters of prepared scenes.
-    pub(crate) const CREATES: u64 = 2;
-
-    /// A driver drawing into `target` (kept by its owner between frames of its size); `salt`
-    /// keeps its pipelines apart in the device's cache.
-    pub(crate) fn with_target(
-        target: CountTarget,
-        salt: &'static str,
-        pipeline: PipelineFn<'a>,
-        draw: DrawFn<'a>,
-    ) -> RenderDriver<'a> {
-        RenderDriver { salt, target, pipeline: RefCell::new(pipeline), draw: RefCell::new(draw), gate: None }
-    }
-
-    /// The driver drawing from `gate.to` in gated passes (oit's own draws: the hardware path).
-    pub(crate) fn with_gate(mut self, gate: Gate) -> Self {
-        self.gate = Some(gate);
-        self
-    }
-}
-
-/// A render-pipeline geometry pass's count target (one channel, additive blending) and the
-/// counter it is summed into: [`RenderDriver::CREATES`] objects, kept between frames of a size.
-#[derive(Clone)]
-pub(crate) struct CountTarget {
-    format: wgpu::TextureFormat,
-    count_view: wgpu::TextureView,
-    sum_layout: wgpu::BindGroupLayout,
-    sum_group: wgpu::BindGroup,
-    total: wgpu::Buffer,
-    size: (u32, u32),
-}
-
-impl CountTarget {
-    /// Its size.
-    pub(crate) fn size(&self) -> (u32, u32) {
-        self.size
-    }
-
-    /// A count target of `width × height`.
-    pub(crate) fn new(gpu: &Gpu, width: u32, height: u32) -> CountTarget {
-        // R16Float counts exactly up to 2048 fragments per pixel and pass; R32Float (blendable
-        // only with FLOAT32_BLENDABLE) up to 2^24.
-        let format = if gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
-            wgpu::TextureFormat::R32Float
-        } else {
-            wgpu::TextureFormat::R16Float
-        };
-        let device = &gpu.device;
-        let count = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("fragment counts"),
-            size: wgpu::Extent3d { width: width.max(1), height: height.max(1), depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
-        let count_view = count.create_view(&Default::default());
-        let total = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("generated"),
-            size: 16,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let sum_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("count sum"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: false },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-            ],
-        });
-        let sum_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("count sum"),
-            layout: &sum_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&count_view),
-                },
-                wgpu::BindGroupEntry { binding: 1, resource: total.as_entire_binding() },
-            ],
-        });
-        CountTarget { format, count_view, sum_layout, sum_group, total, size: (width, height) }
-    }
-}
-
-/// The colour target a capture pipeline writes: the fragment counter.
-fn count_target(format: wgpu::TextureFormat) -> wgpu::ColorTargetState {
-    let add = wgpu::BlendComponent {
-        src_factor: wgpu::BlendFactor::One,
-        dst_factor: wgpu::BlendFactor::One,
-        operation: wgpu::BlendOperation::Add,
-    };
-    wgpu::ColorTargetState {
-        format,
-        blend: Some(wgpu::BlendState { color: add, alpha: add }),
-        write_mask: wgpu::ColorWrites::RED,
-    }
-}
-
-impl Driver for RenderDriver<'_> {
-    fn path(&self) -> RasterPath {
-        RasterPath::Hardware
-    }
-
-    fn geometry_pass(
-        &self,
-        ctx: &mut GpuCtx<'_>,
-        source: &str,
-        layout0: &wgpu::BindGroupLayout,
-        group0: &wgpu::BindGroup,
-    ) -> Result<Generated, OitError> {
-        let wgsl = format!("{COMMON_WGSL}\n{source}\n{CAPTURE_RENDER_WGSL}");
-        let mut h = DefaultHasher::new();
-        wgsl.hash(&mut h);
-        let module_key = h.finish();
-        self.salt.hash(&mut h);
-        self.target.format.hash(&mut h);
-        let pipeline = ctx.gpu.render_pipeline(h.finish(), self.salt, || {
-            (self.pipeline.borrow_mut())(&CaptureShader {
-                wgsl: &wgsl,
-                bind_group_layout: layout0,
-                count_target: count_target(self.target.format),
-                key: module_key,
-            })
-        })?;
-        let index = ctx.passes;
-        let indirect = if ctx.gated_pass { self.gate.as_ref().map(|g| &g.to) } else { None };
-        let mut encoder = ctx.take_encoder();
-        {
-            let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("geometry"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &self.target.count_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: ctx.render_timestamps(),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            rpass.set_pipeline(&pipeline);
-            rpass.set_bind_group(0, group0, &[]);
-            (self.draw.borrow_mut())(&mut rpass, &GeometryPass { index, bind_group: group0, indirect });
-        }
-        ctx.finish_timed("geometry", encoder)?;
-        let sum = ctx.gpu.compute_pipeline(COUNT_SUM_WGSL, "count_sum_main", &[&self.target.sum_layout])?;
-        let encoder = ctx.encoder();
-        encoder.clear_buffer(&self.target.total, 0, None);
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&sum);
-            pass.set_bind_group(0, &self.target.sum_group, &[]);
-            pass.dispatch_workgroups(self.target.size.0.div_ceil(8), self.target.size.1.div_ceil(8), 1);
-        }
-        Ok(Generated(self.target.total.clone()))
-    }
-
-    fn gate(&self) -> Option<Gate> {
-        self.gate.as_ref().map(|g| Gate { from: g.from.clone(), to: g.to.clone(), words: g.words })
-    }
-}
 
 /// oit's capture and resolve, embedded in a wgpu user's frame (see the module docs).
 pub struct OitPass {
@@ -528,7 +296,7 @@ impl OitPass {
         let drivers = self.drivers(Box::new(pipeline), Box::new(draw));
         let mut ctx =
             GpuCtx::with_pool(&self.gpu, &self.scene, &self.camera, &self.settings, Some(&self.pool))?;
-        crate::run_technique(&mut ctx, &drivers)?;
+        crate::technique::run(&mut ctx, &drivers)?;
         let mut frame = ctx.finish(RasterPath::Hardware)?;
         if let Some(view) = target {
             self.write_target(view.texture(), &frame)?;
@@ -580,7 +348,7 @@ impl OitPass {
                 Some(&self.pool),
                 encoder,
             )?;
-            crate::run_technique(&mut ctx, &drivers)?;
+            crate::technique::run(&mut ctx, &drivers)?;
             ctx.finish_recorded()?
         };
         encoder.copy_buffer_to_buffer(&done.totals, 0, &self.stats, 0, 32);
@@ -660,7 +428,7 @@ impl OitPass {
     fn kept_target(&self, kept: &Mutex<Option<CountTarget>>, w: u32, h: u32) -> CountTarget {
         let mut kept = kept.lock().unwrap_or_else(|e| e.into_inner());
         match &*kept {
-            Some(t) if t.size == (w, h) => t.clone(),
+            Some(t) if t.size() == (w, h) => t.clone(),
             _ => {
                 self.made.fetch_add(RenderDriver::CREATES, Relaxed);
                 let t = CountTarget::new(&self.gpu, w, h);

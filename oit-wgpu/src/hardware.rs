@@ -24,6 +24,7 @@
 //! the top, depth in [0, 1]).
 
 use std::cell::{Cell, OnceCell, RefCell};
+use std::hash::{DefaultHasher, Hash, Hasher};
 use std::rc::Rc;
 
 use oit_core::pulled::{PulledGeometry, PulledInstance};
@@ -31,67 +32,109 @@ use oit_core::{Aabb, Camera, OitError, RasterPath, Scene, Settings};
 use wgpu::util::DeviceExt;
 
 use crate::ctx::{Driver, Gate, Generated, GpuCtx};
-use crate::embed::{CaptureShader, CountTarget, GeometryPass, RenderDriver};
-use crate::gpu::Gpu;
+use crate::gpu::{COMMON_WGSL, Gpu};
+use crate::stage::SceneStage;
 
 pub(crate) const RASTER_WGSL: &str = oit_shaders::HARDWARE_RASTER;
 /// What to try when the geometry does not fit in one storage binding.
 const GEOMETRY_HINT: &str = "use fewer triangles or instances, or the cpu backend";
 
-/// The scene (or its instances' bounding boxes) on the GPU's rasterizer, for one frame: handles
-/// to an `HwGeometry`'s buffers and a count target of the frame's size.
-#[derive(Clone)]
-pub struct HardwareRaster {
-    driver: Rc<RenderDriver<'static>>,
-    stage: SceneStage,
+/// The fragment side every render-pipeline geometry pass shares (`oit_capture`).
+pub const CAPTURE_RENDER_WGSL: &str = oit_shaders::CAPTURE_RENDER;
+const COUNT_SUM_WGSL: &str = oit_shaders::text("core/count_sum_texture.wgsl");
+
+/// What the user's pipeline for one capture module is built from.
+pub struct CaptureShader<'a> {
+    /// oit's WGSL: the shared rules, the technique's storage (group 0) and `capture`, and
+    /// `oit_capture` / `oit_capture_full`. Put it in front of the user's own WGSL.
+    pub wgsl: &'a str,
+    /// The layout of group 0 (first in the user's pipeline layout).
+    pub bind_group_layout: &'a wgpu::BindGroupLayout,
+    /// The pipeline's colour target 0: oit's fragment counter (one channel, additive blending).
+    pub count_target: wgpu::ColorTargetState,
+    /// Which module of the technique this is (passes with the same module share a pipeline).
+    pub key: u64,
 }
 
-/// The vertex stage of [`HardwareRaster`] for techniques that build their own render pipelines
-/// (`technique::{bdp_blend, dp_depth}`): put [`SceneStage::wgsl`] after the technique's group 0
-/// declarations, add [`SceneStage::layout`] as group 1, use `hw_vs` as the vertex entry point
-/// (its output `HwOut`, and `shade`, serve the fragment stage), and call [`SceneStage::draw`].
+/// One geometry pass, as the user's draw closure sees it.
+pub struct GeometryPass<'a> {
+    /// 0 for the first geometry pass of the frame, then 1, 2, ...
+    pub index: u32,
+    /// Group 0 of this pass (already set at index 0 when the closure is called).
+    pub bind_group: &'a wgpu::BindGroup,
+    /// oit's own draws of a gated pass draw from these indirect arguments (the user's draws,
+    /// which oit cannot gate, ignore them: see [`OitPass::record`]).
+    pub(crate) indirect: Option<&'a wgpu::Buffer>,
+}
+
+pub(crate) type PipelineFn<'a> = Box<dyn FnMut(&CaptureShader<'_>) -> wgpu::RenderPipeline + 'a>;
+pub(crate) type DrawFn<'a> = Box<dyn FnMut(&mut wgpu::RenderPass<'_>, &GeometryPass<'_>) + 'a>;
+
+/// A geometry pass on a render pipeline: the user's (or oit's own hardware raster's) pipeline
+/// over the capture module, drawn into a one-channel count target. The [`Driver`] both the
+/// hardware path and the embedded pass run.
+pub(crate) struct RenderDriver<'a> {
+    salt: &'static str,
+    target: CountTarget,
+    pipeline: RefCell<PipelineFn<'a>>,
+    draw: RefCell<DrawFn<'a>>,
+    /// The indirect draw arguments of oit's own draws (the hardware path's), for gated passes.
+    gate: Option<Gate>,
+}
+
+impl<'a> RenderDriver<'a> {
+    /// The buffers and textures a [`CountTarget`] is (the count target and the counter it is
+    /// summed into), for the counters of prepared scenes.
+    pub(crate) const CREATES: u64 = 2;
+
+    /// A driver drawing into `target` (kept by its owner between frames of its size); `salt`
+    /// keeps its pipelines apart in the device's cache.
+    pub(crate) fn with_target(
+        target: CountTarget,
+        salt: &'static str,
+        pipeline: PipelineFn<'a>,
+        draw: DrawFn<'a>,
+    ) -> RenderDriver<'a> {
+        RenderDriver { salt, target, pipeline: RefCell::new(pipeline), draw: RefCell::new(draw), gate: None }
+    }
+
+    /// The driver drawing from `gate.to` in gated passes (oit's own draws: the hardware path).
+    pub(crate) fn with_gate(mut self, gate: Gate) -> Self {
+        self.gate = Some(gate);
+        self
+    }
+}
+
+/// A render-pipeline geometry pass's count target (one channel, additive blending) and the
+/// counter it is summed into: [`RenderDriver::CREATES`] objects, kept between frames of a size.
 #[derive(Clone)]
-pub struct SceneStage {
-    layout: wgpu::BindGroupLayout,
-    group: wgpu::BindGroup,
-    vertex_count: u32,
-    /// The image size of the rasterizer this stage belongs to, and the render targets its
-    /// captures drew into, kept for the next frame of that size ([`SceneStage::target`]).
+pub(crate) struct CountTarget {
+    format: wgpu::TextureFormat,
+    count_view: wgpu::TextureView,
+    sum_layout: wgpu::BindGroupLayout,
+    sum_group: wgpu::BindGroup,
+    total: wgpu::Buffer,
     size: (u32, u32),
-    targets: Rc<RefCell<Vec<KeptTarget>>>,
-    occlusion: Rc<RefCell<Option<Occlusion>>>,
 }
 
-/// A render target a [`SceneStage`] keeps: its label, format and view.
-type KeptTarget = (&'static str, wgpu::TextureFormat, wgpu::TextureView);
-
-impl SceneStage {
-    /// raster_hardware.wgsl without its fragment entry point (`hw_fs`, which calls the atomics
-    /// capture): the group 1 bindings, `HwOut` and `hw_vs`.
-    pub(crate) fn wgsl(&self) -> &'static str {
-        RASTER_WGSL.split_once("@fragment").map_or(RASTER_WGSL, |(vertex, _)| vertex)
+impl CountTarget {
+    /// Its size.
+    pub(crate) fn size(&self) -> (u32, u32) {
+        self.size
     }
 
-    /// The layout of group 1 (the vertices, triangles, shading uniform and instances).
-    pub(crate) fn layout(&self) -> &wgpu::BindGroupLayout {
-        &self.layout
-    }
-
-    /// The render target `label` of `format` at this rasterizer's image size (sampled by a
-    /// resolve as well), made on first use and kept: a frame of a size seen before makes none.
-    pub(crate) fn target(
-        &self,
-        device: &wgpu::Device,
-        label: &'static str,
-        format: wgpu::TextureFormat,
-    ) -> wgpu::TextureView {
-        let mut targets = self.targets.borrow_mut();
-        if let Some((.., view)) = targets.iter().find(|(l, f, _)| (*l, *f) == (label, format)) {
-            return view.clone();
-        }
-        let (width, height) = self.size;
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
+    /// A count target of `width × height`.
+    pub(crate) fn new(gpu: &Gpu, width: u32, height: u32) -> CountTarget {
+        // R16Float counts exactly up to 2048 fragments per pixel and pass; R32Float (blendable
+        // only with FLOAT32_BLENDABLE) up to 2^24.
+        let format = if gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
+            wgpu::TextureFormat::R32Float
+        } else {
+            wgpu::TextureFormat::R16Float
+        };
+        let device = &gpu.device;
+        let count = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("fragment counts"),
             size: wgpu::Extent3d { width: width.max(1), height: height.max(1), depth_or_array_layers: 1 },
             mip_level_count: 1,
             sample_count: 1,
@@ -100,132 +143,141 @@ impl SceneStage {
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
             view_formats: &[],
         });
-        let view = texture.create_view(&Default::default());
-        targets.push((label, format, view.clone()));
-        view
-    }
-
-    /// [`SceneStage::draw`] from indirect arguments (a gated pass's: every triangle, or none).
-    pub(crate) fn draw_indirect(&self, rpass: &mut wgpu::RenderPass<'_>, args: &wgpu::Buffer) {
-        rpass.set_bind_group(1, &self.group, &[]);
-        rpass.draw_indirect(args, 0);
-    }
-
-    /// Sets group 1 and draws every triangle (primitive `t` of the draw is the scene's `t`).
-    pub(crate) fn draw(&self, rpass: &mut wgpu::RenderPass<'_>) {
-        rpass.set_bind_group(1, &self.group, &[]);
-        if self.vertex_count > 0 {
-            rpass.draw(0..self.vertex_count, 0..1);
-        }
-    }
-}
-
-/// Where one pass of a blend capture draws: a colour target cleared to `clear`, and a depth
-/// attachment cleared to 1 where the pass tests depth.
-pub(crate) struct PassTarget<'a> {
-    pub label: &'a str,
-    pub color: &'a wgpu::TextureView,
-    pub clear: wgpu::Color,
-    pub depth: Option<&'a wgpu::TextureView>,
-}
-
-/// An occlusion query over one pass, and the buffer its result resolves into (storage too: a
-/// gated peel loop folds it into a flag on the device). Made once per [`SceneStage`] and kept.
-#[derive(Clone)]
-pub(crate) struct Occlusion {
-    set: wgpu::QuerySet,
-    buffer: wgpu::Buffer,
-}
-
-impl Occlusion {
-    fn new(device: &wgpu::Device) -> Occlusion {
-        let label = "blend capture occlusion";
-        let set = device.create_query_set(&wgpu::QuerySetDescriptor {
-            label: Some(label),
-            ty: wgpu::QueryType::Occlusion,
-            count: 1,
-        });
-        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size: 8,
-            usage: wgpu::BufferUsages::QUERY_RESOLVE
-                | wgpu::BufferUsages::COPY_SRC
-                | wgpu::BufferUsages::STORAGE,
+        let count_view = count.create_view(&Default::default());
+        let total = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("generated"),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Occlusion { set, buffer }
-    }
-
-    /// The last pass's result, resolved on the device.
-    pub(crate) fn buffer(&self) -> &wgpu::Buffer {
-        &self.buffer
-    }
-
-    /// Whether any sample of the last pass passed: read back now (a round trip).
-    pub(crate) fn drew(&self, ctx: &mut GpuCtx<'_>) -> Result<bool, OitError> {
-        Ok(ctx.read_u32(&self.buffer)?.iter().any(|&s| s != 0))
+        let sum_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("count sum"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: false },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let sum_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("count sum"),
+            layout: &sum_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&count_view),
+                },
+                wgpu::BindGroupEntry { binding: 1, resource: total.as_entire_binding() },
+            ],
+        });
+        CountTarget { format, count_view, sum_layout, sum_group, total, size: (width, height) }
     }
 }
 
-impl SceneStage {
-    /// This stage's occlusion query and its result buffer, made on first use and kept.
-    pub(crate) fn occlusion(&self, device: &wgpu::Device) -> Occlusion {
-        self.occlusion.borrow_mut().get_or_insert_with(|| Occlusion::new(device)).clone()
+/// The colour target a capture pipeline writes: the fragment counter.
+fn count_target(format: wgpu::TextureFormat) -> wgpu::ColorTargetState {
+    let add = wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Add,
+    };
+    wgpu::ColorTargetState {
+        format,
+        blend: Some(wgpu::BlendState { color: add, alpha: add }),
+        write_mask: wgpu::ColorWrites::RED,
+    }
+}
+
+impl Driver for RenderDriver<'_> {
+    fn path(&self) -> RasterPath {
+        RasterPath::Hardware
     }
 
-    /// One geometry pass of a blend capture (`technique::{dp_depth, ddp_blend}`): `pipeline`
-    /// draws the scene into `target` with `groups` set as groups 0 and 2, inside `occlusion`'s
-    /// query, resolved into its buffer; timed and counted as a geometry pass. `gated`: the draw's
-    /// indirect arguments, where a gate left them (every triangle, or none).
-    pub(crate) fn occlusion_pass(
+    fn geometry_pass(
         &self,
         ctx: &mut GpuCtx<'_>,
-        pipeline: &wgpu::RenderPipeline,
-        groups: (&wgpu::BindGroup, &wgpu::BindGroup),
-        target: PassTarget<'_>,
-        occlusion: &Occlusion,
-        gated: Option<&wgpu::Buffer>,
-    ) -> Result<(), OitError> {
+        source: &str,
+        layout0: &wgpu::BindGroupLayout,
+        group0: &wgpu::BindGroup,
+    ) -> Result<Generated, OitError> {
+        let wgsl = format!("{COMMON_WGSL}\n{source}\n{CAPTURE_RENDER_WGSL}");
+        let mut h = DefaultHasher::new();
+        wgsl.hash(&mut h);
+        let module_key = h.finish();
+        self.salt.hash(&mut h);
+        self.target.format.hash(&mut h);
+        let pipeline = ctx.gpu.render_pipeline(h.finish(), self.salt, || {
+            (self.pipeline.borrow_mut())(&CaptureShader {
+                wgsl: &wgsl,
+                bind_group_layout: layout0,
+                count_target: count_target(self.target.format),
+                key: module_key,
+            })
+        })?;
+        let index = ctx.passes;
+        let indirect = if ctx.gated_pass { self.gate.as_ref().map(|g| &g.to) } else { None };
         let mut encoder = ctx.take_encoder();
         {
             let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(target.label),
+                label: Some("geometry"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: target.color,
+                    view: &self.target.count_view,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(target.clear),
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
                         store: wgpu::StoreOp::Store,
                     },
                 })],
-                depth_stencil_attachment: target.depth.map(|view| wgpu::RenderPassDepthStencilAttachment {
-                    view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
+                depth_stencil_attachment: None,
                 timestamp_writes: ctx.render_timestamps(),
-                occlusion_query_set: Some(&occlusion.set),
+                occlusion_query_set: None,
                 multiview_mask: None,
             });
-            rpass.set_pipeline(pipeline);
-            rpass.set_bind_group(0, groups.0, &[]);
-            rpass.set_bind_group(2, groups.1, &[]);
-            rpass.begin_occlusion_query(0);
-            match gated {
-                Some(args) => self.draw_indirect(&mut rpass, args),
-                None => self.draw(&mut rpass),
-            }
-            rpass.end_occlusion_query();
+            rpass.set_pipeline(&pipeline);
+            rpass.set_bind_group(0, group0, &[]);
+            (self.draw.borrow_mut())(&mut rpass, &GeometryPass { index, bind_group: group0, indirect });
         }
-        encoder.resolve_query_set(&occlusion.set, 0..1, &occlusion.buffer, 0);
         ctx.finish_timed("geometry", encoder)?;
-        ctx.passes += 1;
-        Ok(())
+        let sum = ctx.gpu.compute_pipeline(COUNT_SUM_WGSL, "count_sum_main", &[&self.target.sum_layout])?;
+        let encoder = ctx.encoder();
+        encoder.clear_buffer(&self.target.total, 0, None);
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&sum);
+            pass.set_bind_group(0, &self.target.sum_group, &[]);
+            pass.dispatch_workgroups(self.target.size.0.div_ceil(8), self.target.size.1.div_ceil(8), 1);
+        }
+        Ok(Generated(self.target.total.clone()))
     }
+
+    fn gate(&self) -> Option<Gate> {
+        self.gate.as_ref().map(|g| Gate { from: g.from.clone(), to: g.to.clone(), words: g.words })
+    }
+}
+
+/// The scene (or its instances' bounding boxes) on the GPU's rasterizer, for one frame: handles
+/// to an `HwGeometry`'s buffers and a count target of the frame's size.
+#[derive(Clone)]
+pub struct HardwareRaster {
+    driver: Rc<RenderDriver<'static>>,
+    stage: SceneStage,
 }
 
 impl HardwareRaster {

@@ -50,6 +50,7 @@ mod gpu;
 mod hardware;
 mod pool;
 mod raster;
+mod stage;
 mod technique;
 
 use std::cell::{Cell, RefCell};
@@ -57,12 +58,12 @@ use std::sync::OnceLock;
 use std::time::Instant;
 
 use oit_core::{
-    Backend, Camera, Capabilities, Frame, HardwareCapture, OitError, Prepared, RasterPath, Scene, Settings,
-    Technique, TechniqueKind,
+    Backend, Camera, Capabilities, Frame, OitError, Prepared, RasterPath, Scene, Settings, Technique,
+    TechniqueKind,
 };
 
 pub use crate::ctx::{
-    Driver, Enc, Finishing, Fragments, FrameUniform, Gate, Generated, GpuCtx, Init, RecordedBuffers,
+    Driver, Drivers, Enc, Finishing, Fragments, FrameUniform, Gate, Generated, GpuCtx, Init, RecordedBuffers,
     SetupCheck, TECHNIQUE_PRELUDE, size_class,
 };
 pub use crate::embed::{CaptureShader, GeometryPass, OitPass, Recorded};
@@ -73,15 +74,6 @@ pub use crate::raster::{ComputeRaster, setup_on_gpu};
 
 use crate::hardware::HardwareScene;
 use crate::raster::ComputeBuffers;
-
-/// The rasterizers of one frame: the scene's, and (made on demand) one for the instances'
-/// bounding boxes, on the same path (bdp and adp render boxes for each pixel's depth range).
-pub struct Drivers<'a> {
-    /// Rasterizes the scene.
-    pub scene: Box<dyn Driver + 'a>,
-    /// Makes a rasterizer of the instances' bounding boxes.
-    pub boxes: Box<dyn Fn() -> Result<Box<dyn Driver + 'a>, OitError> + 'a>,
-}
 
 /// The wgpu backend. The device opens on first use.
 #[derive(Default)]
@@ -433,7 +425,7 @@ impl WgpuPrepared<'_> {
         ctx.speculated_deepest = this.deepest.borrow().get(&key).copied();
         ctx.speculated_peels = this.deepest.borrow().get(&format!("{key} peels")).copied();
         ctx.speculated_fragments = this.deepest.borrow().get(&format!("{key} fragments")).copied();
-        run_technique(&mut ctx, &drivers)?;
+        technique::run(&mut ctx, &drivers)?;
         let seen = [ctx.deepest_seen, ctx.peels_seen, ctx.fragments_seen];
         let finishing = ctx.finish_start(path, readback)?;
         Ok(InFlight { finishing, key, seen, start })
@@ -487,43 +479,6 @@ struct InFlight<'c> {
     /// fragment total.
     seen: [Option<u32>; 3],
     start: Instant,
-}
-
-/// Runs the frame's technique (geometry passes through `drivers`, kernels, resolve into the
-/// state; the reference leaves its per-pixel fragment counts to be read with the frame's end).
-/// `Backend::render` and the embedded pass (`embed::OitPass::frame`) both run this.
-pub(crate) fn run_technique(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
-    let hardware = drivers.scene.path() == RasterPath::Hardware;
-    // the papers' graphics-pipeline capture of bdp and dp, when asked for on the hardware path
-    let blend = hardware && ctx.settings.hardware_capture == HardwareCapture::Blend;
-    match ctx.settings.technique {
-        Technique::Dp if blend => technique::dp_depth::render(ctx, drivers),
-        Technique::Ddp if blend => technique::ddp_blend::render(ctx, drivers),
-        Technique::Bdp { .. } if blend => technique::bdp_blend::render(ctx, drivers),
-        Technique::WeightedAverage | Technique::WeightedSum if blend => {
-            technique::blend::weighted(ctx, technique::bdp_blend::scene_stage(drivers)?)
-        }
-        // the blender composites one draw in primitive order: plain's definition, where the
-        // draws are oit's own
-        Technique::Plain if hardware && drivers.scene.scene_stage().is_some() => {
-            technique::blend::plain(ctx, technique::bdp_blend::scene_stage(drivers)?)
-        }
-        // kbuf is refused by the frame's context with the plan's reason (Plan::refuse_interlock)
-        _ => oit_gpu::technique::render(ctx, drivers),
-    }
-}
-
-impl<'a> oit_gpu::Rasters<dyn Driver + 'a> for Drivers<'a> {
-    fn scene(&self) -> &(dyn Driver + 'a) {
-        self.scene.as_ref()
-    }
-
-    fn with_boxes(
-        &self,
-        pass: &mut dyn FnMut(&(dyn Driver + 'a)) -> Result<(), OitError>,
-    ) -> Result<(), OitError> {
-        pass((self.boxes)()?.as_ref())
-    }
 }
 
 /// For test suites and examples: the backend when a Vulkan adapter can be opened, else `None`

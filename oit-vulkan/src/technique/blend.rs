@@ -26,11 +26,10 @@ use std::rc::Rc;
 use ash::vk;
 use oit_core::{BlendTarget, OitError};
 
-use crate::Drivers;
 use crate::ctx::{BlendPass, Init, VkCtx};
 use crate::device::{Blend, Buffer, GpuImage};
 use crate::hardware::HardwareRaster;
-use crate::raster::Raster;
+use crate::raster::{Drivers, Raster};
 
 const RGBA32F: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 const RGBA32U: vk::Format = vk::Format::R32G32B32A32_UINT;

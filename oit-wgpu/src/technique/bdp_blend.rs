@@ -21,11 +21,10 @@
 
 use oit_core::OitError;
 
-use crate::Drivers;
-use crate::ctx::{GpuCtx, TECHNIQUE_PRELUDE};
+use crate::ctx::{Drivers, GpuCtx, TECHNIQUE_PRELUDE};
 use crate::gpu::COMMON_WGSL;
-use crate::hardware::SceneStage;
 use crate::hardware::scene_pipeline;
+use crate::stage::SceneStage;
 
 const WGSL: &str = oit_shaders::text("technique/bdp_blend.wgsl");
 const TARGETS: u32 = 8;

@@ -33,7 +33,8 @@ use oit_core::{BlendTarget, OitError, Technique};
 
 use crate::ctx::{GpuCtx, TECHNIQUE_PRELUDE};
 use crate::gpu::COMMON_WGSL;
-use crate::hardware::{SceneStage, scene_pipeline};
+use crate::hardware::scene_pipeline;
+use crate::stage::SceneStage;
 use crate::technique::bdp_blend::{check_texture_size, key, unsupported};
 
 const WGSL: &str = oit_shaders::text("technique/blend.wgsl");

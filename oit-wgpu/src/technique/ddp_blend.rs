@@ -17,10 +17,10 @@
 
 use oit_core::OitError;
 
-use crate::Drivers;
-use crate::ctx::{GpuCtx, TECHNIQUE_PRELUDE};
+use crate::ctx::{Drivers, GpuCtx, TECHNIQUE_PRELUDE};
 use crate::gpu::COMMON_WGSL;
-use crate::hardware::{PassTarget, scene_pipeline};
+use crate::hardware::scene_pipeline;
+use crate::stage::PassTarget;
 use crate::technique::OcclusionPeel;
 use crate::technique::bdp_blend::{check_texture_size, count_fragments, key, scene_stage, unsupported};
 
@@ -106,7 +106,8 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
             )
         })?;
         let gated = control.gate(ctx, pass)?;
-        stage.occlusion_pass(
+        super::occlusion_pass(
+            stage,
             ctx,
             &pipeline,
             (&group0, &previous_groups[slot]),

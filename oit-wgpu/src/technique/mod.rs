@@ -8,10 +8,34 @@ pub(crate) mod blend;
 pub(crate) mod ddp_blend;
 pub(crate) mod dp_depth;
 
-use oit_core::OitError;
+use oit_core::{HardwareCapture, OitError, RasterPath, Technique};
 
-use crate::ctx::{Driver, Gate, GpuCtx, Init};
-use crate::hardware::Occlusion;
+use crate::ctx::{Driver, Drivers, Gate, GpuCtx, Init};
+use crate::stage::{Occlusion, PassTarget, SceneStage};
+
+/// Runs the frame's technique (geometry passes through `drivers`, kernels, resolve into the
+/// state; the reference leaves its per-pixel fragment counts to be read with the frame's end).
+/// `Backend::render` and the embedded pass (`embed::OitPass::frame`) both run this.
+pub(crate) fn run(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
+    let hardware = drivers.scene.path() == RasterPath::Hardware;
+    // the papers' graphics-pipeline capture of bdp and dp, when asked for on the hardware path
+    let blend = hardware && ctx.settings.hardware_capture == HardwareCapture::Blend;
+    match ctx.settings.technique {
+        Technique::Dp if blend => dp_depth::render(ctx, drivers),
+        Technique::Ddp if blend => ddp_blend::render(ctx, drivers),
+        Technique::Bdp { .. } if blend => bdp_blend::render(ctx, drivers),
+        Technique::WeightedAverage | Technique::WeightedSum if blend => {
+            blend::weighted(ctx, bdp_blend::scene_stage(drivers)?)
+        }
+        // the blender composites one draw in primitive order: plain's definition, where the
+        // draws are oit's own
+        Technique::Plain if hardware && drivers.scene.scene_stage().is_some() => {
+            blend::plain(ctx, bdp_blend::scene_stage(drivers)?)
+        }
+        // kbuf is refused by the frame's context with the plan's reason (Plan::refuse_interlock)
+        _ => oit_gpu::technique::render(ctx, drivers),
+    }
+}
 
 /// The pass count of the blend captures' peel loops (`dp_depth`, `ddp_blend`), which end at the
 /// first pass whose occlusion query saw no sample. As [`peel`] does for the atomics captures:
@@ -70,7 +94,7 @@ impl OcclusionPeel {
                 Ok(false)
             }
             None => {
-                let drew = run < self.cap && occlusion.drew(ctx)?;
+                let drew = run < self.cap && drew(occlusion, ctx)?;
                 if !drew {
                     ctx.peels_seen = Some(run);
                 }
@@ -116,4 +140,63 @@ pub(crate) fn targets_group(
             .collect::<Vec<_>>(),
     });
     (layout, group)
+}
+
+/// One geometry pass of a blend capture (`technique::{dp_depth, ddp_blend}`): `pipeline`
+/// draws the scene into `target` with `groups` set as groups 0 and 2, inside `occlusion`'s
+/// query, resolved into its buffer; timed and counted as a geometry pass. `gated`: the draw's
+/// indirect arguments, where a gate left them (every triangle, or none).
+pub(crate) fn occlusion_pass(
+    stage: &SceneStage,
+    ctx: &mut GpuCtx<'_>,
+    pipeline: &wgpu::RenderPipeline,
+    groups: (&wgpu::BindGroup, &wgpu::BindGroup),
+    target: PassTarget<'_>,
+    occlusion: &Occlusion,
+    gated: Option<&wgpu::Buffer>,
+) -> Result<(), OitError> {
+    let mut encoder = ctx.take_encoder();
+    {
+        let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(target.label),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: target.color,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(target.clear),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: target.depth.map(|view| wgpu::RenderPassDepthStencilAttachment {
+                view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: ctx.render_timestamps(),
+            occlusion_query_set: Some(&occlusion.set),
+            multiview_mask: None,
+        });
+        rpass.set_pipeline(pipeline);
+        rpass.set_bind_group(0, groups.0, &[]);
+        rpass.set_bind_group(2, groups.1, &[]);
+        rpass.begin_occlusion_query(0);
+        match gated {
+            Some(args) => stage.draw_indirect(&mut rpass, args),
+            None => stage.draw(&mut rpass),
+        }
+        rpass.end_occlusion_query();
+    }
+    encoder.resolve_query_set(&occlusion.set, 0..1, &occlusion.buffer, 0);
+    ctx.finish_timed("geometry", encoder)?;
+    ctx.passes += 1;
+    Ok(())
+}
+
+/// Whether any sample of the last pass passed: read back now (a round trip).
+pub(crate) fn drew(occlusion: &Occlusion, ctx: &mut GpuCtx<'_>) -> Result<bool, OitError> {
+    Ok(ctx.read_u32(&occlusion.buffer)?.iter().any(|&s| s != 0))
 }
