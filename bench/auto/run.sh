@@ -3,11 +3,11 @@
 # technique for the scene by more than 10 %. Per scene: the pick (`oit render -t auto --max-epr 0
 # --json`, its counting pass included in nothing below), then `oit bench` of the pick beside every
 # exact technique on the same backend, each on its default raster path, as auto assumes.
-#   OUT=DIR BACKEND=cpu SIZE=512x512 SCENES=../shared/models/bunny.obj,planes:64 bench/auto/run.sh
-# On the GPU machine (see bench/h200/run.sh for the staging):
-#   source .gpu/prelude.sh; OIT=.gpubin/oit BACKEND=wgpu SIZE=1024x1024 \
-#     SCENES=.gpu/models/bunny.obj,.gpu/models/armadillo.obj,planes:64,grid:4x4:.gpu/models/bunny.obj \
+#   OUT=DIR BACKEND=cpu SIZE=512x512 SCENES=bunny,planes:64 bench/auto/run.sh
+# On a GPU machine, after `cargo build --release -p oit-cli --features wgpu`:
+#   BACKEND=wgpu SIZE=1024x1024 SCENES=bunny,armadillo,planes:64,grid:4x4:bunny \
 #     OUT=$OUT bench/auto/run.sh
+# (bunny and armadillo are built into oit: no file needed)
 # Each scene leaves DIR/SLUG-auto.json (the choice) and DIR/SLUG/report.{md,json}; then
 # bench/auto/summary.py DIR prints the table of the report.
 set -u
@@ -16,7 +16,7 @@ OUT=${OUT:-bench/results/auto}
 BACKEND=${BACKEND:-cpu}
 SIZE=${SIZE:-512x512}
 FRAMES=${FRAMES:-10}
-SCENES=${SCENES:-../shared/models/bunny.obj,planes:64}
+SCENES=${SCENES:-bunny,planes:64}
 EXACT=${EXACT:-dp,ddp,mlp:4,mdts64,fabs,dfb,ll}
 mkdir -p "$OUT"
 run() { echo "+ $*" >&2; "$@"; }

@@ -1,13 +1,11 @@
 #!/usr/bin/env bash
 # The H100 runs behind bench/results/h100/ (issues 4 and 5), as one script so they can be redone.
-# On the GPU machine (see DEVELOPERS.md / the device tool), after `../shared/gpu/stage.sh` and
-# `cargo build --release -p oit-cli --features wgpu` here:
-#   source .gpu/prelude.sh; bench/h100/run.sh compare|bench-512|bench-1024|curves
-# Writes into $OUT (default bench/results/h100). OIT_MODELS points the bare mesh names of
-# grid:RxC:MESH at the staged meshes.
+# On a GPU machine with a Vulkan driver, after `cargo build --release -p oit-cli --features wgpu`:
+#   bench/h100/run.sh compare|bench-512|bench-1024|curves
+# Writes into $OUT (default bench/results/h100). The meshes are oit's built-in `bunny` and
+# `armadillo` (the committed results name them by the paths they were then read from).
 set -u
 OIT=${OIT:-./target/release/oit}
-export OIT_MODELS=${OIT_MODELS:-.gpu/models}
 OUT=${OUT:-bench/results/h100}
 mkdir -p "$OUT"
 run() { echo "+ $*" >&2; "$@"; }
@@ -16,13 +14,13 @@ compare)
     run "$OIT" info --json > "$OUT/info.json"
     for m in bunny armadillo; do
         # the table, then the same runs as JSON (one process each: both print gpu_ms)
-        run "$OIT" compare --backend wgpu --raster all --scene "$OIT_MODELS/$m.obj" --size 1024x1024 \
+        run "$OIT" compare --backend wgpu --raster all --scene "$m" --size 1024x1024 \
             --techniques all > "$OUT/compare-$m-1024.txt"
-        run "$OIT" compare --backend wgpu --raster all --scene "$OIT_MODELS/$m.obj" --size 1024x1024 \
+        run "$OIT" compare --backend wgpu --raster all --scene "$m" --size 1024x1024 \
             --techniques all --json > "$OUT/compare-$m-1024.json"
         # the papers' graphics-pipeline capture (MAX blending, depth textures) against atomics
         run "$OIT" compare --backend wgpu --raster hardware --hardware-capture blend \
-            --scene "$OIT_MODELS/$m.obj" --size 1024x1024 --techniques dp,ddp,bdp --json \
+            --scene "$m" --size 1024x1024 --techniques dp,ddp,bdp --json \
             > "$OUT/compare-$m-1024-blend.json"
     done
     # the Gfrag/s target: a 1024² frame of >= 10M fragments (planes:64, 64 layers over ~30 %)
@@ -35,7 +33,7 @@ compare)
 bench-512 | bench-1024)
     size=${1#bench-}
     run "$OIT" bench --backend wgpu --raster all --size "${size}x${size}" --frames 10 --warmup 1 \
-        --scenes "$OIT_MODELS/bunny.obj,$OIT_MODELS/armadillo.obj,grid:4x4:bunny" --no-curves \
+        --scenes "bunny,armadillo,grid:4x4:bunny" --no-curves \
         --out "$OUT/bench-$size"
     ;;
 curves)

@@ -12,9 +12,16 @@ exact techniques, and the ratios the targets name:
     blend_targets.py REPORT.json [REPORT.json ...]
 """
 import json
+import re
 import sys
 
 EXACT = ["fabs", "ll", "dfb", "mdts"]
+
+
+def scene_name(scene):
+    """A scene expression without the folders and `.obj` of the paths older reports name meshes by
+    (`grid:4x4:DIR/bunny.obj` is `grid:4x4:bunny`)."""
+    return re.sub(r"[^:,]*/", "", scene).removesuffix(".obj")
 
 
 def main(paths):
@@ -33,7 +40,7 @@ def main(paths):
                 continue
             t, e = min(exact, key=lambda x: x[1])
             f = lambda xs: " / ".join(f"{x:.2f}" for x in xs)
-            print(f"| {scene.replace('.gpu/models/', '')} | {be} | {f(plain)} | {f(wavg)} | {t} {e:.2f} | **{plain[2] / e:.2f}** | {plain[0] / e:.2f} "
+            print(f"| {scene_name(scene)} | {be} | {f(plain)} | {f(wavg)} | {t} {e:.2f} | **{plain[2] / e:.2f}** | {plain[0] / e:.2f} "
                   f"| **{plain[2] / wavg[2]:.2f}** | {plain[1] / wavg[2]:.2f} |")
 
 

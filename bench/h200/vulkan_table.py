@@ -7,6 +7,7 @@ One table per scene and raster path: each technique's GPU ms on wgpu and vulkan 
 (vulkan / wgpu: below 1 raw Vulkan is faster), with steady-state wall ms beside; then the median
 ratio per path and how many techniques are within 1.1x (issue 9's target)."""
 import json
+import re
 import statistics
 import sys
 
@@ -30,7 +31,7 @@ def main(paths):
                 pairs = [(t, b) for t, b in by.items() if "wgpu" in b and "vulkan" in b]
                 if not pairs:
                     continue
-                name = scene.replace(".gpu/models/", "").replace(".obj", "")
+                name = re.sub(r"[^:,]*/", "", scene).removesuffix(".obj")
                 print(f"\n### {name}, {raster} path ({report['width']}x{report['height']})\n")
                 print("| technique | wgpu GPU ms | vulkan GPU ms | vulkan/wgpu | wgpu steady ms | vulkan steady ms |")
                 print("|---|---|---|---|---|---|")

@@ -5,12 +5,11 @@
 set -u
 OIT=${OIT:-./target/release/oit}
 OUT=${OUT:-bench/results/cpu-lavapipe}
-M=${OIT_MODELS:-../shared/models}
 mkdir -p "$OUT"
 case "${1:-512}" in
 512 | 1024)
     "$OIT" bench --backend all --raster all --size "$1x$1" --frames 10 --warmup 1 \
-        --scenes "$M/bunny.obj,$M/armadillo.obj,grid:4x4:bunny" --no-curves --out "$OUT/bench-$1"
+        --scenes "bunny,armadillo,grid:4x4:bunny" --no-curves --out "$OUT/bench-$1"
     ;;
 curves)
     "$OIT" bench --backend all --raster all --size 256x256 --frames 10 --warmup 1 --scenes knot \

@@ -2,23 +2,33 @@
 """VTK's dual depth peeling on the same mesh and size as `oit`'s ddp, for issue 12's ratio.
 
     pip install vtk        # the PyPI wheel; offscreen through EGL or OSMesa (Mesa's llvmpipe)
-    python3 bench/local/vtk_ddp.py ../shared/models/bunny.obj 512 20
+    python3 bench/local/vtk_ddp.py bunny 512 20       # or a path to an .obj
 
 Every layer is peeled: SetMaximumNumberOfPeels(8) (the bunny has at most 8 at 512² in the
 default view) and occlusion ratio 0. Prints the median and range of the frame times in ms,
 each frame a Render() finished with a read-back of the pixels (so the GPU work is inside it).
-Run it beside `oit render --backend cpu -t ddp --scene ../shared/models/bunny.obj --size 512x512`
+Run it beside `oit render --backend cpu -t ddp --scene bunny --size 512x512`
 (or `oit bench ... -t ddp`) in the same minute: the machine's load moves both.
 """
+import gzip
+import pathlib
 import statistics
 import sys
+import tempfile
 import time
 
 import vtk
 
 
 def main() -> None:
-    path = sys.argv[1] if len(sys.argv) > 1 else "../shared/models/bunny.obj"
+    path = sys.argv[1] if len(sys.argv) > 1 else "bunny"
+    builtin = pathlib.Path(__file__).resolve().parents[2] / "oit-core" / "assets" / f"{path}.obj.gz"
+    if builtin.is_file():
+        # oit's built-in meshes are gzip-compressed OBJ text; VTK's reader wants a file
+        tmp = tempfile.NamedTemporaryFile(suffix=".obj", delete=False)
+        tmp.write(gzip.decompress(builtin.read_bytes()))
+        tmp.close()
+        path = tmp.name
     size = int(sys.argv[2]) if len(sys.argv) > 2 else 512
     frames = int(sys.argv[3]) if len(sys.argv) > 3 else 20
 

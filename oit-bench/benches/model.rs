@@ -1,7 +1,7 @@
 //! The cost model's check (issue 15, item 3), run by the bench crate: calibrate every backend /
 //! raster path compiled in on the procedural calibration scenes only, then predict every
-//! technique on scenes the calibration never saw (the bunny, the armadillo and `grid:4x4:bunny`
-//! when `../shared/models/` has them; the procedural `knot` always) and state the error: per
+//! technique on scenes the calibration never saw (the built-in bunny and armadillo and
+//! `grid:4x4:bunny`, and the procedural `knot`) and state the error: per
 //! backend/path the median |predicted − measured| / measured, the worst technique and the largest
 //! factor off, against the targets (median ≤ 20 %, none off by more than 2×).
 //!
@@ -14,7 +14,6 @@
 //! report; this bench is the one-command form that needs no calibration file.
 
 use std::collections::BTreeMap;
-use std::path::Path;
 
 use oit_bench::model::{self, ModelFile};
 use oit_core::{Settings, Technique, View};
@@ -40,7 +39,6 @@ fn config(scenes: Vec<String>, size: u32, frames: u32, model: Option<ModelFile>)
 fn main() {
     // criterion's convention: `cargo bench` passes --bench, `cargo test` does not
     let full = std::env::args().any(|a| a == "--bench");
-    let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/models");
     let (size, frames, calibration, mut unseen): (u32, u32, Vec<String>, Vec<String>) = if full {
         let scenes = model::CALIBRATION_SCENES.split(',').map(str::to_string).collect();
         (256, 3, scenes, vec!["knot".into()])
@@ -48,18 +46,7 @@ fn main() {
         (64, 1, vec!["planes:4".into(), "spheres:3".into()], vec!["knot".into()])
     };
     if full {
-        for mesh in ["bunny", "armadillo"] {
-            let path = models.join(format!("{mesh}.obj"));
-            if path.is_file() {
-                unseen.push(path.display().to_string());
-            } else {
-                eprintln!("note: {} not found; not among the unseen scenes", path.display());
-            }
-        }
-        let bunny = models.join("bunny.obj");
-        if bunny.is_file() {
-            unseen.push(format!("grid:4x4:{}", bunny.display()));
-        }
+        unseen.extend(["bunny", "armadillo", "grid:4x4:bunny"].map(String::from));
     }
 
     let calibration_report = oit_bench::run_bench(&config(calibration.clone(), size, frames, None))

@@ -1,6 +1,6 @@
 //! Criterion benches: one frame of every technique (the reference included) × backend × raster
-//! path × scene, at 64×64 pixels. Scenes: `planes:8`, `spheres:4`, `knot`, and
-//! `../shared/models/bunny.obj` when it is there. Backends: every one compiled in (features `cpu`
+//! path × scene, at 64×64 pixels. Scenes: `planes:8`, `spheres:4`, `knot`, and the built-in
+//! `bunny`. Backends: every one compiled in (features `cpu`
 //! and `wgpu`, both default), wgpu on each raster path when an adapter is found (else a note says
 //! why it is skipped; with `OIT_REQUIRE_GPU=1` a missing adapter is a panic).
 //!
@@ -28,13 +28,8 @@ use oit_core::{Backend, Camera, Frame, OitError, Scene, Settings, Technique, Vie
 const SIZE: u32 = 64;
 
 fn scenes() -> Vec<(String, Scene)> {
-    let mut names: Vec<String> = ["planes:8", "spheres:4", "knot"].iter().map(|s| (*s).to_string()).collect();
-    let bunny = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/models/bunny.obj");
-    if bunny.is_file() {
-        names.push(bunny.to_string_lossy().into_owned());
-    } else {
-        eprintln!("note: {} not found; the bunny benches are skipped", bunny.display());
-    }
+    let names: Vec<String> =
+        ["planes:8", "spheres:4", "knot", "bunny"].iter().map(|s| (*s).to_string()).collect();
     names
         .into_iter()
         .filter_map(|name| match load_scene(&name) {

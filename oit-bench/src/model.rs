@@ -26,7 +26,7 @@
 //! non-negative least squares on relative error ([`fit`]) over procedural calibration scenes
 //! only ([`CALIBRATION_SCENES`]).
 //!
-//! DESIGN.md's `K = N·Tv/(Tv+Tf)` falls out of it: dp's model is (N+1) passes of
+//! The depth-peeling speedup model `K = N·Tv/(Tv+Tf)` falls out of it: dp's model is (N+1) passes of
 //! `Tv = a·triangles + b·fragments + c·pixels` (its a, b, c), a one-pass technique's is `Tv + Tf`
 //! with Tf its own extra per-fragment and resolve cost, and the predicted speedup over dp is the
 //! ratio of the two predictions ([`Prediction::predicted_speedup`]).

@@ -65,8 +65,8 @@ pub struct BenchArgs {
     #[arg(long, value_name = "DIR", default_value = "bench-report")]
     pub out: PathBuf,
 
-    /// The mesh of the triangle curve's grid:RxC:MESH scenes: a built-in scene, an .obj path, or
-    /// a bare name looked up as NAME.obj in $OIT_MODELS, models/, ../shared/models/.
+    /// The mesh of the triangle curve's grid:RxC:MESH scenes: a built-in scene (bunny, armadillo,
+    /// knot, ...), an .obj path, or a bare name looked up as NAME.obj in $OIT_MODELS, then models/.
     #[arg(long, value_name = "MESH", default_value = "knot")]
     pub curves: String,
 

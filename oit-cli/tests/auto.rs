@@ -6,7 +6,7 @@
 //! measured EPR too, so a bound that is not one fails here. Then the command line: the JSON says
 //! what was picked and why, and bad budgets are one clear error.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::{Command, Output};
 
 use oit_bench::auto::{Budget, Tables, candidates, epr_bound, resolve};
@@ -16,20 +16,9 @@ use oit_core::plan::Plan;
 use oit_core::{Backend, Camera, Scene, Settings, Technique, View, load_scene};
 use serde_json::Value;
 
-fn bunny() -> Option<String> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/models/bunny.obj");
-    if path.is_file() {
-        Some(path.to_string_lossy().into_owned())
-    } else {
-        eprintln!("note: {} not found; the bunny is skipped", path.display());
-        None
-    }
-}
-
 /// The scenes: flat layers, a real mesh, scattered depth, and exact ties (coplanar).
 fn scenes() -> Vec<(String, Scene)> {
-    let mut names: Vec<String> = ["planes:6", "cluster:200", "coplanar"].map(String::from).into();
-    names.extend(bunny());
+    let names: Vec<String> = ["planes:6", "cluster:200", "coplanar", "bunny"].map(String::from).into();
     names.into_iter().map(|n| (n.clone(), load_scene(&n).expect("the scene loads"))).collect()
 }
 

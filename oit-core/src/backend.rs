@@ -225,7 +225,7 @@ pub trait Backend {
     }
     /// Milliseconds of one plain geometry pass over `scene` (every fragment counted into a
     /// per-pixel atomic counter, nothing else) on the raster path `settings` select: the `Tv` of
-    /// DESIGN.md's speedup model `K = N·Tv / (Tv + Tf)`. Device time where the backend measures
+    /// the depth-peeling speedup model `K = N·Tv / (Tv + Tf)`. Device time where the backend measures
     /// it, else wall time; per-frame setup (vertex transform, binning, pipeline creation) is not
     /// counted. The default says the backend cannot.
     fn plain_pass_ms(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<f64, OitError> {

@@ -289,7 +289,7 @@ pub enum HardwareCapture {
     /// Fragment-stage storage-buffer atomics, the same capture function as the compute
     /// rasterizer (integer `atomicMax` of the packed colours for bdp, a 64-bit `atomicMin` of
     /// (depth, payload) for dp). The default: measured faster than blending on the H100 (3.0 vs
-    /// 0.12 Gfrag/s, DESIGN.md's platform facts).
+    /// 0.12 Gfrag/s, the project design's platform facts).
     #[default]
     Atomics,
     /// The papers' graphics-pipeline mechanisms: MAX blending into 8 `Rgba32Float` targets for

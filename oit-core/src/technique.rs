@@ -1,5 +1,5 @@
 //! The technique catalogue: every way oit captures and orders the fragments of a pixel, by the
-//! names DESIGN.md gives them, parameters included (`bdp:3`, `fabs:16`, `mlp:4`).
+//! names the papers and the project's design give them, parameters included (`bdp:3`, `fabs:16`, `mlp:4`).
 
 use std::fmt;
 use std::str::FromStr;

@@ -20,7 +20,6 @@
 //! (fragments per second per core: divide by the threads, `RAYON_NUM_THREADS` or the cores)
 
 use std::hint::black_box;
-use std::path::Path;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Duration;
 
@@ -29,16 +28,10 @@ use oit_core::{Camera, Scene, Settings, View, builtin_scene, load_scene};
 use oit_cpu::raster::{RasterMode, Rasterizer, Shade};
 
 const SIZE: u32 = 512;
-const BUNNY: &str = "../shared/models/bunny.obj";
-
 fn scenes() -> Vec<(String, Scene)> {
     let mut out = Vec::new();
-    // benches run in the package's directory; the workspace root is one up
-    let bunny = Path::new("..").join(BUNNY);
-    match load_scene(bunny.to_str().unwrap_or(BUNNY)) {
-        Ok(scene) => out.push(("bunny".to_string(), scene)),
-        Err(e) => eprintln!("skipping the bunny ({}): {e}", bunny.display()),
-    }
+    // the built-in mesh: no file, whatever the directory benches run in
+    out.push(("bunny".to_string(), load_scene("bunny").expect("the built-in bunny loads")));
     if let Some(Ok(scene)) = builtin_scene("planes:64") {
         out.push(("planes:64".to_string(), scene));
     }

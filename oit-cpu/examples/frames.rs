@@ -2,7 +2,7 @@
 //! look at a frame's wall time: the scene prepared once, a few warm-up frames, then `N` timed
 //! frames through [`Prepared::frame`], the median printed.
 //!
-//! `cargo run --release -p oit-cpu --example frames -- ../shared/models/bunny.obj ddp 512 50`
+//! `cargo run --release -p oit-cpu --example frames -- bunny ddp 512 50`
 
 use std::time::Instant;
 
@@ -10,7 +10,7 @@ use oit_core::{Backend, Camera, Settings, Technique, View, load_scene};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let scene_name = args.first().map_or("../shared/models/bunny.obj", String::as_str);
+    let scene_name = args.first().map_or("bunny", String::as_str);
     let technique: Technique = args.get(1).map_or("plain", String::as_str).parse()?;
     let size: u32 = args.get(2).map_or(Ok(512), |s| s.parse())?;
     let frames: usize = args.get(3).map_or(Ok(20), |s| s.parse())?;

@@ -25,7 +25,7 @@ fn srgb8(x: f64) -> u8 {
 }
 
 /// Each plane's fragment colour and alpha, nearest first: the object's colour times the shading
-/// factor, quantized to 8 bits. Headlight is colour × (0.3 + 0.7·|n·l|) (DESIGN.md); the planes'
+/// factor, quantized to 8 bits. Headlight is colour × (0.3 + 0.7·|n·l|) (the project's design); the planes'
 /// normal is +z and the FRONT camera's forward −z, so the factor is exactly 1.
 fn plane_fragments(scene: &Scene, shading: Shading, forward: Vec3) -> Vec<([f64; 3], f64)> {
     let factor = match shading {
