@@ -39,9 +39,25 @@ fn bytes(n: u64) -> String {
     if unit == 0 { format!("{n} B") } else { format!("{v:.1} {}", UNITS[unit]) }
 }
 
-/// A fraction in per cent, without the sign: the columns' headers say `(%)`.
+/// A fraction in per cent, without the sign: the columns' headers say `(%)`; `n/a` for the NaN
+/// of a frame that covered no pixel (an EPR of nothing is no score, least of all 0).
 fn percent(f: f64) -> String {
-    if f == 0.0 { "0".into() } else { format!("{:.3}", f * 100.0) }
+    if f.is_nan() {
+        "n/a".into()
+    } else if f == 0.0 {
+        "0".into()
+    } else {
+        format!("{:.3}", f * 100.0)
+    }
+}
+
+/// A row's PSNR cell: `n/a` where nothing was covered (its EPR is NaN), `inf` where identical.
+fn psnr_cell(r: &Row) -> String {
+    match r.psnr {
+        _ if r.epr.is_nan() => "n/a".into(),
+        None => "inf".into(),
+        Some(p) => format!("{p:.1}"),
+    }
 }
 
 fn ms(v: f64) -> String {
@@ -171,6 +187,15 @@ fn check_spread(at: &str, s: &Spread) -> Result<(), String> {
     for (name, v) in [("median", s.median), ("min", s.min), ("max", s.max), ("q1", s.q1), ("q3", s.q3)] {
         check_ms(&format!("{at}.{name}"), v)?;
     }
+    // the quartiles are interpolated: allow their rounding, not a median outside the frames
+    let slack = 1e-9 * s.max;
+    let within = |v: f64| s.min - slack <= v && v <= s.max + slack;
+    if s.min > s.max || ![s.q1, s.median, s.q3].into_iter().all(within) {
+        return Err(format!(
+            "{at} is out of order (min {:e}, q1 {:e}, median {:e}, q3 {:e}, max {:e}): a spread's values lie from its min up to its max",
+            s.min, s.q1, s.median, s.q3, s.max
+        ));
+    }
     Ok(())
 }
 
@@ -191,12 +216,22 @@ fn check_numbers(report: &Report) -> Result<(), String> {
     for (i, r) in report.rows.iter().enumerate() {
         let at = |field: &str| format!("rows[{i}].{field}");
         check_spread(&at("wall_ms"), &r.wall_ms)?;
-        if let Some(g) = &r.gpu_ms {
-            check_spread(&at("gpu_ms"), g)?;
+        for (name, spread) in [
+            ("gpu_ms", &r.gpu_ms),
+            ("steady_wall_ms", &r.steady_wall_ms),
+            ("latency_wall_ms", &r.latency_wall_ms),
+            ("readback_wall_ms", &r.readback_wall_ms),
+        ] {
+            if let Some(s) = spread {
+                check_spread(&at(name), s)?;
+            }
         }
         check_ms(&at("time_ms"), r.time_ms)?;
         check(&at("gfrag_per_s"), r.gfrag_per_s, 0.0, MAX_VALUE, "a rate is")?;
-        check(&at("epr"), r.epr, 0.0, 1.0, "an error pixel rate is a fraction")?;
+        // NaN (null in the file): the frame covered no pixel, shown as n/a
+        if !r.epr.is_nan() {
+            check(&at("epr"), r.epr, 0.0, 1.0, "an error pixel rate is a fraction")?;
+        }
         if let Some(p) = r.psnr {
             check(&at("psnr"), p, -1000.0, 1000.0, "a PSNR is decibels")?;
         }
@@ -237,7 +272,9 @@ fn check_numbers(report: &Report) -> Result<(), String> {
         }
     }
     for (i, m) in report.matrix.iter().enumerate() {
-        check(&format!("matrix[{i}].epr"), m.epr, 0.0, 1.0, "an error pixel rate is a fraction")?;
+        if !m.epr.is_nan() {
+            check(&format!("matrix[{i}].epr"), m.epr, 0.0, 1.0, "an error pixel rate is a fraction")?;
+        }
         check(
             &format!("matrix[{i}].max_diff"),
             f64::from(m.max_diff),
@@ -286,7 +323,9 @@ pub fn write_report(report: &mut Report, dir: &Path) -> Result<(), OitError> {
     // trade plots, one per scene
     let mut trade_plots = Vec::new();
     for (i, scene) in report.scenes.iter().enumerate() {
-        let rows: Vec<&Row> = report.rows.iter().filter(|r| r.scene == scene.name).collect();
+        // rows that covered no pixel have no EPR to draw (NaN): left out, not drawn as 0
+        let rows: Vec<&Row> =
+            report.rows.iter().filter(|r| r.scene == scene.name && !r.epr.is_nan()).collect();
         if rows.is_empty() {
             continue;
         }
@@ -482,7 +521,8 @@ fn markdown(
          - **EPR**: error pixel rate, the share of covered pixels whose 8-bit colour differs from \
          the same backend/path's `reference` by more than 1 in any channel, in per cent in these \
          tables and plots (`report.json`'s `epr` holds the fraction, 0 to 1); **PSNR** over covered \
-         pixels (`inf` when identical); **max diff**: the largest channel difference in 8-bit steps."
+         pixels (`inf` when identical); both `n/a` for a frame that covered no pixel (`null` in \
+         report.json; left out of the trade plot); **max diff**: the largest channel difference in 8-bit steps."
     );
 
     for scene in &report.scenes {
@@ -530,7 +570,7 @@ fn markdown(
                 spread(r.readback_wall_ms.as_ref().unwrap_or(&r.wall_ms)),
                 r.gfrag_per_s,
                 percent(r.epr),
-                r.psnr.map_or("inf".into(), |p| format!("{p:.1}")),
+                psnr_cell(r),
             );
         }
         side_by_side(w, report, &scene.name);
