@@ -205,10 +205,8 @@ impl OcclusionPeel {
     fn new(ctx: &mut VkCtx<'_>, cap: u32) -> Result<Self, OitError> {
         let speculated = match ctx.speculated.peels.take().filter(|&s| s >= 1) {
             Some(s) => {
-                let flag = ctx.buffer("peel gate", 1, Init::Zero)?;
-                let query = ctx.buffer("peel query", 2, Init::Zero)?;
-                // bookkeeping, not per-pixel storage
-                ctx.storage_bytes -= 12;
+                let flag = ctx.scratch("peel gate", 1, Init::Zero)?;
+                let query = ctx.scratch("peel query", 2, Init::Zero)?;
                 Some((s.min(cap), flag, query))
             }
             None => {
