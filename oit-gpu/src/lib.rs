@@ -200,7 +200,6 @@ pub trait Frame<R: ?Sized> {
     /// A geometry pass that has work only where word 0 of `flag` (left by the frame's earlier
     /// passes) is not zero: gated on the device where the raster can gate its work (no round
     /// trip, the pass counted on the device where it runs), else the flag is read back first.
-    #[expect(clippy::too_many_arguments, reason = "a geometry pass and its gate")]
     fn geometry_pass_if(
         &mut self,
         raster: &R,
