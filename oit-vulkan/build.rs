@@ -75,7 +75,7 @@ fn literal(words: &[u32]) -> Vec<u8> {
     bytes.split(|&b| b == 0).next().unwrap_or_default().to_vec()
 }
 
-/// Rewrites every call of `vk_atomic_result` / `vk_atomic_result64` (src/shaders/atomic_result.wgsl)
+/// Rewrites every call of `vk_atomic_result` / `vk_atomic_result64` (oit-shaders' wgsl/core/atomic_result.wgsl)
 /// into `OpCopyObject` of the result of the image atomic just before it in the same block (an
 /// `OpAtomic*` on a pointer from `OpImageTexelPointer`), so WGSL's result-less `textureAtomic*`
 /// give the texel's old value, as GLSL's `imageAtomic*` do. Returns the calls rewritten; fails

@@ -1,7 +1,7 @@
 //! One frame on Vulkan: the frame uniform, the per-pixel resolve state, storage buffers checked
-//! against the limits, geometry passes through the compute rasterizer, per-pixel kernels and the
-//! final image — oit-wgpu's `GpuCtx`, step for step, on the same WGSL (as SPIR-V), so that a
-//! technique's file here reads like its twin in `oit-wgpu/src/technique/`.
+//! against the limits, geometry passes through either rasterizer, per-pixel kernels and the final
+//! image, on the same WGSL as oit-wgpu's `GpuCtx` (as SPIR-V). It is the frame contract every
+//! technique's frame is written against (`oit_gpu::Frame`, implemented in `frame.rs`).
 
 use std::cell::{Cell, RefCell};
 use std::rc::Rc;
@@ -976,7 +976,7 @@ pub(crate) struct Ended {
 
 /// The counts a frame reads back that the next frame of the same settings may take instead of
 /// waiting for them, each checked at that frame's end: a peel loop's pass count
-/// (`technique::peel`), a counting pass's deepest pixel ([`VkCtx::deepest`]) and a fragment total
+/// (oit-gpu's peel loop), a counting pass's deepest pixel ([`VkCtx::deepest`]) and a fragment total
 /// ([`VkCtx::fragment_capacity`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct ReadBack {

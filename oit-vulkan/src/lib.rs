@@ -17,13 +17,13 @@
 //!
 //! Captures use storage-buffer atomics, as on wgpu; with `--atomic-storage image`
 //! ([`oit_core::AtomicStorage::Image`]) mdts, mdts64 and fabs use the papers' storage-image
-//! atomics instead (see `technique::mdts` and `technique::fabs`). With `--hardware-capture blend` on the
+//! atomics instead (see `oit_gpu::technique`'s mdts and fabs, and `frame.rs`'s `storage_image`). With `--hardware-capture blend` on the
 //! hardware path, the papers' own operations (`technique::blend`): MAX blending into 8 ×
 //! `R32G32B32A32_SFLOAT` for bdp, a depth test into `D32_SFLOAT` with occlusion queries for dp,
 //! MAX blending of (−d, d) into `R32G32_SFLOAT` with occlusion queries for ddp, additive float
 //! blending for wavg/wsum, and, beyond wgpu, adp's histogram by logic-op OR into 8 ×
 //! `R32G32B32A32_UINT`. `plain` always blends on the hardware path (the over operator in one draw).
-//! Beyond the papers and wgpu, `kbuf[:K]` on the hardware path (`technique::kbuf`): the ordered
+//! Beyond the papers and wgpu, `kbuf[:K]` on the hardware path (oit-gpu's kbuf frame; its interlock is `build.rs`'s rewrite): the ordered
 //! k-buffer, whose fragment stage runs in `VK_EXT_fragment_shader_interlock`'s ordered per-pixel
 //! critical section (WGSL cannot say it: `build.rs` adds it to the SPIR-V of `kbuf_hw`'s `hw_fs`).
 //!
@@ -221,7 +221,7 @@ pub struct VulkanPrepared<'s> {
     gpu_setup: Option<bool>,
     /// What an earlier frame read back, by its settings (`ctx::ReadBack`): the next frame of
     /// those settings runs that many peels gated on the device instead of reading a flag back per
-    /// peel (`technique::peel`), sizes from that deepest pixel instead of waiting for its counting
+    /// peel (oit-gpu's peel loop), sizes from that deepest pixel instead of waiting for its counting
     /// pass (`VkCtx::deepest`) and its fragment arrays from that total
     /// (`VkCtx::fragment_capacity`); each checked at its end.
     read_back: RefCell<std::collections::HashMap<String, ReadBack>>,

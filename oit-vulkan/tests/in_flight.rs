@@ -164,7 +164,7 @@ fn miss_then_fit(
     }
 }
 
-/// A peel loop run with the last frame's pass count (`technique::peel`, and the blend captures'
+/// A peel loop run with the last frame's pass count (oit-gpu's peel loop, and the blend captures'
 /// `OcclusionPeel`): each pass after the
 /// first gated on the device by its predecessor's flag, the last flag checked at the end, so a
 /// steady frame waits once. A view that needs more passes runs again (the first attempt's end,

@@ -254,7 +254,7 @@ pub struct GpuCtx<'a> {
     pub deepest_seen: Option<u32>,
     /// The passes an earlier frame of this prepared scene's peel loop ran at this view's kind:
     /// this frame records as many without reading back in between, and checks at its end
-    /// (`technique::peel`).
+    /// (oit-gpu's peel loop).
     pub speculated_peels: Option<u32>,
     /// The passes this frame's peel loop ran, reading back (none when speculated).
     pub peels_seen: Option<u32>,

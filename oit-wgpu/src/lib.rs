@@ -12,7 +12,7 @@
 //! scene keeps (`raster`); per-pixel storage comes from a pool (`pool`).
 //!
 //! Each technique's WGSL sits next to its Rust in `src/technique/`; the rules shared with oit-core
-//! are in `src/shaders/common.wgsl`.
+//! are in oit-shaders' `wgsl/core/common.wgsl`.
 //!
 //! A frame on each path, read back with its numbers. Without a Vulkan adapter
 //! [`backend_or_skip`] prints one `skipped …` line naming what to install and the example stops
@@ -173,7 +173,7 @@ impl Backend for WgpuBackend {
         Ok(Box::new(self.prepare_scene(scene)?))
     }
 
-    /// One counting geometry pass (`technique::count`'s) on the settings' raster path, timed with
+    /// One counting geometry pass (oit-gpu's `technique::count`) on the settings' raster path, timed with
     /// the GPU timestamps of its geometry pass (wall time of the pass and its readback where the
     /// device has no timestamps). Two passes run and the second is timed, so that nothing paid
     /// once per frame is counted. (On the H100's hardware path this pass, one `atomicAdd` per

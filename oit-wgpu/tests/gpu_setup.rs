@@ -1,4 +1,4 @@
-//! The compute path's GPU setup (`src/shaders/setup.wgsl`) against oit-core's host setup: the
+//! The compute path's GPU setup (oit-shaders' `wgsl/core/setup.wgsl`) against oit-core's host setup: the
 //! triangles it writes equal `TriangleSetup::triangle_words` bit for bit, and its work list holds
 //! the same (triangle, 8×8 tile) pairs, on the bunny, procedural scenes, tiny and huge scales, and
 //! views whose near and far planes cut through the scene or whose narrow field of view sends the

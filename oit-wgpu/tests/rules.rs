@@ -1,4 +1,4 @@
-//! oit-core's rules and their WGSL twins (src/shaders/common.wgsl) on the same edge values:
+//! oit-core's rules and their WGSL twins (oit-shaders' wgsl/core/common.wgsl) on the same edge values:
 //! d = 0, d = 1, −0, NaN, beyond [0, 1], zNear = zFar, alpha 0 and 255, every alpha for the bdp
 //! packing; the bucket midpoint and eq. 5 at and around their boundaries. Integer results must be equal; sRGB encoding may differ by one step (pow differs).
 

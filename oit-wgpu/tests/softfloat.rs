@@ -1,4 +1,4 @@
-//! `src/shaders/softfloat.wgsl`, the compute path setup's f32 arithmetic in integers, against the
+//! oit-shaders' `wgsl/core/softfloat.wgsl`, the compute path setup's f32 arithmetic in integers, against the
 //! host's f32 bit for bit: add, sub, mul, div, u64 → f32, floor and the sign tests, on every pair
 //! of edge values (zeros, subnormals, the normal range's ends, infinities, quiet, signalling and
 //! negative NaNs, halfway cases) and on random operands, both uniformly random bits and operands of
