@@ -53,6 +53,48 @@ pub fn load_obj(path: &Path) -> Result<Scene, OitError> {
     load_obj_limited(path, limit)
 }
 
+/// `O_NONBLOCK` where its value is known without libc (Linux on these architectures): opening a
+/// FIFO with it returns at once instead of waiting for a writer.
+#[cfg(all(
+    target_os = "linux",
+    any(
+        target_arch = "x86_64",
+        target_arch = "x86",
+        target_arch = "aarch64",
+        target_arch = "arm",
+        target_arch = "riscv64"
+    )
+))]
+const O_NONBLOCK: i32 = 0o4000;
+
+/// Opens `path` for reading if it is a regular file, and `Ok(None)` if it is not (a FIFO, device,
+/// socket or folder), before anything can block: the path's metadata is checked first (nothing
+/// else is opened), then the file is opened non-blocking where the flag is known (a FIFO put in
+/// its place meanwhile does not wait for a writer) and its handle checked again. Every user path
+/// oit reads (models, calibrations, reports, view scripts) goes through here: `open()` on a FIFO
+/// blocks until someone writes to it, which hung `oit render --scene fifo.obj` (issue 41.5).
+pub fn open_regular(path: &Path) -> std::io::Result<Option<(std::fs::File, std::fs::Metadata)>> {
+    if !std::fs::metadata(path)?.is_file() {
+        return Ok(None);
+    }
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(all(
+        target_os = "linux",
+        any(
+            target_arch = "x86_64",
+            target_arch = "x86",
+            target_arch = "aarch64",
+            target_arch = "arm",
+            target_arch = "riscv64"
+        )
+    ))]
+    std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, O_NONBLOCK);
+    let file = options.open(path)?;
+    let meta = file.metadata()?;
+    Ok(meta.is_file().then_some((file, meta)))
+}
+
 /// Reads `path` as UTF-8 text, refusing anything but a regular file of at most `limit` bytes.
 fn read_bounded(path: &Path, limit: u64) -> Result<String, OitError> {
     let io = |source| OitError::Io { path: path.to_path_buf(), source };
@@ -63,16 +105,14 @@ fn read_bounded(path: &Path, limit: u64) -> Result<String, OitError> {
         limit,
         hint: format!("set {MAX_MODEL_BYTES_VAR} to a larger number of bytes to read it"),
     };
-    let file = std::fs::File::open(path).map_err(io)?;
-    let meta = file.metadata().map_err(io)?;
-    if !meta.is_file() {
+    let Some((file, meta)) = open_regular(path).map_err(io)? else {
         return Err(OitError::Obj {
             path: path.to_path_buf(),
             line: None,
             message: "not a regular file (a device, pipe or folder): models are read from .obj files only"
                 .into(),
         });
-    }
+    };
     if meta.len() > limit {
         return Err(too_large(meta.len()));
     }
@@ -713,6 +753,28 @@ mod tests {
         assert!(e.contains("not a regular file"), "{e}");
         let dir = std::env::temp_dir();
         assert!(load_obj(&dir).unwrap_err().to_string().contains("not a regular file"));
+    }
+
+    #[test]
+    fn a_fifo_is_refused_without_waiting_for_a_writer() {
+        // Issue 41.5: the model was opened before the regular-file check, and open() on a FIFO
+        // waits for a writer: `--scene fifo.obj` hung. Mutation caught: opening before the
+        // metadata check without O_NONBLOCK (`File::open` first, as before) blocks here, and the
+        // thread's answer never comes (the test fails after 20 s instead of hanging CI).
+        let fifo = std::env::temp_dir().join(format!("oit-obj-fifo-{}.obj", std::process::id()));
+        let _ = std::fs::remove_file(&fifo);
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        if !made.is_ok_and(|s| s.success()) {
+            eprintln!("skipped: no mkfifo on this system");
+            return;
+        }
+        let (tx, rx) = std::sync::mpsc::channel();
+        let path = fifo.clone();
+        std::thread::spawn(move || tx.send(load_obj(&path).map(|_| ()).map_err(|e| e.to_string())));
+        let answer = rx.recv_timeout(std::time::Duration::from_secs(20));
+        std::fs::remove_file(&fifo).ok();
+        let e = answer.expect("load_obj on a FIFO blocked").unwrap_err();
+        assert!(e.contains("not a regular file"), "{e}");
     }
 
     #[test]
