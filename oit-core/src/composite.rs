@@ -129,6 +129,32 @@ pub fn weighted_sum(s: &WeightedSums, background: Vec3) -> Vec3 {
     (s.premultiplied + background * (1.0 - s.alpha)).clamp(Vec3::ZERO, Vec3::ONE)
 }
 
+/// A pixel's sums for weighted blended OIT (McGuire & Bavoil 2013), as floats: Σ α·w·c (each
+/// channel in [0, 255] units of the 8-bit colour), Σ α·w, the optical depth Σ −ln(1 − α) and the
+/// count (see [`crate::rules::wboit_weight`] and [`crate::rules::WBOIT_OPTICAL_DEPTH`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct WboitSums {
+    /// Σ α·w·c, channel by channel.
+    pub weighted: Vec3,
+    /// Σ α·w.
+    pub weight: f32,
+    /// Σ −ln(1 − α).
+    pub optical_depth: f32,
+    /// Fragments.
+    pub count: u32,
+}
+
+/// Weighted blended OIT's composite: the weighted mean colour under the exact coverage,
+/// c̄·(1 − T) + bg·T with T = e^(−optical depth) = Π(1 − αᵢ).
+pub fn wboit(s: &WboitSums, background: Vec3) -> Vec3 {
+    if s.count == 0 || s.weight <= 0.0 {
+        return background;
+    }
+    let mean = s.weighted / (s.weight * 255.0);
+    let t = (-s.optical_depth).exp();
+    mean * (1.0 - t) + background * t
+}
+
 /// Schlick's Fresnel transmittance for a surface seen at `cos_theta`: `1 − (1 − cos θ)⁵`.
 #[inline]
 pub fn schlick_transmittance(cos_theta: f32) -> f32 {

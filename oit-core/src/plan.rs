@@ -145,8 +145,10 @@ impl Plan {
                 what: "fresnel with mdts: its 12 + 12 spare bits hold RGB only; use mdts64".into(),
             });
         }
-        if matches!(technique, Technique::Plain | Technique::WeightedAverage | Technique::WeightedSum)
-            && matches!(settings.effect, Effect::Translucency | Effect::Fresnel)
+        if matches!(
+            technique,
+            Technique::Plain | Technique::WeightedAverage | Technique::WeightedSum | Technique::Wboit
+        ) && matches!(settings.effect, Effect::Translucency | Effect::Fresnel)
         {
             return Err(OitError::Unsupported {
                 backend: backend.into(),
@@ -377,6 +379,8 @@ impl Plan {
                 per_pixel("open depth range", 8, 1),
             ],
             Technique::WeightedAverage | Technique::WeightedSum => vec![per_pixel("weighted sums", 8, 5)],
+            // Σ α·w·r, Σ α·w·g, Σ α·w·b, Σ α·w, Σ −ln(1 − α) and the count, u64 each
+            Technique::Wboit => vec![per_pixel("weighted blended sums", 8, 6)],
             Technique::Bdp { .. } if self.bdp_color => {
                 vec![bounds, per_pixel("colour buckets", 4, u64::from(BDP_COLOR_SUBINTERVALS))]
             }
@@ -472,6 +476,7 @@ impl Plan {
             Technique::Plain
             | Technique::WeightedAverage
             | Technique::WeightedSum
+            | Technique::Wboit
             | Technique::Mdts { .. }
             | Technique::Mdts64 { .. }
             | Technique::Kbuf { .. } => passes.push((PassKind::Capture, 1)),

@@ -33,6 +33,10 @@ pub enum Technique {
     WeightedAverage,
     /// Weighted sum (Meshkin 2007, as reported by Bavoil & Myers 2008): one pass, order ignored.
     WeightedSum,
+    /// Weighted blended OIT (McGuire & Bavoil, JCGT 2013): one pass, order ignored; each
+    /// fragment's premultiplied colour weighted by a function of its depth and alpha (the paper's
+    /// eq. 10, nearer counts more), the coverage exact (the product of the fragments' 1 − α).
+    Wboit,
     /// Bucket depth peeling (Liu et al., HPG 2009) with `passes` capture passes (`bdp` = 1).
     Bdp {
         /// Capture passes (≥ 1).
@@ -90,6 +94,7 @@ pub enum TechniqueKind {
     Ddp,
     Wavg,
     Wsum,
+    Wboit,
     Bdp,
     Adp,
     Mdts,
@@ -103,13 +108,14 @@ pub enum TechniqueKind {
 
 impl TechniqueKind {
     /// Every kind, in catalogue order.
-    pub const ALL: [TechniqueKind; 15] = [
+    pub const ALL: [TechniqueKind; 16] = [
         TechniqueKind::Reference,
         TechniqueKind::Plain,
         TechniqueKind::Dp,
         TechniqueKind::Ddp,
         TechniqueKind::Wavg,
         TechniqueKind::Wsum,
+        TechniqueKind::Wboit,
         TechniqueKind::Bdp,
         TechniqueKind::Adp,
         TechniqueKind::Mdts,
@@ -146,6 +152,7 @@ impl Technique {
             Technique::Ddp,
             Technique::WeightedAverage,
             Technique::WeightedSum,
+            Technique::Wboit,
             Technique::Bdp { passes: 1 },
             Technique::Bdp { passes: 2 },
             Technique::Adp,
@@ -187,6 +194,7 @@ impl Technique {
             Technique::Ddp => TechniqueKind::Ddp,
             Technique::WeightedAverage => TechniqueKind::Wavg,
             Technique::WeightedSum => TechniqueKind::Wsum,
+            Technique::Wboit => TechniqueKind::Wboit,
             Technique::Bdp { .. } => TechniqueKind::Bdp,
             Technique::Adp => TechniqueKind::Adp,
             Technique::Mdts { .. } => TechniqueKind::Mdts,
@@ -229,6 +237,7 @@ impl fmt::Display for Technique {
             Technique::Ddp => write!(f, "ddp"),
             Technique::WeightedAverage => write!(f, "wavg"),
             Technique::WeightedSum => write!(f, "wsum"),
+            Technique::Wboit => write!(f, "wboit"),
             Technique::Bdp { passes: 1 } => write!(f, "bdp"),
             Technique::Bdp { passes: 2 } => write!(f, "bdp2"),
             Technique::Bdp { passes } => write!(f, "bdp:{passes}"),
@@ -281,6 +290,7 @@ impl FromStr for Technique {
             "ddp" => none(Technique::Ddp),
             "wavg" => none(Technique::WeightedAverage),
             "wsum" => none(Technique::WeightedSum),
+            "wboit" => none(Technique::Wboit),
             "adp" => none(Technique::Adp),
             "bdp2" => none(Technique::Bdp { passes: 2 }),
             "bdp" => Ok(Technique::Bdp { passes: param.map(number).transpose()?.unwrap_or(1) }),

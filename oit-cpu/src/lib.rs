@@ -201,6 +201,7 @@ impl CpuPrepared<'_> {
             Technique::Ddp => technique::ddp::render(&mut ctx),
             Technique::WeightedAverage => technique::weighted::render(&mut ctx, true),
             Technique::WeightedSum => technique::weighted::render(&mut ctx, false),
+            Technique::Wboit => technique::wboit::render(&mut ctx),
             Technique::Bdp { .. } => technique::bdp::render(&mut ctx),
             Technique::Adp => technique::adp::render(&mut ctx),
             Technique::Mdts { .. } => technique::mdts::render32(&mut ctx),

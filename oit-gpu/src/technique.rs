@@ -23,6 +23,7 @@ pub fn render<R: ?Sized, F: Frame<R>>(ctx: &mut F, rasters: &impl Rasters<R>) ->
         Technique::Ddp => ddp(ctx, rasters.scene()),
         Technique::WeightedAverage => weighted(ctx, rasters.scene(), true),
         Technique::WeightedSum => weighted(ctx, rasters.scene(), false),
+        Technique::Wboit => wboit(ctx, rasters.scene()),
         Technique::Bdp { .. } => bdp(ctx, rasters),
         Technique::Adp => adp(ctx, rasters),
         Technique::Mdts { .. } => mdts(ctx, rasters.scene(), false),
@@ -234,6 +235,15 @@ fn weighted<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R, average: bool) -> R
     let sums = ctx.array("weighted sums", u64::from(ctx.pixels()) * 5 * 2, Init::Zero)?;
     ctx.geometry_pass(raster, "weighted", &[&sums], 0, 0)?;
     ctx.pixel_kernel("weighted", "composite_main", &[&sums], 0, u32::from(average))
+}
+
+/// Weighted blended OIT (McGuire & Bavoil 2013): one pass summing each pixel's Σ α·w·c, Σ α·w,
+/// optical depth and count in 64-bit integers (6 u64 a pixel), composited as the weighted mean
+/// colour under the exact coverage. Translucency and Fresnel are refused by the plan.
+fn wboit<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> {
+    let sums = ctx.array("wboit sums", u64::from(ctx.pixels()) * 6 * 2, Init::Zero)?;
+    ctx.geometry_pass(raster, "wboit", &[&sums], 0, 0)?;
+    ctx.pixel_kernel("wboit", "composite_main", &[&sums], 0, 0)
 }
 
 /// Depth peeling: one layer a pass, front to back, until a pass peels nothing ([`peel`]).

@@ -83,6 +83,7 @@ files!(
     "technique/scan.wgsl",
     "technique/sort_entries.wgsl",
     "technique/tail.wgsl",
+    "technique/wboit.wgsl",
     "technique/weighted.wgsl",
     "vulkan/adp_logic.wgsl",
     "vulkan/count_sum.wgsl",
@@ -253,6 +254,7 @@ pub const MODULES: &[Module] = &[
         Raster,
     ),
     m("weighted", &["technique/weighted.wgsl"], Raster),
+    m("wboit", &["technique/wboit.wgsl"], Raster),
     m("plain", &["technique/plain.wgsl"], Raster),
     m(
         "mdts",

@@ -23,6 +23,7 @@ pub(crate) mod mdts;
 pub(crate) mod mlp;
 pub(crate) mod plain;
 pub(crate) mod reference;
+pub(crate) mod wboit;
 pub(crate) mod weighted;
 
 /// Everything a technique needs for one frame, and the counters it updates.
