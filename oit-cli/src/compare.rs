@@ -19,13 +19,14 @@ use crate::output::{self, Table};
     about = "Render techniques from one view and measure each against the exact reference",
     long_about = "Render techniques from one view and measure each against the exact reference.\n\n\
         Renders `reference` once per backend, then every technique, and prints a table: geometry \
-        passes, fragments, fragments lost, fragments tied (equal depths the technique ordered by \
+        passes, fragments, fragments captured, merged (into a pixel's tail, --overflow tail) and \
+        lost, fragments tied (equal depths the technique ordered by \
         colour, not as the reference), per-pixel storage, time, error pixel rate (EPR: the \
         share of covered pixels off by more than 1 in 8 bits, in per cent) and PSNR (inf when \
         identical). A \
         technique that fails prints its error in its row and the others go on; the exit code is \
         then 1. With --json, prints one JSON array of objects with the keys technique, backend, \
-        raster, width, height, geometry_passes, fragments, captured, lost, tied, storage_bytes, \
+        raster, width, height, geometry_passes, fragments, captured, merged, lost, tied, storage_bytes, \
         tiles, wall_ms, gpu_ms, epr, psnr, max_error (epr a fraction in [0, 1], not per cent; gpu_ms \
         null when not measured, psnr null when identical); failures go to stderr."
 )]
@@ -68,12 +69,14 @@ struct CompareJson<'a> {
     max_error: f64,
 }
 
-const HEADERS: [(&str, usize); 12] = [
+const HEADERS: [(&str, usize); 14] = [
     ("technique", 10),
     ("backend", 7),
     ("raster", 8),
     ("passes", 6),
     ("fragments", 10),
+    ("captured", 10),
+    ("merged", 8),
     ("lost", 8),
     ("tied", 8),
     ("storage", 10),
@@ -152,6 +155,8 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
                 m.raster.to_string(),
                 s.geometry_passes.to_string(),
                 s.fragments.to_string(),
+                s.captured.to_string(),
+                s.merged.to_string(),
                 s.lost.to_string(),
                 s.tied.to_string(),
                 output::bytes(s.storage_bytes),

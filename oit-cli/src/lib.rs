@@ -35,10 +35,14 @@ mod options;
 mod output;
 mod plot;
 mod render;
+#[cfg(all(unix, any(feature = "wgpu", feature = "vulkan")))]
+mod runtime_dir;
 mod sweep;
 #[cfg(feature = "view")]
 mod view;
 
+#[cfg(not(feature = "view"))]
+use std::ffi::OsString;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
@@ -71,22 +75,54 @@ pub struct Cli {
     pub command: Command,
 }
 
-/// The commands.
+/// The commands, one variant each with its arguments: `render` (`render::RenderArgs`),
+/// `compare`, `sweep`, `info`, `bench` and `view` (with the `view` feature, on by default; a build
+/// without it keeps the name, to say which feature to build with).
+///
+/// Each command's help, its line in `oit --help` and the paragraph atop `oit <command> --help`,
+/// is its arguments' `about` and `long_about`. The variants carry no doc comment on purpose: clap
+/// takes a variant's doc comment over its arguments' help (it had put `` `oit render` `` in
+/// `oit --help` and left `oit render --help` without its paragraph).
 #[derive(Subcommand, Debug)]
+#[allow(missing_docs, reason = "a variant's doc comment would replace its command's help; see above")]
 pub enum Command {
-    /// `oit render`.
     Render(render::RenderArgs),
-    /// `oit compare`.
     Compare(compare::CompareArgs),
-    /// `oit sweep`.
     Sweep(sweep::SweepArgs),
-    /// `oit info`.
     Info(info::InfoArgs),
-    /// `oit bench`.
     Bench(bench::BenchArgs),
-    /// `oit view` (with the `view` feature, on by default).
     #[cfg(feature = "view")]
     View(view::ViewArgs),
+    #[cfg(not(feature = "view"))]
+    View(NoView),
+}
+
+/// `oit view` in a build without the `view` feature: takes whatever follows and answers which
+/// feature to build with, where clap alone would say "unrecognized subcommand".
+#[cfg(not(feature = "view"))]
+#[derive(clap::Args, Debug)]
+#[command(
+    about = "Show the scene in a window, live (not in this build: rebuild with the view feature)",
+    long_about = "Show the scene in a window, live (not in this build: rebuild with the view feature).\n\n\
+        The viewer (orbit, zoom, switch techniques and compare with the reference in a window \
+        drawn by oit-wgpu) needs the `view` feature, which this binary was built without. Rebuild \
+        with it: `cargo install --path oit-cli --features view` (on by default; \
+        `--no-default-features` leaves it out)."
+)]
+pub struct NoView {
+    /// The viewer's options, not read.
+    #[arg(trailing_var_arg = true, allow_hyphen_values = true, hide = true)]
+    pub args: Vec<OsString>,
+}
+
+/// What `oit view` answers in a build without the viewer.
+#[cfg(not(feature = "view"))]
+fn no_view() -> OitError {
+    OitError::InvalidSettings(
+        "`oit view` is not compiled into this oit: rebuild with `--features view` \
+         (`cargo install --path oit-cli --features view`; on by default, left out by --no-default-features)"
+            .into(),
+    )
 }
 
 /// How a command ended when it did not fail outright.
@@ -108,6 +144,8 @@ pub fn run(cli: Cli) -> Result<Outcome, OitError> {
         Command::Bench(args) => bench::run(&args),
         #[cfg(feature = "view")]
         Command::View(args) => view::run(&args),
+        #[cfg(not(feature = "view"))]
+        Command::View(_) => Err(no_view()),
     }
 }
 
@@ -146,6 +184,8 @@ pub fn validate(cli: &Cli) -> Result<Validated, OitError> {
             let checked = view::check(args)?;
             Validated { techniques: vec![checked.state.technique], prepared: None }
         }
+        #[cfg(not(feature = "view"))]
+        Command::View(_) => return Err(no_view()),
     })
 }
 
@@ -168,6 +208,15 @@ fn install_panic_hook() {
 /// The `oit` binary: parses the command line, runs it, and turns the result (or a panic) into
 /// the exit code and the one `error:` line.
 pub fn main() -> ExitCode {
+    // First, before anything can load a Vulkan driver: without XDG_RUNTIME_DIR, Mesa's
+    // device-select layer has libwayland print "error: XDG_RUNTIME_DIR is invalid or not set in
+    // the environment." on every GPU backend's start, which reads as oit's error. This runs oit
+    // again with a private runtime directory instead (setting the variable here would take
+    // `unsafe`, which the workspace forbids; `runtime_dir` says why and what it costs).
+    #[cfg(all(unix, any(feature = "wgpu", feature = "vulkan")))]
+    if let Some(code) = runtime_dir::rerun_with_private_runtime_dir() {
+        return code;
+    }
     let cli = Cli::parse();
     install_panic_hook();
     match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(cli))) {

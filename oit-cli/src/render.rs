@@ -19,7 +19,8 @@ use crate::output::{self, CameraJson};
 #[command(
     about = "Render the scene with one technique and write a PNG",
     long_about = "Render the scene with one technique and write a PNG.\n\n\
-        Prints the frame's numbers: geometry passes, fragments generated, captured, lost and tied, \
+        Prints the frame's numbers: geometry passes, fragments generated, captured, merged (into a \
+        pixel's tail, with --overflow tail), lost and tied, \
         per-pixel storage, screen tiles and time. With --json, prints one JSON object with those \
         numbers, the image size, the camera (view and projection matrices, eye, planes, angles), so \
         another renderer can reproduce the view, and the depth complexity: `max_depth` (the \
@@ -35,7 +36,8 @@ use crate::output::{self, CameraJson};
         (`oit bench --calibrate`; --calibration FILE, else the shipped CPU and H200 tables); the \
         cheapest within --max-epr and --memory is rendered. --json's `auto` says what was picked \
         and why, every candidate with its prediction, bound, storage and any reason it was refused \
-        (docs/auto.md)."
+        (docs/auto.md).\n\n\
+        --no-output writes no image, for runs that only want the numbers."
 )]
 pub struct RenderArgs {
     /// The technique: reference, plain (unsorted alpha blending in primitive order, the
@@ -63,6 +65,11 @@ pub struct RenderArgs {
     #[arg(short, long, value_name = "FILE.png", default_value = "oit.png")]
     pub output: PathBuf,
 
+    /// Write no image, for runs that only want the numbers (the summary or --json, whose
+    /// `output` is then null).
+    #[arg(long, conflicts_with = "output")]
+    pub no_output: bool,
+
     /// Print one JSON object instead of the human-readable summary.
     #[arg(long)]
     pub json: bool,
@@ -84,7 +91,8 @@ struct RenderJson<'a> {
     /// `gpu_pass_ms` where measured).
     #[serde(flatten)]
     stats: &'a Stats,
-    output: &'a Path,
+    /// The image written; null with `--no-output`.
+    output: Option<&'a Path>,
     camera: CameraJson,
     /// The deepest pixel's fragments (from the reference's per-pixel counts).
     max_depth: u32,
@@ -179,7 +187,9 @@ pub fn check(args: &RenderArgs) -> Result<(Requested, Prepared), OitError> {
         }
         Requested::Fixed(args.technique.parse()?)
     };
-    check_output(&args.output, "png", "--output")?;
+    if !args.no_output {
+        check_output(&args.output, "png", "--output")?;
+    }
     Ok((requested, args.scene.prepare()?))
 }
 
@@ -192,7 +202,7 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
     let labels: Vec<String> =
         prepared.backends.iter().map(|b| oit_bench::label(b.as_ref(), &labelled)).collect();
     let paths = output_paths(&args.output, &labels);
-    if paths.len() > 1 {
+    if paths.len() > 1 && !args.no_output {
         let names: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
         eprintln!("note: {} images, one per backend and raster path: {}", paths.len(), names.join(", "));
     }
@@ -215,7 +225,10 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
         let settings = prepared.with_technique(technique);
         let mut frame = backend.render(&prepared.scene, &camera, &settings)?;
         annotate_frame(&mut frame.image, settings.effect, &frame.stats);
-        frame.image.save_png(path)?;
+        let written = (!args.no_output).then_some(path.as_path());
+        if let Some(path) = written {
+            frame.image.save_png(path)?;
+        }
         let raster = backend.raster_path(&settings).to_string();
         let s = &frame.stats;
         if args.json {
@@ -231,7 +244,7 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
                 width: settings.width,
                 height: settings.height,
                 stats: s,
-                output: path,
+                output: written,
                 camera: CameraJson::new(&camera, prepared.view),
                 max_depth: depth.max_depth,
                 depth_histogram: &depth.histogram,
@@ -256,11 +269,12 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
                  passes     {}\n\
                  fragments  {}\n\
                  captured   {}\n\
+                 merged     {}\n\
                  lost       {} ({}%)\n\
                  tied       {}\n\
                  storage    {}{}\n\
                  time       {:.2} ms{gpu}\n\
-                 wrote      {}\n",
+                 {}",
                 backend.name(),
                 args.scene.scene,
                 prepared.scene.triangle_count(),
@@ -269,6 +283,7 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
                 s.geometry_passes,
                 s.fragments,
                 s.captured,
+                s.merged,
                 s.lost,
                 output::percent(lost_share),
                 s.tied,
@@ -279,7 +294,7 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
                     String::new()
                 },
                 s.wall_ms,
-                path.display(),
+                written.map(|p| format!("wrote      {}\n", p.display())).unwrap_or_default(),
             );
             output::print(&text)?;
         }

@@ -28,7 +28,7 @@ const MAX_VIEWS: u32 = 36_000;
         share of covered pixels off by more than 1 in 8 bits), PSNR, fragments lost and time. \
         Prints a summary per technique, backend and raster path (mean and max EPR in per cent, \
         mean lost, mean time), or with --json a JSON array of every record ({azimuth, technique, \
-        backend, raster, geometry_passes, fragments, captured, lost, tied, storage_bytes, \
+        backend, raster, geometry_passes, fragments, captured, merged, lost, tied, storage_bytes, \
         tiles, wall_ms, gpu_ms, epr, psnr, max_error}; epr is a fraction in [0, 1], not per cent) and \
         nothing else. A progress bar goes to stderr. A technique that fails is reported once \
         on stderr and left out of the results; the exit code is then 1."

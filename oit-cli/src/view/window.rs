@@ -147,14 +147,12 @@ impl Gfx {
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
         desc.backends = wgpu::Backends::VULKAN;
         let instance = wgpu::Instance::new(desc);
-        let surface = instance
-            .create_surface(window.clone())
-            .map_err(|e| device_error(format!("cannot make a wgpu surface of the window: {e}")))?;
+        let surface = instance.create_surface(window.clone()).map_err(|e| {
+            device_error(format!("cannot make a wgpu surface of the window: {e}; {INSTALL_VULKAN}"))
+        })?;
         let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
         if adapters.is_empty() {
-            return Err(device_error(
-                "no Vulkan adapter found: install a Vulkan driver (e.g. `apt-get install mesa-vulkan-drivers` for lavapipe)".into(),
-            ));
+            return Err(no_vulkan());
         }
         let names: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
         let filter = adapter_filter.map(str::to_owned).or_else(|| std::env::var("OIT_ADAPTER").ok());
@@ -710,10 +708,32 @@ fn no_display(detail: &str) -> OitError {
     ))
 }
 
+/// What to install for a Vulkan driver, for every error that lacks one.
+const INSTALL_VULKAN: &str = "install a Vulkan loader and driver: `apt-get install libvulkan1 \
+     mesa-vulkan-drivers` (lavapipe, on the CPU, where there is no GPU driver)";
+
+/// The viewer's error without a Vulkan driver.
+fn no_vulkan() -> OitError {
+    OitError::Device(format!("no Vulkan adapter found: oit view draws through Vulkan; {INSTALL_VULKAN}"))
+}
+
+/// Whether any Vulkan adapter is there to draw with (the loader present, a driver found).
+fn vulkan_adapter_present() -> bool {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+    desc.backends = wgpu::Backends::VULKAN;
+    let instance = wgpu::Instance::new(desc);
+    !pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN)).is_empty()
+}
+
 /// Opens the window and runs until it closes, the script quits or `--screenshot` is written.
 pub fn run(checked: Checked, args: &ViewArgs) -> Result<Outcome, OitError> {
     if std::env::var_os("DISPLAY").is_none_or(|d| d.is_empty()) {
         return Err(no_display("DISPLAY is not set"));
+    }
+    // a driver first, before the window and the key list: without one, making the window's
+    // surface fails with wgpu's bare "Failed to create surface for any enabled backend: {}"
+    if !vulkan_adapter_present() {
+        return Err(no_vulkan());
     }
     let event_loop =
         EventLoop::new().map_err(|e| no_display(&format!("cannot connect to the X server ({e})")))?;
