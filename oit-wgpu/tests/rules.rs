@@ -254,3 +254,53 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
     // and the cases can tell ranks apart: the full histogram's rank is the bin itself
     assert_eq!(histogram_rank(&[u32::MAX; HISTOGRAM_WORDS], 1000), 1000);
 }
+
+/// wboit's per-fragment integers: `wboit_weight` and the optical-depth table of
+/// `wboit.wgsl` (the text itself, cut from the file) against `oit_core::rules::wboit_weight` and
+/// `WBOIT_OPTICAL_DEPTH`, over every table entry and depths at and around the 10-bit steps, the
+/// planes, −0, NaN and beyond [0, 1]. Fails when an entry of either table or the weight's formula
+/// on either side is changed.
+#[test]
+fn wgsl_wboit_weight_and_table_equal_rust() {
+    let Some(backend) = oit_wgpu::backend_or_skip("wgsl_wboit_weight_and_table_equal_rust") else { return };
+    let gpu = backend.gpu().expect("opened by backend_or_skip");
+    let wboit = oit_shaders::text("technique/wboit.wgsl");
+    let cut = |from: &str, to: &str| {
+        let start = wboit.find(from).unwrap_or_else(|| panic!("wboit.wgsl has {from}"));
+        let end = start + wboit[start..].find(to).unwrap_or_else(|| panic!("{from} ends")) + to.len();
+        &wboit[start..end]
+    };
+    let kernel = format!(
+        "@group(0) @binding(0) var<storage, read_write> depths: array<u32>;
+@group(0) @binding(1) var<storage, read_write> results: array<u32>;
+{}
+{}
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
+    let i = gid.x;
+    if (i >= arrayLength(&depths)) {{
+        return;
+    }}
+    let w = wboit_weight(bitcast<f32>(depths[i]));
+    results[3u * i] = u32(w);
+    results[3u * i + 1u] = u32(w >> 32u);
+    results[3u * i + 2u] = WBOIT_OPTICAL_DEPTH[i & 255u];
+}}
+",
+        cut("const WBOIT_OPTICAL_DEPTH", "\n);\n"),
+        cut("fn wboit_weight(", "\n}\n")
+    );
+    let mut depths: Vec<f32> = (0..=1024).map(|i| i as f32 / 1024.0).collect();
+    depths.extend((0..=1024).map(|i| (i as f32 / 1024.0 - 1e-7).max(0.0)));
+    depths.extend([-0.0, -1.0, 2.0, f32::NAN, f32::INFINITY, 0.5, 0.999_999, 1e-30]);
+    while depths.len() % 256 != 0 {
+        depths.push(0.25);
+    }
+    let bits: Vec<u32> = depths.iter().map(|d| d.to_bits()).collect();
+    let got = run_kernel(gpu, &kernel, &[bytemuck::cast_slice(&bits)], bits.len() * 3, bits.len() as u32);
+    for (i, d) in depths.iter().enumerate() {
+        let w = u64::from(got[3 * i]) | u64::from(got[3 * i + 1]) << 32;
+        assert_eq!(w, wboit_weight(*d), "weight at depth {d}");
+        assert_eq!(got[3 * i + 2], WBOIT_OPTICAL_DEPTH[i & 255], "optical depth of alpha {}", i & 255);
+    }
+}
