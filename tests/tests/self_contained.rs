@@ -1,8 +1,8 @@
 //! The repository is self-contained (issue 42, item 1): no tracked file refers to a path outside
-//! the repository (the sibling `shared/` folder some machines have beside the clone) or to a
-//! path of one machine (an absolute `/work/…` or `/home/…`, a GPU host's `.gpu/` staging folder).
-//! The meshes the docs, tests and benches use are built in (`bunny`, `armadillo`: oit-core's
-//! `assets/`), so nothing needs such a path.
+//! the repository (the sibling `shared` folder some machines have beside the clone) or to a path
+//! of one machine (an absolute path under the `work` or `home` folders, a GPU host's `.gpu`
+//! staging folder): [`FORBIDDEN`] spells them. The meshes the docs, tests and benches use are
+//! built in (`bunny`, `armadillo`: oit-core's `assets/`), so nothing needs such a path.
 //!
 //! `bench/results/` is left out: its files are historical records of how each run was made,
 //! kept as they were written.
@@ -10,10 +10,11 @@
 //! Needs git (`git ls-files`); without it, or outside a git checkout (a packaged crate), the test
 //! says so and passes.
 //!
-//! Mutations that make it fail: put `--scene ../shared/models/bunny.obj` back into README.md, or
-//! `const BUNNY: &str = "/work/shared/models/bunny.obj";` back into oit-wgpu/tests/gpu_setup.rs,
-//! or drop the `bench/results/` exclusion below (its READMEs name the old staging script), or
-//! empty `FORBIDDEN` (`patterns_catch_what_they_name` fails then).
+//! Mutations that make it fail: put the bunny's old path (`models/bunny.obj` in the sibling
+//! `shared` folder) back into README.md's `--scene`, or oit-wgpu's gpu_setup test's absolute
+//! path of it back into its `BUNNY`, or drop the `bench/results/` exclusion below (its READMEs
+//! name the old staging script), or empty `FORBIDDEN` (`patterns_catch_what_they_name` fails
+//! then). This file spells the patterns in pieces (`concat!`) so it does not match itself.
 
 use std::path::Path;
 use std::process::Command;
