@@ -1,13 +1,48 @@
 //! The chart of `oit sweep --plot`: error pixel rate per view, one line per technique, log axis,
 //! drawn by oit-bench's [`Chart`] (SVG or PNG, the legend beside the plot area, never over the
-//! data).
+//! data), and the per-view [`Record`] it draws (which `oit sweep` makes and prints: here, so that
+//! the chart does not import its command).
 
 use std::path::Path;
 
 use oit_bench::plot::{Chart, Series};
-use oit_core::OitError;
+use oit_core::{OitError, Stats};
+use serde::Serialize;
 
-use crate::sweep::Record;
+/// One technique at one view: a row of `oit sweep --json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Record {
+    /// Camera azimuth in degrees.
+    pub azimuth: f32,
+    /// The technique, parameters included.
+    pub technique: String,
+    /// The backend.
+    pub backend: String,
+    /// The raster path it took.
+    pub raster: String,
+    /// The frame's counters (`geometry_passes`, `fragments`, `captured`, `lost`, `tied`,
+    /// `storage_bytes`, `tiles`, `wall_ms`, `gpu_ms`, and `gpu_pass_ms` where measured).
+    #[serde(flatten)]
+    pub stats: Stats,
+    /// Error pixel rate: the share of covered pixels off by more than 1 in 8 bits, a fraction in
+    /// [0, 1] (the summary table prints it in per cent).
+    pub epr: f64,
+    /// PSNR in dB against the reference; null when identical.
+    pub psnr: Option<f64>,
+    /// The largest channel difference from the reference, in [0, 1].
+    pub max_error: f64,
+}
+
+impl Record {
+    /// `backend` or `backend/path`.
+    pub fn label(&self) -> String {
+        if self.raster == self.backend {
+            self.raster.clone()
+        } else {
+            format!("{}/{}", self.backend, self.raster)
+        }
+    }
+}
 
 /// Where an EPR of 0 is drawn, in per cent: a log axis has no 0, and no real image has 1 error
 /// pixel in 10⁵.

@@ -6,13 +6,12 @@ use std::path::PathBuf;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use oit_bench::experiment::{Experiment, Step};
-use oit_core::{OitError, Stats, Technique, View};
-use serde::Serialize;
+use oit_core::{OitError, Technique, View};
 
 use crate::Outcome;
 use crate::options::{Prepared, SceneArgs, check_output};
 use crate::output::{self, Table};
-use crate::plot;
+use crate::plot::{self, Record};
 
 /// Most views a sweep takes (one per 0.01°).
 const MAX_VIEWS: u32 = 36_000;
@@ -54,41 +53,6 @@ pub struct SweepArgs {
 
     #[command(flatten)]
     pub scene: SceneArgs,
-}
-
-/// One technique at one view: a row of `oit sweep --json`.
-#[derive(Clone, Debug, Serialize)]
-pub struct Record {
-    /// Camera azimuth in degrees.
-    pub azimuth: f32,
-    /// The technique, parameters included.
-    pub technique: String,
-    /// The backend.
-    pub backend: String,
-    /// The raster path it took.
-    pub raster: String,
-    /// The frame's counters (`geometry_passes`, `fragments`, `captured`, `lost`, `tied`,
-    /// `storage_bytes`, `tiles`, `wall_ms`, `gpu_ms`, and `gpu_pass_ms` where measured).
-    #[serde(flatten)]
-    pub stats: Stats,
-    /// Error pixel rate: the share of covered pixels off by more than 1 in 8 bits, a fraction in
-    /// [0, 1] (the summary table prints it in per cent).
-    pub epr: f64,
-    /// PSNR in dB against the reference; null when identical.
-    pub psnr: Option<f64>,
-    /// The largest channel difference from the reference, in [0, 1].
-    pub max_error: f64,
-}
-
-impl Record {
-    /// `backend` or `backend/path`.
-    pub fn label(&self) -> String {
-        if self.raster == self.backend {
-            self.raster.clone()
-        } else {
-            format!("{}/{}", self.backend, self.raster)
-        }
-    }
 }
 
 /// Every check `oit sweep` makes before it renders: the technique list, the view count, the
@@ -250,6 +214,8 @@ fn summary(records: &[Record], techniques: &[Technique]) -> String {
 
 #[cfg(test)]
 mod tests {
+    use oit_core::Stats;
+
     use super::*;
 
     fn record(azimuth: f32, epr: f64) -> Record {

@@ -4,10 +4,9 @@
 //! including ones added after this was written.
 
 use arbitrary::{Arbitrary, Unstructured};
-use clap::CommandFactory;
 
 use crate::Target;
-use crate::mutate::{NUMBERS, Rng, values};
+use crate::dictionary::{NUMBERS, Rng, Vocabulary};
 
 /// A number as an OBJ file or an option writes it.
 #[derive(Arbitrary, Debug)]
@@ -233,109 +232,34 @@ struct ArgsInput {
     items: Vec<ArgItem>,
 }
 
-/// One option of a command, from its clap definition.
-#[derive(Clone, Debug)]
-struct Opt {
-    long: Option<String>,
-    short: Option<char>,
-    takes_value: bool,
-}
-
-/// Every command of `oit` and its options, read from oit-cli's clap definition.
-#[derive(Debug)]
-pub struct Vocabulary {
-    commands: Vec<(String, Vec<Opt>)>,
-}
-
-impl Vocabulary {
-    /// Reads the commands and options of `oit`.
-    pub fn new() -> Vocabulary {
-        let cli = oit_cli::Cli::command();
-        let commands = cli
-            .get_subcommands()
-            .map(|sub| {
-                let opts = sub
-                    .get_arguments()
-                    .filter(|a| !a.is_positional())
-                    .map(|a| Opt {
-                        long: a.get_long().map(str::to_string),
-                        short: a.get_short(),
-                        takes_value: a.get_action().takes_values(),
-                    })
-                    .collect();
-                (sub.get_name().to_string(), opts)
-            })
-            .collect();
-        Vocabulary { commands }
-    }
-
-    /// Commands and options in all.
-    pub fn counts(&self) -> (usize, usize) {
-        (self.commands.len(), self.commands.iter().map(|(_, o)| o.len()).sum())
-    }
-
-    /// The options of `command` (every command's when it is none of them).
-    fn options_of(&self, command: Option<&[u8]>) -> Vec<&Opt> {
-        let own = self.commands.iter().find(|(name, _)| Some(name.as_bytes()) == command);
-        match own {
-            Some((_, opts)) => opts.iter().collect(),
-            None => self.commands.iter().flat_map(|(_, o)| o.iter()).collect(),
-        }
-    }
-
-    /// The arguments of one option: the flag, and its value where it takes one (`form` picks
-    /// `--name value`, `--name=value` or the short flag).
-    fn write(opt: &Opt, value: usize, form: usize) -> Vec<String> {
-        let name = opt.long.clone().unwrap_or_default();
-        let list = values(&name);
-        let list = if list.is_empty() { NUMBERS } else { list };
-        let v = list[value % list.len()].to_string();
-        let flag = match (form % 4, opt.short, &opt.long) {
-            (3, Some(s), _) | (_, Some(s), None) => format!("-{s}"),
-            _ => format!("--{name}"),
-        };
-        match (opt.takes_value, form % 4) {
-            (false, _) => vec![flag],
-            (true, 1) => vec![format!("{flag}={v}")],
-            (true, _) => vec![flag, v],
-        }
-    }
-
-    /// A random option of `command`, with a value of its kind: one or two arguments.
-    pub fn option(&self, rng: &mut Rng, command: Option<&[u8]>) -> Vec<String> {
-        let opts = self.options_of(command);
-        let opt = *rng.pick(&opts);
-        Vocabulary::write(opt, rng.below(1 << 16), rng.below(8))
-    }
-
-    fn args(&self, input: &ArgsInput) -> Vec<String> {
-        let n = self.commands.len();
-        let mut out = vec![match input.command as usize % (n + 3) {
-            i if i < n => self.commands[i].0.clone(),
-            i if i == n => "help".into(),
-            i if i == n + 1 => String::new(),
-            _ => "--version".into(),
-        }];
-        let own = self.options_of(Some(out[0].as_bytes()));
-        let all = self.options_of(None);
-        for item in &input.items {
-            match item {
-                ArgItem::Option { index, value, form } => {
-                    let opt = own[*index as usize % own.len()];
-                    out.extend(Vocabulary::write(opt, usize::from(*value), usize::from(*form)));
-                }
-                ArgItem::Foreign { index, value } => {
-                    let opt = all[*index as usize % all.len()];
-                    out.extend(Vocabulary::write(opt, usize::from(*value), 0));
-                }
-                ArgItem::Number(i) => out.push(NUMBERS[*i as usize % NUMBERS.len()].to_string()),
-                ArgItem::Raw(s) => out.push(s.clone()),
-                ArgItem::Help => out.push("--help".into()),
-                ArgItem::Dashes => out.push("--".into()),
+/// The arguments an [`ArgsInput`] spells, in `vocabulary`'s commands and options.
+fn args(vocabulary: &Vocabulary, input: &ArgsInput) -> Vec<String> {
+    let n = vocabulary.commands.len();
+    let mut out = vec![match input.command as usize % (n + 3) {
+        i if i < n => vocabulary.commands[i].0.clone(),
+        i if i == n => "help".into(),
+        i if i == n + 1 => String::new(),
+        _ => "--version".into(),
+    }];
+    let own = vocabulary.options_of(Some(out[0].as_bytes()));
+    let all = vocabulary.options_of(None);
+    for item in &input.items {
+        match item {
+            ArgItem::Option { index, value, form } => {
+                let opt = own[*index as usize % own.len()];
+                out.extend(Vocabulary::write(opt, usize::from(*value), usize::from(*form)));
             }
+            ArgItem::Foreign { index, value } => {
+                let opt = all[*index as usize % all.len()];
+                out.extend(Vocabulary::write(opt, usize::from(*value), 0));
+            }
+            ArgItem::Number(i) => out.push(NUMBERS[*i as usize % NUMBERS.len()].to_string()),
+            ArgItem::Raw(s) => out.push(s.clone()),
+            ArgItem::Help => out.push("--help".into()),
+            ArgItem::Dashes => out.push("--".into()),
         }
-        out
     }
+    out
 }
 
 /// A new input for `target`, generated from `rng`'s bytes.
@@ -355,7 +279,7 @@ pub fn generate(rng: &mut Rng, target: Target, vocabulary: &Vocabulary) -> Vec<u
         }
         Target::Scene => SceneExpr::arbitrary(&mut u).map(|s| s.text()).unwrap_or_default().into_bytes(),
         Target::Args => {
-            let args = ArgsInput::arbitrary_take_rest(u).map(|a| vocabulary.args(&a)).unwrap_or_default();
+            let args = ArgsInput::arbitrary_take_rest(u).map(|a| args(vocabulary, &a)).unwrap_or_default();
             args.join("\n").into_bytes()
         }
         // the selftest's inputs are its corpus alone

@@ -17,6 +17,7 @@
 //! and saves itself.
 
 mod alloc;
+mod dictionary;
 mod generate;
 mod mutate;
 mod targets;
@@ -547,7 +548,7 @@ fn report(o: &Options, targets: &[Target], states: &[JobState], seconds: f64) ->
         text.push_str(&format!("FAILURE {} on {}: {} ({})\n", f.kind, f.target, f.message, f.file.display()));
     }
     if targets.contains(&Target::Args) {
-        let (commands, options) = generate::Vocabulary::new().counts();
+        let (commands, options) = dictionary::Vocabulary::new().counts();
         text.push_str(&format!(
             "args drew on {commands} commands and {options} options (oit-cli's clap definition)\n"
         ));

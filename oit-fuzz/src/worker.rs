@@ -17,8 +17,10 @@ use std::time::{Duration, Instant};
 
 use serde::{Deserialize, Serialize};
 
-use crate::generate::{Vocabulary, generate};
-use crate::mutate::{Rng, mutate};
+use crate::dictionary::Rng;
+use crate::dictionary::Vocabulary;
+use crate::generate::generate;
+use crate::mutate::mutate;
 use crate::targets::{Ctx, Verdict};
 use crate::{Target, alloc};
 
