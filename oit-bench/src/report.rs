@@ -150,8 +150,23 @@ fn side_by_side(w: &mut String, report: &Report, scene: &str) {
 /// --replot DIR`) without measuring again.
 pub fn read_report(dir: &Path) -> Result<Report, OitError> {
     let path = dir.join("report.json");
-    let text =
-        std::fs::read_to_string(&path).map_err(|source| OitError::Io { path: path.clone(), source })?;
+    let io = |source| OitError::Io { path: path.clone(), source };
+    // a FIFO or device in its place is refused before it is opened for reading (it would block)
+    let Some((file, _)) = oit_core::open_regular(&path).map_err(io)? else {
+        return Err(OitError::InvalidSettings(format!(
+            "{} is not a regular file (a pipe, device or folder): --replot reads the report.json `oit bench` wrote",
+            path.display()
+        )));
+    };
+    let mut text = String::new();
+    std::io::Read::read_to_string(&mut std::io::Read::take(file, MAX_REPORT_BYTES + 1), &mut text)
+        .map_err(io)?;
+    if text.len() as u64 > MAX_REPORT_BYTES {
+        return Err(OitError::InvalidSettings(format!(
+            "{} is over {MAX_REPORT_BYTES} bytes: not a report oit bench writes",
+            path.display()
+        )));
+    }
     let report: Report = serde_json::from_str(&text).map_err(|e| {
         OitError::InvalidSettings(format!("{} is not an oit bench report: {e}", path.display()))
     })?;
@@ -163,6 +178,10 @@ pub fn read_report(dir: &Path) -> Result<Report, OitError> {
     })?;
     Ok(report)
 }
+
+/// The largest report.json `--replot` reads: 1 GiB (a report of every technique on a hundred
+/// scenes is a few MiB).
+const MAX_REPORT_BYTES: u64 = 1 << 30;
 
 /// Longest time any report holds, in milliseconds: a day per frame is absurd already.
 const MAX_MS: f64 = 86_400_000.0;

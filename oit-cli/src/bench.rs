@@ -180,8 +180,7 @@ pub fn check(args: &BenchArgs) -> Result<Checked, OitError> {
     }
     let (model, model_source) = match &args.cost.model {
         Some(path) => {
-            let text = std::fs::read_to_string(path)
-                .map_err(|source| OitError::Io { path: path.clone(), source })?;
+            let text = crate::render::read_calibration(path, "--model")?;
             let name = path.display().to_string();
             (Some(ModelFile::parse(&text, &name)?), Some(name))
         }

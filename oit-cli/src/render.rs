@@ -106,6 +106,31 @@ struct RenderJson<'a> {
 /// Largest `--calibration` file read (the committed ones are under 100 KiB).
 const MAX_CALIBRATION_BYTES: u64 = 16 << 20;
 
+/// The text of a calibration.json given to `option` (`--calibration`, `oit bench --model`):
+/// refused unless a regular file of at most [`MAX_CALIBRATION_BYTES`], checked before it is
+/// opened for reading (a FIFO would block in `open()`, issue 41.5).
+pub fn read_calibration(path: &Path, option: &str) -> Result<String, OitError> {
+    let io = |source| OitError::Io { path: path.to_path_buf(), source };
+    let refuse = || {
+        OitError::InvalidSettings(format!(
+            "{option} {} is not an oit calibration: expected a calibration.json written by `oit \
+             bench --calibrate` (a regular file of at most {MAX_CALIBRATION_BYTES} bytes)",
+            path.display()
+        ))
+    };
+    let Some((file, meta)) = oit_core::open_regular(path).map_err(io)? else { return Err(refuse()) };
+    if meta.len() > MAX_CALIBRATION_BYTES {
+        return Err(refuse());
+    }
+    let mut text = String::new();
+    std::io::Read::read_to_string(&mut std::io::Read::take(file, MAX_CALIBRATION_BYTES + 1), &mut text)
+        .map_err(io)?;
+    if text.len() as u64 > MAX_CALIBRATION_BYTES {
+        return Err(refuse());
+    }
+    Ok(text)
+}
+
 /// What `--technique` asked for: one technique, or a choice under budgets.
 pub enum Requested {
     /// The technique named.
@@ -157,17 +182,7 @@ pub fn check(args: &RenderArgs) -> Result<(Requested, Prepared), OitError> {
         let given = match &args.calibration {
             Some(path) => {
                 // a calibration is a few kilobytes: refuse a device or a huge file before reading it
-                let meta =
-                    std::fs::metadata(path).map_err(|source| OitError::Io { path: path.clone(), source })?;
-                if !meta.is_file() || meta.len() > MAX_CALIBRATION_BYTES {
-                    return Err(OitError::InvalidSettings(format!(
-                        "--calibration {} is not an oit calibration: expected a calibration.json \
-                         written by `oit bench --calibrate` (a file of at most {MAX_CALIBRATION_BYTES} bytes)",
-                        path.display()
-                    )));
-                }
-                let text = std::fs::read_to_string(path)
-                    .map_err(|source| OitError::Io { path: path.clone(), source })?;
+                let text = read_calibration(path, "--calibration")?;
                 let name = path.display().to_string();
                 Some((ModelFile::parse(&text, &name)?, name))
             }

@@ -88,12 +88,15 @@ pub struct ViewArgs {
     #[arg(long)]
     pub no_overlay: bool,
 
-    /// Replays the timed key and mouse events of FILE (the format is below).
+    /// Replays the timed key and mouse events of FILE (the format is below). After its last
+    /// event the window stays open for the keys and mouse, unless the script ends with `quit` or
+    /// --screenshot is given (then the view exits once the last event's frame is drawn).
     #[arg(long, value_name = "FILE")]
     pub script: Option<PathBuf>,
 
     /// Writes the last frame drawn (without the overlay) to FILE.png and exits: after the first
-    /// frame, or with --script when the script quits.
+    /// frame, or with --script when the script quits or its last event has run (an empty script
+    /// included).
     #[arg(long, value_name = "FILE.png")]
     pub screenshot: Option<PathBuf>,
 }

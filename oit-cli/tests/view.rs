@@ -281,6 +281,49 @@ fn scripted_view_matches_render() {
     assert!(err.contains("error: screenshot never.png: the window is minimised"), "{err}");
     assert!(!err.contains("panicked"), "{err}");
     assert!(!dir.join("never.png").exists(), "nothing written");
+
+    // Issue 41.5: a script without `quit` (or an empty one) never ended. With --screenshot the
+    // view exits once the last event's frame is drawn and writes it. Mutation caught: dropping
+    // `script_done` from the exit test in window.rs (the run is killed after 60 s and this fails).
+    for (name, script) in [("empty.txt", ""), ("no-quit.txt", "0.0 key Right\n0.1 drag 10 0\n")] {
+        std::fs::write(dir.join(name), script).unwrap();
+        let shot = format!("{name}.png");
+        let args = [
+            "view",
+            "--scene",
+            SCENE,
+            "--size",
+            "64x48",
+            "--no-overlay",
+            "--script",
+            name,
+            "--screenshot",
+            &shot,
+        ];
+        let mut child = Command::new(env!("CARGO_BIN_EXE_oit"))
+            .args(args)
+            .current_dir(&dir)
+            .env_remove("WAYLAND_DISPLAY")
+            .env("DISPLAY", &display)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("the oit binary runs");
+        let until = Instant::now() + Duration::from_secs(60);
+        let status = loop {
+            if let Some(status) = child.try_wait().unwrap() {
+                break status;
+            }
+            if Instant::now() > until {
+                let _ = child.kill();
+                let _ = child.wait();
+                panic!("{name}: oit view --script without quit --screenshot did not exit in 60 s");
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        };
+        assert!(status.success(), "{name}: {status}");
+        assert!(dir.join(&shot).is_file(), "{name}: the last frame is written");
+    }
 }
 
 /// Asserts the failure contract: exit code 1, one `error:` line, no panic.

@@ -61,14 +61,17 @@ const MAX_SCRIPT_BYTES: u64 = 1 << 20;
 /// Reads and parses the script at `path` (a file of at most 1 MiB); every error names the line.
 pub fn load(path: &Path) -> Result<Vec<Event>, OitError> {
     let bad = |message: String| OitError::InvalidSettings(format!("script {}: {message}", path.display()));
-    let meta = std::fs::metadata(path).map_err(|e| bad(format!("cannot read it: {e}")))?;
-    if !meta.is_file() {
-        return Err(bad("not a file".into()));
-    }
+    // checked before it is opened for reading: a FIFO would block in open() (issue 41.5)
+    let opened = oit_core::open_regular(path).map_err(|e| bad(format!("cannot read it: {e}")))?;
+    let Some((file, meta)) = opened else {
+        return Err(bad("not a regular file (a pipe, device or folder)".into()));
+    };
     if meta.len() > MAX_SCRIPT_BYTES {
         return Err(bad(format!("{} bytes: a script is at most 1 MiB", meta.len())));
     }
-    let text = std::fs::read_to_string(path).map_err(|e| bad(format!("cannot read it: {e}")))?;
+    let mut text = String::new();
+    std::io::Read::read_to_string(&mut std::io::Read::take(file, MAX_SCRIPT_BYTES), &mut text)
+        .map_err(|e| bad(format!("cannot read it: {e}")))?;
     parse(&text).map_err(bad)
 }
 

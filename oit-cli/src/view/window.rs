@@ -327,6 +327,9 @@ struct App<'a> {
     pending_resize: Option<(u32, u32, Instant)>,
     /// The script minimised the window (and has not restored it).
     minimized: bool,
+    /// With `--screenshot`: the script's last event has run without a `quit`, so the next frame
+    /// drawn is the last (a script without `quit`, or an empty one, never ended: issue 41.5).
+    script_done: bool,
     /// Whether F12 asked for a screenshot.
     want_shot: bool,
     /// The left button is down at this cursor position.
@@ -559,6 +562,16 @@ impl App<'_> {
                 }
             }
         }
+        // every event has run: with --screenshot, draw once more (the last event's state) and
+        // exit; without it the window stays open for the keys and mouse (`--help` says so)
+        if self.args.screenshot.is_some() && !self.script_done {
+            self.script_done = true;
+            if self.minimized && self.drawn.is_some() {
+                event_loop.exit();
+            } else {
+                self.dirty = true;
+            }
+        }
         None
     }
 }
@@ -643,7 +656,10 @@ impl ApplicationHandler for App<'_> {
             WindowEvent::RedrawRequested => {
                 self.dirty = false;
                 self.draw();
-                if self.args.screenshot.is_some() && self.args.script.is_none() && self.drawn.is_some() {
+                if self.args.screenshot.is_some()
+                    && (self.args.script.is_none() || self.script_done)
+                    && self.drawn.is_some()
+                {
                     event_loop.exit();
                 }
             }
@@ -751,6 +767,7 @@ pub fn run(checked: Checked, args: &ViewArgs) -> Result<Outcome, OitError> {
         pending_shot: None,
         pending_resize: None,
         minimized: false,
+        script_done: false,
         want_shot: false,
         drag_from: None,
         cursor: (0.0, 0.0),
