@@ -278,7 +278,11 @@ pub fn epr_bound(plan: &Plan, stats: &SceneStats) -> (f64, String) {
                 if fixed.is_some_and(|k| k < n) { ", and layers past K lost" } else { "" }
             ),
         ),
-        Technique::WeightedAverage | Technique::WeightedSum | Technique::Wboit | Technique::Plain => {
+        Technique::WeightedAverage
+        | Technique::WeightedSum
+        | Technique::Wboit
+        | Technique::Mboit { .. }
+        | Technique::Plain => {
             (two, "order ignored: exact at one fragment, any pixel of 2 or more can differ".into())
         }
         Technique::Bdp { .. } => (

@@ -103,7 +103,7 @@ pub use settings::{
     check_threads, max_threads, parse_memory, parse_rgb, parse_size,
 };
 pub use technique::{
-    BoundsMode, Effect, KNOWN_TECHNIQUES, MAX_PARAMETER, RasterPath, Technique, TechniqueKind,
+    BoundsMode, Effect, KNOWN_TECHNIQUES, MAX_PARAMETER, MBOIT_MOMENTS, RasterPath, Technique, TechniqueKind,
 };
 
 pub use glam;

@@ -147,7 +147,11 @@ impl Plan {
         }
         if matches!(
             technique,
-            Technique::Plain | Technique::WeightedAverage | Technique::WeightedSum | Technique::Wboit
+            Technique::Plain
+                | Technique::WeightedAverage
+                | Technique::WeightedSum
+                | Technique::Wboit
+                | Technique::Mboit { .. }
         ) && matches!(settings.effect, Effect::Translucency | Effect::Fresnel)
         {
             return Err(OitError::Unsupported {
@@ -381,6 +385,11 @@ impl Plan {
             Technique::WeightedAverage | Technique::WeightedSum => vec![per_pixel("weighted sums", 8, 5)],
             // Σ α·w·r, Σ α·w·g, Σ α·w·b, Σ α·w, Σ −ln(1 − α) and the count, u64 each
             Technique::Wboit => vec![per_pixel("weighted blended sums", 8, 6)],
+            // the optical depth and m moments (first pass), Σ T·α·r, g, b, Σ T·α and the count
+            // (second pass), u64 each
+            Technique::Mboit { m } => {
+                vec![per_pixel("moments and transmittance-weighted sums", 8, u64::from(m) + 6)]
+            }
             Technique::Bdp { .. } if self.bdp_color => {
                 vec![bounds, per_pixel("colour buckets", 4, u64::from(BDP_COLOR_SUBINTERVALS))]
             }
@@ -469,6 +478,8 @@ impl Plan {
             Technique::Ddp => passes.push((PassKind::Peel, peels(layers.div_ceil(2).saturating_add(1)))),
             Technique::Mlp { m } => passes.push((PassKind::Peel, peels(layers.div_ceil(m.max(1)).max(1)))),
             Technique::Bdp { .. } => passes.push((PassKind::Capture, self.bdp_capture_passes().max(1))),
+            // the moments, then the transmittance-weighted colours
+            Technique::Mboit { .. } => passes.push((PassKind::Capture, 2)),
             Technique::Adp => {
                 passes.push((PassKind::Histogram, 1));
                 passes.push((PassKind::Batch, self.adp_batches(bins)));

@@ -58,7 +58,7 @@ pub const WBOIT_OPTICAL_UNIT: f32 = 65536.0;
 /// at 32 (e⁻³² ≈ 1.3·10⁻¹⁴: fully opaque to 8 bits). Weighted blended OIT sums these per pixel,
 /// order-independently, and composites with e^(−Σ), the product of the fragments' 1 − α (the
 /// paper's revealage, kept by multiplicative blending there). A table, not `ln`, so that every
-/// backend adds the same integers: `wboit.wgsl` holds the same numbers (a test compares them, and
+/// backend adds the same integers: `wboit_table.wgsl` holds the same numbers (a test compares them, and
 /// another checks the table against the formula).
 #[rustfmt::skip]
 pub const WBOIT_OPTICAL_DEPTH: [u32; 256] = [
@@ -95,6 +95,48 @@ pub const WBOIT_OPTICAL_DEPTH: [u32; 256] = [
     185677, 190199, 195056, 200301, 206004, 212250, 219155, 226874,
     235625, 245727, 257676, 272300, 291154, 317726, 363152, 2097152,
 ];
+
+/// Moment-based OIT's depth: the fragment's view distance on a log scale from the near plane
+/// (−1) to the far one (+1), as the paper warps it so that moments resolve near and far alike:
+/// 2·ln(z/near)/ln(far/near) − 1 with z = near/(1 − d(1 − near/far)) (oit_core's
+/// `Camera::linear_depth`), which is 2·ln(1 − d(1 − r))/ln r − 1 for r = near/far. A camera
+/// whose near and far planes meet (r ≥ 1 − 10⁻⁶) gets 2d − 1.
+#[inline]
+pub fn mboit_depth(d: f32, near_over_far: f32) -> f32 {
+    let d = if d.is_nan() { 1.0 } else { d.clamp(0.0, 1.0) };
+    let r = near_over_far;
+    if !(r > 0.0 && r < 0.999_999) {
+        return 2.0 * d - 1.0;
+    }
+    (2.0 * (1.0 - d * (1.0 - r)).ln() / r.ln() - 1.0).clamp(-1.0, 1.0)
+}
+
+/// Units of a power of [`mboit_depth`] in the moment sums: 2²⁰ (z^k ∈ [−1, 1] to ±2²⁰).
+pub const MBOIT_POWER_UNIT: f32 = 1_048_576.0;
+
+/// The warped depth's powers z, z², z³, z⁴ in units of 2⁻²⁰ (rounded to nearest, half away from
+/// zero): what a fragment adds to the moment sums, times its optical depth
+/// ([`WBOIT_OPTICAL_DEPTH`]), in integers, so the sums do not depend on the order they are added
+/// in. The powers are products of f32s, never fused, so every backend finds the same integers.
+#[inline]
+pub fn mboit_powers(z: f32) -> [i64; 4] {
+    let z2 = z * z;
+    let z3 = z2 * z;
+    let z4 = z2 * z2;
+    // v is exact (a power-of-two scale) and so are |v| + 0.5 and its floor for |v| ≤ 2²⁰: the
+    // same integers wherever it runs (WGSL's `round` rounds half to even; this does not)
+    [z, z2, z3, z4].map(|p| {
+        let v = p * MBOIT_POWER_UNIT;
+        ((v.abs() + 0.5).floor() * v.signum()) as i64
+    })
+}
+
+/// Quantizes a fragment's transmittance T ∈ [0, 1] to 16 bits (units of 1/65536, round to
+/// nearest): its weight in moment-based OIT's second pass.
+#[inline]
+pub fn mboit_weight16(t: f32) -> u64 {
+    (t.clamp(0.0, 1.0) * 65536.0 + 0.5) as u64
+}
 
 /// Quantizes a straight-alpha linear colour to RGBA8 (round to nearest) and packs it.
 #[inline]

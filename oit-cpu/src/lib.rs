@@ -202,6 +202,7 @@ impl CpuPrepared<'_> {
             Technique::WeightedAverage => technique::weighted::render(&mut ctx, true),
             Technique::WeightedSum => technique::weighted::render(&mut ctx, false),
             Technique::Wboit => technique::wboit::render(&mut ctx),
+            Technique::Mboit { .. } => technique::mboit::render(&mut ctx),
             Technique::Bdp { .. } => technique::bdp::render(&mut ctx),
             Technique::Adp => technique::adp::render(&mut ctx),
             Technique::Mdts { .. } => technique::mdts::render32(&mut ctx),

@@ -72,6 +72,7 @@ files!(
     "technique/fabs_counters_image.wgsl",
     "technique/ll.wgsl",
     "technique/ll_size.wgsl",
+    "technique/mboit.wgsl",
     "technique/mdts.wgsl",
     "technique/mdts_keys.wgsl",
     "technique/mdts_keys_image.wgsl",
@@ -84,6 +85,7 @@ files!(
     "technique/sort_entries.wgsl",
     "technique/tail.wgsl",
     "technique/wboit.wgsl",
+    "technique/wboit_table.wgsl",
     "technique/weighted.wgsl",
     "vulkan/adp_logic.wgsl",
     "vulkan/count_sum.wgsl",
@@ -254,7 +256,9 @@ pub const MODULES: &[Module] = &[
         Raster,
     ),
     m("weighted", &["technique/weighted.wgsl"], Raster),
-    m("wboit", &["technique/wboit.wgsl"], Raster),
+    m("wboit", &["technique/wboit_table.wgsl", "technique/wboit.wgsl"], Raster),
+    // the same optical depths as wboit's
+    m("mboit", &["technique/wboit_table.wgsl", "technique/mboit.wgsl"], Raster),
     m("plain", &["technique/plain.wgsl"], Raster),
     m(
         "mdts",

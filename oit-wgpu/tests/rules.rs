@@ -255,8 +255,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
     assert_eq!(histogram_rank(&[u32::MAX; HISTOGRAM_WORDS], 1000), 1000);
 }
 
-/// wboit's per-fragment integers: `wboit_weight` and the optical-depth table of
-/// `wboit.wgsl` (the text itself, cut from the file) against `oit_core::rules::wboit_weight` and
+/// wboit's per-fragment integers: `wboit_weight` of `wboit.wgsl` and the optical-depth table of
+/// `wboit_table.wgsl` (the text itself, cut from the file) against `oit_core::rules::wboit_weight` and
 /// `WBOIT_OPTICAL_DEPTH`, over every table entry and depths at and around the 10-bit steps, the
 /// planes, −0, NaN and beyond [0, 1]. Fails when an entry of either table or the weight's formula
 /// on either side is changed.
@@ -265,10 +265,11 @@ fn wgsl_wboit_weight_and_table_equal_rust() {
     let Some(backend) = oit_wgpu::backend_or_skip("wgsl_wboit_weight_and_table_equal_rust") else { return };
     let gpu = backend.gpu().expect("opened by backend_or_skip");
     let wboit = oit_shaders::text("technique/wboit.wgsl");
-    let cut = |from: &str, to: &str| {
-        let start = wboit.find(from).unwrap_or_else(|| panic!("wboit.wgsl has {from}"));
-        let end = start + wboit[start..].find(to).unwrap_or_else(|| panic!("{from} ends")) + to.len();
-        &wboit[start..end]
+    let table = oit_shaders::text("technique/wboit_table.wgsl");
+    let cut = |text: &'static str, from: &str, to: &str| {
+        let start = text.find(from).unwrap_or_else(|| panic!("wboit's WGSL has {from}"));
+        let end = start + text[start..].find(to).unwrap_or_else(|| panic!("{from} ends")) + to.len();
+        &text[start..end]
     };
     let kernel = format!(
         "@group(0) @binding(0) var<storage, read_write> depths: array<u32>;
@@ -287,8 +288,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
     results[3u * i + 2u] = WBOIT_OPTICAL_DEPTH[i & 255u];
 }}
 ",
-        cut("const WBOIT_OPTICAL_DEPTH", "\n);\n"),
-        cut("fn wboit_weight(", "\n}\n")
+        cut(table, "const WBOIT_OPTICAL_DEPTH", "\n);\n"),
+        cut(wboit, "fn wboit_weight(", "\n}\n")
     );
     let mut depths: Vec<f32> = (0..=1024).map(|i| i as f32 / 1024.0).collect();
     depths.extend((0..=1024).map(|i| (i as f32 / 1024.0 - 1e-7).max(0.0)));

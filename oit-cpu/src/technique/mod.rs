@@ -19,6 +19,7 @@ pub(crate) mod dfb;
 pub(crate) mod dp;
 pub(crate) mod fabs;
 pub(crate) mod ll;
+pub(crate) mod mboit;
 pub(crate) mod mdts;
 pub(crate) mod mlp;
 pub(crate) mod plain;
