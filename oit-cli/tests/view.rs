@@ -78,7 +78,9 @@ fn display(test: &str) -> Option<(String, Option<Xvfb>)> {
             continue;
         }
         let mut child = Command::new(&xvfb)
-            .args([format!(":{n}").as_str(), "-screen", "0", "1024x768x24", "-nolisten", "tcp"])
+            // -noreset: an X server resets when its last client leaves and refuses connections
+            // meanwhile, so a run that starts as the previous one ends saw "no display"
+            .args([format!(":{n}").as_str(), "-screen", "0", "1024x768x24", "-nolisten", "tcp", "-noreset"])
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .spawn()

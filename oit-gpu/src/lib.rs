@@ -23,7 +23,7 @@ pub mod technique;
 
 use bytemuck::{Pod, Zeroable};
 use oit_core::plan::Plan;
-use oit_core::{GpuFragments, OitError, Settings};
+use oit_core::{Camera, Effect, GpuFragments, OitError, Scene, Settings};
 
 /// Group 0's binding of the loss accounting (`acct` in prelude.wgsl).
 pub const ACCT_BINDING: u32 = 15;
@@ -73,6 +73,59 @@ pub struct FrameUniform {
 pub fn dispatch_size(invocations: u64) -> (u32, u32) {
     let groups = invocations.div_ceil(64);
     if groups <= 65_535 { (groups as u32, 1) } else { (65_535, groups.div_ceil(65_535) as u32) }
+}
+
+impl FrameUniform {
+    /// The uniform of a frame of `settings` seen by `camera` under `plan` (pass 0, parameter 0):
+    /// the same on every GPU backend.
+    pub fn new(scene: &Scene, camera: &Camera, settings: &Settings, plan: &Plan) -> FrameUniform {
+        FrameUniform {
+            width: settings.width,
+            height: settings.height,
+            pass_index: 0,
+            param: 0,
+            effect: match settings.effect {
+                Effect::Transparency => 0,
+                Effect::Translucency => 1,
+                Effect::Fresnel => 2,
+                Effect::Complexity => 3,
+            },
+            pixel_count: settings.width * settings.height,
+            ties: u32::from(plan.count_ties),
+            last_pass: 0,
+            forward: camera.forward.extend(0.0).to_array(),
+            background: settings.background.extend(1.0).to_array(),
+            lens: [camera.near, camera.far, scene.absorption_for(settings.effect) as f32, 0.0],
+        }
+    }
+}
+
+/// The host's setup of the compute path, set up and binned: the scene's (or, with `boxes`, its
+/// instances' bounding boxes') triangle words (`oit_core::setup`), and the work list of the compute
+/// rasterizer, one (triangle, tile) item for each [`TILE`]² tile a triangle's pixel box touches,
+/// the tile as `ty << 16 | tx`. Both GPU backends upload these where the device sets up on the host.
+pub fn host_setup(
+    scene: &Scene,
+    camera: &Camera,
+    settings: &Settings,
+    boxes: bool,
+) -> (Vec<u32>, Vec<[u32; 2]>) {
+    let r = if boxes {
+        oit_core::setup::TriangleSetup::bounding_boxes(scene, camera, settings)
+    } else {
+        oit_core::setup::TriangleSetup::new(scene, camera, settings)
+    };
+    let words = r.triangle_words();
+    debug_assert_eq!(words.len() % oit_core::setup::TRIANGLE_WORDS, 0);
+    let mut items: Vec<[u32; 2]> = Vec::new();
+    for (i, [x0, y0, x1, y1]) in r.triangle_boxes().enumerate() {
+        for ty in y0 / TILE..=y1 / TILE {
+            for tx in x0 / TILE..=x1 / TILE {
+                items.push([i as u32, ty << 16 | tx]);
+            }
+        }
+    }
+    (words, items)
 }
 
 /// Initial contents of a storage buffer.

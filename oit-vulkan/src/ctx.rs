@@ -8,7 +8,7 @@ use std::rc::Rc;
 
 use ash::vk;
 use oit_core::plan::Plan;
-use oit_core::{Camera, Effect, Frame, Image, OitError, Scene, Settings, Stats};
+use oit_core::{Camera, Frame, Image, OitError, Scene, Settings, Stats};
 
 use crate::device::{
     Blend, Buffer, Framebuffer, Gpu, GpuImage, GraphicsDesc, PassKey, SetKind, storage_usage,
@@ -231,24 +231,7 @@ impl<'a> VkCtx<'a> {
         // the whole frame's storage against the device's budget, before anything is allocated
         let budget = settings.memory_budget(gpu.memory_budget());
         plan.check_budget(u64::from(pixels), oit_core::plan::Counted::default(), (&budget.0, budget.1))?;
-        let uniform = FrameUniform {
-            width: settings.width,
-            height: settings.height,
-            pass_index: 0,
-            param: 0,
-            effect: match settings.effect {
-                Effect::Transparency => 0,
-                Effect::Translucency => 1,
-                Effect::Fresnel => 2,
-                Effect::Complexity => 3,
-            },
-            pixel_count: pixels,
-            ties: u32::from(plan.count_ties),
-            last_pass: 0,
-            forward: camera.forward.extend(0.0).to_array(),
-            background: settings.background.extend(1.0).to_array(),
-            lens: [camera.near, camera.far, scene.absorption_for(settings.effect) as f32, 0.0],
-        };
+        let uniform = FrameUniform::new(scene, camera, settings, &plan);
         let mut lent = Vec::new();
         let mut take = |bytes: u64| -> Result<Rc<Buffer>, OitError> {
             let b = pool.take(gpu, bytes, storage_usage())?;

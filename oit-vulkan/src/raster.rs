@@ -26,12 +26,11 @@ use std::rc::Rc;
 
 use ash::vk;
 use oit_core::gpu_setup::{ARGS_ITEMS, ARGS_PER_ITEM, ARGS_WORDS, COUNTER_WORDS, SetupGeometry, VERT_WORDS};
-use oit_core::setup::{TRIANGLE_WORDS, TriangleSetup};
+use oit_core::setup::TRIANGLE_WORDS;
 use oit_core::{Camera, OitError, Scene, Settings};
 
 use crate::device::{Buffer, Gpu, SetKind, storage_usage};
 use crate::record::{Recorder, SetData};
-use oit_gpu::TILE;
 use oit_gpu::dispatch_size;
 
 /// Bytes of the smallest triangle and work-list buffers (a binding may not be empty).
@@ -445,21 +444,7 @@ impl ComputeBuffers {
         made: &Cell<u64>,
         raster_uniform: impl Fn(u32) -> Vec<u8>,
     ) -> Result<ComputeRaster, OitError> {
-        let r = if boxes {
-            TriangleSetup::bounding_boxes(scene, camera, settings)
-        } else {
-            TriangleSetup::new(scene, camera, settings)
-        };
-        let words = r.triangle_words();
-        debug_assert_eq!(words.len() % TRIANGLE_WORDS, 0);
-        let mut items: Vec<[u32; 2]> = Vec::new();
-        for (i, [x0, y0, x1, y1]) in r.triangle_boxes().enumerate() {
-            for ty in y0 / TILE..=y1 / TILE {
-                for tx in x0 / TILE..=x1 / TILE {
-                    items.push([i as u32, ty << 16 | tx]);
-                }
-            }
-        }
+        let (words, items) = oit_gpu::host_setup(scene, camera, settings, boxes);
         self.reserve(gpu, words.len() as u64 * 4, items.len() as u64 * 8, made)?;
         Ok(ComputeRaster {
             tris: self.tris.clone(),

@@ -34,7 +34,6 @@ use oit_core::{Camera, OitError, RasterPath, Scene, Settings};
 
 use crate::ctx::{Driver, Gate, Generated, GpuCtx, SetupCheck, dispatch_size};
 use crate::gpu::Gpu;
-use oit_gpu::TILE;
 
 const RASTER_WGSL: &str = oit_shaders::COMPUTE_RASTER;
 /// The setup kernels: softfloat.wgsl's integer f32, then setup.wgsl.
@@ -370,21 +369,7 @@ impl ComputeBuffers {
         boxes: bool,
         made: &Cell<u64>,
     ) -> Result<(), OitError> {
-        let r = if boxes {
-            TriangleSetup::bounding_boxes(scene, camera, settings)
-        } else {
-            TriangleSetup::new(scene, camera, settings)
-        };
-        let words = r.triangle_words();
-        debug_assert_eq!(words.len() % TRIANGLE_WORDS, 0);
-        let mut items: Vec<[u32; 2]> = Vec::new();
-        for (i, [x0, y0, x1, y1]) in r.triangle_boxes().enumerate() {
-            for ty in y0 / TILE..=y1 / TILE {
-                for tx in x0 / TILE..=x1 / TILE {
-                    items.push([i as u32, ty << 16 | tx]);
-                }
-            }
-        }
+        let (words, items) = oit_gpu::host_setup(scene, camera, settings, boxes);
         self.reserve(gpu, words.len() as u64 * 4, items.len() as u64 * 8, made)?;
         let queue = &gpu.queue;
         if !words.is_empty() {
