@@ -41,7 +41,7 @@ const MAX_TIES: u32 = 128;
 
 /// A built-in scene or an OBJ file: names in [`BUILTIN_SCENES`] are built, a path to an `.obj` (or
 /// any existing file) is read, and any other bare name is looked up as `NAME.obj` in
-/// [`MODEL_SEARCH`]'s folders.
+/// `MODEL_SEARCH`'s folders.
 pub fn load_scene(name: &str) -> Result<Scene, OitError> {
     match builtin_scene(name) {
         Some(scene) => scene,

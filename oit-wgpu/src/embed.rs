@@ -489,6 +489,8 @@ impl OitPass {
             | Technique::Mdts64 { .. }
             | Technique::WeightedAverage
             | Technique::WeightedSum
+            | Technique::Wboit
+            | Technique::Mboit { .. }
             | Technique::Bdp { .. } => None,
             Technique::Dp | Technique::Ddp | Technique::Mlp { .. } => {
                 Some("it stops peeling when a pass read back finds nothing left")
@@ -502,7 +504,7 @@ impl OitPass {
                 backend: "wgpu (recorded pass)".into(),
                 what: format!(
                     "{}: {why}, which a frame recorded into your encoder cannot do; use `OitPass::frame`, \
-                     or one of fabs:K, mdts:K, mdts64:K, wavg, wsum, bdp, bdp:P",
+                     or one of fabs:K, mdts:K, mdts64:K, wavg, wsum, wboit, mboit, bdp, bdp:P",
                     self.settings.technique
                 ),
             }),

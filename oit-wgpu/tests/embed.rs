@@ -152,6 +152,8 @@ const EMBED_SUPPORTED: &[&str] = &[
     "fabs:2",
     "wavg",
     "wsum",
+    "wboit",
+    "mboit:4",
     "mdts64:4",
     "mdts64",
     "dp",
