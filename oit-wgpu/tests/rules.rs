@@ -294,7 +294,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
     let mut depths: Vec<f32> = (0..=1024).map(|i| i as f32 / 1024.0).collect();
     depths.extend((0..=1024).map(|i| (i as f32 / 1024.0 - 1e-7).max(0.0)));
     depths.extend([-0.0, -1.0, 2.0, f32::NAN, f32::INFINITY, 0.5, 0.999_999, 1e-30]);
-    while depths.len() % 256 != 0 {
+    while !depths.len().is_multiple_of(256) {
         depths.push(0.25);
     }
     let bits: Vec<u32> = depths.iter().map(|d| d.to_bits()).collect();
