@@ -12,8 +12,19 @@ use oit_core::{OitError, Overflow, Settings, Stats, Technique};
 mod example;
 
 /// What a recorded frame runs (the rest must be refused).
-const RECORDABLE: &[&str] =
-    &["fabs:2", "fabs:16", "mdts64:2", "mdts64:16", "wavg", "wsum", "bdp", "bdp:2", "bdp2"];
+const RECORDABLE: &[&str] = &[
+    "fabs:2",
+    "fabs:16",
+    "mdts64:2",
+    "mdts64:16",
+    "wavg",
+    "wsum",
+    "wboit",
+    "mboit:4",
+    "bdp",
+    "bdp:2",
+    "bdp2",
+];
 
 /// The stats both ways must agree on (times aside; `lost_pixels` is not kept when recording).
 fn key(s: &Stats) -> [u64; 8] {

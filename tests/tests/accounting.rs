@@ -21,6 +21,8 @@ const CASES: &[Case] = &[
             "plain",
             "wavg",
             "wsum",
+            "wboit",
+            "mboit",
             "dp",
             "ddp",
             "bdp",

@@ -82,7 +82,7 @@ fn weighted_blends_refuse_ordered_effects_everywhere() {
     let scene = scene("planes:4");
     for backend in backends_for("weighted_blends_refuse_ordered_effects_everywhere") {
         let b = backend.as_ref();
-        for t in ["plain", "wavg", "wsum"] {
+        for t in ["plain", "wavg", "wsum", "wboit", "mboit"] {
             for effect in [Effect::Translucency, Effect::Fresnel] {
                 let s = Settings { effect, ..settings(16, t) };
                 match b.render(&scene, &camera(&scene, &s, View::default()), &s) {
