@@ -60,6 +60,10 @@ pub struct Measurement {
     pub baseline: bool,
     /// The numbers, or why there are none.
     pub result: Result<Measured, String>,
+    /// The technique was refused under these settings (`OitError::Unsupported` or
+    /// `InvalidSettings`: a combination this backend, path or technique does not do), not failed:
+    /// a command running the whole catalogue (`-t all`) lists it and goes on.
+    pub refused: bool,
 }
 
 impl Measurement {
@@ -264,6 +268,7 @@ impl Experiment<'_> {
                     technique,
                     baseline,
                     result,
+                    refused: false,
                 };
 
                 let raster = backend.raster_path(&base);
@@ -300,7 +305,12 @@ impl Experiment<'_> {
                                 numbers.latency_wall_ms = t.latency;
                                 Ok(numbers)
                             });
-                    out.push(row(technique, raster, false, result.map_err(|e| e.to_string())));
+                    let refused =
+                        matches!(result, Err(OitError::Unsupported { .. } | OitError::InvalidSettings(_)));
+                    out.push(Measurement {
+                        refused,
+                        ..row(technique, raster, false, result.map_err(|e| e.to_string()))
+                    });
                     on_step(Step::Measured(out.last().expect("just pushed")));
                 }
             }

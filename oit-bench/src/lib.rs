@@ -300,6 +300,10 @@ pub struct Failure {
     pub technique: String,
     /// Why.
     pub error: String,
+    /// Refused under the run's settings (a combination the backend, path or technique does not
+    /// do: [`experiment::Measurement::refused`]), not failed.
+    #[serde(default)]
+    pub refused: bool,
 }
 
 /// A scene's statistics on one backend/path: the cost model's inputs.
@@ -755,6 +759,7 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
             backend: backend.into(),
             technique: technique.into(),
             error: e.to_string(),
+            refused: false,
         });
     };
     let experiment = Experiment {
@@ -839,6 +844,9 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
                     Ok(r) => r,
                     Err(e) => {
                         fail(&mut report, "bench", scene_name, &m.label(), &technique, e);
+                        if let Some(f) = report.failures.last_mut() {
+                            f.refused = m.refused;
+                        }
                         continue;
                     }
                 };

@@ -339,11 +339,26 @@ pub fn run(args: &BenchArgs) -> Result<Outcome, OitError> {
             if m.within_targets { "" } else { "; targets missed" }
         ))?;
     }
-    for f in &report.failures {
+    // `-t all` runs the catalogue: what these options refuse is listed, not a failure
+    let whole_catalogue = args.techniques.trim().eq_ignore_ascii_case("all");
+    let (refused, failures): (Vec<_>, Vec<_>) =
+        report.failures.iter().partition(|f| whole_catalogue && f.refused);
+    for f in &failures {
         output::error_line(&format!(
             "{} {} on {} ({}): {}",
             f.stage, f.technique, f.backend, f.scene, f.error
         ));
+    }
+    if !refused.is_empty() {
+        let lines: Vec<String> = refused
+            .iter()
+            .map(|f| format!("  {} on {} ({}): {}", f.technique, f.backend, f.scene, f.error))
+            .collect();
+        output::print(&format!(
+            "{} of the catalogue refused under these options (the others ran; listed in the report):\n{}\n",
+            refused.len(),
+            lines.join("\n")
+        ))?;
     }
     output::print(&format!(
         "{} runs measured; wrote {} ({} files)\n",
@@ -351,11 +366,12 @@ pub fn run(args: &BenchArgs) -> Result<Outcome, OitError> {
         args.out.join("report.md").display(),
         report.files.len()
     ))?;
-    if !report.failures.is_empty() {
-        output::error_line(&format!(
-            "{} run(s) failed; they are listed in the report",
-            report.failures.len()
-        ));
+    if !failures.is_empty() {
+        output::error_line(&format!("{} run(s) failed; they are listed in the report", failures.len()));
+        return Ok(Outcome::Failed);
+    }
+    if report.rows.is_empty() && !refused.is_empty() {
+        output::error_line("every technique was refused under these options; nothing ran");
         return Ok(Outcome::Failed);
     }
     Ok(Outcome::Success)

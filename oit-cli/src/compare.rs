@@ -25,7 +25,9 @@ use crate::output::{self, Table};
         share of covered pixels off by more than 1 in 8 bits, in per cent) and PSNR (inf when \
         identical). A \
         technique that fails prints its error in its row and the others go on; the exit code is \
-        then 1. With --json, prints one JSON array of objects with the keys technique, backend, \
+        then 1. With `-t all`, a technique the options refuse (an effect or capture it cannot do) \
+        is listed after the table with the reason and the others run; the exit code is 1 only \
+        when none ran. With --json, prints one JSON array of objects with the keys technique, backend, \
         raster, width, height, geometry_passes, fragments, captured, merged, lost, tied, storage_bytes, \
         tiles, wall_ms, gpu_ms, epr, psnr, max_error (epr a fraction in [0, 1], not per cent; gpu_ms \
         null when not measured, psnr null when identical); failures go to stderr."
@@ -125,6 +127,11 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
         output::print(&header)?;
     }
     let (mut failures, mut attempts) = (0usize, 0usize);
+    // `-t all` runs the catalogue: a technique these options refuse (an effect it cannot do, a
+    // capture it has none of) is listed after the table with its reason, not counted as a failure
+    let whole_catalogue = args.techniques.trim().eq_ignore_ascii_case("all");
+    let mut refused: Vec<String> = Vec::new();
+    let mut ran = 0usize;
     let mut printed = Ok(());
     let measurements = experiment.run(&args.scene.scene, &prepared.scene, &[prepared.view], &mut |step| {
         let Step::Measured(m) = step else { return };
@@ -134,6 +141,10 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
         let technique = m.technique.to_string();
         let result = match &m.result {
             Ok(r) => r,
+            Err(e) if whole_catalogue && m.refused && !m.baseline => {
+                refused.push(format!("{technique} on {}: {e}", m.label()));
+                return;
+            }
             Err(e) => {
                 // Without a reference nothing on this backend can be measured.
                 failures += if m.baseline { techniques.len() } else { 1 };
@@ -147,6 +158,7 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
             }
         };
         let Some(acc) = result.accuracy else { return };
+        ran += 1;
         let s = &result.stats;
         if !args.json && printed.is_ok() {
             printed = output::print(&table.row(&[
@@ -196,8 +208,25 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
             output::print(&format!("wrote {}\n", path.display()))?;
         }
     }
+    if !refused.is_empty() {
+        let list = format!(
+            "{} of the catalogue refused under these options (the others ran):\n{}\n",
+            refused.len(),
+            refused.iter().map(|r| format!("  {r}")).collect::<Vec<_>>().join("\n")
+        );
+        // with --json, stdout holds only the JSON
+        if args.json {
+            eprint!("{list}");
+        } else {
+            output::print(&list)?;
+        }
+    }
     if failures > 0 {
         output::error_line(&format!("{failures} of {attempts} technique runs failed"));
+        return Ok(Outcome::Failed);
+    }
+    if ran == 0 && !refused.is_empty() {
+        output::error_line("every technique was refused under these options; nothing ran");
         return Ok(Outcome::Failed);
     }
     Ok(Outcome::Success)

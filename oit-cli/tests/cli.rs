@@ -691,3 +691,40 @@ fn replot_rejects_absurd_numbers() {
     std::fs::write(&json, damaged).unwrap();
     assert_one_error(&oit(&["bench", "--replot", r]), "a number past f64");
 }
+
+/// Issue 41.6: `-t all` with an option some techniques refuse runs the others, lists the refused
+/// ones with the reason after the table and exits 0; named techniques that are refused still fail
+/// the command. Mutations caught: counting `Measurement::refused` runs as failures again in
+/// compare.rs or bench.rs (exit 1), or treating named techniques as the catalogue (the named cases
+/// exit 0). (A run of the catalogue where every technique is refused exits 1 too; no option refuses
+/// every technique, so no case here reaches it.)
+#[test]
+fn all_runs_what_the_options_allow_and_lists_the_rest() {
+    let base = ["--scene", "planes:4", "--size", "24x24", "--effect", "translucency"];
+    let compare = |t: &str| oit(&[&["compare", "-t", t][..], &base[..]].concat());
+    let out = compare("all");
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stdout(&out);
+    assert!(text.contains("refused under these options"), "{text}");
+    for t in ["plain", "wavg", "wsum", "wboit", "mboit:4"] {
+        assert!(text.contains(&format!("  {t} on cpu:")), "{t} listed: {text}");
+    }
+    assert!(text.lines().any(|l| l.starts_with("dp ")), "dp ran: {text}");
+    assert_eq!(compare("wavg,dp").status.code(), Some(1), "a named technique refused fails");
+
+    let dir = scratch("all-refused");
+    let bench = |t: &str, out: &str| {
+        let out_dir = dir.join(out);
+        let out_dir = out_dir.to_str().expect("a UTF-8 path");
+        let args = [
+            &["bench", "-t", t, "--frames", "1", "--warmup", "0", "--no-curves", "--out", out_dir][..],
+            &["--scenes", "planes:4", "--size", "24x24", "--effect", "translucency"][..],
+        ]
+        .concat();
+        oit(&args)
+    };
+    let out = bench("all", "all");
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stdout(&out).contains("refused under these options"), "{}", stdout(&out));
+    assert_eq!(bench("wavg,wsum", "none").status.code(), Some(1), "nothing ran");
+}
