@@ -88,6 +88,10 @@ impl Array {
     }
 }
 
+/// The most triangles a scene `mboit` renders may have: its i64 moment sums hold 2²² fragments a
+/// pixel.
+pub const MBOIT_MAX_TRIANGLES: u64 = 1 << 22;
+
 /// The plan of one frame: see the module docs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Plan {
@@ -159,6 +163,21 @@ impl Plan {
                 what: format!(
                     "the {:?} effect with {technique}: it never orders fragments; use a sorting technique (dp, fabs, adp, ...)",
                     settings.effect
+                ),
+            });
+        }
+        // mboit's moment sums are i64 integers, |a·zᵏ| < 2⁴¹ a fragment: 2²² fragments fit, and a
+        // pixel holds at most one fragment a triangle, so a scene of more triangles could wrap a
+        // sum in silence and is refused (wboit's u64 sums, α·w·c < 2³⁵ a fragment, hold 2²⁹:
+        // above `Scene::MAX_TRIANGLES`, which scenes are held to)
+        if matches!(technique, Technique::Mboit { .. }) && scene.triangle_count() > MBOIT_MAX_TRIANGLES {
+            return Err(OitError::Unsupported {
+                backend: backend.into(),
+                what: format!(
+                    "{technique} on a scene of {} triangles: its per-pixel moment sums hold \
+                     {MBOIT_MAX_TRIANGLES} fragments a pixel, and a pixel can take one a triangle; \
+                     use an exact technique (ll, dfb) or split the scene",
+                    scene.triangle_count()
                 ),
             });
         }
@@ -776,5 +795,24 @@ mod tests {
         assert_eq!(size_class(1025), 1152);
         // neighbours share a class
         assert_eq!(size_class(1_000_001), size_class(1_020_000));
+    }
+
+    /// mboit refuses a scene with more triangles than its moment sums hold fragments a pixel (one
+    /// over the limit), and renders one at the limit. Fails when the check is dropped or moved by
+    /// one.
+    #[test]
+    fn mboit_refuses_scenes_its_sums_cannot_hold() {
+        let s = Settings { technique: "mboit".parse().unwrap(), ..Settings::default() };
+        let scene = |n: u64| {
+            let mesh = crate::Mesh::new(
+                "many",
+                vec![glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y],
+                vec![[0, 1, 2]; n as usize],
+            );
+            crate::Scene::from_meshes("many", vec![mesh], glam::Vec4::ONE)
+        };
+        let e = Plan::new("test", &scene(MBOIT_MAX_TRIANGLES + 1), &s).unwrap_err().to_string();
+        assert!(e.contains("moment sums") && e.contains("4194305 triangles"), "{e}");
+        assert!(Plan::new("test", &scene(MBOIT_MAX_TRIANGLES), &s).is_ok());
     }
 }

@@ -305,3 +305,81 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
         assert_eq!(got[3 * i + 2], WBOIT_OPTICAL_DEPTH[i & 255], "optical depth of alpha {}", i & 255);
     }
 }
+
+/// mboit's per-fragment arithmetic: `mboit_power` and `mboit_share_in_front` of `mboit.wgsl`
+/// (the text itself, cut from the file) against `oit_core::rules::mboit_powers` and
+/// `oit_core::composite::mboit_share_in_front`, on one- and two-atom moments and moments of
+/// random depth sets, at depths across [−1, 1]. The powers must be equal; the share within 10⁻⁴
+/// (a device may fuse the bound's multiply-adds, f32 rounding apart; one 16-bit transmittance
+/// step is 1.5·10⁻⁵ of e⁻ˢ, so this allows a few). Fails when the bias, the overestimation, the
+/// substitutions or the roots differ on one side, or the powers round differently.
+#[test]
+fn wgsl_mboit_bound_equals_rust() {
+    use oit_core::composite::mboit_share_in_front;
+    let Some(backend) = oit_wgpu::backend_or_skip("wgsl_mboit_bound_equals_rust") else { return };
+    let gpu = backend.gpu().expect("opened by backend_or_skip");
+    let mboit = oit_shaders::text("technique/mboit.wgsl");
+    let cut = |from: &str, to: &str| {
+        let start = mboit.find(from).unwrap_or_else(|| panic!("mboit.wgsl has {from}"));
+        let end = start + mboit[start..].find(to).unwrap_or_else(|| panic!("{from} ends")) + to.len();
+        &mboit[start..end]
+    };
+    let kernel = format!(
+        "@group(0) @binding(0) var<storage, read_write> cases: array<vec4<f32>>;
+@group(0) @binding(1) var<storage, read_write> depths: array<f32>;
+@group(0) @binding(2) var<storage, read_write> results: array<u32>;
+{}
+{}
+{}
+{}
+{}
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
+    let i = gid.x;
+    if (i >= arrayLength(&depths)) {{
+        return;
+    }}
+    let z = depths[i];
+    results[3u * i] = bitcast<u32>(mboit_share_in_front(cases[i], z));
+    let p = mboit_power(z * z * z);
+    results[3u * i + 1u] = u32(p & 0xffffffffli);
+    results[3u * i + 2u] = u32(p >> 32u);
+}}
+",
+        cut("const MBOIT_BIAS", ";\n"),
+        cut("const MBOIT_OVERESTIMATION", ";\n"),
+        cut("fn mboit_power(", "\n}\n"),
+        cut("fn mboit_div(", "\n}\n"),
+        cut("fn mboit_share_in_front(", "\n}\n"),
+    );
+    let moments = |zs: &[f32]| -> [f32; 4] {
+        std::array::from_fn(|k| zs.iter().map(|z| z.powi(k as i32 + 1)).sum::<f32>() / zs.len() as f32)
+    };
+    let mut s = 0x2545_f491u32;
+    let mut next = || {
+        s ^= s << 13;
+        s ^= s >> 17;
+        s ^= s << 5;
+        (s as f32 / u32::MAX as f32) * 2.0 - 1.0
+    };
+    let mut sets: Vec<Vec<f32>> = vec![vec![0.3], vec![-0.7], vec![-0.5, 0.5], vec![0.0, 0.0, 0.9]];
+    for n in 2..10 {
+        sets.push((0..n).map(|_| next()).collect());
+    }
+    let (mut cases, mut depths) = (Vec::new(), Vec::new());
+    for set in &sets {
+        for i in 0..=20 {
+            cases.push(moments(set));
+            depths.push(-1.0 + i as f32 / 10.0);
+        }
+    }
+    let inputs: [&[u8]; 2] = [bytemuck::cast_slice(&cases), bytemuck::cast_slice(&depths)];
+    let got = run_kernel(gpu, &kernel, &inputs, depths.len() * 3, depths.len() as u32);
+    for (i, (m, z)) in cases.iter().zip(&depths).enumerate() {
+        let share = f32::from_bits(got[3 * i]);
+        let want = mboit_share_in_front(*m, *z);
+        assert!((share - want).abs() <= 1e-4, "moments {m:?} at {z}: wgsl {share}, rust {want}");
+        let p = i64::from(got[3 * i + 1]) | i64::from(got[3 * i + 2] as i32) << 32;
+        assert_eq!(p, oit_core::rules::mboit_powers(*z)[2], "z³ at {z}");
+    }
+}

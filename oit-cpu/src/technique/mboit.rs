@@ -15,12 +15,10 @@ use oit_core::rules::{
     MBOIT_POWER_UNIT, WBOIT_OPTICAL_DEPTH, WBOIT_OPTICAL_UNIT, mboit_depth, mboit_powers, mboit_weight16,
     pack_rgba8,
 };
-use oit_core::{Effect, Frame, OitError};
-use rayon::prelude::*;
+use oit_core::{Frame, OitError};
 
 use super::Ctx;
 use crate::raster::prefetch;
-use crate::storage::take_u64;
 
 /// u64 words a pixel: Σ a, Σ a·z, Σ a·z², Σ a·z³, Σ a·z⁴ (two's complement), then Σ T·α·r,
 /// Σ T·α·g, Σ T·α·b, Σ T·α and the count.
@@ -28,9 +26,8 @@ const WORDS: usize = 10;
 
 pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     // translucency and Fresnel are refused by the plan (oit_core::plan::Plan::new)
-    let effect = ctx.resolve.effect;
     let r = ctx.resolve.camera.near / ctx.resolve.camera.far;
-    let mut sums = ctx.alloc64(WORDS, 0)?;
+    let sums = ctx.alloc64(WORDS, 0)?;
     let ahead = |px: u32| prefetch(&sums[WORDS * px as usize..WORDS * px as usize + WORDS]);
     // the moments
     ctx.pass_shaded_ahead(ahead, |f| {
@@ -54,39 +51,15 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         sums[base + 9].fetch_add(1, Relaxed);
     });
     let bg = ctx.settings.background;
-    // a pixel's sums, emptied as they are read (only where a fragment came: the count), so the
-    // next frame lends the array without a sweep
-    let take = |s: &[std::sync::atomic::AtomicU64]| {
-        let count = take_u64(&s[9], 0) as u32;
-        let mut l = [0u64; 9];
-        if count > 0 {
-            for (v, word) in l.iter_mut().zip(s) {
-                *v = take_u64(word, 0);
-            }
-        }
-        MboitSums {
-            weighted: Vec3::new(l[5] as f32, l[6] as f32, l[7] as f32),
-            weight: l[8] as f32,
-            optical_depth: l[0] as f32 / WBOIT_OPTICAL_UNIT,
+    Ok(super::finish_sums(ctx, sums, WORDS, 9, bg, |w, count| {
+        let sums = MboitSums {
+            weighted: Vec3::new(w[5] as f32, w[6] as f32, w[7] as f32),
+            weight: w[8] as f32,
+            optical_depth: w[0] as f32 / WBOIT_OPTICAL_UNIT,
             count,
-        }
-    };
-    let frame = if effect == Effect::Complexity {
-        let mut states = ctx.states();
-        states
-            .par_iter_mut()
-            .zip(sums.par_chunks(WORDS))
-            .for_each(|(state, s)| state.captured = take(s).count);
-        super::finish(ctx, states)
-    } else {
-        let empty = crate::resolve::srgb(bg);
-        super::finish_pixels(ctx, |px| {
-            let w = take(&sums[WORDS * px..WORDS * px + WORDS]);
-            if w.count == 0 { (empty, 0) } else { (crate::resolve::srgb(mboit(&w, bg)), w.count) }
-        })
-    };
-    sums.mark_clean(crate::pool::Clean::Word(0));
-    Ok(frame)
+        };
+        mboit(&sums, bg)
+    }))
 }
 
 /// The transmittance in front of warped depth `z` from a pixel's first-pass sums (Σ a, then the

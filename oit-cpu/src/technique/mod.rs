@@ -383,6 +383,48 @@ pub(crate) fn finish_pixels(
     frame
 }
 
+/// The ending of the weighted techniques (`wavg`, `wsum`, `wboit`, `mboit`), which keep `words`
+/// u64 sums a pixel with its fragment count at word `count_word`: each pixel's words are taken
+/// (emptied as they are read, and only where a fragment came, so the next frame lends the array
+/// without a sweep), and `colour(words, count)` composites them to a linear colour; a pixel no
+/// fragment reached gets `empty`, made once. Under the complexity effect only the counts go into
+/// the resolve states.
+pub(crate) fn finish_sums<'a>(
+    ctx: &Ctx<'a>,
+    mut sums: Pooled<'a, AtomicU64>,
+    words: usize,
+    count_word: usize,
+    empty: glam::Vec3,
+    colour: impl Fn(&[u64], u32) -> glam::Vec3 + Sync,
+) -> oit_core::Frame {
+    use rayon::prelude::*;
+    const MAX_WORDS: usize = 16;
+    assert!(words <= MAX_WORDS && count_word < words, "{words} sum words, count at {count_word}");
+    let take = |s: &[AtomicU64]| {
+        let count = crate::storage::take_u64(&s[count_word], 0) as u32;
+        let mut w = [0u64; MAX_WORDS];
+        if count > 0 {
+            for (v, word) in w.iter_mut().zip(s) {
+                *v = crate::storage::take_u64(word, 0);
+            }
+        }
+        (w, count)
+    };
+    let frame = if ctx.resolve.effect == Effect::Complexity {
+        let mut states = ctx.states();
+        states.par_iter_mut().zip(sums.par_chunks(words)).for_each(|(state, s)| state.captured = take(s).1);
+        finish(ctx, states)
+    } else {
+        let empty = crate::resolve::srgb(empty);
+        finish_pixels(ctx, |px| {
+            let (w, count) = take(&sums[words * px..words * px + words]);
+            if count == 0 { (empty, 0) } else { (crate::resolve::srgb(colour(&w[..words], count)), count) }
+        })
+    };
+    sums.mark_clean(crate::pool::Clean::Word(0));
+    frame
+}
+
 /// Resolves each pixel from a state in the resolving thread's locals, fed by `feed` (the ending
 /// of a technique that captures every fragment before its one resolve;
 /// [`Resolve::image_with`](crate::resolve::Resolve::image_with)).

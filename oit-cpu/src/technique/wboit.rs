@@ -10,20 +10,17 @@ use std::sync::atomic::Ordering::Relaxed;
 use glam::Vec3;
 use oit_core::composite::{WboitSums, wboit};
 use oit_core::rules::{WBOIT_OPTICAL_DEPTH, WBOIT_OPTICAL_UNIT, pack_rgba8, wboit_weight};
-use oit_core::{Effect, Frame, OitError};
-use rayon::prelude::*;
+use oit_core::{Frame, OitError};
 
 use super::Ctx;
 use crate::raster::prefetch;
-use crate::storage::take_u64;
 
 /// u64 words a pixel: Σ α·w·r, Σ α·w·g, Σ α·w·b, Σ α·w, Σ −ln(1 − α), count.
 const WORDS: usize = 6;
 
 pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     // translucency and Fresnel are refused by the plan (oit_core::plan::Plan::new)
-    let effect = ctx.resolve.effect;
-    let mut sums = ctx.alloc64(WORDS, 0)?;
+    let sums = ctx.alloc64(WORDS, 0)?;
     let ahead = |px: u32| prefetch(&sums[WORDS * px as usize..WORDS * px as usize + WORDS]);
     ctx.pass_shaded_ahead(ahead, |f| {
         let c = pack_rgba8(f.color());
@@ -38,37 +35,13 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         sums[base + 5].fetch_add(1, Relaxed);
     });
     let bg = ctx.settings.background;
-    // a pixel's sums, emptied as they are read (only where a fragment came: the count), so the
-    // next frame lends the array without a sweep
-    let take = |s: &[std::sync::atomic::AtomicU64]| {
-        let count = take_u64(&s[5], 0) as u32;
-        let mut l = [0.0f32; 5];
-        if count > 0 {
-            for (v, word) in l.iter_mut().zip(s) {
-                *v = take_u64(word, 0) as f32;
-            }
-        }
-        WboitSums {
-            weighted: Vec3::new(l[0], l[1], l[2]),
-            weight: l[3],
-            optical_depth: l[4] / WBOIT_OPTICAL_UNIT,
+    Ok(super::finish_sums(ctx, sums, WORDS, 5, bg, |w, count| {
+        let sums = WboitSums {
+            weighted: Vec3::new(w[0] as f32, w[1] as f32, w[2] as f32),
+            weight: w[3] as f32,
+            optical_depth: w[4] as f32 / WBOIT_OPTICAL_UNIT,
             count,
-        }
-    };
-    let frame = if effect == Effect::Complexity {
-        let mut states = ctx.states();
-        states
-            .par_iter_mut()
-            .zip(sums.par_chunks(WORDS))
-            .for_each(|(state, s)| state.captured = take(s).count);
-        super::finish(ctx, states)
-    } else {
-        let empty = crate::resolve::srgb(bg);
-        super::finish_pixels(ctx, |px| {
-            let w = take(&sums[WORDS * px..WORDS * px + WORDS]);
-            if w.count == 0 { (empty, 0) } else { (crate::resolve::srgb(wboit(&w, bg)), w.count) }
-        })
-    };
-    sums.mark_clean(crate::pool::Clean::Word(0));
-    Ok(frame)
+        };
+        wboit(&sums, bg)
+    }))
 }

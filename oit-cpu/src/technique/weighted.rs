@@ -7,18 +7,15 @@ use std::sync::atomic::Ordering::Relaxed;
 use glam::Vec3;
 use oit_core::composite::{WeightedSums, weighted_average, weighted_sum};
 use oit_core::rules::pack_rgba8;
-use oit_core::{Effect, Frame, OitError};
-use rayon::prelude::*;
+use oit_core::{Frame, OitError};
 
 use super::Ctx;
 use crate::raster::prefetch;
-use crate::storage::take_u64;
 
 pub(crate) fn render(ctx: &mut Ctx<'_>, average: bool) -> Result<Frame, OitError> {
     // translucency and Fresnel are refused by the plan (oit_core::plan::Plan::new)
-    let effect = ctx.resolve.effect;
     // r, g, b premultiplied sums, alpha sum, count
-    let mut sums = ctx.alloc64(5, 0)?;
+    let sums = ctx.alloc64(5, 0)?;
     // each pixel's 40 bytes of sums asked for a few fragments before its turn: the five
     // locked adds of a fragment otherwise wait on memory one fragment at a time
     let ahead = |px: u32| prefetch(&sums[5 * px as usize..5 * px as usize + 5]);
@@ -34,36 +31,12 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, average: bool) -> Result<Frame, OitError
     });
     let bg = ctx.settings.background;
     let composite = |w: &WeightedSums| if average { weighted_average(w, bg) } else { weighted_sum(w, bg) };
-    // a pixel's sums and count, emptied as they are read (only where a fragment came: the
-    // count), so the next frame lends the array without a sweep
-    let take = |s: &[std::sync::atomic::AtomicU64]| {
-        let count = take_u64(&s[4], 0) as u32;
-        let mut l = [0.0f32; 4];
-        if count > 0 {
-            for (v, word) in l.iter_mut().zip(s) {
-                *v = take_u64(word, 0) as f32;
-            }
-        }
-        WeightedSums {
-            premultiplied: Vec3::new(l[0], l[1], l[2]) / (255.0 * 255.0),
-            alpha: l[3] / 255.0,
+    let empty = composite(&WeightedSums::default());
+    Ok(super::finish_sums(ctx, sums, 5, 4, empty, |w, count| {
+        composite(&WeightedSums {
+            premultiplied: Vec3::new(w[0] as f32, w[1] as f32, w[2] as f32) / (255.0 * 255.0),
+            alpha: w[3] as f32 / 255.0,
             count,
-        }
-    };
-    let frame = if effect == Effect::Complexity {
-        let mut states = ctx.states();
-        states.par_iter_mut().zip(sums.par_chunks(5)).for_each(|(state, s)| state.captured = take(s).count);
-        super::finish(ctx, states)
-    } else {
-        // each pixel's colour straight into the image, with the counts: no state array; a pixel
-        // no fragment reached gets the empty sums' colour, made once (most of a frame's pixels,
-        // each three sRGB conversions)
-        let empty = crate::resolve::srgb(composite(&WeightedSums::default()));
-        super::finish_pixels(ctx, |px| {
-            let w = take(&sums[5 * px..5 * px + 5]);
-            if w.count == 0 { (empty, 0) } else { (crate::resolve::srgb(composite(&w)), w.count) }
         })
-    };
-    sums.mark_clean(crate::pool::Clean::Word(0));
-    Ok(frame)
+    }))
 }

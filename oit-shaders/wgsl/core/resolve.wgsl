@@ -84,6 +84,18 @@ fn state_init(px: u32) {
     state[px] = s;
 }
 
+// Sets a pixel's state to a colour composited in one go (the weighted techniques: wavg, wsum,
+// wboit, mboit): its front colour, nothing behind it, `count` fragments captured.
+fn state_composited(px: u32, c: vec3<f32>, count: u32) {
+    var s = state[px];
+    s.fr = c.x;
+    s.fg = c.y;
+    s.fb = c.z;
+    s.transmittance = 0.0;
+    s.captured = count;
+    state[px] = s;
+}
+
 // oit_core::Camera::linear_depth: n·f / (f − d(f − n)) without the product n·f, which is 0 or
 // infinite in f32 for a scene at 1e-20 or 1e20.
 fn linear_depth(d: f32) -> f32 {

@@ -129,11 +129,5 @@ fn composite_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
         }
         c = mean * (1.0 - t) + bg * t;
     }
-    var s = state[px];
-    s.fr = c.x;
-    s.fg = c.y;
-    s.fb = c.z;
-    s.transmittance = 0.0;
-    s.captured = count;
-    state[px] = s;
+    state_composited(px, c, count);
 }

@@ -52,11 +52,5 @@ fn weighted_composite(px: u32, premultiplied: vec3<f32>, alpha: f32, count: u32)
         // composite::weighted_sum
         c = clamp(premultiplied + bg * (1.0 - alpha), vec3<f32>(0.0), vec3<f32>(1.0));
     }
-    var s = state[px];
-    s.fr = c.x;
-    s.fg = c.y;
-    s.fb = c.z;
-    s.transmittance = 0.0;
-    s.captured = count;
-    state[px] = s;
+    state_composited(px, c, count);
 }
