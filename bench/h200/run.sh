@@ -109,6 +109,30 @@ before-after)
         done
     done
     ;;
+alternated)
+    # issue 37: the binaries of an earlier commit ($BEFORE, $BEFORE_BENCH: oit and the criterion
+    # `techniques` bench, stripped) and of this one ($OIT, $AFTER_BENCH) in turn, twice (before-1,
+    # after-1, before-2, after-2): `oit bench` on both GPU backends and raster paths, then the
+    # criterion benches of the GPU backends on one scene (FILTER). Ratios by
+    # bench/local/alternated.py; criterion's own "change" lines compare each run with the last.
+    SCENE=${SCENE:-bunny}
+    for round in 1 2; do
+        for side in before after; do
+            bin=$([ $side = before ] && echo "$BEFORE" || echo "$OIT")
+            run "$bin" bench --backend wgpu,vulkan --raster all --size 1024x1024 --frames 10 --warmup 2 \
+                --scenes "$SCENE" -t "${TECHNIQUES:-fabs,dfb,ll,adp,dp,ddp,wavg,bdp,bdp2,mdts,mdts64,mlp}" \
+                --no-curves --out "$OUT/$side-$round"
+        done
+    done
+    if [ -n "${BEFORE_BENCH:-}" ]; then
+        for round in 1 2; do
+            for side in before after; do
+                bin=$([ $side = before ] && echo "$BEFORE_BENCH" || echo "$AFTER_BENCH")
+                run "$bin" --bench "${FILTER:-^knot/(wgpu|vulkan)}" > "$OUT/criterion-$side-$round.txt" 2>&1
+            done
+        done
+    fi
+    ;;
 embed)
     # issue 10 item 4: the embeddable pass recorded into the user's encoder, in the example's frame
     # loop (orbiting camera, 120 frames at 128², nothing read back): frames per second; needs

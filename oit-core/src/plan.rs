@@ -550,6 +550,25 @@ impl Plan {
         })
     }
 
+    /// Why a frame of this plan must read back from the device in mid-frame (a count that sizes
+    /// its storage, a peel that stops when a pass finds nothing, adp's histogram), which a frame
+    /// recorded into a caller's command stream cannot do; `None` where it records in one go.
+    pub fn mid_frame_readback(&self) -> Option<&'static str> {
+        match self.technique {
+            _ if self.needs_count() => {
+                Some("its storage is sized by a counting pass read back in mid-frame; give K")
+            }
+            Technique::Dp | Technique::Ddp | Technique::Mlp { .. } => {
+                Some("it stops peeling when a pass read back finds nothing left")
+            }
+            Technique::Adp => Some("its batches are chosen from a histogram read back in mid-frame"),
+            Technique::Reference | Technique::Dfb | Technique::Ll => {
+                Some("it sizes its storage from counts read back in mid-frame")
+            }
+            _ => None,
+        }
+    }
+
     /// True when the technique needs the counting pass before it can size its arrays.
     pub fn needs_count(&self) -> bool {
         matches!(self.sizing, Sizing::FromCount | Sizing::Exact)

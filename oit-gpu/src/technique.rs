@@ -6,7 +6,8 @@
 //! The hardware path's own captures (blending, depth tests, logic ops) are each backend's; they
 //! run instead of these where the settings ask for them (`--hardware-capture blend`).
 
-use oit_core::rules::{BDP_COLOR_SUBINTERVALS, BDP_DEPTH_SUBINTERVALS, BUCKETS, HISTOGRAM_WORDS};
+use oit_core::plan::{Array, Counted};
+use oit_core::rules::BDP_DEPTH_SUBINTERVALS;
 use oit_core::{BoundsMode, Effect, OitError, Technique};
 
 use crate::{Frame, ImageFormat, Init, Rasters};
@@ -36,14 +37,173 @@ pub fn render<R: ?Sized, F: Frame<R>>(ctx: &mut F, rasters: &impl Rasters<R>) ->
     }
 }
 
+/// A frame's storage as its plan names it ([`Plan::arrays`](oit_core::plan::Plan::arrays)): a
+/// technique takes each of its arrays from here by the plan's name, and the sizes are the plan's,
+/// so a GPU frame allocates exactly what the plan counts and checks against the memory budget,
+/// with nothing corrected by hand. [`Storage::finish`] refuses a frame that left one of the
+/// plan's arrays out.
+///
+/// An array's element may be kept as several parallel buffers, one per field (structure of
+/// arrays, as the WGSL reads them: `dfb`'s 12-byte entries as 8-byte keys and 4-byte payloads),
+/// or as storage images (`--atomic-storage image`): the same array of the plan over another
+/// storage kind, with the same bytes.
+pub struct Storage {
+    technique: Technique,
+    pixels: u64,
+    arrays: Vec<(Array, bool)>,
+    /// The fragments per-fragment arrays hold, once the frame knows them ([`Storage::hold`]).
+    fragments: Option<u64>,
+}
+
+impl Storage {
+    /// The plan's arrays of `ctx`'s frame, its per-pixel slots sized from a counting pass whose
+    /// deepest pixel held `deepest` fragments (0 where the frame counts none).
+    pub fn new<R: ?Sized, F: Frame<R>>(ctx: &F, deepest: u32) -> Storage {
+        let arrays = ctx.plan().arrays(Counted { deepest, fragments: 0 });
+        Storage {
+            technique: ctx.settings().technique,
+            pixels: u64::from(ctx.pixels()),
+            arrays: arrays.into_iter().map(|a| (a, false)).collect(),
+            fragments: None,
+        }
+    }
+
+    /// Sizes the per-fragment arrays (exact allocations) for `fragments` fragments.
+    pub fn hold(&mut self, fragments: u64) {
+        self.fragments = Some(fragments);
+    }
+
+    /// The plan's array whose name is `name` (up to its parenthesised gloss) and its element
+    /// count, marked taken.
+    fn take(&mut self, name: &str) -> Result<(Array, u64), OitError> {
+        let technique = self.technique;
+        let internal = |what: String| OitError::Device(format!("internal: {technique}'s GPU frame {what}"));
+        let (array, taken) = self
+            .arrays
+            .iter_mut()
+            .find(|(a, _)| a.name.split(" (").next() == Some(name))
+            .ok_or_else(|| internal(format!("asked for '{name}', which its plan does not allocate")))?;
+        if std::mem::replace(taken, true) {
+            return Err(internal(format!("allocated its plan's '{name}' twice")));
+        }
+        let fragments = match (array.per_fragment, self.fragments) {
+            (0, _) => 0,
+            (_, Some(n)) => n,
+            (_, None) => return Err(internal(format!("allocated '{name}' before it knew its fragments"))),
+        };
+        let elements = self
+            .pixels
+            .saturating_mul(array.per_pixel)
+            .saturating_add(fragments.saturating_mul(array.per_fragment))
+            .saturating_add(array.fixed);
+        Ok((*array, elements))
+    }
+
+    /// The plan's array `name` as one storage buffer a field of its element: `fields` gives each
+    /// field's bytes (a multiple of 4; together the element's) and initial words.
+    pub fn buffers<const N: usize, R: ?Sized, F: Frame<R>>(
+        &mut self,
+        ctx: &mut F,
+        name: &str,
+        fields: [(u64, Init); N],
+    ) -> Result<[F::Buffer; N], OitError> {
+        let (array, elements) = self.take(name)?;
+        let bytes: u64 = fields.iter().map(|f| f.0).sum();
+        if bytes != array.element_bytes || fields.iter().any(|f| f.0 % 4 != 0) {
+            return Err(OitError::Device(format!(
+                "internal: {}'s '{name}' kept as fields of {:?} bytes, its plan's elements are {} bytes",
+                self.technique,
+                fields.map(|f| f.0),
+                array.element_bytes
+            )));
+        }
+        let label = format!("{} {name}", self.technique);
+        let mut out = Vec::with_capacity(N);
+        for (field_bytes, init) in fields {
+            out.push(ctx.array(&label, elements.saturating_mul(field_bytes / 4), init)?);
+        }
+        Ok(out.try_into().unwrap_or_else(|_| unreachable!("N fields, N buffers")))
+    }
+
+    /// [`Storage::buffers`] of one field: the element whole.
+    pub fn buffer<R: ?Sized, F: Frame<R>>(
+        &mut self,
+        ctx: &mut F,
+        name: &str,
+        init: Init,
+    ) -> Result<F::Buffer, OitError> {
+        let bytes = self
+            .arrays
+            .iter()
+            .find(|(a, _)| a.name.split(" (").next() == Some(name))
+            .map_or(4, |a| a.0.element_bytes);
+        Ok(self.buffers(ctx, name, [(bytes, init)])?.into_iter().next().unwrap_or_else(|| unreachable!()))
+    }
+
+    /// The plan's per-pixel array `name` as storage images of the frame's size, one a field of its
+    /// element (`formats`, bound from `binding` on), a layer per element of a pixel, every 32-bit
+    /// half of every texel set to `fill` (`--atomic-storage image`).
+    pub fn images<R: ?Sized, F: Frame<R>>(
+        &mut self,
+        ctx: &mut F,
+        name: &str,
+        binding: u32,
+        formats: &[ImageFormat],
+        fill: u32,
+    ) -> Result<(), OitError> {
+        let (array, _) = self.take(name)?;
+        let bytes: u64 = formats.iter().map(|f| f.bytes()).sum();
+        let layers =
+            u32::try_from(array.per_pixel).ok().filter(|_| array.per_fragment == 0 && array.fixed == 0);
+        let (Some(layers), true) = (layers, bytes == array.element_bytes) else {
+            return Err(OitError::Device(format!(
+                "internal: {}'s '{name}' as images of {formats:?}: its plan's array is {array:?}",
+                self.technique
+            )));
+        };
+        let label = format!("{} {name}", self.technique);
+        for (i, &format) in formats.iter().enumerate() {
+            ctx.storage_image(&label, binding + i as u32, layers, format, fill)?;
+        }
+        Ok(())
+    }
+
+    /// The plan's per-pixel array `name` as render targets the backend makes and counts itself
+    /// (the hardware path's blend captures), `bytes` a pixel in all: checked against the plan's.
+    pub fn attachments(&mut self, name: &str, bytes: u64) -> Result<(), OitError> {
+        let (array, _) = self.take(name)?;
+        if array.per_fragment != 0 || array.fixed != 0 || array.per_pixel * array.element_bytes != bytes {
+            return Err(OitError::Device(format!(
+                "internal: {}'s '{name}' as render targets of {bytes} bytes a pixel: its plan's array is {array:?}",
+                self.technique
+            )));
+        }
+        Ok(())
+    }
+
+    /// Checks that the frame allocated every array of its plan.
+    pub fn finish(self) -> Result<(), OitError> {
+        match self.arrays.iter().find(|(_, taken)| !taken) {
+            None => Ok(()),
+            Some((a, _)) => Err(OitError::Device(format!(
+                "internal: {}'s GPU frame left its plan's '{}' unallocated",
+                self.technique, a.name
+            ))),
+        }
+    }
+}
+
 /// The buffers of `tail.wgsl` (`--overflow tail`), bound at 6 and 7: the tail sums (5 u64 a
 /// pixel, `Plan::arrays`'s "tail sums") and two words of bookkeeping (overflowed, merged);
 /// placeholders where the plan has no tail.
-fn tail_buffers<R: ?Sized, F: Frame<R>>(ctx: &mut F) -> Result<(F::Buffer, F::Buffer), OitError> {
+fn tail_buffers<R: ?Sized, F: Frame<R>>(
+    ctx: &mut F,
+    storage: &mut Storage,
+) -> Result<(F::Buffer, F::Buffer), OitError> {
     if !ctx.plan().tail {
         return Ok((ctx.placeholder()?, ctx.placeholder()?));
     }
-    let sums = ctx.array("tail sums", u64::from(ctx.pixels()) * 5 * 2, Init::Zero)?;
+    let sums = storage.buffer(ctx, "tail sums", Init::Zero)?;
     let words = ctx.scratch("tail words", 2, Init::Zero)?;
     Ok((sums, words))
 }
@@ -153,18 +313,19 @@ fn reference<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitE
     let counts = ctx.scratch("reference counts", entries, Init::Zero)?;
     ctx.geometry_pass(raster, "dfb_count", &[&counts], 0, 0)?;
     ctx.note_layers(&counts);
-    let offsets = ctx.array("reference offsets", entries, Init::Zero)?;
+    let mut storage = Storage::new(ctx, 0);
+    let offsets = storage.buffer(ctx, "offsets", Init::Zero)?;
     ctx.copy(&counts, &offsets, entries * 4)?;
     let total = scan(ctx, &offsets, entries)?;
     // a u64 key and a u32 payload a fragment
     let total = ctx.fragment_capacity(&total, 12)?;
-    let total = u64::from(ctx.plan().check_fragments(u64::from(total))?);
-    let cursor = ctx.array("reference cursor", u64::from(ctx.pixels()), Init::Zero)?;
-    let keys = ctx.array("reference keys", total * 2, Init::Zero)?;
-    let payloads = ctx.array("reference payloads", total, Init::Zero)?;
+    storage.hold(u64::from(ctx.plan().check_fragments(u64::from(total))?));
+    let cursor = storage.buffer(ctx, "fill cursors", Init::Zero)?;
+    let [keys, payloads] = storage.buffers(ctx, "entries", [(8, Init::Zero), (4, Init::Zero)])?;
     let buffers = [&offsets, &cursor, &keys, &payloads];
     ctx.geometry_pass(raster, "reference", &buffers, 0, 0)?;
-    ctx.pixel_kernel("reference", "resolve_main", &buffers, 0, 0)
+    ctx.pixel_kernel("reference", "resolve_main", &buffers, 0, 0)?;
+    storage.finish()
 }
 
 /// `plain` where no rasterizer keeps submission order (the compute path): each pixel's fragments
@@ -173,12 +334,13 @@ fn reference<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitE
 fn plain<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> {
     let deepest = count(ctx, raster)?.1;
     let k = ctx.plan().slots(deepest);
-    let px = u64::from(ctx.pixels());
-    let counters = ctx.array("plain counters", px, Init::Zero)?;
-    let slots = ctx.array("plain slots", px * u64::from(k) * 2, Init::Zero)?;
+    let mut storage = Storage::new(ctx, deepest);
+    let counters = storage.buffer(ctx, "counter", Init::Zero)?;
+    let slots = storage.buffer(ctx, "slots", Init::Zero)?;
     let buffers = [&counters, &slots];
     ctx.geometry_pass(raster, "plain", &buffers, 0, k)?;
-    ctx.pixel_kernel("plain", "plain_resolve_main", &buffers, 0, k)
+    ctx.pixel_kernel("plain", "plain_resolve_main", &buffers, 0, k)?;
+    storage.finish()
 }
 
 /// The passes of `fabs.wgsl` (pass_index).
@@ -200,17 +362,17 @@ fn fabs<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError>
     // slots per pixel by the plan: K, or the deepest pixel's count from a counting pass
     let deepest = if ctx.plan().needs_count() { count(ctx, raster)?.1 } else { 0 };
     let k = ctx.plan().slots(deepest);
-    let px = u64::from(ctx.pixels());
+    let mut storage = Storage::new(ctx, deepest);
     let (module, counters) = if ctx.plan().image_atomics {
-        ctx.storage_image("fabs counters", 8, 1, ImageFormat::R32Uint, 0)?;
+        storage.images(ctx, "counter", 8, &[ImageFormat::R32Uint], 0)?;
         ("fabs_image", ctx.placeholder()?)
     } else {
-        ("fabs", ctx.array("fabs counters", px, Init::Zero)?)
+        ("fabs", storage.buffer(ctx, "counter", Init::Zero)?)
     };
-    let slots = ctx.array("fabs slots", px * u64::from(k) * 2, Init::Zero)?;
-    let payloads = ctx.array("fabs payloads", px * u64::from(k), Init::Zero)?;
+    let slots = storage.buffer(ctx, "slots", Init::Zero)?;
+    let payloads = storage.buffer(ctx, "payloads", Init::Zero)?;
     let overflowed = ctx.scratch("fabs overflowed", 1, Init::Zero)?;
-    let (tail, tail_words) = tail_buffers(ctx)?;
+    let (tail, tail_words) = tail_buffers(ctx, &mut storage)?;
     let buffers = [&counters, &slots, &payloads, &overflowed, &tail, &tail_words];
     ctx.geometry_pass(raster, module, &buffers, FABS_CAPTURE, k)?;
     // sized from the counting pass, no pixel can overflow: no check
@@ -226,25 +388,30 @@ fn fabs<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError>
         }
     }
     let resolve = if ctx.plan().tail { FABS_WITH_TAIL } else { 0 };
-    ctx.pixel_kernel(module, "resolve_main", &buffers, resolve, k)
+    ctx.pixel_kernel(module, "resolve_main", &buffers, resolve, k)?;
+    storage.finish()
 }
 
 /// `wavg` (`average`) and `wsum`: one pass summing each pixel's premultiplied colour, alpha and
 /// count in 64-bit integers (5 u64 a pixel), composited by the weighted formula. Translucency and
 /// Fresnel are refused by the plan.
 fn weighted<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R, average: bool) -> Result<(), OitError> {
-    let sums = ctx.array("weighted sums", u64::from(ctx.pixels()) * 5 * 2, Init::Zero)?;
+    let mut storage = Storage::new(ctx, 0);
+    let sums = storage.buffer(ctx, "weighted sums", Init::Zero)?;
     ctx.geometry_pass(raster, "weighted", &[&sums], 0, 0)?;
-    ctx.pixel_kernel("weighted", "composite_main", &[&sums], 0, u32::from(average))
+    ctx.pixel_kernel("weighted", "composite_main", &[&sums], 0, u32::from(average))?;
+    storage.finish()
 }
 
 /// Weighted blended OIT (McGuire & Bavoil 2013): one pass summing each pixel's Σ α·w·c, Σ α·w,
 /// optical depth and count in 64-bit integers (6 u64 a pixel), composited as the weighted mean
 /// colour under the exact coverage. Translucency and Fresnel are refused by the plan.
 fn wboit<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> {
-    let sums = ctx.array("wboit sums", u64::from(ctx.pixels()) * 6 * 2, Init::Zero)?;
+    let mut storage = Storage::new(ctx, 0);
+    let sums = storage.buffer(ctx, "weighted blended sums", Init::Zero)?;
     ctx.geometry_pass(raster, "wboit", &[&sums], 0, 0)?;
-    ctx.pixel_kernel("wboit", "composite_main", &[&sums], 0, 0)
+    ctx.pixel_kernel("wboit", "composite_main", &[&sums], 0, 0)?;
+    storage.finish()
 }
 
 /// Moment-based OIT (Münstermann et al. 2018) with `m` = 4 power moments: a first pass sums each
@@ -253,21 +420,24 @@ fn wboit<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError
 /// array); composited as the weighted colours under the exact total coverage. Translucency and
 /// Fresnel are refused by the plan.
 fn mboit<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R, m: u32) -> Result<(), OitError> {
-    let sums = ctx.array("mboit sums", u64::from(ctx.pixels()) * (u64::from(m) + 6) * 2, Init::Zero)?;
+    let mut storage = Storage::new(ctx, 0);
+    let sums = storage.buffer(ctx, "moments and transmittance-weighted sums", Init::Zero)?;
     ctx.geometry_pass(raster, "mboit", &[&sums], 0, m)?;
     ctx.geometry_pass(raster, "mboit", &[&sums], 1, m)?;
-    ctx.pixel_kernel("mboit", "composite_main", &[&sums], 0, m)
+    ctx.pixel_kernel("mboit", "composite_main", &[&sums], 0, m)?;
+    storage.finish()
 }
 
 /// Depth peeling: one layer a pass, front to back, until a pass peels nothing ([`peel`]).
 fn dp<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> {
-    let px = u64::from(ctx.pixels());
-    let nearest = ctx.array("dp nearest", px * 2, Init::Fill(u32::MAX))?;
+    let mut storage = Storage::new(ctx, 0);
+    let nearest = storage.buffer(ctx, "nearest", Init::Fill(u32::MAX))?;
     // the previous pass's depth buffer (oit-cpu counts 4 bytes a pixel too)
-    let previous = ctx.array("dp previous depth", px, Init::Zero)?;
+    let previous = storage.buffer(ctx, "previous peel's depth", Init::Zero)?;
     let peeled = ctx.scratch("dp peeled count", 1, Init::Zero)?;
     let buffers = [&nearest, &previous, &peeled];
-    peel(ctx, raster, "dp", &buffers, &peeled, 0, 0)
+    peel(ctx, raster, "dp", &buffers, &peeled, 0, 0)?;
+    storage.finish()
 }
 
 /// Refuses the effects ddp's GPU resolve cannot do (for both captures, atomics and blend).
@@ -288,10 +458,11 @@ pub fn check_ddp_effect(backend: &str, effect: Effect) -> Result<(), OitError> {
 /// a pixel too), and the count of pixels that peeled a layer in the last pass (bookkeeping).
 /// Shared with the backends' blend captures of ddp, which resolve through `ddp.wgsl` too.
 pub fn ddp_state<R: ?Sized, F: Frame<R>>(ctx: &mut F) -> Result<[F::Buffer; 4], OitError> {
-    let px = u64::from(ctx.pixels());
-    let near = ctx.array("ddp near", px * 2, Init::Fill(u32::MAX))?;
-    let far = ctx.array("ddp far", px * 2, Init::Zero)?;
-    let range = ctx.array("ddp range", px * 2, Init::Zero)?;
+    let mut storage = Storage::new(ctx, 0);
+    let near = storage.buffer(ctx, "near", Init::Fill(u32::MAX))?;
+    let far = storage.buffer(ctx, "far", Init::Zero)?;
+    let range = storage.buffer(ctx, "open depth range", Init::Zero)?;
+    storage.finish()?;
     let peeled = ctx.scratch("ddp peeled count", 1, Init::Zero)?;
     ctx.pixel_kernel("ddp", "ddp_init_main", &[&near, &far, &range, &peeled], 0, 0)?;
     Ok([near, far, range, peeled])
@@ -311,13 +482,14 @@ fn mlp<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R, m: u32) -> Result<(), Oi
         // every fragment would overflow an empty array, every pass
         return Err(OitError::InvalidSettings("mlp:0 holds no layer: use mlp:M with M ≥ 1".into()));
     }
-    let px = u64::from(ctx.pixels());
-    let slots = ctx.array("mlp slots", px * u64::from(m) * 2, Init::Fill(u32::MAX))?;
+    let mut storage = Storage::new(ctx, 0);
+    let slots = storage.buffer(ctx, "sorted slots", Init::Fill(u32::MAX))?;
     // the previous pass's deepest depth (oit-cpu counts 4 bytes a pixel too)
-    let deepest = ctx.array("mlp deepest", px, Init::Zero)?;
+    let deepest = storage.buffer(ctx, "fragments at the previous pass's deepest depth", Init::Zero)?;
     let overflowed = ctx.scratch("mlp overflowed", 1, Init::Zero)?;
     let buffers = [&slots, &deepest, &overflowed];
-    peel(ctx, raster, "mlp", &buffers, &overflowed, m, 1)
+    peel(ctx, raster, "mlp", &buffers, &overflowed, m, 1)?;
+    storage.finish()
 }
 
 /// `capture`'s param in `bdp.wgsl`.
@@ -330,8 +502,9 @@ const BDP_MODE_DEPTH: u32 = 1;
 pub fn depth_bounds<R: ?Sized, F: Frame<R>>(
     ctx: &mut F,
     rasters: &impl Rasters<R>,
+    storage: &mut Storage,
 ) -> Result<F::Buffer, OitError> {
-    let bounds = ctx.array("depth bounds", 2 * u64::from(ctx.pixels()), Init::Zero)?;
+    let bounds = storage.buffer(ctx, "depth bounds", Init::Zero)?;
     ctx.pixel_kernel("bounds", "bounds_init_main", &[&bounds], 0, 0)?;
     match ctx.settings().bounds {
         BoundsMode::Exact => ctx.geometry_pass(rasters.scene(), "bounds", &[&bounds], 0, 0)?,
@@ -350,22 +523,22 @@ pub fn depth_bounds<R: ?Sized, F: Frame<R>>(
 /// the plan's `bdp_color`) MAX-updates 32 packed colour words; the depth mode runs the plan's
 /// capture passes, each keeping the (min, max) of 16 subintervals, settled after each pass.
 fn bdp<R: ?Sized, F: Frame<R>>(ctx: &mut F, rasters: &impl Rasters<R>) -> Result<(), OitError> {
-    let bounds = depth_bounds(ctx, rasters)?;
+    let mut storage = Storage::new(ctx, 0);
+    let bounds = depth_bounds(ctx, rasters, &mut storage)?;
     let raster = rasters.scene();
     if ctx.plan().bdp_color {
-        let n = u64::from(BDP_COLOR_SUBINTERVALS);
-        let colors = ctx.array("bdp colour buckets", u64::from(ctx.pixels()) * n, Init::Zero)?;
+        let colors = storage.buffer(ctx, "colour buckets", Init::Zero)?;
         let arrays = ctx.placeholder()?;
         let buffers = [&bounds, &colors, &arrays];
         ctx.geometry_pass(raster, "bdp", &buffers, 0, BDP_MODE_COLOR)?;
-        return ctx.pixel_kernel("bdp", "color_resolve_main", &buffers, 0, 0);
+        ctx.pixel_kernel("bdp", "color_resolve_main", &buffers, 0, 0)?;
+        return storage.finish();
     }
-    // one array per capture pass run: P, or fewer under --max-peels (the plan's stop rule)
+    // one array per capture pass run: P, or fewer under --max-peels (the plan's stop rule), of
+    // 16 × (min, max) u64 a pixel
     let run = ctx.plan().bdp_capture_passes();
-    // 16 × (min, max) u64 a pixel a pass
-    let words = u64::from(ctx.pixels()) * 2 * u64::from(BDP_DEPTH_SUBINTERVALS) * 2;
-    let arrays = ctx.array("bdp depth buckets", words * u64::from(run), Init::Zero)?;
-    let pairs = words * u64::from(run) / 4;
+    let arrays = storage.buffer(ctx, "min and max buckets, per capture pass", Init::Zero)?;
+    let pairs = u64::from(ctx.pixels()) * u64::from(BDP_DEPTH_SUBINTERVALS) * u64::from(run);
     let colors = ctx.placeholder()?;
     let buffers = [&bounds, &colors, &arrays];
     ctx.kernel_over("bdp", "depth_init_main", &buffers, pairs, 0, 0, "depth_init_main")?;
@@ -375,7 +548,8 @@ fn bdp<R: ?Sized, F: Frame<R>>(ctx: &mut F, rasters: &impl Rasters<R>) -> Result
         ctx.pixel_kernel("bdp", "depth_settle_main", &buffers, p, BDP_MODE_DEPTH)?;
     }
     ctx.last_pass(false);
-    ctx.pixel_kernel("bdp", "depth_resolve_main", &buffers, 0, run)
+    ctx.pixel_kernel("bdp", "depth_resolve_main", &buffers, 0, run)?;
+    storage.finish()
 }
 
 /// Adaptive bucket depth peeling: the depth bounds, a 1024-bit histogram pass (by the backend's
@@ -383,15 +557,15 @@ fn bdp<R: ?Sized, F: Frame<R>>(ctx: &mut F, rasters: &impl Rasters<R>) -> Result
 /// count, then one capture and resolve per batch of 32 bins, each bucket keeping its bin's
 /// farthest and nearest fragment.
 fn adp<R: ?Sized, F: Frame<R>>(ctx: &mut F, rasters: &impl Rasters<R>) -> Result<(), OitError> {
-    let bounds = depth_bounds(ctx, rasters)?;
+    let mut storage = Storage::new(ctx, 0);
+    let bounds = depth_bounds(ctx, rasters, &mut storage)?;
     let raster = rasters.scene();
-    let px = u64::from(ctx.pixels());
-    let hist = ctx.array("adp histogram", px * HISTOGRAM_WORDS as u64, Init::Zero)?;
+    let hist = storage.buffer(ctx, "depth histogram", Init::Zero)?;
     // sizing the batches is not per-pixel storage: oit-cpu does not count it either
     let max_bins = ctx.scratch("adp deepest pixel", 1, Init::Zero)?;
     // oit-cpu allocates the buckets after the histogram pass; the bytes are the same
-    let buckets = ctx.array("adp buckets", px * BUCKETS as u64 * 2, Init::Zero)?;
-    let nearest = ctx.array("adp nearest", px * BUCKETS as u64 * 2, Init::Fill(u32::MAX))?;
+    let buckets = storage.buffer(ctx, "buckets", Init::Zero)?;
+    let nearest = storage.buffer(ctx, "nearest of each bin", Init::Fill(u32::MAX))?;
     let buffers = [&bounds, &hist, &buckets, &max_bins, &nearest];
     if !ctx.histogram_capture(raster, &buffers)? {
         ctx.geometry_pass(raster, "adp", &buffers, 0, 0)?;
@@ -408,7 +582,7 @@ fn adp<R: ?Sized, F: Frame<R>>(ctx: &mut F, rasters: &impl Rasters<R>) -> Result
         ctx.pixel_kernel("adp", "resolve_main", &buffers, 1, batch)?;
     }
     ctx.last_pass(false);
-    Ok(())
+    storage.finish()
 }
 
 /// The modes of `mdts.wgsl` (low byte of pass_index).
@@ -426,30 +600,31 @@ fn mdts<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R, wide: bool) -> Result<(
     // the plan refuses Fresnel with the 32-bit words (no room for a normal)
     let deepest = if ctx.plan().needs_count() { count(ctx, raster)?.1 } else { 0 };
     let k = ctx.plan().slots(deepest);
-    let words = u64::from(ctx.pixels()) * u64::from(k);
+    let mut storage = Storage::new(ctx, deepest);
     // alpha is not stored in the 32-bit mode: the plan's (the override, else the objects' mean)
     let mode = if wide { MDTS_64 } else { MDTS_32 | ctx.plan().mdts_alpha8 << 8 };
     let (module, arrays) = match (ctx.plan().image_atomics, wide) {
         (true, true) => {
-            ctx.storage_image("mdts64 keys", 8, k, ImageFormat::R64Uint, u32::MAX)?;
+            storage.images(ctx, "sorted slots", 8, &[ImageFormat::R64Uint], u32::MAX)?;
             ("mdts64_image", [ctx.placeholder()?, ctx.placeholder()?, ctx.placeholder()?])
         }
         (true, false) => {
-            ctx.storage_image("mdts high words", 8, k, ImageFormat::R32Uint, u32::MAX)?;
-            ctx.storage_image("mdts low words", 9, k, ImageFormat::R32Uint, u32::MAX)?;
+            let formats = [ImageFormat::R32Uint, ImageFormat::R32Uint];
+            storage.images(ctx, "sorted slots", 8, &formats, u32::MAX)?;
             ("mdts_image", [ctx.placeholder()?, ctx.placeholder()?, ctx.placeholder()?])
         }
         (false, true) => {
-            let slots = ctx.array("mdts64 slots", words * 2, Init::Fill(u32::MAX))?;
+            let slots = storage.buffer(ctx, "sorted slots", Init::Fill(u32::MAX))?;
             ("mdts", [ctx.placeholder()?, ctx.placeholder()?, slots])
         }
         (false, false) => {
-            let high = ctx.array("mdts high words", words, Init::Fill(u32::MAX))?;
-            let low = ctx.array("mdts low words", words, Init::Fill(u32::MAX))?;
+            // the high and low words apart
+            let fields = [(4, Init::Fill(u32::MAX)), (4, Init::Fill(u32::MAX))];
+            let [high, low] = storage.buffers(ctx, "sorted slots", fields)?;
             ("mdts", [high, low, ctx.placeholder()?])
         }
     };
-    let (tail, tail_words) = tail_buffers(ctx)?;
+    let (tail, tail_words) = tail_buffers(ctx, &mut storage)?;
     let unused = ctx.placeholder()?;
     let buffers = [&arrays[0], &arrays[1], &arrays[2], &unused, &tail, &tail_words];
     let mode = if ctx.plan().tail { mode | MDTS_WITH_TAIL } else { mode };
@@ -459,7 +634,8 @@ fn mdts<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R, wide: bool) -> Result<(
         ctx.geometry_pass_if(raster, module, &buffers, mode | MDTS_TAIL_PASS, k, &tail_words)?;
         ctx.note_merged(&tail_words);
     }
-    ctx.pixel_kernel(module, "resolve_main", &buffers, mode, k)
+    ctx.pixel_kernel(module, "resolve_main", &buffers, mode, k)?;
+    storage.finish()
 }
 
 /// The dynamic fragment buffer: a counting pass, the counts' prefix sum into per-pixel offsets,
@@ -467,19 +643,20 @@ fn mdts<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R, wide: bool) -> Result<(
 fn dfb<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> {
     let entries = u64::from(ctx.pixels()) + 1;
     // fragments per pixel; the last entry stays 0, so the offsets end in the total
-    let counts = ctx.array("dfb counts", entries, Init::Zero)?;
+    let mut storage = Storage::new(ctx, 0);
+    let counts = storage.buffer(ctx, "counts", Init::Zero)?;
     ctx.geometry_pass(raster, "dfb_count", &[&counts], 0, 0)?;
-    let offsets = ctx.array("dfb offsets", entries, Init::Zero)?;
+    let offsets = storage.buffer(ctx, "offsets", Init::Zero)?;
     ctx.copy(&counts, &offsets, entries * 4)?;
     let total = scan(ctx, &offsets, entries)?;
     // a u64 key and a u32 payload a fragment
     let total = ctx.fragment_capacity(&total, 12)?;
-    let total = u64::from(ctx.plan().check_fragments(u64::from(total))?);
-    let keys = ctx.array("dfb keys", total * 2, Init::Zero)?;
-    let payloads = ctx.array("dfb payloads", total, Init::Zero)?;
+    storage.hold(u64::from(ctx.plan().check_fragments(u64::from(total))?));
+    let [keys, payloads] = storage.buffers(ctx, "entries", [(8, Init::Zero), (4, Init::Zero)])?;
     let buffers = [&counts, &offsets, &keys, &payloads];
     ctx.geometry_pass(raster, "dfb", &buffers, 0, 0)?;
-    ctx.pixel_kernel("dfb", "resolve_main", &buffers, 0, 0)
+    ctx.pixel_kernel("dfb", "resolve_main", &buffers, 0, 0)?;
+    storage.finish()
 }
 
 /// `LL_END` of `ll.wgsl`: an empty list's head, a last node's link.
@@ -493,14 +670,16 @@ fn ll<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> {
     // a u64 key, a u32 payload and a u32 link a node
     let nodes = ctx.fragment_capacity(&generated, 16)?;
     let nodes = ctx.plan().check_fragments(u64::from(nodes))?;
-    let heads = ctx.array("ll heads", u64::from(ctx.pixels()), Init::Fill(LL_END))?;
-    let counter = ctx.array("ll node counter", 1, Init::Zero)?;
-    let keys = ctx.array("ll keys", u64::from(nodes) * 2, Init::Zero)?;
-    let payloads = ctx.array("ll payloads", u64::from(nodes), Init::Zero)?;
-    let links = ctx.array("ll links", u64::from(nodes), Init::Fill(LL_END))?;
+    let mut storage = Storage::new(ctx, 0);
+    storage.hold(u64::from(nodes));
+    let heads = storage.buffer(ctx, "heads", Init::Fill(LL_END))?;
+    let counter = storage.buffer(ctx, "node counter", Init::Zero)?;
+    let fields = [(8, Init::Zero), (4, Init::Zero), (4, Init::Fill(LL_END))];
+    let [keys, payloads, links] = storage.buffers(ctx, "nodes", fields)?;
     let buffers = [&heads, &counter, &keys, &payloads, &links];
     ctx.geometry_pass(raster, "ll", &buffers, 0, nodes)?;
-    ctx.pixel_kernel("ll", "resolve_main", &buffers, 0, nodes)
+    ctx.pixel_kernel("ll", "resolve_main", &buffers, 0, nodes)?;
+    storage.finish()
 }
 
 /// The ordered k-buffer: K sorted (depth, primitive id) slots and their payloads, kept by a
@@ -509,10 +688,11 @@ fn ll<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> {
 fn kbuf<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> {
     let deepest = if ctx.plan().needs_count() { count(ctx, raster)?.1 } else { 0 };
     let k = ctx.plan().slots(deepest);
-    let px = u64::from(ctx.pixels());
-    let slots = ctx.array("kbuf slots", px * u64::from(k) * 2, Init::Fill(u32::MAX))?;
-    let payloads = ctx.array("kbuf payloads", px * u64::from(k), Init::Zero)?;
+    let mut storage = Storage::new(ctx, deepest);
+    let slots = storage.buffer(ctx, "sorted slots", Init::Fill(u32::MAX))?;
+    let payloads = storage.buffer(ctx, "payloads", Init::Zero)?;
     let buffers = [&slots, &payloads];
     ctx.geometry_pass(raster, "kbuf", &buffers, 0, k)?;
-    ctx.pixel_kernel("kbuf", "resolve_main", &buffers, 0, k)
+    ctx.pixel_kernel("kbuf", "resolve_main", &buffers, 0, k)?;
+    storage.finish()
 }

@@ -475,37 +475,41 @@ impl OitPass {
         Ok(())
     }
 
+    /// The techniques whose frames this pass's scene and settings record in one go (fixed K where
+    /// a K is taken).
+    fn recordable(&self) -> Vec<String> {
+        Technique::all()
+            .into_iter()
+            .map(|t| match t {
+                Technique::Fabs { k: None } => Technique::Fabs { k: Some(8) },
+                Technique::Mdts { k: None } => Technique::Mdts { k: Some(8) },
+                Technique::Mdts64 { k: None } => Technique::Mdts64 { k: Some(8) },
+                t => t,
+            })
+            .filter(|&technique| {
+                let settings = Settings { technique, ..self.settings.clone() };
+                oit_core::plan::Plan::new("wgpu", &self.scene, &settings)
+                    .is_ok_and(|p| p.mid_frame_readback().is_none() && p.refuse_interlock("wgpu", "").is_ok())
+            })
+            .map(|t| t.to_string())
+            .collect()
+    }
+
     /// Whether the technique's frame can be recorded without a round trip ([`OitPass::record`]).
     fn check_recordable(&self) -> Result<(), OitError> {
         let plan = oit_core::plan::Plan::new("wgpu", &self.scene, &self.settings)?;
         plan.refuse_image_atomics("wgpu")?;
         plan.refuse_interlock("wgpu", "WGSL has no fragment shader interlock")?;
-        let why = match self.settings.technique {
-            _ if plan.needs_count() => {
-                Some("its storage is sized by a counting pass read back in mid-frame; give K")
-            }
-            Technique::Fabs { .. }
-            | Technique::Mdts { .. }
-            | Technique::Mdts64 { .. }
-            | Technique::WeightedAverage
-            | Technique::WeightedSum
-            | Technique::Wboit
-            | Technique::Mboit { .. }
-            | Technique::Bdp { .. } => None,
-            Technique::Dp | Technique::Ddp | Technique::Mlp { .. } => {
-                Some("it stops peeling when a pass read back finds nothing left")
-            }
-            Technique::Adp => Some("its batches are chosen from a histogram read back in mid-frame"),
-            _ => Some("it sizes its storage from counts read back in mid-frame"),
-        };
+        let why = plan.mid_frame_readback();
         match why {
             None => Ok(()),
             Some(why) => Err(OitError::Unsupported {
                 backend: "wgpu (recorded pass)".into(),
                 what: format!(
                     "{}: {why}, which a frame recorded into your encoder cannot do; use `OitPass::frame`, \
-                     or one of fabs:K, mdts:K, mdts64:K, wavg, wsum, wboit, mboit, bdp, bdp:P",
-                    self.settings.technique
+                     or one that records in one go: {}",
+                    self.settings.technique,
+                    self.recordable().join(", ")
                 ),
             }),
         }

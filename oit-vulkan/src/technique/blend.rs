@@ -162,8 +162,12 @@ pub(crate) fn bdp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
     if limit < 8 {
         return Err(unsupported(format!("8 colour targets for bdp: maxColorAttachments is {limit}")));
     }
-    let bounds = oit_gpu::technique::depth_bounds(ctx, drivers)?;
+    let mut storage = oit_gpu::technique::Storage::new(ctx, 0);
+    let bounds = oit_gpu::technique::depth_bounds(ctx, drivers, &mut storage)?;
     ctx.count_fragments(&drivers.scene)?;
+    // the plan's colour buckets, in the targets (counted as each target is made)
+    storage.attachments("colour buckets", 8 * 16)?;
+    storage.finish()?;
     let targets: Vec<Rc<GpuImage>> =
         (0..8).map(|_| ctx.target(RGBA32F, 16, false)).collect::<Result<_, _>>()?;
     let views: Vec<&GpuImage> = targets.iter().map(|t| &**t).collect();

@@ -54,7 +54,8 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         )));
     }
     check_texture_size(ctx, "the bdp bucket targets")?;
-    let bounds = oit_gpu::technique::depth_bounds(ctx, drivers)?;
+    let mut storage = oit_gpu::technique::Storage::new(ctx, 0);
+    let bounds = oit_gpu::technique::depth_bounds(ctx, drivers, &mut storage)?;
     if ctx.fragments == crate::ctx::Fragments::Unset {
         count_fragments(ctx, drivers)?;
     }
@@ -75,6 +76,9 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
             })
         })
         .collect();
+    // the plan's colour buckets, in the targets
+    storage.attachments("colour buckets", u64::from(per_sample))?;
+    storage.finish()?;
     ctx.storage_bytes += u64::from(ctx.pixels) * u64::from(per_sample);
     let views: Vec<wgpu::TextureView> = targets.iter().map(|t| t.create_view(&Default::default())).collect();
 
