@@ -696,3 +696,186 @@ fn kbuf<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError>
     ctx.pixel_kernel("kbuf", "resolve_main", &buffers, 0, k)?;
     storage.finish()
 }
+
+#[cfg(test)]
+mod tests {
+    //! [`Storage`] against a frame that only records what it is asked to allocate.
+
+    use oit_core::plan::{Counted, Plan};
+    use oit_core::{GpuFragments, OitError, Settings, Technique, load_scene};
+
+    use super::Storage;
+    use crate::{Frame, ImageFormat, Init};
+
+    /// A frame that allocates nothing but notes each array's words (and each image's bytes).
+    struct Fake {
+        plan: Plan,
+        settings: Settings,
+        arrays: Vec<u64>,
+    }
+
+    impl Frame<()> for Fake {
+        type Buffer = ();
+        fn plan(&self) -> &Plan {
+            &self.plan
+        }
+        fn settings(&self) -> &Settings {
+            &self.settings
+        }
+        fn pixels(&self) -> u32 {
+            self.settings.width * self.settings.height
+        }
+        fn backend(&self) -> &'static str {
+            "fake"
+        }
+        fn array(&mut self, _: &str, words: u64, _: Init) -> Result<(), OitError> {
+            self.arrays.push(words);
+            Ok(())
+        }
+        fn storage_image(
+            &mut self,
+            _: &str,
+            _: u32,
+            layers: u32,
+            f: ImageFormat,
+            _: u32,
+        ) -> Result<(), OitError> {
+            self.arrays.push(u64::from(self.pixels()) * u64::from(layers) * f.bytes() / 4);
+            Ok(())
+        }
+        fn scratch(&mut self, _: &str, _: u64, _: Init) -> Result<(), OitError> {
+            Ok(())
+        }
+        fn placeholder(&mut self) -> Result<(), OitError> {
+            Ok(())
+        }
+        fn fill(&mut self, _: &(), _: u32) -> Result<(), OitError> {
+            unreachable!("not a pass")
+        }
+        fn copy(&mut self, _: &(), _: &(), _: u64) -> Result<(), OitError> {
+            unreachable!("not a pass")
+        }
+        fn read_u32(&mut self, _: &()) -> Result<Vec<u32>, OitError> {
+            unreachable!("not a pass")
+        }
+        fn last_pass(&mut self, _: bool) {}
+        fn geometry_pass(
+            &mut self,
+            _: &(),
+            _: &'static str,
+            _: &[&()],
+            _: u32,
+            _: u32,
+        ) -> Result<(), OitError> {
+            unreachable!("not a pass")
+        }
+        fn geometry_pass_counted(
+            &mut self,
+            _: &(),
+            _: &'static str,
+            _: &[&()],
+            _: u32,
+            _: u32,
+        ) -> Result<(), OitError> {
+            unreachable!("not a pass")
+        }
+        fn geometry_pass_if(
+            &mut self,
+            _: &(),
+            _: &'static str,
+            _: &[&()],
+            _: u32,
+            _: u32,
+            _: &(),
+        ) -> Result<(), OitError> {
+            unreachable!("not a pass")
+        }
+        fn fragments(&self) -> GpuFragments {
+            unreachable!("not a pass")
+        }
+        fn set_fragments(&mut self, _: GpuFragments) {}
+        fn kernel_over(
+            &mut self,
+            _: &'static str,
+            _: &'static str,
+            _: &[&()],
+            _: u64,
+            _: u32,
+            _: u32,
+            _: &'static str,
+        ) -> Result<(), OitError> {
+            unreachable!("not a pass")
+        }
+        fn deepest_alike(&mut self, _: &(), _: Box<dyn Fn(u32, u32) -> bool>) -> Result<u32, OitError> {
+            unreachable!("not a pass")
+        }
+        fn fragment_capacity(&mut self, _: &(), _: u64) -> Result<u32, OitError> {
+            unreachable!("not a pass")
+        }
+        fn take_speculated_peels(&mut self, _: &()) -> Result<Option<u32>, OitError> {
+            Ok(None)
+        }
+        fn note_peels(&mut self, _: u32) {}
+        fn check_at_end(&mut self, _: &()) {}
+        fn note_merged(&mut self, _: &()) {}
+        fn note_layers(&mut self, _: &()) {}
+    }
+
+    fn fake(technique: &str) -> Fake {
+        let settings = Settings {
+            technique: technique.parse::<Technique>().expect("a technique"),
+            width: 8,
+            height: 4,
+            ..Settings::default()
+        };
+        let scene = load_scene("planes:3").expect("a procedural scene");
+        let plan = Plan::new("fake", &scene, &settings).expect("a plan");
+        Fake { plan, settings, arrays: Vec::new() }
+    }
+
+    /// What a frame takes is the plan's bytes, field by field and as images alike; a technique
+    /// that asks for what its plan does not name, takes an array twice, splits it into fields of
+    /// other bytes, or leaves one out is refused. Mutations caught: `take` matching any array
+    /// (the unnamed request passes), `finish` returning Ok unconditionally (the left-out payloads
+    /// pass), the field check dropped (the 12-byte split of 8-byte slots passes).
+    #[test]
+    fn storage_is_the_plans_arrays_and_refuses_the_rest() {
+        let mut ctx = fake("fabs:3");
+        let mut storage = Storage::new(&ctx, 0);
+        storage.buffer(&mut ctx, "counter", Init::Zero).unwrap();
+        let [(), ()] = storage.buffers(&mut ctx, "slots", [(4, Init::Zero), (4, Init::Zero)]).unwrap();
+        storage.buffer(&mut ctx, "payloads", Init::Zero).unwrap();
+        storage.finish().unwrap();
+        let words: u64 = ctx.arrays.iter().sum();
+        let plan_bytes =
+            ctx.plan.storage_bytes(32, Counted::default()) - 32 * oit_core::plan::RESOLVE_STATE_BYTES;
+        assert_eq!(words * 4, plan_bytes, "{:?}", ctx.arrays);
+
+        let mut storage = Storage::new(&ctx, 0);
+        assert!(storage.buffer(&mut ctx, "nodes", Init::Zero).is_err(), "an array fabs's plan lacks");
+        storage.buffer(&mut ctx, "slots", Init::Zero).unwrap();
+        assert!(storage.buffer(&mut ctx, "slots", Init::Zero).is_err(), "taken twice");
+        assert!(
+            storage.buffers(&mut ctx, "payloads", [(8, Init::Zero), (4, Init::Zero)]).is_err(),
+            "12 ≠ 4 bytes"
+        );
+        assert!(storage.finish().is_err(), "the counter and payloads left out");
+
+        // the image kind of the same array: the same bytes
+        let mut ctx = fake("fabs:3");
+        let mut storage = Storage::new(&ctx, 0);
+        storage.images(&mut ctx, "counter", 8, &[ImageFormat::R32Uint], 0).unwrap();
+        assert_eq!(ctx.arrays, [32]);
+        assert!(storage.images(&mut ctx, "slots", 9, &[ImageFormat::R32Uint], 0).is_err(), "8-byte slots");
+
+        // an exact allocation needs its fragments first
+        let mut ctx = fake("ll");
+        let mut storage = Storage::new(&ctx, 0);
+        let fields = [(8, Init::Zero), (4, Init::Zero), (4, Init::Zero)];
+        assert!(storage.buffers(&mut ctx, "nodes", fields).is_err(), "before hold");
+        let mut storage = Storage::new(&ctx, 0);
+        storage.hold(100);
+        storage.buffers(&mut ctx, "nodes", fields).unwrap();
+        assert_eq!(ctx.arrays, [200, 100, 100]);
+    }
+}
