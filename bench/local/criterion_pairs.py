@@ -1,0 +1,38 @@
+#!/usr/bin/env python3
+"""Criterion outputs of alternated runs (before-1 after-1 before-2 after-2 ...): each bench's
+median time per run and after/before (geometric means of each side's runs), for the benches every
+run finished.  usage: criterion_pairs.py before-1.txt after-1.txt before-2.txt after-2.txt"""
+import math
+import re
+import sys
+
+UNIT = {"ns": 1e-6, "µs": 1e-3, "us": 1e-3, "ms": 1.0, "s": 1e3}
+
+
+def parse(path):
+    out, name = {}, None
+    for line in open(path, encoding="utf-8"):
+        m = re.match(r"^Benchmarking (\S+): Analyzing", line)
+        if m:
+            name = m.group(1)
+        m = re.search(r"time:\s+\[(\S+) (\S+) (\S+) (\S+) (\S+) (\S+)\]", line)
+        if m and name:
+            out[name] = float(m.group(3)) * UNIT[m.group(4)]
+            name = None
+    return out
+
+
+runs = [parse(p) for p in sys.argv[1:]]
+before, after = runs[0::2], runs[1::2]
+common = sorted(set.intersection(*(set(r) for r in runs)))
+print("| bench | median ms, runs in order | after / before |")
+print("|---|---|---|")
+ratios = []
+for b in common:
+    gb = math.exp(sum(math.log(r[b]) for r in before) / len(before))
+    ga = math.exp(sum(math.log(r[b]) for r in after) / len(after))
+    ratios.append(ga / gb)
+    print(f"| {b} | {' / '.join(f'{r[b]:.3f}' for r in runs)} | {ga / gb:.3f} |")
+if ratios:
+    g = math.exp(sum(map(math.log, ratios)) / len(ratios))
+    print(f"\ngeometric mean after / before: {g:.3f} over {len(ratios)} benches")
