@@ -243,8 +243,8 @@ impl FromStr for Overflow {
 /// A frame's place in a larger frame: its top-left pixel and the larger frame's size. Backends
 /// size everything per pixel by the frame's own `width × height`, as for any frame; setup snaps
 /// with the full viewport and shifts the snapped coordinates by the origin (an exact integer
-/// shift, so the fragments are the full frame's, bit for bit), and the hardware raster path maps
-/// the window onto its viewport ([`Region::clip_matrix`]).
+/// shift, so the fragments are the full frame's, bit for bit), and the hardware raster path draws
+/// the full frame's viewport into the window's target ([`Region::viewport`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
 pub struct Region {
     /// Column of the window's left edge in the full frame.
@@ -258,6 +258,19 @@ pub struct Region {
 }
 
 impl Region {
+    /// The viewport `[x, y, width, height]` (pixels, row 0 at the top) that draws the full
+    /// frame into this window's target: the full frame's size, placed at minus the window's
+    /// origin. The window's target cuts what lies outside it, and the rasterizer clips and
+    /// samples in the full frame's viewport, so a window's fragments are the untiled frame's
+    /// there, edges included (a clip-space mapping of the window, [`Region::clip_matrix`], moves
+    /// the float arithmetic of clipping and edge setup, and pixels on an edge may land on either
+    /// side of a tile seam). `None` where the full frame is over `max_side` pixels a side (the
+    /// device's largest viewport): such a window maps through [`Region::clip_matrix`] instead.
+    pub fn viewport(&self, max_side: u32) -> Option<[f32; 4]> {
+        (self.full_width <= max_side && self.full_height <= max_side)
+            .then(|| [-(self.x as f32), -(self.y as f32), self.full_width as f32, self.full_height as f32])
+    }
+
     /// The clip-space transform that maps the window `width × height` at this region's origin
     /// onto the whole viewport of a `width × height` target: applied after the projection
     /// (`clip_matrix · proj · view`), a rasterizer with the window's viewport draws what the full

@@ -244,7 +244,8 @@ impl<'a> VkCtx<'a> {
         let totals = take(16)?;
         let first_count = take(16)?;
         let gated_counter = take(32)?;
-        let rec = Recorder::new(gpu)?;
+        let mut rec = Recorder::new(gpu)?;
+        rec.window = settings.region.and_then(|r| r.viewport(crate::hardware::max_viewport_side(gpu)));
         let mut ctx = VkCtx {
             gpu,
             settings,

@@ -248,3 +248,11 @@ impl HardwareScene {
         })
     }
 }
+
+/// The largest full frame a window may draw through its viewport ([`oit_core::Region::viewport`]):
+/// the device's largest viewport side. Its viewport bounds reach at least twice that either way
+/// (the Vulkan specification's minimum), which a window's offset never passes.
+pub(crate) fn max_viewport_side(gpu: &Gpu) -> u32 {
+    let [w, h] = gpu.info.limits.max_viewport_dimensions;
+    w.min(h)
+}

@@ -363,13 +363,17 @@ impl VulkanPrepared<'_> {
                 }),
             },
             RasterPath::Hardware => {
-                // a window of the frame (tiles) maps onto the viewport in clip space, as on wgpu
+                // a window of the frame (tiles) draws the full frame's viewport into its target
+                // (the recorder's window), or, where the full frame is over the device's largest
+                // viewport, maps onto its own in clip space
                 let camera = match settings.region {
-                    Some(region) => Camera {
-                        proj: region.clip_matrix(settings.width, settings.height) * camera.proj,
-                        ..*camera
-                    },
-                    None => *camera,
+                    Some(region) if region.viewport(hardware::max_viewport_side(this.gpu)).is_none() => {
+                        Camera {
+                            proj: region.clip_matrix(settings.width, settings.height) * camera.proj,
+                            ..*camera
+                        }
+                    }
+                    _ => *camera,
                 };
                 if let Some(missing) = &this.gpu.info.hardware_missing {
                     return Err(OitError::Unsupported {

@@ -106,6 +106,9 @@ pub(crate) struct Recorder<'g> {
     timestamps: Option<Timestamps>,
     /// A submission is on the queue that no wait has collected (`submit` without `wait`).
     submitted: bool,
+    /// The full frame's viewport `[x, y, width, height]` where the frame is a window of it
+    /// ([`oit_core::Region::viewport`]), for every draw.
+    pub(crate) window: Option<[f32; 4]>,
 }
 
 impl Drop for Recorder<'_> {
@@ -177,6 +180,7 @@ impl<'g> Recorder<'g> {
             keep: Vec::new(),
             timestamps,
             submitted: false,
+            window: None,
         };
         r.begin()?;
         Ok(r)
@@ -678,14 +682,9 @@ impl<'g> Recorder<'g> {
             .framebuffer(target.framebuffer)
             .render_area(area)
             .clear_values(clear);
-        let viewport = vk::Viewport {
-            x: 0.0,
-            y: h as f32,
-            width: w as f32,
-            height: -(h as f32),
-            min_depth: 0.0,
-            max_depth: 1.0,
-        };
+        // a window draws the full frame's viewport, shifted: its fragments are the untiled frame's
+        let [x, y, vw, vh] = self.window.unwrap_or([0.0, 0.0, w as f32, h as f32]);
+        let viewport = vk::Viewport { x, y: y + vh, width: vw, height: -vh, min_depth: 0.0, max_depth: 1.0 };
         let d = &self.gpu.raw.device;
         // SAFETY: recording, outside a render pass; the framebuffer was made for a render pass
         // compatible with `render_pass` at its extent, with one clear value per attachment; the

@@ -983,6 +983,15 @@ impl<'a> GpuCtx<'a> {
         }
     }
 
+    /// Sets a render pass's viewport to the full frame's where this frame is a window of it
+    /// ([`oit_core::Region::viewport`]): the window's fragments are then the untiled frame's.
+    pub fn window_viewport(&self, rpass: &mut wgpu::RenderPass<'_>) {
+        let max_side = self.gpu.limits.max_texture_dimension_2d;
+        if let Some([x, y, w, h]) = self.settings.region.and_then(|r| r.viewport(max_side)) {
+            rpass.set_viewport(x, y, w, h, 0.0, 1.0);
+        }
+    }
+
     /// Timestamp writes for the next timed pass (a render pass of the hardware driver, or a
     /// compute pass through [`GpuCtx::timed`]): its own pair of the frame's query set; or none.
     pub fn render_timestamps(&self) -> Option<wgpu::RenderPassTimestampWrites<'_>> {

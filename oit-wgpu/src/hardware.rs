@@ -250,6 +250,7 @@ impl Driver for RenderDriver<'_> {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
+            ctx.window_viewport(&mut rpass);
             rpass.set_pipeline(&pipeline);
             rpass.set_bind_group(0, group0, &[]);
             (self.draw.borrow_mut())(&mut rpass, &GeometryPass { index, bind_group: group0, indirect });

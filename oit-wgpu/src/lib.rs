@@ -342,8 +342,11 @@ impl WgpuPrepared<'_> {
         let start = Instant::now();
         let path = settings.raster.unwrap_or(WgpuBackend::default_path(settings.technique));
         let window_camera;
+        // a window the hardware rasterizer cannot draw through the full frame's viewport (a
+        // full frame over the device's largest one) maps onto its own in clip space
+        let max_side = gpu.limits.max_texture_dimension_2d;
         let camera = match settings.region {
-            Some(region) if path == RasterPath::Hardware => {
+            Some(region) if path == RasterPath::Hardware && region.viewport(max_side).is_none() => {
                 let proj = region.clip_matrix(settings.width, settings.height) * camera.proj;
                 window_camera = Camera { proj, ..*camera };
                 &window_camera

@@ -132,6 +132,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
             occlusion_query_set: None,
             multiview_mask: None,
         });
+        ctx.window_viewport(&mut rpass);
         rpass.set_pipeline(&pipeline);
         rpass.set_bind_group(0, &group0, &[]);
         stage.draw(&mut rpass);

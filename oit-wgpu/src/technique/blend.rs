@@ -184,6 +184,7 @@ fn draw_and_resolve(
             occlusion_query_set: None,
             multiview_mask: None,
         });
+        ctx.window_viewport(&mut rpass);
         rpass.set_pipeline(&pipeline);
         rpass.set_bind_group(0, &group0, &[]);
         stage.draw(&mut rpass);

@@ -180,6 +180,7 @@ pub(crate) fn occlusion_pass(
             occlusion_query_set: Some(&occlusion.set),
             multiview_mask: None,
         });
+        ctx.window_viewport(&mut rpass);
         rpass.set_pipeline(pipeline);
         rpass.set_bind_group(0, groups.0, &[]);
         rpass.set_bind_group(2, groups.1, &[]);
