@@ -97,7 +97,8 @@ pub struct SceneArgs {
 
     /// The blender's colour target on the hardware path, for plain and (with
     /// --hardware-capture blend) wavg/wsum: f32 (exact), f16 (what weighted blended OIT uses),
-    /// unorm8 (plain only: an 8-bit colour buffer). The compute path and cpu ignore it.
+    /// unorm8 (an 8-bit colour buffer: plain only; wavg/wsum blending refuse it, their sums leave
+    /// [0, 1]). The compute path, --hardware-capture atomics and cpu ignore it, and take any.
     #[arg(long, value_name = "f32|f16|unorm8", default_value = "f32")]
     pub blend_target: String,
 

@@ -111,22 +111,24 @@ const MAX_CALIBRATION_BYTES: u64 = 16 << 20;
 /// opened for reading (a FIFO would block in `open()`, issue 41.5).
 pub fn read_calibration(path: &Path, option: &str) -> Result<String, OitError> {
     let io = |source| OitError::Io { path: path.to_path_buf(), source };
-    let refuse = || {
+    let refuse = |what: &str| {
         OitError::InvalidSettings(format!(
-            "{option} {} is not an oit calibration: expected a calibration.json written by `oit \
-             bench --calibrate` (a regular file of at most {MAX_CALIBRATION_BYTES} bytes)",
+            "{option} {} is not an oit calibration ({what}): expected a calibration.json written by \
+             `oit bench --calibrate` (a regular file of at most {MAX_CALIBRATION_BYTES} bytes)",
             path.display()
         ))
     };
-    let Some((file, meta)) = oit_core::open_regular(path).map_err(io)? else { return Err(refuse()) };
+    let Some((file, meta)) = oit_core::open_regular(path).map_err(io)? else {
+        return Err(refuse("not a regular file: a pipe, device or folder"));
+    };
     if meta.len() > MAX_CALIBRATION_BYTES {
-        return Err(refuse());
+        return Err(refuse("too large"));
     }
     let mut text = String::new();
     std::io::Read::read_to_string(&mut std::io::Read::take(file, MAX_CALIBRATION_BYTES + 1), &mut text)
         .map_err(io)?;
     if text.len() as u64 > MAX_CALIBRATION_BYTES {
-        return Err(refuse());
+        return Err(refuse("too large"));
     }
     Ok(text)
 }

@@ -728,3 +728,126 @@ fn all_runs_what_the_options_allow_and_lists_the_rest() {
     assert!(stdout(&out).contains("refused under these options"), "{}", stdout(&out));
     assert_eq!(bench("wavg,wsum", "none").status.code(), Some(1), "nothing ran");
 }
+
+/// Issue 41.6: the CPU takes `--blend-target` as `--help` says (it ignores the target):
+/// `-t wavg --blend-target unorm8` once failed on the CPU with "unorm8 holds [0, 1]", and `-t all`
+/// listed wavg/wsum/wboit as refused. Mutation caught: the unorm8 refusal put back into
+/// `Settings::validate` (both commands exit 1 or list refusals).
+#[test]
+fn the_cpu_takes_any_blend_target() {
+    let dir = scratch("blend-target");
+    let png = dir.join("out.png");
+    let out = oit(&[
+        "render",
+        "--size",
+        "16x16",
+        "-t",
+        "wavg",
+        "--blend-target",
+        "unorm8",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let out =
+        oit(&["compare", "--size", "16x16", "--scene", "planes:4", "-t", "all", "--blend-target", "unorm8"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(!stdout(&out).contains("refused"), "{}", stdout(&out));
+    assert!(stdout(&out).lines().any(|l| l.starts_with("wsum ")), "{}", stdout(&out));
+}
+
+/// `oit ARGS` run in the background, killed after `seconds`: `None` when it had not ended (a
+/// hang), so that a regression fails the test instead of hanging it.
+#[cfg(unix)]
+fn oit_within(args: &[&str], seconds: u64) -> Option<Output> {
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_oit"))
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the oit binary runs");
+    let until = std::time::Instant::now() + std::time::Duration::from_secs(seconds);
+    while child.try_wait().expect("the child's status").is_none() {
+        if std::time::Instant::now() > until {
+            let _ = child.kill();
+            let _ = child.wait();
+            return None;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    Some(child.wait_with_output().expect("the child's output"))
+}
+
+/// Issue 41.5: a FIFO given as any file input is refused before it is opened for reading:
+/// `open()` on a FIFO waits for a writer, and `--scene fifo.obj` hung. Every file oit reads is
+/// tried: a model (alone and in a grid), `--calibration`, `bench --model`, `bench --replot` (its
+/// report.json) and `view --script` (read before any window opens). Mutation caught: any of those
+/// readers opening the path before `oit_core::open_regular`'s check (`File::open` or
+/// `read_to_string` first) blocks, and the case fails after 30 s instead of hanging CI.
+#[cfg(unix)]
+#[test]
+fn a_fifo_is_refused_for_every_file_input() {
+    let dir = scratch("fifo");
+    let fifo = dir.join("pipe.obj");
+    let replot = dir.join("report");
+    std::fs::create_dir_all(&replot).unwrap();
+    let report_fifo = replot.join("report.json");
+    for path in [&fifo, &report_fifo] {
+        let made = Command::new("mkfifo").arg(path).status();
+        assert!(made.is_ok_and(|s| s.success()), "mkfifo {} (coreutils)", path.display());
+    }
+    let png = dir.join("out.png");
+    let (f, png, replot) = (fifo.to_str().unwrap(), png.to_str().unwrap(), replot.to_str().unwrap());
+    let grid = format!("grid:2x2:{f}");
+    let mut cases: Vec<(&str, Vec<&str>)> = vec![
+        ("--scene", vec!["render", "--size", "8x8", "--scene", f, "-o", png]),
+        ("--scene grid", vec!["render", "--size", "8x8", "--scene", &grid, "-o", png]),
+        ("compare --scene", vec!["compare", "--size", "8x8", "--scene", f]),
+        ("--calibration", vec!["render", "--size", "8x8", "-t", "auto", "--calibration", f, "-o", png]),
+        ("bench --model", vec!["bench", "--size", "8x8", "--model", f, "--frames", "1", "--out", replot]),
+        ("bench --replot", vec!["bench", "--replot", replot]),
+    ];
+    if cfg!(feature = "view") {
+        cases.push(("view --script", vec!["view", "--size", "8x8", "--script", f, "--screenshot", png]));
+    }
+    for (what, args) in cases {
+        let out = oit_within(&args, 30).unwrap_or_else(|| panic!("{what}: oit blocked on a FIFO for 30 s"));
+        assert_one_error(&out, what);
+        assert!(stderr(&out).contains("not a regular file"), "{what}: {}", stderr(&out));
+    }
+}
+
+/// Issue 41.4: a frame that covers no pixel has no error rate. `compare`'s table once printed EPR
+/// and PSNR `NaN`, and `sweep`'s summary mean EPR `NaN`; both now say n/a, and the JSON has null.
+/// The scene is one triangle of no area (its corners on a line): every technique renders nothing.
+/// Mutations caught: `output::percent` or `output::psnr` without their NaN arm (`NaN` in a row),
+/// sweep's summary averaging over views that covered nothing (`NaN`).
+#[test]
+fn empty_coverage_is_not_available_in_every_table() {
+    let dir = scratch("empty-coverage");
+    let flat = dir.join("flat.obj");
+    std::fs::write(&flat, "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n").unwrap();
+    let flat = flat.to_str().unwrap();
+    let out = oit(&["compare", "--size", "16x16", "--scene", flat, "-t", "dp,wavg"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stdout(&out);
+    for t in ["dp", "wavg"] {
+        let row =
+            text.lines().find(|l| l.starts_with(&format!("{t} "))).unwrap_or_else(|| panic!("{t}: {text}"));
+        assert!(row.matches("n/a").count() >= 2, "EPR and PSNR n/a: {row}");
+        assert!(!row.contains("inf"), "no perfect score: {row}");
+    }
+    assert!(!text.contains("NaN"), "{text}");
+    let v = parse_json(
+        &oit(&["compare", "--size", "16x16", "--scene", flat, "-t", "dp", "--json"]),
+        "compare --json",
+    );
+    let row = &v.as_array().expect("an array of runs")[0];
+    assert!(row["epr"].is_null() && row["psnr"].is_null(), "{row}");
+    let out = oit(&["sweep", "--size", "16x16", "--scene", flat, "-t", "dp", "--views", "2"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stdout(&out);
+    assert!(text.contains("n/a") && !text.contains("NaN"), "{text}");
+}

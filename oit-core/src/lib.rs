@@ -95,7 +95,7 @@ pub use backend::{
 pub use camera::{Camera, View};
 pub use error::OitError;
 pub use frame::{Frame, GpuFragments, GpuTotals, Image, Stats};
-pub use obj::{load_obj, open_regular, parse_obj};
+pub use obj::{MAX_FACE_CORNERS, load_obj, open_regular, parse_obj};
 pub use procedural::{BUILTIN_SCENES, DEFAULT_SCENE, builtin_scene, is_procedural, load_scene};
 pub use scene::{Aabb, Instance, Mesh, Object, Scene};
 pub use settings::{

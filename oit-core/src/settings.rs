@@ -111,8 +111,9 @@ pub struct Settings {
     /// (`--atomic-storage`); other techniques ignore it.
     pub atomic_storage: AtomicStorage,
     /// The blender's colour target on the hardware raster path (`--blend-target`): `plain`, and
-    /// `wavg`/`wsum` with `--hardware-capture blend`. The compute path and oit-cpu have no blender
-    /// and ignore it (their captures are exact).
+    /// `wavg`/`wsum` with `--hardware-capture blend` (which refuse `unorm8` when they render).
+    /// The compute path and oit-cpu have no blender and ignore it (their captures are exact), so
+    /// [`Settings::validate`] takes every target with every technique.
     pub blend_target: BlendTarget,
 }
 
@@ -453,9 +454,9 @@ impl Settings {
                 "--memory must be at least 1 byte, e.g. --memory 512M".into(),
             ));
         }
-        if matches!(self.technique, Technique::WeightedAverage | Technique::WeightedSum) {
-            self.blend_target.weighted_param(self.technique)?;
-        }
+        // `--blend-target unorm8` with wavg/wsum is refused only where the target is used (the GPU
+        // backends' blend capture, `BlendTarget::weighted_param`): oit-cpu, the compute path and
+        // the atomics capture ignore the target, as `--help` says (issue 41.6)
         if let Some(r) = self.region {
             let inside =
                 |origin: u32, size: u32, full: u32| u64::from(origin) + u64::from(size) <= u64::from(full);

@@ -166,6 +166,8 @@ pub const SCENE_WORDS: &[&str] = &[
     "nosuch.obj",
     "/dev/zero",
     "/dev/null",
+    "@hostile/model.obj",
+    "grid:2x2:@hostile/model.obj",
     "/",
     ".",
     "..",
@@ -281,9 +283,15 @@ pub fn values(option: &str) -> &'static [&'static str] {
         "max-epr" => {
             &["0", "0.01", "1", "1%", "0.5%", "100%", "101%", "-0", "-1", "1e-300", "nan", "inf", "%", ""]
         }
-        "calibration" => {
-            &["bench/results/cpu/calibration.json", "/dev/zero", "obj/triangle.obj", "nosuch.json", "", "/"]
-        }
+        "calibration" => &[
+            "bench/results/cpu/calibration.json",
+            "@hostile/calibration.json",
+            "/dev/zero",
+            "obj/triangle.obj",
+            "nosuch.json",
+            "",
+            "/",
+        ],
         "backend" => {
             &["cpu", "wgpu", "vulkan", "all", "cpu,cpu", "cpu,wgpu", "", ",", "CPU", "cpu,", "nosuch"]
         }
@@ -307,9 +315,19 @@ pub fn values(option: &str) -> &'static [&'static str] {
             "-o",
         ],
         "plot" => &["plot.svg", "plot.SVG", "plot.png", "", "nosuch/plot.svg", "obj/"],
-        "out" | "replot" => {
-            &["reports/huge", "reports/fine", "reports/missing", "obj", "obj/triangle.obj", "", "/"]
-        }
+        "out" | "replot" => &[
+            "reports/huge",
+            "reports/fine",
+            "reports/empty",
+            "reports/missing",
+            "@hostile/report",
+            "obj",
+            "obj/triangle.obj",
+            "",
+            "/",
+        ],
+        "model" => &["@hostile/calibration.json", "reports/fine/report.json", "nosuch.json", "/dev/zero", ""],
+        "script" => &["@hostile/script.txt", "obj/triangle.obj", "nosuch.txt", "/dev/zero", "obj", ""],
         "threads" | "max-peels" | "views" | "frames" | "warmup" | "curve-depth" | "curve-frames" => NUMBERS,
         _ => &[],
     }

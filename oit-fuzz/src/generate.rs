@@ -180,6 +180,7 @@ const FILES: &[&str] = &[
     "/dev/zero",
     "obj",
     "scene/default.txt",
+    "@hostile/model.obj",
 ];
 
 impl SceneExpr {
@@ -269,6 +270,13 @@ pub fn generate(rng: &mut Rng, target: Target, vocabulary: &Vocabulary) -> Vec<u
     let bytes = rng.bytes(len);
     let mut u = Unstructured::new(&bytes);
     match target {
+        // issue 41.3: one OBJ in 512 a lone random star of 16,384 to 65,537 corners (the last over
+        // the limit a face may have)
+        Target::Obj if rng.one_in(512) => {
+            let n =
+                [16_384, 32_768, oit_core::MAX_FACE_CORNERS, oit_core::MAX_FACE_CORNERS + 1][rng.below(4)];
+            crate::hostile::random_star(n, rng.next_u64()).into_bytes()
+        }
         Target::Obj => {
             let lines: Vec<ObjLine> = Vec::arbitrary_take_rest(u).unwrap_or_default();
             let mut text = String::new();

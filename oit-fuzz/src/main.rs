@@ -19,6 +19,7 @@
 mod alloc;
 mod dictionary;
 mod generate;
+mod hostile;
 mod mutate;
 mod targets;
 mod worker;

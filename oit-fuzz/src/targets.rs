@@ -57,14 +57,16 @@ pub struct Ctx {
     pub bits: u64,
     /// The CPU backend on one thread, for the renders of `obj` and `scene`.
     pub cpu: Box<dyn Backend>,
+    /// The worker's folder of FIFOs, which inputs name as `@hostile` ([`crate::hostile`]).
+    pub hostile: PathBuf,
 }
 
 /// Runs `target` on `input`.
 pub fn run(target: Target, input: &[u8], ctx: &Ctx) -> Verdict {
     match target {
         Target::Obj => obj(input, ctx),
-        Target::Scene => scene(input, ctx),
-        Target::Args => args(input, ctx),
+        Target::Scene => scene(&crate::hostile::expand(input, &ctx.hostile), ctx),
+        Target::Args => args(&crate::hostile::expand(input, &ctx.hostile), ctx),
         Target::Selftest => selftest(input),
     }
 }
@@ -122,6 +124,10 @@ fn obj(input: &[u8], ctx: &Ctx) -> Verdict {
                 panic!("an OBJ that loaded does not validate: {e}");
             }
             assert!(scene.triangle_count() > 0, "an OBJ that loaded has no triangles");
+            // a lone star polygon (huge ones among them) is covered exactly once
+            if let Ok(text) = std::str::from_utf8(input) {
+                crate::hostile::check_star(text, &scene);
+            }
             framed(Target::Obj, &scene, ctx)
         }
         Err(e) => Verdict::Refused(signature(Target::Obj, &e)),
@@ -217,6 +223,10 @@ fn args(input: &[u8], ctx: &Ctx) -> Verdict {
         Ok(v) => v,
         Err(e) => return Verdict::Refused(signature(Target::Args, &e)),
     };
+    if let Some(dir) = replot_folder(input) {
+        // an accepted report, empty rows and all, is drawn again and read back unchanged
+        crate::hostile::round_trip(&dir, &ctx.scratch);
+    }
     let Some(prepared) = validated.prepared else { return Verdict::Accepted { rendered: false } };
     let camera = match prepared.camera(prepared.view) {
         Ok(c) => c,
@@ -234,6 +244,25 @@ fn args(input: &[u8], ctx: &Ctx) -> Verdict {
         rendered = render(backend.as_ref(), &prepared.scene, &camera, &settings);
     }
     Verdict::Accepted { rendered }
+}
+
+/// The folder of `bench --replot DIR` (or `--replot=DIR`) in a command line that clap and
+/// `validate` accepted.
+fn replot_folder(input: &[u8]) -> Option<PathBuf> {
+    let words: Vec<&[u8]> = input.split(|&b| b == b'\n').collect();
+    if words.first() != Some(&&b"bench"[..]) {
+        return None;
+    }
+    let to_path = |w: &[u8]| PathBuf::from(OsString::from_vec(w.to_vec()));
+    words.iter().enumerate().rev().find_map(|(i, w)| {
+        if let Some(v) = w.strip_prefix(b"--replot=") {
+            Some(to_path(v))
+        } else if *w == b"--replot" {
+            words.get(i + 1).map(|v| to_path(v))
+        } else {
+            None
+        }
+    })
 }
 
 /// The harness's own check (`--target selftest`): inputs that fail on purpose, one of each kind

@@ -221,12 +221,15 @@ pub fn run(job: &Job) -> Result<(), String> {
     .into_iter()
     .next()
     .ok_or("no cpu backend")?;
-    let mut ctx = Ctx { scratch: job.scratch.clone(), render: false, bits: 0, cpu };
+    let hostile = crate::hostile::prepare(&job.scratch)?;
+    let mut ctx = Ctx { scratch: job.scratch.clone(), render: false, bits: 0, cpu, hostile };
     let mut pools: Vec<Pool> = job
         .targets
         .iter()
         .map(|&t| {
-            let inputs = load_corpus(&job.corpus, t);
+            let mut inputs = load_corpus(&job.corpus, t);
+            // the hostile inputs too large to commit (issue 41's huge polygons), after the corpus
+            inputs.extend(crate::hostile::seeds(t));
             Pool { seeds: inputs.len(), inputs, seen: HashSet::new() }
         })
         .collect();

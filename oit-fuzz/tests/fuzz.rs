@@ -45,6 +45,16 @@ fn corpus_replays_without_failures() {
     for target in ["obj", "scene", "args"] {
         assert!(executions(&text, target) >= 30, "{target}: too few corpus inputs ran:\n{text}");
     }
+    // issue 41's hostile classes: the corpus's FIFO inputs (scene/fifo.txt, args/*-fifo.args: a
+    // reader that opens before it checks hangs, and the run fails), its report of empty rows
+    // (args/replot-empty.args, drawn again and read back), and after the obj corpus the two
+    // random stars too large to commit (65,536 corners, covered once; 65,537, refused)
+    let corpus = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/fuzz/corpus");
+    let files = |target: &str| std::fs::read_dir(corpus.join(target)).map_or(0, |d| d.count()) as u64;
+    assert_eq!(executions(&text, "obj"), files("obj") + 2, "the huge stars ran after the corpus:\n{text}");
+    for input in ["scene/fifo.txt", "scene/grid-fifo.txt", "args/scene-fifo.args", "args/replot-empty.args"] {
+        assert!(corpus.join(input).is_file(), "{input} is in the corpus");
+    }
 }
 
 /// The bounded run: a fixed seed, 20,000 executions (about 10 s in release on 2 cores), capped

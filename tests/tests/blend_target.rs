@@ -117,12 +117,34 @@ fn narrower_blend_targets_stay_within_their_rounding() {
     eprintln!("{ran} target × technique × scene cases checked");
 }
 
+/// unorm8 cannot hold wavg/wsum's sums: the GPU blend capture refuses it (`weighted_param`, which
+/// both GPU backends' `weighted` call first), while the settings take it, as `--help` says for
+/// oit-cpu, the compute path and the atomics capture, which ignore the target (issue 41.6: the
+/// check in `Settings::validate` refused `-t wavg --blend-target unorm8` on the CPU too).
+/// Mutations caught: `weighted_param` accepting unorm8 (the first assertion), the refusal put
+/// back into `Settings::validate` (the second), oit-cpu reading the target (its image differs).
 #[test]
-fn unorm8_refuses_the_weighted_sums() {
+fn unorm8_refuses_the_weighted_sums_where_they_are_blended() {
     for technique in ["wavg", "wsum"] {
         let s = Settings { blend_target: BlendTarget::Unorm8, ..settings(8, technique) };
-        let e = s.validate().expect_err("unorm8 cannot hold the sums");
+        let e = s.blend_target.weighted_param(s.technique).expect_err("unorm8 cannot hold the sums");
         assert!(e.to_string().contains("unorm8"), "{e}");
+        s.validate().expect("the settings take it: the CPU and the compute path ignore the target");
+        #[cfg(feature = "cpu")]
+        {
+            let backend = cpu_with_threads(2);
+            let scene = scene("planes:8");
+            let cam = camera(&scene, &s, FRONT);
+            let narrow = render(backend.as_ref(), &scene, &cam, &s);
+            let wide = render(
+                backend.as_ref(),
+                &scene,
+                &cam,
+                &Settings { blend_target: BlendTarget::F32, ..s.clone() },
+            );
+            assert!(narrow.stats.fragments > 0, "{technique}: planes:8 is in view");
+            assert_eq!(narrow.image.pixels, wide.image.pixels, "{technique}: oit-cpu ignores the target");
+        }
     }
     let plain = Settings { blend_target: BlendTarget::Unorm8, ..settings(8, "plain") };
     plain.validate().expect("plain into unorm8");

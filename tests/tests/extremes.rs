@@ -199,7 +199,7 @@ fn random_star_obj(n: usize, seed: u64) -> String {
 }
 
 #[test]
-fn random_star_of_65536_corners_is_one_layer_deep_but_for_snapping() {
+fn random_star_of_65536_corners_is_one_layer_deep() {
     // Issue 41.3: a random star of 32,768 corners or more rendered with pixels 2 and 3 layers
     // deep. The triangulation was exact (its areas sum to the polygon's: obj.rs's test), but ear
     // clipping in polygon order made long slivers whose tip lay almost on the line through its
@@ -227,6 +227,15 @@ fn random_star_of_65536_corners_is_one_layer_deep_but_for_snapping() {
         "{deep} pixels covered twice or more by one flat polygon (deepest {:?})",
         layers.iter().max()
     );
+    // Issue 41.3's target, `max_layers` 1: at 1024² the corners lie twice as far apart in
+    // sub-pixel steps, which the snapping keeps in order, so a pixel covered twice is the
+    // triangulation's overlap and nothing else (measured: 1 deep pixel at 512², none at 1024²,
+    // 2048² or 4096²). Mutation caught: ears clipped in polygon order again (the priority a
+    // constant, so that the heap pops corners by index) fails this test.
+    let s = settings(1024, "reference");
+    let f = render(backend.as_ref(), &scene, &camera(&scene, &s, View::default()), &s);
+    assert!(f.stats.fragments > 80_000, "the star is in view: {} fragments", f.stats.fragments);
+    assert_eq!(f.stats.max_layers, 1, "one flat polygon is one layer deep everywhere");
 }
 
 /// Issue 13.9: storage far over any memory budget is refused with a clear error before anything
