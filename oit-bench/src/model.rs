@@ -814,7 +814,8 @@ mod tests {
 
     /// A committed measured run of the bench: `bench/results/cpu/model/<dir>/report.json`.
     fn measured(dir: &str) -> crate::Report {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../bench/results/cpu/model").join(dir);
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../bench/results/cpu/model").join(dir);
         crate::report::read_report(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
     }
 
@@ -843,7 +844,11 @@ mod tests {
         for (got, want) in refit[0].techniques.iter().zip(&want.techniques) {
             assert_eq!((&got.technique, got.resolve), (&want.technique, want.resolve));
             let same = got.coefficients.iter().zip(&want.coefficients).all(|(a, b)| close(*a, *b));
-            assert!(same, "{}: refitted {:?}, shipped {:?}", got.technique, got.coefficients, want.coefficients);
+            assert!(
+                same,
+                "{}: refitted {:?}, shipped {:?}",
+                got.technique, got.coefficients, want.coefficients
+            );
             assert!(close(got.rms_relative, want.rms_relative), "{}", got.technique);
         }
     }
@@ -866,7 +871,14 @@ mod tests {
         // each prediction as the run recorded it
         for (p, r) in predictions.iter().zip(&run.predictions) {
             assert_eq!((&p.scene, &p.technique), (&r.scene, &r.technique));
-            assert!(close(p.predicted_ms, r.predicted_ms), "{} on {}: {} vs {}", p.technique, p.scene, p.predicted_ms, r.predicted_ms);
+            assert!(
+                close(p.predicted_ms, r.predicted_ms),
+                "{} on {}: {} vs {}",
+                p.technique,
+                p.scene,
+                p.predicted_ms,
+                r.predicted_ms
+            );
         }
         let summary = summarize(&predictions);
         assert_eq!(summary.len(), 1);
