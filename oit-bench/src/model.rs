@@ -668,8 +668,12 @@ mod tests {
     /// resolve walking each pixel's n layers at `ns × cost(n)` (read off the depth histogram
     /// bucket by bucket), plus a fixed overhead in ms; and a ±`noise` wobble from a fixed hash of
     /// (scene, technique), never the clock.
+    /// A technique's true costs: name, ns per triangle, fragment, pixel (per pass) and layer
+    /// cost unit, ms per frame; and the resolve's cost of n layers in those units.
+    type Truth = (&'static str, [f64; 5], fn(f64) -> f64);
+
     struct Synthetic {
-        truth: Vec<(&'static str, [f64; 5], fn(f64) -> f64)>,
+        truth: Vec<Truth>,
         noise: f64,
     }
 

@@ -255,11 +255,9 @@ fn approximate_bucket_schemes_have_bounded_error_on_meshes() {
 /// (8-bit 51, which comes back 50), 32²: 0 lost, 4.6 % EPR, max 2/255, every pixel inside its
 /// window; at alpha 0.25 (64, which comes back exact) the image is the reference's.
 ///
-/// Mutations of production code that fail it (each tried): `Stats::count_packing` setting 0 (the
-/// count before this test); `bdp_pack_color` keeping a 6-bit alpha (`a * 63 / 255` in the top
-/// bits, decoded as 7: alpha halved, far outside the bound and not exact at 0.25); the WGSL
-/// `bdp_pack_color` (core/common.wgsl) truncating alpha (`a * 127u / 255u`: 64 comes back 62, so
-/// the GPU rows are no longer exact at 0.25).
+/// Mutations of production code that fail it (each tried, on oit-cpu): `Stats::count_packing`
+/// setting 0 (the count before this test); `bdp_pack_color` keeping a 6-bit alpha
+/// (`a * 63 / 255` in the 7 bits: alpha halved, every pixel outside its window, max error 38).
 #[test]
 fn bdp_colour_mode_quantization_is_counted_and_bounded() {
     for backend in backends_for("bdp_colour_mode_quantization_is_counted_and_bounded") {
