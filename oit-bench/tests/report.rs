@@ -35,6 +35,9 @@ fn report_holds_every_technique() {
     let mut report = run_bench(&config).unwrap();
     assert!(report.failures.is_empty(), "{:?}", report.failures);
     // the cost model: the plan's passes are the run's, and a model fitted on this run predicts it
+    // as its fit did (each prediction is the fitted value the model recorded for that run, beside
+    // that run's time; fails where `predict` takes another technique's model, another scene's
+    // statistics or another run's passes)
     assert_eq!(report.scene_stats.len(), labels.len());
     for r in report.rows.iter().filter(|r| r.backend == "cpu") {
         assert_eq!(r.model_passes, r.passes, "{}", r.technique);
@@ -52,7 +55,15 @@ fn report_holds_every_technique() {
     };
     report.predictions = oit_bench::model::predict(&model, &samples);
     assert_eq!(report.predictions.len(), samples.len());
-    assert!(report.predictions.iter().all(|p| p.calibration_scene && p.predicted_ms > 0.0));
+    for p in &report.predictions {
+        assert!(p.calibration_scene, "{p:?}");
+        let calibration = model.backend(&p.backend).expect("the backend was calibrated");
+        let fitted = calibration.technique(&p.technique).expect("the technique was calibrated");
+        let &(_, measured, fitted_ms) =
+            fitted.residuals.iter().find(|(scene, _, _)| *scene == p.scene).expect("the scene was fitted");
+        assert!(p.predicted_ms > 0.0 && p.predicted_ms == fitted_ms, "{p:?} against the fit's {fitted_ms}");
+        assert_eq!(p.measured_ms, measured, "{p:?}");
+    }
     let dir = std::env::temp_dir().join(format!("oit-bench-test-{}", std::process::id()));
     write_report(&mut report, &dir).unwrap();
 

@@ -21,14 +21,16 @@ use crate::output::{self, Table};
         Renders `reference` once per backend, then every technique, and prints a table: geometry \
         passes, fragments, fragments captured, merged (into a pixel's tail, --overflow tail) and \
         lost, fragments tied (equal depths the technique ordered by \
-        colour, not as the reference), per-pixel storage, time, error pixel rate (EPR: the \
+        colour, not as the reference), fragments quantized (composited through a lossy packing of \
+        their colour: bdp's colour mode keeps alpha in 7 bits, one 8-bit step off for half the \
+        alphas; docs/bdp-colour.md gives the bound), per-pixel storage, time, error pixel rate (EPR: the \
         share of covered pixels off by more than 1 in 8 bits, in per cent) and PSNR (inf when \
         identical). A \
         technique that fails prints its error in its row and the others go on; the exit code is \
         then 1. With `-t all`, a technique the options refuse (an effect or capture it cannot do) \
         is listed after the table with the reason and the others run; the exit code is 1 only \
         when none ran. With --json, prints one JSON array of objects with the keys technique, backend, \
-        raster, width, height, geometry_passes, fragments, captured, merged, lost, tied, storage_bytes, \
+        raster, width, height, geometry_passes, fragments, captured, merged, lost, tied, quantized, storage_bytes, \
         tiles, wall_ms, gpu_ms, epr, psnr, max_error (epr a fraction in [0, 1], not per cent; gpu_ms \
         null when not measured, psnr null when identical); failures go to stderr."
 )]
@@ -61,7 +63,7 @@ struct CompareJson<'a> {
     raster: String,
     width: u32,
     height: u32,
-    /// `geometry_passes`, `fragments`, `captured`, `lost`, `tied`, `storage_bytes`, `wall_ms`,
+    /// `geometry_passes`, `fragments`, `captured`, `lost`, `tied`, `quantized`, `storage_bytes`, `wall_ms`,
     /// `gpu_ms`, `max_layers`, `tiles`.
     #[serde(flatten)]
     stats: &'a Stats,
@@ -71,7 +73,7 @@ struct CompareJson<'a> {
     max_error: f64,
 }
 
-const HEADERS: [(&str, usize); 14] = [
+const HEADERS: [(&str, usize); 15] = [
     ("technique", 10),
     ("backend", 7),
     ("raster", 8),
@@ -81,6 +83,7 @@ const HEADERS: [(&str, usize); 14] = [
     ("merged", 8),
     ("lost", 8),
     ("tied", 8),
+    ("quantized", 9),
     ("storage", 10),
     ("time (ms)", 9),
     ("GPU (ms)", 8),
@@ -171,6 +174,7 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
                 s.merged.to_string(),
                 s.lost.to_string(),
                 s.tied.to_string(),
+                s.quantized.to_string(),
                 output::bytes(s.storage_bytes),
                 format!("{:.2}", s.wall_ms),
                 s.gpu_ms.map_or_else(|| "-".to_string(), |g| format!("{g:.2}")),

@@ -204,7 +204,7 @@ fn render_complexity_draws_the_legend_on_the_heat_map() {
     assert!(legend_pixels * 2 > (rect.width * rect.height) as usize, "no legend in {rect:?}");
 }
 
-const COMPARE_KEYS: [&str; 19] = [
+const COMPARE_KEYS: [&str; 20] = [
     "technique",
     "backend",
     "raster",
@@ -216,6 +216,7 @@ const COMPARE_KEYS: [&str; 19] = [
     "lost",
     "merged",
     "tied",
+    "quantized",
     "storage_bytes",
     "wall_ms",
     "gpu_ms",

@@ -27,6 +27,13 @@ pub struct Stats {
     /// keeps: `mdts`'s 20 bits) holding two payloads or more. 0 where the technique orders ties
     /// as the reference does (`fabs` carries the primitive id), and where it cannot see them.
     pub tied: u64,
+    /// Fragments that reached the composite through a lossy packing of their colour: bdp's colour
+    /// mode keeps alpha in 7 bits ([`crate::rules::bdp_pack_color`]), so each fragment it
+    /// composites may carry an alpha one 8-bit step off the reference's (half the 256 alphas do;
+    /// 0 and 255 never). Where none of a pixel's fragments was lost its error is bounded by its
+    /// layer count ([`crate::rules::bdp_color_error_bound`]); `docs/bdp-colour.md` says more. 0
+    /// for every other technique, whose colours reach the composite as the reference's.
+    pub quantized: u64,
     /// Bytes of per-pixel storage the technique allocated.
     pub storage_bytes: u64,
     /// Wall-clock time of the frame in milliseconds.
@@ -47,6 +54,18 @@ pub struct Stats {
 }
 
 impl Stats {
+    /// Sets [`Stats::quantized`] for a frame made under `settings`: every fragment bdp's colour
+    /// mode composites went through its packing; no other technique packs colour lossily. One
+    /// rule for every backend, applied where their frames end ([`crate::tiling::run`],
+    /// [`crate::tiling::frame_stats`]).
+    pub fn count_packing(&mut self, settings: &crate::Settings) {
+        let packs = match settings.technique {
+            crate::Technique::Bdp { passes } => settings.bdp_color_mode(passes).unwrap_or(false),
+            _ => false,
+        };
+        self.quantized = if packs { self.captured } else { 0 };
+    }
+
     /// The frame's own check, where its losses were counted as they happened: every fragment the
     /// first geometry pass generated was either composited, merged into a tail or counted lost. A device that stops
     /// a kernel early (lavapipe ends a shader invocation's loops after 65,535 iterations in all)
@@ -114,6 +133,28 @@ mod tests {
         let image = Image::new(2, 2, [10, 20, 30, 255]);
         let e = image.save_png(Path::new("/dev/full")).expect_err("/dev/full must fail");
         assert!(matches!(e, OitError::Write { .. }), "{e}");
+    }
+
+    /// Issue 41.1: `quantized` is bdp's colour mode's captured fragments, 0 elsewhere (its depth
+    /// mode, `bdp:2`, other effects, other techniques). Mutations caught: the count left at 0, set
+    /// for every technique, or set from `fragments` (which counts the lost ones too).
+    #[test]
+    fn packing_is_counted_for_bdp_colour_mode_only() {
+        use crate::{BdpMode, Effect, Settings};
+        let counted = |technique: &str, f: fn(&mut Settings)| {
+            let mut settings = Settings { technique: technique.parse().unwrap(), ..Settings::default() };
+            f(&mut settings);
+            let mut s = Stats { fragments: 12, captured: 10, lost: 2, quantized: 99, ..Stats::default() };
+            s.count_packing(&settings);
+            s.quantized
+        };
+        assert_eq!(counted("bdp", |_| {}), 10);
+        assert_eq!(counted("bdp", |s| s.bdp_mode = BdpMode::Color), 10);
+        assert_eq!(counted("bdp", |s| s.bdp_mode = BdpMode::Depth), 0);
+        assert_eq!(counted("bdp", |s| s.effect = Effect::Fresnel), 0);
+        assert_eq!(counted("bdp2", |_| {}), 0);
+        assert_eq!(counted("ll", |_| {}), 0);
+        assert_eq!(counted("mdts", |_| {}), 0);
     }
 
     fn totals(fragments: GpuFragments, counted_lost: Option<u64>, from_captured: bool) -> GpuTotals<'static> {

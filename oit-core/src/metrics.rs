@@ -8,6 +8,7 @@
 
 use serde::Serialize;
 
+use crate::composite::linear_to_srgb8_f64;
 use crate::{Frame, Image, OitError};
 
 /// How far an image is from the reference, over the pixels either covers.
@@ -199,6 +200,98 @@ pub fn differ_off_mask(a: &Image, b: &Image, mask: &[bool]) -> (u8, usize) {
     (worst, differ)
 }
 
+/// Slack for the f32 resolve against the f64 reference, in linear [0, 1]: 2⁻¹⁶, some hundred
+/// times the rounding of a 32-layer f32 composite.
+const F32_SLACK: f64 = 1.0 / 65536.0;
+
+/// The smallest linear value the reference's encoding ([`linear_to_srgb8_f64`]) takes to `code`
+/// or above (0 for code 0, 1 above 255), by bisection: the encoding rises with its input.
+fn first_linear_of(code: u16) -> f64 {
+    if code == 0 {
+        return 0.0;
+    }
+    if code > 255 {
+        return 1.0;
+    }
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    for _ in 0..64 {
+        let mid = 0.5 * (lo + hi);
+        if u16::from(linear_to_srgb8_f64(mid)) >= code { hi = mid } else { lo = mid }
+    }
+    hi
+}
+
+/// The 8-bit sRGB codes (lowest, highest) a pixel may hold where the reference holds `code` and
+/// the linear colour behind the pixel is within `delta` of the reference's: every value the
+/// reference could have had for `code`, moved by `delta` (and [`F32_SLACK`]) either way, encoded.
+/// With `delta` from [`crate::rules::bdp_color_error_bound`] this is bdp's colour-mode bound
+/// per pixel; the window is widest where the pixel is dark (sRGB is steepest there).
+pub fn packing_window(code: u8, delta: f64) -> (u8, u8) {
+    let slack = delta.max(0.0) + F32_SLACK;
+    let lo = linear_to_srgb8_f64(first_linear_of(u16::from(code)) - slack);
+    let hi = linear_to_srgb8_f64(first_linear_of(u16::from(code) + 1) + slack);
+    (lo, hi)
+}
+
+/// bdp's colour mode held to its bound ([`packing_check`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct PackingCheck {
+    /// Pixels checked: covered by the reference, none of their fragments lost.
+    pub checked: u64,
+    /// Of those, pixels whose colour is not the reference's: the quantization seen.
+    pub differing: u64,
+    /// Of those, pixels outside [`packing_window`] for their layer count: a defect.
+    pub outside: u64,
+    /// The largest channel difference over the checked pixels, in 8-bit steps.
+    pub max_error: u8,
+    /// The widest window allowed at a pixel that differs, in 8-bit steps (highest − lowest).
+    pub widest_window: u8,
+}
+
+/// Holds `frame`, a frame of bdp's colour mode, to [`crate::rules::bdp_color_error_bound`]
+/// against `reference` (whose per-pixel `layers` give each pixel's count), on the covered pixels
+/// that lost nothing (by `frame.lost_pixels`; a frame without per-pixel losses is checked only
+/// when it lost nothing at all).
+pub fn packing_check(reference: &Frame, frame: &Frame) -> Result<PackingCheck, OitError> {
+    let layers = reference.layers.as_ref().ok_or_else(|| {
+        OitError::InvalidSettings("the reference recorded no per-pixel layers to bound by".into())
+    })?;
+    let (r, f) = (&reference.image, &frame.image);
+    if r.width != f.width || r.height != f.height || layers.len() != r.pixels.len() {
+        return Err(OitError::InvalidSettings("frame and reference differ in size".into()));
+    }
+    let lost = |i: usize| match &frame.lost_pixels {
+        Some(l) => Ok(l[i] > 0),
+        None if frame.stats.lost == 0 => Ok(false),
+        None => Err(OitError::InvalidSettings(format!(
+            "{} fragments lost and no per-pixel losses: cannot tell which pixels to bound",
+            frame.stats.lost
+        ))),
+    };
+    let mut out = PackingCheck::default();
+    for (i, (a, b)) in r.pixels.iter().zip(&f.pixels).enumerate() {
+        if layers[i] == 0 || lost(i)? {
+            continue;
+        }
+        out.checked += 1;
+        let delta = crate::rules::bdp_color_error_bound(layers[i]);
+        let w = worst(a, b);
+        out.max_error = out.max_error.max(w);
+        if w == 0 {
+            continue;
+        }
+        out.differing += 1;
+        let mut inside = true;
+        for c in 0..3 {
+            let (lo, hi) = packing_window(a[c], delta);
+            out.widest_window = out.widest_window.max(hi - lo);
+            inside &= (lo..=hi).contains(&b[c]);
+        }
+        out.outside += u64::from(!inside);
+    }
+    Ok(out)
+}
+
 /// A frame's depth complexity: how many pixels hold 0, 1, 2, … fragments, from per-pixel
 /// fragment counts (`Frame::layers`: the reference counts every fragment a pixel generates).
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
@@ -258,6 +351,27 @@ impl DepthComplexity {
 
 #[cfg(test)]
 mod tests {
+    /// The window is the reference code's linear interval moved by the bound either way: one code
+    /// of slack at each end with no bound (the f32 resolve may round across a threshold), wider
+    /// with it, widest where dark. Values: code 128 holds linear [0.2140, 0.2195); a bound of
+    /// 16/255 reaches 0.151 and 0.277, codes 108 and 144; code 10 holds [0.0029, 0.0032), and
+    /// the bound reaches 0 and 0.066, codes 0 and 73. Mutations caught: the bound not added (`slack` without `delta`),
+    /// the window taken around the code's value instead of its interval's ends, the encoding
+    /// read as linear.
+    #[test]
+    fn packing_window_values() {
+        use super::packing_window;
+        for code in 1..=254u8 {
+            let (lo, hi) = packing_window(code, 0.0);
+            assert!(lo == code - 1 && hi == code + 1, "{code}: {lo}..={hi}");
+        }
+        assert_eq!(packing_window(0, 0.0), (0, 1));
+        assert_eq!(packing_window(255, 0.0), (254, 255));
+        assert_eq!(packing_window(128, 16.0 / 255.0), (108, 144));
+        assert_eq!(packing_window(10, 16.0 / 255.0), (0, 73));
+        assert_eq!(packing_window(250, 1.0), (0, 255));
+    }
+
     #[test]
     fn depth_complexity() {
         let d = DepthComplexity::from_layers(&[0, 0, 1, 3, 1, 2, 0, 1, 1, 1, 2, 1]);

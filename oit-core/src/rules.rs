@@ -271,6 +271,27 @@ pub fn bdp_unpack_color(packed: u32) -> u32 {
     a << 24 | (packed & 0x00ff_ffff)
 }
 
+/// The most [`bdp_pack_color`] and [`bdp_unpack_color`] move a fragment's alpha: one 8-bit step
+/// (`bdp_color_round_trip_every_alpha` checks all 256; 128 alphas come back exact, 0 and 255
+/// among them, the other 128 one step off). RGB comes back exact.
+pub const BDP_ALPHA_STEPS: u32 = 1;
+
+/// How far bdp's colour mode can put a pixel from the reference, where none of its fragments was
+/// lost: at most this much per channel of the linear [0, 1] composite, for `layers` fragments
+/// composited. The bound is what the 7-bit alpha allows, not a measurement:
+///
+/// front to back, the composite is `C = P + T·(α·c + (1 − α)·R)` for the layer of alpha α and
+/// colour c, with P and T what the layers in front of it give and R the composite of everything
+/// behind it over the background. Moving α alone moves C by `T·(c − R)·Δα`, and `T ≤ 1`,
+/// `|c − R| ≤ 1` (colours and background are in [0, 1]). Moving every layer's alpha in turn by at
+/// most [`BDP_ALPHA_STEPS`] / 255 moves C at most that much per layer: `layers × 1/255`. With
+/// nothing lost the buckets hold the pixel's fragments one each, in depth order, so the alpha is
+/// the only difference from the reference. The 8-bit sRGB image turns this into a window of codes
+/// around the reference's ([`crate::metrics::packing_window`]), widest where the pixel is dark.
+pub fn bdp_color_error_bound(layers: u32) -> f64 {
+    f64::from(layers) * f64::from(BDP_ALPHA_STEPS) / 255.0
+}
+
 /// Depth resolution of [`mdts_pack`]: depths closer than this may swap order (2⁻²⁰ ≈ 9.5e-7).
 pub const MDTS_DEPTH_STEP: f32 = 1.0 / (1u32 << 20) as f32;
 
@@ -429,9 +450,15 @@ mod tests {
                 let back = bdp_unpack_color(packed);
                 assert_eq!(back & 0xffffff, rgb, "RGB exact");
                 // 7-bit alpha: within one 8-bit step
-                assert!((back >> 24).abs_diff(a) <= 1, "alpha {a} -> {}", back >> 24);
+                assert!((back >> 24).abs_diff(a) <= BDP_ALPHA_STEPS, "alpha {a} -> {}", back >> 24);
             }
         }
+        // the alphas that come back exact: half of them, 0 and 255 among them (Stats::quantized's
+        // doc and BDP_ALPHA_STEPS say so)
+        let exact: Vec<u32> =
+            (0..=255u32).filter(|&a| bdp_unpack_color(bdp_pack_color(a << 24)) >> 24 == a).collect();
+        assert_eq!(exact.len(), 128);
+        assert!(exact.contains(&0) && exact.contains(&255) && exact.contains(&64) && !exact.contains(&51));
         // MAX keeps the most opaque fragment first: packing is monotone in alpha
         for a in 1..=255u32 {
             assert!(

@@ -165,13 +165,18 @@ pub fn frame_stats<P: ?Sized>(
     untiled: impl FnOnce(&mut P) -> Result<Frame, OitError>,
     tiled: impl FnOnce(&mut P) -> Result<Frame, OitError>,
 ) -> Result<Stats, OitError> {
+    let stats = |f: Frame| {
+        let mut s = f.stats;
+        s.count_packing(settings);
+        s
+    };
     if settings.memory.is_none() {
         match untiled(prepared) {
             Err(OitError::TooLarge { .. }) => {}
-            other => return other.map(|f| f.stats),
+            other => return other.map(stats),
         }
     }
-    tiled(prepared).map(|f| f.stats)
+    tiled(prepared).map(stats)
 }
 
 /// Runs one frame of `settings` through `frame` (a backend's untiled frame), in as many windows
@@ -257,6 +262,7 @@ pub fn run(
         }
     };
     frame.stats.tiles = tiles.max(1) as u32;
+    frame.stats.count_packing(settings);
     if frame.stats.tiles > 1 {
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
     }
@@ -345,6 +351,7 @@ pub fn merge<'a>(stats: impl Iterator<Item = &'a Stats>) -> Stats {
         out.lost += s.lost;
         out.merged += s.merged;
         out.tied += s.tied;
+        out.quantized += s.quantized;
         out.storage_bytes = out.storage_bytes.max(s.storage_bytes);
         out.wall_ms += s.wall_ms;
         out.gpu_ms = match (out.gpu_ms, s.gpu_ms) {
@@ -438,6 +445,7 @@ mod tests {
             fragments: 10,
             captured: 9,
             lost: 1,
+            quantized: 9,
             storage_bytes: 100,
             max_layers: 4,
             gpu_ms: Some(1.0),
@@ -448,6 +456,7 @@ mod tests {
             geometry_passes: 2,
             fragments: 5,
             captured: 5,
+            quantized: 5,
             storage_bytes: 80,
             max_layers: 6,
             gpu_ms: Some(2.0),
@@ -455,7 +464,7 @@ mod tests {
             ..Stats::default()
         };
         let m = merge([&a, &b].into_iter());
-        assert_eq!((m.geometry_passes, m.fragments, m.captured, m.lost), (5, 15, 14, 1));
+        assert_eq!((m.geometry_passes, m.fragments, m.captured, m.lost, m.quantized), (5, 15, 14, 1, 14));
         assert_eq!((m.storage_bytes, m.max_layers, m.gpu_ms, m.tiles), (100, 6, Some(3.0), 2));
         assert_eq!(m.gpu_pass_ms, [("count".to_string(), 0.75)]);
     }

@@ -1107,6 +1107,8 @@ impl VkCtx<'_> {
                 lost,
                 merged: self.merged,
                 tied: u64::from(t[2]),
+                // set where the frame ends (`Stats::count_packing`)
+                quantized: 0,
                 storage_bytes: self.storage_bytes,
                 wall_ms: 0.0,
                 gpu_ms,

@@ -1267,6 +1267,8 @@ pub(crate) fn totals_stats(t: &[u32], passes: u32, storage_bytes: u64) -> Stats 
         lost: u64::from(t[3]),
         merged: u64::from(t[MERGED_WORD as usize]),
         tied: u64::from(t[2]),
+        // set where the frame ends (`Stats::count_packing`)
+        quantized: 0,
         storage_bytes,
         wall_ms: 0.0,
         gpu_ms: None,

@@ -104,6 +104,7 @@ pub fn same_fragments_but_passes(a: &Frame, b: &Frame, fewer: u32) -> Result<(),
         ("lost", x.lost, y.lost),
         ("merged", x.merged, y.merged),
         ("tied", x.tied, y.tied),
+        ("quantized", x.quantized, y.quantized),
         ("passes", u64::from(x.geometry_passes), u64::from(y.geometry_passes) + u64::from(fewer)),
     ];
     for (what, p, q) in pairs {
