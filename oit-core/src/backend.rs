@@ -330,17 +330,43 @@ pub trait DepthHistogram: Sync {
     fn read(&self, pixel: usize) -> [u32; HISTOGRAM_WORDS];
 }
 
-/// A fixed array of `capacity` 64-bit fragment keys per pixel, filled concurrently: by atomic
-/// increment of a per-pixel counter, sorted after (fabs), or kept sorted by repeated atomic min
-/// (mdts64; Liu et al. 2009, Huang et al. 2011).
+/// A fixed array of `capacity` fragment keys per pixel, filled concurrently: the capture of the
+/// techniques that keep a pixel's fragments in K slots. Two disciplines implement it:
+///
+/// - **increment**: a per-pixel counter hands each fragment the next slot by atomic increment, in
+///   arrival order, and the key is stored there; a fragment past K is the one dropped, and
+///   `sorted` sorts the slots after capture (fabs; Liu et al. 2009). The GPU's accessor pairs for
+///   the counter are `fabs_count_add` / `fabs_count`: `technique/fabs_counters.wgsl` over a
+///   storage buffer and `fabs_counters_image.wgsl` over an R32_UINT storage image.
+/// - **min**: each slot keeps the smaller of its key and the carried one and carries the larger
+///   on, so the array stays sorted in any arrival order and the largest is the one dropped
+///   (mdts, mdts64, mlp, fabs's overflow; Liu et al. 2009, Huang et al. 2011). On the GPU:
+///   `mdts_min64` / `mdts_load64` (`mdts_keys.wgsl`, buffer; `mdts_keys_image.wgsl`, image) for
+///   64-bit keys, and `mdts_min_high` / `mdts_min_low` / `mdts_load_*` (`mdts_words.wgsl`,
+///   `mdts_words_image.wgsl`) for 32-bit mdts's two arrays, each one list of 32-bit keys.
+///
+/// The key is what the list orders by and what comes back: a 64-bit word (depth bits above a
+/// payload, or above a primitive id), 32-bit mdts's packed word, or fabs's 96 bits (depth bits and
+/// primitive id above the payload stored beside them, in a `u128`). Which fragment a full list
+/// drops is the discipline's; the key that `insert` returns is it, so a capture counts its losses
+/// where they happen.
 pub trait AtomicFragmentList: Sync {
+    /// A slot's key, in the order the list sorts by.
+    type Key: Copy + Ord + Send + Sync;
     /// Slots per pixel.
     fn capacity(&self) -> usize;
     /// Offers a fragment key; returns the key that did not fit, if any (atomic-min insertion
     /// keeps the array sorted and drops the largest; atomic increment drops the newcomer).
-    fn insert(&self, pixel: usize, key: u64) -> Option<u64>;
+    fn insert(&self, pixel: usize, key: Self::Key) -> Option<Self::Key>;
+    /// The largest key the pixel keeps once its list is full; `None` while it has room. In a list
+    /// that keeps the nearest (atomic min), every key it dropped is larger: `--overflow tail`
+    /// merges the fragments whose keys are.
+    fn last(&self, pixel: usize) -> Option<Self::Key>;
     /// The captured keys of one pixel, in key (depth) order.
-    fn sorted(&self, pixel: usize, out: &mut Vec<u64>);
+    fn sorted(&self, pixel: usize, out: &mut Vec<Self::Key>);
+    /// [`sorted`](Self::sorted), leaving the pixel's list empty: for a list reused pass after
+    /// pass (mlp), read where no pass runs.
+    fn take_sorted(&self, pixel: usize, out: &mut Vec<Self::Key>);
 }
 
 /// A pixel's captured fragments to a colour, fed one at a time in depth order: the resolve every

@@ -52,7 +52,7 @@ use oit_core::{
     TechniqueKind,
 };
 
-pub use technique::fabs::{INSERTION_SORT_MAX, sort_keys};
+pub use storage::{INSERTION_SORT_MAX, sort_keys};
 
 use crate::pool::Pool;
 use crate::raster::{RasterMode, Rasterizer};

@@ -27,7 +27,7 @@ use oit_core::{Frame, OitError};
 use rayon::prelude::*;
 
 use super::Ctx;
-use super::fabs::sort_keys;
+use crate::storage::sort_keys;
 
 /// Pixels per chunk of the parallel prefix sum.
 const SCAN_CHUNK: usize = 1 << 16;

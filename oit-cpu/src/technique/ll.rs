@@ -34,8 +34,8 @@ use oit_core::{Frame, OitError};
 use rayon::prelude::*;
 
 use super::Ctx;
-use super::fabs::sort_keys;
 use crate::raster::{Fragment, Shade};
+use crate::storage::sort_keys;
 
 /// The link of a list's last node, and the head of an empty list.
 pub(crate) const END: u32 = u32::MAX;

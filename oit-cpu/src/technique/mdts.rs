@@ -23,13 +23,13 @@
 //! step, which moves translucency's distances) and per-fragment alpha.
 
 use oit_core::Compositor as _;
-use std::sync::atomic::Ordering::Relaxed;
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
 
 use oit_core::rules::{depth_key64, mdts_pack, mdts_unpack, pack_rgba8, split_key64};
 use oit_core::{AtomicFragmentList, Frame, OitError};
 use rayon::prelude::*;
 
-use super::{Ctx, insert_min32};
+use super::Ctx;
 use crate::storage::MinList;
 
 /// Whether the capture found a pixel full (a fragment counted lost): the tail pass runs only then.
@@ -38,36 +38,40 @@ fn overflowed(ctx: &Ctx<'_>) -> bool {
 }
 
 /// Slots per pixel, by the plan (a counting pass first where it sizes from the scene).
-fn capacity(ctx: &mut Ctx<'_>) -> Result<usize, OitError> {
+pub(crate) fn capacity(ctx: &mut Ctx<'_>) -> Result<usize, OitError> {
     let deepest = if ctx.plan.needs_count() { ctx.max_depth_complexity()? } else { 0 };
     Ok(ctx.plan.slots(deepest) as usize)
 }
 
 pub(crate) fn render64(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let k = capacity(ctx)?;
-    let list = MinList::new(ctx.alloc64(k, MinList::EMPTY)?, k);
+    let slots = ctx.alloc64(k, MinList::<AtomicU64>::EMPTY)?;
+    render64_over(ctx, &MinList::new(&slots, k))
+}
+
+/// `mdts64`'s frame over any list of its keys (depth bits above the payload) that keeps the
+/// nearest: capture, the tail pass, the resolve.
+pub(crate) fn render64_over<L: AtomicFragmentList<Key = u64>>(
+    ctx: &mut Ctx<'_>,
+    list: &L,
+) -> Result<Frame, OitError> {
     let tail = ctx.tail_sums()?;
-    let shade = ctx.payload_shade();
-    let payload = |f: &crate::raster::Fragment<'_>| ctx.payload(f);
-    let generated = ctx.raster.for_each_fragment_with(shade, |f| {
-        if list.insert(f.pixel as usize, depth_key64(f.depth, payload(f))).is_some() {
+    ctx.pass_lossy(|f, ctx| {
+        if list.insert(f.pixel as usize, depth_key64(f.depth, ctx.payload(f))).is_some() {
             // a key carried off the end of the full array
             ctx.lose(f.pixel as usize);
         }
     });
-    ctx.ran_pass(generated);
     if let Some(sums) = &tail
         && overflowed(ctx)
     {
-        let list = &list;
         ctx.tail_pass(sums, |f| {
             let p = pack_rgba8(f.color());
-            (depth_key64(f.depth, p) > list.last(f.pixel as usize)).then_some(p)
+            list.last(f.pixel as usize).is_some_and(|last| depth_key64(f.depth, p) > last).then_some(p)
         });
     }
     let mut states = ctx.states();
     let resolve = &ctx.resolve;
-    let list = &list;
     let tail = tail.as_deref();
     states.par_iter_mut().enumerate().for_each_init(Vec::new, |keys, (px, s)| {
         list.sorted(px, keys);
@@ -85,45 +89,62 @@ pub(crate) fn render64(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
 /// The 32-bit words; the plan refuses Fresnel (no room for a normal) and gives the alpha.
 pub(crate) fn render32(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let k = capacity(ctx)?;
+    let high = ctx.alloc32(k, MinList::<AtomicU32>::EMPTY)?;
+    let low = ctx.alloc32(k, MinList::<AtomicU32>::EMPTY)?;
+    render32_over(ctx, &MinList::new(&high, k), &MinList::new(&low, k))
+}
+
+/// `mdts`'s frame over any two lists of 32-bit words that keep the nearest, `high` and `low`
+/// ([`mdts_pack`]'s two words, each inserted into its own list one after the other, as the
+/// paper's two arrays): capture, the tail pass, the resolve.
+pub(crate) fn render32_over<L: AtomicFragmentList<Key = u32>>(
+    ctx: &mut Ctx<'_>,
+    high: &L,
+    low: &L,
+) -> Result<Frame, OitError> {
     let alpha8 = ctx.plan.mdts_alpha8;
-    let high = ctx.alloc32(k, u32::MAX)?;
-    let low = ctx.alloc32(k, u32::MAX)?;
     let tail = ctx.tail_sums()?;
+    // All ones is the empty word: a fragment at d ≈ 1 with that colour gives up its last bit.
+    let words = |f: &crate::raster::Fragment<'_>| {
+        mdts_pack(f.depth, pack_rgba8(f.color())).map(|w| w.min(u32::MAX - 1))
+    };
     ctx.pass_lossy(|f, ctx| {
         let px = f.pixel as usize;
-        // All ones is the empty word: a fragment at d ≈ 1 with that colour gives up its last bit.
-        let [a, b] = mdts_pack(f.depth, oit_core::rules::pack_rgba8(f.color())).map(|w| w.min(u32::MAX - 1));
+        let [a, b] = words(f);
         // both arrays hold the same number of words: one carried off the high array is one lost
-        if insert_min32(&high[px * k..(px + 1) * k], a) {
+        if high.insert(px, a).is_some() {
             ctx.lose(px);
         }
-        insert_min32(&low[px * k..(px + 1) * k], b);
+        low.insert(px, b);
     });
     if let Some(sums) = &tail
         && overflowed(ctx)
     {
         ctx.tail_pass(sums, |f| {
-            let px = f.pixel as usize;
-            let [a, _] = mdts_pack(f.depth, pack_rgba8(f.color())).map(|w| w.min(u32::MAX - 1));
-            (a > high[px * k + k - 1].load(Relaxed)).then(|| pack_rgba8(f.color()) & 0xff_ffff | alpha8 << 24)
+            let [a, _] = words(f);
+            high.last(f.pixel as usize)
+                .is_some_and(|last| a > last)
+                .then(|| pack_rgba8(f.color()) & 0xff_ffff | alpha8 << 24)
         });
     }
     let mut states = ctx.states();
     let resolve = &ctx.resolve;
     let tail = tail.as_deref();
-    let lists = high.par_chunks(k).zip(low.par_chunks(k));
-    states.par_iter_mut().zip(lists).enumerate().for_each(|(px, (s, (hi, lo)))| {
-        for (h, l) in hi.iter().zip(lo) {
-            let (h, l) = (h.load(Relaxed), l.load(Relaxed));
-            if h == u32::MAX || l == u32::MAX {
-                break;
+    states.par_iter_mut().enumerate().for_each_init(
+        || (Vec::new(), Vec::new()),
+        |(hi, lo), (px, s)| {
+            high.sorted(px, hi);
+            low.sorted(px, lo);
+            // a pixel's two lists hold as many words; the shorter ends the pixel where a word of
+            // the other was all ones
+            for (&h, &l) in hi.iter().zip(lo.iter()) {
+                let (d, rgb) = mdts_unpack([h, l]);
+                resolve.push(s, d, rgb | alpha8 << 24);
             }
-            let (d, rgb) = mdts_unpack([h, l]);
-            resolve.push(s, d, rgb | alpha8 << 24);
-        }
-        if let Some(t) = tail {
-            resolve.tail(s, &t[px * 5..px * 5 + 5]);
-        }
-    });
+            if let Some(t) = tail {
+                resolve.tail(s, &t[px * 5..px * 5 + 5]);
+            }
+        },
+    );
     Ok(super::finish(ctx, states))
 }

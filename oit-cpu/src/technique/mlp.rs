@@ -9,7 +9,7 @@
 //! depths of a pass come out by colour; the resolve counts every fragment of such a run in `tied`.
 
 use oit_core::Compositor as _;
-use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
 
 use oit_core::rules::{depth_bits, depth_key64, split_key64};
 
@@ -22,7 +22,16 @@ use crate::storage::MinList;
 
 pub(crate) fn render(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
     let m = m as usize;
-    let list = MinList::new(ctx.alloc64(m, MinList::EMPTY)?, m);
+    let slots = ctx.alloc64(m, MinList::<AtomicU64>::EMPTY)?;
+    render_over(ctx, &MinList::new(&slots, m))
+}
+
+/// `mlp`'s passes over any list of its keys (depth bits above the payload) that keeps the
+/// nearest, empty when lent and left empty (each pass's resolve takes what the pass kept).
+pub(crate) fn render_over<L: AtomicFragmentList<Key = u64>>(
+    ctx: &mut Ctx<'_>,
+    list: &L,
+) -> Result<Frame, OitError> {
     let mut deepest: Vec<i64> = vec![-1; ctx.pixels];
     ctx.storage_bytes += ctx.pixels as u64 * 4;
     // Per pixel: fragments of a pass at the deepest depth the pass before captured, and how many
@@ -59,7 +68,6 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
         ctx.ran_pass(generated);
         peels += 1;
         let resolve = &ctx.resolve;
-        let list = &list;
         let ctx_ref = &*ctx;
         states
             .par_iter_mut()

@@ -24,6 +24,8 @@ pub(crate) mod mdts;
 pub(crate) mod mlp;
 pub(crate) mod plain;
 pub(crate) mod reference;
+#[cfg(test)]
+mod seam;
 pub(crate) mod wboit;
 pub(crate) mod weighted;
 
@@ -319,23 +321,6 @@ impl<'a> Ctx<'a> {
             })
             .collect())
     }
-}
-
-/// Inserts `key` into a sorted array of 32-bit `slots` by repeated atomic min (mdts's words; the
-/// 64-bit form is [`crate::storage::MinList`]). Empty slots hold `u32::MAX`. Returns true when a
-/// key fell off the end (the array was full): a lost fragment.
-#[inline]
-pub(crate) fn insert_min32(slots: &[AtomicU32], key: u32) -> bool {
-    const EMPTY: u32 = u32::MAX;
-    let mut carry = key;
-    for slot in slots {
-        let old = slot.fetch_min(carry, Relaxed);
-        if old == EMPTY {
-            return false;
-        }
-        carry = carry.max(old);
-    }
-    true
 }
 
 /// Wraps up a frame: stats from the context; `captured` fragments reached the composite.
