@@ -82,7 +82,7 @@ fn count(n: u64) -> String {
     let s = n.to_string();
     let mut out = String::new();
     for (i, c) in s.chars().enumerate() {
-        if i > 0 && (s.len() - i) % 3 == 0 {
+        if i > 0 && (s.len() - i).is_multiple_of(3) {
             out.push(',');
         }
         out.push(c);
@@ -376,14 +376,17 @@ fn builds(spec: &Spec<'_>) -> String {
     ];
     for b in builds.as_array().expect("builds.json is a list") {
         out.push(format!(
-            "| {} | `{}` | {:.0} | {} | {}, {} cores, load {} before, {} |",
+            "| {} | `{}` | {:.0} | {} | {}, {} cores, {}, {} |",
             b["name"].as_str().unwrap_or("?"),
             b["command"].as_str().unwrap_or("?"),
             b["wall_s"].as_f64().unwrap_or(f64::NAN),
             mib(b["binary_bytes"].as_f64().unwrap_or(f64::NAN)),
             b["cpu"].as_str().unwrap_or("?"),
             b["cores"],
-            b["load_before"],
+            match b["load_after"].as_f64() {
+                Some(after) => format!("load average {} before, {after} after", b["load_before"]),
+                None => format!("load average {} at the start", b["load_before"]),
+            },
             b["date"].as_str().unwrap_or("?"),
         ));
     }
