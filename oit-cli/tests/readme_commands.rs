@@ -1,10 +1,13 @@
-//! Every command the README shows runs (issue 42, item 2). The README's ```sh blocks are parsed;
-//! each `oit …` line runs through this build's binary, in a scratch folder, as written but for
+//! Every command the README and the command guides (`docs/commands/*.md`) show runs (issue 42,
+//! item 2). Their ```sh blocks are parsed, each document's in its own scratch folder; each
+//! `oit …` line runs through this build's binary, in a scratch folder, as written but for
 //! its sizes: `--size` becomes 64x64 (added to render, compare, sweep and bench where absent),
 //! `--views` at most 3, bench's `--frames` 2 and `--warmup` 0, so the whole README runs in
 //! seconds. Each `cargo …` line must be one this file knows (the install, the test command CI
 //! runs, the feature builds): those build what this test runs, so they are checked, not run. Any
 //! other line fails the test: a README command this file cannot run is a command nobody checks.
+//! The viewer's lines (`oit view`, `xvfb-run oit view`) are left to `tests/view.rs`, which opens
+//! its window under Xvfb.
 //!
 //! A command on a GPU backend (`--backend wgpu|vulkan|all`) is skipped, with one line saying so,
 //! when this binary was built without that backend, or when the backend finds no device, unless
@@ -27,7 +30,22 @@ const CARGO_LINES: &[&str] = &[
     "cargo install --path oit-cli --no-default-features --features cpu",
     "cargo install --path oit-cli --features vulkan",
     "OIT_WRITE_README=1 cargo test --release -p oit-tests --test readme_tables",
+    "cargo bench -p oit-bench",
+    "cargo build --profile profiling -p oit-cli",
 ];
+
+/// The documents whose commands run: the README and each command's guide.
+fn documents() -> Vec<PathBuf> {
+    let mut out = vec![root().join("README.md")];
+    let mut guides: Vec<PathBuf> = std::fs::read_dir(root().join("docs/commands"))
+        .expect("docs/commands")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "md"))
+        .collect();
+    guides.sort();
+    out.extend(guides);
+    out
+}
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("oit-cli is in the workspace").to_path_buf()
@@ -131,75 +149,84 @@ fn note(line: &str) {
     let _ = writeln!(std::io::stderr(), "{line}");
 }
 
-#[test]
-fn every_readme_command_runs() {
-    let readme = std::fs::read_to_string(root().join("README.md")).expect("README.md");
-    let lines = sh_lines(&readme);
-    assert!(lines.iter().any(|l| l == "oit render"), "the README shows its first command: {lines:?}");
-    assert!(lines.iter().any(|l| l == "cargo test --workspace --release"), "and CI's test command");
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("readme-commands");
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch folder");
-    let compiled = backends();
+/// Runs every command of one document in `dir`; returns how many ran.
+fn run_document(path: &Path, dir: &Path, compiled: &[(String, bool)]) -> usize {
+    let name = path.strip_prefix(root()).unwrap_or(path).display().to_string();
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{name}: {e}"));
+    std::fs::create_dir_all(dir).expect("scratch folder");
     let mut ran = 0;
-    for line in &lines {
+    for line in sh_lines(&text) {
         if line.starts_with("cargo ") || line.contains(" cargo ") {
             assert!(
                 CARGO_LINES.contains(&line.as_str()),
-                "README shows a cargo command this test does not know: {line}"
+                "{name} shows a cargo command this test does not know: {line}"
             );
+            continue;
+        }
+        if line.starts_with("oit view") || line.starts_with("xvfb-run oit view") {
             continue;
         }
         let words: Vec<&str> = line.split_whitespace().collect();
         assert_eq!(
             words[0], "oit",
-            "README shows a command that is neither oit nor a known cargo line: {line}"
+            "{name} shows a command that is neither oit nor a known cargo line: {line}"
         );
         assert!(
             !line.contains(['"', '\'', '$', '|', '>', '<', '&', ';', '*']),
-            "{line}: a README command is plain words, run without a shell"
+            "{name}: `{line}`: a command is plain words, run without a shell"
         );
         let args = small(&words[1..]);
         if let Some(backend) = gpu_backend(&words[1..]) {
             let wanted: Vec<&str> = if backend == "all" { vec![] } else { vec![backend.as_str()] };
-            let missing: Vec<&str> =
-                wanted.iter().copied().filter(|w| !compiled.iter().any(|(n, _)| n == w)).collect();
-            if !missing.is_empty() {
+            if let Some(missing) = wanted.iter().find(|w| !compiled.iter().any(|(n, _)| n == *w)) {
                 note(&format!(
-                    "skipped `{line}`: this build has no {} backend (build with --features {0})",
-                    missing[0]
+                    "skipped `{line}` ({name}): this build has no {missing} backend (build with --features {missing})"
                 ));
                 continue;
             }
-            let no_device: Vec<&str> =
-                wanted.iter().copied().filter(|w| compiled.iter().any(|(n, ok)| n == w && !ok)).collect();
-            if !no_device.is_empty() {
+            if let Some(absent) = wanted.iter().find(|w| compiled.iter().any(|(n, ok)| n == *w && !ok)) {
                 assert!(
                     !gpu_required(),
-                    "OIT_REQUIRE_GPU=1 but {} finds no device for `{line}`",
-                    no_device[0]
+                    "OIT_REQUIRE_GPU=1 but {absent} finds no device for `{line}` ({name})"
                 );
                 note(&format!(
-                    "skipped `{line}`: no Vulkan device for {} (apt-get install mesa-vulkan-drivers; OIT_REQUIRE_GPU=1 makes this a failure)",
-                    no_device[0]
+                    "skipped `{line}` ({name}): no Vulkan device for {absent} (apt-get install mesa-vulkan-drivers; \
+                     OIT_REQUIRE_GPU=1 makes this a failure)"
                 ));
                 continue;
             }
         }
         let out = Command::new(env!("CARGO_BIN_EXE_oit"))
             .args(&args)
-            .current_dir(&dir)
+            .current_dir(dir)
             .output()
             .unwrap_or_else(|e| panic!("{line}: {e}"));
         assert!(
             out.status.success(),
-            "README command `{line}` (run as `oit {}`) failed:\n{}",
+            "{name}: `{line}` (run as `oit {}`) failed:\n{}",
             args.join(" "),
             String::from_utf8_lossy(&out.stderr)
         );
         ran += 1;
     }
-    assert!(ran >= 3, "the README's oit commands ran ({ran})");
+    ran
+}
+
+#[test]
+fn every_readme_command_runs() {
+    let readme = std::fs::read_to_string(root().join("README.md")).expect("README.md");
+    let lines = sh_lines(&readme);
+    assert!(lines.iter().any(|l| l == "oit render"), "the README shows its first command: {lines:?}");
+    assert!(lines.iter().any(|l| l == "cargo test --workspace --release"), "and CI's test command");
+    let scratch = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("readme-commands");
+    let _ = std::fs::remove_dir_all(&scratch);
+    let compiled = backends();
+    for (i, doc) in documents().iter().enumerate() {
+        let ran = run_document(doc, &scratch.join(i.to_string()), &compiled);
+        if i == 0 {
+            assert!(ran >= 3, "the README's oit commands ran ({ran})");
+        }
+    }
 }
 
 #[test]
