@@ -17,7 +17,7 @@
 //! ```
 //!
 //! A scene prepared once renders many frames; the second orbit of the same views allocates no
-//! per-pixel storage (the README's example):
+//! per-pixel storage (the example of docs/embedding.md):
 //!
 //! ```
 //! use oit_core::{load_scene, Backend, Camera, Settings, Technique, View};
