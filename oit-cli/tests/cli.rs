@@ -437,8 +437,9 @@ fn info_json_parses() {
 
 /// The keys of every `oit sweep --json` record: where and what (backend and raster path
 /// included), the frame's counters as `oit compare --json` names them, and the accuracy.
-const SWEEP_KEYS: [&str; 18] = [
+const SWEEP_KEYS: [&str; 19] = [
     "azimuth",
+    "quantized",
     "technique",
     "backend",
     "raster",
