@@ -36,6 +36,23 @@ use crate::gpu::{COMMON_WGSL, Gpu};
 use crate::stage::SceneStage;
 
 pub(crate) const RASTER_WGSL: &str = oit_shaders::HARDWARE_RASTER;
+
+/// The hardware raster's WGSL as the internal path compiles it: oit-shaders' as written, or, where
+/// the process runs with `OIT_MUTATION=hardware-drop-third` (a test hook, not a user setting),
+/// with a capture that drops every third primitive's fragments: a hardware capture gone wrong by
+/// a layer or more, which the conformance checks must catch (`tests/tests/hardware_covered.rs`
+/// runs itself under it and requires the failure). Read once per process.
+fn raster_wgsl() -> &'static str {
+    static WGSL: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    WGSL.get_or_init(|| match std::env::var("OIT_MUTATION").as_deref() {
+        Ok("hardware-drop-third") => RASTER_WGSL.replacen(
+            "    return oit_capture_full(",
+            "    if in.prim % 3u == 0u {\n        discard;\n    }\n    return oit_capture_full(",
+            1,
+        ),
+        _ => RASTER_WGSL.to_owned(),
+    })
+}
 /// What to try when the geometry does not fit in one storage binding.
 const GEOMETRY_HINT: &str = "use fewer triangles or instances, or the cpu backend";
 
@@ -499,7 +516,7 @@ impl HwGeometry {
             scene_pipeline(
                 device,
                 "hardware raster",
-                &format!("{}\n{RASTER_WGSL}", capture.wgsl),
+                &format!("{}\n{}", capture.wgsl, raster_wgsl()),
                 &[capture.bind_group_layout, &layout1],
                 "hw_fs",
                 &[Some(capture.count_target.clone())],
