@@ -1,9 +1,8 @@
 //! Issue 41.8: each GPU backend's hardware path against its compute path (whose fragments are
 //! oit-cpu's, bit for bit) on the pixels the two rasterizers cover alike. The two may disagree on
 //! a pixel whose centre lies on a projected edge, within the snapping precision
-//! ([`checks::COVERAGE_SNAP`]); every other pixel has the same fragment count on both, and every
-//! pixel with the same count has the same fragments and must have the same colour
-//! ([`checks::covered_alike_equal`]). On the bunny at 64² nearly every pixel lies within a pixel
+//! ([`checks::COVERAGE_SNAP`]); every other pixel has the same fragment count on both, the same
+//! fragments, and must have the same colour ([`checks::covered_alike_equal`]). On the bunny at 64² nearly every pixel lies within a pixel
 //! of some edge, so the one-pixel mask of `wgpu.rs` compares next to nothing there; this compares
 //! every pixel but the few a snap can move.
 

@@ -143,8 +143,10 @@ fn hardware_path_differs_only_at_edges() {
         let scene = scene(name);
         let base = settings(64, "reference");
         let cam = camera(&scene, &base, View::default());
-        let mask = edge_mask(&scene, &cam, 64, 64, 1.0);
-        let off_edge = mask.iter().filter(|&&m| !m).count();
+        // pixels whose centre lies within the snapping precision of an edge: the only ones whose
+        // coverage the two rasterizers may disagree on (a one-pixel mask leaves out every covered
+        // pixel of a mesh of small triangles, issue 41.8)
+        let mask = edge_mask(&scene, &cam, 64, 64, checks::COVERAGE_SNAP);
         let on = |t: Technique, path| {
             render(&gpu, &scene, &cam, &Settings { technique: t, raster: Some(path), ..base.clone() })
         };
@@ -160,10 +162,10 @@ fn hardware_path_differs_only_at_edges() {
         assert!(fh.abs_diff(fc) <= edge_frags, "{name}: {fh} vs {fc} fragments, {edge_frags} on edges");
         for t in order_independent() {
             let (h, c) = (on(t, RasterPath::Hardware), on(t, RasterPath::Compute));
-            let (worst, differ) = differ_off_mask(&h.image, &c.image, &mask);
-            println!("{t} on {name}: off-edge worst {worst}, {differ} of {off_edge} off-edge pixels differ");
-            checks::off_edges_equal(&h.image, &c.image, &mask)
+            // every pixel both paths cover alike (the same fragment count) has the same colour
+            let (alike, moved) = checks::covered_alike_equal(&h.image, &c.image, hl, cl, &mask)
                 .unwrap_or_else(|e| panic!("{t} on {name}: hardware against compute: {e}"));
+            println!("{t} on {name}: {alike} pixels covered alike equal, {moved} moved by a snap");
             // plain blends in one draw on the hardware path; the compute path sorts, sized first
             let sizing = u32::from(t == Technique::Plain);
             assert_eq!(h.stats.geometry_passes + sizing, c.stats.geometry_passes, "{t} on {name}: passes");
