@@ -565,6 +565,11 @@ fn wgpu_paths() -> Option<()> {
     let v = parse_json(&oit(&["info", "--json"]), "info --json");
     let found = v["backends"].as_array()?.iter().any(|b| b["name"] == "wgpu" && b["available"] == true);
     if !found {
+        // CI installs lavapipe and sets OIT_REQUIRE_GPU=1: a missing adapter there is a failure
+        assert!(
+            std::env::var("OIT_REQUIRE_GPU").as_deref() != Ok("1"),
+            "OIT_REQUIRE_GPU=1 and oit info finds no wgpu adapter"
+        );
         eprintln!("note: no wgpu adapter; the two-path test is skipped");
     }
     found.then_some(())
