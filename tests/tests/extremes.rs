@@ -23,15 +23,31 @@ fn check(frame: &oit_core::Frame, what: &str) {
     assert!(s.wall_ms.is_finite(), "{what}");
 }
 
+/// [`check`], and an exact technique's image against the reference's: never wrong in silence
+/// (every error pixel counted as tied or lost), and equal where it counts nothing. Mutation
+/// caught: any exact technique's resolve off at these extremes (an image the old `check`, which
+/// looked at counters only, passed).
+fn check_image(reference: &oit_core::Frame, frame: &oit_core::Frame, t: Technique, what: &str) {
+    check(frame, what);
+    if t.is_exact() {
+        oit_tests::checks::never_silent(reference, frame).unwrap_or_else(|e| panic!("{what}: {e}"));
+        if frame.stats.lost + frame.stats.tied == 0 {
+            assert!(frame.image == reference.image, "{what}: exact, nothing counted, image differs");
+        }
+    }
+}
+
 #[test]
 fn single_layer_pixels() {
     for backend in backends_for("single_layer_pixels") {
         eprintln!("on {}", label(backend.as_ref()));
         let scene = scene("planes:1");
+        let base = settings(32, "reference");
+        let r = render(backend.as_ref(), &scene, &camera(&scene, &base, FRONT), &base);
         for t in all_techniques() {
             let s = Settings { technique: t, ..settings(32, "dp") };
             let f = render(backend.as_ref(), &scene, &camera(&scene, &s, FRONT), &s);
-            check(&f, &format!("{t} planes:1"));
+            check_image(&r, &f, t, &format!("{t} planes:1"));
             assert_eq!(f.stats.lost, 0, "{t}: one layer per pixel, nothing to lose");
         }
     }
@@ -45,10 +61,11 @@ fn depths_at_zero_and_one() {
         let scene = scene("planes:2");
         let eye = Vec3::new(0.0, 0.0, 3.0);
         let cam = Camera::look_at(eye, Vec3::ZERO, 40.0, 1.0, 2.5, 3.5);
+        let r = render(backend.as_ref(), &scene, &cam, &settings(32, "reference"));
         for t in all_techniques() {
             let s = Settings { technique: t, ..settings(32, "dp") };
             let f = backend.render(&scene, &cam, &s).unwrap_or_else(|e| panic!("{t}: {e}"));
-            check(&f, &format!("{t} d=0/1"));
+            check_image(&r, &f, t, &format!("{t} d=0/1"));
         }
     }
 }
@@ -81,10 +98,12 @@ fn a_thousand_layers() {
     for backend in backends_for("a_thousand_layers") {
         eprintln!("on {}", label(backend.as_ref()));
         let scene = scene("planes:1000");
+        let base = Settings { max_peels: None, ..settings(8, "reference") };
+        let r = render(backend.as_ref(), &scene, &camera(&scene, &base, FRONT), &base);
         for t in all_techniques() {
             let s = Settings { technique: t, max_peels: None, ..settings(8, "dp") };
             let f = render(backend.as_ref(), &scene, &camera(&scene, &s, FRONT), &s);
-            check(&f, &format!("{t} planes:1000"));
+            check_image(&r, &f, t, &format!("{t} planes:1000"));
             if t.is_exact() && !matches!(t, Technique::Fabs { k: Some(_) } | Technique::Mdts { .. }) {
                 assert_eq!(f.stats.lost, 0, "{t}: 1,000 separated layers, nothing lost");
             }
