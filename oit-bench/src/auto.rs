@@ -285,6 +285,14 @@ pub fn epr_bound(plan: &Plan, stats: &SceneStats) -> (f64, String) {
         | Technique::Plain => {
             (two, "order ignored: exact at one fragment, any pixel of 2 or more can differ".into())
         }
+        // the colour mode keeps alpha in 7 bits (counted as `quantized`): a pixel of one fragment
+        // can differ too
+        Technique::Bdp { .. } if plan.bdp_color => (
+            if covered(stats) > 0 { 1.0 } else { 0.0 },
+            "alpha kept in 7 bits and bucket collisions: any covered pixel can differ (by at most n/255 of \
+             linear colour at a pixel of n layers where nothing collided)"
+                .into(),
+        ),
         Technique::Bdp { .. } => (
             two,
             "bucket collisions need 2 fragments in one bucket: only pixels of 2 or more can differ".into(),
@@ -541,10 +549,13 @@ mod tests {
         }
         assert_eq!(epr_bound(&plan("fabs:3"), &s).0, 2.0 / 8.0);
         assert_eq!(epr_bound(&plan("fabs:1"), &s).0, 5.0 / 8.0);
-        for two in ["dp", "ddp", "mlp:4", "mdts64", "mdts64:2", "wavg", "wsum", "bdp", "bdp2", "adp"] {
+        for two in ["dp", "ddp", "mlp:4", "mdts64", "mdts64:2", "wavg", "wsum", "bdp2", "adp"] {
             assert_eq!(epr_bound(&plan(two), &s).0, 5.0 / 8.0, "{two}");
         }
         assert_eq!(epr_bound(&plan("mdts"), &s).0, 1.0);
+        // bdp's colour mode: a pixel of one fragment differs by its 7-bit alpha too
+        assert!(plan("bdp").bdp_color);
+        assert_eq!(epr_bound(&plan("bdp"), &s).0, 1.0);
         // nothing covered: nothing can be wrong
         let empty = SceneStats::from_layers(1, 0, &[0, 0]);
         assert_eq!(epr_bound(&plan("mdts"), &empty).0, 0.0);
