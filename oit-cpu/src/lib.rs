@@ -48,8 +48,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Instant;
 
 use oit_core::{
-    Backend, Camera, Capabilities, Frame, OitError, Prepared, RasterPath, Scene, Settings, Technique,
-    TechniqueKind,
+    Backend, Camera, Capabilities, Frame, OitError, Prepared, RasterPath, Scene, Settings, TechniqueKind,
 };
 
 pub use storage::{INSERTION_SORT_MAX, sort_keys};
@@ -194,29 +193,7 @@ impl CpuPrepared<'_> {
             raster = raster.with_mode(mode);
         }
         let mut ctx = Ctx::new(self.scene, camera, settings, &raster, &self.pool, plan, self.per_length);
-        let frame = match settings.technique {
-            Technique::Reference => technique::reference::render(&mut ctx),
-            Technique::Plain => technique::plain::render(&mut ctx),
-            Technique::Dp => technique::dp::render(&mut ctx),
-            Technique::Ddp => technique::ddp::render(&mut ctx),
-            Technique::WeightedAverage => technique::weighted::render(&mut ctx, true),
-            Technique::WeightedSum => technique::weighted::render(&mut ctx, false),
-            Technique::Wboit => technique::wboit::render(&mut ctx),
-            Technique::Mboit { .. } => technique::mboit::render(&mut ctx),
-            Technique::Bdp { .. } => technique::bdp::render(&mut ctx),
-            Technique::Adp => technique::adp::render(&mut ctx),
-            Technique::Mdts { .. } => technique::mdts::render32(&mut ctx),
-            Technique::Mdts64 { .. } => technique::mdts::render64(&mut ctx),
-            Technique::Fabs { .. } => technique::fabs::render(&mut ctx),
-            Technique::Mlp { m } => technique::mlp::render(&mut ctx, m),
-            Technique::Dfb => technique::dfb::render(&mut ctx),
-            Technique::Ll => technique::ll::render(&mut ctx),
-            // refused above with the plan's reason (Plan::refuse_interlock); never reached
-            Technique::Kbuf { .. } => Err(OitError::Unsupported {
-                backend: "cpu".into(),
-                what: "kbuf: no fragment-stage interlock".into(),
-            }),
-        };
+        let frame = technique::render(&mut ctx, settings.technique);
         drop(ctx);
         if let Ok(mut kept) = self.raster.lock() {
             *kept = Some(raster);

@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
 
 use oit_core::plan::Plan;
 use oit_core::rules::{depth_bits, pack_normal, pack_rgba8};
-use oit_core::{Camera, Effect, OitError, Scene, Settings};
+use oit_core::{Camera, Effect, OitError, Scene, Settings, Technique};
 
 use crate::pool::{Pool, Pooled};
 use crate::raster::{Fragment, Rasterizer, Shade};
@@ -28,6 +28,33 @@ pub(crate) mod reference;
 mod seam;
 pub(crate) mod wboit;
 pub(crate) mod weighted;
+
+/// Runs `technique`'s frame over `ctx`: the one line a technique adds on the CPU beside its module.
+pub(crate) fn render(ctx: &mut Ctx<'_>, technique: Technique) -> Result<oit_core::Frame, OitError> {
+    match technique {
+        Technique::Reference => reference::render(ctx),
+        Technique::Plain => plain::render(ctx),
+        Technique::Dp => dp::render(ctx),
+        Technique::Ddp => ddp::render(ctx),
+        Technique::WeightedAverage => weighted::render(ctx, true),
+        Technique::WeightedSum => weighted::render(ctx, false),
+        Technique::Wboit => wboit::render(ctx),
+        Technique::Mboit { .. } => mboit::render(ctx),
+        Technique::Bdp { .. } => bdp::render(ctx),
+        Technique::Adp => adp::render(ctx),
+        Technique::Mdts { .. } => mdts::render32(ctx),
+        Technique::Mdts64 { .. } => mdts::render64(ctx),
+        Technique::Fabs { .. } => fabs::render(ctx),
+        Technique::Mlp { m } => mlp::render(ctx, m),
+        Technique::Dfb => dfb::render(ctx),
+        Technique::Ll => ll::render(ctx),
+        // refused before a frame starts with the plan's reason (Plan::refuse_interlock)
+        Technique::Kbuf { .. } => Err(OitError::Unsupported {
+            backend: "cpu".into(),
+            what: "kbuf: no fragment-stage interlock".into(),
+        }),
+    }
+}
 
 /// Everything a technique needs for one frame, and the counters it updates.
 pub(crate) struct Ctx<'a> {
