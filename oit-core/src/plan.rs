@@ -27,6 +27,17 @@ pub enum Sizing {
 /// the ties' 7), counted in [`Plan::storage_bytes`] and not in `Stats::storage_bytes`.
 pub const RESOLVE_STATE_BYTES: u64 = 92;
 
+/// Bytes a frame holds per pixel beside its technique's storage, on every backend: the RGBA8
+/// image (4), the per-pixel lost counters it keeps while it runs (4) and the per-pixel losses it
+/// hands back (`Frame::lost_pixels`, 4). The reference adds its per-pixel fragment counts
+/// (`Frame::layers`, [`LAYERS_BYTES`]). Counted in [`Plan::frame_bytes`], not in
+/// `Stats::storage_bytes`.
+pub const OUTPUT_BYTES: u64 = 12;
+
+/// Bytes a pixel's fragment count takes in a frame that hands its counts back (`Frame::layers`:
+/// the reference's).
+pub const LAYERS_BYTES: u64 = 4;
+
 /// What a frame's counting pass found: the deepest pixel's fragments and the frame's. Zeros
 /// (`Counted::default()`) before a count, or for a technique that runs none.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -475,6 +486,32 @@ impl Plan {
         })
     }
 
+    /// Bytes of the outputs a frame of `pixels` pixels holds beside its storage
+    /// ([`OUTPUT_BYTES`] a pixel, and [`LAYERS_BYTES`] more for the reference's counts).
+    pub fn output_bytes(&self, pixels: u64) -> u64 {
+        pixels.saturating_mul(OUTPUT_BYTES + self.layers_bytes())
+    }
+
+    /// Bytes of what a frame run in screen tiles keeps of the whole frame while its tiles run,
+    /// whatever their size: the stitched image (4 a pixel), per-pixel losses (4) and, for the
+    /// reference, per-pixel counts ([`LAYERS_BYTES`]). [`crate::tiling::run`] sizes tiles by what
+    /// `--memory` leaves beside it.
+    pub fn stitched_bytes(&self, pixels: u64) -> u64 {
+        pixels.saturating_mul(8 + self.layers_bytes())
+    }
+
+    fn layers_bytes(&self) -> u64 {
+        if self.technique == Technique::Reference { LAYERS_BYTES } else { 0 }
+    }
+
+    /// Bytes a frame of this plan holds over `pixels` pixels, given what its counting pass found:
+    /// its storage ([`Plan::storage_bytes`]) and its outputs ([`Plan::output_bytes`]). What every
+    /// backend checks against its memory budget ([`Plan::check_budget`]) before it allocates, and
+    /// what [`crate::tiling::run`] sizes tiles by.
+    pub fn frame_bytes(&self, pixels: u64, counted: Counted) -> u64 {
+        self.storage_bytes(pixels, counted).saturating_add(self.output_bytes(pixels))
+    }
+
     /// The frame's geometry passes, in order, for a scene whose deepest pixel holds `layers`
     /// distinct depths (its fragment count where no two are equal) and, for `adp`, whose fullest
     /// histogram holds `bins` occupied bins: the schedule every backend runs, written once. Peels
@@ -527,11 +564,16 @@ impl Plan {
         passes
     }
 
-    /// Checks [`Plan::storage_bytes`] against `budget` (a name and bytes: the host's available
-    /// memory, a device's): a clear error naming the size, the budget and what helps.
+    /// Checks [`Plan::frame_bytes`] (storage and outputs) against `budget` (a name and bytes: the
+    /// host's available memory, a device's): a clear error naming the size, the budget and what
+    /// helps. Returns the bytes checked.
     pub fn check_budget(&self, pixels: u64, counted: Counted, budget: (&str, u64)) -> Result<u64, OitError> {
-        let needed = self.storage_bytes(pixels, counted);
-        check_total(&format!("{} storage of a frame of {pixels} pixels", self.technique), needed, budget)?;
+        let needed = self.frame_bytes(pixels, counted);
+        check_total(
+            &format!("{} storage and outputs of a frame of {pixels} pixels", self.technique),
+            needed,
+            budget,
+        )?;
         Ok(needed)
     }
 

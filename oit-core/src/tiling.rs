@@ -14,9 +14,13 @@
 //! and [`crate::Stats::tiles`] says how many windows ran.
 //!
 //! When the frame splits:
-//! - before anything runs, when `--memory` is set and the plan's storage
-//!   ([`Plan::storage_bytes`], before any counting pass) is over it: into the fewest near-square
-//!   tiles of a grid that each fit ([`grid`]);
+//! - before anything runs, when `--memory` is set and the plan's frame (its storage and outputs,
+//!   [`Plan::frame_bytes`], before any counting pass) is over it: into the fewest near-square
+//!   tiles of a grid that each fit ([`grid`]) beside what the whole frame keeps while its tiles
+//!   run, the stitched image and per-pixel outputs ([`Plan::stitched_bytes`]; each window is
+//!   placed as it finishes and dropped). Each window runs under `--memory` less that, so a
+//!   backend's own checks (sizes found by a counting pass) hold it to the same total; a budget
+//!   that cannot hold the stitched outputs beside a one-pixel tile is a clear error;
 //! - when a backend refuses a window as too large ([`OitError::TooLarge`]: over the budget, over a
 //!   device limit such as a storage binding's size, or, for techniques sized by a counting pass,
 //!   found over after that pass): that window splits into as many tiles as the refusal's
@@ -186,6 +190,19 @@ pub fn run(
     backend: &str,
     scene: &Scene,
     settings: &Settings,
+    frame: impl FnMut(&Settings) -> Result<Frame, OitError>,
+) -> Result<Frame, OitError> {
+    run_with(backend, scene, settings, 0, frame)
+}
+
+/// [`run`] for a backend whose frame holds `extra` bytes a pixel beyond the plan's
+/// [`Plan::frame_bytes`] (oit-cpu's resolve states, larger than the plan's 23 words): tiles are
+/// sized by both.
+pub fn run_with(
+    backend: &str,
+    scene: &Scene,
+    settings: &Settings,
+    extra: u64,
     mut frame: impl FnMut(&Settings) -> Result<Frame, OitError>,
 ) -> Result<Frame, OitError> {
     settings.validate()?;
@@ -200,23 +217,56 @@ pub fn run(
             (r.full_width, r.full_height),
         ),
     };
+    // what a frame run in tiles keeps of the whole frame while its tiles run (the stitched
+    // image and per-pixel outputs), and the budget its windows share: `--memory` less that
+    let mut kept = None;
     let mut queue: VecDeque<Rect> = match settings.memory {
         None => VecDeque::from([root]),
         Some(budget) => {
             let plan = Plan::new(backend, scene, settings)?;
-            let need = |pixels: u64| plan.storage_bytes(pixels, Counted::default());
+            let need = |pixels: u64| {
+                plan.frame_bytes(pixels, Counted::default()).saturating_add(pixels.saturating_mul(extra))
+            };
             if need(1) > budget {
                 return Err(too_small(settings, need(1), budget, None));
             }
-            grid(root, |pixels| need(pixels) <= budget)
-                .ok_or_else(|| too_many(settings, need(root.pixels()), budget))?
-                .into()
+            let stitched = plan.stitched_bytes(root.pixels());
+            if need(root.pixels()) > budget && stitched.saturating_add(need(1)) > budget {
+                return Err(too_small_to_stitch(settings, root, stitched.saturating_add(need(1)), budget));
+            }
+            kept = Some(stitched);
+            // the whole frame needs no stitching: it fits what a window fits plus what it keeps
+            let fits = |pixels: u64| {
+                let whole = pixels == root.pixels();
+                need(pixels).saturating_add(if whole { 0 } else { stitched }) <= budget
+            };
+            grid(root, fits).ok_or_else(|| too_many(settings, need(root.pixels()), budget))?.into()
         }
     };
-    let mut done: Vec<(Rect, Frame)> = Vec::with_capacity(queue.len());
+    // the windows' budget: what `--memory` leaves beside what the whole frame keeps (without
+    // `--memory`, each backend's own budget)
+    let window_settings = |rect: Rect| {
+        let mut s = window(settings, full, rect);
+        if rect != root
+            && let (Some(memory), Some(kept)) = (settings.memory, kept)
+        {
+            s.memory = Some(memory.saturating_sub(kept).max(1));
+        }
+        s
+    };
+    let mut stitched: Option<Stitched> = None;
+    let mut tiles = 0usize;
     while let Some(rect) = queue.pop_front() {
-        match frame(&window(settings, full, rect)) {
-            Ok(f) => done.push((rect, f)),
+        match frame(&window_settings(rect)) {
+            Ok(f) if rect == root => {
+                // the frame ran whole: nothing to stitch
+                tiles += 1;
+                stitched = Some(Stitched::whole(f));
+            }
+            Ok(f) => {
+                tiles += 1;
+                stitched.get_or_insert_with(|| Stitched::new(root, &f)).place(root, rect, f)?;
+            }
             Err(e @ OitError::TooLarge { .. }) => {
                 if rect.pixels() == 1 {
                     let budget = settings.memory.unwrap_or(u64::MAX);
@@ -234,16 +284,16 @@ pub fn run(
                 queue.extend(split(rect, &e));
                 // without --memory, a device refusal tiles a frame only modestly: a request far
                 // over the device (fabs:65536) is refused with the device's own error
-                if settings.memory.is_none() && done.len() + queue.len() > AUTO_TILES {
+                if settings.memory.is_none() && tiles + queue.len() > AUTO_TILES {
                     return Err(e);
                 }
-                if done.len() + queue.len() > MAX_TILES {
+                if tiles + queue.len() > MAX_TILES {
                     return Err(OitError::TooLarge {
                         what: format!(
                             "{} at {}x{} in screen tiles",
                             settings.technique, root.width, root.height
                         ),
-                        needed: (done.len() + queue.len()) as u64,
+                        needed: (tiles + queue.len()) as u64,
                         limit_name: "oit's most tiles a frame (MAX_TILES)".into(),
                         limit: MAX_TILES as u64,
                         hint: format!("a window of {}x{} was still refused: {e}", rect.width, rect.height),
@@ -253,14 +303,13 @@ pub fn run(
             Err(e) => return Err(e),
         }
     }
-    let tiles = done.len();
-    let mut frame = match done.pop() {
-        Some((rect, f)) if tiles == 1 && rect == root => f,
-        last => {
-            done.extend(last);
-            stitch(root, &done)?
-        }
+    let Some(stitched) = stitched else {
+        return Err(OitError::Device(format!(
+            "a frame of {}x{} ran in no screen tile",
+            root.width, root.height
+        )));
     };
+    let mut frame = stitched.finish();
     frame.stats.tiles = tiles.max(1) as u32;
     frame.stats.count_packing(settings);
     if frame.stats.tiles > 1 {
@@ -269,35 +318,39 @@ pub fn run(
     Ok(frame)
 }
 
-/// The error for a budget one pixel does not fit.
-fn too_small(settings: &Settings, needed: u64, budget: u64, refusal: Option<OitError>) -> OitError {
-    let hint = match refusal {
-        Some(e) => format!("a single pixel was refused: {e}"),
-        None => "raise --memory, or use a technique with less storage a pixel (fewer slots, fabs:K)".into(),
-    };
-    OitError::TooLarge {
-        what: format!("{} storage of one pixel", settings.technique),
-        needed,
-        limit_name: "the memory budget (--memory)".into(),
-        limit: budget,
-        hint,
-    }
+/// A frame being put together from its windows, each placed as it finishes and then dropped, so
+/// a tiled frame holds the whole frame's image and per-pixel outputs once
+/// ([`Plan::stitched_bytes`]) and one window's frame at a time, not every window's.
+struct Stitched {
+    frame: Frame,
+    /// Each window's counters, merged at the end ([`merge`]).
+    stats: Vec<Stats>,
 }
 
-/// The error for a budget that needs more than [`MAX_TILES`] windows.
-fn too_many(settings: &Settings, needed: u64, budget: u64) -> OitError {
-    OitError::TooLarge {
-        what: format!("{} storage of a {}x{} frame", settings.technique, settings.width, settings.height),
-        needed,
-        limit_name: format!("the memory budget (--memory) in at most {MAX_TILES} screen tiles"),
-        limit: budget.saturating_mul(MAX_TILES as u64),
-        hint: "raise --memory, or use a smaller --size or a technique with less storage a pixel".into(),
+impl Stitched {
+    /// A frame that ran whole.
+    fn whole(frame: Frame) -> Stitched {
+        Stitched { stats: Vec::new(), frame }
     }
-}
 
-/// Puts the windows' frames together into the frame of `root`.
-fn stitch(root: Rect, parts: &[(Rect, Frame)]) -> Result<Frame, OitError> {
-    for (rect, f) in parts {
+    /// The frame of `root`, before its first window `first` is placed: per-pixel counts and
+    /// losses where the first window has them (a window without them drops them, as a frame is
+    /// `None` there unless every window counted).
+    fn new(root: Rect, first: &Frame) -> Stitched {
+        let len = root.pixels() as usize;
+        Stitched {
+            frame: Frame {
+                image: Image::new(root.width, root.height, [0, 0, 0, 255]),
+                layers: first.layers.as_ref().map(|_| vec![0; len]),
+                lost_pixels: first.lost_pixels.as_ref().map(|_| vec![0; len]),
+                stats: Stats::default(),
+            },
+            stats: Vec::new(),
+        }
+    }
+
+    /// Copies the window `rect`'s frame `f` into its place.
+    fn place(&mut self, root: Rect, rect: Rect, f: Frame) -> Result<(), OitError> {
         let len = rect.pixels() as usize;
         let bad_len = |v: &Option<Vec<u32>>| v.as_ref().is_some_and(|v| v.len() != len);
         if f.image.width != rect.width
@@ -310,22 +363,76 @@ fn stitch(root: Rect, parts: &[(Rect, Frame)]) -> Result<Frame, OitError> {
                 rect.width, rect.height, f.image.width, f.image.height
             )));
         }
+        place(root, &mut self.frame.image.pixels, [(rect, &f.image.pixels[..])].into_iter());
+        for (out, part) in
+            [(&mut self.frame.layers, &f.layers), (&mut self.frame.lost_pixels, &f.lost_pixels)]
+        {
+            match part {
+                Some(values) => {
+                    if let Some(out) = out.as_mut() {
+                        place(root, out, [(rect, &values[..])].into_iter());
+                    }
+                }
+                None => *out = None,
+            }
+        }
+        self.stats.push(f.stats);
+        Ok(())
     }
-    let mut image = Image::new(root.width, root.height, [0, 0, 0, 255]);
-    place(root, &mut image.pixels, parts.iter().map(|(r, f)| (*r, &f.image.pixels[..])));
-    let per_pixel = |get: fn(&Frame) -> Option<&Vec<u32>>| -> Option<Vec<u32>> {
-        let mut out = vec![0; root.pixels() as usize];
-        let slices: Option<Vec<(Rect, &[u32])>> =
-            parts.iter().map(|(r, f)| Some((*r, &get(f)?[..]))).collect();
-        place(root, &mut out, slices?.into_iter());
-        Some(out)
+
+    /// The frame put together: the windows' counters merged (none to merge where it ran whole).
+    fn finish(mut self) -> Frame {
+        if !self.stats.is_empty() {
+            self.frame.stats = merge(self.stats.iter());
+        }
+        self.frame
+    }
+}
+
+/// The error for a budget that cannot hold what a frame in screen tiles keeps of the whole frame
+/// (its stitched image and per-pixel outputs) beside a window of one pixel.
+fn too_small_to_stitch(settings: &Settings, root: Rect, needed: u64, budget: u64) -> OitError {
+    OitError::TooLarge {
+        what: format!(
+            "{} at {}x{} in screen tiles: the stitched image and per-pixel outputs, and a tile of one pixel",
+            settings.technique, root.width, root.height
+        ),
+        needed,
+        limit_name: "the memory budget (--memory)".into(),
+        limit: budget,
+        hint: "raise --memory or use a smaller --size: a frame in tiles keeps its whole image and \
+               per-pixel outputs while the tiles run"
+            .into(),
+    }
+}
+
+/// The error for a budget one pixel does not fit.
+fn too_small(settings: &Settings, needed: u64, budget: u64, refusal: Option<OitError>) -> OitError {
+    let hint = match refusal {
+        Some(e) => format!("a single pixel was refused: {e}"),
+        None => "raise --memory, or use a technique with less storage a pixel (fewer slots, fabs:K)".into(),
     };
-    Ok(Frame {
-        image,
-        layers: per_pixel(|f| f.layers.as_ref()),
-        lost_pixels: per_pixel(|f| f.lost_pixels.as_ref()),
-        stats: merge(parts.iter().map(|(_, f)| &f.stats)),
-    })
+    OitError::TooLarge {
+        what: format!("{} storage and outputs of one pixel", settings.technique),
+        needed,
+        limit_name: "the memory budget (--memory)".into(),
+        limit: budget,
+        hint,
+    }
+}
+
+/// The error for a budget that needs more than [`MAX_TILES`] windows.
+fn too_many(settings: &Settings, needed: u64, budget: u64) -> OitError {
+    OitError::TooLarge {
+        what: format!(
+            "{} storage and outputs of a {}x{} frame",
+            settings.technique, settings.width, settings.height
+        ),
+        needed,
+        limit_name: format!("the memory budget (--memory) in at most {MAX_TILES} screen tiles"),
+        limit: budget.saturating_mul(MAX_TILES as u64),
+        hint: "raise --memory, or use a smaller --size or a technique with less storage a pixel".into(),
+    }
 }
 
 /// Copies each window's rows into their place in `out`, the rows of `root`.

@@ -48,7 +48,8 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Instant;
 
 use oit_core::{
-    Backend, Camera, Capabilities, Frame, OitError, Prepared, RasterPath, Scene, Settings, TechniqueKind,
+    Backend, Camera, Capabilities, Frame, OitError, Prepared, RasterPath, Scene, Settings, Technique,
+    TechniqueKind,
 };
 
 pub use storage::{INSERTION_SORT_MAX, sort_keys};
@@ -170,12 +171,22 @@ impl CpuPrepared<'_> {
         let plan = oit_core::plan::Plan::new("cpu", self.scene, settings)?.on_path(RasterPath::Cpu);
         plan.refuse_image_atomics("cpu")?;
         plan.refuse_interlock("cpu", "the CPU's rasterizer has no fragment stage to interlock")?;
-        // the whole frame's storage against the host's memory, before anything is allocated
-        // (sizes from a counting pass are checked again as they are allocated)
-        let budget = cpu_budget(settings);
-        plan.check_budget(
-            settings.pixel_count() as u64,
-            oit_core::plan::Counted::default(),
+        // the whole frame's storage and outputs against the host's memory, before anything is
+        // allocated (sizes from a counting pass are checked again as they are allocated)
+        let budget = cpu_budget(settings, &plan);
+        if settings.region.is_some() {
+            // a window of a tiled frame: the last window's outputs and temporaries, freed, go
+            // back to the system before this one allocates (pool::trim)
+            pool::trim();
+        }
+        // the pool keeps arrays of earlier frames and tiles only while all it holds fits the
+        // frame's storage: within the budget, less the outputs, which are not the pool's
+        self.pool.set_cap(budget.1.saturating_sub(plan.output_bytes(settings.pixel_count() as u64)));
+        let pixels = settings.pixel_count() as u64;
+        let needed = plan.frame_bytes(pixels, oit_core::plan::Counted::default());
+        oit_core::plan::check_total(
+            &format!("{} storage and outputs of a frame of {pixels} pixels", plan.technique),
+            needed.saturating_add(pixels.saturating_mul(state_array_extra(settings))),
             (&budget.0, budget.1),
         )?;
         let start = Instant::now();
@@ -204,9 +215,40 @@ impl CpuPrepared<'_> {
     }
 }
 
-/// The budget of a CPU frame's storage: half the host's available memory ([`oit_core::plan::host_memory_budget`]), or `--memory` where smaller.
-pub(crate) fn cpu_budget(settings: &Settings) -> (String, u64) {
-    let (name, bytes) = oit_core::plan::host_memory_budget();
+/// Bytes a pixel's resolve state takes on the CPU beyond the plan's
+/// ([`oit_core::plan::RESOLVE_STATE_BYTES`], the GPU's 23 words), where the technique keeps an
+/// array of states ([`Ctx::states`](crate::technique::Ctx::states)) and not only a state in each
+/// resolving thread's locals: the CPU's state is a struct of floats and a stack
+/// ([`resolve::PixelState`]), larger. Counted in the frame's budget beside
+/// [`oit_core::plan::Plan::frame_bytes`], not in `Stats::storage_bytes`;
+/// `the_state_array_is_counted_where_one_is_lent` holds the list to the techniques that lend one.
+pub(crate) fn state_array_extra(settings: &Settings) -> u64 {
+    let extra = (std::mem::size_of::<resolve::PixelState>() as u64)
+        .saturating_sub(oit_core::plan::RESOLVE_STATE_BYTES);
+    let weighted = matches!(
+        settings.technique,
+        Technique::WeightedAverage | Technique::WeightedSum | Technique::Wboit | Technique::Mboit { .. }
+    );
+    let lends = match settings.technique {
+        Technique::Reference | Technique::Plain | Technique::Fabs { .. } | Technique::Kbuf { .. } => false,
+        // their sums resolve in place, but for the heat map, whose counts go into states
+        _ if weighted => settings.effect == oit_core::Effect::Complexity,
+        _ => true,
+    };
+    if lends { extra } else { 0 }
+}
+
+/// The budget of a CPU frame's storage and outputs ([`oit_core::plan::Plan::frame_bytes`]): half
+/// the host's available memory ([`oit_core::plan::host_memory_budget`]), or `--memory` where
+/// smaller. A window of a frame in screen tiles (`settings.region`) shares the host's half with
+/// what the whole frame keeps while its tiles run ([`oit_core::plan::Plan::stitched_bytes`]);
+/// under `--memory` the tiling loop has taken that off already.
+pub(crate) fn cpu_budget(settings: &Settings, plan: &oit_core::plan::Plan) -> (String, u64) {
+    let (name, mut bytes) = oit_core::plan::host_memory_budget();
+    if let Some(r) = settings.region {
+        let full = u64::from(r.full_width) * u64::from(r.full_height);
+        bytes = bytes.saturating_sub(plan.stitched_bytes(full)).max(1);
+    }
     settings.memory_budget((name.to_string(), bytes))
 }
 
@@ -229,7 +271,10 @@ impl Prepared for CpuPrepared<'_> {
     /// ([`oit_core::tiling`]).
     fn frame(&mut self, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
         let this = &*self;
-        let run = || oit_core::tiling::run("cpu", this.scene, settings, |s| this.frame_inner(camera, s));
+        let extra = state_array_extra(settings);
+        let run = || {
+            oit_core::tiling::run_with("cpu", this.scene, settings, extra, |s| this.frame_inner(camera, s))
+        };
         match &self.threads {
             // The whole frame on one of the global pool's threads, as `install` runs it on a
             // pool of its own: called from outside a pool, each of a frame's parallel steps
@@ -313,6 +358,40 @@ impl Backend for CpuBackend {
 #[cfg(test)]
 mod tests {
     use oit_core::{Backend, Camera, Effect, Settings, Technique, View, load_scene};
+
+    /// The techniques [`crate::state_array_extra`] counts a resolve-state array for are those
+    /// that lend one, under every effect: a technique that lends one uncounted would hold more
+    /// than its budget says. Fails when a technique is moved in or out of its list (`dp` counted as
+    /// a technique that resolves in its threads' locals, or `fabs` as one with an array).
+    #[test]
+    fn the_state_array_is_counted_where_one_is_lent() {
+        let scene = load_scene("planes:4").unwrap();
+        let mut checked = 0;
+        for technique in [Technique::Reference].into_iter().chain(Technique::all()) {
+            for effect in [Effect::Transparency, Effect::Translucency, Effect::Fresnel, Effect::Complexity] {
+                let s = Settings { width: 16, height: 16, technique, effect, ..Settings::default() };
+                let Ok(plan) = oit_core::plan::Plan::new("cpu", &scene, &s) else { continue };
+                let plan = plan.on_path(oit_core::RasterPath::Cpu);
+                let camera = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();
+                let raster = crate::Rasterizer::new(&scene, &camera, &s);
+                let pool = crate::Pool::default();
+                let per_length = scene.absorption_per_length();
+                let mut ctx = crate::Ctx::new(&scene, &camera, &s, &raster, &pool, plan, per_length);
+                let Ok(frame) = crate::render_technique(&mut ctx) else { continue };
+                drop(ctx);
+                assert!(frame.stats.fragments > 0, "{technique} {effect:?}");
+                let lent = pool.states_lent() > 0;
+                assert_eq!(
+                    lent,
+                    crate::state_array_extra(&s) > 0,
+                    "{technique} {effect:?}: lends states: {lent}"
+                );
+                checked += 1;
+            }
+        }
+        assert!(checked > 40, "{checked} cases");
+        assert!(crate::state_array_extra(&Settings { technique: Technique::Dp, ..Settings::default() }) > 0);
+    }
 
     /// A dropped prepared scene leaves its storage to the backend's next one: the next prepared
     /// scene starts with the arrays made so far and its frame makes none; a one-shot render in

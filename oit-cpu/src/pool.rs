@@ -1,9 +1,11 @@
 //! Per-pixel storage kept between frames: a [`Pool`] of arrays by element type and length, lent
 //! out as [`Pooled`] guards that give the array back when dropped. A frame of the same size as an
 //! earlier one finds its arrays here and allocates nothing; [`Pool::allocations`] counts the
-//! arrays that had to be made. A shelf keeps at most [`SHELF_ARRAYS`] arrays, and only while they
-//! and the array a lend must make fit the host's budget ([`oit_core::plan::host_memory_budget`]),
-//! oldest out first: a tiled frame's windows, or frames of ever-new sizes, do not pile up.
+//! arrays that had to be made. A shelf keeps at most [`SHELF_ARRAYS`] arrays, and only while
+//! every array the pool holds (shelved or lent out) and the array a lend must make fit the
+//! frame's budget ([`Pool::set_cap`]; the host's, [`oit_core::plan::host_memory_budget`], until
+//! a frame sets one), oldest out first: a tiled frame's windows, or frames of ever-new sizes, do
+//! not pile up.
 
 use std::ops::{Deref, DerefMut};
 use std::sync::Mutex;
@@ -53,6 +55,13 @@ pub(crate) struct Pool {
     pub u64s: Shelf<AtomicU64>,
     pub states: Shelf<PixelState>,
     allocations: AtomicU64,
+    /// Resolve-state arrays lent ([`Pool::states`]).
+    states_lent: AtomicU64,
+    /// Bytes of every array made and not yet let go: shelved or lent out.
+    held: AtomicU64,
+    /// The most bytes the pool holds where letting shelved arrays go can keep it there (0: the
+    /// host's budget).
+    cap: AtomicU64,
 }
 
 /// An array lent from a [`Pool`]; back on its shelf when dropped, marked clean where its user
@@ -97,6 +106,20 @@ impl<T> Pooled<'_, T> {
 }
 
 impl Pool {
+    /// Sets the most bytes the pool keeps, lent arrays included, where letting shelved ones go
+    /// can keep it there: the frame's storage budget. A frame's arrays are held to its budget by
+    /// its checks (`Ctx::checked`); this holds what earlier frames and tiles left on the shelves
+    /// to it as well.
+    pub fn set_cap(&self, bytes: u64) {
+        self.cap.store(bytes.max(1), Relaxed);
+    }
+
+    /// Resolve-state arrays lent so far.
+    #[cfg(test)]
+    pub fn states_lent(&self) -> u64 {
+        self.states_lent.load(Relaxed)
+    }
+
     /// Arrays made so far (lends that found nothing of the right length on the shelf).
     pub fn allocations(&self) -> u64 {
         self.allocations.load(Relaxed)
@@ -120,21 +143,30 @@ impl Pool {
             let clean = want.and_then(|w| free.iter().position(|(a, c)| a.len() == len && *c == Some(w)));
             let Some(i) = clean.or_else(|| free.iter().position(|(a, _)| a.len() == len)) else {
                 // a miss: the shelf keeps arrays of other lengths (other views' counts, other
-                // tiles, sizes) for frames that may come back, but not past the host's budget
-                // with the array about to be made, largest first out; kept unbounded, the
-                // arrays of every tile of a tiled frame piled up (an 8192² fabs frame in 5 tiles
-                // held 23.7 GB for 7.4 GB of storage a tile)
+                // tiles, sizes) for frames that may come back, but not past the frame's budget
+                // with everything the pool holds (lent arrays too) and the array about to be
+                // made; kept unbounded, the arrays of every tile of a tiled frame piled up (an
+                // 8192² fabs frame in 5 tiles held 23.7 GB for 7.4 GB of storage a tile), and
+                // kept to the host's budget, under --memory they piled up to several tiles'
                 let bytes = |a: &Vec<T>| (a.len() * std::mem::size_of::<T>()) as u64;
-                let cap = oit_core::plan::host_memory_budget().1;
+                let cap = match self.cap.load(Relaxed) {
+                    0 => oit_core::plan::host_memory_budget().1,
+                    cap => cap,
+                };
                 let new = (len * std::mem::size_of::<T>()) as u64;
-                let mut kept: u64 = free.iter().map(|(a, _)| bytes(a)).sum();
+                let mut held = self.held.load(Relaxed);
                 // oldest first out (arrays come back to the end of the list)
                 let mut out = 0;
-                while out < free.len() && (free.len() - out >= SHELF_ARRAYS || kept + new > cap) {
-                    kept -= bytes(&free[out].0);
+                while out < free.len() && (free.len() - out >= SHELF_ARRAYS || held.saturating_add(new) > cap)
+                {
+                    held = held.saturating_sub(bytes(&free[out].0));
                     out += 1;
                 }
-                free.drain(..out);
+                let gone: u64 = free.drain(..out).map(|(a, _)| bytes(&a)).sum();
+                let _ = self.held.fetch_update(Relaxed, Relaxed, |h| Some(h.saturating_sub(gone)));
+                if gone > 0 {
+                    trim();
+                }
                 return None;
             };
             // `remove`, not `swap_remove`: the list stays oldest first
@@ -152,6 +184,7 @@ impl Pool {
             }
             None => {
                 self.allocations.fetch_add(1, Relaxed);
+                self.held.fetch_add((len * std::mem::size_of::<T>()) as u64, Relaxed);
                 // made serially, as before the pool: a one-shot frame costs what it did
                 ((0..len).map(|_| make()).collect(), false)
             }
@@ -216,7 +249,27 @@ impl Pool {
     /// `len` fresh resolve states: an array the last resolve handed back reset
     /// ([`Clean::Default`]; no sweep), else one reset (or made).
     pub fn states(&self, len: usize) -> Pooled<'_, PixelState> {
+        self.states_lent.fetch_add(1, Relaxed);
         let reset = Some(|s: &mut PixelState| *s = PixelState::default());
         self.lend(&self.states, len, Some(Clean::Default), PixelState::default, reset).0
     }
 }
+
+/// Hands the allocator's free pages back to the system. glibc's malloc serves blocks below its
+/// dynamic mmap threshold (which rises to the largest block freed, up to 32 MiB) from its heaps
+/// and keeps them there when freed: the arrays of a tiled frame's earlier tiles, of other lengths
+/// than the next tile's, stayed resident beside it, and a 2048² `adp` frame under `--memory
+/// 128M` peaked 69 MiB over its budget (2 MiB with this, called where the pool lets arrays go and
+/// before each window of a tiled frame). Elsewhere a no-op.
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+pub(crate) fn trim() {
+    #[expect(unsafe_code, reason = "glibc's malloc_trim: takes no pointer and has no precondition")]
+    unsafe extern "C" {
+        safe fn malloc_trim(pad: usize) -> std::ffi::c_int;
+    }
+    malloc_trim(0);
+}
+
+/// See the glibc version: other allocators are left as they are.
+#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+pub(crate) fn trim() {}

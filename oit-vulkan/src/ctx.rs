@@ -293,7 +293,10 @@ impl<'a> VkCtx<'a> {
         let budget = self.settings.memory_budget(self.gpu.memory_budget());
         oit_core::plan::check_total(
             &format!("{} storage of a frame of {} pixels", self.settings.technique, self.pixels),
-            self.storage_bytes.saturating_add(u64::from(self.pixels) * STATE_WORDS * 4).saturating_add(bytes),
+            self.storage_bytes
+                .saturating_add(u64::from(self.pixels) * STATE_WORDS * 4)
+                .saturating_add(bytes)
+                .saturating_add(self.plan.output_bytes(u64::from(self.pixels))),
             (&budget.0, budget.1),
         )
     }

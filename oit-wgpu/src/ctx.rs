@@ -550,7 +550,8 @@ impl<'a> GpuCtx<'a> {
                 &format!("{} storage of a frame of {} pixels", self.settings.technique, self.pixels),
                 self.storage_bytes
                     .saturating_add(u64::from(self.pixels) * STATE_WORDS * 4)
-                    .saturating_add(bytes),
+                    .saturating_add(bytes)
+                    .saturating_add(self.plan.output_bytes(u64::from(self.pixels))),
                 (&budget.0, budget.1),
             )?;
             self.storage_bytes += words * 4;

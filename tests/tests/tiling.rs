@@ -96,7 +96,8 @@ fn tiles_of_a_mesh_are_its_untiled_frame_on_every_path() {
                 let cam = camera(&scene, &s, View::default());
                 let what = format!("{} {technique} {name} 64²", label(b));
                 let whole = render(b, &scene, &cam, &s);
-                let tiled = render(b, &scene, &cam, &Settings { memory: Some(16 << 10), ..s.clone() });
+                // 32 KiB of it the stitched image and losses (issue 41.7), 16 KiB for each tile
+                let tiled = render(b, &scene, &cam, &Settings { memory: Some(48 << 10), ..s.clone() });
                 assert!(tiled.stats.tiles >= 8, "{what}: {} tiles", tiled.stats.tiles);
                 assert_tiles_equal(&what, &tiled, &whole, hardware);
             }

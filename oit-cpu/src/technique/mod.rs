@@ -76,7 +76,8 @@ pub(crate) struct Ctx<'a> {
     pub plan: Plan,
     /// Translucency's absorption per unit of length ([`Scene::absorption_per_length`]).
     pub per_length: f64,
-    /// The memory budget of the frame's storage, all allocations together (issue 13.9).
+    /// The memory budget of the frame's storage and outputs, all allocations together (issue
+    /// 13.9, 41.7).
     pub budget: (String, u64),
     /// Fragments lost per pixel, counted where each is lost (a bucket collision, a key carried
     /// off a full array, a counter past K, a tie a peel skips, a fragment left behind the last
@@ -98,6 +99,7 @@ impl<'a> Ctx<'a> {
     ) -> Self {
         let mut resolve = Resolve::new(per_length, camera, settings);
         resolve.count_ties = plan.count_ties;
+        let budget = crate::cpu_budget(settings, &plan);
         Ctx {
             scene,
             camera,
@@ -111,7 +113,7 @@ impl<'a> Ctx<'a> {
             pool,
             plan,
             per_length,
-            budget: crate::cpu_budget(settings),
+            budget,
             lost: pool.u32s(settings.pixel_count(), 0),
             merged: 0,
         }
@@ -258,13 +260,18 @@ impl<'a> Ctx<'a> {
                 hint: "use a smaller --size or a smaller K".into(),
             });
         }
-        // the frame's total so far, the resolve state included (as `Plan::storage_bytes` counts
-        // it), against the budget: sizes known only after a counting pass (the reference's
-        // lists, fabs/mdts without K) are checked here, before allocating
-        let state = (self.pixels as u64).saturating_mul(oit_core::plan::RESOLVE_STATE_BYTES);
+        // the frame's total so far, the resolve state and the outputs included (as
+        // `Plan::frame_bytes` counts them), against the budget: sizes known only after a counting
+        // pass (the reference's lists, fabs/mdts without K) are checked here, before allocating
+        let pixels = self.pixels as u64;
+        let state = pixels.saturating_mul(oit_core::plan::RESOLVE_STATE_BYTES);
         oit_core::plan::check_total(
-            &format!("{} storage of a frame of {} pixels", self.settings.technique, self.pixels),
-            self.storage_bytes.saturating_add(state).saturating_add(bytes),
+            &format!("{} storage and outputs of a frame of {} pixels", self.settings.technique, self.pixels),
+            self.storage_bytes
+                .saturating_add(state)
+                .saturating_add(self.plan.output_bytes(pixels))
+                .saturating_add(pixels.saturating_mul(crate::state_array_extra(self.settings)))
+                .saturating_add(bytes),
             (&self.budget.0, self.budget.1),
         )?;
         self.storage_bytes += bytes;
