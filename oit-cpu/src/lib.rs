@@ -377,7 +377,7 @@ mod tests {
                 let pool = crate::Pool::default();
                 let per_length = scene.absorption_per_length();
                 let mut ctx = crate::Ctx::new(&scene, &camera, &s, &raster, &pool, plan, per_length);
-                let Ok(frame) = crate::render_technique(&mut ctx) else { continue };
+                let Ok(frame) = crate::technique::render(&mut ctx, technique) else { continue };
                 drop(ctx);
                 assert!(frame.stats.fragments > 0, "{technique} {effect:?}");
                 let lent = pool.states_lent() > 0;
