@@ -3,7 +3,7 @@
 # `cargo package` over the published crates together, so each one that depends on a sibling is
 # verified against the sibling's package (cargo resolves them from a local overlay of the packages
 # just made), not against the workspace's folders. Heavy (every package is built from scratch in
-# the dev profile: about 20 minutes on a 2-core machine); the test suite's cheap check is
+# the dev profile: minutes, not seconds); the test suite's cheap check is
 # tests/tests/packaging.rs (`cargo package --list`, manifests, shipped data).
 #   bench/local/package.sh            # package and verify all
 #   bench/local/package.sh --no-verify  # package only (seconds)

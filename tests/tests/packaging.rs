@@ -128,7 +128,7 @@ fn packages_hold_what_they_embed() {
         assert!(!stderr.contains("warning"), "cargo package --list -p {name} warns: {stderr}");
         let files: Vec<&str> = std::str::from_utf8(&out.stdout).expect("UTF-8 list").lines().collect();
         for file in ["Cargo.toml", "README.md", "src/lib.rs"].iter().chain(embedded.iter()) {
-            assert!(files.contains(&file), "{name}'s package lacks {file}: {files:?}");
+            assert!(files.contains(file), "{name}'s package lacks {file}: {files:?}");
         }
     }
 }
