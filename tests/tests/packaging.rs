@@ -13,7 +13,7 @@
 //!   `include_str!` them from `bench/results/`) are the same bytes as those results, which stay
 //!   the one source: rerunning a calibration means copying it into `oit-bench/data/` too.
 //!
-//! Mutations that make it fail: drop `readme` or `keywords` from a crate's manifest, or the
+//! Mutations that make it fail: drop `keywords` from a crate's manifest, or the
 //! `version` of a sibling in the workspace's `[workspace.dependencies]`; add `"assets/"` to
 //! oit-core's `exclude`; change one byte of `oit-bench/data/cpu-calibration.json`.
 
