@@ -50,7 +50,11 @@ use crate::model::{CPU_CALIBRATION, Calibration, ModelFile, SceneStats, geometry
 
 /// The committed calibration of the H200 (both wgpu raster paths, 1024²): the cost table of the
 /// wgpu backend when no `--calibration` file is given.
-pub const H200_CALIBRATION: &str = include_str!("../../bench/results/h200/calibration.json");
+///
+/// The crate's copy (`data/h200-calibration.json`) of the repository's
+/// `bench/results/h200/calibration.json`, so that the packaged crate holds it; a test of the
+/// workspace (`tests/tests/packaging.rs`) checks that the two are the same bytes.
+pub const H200_CALIBRATION: &str = include_str!("../data/h200-calibration.json");
 
 /// The budgets a choice must meet.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]

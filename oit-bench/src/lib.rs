@@ -70,6 +70,11 @@
 //! # Ok::<(), oit_core::OitError>(())
 //! ```
 
+/// The crate's README (what crates.io shows), whose example runs as a doc test with these.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
+
 pub mod auto;
 pub mod backends;
 pub mod experiment;

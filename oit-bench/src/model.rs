@@ -67,7 +67,11 @@ pub const CALIBRATION_SCENES: &str = "planes:1,planes:4,planes:12,spheres:1,sphe
 
 /// The committed calibration of oit-cpu on this project's 2-core machine, loaded by default for
 /// the `cpu` backend (`oit bench --model FILE` replaces it).
-pub const CPU_CALIBRATION: &str = include_str!("../../bench/results/cpu/calibration.json");
+///
+/// The crate's copy (`data/cpu-calibration.json`) of the repository's
+/// `bench/results/cpu/calibration.json`, so that the packaged crate holds it; a test of the
+/// workspace (`tests/tests/packaging.rs`) checks that the two are the same bytes.
+pub const CPU_CALIBRATION: &str = include_str!("../data/cpu-calibration.json");
 
 /// A scene's statistics, known before any technique runs: what the model's terms are made of.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]

@@ -69,6 +69,11 @@
 //! A [`Backend`] (oit-cpu's `CpuBackend`, oit-wgpu's `WgpuBackend`, oit-vulkan's `VulkanBackend`)
 //! turns the three into a [`Frame`]: see those crates' examples.
 
+/// The crate's README (what crates.io shows), whose example runs as a doc test with these.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
+
 pub mod assets;
 mod backend;
 mod camera;

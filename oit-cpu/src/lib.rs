@@ -38,6 +38,11 @@
 //! assert_eq!(prepared.storage_allocations(), made);
 //! ```
 
+/// The crate's README (what crates.io shows), whose example runs as a doc test with these.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
+
 mod pool;
 pub mod raster;
 mod resolve;

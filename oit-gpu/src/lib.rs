@@ -15,9 +15,34 @@
 //! Static dispatch: a technique is generic over `F: Frame<R>`, where `R` is the backend's
 //! rasterizer type (the compute path's or the GPU's own), so nothing is boxed per pass.
 //!
+//! What a backend computes on the host before its passes is the same on both and runs without a
+//! device: the frame uniform ([`FrameUniform`]), the compute rasterizer's input ([`host_setup`]:
+//! the set-up triangles and one work item per triangle and [`TILE`]² screen tile), and the
+//! workgroups of a pixel kernel ([`dispatch_size`]):
+//!
+//! ```
+//! use oit_core::{load_scene, plan::Plan, Camera, Settings, View};
+//!
+//! let scene = load_scene("planes:4")?;
+//! let camera = Camera::orbit_scene(&scene, View::default(), 1.0)?;
+//! let settings = Settings { width: 64, height: 64, ..Settings::default() };
+//! let plan = Plan::new("my-backend", &scene, &settings)?;
+//! let uniform = oit_gpu::FrameUniform::new(&scene, &camera, &settings, &plan);
+//! assert_eq!(uniform.pixel_count, 64 * 64);
+//! let (_words, items) = oit_gpu::host_setup(&scene, &camera, &settings, false);
+//! assert!(!items.is_empty());
+//! assert_eq!(oit_gpu::dispatch_size(64 * 64), (64, 1));
+//! # Ok::<(), oit_core::OitError>(())
+//! ```
+//!
 //! Adding a technique: its plan (`oit_core::plan`), its WGSL and a manifest line in oit-shaders,
 //! its CPU capture in oit-cpu, and its GPU frame as one function in [`technique`] with its line
 //! in [`technique::render`]'s match; `docs/architecture.md` works one through.
+
+/// The crate's README (what crates.io shows), whose example runs as a doc test with these.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
 
 pub mod technique;
 

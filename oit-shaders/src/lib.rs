@@ -31,6 +31,11 @@
 //! The crate has no dependencies: oit-vulkan's build script depends on it, and a build
 //! dependency is compiled a second time for the build.
 
+/// The crate's README (what crates.io shows), whose example runs as a doc test with these.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
+
 /// `(path under wgsl/, text)` of every file of the tree.
 macro_rules! files {
     ($($path:literal),* $(,)?) => {

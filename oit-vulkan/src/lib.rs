@@ -70,6 +70,11 @@
 //! assert_eq!(frame.stats.geometry_passes, 5); // 4 layers + the pass that finds none left
 //! ```
 
+/// The crate's README (what crates.io shows), whose example runs as a doc test with these.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
+
 mod ctx;
 mod device;
 mod frame;

@@ -43,6 +43,11 @@
 //! To draw into your own renderer instead (your device, vertex buffers and draw calls), see
 //! [`OitPass`] and `examples/embed.rs`.
 
+/// The crate's README (what crates.io shows), whose example runs as a doc test with these.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
+
 mod ctx;
 pub mod embed;
 mod frame;
