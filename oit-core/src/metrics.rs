@@ -223,8 +223,8 @@ fn first_linear_of(code: u16) -> f64 {
 
 /// The 8-bit sRGB codes (lowest, highest) a pixel may hold where the reference holds `code` and
 /// the linear colour behind the pixel is within `delta` of the reference's: every value the
-/// reference could have had for `code`, moved by `delta` (and [`F32_SLACK`]) either way, encoded.
-/// With `delta` from [`crate::rules::bdp_color_error_bound`] this is bdp's colour-mode bound
+/// reference could have had for `code`, moved by `delta` (and a slack for the f32 resolve's
+/// rounding, 2⁻¹⁶) either way, encoded. With `delta` from [`crate::rules::bdp_color_error_bound`] this is bdp's colour-mode bound
 /// per pixel; the window is widest where the pixel is dark (sRGB is steepest there).
 pub fn packing_window(code: u8, delta: f64) -> (u8, u8) {
     let slack = delta.max(0.0) + F32_SLACK;
