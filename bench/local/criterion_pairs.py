@@ -2,24 +2,17 @@
 """Criterion outputs of alternated runs (before-1 after-1 before-2 after-2 ...): each bench's
 median time per run and after/before (geometric means of each side's runs), for the benches every
 run finished.  usage: criterion_pairs.py before-1.txt after-1.txt before-2.txt after-2.txt"""
+import importlib.util
 import math
-import re
+import pathlib
 import sys
 
-UNIT = {"ns": 1e-6, "µs": 1e-3, "us": 1e-3, "ms": 1.0, "s": 1e3}
-
-
-def parse(path):
-    out, name = {}, None
-    for line in open(path, encoding="utf-8"):
-        m = re.match(r"^Benchmarking (\S+): Analyzing", line)
-        if m:
-            name = m.group(1)
-        m = re.search(r"time:\s+\[(\S+) (\S+) (\S+) (\S+) (\S+) (\S+)\]", line)
-        if m and name:
-            out[name] = float(m.group(3)) * UNIT[m.group(4)]
-            name = None
-    return out
+# the one parser of criterion's logs: bench/h200/criterion_ratios.py's
+_spec = importlib.util.spec_from_file_location(
+    "criterion_ratios", pathlib.Path(__file__).resolve().parents[1] / "h200" / "criterion_ratios.py")
+_ratios = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(_ratios)
+parse = _ratios.parse
 
 
 runs = [parse(p) for p in sys.argv[1:]]
