@@ -317,7 +317,7 @@ mod tests {
                 mesh.colors = Some(vec![Vec3::ONE; 3]);
             }
             scene.meshes.push(mesh);
-            scene.objects.push(Object { name: format!("o{i}"), mesh: i, color: Vec4::ONE, absorption: 1.0 });
+            scene.objects.push(Object::new(format!("o{i}"), i, Vec4::ONE));
             for _ in 0..2 {
                 scene.instances.push(Instance { object: i, transform: Mat4::IDENTITY });
             }

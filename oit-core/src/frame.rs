@@ -11,8 +11,17 @@ use crate::OitError;
 pub struct Stats {
     /// Passes over the geometry (bounds, histogram, capture and peel passes all count).
     pub geometry_passes: u32,
-    /// Fragments the rasterizer generated for the scene (one geometry pass's worth).
+    /// Fragments the rasterizer generated for the scene's transparent part (one geometry pass's
+    /// worth), those behind the opaque depth included.
     pub fragments: u64,
+    /// Of `fragments`, those at or behind the opaque depth ([`crate::Scene::layers`]): never
+    /// captured, never composited, not lost. 0 in a scene without opaque parts.
+    pub occluded: u64,
+    /// Fragments the opaque pass drew (the opaque and masked objects'; one pass's worth), those
+    /// masked away included. 0 in a scene without opaque parts.
+    pub opaque_fragments: u64,
+    /// Of `opaque_fragments`, those a mask's cutoff discarded ([`crate::AlphaMode::Mask`]).
+    pub masked: u64,
     /// Fragments that reached the final composite.
     pub captured: u64,
     /// Fragments that did not: collisions, overflow, coplanar ties, peel limits.
@@ -72,15 +81,17 @@ impl Stats {
     /// breaks it, and the frame is refused with an error rather than shown with fragments
     /// missing and `lost` silent.
     pub fn check_accounting(&self, backend: &str) -> Result<(), OitError> {
-        if self.captured + self.merged + self.lost == self.fragments {
+        if self.captured + self.merged + self.lost + self.occluded == self.fragments && self.masked <= self.opaque_fragments
+        {
             return Ok(());
         }
         Err(OitError::Device(format!(
-            "{backend}: {} fragments composited + {} merged + {} counted lost ≠ {} generated: the device did not \
+            "{backend}: {} fragments composited + {} merged + {} counted lost + {} occluded ≠ {} generated (or \
+             {} masked of {} opaque): the device did not \
              run every step of the frame to the end (lavapipe, for one, ends a shader's loops after \
              65,535 iterations, which a pixel of thousands of layers can need); the frame is refused \
              rather than shown wrong. Use fewer layers, another raster path or the cpu backend",
-            self.captured, self.merged, self.lost, self.fragments
+            self.captured, self.merged, self.lost, self.occluded, self.fragments, self.masked, self.opaque_fragments
         )))
     }
 }

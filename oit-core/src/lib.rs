@@ -30,12 +30,7 @@
 //! let scene = Scene {
 //!     name: "one triangle".into(),
 //!     meshes: vec![mesh],
-//!     objects: vec![Object {
-//!         name: "red".into(),
-//!         mesh: 0,
-//!         color: Vec4::new(1.0, 0.0, 0.0, 0.5),
-//!         absorption: 1.0,
-//!     }],
+//!     objects: vec![Object::new("red", 0, Vec4::new(1.0, 0.0, 0.0, 0.5))],
 //!     instances: vec![Instance { object: 0, transform: Mat4::IDENTITY }],
 //!     ..Scene::default()
 //! };
@@ -102,7 +97,7 @@ pub use error::OitError;
 pub use frame::{Frame, GpuFragments, GpuTotals, Image, Stats};
 pub use obj::{MAX_FACE_CORNERS, load_obj, open_regular, parse_obj};
 pub use procedural::{BUILTIN_SCENES, DEFAULT_SCENE, builtin_scene, is_procedural, load_scene};
-pub use scene::{Aabb, Instance, Mesh, Object, Scene};
+pub use scene::{Aabb, AlphaMode, Instance, Layers, Mesh, Object, Scene};
 pub use settings::{
     AtomicStorage, BdpMode, BlendTarget, HardwareCapture, MAX_SIZE, Overflow, Region, Settings, Shading,
     check_threads, max_threads, parse_memory, parse_rgb, parse_size,

@@ -51,6 +51,9 @@ pub struct Counted {
 /// What one geometry pass of a [`Plan::schedule`] does.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PassKind {
+    /// The opaque pass ([`crate::Scene::layers`]): the opaque part's nearest (depth, primitive
+    /// id) per pixel by one 64-bit atomic MIN, then the colour of the fragment that holds it.
+    Opaque,
     /// Each pixel's depth range, over the instances' bounding boxes or the scene (bdp, adp).
     Bounds,
     /// Each pixel's fragments counted, to size the arrays.
@@ -147,7 +150,15 @@ pub struct Plan {
     /// [`Plan::refuse_image_atomics`]). False for every other technique, which ignores the
     /// setting (the reference a comparison renders beside them runs under the same settings).
     pub image_atomics: bool,
+    /// Whether the scene has opaque or masked instances ([`crate::Scene::has_opaque`]): the frame
+    /// runs the opaque pass first ([`PassKind::Opaque`], two geometry passes over the opaque
+    /// part) into [`OPAQUE_BYTES`] a pixel, and the technique captures only what lies in front.
+    pub opaque: bool,
 }
+
+/// Bytes a pixel of the opaque pass's image holds: its nearest opaque (depth, primitive id) key
+/// (8) and that fragment's linear RGB (3 × 4).
+pub const OPAQUE_BYTES: u64 = 20;
 
 impl Plan {
     /// The plan for `settings` on `scene`, or the reason the combination is refused (the same on
@@ -240,8 +251,10 @@ impl Plan {
         let alpha = match settings.alpha {
             Some(a) => a,
             None => {
-                let objects = &scene.objects;
-                objects.iter().map(|o| o.color.w).sum::<f32>() / objects.len().max(1) as f32
+                // the blended objects' (those a technique captures), with their transmission
+                let blended = scene.objects.iter().filter(|o| !o.is_opaque_pass());
+                let (sum, n) = blended.fold((0.0f32, 0usize), |(s, n), o| (s + o.effective_alpha(), n + 1));
+                sum / n.max(1) as f32
             }
         };
         Ok(Plan {
@@ -268,6 +281,7 @@ impl Plan {
                 Technique::Bdp { .. } => !bdp_color,
                 _ => false,
             },
+            opaque: scene.has_opaque(),
         })
     }
 
@@ -481,9 +495,10 @@ impl Plan {
     /// technique keeps. One number every backend checks against its memory budget
     /// ([`Plan::check_budget`]) before it allocates.
     pub fn storage_bytes(&self, pixels: u64, counted: Counted) -> u64 {
-        self.arrays(counted).iter().fold(pixels.saturating_mul(RESOLVE_STATE_BYTES), |sum, a| {
-            sum.saturating_add(a.bytes(pixels, counted.fragments))
-        })
+        let frame = RESOLVE_STATE_BYTES + if self.opaque { OPAQUE_BYTES } else { 0 };
+        self.arrays(counted)
+            .iter()
+            .fold(pixels.saturating_mul(frame), |sum, a| sum.saturating_add(a.bytes(pixels, counted.fragments)))
     }
 
     /// Bytes of the outputs a frame of `pixels` pixels holds beside its storage
@@ -522,6 +537,9 @@ impl Plan {
     pub fn schedule(&self, layers: u32, bins: u32) -> Vec<(PassKind, u32)> {
         let peels = |n: u32| n.min(self.peel_limit);
         let mut passes = Vec::new();
+        if self.opaque {
+            passes.push((PassKind::Opaque, 2));
+        }
         if self.bounds_pass {
             passes.push((PassKind::Bounds, 1));
         }

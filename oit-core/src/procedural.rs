@@ -10,6 +10,7 @@
 //! | `ties:N` | N overlapping quads in one plane, colour order unlike primitive order | up to N, all tied |
 //! | `near:N` | `ties:N` with the quads 10⁻⁷ apart in depth (equal after projection to f32) | up to N |
 //! | `scale:S:SCENE` | SCENE with every coordinate multiplied by S (e.g. `scale:1e-20:planes:8`) | SCENE's |
+//! | `wall:F:SCENE` | SCENE with an opaque grey wall across it, facing the default view, a share F in [0, 1] of the way through its bounding sphere (0: in front of everything, 1: behind it) | SCENE's in front of the wall |
 //! | `default` | a see-through torus knot inside two glass spheres | 10 at the default view, up to 16 |
 //! | `bunny`, `armadillo` | the Stanford scans, embedded ([`crate::assets`]) | varies |
 //!
@@ -24,7 +25,7 @@ use glam::{Mat4, Vec3, Vec4};
 use crate::{Instance, Mesh, Object, OitError, Scene};
 
 /// The built-in names, for messages.
-pub const BUILTIN_SCENES: &str = "default, bunny, armadillo, planes:N, spheres:N, cluster:N, knot, coplanar, ties:N, near:N, grid:RxC:MESH, scale:S:SCENE";
+pub const BUILTIN_SCENES: &str = "default, bunny, armadillo, planes:N, spheres:N, cluster:N, knot, coplanar, ties:N, near:N, grid:RxC:MESH, scale:S:SCENE, wall:F:SCENE";
 
 /// Where a bare name that is not built in (`--scene dragon`, `grid:2x2:dragon`) is looked for, as
 /// `NAME.obj`, in order: for messages. [`find_model`] is the lookup.
@@ -99,6 +100,9 @@ fn builtin_unchecked(name: &str) -> Option<Result<Scene, OitError>> {
     }
     if let Some(rest) = name.strip_prefix("scale:") {
         return Some(scaled(rest));
+    }
+    if let Some(rest) = name.strip_prefix("wall:") {
+        return Some(walled(rest));
     }
     if let Some(mesh) = crate::assets::BuiltinMesh::find(name) {
         return Some(mesh.scene());
@@ -206,12 +210,9 @@ fn grid(spec: &str) -> Result<Scene, OitError> {
         for inst in &base.instances {
             let object = &base.objects[inst.object];
             let color = (tint * 0.5 + object.color.truncate() * 0.5).extend(object.color.w);
-            scene.objects.push(Object {
-                name: format!("{} {i}", object.name),
-                mesh: object.mesh,
-                color,
-                absorption: object.absorption,
-            });
+            // the grid's tint on a blended object's colour; an opaque one keeps its own
+            let color = if object.is_opaque_pass() { object.color } else { color };
+            scene.objects.push(Object { name: format!("{} {i}", object.name), color, ..object.clone() });
             scene.instances.push(Instance {
                 object: scene.objects.len() - 1,
                 transform: Mat4::from_translation(offset) * inst.transform,
@@ -268,6 +269,44 @@ fn scaled(spec: &str) -> Result<Scene, OitError> {
     Ok(scene)
 }
 
+/// `wall:F:SCENE`: SCENE with an opaque wall across it (a grey square of two triangles, drawn
+/// first by the opaque pass), perpendicular to the default view's direction, through the point a
+/// share F of the way along that direction across the scene's bounding sphere: 0 puts it in front
+/// of everything (the frame shows the wall alone), 0.5 through the middle (about half of a
+/// scene's transparent fragments behind it), 1 behind everything (an opaque backdrop). The wall
+/// is as wide as the sphere, so from the default view it hides all that lies behind it. SCENE's
+/// own objects, instances and primitive order are untouched; the wall's instance comes last.
+fn walled(spec: &str) -> Result<Scene, OitError> {
+    let bad = || {
+        OitError::InvalidSettings(format!(
+            "scene 'wall:{spec}': expected wall:F:SCENE with F a number from 0 to 1, e.g. wall:0.5:planes:16"
+        ))
+    };
+    let (share, inner) = spec.split_once(':').ok_or_else(bad)?;
+    let f: f32 = share.parse().map_err(|_| bad())?;
+    if !(0.0..=1.0).contains(&f) {
+        return Err(bad());
+    }
+    let mut scene = inner_scene(inner)?;
+    scene.validate()?;
+    let camera = crate::Camera::orbit_scene(&scene, crate::View::default(), 1.0)?;
+    let bounds = scene.bounds();
+    let (center, r) = (bounds.center(), bounds.radius());
+    let forward = camera.forward;
+    let side = forward.cross(Vec3::Y).normalize_or(Vec3::X);
+    let up = side.cross(forward);
+    let at = center + forward * ((2.0 * f - 1.0) * r);
+    // counter-clockwise seen from the camera (facing −forward)
+    let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+    let positions = corners.iter().map(|&(a, b)| at + (side * a + up * b) * r).collect();
+    scene.meshes.push(Mesh::new("wall", positions, vec![[0, 1, 2], [0, 2, 3]]));
+    let wall = Object::new("wall", scene.meshes.len() - 1, Vec4::new(0.55, 0.55, 0.55, 1.0)).opaque();
+    scene.objects.push(wall);
+    scene.instances.push(Instance { object: scene.objects.len() - 1, transform: Mat4::IDENTITY });
+    scene.name = format!("wall:{spec}");
+    Ok(scene)
+}
+
 /// Hue `h` in [0, 1) to an RGB colour quantized to multiples of 1/255 (so 8-bit compositing by hand
 /// is exact).
 fn hue(h: f32) -> Vec3 {
@@ -301,7 +340,7 @@ fn single(name: String, meshes: Vec<Mesh>, colors: Vec<Vec4>) -> Scene {
         .iter()
         .zip(&colors)
         .enumerate()
-        .map(|(i, (m, &color))| Object { name: m.name.clone(), mesh: i, color, absorption: 1.0 })
+        .map(|(i, (m, &color))| Object::new(m.name.clone(), i, color))
         .collect::<Vec<_>>();
     let instances = (0..objects.len()).map(|object| Instance { object, transform: Mat4::IDENTITY }).collect();
     Scene { name, meshes, objects, instances, warnings: Vec::new() }
@@ -356,12 +395,7 @@ pub fn spheres(n: u32) -> Scene {
     let mut scene = Scene { name: format!("spheres:{n}"), meshes: vec![sphere], ..Default::default() };
     for i in 0..n {
         let r = (i + 1) as f32 / n as f32;
-        scene.objects.push(Object {
-            name: format!("sphere {i}"),
-            mesh: 0,
-            color: hue(i as f32 / n as f32 + 0.6).extend(0.3),
-            absorption: 1.5,
-        });
+        scene.objects.push(Object { absorption: 1.5, ..Object::new(format!("sphere {i}"), 0, hue(i as f32 / n as f32 + 0.6).extend(0.3)) });
         scene.instances.push(Instance { object: i as usize, transform: Mat4::from_scale(Vec3::splat(r)) });
     }
     scene
@@ -397,7 +431,7 @@ pub fn cluster(n: u32) -> Scene {
         let c = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - Vec3::ONE;
         let r = base * (0.6 + 0.8 * rng.next_f32());
         let color = hue(rng.next_f32()).extend(0.25 + 0.5 * rng.next_f32());
-        scene.objects.push(Object { name: format!("ball {i}"), mesh: 0, color, absorption: 2.0 });
+        scene.objects.push(Object { absorption: 2.0, ..Object::new(format!("ball {i}"), 0, color) });
         scene.instances.push(Instance {
             object: i as usize,
             transform: Mat4::from_translation(c) * Mat4::from_scale(Vec3::splat(r)),
@@ -505,7 +539,7 @@ pub fn default_scene() -> Scene {
             .into_iter()
             .enumerate()
     {
-        scene.objects.push(Object { name: format!("glass {i}"), mesh: 1, color, absorption: 0.5 });
+        scene.objects.push(Object { absorption: 0.5, ..Object::new(format!("glass {i}"), 1, color) });
         scene.instances.push(Instance { object: i + 1, transform: Mat4::from_scale(Vec3::splat(r)) });
     }
     scene

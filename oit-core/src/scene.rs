@@ -1,9 +1,18 @@
-//! Scenes: meshes, the objects made of them (colour, absorption) and their instances.
+//! Scenes: meshes, the objects made of them (a material: colour, alpha mode, transmission,
+//! absorption) and their instances.
 //!
 //! A [`Scene`] is plain data. Every backend walks it in the same order — instance by instance,
 //! triangle by triangle — and numbers triangles along the way: the *primitive id* of triangle `t`
 //! of instance `i` is `scene.primitive_base(i) + t`. Ties between fragments of equal depth are broken
 //! by that id wherever a technique can.
+//!
+//! Opaque first: a frame draws the scene's opaque and alpha-masked objects into a depth buffer
+//! and a colour image before any technique runs, as every renderer that uses OIT does, and each
+//! technique then captures only the transparent fragments strictly in front of that depth and
+//! composites them over that colour. Both backends split the scene the same way
+//! ([`Scene::layers`]): the opaque part and the transparent part are scenes of their own, each
+//! numbering its triangles as above, so the reference and every technique order the same
+//! transparent fragments by the same ids.
 
 use glam::{DVec3, Mat4, Vec3, Vec4};
 
@@ -241,18 +250,108 @@ impl Mesh {
     }
 }
 
-/// A mesh with a material: straight-alpha linear RGBA colour and an absorption coefficient
-/// (per unit of view-space distance, used by the translucency effect).
+/// How an object's alpha is read (glTF's `alphaMode`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum AlphaMode {
+    /// Drawn in the opaque pass, alpha ignored (taken as 1).
+    Opaque,
+    /// Drawn in the opaque pass where alpha ≥ `cutoff`, discarded (and counted,
+    /// [`crate::Stats::masked`]) below it.
+    Mask {
+        /// In [0, 1].
+        cutoff: f32,
+    },
+    /// Transparent: captured by the technique, composited by alpha. What every object was before
+    /// materials, and the default.
+    #[default]
+    Blend,
+}
+
+/// A mesh with a material: a base colour (straight-alpha linear RGBA), how its alpha is read, an
+/// optional transmission (glTF's
+/// `KHR_materials_transmission`) and an absorption coefficient (per unit of view-space distance,
+/// used by the translucency effect).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Object {
     /// A name, for messages.
     pub name: String,
     /// Index into [`Scene::meshes`].
     pub mesh: usize,
-    /// Linear RGB and straight alpha.
+    /// Linear RGB and straight alpha: the base colour factor, times the vertex colours where the
+    /// mesh has them.
     pub color: Vec4,
     /// Beer–Lambert absorption coefficient σ.
     pub absorption: f32,
+    /// How alpha is read: opaque, masked or blended ([`AlphaMode::Blend`] unless set).
+    pub alpha_mode: AlphaMode,
+    /// The share of light a blended surface lets through, in [0, 1] (glTF's
+    /// `KHR_materials_transmission`): the fragment's alpha is the colour's alpha × (1 −
+    /// transmission) ([`Object::effective_alpha`]). 0 unless set.
+    pub transmission: f32,
+}
+
+impl Object {
+    /// A blended object of `mesh` in `color`, absorption 1, no transmission: what
+    /// every object was before materials.
+    pub fn new(name: impl Into<String>, mesh: usize, color: Vec4) -> Object {
+        Object {
+            name: name.into(),
+            mesh,
+            color,
+            absorption: 1.0,
+            alpha_mode: AlphaMode::Blend,
+            transmission: 0.0,
+        }
+    }
+
+    /// The same object, opaque.
+    pub fn opaque(self) -> Object {
+        Object { alpha_mode: AlphaMode::Opaque, ..self }
+    }
+
+    /// Whether the opaque pass draws it (opaque or masked).
+    pub fn is_opaque_pass(&self) -> bool {
+        !matches!(self.alpha_mode, AlphaMode::Blend)
+    }
+
+    /// The alpha a fragment of this object carries: under [`AlphaMode::Blend`] the colour's
+    /// alpha × (1 − transmission); under [`AlphaMode::Opaque`] 1; under [`AlphaMode::Mask`] 1
+    /// where the colour's alpha reaches the cutoff and 0 (discarded) below it. The colour's alpha
+    /// is the object's own (vertex colours are RGB), so a mask keeps or discards a whole object.
+    pub fn effective_alpha(&self) -> f32 {
+        match self.alpha_mode {
+            AlphaMode::Opaque => 1.0,
+            AlphaMode::Mask { cutoff } => {
+                if self.color.w >= cutoff {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+            AlphaMode::Blend => self.color.w * (1.0 - self.transmission),
+        }
+    }
+}
+
+/// A scene split for a frame ([`Scene::layers`]).
+#[derive(Clone, Debug)]
+pub struct Layers<'a> {
+    /// The opaque and masked instances, alpha 1 (kept) or 0 (masked away); `None` where there
+    /// are none.
+    pub opaque: Option<Scene>,
+    /// The blended instances, each object's colour carrying its fragments' alpha.
+    pub transparent: std::borrow::Cow<'a, Scene>,
+    /// Whether `--alpha`'s override is in the colours already (the layers are then drawn
+    /// without it: [`Layers::settings`]).
+    pub baked: bool,
+}
+
+impl Layers<'_> {
+    /// The settings the layers are drawn under: `settings` without the alpha override where the
+    /// layers carry it already.
+    pub fn settings(&self, settings: &crate::Settings) -> crate::Settings {
+        if self.baked { crate::Settings { alpha: None, ..settings.clone() } } else { settings.clone() }
+    }
 }
 
 /// One placement of an object.
@@ -314,7 +413,7 @@ impl Scene {
         let objects: Vec<Object> = meshes
             .iter()
             .enumerate()
-            .map(|(i, m)| Object { name: m.name.clone(), mesh: i, color, absorption: 1.0 })
+            .map(|(i, m)| Object::new(m.name.clone(), i, color))
             .collect();
         let instances =
             (0..objects.len()).map(|object| Instance { object, transform: Mat4::IDENTITY }).collect();
@@ -395,6 +494,66 @@ impl Scene {
         sigma / (f64::from(bounds.radius()).max(1e-6) / 8.0)
     }
 
+    /// Whether the scene has anything for the opaque pass or any material that changes a
+    /// fragment's alpha (transmission): where not, [`Scene::layers`] is the scene itself.
+    pub fn has_materials(&self) -> bool {
+        self.objects.iter().any(|o| o.is_opaque_pass() || o.transmission != 0.0)
+    }
+
+    /// Whether any instance draws an opaque or masked object: a frame then runs the opaque pass.
+    pub fn has_opaque(&self) -> bool {
+        self.instances.iter().any(|i| self.objects.get(i.object).is_some_and(Object::is_opaque_pass))
+    }
+
+    /// The scene as a frame draws it: its opaque part (the instances of opaque and masked
+    /// objects, drawn first into a depth buffer and a colour image) and its transparent part
+    /// (the blended ones, which the technique captures), each a scene of its own, its meshes the
+    /// ones its instances draw, its triangles numbered from 0 in instance order. Each object's
+    /// colour carries the alpha a fragment gets ([`Object::effective_alpha`], after `alpha`,
+    /// `--alpha`'s override of the blended objects' alpha): the layers are drawn without the
+    /// override. A scene without materials ([`Scene::has_materials`]) is its own transparent
+    /// part, borrowed, with no opaque part; the override then stays the frame's to apply.
+    pub fn layers(&self, alpha: Option<f32>) -> Layers<'_> {
+        if !self.has_materials() {
+            return Layers { opaque: None, transparent: std::borrow::Cow::Borrowed(self), baked: false };
+        }
+        let part = |opaque: bool, suffix: &str| {
+            let mut out = Scene { name: format!("{}{suffix}", self.name), ..Scene::default() };
+            let mut mesh_of = vec![usize::MAX; self.meshes.len()];
+            let mut object_of = vec![usize::MAX; self.objects.len()];
+            for inst in &self.instances {
+                let Some(o) = self.objects.get(inst.object) else { continue };
+                if o.is_opaque_pass() != opaque {
+                    continue;
+                }
+                if object_of[inst.object] == usize::MAX {
+                    let Some(m) = self.meshes.get(o.mesh) else { continue };
+                    if mesh_of[o.mesh] == usize::MAX {
+                        mesh_of[o.mesh] = out.meshes.len();
+                        out.meshes.push(m.clone());
+                    }
+                    let mut o = o.clone();
+                    if let (Some(a), AlphaMode::Blend) = (alpha, o.alpha_mode) {
+                        o.color.w = a;
+                    }
+                    o.color.w = o.effective_alpha();
+                    o.transmission = 0.0;
+                    o.mesh = mesh_of[o.mesh];
+                    object_of[inst.object] = out.objects.len();
+                    out.objects.push(o);
+                }
+                out.instances.push(Instance { object: object_of[inst.object], transform: inst.transform });
+            }
+            out
+        };
+        let opaque = part(true, " (opaque)");
+        Layers {
+            opaque: (!opaque.instances.is_empty()).then_some(opaque),
+            transparent: std::borrow::Cow::Owned(part(false, "")),
+            baked: true,
+        }
+    }
+
     /// Checks the scene before any raster: finite data, valid references, something to draw.
     pub fn validate(&self) -> Result<(), OitError> {
         self.validated_bounds().map(drop)
@@ -412,6 +571,20 @@ impl Scene {
                 return Err(OitError::InvalidScene(format!(
                     "object '{}': colour and absorption must be finite, absorption ≥ 0",
                     o.name
+                )));
+            }
+            if let AlphaMode::Mask { cutoff } = o.alpha_mode
+                && !(0.0..=1.0).contains(&cutoff)
+            {
+                return Err(OitError::InvalidScene(format!(
+                    "object '{}': alpha cutoff {cutoff} is outside [0, 1]",
+                    o.name
+                )));
+            }
+            if !(0.0..=1.0).contains(&o.transmission) {
+                return Err(OitError::InvalidScene(format!(
+                    "object '{}': transmission {} is outside [0, 1]",
+                    o.name, o.transmission
                 )));
             }
         }

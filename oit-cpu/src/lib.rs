@@ -43,6 +43,7 @@
 #[doc = include_str!("../README.md")]
 pub struct ReadmeDoctests;
 
+mod opaque;
 mod pool;
 pub mod raster;
 mod resolve;
@@ -158,6 +159,9 @@ impl CpuBackend {
 pub struct CpuPrepared<'s> {
     backend: &'s CpuBackend,
     scene: &'s Scene,
+    /// The scene split for its frames: its opaque part, drawn first, and the transparent part the
+    /// technique captures ([`Scene::layers`]), made once per alpha override.
+    layers: std::sync::Mutex<Option<(Option<u32>, std::sync::Arc<oit_core::Layers<'s>>)>>,
     threads: Option<rayon::ThreadPool>,
     pool: Pool,
     /// The scene's [`Scene::absorption_per_length`], from the bounds its validation found.
@@ -167,7 +171,21 @@ pub struct CpuPrepared<'s> {
     raster: std::sync::Mutex<Option<Rasterizer>>,
 }
 
-impl CpuPrepared<'_> {
+impl<'s> CpuPrepared<'s> {
+    /// The scene's layers for `settings`' alpha override, made the first time it is asked for.
+    fn layers(&self, settings: &Settings) -> std::sync::Arc<oit_core::Layers<'s>> {
+        let key = settings.alpha.map(f32::to_bits);
+        let mut kept = self.layers.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        match &*kept {
+            Some((k, layers)) if *k == key => layers.clone(),
+            _ => {
+                let layers = std::sync::Arc::new(self.scene.layers(settings.alpha));
+                *kept = Some((key, layers.clone()));
+                layers
+            }
+        }
+    }
+
     fn frame_inner(&self, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
         settings.validate()?;
         if !(camera.view_proj().is_finite()) {
@@ -197,24 +215,44 @@ impl CpuPrepared<'_> {
         let start = Instant::now();
         // the lock is never contended (frames run one at a time); a poisoned one (a panic in an
         // earlier frame) only loses the storage
+        let layers = self.layers(settings);
+        let drawn = layers.settings(settings);
+        let scene: &Scene = &layers.transparent;
         let kept = self.raster.lock().ok().and_then(|mut r| r.take());
         let mut raster = match kept {
             Some(mut r) => {
-                r.rebuild(self.scene, camera, settings);
+                r.rebuild(scene, camera, &drawn);
                 r
             }
-            None => Rasterizer::new(self.scene, camera, settings),
+            None => Rasterizer::new(scene, camera, &drawn),
         };
         if let Some(mode) = self.backend.mode.filter(|&m| m != raster.mode()) {
             raster = raster.with_mode(mode);
         }
-        let mut ctx = Ctx::new(self.scene, camera, settings, &raster, &self.pool, plan, self.per_length);
+        // opaque first: its depth holds back the transparent fragments behind it
+        let opaque = layers.opaque.as_ref().map(|o| opaque::draw(o, camera, &drawn));
+        raster.cut_at(opaque.as_ref().map(|o| o.depth.clone()));
+        let mut ctx = Ctx::new(scene, camera, &drawn, &raster, &self.pool, plan, self.per_length, opaque.as_ref());
         let frame = technique::render(&mut ctx, settings.technique);
         drop(ctx);
+        let occluded = raster.occluded().unwrap_or_else(|| {
+            // no pass ran behind the cut (nothing to capture): one counts it
+            raster.for_each_fragment(|_| {});
+            raster.occluded().unwrap_or(0)
+        });
+        raster.cut_at(None);
         if let Ok(mut kept) = self.raster.lock() {
             *kept = Some(raster);
         }
         let mut frame = frame?;
+        if let Some(o) = &opaque {
+            let pixels = settings.pixel_count() as u64;
+            frame.stats.occluded = occluded;
+            frame.stats.opaque_fragments = o.fragments;
+            frame.stats.masked = o.masked;
+            frame.stats.geometry_passes += o.passes;
+            frame.stats.storage_bytes += pixels * oit_core::plan::OPAQUE_BYTES;
+        }
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(frame)
     }
@@ -321,6 +359,7 @@ impl Backend for CpuBackend {
         Ok(Box::new(CpuPrepared {
             backend: self,
             scene,
+            layers: std::sync::Mutex::new(None),
             threads: self.thread_pool(threads)?,
             pool,
             per_length: scene.absorption_per_length_in(&bounds),

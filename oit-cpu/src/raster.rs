@@ -364,6 +364,40 @@ impl Bands {
     }
 }
 
+/// Runs `$pass` with `$g` bound to the pass's shader: `$f` itself, or, where the rasterizer has a
+/// cut ([`Rasterizer::cut_at`]), `$f` behind the opaque depth test, counting what it holds back
+/// where this is the first pass after the cut. A macro, not a function taking the pass as a
+/// closure, so that each shader stays a concrete type the walks inline (a `dyn` call a fragment
+/// costs every pass, cut or not).
+macro_rules! behind_cut {
+    ($self:ident, $f:ident, $g:ident => $pass:expr) => {{
+        match &$self.cut {
+            None => {
+                let $g = &$f;
+                $pass
+            }
+            Some(cut) => {
+                let counting = cut.occluded.get().is_none();
+                let shards = Shards::default();
+                let depth = &*cut.depth;
+                let wrapped = |frag: &Fragment<'_>| {
+                    if frag.depth < depth[frag.pixel as usize] {
+                        $f(frag)
+                    } else if counting {
+                        shards.add(frag.pixel)
+                    }
+                };
+                let $g = &wrapped;
+                let n = $pass;
+                if counting {
+                    let _ = cut.occluded.set(shards.sum());
+                }
+                n
+            }
+        }
+    }};
+}
+
 /// The triangles of one frame, ready for any number of geometry passes.
 pub struct Rasterizer {
     setup: TriangleSetup,
@@ -382,6 +416,36 @@ pub struct Rasterizer {
     /// The last frame's bands, their storage kept for the next.
     spare_bands: std::sync::Mutex<Bands>,
     fragments: OnceLock<u64>,
+    /// The opaque pass's depth, where the frame has one ([`Rasterizer::cut_at`]).
+    cut: Option<Cut>,
+}
+
+/// The opaque depth a frame's transparent fragments are tested against: a fragment reaches a
+/// pass's shader only where its depth is strictly less than its pixel's (`f32::INFINITY` where no
+/// opaque fragment fell). The fragments it holds back are counted by the first pass that runs.
+struct Cut {
+    depth: std::sync::Arc<[f32]>,
+    occluded: OnceLock<u64>,
+}
+
+/// Counters spread over cache lines by pixel, so that threads on different parts of the image
+/// rarely add to the same line: the occluded fragments of a pass.
+#[derive(Default)]
+struct Shards([Padded; 16]);
+
+#[derive(Default)]
+#[repr(align(64))]
+struct Padded(std::sync::atomic::AtomicU64);
+
+impl Shards {
+    #[inline]
+    fn add(&self, pixel: u32) {
+        self.0[((pixel >> 5) & 15) as usize].0.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    fn sum(&self) -> u64 {
+        self.0.iter().map(|p| p.0.load(std::sync::atomic::Ordering::Relaxed)).sum()
+    }
 }
 
 impl Rasterizer {
@@ -397,10 +461,30 @@ impl Rasterizer {
             bands: OnceLock::new(),
             spare_bands: std::sync::Mutex::default(),
             fragments: OnceLock::new(),
+            cut: None,
         };
         r.derive();
         r
     }
+
+    /// Tests every fragment of the passes that follow against `depth` (one value a pixel, the
+    /// opaque pass's): a fragment reaches the shader only where its depth is strictly less than
+    /// its pixel's, and [`Rasterizer::occluded`] counts those held back. `None` lifts the test.
+    /// The passes still return (and [`Rasterizer::fragment_count`] still counts) every fragment
+    /// drawn, those held back included.
+    pub fn cut_at(&mut self, depth: Option<std::sync::Arc<[f32]>>) {
+        self.cut = depth.map(|depth| Cut { depth, occluded: OnceLock::new() });
+    }
+
+    /// Fragments the cut held back ([`Rasterizer::cut_at`]), counted by the first pass after it;
+    /// 0 without a cut, `None` before a pass ran.
+    pub fn occluded(&self) -> Option<u64> {
+        match &self.cut {
+            None => Some(0),
+            Some(c) => c.occluded.get().copied(),
+        }
+    }
+
 
     /// What the traversal derives from the set-up triangles, made again: their [`SmallEdges`]
     /// (into the storage the last frame's used), the bins of [`RasterMode::Tiled`], the count.
@@ -554,10 +638,10 @@ impl Rasterizer {
         ahead: &(dyn Fn(u32) + Sync),
         f: F,
     ) -> u64 {
-        let n = match self.mode {
-            RasterMode::Scatter => self.scatter_shaded(Kernel::detect(), &f, Some(ahead)),
-            RasterMode::Tiled => self.covered_on_demand(&f),
-        };
+        let n = behind_cut!(self, f, g => match self.mode {
+            RasterMode::Scatter => self.scatter_shaded(Kernel::detect(), g, Some(ahead)),
+            RasterMode::Tiled => self.covered_on_demand(g),
+        });
         self.fragments.get_or_init(|| n);
         n
     }
@@ -572,7 +656,7 @@ impl Rasterizer {
     /// for bit; the AVX2 walk where the host has it. Shading as `shade` says. The bands are
     /// made by the first such pass of a frame (and kept for the next).
     pub fn for_each_fragment_in_order<F: Fn(&Fragment<'_>) + Sync>(&self, shade: Shade, f: F) -> u64 {
-        self.in_order(Kernel::detect(), shade, &f)
+        behind_cut!(self, f, g => self.in_order(Kernel::detect(), shade, g))
     }
 
     /// [`Rasterizer::for_each_fragment_in_order`] on `kernel`.
@@ -592,7 +676,27 @@ impl Rasterizer {
         shade: Shade,
         make: impl Fn(usize) -> F + Sync,
     ) -> Vec<u64> {
-        self.by_band(Kernel::detect(), shade, make)
+        let Some(cut) = &self.cut else {
+            return self.by_band(Kernel::detect(), shade, make);
+        };
+        let counting = cut.occluded.get().is_none();
+        let shards = Shards::default();
+        let depth = &*cut.depth;
+        let (shards_ref, make) = (&shards, &make);
+        let per_band = self.by_band(Kernel::detect(), shade, move |b| {
+            let f = make(b);
+            move |frag: &Fragment<'_>| {
+                if frag.depth < depth[frag.pixel as usize] {
+                    f(frag)
+                } else if counting {
+                    shards_ref.add(frag.pixel)
+                }
+            }
+        });
+        if counting {
+            let _ = cut.occluded.set(shards.sum());
+        }
+        per_band
     }
 
     /// [`Rasterizer::for_each_fragment_by_band`] on `kernel`.
@@ -637,11 +741,11 @@ impl Rasterizer {
 
     /// [`Rasterizer::for_each_fragment`], shading as `shade` says.
     pub fn for_each_fragment_with<F: Fn(&Fragment<'_>) + Sync>(&self, shade: Shade, f: F) -> u64 {
-        let n = match (self.mode, shade) {
-            (RasterMode::Scatter, Shade::Color) => self.scatter_shaded(Kernel::detect(), &f, None),
-            (RasterMode::Scatter, Shade::OnDemand) => self.scatter_on_demand(Kernel::detect(), &f),
-            (RasterMode::Tiled, _) => self.covered_on_demand(&f),
-        };
+        let n = behind_cut!(self, f, g => match (self.mode, shade) {
+            (RasterMode::Scatter, Shade::Color) => self.scatter_shaded(Kernel::detect(), g, None),
+            (RasterMode::Scatter, Shade::OnDemand) => self.scatter_on_demand(Kernel::detect(), g),
+            (RasterMode::Tiled, _) => self.covered_on_demand(g),
+        });
         self.fragments.get_or_init(|| n);
         n
     }
@@ -1411,12 +1515,7 @@ mod tests {
             meshes.push(mesh);
         }
         let mut scene = scene_of(meshes);
-        scene.objects.push(Object {
-            name: "again".into(),
-            mesh: 0,
-            color: Vec4::new(0.1, 0.9, 0.3, 0.7),
-            absorption: 1.0,
-        });
+        scene.objects.push(Object::new("again".into(), 0, Vec4::new(0.1, 0.9, 0.3, 0.7)));
         scene.instances.push(Instance {
             object: 3,
             transform: Mat4::from_rotation_y(0.7) * Mat4::from_scale(Vec3::new(1.0, 2.0, 0.5)),

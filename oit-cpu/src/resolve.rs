@@ -135,6 +135,10 @@ pub(crate) struct Resolve<'a> {
     per_length: f32,
     /// Whether ties are counted (the plan's `count_ties`).
     pub count_ties: bool,
+    /// The opaque pass's colours, where the frame has opaque parts: what each pixel's
+    /// transparent fragments composite over instead of the background
+    /// ([`Resolve::background_at`]).
+    pub opaque: Option<&'a [Option<Vec3>]>,
 }
 
 impl<'a> Resolve<'a> {
@@ -147,6 +151,17 @@ impl<'a> Resolve<'a> {
             background: settings.background,
             per_length: per_length as f32,
             count_ties: false,
+            opaque: None,
+        }
+    }
+
+    /// What pixel `px` composites over: its opaque colour, or the background where no opaque
+    /// fragment fell (or the frame has no opaque parts).
+    #[inline]
+    pub fn background_at(&self, px: usize) -> Vec3 {
+        match self.opaque {
+            Some(o) => o[px].unwrap_or(self.background),
+            None => self.background,
         }
     }
 
@@ -155,7 +170,7 @@ impl<'a> Resolve<'a> {
     /// pushed: their weighted average (Bavoil & Myers 2008, `composite::weighted_average`) over
     /// the background becomes what the front composites over, as dual depth peeling's back half
     /// does. Transparency only (the plan refuses the tail with other effects).
-    pub fn tail(&self, s: &mut PixelState, sums: &[std::sync::atomic::AtomicU64]) {
+    pub fn tail(&self, s: &mut PixelState, sums: &[std::sync::atomic::AtomicU64], px: usize) {
         use std::sync::atomic::Ordering::Relaxed;
         let l = |i: usize| sums[i].load(Relaxed) as f32;
         let count = sums[4].load(Relaxed) as u32;
@@ -167,7 +182,7 @@ impl<'a> Resolve<'a> {
             alpha: l(3) / 255.0,
             count,
         };
-        s.back = Some(oit_core::composite::weighted_average(&w, self.background));
+        s.back = Some(oit_core::composite::weighted_average(&w, self.background_at(px)));
     }
 
     /// Finishes every pixel into an sRGB image; returns it, the fragments captured in all and
@@ -184,8 +199,9 @@ impl<'a> Resolve<'a> {
             .pixels
             .par_iter_mut()
             .zip(states.par_iter_mut())
-            .map(|(px, s)| {
-                *px = srgb(self.finish(s));
+            .enumerate()
+            .map(|(i, (px, s))| {
+                *px = srgb(self.finish_over(s, self.background_at(i)));
                 let counts = (u64::from(s.captured), u64::from(s.tied()), s.captured);
                 if !complexity {
                     // reset while in cache: the states go back clean (see the doc)
@@ -196,8 +212,8 @@ impl<'a> Resolve<'a> {
             .reduce(|| (0, 0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2.max(b.2)));
         if complexity {
             let max = deepest.max(1);
-            image.pixels.par_iter_mut().zip(states.par_iter_mut()).for_each(|(px, s)| {
-                let c = if s.captured == 0 { self.background } else { heat(s.captured as f32 / max as f32) };
+            image.pixels.par_iter_mut().zip(states.par_iter_mut()).enumerate().for_each(|(i, (px, s))| {
+                let c = if s.captured == 0 { self.background_at(i) } else { heat(s.captured as f32 / max as f32) };
                 *px = srgb(c);
                 *s = PixelState::default();
             });
@@ -230,7 +246,10 @@ impl Resolve<'_> {
         let sums = |px: usize, scratch: &mut S, out: &mut [u8; 4]| {
             let mut state = PixelState::default();
             feed(px, scratch, &mut state);
-            *out = if state.is_empty() { empty } else { srgb(self.finish(&mut state)) };
+            *out = match self.opaque {
+                None if state.is_empty() => empty,
+                _ => srgb(self.finish_over(&mut state, self.background_at(px))),
+            };
             (u64::from(state.captured), u64::from(state.tied()), state.captured)
         };
         let add = |a: (u64, u64, u32), b: (u64, u64, u32)| (a.0 + b.0, a.1 + b.1, a.2.max(b.2));
@@ -256,8 +275,8 @@ impl Resolve<'_> {
         };
         if complexity {
             let max = deepest.max(1);
-            for (px, &n) in image.pixels.iter_mut().zip(&counts) {
-                let c = if n == 0 { self.background } else { heat(n as f32 / max as f32) };
+            for (i, (px, &n)) in image.pixels.iter_mut().zip(&counts).enumerate() {
+                let c = if n == 0 { self.background_at(i) } else { heat(n as f32 / max as f32) };
                 *px = srgb(c);
             }
         }
@@ -300,30 +319,44 @@ impl Compositor for Resolve<'_> {
     /// The next fragment in front of everything pushed from the back so far (dual depth peeling).
     #[inline]
     fn push_back(&self, s: &mut PixelState, depth: f32, payload: u32) {
+        self.push_back_over(s, depth, payload, self.background);
+    }
+
+    /// The final linear colour of a pixel (heat maps are finished by [`Resolve::image`]).
+    fn finish(&self, s: &mut PixelState) -> Vec3 {
+        self.finish_over(s, self.background)
+    }
+}
+
+impl Resolve<'_> {
+    /// [`Compositor::push_back`] of a pixel that composites over `background` (its
+    /// [`Resolve::background_at`]).
+    #[inline]
+    pub fn push_back_over(&self, s: &mut PixelState, depth: f32, payload: u32, background: Vec3) {
         if self.effect == Effect::Transparency {
             s.captured += 1;
             if self.count_ties {
                 s.tied += s.back_run.push(depth_bits(depth), payload);
             }
-            let back = s.back.unwrap_or(self.background);
+            let back = s.back.unwrap_or(background);
             s.back = Some(oit_core::composite::over(back, unpack_rgba8(payload)));
         } else {
             s.back_stack.push((depth, payload));
         }
     }
 
-    /// The final linear colour of a pixel (heat maps are finished by [`Resolve::image`]).
-    fn finish(&self, s: &mut PixelState) -> Vec3 {
+    /// [`Compositor::finish`] over `background` (the pixel's [`Resolve::background_at`]).
+    pub fn finish_over(&self, s: &mut PixelState, background: Vec3) -> Vec3 {
         while let Some((d, p)) = s.back_stack.pop() {
             self.push(s, d, p);
         }
         match self.effect {
-            Effect::Transparency => s.front.over(s.back.unwrap_or(self.background)),
+            Effect::Transparency => s.front.over(s.back.unwrap_or(background)),
             Effect::Complexity => Vec3::ZERO,
-            Effect::Fresnel => self.background * s.fresnel,
+            Effect::Fresnel => background * s.fresnel,
             Effect::Translucency => {
                 let t = Vec3::new((-s.optical.x).exp(), (-s.optical.y).exp(), (-s.optical.z).exp());
-                self.background * t
+                background * t
             }
         }
     }

@@ -16,15 +16,16 @@ pub fn error_pixels<'a>(a: &'a Image, b: &'a Image) -> impl Iterator<Item = usiz
         .map(|(i, _)| i)
 }
 
-/// Losses are counted where they happen: `captured + merged + lost == fragments` (`merged`: the
-/// fragments `--overflow tail` merged into a pixel's tail, 0 elsewhere), and the per-pixel losses
+/// Losses are counted where they happen: `captured + merged + lost + occluded == fragments`
+/// (`merged`: the fragments `--overflow tail` merged into a pixel's tail, 0 elsewhere;
+/// `occluded`: those behind the opaque depth, 0 without opaque parts), and the per-pixel losses
 /// (where the backend reports them) sum to `lost`.
 pub fn accounting(f: &Frame) -> Result<(), String> {
     let s = &f.stats;
-    if s.captured + s.merged + s.lost != s.fragments {
+    if s.captured + s.merged + s.lost + s.occluded != s.fragments {
         return Err(format!(
-            "captured {} + merged {} + lost {} != fragments {}",
-            s.captured, s.merged, s.lost, s.fragments
+            "captured {} + merged {} + lost {} + occluded {} != fragments {}",
+            s.captured, s.merged, s.lost, s.occluded, s.fragments
         ));
     }
     if let Some(px) = &f.lost_pixels {

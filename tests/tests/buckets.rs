@@ -20,7 +20,7 @@ fn quads(zs: &[f32]) -> Scene {
         scene.meshes.push(Mesh::new(format!("q{i}"), p, vec![[0, 1, 2], [0, 2, 3]]));
         let hue = i as f32 / zs.len() as f32;
         let color = Vec4::new(0.2 + 0.7 * hue, 0.9 - 0.6 * hue, 0.3 + 0.5 * (hue * 7.0).fract(), 0.5);
-        scene.objects.push(Object { name: format!("q{i}"), mesh: i, color, absorption: 1.0 });
+        scene.objects.push(Object::new(format!("q{i}"), i, color));
         scene.instances.push(Instance { object: i, transform: Mat4::IDENTITY });
     }
     scene

@@ -137,12 +137,7 @@ fn tilted_quad(degrees: f32, z: f32) -> Mesh {
 /// A scene of the given meshes, one object each, at identity.
 fn scene_of(meshes: Vec<Mesh>) -> Scene {
     let objects = (0..meshes.len())
-        .map(|i| Object {
-            name: format!("object {i}"),
-            mesh: i,
-            color: Vec4::new(0.8, 0.5, 0.2, 0.5),
-            absorption: 1.0,
-        })
+        .map(|i| Object::new(format!("object {i}"), i, Vec4::new(0.8, 0.5, 0.2, 0.5)))
         .collect();
     let instances = (0..meshes.len()).map(|object| Instance { object, transform: Mat4::IDENTITY }).collect();
     Scene { name: "effects".into(), meshes, objects, instances, warnings: Vec::new() }

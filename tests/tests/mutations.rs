@@ -28,7 +28,7 @@ fn quads(layers: &[(f32, Vec4)]) -> Scene {
             Vec3::new(-1.0, 1.0, z),
         ];
         scene.meshes.push(Mesh::new(format!("q{i}"), p, vec![[0, 1, 2], [0, 2, 3]]));
-        scene.objects.push(Object { name: format!("q{i}"), mesh: i, color, absorption: 1.0 });
+        scene.objects.push(Object::new(format!("q{i}"), i, color));
         scene.instances.push(oit_core::Instance { object: i, transform: Mat4::IDENTITY });
     }
     scene

@@ -16,12 +16,7 @@ fn soup(points: &[(f32, f32, f32)], colors: &[(f32, f32, f32, f32)]) -> Scene {
         let p: Vec<Vec3> = points[3 * t..3 * t + 3].iter().map(|&(x, y, z)| Vec3::new(x, y, z)).collect();
         meshes.push(Mesh::new(format!("t{t}"), p, vec![[0, 1, 2]]));
         let (r, g, b, a) = colors[t % colors.len()];
-        scene.objects.push(oit_core::Object {
-            name: format!("t{t}"),
-            mesh: t,
-            color: Vec4::new(r, g, b, a),
-            absorption: 1.0,
-        });
+        scene.objects.push(oit_core::Object::new(format!("t{t}"), t, Vec4::new(r, g, b, a)));
         scene.instances.push(oit_core::Instance { object: t, transform: glam::Mat4::IDENTITY });
     }
     scene.meshes = meshes;

@@ -69,7 +69,7 @@ fn compute_path_equals_cpu_on_a_random_soup() {
         ];
         scene.meshes.push(oit_core::Mesh::new(format!("t{t}"), p, vec![[0, 1, 2]]));
         let color = Vec4::new(next().abs(), next().abs(), next().abs(), 0.2 + 0.6 * next().abs());
-        scene.objects.push(oit_core::Object { name: format!("t{t}"), mesh: t, color, absorption: 1.0 });
+        scene.objects.push(oit_core::Object::new(format!("t{t}"), t, color));
         scene.instances.push(oit_core::Instance { object: t, transform: Mat4::IDENTITY });
     }
     let Some(gpu) = oit_wgpu::backend_or_skip("compute_path_equals_cpu_on_a_random_soup") else { return };

@@ -100,7 +100,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
                 resolve.push(s, dn, pn);
                 if f != n {
                     let (df, pf) = split_key64(f);
-                    resolve.push_back(s, df, pf);
+                    resolve.push_back_over(s, df, pf, resolve.background_at(px));
                 }
                 *range = (i64::from(depth_bits(dn)), i64::from(depth_bits(split_key64(f).0)));
                 1

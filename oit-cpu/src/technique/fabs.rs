@@ -101,7 +101,7 @@ pub(crate) fn resolve<L: AtomicFragmentList<Key = u128>>(
             resolve.push(s, depth_from_bits((key >> 64) as u32), key as u32);
         }
         if let Some(t) = tail {
-            resolve.tail(s, &t[px * 5..px * 5 + 5]);
+            resolve.tail(s, &t[px * 5..px * 5 + 5], px);
         }
     })
 }

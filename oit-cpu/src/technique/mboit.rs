@@ -50,8 +50,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         sums[base + 8].fetch_add(wa, Relaxed);
         sums[base + 9].fetch_add(1, Relaxed);
     });
-    let bg = ctx.settings.background;
-    Ok(super::finish_sums(ctx, sums, WORDS, 9, bg, |w, count| {
+    Ok(super::finish_sums(ctx, sums, WORDS, 9, |w, count, bg| {
         let sums = MboitSums {
             weighted: Vec3::new(w[5] as f32, w[6] as f32, w[7] as f32),
             weight: w[8] as f32,

@@ -80,7 +80,7 @@ pub(crate) fn render64_over<L: AtomicFragmentList<Key = u64>>(
             resolve.push(s, d, p);
         }
         if let Some(t) = tail {
-            resolve.tail(s, &t[px * 5..px * 5 + 5]);
+            resolve.tail(s, &t[px * 5..px * 5 + 5], px);
         }
     });
     Ok(super::finish(ctx, states))
@@ -142,7 +142,7 @@ pub(crate) fn render32_over<L: AtomicFragmentList<Key = u32>>(
                 resolve.push(s, d, rgb | alpha8 << 24);
             }
             if let Some(t) = tail {
-                resolve.tail(s, &t[px * 5..px * 5 + 5]);
+                resolve.tail(s, &t[px * 5..px * 5 + 5], px);
             }
         },
     );

@@ -96,9 +96,11 @@ impl<'a> Ctx<'a> {
         pool: &'a Pool,
         plan: Plan,
         per_length: f64,
+        opaque: Option<&'a crate::opaque::OpaqueImage>,
     ) -> Self {
         let mut resolve = Resolve::new(per_length, camera, settings);
         resolve.count_ties = plan.count_ties;
+        resolve.opaque = opaque.map(|o| &o.color[..]);
         let budget = crate::cpu_budget(settings, &plan);
         Ctx {
             scene,
@@ -264,7 +266,8 @@ impl<'a> Ctx<'a> {
         // `Plan::frame_bytes` counts them), against the budget: sizes known only after a counting
         // pass (the reference's lists, fabs/mdts without K) are checked here, before allocating
         let pixels = self.pixels as u64;
-        let state = pixels.saturating_mul(oit_core::plan::RESOLVE_STATE_BYTES);
+        let opaque = if self.plan.opaque { oit_core::plan::OPAQUE_BYTES } else { 0 };
+        let state = pixels.saturating_mul(oit_core::plan::RESOLVE_STATE_BYTES + opaque);
         oit_core::plan::check_total(
             &format!("{} storage and outputs of a frame of {} pixels", self.settings.technique, self.pixels),
             self.storage_bytes
@@ -405,16 +408,16 @@ pub(crate) fn finish_pixels(
 /// The ending of the weighted techniques (`wavg`, `wsum`, `wboit`, `mboit`), which keep `words`
 /// u64 sums a pixel with its fragment count at word `count_word`: each pixel's words are taken
 /// (emptied as they are read, and only where a fragment came, so the next frame lends the array
-/// without a sweep), and `colour(words, count)` composites them to a linear colour; a pixel no
-/// fragment reached gets `empty`, made once. Under the complexity effect only the counts go into
+/// without a sweep), and `colour(words, count, behind)` composites them to a linear colour over
+/// `behind` (the pixel's opaque colour or the background); a pixel no fragment reached gets the
+/// empty sums' composite. Under the complexity effect only the counts go into
 /// the resolve states.
 pub(crate) fn finish_sums<'a>(
     ctx: &Ctx<'a>,
     mut sums: Pooled<'a, AtomicU64>,
     words: usize,
     count_word: usize,
-    empty: glam::Vec3,
-    colour: impl Fn(&[u64], u32) -> glam::Vec3 + Sync,
+    colour: impl Fn(&[u64], u32, glam::Vec3) -> glam::Vec3 + Sync,
 ) -> oit_core::Frame {
     use rayon::prelude::*;
     const MAX_WORDS: usize = 16;
@@ -434,10 +437,19 @@ pub(crate) fn finish_sums<'a>(
         states.par_iter_mut().zip(sums.par_chunks(words)).for_each(|(state, s)| state.captured = take(s).1);
         finish(ctx, states)
     } else {
-        let empty = crate::resolve::srgb(empty);
+        // a pixel no fragment reached: the empty sums' composite over what lies behind it, made
+        // once where that is the background everywhere
+        let zeros = [0u64; MAX_WORDS];
+        let empty = crate::resolve::srgb(colour(&zeros[..words], 0, ctx.settings.background));
+        let resolve = &ctx.resolve;
         finish_pixels(ctx, |px| {
             let (w, count) = take(&sums[words * px..words * px + words]);
-            if count == 0 { (empty, 0) } else { (crate::resolve::srgb(colour(&w[..words], count)), count) }
+            let behind = resolve.background_at(px);
+            match (count, resolve.opaque) {
+                (0, None) => (empty, 0),
+                (0, Some(_)) => (crate::resolve::srgb(colour(&zeros[..words], 0, behind)), 0),
+                _ => (crate::resolve::srgb(colour(&w[..words], count, behind)), count),
+            }
         })
     };
     sums.mark_clean(crate::pool::Clean::Word(0));

@@ -70,7 +70,8 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     Ok(frame)
 }
 
-/// The transparency effect's ending: each pixel's running composite over the background, as the
+/// The transparency effect's ending: each pixel's running composite over what lies behind it
+/// (the opaque colour or the background), as the
 /// shared resolve finishes a state holding only it ([`PixelState::composited`]: the front over
 /// the background, to sRGB), without making that state; the counts read once and left at zero.
 fn finish_transparency(
@@ -78,11 +79,15 @@ fn finish_transparency(
     counts: &[std::sync::atomic::AtomicU32],
     fronts: &[std::sync::atomic::AtomicU32],
 ) -> Frame {
-    let background = ctx.settings.background;
-    let empty = srgb(FrontToBack::default().over(background));
+    let resolve = &ctx.resolve;
+    let empty = srgb(FrontToBack::default().over(ctx.settings.background));
     super::finish_pixels(ctx, |px| {
         let n = counts[px].swap(0, Relaxed);
-        let colour = if n == 0 { empty } else { srgb(load(&fronts[4 * px..4 * px + 4]).over(background)) };
+        let colour = match (n, resolve.opaque) {
+            (0, None) => empty,
+            (0, Some(_)) => srgb(resolve.background_at(px)),
+            _ => srgb(load(&fronts[4 * px..4 * px + 4]).over(resolve.background_at(px))),
+        };
         (colour, n)
     })
 }

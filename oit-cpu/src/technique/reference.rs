@@ -50,7 +50,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let (keys, payloads) = (&*keys, &*payloads);
 
     let (w, h) = (ctx.settings.width, ctx.settings.height);
-    let bg = ctx.settings.background.as_dvec3();
+    let resolve = &ctx.resolve;
     let (camera, effect) = (ctx.camera, ctx.settings.effect);
     let per_length = ctx.per_length;
     let forward = camera.forward.as_dvec3();
@@ -67,6 +67,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
             list.sort_unstable_by_key(|&(key, _)| key);
             let layers = list.iter().copied();
             let depth = |key: u64| f32::from_bits((key >> 32) as u32);
+            let bg = resolve.background_at(px).as_dvec3();
             let c: DVec3 = match effect {
                 Effect::Transparency => front_to_back_f64(layers.map(|(_, p)| unpack_rgba8_f64(p)), bg),
                 Effect::Translucency => translucency_f64(

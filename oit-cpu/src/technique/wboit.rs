@@ -34,8 +34,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         sums[base + 4].fetch_add(u64::from(WBOIT_OPTICAL_DEPTH[(c >> 24) as usize]), Relaxed);
         sums[base + 5].fetch_add(1, Relaxed);
     });
-    let bg = ctx.settings.background;
-    Ok(super::finish_sums(ctx, sums, WORDS, 5, bg, |w, count| {
+    Ok(super::finish_sums(ctx, sums, WORDS, 5, |w, count, bg| {
         let sums = WboitSums {
             weighted: Vec3::new(w[0] as f32, w[1] as f32, w[2] as f32),
             weight: w[3] as f32,

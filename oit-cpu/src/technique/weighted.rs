@@ -29,14 +29,14 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, average: bool) -> Result<Frame, OitError
         sums[base + 3].fetch_add(a, Relaxed);
         sums[base + 4].fetch_add(1, Relaxed);
     });
-    let bg = ctx.settings.background;
-    let composite = |w: &WeightedSums| if average { weighted_average(w, bg) } else { weighted_sum(w, bg) };
-    let empty = composite(&WeightedSums::default());
-    Ok(super::finish_sums(ctx, sums, 5, 4, empty, |w, count| {
-        composite(&WeightedSums {
+    let composite =
+        |w: &WeightedSums, bg: Vec3| if average { weighted_average(w, bg) } else { weighted_sum(w, bg) };
+    Ok(super::finish_sums(ctx, sums, 5, 4, |w, count, bg| {
+        let sums = WeightedSums {
             premultiplied: Vec3::new(w[0] as f32, w[1] as f32, w[2] as f32) / (255.0 * 255.0),
             alpha: w[3] as f32 / 255.0,
             count,
-        })
+        };
+        composite(&sums, bg)
     }))
 }
