@@ -19,8 +19,8 @@ use crate::output::{self, Table};
     about = "Render techniques from one view and measure each against the exact reference",
     long_about = "Render techniques from one view and measure each against the exact reference.\n\n\
         Renders `reference` once per backend, then every technique, and prints a table: geometry \
-        passes, fragments, fragments captured, merged (into a pixel's tail, --overflow tail) and \
-        lost, fragments tied (equal depths the technique ordered by \
+        passes, fragments, fragments captured, merged (into a pixel's tail, --overflow tail), \
+        lost and occluded (behind the opaque geometry, drawn first), fragments tied (equal depths the technique ordered by \
         colour, not as the reference), fragments quantized (composited through a lossy packing of \
         their colour: bdp's colour mode keeps alpha in 7 bits, one 8-bit step off for half the \
         alphas; docs/bdp-colour.md gives the bound), per-pixel storage, time, error pixel rate (EPR: the \
@@ -30,7 +30,7 @@ use crate::output::{self, Table};
         then 1. With `-t all`, a technique the options refuse (an effect or capture it cannot do) \
         is listed after the table with the reason and the others run; the exit code is 1 only \
         when none ran. With --json, prints one JSON array of objects with the keys technique, backend, \
-        raster, width, height, geometry_passes, fragments, captured, merged, lost, tied, quantized, storage_bytes, \
+        raster, width, height, geometry_passes, fragments, captured, merged, lost, occluded, opaque_fragments, masked, tied, quantized, storage_bytes, \
         tiles, wall_ms, gpu_ms, epr, psnr, max_error (epr a fraction in [0, 1], not per cent; gpu_ms \
         null when not measured, psnr null when identical); failures go to stderr."
 )]
@@ -73,7 +73,7 @@ struct CompareJson<'a> {
     max_error: f64,
 }
 
-const HEADERS: [(&str, usize); 15] = [
+const HEADERS: [(&str, usize); 16] = [
     ("technique", 10),
     ("backend", 7),
     ("raster", 8),
@@ -82,6 +82,7 @@ const HEADERS: [(&str, usize); 15] = [
     ("captured", 10),
     ("merged", 8),
     ("lost", 8),
+    ("occluded", 8),
     ("tied", 8),
     ("quantized", 9),
     ("storage", 10),
@@ -173,6 +174,7 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
                 s.captured.to_string(),
                 s.merged.to_string(),
                 s.lost.to_string(),
+                s.occluded.to_string(),
                 s.tied.to_string(),
                 s.quantized.to_string(),
                 output::bytes(s.storage_bytes),

@@ -288,6 +288,7 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
                  captured   {}\n\
                  merged     {}\n\
                  lost       {} ({}%)\n\
+                 {}\
                  tied       {}\n\
                  storage    {}{}\n\
                  time       {:.2} ms{gpu}\n\
@@ -303,6 +304,14 @@ pub fn run(args: &RenderArgs) -> Result<Outcome, OitError> {
                 s.merged,
                 s.lost,
                 output::percent(lost_share),
+                if s.opaque_fragments > 0 {
+                    format!(
+                        "occluded   {} (behind the opaque pass's {} fragments, {} of them masked away)\n",
+                        s.occluded, s.opaque_fragments, s.masked
+                    )
+                } else {
+                    String::new()
+                },
                 s.tied,
                 output::bytes(s.storage_bytes),
                 if s.tiles > 1 {

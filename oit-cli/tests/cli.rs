@@ -204,7 +204,7 @@ fn render_complexity_draws_the_legend_on_the_heat_map() {
     assert!(legend_pixels * 2 > (rect.width * rect.height) as usize, "no legend in {rect:?}");
 }
 
-const COMPARE_KEYS: [&str; 20] = [
+const COMPARE_KEYS: [&str; 23] = [
     "technique",
     "backend",
     "raster",
@@ -214,6 +214,9 @@ const COMPARE_KEYS: [&str; 20] = [
     "fragments",
     "captured",
     "lost",
+    "occluded",
+    "opaque_fragments",
+    "masked",
     "merged",
     "tied",
     "quantized",

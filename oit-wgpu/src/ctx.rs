@@ -362,6 +362,7 @@ impl<'a> GpuCtx<'a> {
     ) -> Result<Self, OitError> {
         let recording = caller.is_some();
         let plan = Plan::new("wgpu", scene, settings)?;
+        oit_gpu::refuse_materials("wgpu", scene)?;
         plan.refuse_image_atomics("wgpu")?;
         plan.refuse_interlock("wgpu", "WGSL has no fragment shader interlock")?;
         let pixels = settings.width * settings.height;
@@ -1276,6 +1277,7 @@ pub(crate) fn totals_stats(t: &[u32], passes: u32, storage_bytes: u64) -> Stats 
         max_layers: t[1],
         gpu_pass_ms: Vec::new(),
         tiles: 1,
+        ..Stats::default()
     }
 }
 

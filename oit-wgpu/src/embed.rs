@@ -498,6 +498,7 @@ impl OitPass {
     /// Whether the technique's frame can be recorded without a round trip ([`OitPass::record`]).
     fn check_recordable(&self) -> Result<(), OitError> {
         let plan = oit_core::plan::Plan::new("wgpu", &self.scene, &self.settings)?;
+        oit_gpu::refuse_materials("wgpu", &self.scene)?;
         plan.refuse_image_atomics("wgpu")?;
         plan.refuse_interlock("wgpu", "WGSL has no fragment shader interlock")?;
         let why = plan.mid_frame_readback();
