@@ -11,6 +11,7 @@
 //! | `near:N` | `ties:N` with the quads 10⁻⁷ apart in depth (equal after projection to f32) | up to N |
 //! | `scale:S:SCENE` | SCENE with every coordinate multiplied by S (e.g. `scale:1e-20:planes:8`) | SCENE's |
 //! | `wall:F:SCENE` | SCENE with an opaque grey wall across it, facing the default view, a share F in [0, 1] of the way through its bounding sphere (0: in front of everything, 1: behind it) | SCENE's in front of the wall |
+//! | `nowall:F:SCENE` | `wall:F:SCENE` with the wall masked away: the same frame with nothing occluded | SCENE's |
 //! | `default` | a see-through torus knot inside two glass spheres | 10 at the default view, up to 16 |
 //! | `bunny`, `armadillo` | the Stanford scans, embedded ([`crate::assets`]) | varies |
 //!
@@ -25,7 +26,7 @@ use glam::{Mat4, Vec3, Vec4};
 use crate::{Instance, Mesh, Object, OitError, Scene};
 
 /// The built-in names, for messages.
-pub const BUILTIN_SCENES: &str = "default, bunny, armadillo, planes:N, spheres:N, cluster:N, knot, coplanar, ties:N, near:N, grid:RxC:MESH, scale:S:SCENE, wall:F:SCENE";
+pub const BUILTIN_SCENES: &str = "default, bunny, armadillo, planes:N, spheres:N, cluster:N, knot, coplanar, ties:N, near:N, grid:RxC:MESH, scale:S:SCENE, wall:F:SCENE, nowall:F:SCENE";
 
 /// Where a bare name that is not built in (`--scene dragon`, `grid:2x2:dragon`) is looked for, as
 /// `NAME.obj`, in order: for messages. [`find_model`] is the lookup.
@@ -69,7 +70,7 @@ pub fn load_scene(name: &str) -> Result<Scene, OitError> {
 pub fn is_procedural(s: &str) -> bool {
     let mut rest = s.trim();
     loop {
-        let stripped = ["grid:", "scale:"].iter().find_map(|p| {
+        let stripped = ["grid:", "scale:", "wall:", "nowall:"].iter().find_map(|p| {
             let tail = rest.strip_prefix(p)?;
             // the prefix's own argument (R×C or S), then the inner scene
             tail.split_once(':').map(|(_, inner)| inner)
@@ -102,7 +103,10 @@ fn builtin_unchecked(name: &str) -> Option<Result<Scene, OitError>> {
         return Some(scaled(rest));
     }
     if let Some(rest) = name.strip_prefix("wall:") {
-        return Some(walled(rest));
+        return Some(walled(rest, false));
+    }
+    if let Some(rest) = name.strip_prefix("nowall:") {
+        return Some(walled(rest, true));
     }
     if let Some(mesh) = crate::assets::BuiltinMesh::find(name) {
         return Some(mesh.scene());
@@ -276,10 +280,15 @@ fn scaled(spec: &str) -> Result<Scene, OitError> {
 /// scene's transparent fragments behind it), 1 behind everything (an opaque backdrop). The wall
 /// is as wide as the sphere, so from the default view it hides all that lies behind it. SCENE's
 /// own objects, instances and primitive order are untouched; the wall's instance comes last.
-fn walled(spec: &str) -> Result<Scene, OitError> {
+///
+/// `nowall:F:SCENE` is the same scene with the wall masked away (alpha 0 under a cutoff of 0.5,
+/// [`crate::AlphaMode::Mask`]): the same camera, the same transparent fragments, the same opaque
+/// pass, and nothing occluded. What a frame time with the wall is compared against.
+fn walled(spec: &str, masked: bool) -> Result<Scene, OitError> {
+    let prefix = if masked { "nowall" } else { "wall" };
     let bad = || {
         OitError::InvalidSettings(format!(
-            "scene 'wall:{spec}': expected wall:F:SCENE with F a number from 0 to 1, e.g. wall:0.5:planes:16"
+            "scene '{prefix}:{spec}': expected {prefix}:F:SCENE with F a number from 0 to 1, e.g. {prefix}:0.5:planes:16"
         ))
     };
     let (share, inner) = spec.split_once(':').ok_or_else(bad)?;
@@ -300,10 +309,14 @@ fn walled(spec: &str) -> Result<Scene, OitError> {
     let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
     let positions = corners.iter().map(|&(a, b)| at + (side * a + up * b) * r).collect();
     scene.meshes.push(Mesh::new("wall", positions, vec![[0, 1, 2], [0, 2, 3]]));
-    let wall = Object::new("wall", scene.meshes.len() - 1, Vec4::new(0.55, 0.55, 0.55, 1.0)).opaque();
+    let mut wall = Object::new("wall", scene.meshes.len() - 1, Vec4::new(0.55, 0.55, 0.55, 1.0)).opaque();
+    if masked {
+        wall.color.w = 0.0;
+        wall.alpha_mode = crate::AlphaMode::Mask { cutoff: 0.5 };
+    }
     scene.objects.push(wall);
     scene.instances.push(Instance { object: scene.objects.len() - 1, transform: Mat4::IDENTITY });
-    scene.name = format!("wall:{spec}");
+    scene.name = format!("{prefix}:{spec}");
     Ok(scene)
 }
 

@@ -1119,6 +1119,7 @@ impl VkCtx<'_> {
                 max_layers: t[1],
                 gpu_pass_ms,
                 tiles: 1,
+                ..Stats::default()
             },
         };
         if self.counts_losses {
