@@ -230,6 +230,10 @@ pub struct Row {
     /// in reports written before the tail existed.
     #[serde(default)]
     pub merged: u64,
+    /// Fragments behind the opaque pass's depth ([`oit_core::Stats::occluded`]); 0 in a scene
+    /// without opaque parts and in reports written before the opaque pass.
+    #[serde(default)]
+    pub occluded: u64,
     /// Fragments whose order against an equal-depth fragment the technique could not establish
     /// ([`oit_core::Stats::tied`]); 0 in reports written before it was counted.
     #[serde(default)]
@@ -869,6 +873,7 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
                     captured: s.captured,
                     lost: s.lost,
                     merged: s.merged,
+                    occluded: s.occluded,
                     tied: s.tied,
                     storage_bytes: s.storage_bytes,
                     tiles: s.tiles.max(1),
