@@ -524,7 +524,11 @@ pub fn choose(
         first.predicted_ms.unwrap_or(f64::NAN),
         first.passes,
         if first.passes == 1 { "" } else { "es" },
-        if first.tiles > 1 { format!(", {} screen tiles", first.tiles) } else { String::new() },
+        if first.tiles > 1 {
+            format!(", {} screen tiles, {} bytes of storage in the largest", first.tiles, first.storage_bytes)
+        } else {
+            format!(", {} bytes of storage", first.storage_bytes)
+        },
         if eligible == 1 { "" } else { "s" },
         budget.max_epr,
         budget.memory.map(|m| format!(" and --memory {m}")).unwrap_or_default(),

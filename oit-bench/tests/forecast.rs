@@ -3,8 +3,8 @@
 //! scenes, sizes and `--memory` budgets that run whole, that force a few tiles, many, and
 //! splits after a count (sizes from a counting pass), every candidate `auto` foresaw is rendered
 //! under the same budget: `Stats::tiles` and `Stats::storage_bytes` must be the candidate's
-//! `tiles` and `storage_bytes`, and a candidate whose frame the tiling loop refuses must be
-//! refused when it runs.
+//! `tiles` and `storage_bytes` (and the pick's reason says them), and a candidate whose frame
+//! the tiling loop refuses must be refused when it runs.
 
 use oit_bench::auto::{Budget, Tables, resolve};
 use oit_bench::backends::{BackendOptions, select};
@@ -80,12 +80,15 @@ fn predicted_tiles_and_storage_are_the_frames() {
             }
             // the pick is one of them, and its reason names its tiles as they are
             let picked = choice.picked();
-            assert_eq!(
-                choice.reason.contains(&format!(", {} screen tiles)", picked.tiles)),
-                picked.tiles > 1,
-                "{what}: {}",
-                choice.reason
-            );
+            let said = if picked.tiles > 1 {
+                format!(
+                    ", {} screen tiles, {} bytes of storage in the largest)",
+                    picked.tiles, picked.storage_bytes
+                )
+            } else {
+                format!(", {} bytes of storage)", picked.storage_bytes)
+            };
+            assert!(choice.reason.contains(&said), "{what}: {} lacks {said}", choice.reason);
         }
     }
     eprintln!("{compared} compared, {tiled} tiled, {refused} refused");
