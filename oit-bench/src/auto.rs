@@ -17,13 +17,18 @@
 //!   32-bit `mdts` stores one 8-bit alpha for every fragment and depth at 2⁻²⁰: no bound below
 //!   every covered pixel (its documented worst case, 1), so it is a candidate only at
 //!   `--max-epr 1`. The bounds are worst cases; the measured EPR is usually far lower.
-//! - its **storage** ([`Plan::storage_bytes`] with the counted deepest pixel and fragments),
-//!   against `--memory`: over it, the frame would run in screen tiles ([`oit_core::tiling`]), at
-//!   least ⌈storage / memory⌉ of them, each one setting the whole scene up again; the prediction
-//!   adds those repeated geometry and fixed costs, and a candidate one pixel of which does not
-//!   fit is refused. On a hardware raster path the GPU rasterizes each window itself, so
-//!   fragments at the seams may differ from the whole frame's (the CPU and compute paths give the
-//!   same fragments bit for bit): there a tiled candidate has no bound below 1.
+//! - its **screen tiles and storage** under `--memory`, foreseen by the tiling loop the frame
+//!   itself runs ([`oit_core::tiling::forecast`]: the same grid, the same refusals and splits,
+//!   each window sized by [`Plan::frame_bytes`] with its part of the count, the backend's extra
+//!   bytes a pixel and the stitched outputs beside it), so the tiles and the largest tile's
+//!   storage `auto` reports are the ones the frame runs and reports, not a bound (held by
+//!   oit-bench's `tests/forecast.rs`, `predicted_tiles_and_storage_are_the_frames`). Each
+//!   further tile sets the whole scene up again: the prediction adds those repeated geometry and
+//!   fixed costs, and a candidate the loop refuses (a pixel that does not fit alone, more than
+//!   [`oit_core::tiling::MAX_TILES`] windows) is refused. On a hardware raster path the GPU
+//!   rasterizes each window itself, so fragments at the seams may differ from the whole frame's
+//!   (the CPU and compute paths give the same fragments bit for bit): there a tiled candidate has
+//!   no bound below 1.
 //! - its **predicted time** from the backend/path's calibration ([`crate::model::TechniqueModel::predict`])
 //!   with the geometry passes its plan runs at this N ([`geometry_passes`]).
 //!
@@ -43,6 +48,7 @@
 //! the CPU's), and the choice says so: the ranking then rests on another device's relative costs.
 
 use oit_core::plan::{Counted, Plan, Sizing};
+use oit_core::tiling::{Forecast, Rect};
 use oit_core::{Backend, Camera, OitError, RasterPath, Scene, Settings, Technique};
 use serde::Serialize;
 
@@ -177,9 +183,15 @@ pub struct Candidate {
     pub epr_bound: f64,
     /// Why the bound is what it is.
     pub epr_reason: String,
-    /// Storage of the whole frame, bytes ([`Plan::storage_bytes`]).
+    /// Storage the frame will report, bytes: its largest screen tile's (the whole frame's when it
+    /// runs in one), the technique's arrays as [`oit_core::Stats::storage_bytes`] counts them
+    /// ([`oit_core::tiling::Forecast::storage_bytes`]).
     pub storage_bytes: u64,
-    /// Screen tiles it would run in under `--memory` (at least; 1 when it fits).
+    /// The largest tile's bytes held to `--memory` (or the host's budget): its storage, resolve
+    /// state, outputs and the backend's extra ([`oit_core::tiling::Forecast::frame_bytes`]).
+    pub frame_bytes: u64,
+    /// Screen tiles it will run in (1 when it fits): [`oit_core::Stats::tiles`] of its frame; 0
+    /// where the tiling loop refuses it (then `rejected` says why).
     pub tiles: u64,
     /// Why it was not eligible; `None` for a candidate within both budgets.
     pub rejected: Option<String>,
@@ -343,24 +355,42 @@ pub fn candidates(stats: &SceneStats, max_epr: f64) -> Vec<Technique> {
     out
 }
 
+/// What the counting frame's per-pixel counts `layers` (rows of `settings`' frame) hold in the
+/// window `rect` (in the full frame's pixels): its deepest pixel and its fragments, what the
+/// window's own counting pass finds.
+fn counted_in(layers: &[u32], settings: &Settings, rect: Rect) -> Counted {
+    let (x0, y0) = settings.region.map_or((0, 0), |r| (r.x, r.y));
+    let width = settings.width as usize;
+    let mut out = Counted::default();
+    for y in rect.y..rect.y + rect.height {
+        let start = (y - y0) as usize * width + (rect.x - x0) as usize;
+        for &n in layers.get(start..start + rect.width as usize).unwrap_or_default() {
+            out.deepest = out.deepest.max(n);
+            out.fragments += u64::from(n);
+        }
+    }
+    out
+}
+
 /// Chooses for `backend` (its raster path per technique as `settings` gives it) on `scene`, whose
-/// counting pass gave `stats`: every [`candidates`] entry judged against `budget` and ranked by
-/// predicted time from `tables`; a clear error when none is within the budgets.
+/// counting pass gave `stats` and the per-pixel counts `layers` (the reference's
+/// `Frame::layers`): every [`candidates`] entry judged against `budget` and ranked by predicted
+/// time from `tables`; a clear error when none is within the budgets. Its tiles and storage are
+/// those of the frame of `settings` under `budget.memory`.
 pub fn choose(
     backend: &dyn Backend,
     scene: &Scene,
     settings: &Settings,
-    stats: &SceneStats,
+    (stats, layers): (&SceneStats, &[u32]),
     tables: &Tables,
     budget: Budget,
 ) -> Result<Choice, OitError> {
     let n = stats.deepest();
     let pixels = stats.pixels;
-    let counted = Counted { deepest: n, fragments: stats.fragments };
     let supported = backend.capabilities().techniques;
     let mut judged: Vec<(Candidate, String)> = Vec::new();
     for technique in candidates(stats, budget.max_epr) {
-        let s = Settings { technique, ..settings.clone() };
+        let s = Settings { technique, memory: budget.memory, ..settings.clone() };
         let label = crate::label(backend, &s);
         let name = technique.to_string();
         let refused = |reason: String| Candidate {
@@ -372,6 +402,7 @@ pub fn choose(
             epr_bound: f64::NAN,
             epr_reason: String::new(),
             storage_bytes: 0,
+            frame_bytes: 0,
             tiles: 0,
             rejected: Some(reason),
         };
@@ -387,36 +418,34 @@ pub fn choose(
             }
         };
         let (mut epr, mut epr_reason) = epr_bound(&plan, stats);
-        let storage = plan.storage_bytes(pixels, counted);
         let passes = geometry_passes(&plan, n);
         let table = tables.lookup(&label);
         let model = table.as_ref().and_then(|(c, _)| model_name(technique, c));
         let mut rejected = Vec::new();
-        let mut tiles = 1u64;
+        // the frame's own tiling loop, run on the count: the tiles and storage it will have
+        let forecast = oit_core::tiling::forecast(
+            backend.name(),
+            scene,
+            &s,
+            backend.raster_path(&s),
+            backend.frame_extra_bytes(&s),
+            |rect| counted_in(layers, settings, rect),
+        )
+        .unwrap_or_else(|e| {
+            rejected.push(e.to_string());
+            Forecast::default()
+        });
+        // 0 where the loop refuses the frame
+        let tiles = u64::from(forecast.tiles);
         let mut seams = false;
-        if let Some(memory) = budget.memory
-            && storage > memory
-        {
-            // the deepest pixel alone, with its fragments: what one tile of one pixel needs
-            let one = plan.storage_bytes(1, Counted { deepest: n, fragments: u64::from(n) });
-            tiles = storage.div_ceil(memory);
-            if one > memory {
-                rejected.push(format!("one pixel needs {one} bytes, over --memory {memory}"));
-            } else if tiles > oit_core::tiling::MAX_TILES as u64 {
-                rejected.push(format!(
-                    "needs {storage} bytes: over {} screen tiles of --memory {memory}",
-                    oit_core::tiling::MAX_TILES
-                ));
-            }
-            if backend.raster_path(&s) == RasterPath::Hardware && covered(stats) > 0 {
-                seams = epr < 1.0;
-                epr = 1.0;
-                epr_reason = format!(
-                    "{epr_reason}; but in screen tiles on the hardware raster path, where the GPU \
-                     rasterizes each window itself and fragments at the seams may differ from the \
-                     whole frame's: no bound"
-                );
-            }
+        if tiles > 1 && backend.raster_path(&s) == RasterPath::Hardware && covered(stats) > 0 {
+            seams = epr < 1.0;
+            epr = 1.0;
+            epr_reason = format!(
+                "{epr_reason}; but in screen tiles on the hardware raster path, where the GPU \
+                 rasterizes each window itself and fragments at the seams may differ from the \
+                 whole frame's: no bound"
+            );
         }
         if epr > budget.max_epr {
             rejected.push(format!(
@@ -431,7 +460,7 @@ pub fn choose(
                 // each further tile sets the whole scene up again: its triangles and fixed cost
                 let repeated =
                     t.coefficients[0] * f64::from(passes) * stats.triangles as f64 * 1e-6 + t.coefficients[4];
-                once + (tiles - 1) as f64 * repeated
+                once + tiles.saturating_sub(1) as f64 * repeated
             }),
             _ => None,
         };
@@ -448,7 +477,8 @@ pub fn choose(
                 predicted_ms: predicted,
                 epr_bound: epr,
                 epr_reason,
-                storage_bytes: storage,
+                storage_bytes: forecast.storage_bytes,
+                frame_bytes: forecast.frame_bytes,
                 tiles,
                 rejected: (!rejected.is_empty()).then(|| rejected.join("; ")),
             },
@@ -494,7 +524,11 @@ pub fn choose(
         first.predicted_ms.unwrap_or(f64::NAN),
         first.passes,
         if first.passes == 1 { "" } else { "es" },
-        if first.tiles > 1 { format!(", at least {} screen tiles", first.tiles) } else { String::new() },
+        if first.tiles > 1 {
+            format!(", {} screen tiles, {} bytes of storage in the largest", first.tiles, first.storage_bytes)
+        } else {
+            format!(", {} bytes of storage", first.storage_bytes)
+        },
         if eligible == 1 { "" } else { "s" },
         budget.max_epr,
         budget.memory.map(|m| format!(" and --memory {m}")).unwrap_or_default(),
@@ -524,7 +558,8 @@ pub fn resolve(
     budget: Budget,
 ) -> Result<(Choice, oit_core::Frame), OitError> {
     let (stats, frame) = count(backend, scene, camera, settings)?;
-    Ok((choose(backend, scene, settings, &stats, tables, budget)?, frame))
+    let layers = frame.layers.as_deref().unwrap_or_default();
+    Ok((choose(backend, scene, settings, (&stats, layers), tables, budget)?, frame))
 }
 
 #[cfg(test)]

@@ -223,6 +223,14 @@ pub trait Backend {
             .or_else(|| self.capabilities().raster_paths.first().copied())
             .unwrap_or(RasterPath::Cpu)
     }
+    /// Bytes a pixel of a frame of `settings` holds beyond its plan's
+    /// [`crate::plan::Plan::frame_bytes`], counted against the memory budget beside it: what
+    /// the backend hands [`crate::tiling::run_with`] (oit-cpu's array of resolve states, larger
+    /// than the plan's 23 words), and what [`crate::tiling::forecast`] sizes its windows by. 0 by
+    /// default.
+    fn frame_extra_bytes(&self, _settings: &Settings) -> u64 {
+        0
+    }
     /// Milliseconds of one plain geometry pass over `scene` (every fragment counted into a
     /// per-pixel atomic counter, nothing else) on the raster path `settings` select: the `Tv` of
     /// the depth-peeling speedup model `K = N·Tv / (Tv + Tf)`. Device time where the backend measures
@@ -261,6 +269,9 @@ impl Backend for OnPath {
     }
     fn raster_path(&self, _settings: &Settings) -> RasterPath {
         self.path
+    }
+    fn frame_extra_bytes(&self, settings: &Settings) -> u64 {
+        self.backend.frame_extra_bytes(&Settings { raster: Some(self.path), ..settings.clone() })
     }
     fn plain_pass_ms(&self, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<f64, OitError> {
         self.backend.plain_pass_ms(scene, camera, &Settings { raster: Some(self.path), ..settings.clone() })

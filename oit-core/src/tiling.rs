@@ -28,6 +28,12 @@
 //!   and each runs again, recursively, down to a single pixel; a pixel that does not fit alone is
 //!   a clear error, and so is a frame that would need more than [`MAX_TILES`] windows (without
 //!   `--memory`, more than [`AUTO_TILES`]: the device's refusal stands).
+//!
+//! Both decisions are one loop ([`windows`]), run by the frame ([`run_with`]) and, before any
+//! frame, by [`forecast`], which refuses a window where its [`Plan::frame_bytes`] with its part
+//! of a counting pass is over its budget, as oit-cpu does (a window sized by a count is checked
+//! whole once the count is known, so its refusal gives the true ratio): `auto` reports the tiles
+//! and storage the frame then has.
 
 use std::collections::VecDeque;
 use std::time::Instant;
@@ -205,9 +211,43 @@ pub fn run_with(
     extra: u64,
     mut frame: impl FnMut(&Settings) -> Result<Frame, OitError>,
 ) -> Result<Frame, OitError> {
-    settings.validate()?;
     let start = Instant::now();
-    let (root, full) = match settings.region {
+    let (root, _) = root(settings);
+    let mut stitched: Option<Stitched> = None;
+    let tiles = windows(
+        backend,
+        scene,
+        settings,
+        extra,
+        |_, s| frame(s),
+        |rect, f| {
+            if rect == root {
+                // the frame ran whole: nothing to stitch
+                stitched = Some(Stitched::whole(f));
+                Ok(())
+            } else {
+                stitched.get_or_insert_with(|| Stitched::new(root, &f)).place(root, rect, f)
+            }
+        },
+    )?;
+    let Some(stitched) = stitched else {
+        return Err(OitError::Device(format!(
+            "a frame of {}x{} ran in no screen tile",
+            root.width, root.height
+        )));
+    };
+    let mut frame = stitched.finish();
+    frame.stats.tiles = tiles.max(1) as u32;
+    frame.stats.count_packing(settings);
+    if frame.stats.tiles > 1 {
+        frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
+    }
+    Ok(frame)
+}
+
+/// The window a frame of `settings` covers in its full frame, and the full frame's size.
+fn root(settings: &Settings) -> (Rect, (u32, u32)) {
+    match settings.region {
         None => (
             Rect { x: 0, y: 0, width: settings.width, height: settings.height },
             (settings.width, settings.height),
@@ -216,7 +256,24 @@ pub fn run_with(
             Rect { x: r.x, y: r.y, width: settings.width, height: settings.height },
             (r.full_width, r.full_height),
         ),
-    };
+    }
+}
+
+/// The one decision of which windows a frame of `settings` runs as (module docs), whether the
+/// frame then runs ([`run_with`]) or is only foreseen ([`forecast`]): the first grid from the
+/// plan and `--memory`, then each window through `frame` (its rectangle and settings), each one
+/// done handed to `done`, each one refused as too large split and queued again. Returns the
+/// windows that ran. One loop for both, so what `auto` predicts is what the frame does.
+fn windows<T>(
+    backend: &str,
+    scene: &Scene,
+    settings: &Settings,
+    extra: u64,
+    mut frame: impl FnMut(Rect, &Settings) -> Result<T, OitError>,
+    mut done: impl FnMut(Rect, T) -> Result<(), OitError>,
+) -> Result<usize, OitError> {
+    settings.validate()?;
+    let (root, full) = root(settings);
     // what a frame run in tiles keeps of the whole frame while its tiles run (the stitched
     // image and per-pixel outputs), and the budget its windows share: `--memory` less that
     let mut kept = None;
@@ -254,18 +311,12 @@ pub fn run_with(
         }
         s
     };
-    let mut stitched: Option<Stitched> = None;
     let mut tiles = 0usize;
     while let Some(rect) = queue.pop_front() {
-        match frame(&window_settings(rect)) {
-            Ok(f) if rect == root => {
-                // the frame ran whole: nothing to stitch
-                tiles += 1;
-                stitched = Some(Stitched::whole(f));
-            }
+        match frame(rect, &window_settings(rect)) {
             Ok(f) => {
                 tiles += 1;
-                stitched.get_or_insert_with(|| Stitched::new(root, &f)).place(root, rect, f)?;
+                done(rect, f)?;
             }
             Err(e @ OitError::TooLarge { .. }) => {
                 if rect.pixels() == 1 {
@@ -303,19 +354,77 @@ pub fn run_with(
             Err(e) => return Err(e),
         }
     }
-    let Some(stitched) = stitched else {
-        return Err(OitError::Device(format!(
-            "a frame of {}x{} ran in no screen tile",
-            root.width, root.height
-        )));
-    };
-    let mut frame = stitched.finish();
-    frame.stats.tiles = tiles.max(1) as u32;
-    frame.stats.count_packing(settings);
-    if frame.stats.tiles > 1 {
-        frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
+    Ok(tiles)
+}
+
+/// The budget a frame of `settings` (a whole frame, or a window of one) holds its storage and
+/// outputs ([`Plan::frame_bytes`]) to on the host: half the host's available memory
+/// ([`crate::plan::host_memory_budget`]), or `--memory` where smaller. A window of a frame in
+/// screen tiles (`settings.region`) shares the host's half with what the whole frame keeps while
+/// its tiles run ([`Plan::stitched_bytes`]); under `--memory` the tiling loop has taken that off
+/// already. oit-cpu's budget, and what [`forecast`] foresees its refusals by.
+pub fn host_budget(settings: &Settings, plan: &Plan) -> (String, u64) {
+    let (name, mut bytes) = crate::plan::host_memory_budget();
+    if let Some(r) = settings.region {
+        let full = u64::from(r.full_width) * u64::from(r.full_height);
+        bytes = bytes.saturating_sub(plan.stitched_bytes(full)).max(1);
     }
-    Ok(frame)
+    settings.memory_budget((name.to_string(), bytes))
+}
+
+/// What a frame will run as, foreseen before it runs ([`forecast`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Forecast {
+    /// Screen tiles it runs in (1 when it runs whole): [`crate::Stats::tiles`].
+    pub tiles: u32,
+    /// The largest window's storage, as the frame reports it ([`crate::Stats::storage_bytes`]:
+    /// the technique's arrays, [`Plan::storage_bytes`] less the resolve state).
+    pub storage_bytes: u64,
+    /// The largest window's bytes held to its budget: [`Plan::frame_bytes`] and `extra`.
+    pub frame_bytes: u64,
+}
+
+/// The windows a frame of `settings` on `path` runs as and the storage it reports, foreseen from
+/// what a counting pass of the whole frame found, `counted` giving each window's part (its
+/// deepest pixel and fragments). The loop is [`run_with`]'s own ([`windows`]); each window is
+/// refused where the host's budget ([`host_budget`]) cannot hold its [`Plan::frame_bytes`] and
+/// `extra` bytes a pixel, before its count and after it, as oit-cpu refuses it: exact for
+/// oit-cpu and for a GPU backend that no device limit refuses (a storage binding's size is the
+/// device's and not foreseen).
+pub fn forecast(
+    backend: &str,
+    scene: &Scene,
+    settings: &Settings,
+    path: crate::RasterPath,
+    extra: u64,
+    counted: impl Fn(Rect) -> Counted,
+) -> Result<Forecast, OitError> {
+    let plan = Plan::new(backend, scene, settings)?.on_path(path);
+    let counts = plan.needs_count() || plan.technique == crate::Technique::Reference;
+    let mut out = Forecast::default();
+    let tiles = windows(
+        backend,
+        scene,
+        settings,
+        extra,
+        |rect, s| {
+            let pixels = rect.pixels();
+            let budget = host_budget(s, &plan);
+            let what = format!("{} storage and outputs of a frame of {pixels} pixels", plan.technique);
+            let total = |c: Counted| plan.frame_bytes(pixels, c).saturating_add(pixels.saturating_mul(extra));
+            crate::plan::check_total(&what, total(Counted::default()), (&budget.0, budget.1))?;
+            let c = if counts { counted(rect) } else { Counted::default() };
+            crate::plan::check_total(&what, total(c), (&budget.0, budget.1))?;
+            Ok((plan.storage_bytes(pixels, c) - pixels * crate::plan::RESOLVE_STATE_BYTES, total(c)))
+        },
+        |_, (storage, total)| {
+            out.storage_bytes = out.storage_bytes.max(storage);
+            out.frame_bytes = out.frame_bytes.max(total);
+            Ok(())
+        },
+    )?;
+    out.tiles = tiles.max(1) as u32;
+    Ok(out)
 }
 
 /// A frame being put together from its windows, each placed as it finishes and then dropped, so

@@ -281,18 +281,10 @@ pub(crate) fn state_array_extra(settings: &Settings) -> u64 {
     if lends { extra } else { 0 }
 }
 
-/// The budget of a CPU frame's storage and outputs ([`oit_core::plan::Plan::frame_bytes`]): half
-/// the host's available memory ([`oit_core::plan::host_memory_budget`]), or `--memory` where
-/// smaller. A window of a frame in screen tiles (`settings.region`) shares the host's half with
-/// what the whole frame keeps while its tiles run ([`oit_core::plan::Plan::stitched_bytes`]);
-/// under `--memory` the tiling loop has taken that off already.
+/// The budget of a CPU frame's storage and outputs ([`oit_core::plan::Plan::frame_bytes`]):
+/// [`oit_core::tiling::host_budget`], the one [`oit_core::tiling::forecast`] foresees it by.
 pub(crate) fn cpu_budget(settings: &Settings, plan: &oit_core::plan::Plan) -> (String, u64) {
-    let (name, mut bytes) = oit_core::plan::host_memory_budget();
-    if let Some(r) = settings.region {
-        let full = u64::from(r.full_width) * u64::from(r.full_height);
-        bytes = bytes.saturating_sub(plan.stitched_bytes(full)).max(1);
-    }
-    settings.memory_budget((name.to_string(), bytes))
+    oit_core::tiling::host_budget(settings, plan)
 }
 
 impl Drop for CpuPrepared<'_> {
@@ -347,6 +339,10 @@ impl Backend for CpuBackend {
             raster_paths: vec![RasterPath::Cpu],
             limits: vec![("max image side".into(), oit_core::MAX_SIZE.to_string())],
         }
+    }
+
+    fn frame_extra_bytes(&self, settings: &Settings) -> u64 {
+        state_array_extra(settings)
     }
 
     fn prepare<'s>(&'s self, scene: &'s Scene) -> Result<Box<dyn Prepared + 's>, OitError> {

@@ -22,6 +22,7 @@
 use oit_core::Compositor as _;
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
+use oit_core::plan::Counted;
 use oit_core::rules::{depth_bits, depth_from_bits};
 use oit_core::{Frame, OitError};
 use rayon::prelude::*;
@@ -42,6 +43,8 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     // the exclusive prefix sum: offsets[px] is the first entry of pixel px, offsets[pixels] the total
     let offsets = ctx.words32(entries, 0)?;
     let total = ctx.plan.check_fragments(exclusive_prefix_sum(&counts, &offsets))?;
+    let deepest = counts.iter().map(|c| c.load(Relaxed)).max().unwrap_or(0);
+    ctx.check_counted(Counted { deepest, fragments: u64::from(total) })?;
     let keys = ctx.words64(u64::from(total), 0)?;
     let payloads = ctx.words32(u64::from(total), 0)?;
     // pass 2: each fragment takes the last free entry of its pixel's range

@@ -29,6 +29,7 @@ use oit_core::Compositor as _;
 use std::cell::Cell;
 use std::sync::atomic::Ordering::Relaxed;
 
+use oit_core::plan::Counted;
 use oit_core::rules::{depth_bits, depth_from_bits};
 use oit_core::{Frame, OitError};
 use rayon::prelude::*;
@@ -45,6 +46,8 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let per_band = ctx.raster.for_each_fragment_by_band(Shade::OnDemand, |_| |_: &Fragment<'_>| {});
     ctx.ran_pass(per_band.iter().sum());
     let nodes = ctx.plan.check_fragments(ctx.fragments.unwrap_or(0))?;
+    // ll's arrays follow the frame's fragments alone (no per-pixel count: deepest unknown, unused)
+    ctx.check_counted(Counted { deepest: 0, fragments: u64::from(nodes) })?;
     capture_and_resolve(ctx, &per_band, nodes)
 }
 

@@ -4,7 +4,7 @@
 
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
 
-use oit_core::plan::Plan;
+use oit_core::plan::{Counted, Plan};
 use oit_core::rules::{depth_bits, pack_normal, pack_rgba8};
 use oit_core::{Camera, Effect, OitError, Scene, Settings, Technique};
 
@@ -327,7 +327,28 @@ impl<'a> Ctx<'a> {
             counts[f.pixel as usize].fetch_add(1, Relaxed);
         });
         self.storage_bytes -= self.pixels as u64 * 4;
-        Ok(counts.iter().map(|c| c.load(Relaxed)).max().unwrap_or(0))
+        let deepest = counts.iter().map(|c| c.load(Relaxed)).max().unwrap_or(0);
+        let fragments = counts.iter().map(|c| u64::from(c.load(Relaxed))).sum();
+        drop(counts);
+        self.check_counted(Counted { deepest, fragments })?;
+        Ok(deepest)
+    }
+
+    /// Checks the whole frame, sized by what its counting pass found, against the budget before
+    /// any array sized by it is allocated: the plan's [`Plan::frame_bytes`] and the state array's
+    /// extra, as the tiling loop sized the window by before its count. A refusal then names the
+    /// frame's whole need, not the part allocated when an array went over, so the window splits
+    /// by the true ratio, and `auto` foresees it ([`oit_core::tiling::forecast`] refuses the
+    /// same windows by the same numbers).
+    pub fn check_counted(&self, counted: Counted) -> Result<(), OitError> {
+        let pixels = self.pixels as u64;
+        oit_core::plan::check_total(
+            &format!("{} storage and outputs of a frame of {pixels} pixels", self.settings.technique),
+            self.plan
+                .frame_bytes(pixels, counted)
+                .saturating_add(pixels.saturating_mul(crate::state_array_extra(self.settings))),
+            (&self.budget.0, self.budget.1),
+        )
     }
 
     /// Per-pixel depth range [zNear, zFar] for the bucket techniques, from the instances'

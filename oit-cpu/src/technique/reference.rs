@@ -10,6 +10,7 @@ use std::sync::atomic::Ordering::Relaxed;
 
 use glam::DVec3;
 use oit_core::composite::{fresnel_f64, front_to_back_f64, heat_f64, linear_to_srgb8_f64, translucency_f64};
+use oit_core::plan::Counted;
 use oit_core::rules::{depth_bits, unpack_normal_f64, unpack_rgba8_f64};
 use oit_core::{Effect, Frame, Image, OitError};
 use rayon::prelude::*;
@@ -26,9 +27,13 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let mut total = 0usize;
     for &c in &counts {
         offsets.push(total);
+        let deepest = counts.iter().copied().max().unwrap_or(0);
+        ctx.check_counted(Counted { deepest, fragments: total as u64 })?;
         total += c as usize;
     }
     offsets.push(total);
+    let deepest = counts.iter().copied().max().unwrap_or(0);
+    ctx.check_counted(Counted { deepest, fragments: total as u64 })?;
     // the plan's arrays: the counts above serve as the fill cursors (a second array here, not
     // counted, as a GPU clears and reuses the counts); the offsets and the entries (counted as
     // they are lent), every slot of which the fill pass writes
