@@ -442,7 +442,12 @@ impl<'a> VkCtx<'a> {
     /// the opaque image at 16 and 17.
     fn storage<'b>(held: &'b [Rc<Buffer>; 4], buffers: &[&'b Buffer]) -> Vec<(u32, &'b Buffer)> {
         let [state, acct, keys, rgb] = held;
-        let mut out = vec![(1, &**state), (ACCT_BINDING, &**acct), (OPAQUE_KEYS_BINDING, &**keys), (OPAQUE_RGB_BINDING, &**rgb)];
+        let mut out = vec![
+            (1, &**state),
+            (ACCT_BINDING, &**acct),
+            (OPAQUE_KEYS_BINDING, &**keys),
+            (OPAQUE_RGB_BINDING, &**rgb),
+        ];
         out.extend(buffers.iter().enumerate().map(|(i, b)| (i as u32 + 2, *b)));
         out
     }
@@ -1139,7 +1144,8 @@ impl VkCtx<'_> {
         };
         let captured = u64::from(t[0]);
         // words 1-3 of the first count are the opaque pass's, where the frame has one
-        let opaque_word = |w: usize| if self.plan.opaque { first.get(w).copied().map_or(0, u64::from) } else { 0 };
+        let opaque_word =
+            |w: usize| if self.plan.opaque { first.get(w).copied().map_or(0, u64::from) } else { 0 };
         // NOT COUNTED where `counts_losses` is off: the blend captures
         let (fragments, lost, lost_pixels) = oit_core::GpuTotals {
             fragments: self.fragments,

@@ -396,10 +396,22 @@ impl VulkanPrepared<'_> {
             RasterPath::Compute => Drivers {
                 scene: Raster::Compute(this.compute_raster(&this.compute, part, camera, drawn, false)?),
                 boxes: Box::new(move || {
-                    Ok(Raster::Compute(this.compute_raster(&this.compute_boxes, part, camera, drawn, true)?))
+                    Ok(Raster::Compute(this.compute_raster(
+                        &this.compute_boxes,
+                        part,
+                        camera,
+                        drawn,
+                        true,
+                    )?))
                 }),
                 opaque: match &layers.opaque {
-                    Some(o) => Some(Raster::Compute(this.compute_raster(&this.compute_opaque, o, camera, drawn, false)?)),
+                    Some(o) => Some(Raster::Compute(this.compute_raster(
+                        &this.compute_opaque,
+                        o,
+                        camera,
+                        drawn,
+                        false,
+                    )?)),
                     None => None,
                 },
             },
@@ -439,7 +451,9 @@ impl VulkanPrepared<'_> {
                 };
                 let (gpu, made) = (this.gpu, &this.geometry_made);
                 let opaque = match (&layers.opaque, &*this.hardware_opaque.borrow()) {
-                    (Some(o), Some(ohw)) => Some(Raster::Hardware(ohw.raster(gpu, o, &camera, drawn, false, made)?)),
+                    (Some(o), Some(ohw)) => {
+                        Some(Raster::Hardware(ohw.raster(gpu, o, &camera, drawn, false, made)?))
+                    }
                     _ => None,
                 };
                 Drivers {

@@ -437,7 +437,8 @@ impl<'a> GpuCtx<'a> {
             TOTALS_BYTES,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         );
-        let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+        let storage =
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
         let opaque_bytes = oit_core::plan::OPAQUE_BYTES * u64::from(pixels);
         let has_opaque = plan.opaque;
         let opaque = if has_opaque {
@@ -702,7 +703,10 @@ impl<'a> GpuCtx<'a> {
             wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::Buffer(uniform) },
             wgpu::BindGroupEntry { binding: 1, resource: self.state.as_entire_binding() },
             wgpu::BindGroupEntry { binding: ACCT_BINDING, resource: self.acct.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: OPAQUE_KEYS_BINDING, resource: self.opaque.0.as_entire_binding() },
+            wgpu::BindGroupEntry {
+                binding: OPAQUE_KEYS_BINDING,
+                resource: self.opaque.0.as_entire_binding(),
+            },
             wgpu::BindGroupEntry { binding: OPAQUE_RGB_BINDING, resource: self.opaque.1.as_entire_binding() },
         ];
         for (i, b) in buffers.iter().enumerate() {

@@ -455,7 +455,9 @@ impl WgpuPrepared<'_> {
                         as Box<dyn Driver>)
                 }),
                 opaque: match &layers.opaque {
-                    Some(o) => Some(Box::new(this.compute_raster(&this.compute_opaque, o, camera, drawn, false)?)),
+                    Some(o) => {
+                        Some(Box::new(this.compute_raster(&this.compute_opaque, o, camera, drawn, false)?))
+                    }
                     None => None,
                 },
             },
@@ -467,7 +469,9 @@ impl WgpuPrepared<'_> {
                         Ok(Box::new(hw.raster(gpu, part, camera, drawn, true, made)?) as Box<dyn Driver>)
                     }),
                     opaque: match (&layers.opaque, &this.hardware_opaque) {
-                        (Some(o), Some(ohw)) => Some(Box::new(ohw.raster(gpu, o, camera, drawn, false, made)?)),
+                        (Some(o), Some(ohw)) => {
+                            Some(Box::new(ohw.raster(gpu, o, camera, drawn, false, made)?))
+                        }
                         _ => None,
                     },
                 }
