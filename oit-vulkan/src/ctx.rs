@@ -1179,7 +1179,6 @@ impl VkCtx<'_> {
                 opaque_fragments: opaque_word(1),
                 masked: opaque_word(2),
                 occluded: opaque_word(3),
-                ..Stats::default()
             },
         };
         if self.counts_losses {
