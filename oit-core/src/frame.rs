@@ -81,7 +81,8 @@ impl Stats {
     /// breaks it, and the frame is refused with an error rather than shown with fragments
     /// missing and `lost` silent.
     pub fn check_accounting(&self, backend: &str) -> Result<(), OitError> {
-        if self.captured + self.merged + self.lost + self.occluded == self.fragments && self.masked <= self.opaque_fragments
+        if self.captured + self.merged + self.lost + self.occluded == self.fragments
+            && self.masked <= self.opaque_fragments
         {
             return Ok(());
         }
@@ -91,7 +92,13 @@ impl Stats {
              run every step of the frame to the end (lavapipe, for one, ends a shader's loops after \
              65,535 iterations, which a pixel of thousands of layers can need); the frame is refused \
              rather than shown wrong. Use fewer layers, another raster path or the cpu backend",
-            self.captured, self.merged, self.lost, self.occluded, self.fragments, self.masked, self.opaque_fragments
+            self.captured,
+            self.merged,
+            self.lost,
+            self.occluded,
+            self.fragments,
+            self.masked,
+            self.opaque_fragments
         )))
     }
 }

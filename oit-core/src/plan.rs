@@ -496,9 +496,9 @@ impl Plan {
     /// ([`Plan::check_budget`]) before it allocates.
     pub fn storage_bytes(&self, pixels: u64, counted: Counted) -> u64 {
         let frame = RESOLVE_STATE_BYTES + if self.opaque { OPAQUE_BYTES } else { 0 };
-        self.arrays(counted)
-            .iter()
-            .fold(pixels.saturating_mul(frame), |sum, a| sum.saturating_add(a.bytes(pixels, counted.fragments)))
+        self.arrays(counted).iter().fold(pixels.saturating_mul(frame), |sum, a| {
+            sum.saturating_add(a.bytes(pixels, counted.fragments))
+        })
     }
 
     /// Bytes of the outputs a frame of `pixels` pixels holds beside its storage

@@ -408,7 +408,10 @@ pub fn spheres(n: u32) -> Scene {
     let mut scene = Scene { name: format!("spheres:{n}"), meshes: vec![sphere], ..Default::default() };
     for i in 0..n {
         let r = (i + 1) as f32 / n as f32;
-        scene.objects.push(Object { absorption: 1.5, ..Object::new(format!("sphere {i}"), 0, hue(i as f32 / n as f32 + 0.6).extend(0.3)) });
+        scene.objects.push(Object {
+            absorption: 1.5,
+            ..Object::new(format!("sphere {i}"), 0, hue(i as f32 / n as f32 + 0.6).extend(0.3))
+        });
         scene.instances.push(Instance { object: i as usize, transform: Mat4::from_scale(Vec3::splat(r)) });
     }
     scene

@@ -410,11 +410,8 @@ impl Scene {
 
     /// A scene with one instance (identity transform) of each mesh, coloured `color`.
     pub fn from_meshes(name: impl Into<String>, meshes: Vec<Mesh>, color: Vec4) -> Scene {
-        let objects: Vec<Object> = meshes
-            .iter()
-            .enumerate()
-            .map(|(i, m)| Object::new(m.name.clone(), i, color))
-            .collect();
+        let objects: Vec<Object> =
+            meshes.iter().enumerate().map(|(i, m)| Object::new(m.name.clone(), i, color)).collect();
         let instances =
             (0..objects.len()).map(|object| Instance { object, transform: Mat4::IDENTITY }).collect();
         Scene { name: name.into(), meshes, objects, instances, warnings: Vec::new() }

@@ -232,7 +232,8 @@ impl<'s> CpuPrepared<'s> {
         // opaque first: its depth holds back the transparent fragments behind it
         let opaque = layers.opaque.as_ref().map(|o| opaque::draw(o, camera, &drawn));
         raster.cut_at(opaque.as_ref().map(|o| o.depth.clone()));
-        let mut ctx = Ctx::new(scene, camera, &drawn, &raster, &self.pool, plan, self.per_length, opaque.as_ref());
+        let mut ctx =
+            Ctx::new(scene, camera, &drawn, &raster, &self.pool, plan, self.per_length, opaque.as_ref());
         let frame = technique::render(&mut ctx, settings.technique);
         drop(ctx);
         let occluded = raster.occluded().unwrap_or_else(|| {

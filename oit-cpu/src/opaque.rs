@@ -64,13 +64,17 @@ pub(crate) fn draw(scene: &Scene, camera: &Camera, settings: &Settings) -> Opaqu
             }
         }
     });
-    let depth: Arc<[f32]> =
-        keys.iter().map(|k| k.load(Relaxed)).map(|k| if k == u64::MAX { f32::INFINITY } else { f32::from_bits((k >> 32) as u32) }).collect();
+    let depth: Arc<[f32]> = keys
+        .iter()
+        .map(|k| k.load(Relaxed))
+        .map(|k| if k == u64::MAX { f32::INFINITY } else { f32::from_bits((k >> 32) as u32) })
+        .collect();
     let color = keys
         .iter()
         .zip(&rgb)
         .map(|(k, c)| {
-            (k.load(Relaxed) != u64::MAX).then(|| Vec3::from_array(c.each_ref().map(|v| f32::from_bits(v.load(Relaxed)))))
+            (k.load(Relaxed) != u64::MAX)
+                .then(|| Vec3::from_array(c.each_ref().map(|v| f32::from_bits(v.load(Relaxed)))))
         })
         .collect();
     OpaqueImage { depth, color, fragments, masked: masked.into_inner(), passes: 2 }

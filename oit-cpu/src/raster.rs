@@ -506,7 +506,6 @@ impl Rasterizer {
         }
     }
 
-
     /// What the traversal derives from the set-up triangles, made again: their [`SmallEdges`]
     /// (into the storage the last frame's used), the bins of [`RasterMode::Tiled`], the count.
     fn derive(&mut self) {

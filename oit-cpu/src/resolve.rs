@@ -213,7 +213,11 @@ impl<'a> Resolve<'a> {
         if complexity {
             let max = deepest.max(1);
             image.pixels.par_iter_mut().zip(states.par_iter_mut()).enumerate().for_each(|(i, (px, s))| {
-                let c = if s.captured == 0 { self.background_at(i) } else { heat(s.captured as f32 / max as f32) };
+                let c = if s.captured == 0 {
+                    self.background_at(i)
+                } else {
+                    heat(s.captured as f32 / max as f32)
+                };
                 *px = srgb(c);
                 *s = PixelState::default();
             });

@@ -53,6 +53,24 @@ use oit_core::{Camera, Effect, GpuFragments, OitError, Scene, Settings};
 /// Group 0's binding of the loss accounting (`acct` in prelude.wgsl).
 pub const ACCT_BINDING: u32 = 15;
 
+/// Group 0's binding of the opaque pass's keys (`opaque_keys` in prelude.wgsl): a pixel's
+/// nearest opaque `depth bits << 32 | primitive id` as one u64, all ones where none fell.
+pub const OPAQUE_KEYS_BINDING: u32 = 16;
+
+/// Group 0's binding of the opaque pass's colours (`opaque_rgb` in prelude.wgsl): 3 words a
+/// pixel (the winner's linear RGB, f32 bits), then [`OPAQUE_COUNTER_WORDS`] counters.
+pub const OPAQUE_RGB_BINDING: u32 = 17;
+
+/// Counters after the opaque colours: [masked, occluded].
+pub const OPAQUE_COUNTER_WORDS: u64 = 2;
+
+/// Words of the opaque keys' buffer of a frame of `pixels` pixels (2 a pixel), and of its
+/// colours' (3 a pixel and the counters): together [`oit_core::plan::OPAQUE_BYTES`] a pixel, and
+/// the counters (bookkeeping).
+pub fn opaque_words(pixels: u64) -> (u64, u64) {
+    (pixels.max(1) * 2, pixels * 3 + OPAQUE_COUNTER_WORDS)
+}
+
 /// Words of one `PixelState` (resolve.wgsl): 16 for the composite, 7 for the ties.
 pub const STATE_WORDS: u64 = 23;
 
@@ -91,6 +109,11 @@ pub struct FrameUniform {
     /// ([`Scene::absorption_per_length`](oit_core::Scene::absorption_per_length); 0 under the
     /// other effects, which do not read it), unused.
     pub lens: [f32; 4],
+    /// The opaque pass ([`oit_core::Scene::layers`]): x 1 where the frame has its image and the
+    /// pass's transparent fragments are cut at its depth (`opaque_cut` in prelude.wgsl); y 1 in
+    /// the pass that counts the fragments the cut holds back (the frame's first scene pass);
+    /// z, w unused.
+    pub opaque: [u32; 4],
 }
 
 /// The refusal of a scene with opaque or masked objects or a transmission
@@ -137,6 +160,7 @@ impl FrameUniform {
             forward: camera.forward.extend(0.0).to_array(),
             background: settings.background.extend(1.0).to_array(),
             lens: [camera.near, camera.far, scene.absorption_for(settings.effect) as f32, 0.0],
+            opaque: [u32::from(plan.opaque), 0, u32::from(plan.opaque), 0],
         }
     }
 }
@@ -270,6 +294,14 @@ pub trait Frame<R: ?Sized> {
     /// Marks the passes that follow as the last capture pass the plan allows (or not).
     fn last_pass(&mut self, last: bool);
 
+    /// Whether the geometry passes that follow cut their fragments at the opaque pass's depth
+    /// (where the frame has an opaque part; off for the opaque pass itself and the instances'
+    /// bounding boxes, which oit-cpu does not cut either).
+    fn cut(&mut self, on: bool);
+    /// Where the opaque pass counted the fragments it drew (word 0 of `count`, left on the
+    /// device): read with the frame's end into `Stats::opaque_fragments`.
+    fn note_opaque(&mut self, count: &Self::Buffer);
+
     /// One geometry pass of `module`'s `capture` (pass index `pass`, parameter `param`,
     /// `buffers` bound from binding 2 of group 0) through `raster`. The frame's first geometry
     /// pass over the scene counts the scene's fragments.
@@ -380,4 +412,8 @@ pub trait Rasters<R: ?Sized> {
     fn scene(&self) -> &R;
     /// Makes a rasterizer of the instances' bounding boxes and runs `pass` with it.
     fn with_boxes(&self, pass: &mut dyn FnMut(&R) -> Result<(), OitError>) -> Result<(), OitError>;
+    /// Rasterizes the frame's opaque part ([`oit_core::Layers::opaque`]), where it has one.
+    fn opaque(&self) -> Option<&R> {
+        None
+    }
 }

@@ -16,6 +16,9 @@ use crate::{Frame, ImageFormat, Init, Rasters};
 /// into the frame's state (the reference also leaves its per-pixel fragment counts for the
 /// frame's `layers`).
 pub fn render<R: ?Sized, F: Frame<R>>(ctx: &mut F, rasters: &impl Rasters<R>) -> Result<(), OitError> {
+    if let Some(opaque) = rasters.opaque() {
+        opaque_pass(ctx, opaque)?;
+    }
     match ctx.settings().technique {
         Technique::Reference => reference(ctx, rasters.scene()),
         Technique::Plain => plain(ctx, rasters.scene()),
@@ -35,6 +38,23 @@ pub fn render<R: ?Sized, F: Frame<R>>(ctx: &mut F, rasters: &impl Rasters<R>) ->
         Technique::Ll => ll(ctx, rasters.scene()),
         Technique::Kbuf { .. } => kbuf(ctx, rasters.scene()),
     }
+}
+
+/// The opaque pass (oit-cpu's `opaque::draw`): two geometry passes of `opaque.wgsl` over the
+/// frame's opaque part, the first a 64-bit MIN of each pixel's `depth bits << 32 | id` (masked
+/// fragments discarded and counted), the second writing the winner's colour into the frame's
+/// opaque image (group 0, [`crate::OPAQUE_KEYS_BINDING`] and [`crate::OPAQUE_RGB_BINDING`]). The
+/// technique's passes that follow cut their fragments at its depth ([`Frame::cut`]). Neither pass
+/// is the scene's first: the frame's fragments stay the transparent part's.
+pub fn opaque_pass<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> {
+    let fragments = ctx.fragments();
+    ctx.cut(false);
+    let count = ctx.geometry_pass_counted(raster, "opaque", &[], 0, 0)?;
+    ctx.geometry_pass(raster, "opaque", &[], 1, 0)?;
+    ctx.set_fragments(fragments);
+    ctx.note_opaque(&count);
+    ctx.cut(true);
+    Ok(())
 }
 
 /// A frame's storage as its plan names it ([`Plan::arrays`](oit_core::plan::Plan::arrays)): a
@@ -510,7 +530,10 @@ pub fn depth_bounds<R: ?Sized, F: Frame<R>>(
         BoundsMode::Exact => ctx.geometry_pass(rasters.scene(), "bounds", &[&bounds], 0, 0)?,
         BoundsMode::Boxes => {
             let fragments = ctx.fragments();
+            // the boxes are not cut at the opaque depth (nor are they on the CPU)
+            ctx.cut(false);
             rasters.with_boxes(&mut |boxes| ctx.geometry_pass(boxes, "bounds", &[&bounds], 0, 0))?;
+            ctx.cut(true);
             // the frame's fragments are the scene's, not the boxes'
             ctx.set_fragments(fragments);
         }
@@ -759,6 +782,8 @@ mod tests {
             unreachable!("not a pass")
         }
         fn last_pass(&mut self, _: bool) {}
+        fn cut(&mut self, _: bool) {}
+        fn note_opaque(&mut self, _: &()) {}
         fn geometry_pass(
             &mut self,
             _: &(),

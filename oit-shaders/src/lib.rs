@@ -54,6 +54,7 @@ files!(
     "core/finish.wgsl",
     "core/fragment.wgsl",
     "core/gate.wgsl",
+    "core/opaque.wgsl",
     "core/prelude.wgsl",
     "core/raster_compute.wgsl",
     "core/raster_hardware.wgsl",
@@ -247,6 +248,8 @@ pub const MODULES: &[Module] = &[
     m("finish", &["core/finish.wgsl"], Kernels),
     m("gate", &["core/gate.wgsl"], Kernels),
     m("count", &["technique/count.wgsl"], Raster),
+    // the opaque pass's two geometry passes (oit-gpu's `technique::opaque_pass`)
+    m("opaque", &["core/opaque.wgsl"], Raster),
     m("reference", &["technique/reference.wgsl", "technique/sort_entries.wgsl"], Raster),
     m("fabs", &["technique/fabs_counters.wgsl", "technique/fabs.wgsl", "technique/tail.wgsl"], Raster),
     // `--atomic-storage image`: the same technique over the storage-image accessor

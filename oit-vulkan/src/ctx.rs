@@ -20,7 +20,7 @@ use crate::record::{Recorder, Vertices};
 use oit_gpu::dispatch_size;
 
 pub(crate) use oit_gpu::{ACCT_BINDING, FrameUniform};
-use oit_gpu::{MIN_BUFFER_WORDS, STATE_WORDS};
+use oit_gpu::{MIN_BUFFER_WORDS, OPAQUE_KEYS_BINDING, OPAQUE_RGB_BINDING, STATE_WORDS};
 
 /// A framebuffer the pool keeps: its render pass, its images (in attachment order), itself.
 type KeptFramebuffer = (vk::RenderPass, Vec<vk::Image>, Rc<Framebuffer>);
@@ -174,7 +174,14 @@ pub(crate) struct VkCtx<'a> {
     image: Rc<Buffer>,
     totals: Rc<Buffer>,
     acct: Rc<Buffer>,
-    /// The first geometry pass's fragment count ([`Fragments::OnDevice`]).
+    /// The opaque pass's keys and colours (prelude.wgsl's `opaque_keys`, `opaque_rgb`), bound at
+    /// group 0's [`OPAQUE_KEYS_BINDING`] and [`OPAQUE_RGB_BINDING`] in every command: the frame's
+    /// storage where its plan has an opaque part, else small placeholders.
+    opaque: (Rc<Buffer>, Rc<Buffer>),
+    /// Where the opaque pass counted its fragments ([`VkCtx::note_opaque`]).
+    opaque_from: Option<Rc<Buffer>>,
+    /// The first geometry pass's fragment count ([`Fragments::OnDevice`]) in word 0; the opaque
+    /// pass's fragments, masked and occluded counts in words 1–3, copied there at the end.
     first_count: Rc<Buffer>,
     pool: &'a BufferPool,
     lent: Vec<Rc<Buffer>>,
@@ -225,7 +232,6 @@ impl<'a> VkCtx<'a> {
         pool: &'a BufferPool,
     ) -> Result<Self, OitError> {
         let plan = Plan::new("vulkan", scene, settings)?;
-        oit_gpu::refuse_materials("vulkan", scene)?;
         let pixels = settings.width * settings.height;
         let state_bytes = u64::from(pixels) * STATE_WORDS * 4;
         gpu.check_storage("the per-pixel resolve state", state_bytes)?;
@@ -245,6 +251,15 @@ impl<'a> VkCtx<'a> {
         let totals = take(16)?;
         let first_count = take(16)?;
         let gated_counter = take(32)?;
+        let opaque_bytes = oit_core::plan::OPAQUE_BYTES * u64::from(pixels);
+        let has_opaque = plan.opaque;
+        let opaque = if has_opaque {
+            gpu.check_storage("the opaque pass's image", opaque_bytes)?;
+            let (keys, rgb) = oit_gpu::opaque_words(u64::from(pixels));
+            (take(keys * 4)?, take(rgb * 4)?)
+        } else {
+            (take(16)?, take(16)?)
+        };
         let mut rec = Recorder::new(gpu)?;
         rec.window = settings.region.and_then(|r| r.viewport(crate::hardware::max_viewport_side(gpu)));
         let mut ctx = VkCtx {
@@ -254,7 +269,7 @@ impl<'a> VkCtx<'a> {
             pixels,
             passes: 0,
             fragments: Fragments::Unset,
-            storage_bytes: 0,
+            storage_bytes: if has_opaque { opaque_bytes } else { 0 },
             merged: 0,
             counts_losses: true,
             fragments_from_captured: false,
@@ -263,6 +278,8 @@ impl<'a> VkCtx<'a> {
             image,
             totals,
             acct,
+            opaque,
+            opaque_from: None,
             first_count,
             pool,
             lent,
@@ -283,6 +300,11 @@ impl<'a> VkCtx<'a> {
         let (acct, gated_counter) = (ctx.acct.clone(), ctx.gated_counter.clone());
         ctx.rec.fill(&acct, 0);
         ctx.rec.fill(&gated_counter, 0);
+        if has_opaque {
+            let (keys, rgb) = ctx.opaque.clone();
+            ctx.rec.fill(&keys, u32::MAX);
+            ctx.rec.fill(&rgb, 0);
+        }
         let (image, totals) = (ctx.image.clone(), ctx.totals.clone());
         ctx.kernel_over("finish", "init_main", &[&image, &totals], u64::from(pixels), 0, 0, "init")?;
         Ok(ctx)
@@ -400,9 +422,32 @@ impl<'a> VkCtx<'a> {
         self.uniform.last_pass = u32::from(last);
     }
 
-    /// Group 0's (binding, buffer) list: the state, the technique's buffers from 2, acct at 15.
-    fn storage<'b>(state: &'b Buffer, acct: &'b Buffer, buffers: &[&'b Buffer]) -> Vec<(u32, &'b Buffer)> {
-        let mut out = vec![(1, state), (ACCT_BINDING, acct)];
+    /// Whether the geometry passes that follow cut their fragments at the opaque pass's depth
+    /// (only where the frame has an opaque part).
+    pub(crate) fn cut(&mut self, on: bool) {
+        self.uniform.opaque[0] = u32::from(on && self.plan.opaque);
+    }
+
+    /// Where the opaque pass counted its fragments: copied beside the first count at the end.
+    pub(crate) fn note_opaque(&mut self, count: &Rc<Buffer>) {
+        self.opaque_from = Some(count.clone());
+    }
+
+    /// The buffers every command binds in group 0: the state, acct, the opaque keys and colours.
+    fn held(&self) -> [Rc<Buffer>; 4] {
+        [self.state.clone(), self.acct.clone(), self.opaque.0.clone(), self.opaque.1.clone()]
+    }
+
+    /// Group 0's (binding, buffer) list: the state, the technique's buffers from 2, acct at 15,
+    /// the opaque image at 16 and 17.
+    fn storage<'b>(held: &'b [Rc<Buffer>; 4], buffers: &[&'b Buffer]) -> Vec<(u32, &'b Buffer)> {
+        let [state, acct, keys, rgb] = held;
+        let mut out = vec![
+            (1, &**state),
+            (ACCT_BINDING, &**acct),
+            (OPAQUE_KEYS_BINDING, &**keys),
+            (OPAQUE_RGB_BINDING, &**rgb),
+        ];
         out.extend(buffers.iter().enumerate().map(|(i, b)| (i as u32 + 2, *b)));
         out
     }
@@ -433,7 +478,11 @@ impl<'a> VkCtx<'a> {
         count: bool,
     ) -> Result<&'r Buffer, OitError> {
         let first = self.fragments == Fragments::Unset;
-        let generated = self.record_pass(raster, module, buffers, pass_index, param, first || count)?;
+        // the frame's first scene pass counts the fragments the opaque cut holds back
+        self.uniform.opaque[1] = u32::from(first && self.uniform.opaque[0] != 0);
+        let generated = self.record_pass(raster, module, buffers, pass_index, param, first || count);
+        self.uniform.opaque[1] = 0;
+        let generated = generated?;
         self.passes += 1;
         if first {
             self.keep_first_count(generated);
@@ -626,8 +675,8 @@ impl<'a> VkCtx<'a> {
             self.setup_checks.push(check);
         }
         self.rec.fill(&raster.generated, 0);
-        let (state, acct) = (self.state.clone(), self.acct.clone());
-        let storage = Self::storage(&state, &acct, buffers);
+        let held = self.held();
+        let storage = Self::storage(&held, buffers);
         let raster_set = raster.bindings();
         let uniform = self.uniform;
         raster.dispatch(
@@ -660,8 +709,8 @@ impl<'a> VkCtx<'a> {
         let pipeline = self.gpu.render_pipeline(module, buffers.len(), &bindings)?;
         let render_pass = self.gpu.render_pass(&crate::device::count_pass_key())?;
         raster.upload(&mut self.rec)?;
-        let (state, acct) = (self.state.clone(), self.acct.clone());
-        let storage = Self::storage(&state, &acct, buffers);
+        let held = self.held();
+        let storage = Self::storage(&held, buffers);
         let raster_set = raster.bindings();
         let uniform = self.uniform;
         self.rec.draw(
@@ -766,8 +815,8 @@ impl<'a> VkCtx<'a> {
             kinds.push(SetKind::Images(images.iter().map(|(b, _)| *b).collect()));
         }
         let pipeline = self.gpu.compute(module, entry, &kinds)?;
-        let (state, acct) = (self.state.clone(), self.acct.clone());
-        let storage = Self::storage(&state, &acct, buffers);
+        let held = self.held();
+        let storage = Self::storage(&held, buffers);
         let uniform = self.uniform;
         let groups = dispatch_size(invocations);
         let frame =
@@ -848,8 +897,8 @@ impl<'a> VkCtx<'a> {
         self.uniform.pass_index = pass.pass_index;
         self.uniform.param = pass.param;
         raster.upload(&mut self.rec)?;
-        let (state, acct) = (self.state.clone(), self.acct.clone());
-        let storage = Self::storage(&state, &acct, buffers);
+        let held = self.held();
+        let storage = Self::storage(&held, buffers);
         let raster_set = raster.bindings();
         let uniform = self.uniform;
         let mut sets = vec![
@@ -928,6 +977,11 @@ impl<'a> VkCtx<'a> {
         self.kernel_over("finish", "finish_main", &[&image_buf, &totals], px, 0, 0, "resolve")?;
         let acct_buf = self.acct.clone();
         let first_count = self.first_count.clone();
+        if let Some(count) = self.opaque_from.take() {
+            let rgb = self.opaque.1.clone();
+            self.rec.copy_at(&count, 0, &first_count, 4, 4);
+            self.rec.copy_at(&rgb, u64::from(self.pixels) * 12, &first_count, 8, 8);
+        }
         let checks = std::mem::take(&mut self.setup_checks);
         let (gated_counter, end_checks) = (self.gated_counter.clone(), std::mem::take(&mut self.end_checks));
         let mut read = vec![&*totals, &*first_count, &*gated_counter];
@@ -1089,6 +1143,9 @@ impl VkCtx<'_> {
             None => (None, Vec::new()),
         };
         let captured = u64::from(t[0]);
+        // words 1-3 of the first count are the opaque pass's, where the frame has one
+        let opaque_word =
+            |w: usize| if self.plan.opaque { first.get(w).copied().map_or(0, u64::from) } else { 0 };
         // NOT COUNTED where `counts_losses` is off: the blend captures
         let (fragments, lost, lost_pixels) = oit_core::GpuTotals {
             fragments: self.fragments,
@@ -1119,7 +1176,9 @@ impl VkCtx<'_> {
                 max_layers: t[1],
                 gpu_pass_ms,
                 tiles: 1,
-                ..Stats::default()
+                opaque_fragments: opaque_word(1),
+                masked: opaque_word(2),
+                occluded: opaque_word(3),
             },
         };
         if self.counts_losses {

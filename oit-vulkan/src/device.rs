@@ -1324,7 +1324,11 @@ impl Gpu {
                         SetKind::Frame(n, images) => std::iter::once((0, vk::DescriptorType::UNIFORM_BUFFER))
                             .chain(
                                 (1..=*n as u32 + 1)
-                                    .chain([oit_gpu::ACCT_BINDING])
+                                    .chain([
+                                        oit_gpu::ACCT_BINDING,
+                                        oit_gpu::OPAQUE_KEYS_BINDING,
+                                        oit_gpu::OPAQUE_RGB_BINDING,
+                                    ])
                                     .map(|b| (b, vk::DescriptorType::STORAGE_BUFFER)),
                             )
                             .chain(images.iter().map(|&b| (b, vk::DescriptorType::STORAGE_IMAGE)))

@@ -98,6 +98,14 @@ impl Frame<Raster> for VkCtx<'_> {
         VkCtx::last_pass(self, last);
     }
 
+    fn cut(&mut self, on: bool) {
+        VkCtx::cut(self, on);
+    }
+
+    fn note_opaque(&mut self, count: &Rc<Buffer>) {
+        VkCtx::note_opaque(self, count);
+    }
+
     fn geometry_pass(
         &mut self,
         raster: &Raster,

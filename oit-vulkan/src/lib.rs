@@ -84,6 +84,7 @@ mod record;
 mod technique;
 
 use std::cell::{Cell, RefCell};
+use std::rc::Rc;
 use std::sync::OnceLock;
 use std::time::Instant;
 
@@ -204,6 +205,9 @@ impl Backend for VulkanBackend {
             compute: RefCell::new(None),
             compute_boxes: RefCell::new(None),
             hardware: RefCell::new(None),
+            compute_opaque: RefCell::new(None),
+            hardware_opaque: RefCell::new(None),
+            layers: RefCell::new(None),
             gpu_setup: self.gpu_setup,
             read_back: Default::default(),
         }))
@@ -222,6 +226,14 @@ pub struct VulkanPrepared<'s> {
     compute: RefCell<Option<ComputeBuffers>>,
     compute_boxes: RefCell<Option<ComputeBuffers>>,
     hardware: RefCell<Option<HardwareScene>>,
+    /// The compute path's buffers for the opaque part's triangles.
+    compute_opaque: RefCell<Option<ComputeBuffers>>,
+    /// The hardware path's geometry of the opaque part, uploaded on its first frame.
+    hardware_opaque: RefCell<Option<HardwareScene>>,
+    /// The scene split for its frames ([`Scene::layers`]): the opaque part, drawn first, and the
+    /// transparent part the technique captures, made once per alpha override. The geometry above
+    /// is the parts' (their meshes do not depend on the override).
+    layers: RefCell<Option<(Option<u32>, Rc<oit_core::Layers<'s>>)>>,
     /// `VulkanBackend::gpu_setup`.
     gpu_setup: Option<bool>,
     /// What an earlier frame read back, by its settings (`ctx::ReadBack`): the next frame of
@@ -232,10 +244,25 @@ pub struct VulkanPrepared<'s> {
     read_back: RefCell<std::collections::HashMap<String, ReadBack>>,
 }
 
-impl VulkanPrepared<'_> {
+impl<'s> VulkanPrepared<'s> {
+    /// The scene's layers for `settings`' alpha override, made the first time it is asked for.
+    fn layers(&self, settings: &Settings) -> Rc<oit_core::Layers<'s>> {
+        let key = settings.alpha.map(f32::to_bits);
+        let mut kept = self.layers.borrow_mut();
+        match &*kept {
+            Some((k, layers)) if *k == key => layers.clone(),
+            _ => {
+                let layers = Rc::new(self.scene.layers(settings.alpha));
+                *kept = Some((key, layers.clone()));
+                layers
+            }
+        }
+    }
+
     fn compute_raster(
         &self,
         cell: &RefCell<Option<ComputeBuffers>>,
+        scene: &Scene,
         camera: &Camera,
         settings: &Settings,
         boxes: bool,
@@ -245,7 +272,7 @@ impl VulkanPrepared<'_> {
             *kept = Some(ComputeBuffers::new(self.gpu, self.gpu_setup, &self.geometry_made)?);
         }
         let buffers = kept.as_mut().expect("just made");
-        buffers.frame(self.gpu, self.scene, camera, settings, boxes, &self.geometry_made)
+        buffers.frame(self.gpu, scene, camera, settings, boxes, &self.geometry_made)
     }
 }
 
@@ -360,12 +387,33 @@ impl VulkanPrepared<'_> {
             let why = format!("'{}' lacks fragmentShaderPixelInterlock", this.gpu.info.name);
             plan.refuse_interlock("vulkan", &why)?;
         }
+        // as oit-cpu: the technique captures the transparent part, under the layers' settings;
+        // the opaque part is drawn first; the plan is the whole scene's
+        let layers = this.layers(settings);
+        let drawn = layers.settings(settings);
+        let (part, drawn): (&Scene, &Settings) = (&layers.transparent, &drawn);
         let drivers = match path {
             RasterPath::Compute => Drivers {
-                scene: Raster::Compute(this.compute_raster(&this.compute, camera, settings, false)?),
+                scene: Raster::Compute(this.compute_raster(&this.compute, part, camera, drawn, false)?),
                 boxes: Box::new(move || {
-                    Ok(Raster::Compute(this.compute_raster(&this.compute_boxes, camera, settings, true)?))
+                    Ok(Raster::Compute(this.compute_raster(
+                        &this.compute_boxes,
+                        part,
+                        camera,
+                        drawn,
+                        true,
+                    )?))
                 }),
+                opaque: match &layers.opaque {
+                    Some(o) => Some(Raster::Compute(this.compute_raster(
+                        &this.compute_opaque,
+                        o,
+                        camera,
+                        drawn,
+                        false,
+                    )?)),
+                    None => None,
+                },
             },
             RasterPath::Hardware => {
                 // a window of the frame (tiles) draws the full frame's viewport into its target
@@ -390,18 +438,30 @@ impl VulkanPrepared<'_> {
                     });
                 }
                 if this.hardware.borrow().is_none() {
-                    let made = HardwareScene::new(this.gpu, this.scene, &this.geometry_made)?;
+                    let made = HardwareScene::new(this.gpu, part, &this.geometry_made)?;
                     *this.hardware.borrow_mut() = Some(made);
+                }
+                let upload = this.hardware_opaque.borrow().is_none();
+                if let (Some(o), true) = (&layers.opaque, upload) {
+                    let made = HardwareScene::new(this.gpu, o, &this.geometry_made)?;
+                    *this.hardware_opaque.borrow_mut() = Some(made);
                 }
                 let hw = || -> std::cell::Ref<'_, HardwareScene> {
                     std::cell::Ref::map(this.hardware.borrow(), |h| h.as_ref().expect("made above"))
                 };
-                let (gpu, scene, made) = (this.gpu, this.scene, &this.geometry_made);
+                let (gpu, made) = (this.gpu, &this.geometry_made);
+                let opaque = match (&layers.opaque, &*this.hardware_opaque.borrow()) {
+                    (Some(o), Some(ohw)) => {
+                        Some(Raster::Hardware(ohw.raster(gpu, o, &camera, drawn, false, made)?))
+                    }
+                    _ => None,
+                };
                 Drivers {
-                    scene: Raster::Hardware(hw().raster(gpu, scene, &camera, settings, false, made)?),
+                    scene: Raster::Hardware(hw().raster(gpu, part, &camera, drawn, false, made)?),
                     boxes: Box::new(move || {
-                        Ok(Raster::Hardware(hw().raster(gpu, scene, &camera, settings, true, made)?))
+                        Ok(Raster::Hardware(hw().raster(gpu, part, &camera, drawn, true, made)?))
                     }),
+                    opaque,
                 }
             }
             other => {
@@ -462,6 +522,20 @@ fn run_technique(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitEr
     let hardware = matches!(drivers.scene, Raster::Hardware(_));
     // the graphics pipeline's own captures, asked for on the hardware path
     let blend = hardware && ctx.settings.hardware_capture == HardwareCapture::Blend;
+    if drivers.opaque.is_some() {
+        // the blend captures' own fragment stages do not cut at the opaque depth yet
+        if blend {
+            return Err(OitError::Unsupported {
+                backend: "vulkan".into(),
+                what: format!(
+                    "--hardware-capture blend for {} in a scene with opaque or masked objects: the blend captures do not draw the opaque pass yet; use --hardware-capture atomic",
+                    ctx.settings.technique
+                ),
+            });
+        }
+        // plain's atomic capture, which cuts at the opaque depth
+        return oit_gpu::technique::render(ctx, drivers);
+    }
     match ctx.settings.technique {
         // the blender composites one draw in primitive order: plain's definition
         Technique::Plain if hardware => technique::blend::plain(ctx, drivers),

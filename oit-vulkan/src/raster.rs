@@ -207,7 +207,7 @@ fn record_setup(
 ) -> Result<(), OitError> {
     rec.upload(&s.instances, instances)?;
     rec.fill(&s.counters, 0);
-    let storage: [(u32, &Buffer); 8] = [
+    let storage: [(u32, &Buffer); 10] = [
         (1, &s.instances),
         (2, &s.geometry),
         (3, tris),
@@ -217,6 +217,8 @@ fn record_setup(
         (7, &s.verts),
         // group 0's layout always has the accounting binding; setup.wgsl does not use it
         (oit_gpu::ACCT_BINDING, &s.counters),
+        (oit_gpu::OPAQUE_KEYS_BINDING, &s.counters),
+        (oit_gpu::OPAQUE_RGB_BINDING, &s.counters),
     ];
     let gpu = rec.gpu();
     let sets = [SetData::Frame { uniform: bytemuck::cast_slice(uniform), storage: &storage, images: &[] }];
@@ -468,6 +470,8 @@ impl ComputeBuffers {
 pub(crate) struct Drivers<'a> {
     pub(crate) scene: Raster,
     pub(crate) boxes: Box<dyn Fn() -> Result<Raster, OitError> + 'a>,
+    /// Rasterizes the frame's opaque part, where it has one (oit-gpu's `technique::opaque_pass`).
+    pub(crate) opaque: Option<Raster>,
 }
 
 impl oit_gpu::Rasters<Raster> for Drivers<'_> {
@@ -477,5 +481,9 @@ impl oit_gpu::Rasters<Raster> for Drivers<'_> {
 
     fn with_boxes(&self, pass: &mut dyn FnMut(&Raster) -> Result<(), OitError>) -> Result<(), OitError> {
         pass(&(self.boxes)()?)
+    }
+
+    fn opaque(&self) -> Option<&Raster> {
+        self.opaque.as_ref()
     }
 }

@@ -92,6 +92,11 @@ const UNIFORM_STRIDE: u64 = 256;
 const GATED_WORD: u64 = 5;
 /// The totals' word holding the fragments merged into tails ([`GpuCtx::note_merged`]).
 const MERGED_WORD: u64 = 6;
+/// The totals' words holding the opaque pass's fragments ([`GpuCtx::note_opaque`]), then its
+/// masked and occluded counters (copied from the opaque colours' buffer at the frame's end).
+const OPAQUE_WORD: u64 = 8;
+/// Bytes of the totals: 12 words.
+const TOTALS_BYTES: u64 = 48;
 
 /// Where a geometry pass leaves its count of generated fragments: word 0 of this buffer, written
 /// by the pass's submission (a [`Driver`] returns it instead of reading it back, so a pass costs
@@ -124,7 +129,7 @@ pub const TECHNIQUE_PRELUDE: &str = oit_shaders::PRELUDE;
 const FINISH_WGSL: &str = oit_shaders::text("core/finish.wgsl");
 const FILL_WGSL: &str = oit_shaders::text("core/fill.wgsl");
 
-use oit_gpu::{ACCT_BINDING, MIN_BUFFER_WORDS, STATE_WORDS};
+use oit_gpu::{ACCT_BINDING, MIN_BUFFER_WORDS, OPAQUE_KEYS_BINDING, OPAQUE_RGB_BINDING, STATE_WORDS};
 
 pub use oit_gpu::FrameUniform;
 
@@ -176,6 +181,8 @@ pub struct Drivers<'a> {
     pub scene: Box<dyn Driver + 'a>,
     /// Makes a rasterizer of the instances' bounding boxes.
     pub boxes: Box<dyn Fn() -> Result<Box<dyn Driver + 'a>, OitError> + 'a>,
+    /// Rasterizes the frame's opaque part, where it has one (oit-gpu's `technique::opaque_pass`).
+    pub opaque: Option<Box<dyn Driver + 'a>>,
 }
 
 impl<'a> oit_gpu::Rasters<dyn Driver + 'a> for Drivers<'a> {
@@ -188,6 +195,10 @@ impl<'a> oit_gpu::Rasters<dyn Driver + 'a> for Drivers<'a> {
         pass: &mut dyn FnMut(&(dyn Driver + 'a)) -> Result<(), OitError>,
     ) -> Result<(), OitError> {
         pass((self.boxes)()?.as_ref())
+    }
+
+    fn opaque(&self) -> Option<&(dyn Driver + 'a)> {
+        self.opaque.as_deref()
     }
 }
 
@@ -236,6 +247,12 @@ pub struct GpuCtx<'a> {
     /// each is lost; fragments a pass saw at the depths the previous pass peeled; and how many
     /// of those that pass captured. Bound at group 0, binding 15, in every module.
     acct: wgpu::Buffer,
+    /// The opaque pass's keys and colours (prelude.wgsl's `opaque_keys`, `opaque_rgb`), bound at
+    /// group 0's [`OPAQUE_KEYS_BINDING`] and [`OPAQUE_RGB_BINDING`] in every module: the frame's
+    /// storage where its plan has an opaque part, else placeholders.
+    opaque: (wgpu::Buffer, wgpu::Buffer),
+    /// Where the opaque pass counted its fragments ([`GpuCtx::note_opaque`]).
+    opaque_from: Option<wgpu::Buffer>,
     /// Whether the technique's capture counts its losses; the `--hardware-capture blend` captures
     /// do not yet (issue 16), and their `lost` is `fragments − captured`.
     pub counts_losses: bool,
@@ -362,7 +379,6 @@ impl<'a> GpuCtx<'a> {
     ) -> Result<Self, OitError> {
         let recording = caller.is_some();
         let plan = Plan::new("wgpu", scene, settings)?;
-        oit_gpu::refuse_materials("wgpu", scene)?;
         plan.refuse_image_atomics("wgpu")?;
         plan.refuse_interlock("wgpu", "WGSL has no fragment shader interlock")?;
         let pixels = settings.width * settings.height;
@@ -418,9 +434,20 @@ impl<'a> GpuCtx<'a> {
         );
         let totals = make(
             "totals",
-            32,
+            TOTALS_BYTES,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         );
+        let storage =
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+        let opaque_bytes = oit_core::plan::OPAQUE_BYTES * u64::from(pixels);
+        let has_opaque = plan.opaque;
+        let opaque = if has_opaque {
+            gpu.check_storage("the opaque pass's image", opaque_bytes)?;
+            let (keys, rgb) = oit_gpu::opaque_words(u64::from(pixels));
+            (make("opaque keys", keys * 4, storage), make("opaque colours", rgb * 4, storage))
+        } else {
+            (make("unused binding", 16, storage), make("unused binding", 16, storage))
+        };
         let mut ctx = GpuCtx {
             gpu,
             scene,
@@ -430,7 +457,7 @@ impl<'a> GpuCtx<'a> {
             pixels,
             passes: 0,
             fragments: Fragments::Unset,
-            storage_bytes: 0,
+            storage_bytes: if has_opaque { opaque_bytes } else { 0 },
             uniform_buffer,
             uniform,
             state,
@@ -438,6 +465,8 @@ impl<'a> GpuCtx<'a> {
             image,
             totals,
             acct,
+            opaque,
+            opaque_from: None,
             counts_losses: true,
             fragments_from_captured: false,
             checks: Vec::new(),
@@ -466,6 +495,11 @@ impl<'a> GpuCtx<'a> {
         let acct = ctx.acct.clone();
         ctx.fill(&acct, 0)?;
         ctx.fill(&totals, 0)?;
+        if ctx.plan.opaque {
+            let (keys, rgb) = ctx.opaque.clone();
+            ctx.fill(&keys, u32::MAX)?;
+            ctx.fill(&rgb, 0)?;
+        }
         // the gate's pipeline made with the frame, not at the first gated pass: a prepared scene's
         // first speculated frame (its second) then creates no pipeline (tests/tests/prepared.rs)
         let gate_layout = ctx.layout0(4);
@@ -604,8 +638,11 @@ impl<'a> GpuCtx<'a> {
             },
             count: None,
         };
-        // the state and the technique's buffers, then the per-pixel loss counts
-        entries.extend((1..=(n as u32 + 1)).chain([ACCT_BINDING]).map(storage));
+        // the state and the technique's buffers, then the per-pixel loss counts and the opaque
+        // pass's image
+        entries.extend(
+            (1..=(n as u32 + 1)).chain([ACCT_BINDING, OPAQUE_KEYS_BINDING, OPAQUE_RGB_BINDING]).map(storage),
+        );
         self.gpu.layout(n, || {
             self.gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("group 0"),
@@ -618,6 +655,17 @@ impl<'a> GpuCtx<'a> {
     /// shaders count what such a pass leaves behind as lost.
     pub fn last_pass(&mut self, last: bool) {
         self.uniform.last_pass = u32::from(last);
+    }
+
+    /// Whether the geometry passes that follow cut their fragments at the opaque pass's depth
+    /// (only where the frame has an opaque part).
+    pub fn cut(&mut self, on: bool) {
+        self.uniform.opaque[0] = u32::from(on && self.plan.opaque);
+    }
+
+    /// Where the opaque pass counted its fragments: copied into the totals at the frame's end.
+    pub fn note_opaque(&mut self, count: &wgpu::Buffer) {
+        self.opaque_from = Some(count.clone());
     }
 
     /// Group 0 for `buffers` (bound from binding 2), after writing the uniform with this pass's
@@ -655,6 +703,11 @@ impl<'a> GpuCtx<'a> {
             wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::Buffer(uniform) },
             wgpu::BindGroupEntry { binding: 1, resource: self.state.as_entire_binding() },
             wgpu::BindGroupEntry { binding: ACCT_BINDING, resource: self.acct.as_entire_binding() },
+            wgpu::BindGroupEntry {
+                binding: OPAQUE_KEYS_BINDING,
+                resource: self.opaque.0.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry { binding: OPAQUE_RGB_BINDING, resource: self.opaque.1.as_entire_binding() },
         ];
         for (i, b) in buffers.iter().enumerate() {
             entries.push(wgpu::BindGroupEntry { binding: i as u32 + 2, resource: b.as_entire_binding() });
@@ -776,7 +829,10 @@ impl<'a> GpuCtx<'a> {
         pass_index: u32,
         param: u32,
     ) -> Result<Generated, OitError> {
+        // the frame's first scene pass counts the fragments the opaque cut holds back
+        self.uniform.opaque[1] = u32::from(self.uniform.opaque[0] != 0 && self.fragments == Fragments::Unset);
         let (layout, group) = self.group0(buffers, pass_index, param);
+        self.uniform.opaque[1] = 0;
         let full = format!("{TECHNIQUE_PRELUDE}{source}");
         self.add_setup_ms(driver);
         let generated = driver.geometry_pass(self, &full, &layout, &group)?;
@@ -1095,6 +1151,13 @@ impl<'a> GpuCtx<'a> {
         if let Some(words) = self.merged_from.take() {
             self.encoder().copy_buffer_to_buffer(&words, 4, &totals, MERGED_WORD * 4, 4);
         }
+        if let Some(count) = self.opaque_from.take() {
+            let rgb = self.opaque.1.clone();
+            let counters = u64::from(self.pixels) * 3 * 4;
+            let encoder = self.encoder();
+            encoder.copy_buffer_to_buffer(&count, 0, &totals, OPAQUE_WORD * 4, 4);
+            encoder.copy_buffer_to_buffer(&rgb, counters, &totals, (OPAQUE_WORD + 1) * 4, 8);
+        }
         let pixels = u64::from(self.pixels);
         self.kernel_over(FINISH_WGSL, "totals_main", &[&image, &totals], pixels, 0, 0, "resolve")?;
         self.kernel_over(FINISH_WGSL, "finish_main", &[&image, &totals], pixels, 0, 0, "resolve")
@@ -1262,6 +1325,7 @@ fn host_times() -> bool {
 /// ungated and `storage_bytes` of per-pixel storage: what [`GpuCtx::finish_checked`] and a
 /// recorded frame's `OitPass::read_stats` both read.
 pub(crate) fn totals_stats(t: &[u32], passes: u32, storage_bytes: u64) -> Stats {
+    let word = |w: u64| t.get(w as usize).copied().map_or(0, u64::from);
     Stats {
         geometry_passes: passes + t[GATED_WORD as usize],
         fragments: u64::from(t[FRAGMENTS_WORD as usize]),
@@ -1277,7 +1341,9 @@ pub(crate) fn totals_stats(t: &[u32], passes: u32, storage_bytes: u64) -> Stats 
         max_layers: t[1],
         gpu_pass_ms: Vec::new(),
         tiles: 1,
-        ..Stats::default()
+        opaque_fragments: word(OPAQUE_WORD),
+        masked: word(OPAQUE_WORD + 1),
+        occluded: word(OPAQUE_WORD + 2),
     }
 }
 

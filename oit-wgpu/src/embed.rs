@@ -450,7 +450,7 @@ impl OitPass {
             boxes.write_boxes_frame(&self.gpu, &self.camera, &self.settings);
             Ok(Box::new(boxes.raster_into(&self.gpu, self.kept_target(&self.boxes_target, w, h))))
         };
-        crate::Drivers { scene: Box::new(driver), boxes: Box::new(boxes_driver) }
+        crate::Drivers { scene: Box::new(driver), boxes: Box::new(boxes_driver), opaque: None }
     }
 
     /// The techniques the pass refuses whatever the frame: bdp and adp without boxes, mdts

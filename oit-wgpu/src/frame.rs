@@ -69,6 +69,14 @@ impl<'d> Frame<dyn Driver + 'd> for GpuCtx<'_> {
         GpuCtx::last_pass(self, last);
     }
 
+    fn cut(&mut self, on: bool) {
+        GpuCtx::cut(self, on);
+    }
+
+    fn note_opaque(&mut self, count: &wgpu::Buffer) {
+        GpuCtx::note_opaque(self, count);
+    }
+
     fn geometry_pass(
         &mut self,
         raster: &(dyn Driver + 'd),

@@ -59,6 +59,7 @@ mod stage;
 mod technique;
 
 use std::cell::{Cell, RefCell};
+use std::rc::Rc;
 use std::sync::OnceLock;
 use std::time::Instant;
 
@@ -133,8 +134,11 @@ impl WgpuBackend {
             pool: BufferPool::default(),
             geometry_made: Cell::new(0),
             hardware: None,
+            hardware_opaque: None,
             compute: RefCell::new(None),
             compute_boxes: RefCell::new(None),
+            compute_opaque: RefCell::new(None),
+            layers: RefCell::new(None),
             deepest: RefCell::default(),
         })
     }
@@ -241,6 +245,14 @@ pub struct WgpuPrepared<'s> {
     compute: RefCell<Option<ComputeBuffers>>,
     /// The same for the instances' bounding boxes, made on first use.
     compute_boxes: RefCell<Option<ComputeBuffers>>,
+    /// The hardware path's geometry of the scene's opaque part, uploaded on its first frame.
+    hardware_opaque: Option<HardwareScene>,
+    /// The compute path's buffers for the opaque part's triangles.
+    compute_opaque: RefCell<Option<ComputeBuffers>>,
+    /// The scene split for its frames ([`Scene::layers`]): the opaque part, drawn first, and the
+    /// transparent part the technique captures, made once per alpha override. The geometry above
+    /// is the parts' (their meshes do not depend on the override).
+    layers: RefCell<Option<(Option<u32>, Rc<oit_core::Layers<'s>>)>>,
     /// The deepest pixel the last frame's counting pass found, by technique, size, window and
     /// path: the next such frame sizes its storage from it without waiting for its own counting
     /// pass, and runs again if that pass finds otherwise ([`GpuCtx::speculated_deepest`]); and
@@ -249,7 +261,35 @@ pub struct WgpuPrepared<'s> {
     deepest: RefCell<std::collections::HashMap<String, u32>>,
 }
 
-impl WgpuPrepared<'_> {
+impl<'s> WgpuPrepared<'s> {
+    /// The scene's layers for `settings`' alpha override, made the first time it is asked for.
+    fn layers(&self, settings: &Settings) -> Rc<oit_core::Layers<'s>> {
+        let key = settings.alpha.map(f32::to_bits);
+        let mut kept = self.layers.borrow_mut();
+        match &*kept {
+            Some((k, layers)) if *k == key => layers.clone(),
+            _ => {
+                let layers = Rc::new(self.scene.layers(settings.alpha));
+                *kept = Some((key, layers.clone()));
+                layers
+            }
+        }
+    }
+
+    /// Uploads the hardware path's geometry (the transparent part's, and the opaque part's where
+    /// there is one) on its first frame.
+    fn upload_hardware(&mut self, settings: &Settings) -> Result<(), OitError> {
+        if self.hardware.is_some() {
+            return Ok(());
+        }
+        let layers = self.layers(settings);
+        self.hardware = Some(HardwareScene::new(self.gpu, &layers.transparent, &self.geometry_made)?);
+        if let Some(opaque) = &layers.opaque {
+            self.hardware_opaque = Some(HardwareScene::new(self.gpu, opaque, &self.geometry_made)?);
+        }
+        Ok(())
+    }
+
     /// Buffers and textures created so far for the geometry: uploads, per-instance and uniform
     /// buffers, the compute rasterizer's triangles and work lists (each time one grows), and the
     /// hardware path's count targets and counters (one pair per image size).
@@ -261,13 +301,14 @@ impl WgpuPrepared<'_> {
     fn compute_raster(
         &self,
         cell: &RefCell<Option<ComputeBuffers>>,
+        scene: &Scene,
         camera: &Camera,
         settings: &Settings,
         boxes: bool,
     ) -> Result<ComputeRaster, OitError> {
         let mut kept = cell.borrow_mut();
         let buffers = kept.get_or_insert_with(|| ComputeBuffers::new(self.gpu, &self.geometry_made));
-        buffers.frame(self.gpu, self.scene, camera, settings, boxes, &self.geometry_made)
+        buffers.frame(self.gpu, scene, camera, settings, boxes, &self.geometry_made)
     }
 }
 
@@ -303,8 +344,8 @@ impl Prepared for WgpuPrepared<'_> {
     ) -> Result<(), OitError> {
         settings.validate()?;
         let path = settings.raster.unwrap_or(WgpuBackend::default_path(settings.technique));
-        if path == RasterPath::Hardware && self.hardware.is_none() {
-            self.hardware = Some(HardwareScene::new(self.gpu, self.scene, &self.geometry_made)?);
+        if path == RasterPath::Hardware {
+            self.upload_hardware(settings)?;
         }
         let this = &*self;
         let end = oit_core::frames_in_flight(
@@ -343,7 +384,7 @@ impl WgpuPrepared<'_> {
         readback: bool,
     ) -> Result<Frame, OitError> {
         settings.validate()?;
-        let (gpu, scene) = (self.gpu, self.scene);
+        let gpu = self.gpu;
         let start = Instant::now();
         let path = settings.raster.unwrap_or(WgpuBackend::default_path(settings.technique));
         let window_camera;
@@ -358,8 +399,8 @@ impl WgpuPrepared<'_> {
             }
             _ => camera,
         };
-        if path == RasterPath::Hardware && self.hardware.is_none() {
-            self.hardware = Some(HardwareScene::new(gpu, scene, &self.geometry_made)?);
+        if path == RasterPath::Hardware {
+            self.upload_hardware(settings)?;
         }
         // a frame whose setup check (left to its end) finds the setup did not fit runs again,
         // waiting for the setup this time and growing its buffers first
@@ -401,21 +442,38 @@ impl WgpuPrepared<'_> {
     ) -> Result<InFlight<'c>, OitError> {
         let (gpu, scene) = (self.gpu, self.scene);
         let this = self;
+        // as oit-cpu: the technique captures the transparent part, under the layers' settings;
+        // the opaque part is drawn first; the plan is the whole scene's
+        let layers = this.layers(settings);
+        let drawn = layers.settings(settings);
+        let (part, drawn): (&Scene, &Settings) = (&layers.transparent, &drawn);
         let drivers = match (path, &this.hardware) {
             (RasterPath::Compute, _) => Drivers {
-                scene: Box::new(this.compute_raster(&this.compute, camera, settings, false)?),
+                scene: Box::new(this.compute_raster(&this.compute, part, camera, drawn, false)?),
                 boxes: Box::new(move || {
-                    Ok(Box::new(this.compute_raster(&this.compute_boxes, camera, settings, true)?)
+                    Ok(Box::new(this.compute_raster(&this.compute_boxes, part, camera, drawn, true)?)
                         as Box<dyn Driver>)
                 }),
+                opaque: match &layers.opaque {
+                    Some(o) => {
+                        Some(Box::new(this.compute_raster(&this.compute_opaque, o, camera, drawn, false)?))
+                    }
+                    None => None,
+                },
             },
             (RasterPath::Hardware, Some(hw)) => {
                 let made = &this.geometry_made;
                 Drivers {
-                    scene: Box::new(hw.raster(gpu, scene, camera, settings, false, made)?),
+                    scene: Box::new(hw.raster(gpu, part, camera, drawn, false, made)?),
                     boxes: Box::new(move || {
-                        Ok(Box::new(hw.raster(gpu, scene, camera, settings, true, made)?) as Box<dyn Driver>)
+                        Ok(Box::new(hw.raster(gpu, part, camera, drawn, true, made)?) as Box<dyn Driver>)
                     }),
+                    opaque: match (&layers.opaque, &this.hardware_opaque) {
+                        (Some(o), Some(ohw)) => {
+                            Some(Box::new(ohw.raster(gpu, o, camera, drawn, false, made)?))
+                        }
+                        _ => None,
+                    },
                 }
             }
             (other, _) => {

@@ -88,6 +88,7 @@ pub(crate) struct Ctx<'a> {
 }
 
 impl<'a> Ctx<'a> {
+    #[expect(clippy::too_many_arguments, reason = "a frame's context is that many things")]
     pub fn new(
         scene: &'a Scene,
         camera: &'a Camera,

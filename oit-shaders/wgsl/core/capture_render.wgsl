@@ -20,7 +20,10 @@ fn oit_capture_full(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: v
         f.prim = prim;
         f.color = clamp(color, vec4<f32>(0.0), vec4<f32>(1.0));
         f.normal = normalize_or_zero(normal);
-        capture(f);
+        // behind the opaque pass's depth: counted, not captured
+        if (!opaque_cut(f)) {
+            capture(f);
+        }
     }
     return vec4<f32>(1.0, 0.0, 0.0, 0.0);
 }

@@ -23,6 +23,10 @@ struct FrameUniform {
     background: vec4<f32>,
     // near, far, sigma / unit, unused
     lens: vec4<f32>,
+    // the opaque pass: x 1 where this pass cuts its fragments at the opaque depth, y 1 where it
+    // counts those it holds back (the frame's first scene pass), z 1 where the frame has an
+    // opaque image (what its pixels composite over), w unused
+    opaque: vec4<u32>,
 }
 
 const EFFECT_TRANSPARENCY: u32 = 0u;

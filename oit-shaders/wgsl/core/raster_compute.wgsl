@@ -85,7 +85,10 @@ fn raster_pixel(t: Tri, x: u32, y: u32) -> u32 {
     f.prim = t.prim;
     f.color = color;
     f.normal = normalize_or_zero(normal);
-    capture(f);
+    // behind the opaque pass's depth: generated (counted), not captured
+    if (!opaque_cut(f)) {
+        capture(f);
+    }
     return 1u;
 }
 

@@ -165,7 +165,7 @@ fn push_back(px: u32, depth: f32, payload: u32) {
         s.back_run = r;
     }
     let c = unpack_rgba8(payload);
-    var back = fu.background.xyz;
+    var back = background_at(px);
     if (s.has_back != 0u) {
         back = vec3<f32>(s.br, s.bg, s.bb);
     }
@@ -197,7 +197,7 @@ fn heat(t_in: f32) -> vec3<f32> {
 // The final linear colour; `max_captured` scales the heat map.
 fn finish_color(px: u32, max_captured: u32) -> vec3<f32> {
     let s = state[px];
-    let bg = fu.background.xyz;
+    let bg = background_at(px);
     if (fu.effect == EFFECT_TRANSPARENCY) {
         var back = bg;
         if (s.has_back != 0u) {

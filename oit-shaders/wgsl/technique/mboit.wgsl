@@ -114,7 +114,7 @@ fn composite_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
     }
     let base = px * MBOIT_WORDS;
     let count = u32(atomicLoad(&mb_sums[base + 9u]));
-    let bg = fu.background.xyz;
+    let bg = background_at(px);
     var c = bg;
     if (count > 0u) {
         let t = exp(-(f32(atomicLoad(&mb_sums[base])) / 65536.0));

@@ -35,7 +35,7 @@ fn tail_resolve(s: ptr<function, PixelState>, px: u32) {
         f32(atomicLoad(&tail_sums[base + 2u])),
     ) / (255.0 * 255.0);
     let alpha = f32(atomicLoad(&tail_sums[base + 3u])) / 255.0;
-    let bg = fu.background.xyz;
+    let bg = background_at(px);
     var back = bg;
     if (alpha > 0.0) {
         let mean_color = premultiplied / alpha;

@@ -37,7 +37,7 @@ fn composite_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
     let base = px * 6u;
     let count = u32(atomicLoad(&wb_sums[base + 5u]));
     let weight = f32(atomicLoad(&wb_sums[base + 3u]));
-    let bg = fu.background.xyz;
+    let bg = background_at(px);
     var c = bg;
     if (count > 0u && weight > 0.0) {
         let weighted = vec3<f32>(

@@ -36,7 +36,7 @@ fn composite_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
 // The composite of a pixel's sums (premultiplied colour, alpha), into its resolve state; shared
 // with the blend capture (blend.wgsl).
 fn weighted_composite(px: u32, premultiplied: vec3<f32>, alpha: f32, count: u32) {
-    let bg = fu.background.xyz;
+    let bg = background_at(px);
     var c: vec3<f32>;
     if ((fu.param & 1u) == 1u) {
         // composite::weighted_average

@@ -20,6 +20,20 @@ pub(crate) fn run(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), Oit
     let hardware = drivers.scene.path() == RasterPath::Hardware;
     // the papers' graphics-pipeline capture of bdp and dp, when asked for on the hardware path
     let blend = hardware && ctx.settings.hardware_capture == HardwareCapture::Blend;
+    if drivers.opaque.is_some() {
+        // the blend captures' own fragment stages do not cut at the opaque depth yet
+        if blend {
+            return Err(OitError::Unsupported {
+                backend: "wgpu".into(),
+                what: format!(
+                    "--hardware-capture blend for {} in a scene with opaque or masked objects: the blend captures do not draw the opaque pass yet; use --hardware-capture atomic",
+                    ctx.settings.technique
+                ),
+            });
+        }
+        // plain's atomic capture, which cuts at the opaque depth
+        return oit_gpu::technique::render(ctx, drivers);
+    }
     match ctx.settings.technique {
         Technique::Dp if blend => dp_depth::render(ctx, drivers),
         Technique::Ddp if blend => ddp_blend::render(ctx, drivers),
