@@ -36,6 +36,15 @@ model)
         --model "${MODEL:-$OUT/calibrate/calibration.json}" --no-curves \
         --scenes "bunny,armadillo,grid:4x4:bunny" --out "$OUT/model-1024"
     ;;
+opaque)
+    # issue 38: every technique with an opaque wall holding back part of the scene beside the
+    # same frame with the wall masked away (bench/local/opaque_ratio.py reads the pairs), both
+    # GPU backends and raster paths
+    run "$OIT" info --json > "$OUT/info.json"
+    run "$OIT" bench --backend wgpu,vulkan --raster "${PATHS:-all}" --size 1024x1024 --frames 10 --warmup 2 \
+        --warmup-ms 200 --scenes "${SCENES:-wall:0.4:planes:64,nowall:0.4:planes:64,wall:0.4:default,nowall:0.4:default}" \
+        --no-curves --out "$OUT/opaque-1024"
+    ;;
 vulkan)
     # issue 9: oit-vulkan beside wgpu, both raster paths, every technique, GPU timestamps on both
     # (bench/results/h200/vulkan-1024/); needs a build with --features wgpu,vulkan

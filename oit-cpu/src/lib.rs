@@ -417,7 +417,7 @@ mod tests {
                 let raster = crate::Rasterizer::new(&scene, &camera, &s);
                 let pool = crate::Pool::default();
                 let per_length = scene.absorption_per_length();
-                let mut ctx = crate::Ctx::new(&scene, &camera, &s, &raster, &pool, plan, per_length);
+                let mut ctx = crate::Ctx::new(&scene, &camera, &s, &raster, &pool, plan, per_length, None);
                 let Ok(frame) = crate::technique::render(&mut ctx, technique) else { continue };
                 drop(ctx);
                 assert!(frame.stats.fragments > 0, "{technique} {effect:?}");

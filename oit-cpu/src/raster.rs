@@ -1535,7 +1535,7 @@ mod tests {
             meshes.push(mesh);
         }
         let mut scene = scene_of(meshes);
-        scene.objects.push(Object::new("again".into(), 0, Vec4::new(0.1, 0.9, 0.3, 0.7)));
+        scene.objects.push(Object::new("again", 0, Vec4::new(0.1, 0.9, 0.3, 0.7)));
         scene.instances.push(Instance {
             object: 3,
             transform: Mat4::from_rotation_y(0.7) * Mat4::from_scale(Vec3::new(1.0, 2.0, 0.5)),

@@ -131,7 +131,7 @@ mod tests {
         let pool = Pool::default();
         let plan = Plan::new("cpu", &scene, &settings).unwrap();
         let mut ctx =
-            Ctx::new(&scene, &camera, &settings, &raster, &pool, plan, scene.absorption_per_length());
+            Ctx::new(&scene, &camera, &settings, &raster, &pool, plan, scene.absorption_per_length(), None);
         let per_band =
             raster.for_each_fragment_by_band(crate::raster::Shade::OnDemand, |_| |_: &Fragment<'_>| {});
         assert!(per_band.len() > 1, "the case wants several bands, each taking its block");
