@@ -140,7 +140,12 @@ fn masks_keep_or_discard_and_count() {
 #[test]
 fn coplanar_opaque_ties_go_to_the_lower_id() {
     let quad = |z: f32| {
-        let p = vec![Vec3::new(-1.0, -1.0, z), Vec3::new(1.0, -1.0, z), Vec3::new(1.0, 1.0, z), Vec3::new(-1.0, 1.0, z)];
+        let p = vec![
+            Vec3::new(-1.0, -1.0, z),
+            Vec3::new(1.0, -1.0, z),
+            Vec3::new(1.0, 1.0, z),
+            Vec3::new(-1.0, 1.0, z),
+        ];
         Mesh::new("q", p, vec![[0, 1, 2], [0, 2, 3]])
     };
     let mut scene = Scene { name: "coplanar opaque".into(), ..Scene::default() };

@@ -89,7 +89,8 @@ fn frame(
     let raster = Rasterizer::new(scene, &camera, settings);
     let pool = Pool::default();
     let plan = oit_core::plan::Plan::new("cpu", scene, settings).unwrap().on_path(RasterPath::Cpu);
-    let mut ctx = Ctx::new(scene, &camera, settings, &raster, &pool, plan, scene.absorption_per_length(), None);
+    let mut ctx =
+        Ctx::new(scene, &camera, settings, &raster, &pool, plan, scene.absorption_per_length(), None);
     render(&mut ctx).unwrap()
 }
 
