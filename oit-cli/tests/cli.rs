@@ -440,7 +440,7 @@ fn info_json_parses() {
 
 /// The keys of every `oit sweep --json` record: where and what (backend and raster path
 /// included), the frame's counters as `oit compare --json` names them, and the accuracy.
-const SWEEP_KEYS: [&str; 19] = [
+const SWEEP_KEYS: [&str; 22] = [
     "azimuth",
     "quantized",
     "technique",
@@ -450,6 +450,9 @@ const SWEEP_KEYS: [&str; 19] = [
     "fragments",
     "captured",
     "lost",
+    "occluded",
+    "opaque_fragments",
+    "masked",
     "merged",
     "tied",
     "storage_bytes",
