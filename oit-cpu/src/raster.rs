@@ -115,6 +115,7 @@ type Records<'a> = (&'a [Triangle], &'a [SmallEdges], &'a [ShadeRecord]);
 /// `avx2::scatter_task` over the triangles of `order` in the rows `rows` (shading them where
 /// `SHADE`), where `kernel` is [`Kernel::Avx2`]; `None` elsewhere.
 #[cfg(target_arch = "x86_64")]
+#[expect(clippy::too_many_arguments, reason = "the walk's inputs, passed through to the AVX2 task")]
 fn avx2_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
     kernel: Kernel,
     setup: &TriangleSetup,
@@ -123,6 +124,7 @@ fn avx2_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
     rows: [u32; 2],
     f: &F,
     ahead: Ahead<'_>,
+    cut: Option<EarlyCut<'_>>,
 ) -> Option<u64> {
     if kernel != Kernel::Avx2 {
         return None;
@@ -130,7 +132,7 @@ fn avx2_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
     #[expect(unsafe_code, reason = "the one call into code compiled for AVX2")]
     // SAFETY: `Kernel::Avx2` is made only where the host has AVX2 and popcnt (`Kernel::detect`),
     // all that `scatter_task` is compiled to need
-    let n = unsafe { avx2::scatter_task::<SHADE, F>(setup, records, order, rows, f, ahead) };
+    let n = unsafe { avx2::scatter_task::<SHADE, F>(setup, records, order, rows, f, ahead, cut) };
     Some(n)
 }
 
@@ -379,6 +381,8 @@ macro_rules! behind_cut {
             Some(cut) => {
                 let counting = cut.occluded.get().is_none();
                 let pass = COUNTING_PASS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let id = if counting { pass } else { u64::MAX };
+                cut.counting.store(id, std::sync::atomic::Ordering::Relaxed);
                 let depth = &*cut.depth;
                 let wrapped = |frag: &Fragment<'_>| {
                     if frag.depth < depth[frag.pixel as usize] {
@@ -389,6 +393,7 @@ macro_rules! behind_cut {
                 };
                 let $g = &wrapped;
                 let n = $pass;
+                cut.counting.store(u64::MAX, std::sync::atomic::Ordering::Relaxed);
                 if counting {
                     let _ = cut.occluded.set(take_occluded(pass));
                 }
@@ -426,6 +431,30 @@ pub struct Rasterizer {
 struct Cut {
     depth: std::sync::Arc<[f32]>,
     occluded: OnceLock<u64>,
+    /// The counting pass running now ([`COUNTING_PASS`]'s id), `u64::MAX` where the pass running
+    /// does not count: the shaded walks test the cut before they shade ([`Rasterizer::early_cut`])
+    /// and count what they drop themselves.
+    counting: std::sync::atomic::AtomicU64,
+}
+
+/// A shaded walk's view of the cut: the opaque depth, and the counting pass to count the
+/// fragments it drops in (`u64::MAX`: none).
+#[derive(Clone, Copy)]
+pub(crate) struct EarlyCut<'a> {
+    depth: &'a [f32],
+    counting: u64,
+}
+
+impl EarlyCut<'_> {
+    /// Whether a fragment of `pixel` at `depth` is held back (counted where the pass counts).
+    #[inline]
+    fn holds_back(&self, pixel: u32, depth: f32) -> bool {
+        let behind = !(depth < self.depth[pixel as usize]);
+        if behind && self.counting != u64::MAX {
+            occlude(self.counting);
+        }
+        behind
+    }
 }
 
 thread_local! {
@@ -494,7 +523,21 @@ impl Rasterizer {
     /// The passes still return (and [`Rasterizer::fragment_count`] still counts) every fragment
     /// drawn, those held back included.
     pub fn cut_at(&mut self, depth: Option<std::sync::Arc<[f32]>>) {
-        self.cut = depth.map(|depth| Cut { depth, occluded: OnceLock::new() });
+        self.cut = depth.map(|depth| Cut {
+            depth,
+            occluded: OnceLock::new(),
+            counting: std::sync::atomic::AtomicU64::new(u64::MAX),
+        });
+    }
+
+    /// The cut as the shaded walks test it, before they shade: a fragment behind the opaque
+    /// depth is dropped there, so its colour is never made (the shader's own test, behind it,
+    /// then sees only fragments in front).
+    fn early_cut(&self) -> Option<EarlyCut<'_>> {
+        self.cut.as_ref().map(|c| EarlyCut {
+            depth: &c.depth,
+            counting: c.counting.load(std::sync::atomic::Ordering::Relaxed),
+        })
     }
 
     /// Fragments the cut held back ([`Rasterizer::cut_at`]), counted by the first pass after it;
@@ -701,6 +744,7 @@ impl Rasterizer {
         };
         let counting = cut.occluded.get().is_none();
         let pass = COUNTING_PASS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        cut.counting.store(if counting { pass } else { u64::MAX }, std::sync::atomic::Ordering::Relaxed);
         let depth = &*cut.depth;
         let make = &make;
         let per_band = self.by_band(Kernel::detect(), shade, move |b| {
@@ -713,6 +757,7 @@ impl Rasterizer {
                 }
             }
         });
+        cut.counting.store(u64::MAX, std::sync::atomic::Ordering::Relaxed);
         if counting {
             let _ = cut.occluded.set(take_occluded(pass));
         }
@@ -818,9 +863,10 @@ impl Rasterizer {
         #[cfg(target_arch = "x86_64")]
         if kernel == Kernel::Avx2 {
             let (setup, records) = (&self.setup, self.records());
+            // only a shaded walk has work to save by testing the cut first
             let n = match shade {
-                Shade::Color => avx2_task::<true, F>(kernel, setup, records, order, rows, f, ahead),
-                Shade::OnDemand => avx2_task::<false, F>(kernel, setup, records, order, rows, f, ahead),
+                Shade::Color => avx2_task::<true, F>(kernel, setup, records, order, rows, f, ahead, self.early_cut()),
+                Shade::OnDemand => avx2_task::<false, F>(kernel, setup, records, order, rows, f, ahead, None),
             };
             return n.unwrap_or(0);
         }
@@ -906,16 +952,24 @@ impl Rasterizer {
         };
         let mut batch = [Candidate::default(); BATCH];
         let (mut len, mut n) = (0usize, 0u64);
+        let cut = self.early_cut();
         for i in order {
             let (t, s) = (&tris[i], &edges[i]);
             walk_tile(t, s, in_rows(s.bbox, rows), |x, y, e| {
+                n += 1;
+                let pixel = y * setup.width + x;
+                // behind the opaque depth: dropped before it is shaded
+                if let Some(cut) = &cut
+                    && cut.holds_back(pixel, s.plane.depth(s.plane.barycentrics(e)))
+                {
+                    return;
+                }
                 if len == BATCH {
                     flush(&batch);
                     len = 0;
                 }
-                batch[len] = Candidate { tri: i as u32, pixel: y * setup.width + x, e };
+                batch[len] = Candidate { tri: i as u32, pixel, e };
                 len += 1;
-                n += 1;
             });
         }
         flush(&batch[..len]);

@@ -20,7 +20,7 @@ use glam::Vec4;
 use oit_core::Shading;
 use oit_core::setup::{SHADE_LANES, ShadeRecord, Triangle, TriangleSetup};
 
-use super::{AHEAD, Ahead, Fragment, SmallEdges, in_rows, walk};
+use super::{AHEAD, Ahead, EarlyCut, Fragment, SmallEdges, in_rows, walk};
 
 /// Fragments a batch holds (a multiple of [`SHADE_LANES`]).
 const CAP: usize = 128;
@@ -95,6 +95,7 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
     window: [u32; 2],
     f: &F,
     ahead: Ahead<'_>,
+    cut: Option<EarlyCut<'_>>,
 ) -> u64 {
     let width = setup.width;
     let mut batch = Batch {
@@ -128,7 +129,7 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
         if !s.small {
             walk(t, [x0, y0, x1, y1], |x, y, e| {
                 if len == CAP {
-                    flush::<SHADE, F>(setup, (tris, edges, shades), &mut batch, len, f, ahead);
+                    flush::<SHADE, F>(setup, (tris, edges, shades), &mut batch, len, f, ahead, cut);
                     len = 0;
                 }
                 let b = s.plane.barycentrics(e);
@@ -179,7 +180,7 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
             while bx < w {
                 let valid = (((1u32 << (w - bx).min(lanes_x)) - 1) * ROW_PATTERN[l]) & rows_valid;
                 if len > CAP - 8 {
-                    flush::<SHADE, F>(setup, (tris, edges, shades), &mut batch, len, f, ahead);
+                    flush::<SHADE, F>(setup, (tris, edges, shades), &mut batch, len, f, ahead, cut);
                     len = 0;
                 }
                 let e: [__m256i; 3] =
@@ -218,7 +219,7 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
             }
         }
     }
-    flush::<SHADE, F>(setup, (tris, edges, shades), &mut batch, len, f, ahead);
+    flush::<SHADE, F>(setup, (tris, edges, shades), &mut batch, len, f, ahead, cut);
     n
 }
 
@@ -233,7 +234,27 @@ fn flush<const SHADE: bool, F: Fn(&Fragment<'_>)>(
     len: usize,
     f: &F,
     ahead: Ahead<'_>,
+    cut: Option<EarlyCut<'_>>,
 ) {
+    // behind the opaque depth: dropped before the batch is shaded, the rest packed to the front
+    let len = match cut {
+        None => len,
+        Some(cut) => {
+            let mut kept = 0;
+            for i in 0..len {
+                if !cut.holds_back(batch.pixel[i], batch.depth[i]) {
+                    batch.tri[kept] = batch.tri[i];
+                    batch.pixel[kept] = batch.pixel[i];
+                    batch.depth[kept] = batch.depth[i];
+                    for k in 0..3 {
+                        batch.b[k][kept] = batch.b[k][i];
+                    }
+                    kept += 1;
+                }
+            }
+            kept
+        }
+    };
     // a short last group shades what the lanes past `len` hold from before (a triangle of the
     // task, its colour not read)
     let shaded = if SHADE { len } else { 0 };
