@@ -663,6 +663,13 @@ impl<'a> GpuCtx<'a> {
         self.uniform.opaque[0] = u32::from(on && self.plan.opaque);
     }
 
+    /// The frame's opaque image (keys, colours and counters), for the embedded pass to load the
+    /// caller's depth and colour into ([`crate::OitPass::with_opaque`]): placeholders where the
+    /// plan has no opaque part.
+    pub(crate) fn opaque_image(&self) -> (wgpu::Buffer, wgpu::Buffer) {
+        self.opaque.clone()
+    }
+
     /// Where the opaque pass counted its fragments: copied into the totals at the frame's end.
     pub fn note_opaque(&mut self, count: &wgpu::Buffer) {
         self.opaque_from = Some(count.clone());
