@@ -96,7 +96,7 @@ const MERGED_WORD: u64 = 6;
 /// masked and occluded counters (copied from the opaque colours' buffer at the frame's end).
 const OPAQUE_WORD: u64 = 8;
 /// Bytes of the totals: 12 words.
-const TOTALS_BYTES: u64 = 48;
+pub(crate) const TOTALS_BYTES: u64 = 48;
 
 /// Where a geometry pass leaves its count of generated fragments: word 0 of this buffer, written
 /// by the pass's submission (a [`Driver`] returns it instead of reading it back, so a pass costs

@@ -212,7 +212,7 @@ impl OitPass {
         let gpu = Gpu::from_device(device.clone(), queue.clone())?;
         let stats = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("recorded totals"),
-            size: 32,
+            size: crate::ctx::TOTALS_BYTES,
             usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -593,7 +593,8 @@ impl OitPass {
             crate::technique::run(&mut ctx, &drivers)?;
             ctx.finish_recorded()?
         };
-        encoder.copy_buffer_to_buffer(&done.totals, 0, &self.stats, 0, 32);
+        // every word: the opaque pass's counters (occluded) lie after the first eight
+        encoder.copy_buffer_to_buffer(&done.totals, 0, &self.stats, 0, crate::ctx::TOTALS_BYTES);
         let group = self.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("oit image blit"),
             layout: &self.blit_layout,
