@@ -43,6 +43,14 @@
 //!   without an alpha (or set `Settings::bounds` to `BoundsMode::Exact`: then the bounds pass
 //!   draws the user's geometry like any other pass).
 //!
+//! - The caller's opaque geometry: [`OitPass::with_opaque`] takes the caller's depth buffer
+//!   (read, not written) and colour target; every geometry pass cuts the fragments not strictly
+//!   in front of that depth (counted in `Stats::occluded`) and the resolve composites over that
+//!   colour, as behind oit's own opaque pass. [`SceneGeometry`] refuses a scene with opaque parts
+//!   (upload its transparent part, draw the opaque part yourself for `with_opaque`).
+//! - The device needs [`crate::required_features`] and more than wgpu's default 8 storage buffers
+//!   a shader stage (ask for the adapter's limits).
+//!
 //! `Backend::render` on the hardware path is a client of the same code: [`crate::HardwareRaster`]
 //! is this pass's driver with oit's own vertex stage (`shaders/raster_hardware.wgsl`) and draws.
 //! A user who draws an oit [`Scene`] (the `oit view` window does) can take that vertex stage and
