@@ -116,22 +116,6 @@ pub struct FrameUniform {
     pub opaque: [u32; 4],
 }
 
-/// The refusal of a scene with opaque or masked objects or a transmission
-/// ([`Scene::has_materials`]): the GPU backends do not draw the opaque pass yet, and a frame that
-/// drew every object as transparent would be wrong in silence. The CPU backend draws them.
-pub fn refuse_materials(backend: &str, scene: &Scene) -> Result<(), OitError> {
-    if scene.has_materials() {
-        return Err(OitError::Unsupported {
-            backend: backend.into(),
-            what: format!(
-                "scene '{}' has opaque or masked objects or a transmission: the GPU backends do not draw the opaque pass yet; use --backend cpu",
-                scene.name
-            ),
-        });
-    }
-    Ok(())
-}
-
 /// Workgroups of 64 for `invocations` invocations, as (x, y) with x ≤ 65535 (a kernel finds its
 /// invocation's index from both: `kernel_pixel` in prelude.wgsl).
 pub fn dispatch_size(invocations: u64) -> (u32, u32) {

@@ -55,6 +55,7 @@ files!(
     "core/fragment.wgsl",
     "core/gate.wgsl",
     "core/opaque.wgsl",
+    "core/opaque_load.wgsl",
     "core/prelude.wgsl",
     "core/raster_compute.wgsl",
     "core/raster_hardware.wgsl",

@@ -2,6 +2,11 @@
 //! vertex buffer, the vertex shader (world → clip on the GPU with their own uniform) and the draw
 //! call; oit supplies the capture module, its storage, and the resolve into the user's texture.
 //!
+//! As a renderer does, the user draws their opaque geometry first (a grey wall, with a trivial
+//! pipeline of their own, into their colour target and depth buffer), then runs the OIT pass with
+//! that depth and colour ([`OitPass::with_opaque`]): the transparent quads behind the wall are
+//! cut (counted as occluded) and the rest composite over the wall and the cleared target.
+//!
 //! `cargo run -p oit-wgpu --example embed -- [technique] [out.png]` (default `fabs`, `embed.png`).
 
 use glam::{Mat4, Vec3, Vec4};
@@ -43,6 +48,31 @@ pub fn camera() -> Camera {
     Camera::look_at(Vec3::new(0.4, 0.5, 3.5), Vec3::ZERO, 45.0, 1.0, 1.0, 8.0)
 }
 
+/// The user's opaque wall: a grey quad standing in the scene, turned so that the red quad passes
+/// through it (corners, linear RGB).
+pub fn wall() -> ([Vec3; 4], Vec3) {
+    let m = Mat4::from_translation(Vec3::new(0.5, 0.0, -0.3)) * Mat4::from_rotation_y(-0.3);
+    let c = [
+        Vec3::new(-0.6, -1.2, 0.0),
+        Vec3::new(0.6, -1.2, 0.0),
+        Vec3::new(0.6, 1.2, 0.0),
+        Vec3::new(-0.6, 1.2, 0.0),
+    ];
+    (c.map(|p| m.transform_point3(p)), Vec3::new(0.45, 0.45, 0.42))
+}
+
+/// The user's opaque pipeline: their uniform's transform and a constant colour, with a depth test
+/// (`Less`) writing their depth buffer. oit never sees it.
+const WALL_WGSL: &str = r#"
+struct UserUniform { view_proj: mat4x4<f32> }
+@group(0) @binding(0) var<uniform> user: UserUniform;
+
+@vertex
+fn wall_vs(@location(0) p: vec3<f32>) -> @builtin(position) vec4<f32> {
+    return user.view_proj * vec4<f32>(p, 1.0);
+}
+"#;
+
 /// The user's shader: their vertex stage, and a fragment stage that hands the fragment to oit.
 const USER_WGSL: &str = r#"
 struct UserUniform { view_proj: mat4x4<f32> }
@@ -80,8 +110,12 @@ pub struct User {
     uniform: wgpu::Buffer,
     user_layout: wgpu::BindGroupLayout,
     user_group: wgpu::BindGroup,
-    /// The target texture oit's image goes into.
+    /// The target texture oit's image goes into, where the user draws their opaque wall first.
     pub target: wgpu::Texture,
+    /// The user's depth buffer (`Depth32Float`; the wall's depths, read by oit, not written).
+    pub depth: wgpu::Texture,
+    wall_vertices: wgpu::Buffer,
+    wall_pipeline: wgpu::RenderPipeline,
 }
 
 impl User {
@@ -101,6 +135,10 @@ impl User {
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("user"),
             required_features: features,
+            // oit's group 0 binds more storage buffers than wgpu's default limit of 8 a stage (the
+            // per-pixel state, the technique's arrays, the loss accounting and the opaque image):
+            // ask for what the adapter has, as oit's own device does
+            required_limits: adapter.limits(),
             ..Default::default()
         }))
         .map_err(|e| OitError::Device(format!("cannot open the device: {e}")))?;
@@ -155,6 +193,69 @@ impl User {
                 | wgpu::TextureUsages::RENDER_ATTACHMENT,
             view_formats: &[],
         });
+        let depth = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("user depth"),
+            size: wgpu::Extent3d { width: SIZE, height: SIZE, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Depth32Float,
+            // TEXTURE_BINDING: oit loads it
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let (corners, grey) = wall();
+        let wall_vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("user wall"),
+            contents: bytemuck::cast_slice(
+                &QUAD_TRIANGLES.iter().flatten().map(|&i| corners[i as usize].to_array()).collect::<Vec<_>>(),
+            ),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let wgsl = format!(
+            "{WALL_WGSL}\n@fragment\nfn wall_fs() -> @location(0) vec4<f32> {{ return vec4<f32>({:?}, {:?}, {:?}, 1.0); }}\n",
+            grey.x, grey.y, grey.z
+        );
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("user wall"),
+            source: wgpu::ShaderSource::Wgsl(wgsl.into()),
+        });
+        let wall_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("user wall"),
+            bind_group_layouts: &[Some(&user_layout)],
+            immediate_size: 0,
+        });
+        let wall_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("user wall"),
+            layout: Some(&wall_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("wall_vs"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: 3 * 4,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &wgpu::vertex_attr_array![0 => Float32x3],
+                })],
+            },
+            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: wgpu::TextureFormat::Depth32Float,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("wall_fs"),
+                compilation_options: Default::default(),
+                targets: &[Some(format.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
         Ok(User {
             device,
             queue,
@@ -165,7 +266,53 @@ impl User {
             user_layout,
             user_group,
             target,
+            depth,
+            wall_vertices,
+            wall_pipeline,
         })
+    }
+
+    /// The user's opaque pass, recorded into their `encoder`: the target cleared to the
+    /// background and the depth buffer to 1.0, then the wall drawn into both with the user's
+    /// camera (their uniform: the same transform the OIT pass's draws use).
+    pub fn draw_opaque(&self, encoder: &mut wgpu::CommandEncoder) {
+        let bg = Settings::default().background.as_dvec3();
+        let color = self.target.create_view(&Default::default());
+        let depth = self.depth.create_view(&Default::default());
+        let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("user opaque"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &color,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color { r: bg.x, g: bg.y, b: bg.z, a: 1.0 }),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        rpass.set_pipeline(&self.wall_pipeline);
+        rpass.set_bind_group(0, &self.user_group, &[]);
+        rpass.set_vertex_buffer(0, self.wall_vertices.slice(..));
+        rpass.draw(0..6, 0..1);
+    }
+
+    /// `pass` given the user's depth buffer and target as its opaque image.
+    pub fn over_opaque(&self, pass: OitPass) -> Result<OitPass, OitError> {
+        let depth = self.depth.create_view(&Default::default());
+        let color = self.target.create_view(&Default::default());
+        pass.with_opaque(&depth, Some(&color))
     }
 
     /// oit's pass on the user's device for `technique` at `camera`, with the quads' world-space
@@ -288,6 +435,21 @@ pub fn render(technique: Technique) -> Result<(Frame, Image, String), OitError> 
     Ok((frame, user.read_target()?, user.adapter.clone()))
 }
 
+/// Renders the user's wall and then their quads with `technique` through [`OitPass::frame`]
+/// over the wall's depth and colour, into an `Rgba8UnormSrgb` target (the wall's linear colour
+/// stored encoded, decoded again by oit's load): returns oit's frame, the target read back and
+/// the adapter's name.
+pub fn render_over_wall(technique: Technique) -> Result<(Frame, Image, String), OitError> {
+    let user = User::new(wgpu::TextureFormat::Rgba8UnormSrgb)?;
+    let mut encoder = user.device.create_command_encoder(&Default::default());
+    user.draw_opaque(&mut encoder);
+    user.queue.submit([encoder.finish()]);
+    let pass = user.over_opaque(user.pass(technique, camera())?)?;
+    let view = user.target.create_view(&Default::default());
+    let frame = pass.frame(Some(&view), |c| user.pipeline(c), |r, p| user.draw(r, p))?;
+    Ok((frame, user.read_target()?, user.adapter.clone()))
+}
+
 /// The camera of frame `i` of the loop: orbiting the quads, a degree a frame.
 pub fn orbit(i: u32) -> Camera {
     let angle = (i as f32).to_radians();
@@ -296,19 +458,21 @@ pub fn orbit(i: u32) -> Camera {
 }
 
 /// A frame loop as a real application runs it: each frame the camera moves, the user writes
-/// their uniform, oit records into the user's encoder ([`OitPass::record`]: nothing submitted,
-/// nothing read back), the user submits. Returns frames per second over `frames` frames after
+/// their uniform, draws their wall into their target and depth buffer, oit records into the
+/// user's encoder over them ([`OitPass::record`]: nothing submitted, nothing read back) and draws
+/// the image into the same target, the user submits. Returns frames per second over `frames` frames after
 /// one warm-up frame (waited for before and after the timed loop), and the pass's allocations
 /// after the warm-up and at the end.
 pub fn frame_loop(technique: Technique, frames: u32) -> Result<(f64, u64, u64), OitError> {
-    let user = User::new(wgpu::TextureFormat::Rgba8Unorm)?;
-    let mut pass = user.pass(technique, orbit(0))?;
+    let user = User::new(wgpu::TextureFormat::Rgba8UnormSrgb)?;
+    let mut pass = user.over_opaque(user.pass(technique, orbit(0))?)?;
     let view = user.target.create_view(&Default::default());
     let one = |pass: &mut OitPass, i: u32| -> Result<(), OitError> {
         let camera = orbit(i);
         pass.set_view(pass.settings().clone(), camera)?;
         user.set_camera(&camera);
         let mut encoder = user.device.create_command_encoder(&Default::default());
+        user.draw_opaque(&mut encoder);
         pass.record(&mut encoder, &view, |c| user.pipeline(c), |r, p| user.draw(r, p))?;
         user.queue.submit([encoder.finish()]);
         Ok(())
@@ -334,11 +498,13 @@ fn main() -> Result<(), OitError> {
     let mut args = std::env::args().skip(1);
     let technique: Technique = args.next().as_deref().unwrap_or("fabs:8").parse()?;
     let out = args.next().unwrap_or_else(|| "embed.png".into());
-    let (frame, image, adapter) = render(technique)?;
+    let (frame, image, adapter) = render_over_wall(technique)?;
     image.save_png(std::path::Path::new(&out))?;
+    let s = &frame.stats;
     println!(
-        "{technique} on {adapter}: {} fragments, {} geometry passes, gpu {:?} ms, wrote {out}",
-        frame.stats.fragments, frame.stats.geometry_passes, frame.stats.gpu_ms
+        "{technique} on {adapter}, over the user's wall: {} fragments ({} captured, {} behind the wall, {} lost), \
+         {} geometry passes, gpu {:?} ms, wrote {out}",
+        s.fragments, s.captured, s.occluded, s.lost, s.geometry_passes, s.gpu_ms
     );
     match frame_loop(technique, 120) {
         Ok((fps, warm, end)) => println!(

@@ -96,7 +96,7 @@ const MERGED_WORD: u64 = 6;
 /// masked and occluded counters (copied from the opaque colours' buffer at the frame's end).
 const OPAQUE_WORD: u64 = 8;
 /// Bytes of the totals: 12 words.
-const TOTALS_BYTES: u64 = 48;
+pub(crate) const TOTALS_BYTES: u64 = 48;
 
 /// Where a geometry pass leaves its count of generated fragments: word 0 of this buffer, written
 /// by the pass's submission (a [`Driver`] returns it instead of reading it back, so a pass costs
@@ -661,6 +661,13 @@ impl<'a> GpuCtx<'a> {
     /// (only where the frame has an opaque part).
     pub fn cut(&mut self, on: bool) {
         self.uniform.opaque[0] = u32::from(on && self.plan.opaque);
+    }
+
+    /// The frame's opaque image (keys, colours and counters), for the embedded pass to load the
+    /// caller's depth and colour into ([`crate::OitPass::with_opaque`]): placeholders where the
+    /// plan has no opaque part.
+    pub(crate) fn opaque_image(&self) -> (wgpu::Buffer, wgpu::Buffer) {
+        self.opaque.clone()
     }
 
     /// Where the opaque pass counted its fragments: copied into the totals at the frame's end.

@@ -43,6 +43,14 @@
 //!   without an alpha (or set `Settings::bounds` to `BoundsMode::Exact`: then the bounds pass
 //!   draws the user's geometry like any other pass).
 //!
+//! - The caller's opaque geometry: [`OitPass::with_opaque`] takes the caller's depth buffer
+//!   (read, not written) and colour target; every geometry pass cuts the fragments not strictly
+//!   in front of that depth (counted in `Stats::occluded`) and the resolve composites over that
+//!   colour, as behind oit's own opaque pass. [`SceneGeometry`] refuses a scene with opaque parts
+//!   (upload its transparent part, draw the opaque part yourself for `with_opaque`).
+//! - The device needs [`crate::required_features`] and more than wgpu's default 8 storage buffers
+//!   a shader stage (ask for the adapter's limits).
+//!
 //! `Backend::render` on the hardware path is a client of the same code: [`crate::HardwareRaster`]
 //! is this pass's driver with oit's own vertex stage (`shaders/raster_hardware.wgsl`) and draws.
 //! A user who draws an oit [`Scene`] (the `oit view` window does) can take that vertex stage and
@@ -128,6 +136,14 @@ use crate::hardware::{CountTarget, DrawFn, HwGeometry, PipelineFn, RASTER_WGSL, 
 use crate::pool::BufferPool;
 
 const BLIT_WGSL: &str = oit_shaders::text("core/blit.wgsl");
+const OPAQUE_LOAD_WGSL: &str = oit_shaders::text("core/opaque_load.wgsl");
+
+/// The caller's opaque image ([`OitPass::with_opaque`]): their depth buffer and, where given, the
+/// colour the transparent layers composite over.
+struct CallerOpaque {
+    depth: wgpu::TextureView,
+    color: Option<wgpu::TextureView>,
+}
 
 /// oit's capture and resolve, embedded in a wgpu user's frame (see the module docs).
 pub struct OitPass {
@@ -135,6 +151,16 @@ pub struct OitPass {
     settings: Settings,
     camera: Camera,
     scene: Scene,
+    /// The bounds and absorption the stand-in scene is made of ([`OitPass::with_scene_bounds`]).
+    bounds: (Aabb, f32),
+    /// The caller's depth and colour, loaded into the frame's opaque image before its passes.
+    opaque: Option<CallerOpaque>,
+    /// Group 0 of the load of the caller's opaque image, its uniform, a word of zeros (the
+    /// opaque fragments oit drew: none) and a 1×1 texture bound where no colour is given.
+    load_layout: wgpu::BindGroupLayout,
+    load_uniform: wgpu::Buffer,
+    zero: wgpu::Buffer,
+    no_color: wgpu::TextureView,
     /// The instances' bounding boxes on the device, for the bounds pass of bdp and adp.
     boxes: Option<HwGeometry>,
     /// Per-pixel storage kept between frames: a frame of a size seen before creates none.
@@ -165,12 +191,18 @@ pub struct Recorded {
 }
 
 /// A stand-in scene for the frame: what `GpuCtx` reads from a scene (its bounds, which scale the
-/// translucency absorption, and the objects' absorption), without triangles.
-fn stand_in(bounds: Aabb, absorption: f32) -> Scene {
+/// translucency absorption, and the objects' absorption), without triangles; with `opaque`, an
+/// opaque object too, so that the frame's plan holds an opaque image (loaded from the caller's,
+/// [`OitPass::with_opaque`]) and its passes cut at its depth.
+fn stand_in((bounds, absorption): (Aabb, f32), opaque: bool) -> Scene {
     let mesh = Mesh::new("bounds of the embedding scene", vec![bounds.min, bounds.max], Vec::new());
     let mut scene = Scene::from_meshes("embedded", vec![mesh], Vec4::ONE);
     scene.objects[0].absorption = absorption;
     scene.instances = vec![Instance { object: 0, transform: glam::Mat4::IDENTITY }];
+    if opaque {
+        scene.objects.push(scene.objects[0].clone().opaque());
+        scene.instances.push(Instance { object: 1, transform: glam::Mat4::IDENTITY });
+    }
     scene
 }
 
@@ -188,7 +220,7 @@ impl OitPass {
         let gpu = Gpu::from_device(device.clone(), queue.clone())?;
         let stats = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("recorded totals"),
-            size: 32,
+            size: crate::ctx::TOTALS_BYTES,
             usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -205,16 +237,71 @@ impl OitPass {
                 entry(1, wgpu::BufferBindingType::Storage { read_only: true }),
             ],
         });
+        let compute = |binding, ty| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty,
+            count: None,
+        };
+        let buffer = |ty| wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None };
+        let texture = |sample_type| wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        };
+        let load_layout = gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("oit opaque load"),
+            entries: &[
+                compute(0, buffer(wgpu::BufferBindingType::Uniform)),
+                compute(1, texture(wgpu::TextureSampleType::Depth)),
+                compute(2, texture(wgpu::TextureSampleType::Float { filterable: false })),
+                compute(3, buffer(wgpu::BufferBindingType::Storage { read_only: false })),
+                compute(4, buffer(wgpu::BufferBindingType::Storage { read_only: false })),
+            ],
+        });
+        let load_uniform = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("oit opaque load"),
+            size: 32,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        // new buffers are zeroed
+        let zero = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("no opaque fragments"),
+            size: 16,
+            usage: wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let no_color = gpu
+            .device
+            .create_texture(&wgpu::TextureDescriptor {
+                label: Some("no caller colour"),
+                size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba8Unorm,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+            .create_view(&Default::default());
+        let bounds = (Aabb { min: -Vec3::ONE, max: Vec3::ONE }, 1.0);
         Ok(OitPass {
             gpu,
             settings,
             camera,
-            scene: stand_in(Aabb { min: -Vec3::ONE, max: Vec3::ONE }, 1.0),
+            scene: stand_in(bounds, false),
+            bounds,
+            opaque: None,
+            load_layout,
+            load_uniform,
+            zero,
+            no_color,
             boxes: None,
             pool: BufferPool::default(),
             target: Mutex::new(None),
             boxes_target: Mutex::new(None),
-            made: AtomicU64::new(1),
+            made: AtomicU64::new(4),
             stats,
             recorded: Mutex::new(None),
             blit_layout,
@@ -248,7 +335,8 @@ impl OitPass {
     /// the objects' mean absorption ([`OitPass::with_scene_bounds`]), so every technique's image
     /// equals `Backend::render`'s on the hardware path. `geometry` must be on the pass's device.
     pub fn with_scene_geometry(mut self, geometry: &SceneGeometry) -> OitPass {
-        self.scene = stand_in(geometry.bounds, geometry.absorption);
+        self.bounds = (geometry.bounds, geometry.absorption);
+        self.scene = stand_in(self.bounds, self.opaque.is_some());
         self.boxes = Some(geometry.boxes.clone());
         self
     }
@@ -257,8 +345,87 @@ impl OitPass {
     /// effect (absorption is per 1/8 of the bounds' radius, as for oit's own scenes). Default: the
     /// box ±1, absorption 1.
     pub fn with_scene_bounds(mut self, bounds: Aabb, absorption: f32) -> OitPass {
-        self.scene = stand_in(bounds, absorption);
+        self.bounds = (bounds, absorption);
+        self.scene = stand_in(self.bounds, self.opaque.is_some());
         self
+    }
+
+    /// The caller's opaque geometry, drawn before the pass: `depth`, a view of their
+    /// `Depth32Float` depth buffer, which every geometry pass of the technique tests each
+    /// fragment against (a fragment goes on only strictly in front of it, as behind oit's own
+    /// opaque pass; what it holds back is counted in `Stats::occluded`), and `color`, their
+    /// colour target, which the resolve composites the transparent layers over instead of the
+    /// settings' background (without it, over the background, still cut at the depth).
+    ///
+    /// The depth must be oit's convention, NDC z in [0, 1] with smaller nearer (a standard
+    /// `Less` depth test cleared to 1.0, not reversed-Z), drawn with the same `view_proj` as the
+    /// camera given to the pass and the user's capture draws, over the same `width × height`
+    /// pixels (texel (x, y) is pixel (x, y); the texture may be larger). A pixel the caller left
+    /// at the cleared 1.0 cuts only fragments at exactly 1.0, as a `Less` test would. The colour
+    /// is read as linear RGB: a `…Srgb` texture is decoded by the load, any other float format
+    /// (`Rgba8Unorm`, `Rgba16Float`, `Rgba32Float`, ...) is taken as it is; alpha is ignored.
+    ///
+    /// Both are read, never written: each frame starts by loading them (a compute pass,
+    /// `textureLoad` texel for texel) into the frame's opaque image, the buffers oit's own opaque
+    /// pass fills, so every technique's cut and composite run unchanged. They need
+    /// `TEXTURE_BINDING` and one sample. The colour may be the texture [`OitPass::record`] then
+    /// draws the image into (the copy is taken first): the frame's image replaces the caller's
+    /// colour with the transparent layers over it. (Later, a read-only depth attachment with the
+    /// hardware depth test could cut fragments before the fragment shader.)
+    ///
+    /// Views of the caller's textures are kept, so recreate the pass's inputs with
+    /// [`OitPass::set_opaque`] when those textures are recreated (a resize).
+    ///
+    /// ```no_run
+    /// # fn demo(device: &wgpu::Device, queue: &wgpu::Queue, settings: oit_core::Settings,
+    /// #         camera: oit_core::Camera) -> Result<(), oit_core::OitError> {
+    /// let (w, h) = (settings.width, settings.height);
+    /// let texture = |format, usage| {
+    ///     device.create_texture(&wgpu::TextureDescriptor {
+    ///         label: None,
+    ///         size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+    ///         mip_level_count: 1,
+    ///         sample_count: 1,
+    ///         dimension: wgpu::TextureDimension::D2,
+    ///         format,
+    ///         usage,
+    ///         view_formats: &[],
+    ///     })
+    /// };
+    /// let both = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+    /// let depth = texture(wgpu::TextureFormat::Depth32Float, both).create_view(&Default::default());
+    /// let color = texture(wgpu::TextureFormat::Rgba8UnormSrgb, both).create_view(&Default::default());
+    /// // ... draw the opaque geometry into `color` and `depth` (depth compare Less, cleared to
+    /// // 1.0), submit, then run the pass's frames:
+    /// let pass = oit_wgpu::OitPass::new(device, queue, settings, camera)?.with_opaque(&depth, Some(&color))?;
+    /// # let _ = pass; Ok(()) }
+    /// ```
+    pub fn with_opaque(
+        mut self,
+        depth: &wgpu::TextureView,
+        color: Option<&wgpu::TextureView>,
+    ) -> Result<OitPass, OitError> {
+        self.set_opaque(Some(depth), color)?;
+        Ok(self)
+    }
+
+    /// Sets (or, with `depth` `None`, removes) the caller's opaque depth and colour of the next
+    /// frames, as [`OitPass::with_opaque`] does.
+    pub fn set_opaque(
+        &mut self,
+        depth: Option<&wgpu::TextureView>,
+        color: Option<&wgpu::TextureView>,
+    ) -> Result<(), OitError> {
+        self.opaque = match depth {
+            None => None,
+            Some(depth) => {
+                let opaque = CallerOpaque { depth: depth.clone(), color: color.cloned() };
+                self.check_opaque(&opaque)?;
+                Some(opaque)
+            }
+        };
+        self.scene = stand_in(self.bounds, self.opaque.is_some());
+        Ok(())
     }
 
     /// The settings of the pass.
@@ -273,6 +440,87 @@ impl OitPass {
         settings.validate()?;
         self.settings = settings;
         self.camera = camera;
+        Ok(())
+    }
+
+    /// The caller's textures against the pass's size and what the load reads.
+    fn check_opaque(&self, opaque: &CallerOpaque) -> Result<(), OitError> {
+        let (w, h) = (self.settings.width, self.settings.height);
+        let check = |what: &str, texture: &wgpu::Texture, ok_format: bool, want: &str| {
+            let big = texture.width() >= w && texture.height() >= h;
+            let usage = texture.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING);
+            if ok_format && big && usage && texture.sample_count() == 1 {
+                return Ok(());
+            }
+            Err(OitError::InvalidSettings(format!(
+                "the opaque {what} texture is {:?} {}×{} with {:?}, {} sample(s): it must be {want}, at least {w}×{h}, single-sampled, with TEXTURE_BINDING",
+                texture.format(),
+                texture.width(),
+                texture.height(),
+                texture.usage(),
+                texture.sample_count()
+            )))
+        };
+        let depth = opaque.depth.texture();
+        check("depth", depth, depth.format() == wgpu::TextureFormat::Depth32Float, "Depth32Float")?;
+        if let Some(color) = &opaque.color {
+            let texture = color.texture();
+            let float = matches!(
+                texture.format().sample_type(None, None),
+                Some(wgpu::TextureSampleType::Float { .. })
+            );
+            check(
+                "colour",
+                texture,
+                float,
+                "a float colour format (Rgba8Unorm[Srgb], Bgra8Unorm[Srgb], Rgba16Float, Rgba32Float, ...)",
+            )?;
+        }
+        Ok(())
+    }
+
+    /// Records the load of the caller's opaque image into `ctx`'s frame, before its passes.
+    fn load_opaque(&self, ctx: &mut GpuCtx<'_>) -> Result<(), OitError> {
+        let Some(opaque) = &self.opaque else {
+            return Ok(());
+        };
+        self.check_opaque(opaque)?;
+        let (w, h) = (self.settings.width, self.settings.height);
+        let mut uniform = [0u32; 8];
+        uniform[..3].copy_from_slice(&[w, h, u32::from(opaque.color.is_some())]);
+        for (word, c) in uniform[4..7].iter_mut().zip(self.settings.background.to_array()) {
+            *word = c.to_bits();
+        }
+        self.gpu.queue.write_buffer(&self.load_uniform, 0, bytemuck::cast_slice(&uniform));
+        let pipeline =
+            self.gpu.compute_pipeline(OPAQUE_LOAD_WGSL, "opaque_load_main", &[&self.load_layout])?;
+        let (keys, rgb) = ctx.opaque_image();
+        let color = opaque.color.as_ref().unwrap_or(&self.no_color);
+        let group = self.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("oit opaque load"),
+            layout: &self.load_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: self.load_uniform.as_entire_binding() },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&opaque.depth),
+                },
+                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(color) },
+                wgpu::BindGroupEntry { binding: 3, resource: keys.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: rgb.as_entire_binding() },
+            ],
+        });
+        {
+            let mut cpass = ctx.encoder().begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("oit opaque load"),
+                timestamp_writes: None,
+            });
+            cpass.set_pipeline(&pipeline);
+            cpass.set_bind_group(0, &group, &[]);
+            cpass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+        }
+        // oit drew no opaque fragment; the frame's end copies the occluded count beside this
+        ctx.note_opaque(&self.zero);
         Ok(())
     }
 
@@ -296,6 +544,7 @@ impl OitPass {
         let drivers = self.drivers(Box::new(pipeline), Box::new(draw));
         let mut ctx =
             GpuCtx::with_pool(&self.gpu, &self.scene, &self.camera, &self.settings, Some(&self.pool))?;
+        self.load_opaque(&mut ctx)?;
         crate::technique::run(&mut ctx, &drivers)?;
         let mut frame = ctx.finish(RasterPath::Hardware)?;
         if let Some(view) = target {
@@ -348,10 +597,12 @@ impl OitPass {
                 Some(&self.pool),
                 encoder,
             )?;
+            self.load_opaque(&mut ctx)?;
             crate::technique::run(&mut ctx, &drivers)?;
             ctx.finish_recorded()?
         };
-        encoder.copy_buffer_to_buffer(&done.totals, 0, &self.stats, 0, 32);
+        // every word: the opaque pass's counters (occluded) lie after the first eight
+        encoder.copy_buffer_to_buffer(&done.totals, 0, &self.stats, 0, crate::ctx::TOTALS_BYTES);
         let group = self.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("oit image blit"),
             layout: &self.blit_layout,
@@ -413,7 +664,8 @@ impl OitPass {
     }
 
     /// Buffers and textures this pass has created for its frames: its per-pixel storage (a
-    /// [`BufferPool`]'s), its count targets (the scene's, the boxes'), its stats buffer. A frame
+    /// [`BufferPool`]'s), its count targets (the scene's, the boxes'), its stats buffer, and the
+    /// uniform, zero word and placeholder texture of the load of [`OitPass::with_opaque`]. A frame
     /// of a size and technique seen before adds none.
     pub fn allocations(&self) -> u64 {
         self.pool.allocations() + self.made.load(Relaxed)
@@ -498,7 +750,6 @@ impl OitPass {
     /// Whether the technique's frame can be recorded without a round trip ([`OitPass::record`]).
     fn check_recordable(&self) -> Result<(), OitError> {
         let plan = oit_core::plan::Plan::new("wgpu", &self.scene, &self.settings)?;
-        oit_gpu::refuse_materials("wgpu", &self.scene)?;
         plan.refuse_image_atomics("wgpu")?;
         plan.refuse_interlock("wgpu", "WGSL has no fragment shader interlock")?;
         let why = plan.mid_frame_readback();
@@ -658,7 +909,25 @@ impl SceneGeometry {
 
     /// Uploads `scene`'s meshes and triangles, and its instances' bounding boxes, to the device
     /// (which must have [`crate::required_features`]).
+    ///
+    /// A scene with opaque or masked objects or a transmission ([`Scene::has_materials`]) is
+    /// refused: the pass captures what is drawn through it, so upload its transparent part
+    /// (`scene.layers(None).transparent`, drawn with `Settings::alpha` unset where the layers are
+    /// baked), draw the opaque part yourself into a depth buffer and colour target, and give those
+    /// to [`OitPass::with_opaque`] (`tests/embed.rs` draws the opaque part with this shader's
+    /// vertex stage, so the frame equals `Backend::render`'s).
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> Result<SceneGeometry, OitError> {
+        if scene.has_materials() {
+            return Err(OitError::Unsupported {
+                backend: "wgpu (embedded pass)".into(),
+                what: format!(
+                    "scene '{}' has opaque or masked objects or a transmission: a SceneGeometry is captured \
+                     whole as transparent; upload `scene.layers(None).transparent` instead, and draw the opaque \
+                     part into your own depth buffer (and colour target) for `OitPass::with_opaque`",
+                    scene.name
+                ),
+            });
+        }
         let gpu = Gpu::from_device(device.clone(), queue.clone())?;
         let made = std::cell::Cell::new(0);
         let geometry = HwGeometry::new(&gpu, scene, false, &made)?;

@@ -26,6 +26,12 @@ pub fn optional_features() -> wgpu::Features {
         | wgpu::Features::FLOAT32_BLENDABLE
 }
 
+/// The most storage buffers one of oit's pipelines binds in a shader stage: group 0's resolve
+/// state, up to 6 technique arrays, the loss counts and the opaque image's key and colour (10),
+/// and group 1's geometry (3: the compute rasterizer's triangles, work items and count; the
+/// hardware path's vertices, triangles and instances).
+pub const MIN_STORAGE_BUFFERS: u32 = 13;
+
 /// An open device with what oit learned about it.
 pub struct Gpu {
     /// The device.
@@ -139,6 +145,8 @@ impl Gpu {
 
     /// Wraps a device the caller opened (the embedded pass, `crate::embed`). It must have
     /// [`required_features`]; its limits are whatever the caller requested.
+    /// (A device opened with wgpu's default limits, 8 storage buffers a stage, is refused here by
+    /// name rather than by a validation panic at the first pipeline: see [`MIN_STORAGE_BUFFERS`].)
     pub fn from_device(device: wgpu::Device, queue: wgpu::Queue) -> Result<Gpu, OitError> {
         let info = device.adapter_info();
         let features = device.features();
@@ -150,6 +158,14 @@ impl Gpu {
             )));
         }
         let limits = device.limits();
+        if limits.max_storage_buffers_per_shader_stage < MIN_STORAGE_BUFFERS {
+            return Err(OitError::Device(format!(
+                "the device on '{}' was opened with {} storage buffers a shader stage, and oit's pipelines bind up to \
+                 {MIN_STORAGE_BUFFERS} (group 0's state, up to 6 technique arrays, the loss counts and the opaque \
+                 image; group 1's geometry): open it with `adapter.limits()` (or at least that many)",
+                info.name, limits.max_storage_buffers_per_shader_stage
+            )));
+        }
         Ok(Gpu::wrap(device, queue, info, features, limits))
     }
 

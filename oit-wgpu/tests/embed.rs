@@ -415,3 +415,268 @@ fn overflow_tail_through_the_embedded_pass_matches_backend_render() {
         assert_eq!(frame.stats.lost, own.stats.lost, "{technique}");
     }
 }
+
+/// The opaque part of a scene drawn as an embedding renderer would, before the OIT pass: into
+/// its own `Depth32Float` depth buffer (compare `Less`, cleared to 1.0) and an `Rgba32Float`
+/// colour target (cleared to the background), through `SceneGeometry`'s vertex stage and
+/// shading with a capture that returns the shaded colour, so the depths and colours are the ones
+/// oit's own opaque pass keeps (the hardware depth test keeps the first of equal depths, the
+/// lowest primitive id, as the opaque pass's tie rule does).
+fn draw_opaque(
+    gpu: &oit_wgpu::Gpu,
+    opaque: &Scene,
+    camera: &oit_core::Camera,
+    settings: &Settings,
+) -> (wgpu::TextureView, wgpu::TextureView) {
+    // a SceneGeometry takes blended objects only: the opaque part's objects drawn as such
+    let mut part = opaque.clone();
+    for o in &mut part.objects {
+        o.alpha_mode = oit_core::AlphaMode::Blend;
+    }
+    let geometry = oit_wgpu::embed::SceneGeometry::new(&gpu.device, &gpu.queue, &part).unwrap();
+    geometry.write_frame(&part, camera, settings);
+    let device = &gpu.device;
+    let texture = |format| {
+        device
+            .create_texture(&wgpu::TextureDescriptor {
+                label: Some("caller's opaque target"),
+                size: wgpu::Extent3d {
+                    width: settings.width,
+                    height: settings.height,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+            .create_view(&Default::default())
+    };
+    let depth = texture(wgpu::TextureFormat::Depth32Float);
+    let color = texture(wgpu::TextureFormat::Rgba32Float);
+    let stub = "fn oit_capture_full(xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: vec3<f32>, prim: u32) -> vec4<f32> {\n    return clamp(color, vec4<f32>(0.0), vec4<f32>(1.0));\n}\n";
+    let source = format!("{}\n{stub}{}", oit_wgpu::COMMON_WGSL, oit_wgpu::embed::SceneGeometry::WGSL);
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("caller's opaque pass"),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    let empty =
+        device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &[] });
+    let empty_group =
+        device.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout: &empty, entries: &[] });
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: None,
+        bind_group_layouts: &[Some(&empty), Some(geometry.bind_group_layout())],
+        immediate_size: 0,
+    });
+    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("caller's opaque pass"),
+        layout: Some(&layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("hw_vs"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: wgpu::TextureFormat::Depth32Float,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("hw_fs"),
+            compilation_options: Default::default(),
+            targets: &[Some(wgpu::TextureFormat::Rgba32Float.into())],
+        }),
+        multiview_mask: None,
+        cache: None,
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let bg = settings.background.as_dvec3();
+        let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("caller's opaque pass"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &color,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color { r: bg.x, g: bg.y, b: bg.z, a: 1.0 }),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        rpass.set_pipeline(&pipeline);
+        rpass.set_bind_group(0, &empty_group, &[]);
+        rpass.set_bind_group(1, geometry.bind_group(), &[]);
+        rpass.draw(0..geometry.vertex_count(), 0..1);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    (depth, color)
+}
+
+/// A scene with an opaque wall through the embedded pass as an embedding renderer runs it: its
+/// opaque part drawn first into the caller's depth and colour ([`draw_opaque`]), then the
+/// transparent part through `SceneGeometry` and `OitPass::with_opaque`. The frame equals
+/// `Backend::render`'s of the whole scene on the hardware path: the image byte for byte, the
+/// fragments, captured and occluded counts (the same vertex stage and shading on both sides, the
+/// same depths and colours in the opaque image), for an exact technique (fabs) and a peel (dp),
+/// by `OitPass::frame` and, for fabs:K, `OitPass::record`. The pass runs no opaque geometry pass
+/// of its own: two passes fewer.
+#[test]
+fn caller_opaque_depth_and_colour_match_backend_render() {
+    let Some(backend) = oit_wgpu::backend_or_skip("caller_opaque_depth_and_colour_match_backend_render")
+    else {
+        return;
+    };
+    let gpu = backend.gpu().unwrap();
+    let scene = oit_core::load_scene("wall:0.5:planes:16").unwrap();
+    assert!(scene.has_opaque(), "the scene has a wall");
+    let refused = oit_wgpu::embed::SceneGeometry::new(&gpu.device, &gpu.queue, &scene).err().unwrap();
+    assert!(refused.to_string().contains("OitPass::with_opaque"), "{refused}");
+    let (w, h) = (64, 48);
+    let camera =
+        oit_core::Camera::orbit_scene(&scene, oit_core::View::default(), w as f32 / h as f32).unwrap();
+    let layers = scene.layers(None);
+    let opaque = layers.opaque.as_ref().unwrap();
+    let absorption = scene.objects.iter().map(|o| o.absorption).sum::<f32>() / scene.objects.len() as f32;
+    let geometry = oit_wgpu::embed::SceneGeometry::new(&gpu.device, &gpu.queue, &layers.transparent).unwrap();
+    for technique in [Technique::Fabs { k: None }, Technique::Dp, Technique::Fabs { k: Some(4) }] {
+        let settings = Settings {
+            width: w,
+            height: h,
+            technique,
+            raster: Some(RasterPath::Hardware),
+            ..Settings::default()
+        };
+        let own = backend.render(&scene, &camera, &settings).unwrap();
+        assert!(
+            own.stats.occluded > 0 && own.stats.captured > 0,
+            "{technique}: the wall hides some, not all"
+        );
+        let drawn = layers.settings(&settings);
+        let (depth, color) = draw_opaque(gpu, opaque, &camera, &drawn);
+        let pass = oit_wgpu::OitPass::new(&gpu.device, &gpu.queue, settings.clone(), camera)
+            .unwrap()
+            .with_scene_geometry(&geometry)
+            .with_scene_bounds(scene.bounds(), absorption)
+            .with_opaque(&depth, Some(&color))
+            .unwrap();
+        geometry.write_frame(&layers.transparent, &camera, &drawn);
+        let frame = pass
+            .frame(
+                None,
+                |capture| scene_pipeline(&gpu.device, &geometry, capture),
+                |rpass, _| {
+                    rpass.set_bind_group(1, geometry.bind_group(), &[]);
+                    rpass.draw(0..geometry.vertex_count(), 0..1);
+                },
+            )
+            .unwrap();
+        let worst = worst_difference(&frame.image, &own.image);
+        println!(
+            "{technique}: worst {worst}; fragments {} vs {}, captured {} vs {}, occluded {} vs {}, passes {} vs {}",
+            frame.stats.fragments,
+            own.stats.fragments,
+            frame.stats.captured,
+            own.stats.captured,
+            frame.stats.occluded,
+            own.stats.occluded,
+            frame.stats.geometry_passes,
+            own.stats.geometry_passes
+        );
+        assert_eq!(worst, 0, "{technique}: the image differs");
+        assert_eq!(frame.stats.fragments, own.stats.fragments, "{technique}");
+        assert_eq!(frame.stats.captured, own.stats.captured, "{technique}");
+        assert_eq!(frame.stats.occluded, own.stats.occluded, "{technique}");
+        assert_eq!(frame.stats.lost, own.stats.lost, "{technique}");
+        assert_eq!(frame.stats.geometry_passes + 2, own.stats.geometry_passes, "{technique}");
+        assert_eq!(frame.stats.opaque_fragments, 0, "{technique}: the pass drew no opaque fragment");
+        if technique == (Technique::Fabs { k: Some(4) }) {
+            // recorded into the caller's encoder, drawn into a target of its own
+            let target = gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("recorded target"),
+                size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba8Unorm,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            });
+            let view = target.create_view(&Default::default());
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            pass.record(
+                &mut encoder,
+                &view,
+                |capture| scene_pipeline(&gpu.device, &geometry, capture),
+                |rpass, _| {
+                    rpass.set_bind_group(1, geometry.bind_group(), &[]);
+                    rpass.draw(0..geometry.vertex_count(), 0..1);
+                },
+            )
+            .unwrap();
+            gpu.queue.submit([encoder.finish()]);
+            let stats = pass.read_stats().unwrap();
+            assert_eq!(stats.captured, own.stats.captured, "{technique} recorded");
+            assert_eq!(stats.occluded, own.stats.occluded, "{technique} recorded");
+            let image = read_rgba8(gpu, &target);
+            assert_eq!(image.pixels, own.image.pixels, "{technique} recorded: the image differs");
+        }
+    }
+}
+
+/// An `Rgba8Unorm` texture's texels, read back.
+fn read_rgba8(gpu: &oit_wgpu::Gpu, texture: &wgpu::Texture) -> Image {
+    let (w, h) = (texture.width(), texture.height());
+    let row = (w * 4).div_ceil(256) * 256;
+    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("read back"),
+        size: u64::from(row * h),
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    encoder.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: Some(h),
+            },
+        },
+        texture.size(),
+    );
+    gpu.queue.submit([encoder.finish()]);
+    buffer.slice(..).map_async(wgpu::MapMode::Read, |_| ());
+    gpu.device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None }).unwrap();
+    let bytes = buffer.slice(..).get_mapped_range().unwrap();
+    let pixels = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (y, x)))
+        .map(|(y, x)| {
+            let i = (y * row + x * 4) as usize;
+            [bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]]
+        })
+        .collect();
+    Image { width: w, height: h, pixels }
+}
