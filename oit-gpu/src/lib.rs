@@ -132,6 +132,27 @@ pub fn refuse_materials(backend: &str, scene: &Scene) -> Result<(), OitError> {
     Ok(())
 }
 
+/// The refusal of a scene in which any instance draws a textured object
+/// ([`oit_core::Object::texture`]), by the object's and the texture's names: the GPU backends
+/// do not sample textures yet, and a frame that drew the objects in their factor's colour alone
+/// would be wrong in silence. The CPU backend draws them. Called wherever a GPU frame makes its
+/// plan.
+pub fn refuse_textures(backend: &str, scene: &Scene) -> Result<(), OitError> {
+    let textured =
+        scene.instances.iter().filter_map(|i| scene.objects.get(i.object)).find(|o| o.texture.is_some());
+    if let Some(o) = textured {
+        let texture = o.texture.and_then(|t| scene.textures.get(t)).map_or("?", |t| t.name.as_str());
+        return Err(OitError::Unsupported {
+            backend: backend.into(),
+            what: format!(
+                "textures: object '{}' of scene '{}' is textured ('{texture}'), and the GPU backends do not sample textures yet; use --backend cpu",
+                o.name, scene.name
+            ),
+        });
+    }
+    Ok(())
+}
+
 /// Workgroups of 64 for `invocations` invocations, as (x, y) with x ≤ 65535 (a kernel finds its
 /// invocation's index from both: `kernel_pixel` in prelude.wgsl).
 pub fn dispatch_size(invocations: u64) -> (u32, u32) {
