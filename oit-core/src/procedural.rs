@@ -212,6 +212,7 @@ fn grid(spec: &str) -> Result<Scene, OitError> {
     let mut scene = Scene {
         name: format!("grid:{spec}"),
         meshes: base.meshes.clone(),
+        textures: base.textures.clone(),
         warnings: base.warnings.clone(),
         ..Default::default()
     };
