@@ -438,3 +438,17 @@ pub trait Rasters<R: ?Sized> {
         None
     }
 }
+
+#[cfg(test)]
+mod tests {
+    /// A scene that draws a textured object is refused by the object's and the texture's names;
+    /// the same scene untextured is not.
+    #[test]
+    fn textured_scenes_are_refused_by_name() {
+        let scene = oit_core::load_scene("particles:4").unwrap();
+        let e = super::refuse_textures("wgpu", &scene).unwrap_err().to_string();
+        assert!(e.contains("particle 0") && e.contains("sprite") && e.contains("wgpu"), "{e}");
+        let plain = oit_core::load_scene("untextured:particles:4").unwrap();
+        assert!(super::refuse_textures("vulkan", &plain).is_ok());
+    }
+}
