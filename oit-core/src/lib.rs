@@ -86,6 +86,7 @@ mod scene;
 mod settings;
 pub mod setup;
 mod technique;
+pub mod texture;
 pub mod tiling;
 
 pub use backend::{
@@ -105,5 +106,6 @@ pub use settings::{
 pub use technique::{
     BoundsMode, Effect, KNOWN_TECHNIQUES, MAX_PARAMETER, MBOIT_MOMENTS, RasterPath, Technique, TechniqueKind,
 };
+pub use texture::{Texture, Wrap};
 
 pub use glam;

@@ -12,6 +12,9 @@
 //! | `scale:S:SCENE` | SCENE with every coordinate multiplied by S (e.g. `scale:1e-20:planes:8`) | SCENE's |
 //! | `wall:F:SCENE` | SCENE with an opaque grey wall across it, facing the default view, a share F in [0, 1] of the way through its bounding sphere (0: in front of everything, 1: behind it) | SCENE's in front of the wall |
 //! | `nowall:F:SCENE` | `wall:F:SCENE` with the wall masked away: the same frame with nothing occluded | SCENE's |
+//! | `particles:N` | N camera-facing quads (billboards) with a soft round alpha texture, in front of an opaque backdrop | varies |
+//! | `fence` | an alpha-masked quad textured with round holes, in front of `planes:4` and an opaque backdrop | 4 through the holes |
+//! | `untextured:SCENE` | SCENE with its textures dropped (each object its factor's colour): what a textured frame is timed against | SCENE's |
 //! | `default` | a see-through torus knot inside two glass spheres | 10 at the default view, up to 16 |
 //! | `bunny`, `armadillo` | the Stanford scans, embedded ([`crate::assets`]) | varies |
 //!
@@ -21,12 +24,12 @@
 use std::f32::consts::TAU;
 use std::path::Path;
 
-use glam::{Mat4, Vec3, Vec4};
+use glam::{Mat4, Vec2, Vec3, Vec4};
 
-use crate::{Instance, Mesh, Object, OitError, Scene};
+use crate::{AlphaMode, Instance, Mesh, Object, OitError, Scene, Texture, Wrap};
 
 /// The built-in names, for messages.
-pub const BUILTIN_SCENES: &str = "default, bunny, armadillo, planes:N, spheres:N, cluster:N, knot, coplanar, ties:N, near:N, grid:RxC:MESH, scale:S:SCENE, wall:F:SCENE, nowall:F:SCENE";
+pub const BUILTIN_SCENES: &str = "default, bunny, armadillo, planes:N, spheres:N, cluster:N, knot, coplanar, ties:N, near:N, grid:RxC:MESH, scale:S:SCENE, wall:F:SCENE, nowall:F:SCENE, particles:N, fence, untextured:SCENE";
 
 /// Where a bare name that is not built in (`--scene dragon`, `grid:2x2:dragon`) is looked for, as
 /// `NAME.obj`, in order: for messages. [`find_model`] is the lookup.
@@ -70,6 +73,10 @@ pub fn load_scene(name: &str) -> Result<Scene, OitError> {
 pub fn is_procedural(s: &str) -> bool {
     let mut rest = s.trim();
     loop {
+        if let Some(inner) = rest.strip_prefix("untextured:") {
+            rest = inner;
+            continue;
+        }
         let stripped = ["grid:", "scale:", "wall:", "nowall:"].iter().find_map(|p| {
             let tail = rest.strip_prefix(p)?;
             // the prefix's own argument (R×C or S), then the inner scene
@@ -108,6 +115,9 @@ fn builtin_unchecked(name: &str) -> Option<Result<Scene, OitError>> {
     if let Some(rest) = name.strip_prefix("nowall:") {
         return Some(walled(rest, true));
     }
+    if let Some(rest) = name.strip_prefix("untextured:") {
+        return Some(untextured(rest));
+    }
     if let Some(mesh) = crate::assets::BuiltinMesh::find(name) {
         return Some(mesh.scene());
     }
@@ -145,6 +155,8 @@ fn builtin_unchecked(name: &str) -> Option<Result<Scene, OitError>> {
             Ok(if base == "ties" { ties(n) } else { near(n) })
         }),
         "default" => no_param(default_scene()),
+        "particles" => count(64).and_then(particles),
+        "fence" => no_param(Scene::default()).and_then(|_| fence()),
         _ => return None,
     })
 }
@@ -200,6 +212,7 @@ fn grid(spec: &str) -> Result<Scene, OitError> {
     let mut scene = Scene {
         name: format!("grid:{spec}"),
         meshes: base.meshes.clone(),
+        textures: base.textures.clone(),
         warnings: base.warnings.clone(),
         ..Default::default()
     };
@@ -297,8 +310,15 @@ fn walled(spec: &str, masked: bool) -> Result<Scene, OitError> {
         return Err(bad());
     }
     let mut scene = inner_scene(inner)?;
+    add_wall(&mut scene, f, masked)?;
+    scene.name = format!("{prefix}:{spec}");
+    Ok(scene)
+}
+
+/// The wall of [`walled`], added to `scene` as its last object and instance.
+fn add_wall(scene: &mut Scene, f: f32, masked: bool) -> Result<(), OitError> {
     scene.validate()?;
-    let camera = crate::Camera::orbit_scene(&scene, crate::View::default(), 1.0)?;
+    let camera = crate::Camera::orbit_scene(scene, crate::View::default(), 1.0)?;
     let bounds = scene.bounds();
     let (center, r) = (bounds.center(), bounds.radius());
     let forward = camera.forward;
@@ -316,7 +336,134 @@ fn walled(spec: &str, masked: bool) -> Result<Scene, OitError> {
     }
     scene.objects.push(wall);
     scene.instances.push(Instance { object: scene.objects.len() - 1, transform: Mat4::IDENTITY });
-    scene.name = format!("{prefix}:{spec}");
+    Ok(())
+}
+
+/// `untextured:SCENE`: SCENE with every object's texture and every mesh's texture coordinates
+/// dropped, each object drawn in its factor's colour: the same geometry, camera and primitive
+/// order, so a textured frame can be timed against it (`oit bench`).
+fn untextured(inner: &str) -> Result<Scene, OitError> {
+    let mut scene = inner_scene(inner)?;
+    for o in &mut scene.objects {
+        o.texture = None;
+    }
+    for m in &mut scene.meshes {
+        m.uvs = None;
+    }
+    scene.textures.clear();
+    scene.name = format!("untextured:{inner}");
+    Ok(scene)
+}
+
+/// A 2×2 quad facing +z at z = 0, texture coordinates from (0, 0) at the top left to
+/// (`repeat`, `repeat`) at the bottom right (v runs down the image, as glTF's does).
+fn textured_quad(name: &str, repeat: f32) -> Mesh {
+    let mut m = quad(name, (-1.0, -1.0), (1.0, 1.0), 0.0);
+    m.uvs = Some(vec![
+        Vec2::new(0.0, repeat),
+        Vec2::new(repeat, repeat),
+        Vec2::new(repeat, 0.0),
+        Vec2::new(0.0, 0.0),
+    ]);
+    m
+}
+
+/// Side of the textures of `particles:N` and `fence`.
+const SPRITE_SIZE: u32 = 256;
+
+/// A soft round sprite: white, alpha falling from 1 at the centre to 0 at the inscribed circle
+/// as `(1 − r²)²`, in 8 bits.
+fn sprite_texture() -> Result<Texture, OitError> {
+    let n = SPRITE_SIZE;
+    let texels = (0..n * n)
+        .map(|i| {
+            let (x, y) = ((i % n) as f32 + 0.5, (i / n) as f32 + 0.5);
+            let (dx, dy) = (x / n as f32 * 2.0 - 1.0, y / n as f32 * 2.0 - 1.0);
+            let fall = (1.0 - (dx * dx + dy * dy)).max(0.0);
+            [255, 255, 255, (fall * fall * 255.0).round() as u8]
+        })
+        .collect();
+    Texture::new("sprite", n, n, texels, [Wrap::ClampToEdge; 2])
+}
+
+/// `particles:N`: N billboards (2×2 quads facing the default view) of a soft round sprite
+/// ([`sprite_texture`]), each its own colour at alpha 0.8, placed by a fixed seed in a ball of
+/// radius 2, sized so the cloud stays about equally dense whatever N, in front of an opaque
+/// backdrop (`wall:1:`). A smoke or spark effect's frame: most of each quad is nearly transparent,
+/// and the texture decides what each fragment adds.
+fn particles(n: u32) -> Result<Scene, OitError> {
+    let mut scene = Scene {
+        name: format!("particles:{n}"),
+        meshes: vec![textured_quad("billboard", 1.0)],
+        textures: vec![sprite_texture()?],
+        ..Scene::default()
+    };
+    // the default view's direction, from a scene of the cloud's extent
+    let probe = single("probe".into(), vec![quad("probe", (-2.0, -2.0), (2.0, 2.0), 0.0)], vec![Vec4::ONE]);
+    let forward = crate::Camera::orbit_scene(&probe, crate::View::default(), 1.0)?.forward;
+    let side = forward.cross(Vec3::Y).normalize_or(Vec3::X);
+    let up = side.cross(forward);
+    // the quad's +z towards the camera
+    let facing = Mat4::from_cols(side.extend(0.0), up.extend(0.0), (-forward).extend(0.0), Vec4::W);
+    let size = 0.9 / (n as f32).cbrt();
+    let mut rng = Rng(0x2545_f491_4f6c_dd1d);
+    for i in 0..n {
+        let mut c;
+        loop {
+            c = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - Vec3::ONE;
+            if c.length_squared() <= 1.0 {
+                break;
+            }
+        }
+        let scale = size * (0.6 + 0.8 * rng.next_f32());
+        let color = hue(i as f32 / n as f32).extend(0.8);
+        scene.objects.push(Object::new(format!("particle {i}"), 0, color).textured(0));
+        scene.instances.push(Instance {
+            object: i as usize,
+            transform: Mat4::from_translation(c * 2.0) * facing * Mat4::from_scale(Vec3::splat(scale)),
+        });
+    }
+    add_wall(&mut scene, 1.0, false)?;
+    Ok(scene)
+}
+
+/// A fence's texture: a checker of grey and green cells, each with a round hole whose alpha rises
+/// from 0 at its centre to 1 at a radius of 0.8 of the cell's half side (alpha as the distance,
+/// so the bilinear samples cross a cutoff of 0.5 at many different texels).
+fn fence_texture() -> Result<Texture, OitError> {
+    let n = SPRITE_SIZE;
+    let cells = 4;
+    let cell = n / cells;
+    let texels = (0..n * n)
+        .map(|i| {
+            let (x, y) = (i % n, i / n);
+            let (cx, cy) = (x / cell, y / cell);
+            let (fx, fy) = (((x % cell) as f32 + 0.5) / cell as f32, ((y % cell) as f32 + 0.5) / cell as f32);
+            let r = ((fx * 2.0 - 1.0).powi(2) + (fy * 2.0 - 1.0).powi(2)).sqrt() / 0.8;
+            let a = (r.min(1.0) * 255.0).round() as u8;
+            if (cx + cy) % 2 == 0 { [150, 150, 150, a] } else { [60, 170, 80, a] }
+        })
+        .collect();
+    Texture::new("fence", n, n, texels, [Wrap::Repeat, Wrap::MirroredRepeat])
+}
+
+/// `fence`: an alpha-masked quad (cutoff 0.5) textured with round holes ([`fence_texture`],
+/// repeated twice across it) in front of `planes:4` and an opaque backdrop: the planes show
+/// through the holes, and the opaque pass discards (and counts) the fragments of the holes.
+fn fence() -> Result<Scene, OitError> {
+    let mut scene = planes(4);
+    scene.name = "fence".into();
+    scene.textures.push(fence_texture()?);
+    scene.meshes.push(textured_quad("fence", 2.0));
+    scene.objects.push(Object {
+        alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
+        ..Object::new("fence", scene.meshes.len() - 1, Vec4::ONE).textured(0)
+    });
+    scene.instances.push(Instance {
+        object: scene.objects.len() - 1,
+        transform: Mat4::from_translation(Vec3::new(0.0, 0.0, 0.8)) * Mat4::from_scale(Vec3::splat(1.2)),
+    });
+    add_wall(&mut scene, 1.0, false)?;
     Ok(scene)
 }
 
@@ -356,7 +503,7 @@ fn single(name: String, meshes: Vec<Mesh>, colors: Vec<Vec4>) -> Scene {
         .map(|(i, (m, &color))| Object::new(m.name.clone(), i, color))
         .collect::<Vec<_>>();
     let instances = (0..objects.len()).map(|object| Instance { object, transform: Mat4::IDENTITY }).collect();
-    Scene { name, meshes, objects, instances, warnings: Vec::new() }
+    Scene { name, meshes, objects, instances, ..Scene::default() }
 }
 
 /// `planes:N`: N 2×2 quads facing +z, spread over a depth of 1 (z from +0.5 to −0.5), each with its
@@ -488,7 +635,7 @@ pub fn torus_knot(p: u32, q: u32, r: f32, segments: u32, sides: u32) -> Mesh {
             indices.push([a, c, d]);
         }
     }
-    Mesh { name: "knot".into(), positions, normals, colors: None, indices }
+    Mesh { name: "knot".into(), positions, normals, colors: None, uvs: None, indices }
 }
 
 /// `knot`: a (2, 3) torus-knot tube that passes in front of and behind itself.

@@ -14,9 +14,9 @@
 //! numbering its triangles as above, so the reference and every technique order the same
 //! transparent fragments by the same ids.
 
-use glam::{DVec3, Mat4, Vec3, Vec4};
+use glam::{DVec3, Mat4, Vec2, Vec3, Vec4};
 
-use crate::OitError;
+use crate::{OitError, Texture};
 
 /// An axis-aligned bounding box.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -120,6 +120,9 @@ pub struct Mesh {
     pub normals: Vec<Vec3>,
     /// Linear RGB per vertex, where the source had them.
     pub colors: Option<Vec<Vec3>>,
+    /// Texture coordinates per vertex (glTF's `TEXCOORD_0`: u across, v down the image), for
+    /// the textured objects that draw the mesh; `None` on a mesh no textured object draws.
+    pub uvs: Option<Vec<Vec2>>,
     /// Triangles, as indices into `positions`.
     pub indices: Vec<[u32; 3]>,
 }
@@ -133,7 +136,8 @@ impl Mesh {
 
     /// A mesh from positions and triangles, with area-weighted vertex normals computed.
     pub fn new(name: impl Into<String>, positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> Mesh {
-        let mut mesh = Mesh { name: name.into(), positions, normals: Vec::new(), colors: None, indices };
+        let mut mesh =
+            Mesh { name: name.into(), positions, normals: Vec::new(), colors: None, uvs: None, indices };
         mesh.compute_normals();
         mesh
     }
@@ -231,6 +235,24 @@ impl Mesh {
                 self.name
             )));
         }
+        if let Some(uvs) = &self.uvs {
+            if uvs.len() != self.positions.len() {
+                return Err(OitError::InvalidScene(format!(
+                    "mesh '{}': {} texture coordinates for {} positions",
+                    self.name,
+                    uvs.len(),
+                    self.positions.len()
+                )));
+            }
+            if let Some(i) = uvs.iter().position(|uv| !uv.is_finite()) {
+                return Err(OitError::InvalidScene(format!(
+                    "mesh '{}': vertex {} has a NaN or infinite texture coordinate ({:?})",
+                    self.name,
+                    i + 1,
+                    uvs[i]
+                )));
+            }
+        }
         let n = self.positions.len() as u32;
         // the largest index first (a loop the compiler vectorizes), the first bad triangle only
         // when there is one
@@ -288,6 +310,10 @@ pub struct Object {
     /// `KHR_materials_transmission`): the fragment's alpha is the colour's alpha × (1 −
     /// transmission) ([`Object::effective_alpha`]). 0 unless set.
     pub transmission: f32,
+    /// The base-colour texture, an index into [`Scene::textures`]: a fragment's colour and alpha
+    /// are `color` times the texture's sample at the fragment's texture coordinates (the mesh
+    /// must have them). `None` unless set.
+    pub texture: Option<usize>,
 }
 
 impl Object {
@@ -301,6 +327,7 @@ impl Object {
             absorption: 1.0,
             alpha_mode: AlphaMode::Blend,
             transmission: 0.0,
+            texture: None,
         }
     }
 
@@ -314,10 +341,18 @@ impl Object {
         !matches!(self.alpha_mode, AlphaMode::Blend)
     }
 
-    /// The alpha a fragment of this object carries: under [`AlphaMode::Blend`] the colour's
-    /// alpha × (1 − transmission); under [`AlphaMode::Opaque`] 1; under [`AlphaMode::Mask`] 1
-    /// where the colour's alpha reaches the cutoff and 0 (discarded) below it. The colour's alpha
-    /// is the object's own (vertex colours are RGB), so a mask keeps or discards a whole object.
+    /// The same object, textured by texture `texture` of [`Scene::textures`].
+    pub fn textured(self, texture: usize) -> Object {
+        Object { texture: Some(texture), ..self }
+    }
+
+    /// The alpha a fragment of this object carries, before its texture: under
+    /// [`AlphaMode::Blend`] the colour's alpha × (1 − transmission); under [`AlphaMode::Opaque`]
+    /// 1; under [`AlphaMode::Mask`] 1 where the colour's alpha reaches the cutoff and 0
+    /// (discarded) below it. Without a texture the colour's alpha is the object's own (vertex
+    /// colours are RGB), so a mask keeps or discards a whole object; with one, a fragment's alpha
+    /// is this times the texture's, and a masked textured object is decided fragment by fragment
+    /// instead ([`Scene::layers`] keeps its colour's alpha for that).
     pub fn effective_alpha(&self) -> f32 {
         match self.alpha_mode {
             AlphaMode::Opaque => 1.0,
@@ -374,6 +409,8 @@ pub struct Scene {
     pub objects: Vec<Object>,
     /// The instances, drawn in this order.
     pub instances: Vec<Instance>,
+    /// The textures objects name ([`Object::texture`]).
+    pub textures: Vec<Texture>,
     /// What loading left out (an OBJ file's line and point elements, ...), one message each, for
     /// the front end to print.
     pub warnings: Vec<String>,
@@ -414,7 +451,7 @@ impl Scene {
             meshes.iter().enumerate().map(|(i, m)| Object::new(m.name.clone(), i, color)).collect();
         let instances =
             (0..objects.len()).map(|object| Instance { object, transform: Mat4::IDENTITY }).collect();
-        Scene { name: name.into(), meshes, objects, instances, warnings: Vec::new() }
+        Scene { name: name.into(), meshes, objects, instances, ..Scene::default() }
     }
 
     /// The mesh and object an instance draws.
@@ -533,13 +570,28 @@ impl Scene {
                     if let (Some(a), AlphaMode::Blend) = (alpha, o.alpha_mode) {
                         o.color.w = a;
                     }
-                    o.color.w = o.effective_alpha();
+                    // a masked textured object keeps its factor's alpha: its fragments are kept
+                    // or discarded one by one, by the factor times the texture's alpha against
+                    // the cutoff (which the object keeps, with its alpha mode)
+                    if !(o.texture.is_some() && matches!(o.alpha_mode, AlphaMode::Mask { .. })) {
+                        o.color.w = o.effective_alpha();
+                    }
                     o.transmission = 0.0;
                     o.mesh = mesh_of[o.mesh];
                     object_of[inst.object] = out.objects.len();
                     out.objects.push(o);
                 }
                 out.instances.push(Instance { object: object_of[inst.object], transform: inst.transform });
+            }
+            // the textures keep their indices; a mesh whose textured objects are all in the other
+            // part loses its texture coordinates here (they would be coordinates no object reads)
+            if out.objects.iter().any(|o| o.texture.is_some()) {
+                out.textures = self.textures.clone();
+            }
+            for (m, mesh) in out.meshes.iter_mut().enumerate() {
+                if mesh.uvs.is_some() && !out.objects.iter().any(|o| o.mesh == m && o.texture.is_some()) {
+                    mesh.uvs = None;
+                }
             }
             out
         };
@@ -582,6 +634,30 @@ impl Scene {
                 return Err(OitError::InvalidScene(format!(
                     "object '{}': transmission {} is outside [0, 1]",
                     o.name, o.transmission
+                )));
+            }
+            if let Some(t) = o.texture {
+                let Some(texture) = self.textures.get(t) else {
+                    return Err(OitError::InvalidScene(format!(
+                        "object '{}' names texture {t}, and the scene has {}",
+                        o.name,
+                        self.textures.len()
+                    )));
+                };
+                let mesh = &self.meshes[o.mesh];
+                if mesh.uvs.is_none() {
+                    return Err(OitError::InvalidScene(format!(
+                        "object '{}' has texture '{}' but its mesh '{}' has no texture coordinates",
+                        o.name, texture.name, mesh.name
+                    )));
+                }
+            }
+        }
+        for (m, mesh) in self.meshes.iter().enumerate() {
+            if mesh.uvs.is_some() && !self.objects.iter().any(|o| o.mesh == m && o.texture.is_some()) {
+                return Err(OitError::InvalidScene(format!(
+                    "mesh '{}' has texture coordinates but no textured object draws it: give an object of it a texture, or drop them",
+                    mesh.name
                 )));
             }
         }

@@ -19,17 +19,22 @@
 //!   rule; no back-face culling; zero-area triangles are dropped here;
 //! - depth: NDC z interpolated linearly in screen space with barycentrics from the edge functions,
 //!   clamped to [0, 1]; normal and vertex colour perspective-correct (barycentrics weighted by
-//!   1/w); colour from [`Shading::shade`] ([`TriangleSetup::fragment`]).
+//!   1/w); colour from [`Shading::shade`] ([`TriangleSetup::fragment`]);
+//! - a textured object's triangles carry their texture coordinates (perspective-correct, as the
+//!   vertex colours) and one level of detail each ([`crate::texture::level_for`]: the texels its
+//!   uv triangle covers over the pixels it covers, after clipping and snapping); a fragment's
+//!   base colour and vertex colour are multiplied by the texture's sample
+//!   ([`crate::Texture::sample`]) before shading.
 //!
 //! Setup runs in parallel over chunks of triangles with the `rayon` feature, serially without;
 //! the triangles come out in primitive order either way.
 
-use glam::{Mat3, Mat4, Vec3, Vec4};
+use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 #[cfg(feature = "rayon")]
 use rayon::prelude::*;
 use wide::{CmpGt, CmpLt, f32x8};
 
-use crate::{Aabb, Camera, MAX_SIZE, Scene, Settings, Shading};
+use crate::{Aabb, AlphaMode, Camera, MAX_SIZE, Scene, Settings, Shading, Texture};
 
 /// Fractional bits of the snapped screen coordinates (Vulkan's minimum, and what GPUs use).
 pub const SUBPIXEL_BITS: u32 = 8;
@@ -49,6 +54,9 @@ pub const HALF_PIXEL: i64 = SUBPIXEL / 2;
 const COORD_LIMIT: f32 = (1u32 << 29) as f32;
 /// Triangles per task of the setup.
 const SETUP_CHUNK: usize = 1024;
+
+/// [`Triangle::texture`] of a triangle without one.
+pub const NO_TEXTURE: u32 = u32::MAX;
 
 /// Fragments [`TriangleSetup::colors_at`] and [`headlight_colors`] shade at once.
 pub const SHADE_LANES: usize = 8;
@@ -168,6 +176,16 @@ pub struct Triangle {
     pub prim: u32,
     /// Inclusive pixel box clamped to the viewport: x0, y0, x1, y1.
     pub bbox: [u32; 4],
+    /// Texture coordinates of each vertex (meaningful where `texture` is one).
+    pub uv: [Vec2; 3],
+    /// Index into [`TriangleSetup::textures`], or [`NO_TEXTURE`].
+    pub texture: u32,
+    /// The mip level its fragments sample ([`crate::texture::level_for`]).
+    pub lod: u32,
+    /// The opaque pass discards a fragment whose alpha is below this: a textured masked
+    /// object's cutoff; one half for an untextured masked object, which reaches the pass with
+    /// alpha 1 or 0 already ([`crate::Object::effective_alpha`]); 0 (nothing) for any other.
+    pub cutoff: f32,
 }
 
 /// The triangles of one frame after setup, in primitive order, ready for any number of geometry
@@ -184,6 +202,10 @@ pub struct TriangleSetup {
     pub shading: Shading,
     /// The camera's viewing direction (headlight shading).
     pub forward: Vec3,
+    /// The textures the triangles sample ([`Triangle::texture`]): the scene's, where any object
+    /// it draws is textured, else none (shading then needs no look at a triangle's texture, and
+    /// runs in lanes: [`headlight_colors`]).
+    pub textures: Vec<Texture>,
 }
 
 /// A vertex on its way through clipping: clip-space position and the attributes, which are linear
@@ -193,6 +215,7 @@ struct ClipVertex {
     pos: Vec4,
     normal: Vec3,
     color: Vec3,
+    uv: Vec2,
 }
 
 impl ClipVertex {
@@ -201,6 +224,7 @@ impl ClipVertex {
             pos: self.pos + (other.pos - self.pos) * t,
             normal: self.normal + (other.normal - self.normal) * t,
             color: self.color + (other.color - self.color) * t,
+            uv: self.uv + (other.uv - self.uv) * t,
         }
     }
 }
@@ -281,6 +305,30 @@ fn clip(tri: [ClipVertex; 3], planes: u32) -> Polygon {
     poly
 }
 
+/// What setup gives every triangle of an instance from its object.
+#[derive(Clone, Copy, Debug)]
+struct Material {
+    /// [`Triangle::base`].
+    base: Vec4,
+    /// [`Triangle::has_color`].
+    has_color: bool,
+    /// [`Triangle::texture`].
+    texture: u32,
+    /// The texture's level 0 texel count (width × height), for the level of detail.
+    texels: f64,
+    /// The texture's mip levels.
+    levels: u32,
+    /// [`Triangle::cutoff`].
+    cutoff: f32,
+}
+
+impl Material {
+    /// Untextured, never discarded.
+    fn plain(base: Vec4, has_color: bool) -> Material {
+        Material { base, has_color, texture: NO_TEXTURE, texels: 0.0, levels: 1, cutoff: 0.0 }
+    }
+}
+
 /// A vertex in screen space.
 #[derive(Clone, Copy, Default)]
 struct Projected {
@@ -331,14 +379,7 @@ impl Snap {
     /// triangle inside every plane is snapped from those (the projection is a function of the
     /// clip-space position alone, so this is what projecting it here would give, bit for bit).
     #[inline]
-    fn triangle(
-        &self,
-        out: &mut Vec<Triangle>,
-        v: [&SetupVertex; 3],
-        base: Vec4,
-        has_color: bool,
-        prim: u32,
-    ) {
+    fn triangle(&self, out: &mut Vec<Triangle>, v: [&SetupVertex; 3], material: &Material, prim: u32) {
         let any = v[0].code | v[1].code | v[2].code;
         let all = v[0].code & v[1].code & v[2].code;
         // a vertex not finite, or all three outside one plane
@@ -350,32 +391,41 @@ impl Snap {
             if !(a.placed && b.placed && c.placed) {
                 return;
             }
-            self.snapped(out, [a.projected, b.projected, c.projected], base, has_color, prim, |[i, j, k]| {
+            self.snapped(out, [a.projected, b.projected, c.projected], material, prim, |[i, j, k]| {
                 let v = [a, b, c];
-                ([v[i].normal, v[j].normal, v[k].normal], [v[i].color, v[j].color, v[k].color])
+                (
+                    [v[i].normal, v[j].normal, v[k].normal],
+                    [v[i].color, v[j].color, v[k].color],
+                    [v[i].uv, v[j].uv, v[k].uv],
+                )
             });
             return;
         }
         let poly = clip(v.map(SetupVertex::clip_vertex), u32::from(any));
         for i in 1..poly.n.saturating_sub(1) {
-            self.piece(out, [poly.v[0], poly.v[i], poly.v[i + 1]], base, has_color, prim);
+            self.piece(out, [poly.v[0], poly.v[i], poly.v[i + 1]], material, prim);
         }
     }
 
     /// Projects and snaps one (clipped) triangle; keeps it if it has area and touches the viewport.
-    fn piece(&self, out: &mut Vec<Triangle>, v: [ClipVertex; 3], base: Vec4, has_color: bool, prim: u32) {
+    fn piece(&self, out: &mut Vec<Triangle>, v: [ClipVertex; 3], material: &Material, prim: u32) {
         let (Some(p0), Some(p1), Some(p2)) =
             (self.project(v[0].pos), self.project(v[1].pos), self.project(v[2].pos))
         else {
             return;
         };
-        self.snapped(out, [p0, p1, p2], base, has_color, prim, |[i, j, k]| {
-            ([v[i].normal, v[j].normal, v[k].normal], [v[i].color, v[j].color, v[k].color])
+        self.snapped(out, [p0, p1, p2], material, prim, |[i, j, k]| {
+            (
+                [v[i].normal, v[j].normal, v[k].normal],
+                [v[i].color, v[j].color, v[k].color],
+                [v[i].uv, v[j].uv, v[k].uv],
+            )
         });
     }
 
     /// [`Snap::piece`] once its vertices are projected (`p`). `attributes(order)` gives the
-    /// normals and colours of the vertices in `order` (indices into `p`); it is called only for a
+    /// normals, colours and texture coordinates of the vertices in `order` (indices into `p`); it
+    /// is called only for a
     /// triangle that is kept, so a triangle that setup drops (most of a dense mesh far away: no
     /// area, or no pixel centre in its box) never gathers them.
     #[inline]
@@ -383,10 +433,9 @@ impl Snap {
         &self,
         out: &mut Vec<Triangle>,
         mut p: [Projected; 3],
-        base: Vec4,
-        has_color: bool,
+        material: &Material,
         prim: u32,
-        attributes: impl FnOnce([usize; 3]) -> ([Vec3; 3], [Vec3; 3]),
+        attributes: impl FnOnce([usize; 3]) -> ([Vec3; 3], [Vec3; 3], [Vec2; 3]),
     ) {
         let (x0, y0) = (i64::from(p[0].x), i64::from(p[0].y));
         let area = (i64::from(p[1].x) - x0) * (i64::from(p[2].y) - y0)
@@ -418,7 +467,18 @@ impl Snap {
         ) else {
             return;
         };
-        let (normal, color) = attributes(order);
+        let (normal, color, uv) = attributes(order);
+        let lod = if material.texture == NO_TEXTURE {
+            0
+        } else {
+            // texels over pixels: |uv cross| / 2 × texels against area / 2 / 256², in f64 (the
+            // product of a uv area and 2^28 texels must not round to anything a port computes
+            // differently: it is made here once, for every path)
+            let (d1, d2) = (uv[1] - uv[0], uv[2] - uv[0]);
+            let uv_cross = (f64::from(d1.x) * f64::from(d2.y) - f64::from(d1.y) * f64::from(d2.x)).abs();
+            let pixel_area = area as f64 / (SUBPIXEL * SUBPIXEL) as f64;
+            crate::texture::level_for(uv_cross * material.texels, pixel_area, material.levels)
+        };
         out.push(Triangle {
             x: xs,
             y: ys,
@@ -427,10 +487,14 @@ impl Snap {
             normal,
             color,
             inv_area: 1.0 / area as f32,
-            base,
-            has_color,
+            base: material.base,
+            has_color: material.has_color,
             prim,
             bbox: [bx0, by0, bx1, by1],
+            uv,
+            texture: material.texture,
+            lod,
+            cutoff: material.cutoff,
         });
     }
 
@@ -439,6 +503,7 @@ impl Snap {
     /// rather than once per triangle that uses it (about six on a closed mesh).
     fn vertices(&self, out: &mut Vec<SetupVertex>, mvp: &Mat4, normal_matrix: &Mat3, mesh: &crate::Mesh) {
         let colors = mesh.colors.as_deref();
+        let uvs = mesh.uvs.as_deref();
         // every slot is written below; growing writes only the new tail first (a frame as large
         // as the last writes each slot once)
         out.resize(mesh.positions.len(), SetupVertex::default());
@@ -452,6 +517,7 @@ impl Snap {
                     transform_point(mvp, *p),
                     mesh.normals.get(i).map_or(Vec3::ZERO, |n| transform_normal(normal_matrix, *n)),
                     colors.and_then(|c| c.get(i).copied()).unwrap_or(Vec3::ZERO),
+                    uvs.and_then(|c| c.get(i).copied()).unwrap_or(Vec2::ZERO),
                 );
             }
         };
@@ -466,12 +532,13 @@ impl Snap {
 
     /// One vertex's [`SetupVertex`]: its outcode and projection beside its attributes.
     #[inline]
-    fn vertex(&self, clip: Vec4, normal: Vec3, color: Vec3) -> SetupVertex {
+    fn vertex(&self, clip: Vec4, normal: Vec3, color: Vec3, uv: Vec2) -> SetupVertex {
         let projected = self.project(clip);
         SetupVertex {
             clip,
             normal,
             color,
+            uv,
             projected: projected.unwrap_or(Projected { x: 0, y: 0, z: 0.0, inv_w: 0.0 }),
             code: outcode(clip),
             placed: projected.is_some(),
@@ -494,8 +561,7 @@ impl Snap {
         chunks: &mut Vec<Vec<Triangle>>,
         vertices: &[SetupVertex],
         indices: &[[u32; 3]],
-        has_color: bool,
-        base: Vec4,
+        material: &Material,
         prim_base: u32,
     ) -> usize {
         let n = indices.len().div_ceil(SETUP_CHUNK);
@@ -515,7 +581,7 @@ impl Snap {
                     continue;
                 };
                 let prim = first.saturating_add(j as u32);
-                self.triangle(out, [a, b, c], base, has_color, prim);
+                self.triangle(out, [a, b, c], material, prim);
             }
         });
         copy_chunks(out, start, chunks, records, record)
@@ -528,6 +594,7 @@ struct SetupVertex {
     clip: Vec4,
     normal: Vec3,
     color: Vec3,
+    uv: Vec2,
     /// [`Snap::project`]'s result, meaningful when `placed`.
     projected: Projected,
     code: u8,
@@ -536,7 +603,7 @@ struct SetupVertex {
 
 impl SetupVertex {
     fn clip_vertex(&self) -> ClipVertex {
-        ClipVertex { pos: self.clip, normal: self.normal, color: self.color }
+        ClipVertex { pos: self.clip, normal: self.normal, color: self.color, uv: self.uv }
     }
 }
 
@@ -794,6 +861,7 @@ impl TriangleSetup {
             height: settings.height.min(MAX_SIZE),
             shading: settings.shading,
             forward: camera.forward,
+            textures: Vec::new(),
         }
     }
 
@@ -860,6 +928,9 @@ impl TriangleSetup {
         let mut filled = 0;
         let snap = TriangleSetup::snap(settings);
         let view_proj = camera.view_proj();
+        if scene.objects.iter().any(|o| o.texture.is_some()) {
+            self.textures.clone_from(&scene.textures);
+        }
         let mut prim_base = 0u32;
         for inst in &scene.instances {
             let Some(object) = scene.objects.get(inst.object) else {
@@ -872,14 +943,24 @@ impl TriangleSetup {
             prim_base = prim_base.saturating_add(u32::try_from(mesh.indices.len()).unwrap_or(u32::MAX));
             let mvp = view_proj * inst.transform;
             snap.vertices(&mut scratch.vertices, &mvp, &normal_matrix(&inst.transform), mesh);
-            let base = settings.material_color(object.color);
+            let mut material = Material::plain(settings.material_color(object.color), mesh.colors.is_some());
+            // an untextured masked object comes with alpha 1 or 0 (Scene::layers), which one half
+            // splits whatever the cutoff; a textured one with its factor's alpha, which the
+            // texture's multiplies fragment by fragment
+            if let AlphaMode::Mask { cutoff } = object.alpha_mode {
+                material.cutoff = if object.texture.is_some() { cutoff } else { 0.5 };
+            }
+            if let Some((t, texture)) = object.texture.and_then(|t| Some(t).zip(self.textures.get(t))) {
+                material.texture = u32::try_from(t).unwrap_or(NO_TEXTURE);
+                material.texels = f64::from(texture.width()) * f64::from(texture.height());
+                material.levels = texture.level_count();
+            }
             filled = snap.instance(
                 (&mut self.triangles, filled, records, &record),
                 &mut scratch.chunks,
                 &scratch.vertices,
                 &mesh.indices,
-                mesh.colors.is_some(),
-                base,
+                &material,
                 base_id,
             );
         }
@@ -905,18 +986,19 @@ impl TriangleSetup {
             };
             let (corners, normals) = box_vertices(bounds, &inst.transform);
             let vertices: Vec<SetupVertex> = (0..8)
-                .map(|k| snap.vertex(transform_point(&view_proj, corners[k]), normals[k], Vec3::ZERO))
+                .map(|k| {
+                    snap.vertex(transform_point(&view_proj, corners[k]), normals[k], Vec3::ZERO, Vec2::ZERO)
+                })
                 .collect();
             let base_id = u32::try_from(i).unwrap_or(u32::MAX).saturating_mul(12);
-            let base = settings.material_color(object.color);
+            let material = Material::plain(settings.material_color(object.color), false);
             let filled = r.triangles.len();
             snap.instance(
                 (&mut r.triangles, filled, &mut (), &|_: &Triangle| ()),
                 &mut chunks,
                 &vertices,
                 &Aabb::TRIANGLES,
-                false,
-                base,
+                &material,
                 base_id,
             );
         }
@@ -942,16 +1024,35 @@ impl TriangleSetup {
 
     /// The shaded colour of the fragment of `t` with barycentrics `b` ([`barycentrics`]):
     /// [`TriangleSetup::fragment`]'s `color`.
+    ///
+    /// A textured triangle's texture coordinates are interpolated as its vertex colours are,
+    /// `(uv0·p0 + uv1·p1) + uv2·p2` per component, and the texture's sample there at the
+    /// triangle's level ([`crate::Texture::sample`]) multiplies the base colour (RGB and alpha)
+    /// and the vertex colour before shading: the material's factor times the texture.
     #[inline]
     pub fn color_at(&self, t: &Triangle, b: [f32; 3]) -> Vec4 {
         let p = perspective(t, b);
         let normal = interpolated_normal(t, p);
-        let vertex_color = t.has_color.then(|| t.color[0] * p[0] + t.color[1] * p[1] + t.color[2] * p[2]);
-        self.shading.shade(t.base, normal, vertex_color, self.forward)
+        let mut vertex_color = t.has_color.then(|| t.color[0] * p[0] + t.color[1] * p[1] + t.color[2] * p[2]);
+        let mut base = t.base;
+        if let Some(texture) = self.textures.get(t.texture as usize) {
+            let uv = t.uv[0] * p[0] + t.uv[1] * p[1] + t.uv[2] * p[2];
+            let sample = texture.sample(t.lod, uv);
+            base *= sample;
+            vertex_color = vertex_color.map(|c| c * sample.truncate());
+        }
+        self.shading.shade(base, normal, vertex_color, self.forward)
+    }
+
+    /// Whether any triangle may be textured: shading then looks at each triangle's texture
+    /// ([`TriangleSetup::color_at`]) rather than running [`headlight_colors`]' lanes.
+    #[inline]
+    pub fn has_textures(&self) -> bool {
+        !self.textures.is_empty()
     }
     /// [`TriangleSetup::color_at`] of [`SHADE_LANES`] fragments at once, bit for bit: lane `i` is
     /// the colour of the fragment of `tris[i]` with barycentrics `b[i]`. The headlight shading
-    /// (the default) runs in lanes ([`headlight_colors`]); the others call
+    /// (the default) of an untextured setup runs in lanes ([`headlight_colors`]); the others call
     /// [`TriangleSetup::color_at`] per lane.
     #[inline]
     pub fn colors_at(
@@ -959,7 +1060,7 @@ impl TriangleSetup {
         tris: [&Triangle; SHADE_LANES],
         b: [[f32; 3]; SHADE_LANES],
     ) -> [Vec4; SHADE_LANES] {
-        if self.shading == Shading::Headlight {
+        if self.shading == Shading::Headlight && !self.has_textures() {
             let records = tris.map(ShadeRecord::new);
             headlight_colors(std::array::from_fn(|i| &records[i]), b, self.forward)
         } else {
@@ -1157,6 +1258,10 @@ mod tests {
             has_color: rng.next_u64().is_multiple_of(2),
             prim: 0,
             bbox: [0; 4],
+            uv: [Vec2::ZERO; 3],
+            texture: NO_TEXTURE,
+            lod: 0,
+            cutoff: 0.0,
         }
     }
 
@@ -1184,7 +1289,14 @@ mod tests {
         for case in 0..4000 {
             let shading = [Shading::Headlight, Shading::Flat, Shading::Vertex, Shading::Normal][case % 4];
             let forward = vec3(&mut rng, false).normalize_or(Vec3::NEG_Z);
-            let setup = TriangleSetup { triangles: Vec::new(), width: 1, height: 1, shading, forward };
+            let setup = TriangleSetup {
+                triangles: Vec::new(),
+                width: 1,
+                height: 1,
+                shading,
+                forward,
+                textures: Vec::new(),
+            };
             let tris: [Triangle; SHADE_LANES] = std::array::from_fn(|_| triangle(&mut rng));
             let b: [[f32; 3]; SHADE_LANES] = std::array::from_fn(|_| barycentrics(&mut rng));
             let refs = std::array::from_fn(|i| &tris[i]);

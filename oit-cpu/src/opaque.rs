@@ -6,16 +6,17 @@
 //! (depth, primitive id), found by one 64-bit atomic MIN of `depth bits << 32 | id` (a second
 //! geometry pass then shades the one fragment whose key won), so the result does not depend on
 //! the order threads reach a pixel, and two coplanar opaque triangles resolve as they do on the
-//! GPU paths. A masked object whose alpha is under its cutoff reaches the pass with alpha 0
-//! ([`oit_core::Object::effective_alpha`]); its fragments are discarded and counted
-//! ([`oit_core::Stats::masked`]).
+//! GPU paths. A masked fragment whose alpha is under its object's cutoff is discarded and
+//! counted ([`oit_core::Stats::masked`]): an untextured masked object reaches the pass with
+//! alpha 1 or 0 ([`oit_core::Object::effective_alpha`]), a textured one with the factor's alpha
+//! times the texture's, fragment by fragment ([`oit_core::setup::Triangle::cutoff`]).
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
 
 use glam::Vec3;
 use oit_core::rules::depth_bits;
-use oit_core::{Camera, Scene, Settings};
+use oit_core::{AlphaMode, Camera, Scene, Settings};
 
 use crate::raster::{Rasterizer, Shade};
 
@@ -41,11 +42,11 @@ pub(crate) fn draw(scene: &Scene, camera: &Camera, settings: &Settings) -> Opaqu
     let pixels = settings.pixel_count();
     let keys: Vec<AtomicU64> = (0..pixels).map(|_| AtomicU64::new(u64::MAX)).collect();
     let masked = AtomicU64::new(0);
-    // only a scene with an object masked away (alpha 0) needs a fragment's alpha in the first
-    // pass; elsewhere it tests depth and id alone, unshaded
-    let masks = scene.objects.iter().any(|o| o.color.w == 0.0);
+    // only a scene with a masked object needs a fragment's alpha in the first pass; elsewhere
+    // it tests depth and id alone, unshaded
+    let masks = scene.objects.iter().any(|o| matches!(o.alpha_mode, AlphaMode::Mask { .. }));
     let fragments = raster.for_each_fragment(|f| {
-        if masks && f.color().w == 0.0 {
+        if masks && f.color().w < f.cutoff() {
             masked.fetch_add(1, Relaxed);
             return;
         }

@@ -194,6 +194,12 @@ impl Fragment<'_> {
         self.color.unwrap_or_else(|| self.setup.color_at(self.t, self.b))
     }
 
+    /// The alpha below which the opaque pass discards it ([`Triangle::cutoff`]).
+    #[inline]
+    pub fn cutoff(&self) -> f32 {
+        self.t.cutoff
+    }
+
     /// Interpolated world-space normal, normalized, zero where the mesh has none ([`normal_at`]).
     #[inline]
     pub fn normal(&self) -> Vec3 {
@@ -936,7 +942,7 @@ impl Rasterizer {
                 // a short last group repeats its last fragment in the spare lanes
                 let lane = |i: usize| &batch[(start + i).min(batch.len() - 1)];
                 let b = std::array::from_fn(|i| edges[lane(i).tri as usize].plane.barycentrics(lane(i).e));
-                let shaded = if setup.shading != Shading::Headlight {
+                let shaded = if setup.shading != Shading::Headlight || setup.has_textures() {
                     setup.colors_at(std::array::from_fn(|i| &tris[lane(i).tri as usize]), b)
                 } else {
                     headlight_colors(std::array::from_fn(|i| &shades[lane(i).tri as usize]), b, setup.forward)
@@ -1525,6 +1531,7 @@ mod tests {
                 normals: vec![Vec3::Z; 3],
                 positions,
                 colors: None,
+                uvs: None,
                 indices: vec![[0, 1, 2]],
             };
             let scene = scene_of(vec![mesh]);

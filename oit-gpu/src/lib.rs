@@ -116,6 +116,27 @@ pub struct FrameUniform {
     pub opaque: [u32; 4],
 }
 
+/// The refusal of a scene in which any instance draws a textured object
+/// ([`oit_core::Object::texture`]), by the object's and the texture's names: the GPU backends
+/// do not sample textures yet, and a frame that drew the objects in their factor's colour alone
+/// would be wrong in silence. The CPU backend draws them. Called wherever a GPU frame makes its
+/// plan.
+pub fn refuse_textures(backend: &str, scene: &Scene) -> Result<(), OitError> {
+    let textured =
+        scene.instances.iter().filter_map(|i| scene.objects.get(i.object)).find(|o| o.texture.is_some());
+    if let Some(o) = textured {
+        let texture = o.texture.and_then(|t| scene.textures.get(t)).map_or("?", |t| t.name.as_str());
+        return Err(OitError::Unsupported {
+            backend: backend.into(),
+            what: format!(
+                "textures: object '{}' of scene '{}' is textured ('{texture}'), and the GPU backends do not sample textures yet; use --backend cpu",
+                o.name, scene.name
+            ),
+        });
+    }
+    Ok(())
+}
+
 /// Workgroups of 64 for `invocations` invocations, as (x, y) with x ≤ 65535 (a kernel finds its
 /// invocation's index from both: `kernel_pixel` in prelude.wgsl).
 pub fn dispatch_size(invocations: u64) -> (u32, u32) {
@@ -399,5 +420,19 @@ pub trait Rasters<R: ?Sized> {
     /// Rasterizes the frame's opaque part ([`oit_core::Layers::opaque`]), where it has one.
     fn opaque(&self) -> Option<&R> {
         None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// A scene that draws a textured object is refused by the object's and the texture's names;
+    /// the same scene untextured is not.
+    #[test]
+    fn textured_scenes_are_refused_by_name() {
+        let scene = oit_core::load_scene("particles:4").unwrap();
+        let e = super::refuse_textures("wgpu", &scene).unwrap_err().to_string();
+        assert!(e.contains("particle 0") && e.contains("sprite") && e.contains("wgpu"), "{e}");
+        let plain = oit_core::load_scene("untextured:particles:4").unwrap();
+        assert!(super::refuse_textures("vulkan", &plain).is_ok());
     }
 }

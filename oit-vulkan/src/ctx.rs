@@ -232,6 +232,7 @@ impl<'a> VkCtx<'a> {
         pool: &'a BufferPool,
     ) -> Result<Self, OitError> {
         let plan = Plan::new("vulkan", scene, settings)?;
+        oit_gpu::refuse_textures("vulkan", scene)?;
         let pixels = settings.width * settings.height;
         let state_bytes = u64::from(pixels) * STATE_WORDS * 4;
         gpu.check_storage("the per-pixel resolve state", state_bytes)?;

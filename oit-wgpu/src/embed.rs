@@ -742,6 +742,7 @@ impl OitPass {
                 let settings = Settings { technique, ..self.settings.clone() };
                 oit_core::plan::Plan::new("wgpu", &self.scene, &settings)
                     .is_ok_and(|p| p.mid_frame_readback().is_none() && p.refuse_interlock("wgpu", "").is_ok())
+                    && oit_gpu::refuse_textures("wgpu", &self.scene).is_ok()
             })
             .map(|t| t.to_string())
             .collect()
@@ -750,6 +751,7 @@ impl OitPass {
     /// Whether the technique's frame can be recorded without a round trip ([`OitPass::record`]).
     fn check_recordable(&self) -> Result<(), OitError> {
         let plan = oit_core::plan::Plan::new("wgpu", &self.scene, &self.settings)?;
+        oit_gpu::refuse_textures("wgpu", &self.scene)?;
         plan.refuse_image_atomics("wgpu")?;
         plan.refuse_interlock("wgpu", "WGSL has no fragment shader interlock")?;
         let why = plan.mid_frame_readback();

@@ -140,7 +140,7 @@ fn scene_of(meshes: Vec<Mesh>) -> Scene {
         .map(|i| Object::new(format!("object {i}"), i, Vec4::new(0.8, 0.5, 0.2, 0.5)))
         .collect();
     let instances = (0..meshes.len()).map(|object| Instance { object, transform: Mat4::IDENTITY }).collect();
-    Scene { name: "effects".into(), meshes, objects, instances, warnings: Vec::new() }
+    Scene { name: "effects".into(), meshes, objects, instances, ..Scene::default() }
 }
 
 /// Schlick's transmittance with F0 = 0 (the effect's definition: no index of refraction), in

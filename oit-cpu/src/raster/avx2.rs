@@ -262,7 +262,7 @@ fn flush<const SHADE: bool, F: Fn(&Fragment<'_>)>(
         let lane = |k: usize| -> [f32; SHADE_LANES] { std::array::from_fn(|i| batch.b[k][at + i]) };
         let b = [lane(0), lane(1), lane(2)];
         let tri: [usize; SHADE_LANES] = std::array::from_fn(|i| batch.tri[at + i] as usize);
-        let colors: [f32; 4 * SHADE_LANES] = if setup.shading == Shading::Headlight {
+        let colors: [f32; 4 * SHADE_LANES] = if setup.shading == Shading::Headlight && !setup.has_textures() {
             headlight(tri.map(|t| &shades[t]), b.map(bytemuck::cast), setup.forward)
         } else {
             let colors =
