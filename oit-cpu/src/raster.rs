@@ -455,7 +455,9 @@ impl EarlyCut<'_> {
     /// Whether a fragment of `pixel` at `depth` is held back (counted where the pass counts).
     #[inline]
     fn holds_back(&self, pixel: u32, depth: f32) -> bool {
-        let behind = !(depth < self.depth[pixel as usize]);
+        // in front only where strictly less: a NaN depth (never made) would count as behind
+        let in_front = depth < self.depth[pixel as usize];
+        let behind = !in_front;
         if behind && self.counting != u64::MAX {
             occlude(self.counting);
         }
@@ -871,7 +873,9 @@ impl Rasterizer {
             let (setup, records) = (&self.setup, self.records());
             // only a shaded walk has work to save by testing the cut first
             let n = match shade {
-                Shade::Color => avx2_task::<true, F>(kernel, setup, records, order, rows, f, ahead, self.early_cut()),
+                Shade::Color => {
+                    avx2_task::<true, F>(kernel, setup, records, order, rows, f, ahead, self.early_cut())
+                }
                 Shade::OnDemand => avx2_task::<false, F>(kernel, setup, records, order, rows, f, ahead, None),
             };
             return n.unwrap_or(0);
