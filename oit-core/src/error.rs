@@ -25,13 +25,21 @@ pub enum OitError {
         /// What was wrong.
         message: String,
     },
+    /// A model file (glTF) that cannot be read as one.
+    #[error("cannot load {path}: {message}")]
+    Model {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        message: String,
+    },
     /// A scene holds data no technique can render (NaN, infinite or out-of-range vertices, bad
     /// indices, nothing, too many triangles).
     #[error("invalid scene: {0}")]
     InvalidScene(String),
     /// A scene name that is neither built in nor a file.
     #[error(
-        "unknown scene '{name}': not a built-in scene, an .obj file, or {name}.obj in {searched}; built-in scenes: {known}"
+        "unknown scene '{name}': not a built-in scene, an .obj or glTF (.gltf, .glb) file, or {name}.obj in {searched}; built-in scenes: {known}"
     )]
     UnknownScene {
         /// What was asked for.

@@ -49,8 +49,12 @@ fn max_model_bytes(var: Option<&str>) -> Result<u64, OitError> {
 /// first). Files that are not regular files (devices, pipes, folders) and files over
 /// `OIT_MAX_MODEL_BYTES` (default 1 GiB) are refused before anything is read.
 pub fn load_obj(path: &Path) -> Result<Scene, OitError> {
-    let limit = max_model_bytes(std::env::var(MAX_MODEL_BYTES_VAR).ok().as_deref())?;
-    load_obj_limited(path, limit)
+    load_obj_limited(path, model_byte_limit()?)
+}
+
+/// The most bytes a model file may have: [`MAX_MODEL_BYTES_VAR`]'s, or the default.
+pub(crate) fn model_byte_limit() -> Result<u64, OitError> {
+    max_model_bytes(std::env::var(MAX_MODEL_BYTES_VAR).ok().as_deref())
 }
 
 /// `O_NONBLOCK` where its value is known without libc (Linux on these architectures): opening a
@@ -97,6 +101,17 @@ pub fn open_regular(path: &Path) -> std::io::Result<Option<(std::fs::File, std::
 
 /// Reads `path` as UTF-8 text, refusing anything but a regular file of at most `limit` bytes.
 fn read_bounded(path: &Path, limit: u64) -> Result<String, OitError> {
+    let bytes = read_bounded_bytes(path, limit, ".obj")?;
+    String::from_utf8(bytes).map_err(|e| OitError::Obj {
+        path: path.to_path_buf(),
+        line: None,
+        message: format!("not UTF-8 text (byte {}): is this an .obj file?", e.utf8_error().valid_up_to()),
+    })
+}
+
+/// The bytes of the model file `path` (a `kind` file, for the message when it is not a regular
+/// file), refused past `limit` bytes before more than one byte past it is read.
+pub(crate) fn read_bounded_bytes(path: &Path, limit: u64, kind: &str) -> Result<Vec<u8>, OitError> {
     let io = |source| OitError::Io { path: path.to_path_buf(), source };
     let too_large = |needed: u64| OitError::TooLarge {
         what: format!("model file {}", path.display()),
@@ -109,8 +124,9 @@ fn read_bounded(path: &Path, limit: u64) -> Result<String, OitError> {
         return Err(OitError::Obj {
             path: path.to_path_buf(),
             line: None,
-            message: "not a regular file (a device, pipe or folder): models are read from .obj files only"
-                .into(),
+            message: format!(
+                "not a regular file (a device, pipe or folder): models are read from {kind} files only"
+            ),
         });
     };
     if meta.len() > limit {
@@ -122,11 +138,7 @@ fn read_bounded(path: &Path, limit: u64) -> Result<String, OitError> {
     if bytes.len() as u64 > limit {
         return Err(too_large(bytes.len() as u64));
     }
-    String::from_utf8(bytes).map_err(|e| OitError::Obj {
-        path: path.to_path_buf(),
-        line: None,
-        message: format!("not UTF-8 text (byte {}): is this an .obj file?", e.utf8_error().valid_up_to()),
-    })
+    Ok(bytes)
 }
 
 /// [`load_obj`] with an explicit size limit.

@@ -52,7 +52,12 @@ pub fn load_scene(name: &str) -> Result<Scene, OitError> {
         Some(scene) => scene,
         None => {
             let path = Path::new(name);
-            if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) || path.exists() {
+            let gltf = path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"));
+            if gltf {
+                crate::load_gltf(path, None)
+            } else if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) || path.exists() {
                 crate::load_obj(path)
             } else if let Some(found) = find_model(name) {
                 crate::load_obj(&found)

@@ -37,7 +37,7 @@ use crate::OitError;
 
 /// How a coordinate outside [0, 1] maps into the image, per axis (glTF's sampler `wrapS` /
 /// `wrapT`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Wrap {
     /// The image tiles the plane (glTF's `REPEAT`, the default).
     #[default]
