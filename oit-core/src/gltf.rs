@@ -334,7 +334,7 @@ mod tests {
     /// A GLB of `json` (its `buffers[0]` the binary chunk `bin`).
     pub(crate) fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
         let pad = |mut v: Vec<u8>, with: u8| {
-            while v.len() % 4 != 0 {
+            while !v.len().is_multiple_of(4) {
                 v.push(with);
             }
             v
@@ -429,7 +429,7 @@ mod tests {
 
     #[test]
     fn what_oit_cannot_read_is_refused_or_said() {
-        let text = |r: Result<Scene, OitError>| r.err().expect("refused").to_string();
+        let text = |r: Result<Scene, OitError>| r.expect_err("refused").to_string();
         let extra = r#","extensionsUsed":["KHR_draco_mesh_compression"],"extensionsRequired":["KHR_draco_mesh_compression"]"#;
         let e = text(parse(&document(NODES, MESHES, BLEND, extra)));
         assert!(
