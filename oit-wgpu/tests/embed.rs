@@ -513,6 +513,20 @@ fn caller_opaque_depth_and_colour_match_backend_render() {
             let view = target.create_view(&Default::default());
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             let opaque = geometry.draw_opaque(&mut encoder, &settings).expect("an opaque part");
+            // the geometry's depth and colour are kept for frames of a size, made anew for another
+            let mut other = gpu.device.create_command_encoder(&Default::default());
+            let again = geometry.draw_opaque(&mut other, &settings).unwrap();
+            assert_eq!(
+                (again.depth.texture(), again.color.texture()),
+                (opaque.depth.texture(), opaque.color.texture())
+            );
+            assert_eq!(opaque.color.texture().format(), oit_wgpu::embed::OPAQUE_COLOR_FORMAT);
+            let bigger = Settings { width: w + 8, ..settings.clone() };
+            let resized = geometry.draw_opaque(&mut other, &bigger).unwrap();
+            assert_ne!(resized.depth.texture(), opaque.depth.texture());
+            assert_eq!(resized.depth.texture().width(), w + 8);
+            drop(other);
+            let opaque = geometry.draw_opaque(&mut encoder, &settings).unwrap();
             pass.set_opaque(Some(&opaque.depth), Some(&opaque.color)).unwrap();
             pass.record(
                 &mut encoder,
