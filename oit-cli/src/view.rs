@@ -1,6 +1,7 @@
 //! `oit view`: the scene in a window, drawn live by oit-wgpu's embeddable pass
-//! ([`oit_wgpu::OitPass`]) with oit's own vertex stage ([`oit_wgpu::embed::SceneGeometry`]), so
-//! its image is `oit render --backend wgpu --raster hardware`'s at the same view. Keys switch the
+//! ([`oit_wgpu::OitPass`]) with oit's own vertex stage ([`oit_wgpu::embed::SceneGeometry`], which
+//! also draws a scene's opaque part first, for the pass to cut at and composite over), so its
+//! image is `oit render --backend wgpu --raster hardware`'s at the same view. Keys switch the
 //! technique and its parameters, the alpha, shading and effect; the mouse orbits and zooms; `R`
 //! compares with the reference. `--script` replays timed key and mouse events ([`script`]), which
 //! is how the viewer is tested (`tests/view.rs`, under Xvfb).

@@ -46,8 +46,9 @@
 //! - The caller's opaque geometry: [`OitPass::with_opaque`] takes the caller's depth buffer
 //!   (read, not written) and colour target; every geometry pass cuts the fragments not strictly
 //!   in front of that depth (counted in `Stats::occluded`) and the resolve composites over that
-//!   colour, as behind oit's own opaque pass. [`SceneGeometry`] refuses a scene with opaque parts
-//!   (upload its transparent part, draw the opaque part yourself for `with_opaque`).
+//!   colour, as behind oit's own opaque pass. [`SceneGeometry`] takes a scene with opaque parts:
+//!   it captures the transparent part and draws the opaque part itself for `with_opaque`
+//!   ([`SceneGeometry::draw_opaque`], [`SceneGeometry::draw_opaque_for`]).
 //! - The device needs [`crate::required_features`] and more than wgpu's default 8 storage buffers
 //!   a shader stage (ask for the adapter's limits).
 //!
@@ -878,6 +879,51 @@ impl OitPass {
     }
 }
 
+/// The fragment stage of [`SceneGeometry::draw_opaque`]: a capture that hands back the shaded
+/// colour (clamped to [0, 1], as the captures store it), so `hw_fs` compiles, and an entry point
+/// that drops a masked-away object's fragments (its alpha 0: `Scene::layers`) and writes the
+/// shaded colour, opaque.
+const OPAQUE_DRAW_WGSL: &str = "
+fn oit_capture_full(xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: vec3<f32>, prim: u32) -> vec4<f32> {
+    return clamp(color, vec4<f32>(0.0), vec4<f32>(1.0));
+}
+";
+const OPAQUE_FS_WGSL: &str = "
+@fragment
+fn hw_opaque_fs(in: HwOut) -> @location(0) vec4<f32> {
+    if in.base.w <= 0.0 {
+        discard;
+    }
+    let color = shade(hw.shading, in.base, in.normal, in.vcolor, in.has_color != 0u, hw.forward.xyz);
+    return vec4<f32>(clamp(color.xyz, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0);
+}
+";
+
+/// The colour format of the opaque part's image ([`SceneGeometry::draw_opaque`]): 32-bit floats,
+/// so the colours the pass composites over are the ones oit's own opaque pass keeps.
+pub const OPAQUE_COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+/// The opaque part of a scene drawn by [`SceneGeometry::draw_opaque`]: views of its
+/// `Depth32Float` depth and [`OPAQUE_COLOR_FORMAT`] colour, of the settings' size, for
+/// [`OitPass::with_opaque`] / [`OitPass::set_opaque`]. The textures are the geometry's, kept for
+/// the next frames of that size (each draw clears and redraws them).
+#[derive(Clone, Debug)]
+pub struct OpaqueImage {
+    /// The depth (`Less`, cleared to 1.0).
+    pub depth: wgpu::TextureView,
+    /// The shaded colour (cleared to the settings' background).
+    pub color: wgpu::TextureView,
+}
+
+/// A scene's opaque part on the device: its geometry, the pipeline that draws it, and the depth
+/// and colour of the last size drawn.
+struct OpaqueLayer {
+    geometry: HwGeometry,
+    pipeline: wgpu::RenderPipeline,
+    empty_group: wgpu::BindGroup,
+    image: Mutex<Option<(u32, u32, OpaqueImage)>>,
+}
+
 /// An oit [`Scene`] on the user's device in the hardware path's format, for drawing it through an
 /// [`OitPass`] with oit's own vertex stage (the shading and transform of `Backend::render` on the
 /// hardware path, so the images agree).
@@ -887,9 +933,16 @@ impl OitPass {
 /// (no vertex buffers); per frame, [`SceneGeometry::write_frame`] writes each instance's
 /// `camera.view_proj() · transform`, normal matrix and base colour, and the shading uniform.
 ///
-/// The instances' bounding boxes are uploaded with it too (8 corners and 12 triangles each), for
-/// the bounds pass of `bdp` and `adp`: [`OitPass::with_scene_geometry`] hands them (and the
-/// scene's bounds and absorption) to a pass, which draws them itself.
+/// A scene with opaque or masked objects is split as every backend splits it
+/// ([`Scene::layers`]): its transparent part is the geometry the pass captures (the bind group,
+/// the vertex count), and its opaque part is uploaded beside it and drawn by
+/// [`SceneGeometry::draw_opaque`] (or [`SceneGeometry::draw_opaque_for`]) into a depth and
+/// colour of the geometry's own, which the pass cuts at and composites over
+/// ([`OitPass::with_opaque`]): the frame then equals `Backend::render`'s of the whole scene.
+///
+/// The instances' bounding boxes are uploaded with it too (8 corners and 12 triangles each, the
+/// transparent part's), for the bounds pass of `bdp` and `adp`: [`OitPass::with_scene_geometry`]
+/// hands them (and the scene's bounds and absorption) to a pass, which draws them itself.
 ///
 /// Use: the pipeline's module is `capture.wgsl` followed by [`SceneGeometry::WGSL`], vertex entry
 /// point `hw_vs`, fragment entry point `hw_fs`, no vertex buffers, no culling; its layout is the
@@ -901,6 +954,9 @@ pub struct SceneGeometry {
     boxes: HwGeometry,
     bounds: Aabb,
     absorption: f32,
+    /// Whether the scene has materials: each frame's instance data is then the layers'.
+    split: bool,
+    opaque: Option<OpaqueLayer>,
 }
 
 impl SceneGeometry {
@@ -913,39 +969,135 @@ impl SceneGeometry {
     /// (which must have [`crate::required_features`]).
     ///
     /// A scene with opaque or masked objects or a transmission ([`Scene::has_materials`]) is
-    /// refused: the pass captures what is drawn through it, so upload its transparent part
-    /// (`scene.layers(None).transparent`, drawn with `Settings::alpha` unset where the layers are
-    /// baked), draw the opaque part yourself into a depth buffer and colour target, and give those
-    /// to [`OitPass::with_opaque`] (`tests/embed.rs` draws the opaque part with this shader's
-    /// vertex stage, so the frame equals `Backend::render`'s).
+    /// uploaded as its layers (`scene.layers(None)`): the transparent part is what the pass's
+    /// draws capture, the opaque part what [`SceneGeometry::draw_opaque`] draws. A scene that
+    /// draws a textured object is refused (the GPU backends do not sample textures yet).
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> Result<SceneGeometry, OitError> {
-        if scene.has_materials() {
-            return Err(OitError::Unsupported {
-                backend: "wgpu (embedded pass)".into(),
-                what: format!(
-                    "scene '{}' has opaque or masked objects or a transmission: a SceneGeometry is captured \
-                     whole as transparent; upload `scene.layers(None).transparent` instead, and draw the opaque \
-                     part into your own depth buffer (and colour target) for `OitPass::with_opaque`",
-                    scene.name
-                ),
-            });
-        }
+        oit_gpu::refuse_textures("wgpu (embedded pass)", scene)?;
         let gpu = Gpu::from_device(device.clone(), queue.clone())?;
         let made = std::cell::Cell::new(0);
-        let geometry = HwGeometry::new(&gpu, scene, false, &made)?;
-        let boxes = HwGeometry::new(&gpu, scene, true, &made)?;
+        let layers = scene.layers(None);
+        let geometry = HwGeometry::new(&gpu, &layers.transparent, false, &made)?;
+        let boxes = HwGeometry::new(&gpu, &layers.transparent, true, &made)?;
+        let opaque = match &layers.opaque {
+            Some(part) => Some(OpaqueLayer::new(&gpu, HwGeometry::new(&gpu, part, false, &made)?)),
+            None => None,
+        };
         let absorption = if scene.objects.is_empty() {
             1.0
         } else {
             scene.objects.iter().map(|o| o.absorption).sum::<f32>() / scene.objects.len() as f32
         };
-        Ok(SceneGeometry { gpu, geometry, boxes, bounds: scene.bounds(), absorption })
+        Ok(SceneGeometry {
+            gpu,
+            geometry,
+            boxes,
+            bounds: scene.bounds(),
+            absorption,
+            split: layers.baked,
+            opaque,
+        })
     }
 
     /// Writes one frame's instance data and shading uniform (`scene` is the one uploaded; the
-    /// settings' shading, alpha and colours apply) on the queue.
+    /// settings' shading, alpha and colours apply) on the queue: the transparent part's and,
+    /// where the scene has one, the opaque part's. `Settings::alpha` overrides the blended
+    /// objects' alpha only, as [`Scene::layers`] does.
     pub fn write_frame(&self, scene: &Scene, camera: &Camera, settings: &Settings) {
-        self.geometry.write_frame(&self.gpu, scene, camera, settings);
+        if !self.split {
+            self.geometry.write_frame(&self.gpu, scene, camera, settings);
+            return;
+        }
+        // the layers of the scene's objects and instances, without copying its meshes: only the
+        // objects' colours and the instances' transforms go into a frame
+        let skeleton = Scene {
+            name: scene.name.clone(),
+            meshes: vec![Mesh::default(); scene.meshes.len()],
+            objects: scene.objects.clone(),
+            instances: scene.instances.clone(),
+            ..Scene::default()
+        };
+        let layers = skeleton.layers(settings.alpha);
+        let drawn = layers.settings(settings);
+        self.geometry.write_frame(&self.gpu, &layers.transparent, camera, &drawn);
+        if let (Some(layer), Some(part)) = (&self.opaque, &layers.opaque) {
+            layer.geometry.write_frame(&self.gpu, part, camera, &drawn);
+        }
+    }
+
+    /// Whether the scene has an opaque part ([`SceneGeometry::draw_opaque`] draws something).
+    pub fn has_opaque(&self) -> bool {
+        self.opaque.is_some()
+    }
+
+    /// Records the draw of the scene's opaque part into `encoder`, at the instance data
+    /// [`SceneGeometry::write_frame`] wrote last: oit's vertex stage and shading, into a
+    /// `Depth32Float` depth (compare `Less`, cleared to 1.0: the hardware test keeps the first of
+    /// equal depths, the lowest primitive id, as oit's opaque pass does) and an
+    /// [`OPAQUE_COLOR_FORMAT`] colour (cleared to the settings' background), both of the
+    /// settings' size and kept for the next frames of that size. A masked object below its
+    /// cutoff is drawn into neither. Returns their views for [`OitPass::with_opaque`], or `None`
+    /// where the scene has no opaque part.
+    ///
+    /// The pass reads them in its frame: [`OitPass::record`] into the same encoder after this;
+    /// [`OitPass::frame`] after this encoder is submitted ([`SceneGeometry::draw_opaque_for`]
+    /// does both steps for it).
+    pub fn draw_opaque(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        settings: &Settings,
+    ) -> Option<OpaqueImage> {
+        let layer = self.opaque.as_ref()?;
+        let image = layer.image(&self.gpu, settings.width.max(1), settings.height.max(1));
+        let bg = settings.background.as_dvec3();
+        let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("oit opaque part"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &image.color,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color { r: bg.x, g: bg.y, b: bg.z, a: 1.0 }),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &image.depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        rpass.set_pipeline(&layer.pipeline);
+        rpass.set_bind_group(0, &layer.empty_group, &[]);
+        rpass.set_bind_group(1, layer.geometry.group(), &[]);
+        rpass.draw(0..layer.geometry.vertex_count(), 0..1);
+        drop(rpass);
+        Some(image)
+    }
+
+    /// The opaque part for `pass`'s next [`OitPass::frame`]: drawn at the pass's settings
+    /// ([`SceneGeometry::draw_opaque`]), submitted, and given to the pass
+    /// ([`OitPass::set_opaque`]); a scene without one removes the pass's opaque image. Call
+    /// [`SceneGeometry::write_frame`] first, as for the pass's draws.
+    pub fn draw_opaque_for(&self, pass: &mut OitPass) -> Result<(), OitError> {
+        let mut encoder = self
+            .gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("oit opaque part") });
+        let image = self.draw_opaque(&mut encoder, pass.settings());
+        match image {
+            Some(image) => {
+                self.gpu.queue.submit([encoder.finish()]);
+                pass.set_opaque(Some(&image.depth), Some(&image.color))
+            }
+            None => pass.set_opaque(None, None),
+        }
     }
 
     /// The layout of group 1 of the pipeline.
@@ -953,14 +1105,74 @@ impl SceneGeometry {
         self.geometry.layout()
     }
 
-    /// Group 1 of the draw.
+    /// Group 1 of the draw (the transparent part's).
     pub fn bind_group(&self) -> &wgpu::BindGroup {
         self.geometry.group()
     }
 
-    /// The vertices of the one draw: three per triangle (primitive `t` of the draw is the scene's
-    /// primitive `t`).
+    /// The vertices of the one draw: three per triangle of the transparent part (primitive `t` of
+    /// the draw is its primitive `t`).
     pub fn vertex_count(&self) -> u32 {
         self.geometry.vertex_count()
+    }
+}
+
+impl OpaqueLayer {
+    fn new(gpu: &Gpu, geometry: HwGeometry) -> OpaqueLayer {
+        let device = &gpu.device;
+        let empty =
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &[] });
+        let empty_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout: &empty,
+            entries: &[],
+        });
+        let source = format!("{}\n{OPAQUE_DRAW_WGSL}{RASTER_WGSL}{OPAQUE_FS_WGSL}", crate::gpu::COMMON_WGSL);
+        let pipeline = crate::hardware::scene_pipeline(
+            device,
+            "oit opaque part",
+            &source,
+            &[&empty, geometry.layout()],
+            "hw_opaque_fs",
+            &[Some(OPAQUE_COLOR_FORMAT.into())],
+            Some(wgpu::DepthStencilState {
+                format: wgpu::TextureFormat::Depth32Float,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+        );
+        OpaqueLayer { geometry, pipeline, empty_group, image: Mutex::new(None) }
+    }
+
+    /// The depth and colour of `w × h`, kept or made.
+    fn image(&self, gpu: &Gpu, w: u32, h: u32) -> OpaqueImage {
+        let mut kept = self.image.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((kw, kh, image)) = &*kept
+            && (*kw, *kh) == (w, h)
+        {
+            return image.clone();
+        }
+        let texture = |label, format| {
+            gpu.device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                })
+                .create_view(&Default::default())
+        };
+        let image = OpaqueImage {
+            depth: texture("oit opaque depth", wgpu::TextureFormat::Depth32Float),
+            color: texture("oit opaque colour", OPAQUE_COLOR_FORMAT),
+        };
+        *kept = Some((w, h, image.clone()));
+        image
     }
 }

@@ -416,131 +416,16 @@ fn overflow_tail_through_the_embedded_pass_matches_backend_render() {
     }
 }
 
-/// The opaque part of a scene drawn as an embedding renderer would, before the OIT pass: into
-/// its own `Depth32Float` depth buffer (compare `Less`, cleared to 1.0) and an `Rgba32Float`
-/// colour target (cleared to the background), through `SceneGeometry`'s vertex stage and
-/// shading with a capture that returns the shaded colour, so the depths and colours are the ones
-/// oit's own opaque pass keeps (the hardware depth test keeps the first of equal depths, the
-/// lowest primitive id, as the opaque pass's tie rule does).
-fn draw_opaque(
-    gpu: &oit_wgpu::Gpu,
-    opaque: &Scene,
-    camera: &oit_core::Camera,
-    settings: &Settings,
-) -> (wgpu::TextureView, wgpu::TextureView) {
-    // a SceneGeometry takes blended objects only: the opaque part's objects drawn as such
-    let mut part = opaque.clone();
-    for o in &mut part.objects {
-        o.alpha_mode = oit_core::AlphaMode::Blend;
-    }
-    let geometry = oit_wgpu::embed::SceneGeometry::new(&gpu.device, &gpu.queue, &part).unwrap();
-    geometry.write_frame(&part, camera, settings);
-    let device = &gpu.device;
-    let texture = |format| {
-        device
-            .create_texture(&wgpu::TextureDescriptor {
-                label: Some("caller's opaque target"),
-                size: wgpu::Extent3d {
-                    width: settings.width,
-                    height: settings.height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
-            .create_view(&Default::default())
-    };
-    let depth = texture(wgpu::TextureFormat::Depth32Float);
-    let color = texture(wgpu::TextureFormat::Rgba32Float);
-    let stub = "fn oit_capture_full(xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: vec3<f32>, prim: u32) -> vec4<f32> {\n    return clamp(color, vec4<f32>(0.0), vec4<f32>(1.0));\n}\n";
-    let source = format!("{}\n{stub}{}", oit_wgpu::COMMON_WGSL, oit_wgpu::embed::SceneGeometry::WGSL);
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("caller's opaque pass"),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
-    let empty =
-        device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &[] });
-    let empty_group =
-        device.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout: &empty, entries: &[] });
-    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: None,
-        bind_group_layouts: &[Some(&empty), Some(geometry.bind_group_layout())],
-        immediate_size: 0,
-    });
-    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("caller's opaque pass"),
-        layout: Some(&layout),
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("hw_vs"),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: wgpu::TextureFormat::Depth32Float,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: Default::default(),
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("hw_fs"),
-            compilation_options: Default::default(),
-            targets: &[Some(wgpu::TextureFormat::Rgba32Float.into())],
-        }),
-        multiview_mask: None,
-        cache: None,
-    });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    {
-        let bg = settings.background.as_dvec3();
-        let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("caller's opaque pass"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &color,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color { r: bg.x, g: bg.y, b: bg.z, a: 1.0 }),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        rpass.set_pipeline(&pipeline);
-        rpass.set_bind_group(0, &empty_group, &[]);
-        rpass.set_bind_group(1, geometry.bind_group(), &[]);
-        rpass.draw(0..geometry.vertex_count(), 0..1);
-    }
-    gpu.queue.submit([encoder.finish()]);
-    (depth, color)
-}
-
-/// A scene with an opaque wall through the embedded pass as an embedding renderer runs it: its
-/// opaque part drawn first into the caller's depth and colour ([`draw_opaque`]), then the
-/// transparent part through `SceneGeometry` and `OitPass::with_opaque`. The frame equals
-/// `Backend::render`'s of the whole scene on the hardware path: the image byte for byte, the
-/// fragments, captured and occluded counts (the same vertex stage and shading on both sides, the
-/// same depths and colours in the opaque image), for an exact technique (fabs) and a peel (dp),
-/// by `OitPass::frame` and, for fabs:K, `OitPass::record`. The pass runs no opaque geometry pass
-/// of its own: two passes fewer.
+/// A scene with an opaque wall through the embedded pass as an embedding renderer runs it: the
+/// whole scene uploaded as a `SceneGeometry`, its opaque part drawn first into the geometry's depth
+/// and colour (`SceneGeometry::draw_opaque_for`, or `draw_opaque` into the caller's encoder), then
+/// its transparent part through the pass. The frame equals `Backend::render`'s of the whole scene
+/// on the hardware path: the image byte for byte, the fragments, captured and occluded counts
+/// (the same vertex stage and shading on both sides, the same depths and colours in the opaque
+/// image), for an exact technique (fabs, also under an alpha override, which changes the blended
+/// objects only) and a peel (dp), by `OitPass::frame` and, for fabs:K, `OitPass::record`; and for
+/// the wall masked away (`nowall`: nothing drawn into the depth, nothing occluded). The pass runs
+/// no opaque geometry pass of its own: two passes fewer.
 #[test]
 fn caller_opaque_depth_and_colour_match_backend_render() {
     let Some(backend) = oit_wgpu::backend_or_skip("caller_opaque_depth_and_colour_match_backend_render")
@@ -548,39 +433,41 @@ fn caller_opaque_depth_and_colour_match_backend_render() {
         return;
     };
     let gpu = backend.gpu().unwrap();
-    let scene = oit_core::load_scene("wall:0.5:planes:16").unwrap();
-    assert!(scene.has_opaque(), "the scene has a wall");
-    let refused = oit_wgpu::embed::SceneGeometry::new(&gpu.device, &gpu.queue, &scene).err().unwrap();
-    assert!(refused.to_string().contains("OitPass::with_opaque"), "{refused}");
     let (w, h) = (64, 48);
-    let camera =
-        oit_core::Camera::orbit_scene(&scene, oit_core::View::default(), w as f32 / h as f32).unwrap();
-    let layers = scene.layers(None);
-    let opaque = layers.opaque.as_ref().unwrap();
-    let absorption = scene.objects.iter().map(|o| o.absorption).sum::<f32>() / scene.objects.len() as f32;
-    let geometry = oit_wgpu::embed::SceneGeometry::new(&gpu.device, &gpu.queue, &layers.transparent).unwrap();
-    for technique in [Technique::Fabs { k: None }, Technique::Dp, Technique::Fabs { k: Some(4) }] {
+    let cases = [
+        ("wall:0.5:planes:16", Technique::Fabs { k: None }, None),
+        ("wall:0.5:planes:16", Technique::Fabs { k: None }, Some(0.3)),
+        ("wall:0.5:planes:16", Technique::Dp, None),
+        ("wall:0.5:planes:16", Technique::Fabs { k: Some(4) }, None),
+        ("nowall:0.5:planes:16", Technique::Fabs { k: None }, None),
+    ];
+    for (name, technique, alpha) in cases {
+        let scene = oit_core::load_scene(name).unwrap();
+        assert!(scene.has_opaque(), "{name}: the scene has a wall");
+        let camera =
+            oit_core::Camera::orbit_scene(&scene, oit_core::View::default(), w as f32 / h as f32).unwrap();
+        let geometry = oit_wgpu::embed::SceneGeometry::new(&gpu.device, &gpu.queue, &scene).unwrap();
+        assert!(geometry.has_opaque(), "{name}");
         let settings = Settings {
             width: w,
             height: h,
             technique,
+            alpha,
             raster: Some(RasterPath::Hardware),
             ..Settings::default()
         };
+        let what = format!("{name} {technique} alpha {alpha:?}");
         let own = backend.render(&scene, &camera, &settings).unwrap();
-        assert!(
-            own.stats.occluded > 0 && own.stats.captured > 0,
-            "{technique}: the wall hides some, not all"
-        );
-        let drawn = layers.settings(&settings);
-        let (depth, color) = draw_opaque(gpu, opaque, &camera, &drawn);
-        let pass = oit_wgpu::OitPass::new(&gpu.device, &gpu.queue, settings.clone(), camera)
+        if name.starts_with("wall") {
+            assert!(own.stats.occluded > 0 && own.stats.captured > 0, "{what}: the wall hides some, not all");
+        } else {
+            assert_eq!(own.stats.occluded, 0, "{what}: the wall is masked away");
+        }
+        let mut pass = oit_wgpu::OitPass::new(&gpu.device, &gpu.queue, settings.clone(), camera)
             .unwrap()
-            .with_scene_geometry(&geometry)
-            .with_scene_bounds(scene.bounds(), absorption)
-            .with_opaque(&depth, Some(&color))
-            .unwrap();
-        geometry.write_frame(&layers.transparent, &camera, &drawn);
+            .with_scene_geometry(&geometry);
+        geometry.write_frame(&scene, &camera, &settings);
+        geometry.draw_opaque_for(&mut pass).unwrap();
         let frame = pass
             .frame(
                 None,
@@ -593,7 +480,7 @@ fn caller_opaque_depth_and_colour_match_backend_render() {
             .unwrap();
         let worst = worst_difference(&frame.image, &own.image);
         println!(
-            "{technique}: worst {worst}; fragments {} vs {}, captured {} vs {}, occluded {} vs {}, passes {} vs {}",
+            "{what}: worst {worst}; fragments {} vs {}, captured {} vs {}, occluded {} vs {}, passes {} vs {}",
             frame.stats.fragments,
             own.stats.fragments,
             frame.stats.captured,
@@ -603,15 +490,16 @@ fn caller_opaque_depth_and_colour_match_backend_render() {
             frame.stats.geometry_passes,
             own.stats.geometry_passes
         );
-        assert_eq!(worst, 0, "{technique}: the image differs");
-        assert_eq!(frame.stats.fragments, own.stats.fragments, "{technique}");
-        assert_eq!(frame.stats.captured, own.stats.captured, "{technique}");
-        assert_eq!(frame.stats.occluded, own.stats.occluded, "{technique}");
-        assert_eq!(frame.stats.lost, own.stats.lost, "{technique}");
-        assert_eq!(frame.stats.geometry_passes + 2, own.stats.geometry_passes, "{technique}");
-        assert_eq!(frame.stats.opaque_fragments, 0, "{technique}: the pass drew no opaque fragment");
+        assert_eq!(worst, 0, "{what}: the image differs");
+        assert_eq!(frame.stats.fragments, own.stats.fragments, "{what}");
+        assert_eq!(frame.stats.captured, own.stats.captured, "{what}");
+        assert_eq!(frame.stats.occluded, own.stats.occluded, "{what}");
+        assert_eq!(frame.stats.lost, own.stats.lost, "{what}");
+        assert_eq!(frame.stats.geometry_passes + 2, own.stats.geometry_passes, "{what}");
+        assert_eq!(frame.stats.opaque_fragments, 0, "{what}: the pass drew no opaque fragment");
         if technique == (Technique::Fabs { k: Some(4) }) {
-            // recorded into the caller's encoder, drawn into a target of its own
+            // recorded into the caller's encoder after the opaque part, drawn into a target of
+            // its own
             let target = gpu.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("recorded target"),
                 size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
@@ -624,6 +512,22 @@ fn caller_opaque_depth_and_colour_match_backend_render() {
             });
             let view = target.create_view(&Default::default());
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            let opaque = geometry.draw_opaque(&mut encoder, &settings).expect("an opaque part");
+            // the geometry's depth and colour are kept for frames of a size, made anew for another
+            let mut other = gpu.device.create_command_encoder(&Default::default());
+            let again = geometry.draw_opaque(&mut other, &settings).unwrap();
+            assert_eq!(
+                (again.depth.texture(), again.color.texture()),
+                (opaque.depth.texture(), opaque.color.texture())
+            );
+            assert_eq!(opaque.color.texture().format(), oit_wgpu::embed::OPAQUE_COLOR_FORMAT);
+            let bigger = Settings { width: w + 8, ..settings.clone() };
+            let resized = geometry.draw_opaque(&mut other, &bigger).unwrap();
+            assert_ne!(resized.depth.texture(), opaque.depth.texture());
+            assert_eq!(resized.depth.texture().width(), w + 8);
+            drop(other);
+            let opaque = geometry.draw_opaque(&mut encoder, &settings).unwrap();
+            pass.set_opaque(Some(&opaque.depth), Some(&opaque.color)).unwrap();
             pass.record(
                 &mut encoder,
                 &view,
@@ -636,10 +540,10 @@ fn caller_opaque_depth_and_colour_match_backend_render() {
             .unwrap();
             gpu.queue.submit([encoder.finish()]);
             let stats = pass.read_stats().unwrap();
-            assert_eq!(stats.captured, own.stats.captured, "{technique} recorded");
-            assert_eq!(stats.occluded, own.stats.occluded, "{technique} recorded");
+            assert_eq!(stats.captured, own.stats.captured, "{what} recorded");
+            assert_eq!(stats.occluded, own.stats.occluded, "{what} recorded");
             let image = read_rgba8(gpu, &target);
-            assert_eq!(image.pixels, own.image.pixels, "{technique} recorded: the image differs");
+            assert_eq!(image.pixels, own.image.pixels, "{what} recorded: the image differs");
         }
     }
 }

@@ -33,8 +33,9 @@ const OVERLAY_PX: f32 = 14.0;
 const RESIZE_WAIT: Duration = Duration::from_secs(5);
 
 /// Everything the viewer asks of oit's embeddable pass, in one place: the frame's view and
-/// settings, the scene's per-frame data, and one frame whose geometry passes draw the scene with
-/// a pipeline the viewer builds over oit's capture module and the hardware path's vertex stage.
+/// settings, the scene's per-frame data, its opaque part (drawn by the geometry), and one frame
+/// whose geometry passes draw the transparent part with a pipeline the viewer builds over oit's
+/// capture module and the hardware path's vertex stage.
 fn render_frame(
     pass: &mut OitPass,
     geometry: &SceneGeometry,
@@ -45,6 +46,9 @@ fn render_frame(
 ) -> Result<Frame, OitError> {
     pass.set_view(settings.clone(), camera)?;
     geometry.write_frame(scene, &camera, settings);
+    // the scene's opaque part first, into the geometry's depth and colour, which the pass cuts
+    // at and composites over
+    geometry.draw_opaque_for(pass)?;
     pass.frame(
         None,
         |capture| scene_pipeline(device, geometry, capture),
