@@ -154,9 +154,23 @@ pub fn parse_obj(path: &Path, text: &str) -> Result<Scene, OitError> {
     let prepared = prepare(text).map_err(|(line, message)| obj_err(Some(line), message))?;
     let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
     let mut reader = std::io::BufReader::new(prepared.text.as_bytes());
-    let (models, _materials) = tobj::load_obj_buf(&mut reader, &options, |_| Ok(Default::default()))
+    // `mtllib` files are read beside the OBJ file (a missing one is a warning, not an error)
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |mtl| tobj::load_mtl(dir.join(mtl)))
         .map_err(|e| obj_err(None, e.to_string()))?;
+    let mut warnings: Vec<String> = Vec::new();
+    let materials = match materials {
+        Ok(m) => m,
+        Err(e) => {
+            if prepared.text.lines().any(|l| l.trim_start().starts_with("mtllib")) {
+                warnings.push(format!("its materials (mtllib) were not read ({e}): drawn in oit's colour"));
+            }
+            Vec::new()
+        }
+    };
     let mut meshes = Vec::new();
+    let mut material_of = Vec::new();
+    let mut uvs_of = Vec::new();
     for (i, model) in models.into_iter().enumerate() {
         let m = model.mesh;
         if m.indices.is_empty() {
@@ -179,6 +193,11 @@ pub fn parse_obj(path: &Path, text: &str) -> Result<Scene, OitError> {
         if m.vertex_color.len() == m.positions.len() {
             mesh.colors = Some(to_vec3(&m.vertex_color));
         }
+        // OBJ's v runs up the image, oit's (glTF's) down it
+        let uvs = (m.texcoords.len() / 2 == m.positions.len() / 3 && !m.texcoords.is_empty())
+            .then(|| m.texcoords.chunks_exact(2).map(|c| glam::Vec2::new(c[0], 1.0 - c[1])).collect::<Vec<_>>());
+        material_of.push(m.material_id.filter(|&i| i < materials.len()));
+        uvs_of.push(uvs);
         meshes.push(mesh);
     }
     if meshes.is_empty() {
@@ -191,9 +210,88 @@ pub fn parse_obj(path: &Path, text: &str) -> Result<Scene, OitError> {
     }
     let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let mut scene = Scene::from_meshes(name, meshes, OBJ_COLOR);
-    scene.warnings = prepared.warnings.iter().map(|w| format!("{}: {w}", path.display())).collect();
+    for (i, material) in material_of.iter().enumerate() {
+        let Some(material) = material.map(|k| &materials[k]) else { continue };
+        apply_material(&mut scene, i, material, uvs_of[i].take(), &dir, &mut warnings);
+    }
+    scene.warnings = prepared.warnings.iter().chain(&warnings).map(|w| format!("{}: {w}", path.display())).collect();
     scene.validate().map_err(|e| obj_err(None, e.to_string()))?;
     Ok(scene)
+}
+
+/// Object `i` of `scene` (mesh `i`) as its `.mtl` material `m` says: `Kd` its colour, `d` (or
+/// `1 − Tr`) its alpha, blended where below 1 and opaque at 1 (an OBJ drawn with materials is drawn
+/// as its author lit it: solid where not said otherwise); `map_Kd` its base-colour texture (and
+/// `map_d`'s first channel its alpha, where the two are the same size), read beside the OBJ file
+/// with the mesh's texture coordinates. What cannot be read is a warning, and the object keeps
+/// its colour.
+fn apply_material(
+    scene: &mut Scene,
+    i: usize,
+    m: &tobj::Material,
+    uvs: Option<Vec<glam::Vec2>>,
+    dir: &Path,
+    warnings: &mut Vec<String>,
+) {
+    let alpha = m
+        .dissolve
+        .or_else(|| m.unknown_param.get("Tr").and_then(|t| t.trim().parse::<f32>().ok()).map(|t| 1.0 - t))
+        .filter(|a| a.is_finite())
+        .map_or(1.0, |a| a.clamp(0.0, 1.0));
+    let object = &mut scene.objects[i];
+    let kd = m.diffuse.map_or(OBJ_COLOR.truncate(), Vec3::from_array);
+    object.color = kd.clamp(Vec3::ZERO, Vec3::ONE).extend(alpha);
+    object.name = format!("{} ({})", object.name, m.name);
+    object.alpha_mode = if alpha < 1.0 { crate::AlphaMode::Blend } else { crate::AlphaMode::Opaque };
+    let texture = match (&m.diffuse_texture, &m.dissolve_texture) {
+        (None, None) => return,
+        (colour, dissolve) => read_texture(dir, colour.as_deref(), dissolve.as_deref()),
+    };
+    match (texture, uvs) {
+        (Ok(t), Some(uvs)) => {
+            // a texture's alpha below 1 makes the surface see-through where the material said so
+            if alpha == 1.0 && t.texels().iter().any(|p| p[3] < 255) {
+                scene.objects[i].alpha_mode = crate::AlphaMode::Blend;
+            }
+            scene.meshes[i].uvs = Some(uvs);
+            scene.textures.push(t);
+            scene.objects[i].texture = Some(scene.textures.len() - 1);
+        }
+        (Ok(_), None) => warnings.push(format!("material '{}' has a texture and its mesh no texture coordinates: drawn in its colour", m.name)),
+        (Err(e), _) => warnings.push(format!("material '{}': {e}: drawn in its colour", m.name)),
+    }
+}
+
+/// The RGBA texture of `map_Kd` (`colour`) with `map_d`'s first channel as alpha (`dissolve`),
+/// either optional, read from `dir`.
+fn read_texture(dir: &Path, colour: Option<&str>, dissolve: Option<&str>) -> Result<crate::Texture, String> {
+    let open = |name: &str| {
+        image::ImageReader::open(dir.join(name))
+            .map_err(|e| format!("cannot read {name}: {e}"))?
+            .with_guessed_format()
+            .map_err(|e| format!("cannot read {name}: {e}"))?
+            .decode()
+            .map_err(|e| format!("cannot decode {name}: {e}"))
+    };
+    let base = colour.map(|c| open(c).map(|i| i.to_rgba8())).transpose()?;
+    let alpha = dissolve.map(|d| open(d).map(|i| i.to_luma8())).transpose()?;
+    let (w, h) = match (&base, &alpha) {
+        (Some(b), _) => b.dimensions(),
+        (None, Some(a)) => a.dimensions(),
+        (None, None) => return Err("no texture".into()),
+    };
+    let mut texels: Vec<[u8; 4]> = match &base {
+        Some(b) => b.pixels().map(|p| p.0).collect(),
+        None => vec![[255; 4]; w as usize * h as usize],
+    };
+    if let Some(a) = &alpha {
+        if a.dimensions() != (w, h) {
+            return Err(format!("map_d is {}×{}, map_Kd {w}×{h}", a.width(), a.height()));
+        }
+        texels.iter_mut().zip(a.pixels()).for_each(|(t, p)| t[3] = p.0[0]);
+    }
+    let name = colour.or(dissolve).unwrap_or("texture");
+    crate::Texture::new(name, w, h, texels, [crate::Wrap::Repeat; 2]).map_err(|e| e.to_string())
 }
 
 /// The OBJ text as tobj gets it, and what was left out of it.
@@ -812,5 +910,46 @@ mod tests {
         assert!((area - 4.0).abs() < 1e-12 && t.len() <= 3, "{t:?}");
         // all on one line: nothing to draw
         assert!(triangulate(&[v(0.0, 0.0), v(1.0, 0.0), v(2.0, 0.0), v(3.0, 0.0)]).unwrap().is_empty());
+    }
+
+    /// Issue 39.2: an OBJ's `.mtl` materials: `Kd` and `d` (or `Tr`) the colour and alpha, blended
+    /// below 1 and opaque at 1, `map_Kd` the texture read beside it with the faces' coordinates
+    /// (v flipped); a missing `.mtl` still loads, with a warning.
+    #[test]
+    fn materials_from_mtl() {
+        let dir = std::env::temp_dir().join(format!("oit-mtl-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let obj = "mtllib scene.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 -1\nv 1 0 -1\nv 0 1 -1\n\
+                   vt 0 0\nvt 1 0\nvt 0 1\no glass\nusemtl glass\nf 1/1 2/2 3/3\no wall\nusemtl wall\nf 4 5 6\n\
+                   o pane\nusemtl pane\nf 1/1 2/2 3/3\n";
+        let mtl = "newmtl glass\nKd 0.2 0.4 0.6\nd 0.25\nnewmtl wall\nKd 0.5 0.5 0.5\n\
+                   newmtl pane\nKd 1 1 1\nTr 0.75\nmap_Kd pane.png\n";
+        std::fs::write(dir.join("scene.obj"), obj).unwrap();
+        std::fs::write(dir.join("scene.mtl"), mtl).unwrap();
+        image::RgbaImage::from_raw(2, 1, vec![255, 0, 0, 255, 0, 0, 255, 128]).unwrap().save(dir.join("pane.png")).unwrap();
+        let s = load_obj(&dir.join("scene.obj")).expect("loads");
+        s.validate().expect("valid");
+        let by = |n: &str| s.objects.iter().find(|o| o.name.contains(n)).unwrap_or_else(|| panic!("{n}"));
+        assert_eq!(by("(glass)").color, Vec4::new(0.2, 0.4, 0.6, 0.25));
+        assert_eq!(by("(glass)").alpha_mode, crate::AlphaMode::Blend);
+        assert_eq!(by("(wall)").alpha_mode, crate::AlphaMode::Opaque);
+        let pane = by("(pane)");
+        assert_eq!((pane.color.w, pane.texture), (0.25, Some(0)));
+        assert_eq!(s.textures[0].texels(), &[[255, 0, 0, 255], [0, 0, 255, 128]]);
+        let uvs = s.meshes[pane.mesh].uvs.as_ref().expect("coordinates kept");
+        assert_eq!(uvs[..3], [glam::Vec2::new(0.0, 1.0), glam::Vec2::new(1.0, 1.0), glam::Vec2::new(0.0, 0.0)]);
+        assert!(s.meshes[by("(glass)").mesh].uvs.is_none(), "an untextured object's coordinates are dropped");
+        // without its .mtl: oit's colour, one warning
+        std::fs::remove_file(dir.join("scene.mtl")).unwrap();
+        let s = load_obj(&dir.join("scene.obj")).expect("loads without its materials");
+        assert!(s.objects.iter().all(|o| o.color == OBJ_COLOR && o.texture.is_none()));
+        assert!(s.warnings.iter().any(|w| w.contains("materials (mtllib) were not read")), "{:?}", s.warnings);
+        // a texture that is not there: the colour, one warning
+        std::fs::write(dir.join("scene.mtl"), mtl).unwrap();
+        std::fs::remove_file(dir.join("pane.png")).unwrap();
+        let s = load_obj(&dir.join("scene.obj")).expect("loads without its texture");
+        assert!(s.textures.is_empty() && s.warnings.iter().any(|w| w.contains("pane.png")), "{:?}", s.warnings);
+        s.validate().expect("valid without the texture's coordinates");
+        std::fs::remove_dir_all(&dir).ok();
     }
 }
