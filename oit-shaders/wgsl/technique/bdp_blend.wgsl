@@ -52,7 +52,7 @@ fn bdp_blend_fs(in: HwOut) -> BucketsOut {
         return out;
     }
     let px = xy.y * fu.width + xy.x;
-    let color = shade(hw.shading, in.base, in.normal, in.vcolor, in.has_color != 0u, hw.forward.xyz);
+    let color = hw_color(in);
     let depth = clamp(in.position.z, 0.0, 1.0);
     let zn = bitcast<f32>(bounds[2u * px]);
     let zf = bitcast<f32>(bounds[2u * px + 1u]);

@@ -34,7 +34,7 @@ fn blend_fragment(in: HwOut, out: ptr<function, BlendOut>) -> vec4<f32> {
         return vec4<f32>(0.0);
     }
     (*out).count = vec4<f32>(1.0, 0.0, 0.0, 0.0);
-    let color = shade(hw.shading, in.base, in.normal, in.vcolor, in.has_color != 0u, hw.forward.xyz);
+    let color = hw_color(in);
     return unpack_rgba8(pack_rgba8(clamp(color, vec4<f32>(0.0), vec4<f32>(1.0))));
 }
 

@@ -34,7 +34,7 @@ fn dp_peel_fs(in: HwOut) -> @location(0) vec2<u32> {
     f.depth = depth;
     f.prim = in.prim;
     f.color = clamp(
-        shade(hw.shading, in.base, in.normal, in.vcolor, in.has_color != 0u, hw.forward.xyz),
+        hw_color(in),
         vec4<f32>(0.0),
         vec4<f32>(1.0),
     );
