@@ -389,4 +389,47 @@ mod gpu {
             }
         }
     }
+
+    /// The hardware paths' blend-unit captures (`--hardware-capture blend`) sample as the atomic
+    /// captures do: on textured scenes each exact technique with a blend capture equals its
+    /// backend's hardware reference, and the others count the fragments the atomic capture does.
+    #[test]
+    fn textured_blend_captures_sample_too() {
+        let Some(gpus) = gpu_backends("textured_blend_captures_sample_too") else { return };
+        // the blend captures refuse a scene with opaque parts: the particles without their floor
+        for name in ["particles:64", "grid:2x2:particles:8"] {
+            let mut scene = scene(name);
+            let objects = scene.objects.clone();
+            scene.instances.retain(|i| !objects[i.object].is_opaque_pass());
+            let base = Settings { raster: Some(RasterPath::Hardware), ..settings(SIZE, "reference") };
+            let cam = camera(&scene, &base, View::default());
+            for (label, gpu) in &gpus {
+                let reference = render(gpu.as_ref(), &scene, &cam, &base);
+                let mut ran = 0;
+                for t in ["dp", "ddp", "bdp2", "plain", "wavg", "adp"] {
+                    let atomics = Settings { technique: t.parse().unwrap(), ..base.clone() };
+                    let blend =
+                        Settings { hardware_capture: oit_core::HardwareCapture::Blend, ..atomics.clone() };
+                    let what = format!("{t} on {name}, {label} blend capture");
+                    let b = match gpu.render(&scene, &cam, &blend) {
+                        Ok(b) => b,
+                        Err(e) if e.to_string().contains("blend") => {
+                            eprintln!("{what}: skipped, {e}");
+                            continue;
+                        }
+                        Err(e) => panic!("{what}: {e}"),
+                    };
+                    ran += 1;
+                    let a = render(gpu.as_ref(), &scene, &cam, &atomics);
+                    checks::accounting(&b).unwrap_or_else(|e| panic!("{what}: {e}"));
+                    assert_eq!(b.stats.fragments, a.stats.fragments, "{what}: fragments");
+                    same_opaque(&b, &a).unwrap_or_else(|e| panic!("{what}: {e}"));
+                    if blend.technique.is_exact() && b.stats.lost == 0 {
+                        checks::exact(&reference, &b).unwrap_or_else(|e| panic!("{what}: {e}"));
+                    }
+                }
+                assert!(ran >= 3, "{label} on {name}: {ran} blend captures ran");
+            }
+        }
+    }
 }
