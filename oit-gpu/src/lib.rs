@@ -188,7 +188,12 @@ impl TextureRegion {
         for t in textures {
             firsts.push((base + (words.len() + descriptors.len()) as u32, t.level_count()));
             for l in t.mips() {
-                descriptors.extend([texel as u32, l.width, l.height, wrap_code(t.wrap[0]) | wrap_code(t.wrap[1]) << 8]);
+                descriptors.extend([
+                    texel as u32,
+                    l.width,
+                    l.height,
+                    wrap_code(t.wrap[0]) | wrap_code(t.wrap[1]) << 8,
+                ]);
                 texel += l.texels.len();
             }
         }
@@ -223,7 +228,12 @@ impl TextureRegion {
 /// frame's setup for it. A triangle that clipping cuts into pieces takes its first piece's level
 /// (the GPU clips it itself, into one primitive); one that setup drops (no pixel centre in its
 /// box) samples level 0, where the GPU's rasterizer gives it a fragment all the same.
-pub fn triangle_levels(scene: &Scene, camera: &Camera, settings: &Settings, region: &TextureRegion) -> Vec<u32> {
+pub fn triangle_levels(
+    scene: &Scene,
+    camera: &Camera,
+    settings: &Settings,
+    region: &TextureRegion,
+) -> Vec<u32> {
     let setup = oit_core::setup::TriangleSetup::new(scene, camera, settings);
     let (bases, total) = scene.primitive_bases();
     let mut out = vec![0u32; total as usize];

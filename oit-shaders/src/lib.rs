@@ -156,13 +156,19 @@ pub const TEXTURE: &str = include_str!("../wgsl/core/texture.wgsl");
 
 /// The compute rasterizer (the papers' "CUDA rasterizer"), appended to a technique module: the
 /// sampler ([`TEXTURE`]), then the rasterizer.
-pub const COMPUTE_RASTER: &str =
-    concat!(include_str!("../wgsl/core/texture.wgsl"), "\n", include_str!("../wgsl/core/raster_compute.wgsl"));
+pub const COMPUTE_RASTER: &str = concat!(
+    include_str!("../wgsl/core/texture.wgsl"),
+    "\n",
+    include_str!("../wgsl/core/raster_compute.wgsl")
+);
 
 /// The GPU's own rasterizer: the sampler ([`TEXTURE`]), the vertex stage over the pulled geometry
 /// and the fragment stage that calls the technique's `capture` (entry points `hw_vs`, `hw_fs`).
-pub const HARDWARE_RASTER: &str =
-    concat!(include_str!("../wgsl/core/texture.wgsl"), "\n", include_str!("../wgsl/core/raster_hardware.wgsl"));
+pub const HARDWARE_RASTER: &str = concat!(
+    include_str!("../wgsl/core/texture.wgsl"),
+    "\n",
+    include_str!("../wgsl/core/raster_hardware.wgsl")
+);
 
 /// The fragment contract of a render pipeline's capture (what `hw_fs` hands `capture`).
 pub const CAPTURE_RENDER: &str = include_str!("../wgsl/core/capture_render.wgsl");

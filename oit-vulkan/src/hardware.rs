@@ -79,7 +79,8 @@ impl HwGeometry {
         let indirect = storage_usage() | vk::BufferUsageFlags::INDIRECT_BUFFER;
         let draw_args = gpu.buffer(16, indirect, false)?;
         let gated_args = gpu.buffer(16, indirect, false)?;
-        let region = (!boxes && oit_gpu::is_textured(scene)).then(|| oit_gpu::TextureRegion::new(&scene.textures, 0));
+        let region =
+            (!boxes && oit_gpu::is_textured(scene)).then(|| oit_gpu::TextureRegion::new(&scene.textures, 0));
         let tex_bytes = match &region {
             Some(r) => (r.words.len() + g.triangles.len()) as u64 * 4,
             None => 64,

@@ -246,7 +246,10 @@ mod gpu {
     /// The exact techniques compared (fabs with room for every fragment of these scenes), and
     /// two that pack colour (mdts64 in 20+12 bits, bdp's colour mode), compared by their counts.
     fn techniques() -> Vec<Technique> {
-        ["reference", "ll", "fabs:64", "dp", "dfb", "mdts64:16", "bdp2"].iter().map(|t| t.parse().unwrap()).collect()
+        ["reference", "ll", "fabs:64", "dp", "dfb", "mdts64:16", "bdp2"]
+            .iter()
+            .map(|t| t.parse().unwrap())
+            .collect()
     }
 
     fn gpu_backends(test: &str) -> Option<[(&'static str, Box<dyn Backend>); 2]> {
@@ -349,14 +352,22 @@ mod gpu {
                 gpus.iter().map(|(_, g)| render(g.as_ref(), &scene, &cam, &base)).collect();
             let compute: Vec<Frame> = gpus
                 .iter()
-                .map(|(_, g)| render(g.as_ref(), &scene, &cam, &Settings { raster: Some(RasterPath::Compute), ..base.clone() }))
+                .map(|(_, g)| {
+                    render(
+                        g.as_ref(),
+                        &scene,
+                        &cam,
+                        &Settings { raster: Some(RasterPath::Compute), ..base.clone() },
+                    )
+                })
                 .collect();
             for ((label, _), (h, k)) in gpus.iter().zip(references.iter().zip(&compute)) {
                 let (hl, kl) = (h.layers.as_ref().unwrap(), k.layers.as_ref().unwrap());
                 // besides the pixels on an edge, those where a masked fragment's alpha lies at
                 // the cutoff, kept on one path and masked on the other (its transparent
                 // fragments behind it then captured or held back): a few, and only where a mask is
-                let cut: Vec<bool> = near.iter().zip(hl.iter().zip(kl)).map(|(&n, (a, b))| n || a != b).collect();
+                let cut: Vec<bool> =
+                    near.iter().zip(hl.iter().zip(kl)).map(|(&n, (a, b))| n || a != b).collect();
                 let at_cutoff = (0..cut.len()).filter(|&i| cut[i] && !near[i]).count();
                 assert!(
                     at_cutoff == 0 || (c.stats.masked > 0 && at_cutoff <= cut.len() / 200),
@@ -367,11 +378,15 @@ mod gpu {
             }
             for t in techniques() {
                 let s = Settings { technique: t, ..base.clone() };
-                let frames: Vec<Frame> = gpus.iter().map(|(_, g)| render(g.as_ref(), &scene, &cam, &s)).collect();
+                let frames: Vec<Frame> =
+                    gpus.iter().map(|(_, g)| render(g.as_ref(), &scene, &cam, &s)).collect();
                 for (((label, _), g), reference) in gpus.iter().zip(&frames).zip(&references) {
                     let what = format!("{t} on {name}, {label} hardware");
                     checks::accounting(g).unwrap_or_else(|e| panic!("{what}: {e}"));
-                    assert_eq!(g.stats.opaque_fragments, c.stats.opaque_fragments, "{what}: opaque fragments");
+                    assert_eq!(
+                        g.stats.opaque_fragments, c.stats.opaque_fragments,
+                        "{what}: opaque fragments"
+                    );
                     let slack = c.stats.fragments / 100;
                     for (what_count, p, q) in [
                         ("occluded", g.stats.occluded, c.stats.occluded),
@@ -380,7 +395,8 @@ mod gpu {
                         assert!(p.abs_diff(q) <= slack, "{what}: {what_count} {p} vs the CPU's {q}");
                     }
                     if t.is_exact() && g.stats.lost == 0 {
-                        checks::exact(reference, g).unwrap_or_else(|e| panic!("{what} against its reference: {e}"));
+                        checks::exact(reference, g)
+                            .unwrap_or_else(|e| panic!("{what} against its reference: {e}"));
                     }
                 }
                 let what = format!("{t} on {name}, wgpu against vulkan hardware");
