@@ -602,8 +602,15 @@ mod tests {
         let setup = TriangleSetup::new(&scene, &camera, &settings);
         let n = setup.triangles.len();
         assert!(n > 0 && words.len() > n * TRIANGLE_WORDS);
+        let mut textured = 0;
         for (i, t) in setup.triangles.iter().enumerate() {
             let rec = words[i * TRIANGLE_WORDS + super::TRIANGLE_TEXTURE_WORD] as usize;
+            // the backdrop is untextured
+            if t.texture == oit_core::setup::NO_TEXTURE {
+                assert_eq!(rec, 0, "triangle {i}");
+                continue;
+            }
+            textured += 1;
             assert!(rec >= n * TRIANGLE_WORDS, "triangle {i}");
             assert_eq!(f32::from_bits(words[rec + 2]), t.uv[1].x);
             let tables = words[rec + 8] as usize;
@@ -615,9 +622,11 @@ mod tests {
             let last = level.texels.len() - 1;
             assert_eq!(words[words[d] as usize + last], u32::from_le_bytes(level.texels[last]));
         }
+        assert!(textured > 0);
         let region = super::TextureRegion::new(&setup.textures, 0);
         let levels = super::triangle_levels(&scene, &camera, &settings, &region);
         assert_eq!(levels.len(), scene.triangle_count() as usize);
-        assert!(levels.iter().all(|&d| d >= 512));
+        // the sprites' triangles name a descriptor (after the two tables), the backdrop's none
+        assert!(levels.iter().any(|&d| d >= 512) && levels.iter().all(|&d| d == 0 || d >= 512));
     }
 }

@@ -976,7 +976,8 @@ impl SceneGeometry {
     /// A scene with opaque or masked objects or a transmission ([`Scene::has_materials`]) is
     /// uploaded as its layers (`scene.layers(None)`): the transparent part is what the pass's
     /// draws capture, the opaque part what [`SceneGeometry::draw_opaque`] draws. A scene that
-    /// draws a textured object is refused (the GPU backends do not sample textures yet).
+    /// draws a textured object is refused by name (the embedded pass does not sample textures;
+    /// `Backend::render` does, on every backend).
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> Result<SceneGeometry, OitError> {
         oit_gpu::refuse_textures("wgpu (embedded pass)", scene)?;
         let gpu = Gpu::from_device(device.clone(), queue.clone())?;
