@@ -15,7 +15,8 @@
 // Other values compare exactly as their bits.
 //
 // Module: COMMON_WGSL, TECHNIQUE_PRELUDE (group 0: fu, state), this, then the hardware raster's
-// vertex stage (group 1 bindings 0..2: hw_vertices, hw_indices, hw; `HwOut`, `hw_vs`).
+// vertex stage (group 1 bindings 0..4: hw_vertices, hw_indices, hw, hw_instances, hw_tex;
+// `HwOut`, `hw_vs`, `hw_color`).
 
 // [zNear, zFar] bits per pixel (bounds.wgsl), read by the fragment stage.
 @group(0) @binding(2) var<storage, read_write> bounds: array<u32>;

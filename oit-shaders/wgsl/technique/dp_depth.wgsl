@@ -10,7 +10,7 @@
 // the other is lost in both.
 //
 // Module: COMMON_WGSL, TECHNIQUE_PRELUDE (group 0: fu, state), this, then the hardware raster's
-// vertex stage (group 1 bindings 0..2; `HwOut`, `hw_vs`).
+// vertex stage (group 1 bindings 0..4; `HwOut`, `hw_vs`, `hw_color`).
 
 // The previous peel's depth (render pipeline, group 2; unused on the first peel).
 @group(2) @binding(0) var dp_previous: texture_depth_2d;
