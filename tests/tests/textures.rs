@@ -448,4 +448,44 @@ mod gpu {
             }
         }
     }
+
+    /// Textured frames on the compute paths under the other shadings and effects, and split into
+    /// screen tiles by a memory budget (each tile's setup its own, its levels the full frame's):
+    /// oit-cpu's fragments and, for the reference, oit-cpu's image within 1 in 8 bits; the
+    /// hardware paths' tiled frames are their untiled ones.
+    #[test]
+    fn textured_shadings_effects_and_tiles_on_the_gpu() {
+        let Some(gpus) = gpu_backends("textured_shadings_effects_and_tiles_on_the_gpu") else { return };
+        let cpu = oit_cpu::CpuBackend::default();
+        let scene = scene("particles:32");
+        let base = Settings { raster: Some(RasterPath::Compute), ..settings(96, "reference") };
+        let cam = camera(&scene, &base, View::default());
+        let cases = [
+            Settings { shading: oit_core::Shading::Flat, ..base.clone() },
+            Settings { shading: oit_core::Shading::Vertex, ..base.clone() },
+            Settings { effect: oit_core::Effect::Translucency, ..base.clone() },
+            Settings { effect: oit_core::Effect::Fresnel, ..base.clone() },
+            Settings { memory: Some(160 << 10), ..base.clone() },
+            Settings { memory: Some(160 << 10), technique: "fabs:32".parse().unwrap(), ..base.clone() },
+        ];
+        for s in cases {
+            let c = render(&cpu, &scene, &cam, &s);
+            for (label, gpu) in &gpus {
+                let what =
+                    format!("{label} compute, {:?} {:?} {:?} {}", s.shading, s.effect, s.memory, s.technique);
+                let g = render(gpu.as_ref(), &scene, &cam, &s);
+                checks::accounting(&g).unwrap_or_else(|e| panic!("{what}: {e}"));
+                checks::same_fragments_as_cpu(&g, &c, s.technique).unwrap_or_else(|e| panic!("{what}: {e}"));
+                same_opaque(&g, &c).unwrap_or_else(|e| panic!("{what}: {e}"));
+                if s.memory.is_some() {
+                    assert!(g.stats.tiles > 1, "{what}: the budget must force tiles");
+                    let hw = Settings { raster: Some(RasterPath::Hardware), ..s.clone() };
+                    let tiled = render(gpu.as_ref(), &scene, &cam, &hw);
+                    let whole = render(gpu.as_ref(), &scene, &cam, &Settings { memory: None, ..hw.clone() });
+                    assert!(tiled.stats.tiles > 1, "{what}: hardware tiles");
+                    checks::exact(&whole, &tiled).unwrap_or_else(|e| panic!("{what}, hardware: {e}"));
+                }
+            }
+        }
+    }
 }
