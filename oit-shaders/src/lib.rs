@@ -6,8 +6,9 @@
 //!
 //! - `wgsl/core/`: what every module shares ([`COMMON`]: oit-core's rules and the fragment
 //!   contract; [`PRELUDE`]: group 0's frame bindings and the resolve), the two rasterizers
-//!   ([`COMPUTE_RASTER`], [`HARDWARE_RASTER`] over [`CAPTURE_RENDER`]), the compute path's setup
-//!   ([`SETUP`]) and the small kernels of the frame (fill, finish, gate).
+//!   ([`COMPUTE_RASTER`], [`HARDWARE_RASTER`] over [`CAPTURE_RENDER`]), each starting with the
+//!   texture sampler ([`TEXTURE`]), the compute path's setup ([`SETUP`]) and the small kernels of
+//!   the frame (fill, finish, gate).
 //! - `wgsl/technique/`: one file per technique, and the accessor files through which a
 //!   technique reaches its atomic arrays. An accessor is one storage kind of an array: over a
 //!   buffer (`fabs_counters.wgsl`, `mdts_words.wgsl`, `mdts_keys.wgsl`) or over a storage image
