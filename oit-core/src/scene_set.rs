@@ -518,12 +518,12 @@ fn glass() -> Result<Scene, OitError> {
     let floor = b.mesh(cuboid("floor", Vec3::new(1.8, 0.05, 1.2)));
     let floor = b.solid("floor", floor, rgb(150, 136, 118));
     b.place(floor, Mat4::from_translation(Vec3::new(0.0, -0.05, 0.0)));
-    let wall = b.mesh(cuboid("back wall", Vec3::new(1.8, 1.1, 0.05)));
+    let wall = b.mesh(cuboid("back wall", Vec3::new(1.8, 1.2, 0.05)));
     let wall = b.solid("back wall", wall, rgb(200, 196, 186));
-    b.place(wall, Mat4::from_translation(Vec3::new(0.0, 1.1, -1.25)));
-    let side = b.mesh(cuboid("side wall", Vec3::new(0.05, 1.1, 1.2)));
+    b.place(wall, Mat4::from_translation(Vec3::new(0.0, 1.2, -1.25)));
+    let side = b.mesh(cuboid("side wall", Vec3::new(0.05, 1.2, 1.2)));
     let side = b.solid("side wall", side, rgb(176, 184, 190));
-    b.place(side, Mat4::from_translation(Vec3::new(-1.85, 1.1, 0.0)));
+    b.place(side, Mat4::from_translation(Vec3::new(-1.85, 1.2, 0.0)));
     let skirting = b.mesh(cuboid("skirting", Vec3::new(1.8, 0.06, 0.02)));
     let skirting = b.solid("skirting", skirting, rgb(90, 80, 70));
     b.place(skirting, Mat4::from_translation(Vec3::new(0.0, 0.06, -1.18)));
@@ -532,8 +532,8 @@ fn glass() -> Result<Scene, OitError> {
     let plinth = b.mesh(cuboid("plinth", Vec3::new(0.44, 0.05, 0.44)));
     let plinth = b.solid("plinth", plinth, rgb(120, 116, 110));
     for (name, at, height, color) in [
-        ("bunny", Vec3::new(-0.75, 0.0, -0.05), 1.0, rgb(140, 190, 255)),
-        ("armadillo", Vec3::new(0.8, 0.0, -0.35), 1.35, rgb(255, 180, 100)),
+        ("bunny", Vec3::new(-0.8, 0.0, -0.05), 1.25, rgb(140, 190, 255)),
+        ("armadillo", Vec3::new(0.85, 0.0, -0.35), 1.6, rgb(255, 180, 100)),
     ] {
         b.place(plinth, Mat4::from_translation(at + Vec3::Y * 0.05));
         b.place(pedestal, Mat4::from_translation(at + Vec3::Y * 0.1));
