@@ -14,7 +14,8 @@
 //! and a test holds the committed files to what [`generate`] builds now, so they cannot drift.
 //!
 //! Every scene is laid out for the default view (azimuth 30°, elevation 20°): built facing +z,
-//! then turned 30° about the vertical axis, so the camera looks at its front.
+//! then turned 30° about the vertical axis, so the camera looks at its front (`cad` a further 35°,
+//! so the gears show their faces).
 
 use std::f32::consts::{PI, TAU};
 use std::io::{Read, Write};
@@ -285,8 +286,7 @@ fn along(dir: Vec3) -> Quat {
     Quat::from_rotation_arc(Vec3::Y, dir.normalize())
 }
 
-/// A colour from 8-bit sRGB-ish values, as linear factors in [0, 1] (the set's colours are
-/// picked by eye, then written as multiples of 1/255).
+/// A colour given as 8-bit values, divided by 255: linear factors in [0, 1], picked by eye.
 fn rgb(r: u8, g: u8, b: u8) -> Vec3 {
     Vec3::new(f32::from(r), f32::from(g), f32::from(b)) / 255.0
 }
@@ -309,8 +309,8 @@ fn paint(name: &str, wrap: [Wrap; 2], f: impl Fn(f32, f32) -> [f32; 4]) -> Resul
     Texture::new(name, n, n, texels, wrap)
 }
 
-/// A soft round puff: white, alpha falling smoothly from 1 at the centre to 0 at the inscribed
-/// circle (`(1 − r²)²`, smoothed once more at the rim).
+/// A soft round puff: white, alpha falling smoothly as `(1 − r²)²` from 1 at the centre to 0 at
+/// the inscribed circle.
 fn puff_texture() -> Result<Texture, OitError> {
     paint("puff", [Wrap::ClampToEdge; 2], |u, v| {
         let r2 = (u * 2.0 - 1.0).powi(2) + (v * 2.0 - 1.0).powi(2);
@@ -420,9 +420,9 @@ fn particles() -> Result<Scene, OitError> {
 }
 
 /// `foliage`: three trees on a patch of ground, each a trunk and branches (opaque, smooth
-/// cylinders) with leaf cards along and at the ends of its branches: three in five alpha-masked
-/// (cutoff 0.5) in four greens, the rest blended (alpha 0.6) in two yellow-greens, all with the
-/// same leaf texture.
+/// cylinders) with leaf cards along its branches and in a crown at the top: the crown's cards
+/// alpha-masked (cutoff 0.5), the branches' masked three times in five and blended (alpha 0.6)
+/// otherwise; four greens for the masked, two yellow-greens for the blended, one leaf texture.
 fn foliage() -> Result<Scene, OitError> {
     let mut b = Build::new("foliage");
     let ground = b.mesh(cuboid("ground", Vec3::new(2.3, 0.06, 1.5)));

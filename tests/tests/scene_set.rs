@@ -18,7 +18,7 @@
 
 use glam::Vec3;
 use oit_core::scene_set::{SCENE_SET, SetScene, generate};
-use oit_core::{Backend, Scene, Settings, View, load_scene, parse_gltf, write_glb};
+use oit_core::{Scene, Settings, View, load_scene, parse_gltf, write_glb};
 use oit_tests::checks;
 use oit_tests::*;
 
