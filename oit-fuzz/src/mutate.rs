@@ -55,6 +55,19 @@ fn words(target: Target) -> &'static [&'static str] {
             &["--", "-", "--help", "-h", "--version", "=", "render", "compare", "sweep", "info", "bench"]
         }
         Target::Selftest => &[],
+        Target::Gltf => &[
+            "\"count\":",
+            "\"byteOffset\":",
+            "\"byteStride\":4,",
+            "\"sparse\":{},",
+            "\"children\":[0],",
+            "\"uri\":\"missing.bin\",",
+            "glTF",
+            "JSON",
+            "BIN\0",
+            "5126",
+            "4294967295",
+        ],
     }
 }
 
@@ -78,6 +91,7 @@ pub fn mutate(
                 Target::Scene => scene_edit(rng, input),
                 Target::Args => args_edit(rng, input, args),
                 Target::Selftest => {}
+                Target::Gltf => crate::gltf::edit(rng, input),
             }
         }
     }
