@@ -60,7 +60,7 @@ fn write_glb() -> PathBuf {
             let v = j as f32 / ny as f32;
             let t = v * 3.0;
             let layer = t.floor().min(2.0);
-            let along = if layer as u32 % 2 == 0 { t - layer } else { 1.0 - (t - layer) };
+            let along = if (layer as u32).is_multiple_of(2) { t - layer } else { 1.0 - (t - layer) };
             let p = [u, along, 0.2 * layer + 0.03 * (u * 20.0).sin()];
             for k in 0..3 {
                 min[k] = min[k].min(p[k]);

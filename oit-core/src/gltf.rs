@@ -168,6 +168,12 @@ pub fn parse_gltf(path: &Path, bytes: &[u8], scene_index: Option<usize>) -> Resu
     Ok(out)
 }
 
+/// A GLB chunk: its body and its type.
+type Chunk<'a> = (&'a [u8], [u8; 4]);
+
+/// An image's width, height and RGBA8 texels.
+type Pixels = (u32, u32, Vec<[u8; 4]>);
+
 /// The JSON of a GLB and its binary chunk, or the whole of a `.gltf` as JSON. Chunks after the
 /// JSON chunk other than `BIN` are skipped, as the format asks; a file cut short says where.
 fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> {
@@ -189,7 +195,7 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> {
         ));
     }
     let mut rest = &bytes[12.min(length)..length];
-    let mut chunk = |what: &str| -> Result<Option<(&[u8], [u8; 4])>, String> {
+    let mut chunk = |what: &str| -> Result<Option<Chunk<'_>>, String> {
         if rest.is_empty() {
             return Ok(None);
         }
@@ -549,7 +555,7 @@ struct Images<'p> {
     base: &'p Path,
     limit: u64,
     /// Per image index, its decoded pixels once a material has sampled it.
-    decoded: Vec<Option<(u32, u32, Vec<[u8; 4]>)>>,
+    decoded: Vec<Option<Pixels>>,
     /// One texture per (image, wrap modes), made the first time a material samples it.
     made: std::collections::HashMap<(usize, [Wrap; 2]), usize>,
 }
@@ -561,7 +567,7 @@ impl Images<'_> {
         document: &gltf::Document,
         index: usize,
         buffers: &[Cow<'_, [u8]>],
-    ) -> Result<&(u32, u32, Vec<[u8; 4]>), String> {
+    ) -> Result<&Pixels, String> {
         if self.decoded.len() <= index {
             self.decoded.resize_with(index + 1, || None);
         }
@@ -595,7 +601,7 @@ impl Images<'_> {
 /// Decodes a PNG or JPEG (by its MIME type, else by its bytes) into RGBA8, with limits: a side of
 /// at most [`Texture::MAX_SIDE`] and pixels of at most [`IMAGE_EXPANSION`] times its bytes, both
 /// checked before the pixels are allocated.
-fn decode_image(bytes: &[u8], mime: Option<&str>, what: &str) -> Result<(u32, u32, Vec<[u8; 4]>), String> {
+fn decode_image(bytes: &[u8], mime: Option<&str>, what: &str) -> Result<Pixels, String> {
     use image::ImageFormat;
     let format = match mime {
         Some("image/png") => ImageFormat::Png,

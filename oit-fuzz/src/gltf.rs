@@ -6,6 +6,7 @@
 //! (indices and floats), cuts the file in its header or a chunk, and packs the GLB again, with its
 //! header's length mended or not.
 
+use std::f64::consts::FRAC_1_SQRT_2;
 use std::path::Path;
 
 use serde_json::{Value, json};
@@ -191,7 +192,7 @@ pub fn seeds() -> Vec<(&'static str, Vec<u8>)> {
                 json!([{"nodes": [0, 3]}]),
                 json!([
                     {"mesh": 0, "translation": [1, 0, 0], "children": [1]},
-                    {"mesh": 0, "rotation": [0, 0.7071068, 0, 0.7071068], "children": [2]},
+                    {"mesh": 0, "rotation": [0, FRAC_1_SQRT_2, 0, FRAC_1_SQRT_2], "children": [2]},
                     {"mesh": 0, "scale": [2, 2, 2]},
                     {"mesh": 0, "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, -2, 1]},
                 ]),
