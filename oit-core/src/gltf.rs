@@ -387,7 +387,8 @@ fn check_accessor(
     let element = a.size() as u64;
     let stride = view.stride().map_or(element, |s| s as u64);
     let (offset, view_offset) = (a.offset() as u64, view.offset() as u64);
-    if !offset.is_multiple_of(component) || !(offset + view_offset).is_multiple_of(component) {
+    // offsets are any u64 the file writes: sums saturate (a saturated end is past any view)
+    if !offset.is_multiple_of(component) || !offset.wrapping_add(view_offset).is_multiple_of(component) {
         return Err(format!(
             "{what}: misaligned: its offset {offset} in buffer view {} (at {view_offset} in its buffer) is \
              not a multiple of its {component}-byte components",
@@ -400,8 +401,8 @@ fn check_accessor(
             view.index()
         ));
     }
-    // count ≤ 2^26 and stride ≤ 255 (the crate checks it): no overflow in u64
-    let end = offset + stride * (count as u64 - 1) + element;
+    // count ≤ 2^26 and stride ≤ 252 (the crate checks it): their product does not overflow
+    let end = offset.saturating_add(stride * (count as u64 - 1) + element);
     if end > view.length() as u64 {
         return Err(format!(
             "{what}: {count} elements from byte {offset} end at byte {end}, past the {} bytes of buffer view {}",
@@ -1117,6 +1118,21 @@ mod tests {
             (
                 &[(r#""count":4"#, r#""count":5"#)][..],
                 "5 elements from byte 0 end at byte 60, past the 48 bytes of buffer view 0",
+            ),
+            // offsets near 2^64: no overflow, past the view
+            (
+                &[(
+                    r#""componentType":5126,"count":4"#,
+                    r#""byteOffset":18446744073709551612,"componentType":5126,"count":4"#,
+                )],
+                "end at byte 18446744073709551615, past the 48 bytes",
+            ),
+            (
+                &[(
+                    r#""byteOffset":0,"byteLength":48}"#,
+                    r#""byteOffset":18446744073709551612,"byteLength":48}"#,
+                )],
+                "buffer view 0 ends at byte 18446744073709551615, past the 60 bytes of buffer 0",
             ),
             // an offset within the view, the last element past it
             (
