@@ -98,3 +98,52 @@ fn predicted_tiles_and_storage_are_the_frames() {
         "{compared} compared, {tiled} tiled, {refused} refused"
     );
 }
+
+/// The same prediction on every GPU backend and raster path present (wgpu, and vulkan where
+/// compiled): `auto`'s candidates run in the tiles and with the storage they were foreseen with.
+/// Fewer cases than the CPU's (lavapipe is slow): whole, a few tiles and many. Without a Vulkan
+/// driver it says so and compares nothing (`OIT_REQUIRE_GPU=1` makes that a failure).
+#[test]
+fn gpu_predicted_tiles_and_storage_are_the_frames() {
+    let tables = Tables::new(None).expect("the shipped tables");
+    let gpus: Vec<_> =
+        oit_bench::backends::available_backends().into_iter().filter(|b| b.name() != "cpu").collect();
+    if gpus.is_empty() {
+        eprintln!("skipped: no GPU backend present (install a Vulkan driver, e.g. mesa-vulkan-drivers)");
+        return;
+    }
+    let scene = load_scene("default").expect("the scene loads");
+    let (width, height) = (64, 48);
+    let camera = Camera::orbit_scene(&scene, View::default(), width as f32 / height as f32).unwrap();
+    let mut compared = 0;
+    let mut tiled = 0;
+    for b in &gpus {
+        let path = b.raster_path(&Settings::default());
+        for memory in [None, Some(1 << 20), Some(150_000)] {
+            let s = Settings { width, height, memory, ..Settings::default() };
+            let what = format!("{} {path:?} --memory {memory:?}", b.name());
+            let (choice, _) = resolve(b.as_ref(), &scene, &camera, &s, &tables, Budget::new(1.0, memory).unwrap())
+                .unwrap_or_else(|e| panic!("{what}: {e}"));
+            for c in &choice.candidates {
+                let technique = c.technique.parse().unwrap();
+                let run = b.render(&scene, &camera, &Settings { technique, ..s.clone() });
+                let what = format!("{what} {}", c.technique);
+                if c.tiles == 0 {
+                    assert!(run.is_err() && c.rejected.is_some(), "{what}: ran ({:?})", c.rejected);
+                    continue;
+                }
+                let frame =
+                    run.unwrap_or_else(|e| panic!("{what}: foreseen in {} tiles, refused: {e}", c.tiles));
+                assert_eq!(
+                    (u64::from(frame.stats.tiles), frame.stats.storage_bytes),
+                    (c.tiles, c.storage_bytes),
+                    "{what}: (tiles, storage) ran vs predicted"
+                );
+                compared += 1;
+                tiled += usize::from(c.tiles > 1);
+            }
+        }
+    }
+    eprintln!("{compared} compared, {tiled} tiled");
+    assert!(compared >= 20 && tiled >= 5, "{compared} compared, {tiled} tiled");
+}

@@ -17,6 +17,7 @@
 //! | `untextured:SCENE` | SCENE with its textures dropped (each object its factor's colour): what a textured frame is timed against | SCENE's |
 //! | `default` | a see-through torus knot inside two glass spheres | 10 at the default view, up to 16 |
 //! | `bunny`, `armadillo` | the Stanford scans, embedded ([`crate::assets`]) | varies |
+//! | `particles`, `foliage`, `glass`, `cad` | the scene set: real content as glTF, embedded ([`crate::scene_set`]); a bare `particles` is the set's, `particles:N` the procedural one | varies |
 //!
 //! Any other bare name (no extension, not a file) is looked up as `NAME.obj` in
 //! [`MODEL_SEARCH`]'s folders.
@@ -29,7 +30,7 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 use crate::{AlphaMode, Instance, Mesh, Object, OitError, Scene, Texture, Wrap};
 
 /// The built-in names, for messages.
-pub const BUILTIN_SCENES: &str = "default, bunny, armadillo, planes:N, spheres:N, cluster:N, knot, coplanar, ties:N, near:N, grid:RxC:MESH, scale:S:SCENE, wall:F:SCENE, nowall:F:SCENE, particles:N, fence, untextured:SCENE";
+pub const BUILTIN_SCENES: &str = "default, bunny, armadillo, particles, foliage, glass, cad, planes:N, spheres:N, cluster:N, knot, coplanar, ties:N, near:N, grid:RxC:MESH, scale:S:SCENE, wall:F:SCENE, nowall:F:SCENE, particles:N, fence, untextured:SCENE";
 
 /// Where a bare name that is not built in (`--scene dragon`, `grid:2x2:dragon`) is looked for, as
 /// `NAME.obj`, in order: for messages. [`find_model`] is the lookup.
@@ -126,6 +127,9 @@ fn builtin_unchecked(name: &str) -> Option<Result<Scene, OitError>> {
     if let Some(mesh) = crate::assets::BuiltinMesh::find(name) {
         return Some(mesh.scene());
     }
+    if let Some(set) = crate::scene_set::SetScene::find(name) {
+        return Some(set.scene());
+    }
     let (base, param) = match name.split_once(':') {
         Some((b, p)) => (b, Some(p)),
         None => (name, None),
@@ -160,6 +164,7 @@ fn builtin_unchecked(name: &str) -> Option<Result<Scene, OitError>> {
             Ok(if base == "ties" { ties(n) } else { near(n) })
         }),
         "default" => no_param(default_scene()),
+        // a bare `particles` is the scene set's (found above): here only with a count
         "particles" => count(64).and_then(particles),
         "fence" => no_param(Scene::default()).and_then(|_| fence()),
         _ => return None,

@@ -11,12 +11,14 @@
 //! oit-cpu's setup.
 //!
 //! Layouts are plain words, as the WGSL structs declare them: a vertex is 12 floats
-//! (`position.xyz`, 1 in `w` when the mesh has vertex colours; `normal`; `color`), an instance 32
-//! (the column-major `mvp`, the normal matrix's three columns padded to four, the base colour).
+//! (`position.xyz`, 1 in `w` when the mesh has vertex colours; `normal`, the texture coordinate
+//! u in `w`; `color`, v in `w`), an instance 32 (the column-major `mvp`, the normal matrix's three
+//! columns padded to four, the first `w` the opaque pass's cutoff ([`instance_cutoff`]), the base
+//! colour).
 
-use glam::{Mat3, Vec3, Vec4};
+use glam::{Mat3, Vec2, Vec3, Vec4};
 
-use crate::{Aabb, Camera, OitError, Scene, Settings};
+use crate::{Aabb, AlphaMode, Camera, Object, OitError, Scene, Settings};
 
 /// One vertex of a mesh in its own space (`HwVertex` in raster_hardware.wgsl).
 pub type PulledVertex = [f32; 12];
@@ -62,7 +64,8 @@ impl PulledGeometry {
                     for (v, p) in mesh.positions.iter().enumerate() {
                         let n = mesh.normals.get(v).copied().unwrap_or(Vec3::ZERO);
                         let c = mesh.colors.as_ref().and_then(|c| c.get(v).copied()).unwrap_or(Vec3::ZERO);
-                        vertices.push(vertex(p.extend(has_color), n, c));
+                        let uv = mesh.uvs.as_ref().and_then(|t| t.get(v).copied()).unwrap_or(Vec2::ZERO);
+                        vertices.push(vertex(p.extend(has_color), n, c, uv));
                     }
                     firsts[object.mesh] = Some(first);
                     first
@@ -84,7 +87,12 @@ impl PulledGeometry {
         for (i, b) in bounds.iter().enumerate() {
             let first = u32::try_from(vertices.len()).map_err(|_| too_many())?;
             for c in b.corners() {
-                vertices.push(vertex(c.extend(0.0), (c - b.center()).normalize_or_zero(), Vec3::ZERO));
+                vertices.push(vertex(
+                    c.extend(0.0),
+                    (c - b.center()).normalize_or_zero(),
+                    Vec3::ZERO,
+                    Vec2::ZERO,
+                ));
             }
             let i = u32::try_from(i).map_err(|_| too_many())?;
             triangles.extend(Aabb::TRIANGLES.iter().map(|t| [first + t[0], first + t[1], first + t[2], i]));
@@ -135,9 +143,22 @@ pub fn instance_data(
             } else {
                 (view_proj * inst.transform, crate::setup::normal_matrix(&inst.transform))
             };
-            instance(mvp.to_cols_array(), nm, settings.material_color(object.color))
+            let cutoff = if boxes { 0.0 } else { instance_cutoff(object) };
+            instance(mvp.to_cols_array(), nm, settings.material_color(object.color), cutoff)
         })
         .collect()
+}
+
+/// The opaque pass's cutoff of an object's fragments, as oit-core's setup gives its triangles
+/// ([`crate::setup::Triangle::cutoff`]): a textured masked object's cutoff; one half for an
+/// untextured masked object, whose alpha is 1 or 0 ([`Object::effective_alpha`]); 0 (nothing
+/// discarded) for any other.
+pub fn instance_cutoff(object: &Object) -> f32 {
+    match object.alpha_mode {
+        AlphaMode::Mask { cutoff } if object.texture.is_some() => cutoff,
+        AlphaMode::Mask { .. } => 0.5,
+        _ => 0.0,
+    }
 }
 
 /// The instance data of `count` boxes made by [`PulledGeometry::boxes`] without their scene:
@@ -146,24 +167,27 @@ pub fn instance_data(
 /// frame.
 pub fn boxes_data(count: usize, camera: &Camera, settings: &Settings) -> Vec<PulledInstance> {
     let one =
-        instance(camera.view_proj().to_cols_array(), Mat3::IDENTITY, settings.material_color(Vec4::ONE));
+        instance(camera.view_proj().to_cols_array(), Mat3::IDENTITY, settings.material_color(Vec4::ONE), 0.0);
     vec![one; count]
 }
 
-fn vertex(position: Vec4, normal: Vec3, color: Vec3) -> PulledVertex {
+fn vertex(position: Vec4, normal: Vec3, color: Vec3, uv: Vec2) -> PulledVertex {
     let mut v = [0.0; 12];
     v[..4].copy_from_slice(&position.to_array());
     v[4..7].copy_from_slice(&normal.to_array());
+    v[7] = uv.x;
     v[8..11].copy_from_slice(&color.to_array());
+    v[11] = uv.y;
     v
 }
 
-fn instance(mvp: [f32; 16], normal: Mat3, base: Vec4) -> PulledInstance {
+fn instance(mvp: [f32; 16], normal: Mat3, base: Vec4, cutoff: f32) -> PulledInstance {
     let mut d = [0.0; 32];
     d[..16].copy_from_slice(&mvp);
     for (k, c) in [normal.x_axis, normal.y_axis, normal.z_axis].iter().enumerate() {
         d[16 + 4 * k..19 + 4 * k].copy_from_slice(&c.to_array());
     }
+    d[19] = cutoff;
     d[28..].copy_from_slice(&base.to_array());
     d
 }

@@ -116,11 +116,19 @@ pub struct FrameUniform {
     pub opaque: [u32; 4],
 }
 
-/// The refusal of a scene in which any instance draws a textured object
-/// ([`oit_core::Object::texture`]), by the object's and the texture's names: the GPU backends
-/// do not sample textures yet, and a frame that drew the objects in their factor's colour alone
-/// would be wrong in silence. The CPU backend draws them. Called wherever a GPU frame makes its
-/// plan.
+/// Whether any instance of `scene` draws a textured object ([`oit_core::Object::texture`]): the
+/// frame then samples textures (texture.wgsl), its compute path sets up on the host
+/// ([`host_setup`] packs the textures after the triangles) and its hardware path reads the
+/// textures and each triangle's level from group 1's binding 4 ([`TextureRegion`],
+/// [`triangle_levels`]).
+pub fn is_textured(scene: &Scene) -> bool {
+    scene.instances.iter().filter_map(|i| scene.objects.get(i.object)).any(|o| o.texture.is_some())
+}
+
+/// The refusal, by the object's and the texture's names, of a textured scene on a GPU path that
+/// does not sample textures (`what_path`: which, and what to use instead): the embedded pass,
+/// whose caller draws the geometry. A frame that drew the objects in their factor's colour alone
+/// would be wrong in silence.
 pub fn refuse_textures(backend: &str, scene: &Scene) -> Result<(), OitError> {
     let textured =
         scene.instances.iter().filter_map(|i| scene.objects.get(i.object)).find(|o| o.texture.is_some());
@@ -129,12 +137,127 @@ pub fn refuse_textures(backend: &str, scene: &Scene) -> Result<(), OitError> {
         return Err(OitError::Unsupported {
             backend: backend.into(),
             what: format!(
-                "textures: object '{}' of scene '{}' is textured ('{texture}'), and the GPU backends do not sample textures yet; use --backend cpu",
+                "textures: object '{}' of scene '{}' is textured ('{texture}'), and the embedded pass does not sample textures; render it with `Backend::render` (any backend), or draw it yourself",
                 o.name, scene.name
             ),
         });
     }
     Ok(())
+}
+
+/// Words of a textured triangle's record in the compute path's triangle buffer ([`host_setup`]):
+/// its vertices' texture coordinates (6 f32), the word of its level's descriptor in the texture
+/// region, its cutoff (f32, `Triangle::cutoff`), the region's first word (its tables).
+pub const TEXTURE_RECORD_WORDS: usize = 9;
+
+/// Word of a triangle's record in `TriangleSetup::triangle_words` that [`host_setup`] points at
+/// its texture record (the first of the three padding words; 0 where untextured).
+pub const TRIANGLE_TEXTURE_WORD: usize = 41;
+
+/// A frame's textures packed into words for the GPU's sampler (texture.wgsl), placed from word
+/// `base` of the buffer that holds them: the sRGB decode (256 f32, [`oit_core::texture::srgb_to_linear`])
+/// and the alpha decode (code / 255, 256 f32); per texture and level a descriptor of 4 words
+/// (first texel word, width, height, `wrap_u | wrap_v << 8`: 0 repeat, 1 mirrored, 2 clamp);
+/// the texels, `r | g << 8 | b << 16 | a << 24`, level by level.
+#[derive(Clone, Debug)]
+pub struct TextureRegion {
+    /// The words, to be placed from `base` on.
+    pub words: Vec<u32>,
+    base: u32,
+    /// Per texture: the word (in the buffer) of its level 0's descriptor, and its levels.
+    textures: Vec<(u32, u32)>,
+}
+
+fn wrap_code(w: oit_core::Wrap) -> u32 {
+    match w {
+        oit_core::Wrap::Repeat => 0,
+        oit_core::Wrap::MirroredRepeat => 1,
+        oit_core::Wrap::ClampToEdge => 2,
+    }
+}
+
+impl TextureRegion {
+    /// `textures` packed from word `base` on.
+    pub fn new(textures: &[oit_core::Texture], base: u32) -> TextureRegion {
+        let mut words: Vec<u32> = oit_core::texture::srgb_to_linear().iter().map(|v| v.to_bits()).collect();
+        words.extend((0..256u32).map(|a| (a as f32 / 255.0).to_bits()));
+        let levels: usize = textures.iter().map(|t| t.mips().len()).sum();
+        let mut texel = base as usize + words.len() + 4 * levels;
+        let mut descriptors = Vec::with_capacity(4 * levels);
+        let mut firsts = Vec::with_capacity(textures.len());
+        for t in textures {
+            firsts.push((base + (words.len() + descriptors.len()) as u32, t.level_count()));
+            for l in t.mips() {
+                descriptors.extend([
+                    texel as u32,
+                    l.width,
+                    l.height,
+                    wrap_code(t.wrap[0]) | wrap_code(t.wrap[1]) << 8,
+                ]);
+                texel += l.texels.len();
+            }
+        }
+        words.extend(descriptors);
+        for t in textures {
+            for l in t.mips() {
+                words.extend(l.texels.iter().map(|c| u32::from_le_bytes(*c)));
+            }
+        }
+        TextureRegion { words, base, textures: firsts }
+    }
+
+    /// The region's first word: the tables' (texture.wgsl's `tables`).
+    pub fn tables(&self) -> u32 {
+        self.base
+    }
+
+    /// The word of the descriptor of level `lod` (clamped to the chain, as `Texture::sample`
+    /// clamps it) of texture `texture`, or 0 where there is no such texture (untextured).
+    pub fn descriptor(&self, texture: u32, lod: u32) -> u32 {
+        match self.textures.get(texture as usize) {
+            Some(&(first, levels)) => first + 4 * lod.min(levels.saturating_sub(1)),
+            None => 0,
+        }
+    }
+}
+
+/// The hardware path's per-triangle levels of a textured frame: per primitive of `scene` (the
+/// draw's triangle order), the word of the descriptor in `region` of the level its fragments
+/// sample, 0 where untextured, chosen as oit-core's setup chooses it (`texture::level_for`, from
+/// the snapped screen area of the same set-up triangles oit-cpu draws): the host runs the
+/// frame's setup for it. A triangle that clipping cuts into pieces takes its first piece's level
+/// (the GPU clips it itself, into one primitive); one that setup drops (no pixel centre in its
+/// box) samples level 0, where the GPU's rasterizer gives it a fragment all the same.
+pub fn triangle_levels(
+    scene: &Scene,
+    camera: &Camera,
+    settings: &Settings,
+    region: &TextureRegion,
+) -> Vec<u32> {
+    let setup = oit_core::setup::TriangleSetup::new(scene, camera, settings);
+    let (bases, total) = scene.primitive_bases();
+    let mut out = vec![0u32; total as usize];
+    let mut last = u32::MAX;
+    for t in &setup.triangles {
+        if t.prim != last
+            && let Some(slot) = out.get_mut(t.prim as usize)
+        {
+            *slot = region.descriptor(t.texture, t.lod);
+        }
+        last = t.prim;
+    }
+    // a dropped triangle of a textured object: level 0
+    for (inst, &base) in scene.instances.iter().zip(&bases) {
+        let (object, mesh) = scene.instance_parts(inst);
+        if let Some(t) = object.texture {
+            for slot in out.iter_mut().skip(base as usize).take(mesh.indices.len()) {
+                if *slot == 0 {
+                    *slot = region.descriptor(t as u32, 0);
+                }
+            }
+        }
+    }
+    out
 }
 
 /// Workgroups of 64 for `invocations` invocations, as (x, y) with x ≤ 65535 (a kernel finds its
@@ -173,7 +296,9 @@ impl FrameUniform {
 /// The host's setup of the compute path, set up and binned: the scene's (or, with `boxes`, its
 /// instances' bounding boxes') triangle words (`oit_core::setup`), and the work list of the compute
 /// rasterizer, one (triangle, tile) item for each [`TILE`]² tile a triangle's pixel box touches,
-/// the tile as `ty << 16 | tx`. Both GPU backends upload these where the device sets up on the host.
+/// the tile as `ty << 16 | tx`. Both GPU backends upload these where the device sets up on the
+/// host, as every textured frame does ([`is_textured`]): after the triangles, the textured
+/// triangles' records and the texture region ([`TextureRegion`]; raster_compute.wgsl reads them).
 pub fn host_setup(
     scene: &Scene,
     camera: &Camera,
@@ -185,8 +310,11 @@ pub fn host_setup(
     } else {
         oit_core::setup::TriangleSetup::new(scene, camera, settings)
     };
-    let words = r.triangle_words();
+    let mut words = r.triangle_words();
     debug_assert_eq!(words.len() % oit_core::setup::TRIANGLE_WORDS, 0);
+    if r.has_textures() {
+        pack_textures(&r, &mut words);
+    }
     let mut items: Vec<[u32; 2]> = Vec::new();
     for (i, [x0, y0, x1, y1]) in r.triangle_boxes().enumerate() {
         for ty in y0 / TILE..=y1 / TILE {
@@ -196,6 +324,29 @@ pub fn host_setup(
         }
     }
     (words, items)
+}
+
+/// Appends to a textured setup's triangle words (`words`) each textured triangle's record
+/// ([`TEXTURE_RECORD_WORDS`]), pointed at by its [`TRIANGLE_TEXTURE_WORD`], and the texture
+/// region ([`TextureRegion`]) after them: what raster_compute.wgsl samples.
+fn pack_textures(r: &oit_core::setup::TriangleSetup, words: &mut Vec<u32>) {
+    use oit_core::setup::TRIANGLE_WORDS;
+    let count = r.textures.len();
+    let textured = r.triangles.iter().filter(|t| (t.texture as usize) < count).count();
+    let records = words.len();
+    let region = TextureRegion::new(&r.textures, (records + textured * TEXTURE_RECORD_WORDS) as u32);
+    words.reserve(textured * TEXTURE_RECORD_WORDS + region.words.len());
+    for (i, t) in r.triangles.iter().enumerate() {
+        if (t.texture as usize) >= count {
+            continue;
+        }
+        words[i * TRIANGLE_WORDS + TRIANGLE_TEXTURE_WORD] = words.len() as u32;
+        for uv in t.uv {
+            words.extend([uv.x.to_bits(), uv.y.to_bits()]);
+        }
+        words.extend([region.descriptor(t.texture, t.lod), t.cutoff.to_bits(), region.tables()]);
+    }
+    words.extend(region.words);
 }
 
 /// Initial contents of a storage buffer.
@@ -425,14 +576,57 @@ pub trait Rasters<R: ?Sized> {
 
 #[cfg(test)]
 mod tests {
-    /// A scene that draws a textured object is refused by the object's and the texture's names;
-    /// the same scene untextured is not.
+    /// A scene that draws a textured object is refused (where a path refuses it) by the object's
+    /// and the texture's names; the same scene untextured is not.
     #[test]
     fn textured_scenes_are_refused_by_name() {
         let scene = oit_core::load_scene("particles:4").unwrap();
+        assert!(super::is_textured(&scene));
         let e = super::refuse_textures("wgpu", &scene).unwrap_err().to_string();
         assert!(e.contains("particle 0") && e.contains("sprite") && e.contains("wgpu"), "{e}");
         let plain = oit_core::load_scene("untextured:particles:4").unwrap();
+        assert!(!super::is_textured(&plain));
         assert!(super::refuse_textures("vulkan", &plain).is_ok());
+    }
+
+    /// The packed textures are what the sampler reads: a texel of each level at its descriptor's
+    /// place, and each textured triangle's record names its level's descriptor and texture
+    /// coordinates.
+    #[test]
+    fn textures_pack_behind_the_triangles() {
+        use oit_core::setup::{TRIANGLE_WORDS, TriangleSetup};
+        let scene = oit_core::load_scene("particles:4").unwrap();
+        let camera = oit_core::Camera::orbit_scene(&scene, oit_core::View::default(), 1.0).unwrap();
+        let settings = oit_core::Settings { width: 64, height: 64, ..Default::default() };
+        let (words, _) = super::host_setup(&scene, &camera, &settings, false);
+        let setup = TriangleSetup::new(&scene, &camera, &settings);
+        let n = setup.triangles.len();
+        assert!(n > 0 && words.len() > n * TRIANGLE_WORDS);
+        let mut textured = 0;
+        for (i, t) in setup.triangles.iter().enumerate() {
+            let rec = words[i * TRIANGLE_WORDS + super::TRIANGLE_TEXTURE_WORD] as usize;
+            // the backdrop is untextured
+            if t.texture == oit_core::setup::NO_TEXTURE {
+                assert_eq!(rec, 0, "triangle {i}");
+                continue;
+            }
+            textured += 1;
+            assert!(rec >= n * TRIANGLE_WORDS, "triangle {i}");
+            assert_eq!(f32::from_bits(words[rec + 2]), t.uv[1].x);
+            let tables = words[rec + 8] as usize;
+            assert_eq!(f32::from_bits(words[tables + 255]), 1.0);
+            assert_eq!(f32::from_bits(words[tables + 256 + 51]), 0.2);
+            let d = words[rec + 6] as usize;
+            let level = &setup.textures[t.texture as usize].mips()[t.lod as usize];
+            assert_eq!((words[d + 1], words[d + 2]), (level.width, level.height));
+            let last = level.texels.len() - 1;
+            assert_eq!(words[words[d] as usize + last], u32::from_le_bytes(level.texels[last]));
+        }
+        assert!(textured > 0);
+        let region = super::TextureRegion::new(&setup.textures, 0);
+        let levels = super::triangle_levels(&scene, &camera, &settings, &region);
+        assert_eq!(levels.len(), scene.triangle_count() as usize);
+        // the sprites' triangles name a descriptor (after the two tables), the backdrop's none
+        assert!(levels.iter().any(|&d| d >= 512) && levels.iter().all(|&d| d == 0 || d >= 512));
     }
 }

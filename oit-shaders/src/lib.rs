@@ -6,8 +6,9 @@
 //!
 //! - `wgsl/core/`: what every module shares ([`COMMON`]: oit-core's rules and the fragment
 //!   contract; [`PRELUDE`]: group 0's frame bindings and the resolve), the two rasterizers
-//!   ([`COMPUTE_RASTER`], [`HARDWARE_RASTER`] over [`CAPTURE_RENDER`]), the compute path's setup
-//!   ([`SETUP`]) and the small kernels of the frame (fill, finish, gate).
+//!   ([`COMPUTE_RASTER`], [`HARDWARE_RASTER`] over [`CAPTURE_RENDER`]), each starting with the
+//!   texture sampler ([`TEXTURE`]), the compute path's setup ([`SETUP`]) and the small kernels of
+//!   the frame (fill, finish, gate).
 //! - `wgsl/technique/`: one file per technique, and the accessor files through which a
 //!   technique reaches its atomic arrays. An accessor is one storage kind of an array: over a
 //!   buffer (`fabs_counters.wgsl`, `mdts_words.wgsl`, `mdts_keys.wgsl`) or over a storage image
@@ -62,6 +63,7 @@ files!(
     "core/resolve.wgsl",
     "core/setup.wgsl",
     "core/softfloat.wgsl",
+    "core/texture.wgsl",
     "technique/adp.wgsl",
     "technique/bdp.wgsl",
     "technique/bdp_blend.wgsl",
@@ -150,12 +152,24 @@ pub const COMMON: &str =
 pub const PRELUDE: &str =
     concat!(include_str!("../wgsl/core/resolve.wgsl"), "\n", include_str!("../wgsl/core/prelude.wgsl"), "\n");
 
-/// The compute rasterizer (the papers' "CUDA rasterizer"), appended to a technique module.
-pub const COMPUTE_RASTER: &str = include_str!("../wgsl/core/raster_compute.wgsl");
+/// The sampler of base-colour textures (oit-core's, in WGSL), which both rasterizers start with.
+pub const TEXTURE: &str = include_str!("../wgsl/core/texture.wgsl");
 
-/// The GPU's own rasterizer: the vertex stage over the pulled geometry and the fragment stage
-/// that calls the technique's `capture` (entry points `hw_vs`, `hw_fs`).
-pub const HARDWARE_RASTER: &str = include_str!("../wgsl/core/raster_hardware.wgsl");
+/// The compute rasterizer (the papers' "CUDA rasterizer"), appended to a technique module: the
+/// sampler ([`TEXTURE`]), then the rasterizer.
+pub const COMPUTE_RASTER: &str = concat!(
+    include_str!("../wgsl/core/texture.wgsl"),
+    "\n",
+    include_str!("../wgsl/core/raster_compute.wgsl")
+);
+
+/// The GPU's own rasterizer: the sampler ([`TEXTURE`]), the vertex stage over the pulled geometry
+/// and the fragment stage that calls the technique's `capture` (entry points `hw_vs`, `hw_fs`).
+pub const HARDWARE_RASTER: &str = concat!(
+    include_str!("../wgsl/core/texture.wgsl"),
+    "\n",
+    include_str!("../wgsl/core/raster_hardware.wgsl")
+);
 
 /// The fragment contract of a render pipeline's capture (what `hw_fs` hands `capture`).
 pub const CAPTURE_RENDER: &str = include_str!("../wgsl/core/capture_render.wgsl");

@@ -232,7 +232,6 @@ impl<'a> VkCtx<'a> {
         pool: &'a BufferPool,
     ) -> Result<Self, OitError> {
         let plan = Plan::new("vulkan", scene, settings)?;
-        oit_gpu::refuse_textures("vulkan", scene)?;
         let pixels = settings.width * settings.height;
         let state_bytes = u64::from(pixels) * STATE_WORDS * 4;
         gpu.check_storage("the per-pixel resolve state", state_bytes)?;
@@ -881,7 +880,7 @@ impl<'a> VkCtx<'a> {
             final_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
         };
         let bindings = self.image_bindings();
-        let mut kinds = vec![SetKind::Frame(buffers.len(), bindings), SetKind::Raster];
+        let mut kinds = vec![SetKind::Frame(buffers.len(), bindings), SetKind::HwRaster];
         if !pass.previous.is_empty() {
             kinds.push(SetKind::Images(pass.previous.iter().map(|(b, _)| *b).collect()));
         }

@@ -306,6 +306,9 @@ pub(crate) enum SetKind {
     /// rasterizer's triangles, work list and counter; the hardware raster's vertices, triangles
     /// and instances).
     Raster,
+    /// Group 1 of the hardware raster: [`SetKind::Raster`]'s, and its textures at 4
+    /// (raster_hardware.wgsl's `hw_tex`).
+    HwRaster,
     /// Sampled images (read with `textureLoad`) at these bindings: a blend capture's targets.
     Images(Vec<u32>),
 }
@@ -1139,7 +1142,7 @@ impl Gpu {
         self.graphics(&GraphicsDesc {
             module: &format!("{module}_hw"),
             fs: "hw_fs",
-            sets: &[SetKind::Frame(n, images.to_vec()), SetKind::Raster],
+            sets: &[SetKind::Frame(n, images.to_vec()), SetKind::HwRaster],
             pass: &count_pass_key(),
             blends: &[Blend::AddRed],
             depth_test: false,
@@ -1338,6 +1341,13 @@ impl Gpu {
                             (1, vk::DescriptorType::STORAGE_BUFFER),
                             (2, vk::DescriptorType::UNIFORM_BUFFER),
                             (3, vk::DescriptorType::STORAGE_BUFFER),
+                        ],
+                        SetKind::HwRaster => vec![
+                            (0, vk::DescriptorType::STORAGE_BUFFER),
+                            (1, vk::DescriptorType::STORAGE_BUFFER),
+                            (2, vk::DescriptorType::UNIFORM_BUFFER),
+                            (3, vk::DescriptorType::STORAGE_BUFFER),
+                            (4, vk::DescriptorType::STORAGE_BUFFER),
                         ],
                         SetKind::Images(at) => {
                             at.iter().map(|&b| (b, vk::DescriptorType::SAMPLED_IMAGE)).collect()

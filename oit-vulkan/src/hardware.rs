@@ -43,6 +43,13 @@ struct HwGeometry {
     /// passes (`Raster::gate`).
     draw_args: Buffer,
     gated_args: Buffer,
+    /// Group 1's binding 4 (raster_hardware.wgsl's `hw_tex`): a textured scene's textures packed
+    /// from word 0 ([`oit_gpu::TextureRegion`], uploaded once), then one word a triangle, its
+    /// level's descriptor (written each frame); a placeholder elsewhere.
+    tex: Rc<Buffer>,
+    /// A textured scene's region (its words dropped once uploaded) and the word where the
+    /// per-triangle levels start.
+    textures: Option<(oit_gpu::TextureRegion, u32)>,
 }
 
 fn geometry_usage() -> vk::BufferUsageFlags {
@@ -72,8 +79,25 @@ impl HwGeometry {
         let indirect = storage_usage() | vk::BufferUsageFlags::INDIRECT_BUFFER;
         let draw_args = gpu.buffer(16, indirect, false)?;
         let gated_args = gpu.buffer(16, indirect, false)?;
-        made.set(made.get() + 6);
+        let region =
+            (!boxes && oit_gpu::is_textured(scene)).then(|| oit_gpu::TextureRegion::new(&scene.textures, 0));
+        let tex_bytes = match &region {
+            Some(r) => (r.words.len() + g.triangles.len()) as u64 * 4,
+            None => 64,
+        };
+        gpu.check_storage_hint("the textures", tex_bytes, "use smaller textures, or the cpu backend")?;
+        let tex = Rc::new(gpu.buffer(tex_bytes, geometry_usage(), false)?);
+        made.set(made.get() + 7);
         let mut rec = Recorder::new(gpu)?;
+        let textures = match region {
+            Some(mut r) => {
+                rec.upload(&tex, bytemuck::cast_slice(&r.words))?;
+                let levels = r.words.len() as u32;
+                r.words = Vec::new();
+                Some((r, levels))
+            }
+            None => None,
+        };
         rec.upload(&vertices, vertex_bytes)?;
         rec.upload(&triangles, triangle_bytes)?;
         rec.upload(&draw_args, bytemuck::cast_slice(&[g.vertex_count(), 1, 0, 0]))?;
@@ -88,6 +112,8 @@ impl HwGeometry {
             vertex_count: g.vertex_count(),
             draw_args,
             gated_args,
+            tex,
+            textures,
         })
     }
 }
@@ -127,14 +153,15 @@ impl CountTarget {
 pub(crate) struct HardwareRaster {
     geometry: Rc<HwGeometry>,
     target: Rc<CountTarget>,
-    pending: RefCell<Option<[Vec<u8>; 2]>>,
+    /// The frame's instance data, uniform and per-triangle texture levels, until uploaded.
+    pending: RefCell<Option<[Vec<u8>; 3]>>,
 }
 
 impl HardwareRaster {
     /// Group 1's storage bindings (the uniform, binding 2, is bound apart).
     pub(crate) fn bindings(&self) -> Vec<(u32, &Buffer)> {
         let g = &*self.geometry;
-        vec![(0, &*g.vertices), (1, &*g.triangles), (3, &*g.instance_buf)]
+        vec![(0, &*g.vertices), (1, &*g.triangles), (3, &*g.instance_buf), (4, &*g.tex)]
     }
 
     /// The vertex and fragment stages' uniform.
@@ -169,9 +196,12 @@ impl HardwareRaster {
 
     /// Records the upload of this frame's instance data and uniform, once.
     pub(crate) fn upload(&self, rec: &mut Recorder<'_>) -> Result<(), OitError> {
-        if let Some([instances, uniform]) = self.pending.borrow_mut().take() {
+        if let Some([instances, uniform, levels]) = self.pending.borrow_mut().take() {
             rec.upload(&self.geometry.instance_buf, &instances)?;
             rec.upload(&self.geometry.uniform, &uniform)?;
+            if let Some((_, at)) = &self.geometry.textures {
+                rec.upload_at(&self.geometry.tex, u64::from(*at) * 4, &levels)?;
+            }
         }
         Ok(())
     }
@@ -237,13 +267,19 @@ impl HardwareScene {
             }
         };
         let instances = oit_core::pulled::instance_data(scene, camera, settings, boxes);
-        let uniform = oit_core::pulled::raster_uniform(camera, settings);
+        let mut uniform = oit_core::pulled::raster_uniform(camera, settings);
+        let mut levels = Vec::new();
+        if let Some((region, at)) = &geometry.textures {
+            levels = oit_gpu::triangle_levels(scene, camera, settings, region);
+            (uniform[1], uniform[2]) = (1, *at);
+        }
         Ok(HardwareRaster {
             geometry,
             target,
             pending: RefCell::new(Some([
                 bytemuck::cast_slice(&instances).to_vec(),
                 bytemuck::cast_slice(&uniform).to_vec(),
+                bytemuck::cast_slice(&levels).to_vec(),
             ])),
         })
     }

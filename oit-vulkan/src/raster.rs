@@ -338,7 +338,9 @@ impl ComputeBuffers {
             ];
             bytemuck::cast_slice(&words).to_vec()
         };
-        if !self.on_gpu {
+        // a textured frame sets up on the host, which packs the textures after the triangles
+        // (`oit_gpu::host_setup`; oit-wgpu's raster.rs says why)
+        if !self.on_gpu || oit_gpu::is_textured(scene) {
             return self.host_frame(gpu, scene, camera, settings, boxes, made, raster_uniform);
         }
         if self.setup.as_ref().is_none_or(|s| s.layout.boxes != boxes) {

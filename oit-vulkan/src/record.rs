@@ -870,6 +870,18 @@ impl<'g> Recorder<'g> {
         Ok(())
     }
 
+    /// Records an upload of `bytes` into `dst` from byte `offset` on (through a staging buffer).
+    pub(crate) fn upload_at(&mut self, dst: &Buffer, offset: u64, bytes: &[u8]) -> Result<(), OitError> {
+        if bytes.is_empty() {
+            return Ok(());
+        }
+        let staging = self.host_buffer(bytes.len() as u64, vk::BufferUsageFlags::TRANSFER_SRC)?;
+        staging.write(bytes)?;
+        self.copy_at(&staging, 0, dst, offset, bytes.len() as u64);
+        self.keep.push(staging);
+        Ok(())
+    }
+
     /// Reads `buffer` back as u32 words: a copy to a staging buffer, a flush, a map.
     pub(crate) fn read_u32(&mut self, buffer: &Buffer) -> Result<Vec<u32>, OitError> {
         Ok(self.read_u32s(&[buffer])?.pop().unwrap_or_default())

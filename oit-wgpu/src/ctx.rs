@@ -379,7 +379,6 @@ impl<'a> GpuCtx<'a> {
     ) -> Result<Self, OitError> {
         let recording = caller.is_some();
         let plan = Plan::new("wgpu", scene, settings)?;
-        oit_gpu::refuse_textures("wgpu", scene)?;
         plan.refuse_image_atomics("wgpu")?;
         plan.refuse_interlock("wgpu", "WGSL has no fragment shader interlock")?;
         let pixels = settings.width * settings.height;

@@ -541,6 +541,7 @@ impl OitPass {
         if let Some(view) = target {
             self.check_target(view.texture(), wgpu::TextureUsages::COPY_DST)?;
         }
+        oit_gpu::refuse_textures("wgpu (embedded pass)", &self.scene)?;
         self.check_technique()?;
         let drivers = self.drivers(Box::new(pipeline), Box::new(draw));
         let mut ctx =
@@ -743,7 +744,7 @@ impl OitPass {
                 let settings = Settings { technique, ..self.settings.clone() };
                 oit_core::plan::Plan::new("wgpu", &self.scene, &settings)
                     .is_ok_and(|p| p.mid_frame_readback().is_none() && p.refuse_interlock("wgpu", "").is_ok())
-                    && oit_gpu::refuse_textures("wgpu", &self.scene).is_ok()
+                    && oit_gpu::refuse_textures("wgpu (embedded pass)", &self.scene).is_ok()
             })
             .map(|t| t.to_string())
             .collect()
@@ -752,7 +753,7 @@ impl OitPass {
     /// Whether the technique's frame can be recorded without a round trip ([`OitPass::record`]).
     fn check_recordable(&self) -> Result<(), OitError> {
         let plan = oit_core::plan::Plan::new("wgpu", &self.scene, &self.settings)?;
-        oit_gpu::refuse_textures("wgpu", &self.scene)?;
+        oit_gpu::refuse_textures("wgpu (embedded pass)", &self.scene)?;
         plan.refuse_image_atomics("wgpu")?;
         plan.refuse_interlock("wgpu", "WGSL has no fragment shader interlock")?;
         let why = plan.mid_frame_readback();
@@ -887,6 +888,9 @@ const OPAQUE_DRAW_WGSL: &str = "
 fn oit_capture_full(xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: vec3<f32>, prim: u32) -> vec4<f32> {
     return clamp(color, vec4<f32>(0.0), vec4<f32>(1.0));
 }
+fn oit_capture_cut(xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: vec3<f32>, prim: u32, cutoff: f32) -> vec4<f32> {
+    return oit_capture_full(xy, depth, color, normal, prim);
+}
 ";
 const OPAQUE_FS_WGSL: &str = "
 @fragment
@@ -962,7 +966,8 @@ pub struct SceneGeometry {
 impl SceneGeometry {
     /// The hardware path's shader (`shaders/raster_hardware.wgsl`): its group 1 bindings, the
     /// vertex stage `hw_vs` (vertex pulled by index, transformed as oit-cpu's setup does) and the
-    /// fragment stage `hw_fs` (shading as `Shading::shade`, then `oit_capture_full`).
+    /// fragment stage `hw_fs` (shading as `Shading::shade`, then `oit_capture_cut`, which
+    /// `oit_capture_full` calls with the cutoff of an untextured object).
     pub const WGSL: &'static str = RASTER_WGSL;
 
     /// Uploads `scene`'s meshes and triangles, and its instances' bounding boxes, to the device
@@ -971,7 +976,8 @@ impl SceneGeometry {
     /// A scene with opaque or masked objects or a transmission ([`Scene::has_materials`]) is
     /// uploaded as its layers (`scene.layers(None)`): the transparent part is what the pass's
     /// draws capture, the opaque part what [`SceneGeometry::draw_opaque`] draws. A scene that
-    /// draws a textured object is refused (the GPU backends do not sample textures yet).
+    /// draws a textured object is refused by name (the embedded pass does not sample textures;
+    /// `Backend::render` does, on every backend).
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> Result<SceneGeometry, OitError> {
         oit_gpu::refuse_textures("wgpu (embedded pass)", scene)?;
         let gpu = Gpu::from_device(device.clone(), queue.clone())?;

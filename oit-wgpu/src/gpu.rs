@@ -28,8 +28,10 @@ pub fn optional_features() -> wgpu::Features {
 
 /// The most storage buffers one of oit's pipelines binds in a shader stage: group 0's resolve
 /// state, up to 6 technique arrays, the loss counts and the opaque image's key and colour (10),
-/// and group 1's geometry (3: the compute rasterizer's triangles, work items and count; the
-/// hardware path's vertices, triangles and instances).
+/// and group 1's geometry (3: the compute rasterizer's triangles, work items and count, the
+/// triangle buffer holding a textured frame's textures too; the hardware path's vertex stage
+/// reads its vertices, triangles, instances and textures (4), its fragment stage group 0's and
+/// the textures (11)).
 pub const MIN_STORAGE_BUFFERS: u32 = 13;
 
 /// An open device with what oit learned about it.

@@ -10,7 +10,8 @@
 //! and the material's base colour (`settings.material_color`), with the shading uniform. The
 //! vertex stage (`shaders/raster_hardware.wgsl`) pulls a vertex by vertex index and transforms it
 //! with the same matrices, in the same order of operations, as oit-cpu's setup; the fragment
-//! stage shades like `Shading::shade` and calls the shared `oit_capture_full`. The instances'
+//! stage shades like `Shading::shade` (a texture sampled first) and calls the shared
+//! `oit_capture_cut`. The instances'
 //! bounding boxes (12 triangles each, for the bounds passes of bdp and adp) are a second
 //! [`HwGeometry`] of world-space corners, uploaded on first use, whose per-frame matrix is the
 //! view-projection itself; the embedded pass draws the boxes its user gives it
@@ -46,8 +47,8 @@ fn raster_wgsl() -> &'static str {
     static WGSL: std::sync::OnceLock<String> = std::sync::OnceLock::new();
     WGSL.get_or_init(|| match std::env::var("OIT_MUTATION").as_deref() {
         Ok("hardware-drop-third") => RASTER_WGSL.replacen(
-            "    return oit_capture_full(",
-            "    if in.prim % 3u == 0u {\n        discard;\n    }\n    return oit_capture_full(",
+            "    return oit_capture_cut(",
+            "    if in.prim % 3u == 0u {\n        discard;\n    }\n    return oit_capture_cut(",
             1,
         ),
         _ => RASTER_WGSL.to_owned(),
@@ -341,6 +342,21 @@ pub(crate) struct HwGeometry {
     /// gated geometry passes ([`GpuCtx::geometry_pass_if`]).
     draw_args: wgpu::Buffer,
     gated_args: wgpu::Buffer,
+    /// A textured scene's textures and per-triangle levels (group 1's binding 4), else `None`
+    /// (a placeholder is bound).
+    textures: Option<HwTextures>,
+}
+
+/// A textured scene's group 1 binding 4 (`hw_tex` in raster_hardware.wgsl): its textures packed
+/// from word 0 ([`oit_gpu::TextureRegion`]), uploaded once, then one word a triangle, its
+/// level's descriptor, written each frame ([`oit_gpu::triangle_levels`]).
+#[derive(Clone)]
+struct HwTextures {
+    buffer: wgpu::Buffer,
+    /// The region, its words dropped once uploaded (what names a level's descriptor).
+    region: oit_gpu::TextureRegion,
+    /// The word where the per-triangle levels start.
+    levels: u32,
 }
 
 /// A buffer holding `bytes` (at least 64 bytes: a binding may not be empty), counted in `made`.
@@ -364,17 +380,24 @@ impl HwGeometry {
     /// Uploads the scene's meshes and triangles (`boxes`: its instances' bounding boxes) and
     /// makes the per-frame buffers; `made` counts the buffers created.
     pub(crate) fn new(gpu: &Gpu, scene: &Scene, boxes: bool, made: &Cell<u64>) -> Result<Self, OitError> {
-        HwGeometry::upload(gpu, &PulledGeometry::new(scene, boxes)?, made)
+        let textures = (!boxes && oit_gpu::is_textured(scene)).then_some(&scene.textures[..]);
+        HwGeometry::upload(gpu, &PulledGeometry::new(scene, boxes)?, textures, made)
     }
 
     /// The 12 triangles of each of `bounds` (world-space boxes, one per instance), as
     /// [`PulledGeometry::boxes`] lays them out; `made` counts the buffers created.
     pub(crate) fn boxes(gpu: &Gpu, bounds: &[Aabb], made: &Cell<u64>) -> Result<Self, OitError> {
-        HwGeometry::upload(gpu, &PulledGeometry::boxes(bounds)?, made)
+        HwGeometry::upload(gpu, &PulledGeometry::boxes(bounds)?, None, made)
     }
 
-    /// Uploads `geometry`'s vertices and triangles and makes the per-frame buffers.
-    fn upload(gpu: &Gpu, geometry: &PulledGeometry, made: &Cell<u64>) -> Result<Self, OitError> {
+    /// Uploads `geometry`'s vertices and triangles, and `textures` where the scene samples them
+    /// (with room for the per-triangle levels), and makes the per-frame buffers.
+    fn upload(
+        gpu: &Gpu,
+        geometry: &PulledGeometry,
+        textures: Option<&[oit_core::Texture]>,
+        made: &Cell<u64>,
+    ) -> Result<Self, OitError> {
         let (vertices, triangles) = (&geometry.vertices[..], &geometry.triangles[..]);
         let vertex_count = geometry.vertex_count();
         let instance_bytes = geometry.instance_bytes();
@@ -414,8 +437,36 @@ impl HwGeometry {
                 entry(1, wgpu::ShaderStages::VERTEX, read),
                 entry(2, wgpu::ShaderStages::VERTEX_FRAGMENT, wgpu::BufferBindingType::Uniform),
                 entry(3, wgpu::ShaderStages::VERTEX, read),
+                entry(4, wgpu::ShaderStages::VERTEX_FRAGMENT, read),
             ],
         });
+        let textures = match textures {
+            Some(textures) => {
+                let mut region = oit_gpu::TextureRegion::new(textures, 0);
+                let levels = region.words.len() as u32;
+                let bytes = (region.words.len() + geometry.triangles.len()) as u64 * 4;
+                gpu.check_storage_hint("the textures", bytes, "use smaller textures, or the cpu backend")?;
+                made.set(made.get() + 1);
+                let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("textures"),
+                    size: bytes,
+                    usage: storage | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                gpu.queue.write_buffer(&buffer, 0, bytemuck::cast_slice(&region.words));
+                region.words = Vec::new();
+                Some(HwTextures { buffer, region, levels })
+            }
+            None => None,
+        };
+        let placeholder;
+        let tex_buf = match &textures {
+            Some(t) => &t.buffer,
+            None => {
+                placeholder = buffer_init(gpu, "no textures", &[], storage, made);
+                &placeholder
+            }
+        };
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("hardware raster"),
             layout: &layout,
@@ -424,6 +475,7 @@ impl HwGeometry {
                 wgpu::BindGroupEntry { binding: 1, resource: triangle_buf.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 2, resource: uniform.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 3, resource: instances.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: tex_buf.as_entire_binding() },
             ],
         });
         let args = [vertex_count, 1, 0, 0];
@@ -445,6 +497,7 @@ impl HwGeometry {
             vertex_count,
             draw_args,
             gated_args,
+            textures,
         })
     }
 
@@ -469,7 +522,15 @@ impl HwGeometry {
     pub(crate) fn write_frame(&self, gpu: &Gpu, scene: &Scene, camera: &Camera, settings: &Settings) {
         debug_assert_eq!(self.instance_count, scene.instances.len(), "the scene uploaded");
         let data = oit_core::pulled::instance_data(scene, camera, settings, self.boxes);
-        self.write_instances(gpu, &data, camera, settings);
+        let mut uniform = oit_core::pulled::raster_uniform(camera, settings);
+        if let Some(t) = &self.textures {
+            let levels = oit_gpu::triangle_levels(scene, camera, settings, &t.region);
+            if !levels.is_empty() {
+                gpu.queue.write_buffer(&t.buffer, u64::from(t.levels) * 4, bytemuck::cast_slice(&levels));
+            }
+            (uniform[1], uniform[2]) = (1, t.levels);
+        }
+        self.write_instances(gpu, &data, &uniform);
     }
 
     /// Writes the frame's instance data of boxes uploaded by [`HwGeometry::boxes`] without their
@@ -477,16 +538,15 @@ impl HwGeometry {
     pub(crate) fn write_boxes_frame(&self, gpu: &Gpu, camera: &Camera, settings: &Settings) {
         debug_assert!(self.boxes, "boxes uploaded");
         let data = oit_core::pulled::boxes_data(self.instance_count, camera, settings);
-        self.write_instances(gpu, &data, camera, settings);
+        self.write_instances(gpu, &data, &oit_core::pulled::raster_uniform(camera, settings));
     }
 
-    /// Writes `data` into the per-instance buffer and the shading uniform.
-    fn write_instances(&self, gpu: &Gpu, data: &[PulledInstance], camera: &Camera, settings: &Settings) {
+    /// Writes `data` into the per-instance buffer and `uniform` into the shading uniform.
+    fn write_instances(&self, gpu: &Gpu, data: &[PulledInstance], uniform: &[u32; 8]) {
         if !data.is_empty() {
             gpu.queue.write_buffer(&self.instances, 0, bytemuck::cast_slice(data));
         }
-        let uniform = oit_core::pulled::raster_uniform(camera, settings);
-        gpu.queue.write_buffer(&self.uniform, 0, bytemuck::cast_slice(&uniform));
+        gpu.queue.write_buffer(&self.uniform, 0, bytemuck::cast_slice(uniform));
     }
 
     /// A rasterizer of this geometry into a `width × height` count target (a texture and a

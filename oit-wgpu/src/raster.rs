@@ -24,7 +24,11 @@
 //! bunny 1,826 ms a frame with the GPU's setup against 750 with the host's, `grid:3x3:bunny`
 //! 12,126 against 1,781): there oit-core's `TriangleSetup` runs on the host and its words are
 //! uploaded each frame, as before the GPU setup. `OIT_HOST_SETUP=1` forces the host's setup,
-//! `OIT_HOST_SETUP=0` the GPU's, on any device.
+//! `OIT_HOST_SETUP=0` the GPU's, on any device. A textured frame sets up on the host on every
+//! device: a triangle's level of detail is chosen in f64 (`oit_core::texture::level_for`), which
+//! the GPU's setup does not port; the host packs the textures and each textured triangle's record
+//! after the triangles (`oit_gpu::host_setup`), and the raster kernel samples them with oit-core's
+//! sampler in integers (`texture.wgsl`), so its fragments' colours are oit-cpu's.
 
 use std::cell::Cell;
 
@@ -342,7 +346,9 @@ impl ComputeBuffers {
         boxes: bool,
         made: &Cell<u64>,
     ) -> Result<ComputeRaster, OitError> {
-        let (setup_ms, check) = if setup_on_gpu(gpu) {
+        // a textured frame sets up on the host, which packs the textures and each triangle's
+        // level after the triangles (`oit_gpu::host_setup`)
+        let (setup_ms, check) = if setup_on_gpu(gpu) && !oit_gpu::is_textured(scene) {
             self.gpu_frame(gpu, scene, camera, settings, boxes, made)?
         } else {
             self.host_frame(gpu, scene, camera, settings, boxes, made)?;

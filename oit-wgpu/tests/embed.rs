@@ -584,3 +584,21 @@ fn read_rgba8(gpu: &oit_wgpu::Gpu, texture: &wgpu::Texture) -> Image {
         .collect();
     Image { width: w, height: h, pixels }
 }
+
+/// The embeddable pass does not sample textures (its caller draws the geometry): `SceneGeometry`
+/// refuses a textured scene by the object's and the texture's names, and takes it untextured.
+#[test]
+fn scene_geometry_refuses_textures_by_name() {
+    let Some(backend) = oit_wgpu::backend_or_skip("scene_geometry_refuses_textures_by_name") else {
+        return;
+    };
+    let gpu = backend.gpu().unwrap();
+    let scene = oit_core::load_scene("particles:4").unwrap();
+    let e = match oit_wgpu::embed::SceneGeometry::new(&gpu.device, &gpu.queue, &scene) {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("a textured scene through the embedded pass"),
+    };
+    assert!(e.contains("embedded pass") && e.contains("particle 0") && e.contains("sprite"), "{e}");
+    let plain = oit_core::load_scene("untextured:particles:4").unwrap();
+    assert!(oit_wgpu::embed::SceneGeometry::new(&gpu.device, &gpu.queue, &plain).is_ok());
+}

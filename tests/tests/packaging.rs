@@ -23,7 +23,18 @@ use std::process::Command;
 /// The crates published to crates.io, and what each package must hold beyond its manifest and
 /// README.
 const PUBLISHED: &[(&str, &[&str])] = &[
-    ("oit-core", &["assets/bunny.obj.gz", "assets/armadillo.obj.gz", "assets/README.md"]),
+    (
+        "oit-core",
+        &[
+            "assets/bunny.obj.gz",
+            "assets/armadillo.obj.gz",
+            "assets/README.md",
+            "assets/scenes/particles.glb.gz",
+            "assets/scenes/foliage.glb.gz",
+            "assets/scenes/glass.glb.gz",
+            "assets/scenes/cad.glb.gz",
+        ],
+    ),
     ("oit-shaders", &["wgsl/core/common.wgsl"]),
     ("oit-gpu", &[]),
     ("oit-cpu", &[]),

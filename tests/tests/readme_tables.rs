@@ -14,6 +14,8 @@
 //! - `paths REPORT scene=S [backend=wgpu]`: the hardware and compute raster paths side by side,
 //!   GPU and steady wall time, and which is faster where the ranges do not overlap.
 //! - `scenes REPORT`: each scene's triangles, fragments and deepest pixel.
+//! - `picks REPORT [backend=B] [raster=R] [time=readback|gpu]`: per scene, the fastest exact
+//!   technique (EPR 0, nothing lost) and the fastest within 1 % EPR, by median time.
 //! - `model REPORT...`: the cost model's error on the scenes it was not calibrated on.
 //! - `overflow DROP_REPORT TAIL_REPORT [raster=R]`: `--overflow drop` against `--overflow tail`.
 //! - `builds BUILDS_JSON`: each feature set's cold build time and binary size.
@@ -278,6 +280,52 @@ fn paths(spec: &Spec<'_>) -> String {
     out.join("\n")
 }
 
+/// Per scene of a report, in its order: the fastest technique that is exact there (EPR 0 and
+/// nothing lost) and the fastest whose EPR is at most 1 %, by median time (readback wall time, or
+/// GPU time with `time=gpu`), on one backend (and raster path).
+fn picks(spec: &Spec<'_>) -> String {
+    let report = read_json(spec.file(0));
+    let backend = spec.opt("backend").unwrap_or("cpu");
+    let raster = spec.opt("raster");
+    let (key, label) = if spec.opt("time") == Some("gpu") {
+        ("gpu_ms", "GPU ms")
+    } else {
+        ("readback_wall_ms", "wall ms + readback")
+    };
+    let mut out = vec![
+        format!("| scene | fastest exact | {label} | fastest within 1 % EPR | {label} | its EPR (%) |"),
+        "|---|---|---|---|---|---|".to_string(),
+    ];
+    for s in report["scenes"].as_array().expect("report.json has scenes") {
+        let name = s["name"].as_str().unwrap_or("?");
+        let of: Vec<&Value> = rows(&report)
+            .iter()
+            .filter(|r| r["scene"] == name && r["backend"] == backend)
+            .filter(|r| raster.is_none_or(|p| r["raster"] == p))
+            .filter(|r| r[key]["median"].as_f64().is_some())
+            .collect();
+        let fastest = |ok: &dyn Fn(&Value) -> bool| {
+            of.iter()
+                .copied()
+                .filter(|r| ok(r))
+                .min_by(|a, b| a[key]["median"].as_f64().unwrap().total_cmp(&b[key]["median"].as_f64().unwrap()))
+        };
+        let exact = fastest(&|r| r["epr"].as_f64() == Some(0.0) && r["lost"].as_u64() == Some(0));
+        let close = fastest(&|r| r["epr"].as_f64().is_some_and(|e| e <= 0.01));
+        let cell = |r: Option<&Value>| match r {
+            Some(r) => (r["technique"].as_str().unwrap_or("?").to_string(), spread(&r[key])),
+            None => ("none".to_string(), "n/a".to_string()),
+        };
+        let ((et, etime), (ct, ctime)) = (cell(exact), cell(close));
+        out.push(format!(
+            "| {} | {et} | {etime} | {ct} | {ctime} | {} |",
+            scene_name(name),
+            close.map_or_else(|| "n/a".to_string(), epr)
+        ));
+    }
+    out.join("\n")
+}
+
 /// Each scene of a report: triangles, fragments, deepest pixel, and the run's frame size.
 fn scenes(spec: &Spec<'_>) -> String {
     let report = read_json(spec.file(0));
@@ -400,6 +448,7 @@ fn table(head: &str) -> String {
         "trade" => trade(&spec),
         "paths" => paths(&spec),
         "scenes" => scenes(&spec),
+        "picks" => picks(&spec),
         "model" => model(&spec),
         "overflow" => overflow(&spec),
         "builds" => builds(&spec),

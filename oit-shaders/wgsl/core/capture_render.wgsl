@@ -12,6 +12,13 @@
 // when there is none; used by the Fresnel effect), `prim` the primitive id (ties between equal
 // depths are broken by it).
 fn oit_capture_full(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: vec3<f32>, prim: u32) -> vec4<f32> {
+    return oit_capture_cut(pixel_xy, depth, color, normal, prim, 0.5);
+}
+
+// `oit_capture_full` with the opaque pass's cutoff (`Fragment::cutoff`): oit's hardware raster,
+// whose textured masked objects are decided fragment by fragment. A fragment of any other alpha
+// mode comes with alpha 1 or 0 (`Scene::layers`), which the half `oit_capture_full` takes splits.
+fn oit_capture_cut(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: vec3<f32>, prim: u32, cutoff: f32) -> vec4<f32> {
     let xy = vec2<u32>(max(floor(pixel_xy), vec2<f32>(0.0)));
     if (xy.x < fu.width && xy.y < fu.height) {
         var f: Fragment;
@@ -20,6 +27,7 @@ fn oit_capture_full(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: v
         f.prim = prim;
         f.color = clamp(color, vec4<f32>(0.0), vec4<f32>(1.0));
         f.normal = normalize_or_zero(normal);
+        f.cutoff = cutoff;
         // behind the opaque pass's depth: counted, not captured
         if (!opaque_cut(f)) {
             capture(f);

@@ -5,6 +5,10 @@ struct Fragment {
     prim: u32,
     color: vec4<f32>,
     normal: vec3<f32>,
+    // the opaque pass discards the fragment where its alpha is under this (oit-core's
+    // `Triangle::cutoff`: a textured masked object's cutoff; one half for an untextured one,
+    // whose alpha is 1 or 0; 0 elsewhere); no other capture reads it
+    cutoff: f32,
 }
 
 // Every technique's group 0, binding 0: what the pass needs to know.

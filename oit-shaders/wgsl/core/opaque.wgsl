@@ -2,13 +2,13 @@
 // opaque and masked geometry drawn into its opaque image (prelude.wgsl's `opaque_keys` and
 // `opaque_rgb`) before the technique runs. Pass 0: each pixel keeps the smallest
 // `depth bits << 32 | primitive id` by a 64-bit atomic MIN, so ties between coplanar triangles
-// resolve by id whatever order the fragments arrive in; a fragment a mask discarded (alpha 0) is
-// counted and goes no further. Pass 1: the one fragment whose key won writes its linear RGB.
+// resolve by id whatever order the fragments arrive in; a fragment a mask discards (alpha under its
+// cutoff, `Fragment::cutoff`) is counted and goes no further. Pass 1: the one fragment whose key won writes its linear RGB.
 
 fn capture(f: Fragment) {
     let key = (u64(depth_bits(f.depth)) << 32u) | u64(f.prim);
     if (fu.pass_index == 0u) {
-        if (f.color.w == 0.0) {
+        if (f.color.w < f.cutoff) {
             atomicAdd(&opaque_rgb[3u * fu.pixel_count], 1u);
             return;
         }

@@ -18,7 +18,8 @@ struct Tri {
     has_color: u32,
     prim: u32,
     bbox: array<u32, 4>,
-    pad0: u32,
+    // the word offset of the triangle's texture record (0: untextured): oit-gpu's `host_setup`
+    tex: u32,
     pad1: u32,
     pad2: u32,
 }
@@ -31,12 +32,50 @@ struct RasterUniform {
     forward: vec4<f32>,
 }
 
-@group(1) @binding(0) var<storage, read> tris: array<Tri>;
+// TRI_WORDS words a triangle (`TriangleSetup::triangle_words`), then, in a frame with textures
+// (set up on the host: oit-gpu's `host_setup`), each textured triangle's record (its vertices'
+// texture coordinates, 6 f32; its level's descriptor; its cutoff, f32; the texture region's
+// first word) and the texture region (texture.wgsl)
+@group(1) @binding(0) var<storage, read> tris: array<u32>;
 @group(1) @binding(1) var<storage, read> items: array<vec2<u32>>;
 @group(1) @binding(2) var<uniform> ru: RasterUniform;
 @group(1) @binding(3) var<storage, read_write> generated: array<atomic<u32>>;
 
 const TILE: u32 = 8u;
+const TRI_WORDS: u32 = 44u;
+
+fn tex_word(i: u32) -> u32 {
+    return tris[i];
+}
+
+fn tri_f32(i: u32) -> f32 {
+    return bitcast<f32>(tris[i]);
+}
+
+// Triangle `i` of the buffer.
+fn load_tri(i: u32) -> Tri {
+    let o = i * TRI_WORDS;
+    var t: Tri;
+    for (var k = 0u; k < 3u; k++) {
+        t.x[k] = bitcast<i32>(tris[o + k]);
+        t.y[k] = bitcast<i32>(tris[o + 3u + k]);
+        t.z[k] = tri_f32(o + 6u + k);
+        t.inv_w[k] = tri_f32(o + 9u + k);
+    }
+    for (var k = 0u; k < 9u; k++) {
+        t.n[k] = tri_f32(o + 12u + k);
+        t.c[k] = tri_f32(o + 21u + k);
+    }
+    t.inv_area = tri_f32(o + 30u);
+    for (var k = 0u; k < 4u; k++) {
+        t.base[k] = tri_f32(o + 31u + k);
+        t.bbox[k] = tris[o + 37u + k];
+    }
+    t.has_color = tris[o + 35u];
+    t.prim = tris[o + 36u];
+    t.tex = tris[o + 41u];
+    return t;
+}
 const SUBPIXEL: i64 = 256li;
 const HALF_PIXEL: i64 = 128li;
 
@@ -76,8 +115,23 @@ fn raster_pixel(t: Tri, x: u32, y: u32) -> u32 {
     let c0 = vec3<f32>(t.c[0], t.c[1], t.c[2]);
     let c1 = vec3<f32>(t.c[3], t.c[4], t.c[5]);
     let c2 = vec3<f32>(t.c[6], t.c[7], t.c[8]);
-    let vcolor = c0 * p.x + c1 * p.y + c2 * p.z;
-    let base = vec4<f32>(t.base[0], t.base[1], t.base[2], t.base[3]);
+    var vcolor = c0 * p.x + c1 * p.y + c2 * p.z;
+    var base = vec4<f32>(t.base[0], t.base[1], t.base[2], t.base[3]);
+    // an untextured masked object's alpha is 1 or 0 (`Scene::layers`), which one half splits
+    var cutoff = 0.5;
+    if (t.tex != 0u) {
+        // oit-core's `TriangleSetup::color_at`: the texture coordinates interpolated as the
+        // colours are, the sample multiplying the base colour and the vertex colour
+        let r = t.tex;
+        let uv0 = vec2<f32>(tri_f32(r), tri_f32(r + 1u));
+        let uv1 = vec2<f32>(tri_f32(r + 2u), tri_f32(r + 3u));
+        let uv2 = vec2<f32>(tri_f32(r + 4u), tri_f32(r + 5u));
+        let uv = uv0 * p.x + uv1 * p.y + uv2 * p.z;
+        let s = tex_sample(tris[r + 8u], tris[r + 6u], uv);
+        base = base * s;
+        vcolor = vcolor * s.xyz;
+        cutoff = tri_f32(r + 7u);
+    }
     let color = shade(ru.shading, base, normal, vcolor, t.has_color != 0u, ru.forward.xyz);
     var f: Fragment;
     f.pixel = y * ru.width + x;
@@ -85,6 +139,7 @@ fn raster_pixel(t: Tri, x: u32, y: u32) -> u32 {
     f.prim = t.prim;
     f.color = color;
     f.normal = normalize_or_zero(normal);
+    f.cutoff = cutoff;
     // behind the opaque pass's depth: generated (counted), not captured
     if (!opaque_cut(f)) {
         capture(f);
@@ -121,7 +176,7 @@ fn raster_main(
         let item = items[i];
         let x = (item.y & 0xffffu) * TILE + lid % TILE;
         let y = (item.y >> 16u) * TILE + lid / TILE;
-        count = raster_pixel(tris[item.x], x, y);
+        count = raster_pixel(load_tri(item.x), x, y);
     }
     count_fragments(lid, count);
 }
@@ -142,7 +197,7 @@ fn raster_loop_main(
     var count = 0u;
     if (i < ru.item_count) {
         let item = items[i];
-        let t = tris[item.x];
+        let t = load_tri(item.x);
         let x0 = max(t.bbox[0], (item.y & 0xffffu) * TILE);
         let y0 = max(t.bbox[1], (item.y >> 16u) * TILE);
         let x1 = min(t.bbox[2], (item.y & 0xffffu) * TILE + TILE - 1u);

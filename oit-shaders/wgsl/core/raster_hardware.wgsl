@@ -4,19 +4,23 @@
 // operations as glam's). Vertices are pulled from storage by vertex index so each triangle's
 // three vertices carry its primitive id (triangle t of the draw is primitive t: the triangles are
 // laid out in primitive order). No culling, no depth test; the fragment shades like oit-cpu's
-// `Shading::shade` and calls `oit_capture_full` (capture_render.wgsl).
+// `Shading::shade`, its texture sampled first (`hw_color`), and calls `oit_capture_cut`
+// (capture_render.wgsl).
 
 struct HwVertex {
     // xyz: position in the mesh's space; w: 1 when the mesh has vertex colours
     position: vec4<f32>,
+    // w: the texture coordinate u (0 without)
     normal: vec4<f32>,
+    // w: the texture coordinate v
     color: vec4<f32>,
 }
 
 struct HwInstance {
     // object to clip space: view_proj · transform
     mvp: mat4x4<f32>,
-    // the normal matrix's columns (w unused)
+    // the normal matrix's columns (normal0.w: the opaque pass's cutoff, `Fragment::cutoff`;
+    // the other w unused)
     normal0: vec4<f32>,
     normal1: vec4<f32>,
     normal2: vec4<f32>,
@@ -25,8 +29,10 @@ struct HwInstance {
 
 struct HwUniform {
     shading: u32,
-    pad0: u32,
-    pad1: u32,
+    // 1 where the frame has textures: `hw_tex` holds them, and from word `tex_levels` on each
+    // triangle's level descriptor (0: untextured)
+    textured: u32,
+    tex_levels: u32,
     pad2: u32,
     forward: vec4<f32>,
 }
@@ -36,6 +42,15 @@ struct HwUniform {
 @group(1) @binding(1) var<storage, read> hw_indices: array<vec4<u32>>;
 @group(1) @binding(2) var<uniform> hw: HwUniform;
 @group(1) @binding(3) var<storage, read> hw_instances: array<HwInstance>;
+// the frame's textures (oit-gpu's `hardware_textures`): the texture region (texture.wgsl) from
+// word 0, then from `hw.tex_levels` one word a triangle, the word offset of the descriptor of the
+// level its fragments sample (chosen on the host as oit-core's setup chooses it); a placeholder
+// where the frame has none
+@group(1) @binding(4) var<storage, read> hw_tex: array<u32>;
+
+fn tex_word(i: u32) -> u32 {
+    return hw_tex[i];
+}
 
 struct HwOut {
     @builtin(position) position: vec4<f32>,
@@ -44,6 +59,10 @@ struct HwOut {
     @location(2) @interpolate(flat) base: vec4<f32>,
     @location(3) @interpolate(flat) prim: u32,
     @location(4) @interpolate(flat) has_color: u32,
+    @location(5) uv: vec2<f32>,
+    // the level descriptor of the triangle's texture (0: untextured)
+    @location(6) @interpolate(flat) tex: u32,
+    @location(7) @interpolate(flat) cutoff: f32,
 }
 
 @vertex
@@ -63,11 +82,30 @@ fn hw_vs(@builtin(vertex_index) vi: u32) -> HwOut {
     out.base = inst.base;
     out.prim = prim;
     out.has_color = select(0u, 1u, p.w != 0.0);
+    out.uv = vec2<f32>(n.w, v.color.w);
+    out.cutoff = inst.normal0.w;
+    out.tex = 0u;
+    if (hw.textured != 0u) {
+        out.tex = hw_tex[hw.tex_levels + prim];
+    }
     return out;
+}
+
+// The fragment's shaded colour (oit-core's `TriangleSetup::color_at`): where its triangle is
+// textured, the sample at its texture coordinates multiplies the base colour and the vertex
+// colour before shading.
+fn hw_color(in: HwOut) -> vec4<f32> {
+    var base = in.base;
+    var vcolor = in.vcolor;
+    if (in.tex != 0u) {
+        let s = tex_sample(0u, in.tex, in.uv);
+        base = base * s;
+        vcolor = vcolor * s.xyz;
+    }
+    return shade(hw.shading, base, in.normal, vcolor, in.has_color != 0u, hw.forward.xyz);
 }
 
 @fragment
 fn hw_fs(in: HwOut) -> @location(0) vec4<f32> {
-    let color = shade(hw.shading, in.base, in.normal, in.vcolor, in.has_color != 0u, hw.forward.xyz);
-    return oit_capture_full(in.position.xy, in.position.z, color, in.normal, in.prim);
+    return oit_capture_cut(in.position.xy, in.position.z, hw_color(in), in.normal, in.prim, in.cutoff);
 }

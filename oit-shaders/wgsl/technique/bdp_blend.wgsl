@@ -15,7 +15,8 @@
 // Other values compare exactly as their bits.
 //
 // Module: COMMON_WGSL, TECHNIQUE_PRELUDE (group 0: fu, state), this, then the hardware raster's
-// vertex stage (group 1 bindings 0..2: hw_vertices, hw_indices, hw; `HwOut`, `hw_vs`).
+// vertex stage (group 1 bindings 0..4: hw_vertices, hw_indices, hw, hw_instances, hw_tex;
+// `HwOut`, `hw_vs`, `hw_color`).
 
 // [zNear, zFar] bits per pixel (bounds.wgsl), read by the fragment stage.
 @group(0) @binding(2) var<storage, read_write> bounds: array<u32>;
@@ -52,7 +53,7 @@ fn bdp_blend_fs(in: HwOut) -> BucketsOut {
         return out;
     }
     let px = xy.y * fu.width + xy.x;
-    let color = shade(hw.shading, in.base, in.normal, in.vcolor, in.has_color != 0u, hw.forward.xyz);
+    let color = hw_color(in);
     let depth = clamp(in.position.z, 0.0, 1.0);
     let zn = bitcast<f32>(bounds[2u * px]);
     let zf = bitcast<f32>(bounds[2u * px + 1u]);

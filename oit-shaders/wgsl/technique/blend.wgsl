@@ -16,7 +16,7 @@
 //   in [0, 1] units instead, each addition rounded to f16, as weighted blended OIT accumulates.
 //
 // Module: COMMON_WGSL, TECHNIQUE_PRELUDE (group 0: fu, state), this, then the hardware raster's
-// vertex stage (group 1 bindings 0..3; `HwOut`, `hw_vs`, `shade`). The resolve's targets are
+// vertex stage (group 1 bindings 0..4; `HwOut`, `hw_vs`, `hw_color`). The resolve's targets are
 // group 1 bindings 8 and 9 of the compute pipeline, clear of the vertex stage's.
 
 @group(1) @binding(8) var blend_color: texture_2d<f32>;
@@ -34,7 +34,7 @@ fn blend_fragment(in: HwOut, out: ptr<function, BlendOut>) -> vec4<f32> {
         return vec4<f32>(0.0);
     }
     (*out).count = vec4<f32>(1.0, 0.0, 0.0, 0.0);
-    let color = shade(hw.shading, in.base, in.normal, in.vcolor, in.has_color != 0u, hw.forward.xyz);
+    let color = hw_color(in);
     return unpack_rgba8(pack_rgba8(clamp(color, vec4<f32>(0.0), vec4<f32>(1.0))));
 }
 

@@ -8,7 +8,7 @@
 // after their hand-over, so the pass's occlusion query counts what is left to peel.
 //
 // Module: COMMON_WGSL, TECHNIQUE_PRELUDE (group 0: fu, state), this, then the hardware raster's
-// vertex stage (group 1 bindings 0..2; `HwOut`, `hw_vs`).
+// vertex stage (group 1 bindings 0..4; `HwOut`, `hw_vs`, `hw_color`).
 @group(0) @binding(2) var<storage, read_write> ddp_near: array<atomic<u64>>;
 @group(0) @binding(3) var<storage, read_write> ddp_far: array<atomic<u64>>;
 
@@ -34,7 +34,7 @@ fn ddp_peel_fs(in: HwOut) -> @location(0) vec2<f32> {
             f.depth = bitcast<f32>(d);
             f.prim = in.prim;
             f.color = clamp(
-                shade(hw.shading, in.base, in.normal, in.vcolor, in.has_color != 0u, hw.forward.xyz),
+                hw_color(in),
                 vec4<f32>(0.0),
                 vec4<f32>(1.0),
             );

@@ -10,7 +10,7 @@
 // the other is lost in both.
 //
 // Module: COMMON_WGSL, TECHNIQUE_PRELUDE (group 0: fu, state), this, then the hardware raster's
-// vertex stage (group 1 bindings 0..2; `HwOut`, `hw_vs`).
+// vertex stage (group 1 bindings 0..4; `HwOut`, `hw_vs`, `hw_color`).
 
 // The previous peel's depth (render pipeline, group 2; unused on the first peel).
 @group(2) @binding(0) var dp_previous: texture_depth_2d;
@@ -34,7 +34,7 @@ fn dp_peel_fs(in: HwOut) -> @location(0) vec2<u32> {
     f.depth = depth;
     f.prim = in.prim;
     f.color = clamp(
-        shade(hw.shading, in.base, in.normal, in.vcolor, in.has_color != 0u, hw.forward.xyz),
+        hw_color(in),
         vec4<f32>(0.0),
         vec4<f32>(1.0),
     );

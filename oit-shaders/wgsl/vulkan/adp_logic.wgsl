@@ -6,7 +6,7 @@
 // passes and the resolves are the storage capture's own.
 //
 // Module: COMMON_WGSL, TECHNIQUE_PRELUDE, adp.wgsl (group 0: bounds, hist...), this, then the
-// hardware raster's vertex stage (group 1 bindings 0..3). The copy kernel reads the targets as
+// hardware raster's vertex stage (group 1 bindings 0..4). The copy kernel reads the targets as
 // group 1 bindings 3..10, which only the compute pipeline's layout has.
 
 @group(1) @binding(3) var adp_hist0: texture_2d<u32>;
