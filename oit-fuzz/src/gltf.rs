@@ -1,6 +1,6 @@
 //! The `gltf` target's inputs: the seed GLBs the harness writes itself (`--write-gltf-seeds`,
-//! committed in `tests/fuzz/corpus/gltf/`), the repository's own glTF scenes as more seeds
-//! ([`ASSET_SEEDS`]), and the mutator that knows the format: it splits a GLB into its JSON and
+//! committed in `tests/fuzz/corpus/gltf/`), the scene set's GLBs (`oit_core::scene_set`) and any
+//! other glTF file of the repository listed in [`ASSET_SEEDS`] as more seeds, and the mutator that knows the format: it splits a GLB into its JSON and
 //! binary chunks, edits the JSON where the loader's checks are (counts, offsets, lengths, strides,
 //! component types, indices, URIs, sparse accessors, node children), edits the binary chunk
 //! (indices and floats), cuts the file in its header or a chunk, and packs the GLB again, with its
@@ -13,21 +13,23 @@ use serde_json::{Value, json};
 
 use crate::dictionary::Rng;
 
-/// The repository's glTF scenes the `gltf` target also starts from, relative to the repository's
-/// root: one a line, so a scene added to the set is one more line here. A file that is not there
-/// (yet) is skipped; one larger than [`POOL_MAX_BYTES`] is replayed but not mutated.
+/// glTF files of the repository the `gltf` target also starts from, besides every scene of the
+/// scene set (`oit_core::scene_set::SCENE_SET`, which are seeds by themselves): paths relative to
+/// the repository's root, one a line, so a file is one more line here. A file that is not there is
+/// skipped; a seed larger than [`POOL_MAX_BYTES`] is replayed but not mutated.
 pub const ASSET_SEEDS: &[&str] = &[
-    // e.g. "oit-core/assets/scenes/particles.glb",
+    // e.g. "models/lamp.glb",
 ];
 
 /// The largest input the `gltf` target mutates: a larger seed (a real scene of megabytes) is
 /// replayed once, and its mutants would spend the run's seconds parsing it again.
 pub const POOL_MAX_BYTES: usize = 256 << 10;
 
-/// The seeds of [`ASSET_SEEDS`] that exist.
+/// The scene set's GLBs (decompressed), then the files of [`ASSET_SEEDS`] that exist.
 pub fn asset_seeds() -> Vec<Vec<u8>> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    ASSET_SEEDS.iter().filter_map(|p| std::fs::read(root.join(p)).ok()).collect()
+    let set = oit_core::scene_set::SCENE_SET.iter().filter_map(|s| s.glb().ok());
+    set.chain(ASSET_SEEDS.iter().filter_map(|p| std::fs::read(root.join(p)).ok())).collect()
 }
 
 /// A GLB of `json` and `bin` (the binary chunk left out when empty), chunks padded as the format
@@ -635,6 +637,21 @@ mod tests {
             let scene = oit_core::parse_gltf(Path::new(name), &bytes, None).expect("a seed loads");
             scene.validate().expect("a seed that loads validates");
             assert!(scene.triangle_count() > 0, "{name}");
+        }
+    }
+
+    #[test]
+    fn the_scene_set_is_seeded() {
+        let seeds = asset_seeds();
+        assert!(seeds.len() >= oit_core::scene_set::SCENE_SET.len());
+        for (set, glb) in oit_core::scene_set::SCENE_SET.iter().zip(&seeds) {
+            assert!(glb.starts_with(b"glTF"), "{}", set.name);
+            println!(
+                "{}: {} bytes{}",
+                set.name,
+                glb.len(),
+                if glb.len() > POOL_MAX_BYTES { " (replayed only)" } else { "" }
+            );
         }
     }
 
