@@ -646,6 +646,10 @@ mod tests {
         assert!(seeds.len() >= oit_core::scene_set::SCENE_SET.len());
         for (set, glb) in oit_core::scene_set::SCENE_SET.iter().zip(&seeds) {
             assert!(glb.starts_with(b"glTF"), "{}", set.name);
+            // accepted as it is: its mutants start from a file that reaches the whole loader
+            let scene =
+                oit_core::parse_gltf(Path::new(set.name), glb, None).expect("a scene of the set loads");
+            scene.validate().expect("a scene of the set validates");
             println!(
                 "{}: {} bytes{}",
                 set.name,
