@@ -21,6 +21,7 @@ use oit_core::{Settings, Technique, View};
 fn config(scenes: Vec<String>, size: u32, frames: u32, model: Option<ModelFile>) -> oit_bench::Config {
     oit_bench::Config {
         scenes,
+        gltf_scene: None,
         backends: oit_bench::available_backends(),
         settings: Settings { width: size, height: size, ..Settings::default() },
         view: View::default(),

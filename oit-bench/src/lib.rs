@@ -102,6 +102,9 @@ pub use report::{read_report, write_report};
 pub struct Config {
     /// Scenes by name (anything [`oit_core::load_scene`] takes).
     pub scenes: Vec<String>,
+    /// The scene of each glTF file to draw (`--gltf-scene N`, [`oit_core::load_scene_with`]);
+    /// `None`: each file's default scene. With it, every scene must be a `.gltf` or `.glb` path.
+    pub gltf_scene: Option<usize>,
     /// Backends, each pinned to a raster path or on its own default.
     pub backends: Vec<Box<dyn Backend>>,
     /// Image size, shading and the rest (the technique is set per run).
@@ -530,7 +533,17 @@ pub const MAX_CURVE_DEPTH: u32 = 1 << 16;
 
 /// Checks that `name` loads as a valid scene and that `view` frames it at `settings`' aspect.
 pub fn check_scene(name: &str, view: View, settings: &Settings) -> Result<(), OitError> {
-    let scene = load_scene(name)?;
+    check_scene_with(name, None, view, settings)
+}
+
+/// [`check_scene`] of scene `gltf_scene` of a glTF file ([`oit_core::load_scene_with`]).
+pub fn check_scene_with(
+    name: &str,
+    gltf_scene: Option<usize>,
+    view: View,
+    settings: &Settings,
+) -> Result<(), OitError> {
+    let scene = oit_core::load_scene_with(name, gltf_scene)?;
     scene.validate()?;
     Camera::orbit_scene(&scene, view, settings.width as f32 / settings.height as f32)?;
     Ok(())
@@ -600,7 +613,7 @@ impl Config {
         }
         self.settings.validate()?;
         for name in &self.scenes {
-            check_scene(name, self.view, &self.settings)?;
+            check_scene_with(name, self.gltf_scene, self.view, &self.settings)?;
         }
         if let Some(curves) = &self.curves {
             curves.validate(self.view, &self.settings)?;
@@ -782,7 +795,7 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
     };
 
     for scene_name in &config.scenes {
-        let scene = load_scene(scene_name)?;
+        let scene = oit_core::load_scene_with(scene_name, config.gltf_scene)?;
         let camera = Camera::orbit_scene(&scene, config.view, base.width as f32 / base.height as f32)?;
         let mut info = SceneInfo {
             name: scene_name.clone(),

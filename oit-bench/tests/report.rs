@@ -19,6 +19,7 @@ fn report_holds_every_technique() {
     curves.frames = 1;
     let config = Config {
         scenes: vec!["planes:4".into()],
+        gltf_scene: None,
         backends,
         settings: Settings { width: 32, height: 32, ..Settings::default() },
         view: View::default(),

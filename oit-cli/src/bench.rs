@@ -249,6 +249,7 @@ pub fn check(args: &BenchArgs) -> Result<Checked, OitError> {
         .collect::<Result<Vec<_>, _>>()?;
     let config = Config {
         scenes,
+        gltf_scene: args.scene.gltf_scene,
         backends: prepared.backends,
         settings: prepared.settings,
         view: prepared.view,

@@ -7,7 +7,7 @@ use clap::Args;
 use oit_bench::backends::{BackendOptions, RasterChoice, select, with_paths};
 use oit_core::{
     Backend, BdpMode, BoundsMode, Camera, Effect, HardwareCapture, OitError, Overflow, Scene, Settings,
-    Shading, Technique, View, load_scene, parse_memory, parse_rgb, parse_size,
+    Shading, Technique, View, load_scene_with, parse_memory, parse_rgb, parse_size,
 };
 
 /// Options shared by `render`, `compare` and `sweep`.
@@ -19,6 +19,12 @@ pub struct SceneArgs {
     /// path to a Wavefront .obj file (at most 1 GiB; OIT_MAX_MODEL_BYTES raises the limit).
     #[arg(long, value_name = "NAME|FILE.obj", default_value = oit_core::DEFAULT_SCENE)]
     pub scene: String,
+
+    /// The scene of a glTF file to draw (--scene FILE.gltf or FILE.glb), numbered from 0 as in
+    /// the file's `scenes` [default: the file's default scene, else its first]. Refused with a
+    /// scene that is not a glTF file's path.
+    #[arg(long, value_name = "N")]
+    pub gltf_scene: Option<usize>,
 
     /// Image size in pixels, WIDTHxHEIGHT (each from 1 to 16384).
     #[arg(long, value_name = "WxH", default_value = "512x512")]
@@ -171,6 +177,7 @@ impl SceneArgs {
     /// first so a typo fails before a large scene is read.
     pub fn prepare(&self) -> Result<Prepared, OitError> {
         let (width, height) = parse_size(&self.size)?;
+        check_gltf_scene(&self.scene, self.gltf_scene)?;
         if let Some(n) = self.threads {
             oit_core::check_threads(n)?;
         }
@@ -209,7 +216,7 @@ impl SceneArgs {
         let raster = RasterChoice::parse(self.raster.as_deref(), &self.backend)?;
         let options = BackendOptions { threads: self.threads, adapter: self.adapter.clone() };
         let backends = with_paths(select(&self.backend, &options)?, raster)?;
-        let scene = load_scene(&self.scene)?;
+        let scene = load_scene_with(&self.scene, self.gltf_scene)?;
         for warning in &scene.warnings {
             eprintln!("warning: {warning}");
         }
@@ -260,6 +267,18 @@ pub fn shading_warning(scene: &Scene, shading: Shading) -> Option<String> {
         names.join(", "),
         scene.name
     ))
+}
+
+/// Checks before the scene is read that `--gltf-scene` comes with a glTF file's path (which scene
+/// of the file exists is checked when it is read).
+pub fn check_gltf_scene(scene: &str, gltf_scene: Option<usize>) -> Result<(), OitError> {
+    match gltf_scene {
+        Some(n) if !oit_core::is_gltf_path(scene) => Err(OitError::InvalidSettings(format!(
+            "--gltf-scene {n} picks a scene of a glTF file, and scene '{scene}' is not one: give \
+             --scene the path of a .gltf or .glb file, or leave --gltf-scene out"
+        ))),
+        _ => Ok(()),
+    }
 }
 
 /// Checks `--near` and `--far` on their own and against each other (against a plane fitted to the

@@ -13,7 +13,7 @@ mod window;
 use std::path::PathBuf;
 
 use clap::Args;
-use oit_core::{Camera, OitError, Settings, Technique, View, load_scene, parse_rgb, parse_size};
+use oit_core::{Camera, OitError, Settings, Technique, View, load_scene_with, parse_rgb, parse_size};
 
 use crate::Outcome;
 use crate::options::check_output;
@@ -39,6 +39,11 @@ pub struct ViewArgs {
     /// The scene: a built-in name or a Wavefront .obj file, as for `oit render`.
     #[arg(long, value_name = "NAME|FILE.obj", default_value = oit_core::DEFAULT_SCENE)]
     pub scene: String,
+
+    /// The scene of a glTF file to show (--scene FILE.gltf or FILE.glb), numbered from 0, as for
+    /// `oit render` [default: the file's default scene].
+    #[arg(long, value_name = "N")]
+    pub gltf_scene: Option<usize>,
 
     /// The window's first size in pixels, WIDTHxHEIGHT.
     #[arg(long, value_name = "WxH", default_value = "768x768")]
@@ -152,6 +157,7 @@ pub fn check(args: &ViewArgs) -> Result<Checked, OitError> {
     }
     let technique: Technique = args.technique.parse()?;
     let (width, height) = parse_size(&args.size)?;
+    crate::options::check_gltf_scene(&args.scene, args.gltf_scene)?;
     let settings = Settings {
         width,
         height,
@@ -189,7 +195,7 @@ pub fn check(args: &ViewArgs) -> Result<Checked, OitError> {
         Some(path) => script::load(path)?,
         None => Vec::new(),
     };
-    let scene = load_scene(&args.scene)?;
+    let scene = load_scene_with(&args.scene, args.gltf_scene)?;
     for warning in &scene.warnings {
         eprintln!("warning: {warning}");
     }

@@ -525,6 +525,7 @@ fn sweep_summary_table() {
 fn help_mentions_every_option() {
     let shared = [
         "--scene",
+        "--gltf-scene",
         "--size",
         "--azimuth",
         "--elevation",
@@ -863,4 +864,108 @@ fn empty_coverage_is_not_available_in_every_table() {
     assert!(out.status.success(), "{}", stderr(&out));
     let text = stdout(&out);
     assert!(text.contains("n/a") && !text.contains("NaN"), "{text}");
+}
+
+/// A GLB of two scenes: scene 0 draws one quad (2 triangles), scene 1 two (4), the default 0.
+fn two_scene_glb() -> Vec<u8> {
+    let mut bin = Vec::new();
+    for p in [[0f32, 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.]] {
+        p.iter().for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
+    }
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    let json = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]},{"nodes":[1,2]}],
+        "nodes":[{"mesh":0},{"mesh":0,"translation":[0,0,1]},{"mesh":0,"translation":[0,0,2]}],
+        "meshes":[{"name":"quad","primitives":[{"attributes":{"POSITION":0},"indices":1,"material":0}]}],
+        "materials":[{"pbrMetallicRoughness":{"baseColorFactor":[1,0,0,0.5]},"alphaMode":"BLEND","doubleSided":true}],
+        "buffers":[{"byteLength":60}],
+        "bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":48},{"buffer":0,"byteOffset":48,"byteLength":12}],
+        "accessors":[{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[0,0,0],"max":[1,1,0]},
+                     {"bufferView":1,"componentType":5123,"count":6,"type":"SCALAR"}]}"#;
+    let mut json = json.as_bytes().to_vec();
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    let mut out = Vec::new();
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&((12 + 8 + json.len() + 8 + bin.len()) as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    out
+}
+
+/// `--gltf-scene N` draws scene N of a glTF file on every command that takes `--scene`; an index
+/// past the file's scenes, or the option with a scene that is not a glTF file, is one error line.
+#[test]
+fn gltf_scene_picks_a_scene_of_the_file() {
+    let dir = scratch("gltf_scene");
+    let file = dir.join("two.glb");
+    std::fs::write(&file, two_scene_glb()).unwrap();
+    let file = file.to_str().unwrap();
+    let png = dir.join("out.png");
+    let png = png.to_str().unwrap();
+    let render = |extra: &[&str]| {
+        let mut args = vec!["render", "--size", "16x16", "-t", "dp", "--scene", file, "-o", png];
+        args.extend_from_slice(extra);
+        oit(&args)
+    };
+    for (extra, triangles) in [(&[][..], 2), (&["--gltf-scene", "0"][..], 2), (&["--gltf-scene", "1"][..], 4)]
+    {
+        let out = render(extra);
+        assert!(out.status.success(), "{extra:?}: {}", stderr(&out));
+        assert!(stdout(&out).contains(&format!("({triangles} triangles)")), "{extra:?}: {}", stdout(&out));
+    }
+    let out = render(&["--gltf-scene", "2"]);
+    assert_one_error(&out, "--gltf-scene past the scenes");
+    assert!(
+        stderr(&out).contains("scene 2 does not exist: the file has 2 scenes (numbered from 0)"),
+        "{}",
+        stderr(&out)
+    );
+    let out =
+        oit(&["compare", "--size", "16x16", "--techniques", "dp", "--scene", file, "--gltf-scene", "1"]);
+    assert!(out.status.success(), "compare: {}", stderr(&out));
+    // with a scene that is not a glTF file: refused by every command, before anything is read
+    let mut commands: Vec<Vec<&str>> = vec![
+        vec!["render", "--size", "16x16", "-o", png],
+        vec!["compare", "--size", "16x16"],
+        vec!["sweep", "--size", "16x16"],
+        vec!["bench", "--size", "16x16", "--out", dir.to_str().unwrap()],
+    ];
+    if cfg!(feature = "view") {
+        commands.push(vec!["view"]);
+    }
+    for mut args in commands {
+        args.extend_from_slice(&["--scene", "planes:2", "--gltf-scene", "1"]);
+        let out = oit(&args);
+        assert_one_error(&out, args[0]);
+        assert!(
+            stderr(&out)
+                .contains("--gltf-scene 1 picks a scene of a glTF file, and scene 'planes:2' is not one"),
+            "{}: {}",
+            args[0],
+            stderr(&out)
+        );
+    }
+    // bench: --gltf-scene applies to every scene of --scenes
+    let out = oit(&[
+        "bench",
+        "--size",
+        "16x16",
+        "--out",
+        dir.to_str().unwrap(),
+        "--scenes",
+        &format!("{file},knot"),
+        "--gltf-scene",
+        "1",
+        "--no-curves",
+    ]);
+    assert_one_error(&out, "bench --scenes with a scene that is not glTF");
+    assert!(stderr(&out).contains("scene 'knot' is not one"), "{}", stderr(&out));
 }

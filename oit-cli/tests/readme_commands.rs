@@ -31,6 +31,7 @@ const CARGO_LINES: &[&str] = &[
     "cargo install --path oit-cli --features vulkan",
     "OIT_WRITE_README=1 cargo test --release -p oit-tests --test readme_tables",
     "cargo bench -p oit-bench",
+    "cargo bench -p oit-bench --bench gltf_load",
     "cargo build --profile profiling -p oit-cli",
 ];
 

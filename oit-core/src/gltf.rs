@@ -1,19 +1,31 @@
 //! glTF 2.0 scenes (`.gltf` with its buffers, or `.glb`), read through the `gltf` crate into
-//! oit's scene model: the default scene (or the first), its node hierarchy flattened into
-//! instances with their world transforms, each primitive of triangles (strips and fans turned
-//! into triangles, points and lines refused by name) a mesh with its positions, normals (computed
-//! where the file has none), vertex colours and indices, and each primitive's material an object:
-//! `pbrMetallicRoughness.baseColorFactor`, `alphaMode` and `alphaCutoff`
+//! oit's scene model: the default scene (or the first, or the one asked for), its node hierarchy
+//! flattened into instances with their world transforms, each primitive of triangles (strips and
+//! fans turned into triangles, points and lines refused by name) a mesh with its positions,
+//! normals (computed where the file has none), vertex colours and indices, and each primitive's
+//! material an object: `pbrMetallicRoughness.baseColorFactor`, `alphaMode` and `alphaCutoff`
 //! ([`crate::AlphaMode`]), and `KHR_materials_transmission`'s factor ([`Object::transmission`]).
 //!
 //! The base-colour texture is read with its sampler's wrap modes and the primitive's
 //! TEXCOORD_0 ([`crate::Texture`]). What oit does not draw yet is said, never dropped in silence:
 //! a single-sided material (drawn from both sides), a texture on another coordinate set, and the
 //! volume extension each add one warning to [`Scene::warnings`]; an extension the file *requires* and oit does not read
-//! is an error naming it, one it only uses is a warning. Sparse accessors are refused by name, an
-//! accessor of more than [`MAX_VERTICES`] elements before anything is read from it.
+//! is an error naming it, one it only uses is a warning.
+//!
+//! Bad input is an [`OitError::Model`] naming what is wrong, and nothing is half-loaded: the GLB
+//! container is split here (a file cut short says in which part), the JSON is read and checked
+//! by the `gltf` crate (after the indices its checks would follow unchecked), the node hierarchy
+//! must be a set of trees (a node reached twice — a loop, or two parents — is refused), and every
+//! accessor a drawn primitive reads is checked before any is read: its type for its attribute,
+//! a count from 1 to [`MAX_VERTICES`], offsets aligned to its components, its elements within its
+//! buffer view and the view within its buffer; sparse accessors are refused by name. Buffers and
+//! images are read here too, not by the crate's importer: external files through oit's bounded
+//! reader (regular files only, at most `OIT_MAX_MODEL_BYTES`), a file that is missing is an error
+//! naming it, and an image is decoded with limits (a side of at most [`Texture::MAX_SIDE`], and
+//! no more pixels than its bytes can encode), so a small file cannot make a large allocation.
 
-use std::path::Path;
+use std::borrow::Cow;
+use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
@@ -26,8 +38,16 @@ pub const GLTF_EXTENSIONS: [&str; 1] = ["KHR_materials_transmission"];
 /// refused before its data is read (a scene holds at most [`Scene::MAX_TRIANGLES`] triangles).
 pub const MAX_VERTICES: usize = 1 << 26;
 
-/// The deepest node hierarchy walked: a file whose nodes nest deeper (or loop) is refused.
+/// The deepest node hierarchy walked: a file whose nodes nest deeper is refused.
 const MAX_DEPTH: usize = 256;
+
+/// The most bytes an image's pixels may take per byte of its encoding: deflate (PNG) expands at
+/// most 1,032 times, and a JPEG of one colour less; an image that claims more is refused before
+/// its pixels are allocated.
+const IMAGE_EXPANSION: u64 = 1100;
+
+/// The validation errors of the `gltf` crate listed in a message, at most.
+const LISTED_ERRORS: usize = 4;
 
 /// Reads the glTF 2.0 file `path` (`.gltf` or `.glb`; buffers in the GLB's binary chunk, in data
 /// URIs or in files beside it) into a scene; `scene_index` picks a scene of the file (its default
@@ -38,25 +58,36 @@ pub fn load_gltf(path: &Path, scene_index: Option<usize>) -> Result<Scene, OitEr
     parse_gltf(path, &bytes, scene_index)
 }
 
+/// Whether `name` is the path of a glTF file (`.gltf` or `.glb`), as [`crate::load_scene`] reads
+/// it.
+pub fn is_gltf_path(name: &str) -> bool {
+    Path::new(name)
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
+}
+
+/// [`crate::load_scene`] with a scene of a glTF file picked: with `gltf_scene` (the CLI's
+/// `--gltf-scene N`), `name` must be the path of a `.gltf` or `.glb` file and scene N of it is
+/// read; with `None` this is `load_scene(name)`, the file's default scene.
+pub fn load_scene_with(name: &str, gltf_scene: Option<usize>) -> Result<Scene, OitError> {
+    match gltf_scene {
+        None => crate::load_scene(name),
+        Some(n) if is_gltf_path(name) => load_gltf(Path::new(name), Some(n)),
+        Some(n) => Err(OitError::InvalidSettings(format!(
+            "--gltf-scene {n} picks a scene of a glTF file, and scene '{name}' is not one: give \
+             --scene the path of a .gltf or .glb file, or leave --gltf-scene out"
+        ))),
+    }
+}
+
 /// [`load_gltf`] of a file already in memory: `path` names it in messages and locates external
-/// buffers (relative to its folder).
+/// buffers and images (relative to its folder).
 pub fn parse_gltf(path: &Path, bytes: &[u8], scene_index: Option<usize>) -> Result<Scene, OitError> {
     let err = |message: String| OitError::Model { path: path.to_path_buf(), message };
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| {
-        let text = e.to_string();
-        // a required extension the crate has no reader for is refused by it, by name (and oit
-        // builds it with readers for only those it draws, and volume's, to warn that it is not)
-        if text.contains("extensionsRequired") {
-            err(format!(
-                "the file requires an extension oit does not read (it reads {}): {text}",
-                GLTF_EXTENSIONS.join(", ")
-            ))
-        } else {
-            err(format!("not a valid glTF 2.0 file: {text}"))
-        }
-    })?;
+    let (json, blob) = split_glb(bytes).map_err(err)?;
+    let document = read_document(json).map_err(err)?;
     let mut warnings = Vec::new();
-    let unread: Vec<&str> = gltf.extensions_used().filter(|e| !GLTF_EXTENSIONS.contains(e)).collect();
+    let unread: Vec<&str> = document.extensions_used().filter(|e| !GLTF_EXTENSIONS.contains(e)).collect();
     if !unread.is_empty() {
         warnings.push(format!(
             "{}: extensions not read (drawn without them): {}",
@@ -64,88 +95,63 @@ pub fn parse_gltf(path: &Path, bytes: &[u8], scene_index: Option<usize>) -> Resu
             unread.join(", ")
         ));
     }
-    let document = &gltf.document;
     let scene = match scene_index {
         Some(i) => document.scenes().nth(i).ok_or_else(|| {
-            err(format!("the file has {} scenes: scene {i} does not exist", document.scenes().count()))
+            let n = document.scenes().count();
+            err(format!(
+                "scene {i} does not exist: the file has {n} scene{} (numbered from 0)",
+                if n == 1 { "" } else { "s" }
+            ))
         })?,
         None => document
             .default_scene()
             .or_else(|| document.scenes().next())
             .ok_or_else(|| err("the file has no scene".into()))?,
     };
-    // every accessor a primitive reads, checked before any buffer is loaded
-    for mesh in document.meshes() {
-        for prim in mesh.primitives() {
-            let accessors = prim.attributes().map(|(_, a)| a).chain(prim.indices());
-            for a in accessors {
-                if a.sparse().is_some() {
-                    return Err(err(format!("mesh {}: sparse accessors are not read", mesh.index())));
-                }
-                if a.count() > MAX_VERTICES {
-                    return Err(err(format!(
-                        "mesh {}: an accessor of {} elements, over the limit of {MAX_VERTICES}",
-                        mesh.index(),
-                        a.count()
-                    )));
-                }
+    let draws = walk(&document, &scene).map_err(err)?;
+    // every accessor a drawn primitive reads, checked before any buffer is loaded
+    let mut checked = vec![false; document.meshes().len()];
+    for (mesh, _) in &draws {
+        if !std::mem::replace(&mut checked[mesh.index()], true) {
+            for prim in mesh.primitives() {
+                check_primitive(mesh, &prim).map_err(err)?;
             }
         }
     }
+    let limit = crate::obj::model_byte_limit()?;
     let base = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let buffers = gltf::import_buffers(document, Some(base), gltf.blob.clone())
-        .map_err(|e| err(format!("cannot load its buffers: {e}")))?;
-    let images = if document.textures().next().is_some() {
-        gltf::import_images(document, Some(base), &buffers)
-            .map_err(|e| err(format!("cannot load its images: {e}")))?
-    } else {
-        Vec::new()
-    };
+    let buffers = load_buffers(&document, base, blob, limit).map_err(err)?;
     let name = path.file_stem().map_or_else(|| "gltf".to_string(), |s| s.to_string_lossy().into_owned());
-    // one texture per (image, wrap modes), made the first time a material samples it
-    let mut textures: std::collections::HashMap<(usize, [Wrap; 2]), usize> = std::collections::HashMap::new();
     let mut out = Scene { name, ..Scene::default() };
+    let mut images = Images { base, limit, decoded: Vec::new(), made: std::collections::HashMap::new() };
     // one mesh and one object per (mesh, primitive), made the first time a node draws it
     let mut made: std::collections::HashMap<(usize, usize), usize> = std::collections::HashMap::new();
     let mut notes = Notes::default();
-    // depth first, in the file's order: the roots and each node's children pushed last first
-    let roots: Vec<_> = scene.nodes().collect();
-    let mut stack: Vec<(gltf::Node<'_>, Mat4, usize)> =
-        roots.into_iter().rev().map(|n| (n, Mat4::IDENTITY, 0)).collect();
-    while let Some((node, parent, depth)) = stack.pop() {
-        if depth > MAX_DEPTH {
-            return Err(err(format!("the node hierarchy is deeper than {MAX_DEPTH} (or loops)")));
-        }
-        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-        if let Some(mesh) = node.mesh() {
-            for prim in mesh.primitives() {
-                let key = (mesh.index(), prim.index());
-                let object = match made.get(&key) {
-                    Some(&o) => o,
-                    None => {
-                        let mut m = primitive_mesh(&mesh, &prim, &buffers).map_err(err)?;
-                        let mut o = material_object(&mesh, &prim, out.meshes.len(), &mut notes);
-                        o.texture =
-                            base_texture(&prim, &images, &mut out, &mut textures, &mut notes).map_err(err)?;
-                        if o.texture.is_some() && m.uvs.is_none() {
-                            return Err(err(format!("{}: a base-colour texture without TEXCOORD_0", m.name)));
-                        }
-                        if o.texture.is_none() {
-                            // coordinates no texture reads are not kept (oit refuses them as unused)
-                            m.uvs = None;
-                        }
-                        out.meshes.push(m);
-                        out.objects.push(o);
-                        made.insert(key, out.objects.len() - 1);
-                        out.objects.len() - 1
+    for (mesh, world) in &draws {
+        for prim in mesh.primitives() {
+            let key = (mesh.index(), prim.index());
+            let object = match made.get(&key) {
+                Some(&o) => o,
+                None => {
+                    let mut m = primitive_mesh(mesh, &prim, &buffers).map_err(err)?;
+                    let mut o = material_object(mesh, &prim, out.meshes.len(), &mut notes);
+                    o.texture = base_texture(&document, &prim, &buffers, &mut images, &mut out, &mut notes)
+                        .map_err(err)?;
+                    if o.texture.is_some() && m.uvs.is_none() {
+                        return Err(err(format!("{}: a base-colour texture without TEXCOORD_0", m.name)));
                     }
-                };
-                out.instances.push(Instance { object, transform: world });
-            }
+                    if o.texture.is_none() {
+                        // coordinates no texture reads are not kept (oit refuses them as unused)
+                        m.uvs = None;
+                    }
+                    out.meshes.push(m);
+                    out.objects.push(o);
+                    made.insert(key, out.objects.len() - 1);
+                    out.objects.len() - 1
+                }
+            };
+            out.instances.push(Instance { object, transform: *world });
         }
-        // children pushed in reverse, so that they are drawn in the file's order
-        let children: Vec<_> = node.children().collect();
-        stack.extend(children.into_iter().rev().map(|c| (c, world, depth + 1)));
         if out.instances.len() as u64 > Scene::MAX_INSTANCES {
             Scene::check_size(&out.name, out.triangle_count(), out.instances.len() as u64)?;
         }
@@ -156,7 +162,484 @@ pub fn parse_gltf(path: &Path, bytes: &[u8], scene_index: Option<usize>) -> Resu
         return Err(err("its scene draws no triangles (no node has a mesh of triangles)".into()));
     }
     Scene::check_size(&out.name, out.triangle_count(), out.instances.len() as u64)?;
+    // what loads is what every backend takes: a transform or a vertex past oit's limits is the
+    // file's error, not a scene that fails later
+    out.validate().map_err(|e| err(format!("it is not a scene oit can draw: {e}")))?;
     Ok(out)
+}
+
+/// A GLB chunk: its body and its type.
+type Chunk<'a> = (&'a [u8], [u8; 4]);
+
+/// An image's width, height and RGBA8 texels.
+type Pixels = (u32, u32, Vec<[u8; 4]>);
+
+/// The JSON of a GLB and its binary chunk, or the whole of a `.gltf` as JSON. Chunks after the
+/// JSON chunk other than `BIN` are skipped, as the format asks; a file cut short says where.
+fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> {
+    if !bytes.starts_with(b"glTF") {
+        return Ok((bytes, None));
+    }
+    let word = |at: usize| bytes.get(at..at + 4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]));
+    let (Some(version), Some(length)) = (word(4), word(8)) else {
+        return Err(format!("a GLB cut short in its 12-byte header (the file has {} bytes)", bytes.len()));
+    };
+    if version != 2 {
+        return Err(format!("a GLB of version {version}: only glTF 2.0 (version 2) is read"));
+    }
+    let length = length as usize;
+    if length > bytes.len() {
+        return Err(format!(
+            "a GLB cut short: its header says {length} bytes and the file has {}",
+            bytes.len()
+        ));
+    }
+    let mut rest = &bytes[12.min(length)..length];
+    let mut chunk = |what: &str| -> Result<Option<Chunk<'_>>, String> {
+        if rest.is_empty() {
+            return Ok(None);
+        }
+        if rest.len() < 8 {
+            return Err(format!("a GLB cut short in the header of its {what} chunk"));
+        }
+        let size = u32::from_le_bytes([rest[0], rest[1], rest[2], rest[3]]) as usize;
+        let kind = [rest[4], rest[5], rest[6], rest[7]];
+        let body = &rest[8..];
+        if size > body.len() {
+            return Err(format!(
+                "a GLB cut short in its {} chunk: {size} bytes announced, {} there",
+                if &kind == b"JSON" {
+                    "JSON"
+                } else if &kind == b"BIN\0" {
+                    "BIN"
+                } else {
+                    what
+                },
+                body.len()
+            ));
+        }
+        rest = &body[size..];
+        Ok(Some((&body[..size], kind)))
+    };
+    let json = match chunk("JSON")? {
+        Some((json, kind)) if &kind == b"JSON" => json,
+        Some((_, kind)) => {
+            return Err(format!(
+                "a GLB whose first chunk is not JSON (its type is {:?})",
+                String::from_utf8_lossy(&kind)
+            ));
+        }
+        None => return Err("a GLB without its JSON chunk".into()),
+    };
+    let mut bin = None;
+    while let Some((body, kind)) = chunk("next")? {
+        if &kind == b"BIN\0" {
+            if bin.is_some() {
+                return Err("a GLB of two BIN chunks (it may have one)".into());
+            }
+            bin = Some(body);
+        }
+    }
+    Ok((json, bin))
+}
+
+/// The glTF document of `json`: parsed, the indices the `gltf` crate's own checks follow
+/// checked first, then checked by the crate (indices, enumerations, required fields and
+/// extensions).
+fn read_document(json: &[u8]) -> Result<gltf::Document, String> {
+    let root: gltf::json::Root = gltf::json::deserialize::from_slice(json).map_err(|e| {
+        if e.is_syntax() || e.is_eof() {
+            format!("not a glTF file: its JSON does not parse ({e})")
+        } else {
+            format!("its JSON is not a glTF 2.0 document: {e}")
+        }
+    })?;
+    // the crate's check of a primitive reads its POSITION accessor without checking the index
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            for (semantic, index) in &prim.attributes {
+                if index.value() >= root.accessors.len() {
+                    return Err(format!(
+                        "mesh {m} primitive {p}: {} names accessor {}, and the file has {}",
+                        semantic.to_string(),
+                        index.value(),
+                        root.accessors.len()
+                    ));
+                }
+            }
+        }
+    }
+    gltf::Document::from_json(root).map_err(|e| match e {
+        gltf::Error::Validation(errors) => {
+            let listed: Vec<String> =
+                errors.iter().take(LISTED_ERRORS).map(|(path, e)| format!("{path}: {e}")).collect();
+            let more = errors.len().saturating_sub(LISTED_ERRORS);
+            let text = format!(
+                "{}{}",
+                listed.join("; "),
+                if more > 0 { format!("; {more} more") } else { String::new() }
+            );
+            // a required extension the crate has no reader for is refused by it, by name (and
+            // oit builds it with readers for only those it draws, and volume's, to warn that it
+            // is not)
+            if errors.iter().any(|(path, _)| path.as_str().starts_with("extensionsRequired")) {
+                format!(
+                    "the file requires an extension oit does not read (it reads {}): {text}",
+                    GLTF_EXTENSIONS.join(", ")
+                )
+            } else {
+                format!("not a valid glTF 2.0 file: {text}")
+            }
+        }
+        other => format!("not a valid glTF 2.0 file: {other}"),
+    })
+}
+
+/// The meshes `scene` draws and the world transform of each, depth first in the file's order.
+/// The hierarchy must be a set of trees (glTF's rule): a node reached twice — a loop, or a node
+/// with two parents — is refused, which also bounds the walk by the file's nodes.
+fn walk<'a>(
+    document: &'a gltf::Document,
+    scene: &gltf::Scene<'a>,
+) -> Result<Vec<(gltf::Mesh<'a>, Mat4)>, String> {
+    let mut seen = vec![false; document.nodes().len()];
+    let mut draws = Vec::new();
+    let roots: Vec<_> = scene.nodes().collect();
+    let mut stack: Vec<(gltf::Node<'_>, Mat4, usize)> =
+        roots.into_iter().rev().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+    while let Some((node, parent, depth)) = stack.pop() {
+        if depth > MAX_DEPTH {
+            return Err(format!("the node hierarchy is deeper than {MAX_DEPTH}"));
+        }
+        if std::mem::replace(&mut seen[node.index()], true) {
+            return Err(format!(
+                "node {} is reached twice from scene {}: the node hierarchy loops, or a node has two \
+                 parents (glTF's nodes form trees)",
+                node.index(),
+                scene.index()
+            ));
+        }
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        if let Some(mesh) = node.mesh() {
+            draws.push((mesh, world));
+        }
+        // children pushed in reverse, so that they are drawn in the file's order
+        let children: Vec<_> = node.children().collect();
+        stack.extend(children.into_iter().rev().map(|c| (c, world, depth + 1)));
+    }
+    Ok(draws)
+}
+
+/// Checks every accessor `prim` will have read: [`check_accessor`] with the types glTF allows
+/// for its attribute.
+fn check_primitive(mesh: &gltf::Mesh<'_>, prim: &gltf::Primitive<'_>) -> Result<(), String> {
+    use gltf::Semantic;
+    use gltf::accessor::DataType::{F32, U8, U16, U32};
+    use gltf::accessor::Dimensions::{Scalar, Vec2, Vec3, Vec4};
+    let at = format!("mesh {} primitive {}", mesh.index(), prim.index());
+    for (semantic, accessor) in prim.attributes() {
+        let allowed: (&[gltf::accessor::Dimensions], &[gltf::accessor::DataType]) = match semantic {
+            Semantic::Positions | Semantic::Normals => (&[Vec3], &[F32]),
+            Semantic::TexCoords(0) => (&[Vec2], &[F32, U8, U16]),
+            Semantic::Colors(0) => (&[Vec3, Vec4], &[F32, U8, U16]),
+            // the others are not read
+            _ => continue,
+        };
+        check_accessor(&accessor, &format!("{at}: {}", semantic.to_string()), allowed)?;
+    }
+    if let Some(indices) = prim.indices() {
+        check_accessor(&indices, &format!("{at}: its indices"), (&[Scalar], &[U8, U16, U32]))?;
+    }
+    Ok(())
+}
+
+/// Checks an accessor before it is read: not sparse, of a type in `allowed`, of 1 to
+/// [`MAX_VERTICES`] elements, its offsets and stride aligned to its components, its elements
+/// within its buffer view and the view within its buffer (as the buffer declares its length; the
+/// buffer's data is checked against that when loaded).
+fn check_accessor(
+    a: &gltf::Accessor<'_>,
+    what: &str,
+    allowed: (&[gltf::accessor::Dimensions], &[gltf::accessor::DataType]),
+) -> Result<(), String> {
+    let what = format!("{what} (accessor {})", a.index());
+    if a.sparse().is_some() {
+        return Err(format!("{what}: sparse accessors are not read"));
+    }
+    if !allowed.0.contains(&a.dimensions()) || !allowed.1.contains(&a.data_type()) {
+        return Err(format!(
+            "{what}: of type {:?} {:?}, which glTF does not allow there",
+            a.dimensions(),
+            a.data_type()
+        ));
+    }
+    let count = a.count();
+    if count == 0 {
+        return Err(format!("{what}: an accessor of 0 elements (glTF asks for 1 or more)"));
+    }
+    if count > MAX_VERTICES {
+        return Err(format!("{what}: an accessor of {count} elements, over the limit of {MAX_VERTICES}"));
+    }
+    let Some(view) = a.view() else {
+        return Err(format!("{what}: an accessor without a buffer view"));
+    };
+    let component = a.data_type().size() as u64;
+    let element = a.size() as u64;
+    let stride = view.stride().map_or(element, |s| s as u64);
+    let (offset, view_offset) = (a.offset() as u64, view.offset() as u64);
+    // offsets are any u64 the file writes: sums saturate (a saturated end is past any view)
+    if !offset.is_multiple_of(component) || !offset.wrapping_add(view_offset).is_multiple_of(component) {
+        return Err(format!(
+            "{what}: misaligned: its offset {offset} in buffer view {} (at {view_offset} in its buffer) is \
+             not a multiple of its {component}-byte components",
+            view.index()
+        ));
+    }
+    if stride < element || !stride.is_multiple_of(component) {
+        return Err(format!(
+            "{what}: buffer view {}'s byteStride {stride} does not fit its {element}-byte elements",
+            view.index()
+        ));
+    }
+    // count ≤ 2^26 and stride ≤ 252 (the crate checks it): their product does not overflow
+    let end = offset.saturating_add(stride * (count as u64 - 1) + element);
+    if end > view.length() as u64 {
+        return Err(format!(
+            "{what}: {count} elements from byte {offset} end at byte {end}, past the {} bytes of buffer view {}",
+            view.length(),
+            view.index()
+        ));
+    }
+    check_view(&view)
+}
+
+/// Checks that a buffer view lies within its buffer (as the buffer declares its length).
+fn check_view(view: &gltf::buffer::View<'_>) -> Result<(), String> {
+    let end = (view.offset() as u64).saturating_add(view.length() as u64);
+    let buffer = view.buffer();
+    if end > buffer.length() as u64 {
+        return Err(format!(
+            "buffer view {} ends at byte {end}, past the {} bytes of buffer {}",
+            view.index(),
+            buffer.length(),
+            buffer.index()
+        ));
+    }
+    Ok(())
+}
+
+/// The data of every buffer: the GLB's binary chunk (borrowed), a data URI or a file beside the
+/// glTF file; each at least as long as it declares.
+fn load_buffers<'b>(
+    document: &gltf::Document,
+    base: &Path,
+    blob: Option<&'b [u8]>,
+    limit: u64,
+) -> Result<Vec<Cow<'b, [u8]>>, String> {
+    let mut out = Vec::new();
+    for buffer in document.buffers() {
+        let what = format!("buffer {}", buffer.index());
+        let data = match buffer.source() {
+            gltf::buffer::Source::Bin => Cow::Borrowed(
+                blob.ok_or_else(|| format!("{what} is the GLB's binary chunk, and the file has none"))?,
+            ),
+            gltf::buffer::Source::Uri(uri) => Cow::Owned(read_uri(uri, base, limit, &what)?),
+        };
+        if data.len() < buffer.length() {
+            return Err(format!(
+                "{what} holds {} bytes, fewer than its byteLength of {}",
+                data.len(),
+                buffer.length()
+            ));
+        }
+        out.push(data);
+    }
+    Ok(out)
+}
+
+/// The bytes a URI names: a base64 data URI, or a file by a path relative to `base` (percent
+/// escapes decoded) read as a model file is (regular files only, at most `limit` bytes). Other
+/// schemes are refused.
+fn read_uri(uri: &str, base: &Path, limit: u64, what: &str) -> Result<Vec<u8>, String> {
+    if let Some(data) = uri.strip_prefix("data:") {
+        let Some((_, payload)) = data.split_once(";base64,") else {
+            return Err(format!("{what}: a data URI that is not base64"));
+        };
+        return base64(payload).ok_or_else(|| format!("{what}: a data URI whose base64 does not decode"));
+    }
+    // a scheme is letters before a ':' that comes before any '/'
+    if let Some((scheme, _)) = uri.split_once(':')
+        && !scheme.contains('/')
+        && scheme.len() > 1
+    {
+        return Err(format!(
+            "{what}: the URI '{uri}' is not read (its scheme {scheme}: — oit reads relative paths and \
+             base64 data URIs)"
+        ));
+    }
+    let path = base.join(percent_decode(uri));
+    crate::obj::read_bounded_bytes(&path, limit, "glTF buffer and image")
+        .map_err(|e| format!("{what}: '{uri}': {}", describe(&path, e)))
+}
+
+/// A read error about `path` as a message part (the path once).
+fn describe(path: &Path, e: OitError) -> String {
+    match e {
+        OitError::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => {
+            format!("file {} not found", path.display())
+        }
+        OitError::Io { source, .. } => format!("cannot read {}: {source}", path.display()),
+        OitError::Obj { message, .. } => format!("{}: {message}", path.display()),
+        other => other.to_string(),
+    }
+}
+
+/// A URI's path with its `%XX` escapes decoded (a malformed escape kept as it is).
+fn percent_decode(uri: &str) -> PathBuf {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let hex = |b: u8| (b as char).to_digit(16).map(|d| d as u8);
+    let mut i = 0;
+    while i < bytes.len() {
+        if bytes[i] == b'%'
+            && let (Some(h), Some(l)) =
+                (bytes.get(i + 1).copied().and_then(hex), bytes.get(i + 2).copied().and_then(hex))
+        {
+            out.push((h << 4) | l);
+            i += 3;
+        } else {
+            out.push(bytes[i]);
+            i += 1;
+        }
+    }
+    #[cfg(unix)]
+    {
+        PathBuf::from(<std::ffi::OsString as std::os::unix::ffi::OsStringExt>::from_vec(out))
+    }
+    #[cfg(not(unix))]
+    {
+        PathBuf::from(String::from_utf8_lossy(&out).into_owned())
+    }
+}
+
+/// Standard base64 (padding optional, no whitespace); `None` for any other character.
+fn base64(text: &str) -> Option<Vec<u8>> {
+    let value = |c: u8| -> Option<u32> {
+        Some(match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' | b'-' => 62,
+            b'/' | b'_' => 63,
+            _ => return None,
+        } as u32)
+    };
+    let text = text.trim_end_matches('=').as_bytes();
+    if text.len() % 4 == 1 {
+        return None;
+    }
+    let mut out = Vec::with_capacity(text.len() / 4 * 3 + 2);
+    for group in text.chunks(4) {
+        let mut bits = 0u32;
+        for &c in group {
+            bits = (bits << 6) | value(c)?;
+        }
+        bits <<= 6 * (4 - group.len() as u32);
+        let bytes = bits.to_be_bytes();
+        out.extend_from_slice(&bytes[1..group.len()]);
+    }
+    Some(out)
+}
+
+/// The images decoded so far, and the textures made of them.
+struct Images<'p> {
+    base: &'p Path,
+    limit: u64,
+    /// Per image index, its decoded pixels once a material has sampled it.
+    decoded: Vec<Option<Pixels>>,
+    /// One texture per (image, wrap modes), made the first time a material samples it.
+    made: std::collections::HashMap<(usize, [Wrap; 2]), usize>,
+}
+
+impl Images<'_> {
+    /// Decodes image `index` of `document` (once).
+    fn decode(
+        &mut self,
+        document: &gltf::Document,
+        index: usize,
+        buffers: &[Cow<'_, [u8]>],
+    ) -> Result<&Pixels, String> {
+        if self.decoded.len() <= index {
+            self.decoded.resize_with(index + 1, || None);
+        }
+        if self.decoded[index].is_none() {
+            let json = document.as_json();
+            let image = json.images.get(index).ok_or_else(|| format!("image {index} does not exist"))?;
+            let what = match &image.name {
+                Some(n) => format!("image {index} ('{n}')"),
+                None => format!("image {index}"),
+            };
+            let mime = image.mime_type.as_ref().map(|m| m.0.as_str());
+            let bytes: Cow<'_, [u8]> = match (&image.buffer_view, &image.uri) {
+                (Some(v), _) => {
+                    let view = document
+                        .views()
+                        .nth(v.value())
+                        .ok_or_else(|| format!("{what}: buffer view {} does not exist", v.value()))?;
+                    check_view(&view).map_err(|e| format!("{what}: {e}"))?;
+                    let data = &buffers[view.buffer().index()];
+                    Cow::Borrowed(&data[view.offset()..view.offset() + view.length()])
+                }
+                (None, Some(uri)) => Cow::Owned(read_uri(uri, self.base, self.limit, &what)?),
+                (None, None) => return Err(format!("{what} has neither a uri nor a buffer view")),
+            };
+            self.decoded[index] = Some(decode_image(&bytes, mime, &what)?);
+        }
+        Ok(self.decoded[index].as_ref().expect("decoded above"))
+    }
+}
+
+/// Decodes a PNG or JPEG (by its MIME type, else by its bytes) into RGBA8, with limits: a side of
+/// at most [`Texture::MAX_SIDE`] and pixels of at most [`IMAGE_EXPANSION`] times its bytes, both
+/// checked before the pixels are allocated.
+fn decode_image(bytes: &[u8], mime: Option<&str>, what: &str) -> Result<Pixels, String> {
+    use image::ImageFormat;
+    let format = match mime {
+        Some("image/png") => ImageFormat::Png,
+        Some("image/jpeg") => ImageFormat::Jpeg,
+        _ => match image::guess_format(bytes) {
+            Ok(f @ (ImageFormat::Png | ImageFormat::Jpeg)) => f,
+            _ => return Err(format!("{what}: not a PNG or JPEG image (the formats glTF allows)")),
+        },
+    };
+    let undecoded = |e: image::ImageError| format!("{what} does not decode as {format:?}: {e}");
+    let reader = || image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
+    // the header first: sides and the pixels' size against the bytes, before any is allocated
+    let (width, height) = reader().into_dimensions().map_err(undecoded)?;
+    let most = (bytes.len() as u64).saturating_mul(IMAGE_EXPANSION).max(1 << 16);
+    if width > Texture::MAX_SIDE || height > Texture::MAX_SIDE {
+        return Err(format!(
+            "{what}: {width} × {height} pixels, over the largest side of a texture ({})",
+            Texture::MAX_SIDE
+        ));
+    }
+    if u64::from(width) * u64::from(height) * 4 > most {
+        return Err(format!(
+            "{what}: {width} × {height} pixels from {} bytes, more than its encoding can hold (refused \
+             before its pixels are allocated)",
+            bytes.len()
+        ));
+    }
+    let mut reader = reader();
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(Texture::MAX_SIDE);
+    limits.max_image_height = Some(Texture::MAX_SIDE);
+    limits.max_alloc = Some(most);
+    reader.limits(limits);
+    let image = reader.decode().map_err(undecoded)?;
+    let (width, height) = (image.width(), image.height());
+    let texels = image.into_rgba8().into_raw().chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect();
+    Ok((width, height, texels))
 }
 
 /// What the file asked for that oit does not draw yet: one warning each.
@@ -184,17 +667,18 @@ impl Notes {
     }
 }
 
-/// The mesh of one primitive: triangles from its mode, indices or vertex order.
+/// The mesh of one primitive: triangles from its mode, indices or vertex order. Its accessors
+/// were checked ([`check_primitive`]) and its buffers loaded.
 fn primitive_mesh(
     mesh: &gltf::Mesh<'_>,
     prim: &gltf::Primitive<'_>,
-    buffers: &[gltf::buffer::Data],
+    buffers: &[Cow<'_, [u8]>],
 ) -> Result<Mesh, String> {
     let name = match mesh.name() {
         Some(n) => format!("{n} #{}", prim.index()),
         None => format!("mesh {} #{}", mesh.index(), prim.index()),
     };
-    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
     let positions: Vec<Vec3> = reader
         .read_positions()
         .ok_or_else(|| format!("{name}: a primitive without POSITION"))?
@@ -203,6 +687,7 @@ fn primitive_mesh(
     let n = positions.len() as u32;
     let order: Vec<u32> = match reader.read_indices() {
         Some(i) => i.into_u32().collect(),
+        None if prim.indices().is_some() => return Err(format!("{name}: its indices cannot be read")),
         None => (0..n).collect(),
     };
     if let Some(&bad) = order.iter().find(|&&i| i >= n) {
@@ -253,10 +738,11 @@ fn primitive_mesh(
 /// The primitive's base-colour texture, added to `out.textures` the first time (per image and
 /// wrap modes); `None` where its material has none (or one on another coordinate set, noted).
 fn base_texture(
+    document: &gltf::Document,
     prim: &gltf::Primitive<'_>,
-    images: &[gltf::image::Data],
+    buffers: &[Cow<'_, [u8]>],
+    images: &mut Images<'_>,
     out: &mut Scene,
-    made: &mut std::collections::HashMap<(usize, [Wrap; 2]), usize>,
     notes: &mut Notes,
 ) -> Result<Option<usize>, String> {
     let Some(info) = prim.material().pbr_metallic_roughness().base_color_texture() else {
@@ -275,31 +761,15 @@ fn base_texture(
     let sampler = texture.sampler();
     let wraps = [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())];
     let index = texture.source().index();
-    if let Some(&t) = made.get(&(index, wraps)) {
+    if let Some(&t) = images.made.get(&(index, wraps)) {
         return Ok(Some(t));
     }
-    let image = images.get(index).ok_or_else(|| format!("image {index} was not loaded"))?;
     let name = texture.source().name().map_or_else(|| format!("image {index}"), str::to_string);
-    let texels =
-        rgba8(image).ok_or_else(|| format!("{name}: pixels of format {:?} are not read", image.format))?;
-    let t = Texture::new(name, image.width, image.height, texels, wraps).map_err(|e| e.to_string())?;
+    let (width, height, texels) = images.decode(document, index, buffers)?.clone();
+    let t = Texture::new(name, width, height, texels, wraps).map_err(|e| e.to_string())?;
     out.textures.push(t);
-    made.insert((index, wraps), out.textures.len() - 1);
+    images.made.insert((index, wraps), out.textures.len() - 1);
     Ok(Some(out.textures.len() - 1))
-}
-
-/// An image's pixels as RGBA8 (grey as RGB, no alpha as 255); `None` for the 16-bit and float
-/// formats.
-fn rgba8(image: &gltf::image::Data) -> Option<Vec<[u8; 4]>> {
-    use gltf::image::Format;
-    let p = &image.pixels;
-    Some(match image.format {
-        Format::R8G8B8A8 => p.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect(),
-        Format::R8G8B8 => p.chunks_exact(3).map(|c| [c[0], c[1], c[2], 255]).collect(),
-        Format::R8G8 => p.chunks_exact(2).map(|c| [c[0], c[0], c[0], c[1]]).collect(),
-        Format::R8 => p.iter().map(|&c| [c, c, c, 255]).collect(),
-        _ => return None,
-    })
 }
 
 /// The object of one primitive: its material as oit reads it.
@@ -455,7 +925,7 @@ mod tests {
         let e = text(parse_gltf(Path::new("cut.glb"), &whole[..whole.len() - 20], None));
         assert!(e.contains("cut.glb"), "{e}");
         let e = text(parse_gltf(Path::new("x.gltf"), br#"{"hello":1}"#, None));
-        assert!(e.contains("not a valid glTF"), "{e}");
+        assert!(e.contains("not a glTF 2.0 document"), "{e}");
         let mut bin = quad_bin();
         bin[48..50].copy_from_slice(&9u16.to_le_bytes());
         let e = text(parse_gltf(Path::new("i.glb"), &glb(&document(NODES, MESHES, BLEND, ""), &bin), None));
@@ -521,5 +991,509 @@ mod tests {
         assert_eq!((s.objects[0].texture, s.objects[1].texture), (Some(0), None));
         assert_eq!(s.meshes[0].uvs.as_ref().map(Vec::len), Some(4));
         assert!(s.meshes[1].uvs.is_none(), "coordinates no texture reads are dropped");
+    }
+
+    /// The quad document of [`document`] with `edits` (pairs of text and its replacement) made.
+    fn edited(edits: &[(&str, &str)]) -> String {
+        let mut json = document(NODES, MESHES, BLEND, "");
+        for (from, to) in edits {
+            assert!(json.contains(from), "{from} is in the document");
+            json = json.replacen(from, to, 1);
+        }
+        json
+    }
+
+    /// The error of `bytes` as `name`, checked to be a model error naming the file; a panic
+    /// fails the test with the input's name.
+    fn refused(name: &str, bytes: &[u8]) -> String {
+        let result = std::panic::catch_unwind(|| parse_gltf(Path::new(name), bytes, None));
+        match result {
+            Ok(Err(e @ OitError::Model { .. })) => {
+                let text = e.to_string();
+                assert!(text.contains(name), "{text}");
+                text
+            }
+            Ok(Err(other)) => panic!("{name}: not a model error: {other:?}"),
+            Ok(Ok(_)) => panic!("{name}: loaded"),
+            Err(_) => panic!("{name}: panicked"),
+        }
+    }
+
+    /// `bytes` with the GLB header's length set to their length (a file cut and its header
+    /// mended, so the cut is found in a chunk).
+    fn mended(bytes: &[u8]) -> Vec<u8> {
+        let mut out = bytes.to_vec();
+        let n = out.len() as u32;
+        out[8..12].copy_from_slice(&n.to_le_bytes());
+        out
+    }
+
+    #[test]
+    fn truncated_glbs_are_refused_where_cut() {
+        let whole = glb(&document(NODES, MESHES, BLEND, ""), &quad_bin());
+        let json_len = u32::from_le_bytes(whole[12..16].try_into().unwrap()) as usize;
+        let bin_at = 20 + json_len;
+        // in the magic (then not a GLB: not JSON either), in the header, in each chunk's header
+        // and body
+        for cut in [0, 3] {
+            let e = refused("cut.glb", &whole[..cut]);
+            assert!(e.contains("not a glTF file") && e.contains("does not parse"), "{cut}: {e}");
+        }
+        for cut in [4, 7, 11] {
+            let e = refused("cut.glb", &whole[..cut]);
+            assert!(e.contains("cut short in its 12-byte header"), "{cut}: {e}");
+        }
+        for cut in
+            [12, 17, 19, 20, 40, bin_at - 1, bin_at, bin_at + 5, bin_at + 8, bin_at + 30, whole.len() - 1]
+        {
+            let e = refused("cut.glb", &whole[..cut]);
+            assert!(e.contains("cut short: its header says"), "{cut}: {e}");
+        }
+        // the header mended to the cut length: the cut is found in its chunk
+        let e = refused("cut.glb", &mended(&whole[..12]));
+        assert!(e.contains("without its JSON chunk"), "{e}");
+        let e = refused("cut.glb", &mended(&whole[..17]));
+        assert!(e.contains("cut short in the header of its JSON chunk"), "{e}");
+        for cut in [20, 40, bin_at - 1] {
+            let e = refused("cut.glb", &mended(&whole[..cut]));
+            assert!(e.contains("cut short in its JSON chunk"), "{cut}: {e}");
+        }
+        let e = refused("cut.glb", &mended(&whole[..bin_at + 5]));
+        assert!(e.contains("cut short in the header of its next chunk"), "{e}");
+        for cut in [bin_at + 8, bin_at + 30, whole.len() - 1] {
+            let e = refused("cut.glb", &mended(&whole[..cut]));
+            assert!(e.contains("cut short in its BIN chunk"), "{cut}: {e}");
+        }
+        // the JSON whole and the BIN chunk gone: its buffer has no data
+        let e = refused("cut.glb", &mended(&whole[..bin_at]));
+        assert!(e.contains("buffer 0 is the GLB's binary chunk, and the file has none"), "{e}");
+        // every cut, mended or not: an error, never a panic
+        for cut in 0..whole.len() {
+            refused("cut.glb", &whole[..cut]);
+            if cut >= 12 {
+                refused("cut.glb", &mended(&whole[..cut]));
+            }
+        }
+        // another version, a first chunk that is not JSON
+        let mut v1 = whole.clone();
+        v1[4] = 1;
+        assert!(refused("v1.glb", &v1).contains("version 1"));
+        let mut bin_first = whole.clone();
+        bin_first[16..20].copy_from_slice(b"BIN\0");
+        assert!(refused("b.glb", &bin_first).contains("first chunk is not JSON"));
+    }
+
+    #[test]
+    fn json_that_is_not_gltf_is_refused() {
+        for (json, says) in [
+            (&br#"{"hello":1}"#[..], "its JSON is not a glTF 2.0 document: missing field `asset`"),
+            (b"[1, 2, 3]", "its JSON is not a glTF 2.0 document"),
+            (br#"{"asset":{"version":"2.0"},"meshes":7}"#, "its JSON is not a glTF 2.0 document"),
+            (b"\x00\x01\x02 binary", "not a glTF file: its JSON does not parse"),
+            (br#"{"asset":"#, "not a glTF file: its JSON does not parse"),
+            (b"", "not a glTF file: its JSON does not parse"),
+        ] {
+            let e = refused("x.gltf", json);
+            assert!(e.contains(says), "{e}");
+            // the same in a GLB's JSON chunk
+            let e = refused("x.glb", &glb(std::str::from_utf8(json).unwrap_or("\u{1}"), &quad_bin()));
+            assert!(e.contains("JSON"), "{e}");
+        }
+        // glTF's shape, its indices broken: the crate's checks, listed
+        let e = refused("x.glb", &glb(&edited(&[(r#""bufferView":1,"#, r#""bufferView":7,"#)]), &quad_bin()));
+        assert!(e.contains("not a valid glTF 2.0 file") && e.contains("accessors[1].bufferView"), "{e}");
+        // a POSITION past the accessors, which the crate's own check would index unchecked
+        let e = refused(
+            "x.glb",
+            &glb(&edited(&[(r#""POSITION":0},"indices""#, r#""POSITION":9},"indices""#)]), &quad_bin()),
+        );
+        assert!(e.contains("POSITION names accessor 9, and the file has 2"), "{e}");
+    }
+
+    #[test]
+    fn accessors_out_of_range_or_misaligned_are_refused() {
+        let bin = quad_bin();
+        for (edits, says) in [
+            // five positions in a view of four
+            (
+                &[(r#""count":4"#, r#""count":5"#)][..],
+                "5 elements from byte 0 end at byte 60, past the 48 bytes of buffer view 0",
+            ),
+            // offsets near 2^64: no overflow, past the view
+            (
+                &[(
+                    r#""componentType":5126,"count":4"#,
+                    r#""byteOffset":18446744073709551612,"componentType":5126,"count":4"#,
+                )],
+                "end at byte 18446744073709551615, past the 48 bytes",
+            ),
+            (
+                &[(
+                    r#""byteOffset":0,"byteLength":48}"#,
+                    r#""byteOffset":18446744073709551612,"byteLength":48}"#,
+                )],
+                "buffer view 0 ends at byte 18446744073709551615, past the 60 bytes of buffer 0",
+            ),
+            // an offset within the view, the last element past it
+            (
+                &[(r#""componentType":5126,"count":4"#, r#""byteOffset":12,"componentType":5126,"count":4"#)],
+                "end at byte 60, past the 48 bytes",
+            ),
+            // misaligned: a float at byte 2 of its view, the view at an odd byte of its buffer
+            (
+                &[(r#""componentType":5126,"count":4"#, r#""byteOffset":2,"componentType":5126,"count":3"#)],
+                "misaligned: its offset 2",
+            ),
+            (
+                &[(r#""byteOffset":48,"byteLength":12"#, r#""byteOffset":47,"byteLength":12"#)],
+                "misaligned: its offset 0 in buffer view 1 (at 47 in its buffer)",
+            ),
+            // a stride shorter than the elements, or not of whole components
+            (
+                &[(
+                    r#""byteOffset":0,"byteLength":48}"#,
+                    r#""byteOffset":0,"byteLength":48,"byteStride":8}"#,
+                )],
+                "byteStride 8 does not fit its 12-byte elements",
+            ),
+            (
+                &[(
+                    r#""byteOffset":0,"byteLength":48}"#,
+                    r#""byteOffset":0,"byteLength":48,"byteStride":16}"#,
+                )],
+                "end at byte 60, past the 48 bytes",
+            ),
+            // a view past its buffer, a buffer longer than the data
+            (
+                &[(r#""byteOffset":48,"byteLength":12"#, r#""byteOffset":52,"byteLength":12"#)],
+                "buffer view 1 ends at byte 64, past the 60 bytes of buffer 0",
+            ),
+            (
+                &[
+                    (r#"{"byteLength":60}"#, r#"{"byteLength":1000}"#),
+                    (r#""byteOffset":48,"byteLength":12"#, r#""byteOffset":900,"byteLength":12"#),
+                ],
+                "buffer 0 holds 60 bytes, fewer than its byteLength of 1000",
+            ),
+            // types glTF does not allow for the attribute (the crate's reader would not return)
+            (
+                &[(r#""componentType":5123,"count":6"#, r#""componentType":5126,"count":3"#)],
+                "its indices (accessor 1): of type Scalar F32",
+            ),
+            (
+                &[(r#""componentType":5123,"count":6"#, r#""componentType":5122,"count":6"#)],
+                "its indices (accessor 1): of type Scalar I16",
+            ),
+            (&[(r#""type":"VEC3""#, r#""type":"VEC2""#)], "POSITION (accessor 0): of type Vec2 F32"),
+            (
+                &[(r#""componentType":5126,"count":4"#, r#""componentType":5121,"count":4"#)],
+                "POSITION (accessor 0): of type Vec3 U8",
+            ),
+            (&[(r#""count":4"#, r#""count":0"#)], "an accessor of 0 elements"),
+            // more than MAX_VERTICES elements: refused before any buffer is read or allocated
+            (
+                &[(r#""count":4"#, r#""count":1073741824"#)],
+                "an accessor of 1073741824 elements, over the limit of 67108864",
+            ),
+        ] {
+            let e = refused("a.glb", &glb(&edited(edits), &bin));
+            assert!(e.contains(says), "{edits:?}: {e}");
+        }
+        // a vertex colour of a type glTF does not allow
+        let json = edited(&[
+            (r#""POSITION":0},"indices""#, r#""POSITION":0,"COLOR_0":2},"indices""#),
+            (
+                r#""type":"SCALAR"}]"#,
+                r#""type":"SCALAR"},{"bufferView":0,"componentType":5120,"count":4,"type":"VEC4"}]"#,
+            ),
+        ]);
+        let e = refused("c.glb", &glb(&json, &bin));
+        assert!(e.contains("COLOR_0 (accessor 2): of type Vec4 I8"), "{e}");
+        // the same file with unsigned bytes loads (4 of them per vertex, 16 bytes in all)
+        let ok = json.replace(
+            r#""componentType":5120,"count":4,"type":"VEC4""#,
+            r#""componentType":5121,"count":4,"type":"VEC4","normalized":true"#,
+        );
+        let s = parse_gltf(Path::new("c.glb"), &glb(&ok, &bin), None).expect("u8 colours load");
+        assert!(s.meshes[0].colors.is_some());
+    }
+
+    #[test]
+    fn indices_past_the_vertices_are_refused() {
+        let mut bin = quad_bin();
+        bin[58..60].copy_from_slice(&4u16.to_le_bytes());
+        let e = refused("i.glb", &glb(&document(NODES, MESHES, BLEND, ""), &bin));
+        assert!(e.contains("quad #0: index 4 past its 4 vertices"), "{e}");
+        // u32 indices, in a strip
+        let mut bin = quad_bin();
+        bin.truncate(48);
+        for i in [0u32, 1, 2, 70000] {
+            bin.extend_from_slice(&i.to_le_bytes());
+        }
+        let json = edited(&[
+            (r#"{"byteLength":60}"#, r#"{"byteLength":64}"#),
+            (r#""byteOffset":48,"byteLength":12"#, r#""byteOffset":48,"byteLength":16"#),
+            (r#""componentType":5123,"count":6"#, r#""componentType":5125,"count":4"#),
+            (r#""indices":1,"material":0"#, r#""indices":1,"material":0,"mode":5"#),
+        ]);
+        let e = refused("i.glb", &glb(&json, &bin));
+        assert!(e.contains("index 70000 past its 4 vertices"), "{e}");
+    }
+
+    /// A folder of its own under the system's temporary folder.
+    fn temp(name: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("oit-gltf-test-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn external_and_data_uri_buffers() {
+        let dir = temp("external");
+        let json =
+            |uri: &str| edited(&[(r#"{"byteLength":60}"#, &format!(r#"{{"byteLength":60,"uri":"{uri}"}}"#))]);
+        // a missing file: named, and nothing loaded
+        let path = dir.join("scene.gltf");
+        std::fs::write(&path, json("missing.bin")).unwrap();
+        let e = load_gltf(&path, None).expect_err("the buffer is missing");
+        assert!(matches!(e, OitError::Model { .. }), "{e:?}");
+        let e = e.to_string();
+        assert!(e.contains("buffer 0: 'missing.bin': file") && e.contains("not found"), "{e}");
+        // the file beside it, its name percent-escaped in the URI
+        std::fs::write(dir.join("quad data.bin"), quad_bin()).unwrap();
+        std::fs::write(&path, json("quad%20data.bin")).unwrap();
+        let s = load_gltf(&path, None).expect("the external buffer loads");
+        assert_eq!(s.meshes[0].indices, [[0, 1, 2], [0, 2, 3]]);
+        // a folder, a file too short, another scheme, a data URI
+        std::fs::write(&path, json(".")).unwrap();
+        let e = load_gltf(&path, None).expect_err("a folder").to_string();
+        assert!(e.contains("not a regular file"), "{e}");
+        std::fs::write(dir.join("short.bin"), [0u8; 8]).unwrap();
+        std::fs::write(&path, json("short.bin")).unwrap();
+        let e = load_gltf(&path, None).expect_err("too short").to_string();
+        assert!(e.contains("buffer 0 holds 8 bytes, fewer than its byteLength of 60"), "{e}");
+        std::fs::write(&path, json("https://example.com/quad.bin")).unwrap();
+        let e = load_gltf(&path, None).expect_err("a web URI").to_string();
+        assert!(e.contains("scheme https: — oit reads relative paths"), "{e}");
+        let encoded = {
+            const ALPHABET: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+            let mut out = String::new();
+            for c in quad_bin().chunks(3) {
+                let b = [c[0], *c.get(1).unwrap_or(&0), *c.get(2).unwrap_or(&0)];
+                let n = u32::from_be_bytes([0, b[0], b[1], b[2]]);
+                for k in 0..=c.len() {
+                    out.push(ALPHABET[(n >> (18 - 6 * k)) as usize & 63] as char);
+                }
+            }
+            out
+        };
+        let s = parse_gltf(
+            Path::new("d.gltf"),
+            json(&format!("data:application/octet-stream;base64,{encoded}")).as_bytes(),
+            None,
+        )
+        .expect("a data URI loads");
+        assert_eq!(s.meshes[0].positions[2], Vec3::new(1.0, 1.0, 0.0));
+        let e = refused("d.gltf", json("data:application/octet-stream;base64,AB*D").as_bytes());
+        assert!(e.contains("base64 does not decode"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// The textured quad of `textures_and_their_samplers` with `png` as its image (`mime`: its
+    /// image's mimeType, if any).
+    fn textured(png: &[u8], mime: Option<&str>) -> Vec<u8> {
+        let mut bin = quad_bin();
+        for uv in [[0f32, 0.], [1., 0.], [1., 1.], [0., 1.]] {
+            uv.iter().for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
+        }
+        let png_at = bin.len();
+        bin.extend_from_slice(png);
+        let mime = mime.map_or_else(String::new, |m| format!(r#","mimeType":"{m}""#));
+        let json = format!(
+            r#"{{"asset":{{"version":"2.0"}},"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":2}},"indices":1,"material":0}}]}}],
+            "materials":[{{"pbrMetallicRoughness":{{"baseColorTexture":{{"index":0}}}},"doubleSided":true}}],
+            "textures":[{{"source":0}}],"images":[{{"bufferView":3{mime}}}],
+            "buffers":[{{"byteLength":{}}}],
+            "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":12}},
+                           {{"buffer":0,"byteOffset":60,"byteLength":32}},{{"buffer":0,"byteOffset":{png_at},"byteLength":{}}}],
+            "accessors":[{{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                         {{"bufferView":1,"componentType":5123,"count":6,"type":"SCALAR"}},
+                         {{"bufferView":2,"componentType":5126,"count":4,"type":"VEC2"}}]}}"#,
+            bin.len(),
+            png.len()
+        );
+        glb(&json, &bin)
+    }
+
+    /// A PNG of `width` × `height` grey pixels.
+    fn png(width: u32, height: u32) -> Vec<u8> {
+        let mut out = Vec::new();
+        image::ImageEncoder::write_image(
+            image::codecs::png::PngEncoder::new(&mut out),
+            &vec![128u8; (width * height) as usize],
+            width,
+            height,
+            image::ExtendedColorType::L8,
+        )
+        .unwrap();
+        out
+    }
+
+    /// CRC-32 (IEEE), for mending a PNG chunk.
+    fn crc32(bytes: &[u8]) -> u32 {
+        let mut crc = !0u32;
+        for &b in bytes {
+            crc ^= u32::from(b);
+            for _ in 0..8 {
+                crc = if crc & 1 != 0 { (crc >> 1) ^ 0xedb8_8320 } else { crc >> 1 };
+            }
+        }
+        !crc
+    }
+
+    #[test]
+    fn images_that_do_not_decode_are_refused() {
+        let good = png(2, 2);
+        let s = parse_gltf(Path::new("t.glb"), &textured(&good, Some("image/png")), None).expect("loads");
+        assert_eq!(s.textures[0].texels(), &[[128, 128, 128, 255]; 4][..], "grey read as RGB");
+        // without a mimeType (which the crate's importer would panic on): told by its bytes
+        parse_gltf(Path::new("t.glb"), &textured(&good, None), None).expect("a PNG by its bytes");
+        // garbage, a PNG cut short, a JPEG that is not one, bytes of no format glTF allows
+        let mut cut = good.clone();
+        cut.truncate(good.len() - 20);
+        for (bytes, mime, says) in [
+            (
+                &b"\x89PNG\r\n\x1a\n but garbage after the signature"[..],
+                Some("image/png"),
+                "image 0 does not decode as Png",
+            ),
+            (&cut[..], Some("image/png"), "image 0 does not decode as Png"),
+            (b"not a jpeg at all", Some("image/jpeg"), "image 0 does not decode as Jpeg"),
+            (b"GIF89a....", None, "image 0: not a PNG or JPEG image"),
+        ] {
+            let e = refused("t.glb", &textured(bytes, mime));
+            assert!(e.contains(says), "{e}");
+        }
+        // a small PNG whose header claims 16384 × 16384 (a GiB of RGBA): refused before the
+        // pixels are allocated, and one past the largest side oit takes
+        for (side, says) in [
+            (16384u32, "16384 × 16384 pixels from 70 bytes, more than its encoding can hold"),
+            (16385, "16385 × 16385 pixels, over the largest side of a texture (16384)"),
+        ] {
+            let mut big = png(1, 1);
+            // IHDR: length, type, width, height, ..., its CRC over type and data
+            big[16..20].copy_from_slice(&side.to_be_bytes());
+            big[20..24].copy_from_slice(&side.to_be_bytes());
+            let crc = crc32(&big[12..29]);
+            big[29..33].copy_from_slice(&crc.to_be_bytes());
+            let e = refused("t.glb", &textured(&big, Some("image/png")));
+            assert!(e.contains(says), "{side}: {e}");
+        }
+        // an image no material samples is not decoded
+        let unused = textured(b"garbage", Some("image/png"));
+        let json_len = u32::from_le_bytes(unused[12..16].try_into().unwrap()) as usize;
+        let json = std::str::from_utf8(&unused[20..20 + json_len])
+            .unwrap()
+            .replace(r#""material":0"#, r#""material":0,"mode":4"#);
+        let json = json.replace(
+            r#"{"pbrMetallicRoughness":{"baseColorTexture":{"index":0}},"doubleSided":true}"#,
+            r#"{"doubleSided":true}"#,
+        );
+        let bin = &unused[28 + json_len..];
+        parse_gltf(Path::new("t.glb"), &glb(&json, bin), None).expect("an image nothing samples is not read");
+    }
+
+    #[test]
+    fn sparse_accessors_are_refused_by_name() {
+        let json = edited(&[(
+            r#""count":4,"type":"VEC3","#,
+            r#""count":4,"type":"VEC3","sparse":{"count":1,"indices":{"bufferView":1,"componentType":5123},"values":{"bufferView":0}},"#,
+        )]);
+        let e = refused("s.glb", &glb(&json, &quad_bin()));
+        assert!(e.contains("POSITION (accessor 0): sparse accessors are not read"), "{e}");
+    }
+
+    #[test]
+    fn node_hierarchies_that_loop_or_share_are_refused() {
+        let with_nodes = |nodes: &str, roots: &str| {
+            let json = document(nodes, MESHES, BLEND, "")
+                .replace(r#""scenes":[{"nodes":[0,1]}]"#, &format!(r#""scenes":[{{"nodes":{roots}}}]"#));
+            glb(&json, &quad_bin())
+        };
+        for (nodes, roots, says) in [
+            // a node its own child, two nodes each other's, a loop back to the root
+            (r#"[{"mesh":0,"children":[0]}]"#, "[0]", "node 0 is reached twice from scene 0"),
+            (r#"[{"mesh":0,"children":[1]},{"mesh":0,"children":[0]}]"#, "[0]", "node 0 is reached twice"),
+            (
+                r#"[{"children":[1]},{"children":[2]},{"mesh":0,"children":[1]}]"#,
+                "[0]",
+                "node 1 is reached twice",
+            ),
+            // a node with two parents, a root listed twice
+            (r#"[{"children":[2]},{"children":[2]},{"mesh":0}]"#, "[0,1]", "node 2 is reached twice"),
+            (r#"[{"mesh":0}]"#, "[0,0]", "node 0 is reached twice"),
+        ] {
+            let e = refused("n.glb", &with_nodes(nodes, roots));
+            assert!(e.contains(says) && e.contains("loops, or a node has two parents"), "{nodes}: {e}");
+        }
+        // a chain deeper than the limit
+        let chain: Vec<String> = (0..300)
+            .map(|i| if i < 299 { format!(r#"{{"children":[{}]}}"#, i + 1) } else { r#"{"mesh":0}"#.into() })
+            .collect();
+        let e = refused("n.glb", &with_nodes(&format!("[{}]", chain.join(",")), "[0]"));
+        assert!(e.contains("deeper than 256"), "{e}");
+        // 40 levels of two children each, no mesh until the end: 2^40 paths, refused at once
+        let dag: Vec<String> =
+            (0..41)
+                .map(|i| {
+                    if i < 40 {
+                        format!(r#"{{"children":[{0},{0}]}}"#, i + 1)
+                    } else {
+                        r#"{"mesh":0}"#.into()
+                    }
+                })
+                .collect();
+        let started = std::time::Instant::now();
+        let e = refused("n.glb", &with_nodes(&format!("[{}]", dag.join(",")), "[0]"));
+        assert!(e.contains("is reached twice") && started.elapsed().as_secs() < 5, "{e}");
+    }
+
+    /// Every byte of a loadable GLB set to a few values in turn: each parses to an error or to a
+    /// scene that validates, never a panic.
+    #[test]
+    fn single_byte_edits_never_panic() {
+        let mut bin = quad_bin();
+        for uv in [[0f32, 0.], [1., 0.], [1., 1.], [0., 1.]] {
+            uv.iter().for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
+        }
+        let seeds =
+            [glb(&document(NODES, MESHES, BLEND, ""), &quad_bin()), textured(&png(2, 2), Some("image/png"))];
+        for seed in &seeds {
+            for at in 0..seed.len() {
+                for value in [0u8, 0xff, seed[at] ^ 1, b'9', b'"'] {
+                    let mut input = seed.clone();
+                    input[at] = value;
+                    let result = std::panic::catch_unwind(|| parse_gltf(Path::new("m.glb"), &input, None));
+                    match result {
+                        Ok(Ok(scene)) => scene.validate().expect("a scene that loads validates"),
+                        Ok(Err(_)) => {}
+                        Err(_) => panic!("byte {at} set to {value} panics"),
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_scene_of_a_file_is_picked_by_path_only() {
+        let e = load_scene_with("planes:2", Some(1)).expect_err("not a glTF file").to_string();
+        assert!(e.contains("--gltf-scene 1 picks a scene of a glTF file") && e.contains("'planes:2'"), "{e}");
+        assert_eq!(
+            load_scene_with("planes:2", None).expect("built in").name,
+            crate::load_scene("planes:2").unwrap().name
+        );
+        assert!(is_gltf_path("a/b.GLB") && is_gltf_path("x.gltf") && !is_gltf_path("x.obj"));
     }
 }

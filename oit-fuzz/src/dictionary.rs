@@ -163,6 +163,9 @@ pub const SCENE_WORDS: &[&str] = &[
     "obj/star-10000.obj",
     "obj/lines.obj",
     "obj/huge-vertex.obj",
+    "gltf/quad.glb",
+    "gltf/two-scenes.glb",
+    "gltf/data-uri.gltf",
     "nosuch.obj",
     "/dev/zero",
     "/dev/null",
@@ -328,7 +331,8 @@ pub fn values(option: &str) -> &'static [&'static str] {
         ],
         "model" => &["@hostile/calibration.json", "reports/fine/report.json", "nosuch.json", "/dev/zero", ""],
         "script" => &["@hostile/script.txt", "obj/triangle.obj", "nosuch.txt", "/dev/zero", "obj", ""],
-        "threads" | "max-peels" | "views" | "frames" | "warmup" | "curve-depth" | "curve-frames" => NUMBERS,
+        "threads" | "max-peels" | "views" | "frames" | "warmup" | "curve-depth" | "curve-frames"
+        | "gltf-scene" => NUMBERS,
         _ => &[],
     }
 }

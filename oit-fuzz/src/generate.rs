@@ -292,5 +292,14 @@ pub fn generate(rng: &mut Rng, target: Target, vocabulary: &Vocabulary) -> Vec<u
         }
         // the selftest's inputs are its corpus alone
         Target::Selftest => b"fine".to_vec(),
+        // a seed the harness writes, edited where the loader checks, a few times over
+        Target::Gltf => {
+            let seeds = crate::gltf::seeds();
+            let mut input = rng.pick(&seeds).1.clone();
+            for _ in 0..1 + rng.below(6) {
+                crate::gltf::edit(rng, &mut input);
+            }
+            input
+        }
     }
 }

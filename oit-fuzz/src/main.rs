@@ -19,6 +19,7 @@
 mod alloc;
 mod dictionary;
 mod generate;
+mod gltf;
 mod hostile;
 mod mutate;
 mod targets;
@@ -56,11 +57,13 @@ pub enum Target {
     Args,
     /// The harness's own check: inputs that fail on purpose.
     Selftest,
+    /// glTF files (GLB or `.gltf` JSON).
+    Gltf,
 }
 
 impl Target {
     /// Every target, in the order of the state file's index.
-    pub const ALL: [Target; 4] = [Target::Obj, Target::Scene, Target::Args, Target::Selftest];
+    pub const ALL: [Target; 5] = [Target::Obj, Target::Scene, Target::Args, Target::Selftest, Target::Gltf];
 
     /// The name, which is also the corpus folder's.
     pub fn name(self) -> &'static str {
@@ -69,6 +72,7 @@ impl Target {
             Target::Scene => "scene",
             Target::Args => "args",
             Target::Selftest => "selftest",
+            Target::Gltf => "gltf",
         }
     }
 
@@ -78,30 +82,33 @@ impl Target {
             Target::Obj => "obj",
             Target::Args => "args",
             Target::Scene | Target::Selftest => "txt",
+            Target::Gltf => "glb",
         }
     }
 
     /// The longest input made: an OBJ of 1 MiB holds a face of some 100,000 corners; scene
-    /// expressions and command lines are short.
+    /// expressions and command lines are short; a glTF seed may be a real scene of megabytes
+    /// (mutated only up to [`gltf::POOL_MAX_BYTES`]).
     pub fn max_len(self) -> usize {
         match self {
             Target::Obj => 1 << 20,
             Target::Scene => 4096,
             Target::Args => 8192,
             Target::Selftest => 64,
+            Target::Gltf => 16 << 20,
         }
     }
 
     fn parse_list(list: &str) -> Result<Vec<Target>, String> {
         if list == "all" {
-            return Ok(vec![Target::Obj, Target::Scene, Target::Args]);
+            return Ok(vec![Target::Obj, Target::Scene, Target::Args, Target::Gltf]);
         }
         list.split(',')
             .map(|name| {
                 Target::ALL
                     .into_iter()
                     .find(|t| t.name() == name.trim())
-                    .ok_or_else(|| format!("unknown target '{name}': use obj, scene, args or all"))
+                    .ok_or_else(|| format!("unknown target '{name}': use obj, scene, args, gltf or all"))
             })
             .collect()
     }
@@ -112,7 +119,7 @@ impl Target {
 #[derive(Parser, Debug)]
 #[command(name = "oit-fuzz")]
 struct Options {
-    /// What to fuzz: obj, scene, args, a comma-separated list, or all.
+    /// What to fuzz: obj, scene, args, gltf, a comma-separated list, or all.
     #[arg(long, default_value = "all")]
     target: String,
     /// Executions in all, the corpus's replay included [default: 10000 unless --seconds is given].
@@ -151,6 +158,10 @@ struct Options {
     /// No progress lines.
     #[arg(long)]
     quiet: bool,
+    /// Write the gltf target's seed files into this folder and exit (the committed
+    /// tests/fuzz/corpus/gltf/ is written so).
+    #[arg(long, value_name = "DIR")]
+    write_gltf_seeds: Option<PathBuf>,
     /// Internal: run as a worker.
     #[arg(long, hide = true)]
     worker: bool,
@@ -199,6 +210,15 @@ const MAX_RESTARTS: u32 = 100;
 
 fn main() -> ExitCode {
     let options = Options::parse();
+    if let Some(dir) = &options.write_gltf_seeds {
+        return match gltf::write_seeds(dir) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {}: {e}", dir.display());
+                ExitCode::from(2)
+            }
+        };
+    }
     let targets = match Target::parse_list(&options.target) {
         Ok(t) => t,
         Err(e) => {

@@ -55,6 +55,19 @@ fn words(target: Target) -> &'static [&'static str] {
             &["--", "-", "--help", "-h", "--version", "=", "render", "compare", "sweep", "info", "bench"]
         }
         Target::Selftest => &[],
+        Target::Gltf => &[
+            "\"count\":",
+            "\"byteOffset\":",
+            "\"byteStride\":4,",
+            "\"sparse\":{},",
+            "\"children\":[0],",
+            "\"uri\":\"missing.bin\",",
+            "glTF",
+            "JSON",
+            "BIN\0",
+            "5126",
+            "4294967295",
+        ],
     }
 }
 
@@ -69,8 +82,10 @@ pub fn mutate(
     args: &Vocabulary,
 ) {
     let rounds = 1 + rng.below(4);
+    // a glTF file's byte edits mostly break its JSON: one edit in four, the rest the format's own
+    let bytes = if target == Target::Gltf { 4 } else { 2 };
     for _ in 0..rounds {
-        if rng.one_in(2) {
+        if rng.one_in(bytes) {
             byte_edit(rng, target, input, other);
         } else {
             match target {
@@ -78,6 +93,7 @@ pub fn mutate(
                 Target::Scene => scene_edit(rng, input),
                 Target::Args => args_edit(rng, input, args),
                 Target::Selftest => {}
+                Target::Gltf => crate::gltf::edit(rng, input),
             }
         }
     }

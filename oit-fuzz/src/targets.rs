@@ -10,6 +10,10 @@
 //!   nesting, file paths), then validation and the camera.
 //! - `args`: the bytes as `oit`'s arguments, one a line: clap's parsing, then every check the
 //!   command makes before working (`oit_cli::validate`).
+//! - `gltf`: the bytes as a glTF file (GLB or `.gltf` JSON) in the worker's scratch folder (its
+//!   relative URIs resolve there): `oit_core::parse_gltf` (in memory), or one time in 32 written
+//!   and loaded (`oit_core::load_gltf`), one time in four with a scene index of 0 to 3; a scene
+//!   that loads must validate and hold triangles, then the camera as for `obj`.
 //!
 //! A sample of what is accepted (see `--render-every`) is rendered on the CPU backend at 8×8 at
 //! most, when the frame's storage is small, to catch what breaks downstream of the checks.
@@ -68,6 +72,7 @@ pub fn run(target: Target, input: &[u8], ctx: &Ctx) -> Verdict {
         Target::Scene => scene(&crate::hostile::expand(input, &ctx.hostile), ctx),
         Target::Args => args(&crate::hostile::expand(input, &ctx.hostile), ctx),
         Target::Selftest => selftest(input),
+        Target::Gltf => gltf(input, ctx),
     }
 }
 
@@ -131,6 +136,27 @@ fn obj(input: &[u8], ctx: &Ctx) -> Verdict {
             framed(Target::Obj, &scene, ctx)
         }
         Err(e) => Verdict::Refused(signature(Target::Obj, &e)),
+    }
+}
+
+fn gltf(input: &[u8], ctx: &Ctx) -> Verdict {
+    let path = ctx.scratch.join("input.glb");
+    let scene_index = (ctx.bits & 0x30 == 0).then_some(((ctx.bits >> 6) & 3) as usize);
+    let loaded = if ctx.bits.is_multiple_of(32) {
+        std::fs::write(&path, input).expect("the worker's scratch folder takes a file");
+        oit_core::load_gltf(&path, scene_index)
+    } else {
+        oit_core::parse_gltf(&path, input, scene_index)
+    };
+    match loaded {
+        Ok(scene) => {
+            if let Err(e) = scene.validate() {
+                panic!("a glTF file that loaded does not validate: {e}");
+            }
+            assert!(scene.triangle_count() > 0, "a glTF file that loaded has no triangles");
+            framed(Target::Gltf, &scene, ctx)
+        }
+        Err(e) => Verdict::Refused(signature(Target::Gltf, &e)),
     }
 }
 

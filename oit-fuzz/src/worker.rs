@@ -230,6 +230,10 @@ pub fn run(job: &Job) -> Result<(), String> {
             let mut inputs = load_corpus(&job.corpus, t);
             // the hostile inputs too large to commit (issue 41's huge polygons), after the corpus
             inputs.extend(crate::hostile::seeds(t));
+            if t == Target::Gltf {
+                // the repository's own glTF scenes
+                inputs.extend(crate::gltf::asset_seeds());
+            }
             Pool { seeds: inputs.len(), inputs, seen: HashSet::new() }
         })
         .collect();
@@ -238,6 +242,13 @@ pub fn run(job: &Job) -> Result<(), String> {
         .enumerate()
         .flat_map(|(i, p)| p.inputs.iter().map(move |input| (i, input.clone())))
         .collect();
+    // a glTF seed of megabytes is replayed, not mutated: its mutants would spend the run parsing
+    for (pool, t) in pools.iter_mut().zip(&job.targets) {
+        if *t == Target::Gltf {
+            pool.inputs.retain(|i| i.len() <= crate::gltf::POOL_MAX_BYTES);
+            pool.seeds = pool.inputs.len();
+        }
+    }
     let mut stats = Stats::default();
     for t in &job.targets {
         stats.targets.insert(t.name().into(), TargetStats::default());

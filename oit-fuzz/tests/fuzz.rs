@@ -52,6 +52,8 @@ fn corpus_replays_without_failures() {
     let corpus = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/fuzz/corpus");
     let files = |target: &str| std::fs::read_dir(corpus.join(target)).map_or(0, |d| d.count()) as u64;
     assert_eq!(executions(&text, "obj"), files("obj") + 2, "the huge stars ran after the corpus:\n{text}");
+    // the glTF seeds, and the repository's glTF scenes after them (those that are there)
+    assert!(files("gltf") >= 7 && executions(&text, "gltf") >= files("gltf"), "the glTF seeds ran:\n{text}");
     for input in ["scene/fifo.txt", "scene/grid-fifo.txt", "args/scene-fifo.args", "args/replot-empty.args"] {
         assert!(corpus.join(input).is_file(), "{input} is in the corpus");
     }
@@ -64,7 +66,7 @@ fn bounded_run_finds_nothing() {
     let (out, text) =
         fuzz("bounded", &["--target", "all", "--seed", "13", "--execs", "20000", "--seconds", "20"]);
     assert!(out.status.success(), "the bounded fuzz run failed:\n{text}");
-    for target in ["obj", "scene", "args"] {
+    for target in ["obj", "scene", "args", "gltf"] {
         assert!(executions(&text, target) >= 1000, "{target}: too few executions:\n{text}");
     }
 }
