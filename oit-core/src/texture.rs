@@ -236,7 +236,7 @@ fn encode16(v: u32) -> u8 {
 /// the box average of texels (2x, 2y), (2x+1, 2y), (2x, 2y+1), (2x+1, 2y+1) of `l`, each index
 /// clamped to `l` (a side of 1 repeats its texel; an odd side's last row or column is left out,
 /// as OpenGL's rounding down does). RGB is averaged in linear light, in integers: each code
-/// through [`linear16`], the sum of four rounded half up, the nearest code back; A (linear
+/// through `linear16`, the sum of four rounded half up, the nearest code back; A (linear
 /// already) as `(a + b + c + d + 2) / 4`. Integers throughout: the chain is the same on every
 /// host.
 pub fn downsample(l: &Level) -> Level {

@@ -29,7 +29,7 @@
 //!   a clear error, and so is a frame that would need more than [`MAX_TILES`] windows (without
 //!   `--memory`, more than [`AUTO_TILES`]: the device's refusal stands).
 //!
-//! Both decisions are one loop ([`windows`]), run by the frame ([`run_with`]) and, before any
+//! Both decisions are one loop (`windows`), run by the frame ([`run_with`]) and, before any
 //! frame, by [`forecast`], which refuses a window where its [`Plan::frame_bytes`] with its part
 //! of a counting pass is over its budget, as oit-cpu does (a window sized by a count is checked
 //! whole once the count is known, so its refusal gives the true ratio): `auto` reports the tiles
@@ -386,7 +386,7 @@ pub struct Forecast {
 
 /// The windows a frame of `settings` on `path` runs as and the storage it reports, foreseen from
 /// what a counting pass of the whole frame found, `counted` giving each window's part (its
-/// deepest pixel and fragments). The loop is [`run_with`]'s own ([`windows`]); each window is
+/// deepest pixel and fragments). The loop is [`run_with`]'s own (`windows`); each window is
 /// refused where the host's budget ([`host_budget`]) cannot hold its [`Plan::frame_bytes`] and
 /// `extra` bytes a pixel, before its count and after it, as oit-cpu refuses it: exact for
 /// oit-cpu and for a GPU backend that no device limit refuses (a storage binding's size is the
