@@ -82,6 +82,7 @@ pub mod metrics;
 mod obj;
 pub mod plan;
 mod procedural;
+mod rng;
 pub mod pulled;
 pub mod rules;
 mod scene;

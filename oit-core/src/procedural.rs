@@ -28,6 +28,7 @@ use std::path::Path;
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
 use crate::{AlphaMode, Instance, Mesh, Object, OitError, Scene, Texture, Wrap};
+use crate::rng::Rng;
 
 /// The built-in names, for messages.
 pub const BUILTIN_SCENES: &str = "default, bunny, armadillo, particles, foliage, glass, cad, planes:N, spheres:N, cluster:N, knot, coplanar, ties:N, near:N, grid:RxC:MESH, scale:S:SCENE, wall:F:SCENE, nowall:F:SCENE, particles:N, fence, untextured:SCENE";
@@ -572,25 +573,6 @@ pub fn spheres(n: u32) -> Scene {
         scene.instances.push(Instance { object: i as usize, transform: Mat4::from_scale(Vec3::splat(r)) });
     }
     scene
-}
-
-/// A small deterministic generator (xorshift*), so scenes do not change between runs or machines
-/// (and the crate's randomized tests name a failing case by its number).
-pub(crate) struct Rng(pub(crate) u64);
-
-impl Rng {
-    /// The next 64 bits.
-    pub(crate) fn next_u64(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-
-    /// A float in [0, 1), from the top 24 bits.
-    pub(crate) fn next_f32(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-    }
 }
 
 /// `cluster:N`: N spheres placed by a fixed seed in the unit cube, radii scaled so the cluster stays

@@ -23,7 +23,7 @@ use std::path::Path;
 
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 
-use crate::procedural::Rng;
+use crate::rng::Rng;
 use crate::{AlphaMode, Instance, Mesh, Object, OitError, Scene, Texture, Wrap};
 
 /// One scene of the set: its name, what it is, and its compressed GLB.

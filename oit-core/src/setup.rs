@@ -1206,7 +1206,7 @@ pub fn covers(t: &Triangle, x: u32, y: u32) -> Option<[i64; 3]> {
 mod tests {
     use super::*;
 
-    use crate::procedural::Rng;
+    use crate::rng::Rng;
 
     /// A float of any sign and of magnitudes from 2^-140 (subnormal squares) to 2^70 (squares
     /// past f32::MAX), or one of the values where the rules branch.
