@@ -78,6 +78,7 @@ mod frame;
 mod gltf;
 pub mod gpu_setup;
 pub mod metrics;
+pub mod msaa;
 mod obj;
 pub mod plan;
 mod procedural;

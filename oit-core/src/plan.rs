@@ -165,6 +165,15 @@ impl Plan {
     /// every backend; `backend` names the one asking, for the message).
     pub fn new(backend: &str, scene: &Scene, settings: &Settings) -> Result<Plan, OitError> {
         let technique = settings.technique;
+        if settings.samples > 1 && backend != "cpu" {
+            return Err(OitError::Unsupported {
+                backend: backend.into(),
+                what: format!(
+                    "--samples {}: per-sample coverage is not yet done on the GPU backends, only on cpu (docs/msaa.md)",
+                    settings.samples
+                ),
+            });
+        }
         if matches!(technique, Technique::Mdts { .. }) && settings.effect == Effect::Fresnel {
             return Err(OitError::Unsupported {
                 backend: backend.into(),
