@@ -909,7 +909,7 @@ impl Rasterizer {
     /// touched, so `samples == 1` runs exactly as before. The cut of an opaque pass does not
     /// apply here (the CPU backend refuses opaque objects with several samples).
     pub fn for_each_masked_fragment<F: Fn(&Fragment<'_>, u8) + Sync>(&self, samples: u32, f: F) -> u64 {
-        let n = self.scatter_tasks(|run| {
+        self.scatter_tasks(|run| {
             let mut n = 0u64;
             for i in run {
                 let (t, s) = (&self.setup.triangles[i], &self.edges[i]);
@@ -926,8 +926,7 @@ impl Rasterizer {
                 }
             }
             n
-        });
-        n
+        })
     }
 
     /// The fragment of `t` (traversal record `s`) at pixel (`x`, `y`) with edge functions `e`,

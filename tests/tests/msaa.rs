@@ -218,9 +218,9 @@ fn no_seam_along_shared_edges() {
     raster.for_each_masked_fragment(4, |f, mask| {
         colour.lock().unwrap().get_or_insert(f.color());
         frags[f.pixel as usize].fetch_add(1, Relaxed);
-        for i in 0..4 {
+        for (i, c) in covered[f.pixel as usize].iter().enumerate() {
             if mask >> i & 1 == 1 {
-                covered[f.pixel as usize][i].fetch_add(1, Relaxed);
+                c.fetch_add(1, Relaxed);
             }
         }
     });

@@ -203,7 +203,7 @@ fn supersampled(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         // the sample at (x + sx, y + sy) moved onto the centre (x + ½, y + ½): screen x by
         // ½ − sx, which is NDC x by 2(½ − sx)/W; screen y grows down, NDC y up
         let (dx, dy) = (2.0 * (0.5 - sx) / full_w, -2.0 * (0.5 - sy) / full_h);
-        let mut camera = ctx.camera.clone();
+        let mut camera = *ctx.camera;
         camera.proj = Mat4::from_translation(Vec3::new(dx, dy, 0.0)) * camera.proj;
         let raster = crate::raster::Rasterizer::new(ctx.scene, &camera, &single);
         let plan = oit_core::plan::Plan::new("cpu", ctx.scene, &single)?.on_path(oit_core::RasterPath::Cpu);
