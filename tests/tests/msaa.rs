@@ -353,3 +353,20 @@ fn refusals_name_what_is_not_done() {
     }
     assert!(Settings { supersample: true, ..settings(32, "reference") }.validate().is_err());
 }
+
+/// A multisampled frame tiled under `--memory` (each window's masked pass over its own pixels,
+/// the boxes cut to the window) is the untiled frame, for the reference and the exact techniques.
+#[test]
+fn tiled_frames_equal_untiled_at_samples() {
+    let scene = scene_of("bunny");
+    let cpu = CpuBackend::default();
+    for t in ["reference", "dfb", "ll", "fabs", "fabs:3"] {
+        let s = Settings { samples: 4, ..settings(96, t) };
+        let cam = camera(&scene, &s, View::default());
+        let whole = render(&cpu, &scene, &cam, &s);
+        let tiled = render(&cpu, &scene, &cam, &Settings { memory: Some(150 << 10), ..s.clone() });
+        assert!(tiled.stats.tiles > 1, "{t}: {} tiles", tiled.stats.tiles);
+        assert_eq!(whole.image, tiled.image, "{t}");
+        assert_eq!(whole.stats.fragments, tiled.stats.fragments, "{t}");
+    }
+}
