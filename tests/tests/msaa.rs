@@ -370,3 +370,25 @@ fn tiled_frames_equal_untiled_at_samples() {
         assert_eq!(whole.stats.fragments, tiled.stats.fragments, "{t}");
     }
 }
+
+/// The storage a multisampled frame reports is the plan's, the coverage masks included (4 bytes
+/// an entry), so the budget and the tiling forecast count them.
+#[test]
+fn storage_is_the_plans_with_the_masks() {
+    let scene = scene_of("bunny");
+    let cpu = CpuBackend::default();
+    for t in ["reference", "dfb", "ll", "fabs", "fabs:3"] {
+        let s = Settings { samples: 4, ..settings(64, t) };
+        let cam = camera(&scene, &s, View::default());
+        let f = render(&cpu, &scene, &cam, &s);
+        let plan = oit_core::plan::Plan::new("cpu", &scene, &s).unwrap();
+        let one = oit_core::plan::Plan::new("cpu", &scene, &Settings { samples: 1, ..s.clone() }).unwrap();
+        let counted = oit_core::plan::Counted { deepest: f.stats.max_layers, fragments: f.stats.fragments };
+        let pixels = s.pixel_count() as u64;
+        let masks = plan.storage_bytes(pixels, counted) - one.storage_bytes(pixels, counted);
+        assert!(masks > 0, "{t}");
+        // (the resolve state, counted once in the plan's figure, is not in Stats::storage_bytes)
+        let state = pixels * oit_core::plan::RESOLVE_STATE_BYTES;
+        assert_eq!(f.stats.storage_bytes, plan.storage_bytes(pixels, counted) - state, "{t}");
+    }
+}
