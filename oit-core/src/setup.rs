@@ -16,7 +16,9 @@
 //!   exact integer shift: its fragments are the full frame's there, bit for bit); bounding boxes
 //!   are clamped to the window;
 //! - coverage at pixel centres by 64-bit integer edge functions ([`edge`]) with the top-left fill
-//!   rule; no back-face culling; zero-area triangles are dropped here;
+//!   rule; no back-face culling; zero-area triangles are dropped here; with several samples a
+//!   pixel (`Settings::samples`, [`crate::msaa`]) the same functions and rule at each sample
+//!   position ([`sample_mask`]), the boxes sized by the samples' reach;
 //! - depth: NDC z interpolated linearly in screen space with barycentrics from the edge functions,
 //!   clamped to [0, 1]; normal and vertex colour perspective-correct (barycentrics weighted by
 //!   1/w); colour from [`Shading::shade`] ([`TriangleSetup::fragment`]);
