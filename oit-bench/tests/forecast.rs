@@ -122,9 +122,8 @@ fn gpu_predicted_tiles_and_storage_are_the_frames() {
         for memory in [None, Some(1 << 20), Some(150_000)] {
             let s = Settings { width, height, memory, ..Settings::default() };
             let what = format!("{} {path:?} --memory {memory:?}", b.name());
-            let (choice, _) =
-                resolve(b.as_ref(), &scene, &camera, &s, &tables, Budget::new(1.0, memory).unwrap())
-                    .unwrap_or_else(|e| panic!("{what}: {e}"));
+            let (choice, _) = resolve(b.as_ref(), &scene, &camera, &s, &tables, Budget::new(1.0, memory).unwrap())
+                .unwrap_or_else(|e| panic!("{what}: {e}"));
             for c in &choice.candidates {
                 let technique = c.technique.parse().unwrap();
                 let run = b.render(&scene, &camera, &Settings { technique, ..s.clone() });

@@ -194,9 +194,8 @@ pub fn parse_obj(path: &Path, text: &str) -> Result<Scene, OitError> {
             mesh.colors = Some(to_vec3(&m.vertex_color));
         }
         // OBJ's v runs up the image, oit's (glTF's) down it
-        let uvs = (m.texcoords.len() / 2 == m.positions.len() / 3 && !m.texcoords.is_empty()).then(|| {
-            m.texcoords.chunks_exact(2).map(|c| glam::Vec2::new(c[0], 1.0 - c[1])).collect::<Vec<_>>()
-        });
+        let uvs = (m.texcoords.len() / 2 == m.positions.len() / 3 && !m.texcoords.is_empty())
+            .then(|| m.texcoords.chunks_exact(2).map(|c| glam::Vec2::new(c[0], 1.0 - c[1])).collect::<Vec<_>>());
         material_of.push(m.material_id.filter(|&i| i < materials.len()));
         uvs_of.push(uvs);
         meshes.push(mesh);
@@ -215,8 +214,7 @@ pub fn parse_obj(path: &Path, text: &str) -> Result<Scene, OitError> {
         let Some(material) = material.map(|k| &materials[k]) else { continue };
         apply_material(&mut scene, i, material, uvs_of[i].take(), &dir, &mut warnings);
     }
-    scene.warnings =
-        prepared.warnings.iter().chain(&warnings).map(|w| format!("{}: {w}", path.display())).collect();
+    scene.warnings = prepared.warnings.iter().chain(&warnings).map(|w| format!("{}: {w}", path.display())).collect();
     scene.validate().map_err(|e| obj_err(None, e.to_string()))?;
     Ok(scene)
 }
@@ -259,10 +257,7 @@ fn apply_material(
             scene.textures.push(t);
             scene.objects[i].texture = Some(scene.textures.len() - 1);
         }
-        (Ok(_), None) => warnings.push(format!(
-            "material '{}' has a texture and its mesh no texture coordinates: drawn in its colour",
-            m.name
-        )),
+        (Ok(_), None) => warnings.push(format!("material '{}' has a texture and its mesh no texture coordinates: drawn in its colour", m.name)),
         (Err(e), _) => warnings.push(format!("material '{}': {e}: drawn in its colour", m.name)),
     }
 }
@@ -931,10 +926,7 @@ mod tests {
                    newmtl pane\nKd 1 1 1\nTr 0.75\nmap_Kd pane.png\n";
         std::fs::write(dir.join("scene.obj"), obj).unwrap();
         std::fs::write(dir.join("scene.mtl"), mtl).unwrap();
-        image::RgbaImage::from_raw(2, 1, vec![255, 0, 0, 255, 0, 0, 255, 128])
-            .unwrap()
-            .save(dir.join("pane.png"))
-            .unwrap();
+        image::RgbaImage::from_raw(2, 1, vec![255, 0, 0, 255, 0, 0, 255, 128]).unwrap().save(dir.join("pane.png")).unwrap();
         let s = load_obj(&dir.join("scene.obj")).expect("loads");
         s.validate().expect("valid");
         let by = |n: &str| s.objects.iter().find(|o| o.name.contains(n)).unwrap_or_else(|| panic!("{n}"));
@@ -945,29 +937,18 @@ mod tests {
         assert_eq!((pane.color.w, pane.texture), (0.25, Some(0)));
         assert_eq!(s.textures[0].texels(), &[[255, 0, 0, 255], [0, 0, 255, 128]]);
         let uvs = s.meshes[pane.mesh].uvs.as_ref().expect("coordinates kept");
-        assert_eq!(
-            uvs[..3],
-            [glam::Vec2::new(0.0, 1.0), glam::Vec2::new(1.0, 1.0), glam::Vec2::new(0.0, 0.0)]
-        );
+        assert_eq!(uvs[..3], [glam::Vec2::new(0.0, 1.0), glam::Vec2::new(1.0, 1.0), glam::Vec2::new(0.0, 0.0)]);
         assert!(s.meshes[by("(glass)").mesh].uvs.is_none(), "an untextured object's coordinates are dropped");
         // without its .mtl: oit's colour, one warning
         std::fs::remove_file(dir.join("scene.mtl")).unwrap();
         let s = load_obj(&dir.join("scene.obj")).expect("loads without its materials");
         assert!(s.objects.iter().all(|o| o.color == OBJ_COLOR && o.texture.is_none()));
-        assert!(
-            s.warnings.iter().any(|w| w.contains("materials (mtllib) were not read")),
-            "{:?}",
-            s.warnings
-        );
+        assert!(s.warnings.iter().any(|w| w.contains("materials (mtllib) were not read")), "{:?}", s.warnings);
         // a texture that is not there: the colour, one warning
         std::fs::write(dir.join("scene.mtl"), mtl).unwrap();
         std::fs::remove_file(dir.join("pane.png")).unwrap();
         let s = load_obj(&dir.join("scene.obj")).expect("loads without its texture");
-        assert!(
-            s.textures.is_empty() && s.warnings.iter().any(|w| w.contains("pane.png")),
-            "{:?}",
-            s.warnings
-        );
+        assert!(s.textures.is_empty() && s.warnings.iter().any(|w| w.contains("pane.png")), "{:?}", s.warnings);
         s.validate().expect("valid without the texture's coordinates");
         std::fs::remove_dir_all(&dir).ok();
     }

@@ -305,9 +305,10 @@ fn picks(spec: &Spec<'_>) -> String {
             .filter(|r| r[key]["median"].as_f64().is_some())
             .collect();
         let fastest = |ok: &dyn Fn(&Value) -> bool| {
-            of.iter().copied().filter(|r| ok(r)).min_by(|a, b| {
-                a[key]["median"].as_f64().unwrap().total_cmp(&b[key]["median"].as_f64().unwrap())
-            })
+            of.iter()
+                .copied()
+                .filter(|r| ok(r))
+                .min_by(|a, b| a[key]["median"].as_f64().unwrap().total_cmp(&b[key]["median"].as_f64().unwrap()))
         };
         let exact = fastest(&|r| r["epr"].as_f64() == Some(0.0) && r["lost"].as_u64() == Some(0));
         let close = fastest(&|r| r["epr"].as_f64().is_some_and(|e| e <= 0.01));
