@@ -127,6 +127,19 @@ pub struct SceneArgs {
     #[arg(long, value_name = "drop|tail", default_value = "drop")]
     pub overflow: String,
 
+    /// Samples a pixel: 1, 4 or 8 (the standard patterns of Vulkan and D3D). Above 1 a fragment
+    /// covers a pixel where its triangle covers any sample, carries its coverage mask, and is
+    /// composited per sample (MSAA: one shading a fragment); cpu only, with reference, dfb, ll
+    /// and fabs (docs/msaa.md).
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub samples: u32,
+
+    /// With --samples 4 or 8: the reference becomes the supersampled reference (every sample
+    /// rasterized and shaded as a pixel of its own), so that `oit compare` reports MSAA's own
+    /// error against supersampling. Other techniques ignore it.
+    #[arg(long)]
+    pub supersample: bool,
+
     /// Backend to render with: a name (cpu; wgpu, vulkan when compiled in), a comma-separated
     /// list, or all (every backend compiled in whose device is present).
     #[arg(long, value_name = "NAME|all", default_value = "cpu")]
@@ -199,6 +212,8 @@ impl SceneArgs {
             overflow: self.overflow.parse::<Overflow>()?,
             atomic_storage: self.atomic_storage.parse::<oit_core::AtomicStorage>()?,
             blend_target: self.blend_target.parse::<oit_core::BlendTarget>()?,
+            samples: self.samples,
+            supersample: self.supersample,
         };
         settings.validate()?;
         check_planes(self.near, self.far)?;

@@ -79,6 +79,7 @@ mod gltf;
 mod gltf_write;
 pub mod gpu_setup;
 pub mod metrics;
+pub mod msaa;
 mod obj;
 pub mod plan;
 mod procedural;

@@ -154,6 +154,9 @@ pub struct Plan {
     /// runs the opaque pass first ([`PassKind::Opaque`], two geometry passes over the opaque
     /// part) into [`OPAQUE_BYTES`] a pixel, and the technique captures only what lies in front.
     pub opaque: bool,
+    /// Samples a pixel (`Settings::samples`): above 1 each entry of `reference`, `dfb`, `ll` and
+    /// `fabs` carries its coverage mask beside it, a 32-bit word ([`Plan::arrays`]; docs/msaa.md).
+    pub samples: u32,
 }
 
 /// Bytes a pixel of the opaque pass's image holds: its nearest opaque (depth, primitive id) key
@@ -165,6 +168,15 @@ impl Plan {
     /// every backend; `backend` names the one asking, for the message).
     pub fn new(backend: &str, scene: &Scene, settings: &Settings) -> Result<Plan, OitError> {
         let technique = settings.technique;
+        if settings.samples > 1 && backend != "cpu" {
+            return Err(OitError::Unsupported {
+                backend: backend.into(),
+                what: format!(
+                    "--samples {}: per-sample coverage is not yet done on the GPU backends, only on cpu (docs/msaa.md)",
+                    settings.samples
+                ),
+            });
+        }
         if matches!(technique, Technique::Mdts { .. }) && settings.effect == Effect::Fresnel {
             return Err(OitError::Unsupported {
                 backend: backend.into(),
@@ -258,6 +270,7 @@ impl Plan {
             }
         };
         Ok(Plan {
+            samples: settings.samples,
             technique,
             bounds_pass: matches!(technique, Technique::Bdp { .. } | Technique::Adp),
             bdp_color,
@@ -381,6 +394,21 @@ impl Plan {
         let mut arrays = self.own_arrays(k, per_pixel, bounds);
         if self.tail {
             arrays.push(per_pixel("tail sums (Σα·r, Σα·g, Σα·b, Σα, count)", 8, 5));
+        }
+        if self.samples > 1 {
+            // the coverage mask of each entry, beside it (one byte of the word used)
+            let masks = "coverage masks";
+            match self.technique {
+                Technique::Fabs { .. } => arrays.push(per_pixel(masks, 4, k)),
+                Technique::Reference | Technique::Dfb | Technique::Ll => arrays.push(Array {
+                    name: masks,
+                    element_bytes: 4,
+                    per_pixel: 0,
+                    per_fragment: 1,
+                    fixed: 0,
+                }),
+                _ => {}
+            }
         }
         arrays
     }

@@ -115,6 +115,15 @@ pub struct Settings {
     /// The compute path and oit-cpu have no blender and ignore it (their captures are exact), so
     /// [`Settings::validate`] takes every target with every technique.
     pub blend_target: BlendTarget,
+    /// Samples a pixel (`--samples`): 1 (the default: one sample at the centre), 4 or 8 (the
+    /// standard patterns, [`crate::msaa`]). Above 1 a fragment carries its coverage mask and the
+    /// techniques that take it composite per sample (docs/msaa.md); the others refuse it.
+    pub samples: u32,
+    /// With `samples` above 1: the reference technique renders the supersampled reference
+    /// (`--supersample`), every sample rasterized and shaded as a pixel of its own at its
+    /// position, the pixel the mean of its samples, against which MSAA's own error is measured
+    /// (`oit compare` then judges the techniques, MSAA, against it). Other techniques ignore it.
+    pub supersample: bool,
 }
 
 /// The colour target the blender writes on the hardware path, for `plain` and (with
@@ -376,6 +385,8 @@ impl Default for Settings {
             overflow: Overflow::Drop,
             atomic_storage: AtomicStorage::Buffer,
             blend_target: BlendTarget::F32,
+            samples: 1,
+            supersample: false,
         }
     }
 }
@@ -448,6 +459,12 @@ impl Settings {
         }
         if self.max_peels == Some(0) {
             return Err(OitError::InvalidSettings("--max-peels must be at least 1".into()));
+        }
+        crate::msaa::check_samples(self.samples)?;
+        if self.supersample && self.samples == 1 {
+            return Err(OitError::InvalidSettings(
+                "--supersample is the supersampled reference at the sample count: use it with --samples 4 or 8".into(),
+            ));
         }
         if self.memory == Some(0) {
             return Err(OitError::InvalidSettings(

@@ -16,7 +16,9 @@
 //!   exact integer shift: its fragments are the full frame's there, bit for bit); bounding boxes
 //!   are clamped to the window;
 //! - coverage at pixel centres by 64-bit integer edge functions ([`edge`]) with the top-left fill
-//!   rule; no back-face culling; zero-area triangles are dropped here;
+//!   rule; no back-face culling; zero-area triangles are dropped here; with several samples a
+//!   pixel (`Settings::samples`, [`crate::msaa`]) the same functions and rule at each sample
+//!   position ([`sample_mask`]), the boxes sized by the samples' reach;
 //! - depth: NDC z interpolated linearly in screen space with barycentrics from the edge functions,
 //!   clamped to [0, 1]; normal and vertex colour perspective-correct (barycentrics weighted by
 //!   1/w); colour from [`Shading::shade`] ([`TriangleSetup::fragment`]);
@@ -351,6 +353,11 @@ struct Snap {
     origin: (i32, i32),
     /// The window's size: bounding boxes are clamped to it.
     region: (u32, u32),
+    /// The smallest and largest offset of a pixel's samples from its top-left corner, in 1/256
+    /// pixel ([`crate::msaa::reach`]): (128, 128), the centre, with one sample. A triangle's box
+    /// holds the pixels whose samples' square it reaches, and a triangle that reaches none is
+    /// dropped.
+    reach: (i64, i64),
 }
 
 impl Snap {
@@ -454,9 +461,11 @@ impl Snap {
         let area = area.abs();
         let pixel_range = |lo: i32, hi: i32, size: u32| -> Option<(u32, u32)> {
             // Pixel k's centre is at 256k + 128: the first centre at or after `lo`, the last at or
-            // before `hi`.
-            let first = (i64::from(lo) - HALF_PIXEL + SUBPIXEL - 1).div_euclid(SUBPIXEL).max(0);
-            let last = (i64::from(hi) - HALF_PIXEL).div_euclid(SUBPIXEL).min(i64::from(size) - 1);
+            // before `hi`. With several samples a pixel (`reach`), the first pixel whose last
+            // sample offset is at or after `lo`, the last whose first is at or before `hi`.
+            let (near, far) = self.reach;
+            let first = (i64::from(lo) - far + SUBPIXEL - 1).div_euclid(SUBPIXEL).max(0);
+            let last = (i64::from(hi) - near).div_euclid(SUBPIXEL).min(i64::from(size) - 1);
             (first <= last).then_some((first as u32, last as u32))
         };
         let xs = [p[0].x, p[1].x, p[2].x];
@@ -867,8 +876,9 @@ impl TriangleSetup {
 
     fn snap(settings: &Settings) -> Snap {
         let (width, height) = (settings.width.min(MAX_SIZE), settings.height.min(MAX_SIZE));
+        let reach = crate::msaa::reach(settings.samples);
         match settings.region {
-            None => Snap { width, height, origin: (0, 0), region: (width, height) },
+            None => Snap { width, height, origin: (0, 0), region: (width, height), reach },
             // the origin lies within a frame of at most MAX_SIZE a side (Settings::validate), so
             // origin × 256 fits an i32 with room to spare
             Some(r) => Snap {
@@ -879,6 +889,7 @@ impl TriangleSetup {
                     (r.y.min(MAX_SIZE) as i32) << SUBPIXEL_BITS,
                 ),
                 region: (width, height),
+                reach,
             },
         }
     }
@@ -1200,6 +1211,34 @@ pub fn covers(t: &Triangle, x: u32, y: u32) -> Option<[i64; 3]> {
     let (px, py) = (i64::from(x) * SUBPIXEL + HALF_PIXEL, i64::from(y) * SUBPIXEL + HALF_PIXEL);
     let e = [0, 1, 2].map(|k| edge(t, k, px, py));
     e.iter().all(|&(v, _, _, above)| v > above).then(|| e.map(|e| e.0))
+}
+
+/// The multisampled rule ([`crate::msaa`]): the coverage mask of `t` over the `samples` samples
+/// of pixel (x, y), bit `i` set where sample `i` ([`crate::msaa::positions`]) is covered by the
+/// same edge functions and top-left fill rule as [`covers`] tests the centre with (exact: the
+/// sample positions lie on the 1/256-pixel grid), so two triangles sharing an edge cover each
+/// sample exactly once. With one sample it is bit 0 set exactly where [`covers`] is `Some`.
+#[inline]
+pub fn sample_mask(t: &Triangle, x: u32, y: u32, samples: u32) -> u8 {
+    let (x0, y0) = (i64::from(x) * SUBPIXEL, i64::from(y) * SUBPIXEL);
+    let mut mask = 0u8;
+    for (i, (dx, dy)) in crate::msaa::subpixel_offsets(samples).enumerate() {
+        let inside = (0..3).all(|k| {
+            let (v, _, _, above) = edge(t, k, x0 + dx, y0 + dy);
+            v > above
+        });
+        mask |= u8::from(inside) << i;
+    }
+    mask
+}
+
+/// The edge functions of `t` at the centre of pixel (x, y), covered or not: where a
+/// multisampled fragment's centre lies outside its triangle, its barycentrics and depth are
+/// extrapolated from these (docs/msaa.md).
+#[inline]
+pub fn centre_edges(t: &Triangle, x: u32, y: u32) -> [i64; 3] {
+    let (px, py) = (i64::from(x) * SUBPIXEL + HALF_PIXEL, i64::from(y) * SUBPIXEL + HALF_PIXEL);
+    [0, 1, 2].map(|k| edge(t, k, px, py).0)
 }
 
 #[cfg(test)]

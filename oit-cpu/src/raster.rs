@@ -896,6 +896,39 @@ impl Rasterizer {
         n
     }
 
+    /// The multisampled geometry pass ([`oit_core::msaa`], `Settings::samples` above 1): calls
+    /// `f` once per (pixel, triangle) where the triangle covers **any** of the pixel's `samples`
+    /// samples ([`oit_core::setup::sample_mask`]: the same edge functions and top-left rule as
+    /// the centre's, at the standard positions), with the coverage mask (bit `i`: sample `i`).
+    /// The fragment's depth, barycentrics, colour and normal are the pixel centre's, as
+    /// single-sample's (one shading a pixel a fragment: MSAA, not supersampling); where the
+    /// centre lies outside the triangle they are extrapolated from its plane (depth clamped to
+    /// [0, 1] as always). Parallel over runs of triangles, in no particular order; colours made
+    /// where `f` asks. The portable per-pixel walk of each triangle's box (setup sized the box
+    /// by the samples' reach): the single-sample walks, batches and AVX2 kernels are not
+    /// touched, so `samples == 1` runs exactly as before. The cut of an opaque pass does not
+    /// apply here (the CPU backend refuses opaque objects with several samples).
+    pub fn for_each_masked_fragment<F: Fn(&Fragment<'_>, u8) + Sync>(&self, samples: u32, f: F) -> u64 {
+        self.scatter_tasks(|run| {
+            let mut n = 0u64;
+            for i in run {
+                let (t, s) = (&self.setup.triangles[i], &self.edges[i]);
+                let [x0, y0, x1, y1] = t.bbox;
+                for y in y0..=y1 {
+                    for x in x0..=x1 {
+                        let mask = oit_core::setup::sample_mask(t, x, y, samples);
+                        if mask != 0 {
+                            let e = oit_core::setup::centre_edges(t, x, y);
+                            f(&self.on_demand_fragment(t, s, x, y, e), mask);
+                            n += 1;
+                        }
+                    }
+                }
+            }
+            n
+        })
+    }
+
     /// The fragment of `t` (traversal record `s`) at pixel (`x`, `y`) with edge functions `e`,
     /// its depth from the record, colour and normal left to be made where a shader asks.
     #[inline]

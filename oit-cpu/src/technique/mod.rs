@@ -22,6 +22,7 @@ pub(crate) mod ll;
 pub(crate) mod mboit;
 pub(crate) mod mdts;
 pub(crate) mod mlp;
+pub(crate) mod msaa;
 pub(crate) mod plain;
 pub(crate) mod reference;
 #[cfg(test)]
@@ -31,6 +32,9 @@ pub(crate) mod weighted;
 
 /// Runs `technique`'s frame over `ctx`: the one line a technique adds on the CPU beside its module.
 pub(crate) fn render(ctx: &mut Ctx<'_>, technique: Technique) -> Result<oit_core::Frame, OitError> {
+    if ctx.settings.samples > 1 {
+        return msaa::render(ctx, technique);
+    }
     match technique {
         Technique::Reference => reference::render(ctx),
         Technique::Plain => plain::render(ctx),

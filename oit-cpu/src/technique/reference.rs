@@ -18,6 +18,19 @@ use rayon::prelude::*;
 use super::Ctx;
 
 pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
+    let (linear, counts, fragments) = linear(ctx)?;
+    let pixels: Vec<[u8; 4]> = linear.into_par_iter().map(srgb8_f64).collect();
+    let image = Image { width: ctx.settings.width, height: ctx.settings.height, pixels };
+    let mut frame = super::frame(ctx, image, fragments);
+    frame.stats.max_layers = counts.iter().copied().max().unwrap_or(0);
+    frame.layers = Some(counts);
+    Ok(frame)
+}
+
+/// The reference's passes and composite: each pixel's linear colour, each pixel's fragment
+/// count, and the frame's fragments (the supersampled reference averages the linear colours of
+/// several frames before it encodes them).
+pub(crate) fn linear(ctx: &mut Ctx<'_>) -> Result<(Vec<DVec3>, Vec<u32>, u64), OitError> {
     let counts = ctx.alloc32(1, 0)?;
     ctx.pass(|f| {
         counts[f.pixel as usize].fetch_add(1, Relaxed);
@@ -54,13 +67,11 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     drop(cursor);
     let (keys, payloads) = (&*keys, &*payloads);
 
-    let (w, h) = (ctx.settings.width, ctx.settings.height);
     let resolve = &ctx.resolve;
     let (camera, effect) = (ctx.camera, ctx.settings.effect);
     let per_length = ctx.per_length;
-    let forward = camera.forward.as_dvec3();
     let deepest = counts.iter().copied().max().unwrap_or(0).max(1);
-    let pixels: Vec<[u8; 4]> = (0..counts.len())
+    let pixels: Vec<DVec3> = (0..counts.len())
         .into_par_iter()
         // one list a task, reused pixel after pixel: (key, payload) pairs sorted by key, which is
         // (depth, primitive id) and unique at a pixel (one fragment a primitive)
@@ -71,26 +82,46 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
             );
             list.sort_unstable_by_key(|&(key, _)| key);
             let layers = list.iter().copied();
-            let depth = |key: u64| f32::from_bits((key >> 32) as u32);
             let bg = resolve.background_at(px).as_dvec3();
             let c: DVec3 = match effect {
-                Effect::Transparency => front_to_back_f64(layers.map(|(_, p)| unpack_rgba8_f64(p)), bg),
-                Effect::Translucency => translucency_f64(
-                    layers.map(|(key, p)| (camera.linear_depth_f64(depth(key)), unpack_rgba8_f64(p))),
-                    per_length,
-                    bg,
-                ),
-                Effect::Fresnel => fresnel_f64(layers.map(|(_, p)| unpack_normal_f64(p).dot(forward)), bg),
                 Effect::Complexity if counts[px] == 0 => bg,
                 Effect::Complexity => heat_f64(f64::from(counts[px]) / f64::from(deepest)),
+                _ => composite_f64(effect, camera, per_length, layers, bg),
             };
-            [linear_to_srgb8_f64(c.x), linear_to_srgb8_f64(c.y), linear_to_srgb8_f64(c.z), 255]
+            c
         })
         .collect();
-    let image = Image { width: w, height: h, pixels };
-    let fragments = total as u64;
-    let mut frame = super::frame(ctx, image, fragments);
-    frame.stats.max_layers = counts.iter().copied().max().unwrap_or(0);
-    frame.layers = Some(counts);
-    Ok(frame)
+    Ok((pixels, counts, total as u64))
+}
+
+/// A linear colour as an sRGB8 pixel, in f64 (the reference's encoding).
+pub(crate) fn srgb8_f64(c: DVec3) -> [u8; 4] {
+    [linear_to_srgb8_f64(c.x), linear_to_srgb8_f64(c.y), linear_to_srgb8_f64(c.z), 255]
+}
+
+/// The reference's f64 composite of one pixel's (or one sample's) `layers`, (key, payload) pairs
+/// nearest first, over `bg`, under every effect but the heat map (which needs the frame's
+/// deepest pixel).
+pub(crate) fn composite_f64(
+    effect: Effect,
+    camera: &oit_core::Camera,
+    per_length: f64,
+    layers: impl Iterator<Item = (u64, u32)>,
+    bg: DVec3,
+) -> DVec3 {
+    let depth = |key: u64| f32::from_bits((key >> 32) as u32);
+    match effect {
+        Effect::Transparency | Effect::Complexity => {
+            front_to_back_f64(layers.map(|(_, p)| unpack_rgba8_f64(p)), bg)
+        }
+        Effect::Translucency => translucency_f64(
+            layers.map(|(key, p)| (camera.linear_depth_f64(depth(key)), unpack_rgba8_f64(p))),
+            per_length,
+            bg,
+        ),
+        Effect::Fresnel => {
+            let forward = camera.forward.as_dvec3();
+            fresnel_f64(layers.map(|(_, p)| unpack_normal_f64(p).dot(forward)), bg)
+        }
+    }
 }

@@ -1,0 +1,429 @@
+//! Multisampled frames (`Settings::samples` above 1, issue 40; docs/msaa.md): the techniques
+//! that carry each fragment's coverage mask beside its key and composite per sample.
+//!
+//! Every pass here is [`Rasterizer::for_each_masked_fragment`](crate::raster::Rasterizer::for_each_masked_fragment):
+//! a (pixel, triangle) pair is a fragment where the triangle covers any of the pixel's samples,
+//! shaded once at the pixel's centre, with its coverage mask. A fragment is one entry whatever
+//! its mask (the lists and the K slots size by fragments, as single-sample's), and the mask is
+//! kept in a 32-bit word beside the entry's key and payload (one byte of it used).
+//!
+//! The resolve: each pixel's entries sorted by (depth, primitive id) as single-sample's; then
+//! each sample composites, nearest first, only the entries whose mask holds it, over the
+//! background, and the pixel is the mean of its samples in linear light, encoded to sRGB8 as
+//! single-sample's. A pixel whose entries all cover every sample composites once (the mean of
+//! equal samples). Fragments of one surface split across an edge therefore never stack: each
+//! sample sees the one that covers it.
+//!
+//! - `reference`: the per-sample exact A-buffer, composited in f64 as the single-sample
+//!   reference ([`super::reference::composite_f64`]).
+//! - `reference` with `Settings::supersample`: the supersampled reference, every sample
+//!   rasterized and shaded as a pixel of its own: one single-sample reference frame a sample
+//!   position, the camera moved by the position's offset from the centre, averaged in linear
+//!   light.
+//! - `dfb` and `ll`: their single-sample passes (a counting pass and a fill), each entry with its
+//!   mask, resolved per sample through the f32 resolve.
+//! - `fabs`: K slots a pixel, each with its mask; the pixels that overflow keep their K nearest
+//!   by (depth, primitive id), as single-sample's (two more passes). `--overflow tail` is not yet
+//!   done at several samples.
+//!
+//! Every other technique refuses `--samples` above 1 ([`check`]).
+
+use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
+
+use glam::{DVec3, Mat4, Vec3};
+use oit_core::composite::heat_f64;
+use oit_core::plan::Counted;
+use oit_core::rules::{depth_bits, depth_from_bits};
+use oit_core::{Compositor as _, Effect, Frame, Image, OitError, Overflow, Settings, Technique};
+use rayon::prelude::*;
+
+use super::Ctx;
+use super::reference::{composite_f64, srgb8_f64};
+use crate::raster::Fragment;
+use crate::resolve::PixelState;
+
+/// One captured entry: the key (depth bits above the primitive id), the payload, the mask.
+type Entry = (u64, u32, u8);
+
+/// Refuses `settings`' technique where it has no per-sample path yet, naming it.
+pub(crate) fn check(settings: &Settings) -> Result<(), OitError> {
+    if settings.samples <= 1 {
+        return Ok(());
+    }
+    let supported = matches!(
+        settings.technique,
+        Technique::Reference | Technique::Dfb | Technique::Ll | Technique::Fabs { .. }
+    );
+    if !supported {
+        return Err(OitError::Unsupported {
+            backend: "cpu".into(),
+            what: format!(
+                "{} at --samples {}: per-sample coverage is not yet done for this technique (reference, dfb, ll and fabs take it; docs/msaa.md)",
+                settings.technique, settings.samples
+            ),
+        });
+    }
+    if matches!(settings.technique, Technique::Fabs { .. }) && settings.overflow == Overflow::Tail {
+        return Err(OitError::Unsupported {
+            backend: "cpu".into(),
+            what: format!("fabs with --overflow tail at --samples {}: not yet done", settings.samples),
+        });
+    }
+    Ok(())
+}
+
+/// Runs `technique`'s multisampled frame over `ctx`.
+pub(crate) fn render(ctx: &mut Ctx<'_>, technique: Technique) -> Result<Frame, OitError> {
+    check(ctx.settings)?;
+    match technique {
+        Technique::Reference if ctx.settings.supersample => supersampled(ctx),
+        Technique::Reference => reference(ctx),
+        Technique::Dfb => dfb(ctx),
+        Technique::Ll => ll(ctx),
+        Technique::Fabs { .. } => fabs(ctx),
+        other => {
+            Err(OitError::Unsupported { backend: "cpu".into(), what: format!("{other} at several samples") })
+        }
+    }
+}
+
+/// A fragment's key: depth bits above the primitive id.
+#[inline]
+fn key(f: &Fragment<'_>) -> u64 {
+    u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim)
+}
+
+/// One masked geometry pass, counted.
+fn pass<F: Fn(&Fragment<'_>, u8) + Sync>(ctx: &mut Ctx<'_>, f: F) -> u64 {
+    let n = ctx.raster.for_each_masked_fragment(ctx.settings.samples, f);
+    ctx.ran_pass(n);
+    n
+}
+
+/// Per-pixel fragment counts from one masked pass (not counted as storage: the counting pass's
+/// array is the fill's cursors where a technique keeps it).
+fn counts(ctx: &mut Ctx<'_>, counts: &[AtomicU32]) {
+    pass(ctx, |f, _| {
+        counts[f.pixel as usize].fetch_add(1, Relaxed);
+    });
+}
+
+/// Exclusive prefix sum of `counts` into `offsets` (one longer), the total returned.
+fn offsets_of(counts: &[AtomicU32]) -> (Vec<usize>, usize) {
+    let mut offsets = Vec::with_capacity(counts.len() + 1);
+    let mut total = 0usize;
+    for c in counts {
+        offsets.push(total);
+        total += c.load(Relaxed) as usize;
+    }
+    offsets.push(total);
+    (offsets, total)
+}
+
+/// The per-sample exact reference.
+fn reference(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
+    let counted = ctx.alloc32(1, 0)?;
+    counts(ctx, &counted);
+    let (offsets, total) = offsets_of(&counted);
+    let deepest = counted.iter().map(|c| c.load(Relaxed)).max().unwrap_or(0);
+    ctx.check_counted(Counted { deepest, fragments: total as u64 })?;
+    ctx.storage_bytes += offsets.len() as u64 * 4;
+    let cursor = ctx.pool.u32s(counted.len(), 0);
+    let keys = ctx.scratch_words64(total as u64)?;
+    let payloads = ctx.scratch_words32(total as u64)?;
+    let masks = ctx.scratch_words32(total as u64)?;
+    let shared = &*ctx;
+    let n = shared.raster.for_each_masked_fragment(shared.settings.samples, |f, mask| {
+        let px = f.pixel as usize;
+        let slot = offsets[px] + cursor[px].fetch_add(1, Relaxed) as usize;
+        keys[slot].store(key(f), Relaxed);
+        payloads[slot].store(shared.payload(f), Relaxed);
+        masks[slot].store(u32::from(mask), Relaxed);
+    });
+    ctx.ran_pass(n);
+    drop(cursor);
+    let counts: Vec<u32> = counted.iter().map(|c| c.load(Relaxed)).collect();
+    let (keys, payloads, masks) = (&*keys, &*payloads, &*masks);
+    let (camera, effect, per_length) = (ctx.camera, ctx.settings.effect, ctx.per_length);
+    let samples = ctx.settings.samples;
+    let full = oit_core::msaa::full_mask(samples);
+    let resolve = &ctx.resolve;
+    let deepest = deepest.max(1);
+    let pixels: Vec<[u8; 4]> =
+        (0..counts.len())
+            .into_par_iter()
+            .map_init(Vec::new, |list: &mut Vec<Entry>, px| {
+                list.clear();
+                list.extend((offsets[px]..offsets[px + 1]).map(|i| {
+                    (keys[i].load(Relaxed), payloads[i].load(Relaxed), masks[i].load(Relaxed) as u8)
+                }));
+                list.sort_unstable();
+                let bg = resolve.background_at(px).as_dvec3();
+                let c = match effect {
+                    Effect::Complexity if counts[px] == 0 => bg,
+                    Effect::Complexity => heat_f64(f64::from(counts[px]) / f64::from(deepest)),
+                    _ if list.iter().all(|e| e.2 == full) => {
+                        composite_f64(effect, camera, per_length, list.iter().map(|e| (e.0, e.1)), bg)
+                    }
+                    _ => {
+                        let sum: DVec3 = (0..samples)
+                            .map(|i| {
+                                let covering = list.iter().filter(|e| e.2 >> i & 1 == 1).map(|e| (e.0, e.1));
+                                composite_f64(effect, camera, per_length, covering, bg)
+                            })
+                            .sum();
+                        sum / f64::from(samples)
+                    }
+                };
+                srgb8_f64(c)
+            })
+            .collect();
+    let image = Image { width: ctx.settings.width, height: ctx.settings.height, pixels };
+    let mut frame = super::frame(ctx, image, total as u64);
+    frame.stats.max_layers = counts.iter().copied().max().unwrap_or(0);
+    frame.layers = Some(counts);
+    Ok(frame)
+}
+
+/// The supersampled reference: a single-sample reference frame a sample position, the
+/// projection moved so that the position falls on the pixels' centres, the frames' linear
+/// colours averaged (every sample rasterized and shaded as a pixel of its own).
+fn supersampled(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
+    let settings = ctx.settings;
+    let single =
+        Settings { samples: 1, supersample: false, technique: Technique::Reference, ..settings.clone() };
+    let (full_w, full_h) = match settings.region {
+        Some(r) => (r.full_width as f32, r.full_height as f32),
+        None => (settings.width as f32, settings.height as f32),
+    };
+    let mut sum = vec![DVec3::ZERO; ctx.pixels];
+    let mut stats = oit_core::Stats::default();
+    let mut counts = vec![0u32; ctx.pixels];
+    for (sx, sy) in oit_core::msaa::positions_f32(settings.samples) {
+        // the sample at (x + sx, y + sy) moved onto the centre (x + ½, y + ½): screen x by
+        // ½ − sx, which is NDC x by 2(½ − sx)/W; screen y grows down, NDC y up
+        let (dx, dy) = (2.0 * (0.5 - sx) / full_w, -2.0 * (0.5 - sy) / full_h);
+        let mut camera = *ctx.camera;
+        camera.proj = Mat4::from_translation(Vec3::new(dx, dy, 0.0)) * camera.proj;
+        let raster = crate::raster::Rasterizer::new(ctx.scene, &camera, &single);
+        let plan = oit_core::plan::Plan::new("cpu", ctx.scene, &single)?.on_path(oit_core::RasterPath::Cpu);
+        let mut inner = Ctx::new(ctx.scene, &camera, &single, &raster, ctx.pool, plan, ctx.per_length, None);
+        let (linear, layer_counts, fragments) = super::reference::linear(&mut inner)?;
+        for (s, c) in sum.iter_mut().zip(linear) {
+            *s += c;
+        }
+        for (n, c) in counts.iter_mut().zip(layer_counts) {
+            *n = (*n).max(c);
+        }
+        stats.geometry_passes += inner.passes;
+        stats.fragments += fragments;
+        stats.captured += fragments;
+        stats.storage_bytes = stats.storage_bytes.max(inner.storage_bytes);
+    }
+    let n = f64::from(settings.samples);
+    let pixels = sum.into_iter().map(|c| srgb8_f64(c / n)).collect();
+    let image = Image { width: settings.width, height: settings.height, pixels };
+    stats.max_layers = counts.iter().copied().max().unwrap_or(0);
+    let lost_pixels = vec![0; ctx.pixels];
+    Ok(Frame { image, layers: Some(counts), lost_pixels: Some(lost_pixels), stats })
+}
+
+/// The f32 per-sample resolve of every pixel's entries, gathered by `gather(px, list)` (which
+/// clears and fills `list`); sorted here.
+fn resolve_entries(ctx: &Ctx<'_>, gather: impl Fn(usize, &mut Vec<Entry>) + Sync) -> Frame {
+    let samples = ctx.settings.samples;
+    let full = oit_core::msaa::full_mask(samples);
+    let resolve = &ctx.resolve;
+    let complexity = ctx.settings.effect == Effect::Complexity;
+    let deepest = if complexity {
+        (0..ctx.pixels)
+            .into_par_iter()
+            .map_init(Vec::new, |list, px| {
+                gather(px, list);
+                list.len() as u32
+            })
+            .max()
+            .unwrap_or(0)
+            .max(1)
+    } else {
+        1
+    };
+    let push_all = |s: &mut PixelState, entries: &mut dyn Iterator<Item = &Entry>| {
+        for e in entries {
+            resolve.push(s, depth_from_bits((e.0 >> 32) as u32), e.1);
+        }
+    };
+    super::finish_pixels(ctx, |px| {
+        let mut list = Vec::new();
+        gather(px, &mut list);
+        list.sort_unstable();
+        let bg = resolve.background_at(px);
+        let c: Vec3 = if complexity {
+            if list.is_empty() { bg } else { oit_core::composite::heat(list.len() as f32 / deepest as f32) }
+        } else if list.iter().all(|e| e.2 == full) {
+            let mut s = PixelState::default();
+            push_all(&mut s, &mut list.iter());
+            resolve.finish_over(&mut s, bg)
+        } else {
+            let mut sum = Vec3::ZERO;
+            for i in 0..samples {
+                let mut s = PixelState::default();
+                push_all(&mut s, &mut list.iter().filter(|e| e.2 >> i & 1 == 1));
+                sum += resolve.finish_over(&mut s, bg);
+            }
+            sum / samples as f32
+        };
+        (crate::resolve::srgb(c), list.len() as u32)
+    })
+}
+
+/// `dfb` per sample: a counting pass, the offsets, a fill by atomic decrement of the counts, each
+/// entry with its mask.
+fn dfb(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
+    let entries = ctx.pixels as u64 + 1;
+    let counted = ctx.words32(entries, 0)?;
+    counts(ctx, &counted);
+    let (offsets, total) = offsets_of(&counted[..ctx.pixels]);
+    ctx.storage_bytes += entries * 4;
+    let total = ctx.plan.check_fragments(total as u64)?;
+    let deepest = counted.iter().map(|c| c.load(Relaxed)).max().unwrap_or(0);
+    ctx.check_counted(Counted { deepest, fragments: u64::from(total) })?;
+    let keys = ctx.words64(u64::from(total), 0)?;
+    let payloads = ctx.words32(u64::from(total), 0)?;
+    let masks = ctx.words32(u64::from(total), 0)?;
+    let shared = &*ctx;
+    let n = shared.raster.for_each_masked_fragment(shared.settings.samples, |f, mask| {
+        let px = f.pixel as usize;
+        let left = counted[px].fetch_sub(1, Relaxed);
+        if left as i32 <= 0 {
+            shared.lose(px);
+            return;
+        }
+        let entry = offsets[px] + left as usize - 1;
+        keys[entry].store(key(f), Relaxed);
+        payloads[entry].store(shared.payload(f), Relaxed);
+        masks[entry].store(u32::from(mask), Relaxed);
+    });
+    ctx.ran_pass(n);
+    let (keys, payloads, masks, counted) = (&*keys, &*payloads, &*masks, &*counted);
+    Ok(resolve_entries(ctx, |px, list| {
+        let unfilled = (counted[px].load(Relaxed) as i32).max(0) as usize;
+        list.clear();
+        list.extend(
+            (offsets[px] + unfilled..offsets[px + 1])
+                .map(|i| (keys[i].load(Relaxed), payloads[i].load(Relaxed), masks[i].load(Relaxed) as u8)),
+        );
+    }))
+}
+
+/// The end of a list and the head of an empty one.
+const END: u32 = u32::MAX;
+
+/// `ll` per sample: a sizing pass, then a node a fragment by atomic increment of one counter,
+/// linked in front of its pixel's list by atomic exchange of the head, each node with its mask.
+fn ll(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
+    let fragments = pass(ctx, |_, _| {});
+    let nodes = ctx.plan.check_fragments(fragments)?;
+    ctx.check_counted(Counted { deepest: 0, fragments: u64::from(nodes) })?;
+    let heads = ctx.alloc32(1, END)?;
+    let counter = ctx.words32(1, 0)?;
+    let keys = ctx.words64(u64::from(nodes), 0)?;
+    let payloads = ctx.words32(u64::from(nodes), 0)?;
+    let masks = ctx.words32(u64::from(nodes), 0)?;
+    let links = ctx.words32(u64::from(nodes), END)?;
+    let shared = &*ctx;
+    let n = shared.raster.for_each_masked_fragment(shared.settings.samples, |f, mask| {
+        let px = f.pixel as usize;
+        let node = counter[0].fetch_add(1, Relaxed);
+        if node >= nodes {
+            shared.lose(px);
+            return;
+        }
+        let i = node as usize;
+        keys[i].store(key(f), Relaxed);
+        payloads[i].store(shared.payload(f), Relaxed);
+        masks[i].store(u32::from(mask), Relaxed);
+        links[i].store(heads[px].swap(node, Relaxed), Relaxed);
+    });
+    ctx.ran_pass(n);
+    let (heads, keys, payloads, masks, links) = (&*heads, &*keys, &*payloads, &*masks, &*links);
+    Ok(resolve_entries(ctx, |px, list| {
+        list.clear();
+        let mut node = heads[px].load(Relaxed);
+        while node != END {
+            let i = node as usize;
+            list.push((keys[i].load(Relaxed), payloads[i].load(Relaxed), masks[i].load(Relaxed) as u8));
+            node = links[i].load(Relaxed);
+        }
+    }))
+}
+
+/// `fabs:K` per sample: a counter a pixel hands each fragment one of the pixel's K slots (one a
+/// fragment whatever its mask); a pixel past K keeps its K nearest keys, refilled by two more
+/// passes as single-sample's, payload and mask following the key.
+fn fabs(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
+    let deepest = if ctx.plan.needs_count() {
+        let counted = ctx.alloc32(1, 0)?;
+        counts(ctx, &counted);
+        ctx.storage_bytes -= ctx.pixels as u64 * 4;
+        let deepest = counted.iter().map(|c| c.load(Relaxed)).max().unwrap_or(0);
+        let fragments = counted.iter().map(|c| u64::from(c.load(Relaxed))).sum();
+        ctx.check_counted(Counted { deepest, fragments })?;
+        deepest
+    } else {
+        0
+    };
+    let k = ctx.plan.slots(deepest) as usize;
+    let counters = ctx.alloc32(1, 0)?;
+    let slots = ctx.scratch64(k)?;
+    let payloads = ctx.scratch32(k)?;
+    let masks = ctx.scratch32(k)?;
+    let shared = &*ctx;
+    let n = shared.raster.for_each_masked_fragment(shared.settings.samples, |f, mask| {
+        let px = f.pixel as usize;
+        let i = counters[px].fetch_add(1, Relaxed) as usize;
+        if i < k {
+            slots[px * k + i].store(key(f), Relaxed);
+            payloads[px * k + i].store(shared.payload(f), Relaxed);
+            masks[px * k + i].store(u32::from(mask), Relaxed);
+        } else {
+            shared.lose(px);
+        }
+    });
+    ctx.ran_pass(n);
+    let list = crate::storage::CountedList::new(&counters, &slots, &payloads, k);
+    if !ctx.plan.needs_count() && list.empty_overflowing() {
+        // the K nearest keys of each overflowing pixel, whatever the arrival order (the lost
+        // count stays what the capture counted: the fragments past K), then each kept key's
+        // payload and mask written beside it
+        let nearest = list.nearest();
+        ctx.raster.for_each_masked_fragment(ctx.settings.samples, |f, _| {
+            let px = f.pixel as usize;
+            if list.overflowed(px) {
+                oit_core::AtomicFragmentList::insert(&nearest, px, key(f));
+            }
+        });
+        let shared = &*ctx;
+        shared.raster.for_each_masked_fragment(shared.settings.samples, |f, mask| {
+            let px = f.pixel as usize;
+            if list.overflowed(px) {
+                let word = key(f);
+                let at = (px * k..px * k + k).find(|&i| slots[i].load(Relaxed) == word);
+                if let Some(i) = at {
+                    payloads[i].store(shared.payload(f), Relaxed);
+                    masks[i].store(u32::from(mask), Relaxed);
+                }
+            }
+        });
+        ctx.passes += 2;
+    }
+    let (counters, slots, payloads, masks) = (&*counters, &*slots, &*payloads, &*masks);
+    Ok(resolve_entries(ctx, |px, list| {
+        list.clear();
+        let n = (counters[px].load(Relaxed) as usize).min(k);
+        list.extend(
+            (px * k..px * k + n)
+                .map(|i| (slots[i].load(Relaxed), payloads[i].load(Relaxed), masks[i].load(Relaxed) as u8)),
+        );
+    }))
+}
