@@ -27,8 +27,8 @@ use std::path::Path;
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
-use crate::{AlphaMode, Instance, Mesh, Object, OitError, Scene, Texture, Wrap};
 use crate::rng::Rng;
+use crate::{AlphaMode, Instance, Mesh, Object, OitError, Scene, Texture, Wrap};
 
 /// The built-in names, for messages.
 pub const BUILTIN_SCENES: &str = "default, bunny, armadillo, particles, foliage, glass, cad, planes:N, spheres:N, cluster:N, knot, coplanar, ties:N, near:N, grid:RxC:MESH, scale:S:SCENE, wall:F:SCENE, nowall:F:SCENE, particles:N, fence, untextured:SCENE";

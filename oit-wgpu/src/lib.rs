@@ -73,7 +73,9 @@ pub use crate::ctx::{
     SetupCheck, TECHNIQUE_PRELUDE, size_class,
 };
 pub use crate::embed::{CaptureShader, GeometryPass, OitPass, Recorded};
-pub use crate::gpu::{COMMON_WGSL, Gpu, MIN_STORAGE_BUFFERS, Reading, TIMESTAMP_QUERIES, adapters, required_features};
+pub use crate::gpu::{
+    COMMON_WGSL, Gpu, MIN_STORAGE_BUFFERS, Reading, TIMESTAMP_QUERIES, adapters, required_features,
+};
 pub use crate::hardware::HardwareRaster;
 pub use crate::pool::BufferPool;
 pub use crate::raster::{ComputeRaster, setup_on_gpu};
