@@ -827,7 +827,7 @@ mod tests {
         // rebuilt without the live reflex corners, a heap entry clipped after its neighbours
         // changed (the stamp check dropped).
         let n = 65_536;
-        let mut rng = crate::procedural::Rng(0x2545_f491_4f6c_dd1d);
+        let mut rng = crate::rng::Rng(0x2545_f491_4f6c_dd1d);
         let star: Vec<(f32, f32)> = (0..n)
             .map(|i| {
                 let a = i as f64 / n as f64 * std::f64::consts::TAU;
