@@ -72,7 +72,12 @@ fn display(test: &str) -> Option<(String, Option<Xvfb>)> {
         ));
         return None;
     };
-    // a display number no other server holds; another Xvfb may take it first, then try the next
+    // a display number no other server holds; another Xvfb may take it first, then try the next.
+    // The tests of this file pick one at a time: two picking at once saw the same free number,
+    // the loser's server exited on the lock while the winner's socket appeared, and the loser
+    // returned the winner's display, which the winner's end then took away mid-run.
+    static PICKING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _one_at_a_time = PICKING.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
     for n in (90 + std::process::id() % 100)..400 {
         if Path::new(&format!("/tmp/.X{n}-lock")).exists() {
             continue;
@@ -91,7 +96,8 @@ fn display(test: &str) -> Option<(String, Option<Xvfb>)> {
             if let Ok(Some(_)) = child.try_wait() {
                 break;
             }
-            if socket.exists() {
+            // the socket, and this server still running: not another's socket of the same number
+            if socket.exists() && matches!(child.try_wait(), Ok(None)) {
                 return Some((format!(":{n}"), Some(Xvfb { child })));
             }
             std::thread::sleep(Duration::from_millis(50));

@@ -7,7 +7,6 @@
 //! supersampling). See docs/msaa.md.
 
 use crate::OitError;
-use crate::setup::SUBPIXEL;
 
 /// The sample counts `--samples` takes.
 pub const SAMPLE_COUNTS: [u32; 3] = [1, 4, 8];
@@ -56,27 +55,12 @@ pub fn positions_f32(samples: u32) -> Vec<(f32, f32)> {
         .collect()
 }
 
-/// The sample positions in the rasterizer's fixed point ([`crate::setup::SUBPIXEL`] units from
-/// the pixel's top-left corner): each exact.
-pub fn subpixel_offsets(samples: u32) -> impl Iterator<Item = (i64, i64)> {
-    let scale = SUBPIXEL / i64::from(POSITION_UNITS);
-    positions(samples).iter().map(move |&(x, y)| (i64::from(x) * scale, i64::from(y) * scale))
-}
-
 /// The mask of every sample of a pixel: `samples` low bits set.
 pub fn full_mask(samples: u32) -> u8 {
     match samples {
         8.. => u8::MAX,
         n => ((1u16 << n) - 1) as u8,
     }
-}
-
-/// The smallest and largest sample offset, x and y together, in 1/256 pixel: the reach of a
-/// pixel's samples that setup sizes a triangle's box by (the centre, 128, for one sample).
-pub fn reach(samples: u32) -> (i64, i64) {
-    let all = subpixel_offsets(samples).flat_map(|(x, y)| [x, y]);
-    let (lo, hi) = all.fold((i64::MAX, i64::MIN), |(lo, hi), v| (lo.min(v), hi.max(v)));
-    (lo, hi)
 }
 
 #[cfg(test)]
@@ -91,9 +75,6 @@ mod tests {
         assert_eq!(p8[0], (0.5625, 0.3125));
         assert_eq!(p8[7], (0.9375, 0.0625));
         assert_eq!(positions_f32(1), vec![(0.5, 0.5)]);
-        assert_eq!(reach(1), (128, 128));
-        assert_eq!(reach(4), (32, 224));
-        assert_eq!(reach(8), (16, 240));
         assert_eq!((full_mask(1), full_mask(4), full_mask(8)), (1, 0xF, 0xFF));
         assert!(check_samples(2).is_err() && check_samples(0).is_err() && check_samples(16).is_err());
     }

@@ -354,7 +354,7 @@ struct Snap {
     /// The window's size: bounding boxes are clamped to it.
     region: (u32, u32),
     /// The smallest and largest offset of a pixel's samples from its top-left corner, in 1/256
-    /// pixel ([`crate::msaa::reach`]): (128, 128), the centre, with one sample. A triangle's box
+    /// pixel ([`reach`]): (128, 128), the centre, with one sample. A triangle's box
     /// holds the pixels whose samples' square it reaches, and a triangle that reaches none is
     /// dropped.
     reach: (i64, i64),
@@ -876,7 +876,7 @@ impl TriangleSetup {
 
     fn snap(settings: &Settings) -> Snap {
         let (width, height) = (settings.width.min(MAX_SIZE), settings.height.min(MAX_SIZE));
-        let reach = crate::msaa::reach(settings.samples);
+        let reach = reach(settings.samples);
         match settings.region {
             None => Snap { width, height, origin: (0, 0), region: (width, height), reach },
             // the origin lies within a frame of at most MAX_SIZE a side (Settings::validate), so
@@ -1213,6 +1213,21 @@ pub fn covers(t: &Triangle, x: u32, y: u32) -> Option<[i64; 3]> {
     e.iter().all(|&(v, _, _, above)| v > above).then(|| e.map(|e| e.0))
 }
 
+/// The sample positions in the rasterizer's fixed point ([`SUBPIXEL`] units from
+/// the pixel's top-left corner): each exact.
+pub fn subpixel_offsets(samples: u32) -> impl Iterator<Item = (i64, i64)> {
+    let scale = SUBPIXEL / i64::from(crate::msaa::POSITION_UNITS);
+    crate::msaa::positions(samples).iter().map(move |&(x, y)| (i64::from(x) * scale, i64::from(y) * scale))
+}
+
+/// The smallest and largest sample offset, x and y together, in 1/256 pixel: the reach of a
+/// pixel's samples that setup sizes a triangle's box by (the centre, 128, for one sample).
+pub fn reach(samples: u32) -> (i64, i64) {
+    let all = subpixel_offsets(samples).flat_map(|(x, y)| [x, y]);
+    let (lo, hi) = all.fold((i64::MAX, i64::MIN), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    (lo, hi)
+}
+
 /// The multisampled rule ([`crate::msaa`]): the coverage mask of `t` over the `samples` samples
 /// of pixel (x, y), bit `i` set where sample `i` ([`crate::msaa::positions`]) is covered by the
 /// same edge functions and top-left fill rule as [`covers`] tests the centre with (exact: the
@@ -1222,7 +1237,7 @@ pub fn covers(t: &Triangle, x: u32, y: u32) -> Option<[i64; 3]> {
 pub fn sample_mask(t: &Triangle, x: u32, y: u32, samples: u32) -> u8 {
     let (x0, y0) = (i64::from(x) * SUBPIXEL, i64::from(y) * SUBPIXEL);
     let mut mask = 0u8;
-    for (i, (dx, dy)) in crate::msaa::subpixel_offsets(samples).enumerate() {
+    for (i, (dx, dy)) in subpixel_offsets(samples).enumerate() {
         let inside = (0..3).all(|k| {
             let (v, _, _, above) = edge(t, k, x0 + dx, y0 + dy);
             v > above
@@ -1244,6 +1259,15 @@ pub fn centre_edges(t: &Triangle, x: u32, y: u32) -> [i64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The samples' reach in fixed point: the centre for one sample, the standard patterns'
+    /// extremes for four and eight.
+    #[test]
+    fn sample_reach() {
+        assert_eq!(reach(1), (128, 128));
+        assert_eq!(reach(4), (32, 224));
+        assert_eq!(reach(8), (16, 240));
+    }
 
     use crate::rng::Rng;
 
