@@ -10,6 +10,43 @@ use oit_bench::auto::{Budget, Tables, resolve};
 use oit_bench::backends::{BackendOptions, select};
 use oit_core::{Camera, OitError, Settings, View, load_scene};
 
+/// Renders every candidate `auto` foresaw under `s` and holds its frame to the prediction: the
+/// tiles and storage it was foreseen with, a tile within `--memory`, or refused where it was
+/// foreseen refused (the tiling loop, or a technique the backend lacks). Returns how many were
+/// compared, how many of those tiled, and how many were refused as too large.
+fn run_candidates(
+    b: &dyn oit_core::Backend,
+    scene: &oit_core::Scene,
+    camera: &Camera,
+    s: &Settings,
+    candidates: &[oit_bench::auto::Candidate],
+    what: &str,
+) -> (usize, usize, usize) {
+    let (mut compared, mut tiled, mut refused) = (0, 0, 0);
+    for c in candidates {
+        let technique = c.technique.parse().unwrap();
+        let run = b.render(scene, camera, &Settings { technique, ..s.clone() });
+        let what = format!("{what} {}", c.technique);
+        if c.tiles == 0 {
+            assert!(run.is_err() && c.rejected.is_some(), "{what}: ran ({:?})", c.rejected);
+            refused += usize::from(matches!(run, Err(OitError::TooLarge { .. })));
+            continue;
+        }
+        let frame = run.unwrap_or_else(|e| panic!("{what}: foreseen in {} tiles, refused: {e}", c.tiles));
+        assert_eq!(
+            (u64::from(frame.stats.tiles), frame.stats.storage_bytes),
+            (c.tiles, c.storage_bytes),
+            "{what}: (tiles, storage) ran vs predicted"
+        );
+        if let Some(m) = s.memory {
+            assert!(c.frame_bytes <= m, "{what}: a tile of {} bytes over --memory", c.frame_bytes);
+        }
+        compared += 1;
+        tiled += usize::from(c.tiles > 1);
+    }
+    (compared, tiled, refused)
+}
+
 #[test]
 fn predicted_tiles_and_storage_are_the_frames() {
     let tables = Tables::new(None).expect("the shipped tables");
@@ -54,30 +91,8 @@ fn predicted_tiles_and_storage_are_the_frames() {
                     continue;
                 }
             };
-            for c in &choice.candidates {
-                let technique = c.technique.parse().unwrap();
-                let run = b.render(&scene, &camera, &Settings { technique, ..s.clone() });
-                let what = format!("{what} {}", c.technique);
-                if c.tiles == 0 {
-                    // refused before it ran (the tiling loop, or a technique the backend lacks):
-                    // so is the frame
-                    assert!(run.is_err() && c.rejected.is_some(), "{what}: ran ({:?})", c.rejected);
-                    refused += usize::from(matches!(run, Err(OitError::TooLarge { .. })));
-                    continue;
-                }
-                let frame =
-                    run.unwrap_or_else(|e| panic!("{what}: foreseen in {} tiles, refused: {e}", c.tiles));
-                assert_eq!(
-                    (u64::from(frame.stats.tiles), frame.stats.storage_bytes),
-                    (c.tiles, c.storage_bytes),
-                    "{what}: (tiles, storage) ran vs predicted"
-                );
-                if let Some(m) = memory {
-                    assert!(c.frame_bytes <= m, "{what}: a tile of {} bytes over --memory", c.frame_bytes);
-                }
-                compared += 1;
-                tiled += usize::from(c.tiles > 1);
-            }
+            let (c, t, r) = run_candidates(b, &scene, &camera, &s, &choice.candidates, &what);
+            (compared, tiled, refused) = (compared + c, tiled + t, refused + r);
             // the pick is one of them, and its reason names its tiles as they are
             let picked = choice.picked();
             let said = if picked.tiles > 1 {
@@ -125,24 +140,8 @@ fn gpu_predicted_tiles_and_storage_are_the_frames() {
             let (choice, _) =
                 resolve(b.as_ref(), &scene, &camera, &s, &tables, Budget::new(1.0, memory).unwrap())
                     .unwrap_or_else(|e| panic!("{what}: {e}"));
-            for c in &choice.candidates {
-                let technique = c.technique.parse().unwrap();
-                let run = b.render(&scene, &camera, &Settings { technique, ..s.clone() });
-                let what = format!("{what} {}", c.technique);
-                if c.tiles == 0 {
-                    assert!(run.is_err() && c.rejected.is_some(), "{what}: ran ({:?})", c.rejected);
-                    continue;
-                }
-                let frame =
-                    run.unwrap_or_else(|e| panic!("{what}: foreseen in {} tiles, refused: {e}", c.tiles));
-                assert_eq!(
-                    (u64::from(frame.stats.tiles), frame.stats.storage_bytes),
-                    (c.tiles, c.storage_bytes),
-                    "{what}: (tiles, storage) ran vs predicted"
-                );
-                compared += 1;
-                tiled += usize::from(c.tiles > 1);
-            }
+            let (c, t, _) = run_candidates(b.as_ref(), &scene, &camera, &s, &choice.candidates, &what);
+            (compared, tiled) = (compared + c, tiled + t);
         }
     }
     eprintln!("{compared} compared, {tiled} tiled");

@@ -803,28 +803,7 @@ mod tests {
 
     /// A GLB of `json` (its `buffers[0]` the binary chunk `bin`).
     pub(crate) fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
-        let pad = |mut v: Vec<u8>, with: u8| {
-            while !v.len().is_multiple_of(4) {
-                v.push(with);
-            }
-            v
-        };
-        let json = pad(json.as_bytes().to_vec(), b' ');
-        let bin = pad(bin.to_vec(), 0);
-        let total = 12 + 8 + json.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
-        let mut out = Vec::new();
-        out.extend_from_slice(b"glTF");
-        out.extend_from_slice(&2u32.to_le_bytes());
-        out.extend_from_slice(&(total as u32).to_le_bytes());
-        out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"JSON");
-        out.extend_from_slice(&json);
-        if !bin.is_empty() {
-            out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-            out.extend_from_slice(b"BIN\0");
-            out.extend_from_slice(&bin);
-        }
-        out
+        crate::pack_glb(json.as_bytes(), bin).expect("a small GLB")
     }
 
     /// A unit quad's four positions (f32) and its six u16 indices.

@@ -190,20 +190,22 @@ pub fn write_glb(scene: &Scene) -> Result<Vec<u8>, OitError> {
     }
     let json = serde_json::to_vec(&root)
         .map_err(|e| OitError::InvalidScene(format!("scene '{}': cannot write its glTF: {e}", scene.name)))?;
-    glb(&scene.name, json, bin.data)
+    pack_glb(&json, &bin.data).map_err(|e| match e {
+        OitError::InvalidScene(m) => OitError::InvalidScene(format!("scene '{}': {m}", scene.name)),
+        e => e,
+    })
 }
 
-/// The GLB container: a 12-byte header, the JSON chunk (padded with spaces) and the binary chunk
-/// (padded with zeros), each a multiple of 4 bytes long.
-fn glb(name: &str, mut json: Vec<u8>, mut bin: Vec<u8>) -> Result<Vec<u8>, OitError> {
+/// The GLB container of `json` and `bin`: a 12-byte header, the JSON chunk (padded with spaces)
+/// and the binary chunk (padded with zeros; left out when empty), each a multiple of 4 bytes long.
+/// What [`write_glb`] writes its scene into, and how tests and the fuzz harness make GLBs.
+pub fn pack_glb(json: &[u8], bin: &[u8]) -> Result<Vec<u8>, OitError> {
+    let (mut json, mut bin) = (json.to_vec(), bin.to_vec());
     pad(&mut json, b' ');
     pad(&mut bin, 0);
     let total = 12 + 8 + json.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
-    let total = u32::try_from(total).map_err(|_| {
-        OitError::InvalidScene(format!(
-            "scene '{name}' is {total} bytes as a GLB, over the 4 GiB a GLB holds"
-        ))
-    })?;
+    let total = u32::try_from(total)
+        .map_err(|_| OitError::InvalidScene(format!("{total} bytes as a GLB, over the 4 GiB a GLB holds")))?;
     let mut out = Vec::with_capacity(total as usize);
     out.extend_from_slice(b"glTF");
     out.extend_from_slice(&2u32.to_le_bytes());

@@ -368,6 +368,29 @@ impl Object {
     }
 }
 
+/// A prepared scene's [`Layers`], made the first time a frame asks for them and kept while
+/// frames ask with the same alpha override (every backend's prepared scene holds one).
+#[derive(Debug, Default)]
+pub struct LayersCache<'a> {
+    kept: std::sync::Mutex<Option<(Option<u32>, std::sync::Arc<Layers<'a>>)>>,
+}
+
+impl<'a> LayersCache<'a> {
+    /// `scene`'s layers under the alpha override `alpha` (`Settings::alpha`).
+    pub fn get(&self, scene: &'a Scene, alpha: Option<f32>) -> std::sync::Arc<Layers<'a>> {
+        let key = alpha.map(f32::to_bits);
+        let mut kept = self.kept.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        match &*kept {
+            Some((k, layers)) if *k == key => layers.clone(),
+            _ => {
+                let layers = std::sync::Arc::new(scene.layers(alpha));
+                *kept = Some((key, layers.clone()));
+                layers
+            }
+        }
+    }
+}
+
 /// A scene split for a frame ([`Scene::layers`]).
 #[derive(Clone, Debug)]
 pub struct Layers<'a> {

@@ -161,7 +161,7 @@ pub struct CpuPrepared<'s> {
     scene: &'s Scene,
     /// The scene split for its frames: its opaque part, drawn first, and the transparent part the
     /// technique captures ([`Scene::layers`]), made once per alpha override.
-    layers: std::sync::Mutex<Option<(Option<u32>, std::sync::Arc<oit_core::Layers<'s>>)>>,
+    layers: oit_core::LayersCache<'s>,
     threads: Option<rayon::ThreadPool>,
     pool: Pool,
     /// The scene's [`Scene::absorption_per_length`], from the bounds its validation found.
@@ -174,16 +174,7 @@ pub struct CpuPrepared<'s> {
 impl<'s> CpuPrepared<'s> {
     /// The scene's layers for `settings`' alpha override, made the first time it is asked for.
     fn layers(&self, settings: &Settings) -> std::sync::Arc<oit_core::Layers<'s>> {
-        let key = settings.alpha.map(f32::to_bits);
-        let mut kept = self.layers.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-        match &*kept {
-            Some((k, layers)) if *k == key => layers.clone(),
-            _ => {
-                let layers = std::sync::Arc::new(self.scene.layers(settings.alpha));
-                *kept = Some((key, layers.clone()));
-                layers
-            }
-        }
+        self.layers.get(self.scene, settings.alpha)
     }
 
     fn frame_inner(&self, camera: &Camera, settings: &Settings) -> Result<Frame, OitError> {
@@ -366,7 +357,7 @@ impl Backend for CpuBackend {
         Ok(Box::new(CpuPrepared {
             backend: self,
             scene,
-            layers: std::sync::Mutex::new(None),
+            layers: oit_core::LayersCache::default(),
             threads: self.thread_pool(threads)?,
             pool,
             per_length: scene.absorption_per_length_in(&bounds),

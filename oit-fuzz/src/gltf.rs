@@ -35,28 +35,7 @@ pub fn asset_seeds() -> Vec<Vec<u8>> {
 /// A GLB of `json` and `bin` (the binary chunk left out when empty), chunks padded as the format
 /// asks.
 pub fn pack(json: &[u8], bin: &[u8]) -> Vec<u8> {
-    let mut json = json.to_vec();
-    while !json.len().is_multiple_of(4) {
-        json.push(b' ');
-    }
-    let mut bin = bin.to_vec();
-    while !bin.len().is_multiple_of(4) {
-        bin.push(0);
-    }
-    let total = 12 + 8 + json.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&json);
-    if !bin.is_empty() {
-        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"BIN\0");
-        out.extend_from_slice(&bin);
-    }
-    out
+    oit_core::pack_glb(json, bin).expect("a fuzz input is far below 4 GiB")
 }
 
 /// The JSON and binary chunks of a GLB, read leniently (what is there, as far as it goes); a

@@ -84,7 +84,6 @@ mod record;
 mod technique;
 
 use std::cell::{Cell, RefCell};
-use std::rc::Rc;
 use std::sync::OnceLock;
 use std::time::Instant;
 
@@ -207,7 +206,7 @@ impl Backend for VulkanBackend {
             hardware: RefCell::new(None),
             compute_opaque: RefCell::new(None),
             hardware_opaque: RefCell::new(None),
-            layers: RefCell::new(None),
+            layers: oit_core::LayersCache::default(),
             gpu_setup: self.gpu_setup,
             read_back: Default::default(),
         }))
@@ -233,7 +232,7 @@ pub struct VulkanPrepared<'s> {
     /// The scene split for its frames ([`Scene::layers`]): the opaque part, drawn first, and the
     /// transparent part the technique captures, made once per alpha override. The geometry above
     /// is the parts' (their meshes do not depend on the override).
-    layers: RefCell<Option<(Option<u32>, Rc<oit_core::Layers<'s>>)>>,
+    layers: oit_core::LayersCache<'s>,
     /// `VulkanBackend::gpu_setup`.
     gpu_setup: Option<bool>,
     /// What an earlier frame read back, by its settings (`ctx::ReadBack`): the next frame of
@@ -246,17 +245,8 @@ pub struct VulkanPrepared<'s> {
 
 impl<'s> VulkanPrepared<'s> {
     /// The scene's layers for `settings`' alpha override, made the first time it is asked for.
-    fn layers(&self, settings: &Settings) -> Rc<oit_core::Layers<'s>> {
-        let key = settings.alpha.map(f32::to_bits);
-        let mut kept = self.layers.borrow_mut();
-        match &*kept {
-            Some((k, layers)) if *k == key => layers.clone(),
-            _ => {
-                let layers = Rc::new(self.scene.layers(settings.alpha));
-                *kept = Some((key, layers.clone()));
-                layers
-            }
-        }
+    fn layers(&self, settings: &Settings) -> std::sync::Arc<oit_core::Layers<'s>> {
+        self.layers.get(self.scene, settings.alpha)
     }
 
     fn compute_raster(

@@ -59,7 +59,6 @@ mod stage;
 mod technique;
 
 use std::cell::{Cell, RefCell};
-use std::rc::Rc;
 use std::sync::OnceLock;
 use std::time::Instant;
 
@@ -140,7 +139,7 @@ impl WgpuBackend {
             compute: RefCell::new(None),
             compute_boxes: RefCell::new(None),
             compute_opaque: RefCell::new(None),
-            layers: RefCell::new(None),
+            layers: oit_core::LayersCache::default(),
             deepest: RefCell::default(),
         })
     }
@@ -254,7 +253,7 @@ pub struct WgpuPrepared<'s> {
     /// The scene split for its frames ([`Scene::layers`]): the opaque part, drawn first, and the
     /// transparent part the technique captures, made once per alpha override. The geometry above
     /// is the parts' (their meshes do not depend on the override).
-    layers: RefCell<Option<(Option<u32>, Rc<oit_core::Layers<'s>>)>>,
+    layers: oit_core::LayersCache<'s>,
     /// The deepest pixel the last frame's counting pass found, by technique, size, window and
     /// path: the next such frame sizes its storage from it without waiting for its own counting
     /// pass, and runs again if that pass finds otherwise ([`GpuCtx::speculated_deepest`]); and
@@ -265,17 +264,8 @@ pub struct WgpuPrepared<'s> {
 
 impl<'s> WgpuPrepared<'s> {
     /// The scene's layers for `settings`' alpha override, made the first time it is asked for.
-    fn layers(&self, settings: &Settings) -> Rc<oit_core::Layers<'s>> {
-        let key = settings.alpha.map(f32::to_bits);
-        let mut kept = self.layers.borrow_mut();
-        match &*kept {
-            Some((k, layers)) if *k == key => layers.clone(),
-            _ => {
-                let layers = Rc::new(self.scene.layers(settings.alpha));
-                *kept = Some((key, layers.clone()));
-                layers
-            }
-        }
+    fn layers(&self, settings: &Settings) -> std::sync::Arc<oit_core::Layers<'s>> {
+        self.layers.get(self.scene, settings.alpha)
     }
 
     /// Uploads the hardware path's geometry (the transparent part's, and the opaque part's where
