@@ -140,6 +140,12 @@ pub struct SceneArgs {
     #[arg(long)]
     pub supersample: bool,
 
+    /// With --samples 4 or 8: sample (each fragment composited only at the samples it covers) or
+    /// pixel (at every sample of its pixel, the per-pixel capture baseline that shows the seams
+    /// along shared edges; the reference stays per sample).
+    #[arg(long, value_name = "sample|pixel", default_value = "sample")]
+    pub coverage: String,
+
     /// Backend to render with: a name (cpu; wgpu, vulkan when compiled in), a comma-separated
     /// list, or all (every backend compiled in whose device is present).
     #[arg(long, value_name = "NAME|all", default_value = "cpu")]
@@ -214,6 +220,7 @@ impl SceneArgs {
             blend_target: self.blend_target.parse::<oit_core::BlendTarget>()?,
             samples: self.samples,
             supersample: self.supersample,
+            pixel_coverage: parse_coverage(&self.coverage)?,
         };
         settings.validate()?;
         check_planes(self.near, self.far)?;
@@ -333,6 +340,15 @@ pub fn check_output(path: &Path, extension: &str, option: &str) -> Result<(), Oi
         return Err(bad(format!("folder {} does not exist", parent.display())));
     }
     Ok(())
+}
+
+/// `--coverage`: `sample` (per-sample composite) or `pixel` (the per-pixel capture baseline).
+fn parse_coverage(value: &str) -> Result<bool, OitError> {
+    match value {
+        "sample" => Ok(false),
+        "pixel" => Ok(true),
+        other => Err(OitError::InvalidSettings(format!("--coverage {other:?}: use sample or pixel"))),
+    }
 }
 
 #[cfg(test)]

@@ -155,7 +155,7 @@ pub struct Plan {
     /// part) into [`OPAQUE_BYTES`] a pixel, and the technique captures only what lies in front.
     pub opaque: bool,
     /// Samples a pixel (`Settings::samples`): above 1 each entry of `reference`, `dfb`, `ll` and
-    /// `fabs` carries its coverage mask beside it, a 32-bit word ([`Plan::arrays`]; docs/msaa.md).
+    /// `fabs` carries its coverage mask beside it, a byte ([`Plan::arrays`]; docs/msaa.md).
     pub samples: u32,
 }
 
@@ -396,13 +396,13 @@ impl Plan {
             arrays.push(per_pixel("tail sums (Σα·r, Σα·g, Σα·b, Σα, count)", 8, 5));
         }
         if self.samples > 1 {
-            // the coverage mask of each entry, beside it (one byte of the word used)
+            // the coverage mask of each entry, a byte beside it (8 samples at most)
             let masks = "coverage masks";
             match self.technique {
-                Technique::Fabs { .. } => arrays.push(per_pixel(masks, 4, k)),
+                Technique::Fabs { .. } => arrays.push(per_pixel(masks, 1, k)),
                 Technique::Reference | Technique::Dfb | Technique::Ll => arrays.push(Array {
                     name: masks,
-                    element_bytes: 4,
+                    element_bytes: 1,
                     per_pixel: 0,
                     per_fragment: 1,
                     fixed: 0,

@@ -124,6 +124,11 @@ pub struct Settings {
     /// position, the pixel the mean of its samples, against which MSAA's own error is measured
     /// (`oit compare` then judges the techniques, MSAA, against it). Other techniques ignore it.
     pub supersample: bool,
+    /// With `samples` above 1: every technique but the reference composites each fragment over
+    /// all of the pixel's samples, whatever its mask (`--coverage pixel`): per-pixel capture of
+    /// the multisampled fragments, the baseline whose edge seams per-sample coverage removes.
+    /// The reference stays per sample (the target the baseline is measured against).
+    pub pixel_coverage: bool,
 }
 
 /// The colour target the blender writes on the hardware path, for `plain` and (with
@@ -387,6 +392,7 @@ impl Default for Settings {
             blend_target: BlendTarget::F32,
             samples: 1,
             supersample: false,
+            pixel_coverage: false,
         }
     }
 }
@@ -464,6 +470,11 @@ impl Settings {
         if self.supersample && self.samples == 1 {
             return Err(OitError::InvalidSettings(
                 "--supersample is the supersampled reference at the sample count: use it with --samples 4 or 8".into(),
+            ));
+        }
+        if self.pixel_coverage && self.samples == 1 {
+            return Err(OitError::InvalidSettings(
+                "--coverage pixel composites the multisampled fragments per pixel: use it with --samples 4 or 8".into(),
             ));
         }
         if self.memory == Some(0) {

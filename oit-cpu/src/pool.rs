@@ -9,7 +9,7 @@
 
 use std::ops::{Deref, DerefMut};
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
+use std::sync::atomic::{AtomicU8, AtomicU32, AtomicU64, Ordering::Relaxed};
 
 use rayon::prelude::*;
 
@@ -51,6 +51,7 @@ impl<T> Default for Shelf<T> {
 /// The arrays one prepared scene owns between frames.
 #[derive(Default)]
 pub(crate) struct Pool {
+    pub u8s: Shelf<AtomicU8>,
     pub u32s: Shelf<AtomicU32>,
     pub u64s: Shelf<AtomicU64>,
     pub states: Shelf<PixelState>,
@@ -239,6 +240,11 @@ impl Pool {
     /// every element of which is written before it is read.
     pub fn u32s_scratch(&self, len: usize) -> Pooled<'_, AtomicU32> {
         self.lend(&self.u32s, len, None, || AtomicU32::new(0), None::<fn(&mut AtomicU32)>).0
+    }
+
+    /// [`Pool::u32s_scratch`] in 8-bit atomics (the multisampled frames' coverage masks).
+    pub fn u8s_scratch(&self, len: usize) -> Pooled<'_, AtomicU8> {
+        self.lend(&self.u8s, len, None, || AtomicU8::new(0), None::<fn(&mut AtomicU8)>).0
     }
 
     /// [`Pool::u32s_scratch`] in 64-bit atomics.

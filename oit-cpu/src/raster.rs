@@ -909,19 +909,46 @@ impl Rasterizer {
     /// touched, so `samples == 1` runs exactly as before. The cut of an opaque pass does not
     /// apply here (the CPU backend refuses opaque objects with several samples).
     pub fn for_each_masked_fragment<F: Fn(&Fragment<'_>, u8) + Sync>(&self, samples: u32, f: F) -> u64 {
+        use oit_core::setup::{HALF_PIXEL, SUBPIXEL, edge, subpixel_offsets};
+        // each sample's offset from the pixel's centre, in 1/256 pixel
+        let offsets: Vec<(i64, i64)> =
+            subpixel_offsets(samples).map(|(x, y)| (x - HALF_PIXEL, y - HALF_PIXEL)).collect();
         self.scatter_tasks(|run| {
             let mut n = 0u64;
             for i in run {
                 let (t, s) = (&self.setup.triangles[i], &self.edges[i]);
                 let [x0, y0, x1, y1] = t.bbox;
+                // The edge functions stepped across the box from the first pixel's centre, and
+                // each sample's as the centre's plus a constant: the plain rule
+                // (`setup::sample_mask` and `setup::centre_edges` at every pixel) in integers,
+                // so the same values (`masked_walk_is_the_plain_rule`).
+                let (cx, cy) = (i64::from(x0) * SUBPIXEL + HALF_PIXEL, i64::from(y0) * SUBPIXEL + HALF_PIXEL);
+                let e = [0, 1, 2].map(|k| edge(t, k, cx, cy));
+                let mut at_sample = [[0i64; 8]; 3];
+                for (k, (_, step_x, step_y, _)) in e.iter().enumerate() {
+                    for (j, &(ox, oy)) in offsets.iter().enumerate() {
+                        at_sample[k][j] = step_x / SUBPIXEL * ox + step_y / SUBPIXEL * oy;
+                    }
+                }
+                let mut row = e.map(|e| e.0);
                 for y in y0..=y1 {
+                    let mut c = row;
                     for x in x0..=x1 {
-                        let mask = oit_core::setup::sample_mask(t, x, y, samples);
+                        let mut mask = 0u8;
+                        for j in 0..offsets.len() {
+                            let inside = (0..3).all(|k| c[k] + at_sample[k][j] > e[k].3);
+                            mask |= u8::from(inside) << j;
+                        }
                         if mask != 0 {
-                            let e = oit_core::setup::centre_edges(t, x, y);
-                            f(&self.on_demand_fragment(t, s, x, y, e), mask);
+                            f(&self.on_demand_fragment(t, s, x, y, c), mask);
                             n += 1;
                         }
+                        for k in 0..3 {
+                            c[k] += e[k].1;
+                        }
+                    }
+                    for k in 0..3 {
+                        row[k] += e[k].2;
                     }
                 }
             }
@@ -1365,6 +1392,59 @@ mod tests {
         };
         let n = pool.install(|| pass(&sink));
         (n, all.into_inner().unwrap())
+    }
+
+    /// The masked walk steps the edge functions across each box; the plain rule evaluates
+    /// `setup::sample_mask` and `setup::centre_edges` afresh at every pixel. Same fragments, masks
+    /// and depths, bit for bit, at 4 and 8 samples, over triangles large, thin and smaller than a
+    /// pixel, both windings. Mutation: a sample offset measured from the pixel's corner instead of
+    /// its centre fails it.
+    #[test]
+    fn masked_walk_is_the_plain_rule() {
+        let cam = camera(W, H);
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 33) as f32 / (1u64 << 31) as f32
+        };
+        let mut pts = Vec::new();
+        let mut indices = Vec::new();
+        for i in 0..300u32 {
+            let scale = [0.3, 3.0, 40.0][i as usize % 3];
+            let (cx, cy) = (next() * W as f32, next() * H as f32);
+            for _ in 0..3 {
+                pts.push((cx + (next() - 0.5) * scale, cy + (next() - 0.5) * scale));
+            }
+            indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
+        }
+        let scene = scene_of(vec![screen_mesh(&cam, W, H, &pts, indices)]);
+        for samples in [4, 8] {
+            let s = Settings { samples, ..settings(W, H) };
+            let r = Rasterizer::new(&scene, &cam, &s);
+            let walked = Mutex::new(Vec::new());
+            let n = r.for_each_masked_fragment(samples, |f, mask| {
+                walked.lock().unwrap().push((f.pixel, f.prim, mask, f.depth.to_bits()));
+            });
+            let mut walked = walked.into_inner().unwrap();
+            let mut plain = Vec::new();
+            for (t, e) in r.setup.triangles.iter().zip(&r.edges) {
+                let [x0, y0, x1, y1] = t.bbox;
+                for y in y0..=y1 {
+                    for x in x0..=x1 {
+                        let mask = oit_core::setup::sample_mask(t, x, y, samples);
+                        if mask != 0 {
+                            let b = e.plane.barycentrics(oit_core::setup::centre_edges(t, x, y));
+                            plain.push((y * W + x, e.prim, mask, e.plane.depth(b).to_bits()));
+                        }
+                    }
+                }
+            }
+            walked.sort_unstable();
+            plain.sort_unstable();
+            assert_eq!(n as usize, walked.len());
+            assert!(plain.len() > 1000 && plain.iter().any(|f| f.2 != oit_core::msaa::full_mask(samples)));
+            assert_eq!(walked, plain, "{samples} samples");
+        }
     }
 
     fn sorted_fragments(r: &Rasterizer) -> Vec<Key> {

@@ -2,7 +2,7 @@
 //! per-pixel storage in std atomics, and feeds each pixel's captured fragments, nearest first, to
 //! the shared [`Resolve`](crate::resolve::Resolve).
 
-use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
+use std::sync::atomic::{AtomicU8, AtomicU32, AtomicU64, Ordering::Relaxed};
 
 use oit_core::plan::{Counted, Plan};
 use oit_core::rules::{depth_bits, pack_normal, pack_rgba8};
@@ -246,6 +246,12 @@ impl<'a> Ctx<'a> {
     pub fn scratch_words64(&mut self, len: u64) -> Result<Pooled<'a, AtomicU64>, OitError> {
         let n = self.checked(len, 8)?;
         Ok(self.pool.u64s_scratch(n))
+    }
+
+    /// [`Ctx::scratch_words64`] in bytes (the multisampled frames' coverage masks, one a fragment).
+    pub fn scratch_bytes(&mut self, len: u64) -> Result<Pooled<'a, AtomicU8>, OitError> {
+        let n = self.checked(len, 1)?;
+        Ok(self.pool.u8s_scratch(n))
     }
 
     /// [`Ctx::scratch_words64`] in words of 32 bits.

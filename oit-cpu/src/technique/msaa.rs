@@ -5,7 +5,7 @@
 //! a (pixel, triangle) pair is a fragment where the triangle covers any of the pixel's samples,
 //! shaded once at the pixel's centre, with its coverage mask. A fragment is one entry whatever
 //! its mask (the lists and the K slots size by fragments, as single-sample's), and the mask is
-//! kept in a 32-bit word beside the entry's key and payload (one byte of it used).
+//! kept in a byte beside the entry's key and payload (8 samples at most).
 //!
 //! The resolve: each pixel's entries sorted by (depth, primitive id) as single-sample's; then
 //! each sample composites, nearest first, only the entries whose mask holds it, over the
@@ -25,6 +25,9 @@
 //! - `fabs`: K slots a pixel, each with its mask; the pixels that overflow keep their K nearest
 //!   by (depth, primitive id), as single-sample's (two more passes). `--overflow tail` is not yet
 //!   done at several samples.
+//!
+//! With `Settings::pixel_coverage` (`--coverage pixel`) every technique here but the reference
+//! keeps each fragment's mask as the full mask: the per-pixel capture baseline.
 //!
 //! Every other technique refuses `--samples` above 1 ([`check`]).
 
@@ -93,6 +96,13 @@ fn key(f: &Fragment<'_>) -> u64 {
     u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim)
 }
 
+/// The mask a technique keeps of a fragment's `mask`: the mask itself, or every sample of the
+/// pixel with `--coverage pixel` (the per-pixel capture baseline).
+fn coverage(settings: &Settings) -> impl Fn(u8) -> u8 + Sync + Copy {
+    let full = if settings.pixel_coverage { oit_core::msaa::full_mask(settings.samples) } else { 0 };
+    move |mask| mask | full
+}
+
 /// One masked geometry pass, counted.
 fn pass<F: Fn(&Fragment<'_>, u8) + Sync>(ctx: &mut Ctx<'_>, f: F) -> u64 {
     let n = ctx.raster.for_each_masked_fragment(ctx.settings.samples, f);
@@ -131,14 +141,14 @@ fn reference(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let cursor = ctx.pool.u32s(counted.len(), 0);
     let keys = ctx.scratch_words64(total as u64)?;
     let payloads = ctx.scratch_words32(total as u64)?;
-    let masks = ctx.scratch_words32(total as u64)?;
+    let masks = ctx.scratch_bytes(total as u64)?;
     let shared = &*ctx;
     let n = shared.raster.for_each_masked_fragment(shared.settings.samples, |f, mask| {
         let px = f.pixel as usize;
         let slot = offsets[px] + cursor[px].fetch_add(1, Relaxed) as usize;
         keys[slot].store(key(f), Relaxed);
         payloads[slot].store(shared.payload(f), Relaxed);
-        masks[slot].store(u32::from(mask), Relaxed);
+        masks[slot].store(mask, Relaxed);
     });
     ctx.ran_pass(n);
     drop(cursor);
@@ -149,35 +159,35 @@ fn reference(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let full = oit_core::msaa::full_mask(samples);
     let resolve = &ctx.resolve;
     let deepest = deepest.max(1);
-    let pixels: Vec<[u8; 4]> =
-        (0..counts.len())
-            .into_par_iter()
-            .map_init(Vec::new, |list: &mut Vec<Entry>, px| {
-                list.clear();
-                list.extend((offsets[px]..offsets[px + 1]).map(|i| {
-                    (keys[i].load(Relaxed), payloads[i].load(Relaxed), masks[i].load(Relaxed) as u8)
-                }));
-                list.sort_unstable();
-                let bg = resolve.background_at(px).as_dvec3();
-                let c = match effect {
-                    Effect::Complexity if counts[px] == 0 => bg,
-                    Effect::Complexity => heat_f64(f64::from(counts[px]) / f64::from(deepest)),
-                    _ if list.iter().all(|e| e.2 == full) => {
-                        composite_f64(effect, camera, per_length, list.iter().map(|e| (e.0, e.1)), bg)
-                    }
-                    _ => {
-                        let sum: DVec3 = (0..samples)
-                            .map(|i| {
-                                let covering = list.iter().filter(|e| e.2 >> i & 1 == 1).map(|e| (e.0, e.1));
-                                composite_f64(effect, camera, per_length, covering, bg)
-                            })
-                            .sum();
-                        sum / f64::from(samples)
-                    }
-                };
-                srgb8_f64(c)
-            })
-            .collect();
+    let pixels: Vec<[u8; 4]> = (0..counts.len())
+        .into_par_iter()
+        .map_init(Vec::new, |list: &mut Vec<Entry>, px| {
+            list.clear();
+            list.extend(
+                (offsets[px]..offsets[px + 1])
+                    .map(|i| (keys[i].load(Relaxed), payloads[i].load(Relaxed), masks[i].load(Relaxed))),
+            );
+            list.sort_unstable();
+            let bg = resolve.background_at(px).as_dvec3();
+            let c = match effect {
+                Effect::Complexity if counts[px] == 0 => bg,
+                Effect::Complexity => heat_f64(f64::from(counts[px]) / f64::from(deepest)),
+                _ if list.iter().all(|e| e.2 == full) => {
+                    composite_f64(effect, camera, per_length, list.iter().map(|e| (e.0, e.1)), bg)
+                }
+                _ => {
+                    let sum: DVec3 = (0..samples)
+                        .map(|i| {
+                            let covering = list.iter().filter(|e| e.2 >> i & 1 == 1).map(|e| (e.0, e.1));
+                            composite_f64(effect, camera, per_length, covering, bg)
+                        })
+                        .sum();
+                    sum / f64::from(samples)
+                }
+            };
+            srgb8_f64(c)
+        })
+        .collect();
     let image = Image { width: ctx.settings.width, height: ctx.settings.height, pixels };
     let mut frame = super::frame(ctx, image, total as u64);
     frame.stats.max_layers = counts.iter().copied().max().unwrap_or(0);
@@ -290,8 +300,9 @@ fn dfb(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     ctx.check_counted(Counted { deepest, fragments: u64::from(total) })?;
     let keys = ctx.words64(u64::from(total), 0)?;
     let payloads = ctx.words32(u64::from(total), 0)?;
-    let masks = ctx.words32(u64::from(total), 0)?;
+    let masks = ctx.scratch_bytes(u64::from(total))?;
     let shared = &*ctx;
+    let kept = coverage(shared.settings);
     let n = shared.raster.for_each_masked_fragment(shared.settings.samples, |f, mask| {
         let px = f.pixel as usize;
         let left = counted[px].fetch_sub(1, Relaxed);
@@ -302,7 +313,7 @@ fn dfb(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         let entry = offsets[px] + left as usize - 1;
         keys[entry].store(key(f), Relaxed);
         payloads[entry].store(shared.payload(f), Relaxed);
-        masks[entry].store(u32::from(mask), Relaxed);
+        masks[entry].store(kept(mask), Relaxed);
     });
     ctx.ran_pass(n);
     let (keys, payloads, masks, counted) = (&*keys, &*payloads, &*masks, &*counted);
@@ -311,7 +322,7 @@ fn dfb(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         list.clear();
         list.extend(
             (offsets[px] + unfilled..offsets[px + 1])
-                .map(|i| (keys[i].load(Relaxed), payloads[i].load(Relaxed), masks[i].load(Relaxed) as u8)),
+                .map(|i| (keys[i].load(Relaxed), payloads[i].load(Relaxed), masks[i].load(Relaxed))),
         );
     }))
 }
@@ -329,9 +340,10 @@ fn ll(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let counter = ctx.words32(1, 0)?;
     let keys = ctx.words64(u64::from(nodes), 0)?;
     let payloads = ctx.words32(u64::from(nodes), 0)?;
-    let masks = ctx.words32(u64::from(nodes), 0)?;
+    let masks = ctx.scratch_bytes(u64::from(nodes))?;
     let links = ctx.words32(u64::from(nodes), END)?;
     let shared = &*ctx;
+    let kept = coverage(shared.settings);
     let n = shared.raster.for_each_masked_fragment(shared.settings.samples, |f, mask| {
         let px = f.pixel as usize;
         let node = counter[0].fetch_add(1, Relaxed);
@@ -342,7 +354,7 @@ fn ll(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         let i = node as usize;
         keys[i].store(key(f), Relaxed);
         payloads[i].store(shared.payload(f), Relaxed);
-        masks[i].store(u32::from(mask), Relaxed);
+        masks[i].store(kept(mask), Relaxed);
         links[i].store(heads[px].swap(node, Relaxed), Relaxed);
     });
     ctx.ran_pass(n);
@@ -352,7 +364,7 @@ fn ll(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         let mut node = heads[px].load(Relaxed);
         while node != END {
             let i = node as usize;
-            list.push((keys[i].load(Relaxed), payloads[i].load(Relaxed), masks[i].load(Relaxed) as u8));
+            list.push((keys[i].load(Relaxed), payloads[i].load(Relaxed), masks[i].load(Relaxed)));
             node = links[i].load(Relaxed);
         }
     }))
@@ -377,15 +389,16 @@ fn fabs(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let counters = ctx.alloc32(1, 0)?;
     let slots = ctx.scratch64(k)?;
     let payloads = ctx.scratch32(k)?;
-    let masks = ctx.scratch32(k)?;
+    let masks = ctx.scratch_bytes((ctx.pixels as u64).saturating_mul(k as u64))?;
     let shared = &*ctx;
+    let kept = coverage(shared.settings);
     let n = shared.raster.for_each_masked_fragment(shared.settings.samples, |f, mask| {
         let px = f.pixel as usize;
         let i = counters[px].fetch_add(1, Relaxed) as usize;
         if i < k {
             slots[px * k + i].store(key(f), Relaxed);
             payloads[px * k + i].store(shared.payload(f), Relaxed);
-            masks[px * k + i].store(u32::from(mask), Relaxed);
+            masks[px * k + i].store(kept(mask), Relaxed);
         } else {
             shared.lose(px);
         }
@@ -404,6 +417,7 @@ fn fabs(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
             }
         });
         let shared = &*ctx;
+        let kept = coverage(shared.settings);
         shared.raster.for_each_masked_fragment(shared.settings.samples, |f, mask| {
             let px = f.pixel as usize;
             if list.overflowed(px) {
@@ -411,7 +425,7 @@ fn fabs(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
                 let at = (px * k..px * k + k).find(|&i| slots[i].load(Relaxed) == word);
                 if let Some(i) = at {
                     payloads[i].store(shared.payload(f), Relaxed);
-                    masks[i].store(u32::from(mask), Relaxed);
+                    masks[i].store(kept(mask), Relaxed);
                 }
             }
         });
@@ -423,7 +437,7 @@ fn fabs(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         let n = (counters[px].load(Relaxed) as usize).min(k);
         list.extend(
             (px * k..px * k + n)
-                .map(|i| (slots[i].load(Relaxed), payloads[i].load(Relaxed), masks[i].load(Relaxed) as u8)),
+                .map(|i| (slots[i].load(Relaxed), payloads[i].load(Relaxed), masks[i].load(Relaxed))),
         );
     }))
 }
