@@ -440,6 +440,48 @@ fn builds(spec: &Spec<'_>) -> String {
     out.join("\n")
 }
 
+/// Multisampling on one scene (issue 40): three runs of the same techniques, at one sample, at
+/// `--samples N` and at `--samples N --coverage pixel` (files in that order): the fragments the
+/// samples add, bytes a captured fragment, steady wall time, and the error pixel rate against the
+/// per-sample reference per sample and per pixel.
+fn msaa(spec: &Spec<'_>) -> String {
+    let (one, many, pixel) = (read_json(spec.file(0)), read_json(spec.file(1)), read_json(spec.file(2)));
+    let mut out = vec![
+        "| technique | fragments, 1 sample | fragments, N samples | bytes a captured fragment, 1 → N | steady wall ms, 1 → N | EPR (%), per sample | EPR (%), per pixel |"
+            .to_string(),
+        "|---|---|---|---|---|---|---|".to_string(),
+    ];
+    let find = |report: &Value, r: &Value| {
+        rows(report)
+            .iter()
+            .find(|o| o["technique"] == r["technique"] && o["scene"] == r["scene"] && o["backend"] == r["backend"])
+            .cloned()
+    };
+    let per = |r: &Value| {
+        r["storage_bytes"].as_f64().unwrap_or(f64::NAN) / r["captured"].as_f64().unwrap_or(f64::NAN)
+    };
+    let median = |r: &Value| r["steady_wall_ms"]["median"].as_f64().unwrap_or(f64::NAN);
+    for r in rows(&many) {
+        let (Some(o), Some(p)) = (find(&one, r), find(&pixel, r)) else {
+            continue;
+        };
+        out.push(format!(
+            "| {} | {} | {} | {} → {} | {} → {} | {} | {} |",
+            r["technique"].as_str().unwrap_or("?"),
+            count(o["fragments"].as_u64().unwrap_or(0)),
+            count(r["fragments"].as_u64().unwrap_or(0)),
+            sig(per(&o)),
+            sig(per(r)),
+            sig(median(&o)),
+            sig(median(r)),
+            epr(r),
+            epr(&p),
+        ));
+    }
+    assert!(out.len() > 2, "msaa: no technique in all three of {:?}", spec.files);
+    out.join("\n")
+}
+
 /// The table a marker's head (the text after `<!-- table `) asks for.
 fn table(head: &str) -> String {
     let spec = Spec::parse(head);
@@ -451,6 +493,7 @@ fn table(head: &str) -> String {
         "model" => model(&spec),
         "overflow" => overflow(&spec),
         "builds" => builds(&spec),
+        "msaa" => msaa(&spec),
         other => panic!("unknown table kind {other:?} in marker {head:?}"),
     }
 }
