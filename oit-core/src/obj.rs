@@ -984,7 +984,9 @@ mod tests {
             std::fs::write(&obj, format!("mtllib {mtllib}\n{quad}")).unwrap();
             let (tx, rx) = std::sync::mpsc::channel();
             let path = obj.clone();
-            std::thread::spawn(move || tx.send(load_obj(&path).map_err(|e| e.to_string())));
+            std::thread::spawn(move || {
+                let _ = tx.send(load_obj(&path).map_err(|e| e.to_string()));
+            });
             let scene =
                 rx.recv_timeout(std::time::Duration::from_secs(20)).expect("load_obj blocked").unwrap();
             assert!(scene.warnings.iter().any(|w| w.contains(said)), "mtllib {mtllib}: {:?}", scene.warnings);
