@@ -14,10 +14,13 @@ use oit_core::{
 #[derive(Args, Clone, Debug)]
 #[command(next_help_heading = "Scene, camera and shading")]
 pub struct SceneArgs {
-    /// The scene: a built-in name (default, planes:N, spheres:N, cluster:N, knot, coplanar,
-    /// ties:N, near:N, grid:RxC:MESH, scale:S:SCENE for SCENE with every coordinate times S) or a
-    /// path to a Wavefront .obj file (at most 1 GiB; OIT_MAX_MODEL_BYTES raises the limit).
-    #[arg(long, value_name = "NAME|FILE.obj", default_value = oit_core::DEFAULT_SCENE)]
+    /// The scene: a built-in name (default, bunny, armadillo, the scene set particles, foliage,
+    /// glass and cad, planes:N, spheres:N, cluster:N, knot, coplanar, ties:N, near:N, particles:N,
+    /// fence, grid:RxC:MESH, scale:S:SCENE for SCENE with every coordinate times S, wall:F:SCENE
+    /// and nowall:F:SCENE for SCENE with an opaque wall, untextured:SCENE; `oit info` lists them)
+    /// or a path to a Wavefront .obj file or a glTF 2.0 file, .gltf or .glb (at most 1 GiB;
+    /// OIT_MAX_MODEL_BYTES raises the limit).
+    #[arg(long, value_name = "NAME|FILE", default_value = oit_core::DEFAULT_SCENE)]
     pub scene: String,
 
     /// The scene of a glTF file to draw (--scene FILE.gltf or FILE.glb), numbered from 0 as in

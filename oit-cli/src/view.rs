@@ -36,8 +36,9 @@ pub struct ViewArgs {
     #[arg(short, long, value_name = "T", default_value = "reference")]
     pub technique: String,
 
-    /// The scene: a built-in name or a Wavefront .obj file, as for `oit render`.
-    #[arg(long, value_name = "NAME|FILE.obj", default_value = oit_core::DEFAULT_SCENE)]
+    /// The scene: a built-in name, a Wavefront .obj file or a glTF file (.gltf, .glb), as for
+    /// `oit render`.
+    #[arg(long, value_name = "NAME|FILE", default_value = oit_core::DEFAULT_SCENE)]
     pub scene: String,
 
     /// The scene of a glTF file to show (--scene FILE.gltf or FILE.glb), numbered from 0, as for

@@ -599,9 +599,8 @@ impl Images<'_> {
     }
 }
 
-/// Decodes a PNG or JPEG (by its MIME type, else by its bytes) into RGBA8, with limits: a side of
-/// at most [`Texture::MAX_SIDE`] and pixels of at most [`IMAGE_EXPANSION`] times its bytes, both
-/// checked before the pixels are allocated.
+/// Decodes a PNG or JPEG (by its MIME type, else by its bytes) into RGBA8, with
+/// [`decode_limited`]'s limits.
 fn decode_image(bytes: &[u8], mime: Option<&str>, what: &str) -> Result<Pixels, String> {
     use image::ImageFormat;
     let format = match mime {
@@ -612,6 +611,20 @@ fn decode_image(bytes: &[u8], mime: Option<&str>, what: &str) -> Result<Pixels, 
             _ => return Err(format!("{what}: not a PNG or JPEG image (the formats glTF allows)")),
         },
     };
+    let image = decode_limited(bytes, format, what)?;
+    let (width, height) = (image.width(), image.height());
+    let texels = image.into_rgba8().into_raw().chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect();
+    Ok((width, height, texels))
+}
+
+/// Decodes `bytes` as an image of `format`, with limits: a side of at most [`Texture::MAX_SIDE`]
+/// and pixels of at most [`IMAGE_EXPANSION`] times its bytes, both checked before the pixels are
+/// allocated. glTF's images and an OBJ's `map_Kd`/`map_d` textures are decoded here.
+pub(crate) fn decode_limited(
+    bytes: &[u8],
+    format: image::ImageFormat,
+    what: &str,
+) -> Result<image::DynamicImage, String> {
     let undecoded = |e: image::ImageError| format!("{what} does not decode as {format:?}: {e}");
     let reader = || image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
     // the header first: sides and the pixels' size against the bytes, before any is allocated
@@ -636,10 +649,7 @@ fn decode_image(bytes: &[u8], mime: Option<&str>, what: &str) -> Result<Pixels, 
     limits.max_image_height = Some(Texture::MAX_SIDE);
     limits.max_alloc = Some(most);
     reader.limits(limits);
-    let image = reader.decode().map_err(undecoded)?;
-    let (width, height) = (image.width(), image.height());
-    let texels = image.into_rgba8().into_raw().chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect();
-    Ok((width, height, texels))
+    reader.decode().map_err(undecoded)
 }
 
 /// What the file asked for that oit does not draw yet: one warning each.

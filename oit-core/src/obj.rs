@@ -154,16 +154,29 @@ pub fn parse_obj(path: &Path, text: &str) -> Result<Scene, OitError> {
     let prepared = prepare(text).map_err(|(line, message)| obj_err(Some(line), message))?;
     let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
     let mut reader = std::io::BufReader::new(prepared.text.as_bytes());
-    // `mtllib` files are read beside the OBJ file (a missing one is a warning, not an error)
+    // `mtllib` files are read beside the OBJ file (a missing one is a warning, not an error), as
+    // the model is: regular files only, bounded (tobj's own reader opened a FIFO and waited for a
+    // writer, and read /dev/zero until the OOM killer came)
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |mtl| tobj::load_mtl(dir.join(mtl)))
-        .map_err(|e| obj_err(None, e.to_string()))?;
+    let limit = model_byte_limit()?;
+    let mtl_error = std::cell::RefCell::new(None::<String>);
+    let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |mtl| {
+        match read_bounded_bytes(&dir.join(mtl), limit, ".mtl") {
+            Ok(bytes) => tobj::load_mtl_buf(&mut bytes.as_slice()),
+            Err(e) => {
+                *mtl_error.borrow_mut() = Some(e.to_string());
+                Err(tobj::LoadError::OpenFileFailed)
+            }
+        }
+    })
+    .map_err(|e| obj_err(None, e.to_string()))?;
     let mut warnings: Vec<String> = Vec::new();
     let materials = match materials {
         Ok(m) => m,
         Err(e) => {
             if prepared.text.lines().any(|l| l.trim_start().starts_with("mtllib")) {
-                warnings.push(format!("its materials (mtllib) were not read ({e}): drawn in oit's colour"));
+                let why = mtl_error.borrow_mut().take().unwrap_or_else(|| e.to_string());
+                warnings.push(format!("its materials (mtllib) were not read ({why}): drawn in oit's colour"));
             }
             Vec::new()
         }
@@ -268,15 +281,19 @@ fn apply_material(
 }
 
 /// The RGBA texture of `map_Kd` (`colour`) with `map_d`'s first channel as alpha (`dissolve`),
-/// either optional, read from `dir`.
+/// either optional, read from `dir` as the model is (a regular file of at most
+/// `OIT_MAX_MODEL_BYTES`) and decoded with glTF's image limits (a side of at most
+/// [`crate::Texture::MAX_SIDE`], no more pixels than its bytes can encode).
 fn read_texture(dir: &Path, colour: Option<&str>, dissolve: Option<&str>) -> Result<crate::Texture, String> {
+    let limit = model_byte_limit().map_err(|e| e.to_string())?;
     let open = |name: &str| {
-        image::ImageReader::open(dir.join(name))
-            .map_err(|e| format!("cannot read {name}: {e}"))?
-            .with_guessed_format()
-            .map_err(|e| format!("cannot read {name}: {e}"))?
-            .decode()
-            .map_err(|e| format!("cannot decode {name}: {e}"))
+        let bytes = read_bounded_bytes(&dir.join(name), limit, "image").map_err(|e| match e {
+            OitError::Io { source, .. } => format!("cannot read {name}: {source}"),
+            OitError::Obj { message, .. } => format!("cannot read {name}: {message}"),
+            other => format!("cannot read {name}: {other}"),
+        })?;
+        let format = image::guess_format(&bytes).map_err(|e| format!("cannot decode {name}: {e}"))?;
+        crate::gltf::decode_limited(&bytes, format, name).map_err(|e| format!("cannot decode {e}"))
     };
     let base = colour.map(|c| open(c).map(|i| i.to_rgba8())).transpose()?;
     let alpha = dissolve.map(|d| open(d).map(|i| i.to_luma8())).transpose()?;
@@ -422,11 +439,12 @@ fn prepare(text: &str) -> Result<Prepared<'_>, (usize, String)> {
 /// ±[`Mesh::MAX_COORDINATE`].
 fn parse_vertex<'a>(line: &str, words: impl Iterator<Item = &'a str>) -> Result<DVec3, String> {
     let mut values = Vec::with_capacity(6);
+    let line = clip(line);
     for v in words {
         match v.parse::<f32>() {
             Ok(x) if x.is_finite() => values.push(x),
             Ok(_) => return Err(format!("vertex has a NaN or infinite value: '{line}'")),
-            Err(_) => return Err(format!("'{v}' is not a number: '{line}'")),
+            Err(_) => return Err(format!("'{}' is not a number: '{line}'", clip(v))),
         }
     }
     if values.len() < 3 {
@@ -448,11 +466,23 @@ fn parse_vertex<'a>(line: &str, words: impl Iterator<Item = &'a str>) -> Result<
     Ok(p.as_dvec3())
 }
 
+/// Text of the file quoted in a message: at most [`QUOTED_CHARS`] characters, the rest said as
+/// "…" (a line of 200,000 digits was quoted whole, a 200 KB error line).
+fn clip(text: &str) -> std::borrow::Cow<'_, str> {
+    match text.char_indices().nth(QUOTED_CHARS) {
+        Some((end, _)) => format!("{}… ({} bytes)", &text[..end], text.len()).into(),
+        None => text.into(),
+    }
+}
+
+/// The most characters of the file's text a message quotes.
+const QUOTED_CHARS: usize = 80;
+
 /// The 0-based position a face corner (`v`, `v/vt`, `v//vn`, `v/vt/vn`; negative counts back from
 /// the last vertex so far) refers to.
 fn resolve(corner: &str, count: usize) -> Result<usize, String> {
     let v = corner.split('/').next().unwrap_or_default();
-    let bad = || format!("face corner '{corner}' refers to no vertex ({count} defined so far)");
+    let bad = || format!("face corner '{}' refers to no vertex ({count} defined so far)", clip(corner));
     let i: i64 = v.parse().map_err(|_| bad())?;
     let ix = if i > 0 { i - 1 } else { count as i64 + i };
     if i == 0 || ix < 0 || ix >= count as i64 {
@@ -890,6 +920,79 @@ mod tests {
         std::fs::remove_file(&fifo).ok();
         let e = answer.expect("load_obj on a FIFO blocked").unwrap_err();
         assert!(e.contains("not a regular file"), "{e}");
+    }
+
+    #[test]
+    fn a_long_line_is_quoted_in_part() {
+        // The hostile re-run of 2026-12-05: `v 111…1 0 0` (200,000 digits) was refused with the
+        // whole line quoted, a 200 KB error line. Mutation caught: `clip` returning its text whole.
+        let digits = "1".repeat(200_000);
+        for text in [
+            format!("v {digits} 0 0\n"),
+            format!("v 0 0 0\nv x{digits} 0 0\n"),
+            format!("v 0 0 0\nv 1 0 0\nf 1 2 {digits}\n"),
+        ] {
+            let e = parse_obj(Path::new("long.obj"), &text).unwrap_err().to_string();
+            assert!(e.len() < 400 && e.contains("bytes)"), "{} bytes: {}", e.len(), &e[..e.len().min(400)]);
+        }
+    }
+
+    #[test]
+    fn materials_and_textures_are_read_as_models_are() {
+        // The hostile re-run of 2026-12-05 (bench/results/cpu/hostile-2026-12-05): `mtllib` and
+        // `map_Kd` were opened by tobj and the image crate directly, so `mtllib /dev/zero` was
+        // read until the OOM killer came (exit 137) and `mtllib fifo.mtl` or `map_Kd fifo.png`
+        // waited for a writer (a hang). Each is now a warning naming the file, the object drawn
+        // in its colour. Mutation caught: `tobj::load_mtl(dir.join(mtl))` back in the material
+        // loader, or `image::ImageReader::open` in `read_texture` (the thread's answer never
+        // comes, and the test fails after 20 s).
+        let dir = std::env::temp_dir().join(format!("oit-obj-hostile-mtl-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let fifo = |name: &str| {
+            let p = dir.join(name);
+            let _ = std::fs::remove_file(&p);
+            std::process::Command::new("mkfifo").arg(&p).status().is_ok_and(|s| s.success())
+        };
+        if !(fifo("fifo.mtl") && fifo("fifo.png")) {
+            eprintln!("skipped: no mkfifo on this system");
+            return;
+        }
+        std::fs::write(dir.join("tex.mtl"), "newmtl m\nd 0.5\nmap_Kd fifo.png\n").unwrap();
+        std::fs::write(dir.join("zero.mtl"), "newmtl m\nd 0.5\nmap_Kd /dev/zero\n").unwrap();
+        // a PNG whose header claims 100,000² pixels: refused before they are allocated
+        let mut png = Vec::new();
+        image::RgbaImage::new(1, 1)
+            .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .unwrap();
+        png[16..24].copy_from_slice(&[0, 1, 0x86, 0xa0, 0, 1, 0x86, 0xa0]);
+        let mut crc = flate2::Crc::new();
+        crc.update(&png[12..29]);
+        png[29..33].copy_from_slice(&crc.sum().to_be_bytes());
+        std::fs::write(dir.join("huge.png"), &png).unwrap();
+        std::fs::write(dir.join("huge.mtl"), "newmtl m\nd 0.5\nmap_Kd huge.png\n").unwrap();
+        let quad = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl m\nf 1/1 2/2 3/3 4/4\n";
+        for (mtllib, said) in [
+            // the FIFOs first: under the mutations they fail after 20 s, before /dev/zero is read
+            ("fifo.mtl", "not a regular file"),
+            ("tex.mtl", "fifo.png: not a regular file"),
+            ("/dev/zero", "not a regular file"),
+            (".", "not a regular file"),
+            ("zero.mtl", "/dev/zero: not a regular file"),
+            ("huge.mtl", "100000 × 100000 pixels"),
+        ] {
+            let obj = dir.join(format!("with-{}.obj", mtllib.replace(['/', '.'], "_")));
+            std::fs::write(&obj, format!("mtllib {mtllib}\n{quad}")).unwrap();
+            let (tx, rx) = std::sync::mpsc::channel();
+            let path = obj.clone();
+            std::thread::spawn(move || {
+                let _ = tx.send(load_obj(&path).map_err(|e| e.to_string()));
+            });
+            let scene =
+                rx.recv_timeout(std::time::Duration::from_secs(20)).expect("load_obj blocked").unwrap();
+            assert!(scene.warnings.iter().any(|w| w.contains(said)), "mtllib {mtllib}: {:?}", scene.warnings);
+            assert!(scene.textures.is_empty(), "mtllib {mtllib}");
+        }
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]

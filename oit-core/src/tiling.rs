@@ -285,7 +285,7 @@ fn windows<T>(
                 plan.frame_bytes(pixels, Counted::default()).saturating_add(pixels.saturating_mul(extra))
             };
             if need(1) > budget {
-                return Err(too_small(settings, need(1), budget, None));
+                return Err(too_small(settings, need(1), budget));
             }
             let stitched = plan.stitched_bytes(root.pixels());
             if need(root.pixels()) > budget && stitched.saturating_add(need(1)) > budget {
@@ -320,8 +320,7 @@ fn windows<T>(
             }
             Err(e @ OitError::TooLarge { .. }) => {
                 if rect.pixels() == 1 {
-                    let budget = settings.memory.unwrap_or(u64::MAX);
-                    return Err(too_small(settings, 0, budget, Some(e)));
+                    return Err(one_pixel_refused(e));
                 }
                 // without --memory, a refusal of more than AUTO_WORK times the host's budget is
                 // not tiled at all: such a frame (bdp:65536, fabs:65536) asks for a smaller
@@ -516,17 +515,30 @@ fn too_small_to_stitch(settings: &Settings, root: Rect, needed: u64, budget: u64
 }
 
 /// The error for a budget one pixel does not fit.
-fn too_small(settings: &Settings, needed: u64, budget: u64, refusal: Option<OitError>) -> OitError {
-    let hint = match refusal {
-        Some(e) => format!("a single pixel was refused: {e}"),
-        None => "raise --memory, or use a technique with less storage a pixel (fewer slots, fabs:K)".into(),
-    };
+fn too_small(settings: &Settings, needed: u64, budget: u64) -> OitError {
     OitError::TooLarge {
         what: format!("{} storage and outputs of one pixel", settings.technique),
         needed,
         limit_name: "the memory budget (--memory)".into(),
         limit: budget,
-        hint,
+        hint: "raise --memory, or use a technique with less storage a pixel (fewer slots, fabs:K)".into(),
+    }
+}
+
+/// The error for a window of one pixel that was refused: the refusal itself, which names what
+/// does not fit, and that screen tiles cannot make it fit. (It was wrapped as "storage and outputs
+/// of one pixel needs 0 bytes, over the memory budget = 18446744073709551615 bytes" where a scene's
+/// triangles were past a device's storage binding: the hostile re-run of 2026-12-05.)
+fn one_pixel_refused(e: OitError) -> OitError {
+    match e {
+        OitError::TooLarge { what, needed, limit_name, limit, hint } => OitError::TooLarge {
+            what,
+            needed,
+            limit_name,
+            limit,
+            hint: format!("{hint} (refused for a screen tile of one pixel: tiles cannot make it fit)"),
+        },
+        other => other,
     }
 }
 
@@ -686,5 +698,29 @@ mod tests {
         assert_eq!((m.geometry_passes, m.fragments, m.captured, m.lost, m.quantized), (5, 15, 14, 1, 14));
         assert_eq!((m.storage_bytes, m.max_layers, m.gpu_ms, m.tiles), (100, 6, Some(3.0), 2));
         assert_eq!(m.gpu_pass_ms, [("count".to_string(), 0.75)]);
+    }
+
+    #[test]
+    fn a_pixel_refused_alone_says_why() {
+        // The hostile re-run of 2026-12-05: a glTF scene of 45.9 M triangles on wgpu, whose
+        // triangles' indices exceed the device's storage binding however small the tile, was
+        // refused as "fabs:4 storage and outputs of one pixel needs 0 bytes, over the limit the
+        // memory budget (--memory) = 18446744073709551615 bytes". Mutation caught: wrapping the
+        // refusal in `too_small` again (its `needs 0 bytes` and the budget of u64::MAX).
+        let scene = crate::builtin_scene("planes:2").unwrap().unwrap();
+        let settings = Settings { width: 2, height: 2, ..Settings::default() };
+        let e = run("test", &scene, &settings, |_| {
+            Err(OitError::TooLarge {
+                what: "the triangles' indices".into(),
+                needed: 733_992_000,
+                limit_name: "max_storage_buffer_binding_size".into(),
+                limit: 134_217_728,
+                hint: "use fewer triangles".into(),
+            })
+        })
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("the triangles' indices needs 733992000 bytes"), "{e}");
+        assert!(!e.contains("needs 0 bytes") && !e.contains("18446744073709551615"), "{e}");
     }
 }

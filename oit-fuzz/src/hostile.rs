@@ -1,8 +1,10 @@
 //! The hostile classes of issue 41 that byte edits alone rarely reach, made on purpose:
 //!
 //! - **non-regular files**: FIFOs in the worker's scratch folder (`hostile/model.obj`,
-//!   `hostile/calibration.json`, `hostile/script.txt`, `hostile/report/report.json`), which scene
-//!   and argument inputs name as `@hostile/…` (the worker puts its folder in). `open()` on a FIFO
+//!   `hostile/calibration.json`, `hostile/script.txt`, `hostile/report/report.json`,
+//!   `hostile/materials.mtl`, `hostile/texture.png`), which scene and argument inputs name as
+//!   `@hostile/…` (the worker puts its folder in), directly or through the regular OBJ files
+//!   beside them whose `mtllib` or `map_Kd` names one (or `/dev/zero`). `open()` on a FIFO
 //!   waits for a writer, so a reader that opens before it checks hangs, and the supervisor
 //!   reports the hang;
 //! - **huge polygons**: lone random stars of 65,536 corners (the most a face may have: each
@@ -21,7 +23,21 @@ use oit_core::Scene;
 pub const PLACEHOLDER: &str = "@hostile";
 
 /// The FIFOs made in the worker's scratch folder, relative to its `hostile/`.
-const FIFOS: &[&str] = &["model.obj", "calibration.json", "script.txt", "report/report.json"];
+const FIFOS: &[&str] =
+    &["model.obj", "calibration.json", "script.txt", "report/report.json", "materials.mtl", "texture.png"];
+
+/// Regular files made beside the FIFOs that name them: an OBJ whose `mtllib` is a FIFO, and one
+/// whose material's `map_Kd` is (the hostile re-run of 2026-12-05 found both hanging, and
+/// `mtllib /dev/zero` read until the OOM killer came).
+const FILES: &[(&str, &str)] = &[
+    ("materials.obj", "mtllib materials.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+    (
+        "textured.obj",
+        "mtllib textured.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n",
+    ),
+    ("textured.mtl", "newmtl m\nd 0.5\nmap_Kd texture.png\n"),
+    ("zero.obj", "mtllib /dev/zero\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+];
 
 /// Makes `scratch/hostile/` and its FIFOs (with `mkfifo`: the workspace forbids the `unsafe`
 /// that libc's would take), and answers the folder.
@@ -29,6 +45,9 @@ pub fn prepare(scratch: &Path) -> Result<PathBuf, String> {
     let dir = scratch.join("hostile");
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(dir.join("report")).map_err(|e| format!("{}: {e}", dir.display()))?;
+    for (name, text) in FILES {
+        std::fs::write(dir.join(name), text).map_err(|e| format!("{}: {e}", dir.join(name).display()))?;
+    }
     for name in FIFOS {
         let path = dir.join(name);
         let made = std::process::Command::new("mkfifo").arg(&path).status();
