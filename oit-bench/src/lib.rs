@@ -241,6 +241,11 @@ pub struct Row {
     /// ([`oit_core::Stats::tied`]); 0 in reports written before it was counted.
     #[serde(default)]
     pub tied: u64,
+    /// Fragments whose colour went through a lossy packing ([`oit_core::Stats::quantized`]: bdp's
+    /// colour mode), so an EPR above 0 with nothing lost or tied is accounted for; 0 in reports
+    /// written before it was carried here.
+    #[serde(default)]
+    pub quantized: u64,
     /// Bytes of per-pixel storage (the largest tile's, where the frame ran in tiles).
     pub storage_bytes: u64,
     /// Screen tiles the frame ran in ([`oit_core::Stats::tiles`]; `--memory`); 1 in reports
@@ -888,6 +893,7 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
                     merged: s.merged,
                     occluded: s.occluded,
                     tied: s.tied,
+                    quantized: s.quantized,
                     storage_bytes: s.storage_bytes,
                     tiles: s.tiles.max(1),
                     wall_ms: wall_spread(&r.wall_ms),
