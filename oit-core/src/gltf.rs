@@ -4,14 +4,14 @@
 //! fans turned into triangles, points and lines refused by name) a mesh with its positions,
 //! normals (computed where the file has none), vertex colours and indices, and each primitive's
 //! material an object: `pbrMetallicRoughness.baseColorFactor`, `alphaMode` and `alphaCutoff`
-//! ([`crate::AlphaMode`]), `KHR_materials_transmission`'s factor ([`Object::transmission`]) and
+//! ([`crate::AlphaMode`]), `doubleSided` ([`Object::double_sided`]: glTF's default, false, drops
+//! back faces), `KHR_materials_transmission`'s factor ([`Object::transmission`]) and
 //! `KHR_materials_volume` ([`Object::thickness`], [`Object::absorption`], below).
 //!
 //! The base-colour texture is read with its sampler's wrap modes and the primitive's
 //! TEXCOORD_0 ([`crate::Texture`]). What oit does not draw yet is said, never dropped in silence:
-//! a single-sided material (drawn from both sides), a texture on another coordinate set, and an
-//! attenuation colour the translucency effect cannot represent each add one warning to
-//! [`Scene::warnings`]; an extension the file *requires* and oit does not read is an error naming
+//! a texture on another coordinate set, and an attenuation colour the translucency effect cannot
+//! represent each add one warning to [`Scene::warnings`]; an extension the file *requires* and oit does not read is an error naming
 //! it, one it only uses is a warning.
 //!
 //! # `KHR_materials_volume` and the translucency effect
@@ -47,7 +47,8 @@
 //! keeps oit's default absorption, 1, on every object, as before the extension was read.
 //! `thicknessFactor` itself is not otherwise read (the effect measures the thickness between the
 //! entering and the leaving layer), nor `thicknessTexture`; a volume boundary is drawn from both
-//! sides, as glTF says `doubleSided` does not apply to it. A negative thickness, a distance of 0
+//! sides whatever its `doubleSided` (glTF says the property does not apply to it, and the effect
+//! pairs the layer that enters a medium with the one that leaves it, a back face). A negative thickness, a distance of 0
 //! or less or an attenuation colour outside [0, 1] is refused with the material's name.
 //!
 //! Bad input is an [`OitError::Model`] naming what is wrong, and nothing is half-loaded: the GLB
@@ -174,8 +175,7 @@ pub fn parse_gltf(path: &Path, bytes: &[u8], scene_index: Option<usize>) -> Resu
                 Some(&o) => o,
                 None => {
                     let mut m = primitive_mesh(mesh, &prim, &buffers).map_err(err)?;
-                    let (mut o, volume) =
-                        material_object(mesh, &prim, out.meshes.len(), &mut notes).map_err(err)?;
+                    let (mut o, volume) = material_object(mesh, &prim, out.meshes.len()).map_err(err)?;
                     o.texture = base_texture(&document, &prim, &buffers, &mut images, &mut out, &mut notes)
                         .map_err(err)?;
                     if o.texture.is_some() && m.uvs.is_none() {
@@ -692,7 +692,6 @@ fn decode_image(bytes: &[u8], mime: Option<&str>, what: &str) -> Result<Pixels, 
 #[derive(Default)]
 struct Notes {
     other_coordinates: bool,
-    single_sided: bool,
     /// A volume's attenuation colour that oit's per-channel absorption does not represent.
     attenuation: bool,
     /// Volumes of different absorptions (the effect has one medium per scene).
@@ -705,9 +704,6 @@ impl Notes {
         let mut out = Vec::new();
         if self.other_coordinates {
             out.push(format!("{p}: a texture on a coordinate set other than TEXCOORD_0 is not drawn"));
-        }
-        if self.single_sided {
-            out.push(format!("{p}: single-sided materials are drawn from both sides"));
         }
         if self.attenuation {
             out.push(format!(
@@ -845,11 +841,9 @@ fn material_object(
     mesh: &gltf::Mesh<'_>,
     prim: &gltf::Primitive<'_>,
     index: usize,
-    notes: &mut Notes,
 ) -> Result<(Object, Option<VolumeRead>), String> {
     let material = prim.material();
     let pbr = material.pbr_metallic_roughness();
-    notes.single_sided |= !material.double_sided();
     let mut o = Object::new(
         mesh.name().map_or_else(|| format!("mesh {}", mesh.index()), str::to_string),
         index,
@@ -861,6 +855,7 @@ fn material_object(
         gltf::material::AlphaMode::Blend => AlphaMode::Blend,
     };
     o.transmission = material.transmission().map_or(0.0, |t| t.transmission_factor());
+    o.double_sided = material.double_sided();
     let Some(volume) = material.volume() else { return Ok((o, None)) };
     let what = match (material.index(), material.name()) {
         (Some(i), Some(n)) => format!("material {i} ('{n}')"),
@@ -883,6 +878,8 @@ fn material_object(
         ));
     }
     o.thickness = thickness;
+    // a volume boundary: both sides, whatever doubleSided says
+    o.double_sided |= thickness > 0.0;
     Ok((o, (thickness > 0.0).then_some(VolumeRead { distance, attenuation })))
 }
 
@@ -1014,9 +1011,10 @@ mod tests {
         assert_eq!(s.meshes[1].indices, [[0, 1, 2], [2, 1, 3]]);
         let (blend, default) = (&s.objects[0], &s.objects[1]);
         assert_eq!((blend.color, blend.alpha_mode), (Vec4::new(1.0, 0.0, 0.0, 0.5), AlphaMode::Blend));
-        // no material: glTF's default, opaque white, single-sided
+        // no material: glTF's default, opaque white, single-sided (drawn so, nothing to warn of)
         assert_eq!((default.color, default.alpha_mode), (Vec4::ONE, AlphaMode::Opaque));
-        assert!(s.warnings.iter().any(|w| w.contains("single-sided")), "{:?}", s.warnings);
+        assert!(!default.double_sided && blend.double_sided);
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
         assert!(s.meshes[0].normals.iter().all(|n| (n.z - 1.0).abs() < 1e-6), "normals computed");
     }
 
@@ -1096,6 +1094,14 @@ mod tests {
         assert!(s.objects.iter().all(|o| o.absorption == 0.0), "{:?}", s.objects);
         assert_eq!(s.absorption_per_length(), 0.0);
         assert_eq!(volume_lines(&s), 0, "{:?}", s.warnings);
+        // a volume boundary is drawn from both sides whatever doubleSided says; a thin wall as
+        // it says
+        let single = |volume: &str| {
+            let materials =
+                format!(r#"[{{"alphaMode":"BLEND","extensions":{{"KHR_materials_volume":{volume}}}}}]"#);
+            parse(&document(NODES, MESHES, &materials, "")).expect("loads").objects[0].double_sided
+        };
+        assert!(single(r#"{"thicknessFactor":0.5}"#) && !single("{}"));
         // thickness 0 (glTF's default): thin-walled, no volume; the file has none, so every
         // object keeps oit's default
         let s =

@@ -20,7 +20,7 @@
 //!   binary chunk, with a sampler whose `wrapS` / `wrapT` are its [`Wrap`] modes (linear
 //!   filtering, mipmapped).
 //!
-//! Materials are `doubleSided: true`, as oit draws every triangle from both sides, and
+//! Materials are `doubleSided` as the object is ([`crate::Object::double_sided`]), and
 //! `metallicFactor: 0` (glTF's default of 1 would make the scene metal in other viewers).
 //!
 //! A volume is written as the loader reads it back ([`crate::volume_absorption`]): its
@@ -137,7 +137,8 @@ pub fn write_glb(scene: &Scene) -> Result<Vec<u8>, OitError> {
         if let Some(t) = o.texture {
             pbr["baseColorTexture"] = json!({"index": t});
         }
-        let mut material = json!({"name": o.name, "pbrMetallicRoughness": pbr, "doubleSided": true});
+        let mut material =
+            json!({"name": o.name, "pbrMetallicRoughness": pbr, "doubleSided": o.double_sided});
         match o.alpha_mode {
             AlphaMode::Opaque => material["alphaMode"] = json!("OPAQUE"),
             AlphaMode::Mask { cutoff } => {
@@ -354,7 +355,8 @@ mod tests {
     use std::path::Path;
 
     /// A small scene with every kind of part: a textured, vertex-coloured blended quad with
-    /// transmission and a volume placed twice, a masked one, an opaque untextured triangle.
+    /// transmission and a volume placed twice, a masked one, an opaque untextured single-sided
+    /// triangle.
     fn sample() -> Scene {
         let mut quad = Mesh::new(
             "quad",
@@ -380,7 +382,7 @@ mod tests {
             objects: vec![
                 glass.textured(0),
                 leaf.textured(0),
-                Object::new("solid", 1, Vec4::new(0.9, 0.1, 0.3, 1.0)).opaque(),
+                Object::new("solid", 1, Vec4::new(0.9, 0.1, 0.3, 1.0)).opaque().single_sided(),
             ],
             instances: vec![
                 Instance { object: 0, transform: Mat4::IDENTITY },
@@ -422,6 +424,7 @@ mod tests {
             assert_eq!(a.transform, b.transform);
             let ((oa, ma), (ob, mb)) = (scene.instance_parts(a), back.instance_parts(b));
             assert_eq!((&oa.name, oa.color, oa.alpha_mode), (&ob.name, ob.color, ob.alpha_mode));
+            assert_eq!(oa.double_sided, ob.double_sided, "{}", oa.name);
             assert_eq!(
                 (oa.transmission, oa.texture, oa.thickness),
                 (ob.transmission, ob.texture, ob.thickness)

@@ -320,6 +320,13 @@ pub struct Object {
     /// the thickness it absorbs through between paired layers, so only whether this is above 0
     /// is read: the glTF writer writes a volume for such an object. 0 unless set.
     pub thickness: f32,
+    /// Whether both sides of its triangles are drawn (glTF's `doubleSided`). A single-sided
+    /// object's back-facing triangles — clockwise on screen, where glTF's front is
+    /// counter-clockwise, or counter-clockwise under an instance transform that mirrors
+    /// (negative determinant) — produce no fragment, on every backend and raster path
+    /// ([`crate::setup::back_face_sign`]). True unless set: every built-in and OBJ scene is drawn
+    /// from both sides.
+    pub double_sided: bool,
     /// The base-colour texture, an index into [`Scene::textures`]: a fragment's colour and alpha
     /// are `color` times the texture's sample at the fragment's texture coordinates (the mesh
     /// must have them). `None` unless set.
@@ -338,6 +345,7 @@ impl Object {
             alpha_mode: AlphaMode::Blend,
             transmission: 0.0,
             thickness: 0.0,
+            double_sided: true,
             texture: None,
         }
     }
@@ -345,6 +353,11 @@ impl Object {
     /// The same object, opaque.
     pub fn opaque(self) -> Object {
         Object { alpha_mode: AlphaMode::Opaque, ..self }
+    }
+
+    /// The same object, single-sided ([`Object::double_sided`] false).
+    pub fn single_sided(self) -> Object {
+        Object { double_sided: false, ..self }
     }
 
     /// Whether the opaque pass draws it (opaque or masked).
