@@ -14,11 +14,13 @@
 //!   seen edge-on at the silhouette); the exact techniques (dp, fabs, ll, dfb) equal the reference
 //!   on every backend × path, and the compute paths draw exactly oit-cpu's fragments.
 //!
-//! Mutations that make it fail: turn the sign round in `oit_core::setup::back_face_sign` (every
-//! path, the reference included, draws the back faces: the images differ); turn it round in the
-//! compute setup only (`setup.wgsl`'s `area > 0li` for `area < 0li`: the compute paths fail
-//! while oit-cpu passes); make `hw_culled` drop front faces (the hardware paths fail); ignore the
-//! mirror (`back_face_sign` without the determinant: the mirrored quads swap).
+//! Mutations that make it fail: make `hw_culled` drop front faces (tried: wgpu/hardware fails,
+//! the wall facing away is drawn and hides the quads); turn the sign round in
+//! `oit_core::setup::back_face_sign` (every path, the reference included, draws the back faces:
+//! the images differ); turn it round in the compute setup only (`setup.wgsl`'s `area > 0li` for
+//! `area < 0li`; tried: wgpu/compute fails with `OIT_HOST_SETUP=0`, and on a device that sets up
+//! on the GPU; lavapipe sets up on the host, where oit-vulkan's and oit-wgpu's `gpu_setup` tests,
+//! which hold a single-sided scene with a mirrored instance, fail instead).
 //!
 //! GPU backends without a device are left out with a message (`OIT_REQUIRE_GPU=1`: a failure).
 
