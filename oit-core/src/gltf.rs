@@ -4,13 +4,52 @@
 //! fans turned into triangles, points and lines refused by name) a mesh with its positions,
 //! normals (computed where the file has none), vertex colours and indices, and each primitive's
 //! material an object: `pbrMetallicRoughness.baseColorFactor`, `alphaMode` and `alphaCutoff`
-//! ([`crate::AlphaMode`]), and `KHR_materials_transmission`'s factor ([`Object::transmission`]).
+//! ([`crate::AlphaMode`]), `doubleSided` ([`Object::double_sided`]: glTF's default, false, drops
+//! back faces), `KHR_materials_transmission`'s factor ([`Object::transmission`]) and
+//! `KHR_materials_volume` ([`Object::thickness`], [`Object::absorption`], below).
 //!
 //! The base-colour texture is read with its sampler's wrap modes and the primitive's
 //! TEXCOORD_0 ([`crate::Texture`]). What oit does not draw yet is said, never dropped in silence:
-//! a single-sided material (drawn from both sides), a texture on another coordinate set, and the
-//! volume extension each add one warning to [`Scene::warnings`]; an extension the file *requires* and oit does not read
-//! is an error naming it, one it only uses is a warning.
+//! a texture on another coordinate set, and an attenuation colour the translucency effect cannot
+//! represent each add one warning to [`Scene::warnings`]; an extension the file *requires* and oit does not read is an error naming
+//! it, one it only uses is a warning.
+//!
+//! # `KHR_materials_volume` and the translucency effect
+//!
+//! glTF's medium absorbs `σ = −ln(attenuationColor) / attenuationDistance` per channel and per
+//! unit of world-space length (an absent, infinite distance absorbs nothing); `thicknessFactor`
+//! 0 (its default) makes the surface thin-walled, with no volume at all. oit's translucency
+//! effect absorbs `(1 − c)·k` per channel and per unit of view-space length, which is world-space
+//! length (the camera does not scale distances), `c` the entering layer's colour and `k` one
+//! value for the whole scene, [`Scene::absorption_per_length`]: the mean of the objects'
+//! [`Object::absorption`] per 1/8 of the scene's bounding radius `R`. The loader maps a volume
+//! (`thicknessFactor` above 0) onto that model so that the mean over the channels agrees:
+//!
+//! ```text
+//! k = mean(σ) / mean(1 − baseColorFactor.rgb)        absorption = k · R / 8
+//! ```
+//!
+//! with `R` the loaded scene's radius ([`volume_absorption`]). Both sides are then the same
+//! medium on average over the channels, for a layer of the material's base colour (vertex
+//! colours and texture samples change `c` per fragment, as they do for every object). oit's
+//! per-channel shape is fixed by the base colour, so an attenuation colour is drawn exactly only
+//! where `σ` is proportional to `1 − baseColorFactor.rgb` (an `attenuationColor` of
+//! `exp(−s·(1 − baseColorFactor.rgb))` for any `s`, as oit's writer writes); any other is drawn
+//! as its channel mean, with one warning line. A base colour of white absorbs nothing in oit's
+//! model whatever `k`: its volume is drawn without absorption (warned too, where `σ` is not 0).
+//! An attenuation channel of 0 is read as the smallest positive `f32`.
+//!
+//! The effect has one medium per scene, where glTF has one per material, so the objects that do
+//! not bound a volume (no extension, or `thicknessFactor` 0: thin-walled or opaque surfaces,
+//! which glTF gives no absorption) take the mean of the volumes' values, and do not dilute it:
+//! a scene whose volumes share one medium is drawn with exactly that medium (over the channels'
+//! mean), and one whose volumes differ with their mean (one warning line). A file without a volume
+//! keeps oit's default absorption, 1, on every object, as before the extension was read.
+//! `thicknessFactor` itself is not otherwise read (the effect measures the thickness between the
+//! entering and the leaving layer), nor `thicknessTexture`; a volume boundary is drawn from both
+//! sides whatever its `doubleSided` (glTF says the property does not apply to it, and the effect
+//! pairs the layer that enters a medium with the one that leaves it, a back face). A negative thickness, a distance of 0
+//! or less or an attenuation colour outside [0, 1] is refused with the material's name.
 //!
 //! Bad input is an [`OitError::Model`] naming what is wrong, and nothing is half-loaded: the GLB
 //! container is split here (a file cut short says in which part), the JSON is read and checked
@@ -32,7 +71,7 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 use crate::{AlphaMode, Instance, Mesh, Object, OitError, Scene, Texture, Wrap};
 
 /// The extensions oit reads: a file that requires any other is refused.
-pub const GLTF_EXTENSIONS: [&str; 1] = ["KHR_materials_transmission"];
+pub const GLTF_EXTENSIONS: [&str; 2] = ["KHR_materials_transmission", "KHR_materials_volume"];
 
 /// The most elements an accessor read into a mesh may have (64 Mi): a primitive past it is
 /// refused before its data is read (a scene holds at most [`Scene::MAX_TRIANGLES`] triangles).
@@ -127,6 +166,8 @@ pub fn parse_gltf(path: &Path, bytes: &[u8], scene_index: Option<usize>) -> Resu
     // one mesh and one object per (mesh, primitive), made the first time a node draws it
     let mut made: std::collections::HashMap<(usize, usize), usize> = std::collections::HashMap::new();
     let mut notes = Notes::default();
+    // per object, its volume's absorption where its material bounds one
+    let mut volumes: Vec<Option<VolumeRead>> = Vec::new();
     for (mesh, world) in &draws {
         for prim in mesh.primitives() {
             let key = (mesh.index(), prim.index());
@@ -134,7 +175,7 @@ pub fn parse_gltf(path: &Path, bytes: &[u8], scene_index: Option<usize>) -> Resu
                 Some(&o) => o,
                 None => {
                     let mut m = primitive_mesh(mesh, &prim, &buffers).map_err(err)?;
-                    let mut o = material_object(mesh, &prim, out.meshes.len(), &mut notes);
+                    let (mut o, volume) = material_object(mesh, &prim, out.meshes.len()).map_err(err)?;
                     o.texture = base_texture(&document, &prim, &buffers, &mut images, &mut out, &mut notes)
                         .map_err(err)?;
                     if o.texture.is_some() && m.uvs.is_none() {
@@ -146,6 +187,7 @@ pub fn parse_gltf(path: &Path, bytes: &[u8], scene_index: Option<usize>) -> Resu
                     }
                     out.meshes.push(m);
                     out.objects.push(o);
+                    volumes.push(volume);
                     made.insert(key, out.objects.len() - 1);
                     out.objects.len() - 1
                 }
@@ -156,15 +198,16 @@ pub fn parse_gltf(path: &Path, bytes: &[u8], scene_index: Option<usize>) -> Resu
             Scene::check_size(&out.name, out.triangle_count(), out.instances.len() as u64)?;
         }
     }
-    warnings.extend(notes.lines(path));
-    out.warnings = warnings;
     if out.instances.is_empty() {
         return Err(err("its scene draws no triangles (no node has a mesh of triangles)".into()));
     }
     Scene::check_size(&out.name, out.triangle_count(), out.instances.len() as u64)?;
     // what loads is what every backend takes: a transform or a vertex past oit's limits is the
     // file's error, not a scene that fails later
-    out.validate().map_err(|e| err(format!("it is not a scene oit can draw: {e}")))?;
+    let bounds = out.validated_bounds().map_err(|e| err(format!("it is not a scene oit can draw: {e}")))?;
+    apply_volumes(&mut out, &volumes, bounds.radius(), &mut notes).map_err(err)?;
+    warnings.extend(notes.lines(path));
+    out.warnings = warnings;
     Ok(out)
 }
 
@@ -247,13 +290,17 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> {
 /// checked first, then checked by the crate (indices, enumerations, required fields and
 /// extensions).
 fn read_document(json: &[u8]) -> Result<gltf::Document, String> {
-    let root: gltf::json::Root = gltf::json::deserialize::from_slice(json).map_err(|e| {
+    let mut root: gltf::json::Root = gltf::json::deserialize::from_slice(json).map_err(|e| {
         if e.is_syntax() || e.is_eof() {
             format!("not a glTF file: its JSON does not parse ({e})")
         } else {
             format!("its JSON is not a glTF 2.0 document: {e}")
         }
     })?;
+    // the crate reads KHR_materials_volume (with its feature) but leaves it out of the list of
+    // extensions a file may require (gltf-json 1.4's ENABLED_EXTENSIONS), so its check would
+    // refuse a file that requires it: oit reads it, and takes it off that list before the check
+    root.extensions_required.retain(|e| e != "KHR_materials_volume");
     // the crate's check of a primitive reads its POSITION accessor without checking the index
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, prim) in mesh.primitives.iter().enumerate() {
@@ -280,8 +327,7 @@ fn read_document(json: &[u8]) -> Result<gltf::Document, String> {
                 if more > 0 { format!("; {more} more") } else { String::new() }
             );
             // a required extension the crate has no reader for is refused by it, by name (and
-            // oit builds it with readers for only those it draws, and volume's, to warn that it
-            // is not)
+            // oit builds it with readers for only those it reads)
             if errors.iter().any(|(path, _)| path.as_str().starts_with("extensionsRequired")) {
                 format!(
                     "the file requires an extension oit does not read (it reads {}): {text}",
@@ -656,8 +702,10 @@ pub(crate) fn decode_limited(
 #[derive(Default)]
 struct Notes {
     other_coordinates: bool,
-    single_sided: bool,
-    volume: bool,
+    /// A volume's attenuation colour that oit's per-channel absorption does not represent.
+    attenuation: bool,
+    /// Volumes of different absorptions (the effect has one medium per scene).
+    media: bool,
 }
 
 impl Notes {
@@ -667,11 +715,17 @@ impl Notes {
         if self.other_coordinates {
             out.push(format!("{p}: a texture on a coordinate set other than TEXCOORD_0 is not drawn"));
         }
-        if self.single_sided {
-            out.push(format!("{p}: single-sided materials are drawn from both sides"));
+        if self.attenuation {
+            out.push(format!(
+                "{p}: KHR_materials_volume: an attenuationColor whose absorption is not proportional to 1 − \
+                 baseColorFactor is drawn as the mean over its channels (oit's translucency absorbs (1 − colour)·k)"
+            ));
         }
-        if self.volume {
-            out.push(format!("{p}: KHR_materials_volume's thickness and attenuation are not read"));
+        if self.media {
+            out.push(format!(
+                "{p}: KHR_materials_volume: the volumes absorb differently, and the translucency effect has one \
+                 medium per scene: they are drawn with their mean absorption"
+            ));
         }
         out
     }
@@ -782,17 +836,24 @@ fn base_texture(
     Ok(Some(out.textures.len() - 1))
 }
 
-/// The object of one primitive: its material as oit reads it.
+/// A material's `KHR_materials_volume`, where it bounds a volume (`thicknessFactor` above 0).
+#[derive(Clone, Copy, Debug)]
+struct VolumeRead {
+    /// `attenuationDistance`, in world units (infinite where the file leaves it out).
+    distance: f32,
+    /// `attenuationColor`.
+    attenuation: Vec3,
+}
+
+/// The object of one primitive: its material as oit reads it, and its volume where it bounds one
+/// (its absorption is set once the scene's radius is known, [`apply_volumes`]).
 fn material_object(
     mesh: &gltf::Mesh<'_>,
     prim: &gltf::Primitive<'_>,
     index: usize,
-    notes: &mut Notes,
-) -> Object {
+) -> Result<(Object, Option<VolumeRead>), String> {
     let material = prim.material();
     let pbr = material.pbr_metallic_roughness();
-    notes.single_sided |= !material.double_sided();
-    notes.volume |= material.volume().is_some();
     let mut o = Object::new(
         mesh.name().map_or_else(|| format!("mesh {}", mesh.index()), str::to_string),
         index,
@@ -804,7 +865,100 @@ fn material_object(
         gltf::material::AlphaMode::Blend => AlphaMode::Blend,
     };
     o.transmission = material.transmission().map_or(0.0, |t| t.transmission_factor());
-    o
+    o.double_sided = material.double_sided();
+    let Some(volume) = material.volume() else { return Ok((o, None)) };
+    let what = match (material.index(), material.name()) {
+        (Some(i), Some(n)) => format!("material {i} ('{n}')"),
+        (i, _) => format!("material {}", i.unwrap_or(0)),
+    };
+    let (thickness, distance) = (volume.thickness_factor(), volume.attenuation_distance());
+    let attenuation = Vec3::from_array(volume.attenuation_color());
+    if !(thickness.is_finite() && thickness >= 0.0) {
+        return Err(format!(
+            "{what}: KHR_materials_volume's thicknessFactor {thickness} is not finite and ≥ 0"
+        ));
+    }
+    if distance.is_nan() || distance <= 0.0 {
+        return Err(format!("{what}: KHR_materials_volume's attenuationDistance {distance} is not above 0"));
+    }
+    if !attenuation.is_finite() || attenuation.min_element() < 0.0 || attenuation.max_element() > 1.0 {
+        return Err(format!(
+            "{what}: KHR_materials_volume's attenuationColor {:?} is outside [0, 1]",
+            attenuation.to_array()
+        ));
+    }
+    o.thickness = thickness;
+    // a volume boundary: both sides, whatever doubleSided says
+    o.double_sided |= thickness > 0.0;
+    Ok((o, (thickness > 0.0).then_some(VolumeRead { distance, attenuation })))
+}
+
+/// The absorption ([`Object::absorption`]) that makes the translucency effect's medium absorb,
+/// in a scene of bounding radius `radius` (world units), the mean over the channels of glTF's
+/// `σ = −ln(attenuation) / distance` (per world unit) for a layer of colour `color`:
+/// `mean(σ) / mean(1 − color) · radius / 8` ([`Scene::absorption_per_length`] divides by
+/// `radius / 8` again). 0 where `σ` is 0 (an infinite distance, a white attenuation colour) and
+/// where `color` is white, which absorbs nothing in oit's model. The flag says whether oit's
+/// per-channel absorption `(1 − color)·k` is `σ` on every channel (each within 10⁻³ of `σ`'s
+/// largest channel); a channel of `attenuation` at 0 is read as the smallest positive `f32`.
+/// The module docs say why ([`crate::load_gltf`]).
+pub fn volume_absorption(color: Vec3, distance: f32, attenuation: Vec3, radius: f32) -> (f32, bool) {
+    let sigma = attenuation.as_dvec3().to_array().map(|a| {
+        let d = f64::from(distance);
+        if d.is_infinite() { 0.0 } else { -a.max(f64::from(f32::MIN_POSITIVE)).ln() / d }
+    });
+    let open = (glam::DVec3::ONE - color.as_dvec3()).to_array();
+    let (s, w) = (sigma.iter().sum::<f64>() / 3.0, open.iter().sum::<f64>() / 3.0);
+    if s <= 0.0 {
+        return (0.0, true);
+    }
+    if w <= 0.0 {
+        return (0.0, false);
+    }
+    let k = s / w;
+    let largest = sigma.iter().copied().fold(0.0, f64::max);
+    let exact = sigma.iter().zip(open).all(|(&sg, o)| (o * k - sg).abs() <= 1e-3 * largest);
+    ((k * f64::from(radius).max(1e-6) / 8.0) as f32, exact)
+}
+
+/// Sets each object's absorption from the volumes read (`volumes`, one per object): a volume
+/// its [`volume_absorption`], every other object the volumes' mean; nothing where there is no
+/// volume (every object keeps oit's default). A volume that absorbs more than an `f32` holds is
+/// refused with its object's name.
+fn apply_volumes(
+    scene: &mut Scene,
+    volumes: &[Option<VolumeRead>],
+    radius: f32,
+    notes: &mut Notes,
+) -> Result<(), String> {
+    let values: Vec<Option<f32>> = scene
+        .objects
+        .iter()
+        .zip(volumes)
+        .map(|(o, v)| {
+            v.map(|v| {
+                let (a, exact) = volume_absorption(o.color.truncate(), v.distance, v.attenuation, radius);
+                notes.attenuation |= !exact;
+                a
+            })
+        })
+        .collect();
+    if let Some((o, _)) = scene.objects.iter().zip(&values).find(|(_, v)| v.is_some_and(|a| !a.is_finite())) {
+        return Err(format!(
+            "'{}': its KHR_materials_volume absorbs more than oit can hold (attenuationDistance too small)",
+            o.name
+        ));
+    }
+    let read: Vec<f32> = values.iter().flatten().copied().collect();
+    if read.is_empty() {
+        return Ok(());
+    }
+    let mean = (read.iter().map(|&a| f64::from(a)).sum::<f64>() / read.len() as f64) as f32;
+    notes.media = read.iter().any(|&a| (a - mean).abs() > 1e-3 * mean);
+    for (o, v) in scene.objects.iter_mut().zip(values) {
+        o.absorption = v.unwrap_or(mean);
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -867,9 +1021,10 @@ mod tests {
         assert_eq!(s.meshes[1].indices, [[0, 1, 2], [2, 1, 3]]);
         let (blend, default) = (&s.objects[0], &s.objects[1]);
         assert_eq!((blend.color, blend.alpha_mode), (Vec4::new(1.0, 0.0, 0.0, 0.5), AlphaMode::Blend));
-        // no material: glTF's default, opaque white, single-sided
+        // no material: glTF's default, opaque white, single-sided (drawn so, nothing to warn of)
         assert_eq!((default.color, default.alpha_mode), (Vec4::ONE, AlphaMode::Opaque));
-        assert!(s.warnings.iter().any(|w| w.contains("single-sided")), "{:?}", s.warnings);
+        assert!(!default.double_sided && blend.double_sided);
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
         assert!(s.meshes[0].normals.iter().all(|n| (n.z - 1.0).abs() < 1e-6), "normals computed");
     }
 
@@ -886,6 +1041,111 @@ mod tests {
         assert_eq!(s.meshes[1].indices, [[0, 1, 2], [0, 2, 3]], "the fan");
     }
 
+    /// The quad document with material 0 blended in `color` and `volume` as its
+    /// `KHR_materials_volume` (the strip of mesh 1 keeps glTF's default material, opaque). The
+    /// scene's bounds run from (0, 0, 0) to (2, 2, 0): radius √2.
+    fn with_volume(color: [f32; 3], volume: &str) -> Result<Scene, OitError> {
+        let materials = format!(
+            r#"[{{"pbrMetallicRoughness":{{"baseColorFactor":[{},{},{},0.5]}},"alphaMode":"BLEND","doubleSided":true,
+            "extensions":{{"KHR_materials_volume":{volume}}}}}]"#,
+            color[0], color[1], color[2]
+        );
+        parse(&document(NODES, MESHES, &materials, r#","extensionsUsed":["KHR_materials_volume"]"#))
+    }
+
+    /// `KHR_materials_volume` onto the translucency effect: mean(σ) / mean(1 − c) per unit of
+    /// length, the scene's one medium, its objects without a volume taking the volume's value.
+    #[test]
+    fn volumes_feed_the_translucency_effect() {
+        let radius = 2f64.sqrt();
+        // an attenuation colour of exp(−(1 − c)·t): σ = (1 − c)·t / distance on every channel,
+        // which oit represents exactly; here σ = (1.6, 0.8, 0), k = 0.8 / 0.4 = 2
+        let c = [0.2f32, 0.6, 1.0];
+        let a = c.map(|c| (-(1.0 - f64::from(c))).exp());
+        let s = with_volume(
+            c,
+            &format!(
+                r#"{{"thicknessFactor":0.1,"attenuationDistance":0.5,"attenuationColor":[{},{},{}]}}"#,
+                a[0], a[1], a[2]
+            ),
+        )
+        .expect("loads");
+        let volume_lines =
+            |s: &Scene| s.warnings.iter().filter(|w| w.contains("KHR_materials_volume")).count();
+        assert_eq!(volume_lines(&s), 0, "{:?}", s.warnings);
+        assert_eq!(s.objects[0].thickness, 0.1);
+        let expected = 2.0 * radius / 8.0;
+        for o in &s.objects {
+            assert!((f64::from(o.absorption) - expected).abs() < 1e-6, "{}: {}", o.name, o.absorption);
+        }
+        assert!((s.absorption_per_length() - 2.0).abs() < 1e-5, "{}", s.absorption_per_length());
+        // a grey attenuation: σ = ln 2 / 2 on every channel, its mean kept (k = 0.3466 / 0.4),
+        // and one line says the channels are not drawn as they are
+        let s = with_volume(
+            c,
+            r#"{"thicknessFactor":1,"attenuationDistance":2,"attenuationColor":[0.5,0.5,0.5]}"#,
+        )
+        .expect("loads");
+        let k = 2f64.ln() / 2.0 / 0.4;
+        assert!(
+            (f64::from(s.objects[0].absorption) - k * radius / 8.0).abs() < 1e-6,
+            "{}",
+            s.objects[0].absorption
+        );
+        assert!((s.absorption_per_length() - k).abs() < 1e-5);
+        let said: Vec<_> = s.warnings.iter().filter(|w| w.contains("KHR_materials_volume")).collect();
+        assert!(said.len() == 1 && said[0].contains("attenuationColor"), "{:?}", s.warnings);
+        // the same absorption through the public mapping, and a white base colour absorbs nothing
+        let (got, exact) = volume_absorption(Vec3::from_array(c), 2.0, Vec3::splat(0.5), radius as f32);
+        assert!(!exact && (f64::from(got) - k * radius / 8.0).abs() < 1e-6);
+        assert_eq!(volume_absorption(Vec3::ONE, 2.0, Vec3::splat(0.5), 1.0), (0.0, false));
+        // an infinite distance (left out): no absorption, for the volume and the scene
+        let s = with_volume(c, r#"{"thicknessFactor":0.1,"attenuationColor":[0.1,0.2,0.3]}"#).expect("loads");
+        assert!(s.objects.iter().all(|o| o.absorption == 0.0), "{:?}", s.objects);
+        assert_eq!(s.absorption_per_length(), 0.0);
+        assert_eq!(volume_lines(&s), 0, "{:?}", s.warnings);
+        // a volume boundary is drawn from both sides whatever doubleSided says; a thin wall as
+        // it says
+        let single = |volume: &str| {
+            let materials =
+                format!(r#"[{{"alphaMode":"BLEND","extensions":{{"KHR_materials_volume":{volume}}}}}]"#);
+            parse(&document(NODES, MESHES, &materials, "")).expect("loads").objects[0].double_sided
+        };
+        assert!(single(r#"{"thicknessFactor":0.5}"#) && !single("{}"));
+        // thickness 0 (glTF's default): thin-walled, no volume; the file has none, so every
+        // object keeps oit's default
+        let s =
+            with_volume(c, r#"{"attenuationDistance":0.5,"attenuationColor":[0.1,0.2,0.3]}"#).expect("loads");
+        assert!(s.objects.iter().all(|o| o.absorption == 1.0 && o.thickness == 0.0), "{:?}", s.objects);
+        // two volumes of different media: their mean, said in one line
+        let materials = r#"[{"alphaMode":"BLEND","pbrMetallicRoughness":{"baseColorFactor":[0,0,0,0.5]},
+            "extensions":{"KHR_materials_volume":{"thicknessFactor":1,"attenuationDistance":1,"attenuationColor":[0.5,0.5,0.5]}}},
+            {"alphaMode":"BLEND","pbrMetallicRoughness":{"baseColorFactor":[0,0,0,0.5]},
+            "extensions":{"KHR_materials_volume":{"thicknessFactor":1,"attenuationDistance":3,"attenuationColor":[0.5,0.5,0.5]}}}]"#;
+        let meshes = MESHES.replace(r#""mode":5}"#, r#""mode":5,"material":1}"#);
+        let s = parse(&document(NODES, &meshes, materials, "")).expect("loads");
+        let (k0, k1) = (2f64.ln(), 2f64.ln() / 3.0);
+        assert!((s.absorption_per_length() - (k0 + k1) / 2.0).abs() < 1e-5, "{}", s.absorption_per_length());
+        assert!(s.warnings.iter().any(|w| w.contains("one medium per scene")), "{:?}", s.warnings);
+        // what glTF does not allow is refused with the material's name
+        for (volume, says) in [
+            (r#"{"thicknessFactor":-1}"#, "thicknessFactor -1 is not finite and ≥ 0"),
+            (r#"{"thicknessFactor":1,"attenuationDistance":0}"#, "attenuationDistance 0 is not above 0"),
+            (r#"{"thicknessFactor":1,"attenuationDistance":-2}"#, "attenuationDistance -2 is not above 0"),
+            (
+                r#"{"thicknessFactor":1,"attenuationColor":[1.5,0,0]}"#,
+                "attenuationColor [1.5, 0.0, 0.0] is outside [0, 1]",
+            ),
+            (
+                r#"{"thicknessFactor":1,"attenuationDistance":1e-44,"attenuationColor":[0,0,0]}"#,
+                "absorbs more than oit can hold",
+            ),
+        ] {
+            let e = with_volume(c, volume).expect_err(volume).to_string();
+            assert!(e.contains(says) && e.contains("test.glb"), "{volume}: {e}");
+        }
+    }
+
     #[test]
     fn what_oit_cannot_read_is_refused_or_said() {
         let text = |r: Result<Scene, OitError>| r.expect_err("refused").to_string();
@@ -895,14 +1155,11 @@ mod tests {
             e.contains("requires an extension oit does not read") && e.contains("KHR_draco_mesh_compression"),
             "{e}"
         );
-        // one the glTF crate reads but oit does not draw
-        let extra =
-            r#","extensionsUsed":["KHR_materials_volume"],"extensionsRequired":["KHR_materials_volume"]"#;
-        let e = text(parse(&document(NODES, MESHES, BLEND, extra)));
-        assert!(
-            e.contains("requires an extension oit does not read") && e.contains("KHR_materials_volume"),
-            "{e}"
-        );
+        // every extension the glTF crate is built to read, oit reads: a file may require them
+        for name in GLTF_EXTENSIONS {
+            let extra = format!(r#","extensionsUsed":["{name}"],"extensionsRequired":["{name}"]"#);
+            parse(&document(NODES, MESHES, BLEND, &extra)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        }
         let extra = r#","extensionsUsed":["EXT_lights_ies"]"#;
         let s = parse(&document(NODES, MESHES, BLEND, extra)).expect("an optional extension is ignored");
         assert!(s.warnings.iter().any(|w| w.contains("EXT_lights_ies")), "{:?}", s.warnings);

@@ -9,7 +9,8 @@
 //!   mesh's accessors, with a material of its own: `baseColorFactor` (the colour, alpha
 //!   included), `alphaMode` and `alphaCutoff`, `KHR_materials_transmission`'s factor where the
 //!   transmission is above 0 (used, not required: a reader without it draws the object without
-//!   transmission), and the base-colour texture. `TEXCOORD_0` is given only to the primitives of
+//!   transmission), `KHR_materials_volume` where the object bounds a volume
+//!   ([`crate::Object::thickness`] above 0; below), and the base-colour texture. `TEXCOORD_0` is given only to the primitives of
 //!   textured objects. The loader makes one object per glTF (mesh, primitive), so objects come
 //!   back one for one, each with a copy of its mesh.
 //! - **Instances.** Each of [`Scene::instances`] is a root node drawing its object's glTF mesh,
@@ -19,10 +20,18 @@
 //!   binary chunk, with a sampler whose `wrapS` / `wrapT` are its [`Wrap`] modes (linear
 //!   filtering, mipmapped).
 //!
-//! Materials are `doubleSided: true`, as oit draws every triangle from both sides, and
-//! `metallicFactor: 0` (glTF's default of 1 would make the scene metal in other viewers). What
-//! glTF has no place for is not written: [`crate::Object::absorption`] (the translucency effect's
-//! σ; a reader takes 1), the names of meshes (objects keep theirs) and [`Scene::warnings`].
+//! Materials are `doubleSided` as the object is ([`crate::Object::double_sided`]), and
+//! `metallicFactor: 0` (glTF's default of 1 would make the scene metal in other viewers).
+//!
+//! A volume is written as the loader reads it back ([`crate::volume_absorption`]): its
+//! `thicknessFactor` is the object's thickness, its `attenuationDistance` `R / (8·a·max(1 − c))`
+//! and its `attenuationColor` `exp(−(1 − c) / max(1 − c))` per channel, `a` the object's
+//! absorption, `c` its base colour's RGB and `R` the scene's bounding radius: glTF's σ is then
+//! `(1 − c)·a / (R / 8)` on every channel, oit's medium exactly, and the loader's `a` is the
+//! object's (to `f32` rounding). A volume that absorbs nothing (`a` 0, or a white base colour)
+//! leaves the distance out (infinite). The absorption of an object without a volume has no
+//! place in glTF and is not written (the loader gives it the volumes' mean, or 1 where there
+//! are none), nor are the names of meshes (objects keep theirs) or [`Scene::warnings`].
 //!
 //! Numbers are written as the shortest decimal that reads back as the same `f32`, so positions,
 //! transforms and colours come back bit for bit. Both chunks, and every buffer view, start at a
@@ -117,7 +126,8 @@ pub fn write_glb(scene: &Scene) -> Result<Vec<u8>, OitError> {
     }
     // objects: a material and a one-primitive mesh each
     let (mut materials, mut meshes) = (Vec::new(), Vec::new());
-    let mut transmission = false;
+    let (mut transmission, mut volume) = (false, false);
+    let radius = scene.bounds().radius();
     for (i, o) in scene.objects.iter().enumerate() {
         let mut pbr = json!({
             "baseColorFactor": o.color.to_array().map(num),
@@ -127,7 +137,8 @@ pub fn write_glb(scene: &Scene) -> Result<Vec<u8>, OitError> {
         if let Some(t) = o.texture {
             pbr["baseColorTexture"] = json!({"index": t});
         }
-        let mut material = json!({"name": o.name, "pbrMetallicRoughness": pbr, "doubleSided": true});
+        let mut material =
+            json!({"name": o.name, "pbrMetallicRoughness": pbr, "doubleSided": o.double_sided});
         match o.alpha_mode {
             AlphaMode::Opaque => material["alphaMode"] = json!("OPAQUE"),
             AlphaMode::Mask { cutoff } => {
@@ -136,10 +147,20 @@ pub fn write_glb(scene: &Scene) -> Result<Vec<u8>, OitError> {
             }
             AlphaMode::Blend => material["alphaMode"] = json!("BLEND"),
         }
+        let mut extensions = serde_json::Map::new();
         if o.transmission > 0.0 {
             transmission = true;
-            material["extensions"] =
-                json!({"KHR_materials_transmission": {"transmissionFactor": num(o.transmission)}});
+            extensions.insert(
+                "KHR_materials_transmission".into(),
+                json!({"transmissionFactor": num(o.transmission)}),
+            );
+        }
+        if o.thickness > 0.0 {
+            volume = true;
+            extensions.insert("KHR_materials_volume".into(), volume_of(o, radius));
+        }
+        if !extensions.is_empty() {
+            material["extensions"] = Value::Object(extensions);
         }
         materials.push(material);
         let (position, normal, color, uv, indices) = mesh_accessors[o.mesh];
@@ -185,8 +206,12 @@ pub fn write_glb(scene: &Scene) -> Result<Vec<u8>, OitError> {
         root["samplers"] = json!(samplers);
         root["images"] = json!(images);
     }
-    if transmission {
-        root["extensionsUsed"] = json!(["KHR_materials_transmission"]);
+    let used: Vec<&str> = [(transmission, "KHR_materials_transmission"), (volume, "KHR_materials_volume")]
+        .into_iter()
+        .filter_map(|(u, name)| u.then_some(name))
+        .collect();
+    if !used.is_empty() {
+        root["extensionsUsed"] = json!(used);
     }
     let json = serde_json::to_vec(&root)
         .map_err(|e| OitError::InvalidScene(format!("scene '{}': cannot write its glTF: {e}", scene.name)))?;
@@ -194,6 +219,22 @@ pub fn write_glb(scene: &Scene) -> Result<Vec<u8>, OitError> {
         OitError::InvalidScene(m) => OitError::InvalidScene(format!("scene '{}': {m}", scene.name)),
         e => e,
     })
+}
+
+/// The `KHR_materials_volume` of object `o` in a scene of bounding radius `radius` (the module
+/// docs say how it is chosen).
+fn volume_of(o: &crate::Object, radius: f32) -> Value {
+    let open = (glam::Vec3::ONE - o.color.truncate()).max(glam::Vec3::ZERO);
+    let widest = open.max_element();
+    let mut v = json!({"thicknessFactor": num(o.thickness)});
+    let unit = f64::from(radius).max(1e-6) / 8.0;
+    let distance = (unit / (f64::from(o.absorption) * f64::from(widest))) as f32;
+    if o.absorption > 0.0 && widest > 0.0 && distance.is_finite() && distance > 0.0 {
+        let color = open.to_array().map(|w| num((-f64::from(w) / f64::from(widest)).exp() as f32));
+        v["attenuationDistance"] = num(distance);
+        v["attenuationColor"] = json!(color);
+    }
+    v
 }
 
 /// The GLB container of `json` and `bin`: a 12-byte header, the JSON chunk (padded with spaces)
@@ -314,7 +355,8 @@ mod tests {
     use std::path::Path;
 
     /// A small scene with every kind of part: a textured, vertex-coloured blended quad with
-    /// transmission placed twice, a masked one, an opaque untextured triangle.
+    /// transmission and a volume placed twice, a masked one, an opaque untextured single-sided
+    /// triangle.
     fn sample() -> Scene {
         let mut quad = Mesh::new(
             "quad",
@@ -326,7 +368,12 @@ mod tests {
         let tri = Mesh::new("tri", vec![Vec3::ZERO, Vec3::X * 0.3, Vec3::Y * 0.7], vec![[0, 1, 2]]);
         let texels = (0..12u8).map(|i| [i * 20, 255 - i, i, i * 21]).collect();
         let texture = Texture::new("t", 4, 3, texels, [Wrap::ClampToEdge, Wrap::MirroredRepeat]).unwrap();
-        let glass = Object { transmission: 0.7, ..Object::new("glass", 0, Vec4::new(0.2, 0.4, 0.6, 0.45)) };
+        let glass = Object {
+            transmission: 0.7,
+            thickness: 0.25,
+            absorption: 0.8,
+            ..Object::new("glass", 0, Vec4::new(0.2, 0.4, 0.6, 0.45))
+        };
         let leaf =
             Object { alpha_mode: AlphaMode::Mask { cutoff: 0.3 }, ..Object::new("leaf", 0, Vec4::ONE) };
         Scene {
@@ -335,7 +382,7 @@ mod tests {
             objects: vec![
                 glass.textured(0),
                 leaf.textured(0),
-                Object::new("solid", 1, Vec4::new(0.9, 0.1, 0.3, 1.0)).opaque(),
+                Object::new("solid", 1, Vec4::new(0.9, 0.1, 0.3, 1.0)).opaque().single_sided(),
             ],
             instances: vec![
                 Instance { object: 0, transform: Mat4::IDENTITY },
@@ -377,7 +424,14 @@ mod tests {
             assert_eq!(a.transform, b.transform);
             let ((oa, ma), (ob, mb)) = (scene.instance_parts(a), back.instance_parts(b));
             assert_eq!((&oa.name, oa.color, oa.alpha_mode), (&ob.name, ob.color, ob.alpha_mode));
-            assert_eq!((oa.transmission, oa.texture), (ob.transmission, ob.texture));
+            assert_eq!(oa.double_sided, ob.double_sided, "{}", oa.name);
+            assert_eq!(
+                (oa.transmission, oa.texture, oa.thickness),
+                (ob.transmission, ob.texture, ob.thickness)
+            );
+            // the volume's absorption to f32 rounding, and the objects without one take it (the
+            // effect's one medium)
+            assert!((ob.absorption - 0.8).abs() < 1e-5, "{}: {}", ob.name, ob.absorption);
             assert_eq!((&ma.positions, &ma.indices, &ma.colors), (&mb.positions, &mb.indices, &mb.colors));
             assert_eq!(ma.uvs.is_some() && oa.texture.is_some(), mb.uvs.is_some());
             if mb.uvs.is_some() {

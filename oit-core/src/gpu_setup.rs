@@ -182,6 +182,14 @@ impl SetupGeometry {
                 (view_proj * inst.transform, normal_matrix(&inst.transform))
             };
             let base = settings.material_color(g.color);
+            let cull_bits = match scene.objects.get(inst.object) {
+                Some(o) if !self.boxes => match crate::setup::back_face_sign(o, &inst.transform) {
+                    1 => 2,
+                    -1 => 4,
+                    _ => 0,
+                },
+                _ => 0,
+            };
             out.extend(mvp.to_cols_array().map(f32::to_bits));
             out.extend(nm.to_cols_array().map(f32::to_bits));
             out.extend(base.to_array().map(f32::to_bits));
@@ -193,7 +201,9 @@ impl SetupGeometry {
                 g.tri_count,
                 g.prim_base,
                 g.first_task,
-                u32::from(g.raw_normals),
+                // bit 0: raw normals; bits 1 and 2: drop back faces of positive or negative
+                // snapped area (crate::setup::back_face_sign)
+                u32::from(g.raw_normals) | cull_bits,
                 self.positions,
                 self.normals,
                 first_vert,

@@ -101,7 +101,9 @@ pub use backend::{
 pub use camera::{Camera, View};
 pub use error::OitError;
 pub use frame::{Frame, GpuFragments, GpuTotals, Image, Stats};
-pub use gltf::{GLTF_EXTENSIONS, MAX_VERTICES, is_gltf_path, load_gltf, load_scene_with, parse_gltf};
+pub use gltf::{
+    GLTF_EXTENSIONS, MAX_VERTICES, is_gltf_path, load_gltf, load_scene_with, parse_gltf, volume_absorption,
+};
 pub use gltf_write::{pack_glb, write_glb};
 pub use obj::{MAX_FACE_CORNERS, load_obj, open_regular, parse_obj};
 pub use procedural::{BUILTIN_SCENES, DEFAULT_SCENE, builtin_scene, is_procedural, load_scene};

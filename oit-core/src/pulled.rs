@@ -13,7 +13,9 @@
 //! Layouts are plain words, as the WGSL structs declare them: a vertex is 12 floats
 //! (`position.xyz`, 1 in `w` when the mesh has vertex colours; `normal`, the texture coordinate
 //! u in `w`; `color`, v in `w`), an instance 32 (the column-major `mvp`, the normal matrix's three
-//! columns padded to four, the first `w` the opaque pass's cutoff ([`instance_cutoff`]), the base
+//! columns padded to four, the first `w` the opaque pass's cutoff ([`instance_cutoff`]), the
+//! second the back faces' sign ([`crate::setup::back_face_sign`]: the fragment stage drops a
+//! fragment that is not `front_facing` where it is 1, one that is where it is −1), the base
 //! colour).
 
 use glam::{Mat3, Vec2, Vec3, Vec4};
@@ -144,7 +146,8 @@ pub fn instance_data(
                 (view_proj * inst.transform, crate::setup::normal_matrix(&inst.transform))
             };
             let cutoff = if boxes { 0.0 } else { instance_cutoff(object) };
-            instance(mvp.to_cols_array(), nm, settings.material_color(object.color), cutoff)
+            let cull = if boxes { 0 } else { crate::setup::back_face_sign(object, &inst.transform) };
+            instance(mvp.to_cols_array(), nm, settings.material_color(object.color), cutoff, cull as f32)
         })
         .collect()
 }
@@ -166,8 +169,13 @@ pub fn instance_cutoff(object: &Object) -> f32 {
 /// passes boxes serve read only their fragments' depths, so the colour makes no difference to a
 /// frame.
 pub fn boxes_data(count: usize, camera: &Camera, settings: &Settings) -> Vec<PulledInstance> {
-    let one =
-        instance(camera.view_proj().to_cols_array(), Mat3::IDENTITY, settings.material_color(Vec4::ONE), 0.0);
+    let one = instance(
+        camera.view_proj().to_cols_array(),
+        Mat3::IDENTITY,
+        settings.material_color(Vec4::ONE),
+        0.0,
+        0.0,
+    );
     vec![one; count]
 }
 
@@ -181,13 +189,14 @@ fn vertex(position: Vec4, normal: Vec3, color: Vec3, uv: Vec2) -> PulledVertex {
     v
 }
 
-fn instance(mvp: [f32; 16], normal: Mat3, base: Vec4, cutoff: f32) -> PulledInstance {
+fn instance(mvp: [f32; 16], normal: Mat3, base: Vec4, cutoff: f32, cull: f32) -> PulledInstance {
     let mut d = [0.0; 32];
     d[..16].copy_from_slice(&mvp);
     for (k, c) in [normal.x_axis, normal.y_axis, normal.z_axis].iter().enumerate() {
         d[16 + 4 * k..19 + 4 * k].copy_from_slice(&c.to_array());
     }
     d[19] = cutoff;
+    d[23] = cull;
     d[28..].copy_from_slice(&base.to_array());
     d
 }

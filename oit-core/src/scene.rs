@@ -302,7 +302,11 @@ pub struct Object {
     /// Linear RGB and straight alpha: the base colour factor, times the vertex colours where the
     /// mesh has them.
     pub color: Vec4,
-    /// Beer–Lambert absorption coefficient σ.
+    /// Beer–Lambert absorption coefficient, read by the translucency effect: per 1/8 of the
+    /// scene's bounding radius, the medium this object bounds absorbs `(1 − c)·absorption` per
+    /// channel, `c` the entering layer's colour. The effect has one medium per scene, the mean of
+    /// its objects' values ([`Scene::absorption_per_length`]). 1 unless set; the glTF loader maps
+    /// `KHR_materials_volume` onto it ([`crate::load_gltf`]).
     pub absorption: f32,
     /// How alpha is read: opaque, masked or blended ([`AlphaMode::Blend`] unless set).
     pub alpha_mode: AlphaMode,
@@ -310,6 +314,19 @@ pub struct Object {
     /// `KHR_materials_transmission`): the fragment's alpha is the colour's alpha × (1 −
     /// transmission) ([`Object::effective_alpha`]). 0 unless set.
     pub transmission: f32,
+    /// The thickness of the volume beneath the surface, in the mesh's units (glTF's
+    /// `KHR_materials_volume` `thicknessFactor`): 0 is a thin-walled surface, above 0 the object
+    /// bounds a volume whose medium is [`Object::absorption`]. The translucency effect measures
+    /// the thickness it absorbs through between paired layers, so only whether this is above 0
+    /// is read: the glTF writer writes a volume for such an object. 0 unless set.
+    pub thickness: f32,
+    /// Whether both sides of its triangles are drawn (glTF's `doubleSided`). A single-sided
+    /// object's back-facing triangles — clockwise on screen, where glTF's front is
+    /// counter-clockwise, or counter-clockwise under an instance transform that mirrors
+    /// (negative determinant) — produce no fragment, on every backend and raster path
+    /// ([`crate::setup::back_face_sign`]). True unless set: every built-in and OBJ scene is drawn
+    /// from both sides.
+    pub double_sided: bool,
     /// The base-colour texture, an index into [`Scene::textures`]: a fragment's colour and alpha
     /// are `color` times the texture's sample at the fragment's texture coordinates (the mesh
     /// must have them). `None` unless set.
@@ -327,6 +344,8 @@ impl Object {
             absorption: 1.0,
             alpha_mode: AlphaMode::Blend,
             transmission: 0.0,
+            thickness: 0.0,
+            double_sided: true,
             texture: None,
         }
     }
@@ -334,6 +353,11 @@ impl Object {
     /// The same object, opaque.
     pub fn opaque(self) -> Object {
         Object { alpha_mode: AlphaMode::Opaque, ..self }
+    }
+
+    /// The same object, single-sided ([`Object::double_sided`] false).
+    pub fn single_sided(self) -> Object {
+        Object { double_sided: false, ..self }
     }
 
     /// Whether the opaque pass draws it (opaque or masked).
@@ -657,6 +681,12 @@ impl Scene {
                 return Err(OitError::InvalidScene(format!(
                     "object '{}': transmission {} is outside [0, 1]",
                     o.name, o.transmission
+                )));
+            }
+            if !(o.thickness.is_finite() && o.thickness >= 0.0) {
+                return Err(OitError::InvalidScene(format!(
+                    "object '{}': thickness {} must be finite and ≥ 0",
+                    o.name, o.thickness
                 )));
             }
             if let Some(t) = o.texture {

@@ -16,7 +16,8 @@
 //!   exact integer shift: its fragments are the full frame's there, bit for bit); bounding boxes
 //!   are clamped to the window;
 //! - coverage at pixel centres by 64-bit integer edge functions ([`edge`]) with the top-left fill
-//!   rule; no back-face culling; zero-area triangles are dropped here; with several samples a
+//!   rule; zero-area triangles are dropped here, and so are a single-sided object's back faces,
+//!   told by the sign of the same snapped area ([`back_face_sign`]); with several samples a
 //!   pixel (`Settings::samples`, [`crate::msaa`]) the same functions and rule at each sample
 //!   position ([`sample_mask`]), the boxes sized by the samples' reach;
 //! - depth: NDC z interpolated linearly in screen space with barycentrics from the edge functions,
@@ -322,12 +323,35 @@ struct Material {
     levels: u32,
     /// [`Triangle::cutoff`].
     cutoff: f32,
+    /// The sign of the snapped area of the triangles dropped as back faces: 0 (none), 1 or −1
+    /// ([`back_face_sign`]).
+    cull: i64,
 }
 
 impl Material {
-    /// Untextured, never discarded.
+    /// Untextured, never discarded, drawn from both sides.
     fn plain(base: Vec4, has_color: bool) -> Material {
-        Material { base, has_color, texture: NO_TEXTURE, texels: 0.0, levels: 1, cutoff: 0.0 }
+        Material { base, has_color, texture: NO_TEXTURE, texels: 0.0, levels: 1, cutoff: 0.0, cull: 0 }
+    }
+}
+
+/// Which triangles of an instance of `object` placed by `transform` are back faces, dropped
+/// before they make a fragment: 0 for a double-sided object (none); else the sign of the
+/// snapped area ([`Snap`]'s `(x1 − x0)(y2 − y0) − (y1 − y0)(x2 − x0)`, in the rasterizer's
+/// fixed-point pixel coordinates, rows down) that a back face has. glTF's front is
+/// counter-clockwise in NDC (y up), which is clockwise, a negative area, in rows down: the back
+/// has sign 1. A transform that mirrors (its 3×3 part's determinant negative) turns the winding
+/// over, as glTF says, and the back has sign −1. The compute setup (`setup.wgsl`, flag bits 1 and
+/// 2 of `I_FLAGS`) drops by the same sign; the hardware path hands it to its fragment stage
+/// (`HwInstance`'s `normal1.w`, [`crate::pulled`]), which drops a fragment by the GPU's
+/// `front_facing` (1: a fragment not front-facing; −1: one front-facing).
+pub fn back_face_sign(object: &crate::Object, transform: &Mat4) -> i64 {
+    if object.double_sided {
+        0
+    } else if Mat3::from_mat4(*transform).determinant() < 0.0 {
+        -1
+    } else {
+        1
     }
 }
 
@@ -447,11 +471,12 @@ impl Snap {
         let (x0, y0) = (i64::from(p[0].x), i64::from(p[0].y));
         let area = (i64::from(p[1].x) - x0) * (i64::from(p[2].y) - y0)
             - (i64::from(p[1].y) - y0) * (i64::from(p[2].x) - x0);
-        if area == 0 {
+        // no area, or a single-sided object's back face (the sign of its snapped area)
+        if area == 0 || area.signum() == material.cull {
             return;
         }
-        // No culling: a clockwise triangle is turned round so every edge function is positive
-        // inside, which is what the fill rule below assumes.
+        // A clockwise triangle is turned round so every edge function is positive inside, which
+        // is what the fill rule below assumes.
         let order = if area < 0 {
             p.swap(1, 2);
             [0, 2, 1]
@@ -955,6 +980,7 @@ impl TriangleSetup {
             let mvp = view_proj * inst.transform;
             snap.vertices(&mut scratch.vertices, &mvp, &normal_matrix(&inst.transform), mesh);
             let mut material = Material::plain(settings.material_color(object.color), mesh.colors.is_some());
+            material.cull = back_face_sign(object, &inst.transform);
             // an untextured masked object comes with alpha 1 or 0 (Scene::layers), which one half
             // splits whatever the cutoff; a textured one with its factor's alpha, which the
             // texture's multiplies fragment by fragment
@@ -1376,5 +1402,45 @@ mod tests {
             }
         }
         assert_eq!(checked, 1000 * SHADE_LANES);
+    }
+
+    /// A single-sided quad keeps its two triangles where it faces the camera (counter-clockwise
+    /// seen from it, glTF's front), none where it faces away; mirrored in x, the same quads face
+    /// the same ways (their screen winding turns over, and so does the rule); a double-sided
+    /// one keeps both either way.
+    #[test]
+    fn back_faces_by_the_sign_of_the_snapped_area() {
+        let positions = vec![
+            Vec3::new(-0.5, -0.5, 0.0),
+            Vec3::new(0.5, -0.5, 0.0),
+            Vec3::new(0.5, 0.5, 0.0),
+            Vec3::new(-0.5, 0.5, 0.0),
+        ];
+        let kept = |clockwise: bool, single: bool, transform: Mat4| {
+            let indices = if clockwise { vec![[0, 2, 1], [0, 3, 2]] } else { vec![[0, 1, 2], [0, 2, 3]] };
+            let mut scene = crate::Scene::from_meshes(
+                "quad",
+                vec![crate::Mesh::new("quad", positions.clone(), indices)],
+                Vec4::ONE,
+            );
+            scene.objects[0].double_sided = !single;
+            scene.instances[0].transform = transform;
+            // looking down −z from +z
+            let view = crate::View { azimuth: 0.0, elevation: 0.0, ..crate::View::default() };
+            let camera = Camera::orbit_scene(&scene, view, 1.0).unwrap();
+            let settings = Settings { width: 16, height: 16, ..Settings::default() };
+            TriangleSetup::new(&scene, &camera, &settings).triangles.len()
+        };
+        let mirror = Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+        for (clockwise, transform, front) in [
+            (false, Mat4::IDENTITY, true),
+            (true, Mat4::IDENTITY, false),
+            (false, mirror, true),
+            (true, mirror, false),
+        ] {
+            let what = format!("clockwise {clockwise}, mirrored {}", transform != Mat4::IDENTITY);
+            assert_eq!(kept(clockwise, false, transform), 2, "{what}: double-sided");
+            assert_eq!(kept(clockwise, true, transform), if front { 2 } else { 0 }, "{what}: single-sided");
+        }
     }
 }

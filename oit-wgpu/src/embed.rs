@@ -894,7 +894,10 @@ fn oit_capture_cut(xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: vec3<f32
 ";
 const OPAQUE_FS_WGSL: &str = "
 @fragment
-fn hw_opaque_fs(in: HwOut) -> @location(0) vec4<f32> {
+fn hw_opaque_fs(in: HwOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    if (hw_culled(in, front)) {
+        discard;
+    }
     if in.base.w <= 0.0 {
         discard;
     }

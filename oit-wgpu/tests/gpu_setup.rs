@@ -2,7 +2,7 @@
 //! triangles it writes equal `TriangleSetup::triangle_words` bit for bit, and its work list holds
 //! the same (triangle, 8×8 tile) pairs, on the bunny, procedural scenes, tiny and huge scales, and
 //! views whose near and far planes cut through the scene or whose narrow field of view sends the
-//! geometry past the guard band. The GPU writes pieces in an order of its choosing (nothing reads
+//! geometry past the guard band, and single-sided objects (back faces dropped), one mirrored. The GPU writes pieces in an order of its choosing (nothing reads
 //! the order), so both sides are compared as sorted lists.
 
 use glam::Vec3;
@@ -61,6 +61,16 @@ fn host_items(setup: &TriangleSetup) -> Vec<[u32; 2]> {
     items
 }
 
+/// Scene `name` with every object single-sided and its second instance mirrored in x: the
+/// setup drops back faces by the sign of the snapped area, turned over under the mirror
+/// (`oit_core::setup::back_face_sign`).
+fn single_sided(name: &str) -> Scene {
+    let mut scene = load_scene(name).unwrap();
+    scene.objects.iter_mut().for_each(|o| o.double_sided = false);
+    scene.instances[1].transform *= glam::Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+    scene
+}
+
 #[test]
 fn gpu_setup_equals_host_setup() {
     let Some(backend) = oit_wgpu::backend_or_skip("gpu_setup_equals_host_setup") else { return };
@@ -77,10 +87,12 @@ fn gpu_setup_equals_host_setup() {
     ];
     scenes.push(BUNNY.into());
     scenes.push(format!("grid:2x2:{BUNNY}"));
+    let mut scenes: Vec<(String, Scene)> =
+        scenes.into_iter().map(|name| (name.clone(), load_scene(&name).unwrap())).collect();
+    scenes.push(("single-sided".into(), single_sided(&format!("grid:2x2:{BUNNY}"))));
     let mut split = 0;
-    for name in &scenes {
-        let scene = load_scene(name).unwrap();
-        for (view, camera) in cameras(&scene) {
+    for (name, scene) in &scenes {
+        for (view, camera) in cameras(scene) {
             // the whole frame, and a window of it (a screen tile: `Settings::region`)
             let window = Settings {
                 width: 80,
@@ -92,16 +104,16 @@ fn gpu_setup_equals_host_setup() {
                 [(false, settings()), (true, settings()), (false, window.clone()), (true, window)]
             {
                 let host = if boxes {
-                    TriangleSetup::bounding_boxes(&scene, &camera, &s)
+                    TriangleSetup::bounding_boxes(scene, &camera, &s)
                 } else {
-                    TriangleSetup::new(&scene, &camera, &s)
+                    TriangleSetup::new(scene, &camera, &s)
                 };
                 let (host_tris, host_list) = canonical(&host.triangle_words(), &host_items(&host));
                 // through the vertex cache (each vertex transformed once) and without it
                 for cache in [true, false] {
                     let view = format!("{view}, region {:?}, vertex cache {cache}", s.region);
                     let (words, items) =
-                        oit_wgpu::ComputeRaster::setup_words(gpu, &scene, &camera, &s, boxes, true, cache)
+                        oit_wgpu::ComputeRaster::setup_words(gpu, scene, &camera, &s, boxes, true, cache)
                             .unwrap_or_else(|e| panic!("{name}, {view}: {e}"));
                     let (gpu_tris, gpu_items) = canonical(&words, &items);
                     assert_eq!(

@@ -62,6 +62,9 @@ fn written_scenes_read_back_the_same() {
         back.validate().unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(back.instances.len(), scene.instances.len(), "{name}");
         assert_eq!(back.triangle_count(), scene.triangle_count(), "{name}");
+        // glass's two figures bound a volume (KHR_materials_volume), nothing else does
+        let volumes = back.objects.iter().filter(|o| o.thickness > 0.0).count();
+        assert_eq!(volumes, if name == "glass" { 2 } else { 0 }, "{name}");
         assert!(world_triangles(&back) == world_triangles(&scene), "{name}: world-space triangles differ");
         // the texture bytes and samplers, and the same texture on the same objects
         assert_eq!(back.textures.len(), scene.textures.len(), "{name}");
@@ -73,9 +76,17 @@ fn written_scenes_read_back_the_same() {
             assert_eq!(a.transform, b.transform, "{name}: instance {i}");
             let ((oa, ma), (ob, mb)) = (scene.instance_parts(a), back.instance_parts(b));
             assert_eq!(
-                (&oa.name, oa.color, oa.alpha_mode, oa.transmission, oa.texture),
-                (&ob.name, ob.color, ob.alpha_mode, ob.transmission, ob.texture),
+                (&oa.name, oa.color, oa.alpha_mode, oa.transmission, oa.thickness, oa.texture),
+                (&ob.name, ob.color, ob.alpha_mode, ob.transmission, ob.thickness, ob.texture),
                 "{name}: instance {i}'s material"
+            );
+            // the translucency effect's medium, through KHR_materials_volume where the scene has
+            // one (glass), to f32 rounding
+            assert!(
+                (ob.absorption - oa.absorption).abs() <= 1e-5 * oa.absorption,
+                "{name}: instance {i}'s absorption {} read back as {}",
+                oa.absorption,
+                ob.absorption
             );
             assert!(ma.positions == mb.positions && ma.indices == mb.indices, "{name}: instance {i}'s mesh");
             assert_eq!((&ma.colors, &ma.uvs), (&mb.colors, &mb.uvs), "{name}: instance {i}'s attributes");

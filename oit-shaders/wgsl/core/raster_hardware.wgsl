@@ -3,9 +3,10 @@
 // same `view_proj · transform` and normal matrix as oit-cpu, applied in the same order of
 // operations as glam's). Vertices are pulled from storage by vertex index so each triangle's
 // three vertices carry its primitive id (triangle t of the draw is primitive t: the triangles are
-// laid out in primitive order). No culling, no depth test; the fragment shades like oit-cpu's
-// `Shading::shade`, its texture sampled first (`hw_color`), and calls `oit_capture_cut`
-// (capture_render.wgsl).
+// laid out in primitive order). No culling in the pipeline, no depth test: a single-sided object's
+// back faces are dropped by every fragment entry point first, by `front_facing` (`hw_culled`),
+// before anything is counted; the fragment shades like oit-cpu's `Shading::shade`, its texture
+// sampled first (`hw_color`), and calls `oit_capture_cut` (capture_render.wgsl).
 
 struct HwVertex {
     // xyz: position in the mesh's space; w: 1 when the mesh has vertex colours
@@ -20,7 +21,8 @@ struct HwInstance {
     // object to clip space: view_proj · transform
     mvp: mat4x4<f32>,
     // the normal matrix's columns (normal0.w: the opaque pass's cutoff, `Fragment::cutoff`;
-    // the other w unused)
+    // normal1.w: which faces are dropped, oit-core's `back_face_sign`: 0 none, 1 those not
+    // front-facing, −1 those front-facing; normal2.w unused)
     normal0: vec4<f32>,
     normal1: vec4<f32>,
     normal2: vec4<f32>,
@@ -63,6 +65,8 @@ struct HwOut {
     // the level descriptor of the triangle's texture (0: untextured)
     @location(6) @interpolate(flat) tex: u32,
     @location(7) @interpolate(flat) cutoff: f32,
+    // the instance's `normal1.w`: which faces `hw_culled` drops
+    @location(8) @interpolate(flat) cull: f32,
 }
 
 @vertex
@@ -84,6 +88,7 @@ fn hw_vs(@builtin(vertex_index) vi: u32) -> HwOut {
     out.has_color = select(0u, 1u, p.w != 0.0);
     out.uv = vec2<f32>(n.w, v.color.w);
     out.cutoff = inst.normal0.w;
+    out.cull = inst.normal1.w;
     out.tex = 0u;
     if (hw.textured != 0u) {
         out.tex = hw_tex[hw.tex_levels + prim];
@@ -105,7 +110,21 @@ fn hw_color(in: HwOut) -> vec4<f32> {
     return shade(hw.shading, base, in.normal, vcolor, in.has_color != 0u, hw.forward.xyz);
 }
 
+// Whether the fragment is a single-sided object's back face, dropped before anything reads it
+// (every fragment entry point taking `HwOut` discards it first). The pipelines' front face is
+// counter-clockwise, as glTF's; the instance's sign turns it over where its transform mirrors.
+fn hw_culled(in: HwOut, front: bool) -> bool {
+    return (in.cull > 0.0 && !front) || (in.cull < 0.0 && front);
+}
+
 @fragment
-fn hw_fs(in: HwOut) -> @location(0) vec4<f32> {
-    return oit_capture_cut(in.position.xy, in.position.z, hw_color(in), in.normal, in.prim, in.cutoff);
+fn hw_fs(in: HwOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    // a back face is dropped without `discard`, which kbuf's interlocked body may not hold
+    // (oit-vulkan's build.rs): it captures nothing and adds 0 to the count target (additive);
+    // this entry point writes no depth
+    var counted = vec4<f32>(0.0);
+    if (!hw_culled(in, front)) {
+        counted = oit_capture_cut(in.position.xy, in.position.z, hw_color(in), in.normal, in.prim, in.cutoff);
+    }
+    return counted;
 }

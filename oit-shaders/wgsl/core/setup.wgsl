@@ -52,7 +52,8 @@ const I_INDEX_BASE: u32 = 32u;    // first index word of the mesh's triangles
 const I_TRI_COUNT: u32 = 33u;
 const I_PRIM_BASE: u32 = 34u;
 const I_FIRST_TASK: u32 = 35u;    // tasks (triangles) of the instances before this one
-const I_FLAGS: u32 = 36u;         // bit 0: normals are used as given (no normal matrix)
+const I_FLAGS: u32 = 36u;         // bit 0: normals are used as given (no normal matrix); bits 1,
+                                  // 2: drop back faces, of positive / negative snapped area
 const I_POSITIONS: u32 = 37u;     // first position word of the geometry
 const I_NORMALS: u32 = 38u;       // first normal word of the geometry
 const I_FIRST_VERT: u32 = 39u;    // vertex-cache records of the instances before this one
@@ -285,6 +286,12 @@ fn piece_projected(i: u32, v_in: array<ClipVertex, 3>, p_in: array<Projected, 3>
     let y0 = i64(p[0].y);
     var area = (i64(p[1].x) - x0) * (i64(p[2].y) - y0) - (i64(p[1].y) - y0) * (i64(p[2].x) - x0);
     if (area == 0li) {
+        return;
+    }
+    // a single-sided object's back face, by the sign of the snapped area (oit-core's
+    // `back_face_sign`)
+    let flags = inst(i, I_FLAGS);
+    if (((flags & 2u) != 0u && area > 0li) || ((flags & 4u) != 0u && area < 0li)) {
         return;
     }
     if (area < 0li) {

@@ -46,7 +46,10 @@ struct BucketsOut {
 // Shades like raster_hardware.wgsl's `hw_fs`, then writes the packed colour to its bucket's
 // channel and 0 (a no-op under MAX: every stored value is ≥ +0) everywhere else.
 @fragment
-fn bdp_blend_fs(in: HwOut) -> BucketsOut {
+fn bdp_blend_fs(in: HwOut, @builtin(front_facing) front: bool) -> BucketsOut {
+    if (hw_culled(in, front)) {
+        discard;
+    }
     var out: BucketsOut;
     let xy = vec2<u32>(max(floor(in.position.xy), vec2<f32>(0.0)));
     if (xy.x >= fu.width || xy.y >= fu.height) {

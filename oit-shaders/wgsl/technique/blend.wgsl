@@ -39,7 +39,10 @@ fn blend_fragment(in: HwOut, out: ptr<function, BlendOut>) -> vec4<f32> {
 }
 
 @fragment
-fn plain_blend_fs(in: HwOut) -> BlendOut {
+fn plain_blend_fs(in: HwOut, @builtin(front_facing) front: bool) -> BlendOut {
+    if (hw_culled(in, front)) {
+        discard;
+    }
     var out: BlendOut;
     let c = blend_fragment(in, &out);
     out.color = vec4<f32>(c.xyz * c.w, c.w);
@@ -47,7 +50,10 @@ fn plain_blend_fs(in: HwOut) -> BlendOut {
 }
 
 @fragment
-fn weighted_blend_fs(in: HwOut) -> BlendOut {
+fn weighted_blend_fs(in: HwOut, @builtin(front_facing) front: bool) -> BlendOut {
+    if (hw_culled(in, front)) {
+        discard;
+    }
     var out: BlendOut;
     let c = blend_fragment(in, &out);
     if ((fu.param & 2u) != 0u) {

@@ -16,7 +16,10 @@
 @group(2) @binding(0) var ddp_previous: texture_2d<f32>;
 
 @fragment
-fn ddp_peel_fs(in: HwOut) -> @location(0) vec2<f32> {
+fn ddp_peel_fs(in: HwOut, @builtin(front_facing) front: bool) -> @location(0) vec2<f32> {
+    if (hw_culled(in, front)) {
+        discard;
+    }
     let xy = vec2<u32>(max(floor(in.position.xy), vec2<f32>(0.0)));
     // the clamped depth of the atomics capture, compared through its bits as ddp.wgsl does
     let d = depth_bits(clamp(in.position.z, 0.0, 1.0));

@@ -20,7 +20,10 @@
 @group(1) @binding(4) var dp_layer_depth: texture_depth_2d;
 
 @fragment
-fn dp_peel_fs(in: HwOut) -> @location(0) vec2<u32> {
+fn dp_peel_fs(in: HwOut, @builtin(front_facing) front: bool) -> @location(0) vec2<u32> {
+    if (hw_culled(in, front)) {
+        discard;
+    }
     let xy = vec2<u32>(max(floor(in.position.xy), vec2<f32>(0.0)));
     let depth = clamp(in.position.z, 0.0, 1.0);
     if (fu.pass_index > 0u) {

@@ -31,7 +31,10 @@ struct AdpHistOut {
 
 // The fragment's bin bit in its word's channel, 0 (a no-op under OR) everywhere else.
 @fragment
-fn adp_hist_fs(in: HwOut) -> AdpHistOut {
+fn adp_hist_fs(in: HwOut, @builtin(front_facing) front: bool) -> AdpHistOut {
+    if (hw_culled(in, front)) {
+        discard;
+    }
     var out: AdpHistOut;
     let xy = vec2<u32>(max(floor(in.position.xy), vec2<f32>(0.0)));
     if (xy.x >= fu.width || xy.y >= fu.height) {
