@@ -523,7 +523,15 @@ fn read_uri(uri: &str, base: &Path, limit: u64, what: &str) -> Result<Vec<u8>, S
              base64 data URIs)"
         ));
     }
-    let path = base.join(percent_decode(uri));
+    // a relative reference, as glTF's URIs are: `base.join` of an absolute path (`/etc/...`,
+    // `C:\...`, `\\server\...`) would read it wherever it is
+    let relative = percent_decode(uri);
+    if relative.has_root() || relative.is_absolute() || uri.starts_with(['/', '\\']) {
+        return Err(format!(
+            "{what}: the URI '{uri}' is an absolute path (glTF's URIs are relative to the file; oit reads those and base64 data URIs)"
+        ));
+    }
+    let path = base.join(relative);
     crate::obj::read_bounded_bytes(&path, limit, "glTF buffer and image")
         .map_err(|e| format!("{what}: '{uri}': {}", describe(&path, e)))
 }
