@@ -165,10 +165,6 @@ pub(crate) struct VkCtx<'a> {
     /// oit-wgpu: the blend unit returns no previous value to count by), and their `lost` is
     /// `fragments − captured`.
     pub(crate) counts_losses: bool,
-    /// Set by the blend captures of `plain`, `wavg` and `wsum`, whose draw counts every fragment
-    /// into a target the resolve reads into `captured` and loses none: the frame's fragments are
-    /// its captured total.
-    pub(crate) fragments_from_captured: bool,
     uniform: FrameUniform,
     state: Rc<Buffer>,
     image: Rc<Buffer>,
@@ -272,7 +268,6 @@ impl<'a> VkCtx<'a> {
             storage_bytes: if has_opaque { opaque_bytes } else { 0 },
             merged: 0,
             counts_losses: true,
-            fragments_from_captured: false,
             uniform,
             state,
             image,
@@ -1152,7 +1147,6 @@ impl VkCtx<'_> {
             on_device: u64::from(first[0]),
             captured,
             counted_lost: self.counts_losses.then(|| u64::from(t[3])),
-            fragments_from_captured: self.fragments_from_captured,
             acct: acct.as_deref(),
             pixels: self.pixels as usize,
         }

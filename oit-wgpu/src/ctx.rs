@@ -256,11 +256,6 @@ pub struct GpuCtx<'a> {
     /// Whether the technique's capture counts its losses; the `--hardware-capture blend` captures
     /// do not yet (issue 16), and their `lost` is `fragments − captured`.
     pub counts_losses: bool,
-    /// Set by the blend captures of `plain`, `wavg` and `wsum` (`technique::blend`), whose draw
-    /// does not go through a [`Driver`]'s counted geometry pass: they count every fragment in a
-    /// count target the resolve reads into `captured` and lose none, so the frame's fragments
-    /// are its captured total, read with the totals at the end of the frame.
-    pub fragments_from_captured: bool,
     /// The setup checks the frame's drivers left to its end.
     checks: Vec<SetupCheck>,
     /// The deepest pixel an earlier frame of this prepared scene counted at this size and
@@ -468,7 +463,6 @@ impl<'a> GpuCtx<'a> {
             opaque,
             opaque_from: None,
             counts_losses: true,
-            fragments_from_captured: false,
             checks: Vec::new(),
             speculated_deepest: None,
             deepest_seen: None,
@@ -1200,7 +1194,6 @@ impl<'a> GpuCtx<'a> {
             on_device: u64::from(t[FRAGMENTS_WORD as usize]),
             captured: u64::from(t[0]),
             counted_lost: self.counts_losses.then(|| u64::from(t[3])),
-            fragments_from_captured: self.fragments_from_captured,
             acct: acct.as_deref(),
             pixels: self.pixels as usize,
         }
