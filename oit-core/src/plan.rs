@@ -157,6 +157,10 @@ pub struct Plan {
     /// Samples a pixel (`Settings::samples`): above 1 each entry of `reference`, `dfb`, `ll` and
     /// `fabs` carries its coverage mask beside it, a 32-bit word ([`Plan::arrays`]; docs/msaa.md).
     pub samples: u32,
+    /// Whether the backend sizes the per-fragment arrays (`dfb`'s, `ll`'s, the reference's) in
+    /// size classes ([`Plan::fragment_capacity`]): the GPU backends (`wgpu`, `vulkan`), whose
+    /// buffers come from a pool that nearby views share. oit-cpu allocates exactly.
+    pub pooled: bool,
 }
 
 /// Bytes a pixel of the opaque pass's image holds: its nearest opaque (depth, primitive id) key
@@ -271,6 +275,7 @@ impl Plan {
         };
         Ok(Plan {
             samples: settings.samples,
+            pooled: matches!(backend, "wgpu" | "vulkan"),
             technique,
             bounds_pass: matches!(technique, Technique::Bdp { .. } | Technique::Adp),
             bdp_color,
@@ -524,9 +529,23 @@ impl Plan {
     /// ([`Plan::check_budget`]) before it allocates.
     pub fn storage_bytes(&self, pixels: u64, counted: Counted) -> u64 {
         let frame = RESOLVE_STATE_BYTES + if self.opaque { OPAQUE_BYTES } else { 0 };
-        self.arrays(counted).iter().fold(pixels.saturating_mul(frame), |sum, a| {
-            sum.saturating_add(a.bytes(pixels, counted.fragments))
-        })
+        let fragments = self.fragment_capacity(counted.fragments);
+        self.arrays(counted)
+            .iter()
+            .fold(pixels.saturating_mul(frame), |sum, a| sum.saturating_add(a.bytes(pixels, fragments)))
+    }
+
+    /// The elements a frame allocates its per-fragment arrays for, given the fragments it
+    /// counted: on a [`Plan::pooled`] backend (the GPU backends) the count rounded up to its
+    /// [`size_class`] (at most 1/8 more), which is what they allocate and report in
+    /// `Stats::storage_bytes`; elsewhere the count itself. A prepared scene's frame that sized
+    /// its arrays from an earlier frame's count without waiting (the GPU backends' speculation)
+    /// allocates, and reports, that earlier count's capacity where its own fits it.
+    pub fn fragment_capacity(&self, fragments: u64) -> u64 {
+        match u32::try_from(fragments) {
+            Ok(n) if self.pooled => u64::from(size_class(n)),
+            _ => fragments,
+        }
     }
 
     /// Bytes of the outputs a frame of `pixels` pixels holds beside its storage

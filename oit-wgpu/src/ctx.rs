@@ -892,14 +892,17 @@ impl<'a> GpuCtx<'a> {
     }
 
     /// The capacity, in elements of `bytes` bytes, of arrays sized by a count that lies in word 0
-    /// of `count` on the device (`dfb`'s and `ll`'s fragment total): the count rounded up to its
-    /// size class ([`size_class`](crate::size_class): at most 1/8 more, so the frames of one view, and the nearby
-    /// views of a moving camera, take the same buffers from the pool). Where the frame speculates
-    /// ([`GpuCtx::speculated_fragments`]) the count is the earlier frame's, not waited for, and
-    /// checked at the end: a frame whose count exceeds the capacity runs again. Else it is read
-    /// back now (a round trip). Either way the count comes back again with the frame's end, and
-    /// the frame's `storage_bytes` are set from it there, as oit-cpu, which allocates exactly,
-    /// reports them.
+    /// of `count` on the device (`dfb`'s and `ll`'s fragment total): the plan's
+    /// ([`Plan::fragment_capacity`]: the count rounded up to its size class, at most 1/8 more, so
+    /// the frames of one view, and the nearby views of a moving camera, take the same buffers
+    /// from the pool). Where the frame speculates ([`GpuCtx::speculated_fragments`]) the count is
+    /// the earlier frame's, not waited for, and checked at the end: a frame whose count exceeds
+    /// the capacity runs again. Else it is read back now (a round trip). The frame's
+    /// `storage_bytes` are what it allocated: the capacity, not the count.
+    ///
+    /// Under the test hook `OIT_MUTATION=wgpu-capacity-doubled` ([`oit_core::mutation`]) the
+    /// capacity is twice the plan's: `tests/tests/plan.rs` must see the frame allocate past its
+    /// plan.
     pub fn fragment_capacity(&mut self, count: &wgpu::Buffer, bytes: u64) -> Result<u32, OitError> {
         let counted = match self.speculated_fragments.take() {
             Some(earlier) => earlier,
@@ -909,7 +912,10 @@ impl<'a> GpuCtx<'a> {
                 n
             }
         };
-        let capacity = size_class(counted);
+        let mut capacity = u32::try_from(self.plan.fragment_capacity(u64::from(counted))).unwrap_or(u32::MAX);
+        if oit_core::mutation::active("wgpu-capacity-doubled") {
+            capacity = capacity.saturating_mul(2);
+        }
         self.capacity_checks.push((count.clone(), capacity, bytes));
         Ok(capacity)
     }
@@ -1263,12 +1269,9 @@ impl Finishing<'_> {
             let counted = words.next().unwrap_or_default();
             fits &= counted.first().is_some_and(|&c| check(c));
         }
-        for &(capacity, bytes) in &capacities {
+        for &(capacity, _) in &capacities {
             let counted = words.next().unwrap_or_default().first().copied().unwrap_or(u32::MAX);
             fits &= counted <= capacity;
-            // the storage of the count, as a frame that read it back reports it
-            ctx.storage_bytes =
-                ctx.storage_bytes - u64::from(capacity) * bytes + u64::from(counted.min(capacity)) * bytes;
         }
         if !fits {
             return Ok(None);

@@ -83,6 +83,35 @@ pub fn errors_within_losses(reference: &Frame, f: &Frame) -> Result<bool, String
     Ok(true)
 }
 
+/// A GPU backend's storage (`gpu`, from the backend named `backend`) against oit-cpu's (`cpu`)
+/// for the same frame (`scene`, `settings`): the same arrays, the per-fragment ones (`dfb`, `ll`,
+/// the reference) allocated by the GPU at the plan's capacity of the count
+/// ([`oit_core::plan::Plan::fragment_capacity`]), by oit-cpu at the count itself. The difference
+/// is computed by the plan (its figure for the GPU less its figure at the exact count), not
+/// assumed: a GPU array allocated past its capacity, or reported as the count, fails.
+pub fn same_storage_as_cpu(
+    backend: &str,
+    gpu: &Frame,
+    cpu: &Frame,
+    scene: &oit_core::Scene,
+    settings: &oit_core::Settings,
+) -> Result<(), String> {
+    use oit_core::plan::{Counted, Plan};
+    let plan = Plan::new(backend, scene, settings).map_err(|e| e.to_string())?;
+    let exact = Plan { pooled: false, ..plan.clone() };
+    let pixels = u64::from(settings.width) * u64::from(settings.height);
+    // the counting pass counts what lies in front of the opaque depth
+    let counted = Counted { deepest: 0, fragments: cpu.stats.fragments - cpu.stats.occluded };
+    let slack = plan.storage_bytes(pixels, counted) - exact.storage_bytes(pixels, counted);
+    if gpu.stats.storage_bytes != cpu.stats.storage_bytes + slack {
+        return Err(format!(
+            "storage: {} on {backend}, {} on cpu + {slack} of size-class capacity",
+            gpu.stats.storage_bytes, cpu.stats.storage_bytes
+        ));
+    }
+    Ok(())
+}
+
 /// Two backends/paths with the same fixed-point rules (oit-cpu and a compute path): the same
 /// fragments, losses, ties and passes, the same per-pixel counts where both report them, and no
 /// channel off by more than 1 (the order of float operations may differ).
