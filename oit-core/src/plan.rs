@@ -375,8 +375,9 @@ impl Plan {
     /// count (per pixel, per fragment of the frame, and fixed), given what the frame's counting
     /// pass found (`Counted::default()` before it is known; per-pixel slots are [`Plan::slots`]
     /// of the deepest pixel). This is the one definition of a technique's storage: each backend
-    /// allocates these arrays and reports their bytes in `Stats::storage_bytes`, and
-    /// `tests/tests/plan.rs` holds every backend and raster path to it, to the byte.
+    /// allocates these arrays (the per-fragment ones for [`Plan::fragment_capacity`] elements)
+    /// and reports their bytes in `Stats::storage_bytes`, and `tests/tests/plan.rs` holds every
+    /// backend and raster path to it, to the byte.
     ///
     /// `dfb` and `ll` need exactly what the frame's fragments need: a fragment is a 64-bit key
     /// (depth bits, primitive id) and a 32-bit payload, 12 bytes; `dfb` adds a count and an offset
