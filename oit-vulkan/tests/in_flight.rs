@@ -124,7 +124,7 @@ fn as_one_shot(scene: &oit_core::Scene, s: &Settings, t: &Stats) -> Stats {
     }
     let held = t.storage_bytes - base;
     assert!(
-        held % per_fragment == 0 && held / per_fragment >= t.fragments,
+        held.is_multiple_of(per_fragment) && held / per_fragment >= t.fragments,
         "capacity under the count: {t:?}"
     );
     Stats { storage_bytes: base + per_fragment * plan.fragment_capacity(t.fragments), ..t.clone() }

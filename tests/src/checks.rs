@@ -102,7 +102,7 @@ pub fn same_storage_as_cpu(
     let pixels = u64::from(settings.width) * u64::from(settings.height);
     // the count oit-cpu allocated its per-fragment arrays for, from its storage and the plan
     let (base, per_fragment) = fragment_arrays(&plan, pixels);
-    let n = if per_fragment == 0 { 0 } else { cpu.stats.storage_bytes.saturating_sub(base) / per_fragment };
+    let n = cpu.stats.storage_bytes.saturating_sub(base).checked_div(per_fragment).unwrap_or(0);
     let counted = Counted { deepest: 0, fragments: n };
     let slack = plan.storage_bytes(pixels, counted) - exact.storage_bytes(pixels, counted);
     if gpu.stats.storage_bytes != cpu.stats.storage_bytes + slack {
@@ -144,7 +144,7 @@ pub fn one_shot_storage(
     }
     let held = stats.storage_bytes.checked_sub(base).ok_or("storage under the plan's per-pixel arrays")?;
     let capacity = held / per_fragment;
-    if held % per_fragment != 0 || capacity < stats.fragments {
+    if !held.is_multiple_of(per_fragment) || capacity < stats.fragments {
         return Err(format!(
             "storage {} is not the plan's arrays at a capacity holding {} fragments ({} per fragment over {base})",
             stats.storage_bytes, stats.fragments, per_fragment
