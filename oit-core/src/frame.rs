@@ -175,17 +175,9 @@ mod tests {
         assert_eq!(counted("mdts", |_| {}), 0);
     }
 
-    fn totals(fragments: GpuFragments, counted_lost: Option<u64>, from_captured: bool) -> GpuTotals<'static> {
+    fn totals(fragments: GpuFragments, counted_lost: Option<u64>) -> GpuTotals<'static> {
         const ACCT: [u32; 6] = [2, 9, 9, 1, 9, 9];
-        GpuTotals {
-            fragments,
-            on_device: 40,
-            captured: 37,
-            counted_lost,
-            fragments_from_captured: from_captured,
-            acct: Some(&ACCT),
-            pixels: 2,
-        }
+        GpuTotals { fragments, on_device: 40, captured: 37, counted_lost, acct: Some(&ACCT), pixels: 2 }
     }
 
     /// Each source of the fragment count, counted and derived losses. Mutations caught: the
@@ -194,12 +186,11 @@ mod tests {
     #[test]
     fn gpu_totals_take_each_count_from_where_it_is() {
         use GpuFragments::*;
-        assert_eq!(totals(Known(50), Some(3), false).counts(), (50, 3, Some(vec![2, 1])));
-        assert_eq!(totals(OnDevice, Some(3), false).counts(), (40, 3, Some(vec![2, 1])));
+        assert_eq!(totals(Known(50), Some(3)).counts(), (50, 3, Some(vec![2, 1])));
+        assert_eq!(totals(OnDevice, Some(3)).counts(), (40, 3, Some(vec![2, 1])));
         // the blend captures: losses derived, no per-pixel losses
-        assert_eq!(totals(OnDevice, None, false).counts(), (40, 3, None));
-        assert_eq!(totals(Unset, None, true).counts(), (37, 0, None));
-        assert_eq!(totals(Unset, None, false).counts(), (0, 0, None));
+        assert_eq!(totals(OnDevice, None).counts(), (40, 3, None));
+        assert_eq!(totals(Unset, None).counts(), (0, 0, None));
     }
 }
 
@@ -244,9 +235,6 @@ pub struct GpuTotals<'a> {
     /// The totals' counted losses where the capture counts them (`None`: the blend captures,
     /// whose blend unit returns no previous value to count by).
     pub counted_lost: Option<u64>,
-    /// The frame counts every fragment it draws into `captured` and loses none (plain's and the
-    /// weighted blends' captures), so with no geometry pass its fragments are `captured`.
-    pub fragments_from_captured: bool,
     /// The per-pixel loss accounting where read back: 3 words a pixel, fragments lost first
     /// (`acct` in the GPU prelude).
     pub acct: Option<&'a [u32]>,
@@ -261,7 +249,6 @@ impl GpuTotals<'_> {
         let fragments = match self.fragments {
             GpuFragments::Known(generated) => generated,
             GpuFragments::OnDevice => self.on_device,
-            GpuFragments::Unset if self.fragments_from_captured => self.captured,
             GpuFragments::Unset => 0,
         };
         match self.counted_lost {

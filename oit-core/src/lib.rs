@@ -80,6 +80,7 @@ mod gltf_write;
 pub mod gpu_setup;
 pub mod metrics;
 pub mod msaa;
+pub mod mutation;
 mod obj;
 pub mod plan;
 mod procedural;

@@ -157,6 +157,10 @@ pub struct Plan {
     /// Samples a pixel (`Settings::samples`): above 1 each entry of `reference`, `dfb`, `ll` and
     /// `fabs` carries its coverage mask beside it, a byte ([`Plan::arrays`]; docs/msaa.md).
     pub samples: u32,
+    /// Whether the backend sizes the per-fragment arrays (`dfb`'s, `ll`'s, the reference's) in
+    /// size classes ([`Plan::fragment_capacity`]): the GPU backends (`wgpu`, `vulkan`), whose
+    /// buffers come from a pool that nearby views share. oit-cpu allocates exactly.
+    pub pooled: bool,
 }
 
 /// Bytes a pixel of the opaque pass's image holds: its nearest opaque (depth, primitive id) key
@@ -271,6 +275,7 @@ impl Plan {
         };
         Ok(Plan {
             samples: settings.samples,
+            pooled: matches!(backend, "wgpu" | "vulkan"),
             technique,
             bounds_pass: matches!(technique, Technique::Bdp { .. } | Technique::Adp),
             bdp_color,
@@ -370,8 +375,9 @@ impl Plan {
     /// count (per pixel, per fragment of the frame, and fixed), given what the frame's counting
     /// pass found (`Counted::default()` before it is known; per-pixel slots are [`Plan::slots`]
     /// of the deepest pixel). This is the one definition of a technique's storage: each backend
-    /// allocates these arrays and reports their bytes in `Stats::storage_bytes`, and
-    /// `tests/tests/plan.rs` holds every backend and raster path to it, to the byte.
+    /// allocates these arrays (the per-fragment ones for [`Plan::fragment_capacity`] elements)
+    /// and reports their bytes in `Stats::storage_bytes`, and `tests/tests/plan.rs` holds every
+    /// backend and raster path to it, to the byte.
     ///
     /// `dfb` and `ll` need exactly what the frame's fragments need: a fragment is a 64-bit key
     /// (depth bits, primitive id) and a 32-bit payload, 12 bytes; `dfb` adds a count and an offset
@@ -524,9 +530,23 @@ impl Plan {
     /// ([`Plan::check_budget`]) before it allocates.
     pub fn storage_bytes(&self, pixels: u64, counted: Counted) -> u64 {
         let frame = RESOLVE_STATE_BYTES + if self.opaque { OPAQUE_BYTES } else { 0 };
-        self.arrays(counted).iter().fold(pixels.saturating_mul(frame), |sum, a| {
-            sum.saturating_add(a.bytes(pixels, counted.fragments))
-        })
+        let fragments = self.fragment_capacity(counted.fragments);
+        self.arrays(counted)
+            .iter()
+            .fold(pixels.saturating_mul(frame), |sum, a| sum.saturating_add(a.bytes(pixels, fragments)))
+    }
+
+    /// The elements a frame allocates its per-fragment arrays for, given the fragments it
+    /// counted: on a [`Plan::pooled`] backend (the GPU backends) the count rounded up to its
+    /// [`size_class`] (at most 1/8 more), which is what they allocate and report in
+    /// `Stats::storage_bytes`; elsewhere the count itself. A prepared scene's frame that sized
+    /// its arrays from an earlier frame's count without waiting (the GPU backends' speculation)
+    /// allocates, and reports, that earlier count's capacity where its own fits it.
+    pub fn fragment_capacity(&self, fragments: u64) -> u64 {
+        match u32::try_from(fragments) {
+            Ok(n) if self.pooled => u64::from(size_class(n)),
+            _ => fragments,
+        }
     }
 
     /// Bytes of the outputs a frame of `pixels` pixels holds beside its storage

@@ -165,10 +165,6 @@ pub(crate) struct VkCtx<'a> {
     /// oit-wgpu: the blend unit returns no previous value to count by), and their `lost` is
     /// `fragments − captured`.
     pub(crate) counts_losses: bool,
-    /// Set by the blend captures of `plain`, `wavg` and `wsum`, whose draw counts every fragment
-    /// into a target the resolve reads into `captured` and loses none: the frame's fragments are
-    /// its captured total.
-    pub(crate) fragments_from_captured: bool,
     uniform: FrameUniform,
     state: Rc<Buffer>,
     image: Rc<Buffer>,
@@ -272,7 +268,6 @@ impl<'a> VkCtx<'a> {
             storage_bytes: if has_opaque { opaque_bytes } else { 0 },
             merged: 0,
             counts_losses: true,
-            fragments_from_captured: false,
             uniform,
             state,
             image,
@@ -583,10 +578,10 @@ impl<'a> VkCtx<'a> {
     /// The capacity, in elements of `bytes` bytes, of arrays sized by a count in word 0 of `count`
     /// on the device (`dfb`'s and `ll`'s fragment total), as oit-wgpu's: the count rounded up to
     /// its size class (`oit_core::plan::size_class`: at most 1/8 more, so nearby views take the
-    /// same buffers from the pool). Where the frame speculates the count is an earlier frame's, not
-    /// waited for; else it is read back now. Either way it is read again at the frame's end: a
-    /// count over the capacity makes the frame run again, and the frame's `storage_bytes` are set
-    /// from the count there, as oit-cpu, which allocates exactly, reports them.
+    /// same buffers from the pool; [`Plan::fragment_capacity`] is the rule). Where the frame
+    /// speculates the count is an earlier frame's, not waited for; else it is read back now.
+    /// Either way it is read again at the frame's end: a count over the capacity makes the frame
+    /// run again. The frame's `storage_bytes` are what it allocated: the capacity, not the count.
     pub(crate) fn fragment_capacity(&mut self, count: &Rc<Buffer>, bytes: u64) -> Result<u32, OitError> {
         let counted = match self.speculated.fragments.take() {
             Some(earlier) => earlier,
@@ -596,7 +591,7 @@ impl<'a> VkCtx<'a> {
                 n
             }
         };
-        let capacity = oit_core::plan::size_class(counted);
+        let capacity = u32::try_from(self.plan.fragment_capacity(u64::from(counted))).unwrap_or(u32::MAX);
         self.capacity_checks.push((count.clone(), capacity, bytes));
         Ok(capacity)
     }
@@ -1079,12 +1074,9 @@ impl Finishing<'_> {
         // totals, first count, gated counter, the end checks, then the rest in order
         let flags: Vec<Vec<u32>> = words.drain(3..3 + end_checks.len()).collect();
         let mut missed = flags.iter().zip(&end_checks).any(|(f, test)| f.first().is_none_or(|&w| !test(w)));
-        for (counted, &(capacity, bytes)) in words.drain(3..3 + capacities.len()).zip(&capacities) {
+        for (counted, &(capacity, _)) in words.drain(3..3 + capacities.len()).zip(&capacities) {
             let counted = counted.first().copied().unwrap_or(u32::MAX);
             missed |= counted > capacity;
-            // the storage of the count, as a frame that read it back reports it
-            ctx.storage_bytes =
-                ctx.storage_bytes - u64::from(capacity) * bytes + u64::from(counted.min(capacity)) * bytes;
         }
         if merged {
             let words = words.remove(3);
@@ -1152,7 +1144,6 @@ impl VkCtx<'_> {
             on_device: u64::from(first[0]),
             captured,
             counted_lost: self.counts_losses.then(|| u64::from(t[3])),
-            fragments_from_captured: self.fragments_from_captured,
             acct: acct.as_deref(),
             pixels: self.pixels as usize,
         }

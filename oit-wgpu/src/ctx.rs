@@ -256,11 +256,6 @@ pub struct GpuCtx<'a> {
     /// Whether the technique's capture counts its losses; the `--hardware-capture blend` captures
     /// do not yet (issue 16), and their `lost` is `fragments − captured`.
     pub counts_losses: bool,
-    /// Set by the blend captures of `plain`, `wavg` and `wsum` (`technique::blend`), whose draw
-    /// does not go through a [`Driver`]'s counted geometry pass: they count every fragment in a
-    /// count target the resolve reads into `captured` and lose none, so the frame's fragments
-    /// are its captured total, read with the totals at the end of the frame.
-    pub fragments_from_captured: bool,
     /// The setup checks the frame's drivers left to its end.
     checks: Vec<SetupCheck>,
     /// The deepest pixel an earlier frame of this prepared scene counted at this size and
@@ -468,7 +463,6 @@ impl<'a> GpuCtx<'a> {
             opaque,
             opaque_from: None,
             counts_losses: true,
-            fragments_from_captured: false,
             checks: Vec::new(),
             speculated_deepest: None,
             deepest_seen: None,
@@ -898,14 +892,17 @@ impl<'a> GpuCtx<'a> {
     }
 
     /// The capacity, in elements of `bytes` bytes, of arrays sized by a count that lies in word 0
-    /// of `count` on the device (`dfb`'s and `ll`'s fragment total): the count rounded up to its
-    /// size class ([`size_class`](crate::size_class): at most 1/8 more, so the frames of one view, and the nearby
-    /// views of a moving camera, take the same buffers from the pool). Where the frame speculates
-    /// ([`GpuCtx::speculated_fragments`]) the count is the earlier frame's, not waited for, and
-    /// checked at the end: a frame whose count exceeds the capacity runs again. Else it is read
-    /// back now (a round trip). Either way the count comes back again with the frame's end, and
-    /// the frame's `storage_bytes` are set from it there, as oit-cpu, which allocates exactly,
-    /// reports them.
+    /// of `count` on the device (`dfb`'s and `ll`'s fragment total): the plan's
+    /// ([`Plan::fragment_capacity`]: the count rounded up to its size class, at most 1/8 more, so
+    /// the frames of one view, and the nearby views of a moving camera, take the same buffers
+    /// from the pool). Where the frame speculates ([`GpuCtx::speculated_fragments`]) the count is
+    /// the earlier frame's, not waited for, and checked at the end: a frame whose count exceeds
+    /// the capacity runs again. Else it is read back now (a round trip). The frame's
+    /// `storage_bytes` are what it allocated: the capacity, not the count.
+    ///
+    /// Under the test hook `OIT_MUTATION=wgpu-capacity-doubled` ([`oit_core::mutation`]) the
+    /// capacity is twice the plan's: `tests/tests/plan.rs` must see the frame allocate past its
+    /// plan.
     pub fn fragment_capacity(&mut self, count: &wgpu::Buffer, bytes: u64) -> Result<u32, OitError> {
         let counted = match self.speculated_fragments.take() {
             Some(earlier) => earlier,
@@ -915,7 +912,10 @@ impl<'a> GpuCtx<'a> {
                 n
             }
         };
-        let capacity = size_class(counted);
+        let mut capacity = u32::try_from(self.plan.fragment_capacity(u64::from(counted))).unwrap_or(u32::MAX);
+        if oit_core::mutation::active("wgpu-capacity-doubled") {
+            capacity = capacity.saturating_mul(2);
+        }
         self.capacity_checks.push((count.clone(), capacity, bytes));
         Ok(capacity)
     }
@@ -1200,7 +1200,6 @@ impl<'a> GpuCtx<'a> {
             on_device: u64::from(t[FRAGMENTS_WORD as usize]),
             captured: u64::from(t[0]),
             counted_lost: self.counts_losses.then(|| u64::from(t[3])),
-            fragments_from_captured: self.fragments_from_captured,
             acct: acct.as_deref(),
             pixels: self.pixels as usize,
         }
@@ -1270,12 +1269,9 @@ impl Finishing<'_> {
             let counted = words.next().unwrap_or_default();
             fits &= counted.first().is_some_and(|&c| check(c));
         }
-        for &(capacity, bytes) in &capacities {
+        for &(capacity, _) in &capacities {
             let counted = words.next().unwrap_or_default().first().copied().unwrap_or(u32::MAX);
             fits &= counted <= capacity;
-            // the storage of the count, as a frame that read it back reports it
-            ctx.storage_bytes =
-                ctx.storage_bytes - u64::from(capacity) * bytes + u64::from(counted.min(capacity)) * bytes;
         }
         if !fits {
             return Ok(None);

@@ -15,10 +15,30 @@ use crate::ctx::{Driver, GpuCtx};
 pub(crate) fn module_source(name: &str) -> Result<&'static str, OitError> {
     static SOURCES: OnceLock<HashMap<&'static str, String>> = OnceLock::new();
     SOURCES
-        .get_or_init(|| oit_shaders::MODULES.iter().map(|m| (m.name, m.source())).collect())
+        .get_or_init(|| oit_shaders::MODULES.iter().map(|m| (m.name, mutated(m.name, m.source()))).collect())
         .get(name)
         .map(String::as_str)
         .ok_or_else(|| OitError::Device(format!("oit-shaders has no module '{name}'")))
+}
+
+/// `source` of module `name` as this process compiles it: as written, or broken by a test hook
+/// ([`oit_core::mutation`]): `OIT_MUTATION=wgpu-fabs-lose-uncounted` drops fabs's loss count
+/// (a fragment past K vanishes uncounted: the frame's own `Stats::check_accounting` must refuse
+/// it), `wgpu-fabs-ties-reversed` complements the primitive id in fabs's key (equal depths in
+/// descending primitive order, uncounted: `checks::exact` on a scene of ties must fail).
+/// `tests/tests/mutations.rs` runs under each and requires the failure.
+fn mutated(name: &str, source: String) -> String {
+    let swap = |from: &str, to: &str| {
+        assert!(source.contains(from), "the mutation's text is gone from module {name}: {from}");
+        source.replacen(from, to, 1)
+    };
+    match (name, oit_core::mutation::current()) {
+        ("fabs", Some("wgpu-fabs-lose-uncounted")) => swap("            lose(f.pixel);\n", "\n"),
+        ("fabs", Some("wgpu-fabs-ties-reversed")) => {
+            swap("<< 32u) | u64(f.prim);", "<< 32u) | u64(~f.prim);")
+        }
+        _ => source,
+    }
 }
 
 impl<'d> Frame<dyn Driver + 'd> for GpuCtx<'_> {

@@ -83,6 +83,76 @@ pub fn errors_within_losses(reference: &Frame, f: &Frame) -> Result<bool, String
     Ok(true)
 }
 
+/// A GPU backend's storage (`gpu`, from the backend named `backend`) against oit-cpu's (`cpu`)
+/// for the same frame (`scene`, `settings`): the same arrays, the per-fragment ones (`dfb`, `ll`,
+/// the reference) allocated by the GPU at the plan's capacity of the count
+/// ([`oit_core::plan::Plan::fragment_capacity`]), by oit-cpu at the count itself. The difference
+/// is computed by the plan (its figure for the GPU less its figure at the exact count), not
+/// assumed: a GPU array allocated past its capacity, or reported as the count, fails.
+pub fn same_storage_as_cpu(
+    backend: &str,
+    gpu: &Frame,
+    cpu: &Frame,
+    scene: &oit_core::Scene,
+    settings: &oit_core::Settings,
+) -> Result<(), String> {
+    use oit_core::plan::{Counted, Plan};
+    let plan = Plan::new(backend, scene, settings).map_err(|e| e.to_string())?;
+    let exact = Plan { pooled: false, ..plan.clone() };
+    let pixels = u64::from(settings.width) * u64::from(settings.height);
+    // the count oit-cpu allocated its per-fragment arrays for, from its storage and the plan
+    let (base, per_fragment) = fragment_arrays(&plan, pixels);
+    let n = cpu.stats.storage_bytes.saturating_sub(base).checked_div(per_fragment).unwrap_or(0);
+    let counted = Counted { deepest: 0, fragments: n };
+    let slack = plan.storage_bytes(pixels, counted) - exact.storage_bytes(pixels, counted);
+    if gpu.stats.storage_bytes != cpu.stats.storage_bytes + slack {
+        return Err(format!(
+            "storage: {} on {backend}, {} on cpu + {slack} of size-class capacity",
+            gpu.stats.storage_bytes, cpu.stats.storage_bytes
+        ));
+    }
+    Ok(())
+}
+
+/// The bytes of `plan`'s arrays at no fragment (as `Stats::storage_bytes` counts them: without
+/// the resolve state) and the bytes its per-fragment arrays take a fragment (0 where it has none).
+fn fragment_arrays(plan: &oit_core::plan::Plan, pixels: u64) -> (u64, u64) {
+    use oit_core::plan::{Counted, RESOLVE_STATE_BYTES};
+    let base = plan.storage_bytes(pixels, Counted::default()) - pixels * RESOLVE_STATE_BYTES;
+    let per_fragment = plan.arrays(Counted::default()).iter().map(|a| a.per_fragment * a.element_bytes).sum();
+    (base, per_fragment)
+}
+
+/// The storage a one-shot frame of the same view reports, from a prepared scene's frame `stats`
+/// (backend `backend`, `scene`, `settings`): the frame's own where the plan sizes nothing by the
+/// fragment total; for `dfb`, `ll` and the reference, whose frame may keep the capacity an earlier
+/// frame of another view took (the GPU backends' speculation, `Plan::fragment_capacity`), the
+/// frame's storage with its capacity replaced by its own count's, after checking that the
+/// capacity it allocated holds its count (an error where it does not, or where the storage is
+/// not the plan's arrays at some capacity). For comparing frames of different histories.
+pub fn one_shot_storage(
+    backend: &str,
+    scene: &oit_core::Scene,
+    settings: &oit_core::Settings,
+    stats: &oit_core::Stats,
+) -> Result<u64, String> {
+    let plan = oit_core::plan::Plan::new(backend, scene, settings).map_err(|e| e.to_string())?;
+    let pixels = u64::from(settings.width) * u64::from(settings.height);
+    let (base, per_fragment) = fragment_arrays(&plan, pixels);
+    if per_fragment == 0 {
+        return Ok(stats.storage_bytes);
+    }
+    let held = stats.storage_bytes.checked_sub(base).ok_or("storage under the plan's per-pixel arrays")?;
+    let capacity = held / per_fragment;
+    if !held.is_multiple_of(per_fragment) || capacity < stats.fragments {
+        return Err(format!(
+            "storage {} is not the plan's arrays at a capacity holding {} fragments ({} per fragment over {base})",
+            stats.storage_bytes, stats.fragments, per_fragment
+        ));
+    }
+    Ok(base + per_fragment * plan.fragment_capacity(stats.fragments))
+}
+
 /// Two backends/paths with the same fixed-point rules (oit-cpu and a compute path): the same
 /// fragments, losses, ties and passes, the same per-pixel counts where both report them, and no
 /// channel off by more than 1 (the order of float operations may differ).

@@ -9,10 +9,17 @@
 //! (buckets.rs), `same_fragments` and `off_edges_equal` (wgpu.rs, wgpu_hardware.rs), the metrics'
 //! coverage (metrics.rs). The weighted bound and the closed-form composite carry their own
 //! mutations in foundation.rs; the bench's cross-backend check in oit-bench's unit tests.
+//!
+//! The second half mutates production code, not frames (issue 41.10): a test hook
+//! (`OIT_MUTATION`, [`oit_core::mutation`]) breaks one capture of oit-cpu or of oit-wgpu's compute
+//! path (or the blender's count on its hardware path); each `body_*` test here holds its check on
+//! correct code, and each `*_fails_*` test runs this binary again on one body under one mutation
+//! and requires the named check to fail, with its message (as `hardware_covered.rs` does for the
+//! hardware raster's `hardware-drop-third`).
 
 use glam::{Mat4, Vec3, Vec4};
 use oit_core::metrics::{accuracy, edge_mask};
-use oit_core::{Frame, Mesh, Object, Scene, Settings, Shading, Technique};
+use oit_core::{Backend, Frame, Mesh, Object, Scene, Settings, Shading, Technique};
 use oit_tests::checks::*;
 use oit_tests::*;
 
@@ -217,4 +224,168 @@ fn metrics_count_what_is_drawn_outside_the_reference() {
     let a = accuracy(&r, &g.image).unwrap();
     assert_eq!((a.covered, a.error_pixels, a.covered_by_image_only), (1, 1, 1));
     assert_eq!(a.epr, 1.0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Mutations of production code (issue 41.10)
+
+/// The backends the bodies below run on: oit-cpu, and oit-wgpu where a device opens (its compute
+/// path, or `path`), each with its label.
+fn production(test: &str, path: oit_core::RasterPath) -> Vec<(String, Box<dyn Backend>, Settings)> {
+    let mut out: Vec<(String, Box<dyn Backend>, Settings)> =
+        vec![("cpu".into(), Box::new(cpu()), Settings::default())];
+    if let Some(w) = oit_wgpu::backend_or_skip(test) {
+        out.push((
+            format!("wgpu/{path}"),
+            Box::new(w),
+            Settings { raster: Some(path), ..Settings::default() },
+        ));
+    }
+    out
+}
+
+/// `settings` with the raster path of `on`'s.
+fn on(on: &Settings, s: Settings) -> Settings {
+    Settings { raster: on.raster, ..s }
+}
+
+/// `fabs:3` on `planes:8` overflows, and counts every fragment it drops: `checks::accounting`
+/// (and, on the GPU, the frame's own `Stats::check_accounting`).
+#[test]
+fn body_fabs_overflow_accounts() {
+    let scene = scene("planes:8");
+    for (who, b, path) in production("body_fabs_overflow_accounts", oit_core::RasterPath::Compute) {
+        let s = on(&path, settings(16, "fabs:3"));
+        let f = b.render(&scene, &camera(&scene, &s, FRONT), &s).unwrap_or_else(|e| panic!("{who}: {e}"));
+        accounting(&f).unwrap_or_else(|e| panic!("{who}: checks::accounting: {e}"));
+        assert!(f.stats.lost > 0, "{who}: 8 layers in 3 slots");
+    }
+}
+
+/// `fabs` orders equal depths by primitive id, as the reference does: `checks::exact` on
+/// `ties:5` in both primitive orders.
+#[test]
+fn body_fabs_orders_ties_as_the_reference() {
+    let tied = scene("ties:5");
+    let mut reversed = tied.clone();
+    reversed.instances.reverse();
+    for (who, b, path) in production("body_fabs_orders_ties_as_the_reference", oit_core::RasterPath::Compute)
+    {
+        for scene in [&tied, &reversed] {
+            let s = on(&path, flat(32, "reference"));
+            let cam = camera(scene, &s, FRONT);
+            let r = b.render(scene, &cam, &s).unwrap_or_else(|e| panic!("{who}: {e}"));
+            let f = b.render(scene, &cam, &Settings { technique: Technique::Fabs { k: None }, ..s.clone() });
+            let f = f.unwrap_or_else(|e| panic!("{who}: {e}"));
+            exact(&r, &f).unwrap_or_else(|e| panic!("{who}: checks::exact: {e}"));
+        }
+    }
+}
+
+/// `fabs:3` on `planes:8` is wrong where a pixel holds more than 3 layers, and its error pixels
+/// are those that lost a fragment: `checks::errors_within_losses` (oit-cpu: the mutation is of
+/// the frame's per-pixel losses, `technique::frame`).
+#[test]
+fn body_losses_lie_where_the_errors_are() {
+    let b = cpu();
+    let scene = scene("planes:8");
+    let s = settings(16, "reference");
+    let cam = camera(&scene, &s, FRONT);
+    let r = render(&b, &scene, &cam, &s);
+    let f = render(&b, &scene, &cam, &Settings { technique: Technique::Fabs { k: Some(3) }, ..s.clone() });
+    assert!(error_pixels(&r.image, &f.image).nth(1).is_some(), "fabs:3 is wrong at more than one pixel");
+    assert_eq!(errors_within_losses(&r, &f), Ok(true), "cpu: checks::errors_within_losses");
+}
+
+/// `plain` on wgpu's hardware path (the blender) counts its fragments apart from what it
+/// composites, and the two agree: `checks::accounting` (and the frame's `Stats::check_accounting`).
+#[test]
+fn body_blended_plain_accounts() {
+    let scene = scene("planes:8");
+    let Some(w) = oit_wgpu::backend_or_skip("body_blended_plain_accounts") else { return };
+    let s = Settings { raster: Some(oit_core::RasterPath::Hardware), ..settings(16, "plain") };
+    let f = w.render(&scene, &camera(&scene, &s, FRONT), &s).unwrap_or_else(|e| panic!("wgpu/hardware: {e}"));
+    assert!(f.stats.fragments > 0 && f.stats.captured > 0, "wgpu/hardware: {:?}", f.stats);
+    accounting(&f).unwrap_or_else(|e| panic!("wgpu/hardware: checks::accounting: {e}"));
+}
+
+/// Runs `body` (a test of this binary) again in a child process under `OIT_MUTATION=mutation`
+/// and requires it to fail with every one of `expect` in its output.
+fn fails_under(mutation: &str, body: &str, expect: &[&str]) {
+    let out = std::process::Command::new(std::env::current_exe().expect("this test binary"))
+        .args([body, "--exact", "--nocapture", "--test-threads=1"])
+        .env(oit_core::mutation::VAR, mutation)
+        .output()
+        .expect("the test binary runs");
+    let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(!out.status.success(), "{body} passed under OIT_MUTATION={mutation}:\n{text}");
+    for e in expect {
+        assert!(text.contains(e), "{body} failed under OIT_MUTATION={mutation}, but not with '{e}':\n{text}");
+    }
+}
+
+/// oit-cpu's fabs drops a fragment past K without counting it: `checks::accounting` fails.
+#[test]
+fn cpu_fabs_losing_uncounted_fails_accounting() {
+    fails_under(
+        "cpu-fabs-lose-uncounted",
+        "body_fabs_overflow_accounts",
+        &["cpu: checks::accounting: captured", "!= fragments"],
+    );
+}
+
+/// oit-wgpu's fabs shader (compute path) drops a fragment past K without counting it: the
+/// frame's own accounting check (`Stats::check_accounting`, the sum `checks::accounting` holds)
+/// refuses the frame.
+#[test]
+fn wgpu_fabs_losing_uncounted_is_refused() {
+    if oit_wgpu::backend_or_skip("wgpu_fabs_losing_uncounted_is_refused").is_none() {
+        return;
+    }
+    fails_under("wgpu-fabs-lose-uncounted", "body_fabs_overflow_accounts", &["wgpu/compute: ", "refused"]);
+}
+
+/// oit-cpu's fabs orders equal depths by descending primitive id, counting no tie:
+/// `checks::exact` fails on `ties:5`.
+#[test]
+fn cpu_fabs_ties_reversed_fails_exact() {
+    fails_under(
+        "cpu-fabs-ties-reversed",
+        "body_fabs_orders_ties_as_the_reference",
+        &["cpu: checks::exact: ", "error pixels"],
+    );
+}
+
+/// The same in oit-wgpu's fabs shader (compute path): `checks::exact` fails on `ties:5`.
+#[test]
+fn wgpu_fabs_ties_reversed_fails_exact() {
+    if oit_wgpu::backend_or_skip("wgpu_fabs_ties_reversed_fails_exact").is_none() {
+        return;
+    }
+    fails_under(
+        "wgpu-fabs-ties-reversed",
+        "body_fabs_orders_ties_as_the_reference",
+        &["wgpu/compute: checks::exact: ", "error pixels"],
+    );
+}
+
+/// oit-cpu counts every loss at pixel 0 (the total still right): `checks::errors_within_losses`
+/// fails.
+#[test]
+fn cpu_losses_at_one_pixel_fail_errors_within_losses() {
+    fails_under(
+        "cpu-losses-at-pixel-zero",
+        "body_losses_lie_where_the_errors_are",
+        &["checks::errors_within_losses", "where nothing was lost"],
+    );
+}
+
+/// oit-wgpu's blender counts only every other primitive's fragments: with the frame's fragments
+/// counted apart (no longer `fragments := captured`), the frame's accounting check refuses it.
+#[test]
+fn wgpu_blend_counting_half_is_refused() {
+    if oit_wgpu::backend_or_skip("wgpu_blend_counting_half_is_refused").is_none() {
+        return;
+    }
+    fails_under("wgpu-blend-count-half", "body_blended_plain_accounts", &["wgpu/hardware: ", "refused"]);
 }

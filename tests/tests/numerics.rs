@@ -39,19 +39,36 @@ fn run_all(
         .collect()
 }
 
-/// How many pixels of `f` differ from the reference by more than 1/255 without having lost a
-/// fragment; `None` where the backend does not report losses per pixel.
-fn stray_errors(r: &Frame, f: &Frame) -> Option<usize> {
-    let lost = f.lost_pixels.as_ref()?;
-    let stray = r
-        .image
-        .pixels
-        .iter()
-        .zip(&f.image.pixels)
-        .enumerate()
-        .filter(|(i, (a, b))| (0..3).any(|c| a[c].abs_diff(b[c]) > 1) && lost[*i] == 0)
-        .count();
-    Some(stray)
+/// Never wrong in silence, pixel by pixel (issue 41.10: the aggregate `error pixels <= tied +
+/// lost` it replaces held on 64 pixels with thousands lost whatever the pixels showed): every
+/// pixel of `f` that differs from the reference `r` by more than 1/255 lost a fragment there
+/// (`Frame::lost_pixels`, which every backend reports for these captures), or the frame counted
+/// ties and `tieable(pixel)` says two of the pixel's layers lie where the technique cannot tell
+/// their depths apart.
+fn errors_explained(r: &Frame, f: &Frame, tieable: impl Fn(usize) -> bool) -> Result<(), String> {
+    let lost = f.lost_pixels.as_ref().ok_or("no per-pixel losses reported")?;
+    let tied = f.stats.tied > 0;
+    let stray: Vec<usize> =
+        checks::error_pixels(&r.image, &f.image).filter(|&i| lost[i] == 0 && !(tied && tieable(i))).collect();
+    match stray.first() {
+        None => Ok(()),
+        Some(&i) => Err(format!(
+            "{} error pixels neither lost a fragment nor hold a counted tie (first: pixel {i}, {} layers, tied {})",
+            stray.len(),
+            r.layers.as_ref().map_or(0, |l| l[i]),
+            f.stats.tied
+        )),
+    }
+}
+
+/// Whether two of the `k` nearest of `depths` (planes facing the camera, nested on screen: a
+/// pixel covered by k of them is covered by the k nearest) fall within one step of each other
+/// at the precision the technique keeps (`key`): a tie it may resolve unlike the reference.
+fn nearest_tie(depths: &[f32], k: usize, key: impl Fn(f32) -> u32) -> bool {
+    let mut d = depths.to_vec();
+    d.sort_by(f32::total_cmp);
+    d.truncate(k);
+    d.windows(2).any(|w| key(w[1]).abs_diff(key(w[0])) <= 1)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -125,8 +142,22 @@ fn far_near_ratio_of_a_million() {
                 assert!(a.is_measured(), "{what}");
                 eprintln!("{what}");
                 if exact.contains(t) || matches!(t, Technique::Mdts { .. }) {
-                    // never wrong in silence; where f32 keeps the layers apart, exact is exact
-                    assert!(a.error_pixels <= tied + lost, "{what}: wrong and not counted");
+                    // never wrong in silence, per pixel: an error pixel lost a fragment, or holds
+                    // two layers the technique's depth cannot tell apart (f32; mdts's 20 bits) in
+                    // a frame that counted ties. Mutation that fails it: OIT_MUTATION=
+                    // cpu-fabs-ties-reversed (oit-cpu's fabs orders equal depths by descending
+                    // primitive id) on planes:12: "... error pixels neither lost a fragment nor
+                    // hold a counted tie".
+                    let layers = r.layers.as_ref().expect("the reference's layers");
+                    let mdts = matches!(t, Technique::Mdts { .. });
+                    let tieable =
+                        |i: usize| {
+                            nearest_tie(&d, layers[i] as usize, |x| {
+                                if mdts { mdts_depth20(x) } else { x.to_bits() }
+                            })
+                        };
+                    errors_explained(r, f, tieable).unwrap_or_else(|e| panic!("{what}: {e}"));
+                    // where f32 keeps the layers apart, exact is exact
                     if f32_distinct && !matches!(t, Technique::Mdts { .. }) {
                         assert_eq!((a.error_pixels, tied, lost), (0, 0, 0), "{what}");
                     }
@@ -141,9 +172,7 @@ fn far_near_ratio_of_a_million() {
                 }
                 if matches!(t, Technique::Bdp { .. } | Technique::Adp) {
                     // their stated bound: an error pixel is a pixel that lost a fragment
-                    if let Some(stray) = stray_errors(r, f) {
-                        assert_eq!(stray, 0, "{what}: error pixels where nothing was lost");
-                    }
+                    assert_eq!(checks::errors_within_losses(r, f), Ok(true), "{what}");
                 }
                 if matches!(t, Technique::WeightedAverage | Technique::WeightedSum) {
                     // order-independent: the depth range cannot change them
@@ -202,11 +231,12 @@ fn four_thousand_layers() {
             }
             // nothing else holds 4,096 layers here: the loss is counted ...
             assert!(lost > 0, "{what}: 4,096 layers held in 64 slots or 8 passes?");
-            // ... and is the only error: no error pixel without a counted loss
-            assert!(a.error_pixels <= tied + lost, "{what}");
-            if let Some(stray) = stray_errors(r, f) {
-                assert_eq!(stray, 0, "{what}: error pixels where nothing was lost");
-            }
+            // ... and is the only error, pixel by pixel: every error pixel lost a fragment there
+            // (issue 41.10: the aggregate `error pixels <= tied + lost` it replaces could not
+            // fail on 64 pixels with thousands lost). Mutation that fails it: OIT_MUTATION=
+            // cpu-losses-at-pixel-zero (oit-cpu reports every per-pixel loss at pixel 0: the
+            // sum holds, the pixels do not): "error pixels where nothing was lost".
+            assert_eq!(checks::errors_within_losses(r, f), Ok(true), "{what}");
             if matches!(t, Technique::Fabs { .. } | Technique::Mdts64 { .. } | Technique::Mlp { .. }) {
                 // the 64 nearest layers, exactly: behind them alpha 0.4 leaves 0.6⁶⁴ ≈ 6e-15
                 assert_eq!(a.error_pixels, 0, "{what}");

@@ -3,6 +3,15 @@
 //! byte, for every technique, on every backend and raster path: a backend that allocated past the
 //! plan would make the budget check a promise it does not keep, and one that allocated something
 //! else would be restating the plan in its own words.
+//!
+//! What a GPU frame reports is what it allocated: `dfb`'s, `ll`'s and the reference's
+//! per-fragment arrays at their capacity, the fragment count rounded up to its size class, not
+//! rewritten to the count (issue 41.10: the contexts used to report the count, so an allocation
+//! past it could not show here). The rounding is the plan's own rule
+//! (`Plan::fragment_capacity`, on the backends it marks `pooled`), which the GPU contexts
+//! allocate by; this test applies no correction of its own. Mutation that fails it:
+//! `OIT_MUTATION=wgpu-capacity-doubled` (oit-wgpu's `GpuCtx::fragment_capacity` allocates twice
+//! the plan's capacity) — "wgpu/compute dfb Drop on knot: reports ... bytes".
 
 use oit_core::plan::{Counted, Plan, RESOLVE_STATE_BYTES};
 use oit_core::{Overflow, Settings, Technique, View};

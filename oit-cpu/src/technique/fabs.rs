@@ -24,10 +24,14 @@ use super::Ctx;
 use crate::raster::Fragment;
 use crate::storage::CountedList;
 
-/// A fragment's slot word: depth bits above the primitive id.
+/// A fragment's slot word: depth bits above the primitive id. Under the test hook
+/// `OIT_MUTATION=cpu-fabs-ties-reversed` ([`oit_core::mutation`]) the id is complemented, so
+/// equal depths come out in descending primitive order, uncounted: `checks::exact` on a scene of
+/// ties must fail (`tests/tests/mutations.rs`).
 #[inline]
 fn word(f: &Fragment<'_>) -> u64 {
-    u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim)
+    let prim = if oit_core::mutation::active("cpu-fabs-ties-reversed") { !f.prim } else { f.prim };
+    u64::from(depth_bits(f.depth)) << 32 | u64::from(prim)
 }
 
 pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
@@ -76,11 +80,14 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
 }
 
 /// fabs's capture pass over any list of its keys (slot word above payload): each fragment offered
-/// once, and the one the list drops counted lost.
+/// once, and the one the list drops counted lost (not counted under the test hook
+/// `OIT_MUTATION=cpu-fabs-lose-uncounted`, [`oit_core::mutation`]: `checks::accounting` must
+/// then fail, `tests/tests/mutations.rs`).
 pub(crate) fn capture<L: AtomicFragmentList<Key = u128>>(ctx: &mut Ctx<'_>, list: &L) {
+    let uncounted = oit_core::mutation::active("cpu-fabs-lose-uncounted");
     ctx.pass_lossy(|f, ctx| {
         let px = f.pixel as usize;
-        if list.insert(px, CountedList::key(word(f), ctx.payload(f))).is_some() {
+        if list.insert(px, CountedList::key(word(f), ctx.payload(f))).is_some() && !uncounted {
             // the counter is past K: no slot for this fragment
             ctx.lose(px);
         }

@@ -392,10 +392,18 @@ impl<'a> Ctx<'a> {
     }
 }
 
-/// Wraps up a frame: stats from the context; `captured` fragments reached the composite.
+/// Wraps up a frame: stats from the context; `captured` fragments reached the composite. Under
+/// the test hook `OIT_MUTATION=cpu-losses-at-pixel-zero` ([`oit_core::mutation`]) the per-pixel
+/// losses are all reported at pixel 0: the sum holds, the pixels lie, and
+/// `checks::errors_within_losses` must fail (`tests/tests/mutations.rs`).
 pub(crate) fn frame(ctx: &Ctx<'_>, image: oit_core::Image, captured: u64) -> oit_core::Frame {
     let fragments = ctx.fragments.unwrap_or(0);
-    let lost_pixels: Vec<u32> = ctx.lost.iter().map(|l| l.load(Relaxed)).collect();
+    let mut lost_pixels: Vec<u32> = ctx.lost.iter().map(|l| l.load(Relaxed)).collect();
+    if oit_core::mutation::active("cpu-losses-at-pixel-zero") && !lost_pixels.is_empty() {
+        let all = lost_pixels.iter().fold(0u32, |a, &l| a.wrapping_add(l));
+        lost_pixels.fill(0);
+        lost_pixels[0] = all;
+    }
     let lost: u64 = lost_pixels.iter().map(|&l| u64::from(l)).sum();
     oit_core::Frame {
         image,

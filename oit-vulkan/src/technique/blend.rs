@@ -127,7 +127,10 @@ fn draw_and_resolve(
     let raster = hardware(drivers)?;
     let color_target = ctx.target(colour.0, colour.1, false)?;
     let count_target = ctx.target(R32F, 4, false)?;
-    ctx.fragments_from_captured = true;
+    // the frame's fragments counted apart from the blender's count (`captured`, losses counted
+    // as 0): the count-only draw the other blend captures run, so that the frame's accounting
+    // check can fail where the two disagree (issue 41.10), not `fragments := captured`
+    ctx.count_fragments(&drivers.scene)?;
     ctx.blend_pass(
         raster,
         BlendPass {

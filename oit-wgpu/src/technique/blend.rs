@@ -24,10 +24,13 @@
 //!   n · 2^-11 a sum.
 //!
 //! Storage per pixel: the two targets (20 bytes in f32; 8 + 4 with RGBA16F or RGBA8 colour). The blender loses no
-//! fragment: every fragment drawn is counted in the count target and composited, so the frame's
-//! fragments are its captured total (read with the totals at the end of the frame: no readback
-//! between the draw and the resolve). The targets are kept by the frame's rasterizer
-//! ([`SceneStage::target`]), made once per image size.
+//! fragment: every fragment drawn is counted in the count target and composited (`captured`,
+//! losses counted as 0). The frame's fragments are counted apart from it, by the hardware
+//! driver's count-only draw the other blend captures run (`bdp_blend::count_fragments`, not a
+//! geometry pass of the technique), so `captured + lost = fragments` is a check the frame can
+//! fail (issue 41.10), not `fragments := captured`; both are read with the totals at the end of
+//! the frame (no readback between the draws and the resolve). The targets are kept by the
+//! frame's rasterizer ([`SceneStage::target`]), made once per image size.
 
 use oit_core::{BlendTarget, OitError, Technique};
 
@@ -39,6 +42,22 @@ use crate::technique::bdp_blend::{check_texture_size, key, unsupported};
 
 const WGSL: &str = oit_shaders::text("technique/blend.wgsl");
 const WEIGHTED_WGSL: &str = oit_shaders::text("technique/weighted.wgsl");
+
+/// blend.wgsl as this process compiles it: as written, or, under the test hook
+/// `OIT_MUTATION=wgpu-blend-count-half` ([`oit_core::mutation`]), with a fragment stage that
+/// counts only the even primitives' fragments into the count target: `captured` then falls short
+/// of the fragments the count-only draw counted, and the frame's `Stats::check_accounting` must
+/// refuse it (the accounting of the blend captures is no longer `fragments := captured`).
+fn blend_wgsl() -> std::borrow::Cow<'static, str> {
+    const COUNT: &str = "    (*out).count = vec4<f32>(1.0, 0.0, 0.0, 0.0);\n";
+    if oit_core::mutation::active("wgpu-blend-count-half") {
+        assert!(WGSL.contains(COUNT), "the mutation's text is gone from blend.wgsl");
+        let half =
+            "    if (in.prim % 2u == 0u) {\n        (*out).count = vec4<f32>(1.0, 0.0, 0.0, 0.0);\n    }\n";
+        return WGSL.replacen(COUNT, half, 1).into();
+    }
+    WGSL.into()
+}
 
 /// `plain` on the blender, into the colour target `--blend-target` names.
 pub(crate) fn plain(ctx: &mut GpuCtx<'_>, stage: &SceneStage) -> Result<(), OitError> {
@@ -130,10 +149,9 @@ fn draw_and_resolve(
     let count = stage.target(&device, "blend count", formats.1);
     let texel = |f: wgpu::TextureFormat| u64::from(f.block_copy_size(None).unwrap_or(16));
     ctx.storage_bytes += u64::from(ctx.pixels) * (texel(formats.0) + texel(formats.1));
-    ctx.fragments_from_captured = true;
 
     let (layout0, group0) = ctx.group0(&[], 0, param);
-    let body = format!("{TECHNIQUE_PRELUDE}{WEIGHTED_WGSL}\n{WGSL}\n{}", stage.wgsl());
+    let body = format!("{TECHNIQUE_PRELUDE}{WEIGHTED_WGSL}\n{}\n{}", blend_wgsl(), stage.wgsl());
     let module_source = format!("{COMMON_WGSL}\n{body}");
     let targets = [
         Some(wgpu::ColorTargetState {

@@ -39,16 +39,30 @@ pub(crate) fn run(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), Oit
         Technique::Ddp if blend => ddp_blend::render(ctx, drivers),
         Technique::Bdp { .. } if blend => bdp_blend::render(ctx, drivers),
         Technique::WeightedAverage | Technique::WeightedSum if blend => {
-            blend::weighted(ctx, bdp_blend::scene_stage(drivers)?)
+            let stage = bdp_blend::scene_stage(drivers)?;
+            counted_apart(ctx, drivers)?;
+            blend::weighted(ctx, stage)
         }
         // the blender composites one draw in primitive order: plain's definition, where the
         // draws are oit's own
         Technique::Plain if hardware && drivers.scene.scene_stage().is_some() => {
-            blend::plain(ctx, bdp_blend::scene_stage(drivers)?)
+            let stage = bdp_blend::scene_stage(drivers)?;
+            counted_apart(ctx, drivers)?;
+            blend::plain(ctx, stage)
         }
         // kbuf is refused by the frame's context with the plan's reason (Plan::refuse_interlock)
         _ => oit_gpu::technique::render(ctx, drivers),
     }
+}
+
+/// The frame's fragments counted by the hardware driver's count-only draw, apart from the
+/// blender's own count (`captured`) of `plain`, `wavg` and `wsum` on the blend unit: the two
+/// must agree, and the frame's accounting check sees it where they do not (issue 41.10).
+fn counted_apart(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
+    if ctx.fragments == crate::ctx::Fragments::Unset {
+        bdp_blend::count_fragments(ctx, drivers)?;
+    }
+    Ok(())
 }
 
 /// The pass count of the blend captures' peel loops (`dp_depth`, `ddp_blend`), which end at the

@@ -20,7 +20,8 @@ pub fn compare(gpu: &oit_wgpu::WgpuBackend, cpu: &oit_cpu::CpuBackend, scene_nam
     assert_eq!(g.stats.lost, c.stats.lost, "{what}: lost");
     assert_eq!(g.stats.tied, c.stats.tied, "{what}: tied");
     assert_eq!(g.stats.geometry_passes, c.stats.geometry_passes, "{what}: geometry passes");
-    assert_eq!(g.stats.storage_bytes, c.stats.storage_bytes, "{what}: storage");
+    oit_tests::checks::same_storage_as_cpu("wgpu", &g, &c, &scene, s)
+        .unwrap_or_else(|e| panic!("{what}: {e}"));
     let worst = g
         .image
         .pixels
