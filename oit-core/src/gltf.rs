@@ -1530,6 +1530,12 @@ mod tests {
         std::fs::write(&path, json("https://example.com/quad.bin")).unwrap();
         let e = load_gltf(&path, None).expect_err("a web URI").to_string();
         assert!(e.contains("scheme https: — oit reads relative paths"), "{e}");
+        // an absolute path, though the file exists (mutation: no root check reads it, and the
+        // error is then its length against byteLength)
+        let absolute = dir.join("quad data.bin");
+        std::fs::write(&path, json(&absolute.display().to_string().replace(' ', "%20"))).unwrap();
+        let e = load_gltf(&path, None).expect_err("an absolute path").to_string();
+        assert!(e.contains("is an absolute path"), "{e}");
         let encoded = {
             const ALPHABET: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
             let mut out = String::new();

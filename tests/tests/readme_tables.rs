@@ -454,7 +454,9 @@ fn msaa(spec: &Spec<'_>) -> String {
     let find = |report: &Value, r: &Value| {
         rows(report)
             .iter()
-            .find(|o| o["technique"] == r["technique"] && o["scene"] == r["scene"] && o["backend"] == r["backend"])
+            .find(|o| {
+                o["technique"] == r["technique"] && o["scene"] == r["scene"] && o["backend"] == r["backend"]
+            })
             .cloned()
     };
     let per = |r: &Value| {
