@@ -309,6 +309,33 @@ fn body_blended_plain_accounts() {
     accounting(&f).unwrap_or_else(|e| panic!("wgpu/hardware: checks::accounting: {e}"));
 }
 
+/// `fabs` on `ties:5` is never wrong in silence: `checks::never_silent` (every error pixel a
+/// counted loss, tail or tie; here none).
+#[test]
+fn body_fabs_is_never_silent_on_ties() {
+    let b = cpu();
+    let scene = scene("ties:5");
+    let s = flat(32, "reference");
+    let cam = camera(&scene, &s, FRONT);
+    let r = render(&b, &scene, &cam, &s);
+    let f = render(&b, &scene, &cam, &Settings { technique: Technique::Fabs { k: None }, ..s.clone() });
+    never_silent(&r, &f).unwrap_or_else(|e| panic!("cpu: checks::never_silent: {e}"));
+}
+
+/// wgpu's compute path and oit-cpu run the same fixed-point rules: `fabs` on `ties:5` gives the
+/// same fragments, counts and image on both (`checks::same_fragments_as_cpu`).
+#[test]
+fn body_compute_fabs_is_the_cpus() {
+    let Some(w) = oit_wgpu::backend_or_skip("body_compute_fabs_is_the_cpus") else { return };
+    let scene = scene("ties:5");
+    let s = Settings { raster: Some(oit_core::RasterPath::Compute), ..flat(32, "fabs") };
+    let cam = camera(&scene, &s, FRONT);
+    let g = w.render(&scene, &cam, &s).unwrap_or_else(|e| panic!("wgpu/compute: {e}"));
+    let c = render(&cpu(), &scene, &cam, &Settings { raster: None, ..s.clone() });
+    same_fragments_as_cpu(&g, &c, Technique::Fabs { k: None })
+        .unwrap_or_else(|e| panic!("wgpu/compute against cpu: checks::same_fragments_as_cpu: {e}"));
+}
+
 /// Runs `body` (a test of this binary) again in a child process under `OIT_MUTATION=mutation`
 /// and requires it to fail with every one of `expect` in its output.
 fn fails_under(mutation: &str, body: &str, expect: &[&str]) {
@@ -388,4 +415,28 @@ fn wgpu_blend_counting_half_is_refused() {
         return;
     }
     fails_under("wgpu-blend-count-half", "body_blended_plain_accounts", &["wgpu/hardware: ", "refused"]);
+}
+
+/// oit-cpu's fabs orders ties backwards and counts none: `checks::never_silent` fails.
+#[test]
+fn cpu_fabs_ties_reversed_fails_never_silent() {
+    fails_under(
+        "cpu-fabs-ties-reversed",
+        "body_fabs_is_never_silent_on_ties",
+        &["cpu: checks::never_silent: ", "wrong in silence"],
+    );
+}
+
+/// oit-cpu's fabs orders ties backwards while wgpu's compute path does not: the two no longer
+/// agree, and `checks::same_fragments_as_cpu` fails on the image.
+#[test]
+fn cpu_fabs_ties_reversed_fails_same_fragments_as_cpu() {
+    if oit_wgpu::backend_or_skip("cpu_fabs_ties_reversed_fails_same_fragments_as_cpu").is_none() {
+        return;
+    }
+    fails_under(
+        "cpu-fabs-ties-reversed",
+        "body_compute_fabs_is_the_cpus",
+        &["checks::same_fragments_as_cpu: "],
+    );
 }
