@@ -80,11 +80,6 @@ pub const MAX_VERTICES: usize = 1 << 26;
 /// The deepest node hierarchy walked: a file whose nodes nest deeper is refused.
 const MAX_DEPTH: usize = 256;
 
-/// The most bytes an image's pixels may take per byte of its encoding: deflate (PNG) expands at
-/// most 1,032 times, and a JPEG of one colour less; an image that claims more is refused before
-/// its pixels are allocated.
-const IMAGE_EXPANSION: u64 = 1100;
-
 /// The validation errors of the `gltf` crate listed in a message, at most.
 const LISTED_ERRORS: usize = 4;
 
@@ -654,7 +649,7 @@ impl Images<'_> {
 }
 
 /// Decodes a PNG or JPEG (by its MIME type, else by its bytes) into RGBA8, with
-/// [`decode_limited`]'s limits.
+/// [`crate::texture::decode_limited`]'s limits.
 fn decode_image(bytes: &[u8], mime: Option<&str>, what: &str) -> Result<Pixels, String> {
     use image::ImageFormat;
     let format = match mime {
@@ -665,45 +660,10 @@ fn decode_image(bytes: &[u8], mime: Option<&str>, what: &str) -> Result<Pixels, 
             _ => return Err(format!("{what}: not a PNG or JPEG image (the formats glTF allows)")),
         },
     };
-    let image = decode_limited(bytes, format, what)?;
+    let image = crate::texture::decode_limited(bytes, format, what)?;
     let (width, height) = (image.width(), image.height());
     let texels = image.into_rgba8().into_raw().chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect();
     Ok((width, height, texels))
-}
-
-/// Decodes `bytes` as an image of `format`, with limits: a side of at most [`Texture::MAX_SIDE`]
-/// and pixels of at most [`IMAGE_EXPANSION`] times its bytes, both checked before the pixels are
-/// allocated. glTF's images and an OBJ's `map_Kd`/`map_d` textures are decoded here.
-pub(crate) fn decode_limited(
-    bytes: &[u8],
-    format: image::ImageFormat,
-    what: &str,
-) -> Result<image::DynamicImage, String> {
-    let undecoded = |e: image::ImageError| format!("{what} does not decode as {format:?}: {e}");
-    let reader = || image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
-    // the header first: sides and the pixels' size against the bytes, before any is allocated
-    let (width, height) = reader().into_dimensions().map_err(undecoded)?;
-    let most = (bytes.len() as u64).saturating_mul(IMAGE_EXPANSION).max(1 << 16);
-    if width > Texture::MAX_SIDE || height > Texture::MAX_SIDE {
-        return Err(format!(
-            "{what}: {width} × {height} pixels, over the largest side of a texture ({})",
-            Texture::MAX_SIDE
-        ));
-    }
-    if u64::from(width) * u64::from(height) * 4 > most {
-        return Err(format!(
-            "{what}: {width} × {height} pixels from {} bytes, more than its encoding can hold (refused \
-             before its pixels are allocated)",
-            bytes.len()
-        ));
-    }
-    let mut reader = reader();
-    let mut limits = image::Limits::default();
-    limits.max_image_width = Some(Texture::MAX_SIDE);
-    limits.max_image_height = Some(Texture::MAX_SIDE);
-    limits.max_alloc = Some(most);
-    reader.limits(limits);
-    reader.decode().map_err(undecoded)
 }
 
 /// What the file asked for that oit does not draw yet: one warning each.

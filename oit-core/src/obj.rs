@@ -293,7 +293,7 @@ fn read_texture(dir: &Path, colour: Option<&str>, dissolve: Option<&str>) -> Res
             other => format!("cannot read {name}: {other}"),
         })?;
         let format = image::guess_format(&bytes).map_err(|e| format!("cannot decode {name}: {e}"))?;
-        crate::gltf::decode_limited(&bytes, format, name).map_err(|e| format!("cannot decode {e}"))
+        crate::texture::decode_limited(&bytes, format, name).map_err(|e| format!("cannot decode {e}"))
     };
     let base = colour.map(|c| open(c).map(|i| i.to_rgba8())).transpose()?;
     let alpha = dissolve.map(|d| open(d).map(|i| i.to_luma8())).transpose()?;
