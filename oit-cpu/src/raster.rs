@@ -924,19 +924,19 @@ impl Rasterizer {
                 // so the same values (`masked_walk_is_the_plain_rule`).
                 let (cx, cy) = (i64::from(x0) * SUBPIXEL + HALF_PIXEL, i64::from(y0) * SUBPIXEL + HALF_PIXEL);
                 let e = [0, 1, 2].map(|k| edge(t, k, cx, cy));
-                let mut at_sample = [[0i64; 8]; 3];
-                for (k, (_, step_x, step_y, _)) in e.iter().enumerate() {
-                    for (j, &(ox, oy)) in offsets.iter().enumerate() {
-                        at_sample[k][j] = step_x / SUBPIXEL * ox + step_y / SUBPIXEL * oy;
-                    }
+                // sample j's three edge values less the centre's (no allocation a triangle)
+                let mut deltas = [[0i64; 3]; 8];
+                for (d, &(ox, oy)) in deltas.iter_mut().zip(&offsets) {
+                    *d = e.map(|(_, step_x, step_y, _)| step_x / SUBPIXEL * ox + step_y / SUBPIXEL * oy);
                 }
+                let at_sample = &deltas[..offsets.len()];
                 let mut row = e.map(|e| e.0);
                 for y in y0..=y1 {
                     let mut c = row;
                     for x in x0..=x1 {
                         let mut mask = 0u8;
-                        for j in 0..offsets.len() {
-                            let inside = (0..3).all(|k| c[k] + at_sample[k][j] > e[k].3);
+                        for (j, d) in at_sample.iter().enumerate() {
+                            let inside = (0..3).all(|k| c[k] + d[k] > e[k].3);
                             mask |= u8::from(inside) << j;
                         }
                         if mask != 0 {
