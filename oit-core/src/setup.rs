@@ -337,7 +337,7 @@ impl Material {
 
 /// Which triangles of an instance of `object` placed by `transform` are back faces, dropped
 /// before they make a fragment: 0 for a double-sided object (none); else the sign of the
-/// snapped area ([`Snap`]'s `(x1 − x0)(y2 − y0) − (y1 − y0)(x2 − x0)`, in the rasterizer's
+/// snapped area (`Snap`'s `(x1 − x0)(y2 − y0) − (y1 − y0)(x2 − x0)`, in the rasterizer's
 /// fixed-point pixel coordinates, rows down) that a back face has. glTF's front is
 /// counter-clockwise in NDC (y up), which is clockwise, a negative area, in rows down: the back
 /// has sign 1. A transform that mirrors (its 3×3 part's determinant negative) turns the winding
