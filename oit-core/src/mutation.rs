@@ -16,6 +16,7 @@
 //! | `wgpu-fabs-ties-reversed` | oit-wgpu `frame.rs` (fabs.wgsl) | as `cpu-fabs-ties-reversed`, in the shader |
 //! | `wgpu-blend-count-half` | oit-wgpu `technique/blend.rs` (blend.wgsl) | the blender counts every other primitive's fragments |
 //! | `wgpu-capacity-doubled` | oit-wgpu `ctx.rs` (`fragment_capacity`) | dfb's, ll's and the reference's arrays twice their size class |
+//! | `wgpu-storage-short` | oit-wgpu `ctx.rs` (`reported_storage`) | a frame reports a word less storage than it allocated |
 //! | `hardware-drop-third` | oit-wgpu `hardware.rs` | the hardware raster drops every third primitive |
 //!
 //! (oit-vulkan compiles its shaders when it is built, so its shaders have no such hook.)

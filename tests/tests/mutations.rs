@@ -336,6 +336,20 @@ fn body_compute_fabs_is_the_cpus() {
         .unwrap_or_else(|e| panic!("wgpu/compute against cpu: checks::same_fragments_as_cpu: {e}"));
 }
 
+/// A prepared wgpu frame of `dfb` (compute path) reports storage that is the plan's arrays at a
+/// capacity holding its fragments: `checks::one_shot_storage`.
+#[test]
+fn body_prepared_storage_is_the_plans() {
+    let Some(w) = oit_wgpu::backend_or_skip("body_prepared_storage_is_the_plans") else { return };
+    let scene = scene("planes:8");
+    let s = Settings { raster: Some(oit_core::RasterPath::Compute), ..settings(16, "dfb") };
+    let cam = camera(&scene, &s, FRONT);
+    let mut prepared = w.prepare(&scene).unwrap_or_else(|e| panic!("wgpu/compute: {e}"));
+    let f = prepared.frame(&cam, &s).unwrap_or_else(|e| panic!("wgpu/compute: {e}"));
+    one_shot_storage("wgpu", &scene, &s, &f.stats)
+        .unwrap_or_else(|e| panic!("wgpu/compute: checks::one_shot_storage: {e}"));
+}
+
 /// Runs `body` (a test of this binary) again in a child process under `OIT_MUTATION=mutation`
 /// and requires it to fail with every one of `expect` in its output.
 fn fails_under(mutation: &str, body: &str, expect: &[&str]) {
@@ -438,5 +452,18 @@ fn cpu_fabs_ties_reversed_fails_same_fragments_as_cpu() {
         "cpu-fabs-ties-reversed",
         "body_compute_fabs_is_the_cpus",
         &["checks::same_fragments_as_cpu: "],
+    );
+}
+
+/// oit-wgpu reports a word less storage than it allocated: `checks::one_shot_storage` refuses it.
+#[test]
+fn wgpu_storage_short_fails_one_shot_storage() {
+    if oit_wgpu::backend_or_skip("wgpu_storage_short_fails_one_shot_storage").is_none() {
+        return;
+    }
+    fails_under(
+        "wgpu-storage-short",
+        "body_prepared_storage_is_the_plans",
+        &["checks::one_shot_storage: ", "is not the plan's arrays"],
     );
 }
