@@ -11,6 +11,10 @@ use glam::{Mat3, Vec3, Vec4};
 use crate::setup::{box_vertices, normal_matrix};
 use crate::{Aabb, Camera, MAX_SIZE, OitError, Scene, Settings};
 
+/// Words of the setup kernel's uniform (setup.wgsl's `SetupUniform`;
+/// [`SetupGeometry::uniform_words`]).
+pub const SETUP_UNIFORM_WORDS: usize = 16;
+
 /// Words per instance in the instance table (setup.wgsl's `INSTANCE_WORDS`).
 pub const INSTANCE_WORDS: usize = 40;
 /// Words of one vertex-cache record (setup.wgsl's `VERT_WORDS`).
@@ -227,7 +231,7 @@ impl SetupGeometry {
         tri_capacity: u64,
         item_capacity: u64,
         use_verts: bool,
-    ) -> [u32; 12] {
+    ) -> [u32; SETUP_UNIFORM_WORDS] {
         let (full, origin) = match settings.region {
             Some(r) => ((r.full_width, r.full_height), (r.x << 8, r.y << 8)),
             None => ((settings.width, settings.height), (0, 0)),
@@ -237,6 +241,7 @@ impl SetupGeometry {
             (origin.0.min(MAX_SIZE << 8), origin.1.min(MAX_SIZE << 8)),
         );
         let clamp = |v: u64| v.min(u64::from(u32::MAX)) as u32;
+        let reach = crate::setup::reach(settings.samples);
         [
             settings.width.min(MAX_SIZE),
             settings.height.min(MAX_SIZE),
@@ -250,6 +255,12 @@ impl SetupGeometry {
             origin.1,
             clamp(self.vertex_total()),
             u32::from(use_verts),
+            // the reach of a pixel's samples in 1/256 pixel (`setup::reach`): pixel boxes are
+            // sized by it, so a triangle that covers a sample but no centre keeps its pixels
+            reach.0 as u32,
+            reach.1 as u32,
+            0,
+            0,
         ]
     }
 

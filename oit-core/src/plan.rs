@@ -92,13 +92,19 @@ pub struct Array {
 }
 
 impl Array {
-    /// The array's bytes for a frame of `pixels` pixels and `fragments` fragments.
+    /// The array's bytes for a frame of `pixels` pixels and `fragments` fragments, in whole
+    /// 32-bit words.
     pub fn bytes(&self, pixels: u64, fragments: u64) -> u64 {
         pixels
             .saturating_mul(self.per_pixel)
             .saturating_add(fragments.saturating_mul(self.per_fragment))
             .saturating_add(self.fixed)
             .saturating_mul(self.element_bytes)
+            // an array of elements smaller than a word (the coverage masks, a byte each) is
+            // allocated in whole 32-bit words on every backend, as a GPU storage buffer must be
+            .saturating_add(3)
+            / 4
+            * 4
     }
 }
 
@@ -172,15 +178,7 @@ impl Plan {
     /// every backend; `backend` names the one asking, for the message).
     pub fn new(backend: &str, scene: &Scene, settings: &Settings) -> Result<Plan, OitError> {
         let technique = settings.technique;
-        if settings.samples > 1 && backend != "cpu" {
-            return Err(OitError::Unsupported {
-                backend: backend.into(),
-                what: format!(
-                    "--samples {}: per-sample coverage is not yet done on the GPU backends, only on cpu (docs/msaa.md)",
-                    settings.samples
-                ),
-            });
-        }
+        check_samples(backend, scene, settings)?;
         if matches!(technique, Technique::Mdts { .. }) && settings.effect == Effect::Fresnel {
             return Err(OitError::Unsupported {
                 backend: backend.into(),
@@ -701,6 +699,53 @@ impl Plan {
     pub fn adp_batches(&self, bins: u32) -> u32 {
         bins.div_ceil(crate::rules::BUCKETS as u32).min(self.peel_limit)
     }
+}
+
+/// What several samples a pixel (`Settings::samples` above 1, docs/msaa.md) are not yet done
+/// for, refused by name alike on every backend: techniques other than `reference`, `dfb`, `ll`
+/// and `fabs`; fabs's `--overflow tail`; opaque objects (the opaque pass is not multisampled);
+/// and on the GPU backends the hardware raster path (its pass reads no `sample_mask` yet).
+fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<(), OitError> {
+    let samples = settings.samples;
+    if samples <= 1 {
+        return Ok(());
+    }
+    let technique = settings.technique;
+    let refuse = |what: String| Err(OitError::Unsupported { backend: backend.into(), what });
+    if !matches!(technique, Technique::Reference | Technique::Dfb | Technique::Ll | Technique::Fabs { .. }) {
+        return refuse(format!(
+            "{technique} at --samples {samples}: per-sample coverage is not yet done for this technique \
+             (reference, dfb, ll and fabs take it; docs/msaa.md)"
+        ));
+    }
+    if matches!(technique, Technique::Fabs { .. }) && settings.overflow == crate::Overflow::Tail {
+        return refuse(format!("fabs with --overflow tail at --samples {samples}: not yet done"));
+    }
+    if scene.has_opaque() {
+        return refuse(format!(
+            "--samples {samples} with opaque objects: the opaque pass is not yet multisampled (docs/msaa.md)"
+        ));
+    }
+    if backend != "cpu" && settings.raster == Some(crate::RasterPath::Hardware) {
+        return refuse_multisampled_hardware(backend, samples);
+    }
+    Ok(())
+}
+
+/// The refusal of a GPU backend's hardware raster path at several samples a pixel (`Ok` at one):
+/// its pass reads no `sample_mask` yet. Each GPU backend also calls it where it starts a hardware
+/// frame, whatever chose the path.
+pub fn refuse_multisampled_hardware(backend: &str, samples: u32) -> Result<(), OitError> {
+    if samples <= 1 {
+        return Ok(());
+    }
+    Err(OitError::Unsupported {
+        backend: backend.into(),
+        what: format!(
+            "the hardware raster path at --samples {samples}: not yet done (its pass reads no \
+             sample_mask yet); use --raster compute, the default at several samples (docs/msaa.md)"
+        ),
+    })
 }
 
 /// Checks `needed` bytes of a frame's storage (`what`) against `budget`; see [`Plan::check_budget`].

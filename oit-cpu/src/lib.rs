@@ -207,16 +207,6 @@ impl<'s> CpuPrepared<'s> {
         // the lock is never contended (frames run one at a time); a poisoned one (a panic in an
         // earlier frame) only loses the storage
         let layers = self.layers(settings);
-        technique::msaa::check(settings)?;
-        if settings.samples > 1 && layers.opaque.is_some() {
-            return Err(OitError::Unsupported {
-                backend: "cpu".into(),
-                what: format!(
-                    "--samples {} with opaque objects: the opaque pass is not yet multisampled (docs/msaa.md)",
-                    settings.samples
-                ),
-            });
-        }
         let drawn = layers.settings(settings);
         let scene: &Scene = &layers.transparent;
         let kept = self.raster.lock().ok().and_then(|mut r| r.take());

@@ -114,6 +114,22 @@ pub struct FrameUniform {
     /// the pass that counts the fragments the cut holds back (the frame's first scene pass);
     /// z, w unused.
     pub opaque: [u32; 4],
+    /// Multisampling ([`oit_core::msaa`], docs/msaa.md): x the samples a pixel (1, 4 or 8); y the
+    /// mask every kept coverage mask is ORed with (every sample under `--coverage pixel`, else
+    /// 0); z and w the sample positions, a byte each (x | y << 4, in 1/16 pixel from the pixel's
+    /// top-left corner), samples 0–3 in z and 4–7 in w ([`sample_position_words`]).
+    pub msaa: [u32; 4],
+}
+
+/// The sample positions of `samples` samples ([`oit_core::msaa::positions`]) as the frame
+/// uniform carries them: sample i's byte (x | y << 4, 1/16 pixel) at bits 8·(i mod 4) of word
+/// i / 4.
+pub fn sample_position_words(samples: u32) -> [u32; 2] {
+    let mut words = [0u32; 2];
+    for (i, &(x, y)) in oit_core::msaa::positions(samples).iter().enumerate() {
+        words[i / 4] |= (u32::from(x) | u32::from(y) << 4) << (8 * (i % 4));
+    }
+    words
 }
 
 /// Whether any instance of `scene` draws a textured object ([`oit_core::Object::texture`]): the
@@ -289,6 +305,12 @@ impl FrameUniform {
             background: settings.background.extend(1.0).to_array(),
             lens: [camera.near, camera.far, scene.absorption_for(settings.effect) as f32, 0.0],
             opaque: [u32::from(plan.opaque), 0, u32::from(plan.opaque), 0],
+            msaa: {
+                let samples = settings.samples.max(1);
+                let keep = if settings.pixel_coverage { oit_core::msaa::full_mask(samples) } else { 0 };
+                let [lo, hi] = sample_position_words(samples);
+                [samples, u32::from(keep), lo, hi]
+            },
         }
     }
 }

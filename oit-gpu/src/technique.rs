@@ -160,6 +160,26 @@ impl Storage {
         Ok(self.buffers(ctx, name, [(bytes, init)])?.into_iter().next().unwrap_or_else(|| unreachable!()))
     }
 
+    /// The plan's array `name` of one-byte elements as one storage buffer, four elements a word
+    /// (the coverage masks of multisampled frames: `technique/coverage.wgsl`), zeroed.
+    pub fn bytes<R: ?Sized, F: Frame<R>>(&mut self, ctx: &mut F, name: &str) -> Result<F::Buffer, OitError> {
+        let (array, elements) = self.take(name)?;
+        if array.element_bytes != 1 {
+            return Err(OitError::Device(format!(
+                "internal: {}'s '{name}' kept as bytes, its plan's elements are {} bytes",
+                self.technique, array.element_bytes
+            )));
+        }
+        ctx.array(&format!("{} {name}", self.technique), elements.div_ceil(4), Init::Zero)
+    }
+
+    /// The coverage masks of a multisampled frame (the plan's "coverage masks", a byte an entry;
+    /// docs/msaa.md), or a placeholder at one sample, where the plan has none and the WGSL reads
+    /// none.
+    pub fn masks<R: ?Sized, F: Frame<R>>(&mut self, ctx: &mut F) -> Result<F::Buffer, OitError> {
+        if ctx.plan().samples > 1 { self.bytes(ctx, "coverage masks") } else { ctx.placeholder() }
+    }
+
     /// The plan's per-pixel array `name` as storage images of the frame's size, one a field of its
     /// element (`formats`, bound from `binding` on), a layer per element of a pixel, every 32-bit
     /// half of every texel set to `fill` (`--atomic-storage image`).
@@ -342,7 +362,8 @@ fn reference<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitE
     storage.hold(u64::from(ctx.plan().check_fragments(u64::from(total))?));
     let cursor = storage.buffer(ctx, "fill cursors", Init::Zero)?;
     let [keys, payloads] = storage.buffers(ctx, "entries", [(8, Init::Zero), (4, Init::Zero)])?;
-    let buffers = [&offsets, &cursor, &keys, &payloads];
+    let masks = storage.masks(ctx)?;
+    let buffers = [&offsets, &cursor, &keys, &payloads, &masks];
     ctx.geometry_pass(raster, "reference", &buffers, 0, 0)?;
     ctx.pixel_kernel("reference", "resolve_main", &buffers, 0, 0)?;
     storage.finish()
@@ -384,7 +405,7 @@ fn fabs<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError>
     let k = ctx.plan().slots(deepest);
     let mut storage = Storage::new(ctx, deepest);
     let (module, counters) = if ctx.plan().image_atomics {
-        storage.images(ctx, "counter", 8, &[ImageFormat::R32Uint], 0)?;
+        storage.images(ctx, "counter", 9, &[ImageFormat::R32Uint], 0)?;
         ("fabs_image", ctx.placeholder()?)
     } else {
         ("fabs", storage.buffer(ctx, "counter", Init::Zero)?)
@@ -393,7 +414,8 @@ fn fabs<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError>
     let payloads = storage.buffer(ctx, "payloads", Init::Zero)?;
     let overflowed = ctx.scratch("fabs overflowed", 1, Init::Zero)?;
     let (tail, tail_words) = tail_buffers(ctx, &mut storage)?;
-    let buffers = [&counters, &slots, &payloads, &overflowed, &tail, &tail_words];
+    let masks = storage.masks(ctx)?;
+    let buffers = [&counters, &slots, &payloads, &overflowed, &tail, &tail_words, &masks];
     ctx.geometry_pass(raster, module, &buffers, FABS_CAPTURE, k)?;
     // sized from the counting pass, no pixel can overflow: no check
     if !ctx.plan().needs_count() {
@@ -676,7 +698,8 @@ fn dfb<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> 
     let total = ctx.fragment_capacity(&total, 12)?;
     storage.hold(u64::from(ctx.plan().check_fragments(u64::from(total))?));
     let [keys, payloads] = storage.buffers(ctx, "entries", [(8, Init::Zero), (4, Init::Zero)])?;
-    let buffers = [&counts, &offsets, &keys, &payloads];
+    let masks = storage.masks(ctx)?;
+    let buffers = [&counts, &offsets, &keys, &payloads, &masks];
     ctx.geometry_pass(raster, "dfb", &buffers, 0, 0)?;
     ctx.pixel_kernel("dfb", "resolve_main", &buffers, 0, 0)?;
     storage.finish()
@@ -699,7 +722,8 @@ fn ll<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> {
     let counter = storage.buffer(ctx, "node counter", Init::Zero)?;
     let fields = [(8, Init::Zero), (4, Init::Zero), (4, Init::Fill(LL_END))];
     let [keys, payloads, links] = storage.buffers(ctx, "nodes", fields)?;
-    let buffers = [&heads, &counter, &keys, &payloads, &links];
+    let masks = storage.masks(ctx)?;
+    let buffers = [&heads, &counter, &keys, &payloads, &links, &masks];
     ctx.geometry_pass(raster, "ll", &buffers, 0, nodes)?;
     ctx.pixel_kernel("ll", "resolve_main", &buffers, 0, nodes)?;
     storage.finish()
@@ -889,7 +913,7 @@ mod tests {
         // the image kind of the same array: the same bytes
         let mut ctx = fake("fabs:3");
         let mut storage = Storage::new(&ctx, 0);
-        storage.images(&mut ctx, "counter", 8, &[ImageFormat::R32Uint], 0).unwrap();
+        storage.images(&mut ctx, "counter", 9, &[ImageFormat::R32Uint], 0).unwrap();
         assert_eq!(ctx.arrays, [32]);
         assert!(storage.images(&mut ctx, "slots", 9, &[ImageFormat::R32Uint], 0).is_err(), "8-byte slots");
 

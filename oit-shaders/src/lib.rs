@@ -24,8 +24,11 @@
 //!
 //! ```
 //! let fabs = oit_shaders::module("fabs").expect("a module of the manifest");
-//! // the buffer accessor, the technique, its tail
-//! assert_eq!(fabs.sources, ["technique/fabs_counters.wgsl", "technique/fabs.wgsl", "technique/tail.wgsl"]);
+//! // the buffer accessor, the technique, its tail, the coverage masks of multisampled frames
+//! assert_eq!(
+//!     fabs.sources,
+//!     ["technique/fabs_counters.wgsl", "technique/fabs.wgsl", "technique/tail.wgsl", "technique/coverage.wgsl"]
+//! );
 //! assert!(fabs.compute_text().contains("fn raster_main"));
 //! ```
 //!
@@ -70,6 +73,7 @@ files!(
     "technique/blend.wgsl",
     "technique/bounds.wgsl",
     "technique/count.wgsl",
+    "technique/coverage.wgsl",
     "technique/ddp.wgsl",
     "technique/ddp_blend.wgsl",
     "technique/dfb.wgsl",
@@ -257,6 +261,10 @@ const fn m(name: &'static str, sources: &'static [&'static str], tail: Tail) -> 
 
 use Tail::{Alone, Kernels, Raster, Stage};
 
+/// The coverage masks and the per-sample resolve of multisampled frames, appended to the modules
+/// of the techniques that keep masks.
+const COVERAGE: &str = "technique/coverage.wgsl";
+
 /// Every module both GPU backends build, each written once.
 pub const MODULES: &[Module] = &[
     m("fill", &["core/fill.wgsl"], Kernels),
@@ -265,8 +273,12 @@ pub const MODULES: &[Module] = &[
     m("count", &["technique/count.wgsl"], Raster),
     // the opaque pass's two geometry passes (oit-gpu's `technique::opaque_pass`)
     m("opaque", &["core/opaque.wgsl"], Raster),
-    m("reference", &["technique/reference.wgsl", "technique/sort_entries.wgsl"], Raster),
-    m("fabs", &["technique/fabs_counters.wgsl", "technique/fabs.wgsl", "technique/tail.wgsl"], Raster),
+    m("reference", &["technique/reference.wgsl", "technique/sort_entries.wgsl", COVERAGE], Raster),
+    m(
+        "fabs",
+        &["technique/fabs_counters.wgsl", "technique/fabs.wgsl", "technique/tail.wgsl", COVERAGE],
+        Raster,
+    ),
     // `--atomic-storage image`: the same technique over the storage-image accessor
     m(
         "fabs_image",
@@ -275,6 +287,7 @@ pub const MODULES: &[Module] = &[
             "technique/fabs_counters_image.wgsl",
             "technique/fabs.wgsl",
             "technique/tail.wgsl",
+            COVERAGE,
         ],
         Raster,
     ),
@@ -322,9 +335,9 @@ pub const MODULES: &[Module] = &[
     m("bdp", &["technique/bdp.wgsl"], Raster),
     m("adp", &["technique/adp.wgsl"], Raster),
     m("dfb_count", &["technique/dfb_count.wgsl"], Raster),
-    m("dfb", &["technique/dfb.wgsl", "technique/sort_entries.wgsl"], Raster),
+    m("dfb", &["technique/dfb.wgsl", "technique/sort_entries.wgsl", COVERAGE], Raster),
     m("ll_size", &["technique/ll_size.wgsl"], Raster),
-    m("ll", &["technique/ll.wgsl"], Raster),
+    m("ll", &["technique/ll.wgsl", COVERAGE], Raster),
     // kbuf (oit-vulkan): its hardware twin's fragment stage runs in an ordered interlock (the
     // build script's rewrite); the compute twin is only its resolve (the compute path refuses
     // kbuf)

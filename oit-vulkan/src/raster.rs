@@ -102,7 +102,12 @@ enum Pending {
     /// The host's triangle words, work items and raster uniform, to upload.
     Host([Vec<u8>; 3]),
     /// The GPU's setup: the instance table and the raster uniform to upload, the setup's uniform.
-    Gpu { instances: Vec<u8>, raster_uniform: Vec<u8>, setup_uniform: [u32; 12], check: Option<SetupCheck> },
+    Gpu {
+        instances: Vec<u8>,
+        raster_uniform: Vec<u8>,
+        setup_uniform: [u32; oit_core::gpu_setup::SETUP_UNIFORM_WORDS],
+        check: Option<SetupCheck>,
+    },
 }
 
 /// How many work items a geometry pass dispatches.
@@ -203,7 +208,7 @@ fn record_setup(
     items: &Buffer,
     args: &Buffer,
     instances: &[u8],
-    uniform: &[u32; 12],
+    uniform: &[u32; oit_core::gpu_setup::SETUP_UNIFORM_WORDS],
 ) -> Result<(), OitError> {
     rec.upload(&s.instances, instances)?;
     rec.fill(&s.counters, 0);

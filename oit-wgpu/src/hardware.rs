@@ -306,6 +306,7 @@ impl HardwareRaster {
     /// Uploads the scene's geometry and sets it up for one frame at `camera` and `settings`, in
     /// buffers of its own (a prepared scene keeps its `HwGeometry` instead).
     pub fn new(gpu: &Gpu, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<Self, OitError> {
+        oit_core::plan::refuse_multisampled_hardware("wgpu", settings.samples)?;
         let made = Cell::new(0);
         let geometry = HwGeometry::new(gpu, scene, false, &made)?;
         geometry.write_frame(gpu, scene, camera, settings);

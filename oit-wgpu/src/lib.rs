@@ -110,6 +110,17 @@ impl WgpuBackend {
             .map_err(|e| OitError::Device(e.clone()))
     }
 
+    /// The raster path `settings` run on: theirs, or where they name none the technique's
+    /// [`WgpuBackend::default_path`], except at several samples a pixel, which the compute
+    /// rasterizer alone computes coverage masks for (docs/msaa.md).
+    pub fn path_of(settings: &Settings) -> RasterPath {
+        match settings.raster {
+            Some(path) => path,
+            None if settings.samples > 1 => RasterPath::Compute,
+            None => WgpuBackend::default_path(settings.technique),
+        }
+    }
+
     /// The raster path a technique runs on when the settings name none: the graphics pipeline for
     /// the techniques the papers wrote for it, the compute rasterizer for the CUDA-rasterizer ones.
     pub fn default_path(technique: Technique) -> RasterPath {
@@ -176,7 +187,7 @@ impl Backend for WgpuBackend {
     }
 
     fn raster_path(&self, settings: &Settings) -> RasterPath {
-        settings.raster.unwrap_or(WgpuBackend::default_path(settings.technique))
+        WgpuBackend::path_of(settings)
     }
 
     fn prepare<'s>(&'s self, scene: &'s Scene) -> Result<Box<dyn Prepared + 's>, OitError> {
@@ -193,7 +204,7 @@ impl Backend for WgpuBackend {
         settings.validate()?;
         scene.validate()?;
         let gpu = self.gpu()?;
-        let path = settings.raster.unwrap_or(WgpuBackend::default_path(settings.technique));
+        let path = WgpuBackend::path_of(settings);
         let driver: Box<dyn Driver> = match path {
             RasterPath::Compute => Box::new(ComputeRaster::new(gpu, scene, camera, settings, false)?),
             RasterPath::Hardware => Box::new(HardwareRaster::new(gpu, scene, camera, settings)?),
@@ -271,6 +282,7 @@ impl<'s> WgpuPrepared<'s> {
     /// Uploads the hardware path's geometry (the transparent part's, and the opaque part's where
     /// there is one) on its first frame.
     fn upload_hardware(&mut self, settings: &Settings) -> Result<(), OitError> {
+        oit_core::plan::refuse_multisampled_hardware("wgpu", settings.samples)?;
         if self.hardware.is_some() {
             return Ok(());
         }
@@ -335,7 +347,7 @@ impl Prepared for WgpuPrepared<'_> {
         done: &mut dyn FnMut(usize, oit_core::Stats),
     ) -> Result<(), OitError> {
         settings.validate()?;
-        let path = settings.raster.unwrap_or(WgpuBackend::default_path(settings.technique));
+        let path = WgpuBackend::path_of(settings);
         if path == RasterPath::Hardware {
             self.upload_hardware(settings)?;
         }
@@ -378,7 +390,7 @@ impl WgpuPrepared<'_> {
         settings.validate()?;
         let gpu = self.gpu;
         let start = Instant::now();
-        let path = settings.raster.unwrap_or(WgpuBackend::default_path(settings.technique));
+        let path = WgpuBackend::path_of(settings);
         let window_camera;
         // a window the hardware rasterizer cannot draw through the full frame's viewport (a
         // full frame over the device's largest one) maps onto its own in clip space

@@ -430,7 +430,13 @@ impl ComputeBuffers {
             self.setup = Some(SetupBuffers {
                 geometry,
                 instances: storage_buffer(gpu, "setup instances", instance_bytes, made),
-                uniform: buffer(gpu, "setup uniform", 48, U::UNIFORM | U::COPY_DST, made),
+                uniform: buffer(
+                    gpu,
+                    "setup uniform",
+                    4 * oit_core::gpu_setup::SETUP_UNIFORM_WORDS as u64,
+                    U::UNIFORM | U::COPY_DST,
+                    made,
+                ),
                 counters: buffer(gpu, "setup counters", 16, U::STORAGE | U::COPY_SRC | U::COPY_DST, made),
                 layout,
                 group: None,

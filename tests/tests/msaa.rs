@@ -1,8 +1,8 @@
-//! Multisampling on the CPU backend (issue 40, its first slice; docs/msaa.md): the standard sample
-//! positions, per-sample coverage that covers each sample of a surface once, `--samples 1` as
-//! before, the exact techniques equal to the per-sample reference, no seam along the shared edges
-//! of a tessellated surface where per-pixel coverage shows one, the supersampled reference against
-//! the MSAA one, and the refusals.
+//! Multisampling (issue 40; docs/msaa.md): the standard sample positions, per-sample coverage that
+//! covers each sample of a surface once, `--samples 1` as before, the exact techniques equal to
+//! the per-sample reference, no seam along the shared edges of a tessellated surface where
+//! per-pixel coverage shows one, the supersampled reference against the MSAA one, the GPU
+//! backends' compute paths equal to oit-cpu at several samples, and the refusals.
 
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
@@ -327,8 +327,8 @@ fn sample_counts_with(scene: &oit_core::Scene, s: &Settings, cam: &oit_core::Cam
     counts.chunks(k).map(|c| c.iter().map(|a| a.load(Relaxed)).collect()).collect()
 }
 
-/// What is not done yet says so by name: another technique at 4 samples, a GPU backend's plan,
-/// fabs's tail, opaque objects; a sample count other than 1, 4 or 8 and `--supersample` at one sample are
+/// What is not done yet says so by name: another technique at 4 samples, a GPU backend's hardware
+/// raster path, fabs's tail, opaque objects; a sample count other than 1, 4 or 8 and `--supersample` at one sample are
 /// invalid settings.
 #[test]
 fn refusals_name_what_is_not_done() {
@@ -357,11 +357,17 @@ fn refusals_name_what_is_not_done() {
         Err(OitError::Unsupported { what, .. }) => assert!(what.contains("opaque"), "{what}"),
         other => panic!("opaque at 4 samples: {:?}", other.map(|f| f.stats)),
     }
+    // the GPU backends' hardware raster path (the compute path takes the samples)
+    let hardware = Settings { raster: Some(oit_core::RasterPath::Hardware), ..base.clone() };
     for backend in ["wgpu", "vulkan"] {
-        match oit_core::plan::Plan::new(backend, &scene, &base) {
-            Err(OitError::Unsupported { what, .. }) => assert!(what.contains("not yet done"), "{what}"),
+        match oit_core::plan::Plan::new(backend, &scene, &hardware) {
+            Err(OitError::Unsupported { what, .. }) => {
+                assert!(what.contains("not yet done") && what.contains("hardware"), "{what}")
+            }
             other => panic!("{backend}: {:?}", other.is_ok()),
         }
+        let compute = Settings { raster: Some(oit_core::RasterPath::Compute), ..base.clone() };
+        assert!(oit_core::plan::Plan::new(backend, &scene, &compute).is_ok(), "{backend} compute");
     }
     for samples in [0, 2, 3, 16] {
         let e = Settings { samples, ..base.clone() }.validate().unwrap_err().to_string();
@@ -482,4 +488,89 @@ fn masks_cost_bits_not_fragments() {
             a.stats.captured
         );
     }
+}
+
+/// The GPU backends' compute paths at 4 and 8 samples against oit-cpu (the same fixed-point
+/// coverage masks, written once in WGSL): the same fragments, losses and passes, each pixel
+/// within 1 of 8 bits, the plan's storage (the masks a byte an entry, in whole words), and the
+/// exact techniques equal to the path's own per-sample reference; `fabs:2` overflowing, the
+/// per-pixel coverage baseline and the other effects alike; a tiled frame equal to the whole.
+/// Each GPU hardware path refuses several samples by name. Mutations caught (each tried): the
+/// compute rasterizer's mask forced full (every pixel of the per-sample resolve off the CPU's
+/// along the edges), the masks not swapped by the in-place sorts (dfb and the reference off).
+#[test]
+fn gpu_compute_paths_equal_the_cpu_at_samples() {
+    let cpu = CpuBackend::default();
+    let gpus: Vec<_> = backends_for("gpu_compute_paths_equal_the_cpu_at_samples")
+        .into_iter()
+        .filter(|b| b.name() != "cpu")
+        .collect();
+    let mut compared = 0;
+    for backend in &gpus {
+        let on = label(backend.as_ref());
+        let path = backend.raster_path(&Settings::default());
+        if path == oit_core::RasterPath::Hardware {
+            let scene = scene_of("knot");
+            let s = Settings { samples: 4, ..settings(32, "dfb") };
+            match backend.render(&scene, &camera(&scene, &s, View::default()), &s) {
+                Err(OitError::Unsupported { what, .. }) => assert!(what.contains("hardware"), "{on}: {what}"),
+                other => panic!("{on} at 4 samples: {:?}", other.map(|f| f.stats)),
+            }
+            continue;
+        }
+        for (name, size, samples) in [("bunny", 64, 4), ("knot", 48, 8), ("planes:6", 40, 4)] {
+            let scene = scene_of(name);
+            let base = Settings { samples, ..settings(size, "reference") };
+            let cam = camera(&scene, &base, View::default());
+            let reference = render(backend.as_ref(), &scene, &cam, &base);
+            let mut cases: Vec<Settings> = ["reference", "dfb", "ll", "fabs", "fabs:2"]
+                .iter()
+                .map(|t| Settings { technique: t.parse().unwrap(), ..base.clone() })
+                .collect();
+            cases.push(Settings { pixel_coverage: true, ..settings(size, "fabs:2") });
+            cases.push(Settings { pixel_coverage: true, ..settings(size, "ll") });
+            for effect in
+                [oit_core::Effect::Translucency, oit_core::Effect::Fresnel, oit_core::Effect::Complexity]
+            {
+                cases.push(Settings { effect, ..settings(size, "dfb") });
+            }
+            for s in cases {
+                let s = Settings { samples, ..s };
+                let what = format!(
+                    "{on}: {} on {name} at {samples}× ({:?}{})",
+                    s.technique,
+                    s.effect,
+                    if s.pixel_coverage { ", per-pixel coverage" } else { "" }
+                );
+                let g = render(backend.as_ref(), &scene, &cam, &s);
+                let c = render(&cpu, &scene, &cam, &s);
+                checks::accounting(&g).unwrap_or_else(|e| panic!("{what}: {e}"));
+                checks::same_fragments_as_cpu(&g, &c, s.technique).unwrap_or_else(|e| panic!("{what}: {e}"));
+                checks::same_storage_as_cpu(backend.name(), &g, &c, &scene, &s)
+                    .unwrap_or_else(|e| panic!("{what}: {e}"));
+                let exact =
+                    matches!(s.technique, Technique::Dfb | Technique::Ll | Technique::Fabs { k: None });
+                if exact && s.effect == oit_core::Effect::Transparency && !s.pixel_coverage {
+                    checks::exact(&reference, &g).unwrap_or_else(|e| panic!("{what}: {e}"));
+                }
+                compared += 1;
+            }
+        }
+        // a frame in screen tiles (`--memory`) equals the whole one
+        let scene = scene_of("bunny");
+        for t in ["reference", "fabs:3"] {
+            let s = Settings { samples: 4, ..settings(96, t) };
+            let cam = camera(&scene, &s, View::default());
+            let whole = render(backend.as_ref(), &scene, &cam, &s);
+            let tiled =
+                render(backend.as_ref(), &scene, &cam, &Settings { memory: Some(200 << 10), ..s.clone() });
+            assert!(tiled.stats.tiles > 1, "{on} {t}: {} tiles", tiled.stats.tiles);
+            assert_eq!(
+                (whole.image, whole.stats.fragments),
+                (tiled.image, tiled.stats.fragments),
+                "{on} {t}"
+            );
+        }
+    }
+    eprintln!("{compared} multisampled GPU frames compared with oit-cpu's");
 }

@@ -248,9 +248,12 @@ impl<'a> Ctx<'a> {
         Ok(self.pool.u64s_scratch(n))
     }
 
-    /// [`Ctx::scratch_words64`] in bytes (the multisampled frames' coverage masks, one a fragment).
+    /// [`Ctx::scratch_words64`] in bytes (the multisampled frames' coverage masks, one a fragment),
+    /// counted in whole 32-bit words as every backend allocates them (`plan::Array::bytes`).
     pub fn scratch_bytes(&mut self, len: u64) -> Result<Pooled<'a, AtomicU8>, OitError> {
-        let n = self.checked(len, 1)?;
+        self.checked(len.div_ceil(4), 4)?;
+        let n = usize::try_from(len)
+            .map_err(|_| OitError::Device(format!("{len} bytes do not fit this host's address space")))?;
         Ok(self.pool.u8s_scratch(n))
     }
 

@@ -29,7 +29,7 @@
 //! With `Settings::pixel_coverage` (`--coverage pixel`) every technique here but the reference
 //! keeps each fragment's mask as the full mask: the per-pixel capture baseline.
 //!
-//! Every other technique refuses `--samples` above 1 ([`check`]).
+//! Every other technique is refused at `--samples` above 1 by the plan (`oit_core::plan::Plan::new`).
 
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
@@ -37,7 +37,7 @@ use glam::{DVec3, Mat4, Vec3};
 use oit_core::composite::heat_f64;
 use oit_core::plan::Counted;
 use oit_core::rules::{depth_bits, depth_from_bits};
-use oit_core::{Compositor as _, Effect, Frame, Image, OitError, Overflow, Settings, Technique};
+use oit_core::{Compositor as _, Effect, Frame, Image, OitError, Settings, Technique};
 use rayon::prelude::*;
 
 use super::Ctx;
@@ -48,36 +48,8 @@ use crate::resolve::PixelState;
 /// One captured entry: the key (depth bits above the primitive id), the payload, the mask.
 type Entry = (u64, u32, u8);
 
-/// Refuses `settings`' technique where it has no per-sample path yet, naming it.
-pub(crate) fn check(settings: &Settings) -> Result<(), OitError> {
-    if settings.samples <= 1 {
-        return Ok(());
-    }
-    let supported = matches!(
-        settings.technique,
-        Technique::Reference | Technique::Dfb | Technique::Ll | Technique::Fabs { .. }
-    );
-    if !supported {
-        return Err(OitError::Unsupported {
-            backend: "cpu".into(),
-            what: format!(
-                "{} at --samples {}: per-sample coverage is not yet done for this technique (reference, dfb, ll and fabs take it; docs/msaa.md)",
-                settings.technique, settings.samples
-            ),
-        });
-    }
-    if matches!(settings.technique, Technique::Fabs { .. }) && settings.overflow == Overflow::Tail {
-        return Err(OitError::Unsupported {
-            backend: "cpu".into(),
-            what: format!("fabs with --overflow tail at --samples {}: not yet done", settings.samples),
-        });
-    }
-    Ok(())
-}
-
 /// Runs `technique`'s multisampled frame over `ctx`.
 pub(crate) fn render(ctx: &mut Ctx<'_>, technique: Technique) -> Result<Frame, OitError> {
-    check(ctx.settings)?;
     match technique {
         Technique::Reference if ctx.settings.supersample => supersampled(ctx),
         Technique::Reference => reference(ctx),

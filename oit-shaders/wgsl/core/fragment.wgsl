@@ -9,6 +9,10 @@ struct Fragment {
     // `Triangle::cutoff`: a textured masked object's cutoff; one half for an untextured one,
     // whose alpha is 1 or 0; 0 elsewhere); no other capture reads it
     cutoff: f32,
+    // the samples of the pixel the fragment covers (bit i: sample i of oit-core's standard
+    // pattern; `fu.msaa.x` samples a pixel), set by the compute rasterizer; read only by the
+    // multisampled captures (the hardware path runs one sample and leaves it 0)
+    mask: u32,
 }
 
 // Every technique's group 0, binding 0: what the pass needs to know.
@@ -31,6 +35,10 @@ struct FrameUniform {
     // counts those it holds back (the frame's first scene pass), z 1 where the frame has an
     // opaque image (what its pixels composite over), w unused
     opaque: vec4<u32>,
+    // multisampling (oit-gpu's `FrameUniform::msaa`): x samples a pixel, y the mask ORed into
+    // every kept coverage mask (`--coverage pixel`), z and w the sample positions, a byte each
+    // (x | y << 4 in 1/16 pixel), samples 0-3 in z, 4-7 in w
+    msaa: vec4<u32>,
 }
 
 const EFFECT_TRANSPARENCY: u32 = 0u;

@@ -79,7 +79,8 @@ fn load_tri(i: u32) -> Tri {
 const SUBPIXEL: i64 = 256li;
 const HALF_PIXEL: i64 = 128li;
 
-// The fragment of `t` at pixel (x, y), captured if the pixel's centre is inside; returns 1 then.
+// The fragment of `t` at pixel (x, y), captured if the pixel's centre is inside (with several
+// samples a pixel, if any of its samples is: `fu.msaa`); returns 1 then.
 fn raster_pixel(t: Tri, x: u32, y: u32) -> u32 {
     if (x < t.bbox[0] || x > t.bbox[2] || y < t.bbox[1] || y > t.bbox[3]) {
         return 0u;
@@ -88,6 +89,9 @@ fn raster_pixel(t: Tri, x: u32, y: u32) -> u32 {
     let px = i64(x) * SUBPIXEL + HALF_PIXEL;
     // edge k runs from vertex k+1 to k+2
     var e: array<i64, 3>;
+    var step_x: array<i64, 3>;
+    var step_y: array<i64, 3>;
+    var above: array<i64, 3>;
     var inside = true;
     for (var k = 0u; k < 3u; k++) {
         let a = (k + 1u) % 3u;
@@ -98,7 +102,28 @@ fn raster_pixel(t: Tri, x: u32, y: u32) -> u32 {
         let dy = i64(t.y[b]) - ay;
         let top_left = dy < 0li || (dy == 0li && dx > 0li);
         e[k] = dx * (py - ay) - dy * (px - ax);
-        inside = inside && e[k] > select(0li, -1li, top_left);
+        step_x[k] = -dy;
+        step_y[k] = dx;
+        above[k] = select(0li, -1li, top_left);
+        inside = inside && e[k] > above[k];
+    }
+    var mask = 1u;
+    if (fu.msaa.x > 1u) {
+        // oit-core's `setup::sample_mask`: the same edge functions and rule at each sample, the
+        // centre's value plus the sample's offset from the centre along each edge's steps; the
+        // fragment is shaded at the centre, covered or not (its depth extrapolated)
+        mask = 0u;
+        for (var i = 0u; i < fu.msaa.x; i++) {
+            let byte = (select(fu.msaa.z, fu.msaa.w, i >= 4u) >> (8u * (i % 4u))) & 0xffu;
+            let ox = i64(byte & 15u) * 16li - HALF_PIXEL;
+            let oy = i64(byte >> 4u) * 16li - HALF_PIXEL;
+            var covered = true;
+            for (var k = 0u; k < 3u; k++) {
+                covered = covered && e[k] + step_x[k] * ox + step_y[k] * oy > above[k];
+            }
+            mask |= select(0u, 1u << i, covered);
+        }
+        inside = mask != 0u;
     }
     if (!inside) {
         return 0u;
@@ -140,6 +165,7 @@ fn raster_pixel(t: Tri, x: u32, y: u32) -> u32 {
     f.color = color;
     f.normal = normalize_or_zero(normal);
     f.cutoff = cutoff;
+    f.mask = mask;
     // behind the opaque pass's depth: generated (counted), not captured
     if (!opaque_cut(f)) {
         capture(f);

@@ -77,6 +77,18 @@ fn state_tied(s: PixelState) -> u32 {
     return s.tied - run_counted(s.front_run) - run_counted(s.back_run) + joined;
 }
 
+// `has_back` of a state whose pixel was composited by its technique's resolve (the multisampled
+// resolve, coverage.wgsl): its colour is (br, bg, bb), which `finish_color` returns as it is.
+const STATE_RESOLVED: u32 = 2u;
+
+// Sets a state's colour to `c`, composited (`STATE_RESOLVED`).
+fn state_resolved(s: ptr<function, PixelState>, c: vec3<f32>) {
+    (*s).br = c.x;
+    (*s).bg = c.y;
+    (*s).bb = c.z;
+    (*s).has_back = STATE_RESOLVED;
+}
+
 fn state_init(px: u32) {
     var s: PixelState;
     s.transmittance = 1.0;
@@ -194,10 +206,9 @@ fn heat(t_in: f32) -> vec3<f32> {
     return mix(stops[i], stops[i + 1u], t - f32(i));
 }
 
-// The final linear colour; `max_captured` scales the heat map.
-fn finish_color(px: u32, max_captured: u32) -> vec3<f32> {
-    let s = state[px];
-    let bg = background_at(px);
+// A state's final linear colour over `bg` (the pixel's `background_at`) under the effects that
+// composite (oit-cpu's `Resolve::finish_over`); `bg` under the complexity effect.
+fn finish_over(s: PixelState, bg: vec3<f32>) -> vec3<f32> {
     if (fu.effect == EFFECT_TRANSPARENCY) {
         var back = bg;
         if (s.has_back != 0u) {
@@ -208,6 +219,19 @@ fn finish_color(px: u32, max_captured: u32) -> vec3<f32> {
         return bg * s.fresnel;
     } else if (fu.effect == EFFECT_TRANSLUCENCY) {
         return bg * exp(-vec3<f32>(s.or, s.og, s.ob));
+    }
+    return bg;
+}
+
+// The final linear colour; `max_captured` scales the heat map.
+fn finish_color(px: u32, max_captured: u32) -> vec3<f32> {
+    let s = state[px];
+    if (s.has_back == STATE_RESOLVED) {
+        return vec3<f32>(s.br, s.bg, s.bb);
+    }
+    let bg = background_at(px);
+    if (fu.effect != EFFECT_COMPLEXITY) {
+        return finish_over(s, bg);
     }
     if (s.captured == 0u) {
         return bg;

@@ -40,6 +40,12 @@ struct SetupUniform {
     // vertices of all instances (the vertex cache's records), and 1 when the cache is used
     vertex_total: u32,
     use_verts: u32,
+    // the smallest and largest offset of a pixel's samples from its top-left corner, in 1/256
+    // pixel (oit-core's `setup::reach`): 128 and 128, the centre, with one sample
+    reach_near: i32,
+    reach_far: i32,
+    pad0: u32,
+    pad1: u32,
 }
 
 // Per instance, INSTANCE_WORDS words: mvp (16, columns), normal matrix (9, columns), base colour
@@ -259,9 +265,11 @@ struct Range {
 }
 
 // Pixel k's centre is at 256k + 128: the first centre at or after `lo`, the last at or before `hi`.
+// With several samples a pixel, the first pixel whose last sample is at or after `lo`, the last
+// whose first is at or before `hi` (oit-core's `TriangleSetup` sizes boxes the same way).
 fn pixel_range(lo: i32, hi: i32, size: u32) -> Range {
-    let first = max((lo - 128 + 255) >> 8u, 0);
-    let last = min((hi - 128) >> 8u, i32(size) - 1);
+    let first = max((lo - su.reach_far + 255) >> 8u, 0);
+    let last = min((hi - su.reach_near) >> 8u, i32(size) - 1);
     return Range(first <= last, u32(max(first, 0)), u32(max(last, 0)));
 }
 

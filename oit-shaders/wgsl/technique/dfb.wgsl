@@ -18,6 +18,8 @@
 @group(0) @binding(3) var<storage, read_write> offsets: array<u32>;
 @group(0) @binding(4) var<storage, read_write> keys: array<u64>;
 @group(0) @binding(5) var<storage, read_write> payloads: array<u32>;
+// multisampled: each entry's coverage mask, a byte (coverage.wgsl); a placeholder at one sample
+@group(0) @binding(6) var<storage, read_write> masks: array<atomic<u32>>;
 
 const LOCAL_ENTRIES: u32 = 64u;
 
@@ -31,6 +33,9 @@ fn capture(f: Fragment) {
     let entry = offsets[f.pixel + 1u] - left;
     keys[entry] = (u64(depth_bits(f.depth)) << 32u) | u64(f.prim);
     payloads[entry] = payload(f, fu.effect);
+    if (fu.msaa.x > 1u) {
+        mask_new(entry, kept_mask(f));
+    }
 }
 
 @compute @workgroup_size(64)
@@ -43,6 +48,12 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     // entries the fill did not reach (a count it did not spend, at the end) are left out
     let lo = offsets[px];
     let hi = offsets[px + 1u] - u32(max(bitcast<i32>(atomicLoad(&counts[px])), 0));
+    if (fu.msaa.x > 1u) {
+        // per sample: sorted in place with the masks, then each sample composited
+        sort_entries(lo, hi - lo);
+        resolve_masked(px, lo, hi - lo);
+        return;
+    }
     if (hi - lo <= LOCAL_ENTRIES) {
         var list: array<u64, LOCAL_ENTRIES>;
         var list_payloads: array<u32, LOCAL_ENTRIES>;

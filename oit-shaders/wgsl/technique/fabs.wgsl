@@ -28,6 +28,10 @@
 @group(0) @binding(3) var<storage, read_write> slots: array<atomic<u64>>;
 @group(0) @binding(4) var<storage, read_write> payloads: array<u32>;
 @group(0) @binding(5) var<storage, read_write> overflowed: array<atomic<u32>>;
+// multisampled: each slot's coverage mask, a byte (coverage.wgsl), slot-major as the slots; a
+// placeholder at one sample. A multisampled pixel's slots are sorted in place, masks following
+// keys, then resolved per sample.
+@group(0) @binding(8) var<storage, read_write> masks: array<atomic<u32>>;
 
 const LOCAL_SLOTS: u32 = 64u;
 const FABS_EMPTY: u64 = 0xfffffffffffffffflu;
@@ -46,6 +50,9 @@ fn capture(f: Fragment) {
         if (i < k) {
             atomicStore(&slots[i * stride + f.pixel], key);
             payloads[i * stride + f.pixel] = payload(f, fu.effect);
+            if (fu.msaa.x > 1u) {
+                mask_new(i * stride + f.pixel, kept_mask(f));
+            }
         } else {
             // the counter is past K: one fragment of this pixel finds no slot (which one is
             // settled by the overflow passes below: the K nearest stay); counted once here
@@ -77,6 +84,9 @@ fn capture(f: Fragment) {
     for (var i = 0u; i < k; i++) {
         if (atomicLoad(&slots[i * stride + f.pixel]) == key) {
             payloads[i * stride + f.pixel] = payload(f, fu.effect);
+            if (fu.msaa.x > 1u) {
+                mask_put(i * stride + f.pixel, kept_mask(f));
+            }
             return;
         }
     }
@@ -103,6 +113,13 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     var s = state[px];
     let n = min(fabs_count(px), fu.param);
     let stride = fu.pixel_count;
+    if (fu.msaa.x > 1u) {
+        if (n > 1u) {
+            fabs_heapsort(px, stride, n);
+        }
+        resolve_masked(px, px, n);
+        return;
+    }
     if (n <= LOCAL_SLOTS) {
         var list: array<u64, LOCAL_SLOTS>;
         var list_payloads: array<u32, LOCAL_SLOTS>;
@@ -129,13 +146,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     }
     // longer: heapsort in place (O(n log n) loops; an in-place insertion sort composited only
     // part of 2,000-entry lists on lavapipe, see dfb.wgsl)
-    for (var i = n / 2u; i > 0u; i--) {
-        fabs_sift_down(px, stride, i - 1u, n);
-    }
-    for (var end = n - 1u; end > 0u; end--) {
-        fabs_swap(px, stride, 0u, end);
-        fabs_sift_down(px, stride, 0u, end);
-    }
+    fabs_heapsort(px, stride, n);
     for (var i = 0u; i < n; i++) {
         let key = atomicLoad(&slots[i * stride + px]);
         push_local(&s, bitcast<f32>(u32(key >> 32u)), payloads[i * stride + px]);
@@ -146,8 +157,34 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     state[px] = s;
 }
 
-// Slots `a` and `b` of pixel `px` (and their payloads) exchanged.
+// Pixel `px`'s n slots (n at least 2) sorted by key in place: heapsort.
+fn fabs_heapsort(px: u32, stride: u32, n: u32) {
+    for (var i = n / 2u; i > 0u; i--) {
+        fabs_sift_down(px, stride, i - 1u, n);
+    }
+    for (var end = n - 1u; end > 0u; end--) {
+        fabs_swap(px, stride, 0u, end);
+        fabs_sift_down(px, stride, 0u, end);
+    }
+}
+
+// Slot e (i · pixels + px) of a pixel's sorted slots, for coverage.wgsl: its key, its payload,
+// the slot after it.
+fn msaa_key(e: u32) -> u64 {
+    return atomicLoad(&slots[e]);
+}
+
+fn msaa_payload(e: u32) -> u32 {
+    return payloads[e];
+}
+
+fn msaa_next(e: u32) -> u32 {
+    return e + fu.pixel_count;
+}
+
+// Slots `a` and `b` of pixel `px` (and their payloads and masks) exchanged.
 fn fabs_swap(px: u32, stride: u32, a: u32, b: u32) {
+    mask_swap(a * stride + px, b * stride + px);
     let k = atomicLoad(&slots[a * stride + px]);
     let p = payloads[a * stride + px];
     atomicStore(&slots[a * stride + px], atomicLoad(&slots[b * stride + px]));

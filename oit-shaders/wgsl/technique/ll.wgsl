@@ -13,6 +13,10 @@
 @group(0) @binding(4) var<storage, read_write> keys: array<u64>;
 @group(0) @binding(5) var<storage, read_write> payloads: array<u32>;
 @group(0) @binding(6) var<storage, read_write> links: array<u32>;
+// multisampled: each node's coverage mask, a byte (coverage.wgsl); a placeholder at one sample.
+// A multisampled list is always merge-sorted along its links (the nodes, and so their masks,
+// stay where they are), then resolved per sample.
+@group(0) @binding(7) var<storage, read_write> masks: array<atomic<u32>>;
 
 const LL_END: u32 = 0xffffffffu;
 const LOCAL_NODES: u32 = 64u;
@@ -26,7 +30,23 @@ fn capture(f: Fragment) {
     }
     keys[node] = (u64(depth_bits(f.depth)) << 32u) | u64(f.prim);
     payloads[node] = payload(f, fu.effect);
+    if (fu.msaa.x > 1u) {
+        mask_new(node, kept_mask(f));
+    }
     links[node] = atomicExchange(&heads[f.pixel], node);
+}
+
+// Node e of a sorted list, for coverage.wgsl: its key, its payload, the node after it.
+fn msaa_key(e: u32) -> u64 {
+    return keys[e];
+}
+
+fn msaa_payload(e: u32) -> u32 {
+    return payloads[e];
+}
+
+fn msaa_next(e: u32) -> u32 {
+    return links[e];
 }
 
 @compute @workgroup_size(64)
@@ -37,11 +57,16 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     }
     var s = state[px];
     let head = atomicLoad(&heads[px]);
+    let masked = fu.msaa.x > 1u;
+    if (masked && head == LL_END) {
+        // nothing captured: the state as initialized composites the background
+        return;
+    }
     var list: array<u64, LOCAL_NODES>;
     var list_payloads: array<u32, LOCAL_NODES>;
     var n = 0u;
     var node = head;
-    while (node != LL_END && n < LOCAL_NODES) {
+    while (!masked && node != LL_END && n < LOCAL_NODES) {
         let v = keys[node];
         let p = payloads[node];
         var j = n;
@@ -55,7 +80,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         n += 1u;
         node = links[node];
     }
-    if (node == LL_END) {
+    if (!masked && node == LL_END) {
         for (var i = n; i > 0u; i--) {
             push_local(&s, bitcast<f32>(u32(list[i - 1u] >> 32u)), list_payloads[i - 1u]);
         }
@@ -108,6 +133,14 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         width *= 2u;
     }
     atomicStore(&heads[px], first);
+    if (masked) {
+        var count = 0u;
+        for (var a = first; a != LL_END; a = links[a]) {
+            count += 1u;
+        }
+        resolve_masked(px, first, count);
+        return;
+    }
     for (var a = first; a != LL_END; a = links[a]) {
         push_local(&s, bitcast<f32>(u32(keys[a] >> 32u)), payloads[a]);
     }

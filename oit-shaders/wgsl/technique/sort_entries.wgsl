@@ -1,5 +1,5 @@
 // The in-place sort of one pixel's entries [lo, lo + n) of `keys` (u64, depth bits << 32 |
-// primitive id) with `payloads` beside them, by key: heapsort, O(n log n) loops and no private
+// primitive id) with `payloads` (and, multisampled, the masks of coverage.wgsl) beside them, by key: heapsort, O(n log n) loops and no private
 // array. Appended to the modules whose resolve sorts entries in place (reference.wgsl, dfb.wgsl),
 // which declare `keys` and `payloads`. (An in-place insertion sort composited only part of
 // 1,000-entry lists on lavapipe, the counts and offsets read back correct; its O(n²) loop
@@ -15,6 +15,7 @@ fn sort_entries(lo: u32, n: u32) {
 }
 
 fn swap_entries(a: u32, b: u32) {
+    mask_swap(a, b);
     let k = keys[a];
     let p = payloads[a];
     keys[a] = keys[b];
@@ -40,4 +41,17 @@ fn sift_down(lo: u32, root_in: u32, n: u32) {
         swap_entries(lo + root, lo + child);
         root = child;
     }
+}
+
+// Entry e of a pixel's range, for coverage.wgsl: its key, its payload, the entry after it.
+fn msaa_key(e: u32) -> u64 {
+    return keys[e];
+}
+
+fn msaa_payload(e: u32) -> u32 {
+    return payloads[e];
+}
+
+fn msaa_next(e: u32) -> u32 {
+    return e + 1u;
 }
