@@ -704,7 +704,8 @@ impl Plan {
 /// What several samples a pixel (`Settings::samples` above 1, docs/msaa.md) are not yet done
 /// for, refused by name alike on every backend: techniques other than `reference`, `dfb`, `ll`
 /// and `fabs`; fabs's `--overflow tail`; opaque objects (the opaque pass is not multisampled);
-/// and on the GPU backends the hardware raster path (its pass reads no `sample_mask` yet).
+/// and on the GPU backends the hardware raster path (its pass reads no `sample_mask` yet) and
+/// the supersampled reference (`--supersample`).
 fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<(), OitError> {
     let samples = settings.samples;
     if samples <= 1 {
@@ -728,6 +729,13 @@ fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<()
     }
     if backend != "cpu" && settings.raster == Some(crate::RasterPath::Hardware) {
         return refuse_multisampled_hardware(backend, samples);
+    }
+    if backend != "cpu" && settings.supersample {
+        return refuse(format!(
+            "--supersample on {backend}: the supersampled reference is not yet done on the GPU \
+             backends (their reference would be the per-sample one, in silence); compare with \
+             --backend cpu"
+        ));
     }
     Ok(())
 }

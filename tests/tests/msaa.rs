@@ -193,9 +193,10 @@ fn diff(a: [u8; 4], b: [u8; 4]) -> u8 {
     (0..3).map(|i| a[i].abs_diff(b[i])).max().unwrap_or(0)
 }
 
-/// The seam test. A tessellated sphere, flat shaded at alpha 0.4, so that every sample inside
-/// its silhouette composites the same two layers (its front and its back, of one colour) to the
-/// same colour: at 4 samples the per-sample reference and `ll`, `dfb` and `fabs` give every
+/// The seam test, on oit-cpu and every GPU compute path. A tessellated sphere, flat shaded at
+/// alpha 0.4, so that every sample inside its silhouette composites the same two layers (its
+/// front and its back, of one colour) to the same colour: at 4 samples the per-sample reference
+/// and `ll`, `dfb` and `fabs` give every
 /// pixel whose samples all lie inside the silhouette that colour, within 1 level of 8 bits (the
 /// mean of equal samples rounds at most that far) — the pixels on the triangles' shared edges
 /// included, which receive 3 or 4 fragments. Per-pixel coverage (every mask full, what
@@ -245,20 +246,32 @@ fn no_seam_along_shared_edges() {
         }
         oit_core::composite::linear_to_srgb8(c.max_element())
     };
-    for t in ["reference", "ll", "dfb", "fabs"] {
-        let f: Frame = render(&cpu, &scene, &cam, &flat_settings(4, t));
-        let want = f.image.pixels[plain];
-        let worst = inside.iter().map(|&p| diff(f.image.pixels[p], want)).max().unwrap();
-        assert!(worst <= 1, "{t}: a pixel inside the silhouette {worst} levels off its interior");
-    }
-    // per-pixel coverage (`--coverage pixel`): the same fragments at full weight make the seam
-    // pixels a layer more opaque, rendered (mutation: `coverage` keeping the mask as it is makes
-    // the baseline seamless and this fails)
-    for t in ["ll", "dfb", "fabs"] {
-        let f: Frame = render(&cpu, &scene, &cam, &Settings { pixel_coverage: true, ..flat_settings(4, t) });
-        let want = f.image.pixels[plain];
-        let worst = seams.iter().map(|&p| diff(f.image.pixels[p], want)).max().unwrap();
-        assert!(worst > 4, "{t} --coverage pixel: the seam is only {worst} levels off the interior");
+    // on oit-cpu and every GPU compute path (the GPU hardware paths refuse several samples)
+    let backends: Vec<Box<dyn Backend>> = std::iter::once(Box::new(cpu) as Box<dyn Backend>)
+        .chain(
+            backends_for("no_seam_along_shared_edges")
+                .into_iter()
+                .filter(|b| b.name() != "cpu" && b.raster_path(&s) == oit_core::RasterPath::Compute),
+        )
+        .collect();
+    for backend in &backends {
+        let on = label(backend.as_ref());
+        for t in ["reference", "ll", "dfb", "fabs"] {
+            let f: Frame = render(backend.as_ref(), &scene, &cam, &flat_settings(4, t));
+            let want = f.image.pixels[plain];
+            let worst = inside.iter().map(|&p| diff(f.image.pixels[p], want)).max().unwrap();
+            assert!(worst <= 1, "{on} {t}: a pixel inside the silhouette {worst} levels off its interior");
+        }
+        // per-pixel coverage (`--coverage pixel`): the same fragments at full weight make the
+        // seam pixels a layer more opaque, rendered (mutation: `coverage` keeping the mask as it
+        // is makes the baseline seamless and this fails)
+        for t in ["ll", "dfb", "fabs"] {
+            let s = Settings { pixel_coverage: true, ..flat_settings(4, t) };
+            let f: Frame = render(backend.as_ref(), &scene, &cam, &s);
+            let want = f.image.pixels[plain];
+            let worst = seams.iter().map(|&p| diff(f.image.pixels[p], want)).max().unwrap();
+            assert!(worst > 4, "{on} {t} --coverage pixel: the seam is only {worst} levels off the interior");
+        }
     }
     // and worked out by hand: a seam pixel composites all of its fragments at full weight
     let seam = seams.iter().map(|&p| frags[p].load(Relaxed)).max().unwrap();
@@ -368,6 +381,12 @@ fn refusals_name_what_is_not_done() {
         }
         let compute = Settings { raster: Some(oit_core::RasterPath::Compute), ..base.clone() };
         assert!(oit_core::plan::Plan::new(backend, &scene, &compute).is_ok(), "{backend} compute");
+        // the supersampled reference runs on the cpu only: a GPU backend's would be the
+        // per-sample one in silence
+        match oit_core::plan::Plan::new(backend, &scene, &Settings { supersample: true, ..compute }) {
+            Err(OitError::Unsupported { what, .. }) => assert!(what.contains("--supersample"), "{what}"),
+            other => panic!("{backend} --supersample: {:?}", other.is_ok()),
+        }
     }
     for samples in [0, 2, 3, 16] {
         let e = Settings { samples, ..base.clone() }.validate().unwrap_err().to_string();
