@@ -132,14 +132,15 @@ pub struct SceneArgs {
 
     /// Samples a pixel: 1, 4 or 8 (the standard patterns of Vulkan and D3D). Above 1 a fragment
     /// covers a pixel where its triangle covers any sample, carries its coverage mask, and is
-    /// composited per sample (MSAA: one shading a fragment); cpu only, with reference, dfb, ll
-    /// and fabs (docs/msaa.md).
+    /// composited per sample (MSAA: one shading a fragment); on cpu and the GPU backends'
+    /// compute path (their default at several samples), with reference, dfb, ll and fabs
+    /// (docs/msaa.md).
     #[arg(long, value_name = "N", default_value_t = 1)]
     pub samples: u32,
 
     /// With --samples 4 or 8: the reference becomes the supersampled reference (every sample
     /// rasterized and shaded as a pixel of its own), so that `oit compare` reports MSAA's own
-    /// error against supersampling. Other techniques ignore it.
+    /// error against supersampling (cpu only so far). Other techniques ignore it.
     #[arg(long)]
     pub supersample: bool,
 

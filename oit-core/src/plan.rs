@@ -704,8 +704,9 @@ impl Plan {
 /// What several samples a pixel (`Settings::samples` above 1, docs/msaa.md) are not yet done
 /// for, refused by name alike on every backend: techniques other than `reference`, `dfb`, `ll`
 /// and `fabs`; fabs's `--overflow tail`; opaque objects (the opaque pass is not multisampled);
-/// and on the GPU backends the hardware raster path (its pass reads no `sample_mask` yet) and
-/// the supersampled reference (`--supersample`).
+/// and on the GPU backends the supersampled reference (`--supersample`). (oit-vulkan's hardware
+/// raster path refuses several samples where it starts a frame:
+/// [`refuse_multisampled_hardware`].)
 fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<(), OitError> {
     let samples = settings.samples;
     if samples <= 1 {
@@ -727,9 +728,6 @@ fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<()
             "--samples {samples} with opaque objects: the opaque pass is not yet multisampled (docs/msaa.md)"
         ));
     }
-    if backend != "cpu" && settings.raster == Some(crate::RasterPath::Hardware) {
-        return refuse_multisampled_hardware(backend, samples);
-    }
     if backend != "cpu" && settings.supersample {
         return refuse(format!(
             "--supersample on {backend}: the supersampled reference is not yet done on the GPU \
@@ -740,9 +738,8 @@ fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<()
     Ok(())
 }
 
-/// The refusal of a GPU backend's hardware raster path at several samples a pixel (`Ok` at one):
-/// its pass reads no `sample_mask` yet. Each GPU backend also calls it where it starts a hardware
-/// frame, whatever chose the path.
+/// The refusal of a hardware raster path (or embedded pass) that draws no multisampled pass yet,
+/// at several samples a pixel (`Ok` at one), where it starts a frame.
 pub fn refuse_multisampled_hardware(backend: &str, samples: u32) -> Result<(), OitError> {
     if samples <= 1 {
         return Ok(());
@@ -750,8 +747,9 @@ pub fn refuse_multisampled_hardware(backend: &str, samples: u32) -> Result<(), O
     Err(OitError::Unsupported {
         backend: backend.into(),
         what: format!(
-            "the hardware raster path at --samples {samples}: not yet done (its pass reads no \
-             sample_mask yet); use --raster compute, the default at several samples (docs/msaa.md)"
+            "the hardware raster path at --samples {samples}: not yet done here (no multisampled \
+             pass reading sample_mask); use --raster compute, the default at several samples \
+             (docs/msaa.md)"
         ),
     })
 }

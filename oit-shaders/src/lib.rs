@@ -54,6 +54,7 @@ files!(
     "core/capture_render.wgsl",
     "core/common.wgsl",
     "core/count_sum_texture.wgsl",
+    "core/count_sum_texture_ms.wgsl",
     "core/fill.wgsl",
     "core/finish.wgsl",
     "core/fragment.wgsl",

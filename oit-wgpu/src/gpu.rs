@@ -24,6 +24,9 @@ pub fn optional_features() -> wgpu::Features {
         | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
         | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES
         | wgpu::Features::FLOAT32_BLENDABLE
+        // 8 samples a pixel on the hardware path, where the adapter's count target format takes
+        // them (WebGPU guarantees 4)
+        | wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES
 }
 
 /// The most storage buffers one of oit's pipelines binds in a shader stage: group 0's resolve
@@ -46,6 +49,10 @@ pub struct Gpu {
     pub features: wgpu::Features,
     /// Limits of the device (the adapter's own, requested in full).
     pub limits: wgpu::Limits,
+    /// Whether the hardware path's count target takes 8 samples a pixel (the adapter's format
+    /// features, where the device has `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES`; false for a
+    /// device oit did not open).
+    pub eight_samples: bool,
     pipelines: Mutex<HashMap<u64, Arc<wgpu::ComputePipeline>>>,
     render_pipelines: Mutex<HashMap<u64, Arc<wgpu::RenderPipeline>>>,
     /// Mappable readback buffers, kept for the next readback of the same size.
@@ -119,7 +126,16 @@ impl Gpu {
             ..Default::default()
         }))
         .map_err(|e| OitError::Device(format!("cannot open '{}': {e}", info.name)))?;
-        Ok(Gpu::wrap(device, queue, info, features, limits))
+        let format = if features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
+            wgpu::TextureFormat::R32Float
+        } else {
+            wgpu::TextureFormat::R16Float
+        };
+        let eight_samples = features.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES)
+            && adapter.get_texture_format_features(format).flags.sample_count_supported(8);
+        let mut gpu = Gpu::wrap(device, queue, info, features, limits);
+        gpu.eight_samples = eight_samples;
+        Ok(gpu)
     }
 
     /// A `Gpu` of an open device, its pipeline caches empty.
@@ -136,6 +152,7 @@ impl Gpu {
             info,
             features,
             limits,
+            eight_samples: false,
             pipelines: Mutex::new(HashMap::new()),
             render_pipelines: Mutex::new(HashMap::new()),
             staging: Mutex::new(Vec::new()),

@@ -63,6 +63,8 @@ const GEOMETRY_HINT: &str = "use fewer triangles or instances, or the cpu backen
 /// The fragment side every render-pipeline geometry pass shares (`oit_capture`).
 pub const CAPTURE_RENDER_WGSL: &str = oit_shaders::CAPTURE_RENDER;
 const COUNT_SUM_WGSL: &str = oit_shaders::text("core/count_sum_texture.wgsl");
+/// The same sum over a multisampled count target (every sample of every pixel).
+const COUNT_SUM_MS_WGSL: &str = oit_shaders::text("core/count_sum_texture_ms.wgsl");
 
 /// What the user's pipeline for one capture module is built from.
 pub struct CaptureShader<'a> {
@@ -136,6 +138,9 @@ pub(crate) struct CountTarget {
     sum_group: wgpu::BindGroup,
     total: wgpu::Buffer,
     size: (u32, u32),
+    /// Samples a pixel: above 1 a multisampled pass (docs/msaa.md), whose fragments each add 1
+    /// at one sample (the first they cover), so the samples add up to fragments.
+    samples: u32,
 }
 
 impl CountTarget {
@@ -144,21 +149,28 @@ impl CountTarget {
         self.size
     }
 
-    /// A count target of `width × height`.
+    /// Its samples a pixel.
+    pub(crate) fn samples(&self) -> u32 {
+        self.samples
+    }
+
+    /// A count target of `width × height`, one sample a pixel.
     pub(crate) fn new(gpu: &Gpu, width: u32, height: u32) -> CountTarget {
+        CountTarget::with_samples(gpu, width, height, 1)
+    }
+
+    /// A count target of `width × height` and `samples` samples a pixel (1, or a count
+    /// [`check_samples`] accepts).
+    pub(crate) fn with_samples(gpu: &Gpu, width: u32, height: u32, samples: u32) -> CountTarget {
         // R16Float counts exactly up to 2048 fragments per pixel and pass; R32Float (blendable
         // only with FLOAT32_BLENDABLE) up to 2^24.
-        let format = if gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
-            wgpu::TextureFormat::R32Float
-        } else {
-            wgpu::TextureFormat::R16Float
-        };
+        let format = count_format(gpu);
         let device = &gpu.device;
         let count = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("fragment counts"),
             size: wgpu::Extent3d { width: width.max(1), height: height.max(1), depth_or_array_layers: 1 },
             mip_level_count: 1,
-            sample_count: 1,
+            sample_count: samples,
             dimension: wgpu::TextureDimension::D2,
             format,
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
@@ -180,7 +192,7 @@ impl CountTarget {
                     ty: wgpu::BindingType::Texture {
                         sample_type: wgpu::TextureSampleType::Float { filterable: false },
                         view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
+                        multisampled: samples > 1,
                     },
                     count: None,
                 },
@@ -207,8 +219,39 @@ impl CountTarget {
                 wgpu::BindGroupEntry { binding: 1, resource: total.as_entire_binding() },
             ],
         });
-        CountTarget { format, count_view, sum_layout, sum_group, total, size: (width, height) }
+        CountTarget { format, count_view, sum_layout, sum_group, total, size: (width, height), samples }
     }
+}
+
+/// The count target's format on `gpu` ([`CountTarget::new`]).
+fn count_format(gpu: &Gpu) -> wgpu::TextureFormat {
+    if gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
+        wgpu::TextureFormat::R32Float
+    } else {
+        wgpu::TextureFormat::R16Float
+    }
+}
+
+/// Whether the hardware path can draw `samples` samples a pixel on `gpu` (`Ok` at one sample):
+/// WebGPU guarantees 4; 8 where the adapter's count target format takes it
+/// ([`Gpu::eight_samples`]). Refused by name otherwise.
+pub(crate) fn check_samples(gpu: &Gpu, samples: u32) -> Result<(), OitError> {
+    let format = count_format(gpu);
+    let ok = match samples {
+        1 | 4 => true,
+        8 => gpu.eight_samples,
+        _ => false,
+    };
+    if ok {
+        return Ok(());
+    }
+    Err(OitError::Unsupported {
+        backend: "wgpu".into(),
+        what: format!(
+            "the hardware raster path at --samples {samples}: this adapter's {format:?} count target \
+             takes no {samples} samples (WebGPU guarantees 4); use --samples 4 or --raster compute"
+        ),
+    })
 }
 
 /// The colour target a capture pipeline writes: the fragment counter.
@@ -243,6 +286,7 @@ impl Driver for RenderDriver<'_> {
         let module_key = h.finish();
         self.salt.hash(&mut h);
         self.target.format.hash(&mut h);
+        self.target.samples.hash(&mut h);
         let pipeline = ctx.gpu.render_pipeline(h.finish(), self.salt, || {
             (self.pipeline.borrow_mut())(&CaptureShader {
                 wgsl: &wgsl,
@@ -277,7 +321,8 @@ impl Driver for RenderDriver<'_> {
             (self.draw.borrow_mut())(&mut rpass, &GeometryPass { index, bind_group: group0, indirect });
         }
         ctx.finish_timed("geometry", encoder)?;
-        let sum = ctx.gpu.compute_pipeline(COUNT_SUM_WGSL, "count_sum_main", &[&self.target.sum_layout])?;
+        let sum_wgsl = if self.target.samples > 1 { COUNT_SUM_MS_WGSL } else { COUNT_SUM_WGSL };
+        let sum = ctx.gpu.compute_pipeline(sum_wgsl, "count_sum_main", &[&self.target.sum_layout])?;
         let encoder = ctx.encoder();
         encoder.clear_buffer(&self.target.total, 0, None);
         {
@@ -306,11 +351,12 @@ impl HardwareRaster {
     /// Uploads the scene's geometry and sets it up for one frame at `camera` and `settings`, in
     /// buffers of its own (a prepared scene keeps its `HwGeometry` instead).
     pub fn new(gpu: &Gpu, scene: &Scene, camera: &Camera, settings: &Settings) -> Result<Self, OitError> {
-        oit_core::plan::refuse_multisampled_hardware("wgpu", settings.samples)?;
+        let samples = settings.samples.max(1);
+        check_samples(gpu, samples)?;
         let made = Cell::new(0);
         let geometry = HwGeometry::new(gpu, scene, false, &made)?;
         geometry.write_frame(gpu, scene, camera, settings);
-        Ok(geometry.raster(gpu, settings.width, settings.height, &made))
+        Ok(geometry.raster_sampled(gpu, settings.width, settings.height, samples, &made))
     }
 
     /// The 12 triangles of each instance's world bounding box (`Aabb::TRIANGLES` over the corners
@@ -557,8 +603,20 @@ impl HwGeometry {
     /// counter buffer, counted in `made`), drawn with whatever [`HwGeometry::write_frame`] wrote
     /// last.
     pub(crate) fn raster(&self, gpu: &Gpu, width: u32, height: u32, made: &Cell<u64>) -> HardwareRaster {
+        self.raster_sampled(gpu, width, height, 1, made)
+    }
+
+    /// [`HwGeometry::raster`] at `samples` samples a pixel (a multisampled pass: docs/msaa.md).
+    pub(crate) fn raster_sampled(
+        &self,
+        gpu: &Gpu,
+        width: u32,
+        height: u32,
+        samples: u32,
+        made: &Cell<u64>,
+    ) -> HardwareRaster {
         made.set(made.get() + RenderDriver::CREATES);
-        self.raster_into(gpu, CountTarget::new(gpu, width, height))
+        self.raster_into(gpu, CountTarget::with_samples(gpu, width, height, samples))
     }
 
     /// [`HwGeometry::raster`] into a count target its owner keeps (of the frame's size).
@@ -575,16 +633,18 @@ impl HwGeometry {
         };
         let layout1 = stage.layout.clone();
         let pipeline_device = gpu.device.clone();
+        let samples = target.samples();
         let pipeline = move |capture: &CaptureShader<'_>| {
             let device = &pipeline_device;
-            scene_pipeline(
+            scene_pipeline_sampled(
                 device,
                 "hardware raster",
                 &format!("{}\n{}", capture.wgsl, raster_wgsl()),
                 &[capture.bind_group_layout, &layout1],
-                "hw_fs",
+                // a multisampled pass's fragments carry the samples they cover
+                if samples > 1 { "hw_fs_masked" } else { "hw_fs" },
                 &[Some(capture.count_target.clone())],
-                None,
+                samples,
             )
         };
         let draw_stage = stage.clone();
@@ -605,7 +665,8 @@ impl HwGeometry {
 pub(crate) struct HardwareScene {
     scene: HwGeometry,
     boxes: OnceCell<HwGeometry>,
-    rasters: RefCell<Vec<(bool, u32, u32, HardwareRaster)>>,
+    /// (boxes, width, height, samples) and the raster of that shape.
+    rasters: RefCell<Vec<(bool, u32, u32, u32, HardwareRaster)>>,
 }
 
 impl HardwareScene {
@@ -638,13 +699,18 @@ impl HardwareScene {
             }
         };
         geometry.write_frame(gpu, scene, camera, settings);
-        let (w, h) = (settings.width, settings.height);
+        let (w, h, n) = (settings.width, settings.height, settings.samples.max(1));
+        if n > 1 {
+            check_samples(gpu, n)?;
+        }
         let mut rasters = self.rasters.borrow_mut();
-        if let Some((.., raster)) = rasters.iter().find(|(b, rw, rh, _)| (*b, *rw, *rh) == (boxes, w, h)) {
+        if let Some((.., raster)) =
+            rasters.iter().find(|(b, rw, rh, rn, _)| (*b, *rw, *rh, *rn) == (boxes, w, h, n))
+        {
             return Ok(raster.clone());
         }
-        let raster = geometry.raster(gpu, w, h, made);
-        rasters.push((boxes, w, h, raster.clone()));
+        let raster = geometry.raster_sampled(gpu, w, h, n, made);
+        rasters.push((boxes, w, h, n, raster.clone()));
         Ok(raster)
     }
 }
@@ -686,6 +752,34 @@ pub(crate) fn scene_pipeline(
     targets: &[Option<wgpu::ColorTargetState>],
     depth_stencil: Option<wgpu::DepthStencilState>,
 ) -> wgpu::RenderPipeline {
+    scene_pipeline_with(device, label, source, layouts, fs_entry, targets, depth_stencil, 1)
+}
+
+/// [`scene_pipeline`] without a depth test, drawing `samples` samples a pixel.
+fn scene_pipeline_sampled(
+    device: &wgpu::Device,
+    label: &str,
+    source: &str,
+    layouts: &[&wgpu::BindGroupLayout],
+    fs_entry: &str,
+    targets: &[Option<wgpu::ColorTargetState>],
+    samples: u32,
+) -> wgpu::RenderPipeline {
+    scene_pipeline_with(device, label, source, layouts, fs_entry, targets, None, samples)
+}
+
+/// [`scene_pipeline`] at `samples` samples a pixel.
+#[allow(clippy::too_many_arguments)]
+fn scene_pipeline_with(
+    device: &wgpu::Device,
+    label: &str,
+    source: &str,
+    layouts: &[&wgpu::BindGroupLayout],
+    fs_entry: &str,
+    targets: &[Option<wgpu::ColorTargetState>],
+    depth_stencil: Option<wgpu::DepthStencilState>,
+    samples: u32,
+) -> wgpu::RenderPipeline {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(label),
         source: wgpu::ShaderSource::Wgsl(source.into()),
@@ -707,7 +801,7 @@ pub(crate) fn scene_pipeline(
         },
         primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
         depth_stencil,
-        multisample: Default::default(),
+        multisample: wgpu::MultisampleState { count: samples, ..Default::default() },
         fragment: Some(wgpu::FragmentState {
             module: &module,
             entry_point: Some(fs_entry),

@@ -282,7 +282,7 @@ impl<'s> WgpuPrepared<'s> {
     /// Uploads the hardware path's geometry (the transparent part's, and the opaque part's where
     /// there is one) on its first frame.
     fn upload_hardware(&mut self, settings: &Settings) -> Result<(), OitError> {
-        oit_core::plan::refuse_multisampled_hardware("wgpu", settings.samples)?;
+        hardware::check_samples(self.gpu, settings.samples.max(1))?;
         if self.hardware.is_some() {
             return Ok(());
         }

@@ -19,6 +19,12 @@ fn oit_capture_full(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: v
 // whose textured masked objects are decided fragment by fragment. A fragment of any other alpha
 // mode comes with alpha 1 or 0 (`Scene::layers`), which the half `oit_capture_full` takes splits.
 fn oit_capture_cut(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: vec3<f32>, prim: u32, cutoff: f32) -> vec4<f32> {
+    return oit_capture_masked(pixel_xy, depth, color, normal, prim, cutoff, 1u);
+}
+
+// `oit_capture_cut` of a fragment covering the samples `mask` of its pixel (a multisampled pass:
+// `sample_mask`; 1 at one sample).
+fn oit_capture_masked(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: vec3<f32>, prim: u32, cutoff: f32, mask: u32) -> vec4<f32> {
     let xy = vec2<u32>(max(floor(pixel_xy), vec2<f32>(0.0)));
     if (xy.x < fu.width && xy.y < fu.height) {
         var f: Fragment;
@@ -28,6 +34,7 @@ fn oit_capture_cut(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: ve
         f.color = clamp(color, vec4<f32>(0.0), vec4<f32>(1.0));
         f.normal = normalize_or_zero(normal);
         f.cutoff = cutoff;
+        f.mask = mask;
         // behind the opaque pass's depth: counted, not captured
         if (!opaque_cut(f)) {
             capture(f);
