@@ -177,7 +177,15 @@ mod tests {
 
     fn totals(fragments: GpuFragments, counted_lost: Option<u64>) -> GpuTotals<'static> {
         const ACCT: [u32; 6] = [2, 9, 9, 1, 9, 9];
-        GpuTotals { fragments, on_device: 40, captured: 37, counted_lost, acct: Some(&ACCT), pixels: 2 }
+        GpuTotals {
+            fragments,
+            on_device: 40,
+            captured: 37,
+            counted_lost,
+            occluded: 0,
+            acct: Some(&ACCT),
+            pixels: 2,
+        }
     }
 
     /// Each source of the fragment count, counted and derived losses. Mutations caught: the
@@ -191,6 +199,11 @@ mod tests {
         // the blend captures: losses derived, no per-pixel losses
         assert_eq!(totals(OnDevice, None).counts(), (40, 3, None));
         assert_eq!(totals(Unset, None).counts(), (0, 0, None));
+        // what the opaque cut held back is not lost: derived losses leave it out, counted ones
+        // are as counted
+        let occluded = |lost| GpuTotals { occluded: 2, ..totals(OnDevice, lost) };
+        assert_eq!(occluded(None).counts(), (40, 1, None));
+        assert_eq!(occluded(Some(3)).counts(), (40, 3, Some(vec![2, 1])));
     }
 }
 
@@ -235,6 +248,9 @@ pub struct GpuTotals<'a> {
     /// The totals' counted losses where the capture counts them (`None`: the blend captures,
     /// whose blend unit returns no previous value to count by).
     pub counted_lost: Option<u64>,
+    /// The fragments the opaque cut held back (`Stats::occluded`; 0 without opaque parts): of the
+    /// fragments, neither captured nor lost.
+    pub occluded: u64,
     /// The per-pixel loss accounting where read back: 3 words a pixel, fragments lost first
     /// (`acct` in the GPU prelude).
     pub acct: Option<&'a [u32]>,
@@ -244,7 +260,7 @@ pub struct GpuTotals<'a> {
 
 impl GpuTotals<'_> {
     /// (fragments, lost, per-pixel losses). Without counted losses, `lost` is
-    /// `fragments − captured` and there are no per-pixel losses.
+    /// `fragments − captured − occluded` and there are no per-pixel losses.
     pub fn counts(&self) -> (u64, u64, Option<Vec<u32>>) {
         let fragments = match self.fragments {
             GpuFragments::Known(generated) => generated,
@@ -256,7 +272,7 @@ impl GpuTotals<'_> {
                 let px = self.acct.map(|acct| acct.chunks(3).take(self.pixels).map(|w| w[0]).collect());
                 (fragments, lost, px)
             }
-            None => (fragments, fragments.saturating_sub(self.captured), None),
+            None => (fragments, fragments.saturating_sub(self.captured + self.occluded), None),
         }
     }
 }

@@ -16,9 +16,7 @@ use crate::{Frame, ImageFormat, Init, Rasters};
 /// into the frame's state (the reference also leaves its per-pixel fragment counts for the
 /// frame's `layers`).
 pub fn render<R: ?Sized, F: Frame<R>>(ctx: &mut F, rasters: &impl Rasters<R>) -> Result<(), OitError> {
-    if let Some(opaque) = rasters.opaque() {
-        opaque_pass(ctx, opaque)?;
-    }
+    opaque_first(ctx, rasters)?;
     match ctx.settings().technique {
         Technique::Reference => reference(ctx, rasters.scene()),
         Technique::Plain => plain(ctx, rasters.scene()),
@@ -38,6 +36,19 @@ pub fn render<R: ?Sized, F: Frame<R>>(ctx: &mut F, rasters: &impl Rasters<R>) ->
         Technique::Ll => ll(ctx, rasters.scene()),
         Technique::Kbuf { .. } => kbuf(ctx, rasters.scene()),
     }
+}
+
+/// What every GPU frame runs before its technique, [`render`]'s and each backend's own hardware
+/// captures' (`--hardware-capture blend`, plain's blender) alike: the [`opaque_pass`] where the
+/// frame has an opaque part. The passes that follow cut their fragments at its depth (the blend
+/// captures in their fragment stages: `hw_dropped`, `core/blend_stage.wgsl`), the frame's first
+/// scene pass (or count-only draw) counts what the cut holds back, and every resolve composites
+/// over its colour (`background_at`).
+pub fn opaque_first<R: ?Sized, F: Frame<R>>(ctx: &mut F, rasters: &impl Rasters<R>) -> Result<(), OitError> {
+    if let Some(opaque) = rasters.opaque() {
+        opaque_pass(ctx, opaque)?;
+    }
+    Ok(())
 }
 
 /// The opaque pass (oit-cpu's `opaque::draw`): two geometry passes of `opaque.wgsl` over the

@@ -50,6 +50,7 @@ macro_rules! files {
 
 files!(
     "core/atomic_result.wgsl",
+    "core/blend_stage.wgsl",
     "core/blit.wgsl",
     "core/capture_render.wgsl",
     "core/common.wgsl",
@@ -184,10 +185,18 @@ pub const CAPTURE_RENDER: &str = include_str!("../wgsl/core/capture_render.wgsl"
 pub const SETUP: &str =
     concat!(include_str!("../wgsl/core/softfloat.wgsl"), "\n", include_str!("../wgsl/core/setup.wgsl"));
 
-/// [`HARDWARE_RASTER`]'s vertex stage alone (up to its fragment entry point): the blend
-/// captures put their own fragment stages after it.
+/// [`HARDWARE_RASTER`]'s vertex stage alone (up to its fragment entry point).
 pub fn vertex_stage() -> &'static str {
     HARDWARE_RASTER.split_once("@fragment").map_or(HARDWARE_RASTER, |(vertex, _)| vertex)
+}
+
+/// What a blend capture's module has after its sources ([`Tail::Stage`]): [`vertex_stage`], then
+/// `core/blend_stage.wgsl`, the test every blend capture's fragment stage makes first
+/// (`hw_dropped`: a back face, or a fragment at or behind the opaque pass's depth). The blend
+/// captures put their own fragment stages before it; both GPU backends build them from this.
+pub fn blend_stage() -> &'static str {
+    static TEXT: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    TEXT.get_or_init(|| format!("{}\n{}", vertex_stage(), text("core/blend_stage.wgsl")))
 }
 
 /// What follows a module's sources.
@@ -201,7 +210,8 @@ pub enum Tail {
     /// Nothing, and nothing before: the sources alone, without [`COMMON`] (the setup kernels,
     /// which bind a group 0 of their own).
     Alone,
-    /// [`vertex_stage`] alone: a blend capture's module, with fragment entry points of its own.
+    /// [`blend_stage`] (the vertex stage and the blend captures' shared test): a blend capture's
+    /// module, with fragment entry points of its own.
     Stage,
 }
 
@@ -233,13 +243,13 @@ impl Module {
     }
 
     /// The module's full text for compute pipelines: [`Module::kernels_text`], then the compute
-    /// rasterizer where its tail is [`Tail::Raster`], or the vertex stage for [`Tail::Stage`].
+    /// rasterizer where its tail is [`Tail::Raster`], or [`blend_stage`] for [`Tail::Stage`].
     pub fn compute_text(&self) -> String {
         let text = self.kernels_text();
         match self.tail {
             Tail::Kernels | Tail::Alone => text,
             Tail::Raster => format!("{text}\n{COMPUTE_RASTER}"),
-            Tail::Stage => format!("{text}\n{}", vertex_stage()),
+            Tail::Stage => format!("{text}\n{}", blend_stage()),
         }
     }
 
@@ -347,7 +357,8 @@ pub const MODULES: &[Module] = &[
     m("setup", &["core/softfloat.wgsl", "core/setup.wgsl"], Alone),
     m("scan", &["technique/scan.wgsl"], Kernels),
     m("nothing", &["vulkan/no_capture.wgsl"], Raster),
-    // the blend captures: the hardware raster's vertex stage and fragment stages of their own
+    // the blend captures: fragment stages of their own after the hardware raster's vertex stage
+    // (each drops first what `hw_dropped`, core/blend_stage.wgsl, drops)
     m("blend", &["technique/weighted.wgsl", "technique/blend.wgsl"], Stage),
     m("bdp_blend", &["technique/bdp_blend.wgsl"], Stage),
     m("dp_depth", &["technique/dp_depth.wgsl"], Stage),
@@ -424,5 +435,9 @@ mod tests {
         assert!(hw.ends_with(HARDWARE_RASTER) && hw.contains(CAPTURE_RENDER));
         assert!(module("scan").and_then(Module::hardware_text).is_none());
         assert_eq!(module("setup").expect("setup").compute_text(), SETUP);
+        // a blend capture's module ends with the vertex stage and the test its fragment stages make
+        let dp = module("dp_depth").expect("dp_depth").compute_text();
+        assert!(dp.ends_with(blend_stage()) && dp.contains("fn hw_vs") && dp.contains("fn hw_dropped"));
+        assert!(!dp.contains("fn hw_fs"), "a blend capture has fragment stages of its own");
     }
 }

@@ -613,13 +613,16 @@ impl<'a> VkCtx<'a> {
     }
 
     /// Counts the scene's fragments with one count-only draw (a capture that keeps nothing,
-    /// `shaders/no_capture.wgsl`) where no pass has yet, for captures whose passes cannot count
-    /// them (a depth test kills fragments before the counter); not a geometry pass of the
+    /// `vulkan/no_capture.wgsl`) where no pass has yet, for captures whose passes cannot count
+    /// them (a depth test kills fragments before the counter), and those the opaque cut holds
+    /// back (`occluded`), as a frame's first scene pass does; not a geometry pass of the
     /// technique.
     pub(crate) fn count_fragments(&mut self, raster: &Raster) -> Result<(), OitError> {
         if self.fragments == Fragments::Unset {
-            let generated = self.record_pass(raster, "nothing", &[], 0, 0, true)?;
-            self.keep_first_count(generated);
+            self.uniform.opaque[1] = self.uniform.opaque[0];
+            let generated = self.record_pass(raster, "nothing", &[], 0, 0, true);
+            self.uniform.opaque[1] = 0;
+            self.keep_first_count(generated?);
         }
         Ok(())
     }
@@ -1144,6 +1147,7 @@ impl VkCtx<'_> {
             on_device: u64::from(first[0]),
             captured,
             counted_lost: self.counts_losses.then(|| u64::from(t[3])),
+            occluded: opaque_word(3),
             acct: acct.as_deref(),
             pixels: self.pixels as usize,
         }

@@ -513,32 +513,27 @@ fn run_technique(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitEr
     let hardware = matches!(drivers.scene, Raster::Hardware(_));
     // the graphics pipeline's own captures, asked for on the hardware path
     let blend = hardware && ctx.settings.hardware_capture == HardwareCapture::Blend;
-    if drivers.opaque.is_some() {
-        // the blend captures' own fragment stages do not cut at the opaque depth yet
-        if blend {
-            return Err(OitError::Unsupported {
-                backend: "vulkan".into(),
-                what: format!(
-                    "--hardware-capture blend for {} in a scene with opaque or masked objects: the blend captures do not draw the opaque pass yet; use --hardware-capture atomic",
-                    ctx.settings.technique
-                ),
-            });
-        }
-        // plain's atomic capture, which cuts at the opaque depth
-        return oit_gpu::technique::render(ctx, drivers);
-    }
-    match ctx.settings.technique {
+    let own = match ctx.settings.technique {
+        Technique::Dp | Technique::Ddp | Technique::Bdp { .. } => blend,
+        Technique::WeightedAverage | Technique::WeightedSum => blend,
         // the blender composites one draw in primitive order: plain's definition
-        Technique::Plain if hardware => technique::blend::plain(ctx, drivers),
-        Technique::Dp if blend => technique::blend::dp(ctx, drivers),
-        Technique::Ddp if blend => technique::blend::ddp(ctx, drivers),
-        Technique::Bdp { .. } if blend => technique::blend::bdp(ctx, drivers),
-        Technique::WeightedAverage | Technique::WeightedSum if blend => {
-            technique::blend::weighted(ctx, drivers)
-        }
+        Technique::Plain => hardware,
         // the rest (adp's histogram by logic-op OR included: `Frame::histogram_capture`) as
         // every GPU backend runs them
-        _ => oit_gpu::technique::render(ctx, drivers),
+        _ => false,
+    };
+    if !own {
+        return oit_gpu::technique::render(ctx, drivers);
+    }
+    // the opaque pass first, as every frame: the captures' fragment stages cut at its depth
+    oit_gpu::technique::opaque_first(ctx, drivers)?;
+    match ctx.settings.technique {
+        Technique::Plain => technique::blend::plain(ctx, drivers),
+        Technique::Dp => technique::blend::dp(ctx, drivers),
+        Technique::Ddp => technique::blend::ddp(ctx, drivers),
+        Technique::Bdp { .. } => technique::blend::bdp(ctx, drivers),
+        // wavg and wsum
+        _ => technique::blend::weighted(ctx, drivers),
     }
 }
 

@@ -820,6 +820,20 @@ impl<'a> GpuCtx<'a> {
         self.merged_from = Some(words.clone());
     }
 
+    /// [`GpuCtx::group0`] for a draw of the scene: the frame's first (a geometry pass, or a blend
+    /// capture's count-only draw) counts the fragments the opaque cut holds back (`occluded`).
+    pub(crate) fn scene_group0(
+        &mut self,
+        buffers: &[&wgpu::Buffer],
+        pass_index: u32,
+        param: u32,
+    ) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
+        self.uniform.opaque[1] = u32::from(self.uniform.opaque[0] != 0 && self.fragments == Fragments::Unset);
+        let group = self.group0(buffers, pass_index, param);
+        self.uniform.opaque[1] = 0;
+        group
+    }
+
     /// The pass both of the above run: group 0 bound, the driver's setup time and check taken,
     /// the pass recorded and counted.
     fn run_geometry_pass(
@@ -830,10 +844,7 @@ impl<'a> GpuCtx<'a> {
         pass_index: u32,
         param: u32,
     ) -> Result<Generated, OitError> {
-        // the frame's first scene pass counts the fragments the opaque cut holds back
-        self.uniform.opaque[1] = u32::from(self.uniform.opaque[0] != 0 && self.fragments == Fragments::Unset);
-        let (layout, group) = self.group0(buffers, pass_index, param);
-        self.uniform.opaque[1] = 0;
+        let (layout, group) = self.scene_group0(buffers, pass_index, param);
         let full = format!("{TECHNIQUE_PRELUDE}{source}");
         self.add_setup_ms(driver);
         let generated = driver.geometry_pass(self, &full, &layout, &group)?;
@@ -1200,6 +1211,7 @@ impl<'a> GpuCtx<'a> {
             on_device: u64::from(t[FRAGMENTS_WORD as usize]),
             captured: u64::from(t[0]),
             counted_lost: self.counts_losses.then(|| u64::from(t[3])),
+            occluded: t.get(OPAQUE_WORD as usize + 2).copied().map_or(0, u64::from),
             acct: acct.as_deref(),
             pixels: self.pixels as usize,
         }

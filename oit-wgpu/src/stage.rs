@@ -27,9 +27,10 @@ type KeptTarget = (&'static str, wgpu::TextureFormat, wgpu::TextureView);
 
 impl SceneStage {
     /// raster_hardware.wgsl without its fragment entry point (`hw_fs`, which calls the atomics
-    /// capture): the group 1 bindings, `HwOut` and `hw_vs`.
+    /// capture): the group 1 bindings, `HwOut` and `hw_vs`; then `hw_dropped`, the test every
+    /// blend capture's fragment stage makes first (oit-shaders' `blend_stage`).
     pub(crate) fn wgsl(&self) -> &'static str {
-        oit_shaders::vertex_stage()
+        oit_shaders::blend_stage()
     }
 
     /// The layout of group 1 (the vertices, triangles, shading uniform and instances).

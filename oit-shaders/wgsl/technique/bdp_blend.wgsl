@@ -16,7 +16,8 @@
 //
 // Module: COMMON_WGSL, TECHNIQUE_PRELUDE (group 0: fu, state), this, then the hardware raster's
 // vertex stage (group 1 bindings 0..4: hw_vertices, hw_indices, hw, hw_instances, hw_tex;
-// `HwOut`, `hw_vs`, `hw_color`).
+// `HwOut`, `hw_vs`, `hw_color`) and `hw_dropped` (blend_stage.wgsl: what the opaque pass holds
+// back reaches no bucket).
 
 // [zNear, zFar] bits per pixel (bounds.wgsl), read by the fragment stage.
 @group(0) @binding(2) var<storage, read_write> bounds: array<u32>;
@@ -47,7 +48,7 @@ struct BucketsOut {
 // channel and 0 (a no-op under MAX: every stored value is ≥ +0) everywhere else.
 @fragment
 fn bdp_blend_fs(in: HwOut, @builtin(front_facing) front: bool) -> BucketsOut {
-    if (hw_culled(in, front)) {
+    if (hw_dropped(in, front)) {
         discard;
     }
     var out: BucketsOut;

@@ -16,8 +16,10 @@
 //   in [0, 1] units instead, each addition rounded to f16, as weighted blended OIT accumulates.
 //
 // Module: COMMON_WGSL, TECHNIQUE_PRELUDE (group 0: fu, state), this, then the hardware raster's
-// vertex stage (group 1 bindings 0..4; `HwOut`, `hw_vs`, `hw_color`). The resolve's targets are
-// group 1 bindings 8 and 9 of the compute pipeline, clear of the vertex stage's.
+// vertex stage (group 1 bindings 0..4; `HwOut`, `hw_vs`, `hw_color`) and `hw_dropped`
+// (blend_stage.wgsl: back faces and what the opaque pass holds back are dropped unwritten, so
+// neither target sees them). The resolve's targets are group 1 bindings 8 and 9 of the compute
+// pipeline, clear of the vertex stage's.
 
 @group(1) @binding(8) var blend_color: texture_2d<f32>;
 @group(1) @binding(9) var blend_count: texture_2d<f32>;
@@ -40,7 +42,7 @@ fn blend_fragment(in: HwOut, out: ptr<function, BlendOut>) -> vec4<f32> {
 
 @fragment
 fn plain_blend_fs(in: HwOut, @builtin(front_facing) front: bool) -> BlendOut {
-    if (hw_culled(in, front)) {
+    if (hw_dropped(in, front)) {
         discard;
     }
     var out: BlendOut;
@@ -51,7 +53,7 @@ fn plain_blend_fs(in: HwOut, @builtin(front_facing) front: bool) -> BlendOut {
 
 @fragment
 fn weighted_blend_fs(in: HwOut, @builtin(front_facing) front: bool) -> BlendOut {
-    if (hw_culled(in, front)) {
+    if (hw_dropped(in, front)) {
         discard;
     }
     var out: BlendOut;

@@ -8,7 +8,8 @@
 // after their hand-over, so the pass's occlusion query counts what is left to peel.
 //
 // Module: COMMON_WGSL, TECHNIQUE_PRELUDE (group 0: fu, state), this, then the hardware raster's
-// vertex stage (group 1 bindings 0..4; `HwOut`, `hw_vs`, `hw_color`).
+// vertex stage (group 1 bindings 0..4; `HwOut`, `hw_vs`, `hw_color`) and `hw_dropped`
+// (blend_stage.wgsl: a fragment at or behind the opaque depth never enters a range).
 @group(0) @binding(2) var<storage, read_write> ddp_near: array<atomic<u64>>;
 @group(0) @binding(3) var<storage, read_write> ddp_far: array<atomic<u64>>;
 
@@ -17,7 +18,7 @@
 
 @fragment
 fn ddp_peel_fs(in: HwOut, @builtin(front_facing) front: bool) -> @location(0) vec2<f32> {
-    if (hw_culled(in, front)) {
+    if (hw_dropped(in, front)) {
         discard;
     }
     let xy = vec2<u32>(max(floor(in.position.xy), vec2<f32>(0.0)));

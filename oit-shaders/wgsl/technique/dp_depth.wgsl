@@ -10,7 +10,9 @@
 // the other is lost in both.
 //
 // Module: COMMON_WGSL, TECHNIQUE_PRELUDE (group 0: fu, state), this, then the hardware raster's
-// vertex stage (group 1 bindings 0..4; `HwOut`, `hw_vs`, `hw_color`).
+// vertex stage (group 1 bindings 0..4; `HwOut`, `hw_vs`, `hw_color`) and `hw_dropped`
+// (blend_stage.wgsl: a fragment at or behind the opaque depth is discarded before the depth
+// test writes it, so no peel reaches it).
 
 // The previous peel's depth (render pipeline, group 2; unused on the first peel).
 @group(2) @binding(0) var dp_previous: texture_depth_2d;
@@ -21,7 +23,7 @@
 
 @fragment
 fn dp_peel_fs(in: HwOut, @builtin(front_facing) front: bool) -> @location(0) vec2<u32> {
-    if (hw_culled(in, front)) {
+    if (hw_dropped(in, front)) {
         discard;
     }
     let xy = vec2<u32>(max(floor(in.position.xy), vec2<f32>(0.0)));

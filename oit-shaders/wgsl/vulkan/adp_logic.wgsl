@@ -6,8 +6,9 @@
 // passes and the resolves are the storage capture's own.
 //
 // Module: COMMON_WGSL, TECHNIQUE_PRELUDE, adp.wgsl (group 0: bounds, hist...), this, then the
-// hardware raster's vertex stage (group 1 bindings 0..4). The copy kernel reads the targets as
-// group 1 bindings 3..10, which only the compute pipeline's layout has.
+// hardware raster's vertex stage (group 1 bindings 0..4) and `hw_dropped` (blend_stage.wgsl: what
+// the opaque pass holds back sets no bin, as in the storage capture). The copy kernel reads the
+// targets as group 1 bindings 3..10, which only the compute pipeline's layout has.
 
 @group(1) @binding(3) var adp_hist0: texture_2d<u32>;
 @group(1) @binding(4) var adp_hist1: texture_2d<u32>;
@@ -32,7 +33,7 @@ struct AdpHistOut {
 // The fragment's bin bit in its word's channel, 0 (a no-op under OR) everywhere else.
 @fragment
 fn adp_hist_fs(in: HwOut, @builtin(front_facing) front: bool) -> AdpHistOut {
-    if (hw_culled(in, front)) {
+    if (hw_dropped(in, front)) {
         discard;
     }
     var out: AdpHistOut;

@@ -18,8 +18,13 @@
 //!   bucket passes are the atomics capture's.
 //!
 //! The blend unit returns no previous value, so these captures cannot count where they lose a
-//! fragment: their `lost` is `fragments − captured` (as on oit-wgpu); adp's is still counted (its
-//! bucket passes are atomics).
+//! fragment: their `lost` is `fragments − captured − occluded` (as on oit-wgpu); adp's is still
+//! counted (its bucket passes are atomics).
+//!
+//! Every one of them runs after the opaque pass (`oit_gpu::technique::opaque_first`), and its
+//! fragment stage first drops what `hw_dropped` drops (oit-shaders' `core/blend_stage.wgsl`: back
+//! faces, and fragments at or behind the opaque depth); the count-only draw counts the latter
+//! (`occluded`).
 
 use std::rc::Rc;
 
@@ -359,6 +364,7 @@ pub(crate) fn adp_histogram(
     raster: &Raster,
     buffers: &[&crate::device::Buffer],
 ) -> Result<(), OitError> {
+    let scene = raster;
     let raster = hardware_raster(raster)?;
     if !ctx.gpu.info.logic_op {
         return Err(unsupported(format!(
@@ -372,6 +378,10 @@ pub(crate) fn adp_histogram(
             "8 colour targets for adp's histogram: maxColorAttachments is {limit}"
         )));
     }
+    // the frame's fragments (and what the opaque cut holds back), which the logic-op pass cannot
+    // count, where no pass has counted them yet (`--bounds boxes`): not left to the first bucket
+    // pass, which a frame whose every fragment lies behind the opaque depth does not run
+    ctx.count_fragments(scene)?;
     let targets: Vec<Rc<GpuImage>> =
         (0..8).map(|_| ctx.target(RGBA32U, 16, false)).collect::<Result<_, _>>()?;
     let views: Vec<&GpuImage> = targets.iter().map(|t| &**t).collect();

@@ -195,10 +195,11 @@ pub(crate) fn check_texture_size(ctx: &GpuCtx<'_>, what: &str) -> Result<(), Oit
 }
 
 /// Counts the scene's fragments with one count-only draw of the hardware driver (its additive
-/// fragment counter; the capture does nothing), for passes that cannot count themselves. Not a
+/// fragment counter; the capture does nothing), for passes that cannot count themselves, and
+/// those the opaque cut holds back (`occluded`), as a frame's first scene pass does. Not a
 /// geometry pass of the technique.
 pub(crate) fn count_fragments(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
-    let (layout, group) = ctx.group0(&[], 0, 0);
+    let (layout, group) = ctx.scene_group0(&[], 0, 0);
     let source = format!("{TECHNIQUE_PRELUDE}fn capture(f: Fragment) {{}}\n");
     let generated = drivers.scene.geometry_pass(ctx, &source, &layout, &group)?;
     ctx.note_generated(&generated);

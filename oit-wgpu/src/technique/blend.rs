@@ -27,10 +27,11 @@
 //! fragment: every fragment drawn is counted in the count target and composited (`captured`,
 //! losses counted as 0). The frame's fragments are counted apart from it, by the hardware
 //! driver's count-only draw the other blend captures run (`bdp_blend::count_fragments`, not a
-//! geometry pass of the technique), so `captured + lost = fragments` is a check the frame can
-//! fail (issue 41.10), not `fragments := captured`; both are read with the totals at the end of
-//! the frame (no readback between the draws and the resolve). The targets are kept by the
-//! frame's rasterizer ([`SceneStage::target`]), made once per image size.
+//! geometry pass of the technique; it counts what the opaque cut holds back as well, which the
+//! fragment stage discards uncounted), so `captured + lost + occluded = fragments` is a check the
+//! frame can fail (issue 41.10), not `fragments := captured`; both are read with the totals at
+//! the end of the frame (no readback between the draws and the resolve). The targets are kept by
+//! the frame's rasterizer ([`SceneStage::target`]), made once per image size.
 
 use oit_core::{BlendTarget, OitError, Technique};
 

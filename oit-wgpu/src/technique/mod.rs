@@ -20,44 +20,43 @@ pub(crate) fn run(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), Oit
     let hardware = drivers.scene.path() == RasterPath::Hardware;
     // the papers' graphics-pipeline capture of bdp and dp, when asked for on the hardware path
     let blend = hardware && ctx.settings.hardware_capture == HardwareCapture::Blend;
-    if drivers.opaque.is_some() {
-        // the blend captures' own fragment stages do not cut at the opaque depth yet
-        if blend {
-            return Err(OitError::Unsupported {
-                backend: "wgpu".into(),
-                what: format!(
-                    "--hardware-capture blend for {} in a scene with opaque or masked objects: the blend captures do not draw the opaque pass yet; use --hardware-capture atomic",
-                    ctx.settings.technique
-                ),
-            });
-        }
-        // plain's atomic capture, which cuts at the opaque depth
+    // the blender composites one draw in primitive order: plain's definition, where the draws
+    // are oit's own
+    let blender = hardware && drivers.scene.scene_stage().is_some();
+    let own = match ctx.settings.technique {
+        Technique::Dp | Technique::Ddp | Technique::Bdp { .. } => blend,
+        Technique::WeightedAverage | Technique::WeightedSum => blend,
+        Technique::Plain => blender,
+        // kbuf is refused by the frame's context with the plan's reason (Plan::refuse_interlock)
+        _ => false,
+    };
+    if !own {
         return oit_gpu::technique::render(ctx, drivers);
     }
+    // the opaque pass first, as every frame: the captures' fragment stages cut at its depth
+    oit_gpu::technique::opaque_first(ctx, drivers)?;
     match ctx.settings.technique {
-        Technique::Dp if blend => dp_depth::render(ctx, drivers),
-        Technique::Ddp if blend => ddp_blend::render(ctx, drivers),
-        Technique::Bdp { .. } if blend => bdp_blend::render(ctx, drivers),
-        Technique::WeightedAverage | Technique::WeightedSum if blend => {
-            let stage = bdp_blend::scene_stage(drivers)?;
-            counted_apart(ctx, drivers)?;
-            blend::weighted(ctx, stage)
-        }
-        // the blender composites one draw in primitive order: plain's definition, where the
-        // draws are oit's own
-        Technique::Plain if hardware && drivers.scene.scene_stage().is_some() => {
+        Technique::Dp => dp_depth::render(ctx, drivers),
+        Technique::Ddp => ddp_blend::render(ctx, drivers),
+        Technique::Bdp { .. } => bdp_blend::render(ctx, drivers),
+        Technique::Plain => {
             let stage = bdp_blend::scene_stage(drivers)?;
             counted_apart(ctx, drivers)?;
             blend::plain(ctx, stage)
         }
-        // kbuf is refused by the frame's context with the plan's reason (Plan::refuse_interlock)
-        _ => oit_gpu::technique::render(ctx, drivers),
+        // wavg and wsum
+        _ => {
+            let stage = bdp_blend::scene_stage(drivers)?;
+            counted_apart(ctx, drivers)?;
+            blend::weighted(ctx, stage)
+        }
     }
 }
 
 /// The frame's fragments counted by the hardware driver's count-only draw, apart from the
-/// blender's own count (`captured`) of `plain`, `wavg` and `wsum` on the blend unit: the two
-/// must agree, and the frame's accounting check sees it where they do not (issue 41.10).
+/// blender's own count (`captured`) of `plain`, `wavg` and `wsum` on the blend unit, with those
+/// the opaque cut holds back (`occluded`): `captured + occluded` must equal them, and the frame's
+/// accounting check sees it where they do not (issue 41.10).
 fn counted_apart(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     if ctx.fragments == crate::ctx::Fragments::Unset {
         bdp_blend::count_fragments(ctx, drivers)?;
