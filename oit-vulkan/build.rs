@@ -6,8 +6,9 @@
 //! with a rasterizer also its hardware-raster twin, `Module::hardware_text`, as `<module>_hw`
 //! (entry points `hw_vs` and `hw_fs`). One SPIR-V module per name holds every entry point: the
 //! rasterizer's (`raster_main`, `raster_loop_main`) and the technique's kernels. What only raw
-//! Vulkan needs is done here, on the SPIR-V: the image atomics' results (`atomic_results`) and
-//! the ordered interlock (`interlock`).
+//! Vulkan needs is done here, on the SPIR-V: the image atomics' results (`atomic_results`), the
+//! ordered interlock (`interlock`) and `sample_mask` as the array Vulkan requires
+//! (`sample_mask_arrays`).
 //!
 //! naga as wgpu-hal's Vulkan backend sets it up: explicit validator capabilities (64-bit integers
 //! and 64-bit atomics; naga's default has neither), `ADJUST_COORDINATE_SPACE` off (wgpu's
@@ -198,6 +199,100 @@ fn interlock(words: &[u32], entry: &str) -> Result<Vec<u32>, String> {
     Ok(out)
 }
 
+/// naga declares WGSL's `@builtin(sample_mask)` (the multisampled hardware raster's
+/// `hw_fs_masked`) as a scalar `u32` variable (gfx-rs/wgpu issue 7311), where Vulkan requires an
+/// array of 32-bit integers (VUID-SampleMask-SampleMask-04359; drivers may misread a scalar).
+/// Rewrites each variable decorated `BuiltIn SampleMask` into an array of one, and each load and
+/// store of it into one through an access chain to element 0. Returns the module and the
+/// variables rewritten; fails on any other use of such a variable in a function.
+fn sample_mask_arrays(words: &[u32]) -> Result<(Vec<u32>, usize), String> {
+    const DECORATE: u32 = 71;
+    const BUILT_IN: u32 = 11;
+    const SAMPLE_MASK: u32 = 20;
+    const TYPE_INT: u32 = 21;
+    const TYPE_ARRAY: u32 = 28;
+    const TYPE_POINTER: u32 = 32;
+    const CONSTANT: u32 = 43;
+    const LOAD: u32 = 61;
+    const STORE: u32 = 62;
+    const ACCESS_CHAIN: u32 = 65;
+    let list = instructions(words)?;
+    let masks: Vec<u32> = list
+        .iter()
+        .filter(|&&(at, o, count)| {
+            o == DECORATE && count == 4 && words[at + 2] == BUILT_IN && words[at + 3] == SAMPLE_MASK
+        })
+        .map(|&(at, _, _)| words[at + 1])
+        .collect();
+    if masks.is_empty() {
+        return Ok((words.to_vec(), 0));
+    }
+    let find = |opcode: u32, result_at: usize, id: u32| {
+        list.iter().find(|&&(at, o, count)| o == opcode && count > result_at && words[at + result_at] == id).copied()
+    };
+    let mut bound = words[3];
+    // per variable: (variable, its scalar pointer type, storage class, integer type, constant 0,
+    // constant 1, the array type, the pointer to it)
+    let mut plans = Vec::new();
+    for &var in &masks {
+        let (at, _, _) = find(op::VARIABLE, 2, var).ok_or(format!("no OpVariable %{var}"))?;
+        let (pointer, storage) = (words[at + 1], words[at + 3]);
+        let (pt, _, _) = find(TYPE_POINTER, 1, pointer).ok_or(format!("no pointer type %{pointer}"))?;
+        let int = words[pt + 3];
+        let (it, _, _) = find(TYPE_INT, 1, int).ok_or(format!("%{var} is no integer"))?;
+        if words[it + 2] != 32 {
+            return Err(format!("%{var} is not a 32-bit integer"));
+        }
+        plans.push((var, pointer, storage, int, bound, bound + 1, bound + 2, bound + 3));
+        bound += 4;
+    }
+    let mut out = words[..HEADER].to_vec();
+    let mut in_function = false;
+    for &(at, o, count) in &list {
+        let ins = &words[at..at + count];
+        if o == op::FUNCTION {
+            in_function = true;
+        }
+        if o == op::VARIABLE
+            && let Some(&(_, _, storage, int, zero, one, array, array_ptr)) =
+                plans.iter().find(|p| p.0 == ins[2])
+        {
+            out.extend([(4 << 16) | CONSTANT, int, zero, 0]);
+            out.extend([(4 << 16) | CONSTANT, int, one, 1]);
+            out.extend([(4 << 16) | TYPE_ARRAY, array, int, one]);
+            out.extend([(4 << 16) | TYPE_POINTER, array_ptr, storage, array]);
+            out.extend([ins[0], array_ptr, ins[2]]);
+            out.extend(&ins[3..]);
+            continue;
+        }
+        if in_function {
+            // the pointer operand of a load (word 3) or a store (word 1)
+            let pointer_at = match o {
+                LOAD => Some(3),
+                STORE => Some(1),
+                _ => None,
+            };
+            if let Some(k) = pointer_at
+                && let Some(&(var, pointer, _, _, zero, ..)) = plans.iter().find(|p| p.0 == ins[k])
+            {
+                let element = bound;
+                bound += 1;
+                out.extend([(5 << 16) | ACCESS_CHAIN, pointer, element, var, zero]);
+                let mut rewritten = ins.to_vec();
+                rewritten[k] = element;
+                out.extend(rewritten);
+                continue;
+            }
+            if let Some(p) = plans.iter().find(|p| ins[1..].contains(&p.0)) {
+                return Err(format!("%{} (a SampleMask) used by opcode {o}, which is not rewritten", p.0));
+            }
+        }
+        out.extend_from_slice(ins);
+    }
+    out[3] = bound;
+    Ok((out, masks.len()))
+}
+
 fn main() {
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets it"));
 
@@ -254,6 +349,11 @@ fn main() {
         if INTERLOCKED.contains(&name) {
             words = interlock(&words, "hw_fs").unwrap_or_else(|e| panic!("{name}: {e}"));
         }
+        let (arrays, rewritten) = sample_mask_arrays(&words).unwrap_or_else(|e| panic!("{name}: {e}"));
+        if text.contains("@builtin(sample_mask)") && rewritten == 0 {
+            panic!("{name}: uses sample_mask but no SampleMask variable was rewritten");
+        }
+        words = arrays;
         let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
         std::fs::write(out.join(format!("{name}.spv")), bytes).expect("write SPIR-V");
         let entries: Vec<String> = module.entry_points.iter().map(|e| format!("{:?}", e.name)).collect();

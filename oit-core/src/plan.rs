@@ -704,9 +704,8 @@ impl Plan {
 /// What several samples a pixel (`Settings::samples` above 1, docs/msaa.md) are not yet done
 /// for, refused by name alike on every backend: techniques other than `reference`, `dfb`, `ll`
 /// and `fabs`; fabs's `--overflow tail`; opaque objects (the opaque pass is not multisampled);
-/// and on the GPU backends the supersampled reference (`--supersample`). (oit-vulkan's hardware
-/// raster path refuses several samples where it starts a frame:
-/// [`refuse_multisampled_hardware`].)
+/// and on the GPU backends the supersampled reference (`--supersample`). (A hardware raster path
+/// refuses a sample count its device does not draw where it starts a frame.)
 fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<(), OitError> {
     let samples = settings.samples;
     if samples <= 1 {
@@ -738,8 +737,8 @@ fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<()
     Ok(())
 }
 
-/// The refusal of a hardware raster path (or embedded pass) that draws no multisampled pass yet,
-/// at several samples a pixel (`Ok` at one), where it starts a frame.
+/// The refusal of an embedded pass, which draws no multisampled pass yet, at several samples a
+/// pixel (`Ok` at one), where it starts a frame.
 pub fn refuse_multisampled_hardware(backend: &str, samples: u32) -> Result<(), OitError> {
     if samples <= 1 {
         return Ok(());
@@ -747,9 +746,8 @@ pub fn refuse_multisampled_hardware(backend: &str, samples: u32) -> Result<(), O
     Err(OitError::Unsupported {
         backend: backend.into(),
         what: format!(
-            "the hardware raster path at --samples {samples}: not yet done here (no multisampled \
-             pass reading sample_mask); use --raster compute, the default at several samples \
-             (docs/msaa.md)"
+            "the embedded pass at --samples {samples}: not yet done (no multisampled pass reading \
+             sample_mask); render with --raster compute or hardware (docs/msaa.md)"
         ),
     })
 }

@@ -104,6 +104,7 @@ files!(
     "technique/weighted.wgsl",
     "vulkan/adp_logic.wgsl",
     "vulkan/count_sum.wgsl",
+    "vulkan/count_sum_ms.wgsl",
     "vulkan/kbuf.wgsl",
     "vulkan/no_capture.wgsl",
 );
@@ -354,6 +355,8 @@ pub const MODULES: &[Module] = &[
     // kbuf)
     m("kbuf", &["vulkan/kbuf.wgsl"], Raster),
     m("count_sum", &["vulkan/count_sum.wgsl"], Kernels),
+    // the same over a multisampled count image (several samples a pixel)
+    m("count_sum_ms", &["vulkan/count_sum_ms.wgsl"], Kernels),
     m("setup", &["core/softfloat.wgsl", "core/setup.wgsl"], Alone),
     m("scan", &["technique/scan.wgsl"], Kernels),
     m("nothing", &["vulkan/no_capture.wgsl"], Raster),

@@ -704,8 +704,9 @@ impl<'a> VkCtx<'a> {
         count: bool,
     ) -> Result<&'r Buffer, OitError> {
         let bindings = self.image_bindings();
-        let pipeline = self.gpu.render_pipeline(module, buffers.len(), &bindings)?;
-        let render_pass = self.gpu.render_pass(&crate::device::count_pass_key())?;
+        let samples = raster.samples();
+        let pipeline = self.gpu.render_pipeline(module, buffers.len(), &bindings, samples)?;
+        let render_pass = self.gpu.render_pass(&crate::device::count_pass_key(samples))?;
         raster.upload(&mut self.rec)?;
         let held = self.held();
         let storage = Self::storage(&held, buffers);
@@ -736,9 +737,17 @@ impl<'a> VkCtx<'a> {
         if !count {
             return Ok(generated);
         }
+        let (w, h) = raster.target().extent;
+        if samples > 1 {
+            // every sample of the multisampled count image, read where it lies
+            self.rec.fill(generated, 0);
+            let invocations = u64::from(w) * u64::from(h);
+            let image = [(0, raster.target())];
+            self.kernel_with("count_sum_ms", "count_sum_main", &[generated], &image, invocations, "count sum")?;
+            return Ok(generated);
+        }
         self.rec.copy_image(raster.target(), counts);
         self.rec.fill(generated, 0);
-        let (w, h) = raster.target().extent;
         self.kernel_over(
             "count_sum",
             "count_sum_main",
@@ -876,6 +885,7 @@ impl<'a> VkCtx<'a> {
             colors,
             depth: pass.depth.then(|| pass.targets.last().map(|i| i.format)).flatten(),
             final_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+            samples: 1,
         };
         let bindings = self.image_bindings();
         let mut kinds = vec![SetKind::Frame(buffers.len(), bindings), SetKind::HwRaster];

@@ -322,6 +322,17 @@ pub(crate) struct PassKey {
     pub colors: Vec<vk::Format>,
     pub depth: Option<vk::Format>,
     pub final_layout: vk::ImageLayout,
+    /// Samples a pixel of every attachment (and of the pipelines drawn in the pass).
+    pub samples: u32,
+}
+
+/// `samples` (1, 4 or 8) as Vulkan's flag.
+pub(crate) fn sample_count_flags(samples: u32) -> vk::SampleCountFlags {
+    match samples {
+        8 => vk::SampleCountFlags::TYPE_8,
+        4 => vk::SampleCountFlags::TYPE_4,
+        _ => vk::SampleCountFlags::TYPE_1,
+    }
 }
 
 /// How a graphics pipeline writes one colour attachment.
@@ -896,6 +907,12 @@ impl Gpu {
         format: vk::Format,
         usage: vk::ImageUsageFlags,
     ) -> Result<GpuImage, OitError> {
+        self.check_target_size((width, height))?;
+        self.image_layers((width, height), 1, format, usage, 1)
+    }
+
+    /// A render target's size against `maxImageDimension2D` and the framebuffer limits.
+    fn check_target_size(&self, (width, height): (u32, u32)) -> Result<(), OitError> {
         let limit = self.info.limits.max_image_dimension2_d;
         let max_fb = self.info.limits.max_framebuffer_width.min(self.info.limits.max_framebuffer_height);
         let side = width.max(height);
@@ -908,7 +925,54 @@ impl Gpu {
                 hint: "use --memory to render in tiles, a smaller --size, or --raster compute".into(),
             });
         }
-        self.image_layers((width, height), 1, format, usage)
+        Ok(())
+    }
+
+    /// [`Gpu::image`] of `samples` samples a pixel (the multisampled count target).
+    pub(crate) fn image_sampled(
+        &self,
+        size: (u32, u32),
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+        samples: u32,
+    ) -> Result<GpuImage, OitError> {
+        if samples <= 1 {
+            return self.image(size, format, usage);
+        }
+        self.check_samples(samples)?;
+        self.check_target_size(size)?;
+        self.image_layers(size, 1, format, usage, samples)
+    }
+
+    /// Whether the hardware raster path can draw `samples` samples a pixel (`Ok` at one): the
+    /// count target's samples as a colour attachment and as a sampled image, and the standard
+    /// sample locations (oit-core's positions). Refused by name otherwise.
+    pub(crate) fn check_samples(&self, samples: u32) -> Result<(), OitError> {
+        if samples <= 1 {
+            return Ok(());
+        }
+        let l = &self.info.limits;
+        let flag = sample_count_flags(samples);
+        let missing = if !l.framebuffer_color_sample_counts.contains(flag) {
+            Some("framebufferColorSampleCounts")
+        } else if !l.sampled_image_color_sample_counts.contains(flag) {
+            Some("sampledImageColorSampleCounts")
+        } else if l.standard_sample_locations == vk::FALSE {
+            Some("standardSampleLocations")
+        } else {
+            None
+        };
+        match missing {
+            None => Ok(()),
+            Some(what) => Err(OitError::Unsupported {
+                backend: "vulkan".into(),
+                what: format!(
+                    "the hardware raster path at --samples {samples} on '{}': its {what} does not \
+                     allow it; use --raster compute",
+                    self.info.name
+                ),
+            }),
+        }
     }
 
     /// A device-local `width × height × layers` storage image of `format` for atomics (a 2D
@@ -941,7 +1005,7 @@ impl Gpu {
                 hint: "use a smaller K or --atomic-storage buffer".into(),
             });
         }
-        self.image_layers((width, height), layers.max(1), format, STORAGE_IMAGE_USAGE)
+        self.image_layers((width, height), layers.max(1), format, STORAGE_IMAGE_USAGE, 1)
     }
 
     /// The image of [`Gpu::image`] and [`Gpu::storage_image`]: `layers` of 2D, viewed as a 2D
@@ -952,6 +1016,7 @@ impl Gpu {
         layers: u32,
         format: vk::Format,
         usage: vk::ImageUsageFlags,
+        samples: u32,
     ) -> Result<GpuImage, OitError> {
         let d = &self.raw.device;
         let extent = vk::Extent3D { width: width.max(1), height: height.max(1), depth: 1 };
@@ -961,7 +1026,7 @@ impl Gpu {
             .extent(extent)
             .mip_levels(1)
             .array_layers(layers)
-            .samples(vk::SampleCountFlags::TYPE_1)
+            .samples(sample_count_flags(samples))
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(usage)
             .sharing_mode(vk::SharingMode::EXCLUSIVE)
@@ -1138,12 +1203,14 @@ impl Gpu {
         module: &'static str,
         n: usize,
         images: &[u32],
+        samples: u32,
     ) -> Result<Pipeline, OitError> {
         self.graphics(&GraphicsDesc {
             module: &format!("{module}_hw"),
-            fs: "hw_fs",
+            // a multisampled pass's fragments carry the samples they cover (docs/msaa.md)
+            fs: if samples > 1 { "hw_fs_masked" } else { "hw_fs" },
             sets: &[SetKind::Frame(n, images.to_vec()), SetKind::HwRaster],
-            pass: &count_pass_key(),
+            pass: &count_pass_key(samples),
             blends: &[Blend::AddRed],
             depth_test: false,
         })
@@ -1204,7 +1271,7 @@ impl Gpu {
             .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
             .line_width(1.0);
         let multisample = vk::PipelineMultisampleStateCreateInfo::default()
-            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+            .rasterization_samples(sample_count_flags(desc.pass.samples));
         let attachments: Vec<vk::PipelineColorBlendAttachmentState> =
             desc.blends.iter().map(|&b| blend_state(b)).collect();
         let mut blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
@@ -1254,7 +1321,7 @@ impl Gpu {
         let attachment = |format: vk::Format, final_layout: vk::ImageLayout| {
             vk::AttachmentDescription::default()
                 .format(format)
-                .samples(vk::SampleCountFlags::TYPE_1)
+                .samples(sample_count_flags(key.samples))
                 .load_op(vk::AttachmentLoadOp::CLEAR)
                 .store_op(vk::AttachmentStoreOp::STORE)
                 .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
@@ -1474,9 +1541,16 @@ pub(crate) fn aspect(format: vk::Format) -> vk::ImageAspectFlags {
     }
 }
 
-/// The hardware raster's render pass: one [`COUNT_FORMAT`] counter, left to be copied out.
-pub(crate) fn count_pass_key() -> PassKey {
-    PassKey { colors: vec![COUNT_FORMAT], depth: None, final_layout: vk::ImageLayout::TRANSFER_SRC_OPTIMAL }
+/// The hardware raster's render pass at `samples` samples a pixel: one [`COUNT_FORMAT`]
+/// counter, left to be copied out (one sample) or read by `count_sum_ms` (several).
+pub(crate) fn count_pass_key(samples: u32) -> PassKey {
+    // one sample: copied out into a buffer; several: read by a kernel as a multisampled image
+    let final_layout = if samples > 1 {
+        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL
+    } else {
+        vk::ImageLayout::TRANSFER_SRC_OPTIMAL
+    };
+    PassKey { colors: vec![COUNT_FORMAT], depth: None, final_layout, samples }
 }
 
 /// The colour blend state of `blend`.

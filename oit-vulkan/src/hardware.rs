@@ -12,7 +12,9 @@
 //! A geometry pass is one draw of every triangle in a render pass whose one colour attachment
 //! counts fragments by additive blending ([`crate::device::COUNT_FORMAT`]); the count image is
 //! copied into a buffer and summed by a kernel (`shaders/count_sum.wgsl`) into the pass's
-//! fragment count. The viewport's height is negative, so pixel rows, depth range and clip space
+//! fragment count. At several samples a pixel (docs/msaa.md) the pass is multisampled, its
+//! fragments carry `sample_mask` into the capture (`hw_fs_masked`) and add 1 at one sample, and
+//! `vulkan/count_sum_ms.wgsl` sums the multisampled image's samples. The viewport's height is negative, so pixel rows, depth range and clip space
 //! are wgpu's, and the fragments are those of oit-wgpu's hardware path on the same driver; against
 //! oit-cpu only pixels on triangle edges may differ (the GPU's sub-pixel precision and clipping).
 
@@ -126,24 +128,32 @@ struct CountTarget {
     image: GpuImage,
     counts: Buffer,
     generated: Buffer,
+    /// Samples a pixel: above 1 a multisampled pass (docs/msaa.md), whose fragments each add 1
+    /// at one sample (the first they cover), so the samples add up to fragments.
+    samples: u32,
 }
 
 impl CountTarget {
     /// Objects a count target makes (for the prepared scene's allocation counter).
     const CREATES: u64 = 3;
 
-    fn new(gpu: &Gpu, size: (u32, u32)) -> Result<CountTarget, OitError> {
-        let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC;
-        let image = gpu.image(size, COUNT_FORMAT, usage)?;
-        let framebuffer = gpu.framebuffer(gpu.render_pass(&count_pass_key())?, &[&image])?;
+    /// A count target of `size` and `samples` samples a pixel: at one sample copied into a
+    /// buffer of a word a pixel for `count_sum`, at several read as a multisampled image by
+    /// `count_sum_ms` (its buffer then a word).
+    fn new(gpu: &Gpu, size: (u32, u32), samples: u32) -> Result<CountTarget, OitError> {
+        let read = if samples > 1 { vk::ImageUsageFlags::SAMPLED } else { vk::ImageUsageFlags::TRANSFER_SRC };
+        let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | read;
+        let image = gpu.image_sampled(size, COUNT_FORMAT, usage, samples)?;
+        let framebuffer = gpu.framebuffer(gpu.render_pass(&count_pass_key(samples))?, &[&image])?;
         let (w, h) = image.extent;
-        let counts_bytes = u64::from(w) * u64::from(h) * 4;
+        let counts_bytes = if samples > 1 { 16 } else { u64::from(w) * u64::from(h) * 4 };
         gpu.check_storage("the hardware raster's fragment counts", counts_bytes)?;
         Ok(CountTarget {
             framebuffer,
             counts: gpu.buffer(counts_bytes, storage_usage(), false)?,
             generated: gpu.buffer(16, storage_usage(), false)?,
             image,
+            samples,
         })
     }
 }
@@ -184,6 +194,11 @@ impl HardwareRaster {
         &self.target.image
     }
 
+    /// Samples a pixel of the count image (and of the pass).
+    pub(crate) fn samples(&self) -> u32 {
+        self.target.samples
+    }
+
     /// The count image's framebuffer.
     pub(crate) fn framebuffer(&self) -> &Framebuffer {
         &self.target.framebuffer
@@ -207,8 +222,9 @@ impl HardwareRaster {
     }
 }
 
-/// A count target a prepared scene keeps: for the boxes or the scene, its size, itself.
-type KeptTarget = (bool, (u32, u32), Rc<CountTarget>);
+/// A count target a prepared scene keeps: for the boxes or the scene, its size, its samples,
+/// itself.
+type KeptTarget = (bool, (u32, u32), u32, Rc<CountTarget>);
 
 /// The hardware path's part of a prepared scene: the scene's geometry (uploaded when made), the
 /// boxes' (on first use), and count targets by (boxes, size), so a frame of a size seen before
@@ -254,14 +270,15 @@ impl HardwareScene {
         debug_assert_eq!(geometry.boxes, boxes);
         debug_assert_eq!(geometry.instances, scene.instances.len());
         let size = (settings.width, settings.height);
+        let samples = settings.samples.max(1);
         let target = {
             let mut targets = self.targets.borrow_mut();
-            match targets.iter().find(|(b, s, _)| (*b, *s) == (boxes, size)) {
+            match targets.iter().find(|(b, s, n, _)| (*b, *s, *n) == (boxes, size, samples)) {
                 Some((.., t)) => t.clone(),
                 None => {
-                    let t = Rc::new(CountTarget::new(gpu, size)?);
+                    let t = Rc::new(CountTarget::new(gpu, size, samples)?);
                     made.set(made.get() + CountTarget::CREATES);
-                    targets.push((boxes, size, t.clone()));
+                    targets.push((boxes, size, samples, t.clone()));
                     t
                 }
             }

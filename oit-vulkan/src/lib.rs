@@ -406,7 +406,7 @@ impl VulkanPrepared<'_> {
                 },
             },
             RasterPath::Hardware => {
-                oit_core::plan::refuse_multisampled_hardware("vulkan", settings.samples)?;
+                this.gpu.check_samples(settings.samples)?;
                 // a window of the frame (tiles) draws the full frame's viewport into its target
                 // (the recorder's window), or, where the full frame is over the device's largest
                 // viewport, maps onto its own in clip space
