@@ -232,8 +232,9 @@ pub const MBOIT6_BIAS_TARGET: [f32; 6] = [0.0, 0.4375, 0.0, 0.296_875, 0.0, 0.26
 /// overflow when c3 nears zero and one root runs off to infinity), shifted to t³ + p·t + q, its
 /// roots 2ρ·cos(φ/3 − 2πk/3) with ρ = √(−p/3), cos φ = −q/(2ρ³); of the largest and the smallest
 /// t, the one farther from zero once shifted back (no cancellation: its relative error is a few
-/// ulps). Rounding that makes a near-double root look complex (p > 0 or |cos φ| > 1) is clamped
-/// to the coincident root, the continuous limit. That root r is then divided out, from the
+/// ulps), then polished by one Newton step (the trigonometric functions of a GPU are far less
+/// exact than its arithmetic). Rounding that makes a near-double root look complex (p > 0 or
+/// |cos φ| > 1) is clamped to the coincident root, the continuous limit. That root r is then divided out, from the
 /// constant term up when |r| > 1 (as the factor 1 − x/r, so the quotient stays finite however
 /// far r runs: dividing from the leading term, or solving the monic cubic for the other roots,
 /// would lose them to cancellation against r), and the quadratic quotient k2·x² + k1·x + k0
@@ -252,7 +253,14 @@ macro_rules! cubic_roots {
         let third = cos_phi.acos() / 3.0;
         let hi = 2.0 * rho * third.cos() - a / 3.0;
         let lo = 2.0 * rho * (third + 2.0 * std::f64::consts::FRAC_PI_3 as $t).cos() - a / 3.0;
-        let r = s * if hi.abs() >= lo.abs() { hi } else { lo };
+        // one Newton step on the scaled monic cubic: a GPU's acos and cos may be off by 2⁻¹¹
+        // (Vulkan's bound), which the step takes to f32 rounding; a near-double root (a slope
+        // near zero) keeps the trigonometric one
+        let u = if hi.abs() >= lo.abs() { hi } else { lo };
+        let slope = (3.0 * u + 2.0 * a) * u + b;
+        let step = ((u + a) * u + b) * u + c;
+        let u = if slope.abs() > 1e-3 { u - step / slope } else { u };
+        let r = s * u;
         // c = (x − r)·(k2·x² + k1·x + k0) for |r| ≤ 1, c = (1 − x/r)·(k2·x² + k1·x + k0) beyond:
         // the second keeps the quotient finite as r runs off (it tends to c2·x² + c1·x + c0)
         let (k2, k1, k0) = if r.abs() > 1.0 {
@@ -708,9 +716,7 @@ mod tests {
             s ^= s << 5;
             f64::from(s) / f64::from(u32::MAX)
         };
-        (0..n)
-            .map(|i| (0..1 + i % 12).map(|_| (0.05 + next(), next() * 2.0 - 1.0)).collect())
-            .collect()
+        (0..n).map(|i| (0..1 + i % 12).map(|_| (0.05 + next(), next() * 2.0 - 1.0)).collect()).collect()
     }
 
     /// The six-moment bound finds the atoms it is given, as the four-moment one does, and three
@@ -802,32 +808,18 @@ mod tests {
                 worst = worst.max((s32 - s64).abs());
                 let truth = true_share(&set, z);
                 err6 += (s64 - truth).abs();
-                err4 += (f64::from(mboit_share_in_front(std::array::from_fn(|k| m32[k]), z as f32)) - truth).abs();
+                err4 += (f64::from(mboit_share_in_front(std::array::from_fn(|k| m32[k]), z as f32)) - truth)
+                    .abs();
                 n += 1;
             }
         }
         let n = f64::from(n);
-        eprintln!("f32 against f64 at most {worst:.2e}; mean error six {:.4}, four {:.4}", err6 / n, err4 / n);
+        eprintln!(
+            "f32 against f64 at most {worst:.2e}; mean error six {:.4}, four {:.4}",
+            err6 / n,
+            err4 / n
+        );
         assert!(worst <= 2e-3, "f32 off f64 by {worst}");
         assert!(err6 < err4, "six moments no closer than four: {} against {}", err6 / n, err4 / n);
     }
-}
-
-#[cfg(test)]
-mod dbg6 {
-    #[test]
-    fn dbg6() {
-        let m = super::tests_dbg_m();
-        for z in [-0.9f64, -0.5, -0.3, 0.0, 0.3, 0.9] {
-            eprintln!("z {z}: {}", super::mboit6_share_in_front_dbg(m, z));
-        }
-    }
-}
-#[cfg(test)]
-fn tests_dbg_m() -> [f64; 6] {
-    std::array::from_fn(|k| 0.5 * (0.5f64.powi(k as i32 + 1) + (-0.5f64).powi(k as i32 + 1)))
-}
-#[cfg(test)]
-mboit6_share! {
-    fn mboit6_share_in_front_dbg(f64)
 }

@@ -440,6 +440,8 @@ mod tests {
             "ll",
             "kbuf",
             "kbuf:8",
+            "mboit:4",
+            "mboit:6",
         ] {
             let t: Technique = name.parse().unwrap();
             assert_eq!(t.to_string(), name);
@@ -458,6 +460,8 @@ mod tests {
             "dp:3",
             "mlp:-1",
             "bdp:99999999",
+            "mboit:5",
+            "mboit:8",
             "dfb:4",
             "ll:2",
             "plain:2",

@@ -88,7 +88,14 @@ fn mboit_cubic_roots(c: vec4<f32>) -> vec3<f32> {
     let third = acos(cos_phi) / 3.0;
     let hi = 2.0 * rho * cos(third) - a / 3.0;
     let lo = 2.0 * rho * cos(third + 1.0471976) - a / 3.0;
-    let r = s * select(lo, hi, abs(hi) >= abs(lo));
+    // one Newton step: this device's acos and cos may be off by 2⁻¹¹
+    var u = select(lo, hi, abs(hi) >= abs(lo));
+    let slope = (3.0 * u + 2.0 * a) * u + b;
+    let step = ((u + a) * u + b) * u + e;
+    if (abs(slope) > 1e-3) {
+        u = u - step / slope;
+    }
+    let r = s * u;
     var k2 = c.w;
     var k1 = c.z + r * c.w;
     var k0 = c.y + r * k1;
