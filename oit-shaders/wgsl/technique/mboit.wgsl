@@ -87,7 +87,8 @@ fn mboit_cubic_roots(c: vec4<f32>) -> vec3<f32> {
     }
     let third = acos(cos_phi) / 3.0;
     let hi = 2.0 * rho * cos(third) - a / 3.0;
-    let lo = 2.0 * rho * cos(third + 1.0471976) - a / 3.0;
+    // 2π/3: the smallest of the three t (the largest is at angle `third`)
+    let lo = 2.0 * rho * cos(third + 2.0943951) - a / 3.0;
     // one Newton step: this device's acos and cos may be off by 2⁻¹¹
     var u = select(lo, hi, abs(hi) >= abs(lo));
     let slope = (3.0 * u + 2.0 * a) * u + b;
