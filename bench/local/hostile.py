@@ -49,12 +49,12 @@ SEED = 41_2026_12_05
 # techniques and what "exact" means
 
 TECHNIQUES = [
-    "plain", "dp", "ddp", "wavg", "wsum", "wboit", "mboit", "mboit:4", "bdp", "bdp:2", "bdp2",
+    "plain", "dp", "ddp", "wavg", "wsum", "wboit", "mboit", "mboit:4", "mboit:6", "bdp", "bdp:2", "bdp2",
     "bdp:4", "adp", "mdts", "mdts:4", "mdts64", "mdts64:2", "mdts64:8", "fabs", "fabs:1",
     "fabs:4", "fabs:16", "mlp:1", "mlp:4", "dfb", "ll", "kbuf", "kbuf:4", "reference", "auto",
 ]
 HOSTILE_TECHNIQUES = [
-    "fabs:0", "fabs:65537", "mdts:99999999999", "mboit:6", "bdp:0", "mlp:", "mlp", "kbuf:0",
+    "fabs:0", "fabs:65537", "mdts:99999999999", "mboit:5", "bdp:0", "mlp:", "mlp", "kbuf:0",
     "dfb:3", "ll:2", "FABS:4", "fabs:4,", "fabs:-1", "fabs:4.5", "", " ", "all", "auto:3",
     "reference,reference", "fabs:65536", "bdp:65536", "mlp:65536", "nosuch", "fabs:K",
 ]

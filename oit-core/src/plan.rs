@@ -109,7 +109,8 @@ impl Array {
 }
 
 /// The most triangles a scene `mboit` renders may have: its i64 moment sums hold 2²² fragments a
-/// pixel.
+/// pixel, with four moments or six (every power of the warped depth is at most 2²⁰ units, so
+/// z⁶'s sum needs no more headroom than z's).
 pub const MBOIT_MAX_TRIANGLES: u64 = 1 << 22;
 
 /// The plan of one frame: see the module docs.
@@ -202,7 +203,8 @@ impl Plan {
                 ),
             });
         }
-        // mboit's moment sums are i64 integers, |a·zᵏ| < 2⁴¹ a fragment: 2²² fragments fit, and a
+        // mboit's moment sums are i64 integers, |a·zᵏ| < 2⁴¹ a fragment (a < 2²¹, |zᵏ| ≤ 2²⁰
+        // units for every k ≤ 6, so mboit:6 as mboit:4): 2²² fragments fit, and a
         // pixel holds at most one fragment a triangle, so a scene of more triangles could wrap a
         // sum in silence and is refused (wboit's u64 sums, α·w·c < 2³⁵ a fragment, hold 2²⁹:
         // above `Scene::MAX_TRIANGLES`, which scenes are held to)
@@ -461,8 +463,8 @@ impl Plan {
             Technique::WeightedAverage | Technique::WeightedSum => vec![per_pixel("weighted sums", 8, 5)],
             // Σ α·w·r, Σ α·w·g, Σ α·w·b, Σ α·w, Σ −ln(1 − α) and the count, u64 each
             Technique::Wboit => vec![per_pixel("weighted blended sums", 8, 6)],
-            // the optical depth and m moments (first pass), Σ T·α·r, g, b, Σ T·α and the count
-            // (second pass), u64 each
+            // the optical depth and m moments (first pass; m = 4 or 6), Σ T·α·r, g, b, Σ T·α and
+            // the count (second pass), u64 each: 10 or 12 words a pixel
             Technique::Mboit { m } => {
                 vec![per_pixel("moments and transmittance-weighted sums", 8, u64::from(m) + 6)]
             }

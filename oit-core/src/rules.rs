@@ -114,18 +114,24 @@ pub fn mboit_depth(d: f32, near_over_far: f32) -> f32 {
 /// Units of a power of [`mboit_depth`] in the moment sums: 2²⁰ (z^k ∈ [−1, 1] to ±2²⁰).
 pub const MBOIT_POWER_UNIT: f32 = 1_048_576.0;
 
-/// The warped depth's powers z, z², z³, z⁴ in units of 2⁻²⁰ (rounded to nearest, half away from
+/// The warped depth's powers z, z², …, z⁶ in units of 2⁻²⁰ (rounded to nearest, half away from
 /// zero): what a fragment adds to the moment sums, times its optical depth
 /// ([`WBOIT_OPTICAL_DEPTH`]), in integers, so the sums do not depend on the order they are added
-/// in. The powers are products of f32s, never fused, so every backend finds the same integers.
+/// in (`mboit:4` adds the first four, `mboit:6` all six). The powers are products of f32s, never
+/// fused, each from the same two factors on every backend (z⁵ = z⁴·z, z⁶ = z³·z³), so every
+/// backend finds the same integers. As |z| ≤ 1, every power is at most 2²⁰ units whatever M is:
+/// the sums' headroom (`oit_core::plan::MBOIT_MAX_TRIANGLES`) is the same for six moments as
+/// for four.
 #[inline]
-pub fn mboit_powers(z: f32) -> [i64; 4] {
+pub fn mboit_powers(z: f32) -> [i64; 6] {
     let z2 = z * z;
     let z3 = z2 * z;
     let z4 = z2 * z2;
+    let z5 = z4 * z;
+    let z6 = z3 * z3;
     // v is exact (a power-of-two scale) and so are |v| + 0.5 and its floor for |v| ≤ 2²⁰: the
     // same integers wherever it runs (WGSL's `round` rounds half to even; this does not)
-    [z, z2, z3, z4].map(|p| {
+    [z, z2, z3, z4, z5, z6].map(|p| {
         let v = p * MBOIT_POWER_UNIT;
         ((v.abs() + 0.5).floor() * v.signum()) as i64
     })

@@ -41,7 +41,7 @@ pub enum Technique {
     /// depth and `m` power moments of its warped depths weighted by it, a second pass weighs each
     /// fragment by the transmittance in front of it that those moments bound; order ignored.
     Mboit {
-        /// Power moments a pixel (4; 6 is not implemented yet and refused by name).
+        /// Power moments a pixel: 4 or 6.
         m: u32,
     },
     /// Bucket depth peeling (Liu et al., HPG 2009) with `passes` capture passes (`bdp` = 1).
@@ -145,9 +145,9 @@ impl TechniqueKind {
 }
 
 /// The names `parse` accepts, for messages.
-pub const KNOWN_TECHNIQUES: &str = "reference, plain, dp, ddp, wavg, wsum, wboit, mboit[:4], bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K], fabs[:K], mlp:M, dfb, ll, kbuf[:K]";
+pub const KNOWN_TECHNIQUES: &str = "reference, plain, dp, ddp, wavg, wsum, wboit, mboit[:4|6], bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K], fabs[:K], mlp:M, dfb, ll, kbuf[:K]";
 
-/// Power moments `mboit` keeps a pixel.
+/// Power moments `mboit` keeps a pixel unless told (`mboit:6` keeps six).
 pub const MBOIT_MOMENTS: u32 = 4;
 
 /// Largest K or M accepted (a pixel with this many layers is already far past any real scene).
@@ -307,12 +307,8 @@ impl FromStr for Technique {
             "wsum" => none(Technique::WeightedSum),
             "wboit" => none(Technique::Wboit),
             "mboit" => match param.map(number).transpose()?.unwrap_or(MBOIT_MOMENTS) {
-                MBOIT_MOMENTS => Ok(Technique::Mboit { m: MBOIT_MOMENTS }),
-                6 => Err(err(
-                    "mboit:6 (six power moments, a cubic per fragment) is not implemented yet; use mboit:4"
-                        .into(),
-                )),
-                m => Err(err(format!("mboit takes 4 power moments (the paper's 4 or 6), not {m}"))),
+                m @ (4 | 6) => Ok(Technique::Mboit { m }),
+                m => Err(err(format!("mboit takes 4 or 6 power moments (the paper's), not {m}"))),
             },
             "adp" => none(Technique::Adp),
             "bdp2" => none(Technique::Bdp { passes: 2 }),
@@ -444,6 +440,8 @@ mod tests {
             "ll",
             "kbuf",
             "kbuf:8",
+            "mboit:4",
+            "mboit:6",
         ] {
             let t: Technique = name.parse().unwrap();
             assert_eq!(t.to_string(), name);
@@ -462,6 +460,8 @@ mod tests {
             "dp:3",
             "mlp:-1",
             "bdp:99999999",
+            "mboit:5",
+            "mboit:8",
             "dfb:4",
             "ll:2",
             "plain:2",

@@ -224,6 +224,7 @@ pub fn values(option: &str) -> &'static [&'static str] {
             "mboit",
             "mboit:4",
             "mboit:6",
+            "mboit:5",
             "mboit:0",
             "bdp",
             "bdp2",

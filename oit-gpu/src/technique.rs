@@ -467,10 +467,10 @@ fn wboit<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError
     storage.finish()
 }
 
-/// Moment-based OIT (Münstermann et al. 2018) with `m` = 4 power moments: a first pass sums each
-/// pixel's optical depth and its moments, a second weighs each fragment by the transmittance the
-/// moments bound in front of it and sums Σ T·α·c, Σ T·α and the count (m + 6 u64 a pixel, one
-/// array); composited as the weighted colours under the exact total coverage. Translucency and
+/// Moment-based OIT (Münstermann et al. 2018) with `m` = 4 or 6 power moments (the WGSL's
+/// `fu.param`): a first pass sums each pixel's optical depth and its moments, a second weighs each
+/// fragment by the transmittance the moments bound in front of it and sums Σ T·α·c, Σ T·α and the
+/// count (m + 6 u64 a pixel, one array); composited as the weighted colours under the exact total coverage. Translucency and
 /// Fresnel are refused by the plan.
 fn mboit<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R, m: u32) -> Result<(), OitError> {
     let mut storage = Storage::new(ctx, 0);

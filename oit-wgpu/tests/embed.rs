@@ -154,6 +154,7 @@ const EMBED_SUPPORTED: &[&str] = &[
     "wsum",
     "wboit",
     "mboit:4",
+    "mboit:6",
     "mdts64:4",
     "mdts64",
     "dp",

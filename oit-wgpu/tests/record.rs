@@ -21,6 +21,7 @@ const RECORDABLE: &[&str] = &[
     "wsum",
     "wboit",
     "mboit:4",
+    "mboit:6",
     "bdp",
     "bdp:2",
     "bdp2",

@@ -383,3 +383,167 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
         assert_eq!(p, oit_core::rules::mboit_powers(*z)[2], "z³ at {z}");
     }
 }
+
+/// mboit:6's bound: `mboit6_share_in_front` and `mboit_cubic_roots` of `mboit.wgsl` (the text
+/// itself) against `oit_core::composite::mboit6_share_in_front`, on one-, two- and three-atom
+/// moments and moments of random depth sets (as mboit:4's above, at the same depths), and the
+/// powers z⁵ and z⁶ as the capture forms them (z⁴·z, z³·z³) against `mboit_powers`. The powers
+/// must be equal; the share within 10⁻³: the roots of the cubic go through `acos`, `cos` and a
+/// cube root (`pow` in WGSL), each within a few ulps on a device but not the same ulps, and a
+/// near-double root or a fragment near a root of the Hankel matrix's orthogonal cubic magnifies
+/// an ulp (the f32 bound against itself in f64 differs by up to 1.1·10⁻³, oit-core's
+/// `mboit6_f32_follows_f64`). Fails when the bias, its target, the factorization, the roots or
+/// the interpolation differ on one side, or a power rounds differently.
+#[test]
+fn wgsl_mboit6_bound_equals_rust() {
+    use oit_core::composite::mboit6_share_in_front;
+    let Some(backend) = oit_wgpu::backend_or_skip("wgsl_mboit6_bound_equals_rust") else { return };
+    let gpu = backend.gpu().expect("opened by backend_or_skip");
+    let mboit = oit_shaders::text("technique/mboit.wgsl");
+    let cut = |from: &str, to: &str| {
+        let start = mboit.find(from).unwrap_or_else(|| panic!("mboit.wgsl has {from}"));
+        let end = start + mboit[start..].find(to).unwrap_or_else(|| panic!("{from} ends")) + to.len();
+        &mboit[start..end]
+    };
+    let kernel = format!(
+        "@group(0) @binding(0) var<storage, read_write> cases: array<vec4<f32>>;
+@group(0) @binding(1) var<storage, read_write> depths: array<f32>;
+@group(0) @binding(2) var<storage, read_write> results: array<u32>;
+{}
+{}
+{}
+{}
+{}
+{}
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
+    let i = gid.x;
+    if (i >= arrayLength(&depths)) {{
+        return;
+    }}
+    let z = depths[i];
+    results[5u * i] = bitcast<u32>(mboit6_share_in_front(cases[2u * i], cases[2u * i + 1u].xy, z));
+    let z2 = z * z;
+    let z3 = z2 * z;
+    let p5 = mboit_power((z2 * z2) * z);
+    let p6 = mboit_power(z3 * z3);
+    results[5u * i + 1u] = u32(p5 & 0xffffffffli);
+    results[5u * i + 2u] = u32(p5 >> 32u);
+    results[5u * i + 3u] = u32(p6 & 0xffffffffli);
+    results[5u * i + 4u] = u32(p6 >> 32u);
+}}
+",
+        cut("const MBOIT6_BIAS", ";\n"),
+        cut("const MBOIT_OVERESTIMATION", ";\n"),
+        cut("fn mboit_power(", "\n}\n"),
+        cut("fn mboit_div(", "\n}\n"),
+        cut("fn mboit_cubic_roots(", "\n}\n"),
+        cut("fn mboit6_share_in_front(", "\n}\n"),
+    );
+    let moments = |zs: &[f32]| -> [f32; 6] {
+        std::array::from_fn(|k| zs.iter().map(|z| z.powi(k as i32 + 1)).sum::<f32>() / zs.len() as f32)
+    };
+    let mut s = 0x2545_f491u32;
+    let mut next = || {
+        s ^= s << 13;
+        s ^= s >> 17;
+        s ^= s << 5;
+        (s as f32 / u32::MAX as f32) * 2.0 - 1.0
+    };
+    let mut sets: Vec<Vec<f32>> =
+        vec![vec![0.3], vec![-0.7], vec![-0.5, 0.5], vec![0.0, 0.0, 0.9], vec![-0.6, 0.0, 0.6]];
+    for n in 2..14 {
+        sets.push((0..n).map(|_| next()).collect());
+    }
+    let (mut cases, mut depths, mut want) = (Vec::new(), Vec::new(), Vec::new());
+    for set in &sets {
+        let m = moments(set);
+        for i in 0..=20 {
+            let z = -1.0 + i as f32 / 10.0;
+            cases.extend([[m[0], m[1], m[2], m[3]], [m[4], m[5], 0.0, 0.0]]);
+            depths.push(z);
+            want.push((m, z));
+        }
+    }
+    let inputs: [&[u8]; 2] = [bytemuck::cast_slice(&cases), bytemuck::cast_slice(&depths)];
+    let got = run_kernel(gpu, &kernel, &inputs, depths.len() * 5, depths.len() as u32);
+    let mut worst = 0.0f32;
+    for (i, (m, z)) in want.iter().enumerate() {
+        let share = f32::from_bits(got[5 * i]);
+        let rust = mboit6_share_in_front(*m, *z);
+        worst = worst.max((share - rust).abs());
+        assert!((share - rust).abs() <= 1e-3, "moments {m:?} at {z}: wgsl {share}, rust {rust}");
+        let word = |j: usize| i64::from(got[5 * i + j]) | i64::from(got[5 * i + j + 1] as i32) << 32;
+        let powers = oit_core::rules::mboit_powers(*z);
+        assert_eq!(word(1), powers[4], "z⁵ at {z}");
+        assert_eq!(word(3), powers[5], "z⁶ at {z}");
+    }
+    eprintln!("wgsl against rust: {} cases, the share at most {worst:.2e} apart", want.len());
+}
+
+/// mboit:6's cubic: `mboit_cubic_roots` of `mboit.wgsl` (the text itself) on oit-core's
+/// `mboit6_cubic_roots` cases (three real roots spread, clustered, double, symmetric, one running
+/// off to infinity), each root within that test's bound: 10⁻⁴ of its size, 10⁻³ near a double
+/// root. The bound above reaches the smallest of Viète's three roots only where it is the largest
+/// in magnitude, and then only through the share; here each root is checked. Fails when Viète's
+/// angles (the smallest root at φ/3 + 2π/3), the scaling, the Newton step, the deflation or the
+/// quadratic differ from oit-core's `cubic_roots`.
+#[test]
+fn wgsl_mboit6_cubic_roots() {
+    let Some(backend) = oit_wgpu::backend_or_skip("wgsl_mboit6_cubic_roots") else { return };
+    let gpu = backend.gpu().expect("opened by backend_or_skip");
+    let mboit = oit_shaders::text("technique/mboit.wgsl");
+    let cut = |from: &str, to: &str| {
+        let start = mboit.find(from).unwrap_or_else(|| panic!("mboit.wgsl has {from}"));
+        let end = start + mboit[start..].find(to).unwrap_or_else(|| panic!("{from} ends")) + to.len();
+        &mboit[start..end]
+    };
+    let kernel = format!(
+        "@group(0) @binding(0) var<storage, read_write> cases: array<vec4<f32>>;
+@group(0) @binding(1) var<storage, read_write> results: array<vec4<f32>>;
+{}
+{}
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
+    let i = gid.x;
+    if (i >= arrayLength(&cases)) {{
+        return;
+    }}
+    results[i] = vec4<f32>(mboit_cubic_roots(cases[i]), 0.0);
+}}
+",
+        cut("fn mboit_div(", "\n}\n"),
+        cut("fn mboit_cubic_roots(", "\n}\n"),
+    );
+    let roots: [([f32; 3], f32); 9] = [
+        ([-0.5, 0.1, 0.7], 1.0),
+        ([-0.5, 0.1, 0.7], -3e4),
+        ([0.2, 0.2, -0.9], 2.0),
+        ([0.3, 0.30001, 0.31], 1.0),
+        ([-0.4, 0.6, 1e6], 1e-6),
+        ([-0.4, 0.6, -3e8], 1.0),
+        ([0.0, 0.5, -0.5], 1.0),
+        ([-0.7, -0.1, 0.5], 1.0),
+        ([-0.5, 0.5, -10.0], -3e3),
+    ];
+    let cases: Vec<[f32; 4]> = roots
+        .iter()
+        .map(|&(r, lead)| {
+            let [r1, r2, r3] = r.map(f64::from);
+            let l = f64::from(lead);
+            [-l * r1 * r2 * r3, l * (r1 * r2 + r1 * r3 + r2 * r3), -l * (r1 + r2 + r3), l].map(|v| v as f32)
+        })
+        .collect();
+    let got = run_kernel(gpu, &kernel, &[bytemuck::cast_slice(&cases)], cases.len() * 4, cases.len() as u32);
+    for (i, (r, _)) in roots.iter().enumerate() {
+        let mut found: Vec<f32> = (0..3).map(|j| f32::from_bits(got[4 * i + j])).collect();
+        found.sort_by(f32::total_cmp);
+        let mut want = *r;
+        want.sort_by(f32::total_cmp);
+        let close = (r[0] - r[1]).abs() < 1e-3;
+        for (g, w) in found.iter().zip(want) {
+            let tol = if close { 1e-3 } else { 1e-4 * w.abs().max(1.0) };
+            assert!((g - w).abs() <= tol, "{r:?}: wgsl {found:?}");
+        }
+    }
+}

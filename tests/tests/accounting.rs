@@ -23,6 +23,7 @@ const CASES: &[Case] = &[
             "wsum",
             "wboit",
             "mboit",
+            "mboit:6",
             "dp",
             "ddp",
             "bdp",

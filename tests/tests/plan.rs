@@ -45,6 +45,7 @@ fn reported_storage_is_the_plans_arrays() {
         Technique::Mdts { k: Some(3) },
         Technique::Mdts64 { k: Some(3) },
         Technique::Mlp { m: 2 },
+        Technique::Mboit { m: 6 },
     ]);
     for backend in backends_for("reported_storage_is_the_plans_arrays") {
         let b = backend.as_ref();
@@ -91,7 +92,7 @@ fn weighted_blends_refuse_ordered_effects_everywhere() {
     let scene = scene("planes:4");
     for backend in backends_for("weighted_blends_refuse_ordered_effects_everywhere") {
         let b = backend.as_ref();
-        for t in ["plain", "wavg", "wsum", "wboit", "mboit"] {
+        for t in ["plain", "wavg", "wsum", "wboit", "mboit", "mboit:6"] {
             for effect in [Effect::Translucency, Effect::Fresnel] {
                 let s = Settings { effect, ..settings(16, t) };
                 match b.render(&scene, &camera(&scene, &s, View::default()), &s) {
@@ -121,6 +122,7 @@ fn geometry_passes_follow_the_plans_schedule() {
         Technique::Mdts { k: Some(3) },
         Technique::Mdts64 { k: Some(3) },
         Technique::Mlp { m: 3 },
+        Technique::Mboit { m: 6 },
     ]);
     for backend in backends_for("geometry_passes_follow_the_plans_schedule") {
         let b = backend.as_ref();

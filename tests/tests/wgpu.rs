@@ -19,7 +19,12 @@ use oit_tests::*;
 fn order_independent() -> Vec<Technique> {
     let mut t = vec![Technique::Reference];
     t.extend(Technique::all());
-    t.extend([Technique::Bdp { passes: 3 }, Technique::Mdts64 { k: Some(3) }, Technique::Mlp { m: 1 }]);
+    t.extend([
+        Technique::Bdp { passes: 3 },
+        Technique::Mdts64 { k: Some(3) },
+        Technique::Mlp { m: 1 },
+        Technique::Mboit { m: 6 },
+    ]);
     t
 }
 
