@@ -228,7 +228,9 @@ fn sample_mask_arrays(words: &[u32]) -> Result<(Vec<u32>, usize), String> {
         return Ok((words.to_vec(), 0));
     }
     let find = |opcode: u32, result_at: usize, id: u32| {
-        list.iter().find(|&&(at, o, count)| o == opcode && count > result_at && words[at + result_at] == id).copied()
+        list.iter()
+            .find(|&&(at, o, count)| o == opcode && count > result_at && words[at + result_at] == id)
+            .copied()
     };
     let mut bound = words[3];
     // per variable: (variable, its scalar pointer type, storage class, integer type, constant 0,

@@ -743,7 +743,14 @@ impl<'a> VkCtx<'a> {
             self.rec.fill(generated, 0);
             let invocations = u64::from(w) * u64::from(h);
             let image = [(0, raster.target())];
-            self.kernel_with("count_sum_ms", "count_sum_main", &[generated], &image, invocations, "count sum")?;
+            self.kernel_with(
+                "count_sum_ms",
+                "count_sum_main",
+                &[generated],
+                &image,
+                invocations,
+                "count sum",
+            )?;
             return Ok(generated);
         }
         self.rec.copy_image(raster.target(), counts);
