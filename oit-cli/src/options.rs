@@ -132,9 +132,9 @@ pub struct SceneArgs {
 
     /// Samples a pixel: 1, 4 or 8 (the standard patterns of Vulkan and D3D). Above 1 a fragment
     /// covers a pixel where its triangle covers any sample, carries its coverage mask, and is
-    /// composited per sample (MSAA: one shading a fragment); on cpu, the GPU backends' compute
-    /// path (their default at several samples) and wgpu's hardware path, with reference, dfb,
-    /// ll and fabs (docs/msaa.md).
+    /// composited per sample (MSAA: one shading a fragment); on every backend and raster path
+    /// (the GPU backends' default at several samples: compute), with reference, dfb, ll and
+    /// fabs (docs/msaa.md).
     #[arg(long, value_name = "N", default_value_t = 1)]
     pub samples: u32,
 

@@ -65,6 +65,7 @@ files!(
     "core/prelude.wgsl",
     "core/raster_compute.wgsl",
     "core/raster_hardware.wgsl",
+    "core/raster_hardware_masked.wgsl",
     "core/resolve.wgsl",
     "core/setup.wgsl",
     "core/softfloat.wgsl",
@@ -178,6 +179,10 @@ pub const HARDWARE_RASTER: &str = concat!(
     include_str!("../wgsl/core/raster_hardware.wgsl")
 );
 
+/// The multisampled fragment entry point `hw_fs_masked`, after [`HARDWARE_RASTER`] and
+/// [`CAPTURE_RENDER`] (it hands `capture` the fragment's `sample_mask`; docs/msaa.md).
+pub const HARDWARE_RASTER_MASKED: &str = include_str!("../wgsl/core/raster_hardware_masked.wgsl");
+
 /// The fragment contract of a render pipeline's capture (what `hw_fs` hands `capture`).
 pub const CAPTURE_RENDER: &str = include_str!("../wgsl/core/capture_render.wgsl");
 
@@ -255,10 +260,11 @@ impl Module {
     }
 
     /// The module's hardware-raster twin (for [`Tail::Raster`] modules): [`Module::kernels_text`],
-    /// [`CAPTURE_RENDER`] and [`HARDWARE_RASTER`].
+    /// [`CAPTURE_RENDER`], [`HARDWARE_RASTER`] and [`HARDWARE_RASTER_MASKED`].
     pub fn hardware_text(&self) -> Option<String> {
-        (self.tail == Tail::Raster)
-            .then(|| format!("{}\n{CAPTURE_RENDER}\n{HARDWARE_RASTER}", self.kernels_text()))
+        (self.tail == Tail::Raster).then(|| {
+            format!("{}\n{CAPTURE_RENDER}\n{HARDWARE_RASTER}\n{HARDWARE_RASTER_MASKED}", self.kernels_text())
+        })
     }
 }
 
@@ -435,7 +441,11 @@ mod tests {
         assert!(at(PRELUDE) < at(&fabs.source()));
         assert!(at(&fabs.source()) < at(COMPUTE_RASTER));
         let hw = fabs.hardware_text().expect("a raster module has a hardware twin");
-        assert!(hw.ends_with(HARDWARE_RASTER) && hw.contains(CAPTURE_RENDER));
+        assert!(
+            hw.ends_with(HARDWARE_RASTER_MASKED)
+                && hw.contains(HARDWARE_RASTER)
+                && hw.contains(CAPTURE_RENDER)
+        );
         assert!(module("scan").and_then(Module::hardware_text).is_none());
         assert_eq!(module("setup").expect("setup").compute_text(), SETUP);
         // a blend capture's module ends with the vertex stage and the test its fragment stages make

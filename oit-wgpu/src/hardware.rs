@@ -38,14 +38,20 @@ use crate::stage::SceneStage;
 
 pub(crate) const RASTER_WGSL: &str = oit_shaders::HARDWARE_RASTER;
 
-/// The hardware raster's WGSL as the internal path compiles it: oit-shaders' as written, or, where
+/// The hardware raster's WGSL as the internal path compiles it (after the capture), its
+/// multisampled entry point appended (`HARDWARE_RASTER_MASKED`): oit-shaders' as written, or, where
 /// the process runs with `OIT_MUTATION=hardware-drop-third` (a test hook, not a user setting),
 /// with a capture that drops every third primitive's fragments: a hardware capture gone wrong by
 /// a layer or more, which the conformance checks must catch (`tests/tests/hardware_covered.rs`
 /// runs itself under it and requires the failure). Read once per process.
 fn raster_wgsl() -> &'static str {
     static WGSL: std::sync::OnceLock<String> = std::sync::OnceLock::new();
-    WGSL.get_or_init(|| match std::env::var("OIT_MUTATION").as_deref() {
+    WGSL.get_or_init(|| raster_capture_wgsl() + "\n" + oit_shaders::HARDWARE_RASTER_MASKED)
+}
+
+/// [`RASTER_WGSL`], or its mutation ([`raster_wgsl`]).
+fn raster_capture_wgsl() -> String {
+    match std::env::var("OIT_MUTATION").as_deref() {
         Ok("hardware-drop-third") => {
             // the capture's guard, made to skip every third primitive too; a hook whose pattern
             // is gone would leave the shader as written and the test that needs it passing, so
@@ -55,7 +61,7 @@ fn raster_wgsl() -> &'static str {
             RASTER_WGSL.replacen(guard, "    if (!hw_culled(in, front) && in.prim % 3u != 0u) {", 1)
         }
         _ => RASTER_WGSL.to_owned(),
-    })
+    }
 }
 /// What to try when the geometry does not fit in one storage binding.
 const GEOMETRY_HINT: &str = "use fewer triangles or instances, or the cpu backend";
