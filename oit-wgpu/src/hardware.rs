@@ -665,14 +665,17 @@ impl HwGeometry {
     }
 }
 
+/// A raster a prepared scene keeps: for the boxes or the scene, its width, height and samples,
+/// itself.
+type KeptRaster = (bool, u32, u32, u32, HardwareRaster);
+
 /// The hardware path's part of a prepared scene: the scene's [`HwGeometry`] (uploaded when made),
 /// the boxes' (uploaded on first use), and a [`HardwareRaster`] per (geometry, image size), so a
 /// frame of a size seen before creates no buffer or texture.
 pub(crate) struct HardwareScene {
     scene: HwGeometry,
     boxes: OnceCell<HwGeometry>,
-    /// (boxes, width, height, samples) and the raster of that shape.
-    rasters: RefCell<Vec<(bool, u32, u32, u32, HardwareRaster)>>,
+    rasters: RefCell<Vec<KeptRaster>>,
 }
 
 impl HardwareScene {
@@ -775,7 +778,7 @@ fn scene_pipeline_sampled(
 }
 
 /// [`scene_pipeline`] at `samples` samples a pixel.
-#[allow(clippy::too_many_arguments)]
+#[expect(clippy::too_many_arguments, reason = "a render pipeline's state is that many things")]
 fn scene_pipeline_with(
     device: &wgpu::Device,
     label: &str,
