@@ -446,16 +446,26 @@ fn builds(spec: &Spec<'_>) -> String {
 /// per-sample reference per sample and per pixel.
 fn msaa(spec: &Spec<'_>) -> String {
     let (one, many, pixel) = (read_json(spec.file(0)), read_json(spec.file(1)), read_json(spec.file(2)));
+    // a column naming the backend and raster path where the reports hold several
+    let path = |r: &Value| {
+        format!("{}/{}", r["backend"].as_str().unwrap_or("?"), r["raster"].as_str().unwrap_or("?"))
+    };
+    let several = rows(&many).iter().map(path).collect::<std::collections::BTreeSet<_>>().len() > 1;
     let mut out = vec![
-        "| technique | fragments, 1 sample | fragments, N samples | bytes a captured fragment, 1 → N | steady wall ms, 1 → N | EPR (%), per sample | EPR (%), per pixel |"
-            .to_string(),
-        "|---|---|---|---|---|---|---|".to_string(),
+        format!(
+            "| {}technique | fragments, 1 sample | fragments, N samples | bytes a captured fragment, 1 → N | steady wall ms, 1 → N | EPR (%), per sample | EPR (%), per pixel |",
+            if several { "backend/path | " } else { "" }
+        ),
+        format!("|{}---|---|---|---|---|---|---|", if several { "---|" } else { "" }),
     ];
     let find = |report: &Value, r: &Value| {
         rows(report)
             .iter()
             .find(|o| {
-                o["technique"] == r["technique"] && o["scene"] == r["scene"] && o["backend"] == r["backend"]
+                o["technique"] == r["technique"]
+                    && o["scene"] == r["scene"]
+                    && o["backend"] == r["backend"]
+                    && o["raster"] == r["raster"]
             })
             .cloned()
     };
@@ -468,7 +478,8 @@ fn msaa(spec: &Spec<'_>) -> String {
             continue;
         };
         out.push(format!(
-            "| {} | {} | {} | {} → {} | {} → {} | {} | {} |",
+            "| {}{} | {} | {} | {} → {} | {} → {} | {} | {} |",
+            if several { format!("{} | ", path(r)) } else { String::new() },
             r["technique"].as_str().unwrap_or("?"),
             count(o["fragments"].as_u64().unwrap_or(0)),
             count(r["fragments"].as_u64().unwrap_or(0)),
