@@ -881,16 +881,17 @@ impl OitPass {
     }
 }
 
-/// The fragment stage of [`SceneGeometry::draw_opaque`]: a capture that hands back the shaded
-/// colour (clamped to [0, 1], as the captures store it), so `hw_fs` compiles, and an entry point
+/// The fragment stage of [`SceneGeometry::draw_opaque`]: a capture that holds nothing back and
+/// hands back the shaded colour (clamped to [0, 1], as the captures store it), so `hw_fs`
+/// compiles, and an entry point
 /// that drops a masked-away object's fragments (its alpha 0: `Scene::layers`) and writes the
 /// shaded colour, opaque.
 const OPAQUE_DRAW_WGSL: &str = "
-fn oit_capture_full(xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: vec3<f32>, prim: u32) -> vec4<f32> {
-    return clamp(color, vec4<f32>(0.0), vec4<f32>(1.0));
+fn oit_held_back(xy: vec2<f32>, depth: f32) -> bool {
+    return false;
 }
-fn oit_capture_cut(xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: vec3<f32>, prim: u32, cutoff: f32) -> vec4<f32> {
-    return oit_capture_full(xy, depth, color, normal, prim);
+fn oit_capture_shaded(xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: vec3<f32>, prim: u32, cutoff: f32, mask: u32) -> vec4<f32> {
+    return clamp(color, vec4<f32>(0.0), vec4<f32>(1.0));
 }
 ";
 const OPAQUE_FS_WGSL: &str = "
@@ -970,8 +971,8 @@ pub struct SceneGeometry {
 impl SceneGeometry {
     /// The hardware path's shader (`shaders/raster_hardware.wgsl`): its group 1 bindings, the
     /// vertex stage `hw_vs` (vertex pulled by index, transformed as oit-cpu's setup does) and the
-    /// fragment stage `hw_fs` (shading as `Shading::shade`, then `oit_capture_cut`, which
-    /// `oit_capture_full` calls with the cutoff of an untextured object).
+    /// fragment stage `hw_fs` (where the opaque pass does not hold the fragment back,
+    /// `oit_held_back`, shading as `Shading::shade`, then `oit_capture_shaded`).
     pub const WGSL: &'static str = RASTER_WGSL;
 
     /// Uploads `scene`'s meshes and triangles, and its instances' bounding boxes, to the device

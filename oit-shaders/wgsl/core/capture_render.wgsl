@@ -25,6 +25,28 @@ fn oit_capture_cut(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: ve
 // `oit_capture_cut` of a fragment covering the samples `mask` of its pixel (a multisampled pass:
 // `sample_mask`; 1 at one sample).
 fn oit_capture_masked(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: vec3<f32>, prim: u32, cutoff: f32, mask: u32) -> vec4<f32> {
+    if (!oit_held_back(pixel_xy, depth)) {
+        return oit_capture_shaded(pixel_xy, depth, color, normal, prim, cutoff, mask);
+    }
+    return vec4<f32>(1.0, 0.0, 0.0, 0.0);
+}
+
+// Whether the opaque pass holds back a fragment at `pixel_xy` and `depth` (`opaque_cut`: counted
+// where the pass counts): oit's hardware raster asks before it shades, so a fragment behind the
+// opaque depth costs no shading (as oit-cpu's and the compute path's).
+fn oit_held_back(pixel_xy: vec2<f32>, depth: f32) -> bool {
+    let xy = vec2<u32>(max(floor(pixel_xy), vec2<f32>(0.0)));
+    if (xy.x >= fu.width || xy.y >= fu.height) {
+        return false;
+    }
+    var f: Fragment;
+    f.pixel = xy.y * fu.width + xy.x;
+    f.depth = clamp(depth, 0.0, 1.0);
+    return opaque_cut(f);
+}
+
+// Captures a fragment `oit_held_back` did not hold back; returns what it adds to the count target.
+fn oit_capture_shaded(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: vec3<f32>, prim: u32, cutoff: f32, mask: u32) -> vec4<f32> {
     let xy = vec2<u32>(max(floor(pixel_xy), vec2<f32>(0.0)));
     if (xy.x < fu.width && xy.y < fu.height) {
         var f: Fragment;
@@ -35,10 +57,7 @@ fn oit_capture_masked(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, normal:
         f.normal = normalize_or_zero(normal);
         f.cutoff = cutoff;
         f.mask = mask;
-        // behind the opaque pass's depth: counted, not captured
-        if (!opaque_cut(f)) {
-            capture(f);
-        }
+        capture(f);
     }
     return vec4<f32>(1.0, 0.0, 0.0, 0.0);
 }

@@ -130,6 +130,14 @@ fn raster_pixel(t: Tri, x: u32, y: u32) -> u32 {
     }
     let b = vec3<f32>(f32(e[0]) * t.inv_area, f32(e[1]) * t.inv_area, f32(e[2]) * t.inv_area);
     let depth = clamp(t.z[0] + b.y * (t.z[1] - t.z[0]) + b.z * (t.z[2] - t.z[0]), 0.0, 1.0);
+    var f: Fragment;
+    f.pixel = y * ru.width + x;
+    f.depth = depth;
+    // behind the opaque pass's depth: generated (counted), neither shaded nor captured (oit-cpu
+    // tests the cut before it shades too)
+    if (opaque_cut(f)) {
+        return 1u;
+    }
     let q = vec3<f32>(b.x * t.inv_w[0], b.y * t.inv_w[1], b.z * t.inv_w[2]);
     let inv_q = 1.0 / (q.x + q.y + q.z);
     let p = q * inv_q;
@@ -158,18 +166,12 @@ fn raster_pixel(t: Tri, x: u32, y: u32) -> u32 {
         cutoff = tri_f32(r + 7u);
     }
     let color = shade(ru.shading, base, normal, vcolor, t.has_color != 0u, ru.forward.xyz);
-    var f: Fragment;
-    f.pixel = y * ru.width + x;
-    f.depth = depth;
     f.prim = t.prim;
     f.color = color;
     f.normal = normalize_or_zero(normal);
     f.cutoff = cutoff;
     f.mask = mask;
-    // behind the opaque pass's depth: generated (counted), not captured
-    if (!opaque_cut(f)) {
-        capture(f);
-    }
+    capture(f);
     return 1u;
 }
 

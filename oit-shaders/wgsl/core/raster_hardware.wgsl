@@ -6,7 +6,8 @@
 // laid out in primitive order). No culling in the pipeline, no depth test: a single-sided object's
 // back faces are dropped by every fragment entry point first, by `front_facing` (`hw_culled`),
 // before anything is counted; the fragment shades like oit-cpu's `Shading::shade`, its texture
-// sampled first (`hw_color`), and calls `oit_capture_cut` (capture_render.wgsl).
+// sampled first (`hw_color`), where the opaque pass does not hold it back (`oit_held_back`), and
+// is captured (`oit_capture_shaded`, capture_render.wgsl).
 
 struct HwVertex {
     // xyz: position in the mesh's space; w: 1 when the mesh has vertex colours
@@ -124,7 +125,11 @@ fn hw_fs(in: HwOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32
     // this entry point writes no depth
     var counted = vec4<f32>(0.0);
     if (!hw_culled(in, front)) {
-        counted = oit_capture_cut(in.position.xy, in.position.z, hw_color(in), in.normal, in.prim, in.cutoff);
+        // behind the opaque pass's depth: counted, neither shaded nor captured
+        counted = vec4<f32>(1.0, 0.0, 0.0, 0.0);
+        if (!oit_held_back(in.position.xy, in.position.z)) {
+            counted = oit_capture_shaded(in.position.xy, in.position.z, hw_color(in), in.normal, in.prim, in.cutoff, 1u);
+        }
     }
     return counted;
 }

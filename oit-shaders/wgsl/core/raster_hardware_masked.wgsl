@@ -18,7 +18,10 @@ fn hw_fs_masked(in: HwOut, @builtin(front_facing) front: bool, @builtin(sample_m
     out.count = vec4<f32>(0.0);
     out.written = covered & (0u - covered);
     if (!hw_culled(in, front)) {
-        out.count = oit_capture_masked(in.position.xy, in.position.z, hw_color(in), in.normal, in.prim, in.cutoff, covered);
+        out.count = vec4<f32>(1.0, 0.0, 0.0, 0.0);
+        if (!oit_held_back(in.position.xy, in.position.z)) {
+            out.count = oit_capture_shaded(in.position.xy, in.position.z, hw_color(in), in.normal, in.prim, in.cutoff, covered);
+        }
     }
     return out;
 }
