@@ -741,7 +741,7 @@ fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<()
 
 /// The refusal of an embedded pass, which draws no multisampled pass yet, at several samples a
 /// pixel (`Ok` at one), where it starts a frame.
-pub fn refuse_multisampled_hardware(backend: &str, samples: u32) -> Result<(), OitError> {
+pub fn refuse_multisampled_embedding(backend: &str, samples: u32) -> Result<(), OitError> {
     if samples <= 1 {
         return Ok(());
     }

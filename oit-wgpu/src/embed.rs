@@ -710,7 +710,7 @@ impl OitPass {
     /// The techniques the pass refuses whatever the frame: bdp and adp without boxes, mdts
     /// without an alpha. Checked before any pass runs.
     fn check_technique(&self) -> Result<(), OitError> {
-        oit_core::plan::refuse_multisampled_hardware("wgpu (embedded pass)", self.settings.samples)?;
+        oit_core::plan::refuse_multisampled_embedding("wgpu (embedded pass)", self.settings.samples)?;
         if self.boxes.is_none()
             && self.settings.bounds == BoundsMode::Boxes
             && matches!(self.settings.technique, Technique::Bdp { .. } | Technique::Adp)

@@ -29,6 +29,17 @@ pub fn optional_features() -> wgpu::Features {
         | wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES
 }
 
+/// The format of the hardware path's count target on a device with `features`: R16Float counts
+/// exactly up to 2048 fragments per pixel and pass; R32Float (blendable only with
+/// FLOAT32_BLENDABLE) up to 2^24.
+pub(crate) fn count_format(features: wgpu::Features) -> wgpu::TextureFormat {
+    if features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
+        wgpu::TextureFormat::R32Float
+    } else {
+        wgpu::TextureFormat::R16Float
+    }
+}
+
 /// The most storage buffers one of oit's pipelines binds in a shader stage: group 0's resolve
 /// state, up to 6 technique arrays, the loss counts and the opaque image's key and colour (10),
 /// and group 1's geometry (3: the compute rasterizer's triangles, work items and count, the
@@ -126,13 +137,8 @@ impl Gpu {
             ..Default::default()
         }))
         .map_err(|e| OitError::Device(format!("cannot open '{}': {e}", info.name)))?;
-        let format = if features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
-            wgpu::TextureFormat::R32Float
-        } else {
-            wgpu::TextureFormat::R16Float
-        };
         let eight_samples = features.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES)
-            && adapter.get_texture_format_features(format).flags.sample_count_supported(8);
+            && adapter.get_texture_format_features(count_format(features)).flags.sample_count_supported(8);
         let mut gpu = Gpu::wrap(device, queue, info, features, limits);
         gpu.eight_samples = eight_samples;
         Ok(gpu)

@@ -33,7 +33,7 @@ use oit_core::{Aabb, Camera, OitError, RasterPath, Scene, Settings};
 use wgpu::util::DeviceExt;
 
 use crate::ctx::{Driver, Gate, Generated, GpuCtx};
-use crate::gpu::{COMMON_WGSL, Gpu};
+use crate::gpu::{COMMON_WGSL, Gpu, count_format};
 use crate::stage::SceneStage;
 
 pub(crate) const RASTER_WGSL: &str = oit_shaders::HARDWARE_RASTER;
@@ -168,9 +168,7 @@ impl CountTarget {
     /// A count target of `width × height` and `samples` samples a pixel (1, or a count
     /// [`check_samples`] accepts).
     pub(crate) fn with_samples(gpu: &Gpu, width: u32, height: u32, samples: u32) -> CountTarget {
-        // R16Float counts exactly up to 2048 fragments per pixel and pass; R32Float (blendable
-        // only with FLOAT32_BLENDABLE) up to 2^24.
-        let format = count_format(gpu);
+        let format = count_format(gpu.features);
         let device = &gpu.device;
         let count = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("fragment counts"),
@@ -229,20 +227,11 @@ impl CountTarget {
     }
 }
 
-/// The count target's format on `gpu` ([`CountTarget::new`]).
-fn count_format(gpu: &Gpu) -> wgpu::TextureFormat {
-    if gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
-        wgpu::TextureFormat::R32Float
-    } else {
-        wgpu::TextureFormat::R16Float
-    }
-}
-
 /// Whether the hardware path can draw `samples` samples a pixel on `gpu` (`Ok` at one sample):
 /// WebGPU guarantees 4; 8 where the adapter's count target format takes it
 /// ([`Gpu::eight_samples`]). Refused by name otherwise.
 pub(crate) fn check_samples(gpu: &Gpu, samples: u32) -> Result<(), OitError> {
-    let format = count_format(gpu);
+    let format = count_format(gpu.features);
     let ok = match samples {
         1 | 4 => true,
         8 => gpu.eight_samples,
@@ -642,7 +631,7 @@ impl HwGeometry {
         let samples = target.samples();
         let pipeline = move |capture: &CaptureShader<'_>| {
             let device = &pipeline_device;
-            scene_pipeline_sampled(
+            scene_pipeline_with(
                 device,
                 "hardware raster",
                 &format!("{}\n{}", capture.wgsl, raster_wgsl()),
@@ -650,6 +639,7 @@ impl HwGeometry {
                 // a multisampled pass's fragments carry the samples they cover
                 if samples > 1 { "hw_fs_masked" } else { "hw_fs" },
                 &[Some(capture.count_target.clone())],
+                None,
                 samples,
             )
         };
@@ -762,19 +752,6 @@ pub(crate) fn scene_pipeline(
     depth_stencil: Option<wgpu::DepthStencilState>,
 ) -> wgpu::RenderPipeline {
     scene_pipeline_with(device, label, source, layouts, fs_entry, targets, depth_stencil, 1)
-}
-
-/// [`scene_pipeline`] without a depth test, drawing `samples` samples a pixel.
-fn scene_pipeline_sampled(
-    device: &wgpu::Device,
-    label: &str,
-    source: &str,
-    layouts: &[&wgpu::BindGroupLayout],
-    fs_entry: &str,
-    targets: &[Option<wgpu::ColorTargetState>],
-    samples: u32,
-) -> wgpu::RenderPipeline {
-    scene_pipeline_with(device, label, source, layouts, fs_entry, targets, None, samples)
 }
 
 /// [`scene_pipeline`] at `samples` samples a pixel.

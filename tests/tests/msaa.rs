@@ -566,6 +566,21 @@ fn gpu_paths_equal_the_cpu_at_samples() {
                 compared += 1;
             }
         }
+        // oit-vulkan's `--atomic-storage image`: fabs's counters in a storage image, the masks
+        // beside them (binding 8, the image at 9), the same frame as oit-cpu's over buffers
+        if backend.name() == "vulkan" {
+            let scene = scene_of("bunny");
+            for t in ["fabs", "fabs:2"] {
+                let s = Settings { samples: 4, ..settings(64, t) };
+                let cam = camera(&scene, &s, View::default());
+                let image = Settings { atomic_storage: oit_core::AtomicStorage::Image, ..s.clone() };
+                let g = render(backend.as_ref(), &scene, &cam, &image);
+                let c = render(&cpu, &scene, &cam, &s);
+                checks::same_fragments_as_cpu(&g, &c, s.technique)
+                    .unwrap_or_else(|e| panic!("{on}: {t} with image atomics at 4×: {e}"));
+                compared += 1;
+            }
+        }
         // a frame in screen tiles (`--memory`) equals the whole one
         let scene = scene_of("bunny");
         for t in ["reference", "fabs:3"] {
