@@ -304,7 +304,9 @@ fn main() {
         | Capabilities::SHADER_INT64_ATOMIC_MIN_MAX
         | Capabilities::SHADER_INT64_ATOMIC_ALL_OPS
         | Capabilities::TEXTURE_ATOMIC
-        | Capabilities::TEXTURE_INT64_ATOMIC;
+        | Capabilities::TEXTURE_INT64_ATOMIC
+        // `hw_fs_early`'s `@early_depth_test(force)` (SPIR-V's EarlyFragmentTests)
+        | Capabilities::EARLY_DEPTH_TEST;
     let mut flags = spv::WriterFlags::empty();
     flags.set(spv::WriterFlags::DEBUG, true);
     flags.set(spv::WriterFlags::ADJUST_COORDINATE_SPACE, false);

@@ -66,6 +66,7 @@ files!(
     "core/raster_compute.wgsl",
     "core/raster_hardware.wgsl",
     "core/raster_hardware_masked.wgsl",
+    "core/raster_hardware_early.wgsl",
     "core/resolve.wgsl",
     "core/setup.wgsl",
     "core/softfloat.wgsl",
@@ -183,6 +184,11 @@ pub const HARDWARE_RASTER: &str = concat!(
 /// [`CAPTURE_RENDER`] (it hands `capture` the fragment's `sample_mask`; docs/msaa.md).
 pub const HARDWARE_RASTER_MASKED: &str = include_str!("../wgsl/core/raster_hardware_masked.wgsl");
 
+/// The entry points over the opaque depth in the fixed-function depth test, `hw_fs_early`
+/// (`@early_depth_test(force)`) and the count-only `hw_fs_count`, after [`HARDWARE_RASTER`] and
+/// [`CAPTURE_RENDER`]: appended only where the device takes `@early_depth_test`.
+pub const HARDWARE_RASTER_EARLY: &str = include_str!("../wgsl/core/raster_hardware_early.wgsl");
+
 /// The fragment contract of a render pipeline's capture (what `hw_fs` hands `capture`).
 pub const CAPTURE_RENDER: &str = include_str!("../wgsl/core/capture_render.wgsl");
 
@@ -260,10 +266,14 @@ impl Module {
     }
 
     /// The module's hardware-raster twin (for [`Tail::Raster`] modules): [`Module::kernels_text`],
-    /// [`CAPTURE_RENDER`], [`HARDWARE_RASTER`] and [`HARDWARE_RASTER_MASKED`].
+    /// [`CAPTURE_RENDER`], [`HARDWARE_RASTER`], [`HARDWARE_RASTER_MASKED`] and
+    /// [`HARDWARE_RASTER_EARLY`] (oit-vulkan's, whose devices all take `@early_depth_test`).
     pub fn hardware_text(&self) -> Option<String> {
         (self.tail == Tail::Raster).then(|| {
-            format!("{}\n{CAPTURE_RENDER}\n{HARDWARE_RASTER}\n{HARDWARE_RASTER_MASKED}", self.kernels_text())
+            format!(
+                "{}\n{CAPTURE_RENDER}\n{HARDWARE_RASTER}\n{HARDWARE_RASTER_MASKED}\n{HARDWARE_RASTER_EARLY}",
+                self.kernels_text()
+            )
         })
     }
 }
@@ -442,7 +452,8 @@ mod tests {
         assert!(at(&fabs.source()) < at(COMPUTE_RASTER));
         let hw = fabs.hardware_text().expect("a raster module has a hardware twin");
         assert!(
-            hw.ends_with(HARDWARE_RASTER_MASKED)
+            hw.ends_with(HARDWARE_RASTER_EARLY)
+                && hw.contains(HARDWARE_RASTER_MASKED)
                 && hw.contains(HARDWARE_RASTER)
                 && hw.contains(CAPTURE_RENDER)
         );

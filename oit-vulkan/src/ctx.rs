@@ -11,7 +11,8 @@ use oit_core::plan::Plan;
 use oit_core::{Camera, Frame, Image, OitError, Scene, Settings, Stats};
 
 use crate::device::{
-    Blend, Buffer, Framebuffer, Gpu, GpuImage, GraphicsDesc, PassKey, SetKind, storage_usage,
+    Blend, Buffer, DepthTest, Framebuffer, Gpu, GpuImage, GraphicsDesc, PassKey, SetKind, early_pass_key,
+    storage_usage,
 };
 use crate::hardware::HardwareRaster;
 use crate::raster::{ComputeRaster, Raster};
@@ -705,19 +706,55 @@ impl<'a> VkCtx<'a> {
     ) -> Result<&'r Buffer, OitError> {
         let bindings = self.image_bindings();
         let samples = raster.samples();
-        let pipeline = self.gpu.render_pipeline(module, buffers.len(), &bindings, samples)?;
-        let render_pass = self.gpu.render_pass(&crate::device::count_pass_key(samples))?;
+        // over the opaque depth (one sample): the pass fills a depth attachment from the opaque
+        // keys, the frame's first scene pass counts untested, and the capture runs behind the
+        // fixed-function test (`core/raster_hardware_early.wgsl`; oit-wgpu's `EarlyDepth`); the
+        // interlocked k-buffer keeps its one entry point and tests in its stage
+        let early = self.uniform.opaque[0] != 0 && samples == 1 && module != "kbuf";
+        let mut draws = Vec::new();
+        let (render_pass, framebuffer, clear) = if early {
+            draws.push((
+                self.gpu.early_pipeline(module, buffers.len(), &bindings, "depth_fs")?,
+                Vertices::Count(3),
+            ));
+            if self.uniform.opaque[1] != 0 {
+                draws.push((
+                    self.gpu.early_pipeline(module, buffers.len(), &bindings, "hw_fs_count")?,
+                    self.scene_vertices(raster),
+                ));
+            }
+            draws.push((
+                self.gpu.early_pipeline(module, buffers.len(), &bindings, "hw_fs_early")?,
+                self.scene_vertices(raster),
+            ));
+            let depth_clear =
+                vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } };
+            (
+                self.gpu.render_pass(&early_pass_key())?,
+                raster.early_framebuffer(self.gpu)?,
+                vec![vk::ClearValue::default(), depth_clear],
+            )
+        } else {
+            draws.push((
+                self.gpu.render_pipeline(module, buffers.len(), &bindings, samples)?,
+                self.scene_vertices(raster),
+            ));
+            (
+                self.gpu.render_pass(&crate::device::count_pass_key(samples))?,
+                raster.framebuffer(),
+                vec![vk::ClearValue::default()],
+            )
+        };
         raster.upload(&mut self.rec)?;
         let held = self.held();
         let storage = Self::storage(&held, buffers);
         let raster_set = raster.bindings();
         let uniform = self.uniform;
-        self.rec.draw(
+        self.rec.draws(
             "geometry",
-            &pipeline,
             render_pass,
-            raster.framebuffer(),
-            &[vk::ClearValue::default()],
+            framebuffer,
+            &clear,
             &[
                 SetData::Frame {
                     uniform: bytemuck::bytes_of(&uniform),
@@ -726,11 +763,7 @@ impl<'a> VkCtx<'a> {
                 },
                 SetData::Raster { storage: &raster_set, uniform: raster.uniform() },
             ],
-            if self.gated_pass {
-                Vertices::Indirect(raster.gate().1)
-            } else {
-                Vertices::Count(raster.vertex_count())
-            },
+            &draws,
             false,
         )?;
         let (counts, generated) = raster.counters();
@@ -765,6 +798,15 @@ impl<'a> VkCtx<'a> {
             "count sum",
         )?;
         Ok(generated)
+    }
+
+    /// The scene's draw through `raster`: its vertices, or in a gated pass the gated arguments.
+    fn scene_vertices<'r>(&self, raster: &'r HardwareRaster) -> Vertices<'r> {
+        if self.gated_pass {
+            Vertices::Indirect(raster.gate().1)
+        } else {
+            Vertices::Count(raster.vertex_count())
+        }
     }
 
     /// Runs compute `entry` of `module` once per pixel (its GPU time under `entry`).
@@ -905,7 +947,7 @@ impl<'a> VkCtx<'a> {
             sets: &kinds,
             pass: &key,
             blends: pass.blends,
-            depth_test: pass.depth,
+            depth: if pass.depth { DepthTest::Write } else { DepthTest::Off },
         })?;
         let render_pass = self.gpu.render_pass(&key)?;
         let framebuffer = self.pool.framebuffer(self.gpu, render_pass, pass.targets)?;

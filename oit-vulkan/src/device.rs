@@ -344,6 +344,8 @@ pub(crate) enum Blend {
     Add,
     /// src + dst into the red channel only (a fragment counter).
     AddRed,
+    /// Nothing written (a draw that writes depth only: the opaque depth's fill).
+    Nothing,
     /// The over operator on premultiplied colour: rgb `src + (1 − αs)·dst`, α `(1 − αs)·dst`
     /// (the product of transmittances).
     Over,
@@ -365,8 +367,21 @@ pub(crate) struct GraphicsDesc<'a> {
     pub pass: &'a PassKey,
     /// One per colour attachment of `pass`.
     pub blends: &'a [Blend],
-    /// A depth test (LESS_OR_EQUAL, writing) against `pass`'s depth attachment.
-    pub depth_test: bool,
+    /// The depth test against `pass`'s depth attachment (where it has one).
+    pub depth: DepthTest,
+}
+
+/// A graphics pipeline's depth test.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(crate) enum DepthTest {
+    /// None.
+    Off,
+    /// LESS_OR_EQUAL, writing (the blend captures' depth peels).
+    Write,
+    /// LESS_OR_EQUAL, read only (the capture over the opaque depth: `hw_fs_early`).
+    ReadOnly,
+    /// ALWAYS, writing: the draw that fills the opaque depth (`depth_vs`/`depth_fs`).
+    Fill,
 }
 
 /// A compute or graphics pipeline and its layout (owned by the [`Gpu`]'s cache).
@@ -1212,7 +1227,33 @@ impl Gpu {
             sets: &[SetKind::Frame(n, images.to_vec()), SetKind::HwRaster],
             pass: &count_pass_key(samples),
             blends: &[Blend::AddRed],
-            depth_test: false,
+            depth: DepthTest::Off,
+        })
+    }
+
+    /// [`Gpu::render_pipeline`]'s draw `fs` over the opaque depth, at one sample, in
+    /// [`early_pass_key`]'s pass (`core/raster_hardware_early.wgsl`): `depth_fs` fills the depth
+    /// attachment (its vertex stage `depth_vs`, no colour), `hw_fs_count` counts untested,
+    /// `hw_fs_early` captures behind the LESS_OR_EQUAL test.
+    pub fn early_pipeline(
+        &self,
+        module: &'static str,
+        n: usize,
+        images: &[u32],
+        fs: &str,
+    ) -> Result<Pipeline, OitError> {
+        let (blend, depth) = match fs {
+            "depth_fs" => (Blend::Nothing, DepthTest::Fill),
+            "hw_fs_early" => (Blend::AddRed, DepthTest::ReadOnly),
+            _ => (Blend::AddRed, DepthTest::Off),
+        };
+        self.graphics(&GraphicsDesc {
+            module: &format!("{module}_hw"),
+            fs,
+            sets: &[SetKind::Frame(n, images.to_vec()), SetKind::HwRaster],
+            pass: &early_pass_key(),
+            blends: &[blend],
+            depth,
         })
     }
 
@@ -1244,8 +1285,10 @@ impl Gpu {
         let mut guard = self.cache.lock().map_err(|_| OitError::Device("pipeline cache poisoned".into()))?;
         let cache = &mut *guard;
         let (set_layouts, layout) = self.layouts(cache, desc.sets)?;
-        let (name, shader) = self.module(cache, desc.module, &["hw_vs", desc.fs])?;
-        let state = format!("hw_vs+{} {:?} {:?} {}", desc.fs, desc.pass, desc.blends, desc.depth_test);
+        let vs = if desc.fs == "depth_fs" { c"depth_vs" } else { c"hw_vs" };
+        let vs_name = vs.to_str().map_err(|_| OitError::Device("bad entry name".into()))?;
+        let (name, shader) = self.module(cache, desc.module, &[vs_name, desc.fs])?;
+        let state = format!("{vs_name}+{} {:?} {:?} {:?}", desc.fs, desc.pass, desc.blends, desc.depth);
         let key = (name, state, desc.sets.to_vec());
         if let Some(&pipeline) = cache.pipelines.get(&key) {
             return Ok(Pipeline { pipeline, layout, sets: set_layouts });
@@ -1255,7 +1298,7 @@ impl Gpu {
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::VERTEX)
                 .module(shader)
-                .name(c"hw_vs"),
+                .name(vs),
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::FRAGMENT)
                 .module(shader)
@@ -1278,10 +1321,16 @@ impl Gpu {
         if logic_or {
             blend = blend.logic_op_enable(true).logic_op(vk::LogicOp::OR);
         }
+        let (test, write, compare) = match desc.depth {
+            DepthTest::Off => (false, false, vk::CompareOp::ALWAYS),
+            DepthTest::Write => (true, true, vk::CompareOp::LESS_OR_EQUAL),
+            DepthTest::ReadOnly => (true, false, vk::CompareOp::LESS_OR_EQUAL),
+            DepthTest::Fill => (true, true, vk::CompareOp::ALWAYS),
+        };
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(desc.depth_test)
-            .depth_write_enable(desc.depth_test)
-            .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL);
+            .depth_test_enable(test)
+            .depth_write_enable(write)
+            .depth_compare_op(compare);
         let dynamic = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic);
         let mut info = vk::GraphicsPipelineCreateInfo::default()
@@ -1543,6 +1592,15 @@ pub(crate) fn aspect(format: vk::Format) -> vk::ImageAspectFlags {
 
 /// The hardware raster's render pass at `samples` samples a pixel: one [`COUNT_FORMAT`]
 /// counter, left to be copied out (one sample) or read by `count_sum_ms` (several).
+/// The pass of a hardware geometry pass over the opaque depth (one sample): the count image and
+/// a depth attachment its first draw fills ([`DepthTest::Fill`]).
+pub(crate) fn early_pass_key() -> PassKey {
+    PassKey { depth: Some(EARLY_DEPTH_FORMAT), ..count_pass_key(1) }
+}
+
+/// The opaque depth's format on the hardware path (a format every Vulkan device attaches).
+pub(crate) const EARLY_DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+
 pub(crate) fn count_pass_key(samples: u32) -> PassKey {
     // one sample: copied out into a buffer; several: read by a kernel as a multisampled image
     let final_layout = if samples > 1 {
@@ -1575,6 +1633,9 @@ fn blend_state(blend: Blend) -> vk::PipelineColorBlendAttachmentState {
         }
         Blend::Add => on(one, one, vk::BlendOp::ADD),
         Blend::AddRed => on(one, one, vk::BlendOp::ADD).color_write_mask(vk::ColorComponentFlags::R),
+        Blend::Nothing => vk::PipelineColorBlendAttachmentState::default()
+            .blend_enable(false)
+            .color_write_mask(vk::ColorComponentFlags::empty()),
         Blend::Over => {
             on((F::ONE, F::ONE_MINUS_SRC_ALPHA), (F::ZERO, F::ONE_MINUS_SRC_ALPHA), vk::BlendOp::ADD)
         }

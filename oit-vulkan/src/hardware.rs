@@ -25,7 +25,10 @@ use ash::vk;
 use oit_core::pulled::PulledGeometry;
 use oit_core::{Camera, OitError, Scene, Settings};
 
-use crate::device::{Buffer, COUNT_FORMAT, Framebuffer, Gpu, GpuImage, count_pass_key, storage_usage};
+use crate::device::{
+    Buffer, COUNT_FORMAT, EARLY_DEPTH_FORMAT, Framebuffer, Gpu, GpuImage, count_pass_key, early_pass_key,
+    storage_usage,
+};
 use crate::record::Recorder;
 
 /// What to try when the geometry does not fit in one storage binding.
@@ -123,6 +126,9 @@ impl HwGeometry {
 /// A hardware-raster geometry pass's fragment counter: the count image (with its framebuffer),
 /// the buffer it is copied into, and the word the kernel sums it into.
 struct CountTarget {
+    /// The pass over the opaque depth's framebuffer (the count image and a depth image), made on
+    /// first use ([`HardwareRaster::early_framebuffer`]); dropped before both images.
+    early: OnceCell<(Framebuffer, GpuImage)>,
     /// Dropped before the image it is made of (fields drop in order).
     framebuffer: Framebuffer,
     image: GpuImage,
@@ -149,6 +155,7 @@ impl CountTarget {
         let counts_bytes = if samples > 1 { 16 } else { u64::from(w) * u64::from(h) * 4 };
         gpu.check_storage("the hardware raster's fragment counts", counts_bytes)?;
         Ok(CountTarget {
+            early: OnceCell::new(),
             framebuffer,
             counts: gpu.buffer(counts_bytes, storage_usage(), false)?,
             generated: gpu.buffer(16, storage_usage(), false)?,
@@ -202,6 +209,21 @@ impl HardwareRaster {
     /// The count image's framebuffer.
     pub(crate) fn framebuffer(&self) -> &Framebuffer {
         &self.target.framebuffer
+    }
+
+    /// The framebuffer of a pass over the opaque depth ([`crate::device::early_pass_key`]): the
+    /// count image and a `D32_SFLOAT` image the pass fills from the opaque keys and tests
+    /// against; made on first use (one sample a pixel).
+    pub(crate) fn early_framebuffer(&self, gpu: &Gpu) -> Result<&Framebuffer, OitError> {
+        if let Some((framebuffer, _)) = self.target.early.get() {
+            return Ok(framebuffer);
+        }
+        // left readable by the pass (as every depth attachment of oit-vulkan)
+        let usage = vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::SAMPLED;
+        let depth = gpu.image(self.target.image.extent, EARLY_DEPTH_FORMAT, usage)?;
+        let render_pass = gpu.render_pass(&early_pass_key())?;
+        let framebuffer = gpu.framebuffer(render_pass, &[&self.target.image, &depth])?;
+        Ok(&self.target.early.get_or_init(|| (framebuffer, depth)).0)
     }
 
     /// The buffer the count image is copied into, and the word it is summed into.

@@ -671,6 +671,26 @@ impl<'g> Recorder<'g> {
         vertices: Vertices<'_>,
         occlusion: bool,
     ) -> Result<(), OitError> {
+        self.draws(label, render_pass, target, clear, sets, &[(pipeline.clone(), vertices)], occlusion)
+    }
+
+    /// [`Recorder::draw`] of several pipelines in turn in one render pass, each drawing its
+    /// vertices; their layouts are one (the same sets), bound once. At least one draw.
+    #[expect(clippy::too_many_arguments, reason = "a draw is that many things")]
+    pub(crate) fn draws(
+        &mut self,
+        label: &str,
+        render_pass: vk::RenderPass,
+        target: &Framebuffer,
+        clear: &[vk::ClearValue],
+        sets: &[SetData<'_>],
+        draws: &[(Pipeline, Vertices<'_>)],
+        occlusion: bool,
+    ) -> Result<(), OitError> {
+        let Some((pipeline, _)) = draws.first() else {
+            return Err(OitError::Device("a render pass with no draw".into()));
+        };
+        debug_assert!(draws.iter().all(|(p, _)| p.layout == pipeline.layout), "one layout");
         let sets = self.sets(pipeline, sets)?;
         let timed = self.timed(label);
         self.stamp(timed, 0);
@@ -696,6 +716,8 @@ impl<'g> Recorder<'g> {
                 d.cmd_reset_query_pool(self.p.cmd, self.p.occlusion, 0, 1);
             }
             d.cmd_begin_render_pass(self.p.cmd, &begin, vk::SubpassContents::INLINE);
+            // the first pipeline bound before the state that follows (lavapipe faults on a pass
+            // whose state was set with no pipeline bound and nothing drawn)
             d.cmd_bind_pipeline(self.p.cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.pipeline);
             d.cmd_bind_descriptor_sets(
                 self.p.cmd,
@@ -710,13 +732,18 @@ impl<'g> Recorder<'g> {
             if occlusion {
                 d.cmd_begin_query(self.p.cmd, self.p.occlusion, 0, vk::QueryControlFlags::empty());
             }
-            match vertices {
-                Vertices::Count(0) => {}
-                Vertices::Count(n) => d.cmd_draw(self.p.cmd, n, 1, 0, 0),
-                // the arguments' buffer has INDIRECT_BUFFER usage and holds four u32 (vertices,
-                // 1, 0, 0, or zeros), made visible by the barrier after the command that wrote
-                // them
-                Vertices::Indirect(args) => d.cmd_draw_indirect(self.p.cmd, args.buffer, 0, 1, 16),
+            for (i, (pipeline, vertices)) in draws.iter().enumerate() {
+                if i > 0 {
+                    d.cmd_bind_pipeline(self.p.cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.pipeline);
+                }
+                match vertices {
+                    Vertices::Count(0) => {}
+                    Vertices::Count(n) => d.cmd_draw(self.p.cmd, *n, 1, 0, 0),
+                    // the arguments' buffer has INDIRECT_BUFFER usage and holds four u32
+                    // (vertices, 1, 0, 0, or zeros), made visible by the barrier after the
+                    // command that wrote them
+                    Vertices::Indirect(args) => d.cmd_draw_indirect(self.p.cmd, args.buffer, 0, 1, 16),
+                }
             }
             if occlusion {
                 d.cmd_end_query(self.p.cmd, self.p.occlusion, 0);

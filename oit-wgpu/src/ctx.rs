@@ -657,6 +657,11 @@ impl<'a> GpuCtx<'a> {
         self.uniform.opaque[0] = u32::from(on && self.plan.opaque);
     }
 
+    /// Whether the geometry pass recorded next cuts its fragments at the opaque pass's depth.
+    pub(crate) fn cuts_at_opaque(&self) -> bool {
+        self.uniform.opaque[0] != 0
+    }
+
     /// The frame's opaque image (keys, colours and counters), for the embedded pass to load the
     /// caller's depth and colour into ([`crate::OitPass::with_opaque`]): placeholders where the
     /// plan has no opaque part.

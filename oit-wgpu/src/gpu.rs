@@ -27,6 +27,9 @@ pub fn optional_features() -> wgpu::Features {
         // 8 samples a pixel on the hardware path, where the adapter's count target format takes
         // them (WebGPU guarantees 4)
         | wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES
+        // the hardware path's fixed-function test at the opaque depth before the fragment stage
+        // (`core/raster_hardware_early.wgsl`); without it the stage tests the depth itself
+        | wgpu::Features::SHADER_EARLY_DEPTH_TEST
 }
 
 /// The format of the hardware path's count target on a device with `features`: R16Float counts

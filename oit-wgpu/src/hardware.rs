@@ -32,7 +32,7 @@ use oit_core::pulled::{PulledGeometry, PulledInstance};
 use oit_core::{Aabb, Camera, OitError, RasterPath, Scene, Settings};
 use wgpu::util::DeviceExt;
 
-use crate::ctx::{Driver, Gate, Generated, GpuCtx};
+use crate::ctx::{Driver, Fragments, Gate, Generated, GpuCtx};
 use crate::gpu::{COMMON_WGSL, Gpu, count_format};
 use crate::stage::SceneStage;
 
@@ -97,6 +97,10 @@ pub struct GeometryPass<'a> {
 }
 
 pub(crate) type PipelineFn<'a> = Box<dyn FnMut(&CaptureShader<'_>) -> wgpu::RenderPipeline + 'a>;
+/// oit's own pipelines of a pass over the opaque depth ([`EarlyDepth`]): the capture's, over
+/// `capture.wgsl`, with fragment entry point `depth_fs`, `hw_fs_count` or `hw_fs_early`.
+pub(crate) type EarlyPipelineFn<'a> =
+    Box<dyn FnMut(&CaptureShader<'_>, &'static str) -> wgpu::RenderPipeline + 'a>;
 pub(crate) type DrawFn<'a> = Box<dyn FnMut(&mut wgpu::RenderPass<'_>, &GeometryPass<'_>) + 'a>;
 
 /// A geometry pass on a render pipeline: the user's (or oit's own hardware raster's) pipeline
@@ -109,6 +113,9 @@ pub(crate) struct RenderDriver<'a> {
     draw: RefCell<DrawFn<'a>>,
     /// The indirect draw arguments of oit's own draws (the hardware path's), for gated passes.
     gate: Option<Gate>,
+    /// oit's own pipelines over the opaque depth in the fixed-function test (the hardware path's
+    /// at one sample, where the device takes `@early_depth_test`; see [`EarlyDepth`]).
+    early: Option<RefCell<EarlyPipelineFn<'a>>>,
 }
 
 impl<'a> RenderDriver<'a> {
@@ -124,7 +131,21 @@ impl<'a> RenderDriver<'a> {
         pipeline: PipelineFn<'a>,
         draw: DrawFn<'a>,
     ) -> RenderDriver<'a> {
-        RenderDriver { salt, target, pipeline: RefCell::new(pipeline), draw: RefCell::new(draw), gate: None }
+        RenderDriver {
+            salt,
+            target,
+            pipeline: RefCell::new(pipeline),
+            draw: RefCell::new(draw),
+            gate: None,
+            early: None,
+        }
+    }
+
+    /// The driver testing the opaque depth in the fixed-function unit ([`EarlyDepth`]) with
+    /// `early`'s pipelines, where its passes cut at it (oit's own draws: the hardware path).
+    pub(crate) fn with_early_depth(mut self, early: EarlyPipelineFn<'a>) -> Self {
+        self.early = Some(RefCell::new(early));
+        self
     }
 
     /// The driver drawing from `gate.to` in gated passes (oit's own draws: the hardware path).
@@ -147,6 +168,8 @@ pub(crate) struct CountTarget {
     /// Samples a pixel: above 1 a multisampled pass (docs/msaa.md), whose fragments each add 1
     /// at one sample (the first they cover), so the samples add up to fragments.
     samples: u32,
+    /// The opaque depth of this size ([`EarlyDepth`]), made on first use.
+    depth: Rc<OnceCell<EarlyDepth>>,
 }
 
 impl CountTarget {
@@ -223,7 +246,16 @@ impl CountTarget {
                 wgpu::BindGroupEntry { binding: 1, resource: total.as_entire_binding() },
             ],
         });
-        CountTarget { format, count_view, sum_layout, sum_group, total, size: (width, height), samples }
+        CountTarget {
+            format,
+            count_view,
+            sum_layout,
+            sum_group,
+            total,
+            size: (width, height),
+            samples,
+            depth: Rc::default(),
+        }
     }
 }
 
@@ -263,6 +295,96 @@ fn count_target(format: wgpu::TextureFormat) -> wgpu::ColorTargetState {
     }
 }
 
+/// The opaque pass's depth in the GPU's fixed-function depth test (issue 38): a `Depth32Float`
+/// attachment of a count target's size, bound to the hardware path's passes that cut at the
+/// opaque depth. Each such pass first draws each pixel's opaque depth into it from the opaque
+/// keys (`depth_vs`/`depth_fs` of `core/raster_hardware_early.wgsl`: one triangle, 1.0 where no
+/// opaque fragment fell), then its capture (`hw_fs_early`, `@early_depth_test(force)`) tests
+/// `LessEqual` against it before the fragment stage, so a fragment behind the opaque depth is
+/// neither shaded nor captured; the stage holds back the ties itself, the cut being strict. The
+/// frame's first scene pass draws a count-only draw (`hw_fs_count`, untested) between the two,
+/// which counts every fragment and those the cut holds back, as `hw_fs` does. The depths are
+/// the keys' high words, the bits of the depth the opaque pass kept, so the test and
+/// `opaque_cut` compare the same numbers.
+pub(crate) struct EarlyDepth {
+    view: wgpu::TextureView,
+}
+
+impl EarlyDepth {
+    const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+    fn new(gpu: &Gpu, (width, height): (u32, u32)) -> EarlyDepth {
+        let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("opaque depth"),
+            size: wgpu::Extent3d { width: width.max(1), height: height.max(1), depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: Self::FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        EarlyDepth { view: texture.create_view(&Default::default()) }
+    }
+
+    /// The depth state of the draw of `entry`: the capture's test (`LessEqual`, read only), the
+    /// count-only draw's none, the depth draw's write.
+    fn state(entry: &str) -> wgpu::DepthStencilState {
+        let (write, compare) = match entry {
+            "hw_fs_early" => (false, wgpu::CompareFunction::LessEqual),
+            "depth_fs" => (true, wgpu::CompareFunction::Always),
+            _ => (false, wgpu::CompareFunction::Always),
+        };
+        wgpu::DepthStencilState {
+            format: Self::FORMAT,
+            depth_write_enabled: Some(write),
+            depth_compare: Some(compare),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }
+    }
+
+    /// The depth draw's pipeline over `source` (a capture module with the early entry points),
+    /// its group 0 `layout0`: no colour written.
+    fn pipeline(
+        device: &wgpu::Device,
+        source: &str,
+        layout0: &wgpu::BindGroupLayout,
+        count: wgpu::ColorTargetState,
+    ) -> wgpu::RenderPipeline {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("opaque depth"),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("opaque depth"),
+            bind_group_layouts: &[Some(layout0)],
+            immediate_size: 0,
+        });
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("opaque depth"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("depth_vs"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+            depth_stencil: Some(Self::state("depth_fs")),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("depth_fs"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState { write_mask: wgpu::ColorWrites::empty(), ..count })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    }
+}
+
 impl Driver for RenderDriver<'_> {
     fn path(&self) -> RasterPath {
         RasterPath::Hardware
@@ -282,14 +404,39 @@ impl Driver for RenderDriver<'_> {
         self.salt.hash(&mut h);
         self.target.format.hash(&mut h);
         self.target.samples.hash(&mut h);
-        let pipeline = ctx.gpu.render_pipeline(h.finish(), self.salt, || {
-            (self.pipeline.borrow_mut())(&CaptureShader {
-                wgsl: &wgsl,
-                bind_group_layout: layout0,
-                count_target: count_target(self.target.format),
-                key: module_key,
-            })
-        })?;
+        let capture = |wgsl| CaptureShader {
+            wgsl,
+            bind_group_layout: layout0,
+            count_target: count_target(self.target.format),
+            key: module_key,
+        };
+        // over the opaque depth: the fixed-function test drops what lies behind it before the
+        // fragment stage; the frame's first scene pass draws its count-only draw first
+        let early = self.early.as_ref().filter(|_| ctx.cuts_at_opaque() && self.target.samples == 1);
+        let mut pipelines = Vec::new();
+        match early {
+            None => {
+                pipelines.push(ctx.gpu.render_pipeline(h.finish(), self.salt, || {
+                    (self.pipeline.borrow_mut())(&capture(&wgsl))
+                })?)
+            }
+            Some(early) => {
+                let early_wgsl = format!("{wgsl}\n{}", oit_shaders::HARDWARE_RASTER_EARLY);
+                let mut entries = vec!["depth_fs", "hw_fs_early"];
+                if ctx.fragments == Fragments::Unset {
+                    entries.insert(1, "hw_fs_count");
+                }
+                for entry in entries {
+                    let mut e = DefaultHasher::new();
+                    (h.finish(), entry).hash(&mut e);
+                    pipelines.push(ctx.gpu.render_pipeline(e.finish(), self.salt, || {
+                        (early.borrow_mut())(&capture(&early_wgsl), entry)
+                    })?);
+                }
+                self.target.depth.get_or_init(|| EarlyDepth::new(ctx.gpu, self.target.size));
+            }
+        }
+        let depth = early.and_then(|_| self.target.depth.get());
         let index = ctx.passes;
         let indirect = if ctx.gated_pass { self.gate.as_ref().map(|g| &g.to) } else { None };
         let mut encoder = ctx.take_encoder();
@@ -305,15 +452,34 @@ impl Driver for RenderDriver<'_> {
                         store: wgpu::StoreOp::Store,
                     },
                 })],
-                depth_stencil_attachment: None,
+                // the opaque depth, drawn by the pass's first draw and tested by its capture
+                depth_stencil_attachment: depth.map(|d| wgpu::RenderPassDepthStencilAttachment {
+                    view: &d.view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
                 timestamp_writes: ctx.render_timestamps(),
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
             ctx.window_viewport(&mut rpass);
-            rpass.set_pipeline(&pipeline);
-            rpass.set_bind_group(0, group0, &[]);
-            (self.draw.borrow_mut())(&mut rpass, &GeometryPass { index, bind_group: group0, indirect });
+            let mut geometry = pipelines.as_slice();
+            if depth.is_some() {
+                // the depth draw: one triangle over the whole viewport (a window's viewport holds
+                // the target)
+                rpass.set_pipeline(&pipelines[0]);
+                rpass.set_bind_group(0, group0, &[]);
+                rpass.draw(0..3, 0..1);
+                geometry = &pipelines[1..];
+            }
+            for pipeline in geometry {
+                rpass.set_pipeline(pipeline);
+                rpass.set_bind_group(0, group0, &[]);
+                (self.draw.borrow_mut())(&mut rpass, &GeometryPass { index, bind_group: group0, indirect });
+            }
         }
         ctx.finish_timed("geometry", encoder)?;
         let sum_wgsl = if self.target.samples > 1 { COUNT_SUM_MS_WGSL } else { COUNT_SUM_WGSL };
@@ -649,8 +815,34 @@ impl HwGeometry {
             None => draw_stage.draw(rpass),
         };
         let gate = Gate { from: self.draw_args.clone(), to: self.gated_args.clone(), words: 4 };
-        let driver =
+        let mut driver =
             RenderDriver::with_target(target, "hardware", Box::new(pipeline), Box::new(draw)).with_gate(gate);
+        if samples == 1 && gpu.features.contains(wgpu::Features::SHADER_EARLY_DEPTH_TEST) {
+            let layout1 = stage.layout.clone();
+            let device = gpu.device.clone();
+            let early = move |capture: &CaptureShader<'_>, entry: &'static str| {
+                let source = format!("{}\n{}", capture.wgsl, raster_wgsl());
+                if entry == "depth_fs" {
+                    return EarlyDepth::pipeline(
+                        &device,
+                        &source,
+                        capture.bind_group_layout,
+                        capture.count_target.clone(),
+                    );
+                }
+                scene_pipeline_with(
+                    &device,
+                    "hardware raster over the opaque depth",
+                    &source,
+                    &[capture.bind_group_layout, &layout1],
+                    entry,
+                    &[Some(capture.count_target.clone())],
+                    Some(EarlyDepth::state(entry)),
+                    1,
+                )
+            };
+            driver = driver.with_early_depth(Box::new(early));
+        }
         HardwareRaster { driver: Rc::new(driver), stage }
     }
 }

@@ -1,0 +1,74 @@
+// The hardware raster's entry points over the opaque pass's depth in the fixed-function depth
+// test (one sample a pixel; issue 38): appended after raster_hardware.wgsl and the capture
+// contract only where the device takes `@early_depth_test` (oit-wgpu's hardware path with
+// SHADER_EARLY_DEPTH_TEST; every Vulkan device), not to what an embedding user compiles.
+//
+// Each such pass has a depth attachment of its own, which its first draw (`depth_vs`/`depth_fs`)
+// fills with each pixel's opaque depth (1.0 where no opaque fragment fell); its capture draw
+// tests LESS_OR_EQUAL against it, without writing, before the fragment stage runs, so a fragment
+// behind the opaque depth costs neither shading nor capture. The test keeps ties (a fragment at
+// exactly the opaque depth, which the cut holds back: `opaque_cut` is strict); this stage holds
+// them back itself. The fragments the test drops are counted by the frame's count-only draw
+// (`hw_fs_count`), drawn first, without the test, in the frame's first scene pass: it counts
+// every fragment and those the cut holds back (`occluded`), as `hw_fs` does.
+
+// Whether the fragment at `pixel_xy`, `depth` lies at the opaque depth or behind it, uncounted
+// (`opaque_cut` without its count: the count-only draw counted it).
+fn oit_at_or_behind_opaque(pixel_xy: vec2<f32>, depth: f32) -> bool {
+    let xy = vec2<u32>(max(floor(pixel_xy), vec2<f32>(0.0)));
+    if (fu.opaque.x == 0u || xy.x >= fu.width || xy.y >= fu.height) {
+        return false;
+    }
+    let nearest = u32(atomicLoad(&opaque_keys[xy.y * fu.width + xy.x]) >> 32u);
+    return depth_bits(clamp(depth, 0.0, 1.0)) >= nearest;
+}
+
+// The capture behind the fixed-function test: what `hw_fs` does with the fragments the test
+// passed. It adds 1 to the count target in a pass that is not the frame's first (those counts
+// are not read) and 0 in the first, whose count-only draw counted the fragments.
+@fragment
+@early_depth_test(force)
+fn hw_fs_early(in: HwOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    if (!hw_culled(in, front) && !oit_at_or_behind_opaque(in.position.xy, in.position.z)) {
+        _ = oit_capture_shaded(in.position.xy, in.position.z, hw_color(in), in.normal, in.prim, in.cutoff, 1u);
+    }
+    return vec4<f32>(f32(1u - min(fu.opaque.y, 1u)), 0.0, 0.0, 0.0);
+}
+
+// The count-only draw of a frame's first scene pass over the opaque depth: every fragment (a
+// back face of a single-sided object excepted, as `hw_fs`) adds 1, and `oit_held_back` counts
+// those the cut holds back (`occluded`). No test, no shading, no capture.
+@fragment
+fn hw_fs_count(in: HwOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    if (hw_culled(in, front)) {
+        return vec4<f32>(0.0);
+    }
+    _ = oit_held_back(in.position.xy, in.position.z);
+    return vec4<f32>(1.0, 0.0, 0.0, 0.0);
+}
+
+// The draw that fills the pass's depth attachment: one triangle over the whole target, whose
+// fragment writes the pixel's opaque depth, the high word of its key (`depth bits << 32 |
+// primitive id`: the bits of the depth the opaque pass kept, so the fixed-function test and
+// `opaque_cut` compare the same numbers), or 1.0 where no opaque fragment fell. Drawn with the
+// test ALWAYS, writing depth and no colour.
+@vertex
+fn depth_vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    // (-1, -1), (3, -1), (-1, 3): every pixel of the viewport, whichever way it is turned
+    let x = f32(i32(i & 1u) * 4 - 1);
+    let y = f32(i32(i >> 1u) * 4 - 1);
+    return vec4<f32>(x, y, 0.5, 1.0);
+}
+
+@fragment
+fn depth_fs(@builtin(position) position: vec4<f32>) -> @builtin(frag_depth) f32 {
+    let xy = vec2<u32>(max(floor(position.xy), vec2<f32>(0.0)));
+    if (xy.x >= fu.width || xy.y >= fu.height) {
+        return 1.0;
+    }
+    let key = atomicLoad(&opaque_keys[xy.y * fu.width + xy.x]);
+    if (key == OPAQUE_NONE) {
+        return 1.0;
+    }
+    return bitcast<f32>(u32(key >> 32u));
+}
