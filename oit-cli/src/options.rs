@@ -133,8 +133,9 @@ pub struct SceneArgs {
     /// Samples a pixel: 1, 4 or 8 (the standard patterns of Vulkan and D3D). Above 1 a fragment
     /// covers a pixel where its triangle covers any sample, carries its coverage mask, and is
     /// composited per sample (MSAA: one shading a fragment); on every backend and raster path
-    /// (the GPU backends' default at several samples: compute), with reference, dfb, ll and
-    /// fabs (docs/msaa.md).
+    /// (the GPU backends' default at several samples: compute): per sample with reference, dfb,
+    /// ll and fabs; every other technique but kbuf composites each fragment over its pixel with
+    /// its alpha weighted by its coverage fraction (the report's `coverage`; docs/msaa.md).
     #[arg(long, value_name = "N", default_value_t = 1)]
     pub samples: u32,
 
@@ -146,7 +147,8 @@ pub struct SceneArgs {
 
     /// With --samples 4 or 8: sample (each fragment composited only at the samples it covers) or
     /// pixel (at every sample of its pixel, the per-pixel capture baseline that shows the seams
-    /// along shared edges; the reference stays per sample).
+    /// along shared edges; the reference stays per sample). The techniques that keep no mask
+    /// weigh alpha by coverage under `sample` and take it whole under `pixel`.
     #[arg(long, value_name = "sample|pixel", default_value = "sample")]
     pub coverage: String,
 
