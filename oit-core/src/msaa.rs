@@ -91,10 +91,11 @@ pub fn keeps_masks(technique: Technique) -> bool {
 /// What a frame under `settings` does with its fragments' coverage masks; `None` at one sample.
 /// The reference is per sample always (the MSAA target); a technique that keeps masks is per
 /// sample unless `--coverage pixel`; every other technique weighs a fragment's alpha by its
-/// coverage fraction (measured to err less than per-pixel coverage on every one of them against
-/// the per-sample reference: docs/msaa.md), or takes it at full alpha under `--coverage pixel`
-/// and under the effects whose payload has no alpha (Fresnel's normal, translucency's
-/// absorbing colour).
+/// coverage fraction (measured to err less than per-pixel coverage against the per-sample
+/// reference on each but bdp's colour mode, which takes it whole: docs/msaa.md), or takes it at
+/// full alpha under `--coverage pixel` and under the effects whose payload has no alpha
+/// (Fresnel's normal, translucency's absorbing colour); `--coverage fraction` weighs it in
+/// every one.
 pub fn coverage(settings: &Settings) -> Option<Coverage> {
     if settings.samples <= 1 {
         return None;
@@ -106,7 +107,21 @@ pub fn coverage(settings: &Settings) -> Option<Coverage> {
         Coverage::Pixel
     } else if keeps_masks(technique) {
         Coverage::Sample
-    } else if matches!(settings.effect, Effect::Fresnel | Effect::Translucency) {
+    } else if matches!(settings.effect, Effect::Fresnel | Effect::Translucency)
+        || matches!(technique, Technique::Mdts { .. })
+    {
+        // no alpha to weight: Fresnel's payload is the normal, translucency's colour absorbs,
+        // and `mdts`'s 32-bit word keeps RGB only (the plan's alpha for every fragment)
+        Coverage::Pixel
+    } else if settings.fraction_coverage {
+        Coverage::Fraction
+    } else if let Technique::Bdp { passes } = technique
+        && settings.bdp_color_mode(passes).unwrap_or(false)
+    {
+        // one colour a bucket, the larger packed word kept: the two halves of a surface split
+        // across an edge fall in one bucket and only one is kept, so at full alpha the pixel
+        // gets the one layer the samples see, where weighted it gets a thinner one (measured:
+        // `techniques_without_masks_weigh_alpha_by_coverage`)
         Coverage::Pixel
     } else {
         Coverage::Fraction

@@ -973,7 +973,13 @@ impl Rasterizer {
     /// The multisampled walk of triangle `i` in the rows `rows` (inclusive), the samples at
     /// `offsets` from the pixel's centre ([`sample_offsets`]): `f` gets each fragment with its
     /// mask ([`Rasterizer::for_each_masked_fragment`]); returns the fragments.
-    fn walk_masked(&self, i: usize, offsets: &[(i64, i64)], rows: [u32; 2], mut f: impl FnMut(&Fragment<'_>, u8)) -> u64 {
+    fn walk_masked(
+        &self,
+        i: usize,
+        offsets: &[(i64, i64)],
+        rows: [u32; 2],
+        mut f: impl FnMut(&Fragment<'_>, u8),
+    ) -> u64 {
         use oit_core::setup::{HALF_PIXEL, SUBPIXEL, edge};
         let (t, s) = (&self.setup.triangles[i], &self.edges[i]);
         let [x0, y0, x1, y1] = t.bbox;

@@ -7,7 +7,7 @@
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
 use oit_core::metrics::accuracy;
-use oit_core::msaa::{full_mask, positions, positions_f32};
+use oit_core::msaa::{Coverage, full_mask, positions, positions_f32};
 use oit_core::{Backend, Frame, OitError, Settings, Shading, Technique, View};
 use oit_cpu::CpuBackend;
 use oit_cpu::raster::Rasterizer;
@@ -356,7 +356,10 @@ fn refusals_name_what_is_not_done() {
         let s = Settings { technique: "kbuf:4".parse().unwrap(), ..base.clone() };
         match oit_core::plan::Plan::new(backend, &scene, &s) {
             Err(OitError::Unsupported { what, .. }) => {
-                assert!(what.contains("not yet done") && what.contains("--samples 4"), "{backend} kbuf: {what}")
+                assert!(
+                    what.contains("not yet done") && what.contains("--samples 4"),
+                    "{backend} kbuf: {what}"
+                )
             }
             other => panic!("{backend} kbuf at 4 samples: {:?}", other.is_ok()),
         }
@@ -365,7 +368,9 @@ fn refusals_name_what_is_not_done() {
     // multisampled, refused where a backend would run one
     let own = Settings { technique: Technique::Plain, ..base.clone() };
     match oit_core::plan::refuse_multisampled_own_capture("wgpu", &own) {
-        Err(OitError::Unsupported { what, .. }) => assert!(what.contains("not") && what.contains("plain"), "{what}"),
+        Err(OitError::Unsupported { what, .. }) => {
+            assert!(what.contains("not") && what.contains("plain"), "{what}")
+        }
         other => panic!("plain's blender at 4 samples: {other:?}"),
     }
     assert!(oit_core::plan::refuse_multisampled_own_capture("wgpu", &Settings { samples: 1, ..own }).is_ok());
@@ -549,7 +554,11 @@ fn gpu_paths_equal_the_cpu_at_samples() {
             cases.push(Settings { pixel_coverage: true, ..settings(size, "fabs:2") });
             cases.push(Settings { pixel_coverage: true, ..settings(size, "ll") });
             // the techniques that keep no mask: alpha weighted by coverage, and per pixel
-            cases.extend(FRACTION_TECHNIQUES.iter().map(|t| Settings { technique: t.parse().unwrap(), ..base.clone() }));
+            cases.extend(
+                FRACTION_TECHNIQUES
+                    .iter()
+                    .map(|t| Settings { technique: t.parse().unwrap(), ..base.clone() }),
+            );
             cases.push(Settings { pixel_coverage: true, ..settings(size, "wboit") });
             for effect in
                 [oit_core::Effect::Translucency, oit_core::Effect::Fresnel, oit_core::Effect::Complexity]
@@ -714,30 +723,50 @@ fn techniques_without_masks_weigh_alpha_by_coverage() {
         let (r1, r4) = (render(&cpu, &scene, &cam, &one), render(&cpu, &scene, &cam, &four));
         let seam = mean_error(
             &r4.image,
-            &render(&cpu, &scene, &cam, &Settings { technique: Technique::Dfb, pixel_coverage: true, ..four.clone() })
-                .image,
+            &render(
+                &cpu,
+                &scene,
+                &cam,
+                &Settings { technique: Technique::Dfb, pixel_coverage: true, ..four.clone() },
+            )
+            .image,
         );
         assert!(seam > 0.0, "{name}: per-pixel coverage shows no seam");
         for t in FRACTION_TECHNIQUES {
             let technique: Technique = t.parse().unwrap();
             let at = |s: &Settings| render(&cpu, &scene, &cam, &Settings { technique, ..s.clone() });
-            let (single, fraction) = (at(&one), at(&four));
+            let single = at(&one);
+            let chosen = at(&four);
+            let fraction = at(&Settings { fraction_coverage: true, ..four.clone() });
             let pixel = at(&Settings { pixel_coverage: true, ..four.clone() });
             assert_eq!(single.stats.coverage, None, "{t}");
-            assert_eq!(fraction.stats.coverage, Some(oit_core::msaa::Coverage::Fraction), "{t}");
-            assert_eq!(pixel.stats.coverage, Some(oit_core::msaa::Coverage::Pixel), "{t}");
-            // the multisampled fragments, the reference's, in both
-            assert_eq!(fraction.stats.fragments, r4.stats.fragments, "{t} on {name}");
-            assert_eq!(pixel.stats.fragments, r4.stats.fragments, "{t} on {name}");
-            checks::accounting(&fraction).unwrap_or_else(|e| panic!("{t} on {name}: {e}"));
+            // mdts's 32-bit word keeps no alpha to weight: per pixel whatever is asked, and said
+            let weighs = technique.kind() != oit_core::TechniqueKind::Mdts;
+            let asked = if weighs { Coverage::Fraction } else { Coverage::Pixel };
+            assert_eq!(fraction.stats.coverage, Some(asked), "{t}");
+            assert_eq!(pixel.stats.coverage, Some(Coverage::Pixel), "{t}");
+            // the multisampled fragments, the reference's, in each
+            for f in [&chosen, &fraction, &pixel] {
+                assert_eq!(f.stats.fragments, r4.stats.fragments, "{t} on {name}");
+                checks::accounting(f).unwrap_or_else(|e| panic!("{t} on {name}: {e}"));
+            }
             let own = mean_error(&r1.image, &single.image);
             let (f, p) = (mean_error(&r4.image, &fraction.image), mean_error(&r4.image, &pixel.image));
+            let c = mean_error(&r4.image, &chosen.image);
             eprintln!(
-                "{name} {t}: mean error at 4 samples {f:.4} (fraction), {p:.4} (pixel); at 1 sample {own:.4}; \
-                 per-pixel dfb {seam:.4}"
+                "{name} {t}: mean error at 4 samples {f:.4} (fraction), {p:.4} (pixel), {c:.4} chosen \
+                 ({:?}); at 1 sample {own:.4}; per-pixel dfb {seam:.4}",
+                chosen.stats.coverage
             );
-            assert!(f < p, "{t} on {name}: fraction {f:.4} against pixel {p:.4}");
-            assert!(f <= own + seam, "{t} on {name}: {f:.4} over {own:.4} + {seam:.4}");
+            // the choice is the one that errs least, and within the bound
+            if weighs {
+                let (best, worse) = if f <= p { (Coverage::Fraction, p) } else { (Coverage::Pixel, f) };
+                assert_eq!(chosen.stats.coverage, Some(best), "{t} on {name}: fraction {f:.4}, pixel {p:.4}");
+                assert!(c < worse, "{t} on {name}: the choice {c:.4} against {worse:.4}");
+            } else {
+                assert_eq!((&chosen.image, &fraction.image), (&pixel.image, &pixel.image), "{t} on {name}");
+            }
+            assert!(c <= own + seam, "{t} on {name}: {c:.4} over {own:.4} + {seam:.4}");
         }
     }
 }
