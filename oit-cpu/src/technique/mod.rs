@@ -392,7 +392,10 @@ impl<'a> Ctx<'a> {
         match self.settings.bounds {
             oit_core::BoundsMode::Exact => self.pass(shader),
             oit_core::BoundsMode::Boxes => {
-                let boxes = Rasterizer::bounding_boxes(self.scene, self.camera, self.settings);
+                let mut boxes = Rasterizer::bounding_boxes(self.scene, self.camera, self.settings);
+                // the boxes' multisampled fragments where the frame's are (the GPU's box raster
+                // runs the same masked rule), so every pixel a fragment reaches has bounds
+                boxes.cover(covered(self.settings));
                 boxes.for_each_fragment(shader);
                 self.passes += 1;
             }
