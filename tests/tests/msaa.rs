@@ -712,9 +712,8 @@ fn mean_error(a: &oit_core::Image, b: &oit_core::Image) -> f64 {
 /// against the per-sample reference: what MSAA's edge fragments cost a technique that ignores the
 /// mask) — the two errors a technique that keeps no mask adds to the per-sample reference, by the
 /// triangle inequality where the two add independently; a technique below it loses no more at the
-/// edges than per-pixel capture does. Mutations tried: the alpha weight dropped on oit-cpu (every
-/// technique at full alpha: fraction no better than pixel, and the bound broken on the sphere);
-/// the weight squared (`fraction_alpha` times the fraction twice: over the bound).
+/// edges than per-pixel capture does. Mutation tried: the alpha weight dropped in oit-cpu's
+/// covered walk (every fragment at full alpha: "dp on bunny: the choice 12.6825 against 12.6825").
 #[test]
 fn techniques_without_masks_weigh_alpha_by_coverage() {
     let cpu = CpuBackend::default();
