@@ -133,8 +133,9 @@ pub struct SceneArgs {
     /// Samples a pixel: 1, 4 or 8 (the standard patterns of Vulkan and D3D). Above 1 a fragment
     /// covers a pixel where its triangle covers any sample, carries its coverage mask, and is
     /// composited per sample (MSAA: one shading a fragment); on every backend and raster path
-    /// (the GPU backends' default at several samples: compute), with reference, dfb, ll and
-    /// fabs (docs/msaa.md).
+    /// (the GPU backends' default at several samples: compute): per sample with reference, dfb,
+    /// ll and fabs; every other technique but kbuf composites each fragment over its pixel with
+    /// its alpha weighted by its coverage fraction (the report's `coverage`; docs/msaa.md).
     #[arg(long, value_name = "N", default_value_t = 1)]
     pub samples: u32,
 
@@ -146,8 +147,10 @@ pub struct SceneArgs {
 
     /// With --samples 4 or 8: sample (each fragment composited only at the samples it covers) or
     /// pixel (at every sample of its pixel, the per-pixel capture baseline that shows the seams
-    /// along shared edges; the reference stays per sample).
-    #[arg(long, value_name = "sample|pixel", default_value = "sample")]
+    /// along shared edges; the reference stays per sample). The techniques that keep no mask
+    /// weigh alpha by coverage under `sample` (bdp's colour mode: whole, its measured choice),
+    /// whole under `pixel`, and by coverage under `fraction`.
+    #[arg(long, value_name = "sample|pixel|fraction", default_value = "sample")]
     pub coverage: String,
 
     /// Backend to render with: a name (cpu; wgpu, vulkan when compiled in), a comma-separated
@@ -224,7 +227,8 @@ impl SceneArgs {
             blend_target: self.blend_target.parse::<oit_core::BlendTarget>()?,
             samples: self.samples,
             supersample: self.supersample,
-            pixel_coverage: parse_coverage(&self.coverage)?,
+            pixel_coverage: parse_coverage(&self.coverage)? == Some(true),
+            fraction_coverage: parse_coverage(&self.coverage)?.is_none(),
         };
         settings.validate()?;
         check_planes(self.near, self.far)?;
@@ -346,12 +350,17 @@ pub fn check_output(path: &Path, extension: &str, option: &str) -> Result<(), Oi
     Ok(())
 }
 
-/// `--coverage`: `sample` (per-sample composite) or `pixel` (the per-pixel capture baseline).
-fn parse_coverage(value: &str) -> Result<bool, OitError> {
+/// `--coverage`: `sample` (per-sample composite, or each technique's own choice where it keeps
+/// no mask: `Some(false)`), `pixel` (the per-pixel capture baseline: `Some(true)`) or `fraction`
+/// (alpha weighted by coverage in every technique that keeps no mask: `None`).
+fn parse_coverage(value: &str) -> Result<Option<bool>, OitError> {
     match value {
-        "sample" => Ok(false),
-        "pixel" => Ok(true),
-        other => Err(OitError::InvalidSettings(format!("--coverage {other:?}: use sample or pixel"))),
+        "sample" => Ok(Some(false)),
+        "pixel" => Ok(Some(true)),
+        "fraction" => Ok(None),
+        other => {
+            Err(OitError::InvalidSettings(format!("--coverage {other:?}: use sample, pixel or fraction")))
+        }
     }
 }
 

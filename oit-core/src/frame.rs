@@ -60,10 +60,15 @@ pub struct Stats {
     /// Device time per pass, where measured.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub gpu_pass_ms: Vec<(String, f64)>,
+    /// Above one sample a pixel: what the technique did with each fragment's coverage mask
+    /// ([`crate::msaa::coverage`]: per sample, its alpha weighted by its coverage fraction, or
+    /// per pixel at full alpha). Absent at one sample.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub coverage: Option<crate::msaa::Coverage>,
 }
 
 impl Stats {
-    /// Sets [`Stats::quantized`] for a frame made under `settings`: every fragment bdp's colour
+    /// Sets [`Stats::quantized`] (and [`Stats::coverage`]) for a frame made under `settings`: every fragment bdp's colour
     /// mode composites went through its packing; no other technique packs colour lossily. One
     /// rule for every backend, applied where their frames end ([`crate::tiling::run`],
     /// [`crate::tiling::frame_stats`]).
@@ -73,6 +78,7 @@ impl Stats {
             _ => false,
         };
         self.quantized = if packs { self.captured } else { 0 };
+        self.coverage = crate::msaa::coverage(settings);
     }
 
     /// The frame's own check, where its losses were counted as they happened: every fragment the

@@ -6,7 +6,9 @@
 //! `i` is covered). Shading and depth stay one evaluation at the pixel's centre (MSAA, not
 //! supersampling). See docs/msaa.md.
 
-use crate::OitError;
+use serde::Serialize;
+
+use crate::{Effect, OitError, Settings, Technique};
 
 /// The sample counts `--samples` takes.
 pub const SAMPLE_COUNTS: [u32; 3] = [1, 4, 8];
@@ -61,6 +63,77 @@ pub fn full_mask(samples: u32) -> u8 {
         8.. => u8::MAX,
         n => ((1u16 << n) - 1) as u8,
     }
+}
+
+/// How a technique composites a fragment's coverage mask above one sample (docs/msaa.md), as a
+/// frame's `Stats::coverage` reports it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Coverage {
+    /// Per sample: the mask kept beside each entry's key, each sample compositing the entries
+    /// that cover it, the pixel the mean of its samples (reference, dfb, ll, fabs).
+    Sample,
+    /// The fragment composited over the whole pixel, its alpha scaled by the fraction of the
+    /// pixel's samples it covers (popcount(mask) / samples): the techniques without room for the
+    /// mask (the fixed packings, the weighted sums, the peels, the merges).
+    Fraction,
+    /// The fragment composited over the whole pixel at full alpha, whatever its mask: the
+    /// per-pixel capture baseline (`--coverage pixel`), and what a technique does under an
+    /// effect whose payload carries no alpha to scale (Fresnel, translucency).
+    Pixel,
+}
+
+/// Whether `technique` keeps each fragment's mask beside its key and composites per sample.
+pub fn keeps_masks(technique: Technique) -> bool {
+    matches!(technique, Technique::Reference | Technique::Dfb | Technique::Ll | Technique::Fabs { .. })
+}
+
+/// What a frame under `settings` does with its fragments' coverage masks; `None` at one sample.
+/// The reference is per sample always (the MSAA target); a technique that keeps masks is per
+/// sample unless `--coverage pixel`; every other technique weighs a fragment's alpha by its
+/// coverage fraction (measured to err less than per-pixel coverage against the per-sample
+/// reference on each but bdp's colour mode, which takes it whole: docs/msaa.md), or takes it at
+/// full alpha under `--coverage pixel` and under the effects whose payload has no alpha
+/// (Fresnel's normal, translucency's absorbing colour); `--coverage fraction` weighs it in
+/// every one.
+pub fn coverage(settings: &Settings) -> Option<Coverage> {
+    if settings.samples <= 1 {
+        return None;
+    }
+    let technique = settings.technique;
+    Some(if technique == Technique::Reference {
+        Coverage::Sample
+    } else if settings.pixel_coverage {
+        Coverage::Pixel
+    } else if keeps_masks(technique) {
+        Coverage::Sample
+    } else if matches!(settings.effect, Effect::Fresnel | Effect::Translucency)
+        || matches!(technique, Technique::Mdts { .. })
+    {
+        // no alpha to weight: Fresnel's payload is the normal, translucency's colour absorbs,
+        // and `mdts`'s 32-bit word keeps RGB only (the plan's alpha for every fragment)
+        Coverage::Pixel
+    } else if settings.fraction_coverage {
+        Coverage::Fraction
+    } else if let Technique::Bdp { passes } = technique
+        && settings.bdp_color_mode(passes).unwrap_or(false)
+    {
+        // one colour a bucket, the larger packed word kept: the two halves of a surface split
+        // across an edge fall in one bucket and only one is kept, so at full alpha the pixel
+        // gets the one layer the samples see, where weighted it gets a thinner one (measured:
+        // `techniques_without_masks_weigh_alpha_by_coverage`)
+        Coverage::Pixel
+    } else {
+        Coverage::Fraction
+    })
+}
+
+/// A fragment's alpha under [`Coverage::Fraction`]: `alpha` times the fraction of the `samples`
+/// samples its `mask` covers (k/4 and k/8 are exact in f32, so one rounding, the product's: the
+/// compute path's `coverage_weighted` makes the same).
+#[inline]
+pub fn fraction_alpha(alpha: f32, mask: u8, samples: u32) -> f32 {
+    alpha * (mask.count_ones() as f32 / samples as f32)
 }
 
 #[cfg(test)]

@@ -704,10 +704,12 @@ impl Plan {
 }
 
 /// What several samples a pixel (`Settings::samples` above 1, docs/msaa.md) are not yet done
-/// for, refused by name alike on every backend: techniques other than `reference`, `dfb`, `ll`
-/// and `fabs`; fabs's `--overflow tail`; opaque objects (the opaque pass is not multisampled);
+/// for, refused by name alike on every backend: `kbuf` (its interlock wraps the single-sample
+/// fragment stage); fabs's `--overflow tail`; opaque objects (the opaque pass is not multisampled);
 /// and on the GPU backends the supersampled reference (`--supersample`). (A hardware raster path
-/// refuses a sample count its device does not draw where it starts a frame.)
+/// refuses a sample count its device does not draw where it starts a frame, and its own captures,
+/// [`refuse_multisampled_own_capture`].) The techniques that keep no mask take the samples by
+/// their coverage fraction ([`crate::msaa::coverage`]).
 fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<(), OitError> {
     let samples = settings.samples;
     if samples <= 1 {
@@ -715,10 +717,10 @@ fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<()
     }
     let technique = settings.technique;
     let refuse = |what: String| Err(OitError::Unsupported { backend: backend.into(), what });
-    if !matches!(technique, Technique::Reference | Technique::Dfb | Technique::Ll | Technique::Fabs { .. }) {
+    if matches!(technique, Technique::Kbuf { .. }) {
         return refuse(format!(
-            "{technique} at --samples {samples}: per-sample coverage is not yet done for this technique \
-             (reference, dfb, ll and fabs take it; docs/msaa.md)"
+            "kbuf at --samples {samples}: not yet done (its ordered interlock wraps the single-sample \
+             fragment stage only; docs/msaa.md)"
         ));
     }
     if matches!(technique, Technique::Fabs { .. }) && settings.overflow == crate::Overflow::Tail {
@@ -737,6 +739,23 @@ fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<()
         ));
     }
     Ok(())
+}
+
+/// The refusal of a hardware path's own capture of `technique` (plain's blender, the blend
+/// captures) at several samples a pixel (`Ok` at one): their colour targets are not
+/// multisampled. Each GPU backend asks where it would run one.
+pub fn refuse_multisampled_own_capture(backend: &str, settings: &Settings) -> Result<(), OitError> {
+    if settings.samples <= 1 {
+        return Ok(());
+    }
+    Err(OitError::Unsupported {
+        backend: backend.into(),
+        what: format!(
+            "{} on the hardware path at --samples {}: its graphics-pipeline capture (the blender) is not \
+             yet multisampled; use --raster compute (docs/msaa.md)",
+            settings.technique, settings.samples
+        ),
+    })
 }
 
 /// The refusal of an embedded pass, which draws no multisampled pass yet, at several samples a

@@ -129,6 +129,11 @@ pub struct Settings {
     /// the multisampled fragments, the baseline whose edge seams per-sample coverage removes.
     /// The reference stays per sample (the target the baseline is measured against).
     pub pixel_coverage: bool,
+    /// With `samples` above 1: a technique that keeps no mask weighs each fragment's alpha by its
+    /// coverage fraction even where its own choice is per pixel (`--coverage fraction`; bdp's
+    /// colour mode: [`crate::msaa::coverage`]), so that the two can be measured side by side.
+    /// The techniques that keep masks ignore it.
+    pub fraction_coverage: bool,
 }
 
 /// The colour target the blender writes on the hardware path, for `plain` and (with
@@ -393,6 +398,7 @@ impl Default for Settings {
             samples: 1,
             supersample: false,
             pixel_coverage: false,
+            fraction_coverage: false,
         }
     }
 }
@@ -470,6 +476,12 @@ impl Settings {
         if self.supersample && self.samples == 1 {
             return Err(OitError::InvalidSettings(
                 "--supersample is the supersampled reference at the sample count: use it with --samples 4 or 8".into(),
+            ));
+        }
+        if self.fraction_coverage && (self.samples == 1 || self.pixel_coverage) {
+            return Err(OitError::InvalidSettings(
+                "--coverage fraction weighs the multisampled fragments' alpha: use it with --samples 4 or 8"
+                    .into(),
             ));
         }
         if self.pixel_coverage && self.samples == 1 {

@@ -223,6 +223,8 @@ impl<'s> CpuPrepared<'s> {
         // opaque first: its depth holds back the transparent fragments behind it
         let opaque = layers.opaque.as_ref().map(|o| opaque::draw(o, camera, &drawn));
         raster.cut_at(opaque.as_ref().map(|o| o.depth.clone()));
+        // above one sample, a technique that keeps no mask walks the multisampled fragments
+        raster.cover(technique::covered(&drawn));
         let mut ctx =
             Ctx::new(scene, camera, &drawn, &raster, &self.pool, plan, self.per_length, opaque.as_ref());
         let frame = technique::render(&mut ctx, settings.technique);
@@ -233,6 +235,7 @@ impl<'s> CpuPrepared<'s> {
             raster.occluded().unwrap_or(0)
         });
         raster.cut_at(None);
+        raster.cover(None);
         if let Ok(mut kept) = self.raster.lock() {
             *kept = Some(raster);
         }

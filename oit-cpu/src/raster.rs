@@ -176,6 +176,12 @@ fn in_rows([x0, y0, x1, y1]: [u32; 4], rows: [u32; 2]) -> [u32; 4] {
     [x0, y0.max(rows[0]), x1, y1.min(rows[1])]
 }
 
+/// Each of `samples` samples' offset from the pixel's centre, in 1/256 pixel.
+fn sample_offsets(samples: u32) -> Vec<(i64, i64)> {
+    use oit_core::setup::{HALF_PIXEL, subpixel_offsets};
+    subpixel_offsets(samples).map(|(x, y)| (x - HALF_PIXEL, y - HALF_PIXEL)).collect()
+}
+
 /// Every row: a Scatter task walks its triangles' whole boxes.
 const ALL_ROWS: [u32; 2] = [0, u32::MAX];
 
@@ -429,6 +435,21 @@ pub struct Rasterizer {
     fragments: OnceLock<u64>,
     /// The opaque pass's depth, where the frame has one ([`Rasterizer::cut_at`]).
     cut: Option<Cut>,
+    /// Where every pass walks the multisampled fragments ([`Rasterizer::cover`]).
+    covered: Option<Covered>,
+}
+
+/// The multisampled fragments of a technique that keeps no coverage mask (docs/msaa.md): every
+/// pass of [`Rasterizer::cover`]'s frame walks a fragment where the triangle covers any of the
+/// pixel's `samples` samples, shaded at the centre as [`Rasterizer::for_each_masked_fragment`]'s,
+/// its alpha weighted by its coverage fraction where `fraction`
+/// ([`oit_core::msaa::Coverage::Fraction`]), else left whole ([`oit_core::msaa::Coverage::Pixel`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Covered {
+    /// Samples a pixel (4 or 8).
+    pub samples: u32,
+    /// Whether each fragment's alpha is weighted by its coverage fraction.
+    pub fraction: bool,
 }
 
 /// The opaque depth a frame's transparent fragments are tested against: a fragment reaches a
@@ -520,9 +541,23 @@ impl Rasterizer {
             spare_bands: std::sync::Mutex::default(),
             fragments: OnceLock::new(),
             cut: None,
+            covered: None,
         };
         r.derive();
         r
+    }
+
+    /// Makes every pass that follows (but [`Rasterizer::for_each_masked_fragment`], which takes
+    /// its samples itself) walk the multisampled fragments as `covered` says ([`Covered`]), on
+    /// the portable per-pixel walk of [`Rasterizer::for_each_masked_fragment`], in
+    /// [`RasterMode::Scatter`]'s tasks or the banded pass's bands (each pixel's fragments still
+    /// from one thread, highest primitive first, there); `None` goes back to the single-sample
+    /// walks.
+    pub fn cover(&mut self, covered: Option<Covered>) {
+        if self.covered != covered {
+            self.fragments = OnceLock::new();
+        }
+        self.covered = covered;
     }
 
     /// Tests every fragment of the passes that follow against `depth` (one value a pixel, the
@@ -709,7 +744,7 @@ impl Rasterizer {
         ahead: &(dyn Fn(u32) + Sync),
         f: F,
     ) -> u64 {
-        let n = behind_cut!(self, f, g => match self.mode {
+        let n = behind_cut!(self, f, g => match self.pass_mode() {
             RasterMode::Scatter => self.scatter_shaded(Kernel::detect(), g, Some(ahead)),
             RasterMode::Tiled => self.covered_on_demand(g),
         });
@@ -814,13 +849,19 @@ impl Rasterizer {
 
     /// [`Rasterizer::for_each_fragment`], shading as `shade` says.
     pub fn for_each_fragment_with<F: Fn(&Fragment<'_>) + Sync>(&self, shade: Shade, f: F) -> u64 {
-        let n = behind_cut!(self, f, g => match (self.mode, shade) {
+        let n = behind_cut!(self, f, g => match (self.pass_mode(), shade) {
             (RasterMode::Scatter, Shade::Color) => self.scatter_shaded(Kernel::detect(), g, None),
             (RasterMode::Scatter, Shade::OnDemand) => self.scatter_on_demand(Kernel::detect(), g),
             (RasterMode::Tiled, _) => self.covered_on_demand(g),
         });
         self.fragments.get_or_init(|| n);
         n
+    }
+
+    /// The mode a pass runs in: [`RasterMode::Scatter`] where [`Rasterizer::cover`] asked for
+    /// the multisampled fragments (whose walk is Scatter's tasks'), else the rasterizer's.
+    fn pass_mode(&self) -> RasterMode {
+        if self.covered.is_some() { RasterMode::Scatter } else { self.mode }
     }
 
     /// Every covered pixel handed to `f` with its colour and normal left to be made where `f`
@@ -868,6 +909,22 @@ impl Rasterizer {
         f: &F,
         ahead: Ahead<'_>,
     ) -> u64 {
+        if let Some(covered) = self.covered {
+            let offsets = sample_offsets(covered.samples);
+            let mut n = 0u64;
+            for i in order {
+                n += self.walk_masked(i, &offsets, rows, |frag, mask| {
+                    if covered.fraction {
+                        let mut color = frag.color();
+                        color.w = oit_core::msaa::fraction_alpha(color.w, mask, covered.samples);
+                        f(&Fragment { color: Some(color), ..*frag });
+                    } else {
+                        f(frag);
+                    }
+                });
+            }
+            return n;
+        }
         #[cfg(target_arch = "x86_64")]
         if kernel == Kernel::Avx2 {
             let (setup, records) = (&self.setup, self.records());
@@ -909,51 +966,60 @@ impl Rasterizer {
     /// touched, so `samples == 1` runs exactly as before. The cut of an opaque pass does not
     /// apply here (the CPU backend refuses opaque objects with several samples).
     pub fn for_each_masked_fragment<F: Fn(&Fragment<'_>, u8) + Sync>(&self, samples: u32, f: F) -> u64 {
-        use oit_core::setup::{HALF_PIXEL, SUBPIXEL, edge, subpixel_offsets};
-        // each sample's offset from the pixel's centre, in 1/256 pixel
-        let offsets: Vec<(i64, i64)> =
-            subpixel_offsets(samples).map(|(x, y)| (x - HALF_PIXEL, y - HALF_PIXEL)).collect();
-        self.scatter_tasks(|run| {
-            let mut n = 0u64;
-            for i in run {
-                let (t, s) = (&self.setup.triangles[i], &self.edges[i]);
-                let [x0, y0, x1, y1] = t.bbox;
-                // The edge functions stepped across the box from the first pixel's centre, and
-                // each sample's as the centre's plus a constant: the plain rule
-                // (`setup::sample_mask` and `setup::centre_edges` at every pixel) in integers,
-                // so the same values (`masked_walk_is_the_plain_rule`).
-                let (cx, cy) = (i64::from(x0) * SUBPIXEL + HALF_PIXEL, i64::from(y0) * SUBPIXEL + HALF_PIXEL);
-                let e = [0, 1, 2].map(|k| edge(t, k, cx, cy));
-                // sample j's three edge values less the centre's (no allocation a triangle)
-                let mut deltas = [[0i64; 3]; 8];
-                for (d, &(ox, oy)) in deltas.iter_mut().zip(&offsets) {
-                    *d = e.map(|(_, step_x, step_y, _)| step_x / SUBPIXEL * ox + step_y / SUBPIXEL * oy);
-                }
-                let at_sample = &deltas[..offsets.len()];
-                let mut row = e.map(|e| e.0);
-                for y in y0..=y1 {
-                    let mut c = row;
-                    for x in x0..=x1 {
-                        let mut mask = 0u8;
-                        for (j, d) in at_sample.iter().enumerate() {
-                            let inside = (0..3).all(|k| c[k] + d[k] > e[k].3);
-                            mask |= u8::from(inside) << j;
-                        }
-                        if mask != 0 {
-                            f(&self.on_demand_fragment(t, s, x, y, c), mask);
-                            n += 1;
-                        }
-                        for k in 0..3 {
-                            c[k] += e[k].1;
-                        }
+        let offsets = sample_offsets(samples);
+        self.scatter_tasks(|run| run.map(|i| self.walk_masked(i, &offsets, ALL_ROWS, &f)).sum())
+    }
+
+    /// The multisampled walk of triangle `i` in the rows `rows` (inclusive), the samples at
+    /// `offsets` from the pixel's centre ([`sample_offsets`]): `f` gets each fragment with its
+    /// mask ([`Rasterizer::for_each_masked_fragment`]); returns the fragments.
+    fn walk_masked(
+        &self,
+        i: usize,
+        offsets: &[(i64, i64)],
+        rows: [u32; 2],
+        mut f: impl FnMut(&Fragment<'_>, u8),
+    ) -> u64 {
+        use oit_core::setup::{HALF_PIXEL, SUBPIXEL, edge};
+        let (t, s) = (&self.setup.triangles[i], &self.edges[i]);
+        let [x0, y0, x1, y1] = t.bbox;
+        // The edge functions stepped across the box from the first pixel's centre, and
+        // each sample's as the centre's plus a constant: the plain rule
+        // (`setup::sample_mask` and `setup::centre_edges` at every pixel) in integers,
+        // so the same values (`masked_walk_is_the_plain_rule`).
+        let (cx, cy) = (i64::from(x0) * SUBPIXEL + HALF_PIXEL, i64::from(y0) * SUBPIXEL + HALF_PIXEL);
+        let e = [0, 1, 2].map(|k| edge(t, k, cx, cy));
+        // sample j's three edge values less the centre's (no allocation a triangle)
+        let mut deltas = [[0i64; 3]; 8];
+        for (d, &(ox, oy)) in deltas.iter_mut().zip(offsets) {
+            *d = e.map(|(_, step_x, step_y, _)| step_x / SUBPIXEL * ox + step_y / SUBPIXEL * oy);
+        }
+        let at_sample = &deltas[..offsets.len()];
+        let mut row = e.map(|e| e.0);
+        let mut n = 0u64;
+        for y in y0..=y1 {
+            if y >= rows[0] && y <= rows[1] {
+                let mut c = row;
+                for x in x0..=x1 {
+                    let mut mask = 0u8;
+                    for (j, d) in at_sample.iter().enumerate() {
+                        let inside = (0..3).all(|k| c[k] + d[k] > e[k].3);
+                        mask |= u8::from(inside) << j;
+                    }
+                    if mask != 0 {
+                        f(&self.on_demand_fragment(t, s, x, y, c), mask);
+                        n += 1;
                     }
                     for k in 0..3 {
-                        row[k] += e[k].2;
+                        c[k] += e[k].1;
                     }
                 }
             }
-            n
-        })
+            for k in 0..3 {
+                row[k] += e[k].2;
+            }
+        }
+        n
     }
 
     /// The fragment of `t` (traversal record `s`) at pixel (`x`, `y`) with edge functions `e`,
@@ -1101,7 +1167,10 @@ impl Rasterizer {
 
     /// Fragments one pass generates (counted by a coverage-only pass unless a pass ran already).
     pub fn fragment_count(&self) -> u64 {
-        *self.fragments.get_or_init(|| self.for_each_covered(|_, _, _, _, _| {}))
+        *self.fragments.get_or_init(|| match self.covered {
+            Some(c) => self.for_each_masked_fragment(c.samples, |_, _| {}),
+            None => self.for_each_covered(|_, _, _, _, _| {}),
+        })
     }
 
     /// Triangles after setup: the pieces of clipped triangles counted apiece, triangles that cover

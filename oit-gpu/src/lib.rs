@@ -116,10 +116,16 @@ pub struct FrameUniform {
     pub opaque: [u32; 4],
     /// Multisampling ([`oit_core::msaa`], docs/msaa.md): x the samples a pixel (1, 4 or 8); y the
     /// mask every kept coverage mask is ORed with (every sample under `--coverage pixel`, else
-    /// 0); z and w the sample positions, a byte each (x | y << 4, in 1/16 pixel from the pixel's
+    /// 0), and [`MSAA_FRACTION`] where each fragment's alpha is weighted by its coverage
+    /// fraction ([`oit_core::msaa::Coverage::Fraction`]); z and w the sample positions, a byte each (x | y << 4, in 1/16 pixel from the pixel's
     /// top-left corner), samples 0–3 in z and 4–7 in w ([`sample_position_words`]).
     pub msaa: [u32; 4],
 }
+
+/// The bit of [`FrameUniform::msaa`]'s y that weights each fragment's alpha by the fraction of
+/// its pixel's samples it covers (`coverage_weighted` in fragment.wgsl): the techniques that keep
+/// no coverage mask ([`oit_core::msaa::Coverage::Fraction`]).
+pub const MSAA_FRACTION: u32 = 1 << 8;
 
 /// The sample positions of `samples` samples ([`oit_core::msaa::positions`]) as the frame
 /// uniform carries them: sample i's byte (x | y << 4, 1/16 pixel) at bits 8·(i mod 4) of word
@@ -308,8 +314,9 @@ impl FrameUniform {
             msaa: {
                 let samples = settings.samples.max(1);
                 let keep = if settings.pixel_coverage { oit_core::msaa::full_mask(samples) } else { 0 };
+                let fraction = oit_core::msaa::coverage(settings) == Some(oit_core::msaa::Coverage::Fraction);
                 let [lo, hi] = sample_position_words(samples);
-                [samples, u32::from(keep), lo, hi]
+                [samples, u32::from(keep) | if fraction { MSAA_FRACTION } else { 0 }, lo, hi]
             },
         }
     }

@@ -1233,6 +1233,8 @@ impl VkCtx<'_> {
                 opaque_fragments: opaque_word(1),
                 masked: opaque_word(2),
                 occluded: opaque_word(3),
+                // set where the frame ends (`Stats::count_packing`)
+                coverage: None,
             },
         };
         if self.counts_losses {

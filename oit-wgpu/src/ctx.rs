@@ -1364,6 +1364,8 @@ pub(crate) fn totals_stats(t: &[u32], passes: u32, storage_bytes: u64) -> Stats 
         opaque_fragments: word(OPAQUE_WORD),
         masked: word(OPAQUE_WORD + 1),
         occluded: word(OPAQUE_WORD + 2),
+        // set where the frame ends (`Stats::count_packing`)
+        coverage: None,
     }
 }
 

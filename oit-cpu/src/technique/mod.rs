@@ -32,7 +32,7 @@ pub(crate) mod weighted;
 
 /// Runs `technique`'s frame over `ctx`: the one line a technique adds on the CPU beside its module.
 pub(crate) fn render(ctx: &mut Ctx<'_>, technique: Technique) -> Result<oit_core::Frame, OitError> {
-    if ctx.settings.samples > 1 {
+    if ctx.settings.samples > 1 && oit_core::msaa::keeps_masks(technique) {
         return msaa::render(ctx, technique);
     }
     match technique {
@@ -57,6 +57,19 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, technique: Technique) -> Result<oit_core
             backend: "cpu".into(),
             what: "kbuf: no fragment-stage interlock".into(),
         }),
+    }
+}
+
+/// What a frame's passes walk above one sample where its technique keeps no coverage mask
+/// ([`oit_core::msaa::coverage`]: its alpha weighted by its coverage fraction, or at full alpha
+/// per pixel); `None` where the frame walks single-sample fragments or the technique's own
+/// masked passes ([`msaa`]).
+pub(crate) fn covered(settings: &Settings) -> Option<crate::raster::Covered> {
+    use oit_core::msaa::Coverage;
+    match oit_core::msaa::coverage(settings)? {
+        Coverage::Sample => None,
+        _ if oit_core::msaa::keeps_masks(settings.technique) => None,
+        c => Some(crate::raster::Covered { samples: settings.samples, fraction: c == Coverage::Fraction }),
     }
 }
 
@@ -379,7 +392,10 @@ impl<'a> Ctx<'a> {
         match self.settings.bounds {
             oit_core::BoundsMode::Exact => self.pass(shader),
             oit_core::BoundsMode::Boxes => {
-                let boxes = Rasterizer::bounding_boxes(self.scene, self.camera, self.settings);
+                let mut boxes = Rasterizer::bounding_boxes(self.scene, self.camera, self.settings);
+                // the boxes' multisampled fragments where the frame's are (the GPU's box raster
+                // runs the same masked rule), so every pixel a fragment reaches has bounds
+                boxes.cover(covered(self.settings));
                 boxes.for_each_fragment(shader);
                 self.passes += 1;
             }

@@ -29,7 +29,9 @@
 //! With `Settings::pixel_coverage` (`--coverage pixel`) every technique here but the reference
 //! keeps each fragment's mask as the full mask: the per-pixel capture baseline.
 //!
-//! Every other technique is refused at `--samples` above 1 by the plan (`oit_core::plan::Plan::new`).
+//! Every other technique keeps no mask: its own passes run over the multisampled fragments
+//! ([`crate::raster::Rasterizer::cover`]), each over its whole pixel with its alpha weighted by
+//! its coverage fraction, or at full alpha with `--coverage pixel` (`oit_core::msaa::coverage`).
 
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 

@@ -57,7 +57,7 @@ fn oit_capture_shaded(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, normal:
         f.normal = normalize_or_zero(normal);
         f.cutoff = cutoff;
         f.mask = mask;
-        capture(f);
+        capture(coverage_weighted(f, fu.msaa));
     }
     return vec4<f32>(1.0, 0.0, 0.0, 0.0);
 }

@@ -36,9 +36,24 @@ struct FrameUniform {
     // opaque image (what its pixels composite over), w unused
     opaque: vec4<u32>,
     // multisampling (oit-gpu's `FrameUniform::msaa`): x samples a pixel, y the mask ORed into
-    // every kept coverage mask (`--coverage pixel`), z and w the sample positions, a byte each
+    // every kept coverage mask (`--coverage pixel`) in its low byte and MSAA_FRACTION, z and w the sample positions, a byte each
     // (x | y << 4 in 1/16 pixel), samples 0-3 in z, 4-7 in w
     msaa: vec4<u32>,
+}
+
+// oit-gpu's `MSAA_FRACTION`: each fragment's alpha weighted by its coverage fraction.
+const MSAA_FRACTION: u32 = 256u;
+
+// `f` as a technique that keeps no coverage mask captures it above one sample (oit-core's
+// `msaa::Coverage::Fraction`, `fu.msaa.y` holding MSAA_FRACTION): its alpha times the fraction
+// of its pixel's samples its mask covers (oit-core's `msaa::fraction_alpha`: k/4 and k/8 exact,
+// one rounding, the product's, as oit-cpu's); else `f` as it is.
+fn coverage_weighted(f: Fragment, msaa: vec4<u32>) -> Fragment {
+    var g = f;
+    if ((msaa.y & MSAA_FRACTION) != 0u) {
+        g.color.a = f.color.a * (f32(countOneBits(f.mask)) / f32(msaa.x));
+    }
+    return g;
 }
 
 const EFFECT_TRANSPARENCY: u32 = 0u;

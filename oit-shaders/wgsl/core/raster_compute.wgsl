@@ -171,7 +171,7 @@ fn raster_pixel(t: Tri, x: u32, y: u32) -> u32 {
     f.normal = normalize_or_zero(normal);
     f.cutoff = cutoff;
     f.mask = mask;
-    capture(f);
+    capture(coverage_weighted(f, fu.msaa));
     return 1u;
 }
 

@@ -29,7 +29,7 @@ fn mask_put(e: u32, m: u32) {
 // The mask a capture keeps of `f`: its own, or every sample under `--coverage pixel` (the
 // per-pixel capture baseline).
 fn kept_mask(f: Fragment) -> u32 {
-    return f.mask | fu.msaa.y;
+    return f.mask | (fu.msaa.y & 0xffu);
 }
 
 // Exchanges the masks of entries a and b (an in-place sort moving entries; nothing at one
