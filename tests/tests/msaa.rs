@@ -681,7 +681,11 @@ fn oblique() -> View {
 /// The fragments of `scene` under `s` by the plain rule, not through a rasterizer: every
 /// (pixel, triangle) of each set-up triangle's box where `setup::sample_mask` is not empty, with
 /// its mask and its depth at the pixel's centre (`DepthPlane` over `setup::centre_edges`).
-fn plain_fragments(scene: &oit_core::Scene, cam: &oit_core::Camera, s: &Settings) -> Vec<(usize, u32, u8, f32)> {
+fn plain_fragments(
+    scene: &oit_core::Scene,
+    cam: &oit_core::Camera,
+    s: &Settings,
+) -> Vec<(usize, u32, u8, f32)> {
     let setup = oit_core::setup::TriangleSetup::new(scene, cam, s);
     let mut out = Vec::new();
     for t in &setup.triangles {
@@ -773,13 +777,26 @@ fn opaque_pass_at_samples_on_the_cpu() {
                 let counted = oit_core::plan::Counted { deepest: 0, fragments };
                 let pixels = s.pixel_count() as u64;
                 let state = pixels * oit_core::plan::RESOLVE_STATE_BYTES;
-                assert_eq!(f.stats.storage_bytes, plan.storage_bytes(pixels, counted) - state, "{what}: storage");
+                assert_eq!(
+                    f.stats.storage_bytes,
+                    plan.storage_bytes(pixels, counted) - state,
+                    "{what}: storage"
+                );
             }
         }
-        let tiled = render(&cpu, &scene, &cam, &Settings { memory: Some(200 << 10), technique: Technique::Dfb, ..base.clone() });
+        let tiled = render(
+            &cpu,
+            &scene,
+            &cam,
+            &Settings { memory: Some(200 << 10), technique: Technique::Dfb, ..base.clone() },
+        );
         let whole = render(&cpu, &scene, &cam, &Settings { technique: Technique::Dfb, ..base.clone() });
         assert!(tiled.stats.tiles > 1, "{what}: {} tiles", tiled.stats.tiles);
-        assert_eq!((&whole.image, whole.stats.occluded), (&tiled.image, tiled.stats.occluded), "{what}: tiled");
+        assert_eq!(
+            (&whole.image, whole.stats.occluded),
+            (&tiled.image, tiled.stats.occluded),
+            "{what}: tiled"
+        );
     }
     // at one sample the count by hand is the single-sample pass's (the same rule, one sample)
     let scene = scene_of(WALLED[0]);
@@ -901,11 +918,20 @@ fn opaque_pass_at_samples_on_the_gpu() {
                 checks::accounting(&g).unwrap_or_else(|e| panic!("{what}: {e}"));
                 if hardware {
                     let slack = c.stats.fragments / 100;
-                    assert!(g.stats.occluded.abs_diff(c.stats.occluded) <= slack, "{what}: occluded {} vs the CPU's {}", g.stats.occluded, c.stats.occluded);
+                    assert!(
+                        g.stats.occluded.abs_diff(c.stats.occluded) <= slack,
+                        "{what}: occluded {} vs the CPU's {}",
+                        g.stats.occluded,
+                        c.stats.occluded
+                    );
                     let slack = c.stats.opaque_fragments / 100;
-                    assert!(g.stats.opaque_fragments.abs_diff(c.stats.opaque_fragments) <= slack, "{what}: opaque fragments");
+                    assert!(
+                        g.stats.opaque_fragments.abs_diff(c.stats.opaque_fragments) <= slack,
+                        "{what}: opaque fragments"
+                    );
                 } else {
-                    checks::same_fragments_as_cpu(&g, &c, s.technique).unwrap_or_else(|e| panic!("{what}: {e}"));
+                    checks::same_fragments_as_cpu(&g, &c, s.technique)
+                        .unwrap_or_else(|e| panic!("{what}: {e}"));
                     assert_eq!(
                         (g.stats.occluded, g.stats.opaque_fragments, g.stats.masked),
                         (c.stats.occluded, c.stats.opaque_fragments, c.stats.masked),
@@ -914,7 +940,8 @@ fn opaque_pass_at_samples_on_the_gpu() {
                     checks::same_storage_as_cpu(backend.name(), &g, &c, &scene, &s)
                         .unwrap_or_else(|e| panic!("{what}: {e}"));
                 }
-                let exact = matches!(s.technique, Technique::Dfb | Technique::Ll | Technique::Fabs { k: None });
+                let exact =
+                    matches!(s.technique, Technique::Dfb | Technique::Ll | Technique::Fabs { k: None });
                 if exact && s.effect == oit_core::Effect::Transparency && !s.pixel_coverage {
                     checks::exact(&reference, &g).unwrap_or_else(|e| panic!("{what}: {e}"));
                 }
