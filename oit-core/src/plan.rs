@@ -159,7 +159,8 @@ pub struct Plan {
     pub image_atomics: bool,
     /// Whether the scene has opaque or masked instances ([`crate::Scene::has_opaque`]): the frame
     /// runs the opaque pass first ([`PassKind::Opaque`], two geometry passes over the opaque
-    /// part) into [`OPAQUE_BYTES`] a pixel, and the technique captures only what lies in front.
+    /// part) into [`OPAQUE_BYTES`] a sample ([`Plan::opaque_bytes`]), and the technique captures
+    /// only what lies in front.
     pub opaque: bool,
     /// Samples a pixel (`Settings::samples`): above 1 each entry of `reference`, `dfb`, `ll` and
     /// `fabs` carries its coverage mask beside it, a byte ([`Plan::arrays`]; docs/msaa.md).
@@ -170,8 +171,9 @@ pub struct Plan {
     pub pooled: bool,
 }
 
-/// Bytes a pixel of the opaque pass's image holds: its nearest opaque (depth, primitive id) key
-/// (8) and that fragment's linear RGB (3 × 4).
+/// Bytes a sample of the opaque pass's image holds: its nearest opaque (depth, primitive id) key
+/// (8) and that fragment's linear RGB (3 × 4). One sample a pixel at `--samples 1`; at several
+/// samples the image is kept a sample ([`Plan::opaque_bytes`], docs/msaa.md).
 pub const OPAQUE_BYTES: u64 = 20;
 
 impl Plan {
@@ -529,11 +531,18 @@ impl Plan {
     /// technique keeps. One number every backend checks against its memory budget
     /// ([`Plan::check_budget`]) before it allocates.
     pub fn storage_bytes(&self, pixels: u64, counted: Counted) -> u64 {
-        let frame = RESOLVE_STATE_BYTES + if self.opaque { OPAQUE_BYTES } else { 0 };
+        let frame = RESOLVE_STATE_BYTES + self.opaque_bytes();
         let fragments = self.fragment_capacity(counted.fragments);
         self.arrays(counted)
             .iter()
             .fold(pixels.saturating_mul(frame), |sum, a| sum.saturating_add(a.bytes(pixels, fragments)))
+    }
+
+    /// Bytes a pixel of the opaque pass's image: [`OPAQUE_BYTES`] a sample (the key and the
+    /// colour of each sample's nearest opaque fragment, docs/msaa.md), where the scene has an
+    /// opaque part; 0 elsewhere.
+    pub fn opaque_bytes(&self) -> u64 {
+        if self.opaque { OPAQUE_BYTES * u64::from(self.samples.max(1)) } else { 0 }
     }
 
     /// The elements a frame allocates its per-fragment arrays for, given the fragments it
@@ -705,11 +714,12 @@ impl Plan {
 
 /// What several samples a pixel (`Settings::samples` above 1, docs/msaa.md) are not yet done
 /// for, refused by name alike on every backend: `kbuf` (its interlock wraps the single-sample
-/// fragment stage); fabs's `--overflow tail`; opaque objects (the opaque pass is not multisampled);
-/// and on the GPU backends the supersampled reference (`--supersample`). (A hardware raster path
-/// refuses a sample count its device does not draw where it starts a frame, and its own captures,
-/// [`refuse_multisampled_own_capture`].) The techniques that keep no mask take the samples by
-/// their coverage fraction ([`crate::msaa::coverage`]).
+/// fragment stage); fabs's `--overflow tail`; the supersampled reference (`--supersample`) of a
+/// scene with opaque objects, and on the GPU backends any supersampled reference. (The opaque
+/// pass itself is multisampled: its depth and colour are kept a sample, [`Plan::opaque_bytes`].)
+/// (A hardware raster path refuses a sample count its device does not draw where it starts a
+/// frame, and its own captures, [`refuse_multisampled_own_capture`].) The techniques that keep
+/// no mask take the samples by their coverage fraction ([`crate::msaa::coverage`]).
 fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<(), OitError> {
     let samples = settings.samples;
     if samples <= 1 {
@@ -726,9 +736,17 @@ fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<()
     if matches!(technique, Technique::Fabs { .. }) && settings.overflow == crate::Overflow::Tail {
         return refuse(format!("fabs with --overflow tail at --samples {samples}: not yet done"));
     }
-    if scene.has_opaque() {
+    if scene.has_opaque() && !crate::msaa::keeps_masks(technique) {
         return refuse(format!(
-            "--samples {samples} with opaque objects: the opaque pass is not yet multisampled (docs/msaa.md)"
+            "{technique} at --samples {samples} with opaque objects: not yet done (the opaque cut \
+             is per sample, and the techniques that keep no mask do not yet reduce their coverage \
+             by it; reference, dfb, ll and fabs do: docs/msaa.md)"
+        ));
+    }
+    if scene.has_opaque() && settings.supersample {
+        return refuse(format!(
+            "--supersample with opaque objects at --samples {samples}: the supersampled reference \
+             does not yet draw the opaque pass (compare against the per-sample reference)"
         ));
     }
     if backend != "cpu" && settings.supersample {

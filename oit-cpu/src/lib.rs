@@ -183,6 +183,7 @@ impl<'s> CpuPrepared<'s> {
             return Err(OitError::InvalidSettings("camera matrices are not finite".into()));
         }
         let plan = oit_core::plan::Plan::new("cpu", self.scene, settings)?.on_path(RasterPath::Cpu);
+        let plan_opaque_bytes = plan.opaque_bytes();
         plan.refuse_image_atomics("cpu")?;
         plan.refuse_interlock("cpu", "the CPU's rasterizer has no fragment stage to interlock")?;
         // the whole frame's storage and outputs against the host's memory, before anything is
@@ -231,7 +232,11 @@ impl<'s> CpuPrepared<'s> {
         drop(ctx);
         let occluded = raster.occluded().unwrap_or_else(|| {
             // no pass ran behind the cut (nothing to capture): one counts it
-            raster.for_each_fragment(|_| {});
+            if settings.samples > 1 {
+                raster.for_each_masked_fragment(settings.samples, |_, _| {});
+            } else {
+                raster.for_each_fragment(|_| {});
+            }
             raster.occluded().unwrap_or(0)
         });
         raster.cut_at(None);
@@ -246,7 +251,7 @@ impl<'s> CpuPrepared<'s> {
             frame.stats.opaque_fragments = o.fragments;
             frame.stats.masked = o.masked;
             frame.stats.geometry_passes += o.passes;
-            frame.stats.storage_bytes += pixels * oit_core::plan::OPAQUE_BYTES;
+            frame.stats.storage_bytes += pixels * plan_opaque_bytes;
         }
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(frame)

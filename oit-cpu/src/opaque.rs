@@ -21,12 +21,16 @@ use oit_core::{AlphaMode, Camera, Scene, Settings};
 use crate::raster::{Rasterizer, Shade};
 
 /// What the opaque pass leaves for the technique: the depth transparent fragments must be in
-/// front of, and the colour they composite over.
+/// front of, and the colour they composite over, each kept a **sample** (`samples` a pixel, sample
+/// `i` of pixel `px` at `px · samples + i`; one a pixel at one sample).
 pub(crate) struct OpaqueImage {
-    /// Per pixel, the nearest opaque depth; `f32::INFINITY` where none fell.
+    /// Per sample, the nearest opaque depth; `f32::INFINITY` where none fell.
     pub depth: Arc<[f32]>,
-    /// Per pixel, that fragment's linear RGB; `None` where none fell (the background shows).
+    /// Per sample, that fragment's linear RGB; `None` where none fell (the background shows).
     pub color: Vec<Option<Vec3>>,
+    /// Per pixel (kept only above one sample), whether every sample holds the same key (the same
+    /// opaque fragment, or none): the per-sample resolves composite such a pixel once.
+    pub uniform: Vec<bool>,
     /// Fragments the pass drew (those masked away included).
     pub fragments: u64,
     /// Of those, fragments a mask's cutoff discarded.
@@ -36,35 +40,57 @@ pub(crate) struct OpaqueImage {
 }
 
 /// Draws `scene` (a frame's opaque part) seen by `camera` under `settings` (the layers'
-/// settings: a tile's region included).
+/// settings: a tile's region included). Above one sample (docs/msaa.md) the z-buffer is kept a
+/// sample: a fragment (one a pixel a triangle where it covers any sample, its depth the pixel
+/// centre's as every multisampled fragment's) writes the samples its coverage mask holds, and
+/// each sample keeps its own nearest key and that fragment's colour.
 pub(crate) fn draw(scene: &Scene, camera: &Camera, settings: &Settings) -> OpaqueImage {
     let raster = Rasterizer::new(scene, camera, settings);
+    let samples = settings.samples.max(1);
+    let per = samples as usize;
     let pixels = settings.pixel_count();
-    let keys: Vec<AtomicU64> = (0..pixels).map(|_| AtomicU64::new(u64::MAX)).collect();
+    let keys: Vec<AtomicU64> = (0..pixels * per).map(|_| AtomicU64::new(u64::MAX)).collect();
     let masked = AtomicU64::new(0);
     // only a scene with a masked object needs a fragment's alpha in the first pass; elsewhere
     // it tests depth and id alone, unshaded
     let masks = scene.objects.iter().any(|o| matches!(o.alpha_mode, AlphaMode::Mask { .. }));
-    let fragments = raster.for_each_fragment(|f| {
+    let key_of = |f: &crate::raster::Fragment<'_>| u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim);
+    let first = |f: &crate::raster::Fragment<'_>, mask: u8| {
         if masks && f.color().w < f.cutoff() {
             masked.fetch_add(1, Relaxed);
             return;
         }
-        let key = u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim);
-        keys[f.pixel as usize].fetch_min(key, Relaxed);
-    });
-    // the winner's colour: one fragment a pixel matches its key (ids are unique in a pixel)
-    let rgb: Vec<[AtomicU32; 3]> = (0..pixels).map(|_| Default::default()).collect();
-    raster.for_each_fragment_with(Shade::OnDemand, |f| {
-        let px = f.pixel as usize;
-        let key = u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim);
-        if keys[px].load(Relaxed) == key {
-            let c = f.color();
-            for (slot, v) in rgb[px].iter().zip([c.x, c.y, c.z]) {
-                slot.store(v.to_bits(), Relaxed);
+        let key = key_of(f);
+        let base = f.pixel as usize * per;
+        for i in (0..per).filter(|i| mask >> i & 1 == 1) {
+            keys[base + i].fetch_min(key, Relaxed);
+        }
+    };
+    let fragments = if samples > 1 {
+        raster.for_each_masked_fragment(samples, first)
+    } else {
+        raster.for_each_fragment(|f| first(f, 1))
+    };
+    // the winner's colour: one fragment a sample matches its key (ids are unique in a pixel)
+    let rgb: Vec<[AtomicU32; 3]> = (0..pixels * per).map(|_| Default::default()).collect();
+    let second = |f: &crate::raster::Fragment<'_>, mask: u8| {
+        let key = key_of(f);
+        let base = f.pixel as usize * per;
+        let mut color = None;
+        for i in (0..per).filter(|i| mask >> i & 1 == 1) {
+            if keys[base + i].load(Relaxed) == key {
+                let c = *color.get_or_insert_with(|| f.color());
+                for (slot, v) in rgb[base + i].iter().zip([c.x, c.y, c.z]) {
+                    slot.store(v.to_bits(), Relaxed);
+                }
             }
         }
-    });
+    };
+    if samples > 1 {
+        raster.for_each_masked_fragment(samples, second);
+    } else {
+        raster.for_each_fragment_with(Shade::OnDemand, |f| second(f, 1));
+    }
     let depth: Arc<[f32]> = keys
         .iter()
         .map(|k| k.load(Relaxed))
@@ -78,5 +104,10 @@ pub(crate) fn draw(scene: &Scene, camera: &Camera, settings: &Settings) -> Opaqu
                 .then(|| Vec3::from_array(c.each_ref().map(|v| f32::from_bits(v.load(Relaxed)))))
         })
         .collect();
-    OpaqueImage { depth, color, fragments, masked: masked.into_inner(), passes: 2 }
+    let uniform = if samples > 1 {
+        keys.chunks(per).map(|k| k.iter().all(|v| v.load(Relaxed) == k[0].load(Relaxed))).collect()
+    } else {
+        Vec::new()
+    };
+    OpaqueImage { depth, color, uniform, fragments, masked: masked.into_inner(), passes: 2 }
 }

@@ -561,7 +561,8 @@ impl Rasterizer {
     }
 
     /// Tests every fragment of the passes that follow against `depth` (one value a pixel, the
-    /// opaque pass's): a fragment reaches the shader only where its depth is strictly less than
+    /// opaque pass's; one a sample for [`Rasterizer::for_each_masked_fragment`]'s passes at
+    /// several samples): a fragment reaches the shader only where its depth is strictly less than
     /// its pixel's, and [`Rasterizer::occluded`] counts those held back. `None` lifts the test.
     /// The passes still return (and [`Rasterizer::fragment_count`] still counts) every fragment
     /// drawn, those held back included.
@@ -963,11 +964,46 @@ impl Rasterizer {
     /// [0, 1] as always). Parallel over runs of triangles, in no particular order; colours made
     /// where `f` asks. The portable per-pixel walk of each triangle's box (setup sized the box
     /// by the samples' reach): the single-sample walks, batches and AVX2 kernels are not
-    /// touched, so `samples == 1` runs exactly as before. The cut of an opaque pass does not
-    /// apply here (the CPU backend refuses opaque objects with several samples).
+    /// touched, so `samples == 1` runs exactly as before.
+    ///
+    /// Where the rasterizer has a cut ([`Rasterizer::cut_at`], here one depth a **sample**,
+    /// `pixel · samples + i`), the mask `f` sees is reduced to the samples where the fragment's
+    /// depth (the pixel centre's, its one depth) lies strictly in front of that sample's opaque
+    /// depth; a fragment left with no sample does not reach `f` and is counted occluded by the
+    /// first pass after the cut, as the single-sample walks count theirs. The pass still returns
+    /// every fragment drawn.
     pub fn for_each_masked_fragment<F: Fn(&Fragment<'_>, u8) + Sync>(&self, samples: u32, f: F) -> u64 {
+        let Some(cut) = &self.cut else {
+            return self.masked_walk(samples, &f);
+        };
+        let counting = cut.occluded.get().is_none();
+        let pass = COUNTING_PASS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let (depth, per) = (&*cut.depth, samples as usize);
+        debug_assert_eq!(depth.len(), self.setup.width as usize * self.setup.height as usize * per);
+        let n = self.masked_walk(samples, &|frag: &Fragment<'_>, mask: u8| {
+            let opaque = &depth[frag.pixel as usize * per..][..per];
+            let mut kept = 0u8;
+            for (i, &d) in opaque.iter().enumerate() {
+                // in front only where strictly less (a NaN depth would count as behind)
+                kept |= u8::from(frag.depth < d) << i;
+            }
+            let kept = kept & mask;
+            if kept != 0 {
+                f(frag, kept);
+            } else if counting {
+                occlude(pass);
+            }
+        });
+        if counting {
+            let _ = cut.occluded.set(take_occluded(pass));
+        }
+        n
+    }
+
+    /// [`Rasterizer::for_each_masked_fragment`]'s walk, without the cut.
+    fn masked_walk<F: Fn(&Fragment<'_>, u8) + Sync>(&self, samples: u32, f: &F) -> u64 {
         let offsets = sample_offsets(samples);
-        self.scatter_tasks(|run| run.map(|i| self.walk_masked(i, &offsets, ALL_ROWS, &f)).sum())
+        self.scatter_tasks(|run| run.map(|i| self.walk_masked(i, &offsets, ALL_ROWS, f)).sum())
     }
 
     /// The multisampled walk of triangle `i` in the rows `rows` (inclusive), the samples at

@@ -139,6 +139,12 @@ pub(crate) struct Resolve<'a> {
     /// transparent fragments composite over instead of the background
     /// ([`Resolve::background_at`]).
     pub opaque: Option<&'a [Option<Vec3>]>,
+    /// Samples a pixel: the opaque colours are kept a sample, sample `i` of pixel `px` at
+    /// `px · samples + i` (docs/msaa.md).
+    pub samples: usize,
+    /// Above one sample, per pixel whether its opaque samples are all alike
+    /// ([`crate::opaque::OpaqueImage::uniform`]).
+    pub opaque_uniform: Option<&'a [bool]>,
 }
 
 impl<'a> Resolve<'a> {
@@ -152,13 +158,45 @@ impl<'a> Resolve<'a> {
             per_length: per_length as f32,
             count_ties: false,
             opaque: None,
+            samples: 1,
+            opaque_uniform: None,
         }
+    }
+
+    /// What sample `i` of pixel `px` composites over (a multisampled frame): that sample's opaque
+    /// colour, or the background where no opaque fragment covers it.
+    #[inline]
+    pub fn background_at_sample(&self, px: usize, i: usize) -> Vec3 {
+        match self.opaque {
+            Some(o) => o[px * self.samples + i].unwrap_or(self.background),
+            None => self.background,
+        }
+    }
+
+    /// Whether every sample of pixel `px` composites over the same opaque fragment (or every one
+    /// over the background): then a multisampled resolve may composite the pixel once, over
+    /// [`Resolve::background_at_sample`]`(px, 0)`.
+    #[inline]
+    pub fn opaque_uniform(&self, px: usize) -> bool {
+        self.opaque_uniform.is_none_or(|u| u[px])
+    }
+
+    /// What a multisampled pixel with nothing captured shows: the mean of its samples'
+    /// backgrounds (summed in sample order, then times 1/N, as `background_at` in prelude.wgsl),
+    /// the one background where they are alike.
+    pub fn background_mean(&self, px: usize) -> Vec3 {
+        if self.samples <= 1 || self.opaque_uniform(px) {
+            return self.background_at_sample(px, 0);
+        }
+        let sum = (0..self.samples).fold(Vec3::ZERO, |sum, i| sum + self.background_at_sample(px, i));
+        sum * (1.0 / self.samples as f32)
     }
 
     /// What pixel `px` composites over: its opaque colour, or the background where no opaque
     /// fragment fell (or the frame has no opaque parts).
     #[inline]
     pub fn background_at(&self, px: usize) -> Vec3 {
+        debug_assert_eq!(self.samples, 1, "a multisampled frame's background is a sample's");
         match self.opaque {
             Some(o) => o[px].unwrap_or(self.background),
             None => self.background,

@@ -53,22 +53,31 @@ use oit_core::{Camera, Effect, GpuFragments, OitError, Scene, Settings};
 /// Group 0's binding of the loss accounting (`acct` in prelude.wgsl).
 pub const ACCT_BINDING: u32 = 15;
 
-/// Group 0's binding of the opaque pass's keys (`opaque_keys` in prelude.wgsl): a pixel's
-/// nearest opaque `depth bits << 32 | primitive id` as one u64, all ones where none fell.
+/// Group 0's binding of the opaque pass's keys (`opaque_keys` in prelude.wgsl): each sample's
+/// nearest opaque `depth bits << 32 | primitive id` as one u64 (one sample a pixel at
+/// `--samples 1`; sample i of pixel p at p · samples + i), all ones where none fell.
 pub const OPAQUE_KEYS_BINDING: u32 = 16;
 
 /// Group 0's binding of the opaque pass's colours (`opaque_rgb` in prelude.wgsl): 3 words a
-/// pixel (the winner's linear RGB, f32 bits), then [`OPAQUE_COUNTER_WORDS`] counters.
+/// sample (the winner's linear RGB, f32 bits), then [`OPAQUE_COUNTER_WORDS`] counters.
 pub const OPAQUE_RGB_BINDING: u32 = 17;
 
 /// Counters after the opaque colours: [masked, occluded].
 pub const OPAQUE_COUNTER_WORDS: u64 = 2;
 
-/// Words of the opaque keys' buffer of a frame of `pixels` pixels (2 a pixel), and of its
-/// colours' (3 a pixel and the counters): together [`oit_core::plan::OPAQUE_BYTES`] a pixel, and
-/// the counters (bookkeeping).
-pub fn opaque_words(pixels: u64) -> (u64, u64) {
-    (pixels.max(1) * 2, pixels * 3 + OPAQUE_COUNTER_WORDS)
+/// Words of the opaque keys' buffer of a frame of `pixels` pixels at `samples` samples a pixel
+/// (2 a sample), and of its colours' (3 a sample and the counters): together
+/// [`oit_core::plan::OPAQUE_BYTES`] a sample ([`Plan::opaque_bytes`] a pixel), and the counters
+/// (bookkeeping).
+pub fn opaque_words(pixels: u64, samples: u32) -> (u64, u64) {
+    let samples = pixels * u64::from(samples.max(1));
+    (samples.max(1) * 2, samples * 3 + OPAQUE_COUNTER_WORDS)
+}
+
+/// The byte offset of the opaque colours' counters ([`OPAQUE_COUNTER_WORDS`]) in their buffer:
+/// after 3 words a sample (`opaque_counter` in prelude.wgsl).
+pub fn opaque_counters_offset(pixels: u64, samples: u32) -> u64 {
+    pixels * u64::from(samples.max(1)) * 12
 }
 
 /// Words of one `PixelState` (resolve.wgsl): 16 for the composite, 7 for the ties.

@@ -248,11 +248,11 @@ impl<'a> VkCtx<'a> {
         let totals = take(16)?;
         let first_count = take(16)?;
         let gated_counter = take(32)?;
-        let opaque_bytes = oit_core::plan::OPAQUE_BYTES * u64::from(pixels);
+        let opaque_bytes = plan.opaque_bytes() * u64::from(pixels);
         let has_opaque = plan.opaque;
         let opaque = if has_opaque {
             gpu.check_storage("the opaque pass's image", opaque_bytes)?;
-            let (keys, rgb) = oit_gpu::opaque_words(u64::from(pixels));
+            let (keys, rgb) = oit_gpu::opaque_words(u64::from(pixels), settings.samples);
             (take(keys * 4)?, take(rgb * 4)?)
         } else {
             (take(16)?, take(16)?)
@@ -1037,7 +1037,8 @@ impl<'a> VkCtx<'a> {
         if let Some(count) = self.opaque_from.take() {
             let rgb = self.opaque.1.clone();
             self.rec.copy_at(&count, 0, &first_count, 4, 4);
-            self.rec.copy_at(&rgb, u64::from(self.pixels) * 12, &first_count, 8, 8);
+            let counters = oit_gpu::opaque_counters_offset(u64::from(self.pixels), self.settings.samples);
+            self.rec.copy_at(&rgb, counters, &first_count, 8, 8);
         }
         let checks = std::mem::take(&mut self.setup_checks);
         let (gated_counter, end_checks) = (self.gated_counter.clone(), std::mem::take(&mut self.end_checks));

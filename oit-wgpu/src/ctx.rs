@@ -434,11 +434,11 @@ impl<'a> GpuCtx<'a> {
         );
         let storage =
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
-        let opaque_bytes = oit_core::plan::OPAQUE_BYTES * u64::from(pixels);
+        let opaque_bytes = plan.opaque_bytes() * u64::from(pixels);
         let has_opaque = plan.opaque;
         let opaque = if has_opaque {
             gpu.check_storage("the opaque pass's image", opaque_bytes)?;
-            let (keys, rgb) = oit_gpu::opaque_words(u64::from(pixels));
+            let (keys, rgb) = oit_gpu::opaque_words(u64::from(pixels), settings.samples);
             (make("opaque keys", keys * 4, storage), make("opaque colours", rgb * 4, storage))
         } else {
             (make("unused binding", 16, storage), make("unused binding", 16, storage))
@@ -1176,7 +1176,7 @@ impl<'a> GpuCtx<'a> {
         }
         if let Some(count) = self.opaque_from.take() {
             let rgb = self.opaque.1.clone();
-            let counters = u64::from(self.pixels) * 3 * 4;
+            let counters = oit_gpu::opaque_counters_offset(u64::from(self.pixels), self.settings.samples);
             let encoder = self.encoder();
             encoder.copy_buffer_to_buffer(&count, 0, &totals, OPAQUE_WORD * 4, 4);
             encoder.copy_buffer_to_buffer(&rgb, counters, &totals, (OPAQUE_WORD + 1) * 4, 8);

@@ -119,6 +119,8 @@ impl<'a> Ctx<'a> {
         let mut resolve = Resolve::new(per_length, camera, settings);
         resolve.count_ties = plan.count_ties;
         resolve.opaque = opaque.map(|o| &o.color[..]);
+        resolve.opaque_uniform = opaque.map(|o| &o.uniform[..]);
+        resolve.samples = settings.samples.max(1) as usize;
         let budget = crate::cpu_budget(settings, &plan);
         Ctx {
             scene,
@@ -293,7 +295,7 @@ impl<'a> Ctx<'a> {
         // `Plan::frame_bytes` counts them), against the budget: sizes known only after a counting
         // pass (the reference's lists, fabs/mdts without K) are checked here, before allocating
         let pixels = self.pixels as u64;
-        let opaque = if self.plan.opaque { oit_core::plan::OPAQUE_BYTES } else { 0 };
+        let opaque = self.plan.opaque_bytes();
         let state = pixels.saturating_mul(oit_core::plan::RESOLVE_STATE_BYTES + opaque);
         oit_core::plan::check_total(
             &format!("{} storage and outputs of a frame of {} pixels", self.settings.technique, self.pixels),

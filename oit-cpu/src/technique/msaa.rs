@@ -142,18 +142,19 @@ fn reference(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
                     .map(|i| (keys[i].load(Relaxed), payloads[i].load(Relaxed), masks[i].load(Relaxed))),
             );
             list.sort_unstable();
-            let bg = resolve.background_at(px).as_dvec3();
+            let bg = |i: u32| resolve.background_at_sample(px, i as usize).as_dvec3();
             let c = match effect {
-                Effect::Complexity if counts[px] == 0 => bg,
+                Effect::Complexity if counts[px] == 0 => resolve.background_mean(px).as_dvec3(),
                 Effect::Complexity => heat_f64(f64::from(counts[px]) / f64::from(deepest)),
-                _ if list.iter().all(|e| e.2 == full) => {
-                    composite_f64(effect, camera, per_length, list.iter().map(|e| (e.0, e.1)), bg)
+                _ if resolve.opaque_uniform(px) && list.iter().all(|e| e.2 == full) => {
+                    composite_f64(effect, camera, per_length, list.iter().map(|e| (e.0, e.1)), bg(0))
                 }
                 _ => {
+                    // each sample over its own opaque colour (the background where none covers it)
                     let sum: DVec3 = (0..samples)
                         .map(|i| {
                             let covering = list.iter().filter(|e| e.2 >> i & 1 == 1).map(|e| (e.0, e.1));
-                            composite_f64(effect, camera, per_length, covering, bg)
+                            composite_f64(effect, camera, per_length, covering, bg(i))
                         })
                         .sum();
                     sum / f64::from(samples)
@@ -241,19 +242,23 @@ fn resolve_entries(ctx: &Ctx<'_>, gather: impl Fn(usize, &mut Vec<Entry>) + Sync
         let mut list = Vec::new();
         gather(px, &mut list);
         list.sort_unstable();
-        let bg = resolve.background_at(px);
         let c: Vec3 = if complexity {
-            if list.is_empty() { bg } else { oit_core::composite::heat(list.len() as f32 / deepest as f32) }
-        } else if list.iter().all(|e| e.2 == full) {
+            if list.is_empty() {
+                resolve.background_mean(px)
+            } else {
+                oit_core::composite::heat(list.len() as f32 / deepest as f32)
+            }
+        } else if resolve.opaque_uniform(px) && list.iter().all(|e| e.2 == full) {
             let mut s = PixelState::default();
             push_all(&mut s, &mut list.iter());
-            resolve.finish_over(&mut s, bg)
+            resolve.finish_over(&mut s, resolve.background_at_sample(px, 0))
         } else {
+            // each sample over its own opaque colour (the background where none covers it)
             let mut sum = Vec3::ZERO;
             for i in 0..samples {
                 let mut s = PixelState::default();
                 push_all(&mut s, &mut list.iter().filter(|e| e.2 >> i & 1 == 1));
-                sum += resolve.finish_over(&mut s, bg);
+                sum += resolve.finish_over(&mut s, resolve.background_at_sample(px, i as usize));
             }
             sum / samples as f32
         };

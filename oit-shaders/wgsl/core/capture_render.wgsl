@@ -25,10 +25,26 @@ fn oit_capture_cut(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: ve
 // `oit_capture_cut` of a fragment covering the samples `mask` of its pixel (a multisampled pass:
 // `sample_mask`; 1 at one sample).
 fn oit_capture_masked(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: vec3<f32>, prim: u32, cutoff: f32, mask: u32) -> vec4<f32> {
-    if (!oit_held_back(pixel_xy, depth)) {
-        return oit_capture_shaded(pixel_xy, depth, color, normal, prim, cutoff, mask);
+    let kept = oit_kept(pixel_xy, depth, mask);
+    if (kept != 0u) {
+        return oit_capture_shaded(pixel_xy, depth, color, normal, prim, cutoff, kept);
     }
     return vec4<f32>(1.0, 0.0, 0.0, 0.0);
+}
+
+// The samples of `mask` (a multisampled pass's coverage; 1 at one sample) the opaque pass leaves to
+// a fragment at `pixel_xy` and `depth` (prelude.wgsl's `opaque_kept`, counted where the pass
+// counts): 0 where it holds the fragment back at all of them.
+fn oit_kept(pixel_xy: vec2<f32>, depth: f32, mask: u32) -> u32 {
+    let xy = vec2<u32>(max(floor(pixel_xy), vec2<f32>(0.0)));
+    if (xy.x >= fu.width || xy.y >= fu.height) {
+        return mask;
+    }
+    var f: Fragment;
+    f.pixel = xy.y * fu.width + xy.x;
+    f.depth = clamp(depth, 0.0, 1.0);
+    f.mask = mask;
+    return opaque_kept(f);
 }
 
 // Whether the opaque pass holds back a fragment at `pixel_xy` and `depth` (`opaque_cut`: counted

@@ -4,18 +4,30 @@
 // `depth bits << 32 | primitive id` by a 64-bit atomic MIN, so ties between coplanar triangles
 // resolve by id whatever order the fragments arrive in; a fragment a mask discards (alpha under its
 // cutoff, `Fragment::cutoff`) is counted and goes no further. Pass 1: the one fragment whose key won writes its linear RGB.
+// Above one sample the image is kept a sample: a fragment writes only the samples its coverage mask
+// holds (`f.mask`; 1 at one sample), each sample keeping its own nearest key and colour.
 
 fn capture(f: Fragment) {
     let key = (u64(depth_bits(f.depth)) << 32u) | u64(f.prim);
+    let n = opaque_samples();
     if (fu.pass_index == 0u) {
         if (f.color.w < f.cutoff) {
-            atomicAdd(&opaque_rgb[3u * fu.pixel_count], 1u);
+            atomicAdd(&opaque_rgb[opaque_counter(0u)], 1u);
             return;
         }
-        atomicMin(&opaque_keys[f.pixel], key);
-    } else if (atomicLoad(&opaque_keys[f.pixel]) == key) {
-        atomicStore(&opaque_rgb[3u * f.pixel], bitcast<u32>(f.color.x));
-        atomicStore(&opaque_rgb[3u * f.pixel + 1u], bitcast<u32>(f.color.y));
-        atomicStore(&opaque_rgb[3u * f.pixel + 2u], bitcast<u32>(f.color.z));
+        for (var i = 0u; i < n; i++) {
+            if (((f.mask >> i) & 1u) != 0u) {
+                atomicMin(&opaque_keys[f.pixel * n + i], key);
+            }
+        }
+    } else {
+        for (var i = 0u; i < n; i++) {
+            let s = f.pixel * n + i;
+            if (((f.mask >> i) & 1u) != 0u && atomicLoad(&opaque_keys[s]) == key) {
+                atomicStore(&opaque_rgb[3u * s], bitcast<u32>(f.color.x));
+                atomicStore(&opaque_rgb[3u * s + 1u], bitcast<u32>(f.color.y));
+                atomicStore(&opaque_rgb[3u * s + 2u], bitcast<u32>(f.color.z));
+            }
+        }
     }
 }

@@ -133,9 +133,11 @@ fn raster_pixel(t: Tri, x: u32, y: u32) -> u32 {
     var f: Fragment;
     f.pixel = y * ru.width + x;
     f.depth = depth;
-    // behind the opaque pass's depth: generated (counted), neither shaded nor captured (oit-cpu
-    // tests the cut before it shades too)
-    if (opaque_cut(f)) {
+    // the samples in front of the opaque pass's depth; behind at every one: generated (counted),
+    // neither shaded nor captured (oit-cpu tests the cut before it shades too)
+    f.mask = mask;
+    f.mask = opaque_kept(f);
+    if (f.mask == 0u) {
         return 1u;
     }
     let q = vec3<f32>(b.x * t.inv_w[0], b.y * t.inv_w[1], b.z * t.inv_w[2]);
@@ -170,7 +172,6 @@ fn raster_pixel(t: Tri, x: u32, y: u32) -> u32 {
     f.color = color;
     f.normal = normalize_or_zero(normal);
     f.cutoff = cutoff;
-    f.mask = mask;
     capture(coverage_weighted(f, fu.msaa));
     return 1u;
 }

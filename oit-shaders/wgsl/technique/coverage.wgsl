@@ -59,9 +59,10 @@ fn composite_covering(first: u32, n: u32, bits: u32, bg: vec3<f32>) -> vec3<f32>
 }
 
 // The per-sample resolve of pixel `px`'s n entries, sorted by key, from `first` (oit-cpu's
-// `resolve_entries`): where every entry covers every sample the pixel composites once; else each
-// sample composites the entries that cover it over the pixel's background, and the pixel is the
-// mean of its samples. The colour goes into the state as resolved (`state_resolved`), with n
+// `resolve_entries`): where every entry covers every sample and every sample holds the same
+// opaque key (`opaque_uniform`) the pixel composites once; else each sample composites the entries
+// that cover it over its own opaque colour or the background (`background_at_sample`), and the
+// pixel is the mean of its samples. The colour goes into the state as resolved (`state_resolved`), with n
 // captured and no ties counted (as oit-cpu's).
 fn resolve_masked(px: u32, first: u32, n: u32) {
     let samples = fu.msaa.x;
@@ -75,14 +76,14 @@ fn resolve_masked(px: u32, first: u32, n: u32) {
     var s = state[px];
     s.captured = n;
     if (fu.effect != EFFECT_COMPLEXITY) {
-        let bg = background_at(px);
         var c: vec3<f32>;
-        if (all == full) {
-            c = composite_covering(first, n, full, bg);
+        if (all == full && opaque_uniform(px)) {
+            c = composite_covering(first, n, full, background_at_sample(px, 0u));
         } else {
+            // each sample over its own opaque colour (the background where none covers it)
             var sum = vec3<f32>(0.0);
             for (var j = 0u; j < samples; j++) {
-                sum += composite_covering(first, n, 1u << j, bg);
+                sum += composite_covering(first, n, 1u << j, background_at_sample(px, j));
             }
             // 4 or 8 samples: exact, as oit-cpu's division
             c = sum * (1.0 / f32(samples));
