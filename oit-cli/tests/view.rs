@@ -391,6 +391,54 @@ fn scripted_view_of_a_wall_matches_render() {
     }
 }
 
+/// A textured scene (issue 38): the fence's masked quad with round holes (the opaque part's draw
+/// samples its texture and drops what its cutoff masks) in front of blended planes, and the
+/// particles' billboards of a soft alpha texture (the transparent capture samples theirs). The
+/// screenshots equal `oit render --backend wgpu --raster hardware` of the same view. Before, the
+/// viewer refused textured scenes by name.
+#[test]
+fn scripted_view_of_textured_scenes_matches_render() {
+    let test = "oit view of textured scenes under Xvfb";
+    if oit_wgpu::backend_or_skip(test).is_none() {
+        return;
+    }
+    let Some((display, _xvfb)) = display(test) else {
+        return;
+    };
+    let dir = scratch("textured");
+    let script = "\
+        0.0 screenshot tex-a.png
+        0.1 key T          # the next technique
+        0.1 drag 20 10
+        0.2 screenshot tex-b.png
+        0.3 quit
+    ";
+    std::fs::write(dir.join("tex.txt"), script).unwrap();
+    for scene in ["fence", "particles:48"] {
+        let out = oit(
+            &["view", "--scene", scene, "--technique", "fabs", "--size", "96x72", "--no-overlay", "--script", "tex.txt"],
+            Some(&display),
+            &dir,
+        );
+        let (text, err) = (stdout(&out), stderr(&out));
+        assert!(out.status.success(), "oit view --scene {scene} failed: {err}\nstdout: {text}");
+        assert!(!err.lines().any(|l| l.starts_with("error")), "{scene}: no frame failed: {err}");
+        let shots: Vec<(&str, &str)> = text
+            .lines()
+            .filter_map(|l| l.strip_prefix("screenshot "))
+            .map(|l| l.split_once(": ").expect("screenshot PATH: OPTIONS"))
+            .collect();
+        assert_eq!(shots.len(), 2, "{scene}: two screenshots: {text}");
+        assert_eq!(option(shots[0].1, "--technique"), "fabs");
+        assert_ne!(option(shots[1].1, "--technique"), "fabs");
+        for (name, options) in &shots {
+            let kept = dir.join(format!("{}-{name}", scene.replace(':', "-")));
+            std::fs::rename(dir.join(name), &kept).unwrap();
+            check_against_render(&dir, &kept, scene, options, &format!("{scene} {name}"));
+        }
+    }
+}
+
 /// Asserts the failure contract: exit code 1, one `error:` line, no panic.
 fn assert_one_error(out: &Output, what: &str, needles: &[&str]) {
     let err = stderr(out);

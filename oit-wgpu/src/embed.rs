@@ -541,7 +541,6 @@ impl OitPass {
         if let Some(view) = target {
             self.check_target(view.texture(), wgpu::TextureUsages::COPY_DST)?;
         }
-        oit_gpu::refuse_textures("wgpu (embedded pass)", &self.scene)?;
         self.check_technique()?;
         let drivers = self.drivers(Box::new(pipeline), Box::new(draw));
         let mut ctx =
@@ -745,7 +744,6 @@ impl OitPass {
                 let settings = Settings { technique, ..self.settings.clone() };
                 oit_core::plan::Plan::new("wgpu", &self.scene, &settings)
                     .is_ok_and(|p| p.mid_frame_readback().is_none() && p.refuse_interlock("wgpu", "").is_ok())
-                    && oit_gpu::refuse_textures("wgpu (embedded pass)", &self.scene).is_ok()
             })
             .map(|t| t.to_string())
             .collect()
@@ -754,7 +752,6 @@ impl OitPass {
     /// Whether the technique's frame can be recorded without a round trip ([`OitPass::record`]).
     fn check_recordable(&self) -> Result<(), OitError> {
         let plan = oit_core::plan::Plan::new("wgpu", &self.scene, &self.settings)?;
-        oit_gpu::refuse_textures("wgpu (embedded pass)", &self.scene)?;
         plan.refuse_image_atomics("wgpu")?;
         plan.refuse_interlock("wgpu", "WGSL has no fragment shader interlock")?;
         let why = plan.mid_frame_readback();
@@ -883,9 +880,9 @@ impl OitPass {
 
 /// The fragment stage of [`SceneGeometry::draw_opaque`]: a capture that holds nothing back and
 /// hands back the shaded colour (clamped to [0, 1], as the captures store it), so `hw_fs`
-/// compiles, and an entry point
-/// that drops a masked-away object's fragments (its alpha 0: `Scene::layers`) and writes the
-/// shaded colour, opaque.
+/// compiles, and an entry point that drops a masked-away fragment (its alpha, the texture's
+/// sample included, under its cutoff: `Scene::layers`, `oit_core::pulled::instance_cutoff`) and
+/// writes the shaded colour, opaque.
 const OPAQUE_DRAW_WGSL: &str = "
 fn oit_held_back(xy: vec2<f32>, depth: f32) -> bool {
     return false;
@@ -900,11 +897,15 @@ fn hw_opaque_fs(in: HwOut, @builtin(front_facing) front: bool) -> @location(0) v
     if (hw_culled(in, front)) {
         discard;
     }
-    if in.base.w <= 0.0 {
+    // as oit's opaque pass (core/opaque.wgsl): the shaded colour, its texture sampled first
+    // (`hw_color`), clamped as the capture clamps it; a fragment whose alpha is under its
+    // instance's cutoff is masked away (a textured masked object's cutoff, one half for an
+    // untextured masked one, whose alpha is 1 or 0; 0 for an opaque one: nothing)
+    let color = clamp(hw_color(in), vec4<f32>(0.0), vec4<f32>(1.0));
+    if (color.w < in.cutoff) {
         discard;
     }
-    let color = shade(hw.shading, in.base, in.normal, in.vcolor, in.has_color != 0u, hw.forward.xyz);
-    return vec4<f32>(clamp(color.xyz, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0);
+    return vec4<f32>(color.xyz, 1.0);
 }
 ";
 
@@ -937,10 +938,14 @@ struct OpaqueLayer {
 /// [`OitPass`] with oit's own vertex stage (the shading and transform of `Backend::render` on the
 /// hardware path, so the images agree).
 ///
-/// Upload: each mesh's vertices once (position, normal, vertex colour) and per triangle its three
-/// vertex indices and its instance, in primitive order, read from storage buffers by vertex index
-/// (no vertex buffers); per frame, [`SceneGeometry::write_frame`] writes each instance's
-/// `camera.view_proj() · transform`, normal matrix and base colour, and the shading uniform.
+/// Upload: each mesh's vertices once (position, normal, vertex colour, texture coordinates) and
+/// per triangle its three vertex indices and its instance, in primitive order, read from storage
+/// buffers by vertex index (no vertex buffers), and a textured scene's textures (group 1's binding
+/// 4); per frame, [`SceneGeometry::write_frame`] writes each instance's
+/// `camera.view_proj() · transform`, normal matrix, base colour and cutoff, the shading uniform,
+/// and, where the scene is textured, each triangle's texture level (chosen on the host as
+/// oit-core's setup chooses it, so it sets the frame's triangles up: a host cost per frame that an
+/// untextured scene does not pay).
 ///
 /// A scene with opaque or masked objects is split as every backend splits it
 /// ([`Scene::layers`]): its transparent part is the geometry the pass captures (the bind group,
@@ -965,6 +970,11 @@ pub struct SceneGeometry {
     absorption: f32,
     /// Whether the scene has materials: each frame's instance data is then the layers'.
     split: bool,
+    /// A textured scene's layers (transparent, opaque) with their meshes, for each frame's
+    /// per-triangle texture levels (`oit_gpu::triangle_levels` sets the triangles up on the
+    /// host): only where the scene is split and textured; each frame puts its objects and
+    /// instances in.
+    textured_layers: Option<Mutex<(Scene, Option<Scene>)>>,
     opaque: Option<OpaqueLayer>,
 }
 
@@ -980,11 +990,16 @@ impl SceneGeometry {
     ///
     /// A scene with opaque or masked objects or a transmission ([`Scene::has_materials`]) is
     /// uploaded as its layers (`scene.layers(None)`): the transparent part is what the pass's
-    /// draws capture, the opaque part what [`SceneGeometry::draw_opaque`] draws. A scene that
-    /// draws a textured object is refused by name (the embedded pass does not sample textures;
-    /// `Backend::render` does, on every backend).
+    /// draws capture, the opaque part what [`SceneGeometry::draw_opaque`] draws.
+    ///
+    /// A textured scene's textures are uploaded with the part that draws them (packed as the
+    /// hardware path packs them, [`oit_gpu::TextureRegion`]), and both stages sample them as
+    /// `Backend::render`'s hardware path does: each fragment's colour is its object's base
+    /// colour factor times the sample at its texture coordinates, with oit-core's filter, at the
+    /// level oit-core's setup chooses per triangle (written each frame by
+    /// [`SceneGeometry::write_frame`]); a masked object's fragment under its cutoff is dropped
+    /// from the opaque part.
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> Result<SceneGeometry, OitError> {
-        oit_gpu::refuse_textures("wgpu (embedded pass)", scene)?;
         let gpu = Gpu::from_device(device.clone(), queue.clone())?;
         let made = std::cell::Cell::new(0);
         let layers = scene.layers(None);
@@ -999,6 +1014,8 @@ impl SceneGeometry {
         } else {
             scene.objects.iter().map(|o| o.absorption).sum::<f32>() / scene.objects.len() as f32
         };
+        let textured_layers = (layers.baked && oit_gpu::is_textured(scene))
+            .then(|| Mutex::new((layers.transparent.clone().into_owned(), layers.opaque.clone())));
         Ok(SceneGeometry {
             gpu,
             geometry,
@@ -1006,6 +1023,7 @@ impl SceneGeometry {
             bounds: scene.bounds(),
             absorption,
             split: layers.baked,
+            textured_layers,
             opaque,
         })
     }
@@ -1030,6 +1048,24 @@ impl SceneGeometry {
         };
         let layers = skeleton.layers(settings.alpha);
         let drawn = layers.settings(settings);
+        if let Some(kept) = &self.textured_layers {
+            // the per-triangle texture levels set the triangles up: the layers with their meshes
+            // (the same parts, meshes and order as the skeleton's: one split of one scene),
+            // this frame's objects and instances put in
+            let mut kept = kept.lock().unwrap_or_else(|e| e.into_inner());
+            let (transparent, opaque) = &mut *kept;
+            let frame_of = |kept: &mut Scene, part: &Scene| {
+                kept.objects.clone_from(&part.objects);
+                kept.instances.clone_from(&part.instances);
+            };
+            frame_of(transparent, &layers.transparent);
+            self.geometry.write_frame(&self.gpu, transparent, camera, &drawn);
+            if let (Some(layer), Some(kept), Some(part)) = (&self.opaque, opaque, &layers.opaque) {
+                frame_of(kept, part);
+                layer.geometry.write_frame(&self.gpu, kept, camera, &drawn);
+            }
+            return;
+        }
         self.geometry.write_frame(&self.gpu, &layers.transparent, camera, &drawn);
         if let (Some(layer), Some(part)) = (&self.opaque, &layers.opaque) {
             layer.geometry.write_frame(&self.gpu, part, camera, &drawn);
