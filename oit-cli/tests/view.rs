@@ -196,7 +196,14 @@ fn scripted_view_matches_render() {
         1.7 drag -40 0     # azimuth 20 → 30
         1.9 restore
         2.0 screenshot seven.png
-        2.1 quit
+        2.1 key T          # reference
+        2.1 key N          # 4 samples a pixel
+        2.2 screenshot eight.png
+        2.3 key shift+T    # ll, still at 4 samples
+        2.4 screenshot nine.png
+        2.5 key N          # 8 where the device draws it, else back to 1
+        2.5 key N          # then 1 (or 4)
+        2.6 quit
     ";
     std::fs::write(dir.join("run.txt"), script).unwrap();
     let out = oit(
@@ -223,7 +230,7 @@ fn scripted_view_matches_render() {
         .filter_map(|l| l.strip_prefix("screenshot "))
         .map(|l| l.split_once(": ").expect("screenshot PATH: OPTIONS"))
         .collect();
-    assert_eq!(shots.len(), 7, "seven screenshots: {text}");
+    assert_eq!(shots.len(), 9, "nine screenshots: {text}");
     let first = shots[0].1;
     assert_eq!(option(first, "--technique"), "fabs:8");
     assert_eq!(option(first, "--size"), "128x96");
@@ -244,8 +251,16 @@ fn scripted_view_matches_render() {
     assert_eq!(option(shots[6].1, "--technique"), "adp");
     assert_eq!(option(shots[6].1, "--azimuth").parse::<f32>().unwrap(), 30.0);
     assert_eq!(option(shots[6].1, "--size"), "112x72");
+    assert!(!shots[6].1.contains("--samples"), "one sample a pixel: {}", shots[6].1);
+    // N: multisampled through the embedded pass, as `oit render --samples 4` on the hardware path
+    assert_eq!(option(shots[7].1, "--technique"), "reference");
+    assert_eq!(option(shots[7].1, "--samples"), "4");
+    assert_eq!(option(shots[8].1, "--technique"), "ll");
+    assert_eq!(option(shots[8].1, "--samples"), "4");
     let last = text.lines().find_map(|l| l.strip_prefix("view ")).expect("the final view is printed");
-    assert_eq!(last, shots[6].1, "nothing changed after the last screenshot");
+    // two more N: 4 → 8 → 1 where the device draws 8, 4 → 1 → 4 where not
+    let samples = last.split_whitespace().skip_while(|w| *w != "--samples").nth(1);
+    assert!(matches!(samples, None | Some("4")), "N steps back round: {last}");
     for (name, options) in &shots {
         check_against_render(&dir, &dir.join(name), SCENE, options, name);
     }
@@ -416,7 +431,18 @@ fn scripted_view_of_textured_scenes_matches_render() {
     std::fs::write(dir.join("tex.txt"), script).unwrap();
     for scene in ["fence", "particles:48"] {
         let out = oit(
-            &["view", "--scene", scene, "--technique", "fabs", "--size", "96x72", "--no-overlay", "--script", "tex.txt"],
+            &[
+                "view",
+                "--scene",
+                scene,
+                "--technique",
+                "fabs",
+                "--size",
+                "96x72",
+                "--no-overlay",
+                "--script",
+                "tex.txt",
+            ],
             Some(&display),
             &dir,
         );

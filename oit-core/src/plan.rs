@@ -739,21 +739,6 @@ fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<()
     Ok(())
 }
 
-/// The refusal of an embedded pass, which draws no multisampled pass yet, at several samples a
-/// pixel (`Ok` at one), where it starts a frame.
-pub fn refuse_multisampled_embedding(backend: &str, samples: u32) -> Result<(), OitError> {
-    if samples <= 1 {
-        return Ok(());
-    }
-    Err(OitError::Unsupported {
-        backend: backend.into(),
-        what: format!(
-            "the embedded pass at --samples {samples}: not yet done (no multisampled pass reading \
-             sample_mask); render with --raster compute or hardware (docs/msaa.md)"
-        ),
-    })
-}
-
 /// Checks `needed` bytes of a frame's storage (`what`) against `budget`; see [`Plan::check_budget`].
 pub fn check_total(what: &str, needed: u64, budget: (&str, u64)) -> Result<(), OitError> {
     let (limit_name, limit) = budget;

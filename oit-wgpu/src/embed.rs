@@ -49,6 +49,14 @@
 //!   colour, as behind oit's own opaque pass. [`SceneGeometry`] takes a scene with opaque parts:
 //!   it captures the transparent part and draws the opaque part itself for `with_opaque`
 //!   ([`SceneGeometry::draw_opaque`], [`SceneGeometry::draw_opaque_for`]).
+//! - Several samples a pixel (`Settings::samples` 4, or 8 where [`OitPass::with_adapter`] finds
+//!   the device draws them; docs/msaa.md): oit's count target is then multisampled, and the
+//!   user's pipeline takes [`CaptureShader::multisample`] as its multisample state and ends its
+//!   fragment shader in `return oit_capture_samples(position.xy, position.z, colour, normal,
+//!   prim, mask);` with `mask` its `@builtin(sample_mask)` input (the fragment is shaded once; the
+//!   technique composites it into the samples it covers, and its count is written at the first of
+//!   them). The techniques and scenes `Backend::render` takes at several samples, the pass takes
+//!   (`reference`, `fabs`, `dfb`, `ll`; no opaque image yet); the others are refused by name.
 //! - The device needs [`crate::required_features`] and more than wgpu's default 8 storage buffers
 //!   a shader stage (ask for the adapter's limits).
 //!
@@ -429,6 +437,24 @@ impl OitPass {
         Ok(())
     }
 
+    /// What the pass knows of the device's texture formats from `adapter` (the one the device was
+    /// opened on, with `wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES`): whether its
+    /// count target takes 8 samples a pixel ([`OitPass::max_samples`]). Without it, or without
+    /// that feature, a pass draws at most 4 (what WebGPU guarantees).
+    pub fn with_adapter(mut self, adapter: &wgpu::Adapter) -> OitPass {
+        let format = crate::gpu::count_format(self.gpu.features);
+        self.gpu.eight_samples =
+            self.gpu.features.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES)
+                && adapter.get_texture_format_features(format).flags.sample_count_supported(8);
+        self
+    }
+
+    /// The most samples a pixel the pass draws (`Settings::samples`): 4, or 8 where
+    /// [`OitPass::with_adapter`] found the count target's format takes them.
+    pub fn max_samples(&self) -> u32 {
+        if self.gpu.eight_samples { 8 } else { 4 }
+    }
+
     /// The settings of the pass.
     pub fn settings(&self) -> &Settings {
         &self.settings
@@ -672,19 +698,21 @@ impl OitPass {
         self.pool.allocations() + self.made.load(Relaxed)
     }
 
-    /// The count target of the pass's size, kept or made.
+    /// The count target of the pass's size and samples, kept or made.
     fn count_target(&self) -> CountTarget {
         self.kept_target(&self.target, self.settings.width, self.settings.height)
     }
 
-    /// The count target of `kept` if it is `w × h`, else a new one kept there.
+    /// The count target of `kept` if it is `w × h` at the settings' samples a pixel, else a new
+    /// one kept there.
     fn kept_target(&self, kept: &Mutex<Option<CountTarget>>, w: u32, h: u32) -> CountTarget {
+        let samples = self.settings.samples.max(1);
         let mut kept = kept.lock().unwrap_or_else(|e| e.into_inner());
         match &*kept {
-            Some(t) if t.size() == (w, h) => t.clone(),
+            Some(t) if t.size() == (w, h) && t.samples() == samples => t.clone(),
             _ => {
                 self.made.fetch_add(RenderDriver::CREATES, Relaxed);
-                let t = CountTarget::new(&self.gpu, w, h);
+                let t = CountTarget::with_samples(&self.gpu, w, h, samples);
                 *kept = Some(t.clone());
                 t
             }
@@ -709,7 +737,18 @@ impl OitPass {
     /// The techniques the pass refuses whatever the frame: bdp and adp without boxes, mdts
     /// without an alpha. Checked before any pass runs.
     fn check_technique(&self) -> Result<(), OitError> {
-        oit_core::plan::refuse_multisampled_embedding("wgpu (embedded pass)", self.settings.samples)?;
+        let samples = self.settings.samples.max(1);
+        if samples > self.max_samples() {
+            return Err(OitError::Unsupported {
+                backend: "wgpu (embedded pass)".into(),
+                what: format!(
+                    "--samples {samples}: this pass's count target takes {} samples a pixel at most \
+                     (WebGPU guarantees 4; 8 where the adapter's format takes them, which \
+                     `OitPass::with_adapter` tells the pass)",
+                    self.max_samples()
+                ),
+            });
+        }
         if self.boxes.is_none()
             && self.settings.bounds == BoundsMode::Boxes
             && matches!(self.settings.technique, Technique::Bdp { .. } | Technique::Adp)
@@ -958,8 +997,10 @@ struct OpaqueLayer {
 /// transparent part's), for the bounds pass of `bdp` and `adp`: [`OitPass::with_scene_geometry`]
 /// hands them (and the scene's bounds and absorption) to a pass, which draws them itself.
 ///
-/// Use: the pipeline's module is `capture.wgsl` followed by [`SceneGeometry::WGSL`], vertex entry
-/// point `hw_vs`, fragment entry point `hw_fs`, no vertex buffers, no culling; its layout is the
+/// Use: the pipeline's module is `capture.wgsl` followed by [`SceneGeometry::WGSL`] (and
+/// [`SceneGeometry::WGSL_MASKED`] for a multisampled pass), vertex entry point `hw_vs`, fragment
+/// entry point [`SceneGeometry::fragment_entry`] (`hw_fs`, or `hw_fs_masked` at several samples),
+/// multisample state `capture.multisample`, no vertex buffers, no culling; its layout is the
 /// capture's group 0 then [`SceneGeometry::bind_group_layout`] as group 1. In the draw closure, set
 /// [`SceneGeometry::bind_group`] at index 1 and draw `0..vertex_count()`.
 pub struct SceneGeometry {
@@ -984,6 +1025,18 @@ impl SceneGeometry {
     /// fragment stage `hw_fs` (where the opaque pass does not hold the fragment back,
     /// `oit_held_back`, shading as `Shading::shade`, then `oit_capture_shaded`).
     pub const WGSL: &'static str = RASTER_WGSL;
+
+    /// The multisampled fragment stage `hw_fs_masked` (core/raster_hardware_masked.wgsl, oit's
+    /// own hardware path's), to put after [`SceneGeometry::WGSL`] for a pass at several samples a
+    /// pixel ([`CaptureShader::multisample`]): it hands the capture the fragment's
+    /// `@builtin(sample_mask)` and writes the count at the first sample it covers.
+    pub const WGSL_MASKED: &'static str = oit_shaders::HARDWARE_RASTER_MASKED;
+
+    /// The fragment entry point of a pipeline over `capture`: `hw_fs`, or `hw_fs_masked` (from
+    /// [`SceneGeometry::WGSL_MASKED`]) where the pass is multisampled.
+    pub fn fragment_entry(capture: &CaptureShader<'_>) -> &'static str {
+        if capture.multisample.count > 1 { "hw_fs_masked" } else { "hw_fs" }
+    }
 
     /// Uploads `scene`'s meshes and triangles, and its instances' bounding boxes, to the device
     /// (which must have [`crate::required_features`]).
