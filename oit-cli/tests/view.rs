@@ -196,10 +196,13 @@ fn scripted_view_matches_render() {
         1.7 drag -40 0     # azimuth 20 → 30
         1.9 restore
         2.0 screenshot seven.png
-        2.1 key T          # reference
+        2.1 key T          # mdts64:8
+        2.1 key T          # fabs:8
         2.1 key N          # 4 samples a pixel
         2.2 screenshot eight.png
-        2.3 key shift+T    # ll, still at 4 samples
+        2.3 key T          # mlp:4
+        2.3 key T          # dfb
+        2.3 key T          # ll, still at 4 samples
         2.4 screenshot nine.png
         2.5 key N          # 8 where the device draws it, else back to 1
         2.5 key N          # then 1 (or 4)
@@ -253,7 +256,7 @@ fn scripted_view_matches_render() {
     assert_eq!(option(shots[6].1, "--size"), "112x72");
     assert!(!shots[6].1.contains("--samples"), "one sample a pixel: {}", shots[6].1);
     // N: multisampled through the embedded pass, as `oit render --samples 4` on the hardware path
-    assert_eq!(option(shots[7].1, "--technique"), "reference");
+    assert_eq!(option(shots[7].1, "--technique"), "fabs:8");
     assert_eq!(option(shots[7].1, "--samples"), "4");
     assert_eq!(option(shots[8].1, "--technique"), "ll");
     assert_eq!(option(shots[8].1, "--samples"), "4");
