@@ -78,6 +78,11 @@ pub struct ViewArgs {
     #[arg(long, value_name = "R,G,B", default_value = "0.06,0.07,0.09")]
     pub background: String,
 
+    /// Starting samples a pixel: 1, 4 or 8 (where the device draws 8), multisampled as
+    /// `oit render --samples` on the hardware path (N steps it).
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub samples: u32,
+
     /// Stops the peeling techniques after N capture passes, as for `oit render`.
     #[arg(long, value_name = "N")]
     pub max_peels: Option<u32>,
@@ -168,6 +173,7 @@ pub fn check(args: &ViewArgs) -> Result<Checked, OitError> {
         max_peels: args.max_peels,
         shading: args.shading.parse()?,
         effect: args.effect.parse()?,
+        samples: args.samples,
         ..Settings::default()
     };
     settings.validate()?;
@@ -214,6 +220,9 @@ pub fn check(args: &ViewArgs) -> Result<Checked, OitError> {
             Technique::Bdp { passes } => passes,
             _ => 1,
         },
+        samples: args.samples,
+        // until the device says (the window sets it once its device is open)
+        max_samples: 8,
     };
     Ok(Checked { scene, settings, state, script })
 }

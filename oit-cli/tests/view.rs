@@ -196,7 +196,17 @@ fn scripted_view_matches_render() {
         1.7 drag -40 0     # azimuth 20 → 30
         1.9 restore
         2.0 screenshot seven.png
-        2.1 quit
+        2.1 key T          # mdts64:8
+        2.1 key T          # fabs:8
+        2.1 key N          # 4 samples a pixel
+        2.2 screenshot eight.png
+        2.3 key T          # mlp:4
+        2.3 key T          # dfb
+        2.3 key T          # ll, still at 4 samples
+        2.4 screenshot nine.png
+        2.5 key N          # 8 where the device draws it, else back to 1
+        2.5 key N          # then 1 (or 4)
+        2.6 quit
     ";
     std::fs::write(dir.join("run.txt"), script).unwrap();
     let out = oit(
@@ -223,7 +233,7 @@ fn scripted_view_matches_render() {
         .filter_map(|l| l.strip_prefix("screenshot "))
         .map(|l| l.split_once(": ").expect("screenshot PATH: OPTIONS"))
         .collect();
-    assert_eq!(shots.len(), 7, "seven screenshots: {text}");
+    assert_eq!(shots.len(), 9, "nine screenshots: {text}");
     let first = shots[0].1;
     assert_eq!(option(first, "--technique"), "fabs:8");
     assert_eq!(option(first, "--size"), "128x96");
@@ -244,8 +254,16 @@ fn scripted_view_matches_render() {
     assert_eq!(option(shots[6].1, "--technique"), "adp");
     assert_eq!(option(shots[6].1, "--azimuth").parse::<f32>().unwrap(), 30.0);
     assert_eq!(option(shots[6].1, "--size"), "112x72");
+    assert!(!shots[6].1.contains("--samples"), "one sample a pixel: {}", shots[6].1);
+    // N: multisampled through the embedded pass, as `oit render --samples 4` on the hardware path
+    assert_eq!(option(shots[7].1, "--technique"), "fabs:8");
+    assert_eq!(option(shots[7].1, "--samples"), "4");
+    assert_eq!(option(shots[8].1, "--technique"), "ll");
+    assert_eq!(option(shots[8].1, "--samples"), "4");
     let last = text.lines().find_map(|l| l.strip_prefix("view ")).expect("the final view is printed");
-    assert_eq!(last, shots[6].1, "nothing changed after the last screenshot");
+    // two more N: 4 → 8 → 1 where the device draws 8, 4 → 1 → 4 where not
+    let samples = last.split_whitespace().skip_while(|w| *w != "--samples").nth(1);
+    assert!(matches!(samples, None | Some("4")), "N steps back round: {last}");
     for (name, options) in &shots {
         check_against_render(&dir, &dir.join(name), SCENE, options, name);
     }
@@ -388,6 +406,65 @@ fn scripted_view_of_a_wall_matches_render() {
     assert!(shots[1].1.contains("--alpha"), "{}", shots[1].1);
     for (name, options) in &shots {
         check_against_render(&dir, &dir.join(name), scene, options, name);
+    }
+}
+
+/// A textured scene (issue 38): the fence's masked quad with round holes (the opaque part's draw
+/// samples its texture and drops what its cutoff masks) in front of blended planes, and the
+/// particles' billboards of a soft alpha texture (the transparent capture samples theirs). The
+/// screenshots equal `oit render --backend wgpu --raster hardware` of the same view. Before, the
+/// viewer refused textured scenes by name.
+#[test]
+fn scripted_view_of_textured_scenes_matches_render() {
+    let test = "oit view of textured scenes under Xvfb";
+    if oit_wgpu::backend_or_skip(test).is_none() {
+        return;
+    }
+    let Some((display, _xvfb)) = display(test) else {
+        return;
+    };
+    let dir = scratch("textured");
+    let script = "\
+        0.0 screenshot tex-a.png
+        0.1 key T          # the next technique
+        0.1 drag 20 10
+        0.2 screenshot tex-b.png
+        0.3 quit
+    ";
+    std::fs::write(dir.join("tex.txt"), script).unwrap();
+    for scene in ["fence", "particles:48"] {
+        let out = oit(
+            &[
+                "view",
+                "--scene",
+                scene,
+                "--technique",
+                "fabs",
+                "--size",
+                "96x72",
+                "--no-overlay",
+                "--script",
+                "tex.txt",
+            ],
+            Some(&display),
+            &dir,
+        );
+        let (text, err) = (stdout(&out), stderr(&out));
+        assert!(out.status.success(), "oit view --scene {scene} failed: {err}\nstdout: {text}");
+        assert!(!err.lines().any(|l| l.starts_with("error")), "{scene}: no frame failed: {err}");
+        let shots: Vec<(&str, &str)> = text
+            .lines()
+            .filter_map(|l| l.strip_prefix("screenshot "))
+            .map(|l| l.split_once(": ").expect("screenshot PATH: OPTIONS"))
+            .collect();
+        assert_eq!(shots.len(), 2, "{scene}: two screenshots: {text}");
+        assert_eq!(option(shots[0].1, "--technique"), "fabs");
+        assert_ne!(option(shots[1].1, "--technique"), "fabs");
+        for (name, options) in &shots {
+            let kept = dir.join(format!("{}-{name}", scene.replace(':', "-")));
+            std::fs::rename(dir.join(name), &kept).unwrap();
+            check_against_render(&dir, &kept, scene, options, &format!("{scene} {name}"));
+        }
     }
 }
 

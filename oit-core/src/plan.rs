@@ -776,21 +776,6 @@ pub fn refuse_multisampled_own_capture(backend: &str, settings: &Settings) -> Re
     })
 }
 
-/// The refusal of an embedded pass, which draws no multisampled pass yet, at several samples a
-/// pixel (`Ok` at one), where it starts a frame.
-pub fn refuse_multisampled_embedding(backend: &str, samples: u32) -> Result<(), OitError> {
-    if samples <= 1 {
-        return Ok(());
-    }
-    Err(OitError::Unsupported {
-        backend: backend.into(),
-        what: format!(
-            "the embedded pass at --samples {samples}: not yet done (no multisampled pass reading \
-             sample_mask); render with --raster compute or hardware (docs/msaa.md)"
-        ),
-    })
-}
-
 /// Checks `needed` bytes of a frame's storage (`what`) against `budget`; see [`Plan::check_budget`].
 pub fn check_total(what: &str, needed: u64, budget: (&str, u64)) -> Result<(), OitError> {
     let (limit_name, limit) = budget;

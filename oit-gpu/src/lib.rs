@@ -156,26 +156,6 @@ pub fn is_textured(scene: &Scene) -> bool {
     scene.instances.iter().filter_map(|i| scene.objects.get(i.object)).any(|o| o.texture.is_some())
 }
 
-/// The refusal, by the object's and the texture's names, of a textured scene on a GPU path that
-/// does not sample textures (`what_path`: which, and what to use instead): the embedded pass,
-/// whose caller draws the geometry. A frame that drew the objects in their factor's colour alone
-/// would be wrong in silence.
-pub fn refuse_textures(backend: &str, scene: &Scene) -> Result<(), OitError> {
-    let textured =
-        scene.instances.iter().filter_map(|i| scene.objects.get(i.object)).find(|o| o.texture.is_some());
-    if let Some(o) = textured {
-        let texture = o.texture.and_then(|t| scene.textures.get(t)).map_or("?", |t| t.name.as_str());
-        return Err(OitError::Unsupported {
-            backend: backend.into(),
-            what: format!(
-                "textures: object '{}' of scene '{}' is textured ('{texture}'), and the embedded pass does not sample textures; render it with `Backend::render` (any backend), or draw it yourself",
-                o.name, scene.name
-            ),
-        });
-    }
-    Ok(())
-}
-
 /// Words of a textured triangle's record in the compute path's triangle buffer ([`host_setup`]):
 /// its vertices' texture coordinates (6 f32), the word of its level's descriptor in the texture
 /// region, its cutoff (f32, `Triangle::cutoff`), the region's first word (its tables).
@@ -614,17 +594,13 @@ pub trait Rasters<R: ?Sized> {
 
 #[cfg(test)]
 mod tests {
-    /// A scene that draws a textured object is refused (where a path refuses it) by the object's
-    /// and the texture's names; the same scene untextured is not.
+    /// Whether a scene draws a textured object: the particles do, their untextured twin does not.
     #[test]
-    fn textured_scenes_are_refused_by_name() {
+    fn textured_scenes_are_told_apart() {
         let scene = oit_core::load_scene("particles:4").unwrap();
         assert!(super::is_textured(&scene));
-        let e = super::refuse_textures("wgpu", &scene).unwrap_err().to_string();
-        assert!(e.contains("particle 0") && e.contains("sprite") && e.contains("wgpu"), "{e}");
         let plain = oit_core::load_scene("untextured:particles:4").unwrap();
         assert!(!super::is_textured(&plain));
-        assert!(super::refuse_textures("vulkan", &plain).is_ok());
     }
 
     /// The packed textures are what the sampler reads: a texel of each level at its descriptor's

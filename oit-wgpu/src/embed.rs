@@ -49,6 +49,14 @@
 //!   colour, as behind oit's own opaque pass. [`SceneGeometry`] takes a scene with opaque parts:
 //!   it captures the transparent part and draws the opaque part itself for `with_opaque`
 //!   ([`SceneGeometry::draw_opaque`], [`SceneGeometry::draw_opaque_for`]).
+//! - Several samples a pixel (`Settings::samples` 4, or 8 where [`OitPass::with_adapter`] finds
+//!   the device draws them; docs/msaa.md): oit's count target is then multisampled, and the
+//!   user's pipeline takes [`CaptureShader::multisample`] as its multisample state and ends its
+//!   fragment shader in `return oit_capture_samples(position.xy, position.z, colour, normal,
+//!   prim, mask);` with `mask` its `@builtin(sample_mask)` input (the fragment is shaded once; the
+//!   technique composites it into the samples it covers, and its count is written at the first of
+//!   them). The techniques and scenes `Backend::render` takes at several samples, the pass takes
+//!   (`reference`, `fabs`, `dfb`, `ll`; no opaque image yet); the others are refused by name.
 //! - The device needs [`crate::required_features`] and more than wgpu's default 8 storage buffers
 //!   a shader stage (ask for the adapter's limits).
 //!
@@ -429,6 +437,24 @@ impl OitPass {
         Ok(())
     }
 
+    /// What the pass knows of the device's texture formats from `adapter` (the one the device was
+    /// opened on, with `wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES`): whether its
+    /// count target takes 8 samples a pixel ([`OitPass::max_samples`]). Without it, or without
+    /// that feature, a pass draws at most 4 (what WebGPU guarantees).
+    pub fn with_adapter(mut self, adapter: &wgpu::Adapter) -> OitPass {
+        let format = crate::gpu::count_format(self.gpu.features);
+        self.gpu.eight_samples =
+            self.gpu.features.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES)
+                && adapter.get_texture_format_features(format).flags.sample_count_supported(8);
+        self
+    }
+
+    /// The most samples a pixel the pass draws (`Settings::samples`): 4, or 8 where
+    /// [`OitPass::with_adapter`] found the count target's format takes them.
+    pub fn max_samples(&self) -> u32 {
+        if self.gpu.eight_samples { 8 } else { 4 }
+    }
+
     /// The settings of the pass.
     pub fn settings(&self) -> &Settings {
         &self.settings
@@ -541,7 +567,6 @@ impl OitPass {
         if let Some(view) = target {
             self.check_target(view.texture(), wgpu::TextureUsages::COPY_DST)?;
         }
-        oit_gpu::refuse_textures("wgpu (embedded pass)", &self.scene)?;
         self.check_technique()?;
         let drivers = self.drivers(Box::new(pipeline), Box::new(draw));
         let mut ctx =
@@ -673,19 +698,21 @@ impl OitPass {
         self.pool.allocations() + self.made.load(Relaxed)
     }
 
-    /// The count target of the pass's size, kept or made.
+    /// The count target of the pass's size and samples, kept or made.
     fn count_target(&self) -> CountTarget {
         self.kept_target(&self.target, self.settings.width, self.settings.height)
     }
 
-    /// The count target of `kept` if it is `w × h`, else a new one kept there.
+    /// The count target of `kept` if it is `w × h` at the settings' samples a pixel, else a new
+    /// one kept there.
     fn kept_target(&self, kept: &Mutex<Option<CountTarget>>, w: u32, h: u32) -> CountTarget {
+        let samples = self.settings.samples.max(1);
         let mut kept = kept.lock().unwrap_or_else(|e| e.into_inner());
         match &*kept {
-            Some(t) if t.size() == (w, h) => t.clone(),
+            Some(t) if t.size() == (w, h) && t.samples() == samples => t.clone(),
             _ => {
                 self.made.fetch_add(RenderDriver::CREATES, Relaxed);
-                let t = CountTarget::new(&self.gpu, w, h);
+                let t = CountTarget::with_samples(&self.gpu, w, h, samples);
                 *kept = Some(t.clone());
                 t
             }
@@ -710,7 +737,30 @@ impl OitPass {
     /// The techniques the pass refuses whatever the frame: bdp and adp without boxes, mdts
     /// without an alpha. Checked before any pass runs.
     fn check_technique(&self) -> Result<(), OitError> {
-        oit_core::plan::refuse_multisampled_embedding("wgpu (embedded pass)", self.settings.samples)?;
+        let samples = self.settings.samples.max(1);
+        if samples > self.max_samples() {
+            return Err(OitError::Unsupported {
+                backend: "wgpu (embedded pass)".into(),
+                what: format!(
+                    "--samples {samples}: this pass's count target takes {} samples a pixel at most \
+                     (WebGPU guarantees 4; 8 where the adapter's format takes them, which \
+                     `OitPass::with_adapter` tells the pass)",
+                    self.max_samples()
+                ),
+            });
+        }
+        if samples > 1 && self.opaque.is_some() {
+            // the opaque image is kept a sample above one (docs/msaa.md); the caller's depth and
+            // colour are loaded a pixel
+            return Err(OitError::Unsupported {
+                backend: "wgpu (embedded pass)".into(),
+                what: format!(
+                    "the caller's opaque depth (`OitPass::with_opaque`) at --samples {samples}: not yet \
+                     done (a multisampled depth is not loaded a sample); draw at one sample, or let \
+                     oit draw the opaque part (`Backend::render`)"
+                ),
+            });
+        }
         if self.boxes.is_none()
             && self.settings.bounds == BoundsMode::Boxes
             && matches!(self.settings.technique, Technique::Bdp { .. } | Technique::Adp)
@@ -745,7 +795,6 @@ impl OitPass {
                 let settings = Settings { technique, ..self.settings.clone() };
                 oit_core::plan::Plan::new("wgpu", &self.scene, &settings)
                     .is_ok_and(|p| p.mid_frame_readback().is_none() && p.refuse_interlock("wgpu", "").is_ok())
-                    && oit_gpu::refuse_textures("wgpu (embedded pass)", &self.scene).is_ok()
             })
             .map(|t| t.to_string())
             .collect()
@@ -754,7 +803,6 @@ impl OitPass {
     /// Whether the technique's frame can be recorded without a round trip ([`OitPass::record`]).
     fn check_recordable(&self) -> Result<(), OitError> {
         let plan = oit_core::plan::Plan::new("wgpu", &self.scene, &self.settings)?;
-        oit_gpu::refuse_textures("wgpu (embedded pass)", &self.scene)?;
         plan.refuse_image_atomics("wgpu")?;
         plan.refuse_interlock("wgpu", "WGSL has no fragment shader interlock")?;
         let why = plan.mid_frame_readback();
@@ -883,9 +931,9 @@ impl OitPass {
 
 /// The fragment stage of [`SceneGeometry::draw_opaque`]: a capture that holds nothing back and
 /// hands back the shaded colour (clamped to [0, 1], as the captures store it), so `hw_fs`
-/// compiles, and an entry point
-/// that drops a masked-away object's fragments (its alpha 0: `Scene::layers`) and writes the
-/// shaded colour, opaque.
+/// compiles, and an entry point that drops a masked-away fragment (its alpha, the texture's
+/// sample included, under its cutoff: `Scene::layers`, `oit_core::pulled::instance_cutoff`) and
+/// writes the shaded colour, opaque.
 const OPAQUE_DRAW_WGSL: &str = "
 fn oit_held_back(xy: vec2<f32>, depth: f32) -> bool {
     return false;
@@ -900,11 +948,15 @@ fn hw_opaque_fs(in: HwOut, @builtin(front_facing) front: bool) -> @location(0) v
     if (hw_culled(in, front)) {
         discard;
     }
-    if in.base.w <= 0.0 {
+    // as oit's opaque pass (core/opaque.wgsl): the shaded colour, its texture sampled first
+    // (`hw_color`), clamped as the capture clamps it; a fragment whose alpha is under its
+    // instance's cutoff is masked away (a textured masked object's cutoff, one half for an
+    // untextured masked one, whose alpha is 1 or 0; 0 for an opaque one: nothing)
+    let color = clamp(hw_color(in), vec4<f32>(0.0), vec4<f32>(1.0));
+    if (color.w < in.cutoff) {
         discard;
     }
-    let color = shade(hw.shading, in.base, in.normal, in.vcolor, in.has_color != 0u, hw.forward.xyz);
-    return vec4<f32>(clamp(color.xyz, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0);
+    return vec4<f32>(color.xyz, 1.0);
 }
 ";
 
@@ -937,10 +989,14 @@ struct OpaqueLayer {
 /// [`OitPass`] with oit's own vertex stage (the shading and transform of `Backend::render` on the
 /// hardware path, so the images agree).
 ///
-/// Upload: each mesh's vertices once (position, normal, vertex colour) and per triangle its three
-/// vertex indices and its instance, in primitive order, read from storage buffers by vertex index
-/// (no vertex buffers); per frame, [`SceneGeometry::write_frame`] writes each instance's
-/// `camera.view_proj() · transform`, normal matrix and base colour, and the shading uniform.
+/// Upload: each mesh's vertices once (position, normal, vertex colour, texture coordinates) and
+/// per triangle its three vertex indices and its instance, in primitive order, read from storage
+/// buffers by vertex index (no vertex buffers), and a textured scene's textures (group 1's binding
+/// 4); per frame, [`SceneGeometry::write_frame`] writes each instance's
+/// `camera.view_proj() · transform`, normal matrix, base colour and cutoff, the shading uniform,
+/// and, where the scene is textured, each triangle's texture level (chosen on the host as
+/// oit-core's setup chooses it, so it sets the frame's triangles up: a host cost per frame that an
+/// untextured scene does not pay).
 ///
 /// A scene with opaque or masked objects is split as every backend splits it
 /// ([`Scene::layers`]): its transparent part is the geometry the pass captures (the bind group,
@@ -953,8 +1009,10 @@ struct OpaqueLayer {
 /// transparent part's), for the bounds pass of `bdp` and `adp`: [`OitPass::with_scene_geometry`]
 /// hands them (and the scene's bounds and absorption) to a pass, which draws them itself.
 ///
-/// Use: the pipeline's module is `capture.wgsl` followed by [`SceneGeometry::WGSL`], vertex entry
-/// point `hw_vs`, fragment entry point `hw_fs`, no vertex buffers, no culling; its layout is the
+/// Use: the pipeline's module is `capture.wgsl` followed by [`SceneGeometry::WGSL`] (and
+/// [`SceneGeometry::WGSL_MASKED`] for a multisampled pass), vertex entry point `hw_vs`, fragment
+/// entry point [`SceneGeometry::fragment_entry`] (`hw_fs`, or `hw_fs_masked` at several samples),
+/// multisample state `capture.multisample`, no vertex buffers, no culling; its layout is the
 /// capture's group 0 then [`SceneGeometry::bind_group_layout`] as group 1. In the draw closure, set
 /// [`SceneGeometry::bind_group`] at index 1 and draw `0..vertex_count()`.
 pub struct SceneGeometry {
@@ -965,6 +1023,11 @@ pub struct SceneGeometry {
     absorption: f32,
     /// Whether the scene has materials: each frame's instance data is then the layers'.
     split: bool,
+    /// A textured scene's layers (transparent, opaque) with their meshes, for each frame's
+    /// per-triangle texture levels (`oit_gpu::triangle_levels` sets the triangles up on the
+    /// host): only where the scene is split and textured; each frame puts its objects and
+    /// instances in.
+    textured_layers: Option<Mutex<(Scene, Option<Scene>)>>,
     opaque: Option<OpaqueLayer>,
 }
 
@@ -975,16 +1038,33 @@ impl SceneGeometry {
     /// `oit_held_back`, shading as `Shading::shade`, then `oit_capture_shaded`).
     pub const WGSL: &'static str = RASTER_WGSL;
 
+    /// The multisampled fragment stage `hw_fs_masked` (core/raster_hardware_masked.wgsl, oit's
+    /// own hardware path's), to put after [`SceneGeometry::WGSL`] for a pass at several samples a
+    /// pixel ([`CaptureShader::multisample`]): it hands the capture the fragment's
+    /// `@builtin(sample_mask)` and writes the count at the first sample it covers.
+    pub const WGSL_MASKED: &'static str = oit_shaders::HARDWARE_RASTER_MASKED;
+
+    /// The fragment entry point of a pipeline over `capture`: `hw_fs`, or `hw_fs_masked` (from
+    /// [`SceneGeometry::WGSL_MASKED`]) where the pass is multisampled.
+    pub fn fragment_entry(capture: &CaptureShader<'_>) -> &'static str {
+        if capture.multisample.count > 1 { "hw_fs_masked" } else { "hw_fs" }
+    }
+
     /// Uploads `scene`'s meshes and triangles, and its instances' bounding boxes, to the device
     /// (which must have [`crate::required_features`]).
     ///
     /// A scene with opaque or masked objects or a transmission ([`Scene::has_materials`]) is
     /// uploaded as its layers (`scene.layers(None)`): the transparent part is what the pass's
-    /// draws capture, the opaque part what [`SceneGeometry::draw_opaque`] draws. A scene that
-    /// draws a textured object is refused by name (the embedded pass does not sample textures;
-    /// `Backend::render` does, on every backend).
+    /// draws capture, the opaque part what [`SceneGeometry::draw_opaque`] draws.
+    ///
+    /// A textured scene's textures are uploaded with the part that draws them (packed as the
+    /// hardware path packs them, [`oit_gpu::TextureRegion`]), and both stages sample them as
+    /// `Backend::render`'s hardware path does: each fragment's colour is its object's base
+    /// colour factor times the sample at its texture coordinates, with oit-core's filter, at the
+    /// level oit-core's setup chooses per triangle (written each frame by
+    /// [`SceneGeometry::write_frame`]); a masked object's fragment under its cutoff is dropped
+    /// from the opaque part.
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> Result<SceneGeometry, OitError> {
-        oit_gpu::refuse_textures("wgpu (embedded pass)", scene)?;
         let gpu = Gpu::from_device(device.clone(), queue.clone())?;
         let made = std::cell::Cell::new(0);
         let layers = scene.layers(None);
@@ -999,6 +1079,8 @@ impl SceneGeometry {
         } else {
             scene.objects.iter().map(|o| o.absorption).sum::<f32>() / scene.objects.len() as f32
         };
+        let textured_layers = (layers.baked && oit_gpu::is_textured(scene))
+            .then(|| Mutex::new((layers.transparent.clone().into_owned(), layers.opaque.clone())));
         Ok(SceneGeometry {
             gpu,
             geometry,
@@ -1006,6 +1088,7 @@ impl SceneGeometry {
             bounds: scene.bounds(),
             absorption,
             split: layers.baked,
+            textured_layers,
             opaque,
         })
     }
@@ -1030,6 +1113,24 @@ impl SceneGeometry {
         };
         let layers = skeleton.layers(settings.alpha);
         let drawn = layers.settings(settings);
+        if let Some(kept) = &self.textured_layers {
+            // the per-triangle texture levels set the triangles up: the layers with their meshes
+            // (the same parts, meshes and order as the skeleton's: one split of one scene),
+            // this frame's objects and instances put in
+            let mut kept = kept.lock().unwrap_or_else(|e| e.into_inner());
+            let (transparent, opaque) = &mut *kept;
+            let frame_of = |kept: &mut Scene, part: &Scene| {
+                kept.objects.clone_from(&part.objects);
+                kept.instances.clone_from(&part.instances);
+            };
+            frame_of(transparent, &layers.transparent);
+            self.geometry.write_frame(&self.gpu, transparent, camera, &drawn);
+            if let (Some(layer), Some(kept), Some(part)) = (&self.opaque, opaque, &layers.opaque) {
+                frame_of(kept, part);
+                layer.geometry.write_frame(&self.gpu, kept, camera, &drawn);
+            }
+            return;
+        }
         self.geometry.write_frame(&self.gpu, &layers.transparent, camera, &drawn);
         if let (Some(layer), Some(part)) = (&self.opaque, &layers.opaque) {
             layer.geometry.write_frame(&self.gpu, part, camera, &drawn);

@@ -81,6 +81,11 @@ pub struct CaptureShader<'a> {
     pub bind_group_layout: &'a wgpu::BindGroupLayout,
     /// The pipeline's colour target 0: oit's fragment counter (one channel, additive blending).
     pub count_target: wgpu::ColorTargetState,
+    /// The pipeline's multisample state: the count target's samples a pixel (the settings'
+    /// `samples`). Above one, the pass is multisampled (docs/msaa.md): the fragment stage takes
+    /// `@builtin(sample_mask)` and returns `oit_capture_samples(.., mask)` (its count written at
+    /// the first sample it covers, so the target's samples add up to fragments).
+    pub multisample: wgpu::MultisampleState,
     /// Which module of the technique this is (passes with the same module share a pipeline).
     pub key: u64,
 }
@@ -181,11 +186,6 @@ impl CountTarget {
     /// Its samples a pixel.
     pub(crate) fn samples(&self) -> u32 {
         self.samples
-    }
-
-    /// A count target of `width × height`, one sample a pixel.
-    pub(crate) fn new(gpu: &Gpu, width: u32, height: u32) -> CountTarget {
-        CountTarget::with_samples(gpu, width, height, 1)
     }
 
     /// A count target of `width × height` and `samples` samples a pixel (1, or a count
@@ -408,6 +408,7 @@ impl Driver for RenderDriver<'_> {
             wgsl,
             bind_group_layout: layout0,
             count_target: count_target(self.target.format),
+            multisample: wgpu::MultisampleState { count: self.target.samples, ..Default::default() },
             key: module_key,
         };
         // over the opaque depth: the fixed-function test drops what lies behind it before the

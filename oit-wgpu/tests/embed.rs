@@ -219,13 +219,14 @@ fn worst_difference(a: &Image, b: &Image) -> u8 {
 }
 
 /// The render pipeline of a capture module over `SceneGeometry`'s vertex and fragment stages, as
-/// `oit view` builds it.
+/// `oit view` builds it (multisampled where the capture is).
 fn scene_pipeline(
     device: &wgpu::Device,
     geometry: &oit_wgpu::embed::SceneGeometry,
     capture: &oit_wgpu::CaptureShader<'_>,
 ) -> wgpu::RenderPipeline {
-    let source = format!("{}\n{}", capture.wgsl, oit_wgpu::embed::SceneGeometry::WGSL);
+    use oit_wgpu::embed::SceneGeometry;
+    let source = format!("{}\n{}\n{}", capture.wgsl, SceneGeometry::WGSL, SceneGeometry::WGSL_MASKED);
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("scene geometry"),
         source: wgpu::ShaderSource::Wgsl(source.into()),
@@ -246,10 +247,10 @@ fn scene_pipeline(
         },
         primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
         depth_stencil: None,
-        multisample: Default::default(),
+        multisample: capture.multisample,
         fragment: Some(wgpu::FragmentState {
             module: &module,
-            entry_point: Some("hw_fs"),
+            entry_point: Some(SceneGeometry::fragment_entry(capture)),
             compilation_options: Default::default(),
             targets: &[Some(capture.count_target.clone())],
         }),
@@ -586,20 +587,380 @@ fn read_rgba8(gpu: &oit_wgpu::Gpu, texture: &wgpu::Texture) -> Image {
     Image { width: w, height: h, pixels }
 }
 
-/// The embeddable pass does not sample textures (its caller draws the geometry): `SceneGeometry`
-/// refuses a textured scene by the object's and the texture's names, and takes it untextured.
+/// `scene` without its opaque and masked instances: what is left is blended only, so
+/// `SceneGeometry` uploads it whole, unsplit.
+fn blended_only(mut scene: Scene) -> Scene {
+    let objects = scene.objects.clone();
+    scene.instances.retain(|i| !objects[i.object].is_opaque_pass());
+    scene.name = format!("{} (blended only)", scene.name);
+    scene
+}
+
+/// Textured scenes through `SceneGeometry` and the embedded pass (issue 38): the textures are
+/// sampled in the transparent geometry passes and in the opaque part's draw
+/// (`SceneGeometry::draw_opaque_for`, masked leaves and the fence's holes discarded there), so the
+/// frame equals `Backend::render`'s of the whole scene on the hardware path: the same fragments,
+/// captured, occluded and lost counts, and every pixel within 1 in 8 bits (the same vertex stage,
+/// sampler and shading on both sides: measured 0); and the exact techniques' images equal the
+/// embedded reference's. Scenes: billboards with a soft alpha texture over an opaque backdrop,
+/// the same without the backdrop (a textured scene that is not split), the masked fence and the
+/// foliage (textured opaque-pass objects, masked by the texture's alpha, beside blended ones).
 #[test]
-fn scene_geometry_refuses_textures_by_name() {
-    let Some(backend) = oit_wgpu::backend_or_skip("scene_geometry_refuses_textures_by_name") else {
+fn textured_scenes_match_backend_render() {
+    let Some(backend) = oit_wgpu::backend_or_skip("textured_scenes_match_backend_render") else {
         return;
     };
     let gpu = backend.gpu().unwrap();
-    let scene = oit_core::load_scene("particles:4").unwrap();
-    let e = match oit_wgpu::embed::SceneGeometry::new(&gpu.device, &gpu.queue, &scene) {
-        Err(e) => e.to_string(),
-        Ok(_) => panic!("a textured scene through the embedded pass"),
+    let (w, h) = (64, 48);
+    let scenes = [
+        oit_core::load_scene("particles:24").unwrap(),
+        blended_only(oit_core::load_scene("particles:24").unwrap()),
+        oit_core::load_scene("fence").unwrap(),
+        oit_core::load_scene("foliage").unwrap(),
+    ];
+    for scene in &scenes {
+        assert!(oit_gpu::is_textured(scene), "{}: textured", scene.name);
+        let camera =
+            oit_core::Camera::orbit_scene(scene, oit_core::View::default(), w as f32 / h as f32).unwrap();
+        let geometry = oit_wgpu::embed::SceneGeometry::new(&gpu.device, &gpu.queue, scene).unwrap();
+        assert_eq!(geometry.has_opaque(), scene.has_opaque(), "{}", scene.name);
+        let mut reference: Option<Image> = None;
+        for (technique, alpha) in [
+            (Technique::Reference, None),
+            (Technique::Fabs { k: None }, None),
+            (Technique::Dfb, None),
+            (Technique::Dp, None),
+            (Technique::Fabs { k: None }, Some(0.4)),
+            (Technique::WeightedAverage, None),
+        ] {
+            let settings = Settings {
+                width: w,
+                height: h,
+                technique,
+                alpha,
+                raster: Some(RasterPath::Hardware),
+                ..Settings::default()
+            };
+            let what = format!("{} {technique} alpha {alpha:?}", scene.name);
+            let own = backend.render(scene, &camera, &settings).unwrap();
+            let mut pass = oit_wgpu::OitPass::new(&gpu.device, &gpu.queue, settings.clone(), camera)
+                .unwrap()
+                .with_scene_geometry(&geometry);
+            geometry.write_frame(scene, &camera, &settings);
+            geometry.draw_opaque_for(&mut pass).unwrap();
+            let frame = pass
+                .frame(
+                    None,
+                    |capture| scene_pipeline(&gpu.device, &geometry, capture),
+                    |rpass, _| {
+                        rpass.set_bind_group(1, geometry.bind_group(), &[]);
+                        rpass.draw(0..geometry.vertex_count(), 0..1);
+                    },
+                )
+                .unwrap();
+            let worst = worst_difference(&frame.image, &own.image);
+            println!(
+                "{what}: worst {worst}; fragments {} vs {}, captured {} vs {}, occluded {} vs {}, masked {}",
+                frame.stats.fragments,
+                own.stats.fragments,
+                frame.stats.captured,
+                own.stats.captured,
+                frame.stats.occluded,
+                own.stats.occluded,
+                own.stats.masked
+            );
+            assert!(own.stats.fragments > 0, "{what}: something drawn");
+            assert!(worst <= 1, "{what}: a pixel differs by {worst}");
+            assert_eq!(frame.stats.fragments, own.stats.fragments, "{what}");
+            assert_eq!(frame.stats.captured, own.stats.captured, "{what}");
+            assert_eq!(frame.stats.occluded, own.stats.occluded, "{what}");
+            assert_eq!(frame.stats.lost, own.stats.lost, "{what}");
+            if alpha.is_none() {
+                match (technique.is_exact(), &reference) {
+                    (_, None) => reference = Some(frame.image.clone()),
+                    (true, Some(r)) => {
+                        let differ = frame.image.pixels.iter().zip(&r.pixels).filter(|(a, b)| a != b).count();
+                        assert_eq!(
+                            differ, 0,
+                            "{what}: an exact technique's image differs from the reference's"
+                        );
+                    }
+                    (false, Some(_)) => {}
+                }
+            }
+        }
+    }
+}
+
+/// The textured scene's untextured twin draws other colours: the textures are what the
+/// frames above sample (a pass that ignored them would match neither).
+#[test]
+fn textures_change_the_embedded_image() {
+    let Some(backend) = oit_wgpu::backend_or_skip("textures_change_the_embedded_image") else {
+        return;
     };
-    assert!(e.contains("embedded pass") && e.contains("particle 0") && e.contains("sprite"), "{e}");
-    let plain = oit_core::load_scene("untextured:particles:4").unwrap();
-    assert!(oit_wgpu::embed::SceneGeometry::new(&gpu.device, &gpu.queue, &plain).is_ok());
+    let gpu = backend.gpu().unwrap();
+    let (w, h) = (64, 48);
+    let settings = Settings {
+        width: w,
+        height: h,
+        technique: Technique::Reference,
+        raster: Some(RasterPath::Hardware),
+        ..Settings::default()
+    };
+    let mut images = Vec::new();
+    for name in ["fence", "untextured:fence"] {
+        let scene = oit_core::load_scene(name).unwrap();
+        let camera =
+            oit_core::Camera::orbit_scene(&scene, oit_core::View::default(), w as f32 / h as f32).unwrap();
+        let geometry = oit_wgpu::embed::SceneGeometry::new(&gpu.device, &gpu.queue, &scene).unwrap();
+        let mut pass = oit_wgpu::OitPass::new(&gpu.device, &gpu.queue, settings.clone(), camera)
+            .unwrap()
+            .with_scene_geometry(&geometry);
+        geometry.write_frame(&scene, &camera, &settings);
+        geometry.draw_opaque_for(&mut pass).unwrap();
+        let frame = pass
+            .frame(
+                None,
+                |capture| scene_pipeline(&gpu.device, &geometry, capture),
+                |rpass, _| {
+                    rpass.set_bind_group(1, geometry.bind_group(), &[]);
+                    rpass.draw(0..geometry.vertex_count(), 0..1);
+                },
+            )
+            .unwrap();
+        images.push(frame.image);
+    }
+    let differ = images[0].pixels.iter().zip(&images[1].pixels).filter(|(a, b)| a != b).count();
+    println!("fence against untextured:fence: {differ} pixels differ");
+    assert!(differ > 100, "the fence's texture changes the image: {differ} pixels differ");
+}
+
+/// A caller's own multisampled fragment stage over `SceneGeometry`'s vertex stage: it takes
+/// `@builtin(sample_mask)` and returns `oit_capture_samples`, as docs/embedding.md shows.
+const USER_MASKED_WGSL: &str = "
+@fragment
+fn user_fs(in: HwOut, @builtin(front_facing) front: bool, @builtin(sample_mask) mask: u32) -> OitSampled {
+    if (hw_culled(in, front)) {
+        discard;
+    }
+    return oit_capture_samples(in.position.xy, in.position.z, hw_color(in), in.normal, in.prim, mask);
+}
+";
+
+/// [`scene_pipeline`] with the caller's fragment stage [`USER_MASKED_WGSL`].
+fn user_masked_pipeline(
+    device: &wgpu::Device,
+    geometry: &oit_wgpu::embed::SceneGeometry,
+    capture: &oit_wgpu::CaptureShader<'_>,
+) -> wgpu::RenderPipeline {
+    let source = format!("{}\n{}\n{USER_MASKED_WGSL}", capture.wgsl, oit_wgpu::embed::SceneGeometry::WGSL);
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("caller's masked stage"),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: None,
+        bind_group_layouts: &[Some(capture.bind_group_layout), Some(geometry.bind_group_layout())],
+        immediate_size: 0,
+    });
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("caller's masked stage"),
+        layout: Some(&layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("hw_vs"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+        depth_stencil: None,
+        multisample: capture.multisample,
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("user_fs"),
+            compilation_options: Default::default(),
+            targets: &[Some(capture.count_target.clone())],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+/// The embedded pass at several samples a pixel (issue 40.5): a multisampled count target, the
+/// capture's multisample state in the caller's pipeline, and `hw_fs_masked` handing the capture
+/// each fragment's `sample_mask`. At `--samples 4` the frame equals `Backend::render`'s on the
+/// hardware path at `--samples 4` (the same fragments, captured and lost counts, no pixel more
+/// than 1 in 8 bits apart: measured 0), by `OitPass::frame` and, for fabs:4, `OitPass::record`;
+/// the exact techniques' images equal the embedded reference's; the image is not the
+/// single-sampled one (edges are resolved per sample). A technique that takes no samples is
+/// refused by name, as `Backend::render` refuses it, and so is a count the pass was not told the
+/// device draws.
+#[test]
+fn multisampled_pass_matches_backend_render() {
+    let Some(backend) = oit_wgpu::backend_or_skip("multisampled_pass_matches_backend_render") else {
+        return;
+    };
+    let gpu = backend.gpu().unwrap();
+    let scene = oit_core::load_scene("grid:2x2:spheres:2").unwrap();
+    let (w, h) = (64, 48);
+    let camera =
+        oit_core::Camera::orbit_scene(&scene, oit_core::View::default(), w as f32 / h as f32).unwrap();
+    let geometry = oit_wgpu::embed::SceneGeometry::new(&gpu.device, &gpu.queue, &scene).unwrap();
+    let run = |pass: &oit_wgpu::OitPass, settings: &Settings| {
+        geometry.write_frame(&scene, &camera, settings);
+        pass.frame(
+            None,
+            |capture| {
+                assert_eq!(capture.multisample.count, settings.samples, "the capture's multisample state");
+                scene_pipeline(&gpu.device, &geometry, capture)
+            },
+            |rpass, _| {
+                rpass.set_bind_group(1, geometry.bind_group(), &[]);
+                rpass.draw(0..geometry.vertex_count(), 0..1);
+            },
+        )
+    };
+    let mut reference: Option<Image> = None;
+    for technique in [
+        Technique::Reference,
+        Technique::Fabs { k: None },
+        Technique::Dfb,
+        Technique::Ll,
+        Technique::Fabs { k: Some(4) },
+    ] {
+        let settings = Settings {
+            width: w,
+            height: h,
+            technique,
+            samples: 4,
+            raster: Some(RasterPath::Hardware),
+            ..Settings::default()
+        };
+        let what = format!("{technique} at --samples 4");
+        let own = backend.render(&scene, &camera, &settings).unwrap();
+        let pass = oit_wgpu::OitPass::new(&gpu.device, &gpu.queue, settings.clone(), camera)
+            .unwrap()
+            .with_scene_geometry(&geometry);
+        let frame = run(&pass, &settings).unwrap();
+        let worst = worst_difference(&frame.image, &own.image);
+        println!(
+            "{what}: worst {worst}; fragments {} vs {}, captured {} vs {}, lost {} vs {}",
+            frame.stats.fragments,
+            own.stats.fragments,
+            frame.stats.captured,
+            own.stats.captured,
+            frame.stats.lost,
+            own.stats.lost
+        );
+        assert!(worst <= 1, "{what}: a pixel differs by {worst}");
+        assert_eq!(frame.stats.fragments, own.stats.fragments, "{what}");
+        assert_eq!(frame.stats.captured, own.stats.captured, "{what}");
+        assert_eq!(frame.stats.lost, own.stats.lost, "{what}");
+        assert_eq!(frame.stats.geometry_passes, own.stats.geometry_passes, "{what}");
+        assert_eq!(frame.stats.storage_bytes, own.stats.storage_bytes, "{what}");
+        // fabs:4 keeps 4 fragments a pixel: approximate here, the others exact
+        let exact = technique != Technique::Fabs { k: Some(4) };
+        match (exact, &reference) {
+            (_, None) => reference = Some(frame.image.clone()),
+            (true, Some(r)) => {
+                let differ = frame.image.pixels.iter().zip(&r.pixels).filter(|(a, b)| a != b).count();
+                assert_eq!(differ, 0, "{what}: an exact technique's image differs from the reference's");
+            }
+            (false, Some(_)) => assert!(frame.stats.lost > 0, "{what}: K is exceeded"),
+        }
+        if technique == Technique::Reference {
+            // the caller's own fragment stage through `oit_capture_samples`
+            geometry.write_frame(&scene, &camera, &settings);
+            let user = pass
+                .frame(
+                    None,
+                    |capture| user_masked_pipeline(&gpu.device, &geometry, capture),
+                    |rpass, _| {
+                        rpass.set_bind_group(1, geometry.bind_group(), &[]);
+                        rpass.draw(0..geometry.vertex_count(), 0..1);
+                    },
+                )
+                .unwrap();
+            let worst = worst_difference(&user.image, &own.image);
+            println!(
+                "{what}, the caller's oit_capture_samples: worst {worst}, fragments {}",
+                user.stats.fragments
+            );
+            assert!(worst <= 1, "{what}, oit_capture_samples: a pixel differs by {worst}");
+            assert_eq!(user.stats.fragments, own.stats.fragments, "{what}, oit_capture_samples");
+            // the storage is sized from the count target: one count a fragment, not a sample
+            assert_eq!(user.stats.storage_bytes, own.stats.storage_bytes, "{what}, oit_capture_samples");
+            assert_eq!(user.stats.max_layers, own.stats.max_layers, "{what}, oit_capture_samples");
+        }
+        if technique == (Technique::Fabs { k: Some(4) }) {
+            let target = gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("recorded target"),
+                size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba8Unorm,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            });
+            let view = target.create_view(&Default::default());
+            geometry.write_frame(&scene, &camera, &settings);
+            gpu.queue.submit([]);
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            pass.record(
+                &mut encoder,
+                &view,
+                |capture| scene_pipeline(&gpu.device, &geometry, capture),
+                |rpass, _| {
+                    rpass.set_bind_group(1, geometry.bind_group(), &[]);
+                    rpass.draw(0..geometry.vertex_count(), 0..1);
+                },
+            )
+            .unwrap();
+            gpu.queue.submit([encoder.finish()]);
+            let stats = pass.read_stats().unwrap();
+            assert_eq!(stats.captured, own.stats.captured, "{what} recorded");
+            assert_eq!(
+                read_rgba8(gpu, &target).pixels,
+                own.image.pixels,
+                "{what} recorded: the image differs"
+            );
+        }
+    }
+    // the samples resolve the edges: the single-sampled reference is another image
+    let reference = reference.unwrap();
+    let settings1 = Settings {
+        width: w,
+        height: h,
+        technique: Technique::Reference,
+        raster: Some(RasterPath::Hardware),
+        ..Settings::default()
+    };
+    let pass = oit_wgpu::OitPass::new(&gpu.device, &gpu.queue, settings1.clone(), camera)
+        .unwrap()
+        .with_scene_geometry(&geometry);
+    let one = run(&pass, &settings1).unwrap();
+    let differ = one.image.pixels.iter().zip(&reference.pixels).filter(|(a, b)| a != b).count();
+    println!("reference at 1 sample against 4: {differ} pixels differ");
+    assert!(differ > 20, "at 4 samples the edges are resolved per sample: {differ} pixels differ");
+    // refused by name: a technique without per-sample coverage, and 8 samples where the pass was
+    // not told the device draws them
+    for (technique, samples, needle) in
+        [(Technique::Dp, 4, "dp at --samples 4"), (Technique::Reference, 8, "with_adapter")]
+    {
+        let settings = Settings { width: w, height: h, technique, samples, ..Settings::default() };
+        let pass = oit_wgpu::OitPass::new(&gpu.device, &gpu.queue, settings.clone(), camera)
+            .unwrap()
+            .with_scene_geometry(&geometry);
+        match run(&pass, &settings) {
+            Err(OitError::Unsupported { what, .. }) => {
+                assert!(what.contains(needle), "{technique} {samples}: {what}")
+            }
+            other => panic!(
+                "{technique} at {samples} samples: expected Unsupported, got {:?}",
+                other.map(|f| f.stats)
+            ),
+        }
+    }
 }

@@ -14,6 +14,8 @@ pub enum Key {
     P,
     /// M of mlp.
     M,
+    /// Samples a pixel (multisampling).
+    Samples,
     /// The opacity given to every object.
     Alpha,
     /// The shading.
@@ -48,6 +50,7 @@ const NAMES: &[(&str, Key)] = &[
     ("K", Key::K),
     ("P", Key::P),
     ("M", Key::M),
+    ("N", Key::Samples),
     ("A", Key::Alpha),
     ("S", Key::Shading),
     ("E", Key::Effect),
@@ -82,6 +85,8 @@ Keys and mouse:
   M / shift+M        M of mlp (1, 2, 4, 8, 16)
   P / shift+P        P of bdp:P, its capture passes (1, 2, 3, 4); bdp and adp's bounds pass
                      draws the instances' bounding boxes, which the viewer gives the pass
+  N / shift+N        samples a pixel: 1, 4, 8 (where the device draws 8), multisampled
+                     through the embedded pass (reference, fabs, dfb, ll; no opaque parts)
   A / shift+A        alpha of every object (own, 0.1, 0.25, 0.5, 0.75, 1)
   S, E               next shading, next effect
   R                  compare with the reference at this view: EPR, and the error heat map
@@ -111,6 +116,8 @@ const KS: [Option<u32>; 8] = [None, Some(1), Some(2), Some(4), Some(8), Some(16)
 const MS: [u32; 5] = [1, 2, 4, 8, 16];
 /// The values P cycles through.
 const PS: [u32; 4] = [1, 2, 3, 4];
+/// The sample counts N cycles through (8 only where the device draws it: `ViewState::max_samples`).
+const SAMPLES: [u32; 3] = [1, 4, 8];
 /// The values alpha cycles through (`None`: each object's own).
 const ALPHAS: [Option<f32>; 6] = [None, Some(0.1), Some(0.25), Some(0.5), Some(0.75), Some(1.0)];
 
@@ -152,6 +159,11 @@ pub struct ViewState {
     /// bdp's P: what the technique cycle gives bdp, and P's value while another technique is
     /// drawn.
     pub p: u32,
+    /// Samples a pixel (1: not multisampled).
+    pub samples: u32,
+    /// The most samples a pixel the device draws (4, or 8 where its count target takes 8), which
+    /// N's cycle stops at.
+    pub max_samples: u32,
 }
 
 /// Index of `value` in `list`, else 0.
@@ -241,6 +253,10 @@ impl ViewState {
                     _ => return Reaction::Note("M is the parameter of mlp".into()),
                 };
             }
+            Key::Samples => {
+                let counts: Vec<u32> = SAMPLES.into_iter().filter(|&n| n <= self.max_samples).collect();
+                self.samples = step(&counts, &self.samples, shift);
+            }
             Key::P => {
                 let Technique::Bdp { passes } = self.technique else {
                     return Reaction::Note("P is the parameter of bdp (bdp:P)".into());
@@ -308,6 +324,9 @@ impl ViewState {
                 text.push_str(&format!(" {flag} {x}"));
             }
         }
+        if self.samples > 1 {
+            text.push_str(&format!(" --samples {}", self.samples));
+        }
         text
     }
 }
@@ -326,6 +345,8 @@ mod tests {
             compare: false,
             overlay: true,
             p: 1,
+            samples: 1,
+            max_samples: 8,
         }
     }
 
@@ -385,6 +406,28 @@ mod tests {
         assert_eq!(s.technique, Technique::Adp);
         s.key(Key::Technique, true);
         assert_eq!(s.technique, Technique::Bdp { passes: 4 });
+    }
+
+    /// N steps 1 → 4 → 8 → 1 (shift: back), skipping 8 where the device does not draw it, and
+    /// the printed options carry the count above one sample.
+    #[test]
+    fn samples_step_to_what_the_device_draws() {
+        let mut s = state();
+        let mut seen = vec![s.samples];
+        for _ in 0..3 {
+            assert_eq!(s.key(Key::Samples, false), Reaction::Redraw);
+            seen.push(s.samples);
+        }
+        assert_eq!(seen, [1, 4, 8, 1]);
+        s.key(Key::Samples, true);
+        assert_eq!(s.samples, 8, "shift+N steps back");
+        assert!(s.render_options(8, 8).ends_with(" --samples 8"), "{}", s.render_options(8, 8));
+        s.max_samples = 4;
+        s.samples = 4;
+        s.key(Key::Samples, false);
+        assert_eq!(s.samples, 1, "no 8 where the device does not draw it");
+        assert!(!s.render_options(8, 8).contains("--samples"));
+        assert_eq!(lookup("n"), Some(Key::Samples));
     }
 
     #[test]

@@ -60,7 +60,8 @@ fn render_frame(
 }
 
 /// The viewer's render pipeline for one capture module: oit's module, then the hardware path's
-/// vertex and fragment stages (`hw_vs`, `hw_fs`), no vertex buffers, no culling.
+/// vertex and fragment stages (`hw_vs`, and `hw_fs` or, multisampled, `hw_fs_masked`), the
+/// capture's multisample state, no vertex buffers, no culling.
 fn scene_pipeline(
     device: &wgpu::Device,
     geometry: &SceneGeometry,
@@ -68,7 +69,9 @@ fn scene_pipeline(
 ) -> wgpu::RenderPipeline {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("oit view"),
-        source: wgpu::ShaderSource::Wgsl(format!("{}\n{}", capture.wgsl, SceneGeometry::WGSL).into()),
+        source: wgpu::ShaderSource::Wgsl(
+            format!("{}\n{}\n{}", capture.wgsl, SceneGeometry::WGSL, SceneGeometry::WGSL_MASKED).into(),
+        ),
     });
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("oit view"),
@@ -86,10 +89,10 @@ fn scene_pipeline(
         },
         primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
         depth_stencil: None,
-        multisample: Default::default(),
+        multisample: capture.multisample,
         fragment: Some(wgpu::FragmentState {
             module: &module,
-            entry_point: Some("hw_fs"),
+            entry_point: Some(SceneGeometry::fragment_entry(capture)),
             compilation_options: Default::default(),
             targets: &[Some(capture.count_target.clone())],
         }),
@@ -123,12 +126,15 @@ struct Gfx {
 }
 
 /// The device features oit-wgpu uses when the adapter has them (timestamps for the GPU time,
-/// 32-bit float blending for the fragment counts), as oit-wgpu's own device asks for them.
+/// 32-bit float blending for the fragment counts, the adapter's format features for 8 samples),
+/// as oit-wgpu's own device asks for them.
 fn optional_features() -> wgpu::Features {
     wgpu::Features::TIMESTAMP_QUERY
         | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
         | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES
         | wgpu::Features::FLOAT32_BLENDABLE
+        // whether the count target takes 8 samples a pixel (`OitPass::with_adapter`)
+        | wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES
 }
 
 impl Gfx {
@@ -227,8 +233,9 @@ impl Gfx {
         let geometry = SceneGeometry::new(&device, &queue, scene)?;
         let camera = Camera::orbit_scene(scene, checked.state.view, w as f32 / h as f32)?;
         // the scene's bounds and absorption, and its instances' boxes for bdp and adp
-        let pass =
-            OitPass::new(&device, &queue, checked.settings.clone(), camera)?.with_scene_geometry(&geometry);
+        let pass = OitPass::new(&device, &queue, checked.settings.clone(), camera)?
+            .with_scene_geometry(&geometry)
+            .with_adapter(&adapter);
         Ok(Gfx {
             window,
             surface,
@@ -392,6 +399,7 @@ impl App<'_> {
             alpha: state.alpha,
             shading: state.shading,
             effect: state.effect,
+            samples: state.samples,
             ..self.checked.settings.clone()
         };
         let options = state.render_options(size.width, size.height);
@@ -610,7 +618,12 @@ fn draw_overlay(
         lines.push(format!("GPU {gpu}   frame {frame_ms:.1} ms"));
     }
     let alpha = state.alpha.map_or("own".to_string(), |a| a.to_string());
-    lines.push(format!("alpha {alpha}   shading {}   effect {}", state.shading_name(), state.effect_name()));
+    lines.push(format!(
+        "alpha {alpha}   shading {}   effect {}   samples {}",
+        state.shading_name(),
+        state.effect_name(),
+        state.samples
+    ));
     if let Some(acc) = &drawn.accuracy {
         let epr = if acc.is_measured() {
             format!("{:.3}%", acc.epr * 100.0)
@@ -625,7 +638,9 @@ fn draw_overlay(
     if let Some(note) = note {
         lines.push(note.to_string());
     }
-    lines.push("T technique  K/P/M parameter  A alpha  S shading  E effect  R reference  F12 shot".into());
+    lines.push(
+        "T technique  K/P/M parameter  N samples  A alpha  S shading  E effect  R reference  F12 shot".into(),
+    );
     let step = line_height(OVERLAY_PX) as i64 + 2;
     let width = lines.iter().map(|l| oit_bench::present::text_width(l, OVERLAY_PX)).max().unwrap_or(0);
     fill_rect(image, 0, 0, u64::from(width) + 12, (step * lines.len() as i64 + 8) as u64, [0, 0, 0, 160]);
@@ -642,6 +657,8 @@ impl ApplicationHandler for App<'_> {
         match Gfx::new(event_loop, &self.checked, self.args.adapter.as_deref()) {
             Ok(gfx) => {
                 gfx.window.request_redraw();
+                // N steps to 8 samples only where the device draws them
+                self.checked.state.max_samples = gfx.pass.max_samples();
                 self.gfx = Some(gfx);
             }
             Err(e) => {

@@ -47,6 +47,25 @@ fn oit_kept(pixel_xy: vec2<f32>, depth: f32, mask: u32) -> u32 {
     return opaque_kept(f);
 }
 
+// What a fragment of a multisampled pass writes (an embedding user's pipeline at
+// `CaptureShader::multisample` above one sample): oit's count at the first sample the fragment
+// covers only, so the count target's samples add up to fragments (core/count_sum_texture_ms.wgsl),
+// as oit's own `hw_fs_masked` writes it.
+struct OitSampled {
+    @location(0) count: vec4<f32>,
+    @builtin(sample_mask) written: u32,
+}
+
+// `oit_capture_full` in a multisampled pass: `mask` is the fragment's `@builtin(sample_mask)`
+// input (the samples it covers, which the technique composites it into); the fragment stage
+// returns what this returns.
+fn oit_capture_samples(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, normal: vec3<f32>, prim: u32, mask: u32) -> OitSampled {
+    var out: OitSampled;
+    out.written = mask & (0u - mask);
+    out.count = oit_capture_masked(pixel_xy, depth, color, normal, prim, 0.5, mask);
+    return out;
+}
+
 // Whether the opaque pass holds back a fragment at `pixel_xy` and `depth` (`opaque_cut`: counted
 // where the pass counts): oit's hardware raster asks before it shades, so a fragment behind the
 // opaque depth costs no shading (as oit-cpu's and the compute path's).
