@@ -578,6 +578,8 @@ impl OitPass {
             self.write_target(view.texture(), &frame)?;
         }
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
+        // what every backend's frame says where it ends: the packing, the coverage taken
+        frame.stats.count_packing(&self.settings);
         Ok(frame)
     }
 
@@ -685,7 +687,8 @@ impl OitPass {
             return Err(OitError::InvalidSettings("no frame has been recorded with this pass".into()));
         };
         let t = self.gpu.read_u32(&self.stats)?;
-        let stats = crate::ctx::totals_stats(&t, passes, storage_bytes);
+        let mut stats = crate::ctx::totals_stats(&t, passes, storage_bytes);
+        stats.count_packing(&self.settings);
         stats.check_accounting("wgpu (recorded pass)")?;
         Ok(stats)
     }
