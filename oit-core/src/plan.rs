@@ -705,10 +705,10 @@ impl Plan {
 
 /// What several samples a pixel (`Settings::samples` above 1, docs/msaa.md) are not yet done
 /// for, refused by name alike on every backend: `kbuf` (its interlock wraps the single-sample
-/// fragment stage); fabs's `--overflow tail`; opaque objects (the opaque pass is not multisampled);
-/// and on the GPU backends the supersampled reference (`--supersample`). (A hardware raster path
-/// refuses a sample count its device does not draw where it starts a frame, and its own captures,
-/// [`refuse_multisampled_own_capture`].) The techniques that keep no mask take the samples by
+/// fragment stage); fabs's `--overflow tail`; opaque objects (the opaque pass is not multisampled).
+/// (A hardware raster path refuses a sample count its device does not draw where it starts a
+/// frame, its own captures, [`refuse_multisampled_own_capture`], and the supersampled
+/// reference, [`refuse_supersampled_hardware`].) The techniques that keep no mask take the samples by
 /// their coverage fraction ([`crate::msaa::coverage`]).
 fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<(), OitError> {
     let samples = settings.samples;
@@ -731,13 +731,6 @@ fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<()
             "--samples {samples} with opaque objects: the opaque pass is not yet multisampled (docs/msaa.md)"
         ));
     }
-    if backend != "cpu" && settings.supersample {
-        return refuse(format!(
-            "--supersample on {backend}: the supersampled reference is not yet done on the GPU \
-             backends (their reference would be the per-sample one, in silence); compare with \
-             --backend cpu"
-        ));
-    }
     Ok(())
 }
 
@@ -755,6 +748,24 @@ pub fn refuse_multisampled_own_capture(backend: &str, settings: &Settings) -> Re
              yet multisampled; use --raster compute (docs/msaa.md)",
             settings.technique, settings.samples
         ),
+    })
+}
+
+/// The refusal of the supersampled reference (`--supersample`) on a GPU backend's hardware raster
+/// path (`Ok` on the others, and where the frame is not one, [`crate::msaa::is_supersampled`]):
+/// its frames would be the compute path's, one a sample under a moved projection, but the
+/// device's rasterizer snaps the moved vertices in its own precision, and nothing compares those
+/// frames with oit-cpu's yet.
+pub fn refuse_supersampled_hardware(backend: &str, path: crate::RasterPath, settings: &Settings) -> Result<(), OitError> {
+    if path != crate::RasterPath::Hardware || !crate::msaa::is_supersampled(settings) {
+        return Ok(());
+    }
+    Err(OitError::Unsupported {
+        backend: backend.into(),
+        what: "--supersample on the hardware raster path: not yet done (the device snaps each sample's \
+               moved projection in its own precision, not yet compared with oit-cpu's); use --raster compute \
+               (docs/msaa.md)"
+            .into(),
     })
 }
 

@@ -35,7 +35,7 @@
 
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
-use glam::{DVec3, Mat4, Vec3};
+use glam::{DVec3, Vec3};
 use oit_core::composite::heat_f64;
 use oit_core::plan::Counted;
 use oit_core::rules::{depth_bits, depth_from_bits};
@@ -171,45 +171,35 @@ fn reference(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
 
 /// The supersampled reference: a single-sample reference frame a sample position, the
 /// projection moved so that the position falls on the pixels' centres, the frames' linear
-/// colours averaged (every sample rasterized and shaded as a pixel of its own).
+/// colours averaged (every sample rasterized and shaded as a pixel of its own); the frames and
+/// their totals are oit-core's, alike on every backend ([`oit_core::msaa::supersample_frames`]).
 fn supersampled(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let settings = ctx.settings;
-    let single =
-        Settings { samples: 1, supersample: false, technique: Technique::Reference, ..settings.clone() };
-    let (full_w, full_h) = match settings.region {
-        Some(r) => (r.full_width as f32, r.full_height as f32),
-        None => (settings.width as f32, settings.height as f32),
-    };
+    let (single, cameras) = oit_core::msaa::supersample_frames(ctx.camera, settings);
     let mut sum = vec![DVec3::ZERO; ctx.pixels];
-    let mut stats = oit_core::Stats::default();
-    let mut counts = vec![0u32; ctx.pixels];
-    for (sx, sy) in oit_core::msaa::positions_f32(settings.samples) {
-        // the sample at (x + sx, y + sy) moved onto the centre (x + ½, y + ½): screen x by
-        // ½ − sx, which is NDC x by 2(½ − sx)/W; screen y grows down, NDC y up
-        let (dx, dy) = (2.0 * (0.5 - sx) / full_w, -2.0 * (0.5 - sy) / full_h);
-        let mut camera = *ctx.camera;
-        camera.proj = Mat4::from_translation(Vec3::new(dx, dy, 0.0)) * camera.proj;
-        let raster = crate::raster::Rasterizer::new(ctx.scene, &camera, &single);
+    let mut totals = oit_core::msaa::SupersampleTotals::default();
+    for camera in &cameras {
+        let raster = crate::raster::Rasterizer::new(ctx.scene, camera, &single);
         let plan = oit_core::plan::Plan::new("cpu", ctx.scene, &single)?.on_path(oit_core::RasterPath::Cpu);
-        let mut inner = Ctx::new(ctx.scene, &camera, &single, &raster, ctx.pool, plan, ctx.per_length, None);
+        let mut inner = Ctx::new(ctx.scene, camera, &single, &raster, ctx.pool, plan, ctx.per_length, None);
         let (linear, layer_counts, fragments) = super::reference::linear(&mut inner)?;
         for (s, c) in sum.iter_mut().zip(linear) {
             *s += c;
         }
-        for (n, c) in counts.iter_mut().zip(layer_counts) {
-            *n = (*n).max(c);
-        }
-        stats.geometry_passes += inner.passes;
-        stats.fragments += fragments;
-        stats.captured += fragments;
-        stats.storage_bytes = stats.storage_bytes.max(inner.storage_bytes);
+        let stats = oit_core::Stats {
+            geometry_passes: inner.passes,
+            fragments,
+            captured: fragments,
+            storage_bytes: inner.storage_bytes,
+            max_layers: layer_counts.iter().copied().max().unwrap_or(0),
+            ..Default::default()
+        };
+        totals.add(&stats, Some(&layer_counts), Some(&vec![0; ctx.pixels]));
     }
     let n = f64::from(settings.samples);
     let pixels = sum.into_iter().map(|c| srgb8_f64(c / n)).collect();
     let image = Image { width: settings.width, height: settings.height, pixels };
-    stats.max_layers = counts.iter().copied().max().unwrap_or(0);
-    let lost_pixels = vec![0; ctx.pixels];
-    Ok(Frame { image, layers: Some(counts), lost_pixels: Some(lost_pixels), stats })
+    Ok(Frame { image, layers: totals.layers, lost_pixels: totals.lost_pixels, stats: totals.stats })
 }
 
 /// The f32 per-sample resolve of every pixel's entries, gathered by `gather(px, list)` (which
