@@ -705,7 +705,7 @@ impl Plan {
 
 /// What several samples a pixel (`Settings::samples` above 1, docs/msaa.md) are not yet done
 /// for, refused by name alike on every backend: `kbuf` (its interlock wraps the single-sample
-/// fragment stage); fabs's `--overflow tail`; opaque objects (the opaque pass is not multisampled).
+/// fragment stage); opaque objects (the opaque pass is not multisampled).
 /// (A hardware raster path refuses a sample count its device does not draw where it starts a
 /// frame, its own captures, [`refuse_multisampled_own_capture`], and the supersampled
 /// reference, [`refuse_supersampled_hardware`].) The techniques that keep no mask take the samples by
@@ -722,9 +722,6 @@ fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<()
             "kbuf at --samples {samples}: not yet done (its ordered interlock wraps the single-sample \
              fragment stage only; docs/msaa.md)"
         ));
-    }
-    if matches!(technique, Technique::Fabs { .. }) && settings.overflow == crate::Overflow::Tail {
-        return refuse(format!("fabs with --overflow tail at --samples {samples}: not yet done"));
     }
     if scene.has_opaque() {
         return refuse(format!(

@@ -23,8 +23,9 @@
 //! - `dfb` and `ll`: their single-sample passes (a counting pass and a fill), each entry with its
 //!   mask, resolved per sample through the f32 resolve.
 //! - `fabs`: K slots a pixel, each with its mask; the pixels that overflow keep their K nearest
-//!   by (depth, primitive id), as single-sample's (two more passes). `--overflow tail` is not yet
-//!   done at several samples.
+//!   by (depth, primitive id), as single-sample's (two more passes). `--overflow tail` merges
+//!   what lies behind the K into one tail a pixel, each fragment's alpha weighted by its coverage
+//!   fraction, and each sample composites its covering slots over that tail.
 //!
 //! With `Settings::pixel_coverage` (`--coverage pixel`) every technique here but the reference
 //! keeps each fragment's mask as the full mask: the per-pixel capture baseline.
@@ -33,7 +34,7 @@
 //! ([`crate::raster::Rasterizer::cover`]), each over its whole pixel with its alpha weighted by
 //! its coverage fraction, or at full alpha with `--coverage pixel` (`oit_core::msaa::coverage`).
 
-use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
 
 use glam::{DVec3, Vec3};
 use oit_core::composite::heat_f64;
@@ -203,8 +204,15 @@ fn supersampled(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
 }
 
 /// The f32 per-sample resolve of every pixel's entries, gathered by `gather(px, list)` (which
-/// clears and fills `list`); sorted here.
-fn resolve_entries(ctx: &Ctx<'_>, gather: impl Fn(usize, &mut Vec<Entry>) + Sync) -> Frame {
+/// clears and fills `list`); sorted here. With `tail` (fabs's `--overflow tail` sums, 5 a pixel)
+/// each sample composites its entries over the pixel's tail ([`crate::resolve::Resolve::tail`]:
+/// one tail a pixel, its fragments' alpha weighted by their coverage fractions) instead of the
+/// background.
+fn resolve_entries(
+    ctx: &Ctx<'_>,
+    tail: Option<&[AtomicU64]>,
+    gather: impl Fn(usize, &mut Vec<Entry>) + Sync,
+) -> Frame {
     let samples = ctx.settings.samples;
     let full = oit_core::msaa::full_mask(samples);
     let resolve = &ctx.resolve;
@@ -227,6 +235,14 @@ fn resolve_entries(ctx: &Ctx<'_>, gather: impl Fn(usize, &mut Vec<Entry>) + Sync
             resolve.push(s, depth_from_bits((e.0 >> 32) as u32), e.1);
         }
     };
+    // a sample's state: nothing pushed, the pixel's tail behind (where it has one)
+    let fresh = |px: usize| {
+        let mut s = PixelState::default();
+        if let Some(t) = tail {
+            resolve.tail(&mut s, &t[px * 5..px * 5 + 5], px);
+        }
+        s
+    };
     super::finish_pixels(ctx, |px| {
         let mut list = Vec::new();
         gather(px, &mut list);
@@ -235,13 +251,13 @@ fn resolve_entries(ctx: &Ctx<'_>, gather: impl Fn(usize, &mut Vec<Entry>) + Sync
         let c: Vec3 = if complexity {
             if list.is_empty() { bg } else { oit_core::composite::heat(list.len() as f32 / deepest as f32) }
         } else if list.iter().all(|e| e.2 == full) {
-            let mut s = PixelState::default();
+            let mut s = fresh(px);
             push_all(&mut s, &mut list.iter());
             resolve.finish_over(&mut s, bg)
         } else {
             let mut sum = Vec3::ZERO;
             for i in 0..samples {
-                let mut s = PixelState::default();
+                let mut s = fresh(px);
                 push_all(&mut s, &mut list.iter().filter(|e| e.2 >> i & 1 == 1));
                 sum += resolve.finish_over(&mut s, bg);
             }
@@ -281,7 +297,7 @@ fn dfb(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     });
     ctx.ran_pass(n);
     let (keys, payloads, masks, counted) = (&*keys, &*payloads, &*masks, &*counted);
-    Ok(resolve_entries(ctx, |px, list| {
+    Ok(resolve_entries(ctx, None, |px, list| {
         let unfilled = (counted[px].load(Relaxed) as i32).max(0) as usize;
         list.clear();
         list.extend(
@@ -323,7 +339,7 @@ fn ll(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     });
     ctx.ran_pass(n);
     let (heads, keys, payloads, masks, links) = (&*heads, &*keys, &*payloads, &*masks, &*links);
-    Ok(resolve_entries(ctx, |px, list| {
+    Ok(resolve_entries(ctx, None, |px, list| {
         list.clear();
         let mut node = heads[px].load(Relaxed);
         while node != END {
@@ -354,6 +370,7 @@ fn fabs(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let slots = ctx.scratch64(k)?;
     let payloads = ctx.scratch32(k)?;
     let masks = ctx.scratch_bytes((ctx.pixels as u64).saturating_mul(k as u64))?;
+    let tail = ctx.tail_sums()?;
     let shared = &*ctx;
     let kept = coverage(shared.settings);
     let n = shared.raster.for_each_masked_fragment(shared.settings.samples, |f, mask| {
@@ -394,9 +411,27 @@ fn fabs(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
             }
         });
         ctx.passes += 2;
+        if let Some(sums) = &tail {
+            // `--overflow tail`: every fragment behind an overflowing pixel's K nearest (sorted
+            // now: the last is the largest) merged into the pixel's one tail, its alpha weighted
+            // by its coverage fraction, as the techniques without a mask weigh theirs
+            let samples = ctx.settings.samples;
+            let kept = coverage(ctx.settings);
+            let nearest = &nearest;
+            ctx.tail_pass_masked(sums, |f, mask| {
+                let px = f.pixel as usize;
+                let behind = list.overflowed(px)
+                    && oit_core::AtomicFragmentList::last(nearest, px).is_some_and(|last| key(f) > last);
+                behind.then(|| {
+                    let mut color = f.color();
+                    color.w = oit_core::msaa::fraction_alpha(color.w, kept(mask), samples);
+                    oit_core::rules::pack_rgba8(color)
+                })
+            });
+        }
     }
     let (counters, slots, payloads, masks) = (&*counters, &*slots, &*payloads, &*masks);
-    Ok(resolve_entries(ctx, |px, list| {
+    Ok(resolve_entries(ctx, tail.as_deref().map(|t| &t[..]), |px, list| {
         list.clear();
         let n = (counters[px].load(Relaxed) as usize).min(k);
         list.extend(

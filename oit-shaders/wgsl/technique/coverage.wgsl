@@ -64,6 +64,12 @@ fn composite_covering(first: u32, n: u32, bits: u32, bg: vec3<f32>) -> vec3<f32>
 // mean of its samples. The colour goes into the state as resolved (`state_resolved`), with n
 // captured and no ties counted (as oit-cpu's).
 fn resolve_masked(px: u32, first: u32, n: u32) {
+    resolve_masked_over(px, first, n, background_at(px));
+}
+
+// `resolve_masked` with every sample composited over `bg` (fabs's tail, where it has one) instead
+// of the pixel's background.
+fn resolve_masked_over(px: u32, first: u32, n: u32, bg: vec3<f32>) {
     let samples = fu.msaa.x;
     let full = (1u << samples) - 1u;
     var all = full;
@@ -75,7 +81,6 @@ fn resolve_masked(px: u32, first: u32, n: u32) {
     var s = state[px];
     s.captured = n;
     if (fu.effect != EFFECT_COMPLEXITY) {
-        let bg = background_at(px);
         var c: vec3<f32>;
         if (all == full) {
             c = composite_covering(first, n, full, bg);
