@@ -153,7 +153,8 @@ pub fn is_supersampled(settings: &Settings) -> bool {
 /// positions lie on the 1/16-pixel grid, so the move is a whole number of the rasterizer's
 /// 1/256-pixel fixed-point steps up to the projection's f32 rounding.
 pub fn supersample_frames(camera: &Camera, settings: &Settings) -> (Settings, Vec<Camera>) {
-    let single = Settings { samples: 1, supersample: false, technique: Technique::Reference, ..settings.clone() };
+    let single =
+        Settings { samples: 1, supersample: false, technique: Technique::Reference, ..settings.clone() };
     let (full_w, full_h) = match settings.region {
         Some(r) => (r.full_width as f32, r.full_height as f32),
         None => (settings.width as f32, settings.height as f32),

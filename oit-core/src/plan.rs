@@ -753,7 +753,11 @@ pub fn refuse_multisampled_own_capture(backend: &str, settings: &Settings) -> Re
 /// its frames would be the compute path's, one a sample under a moved projection, but the
 /// device's rasterizer snaps the moved vertices in its own precision, and nothing compares those
 /// frames with oit-cpu's yet.
-pub fn refuse_supersampled_hardware(backend: &str, path: crate::RasterPath, settings: &Settings) -> Result<(), OitError> {
+pub fn refuse_supersampled_hardware(
+    backend: &str,
+    path: crate::RasterPath,
+    settings: &Settings,
+) -> Result<(), OitError> {
     if path != crate::RasterPath::Hardware || !crate::msaa::is_supersampled(settings) {
         return Ok(());
     }

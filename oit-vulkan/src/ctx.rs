@@ -50,7 +50,12 @@ impl BufferPool {
 
     /// A device-local buffer of `size` bytes and `usage`, free or new; its contents are whatever
     /// the last frame left.
-    pub(crate) fn take(&self, gpu: &Gpu, size: u64, usage: vk::BufferUsageFlags) -> Result<Rc<Buffer>, OitError> {
+    pub(crate) fn take(
+        &self,
+        gpu: &Gpu,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+    ) -> Result<Rc<Buffer>, OitError> {
         let mut free = self.free.borrow_mut();
         if let Some(i) = free.iter().position(|b| b.size == size && b.usage == usage) {
             return Ok(free.swap_remove(i));

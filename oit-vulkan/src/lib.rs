@@ -360,7 +360,12 @@ impl VulkanPrepared<'_> {
     /// its linear colours into running sums on the device instead of writing its own
     /// (`supersample.wgsl`), the last frame's image their mean; the frames' stats added up as
     /// [`oit_core::msaa::SupersampleTotals`] says.
-    fn supersampled(&mut self, camera: &Camera, settings: &Settings, readback: bool) -> Result<Frame, OitError> {
+    fn supersampled(
+        &mut self,
+        camera: &Camera,
+        settings: &Settings,
+        readback: bool,
+    ) -> Result<Frame, OitError> {
         let path = settings.raster.unwrap_or(RasterPath::Compute);
         oit_core::plan::refuse_supersampled_hardware("vulkan", path, settings)?;
         let (single, cameras) = oit_core::msaa::supersample_frames(camera, settings);
@@ -389,7 +394,8 @@ impl VulkanPrepared<'_> {
         *self.supersample.borrow_mut() = None;
         self.pool.give_back(sums);
         result?;
-        let image = last.map(|f| f.image).unwrap_or(oit_core::Image { width: 0, height: 0, pixels: Vec::new() });
+        let image =
+            last.map(|f| f.image).unwrap_or(oit_core::Image { width: 0, height: 0, pixels: Vec::new() });
         Ok(Frame { image, layers: totals.layers, lost_pixels: totals.lost_pixels, stats: totals.stats })
     }
 

@@ -438,7 +438,12 @@ impl WgpuPrepared<'_> {
     /// each on the compute path, each frame's end adding its linear colours into running sums on
     /// the device instead of writing its own (`supersample.wgsl`), the last frame's image their
     /// mean; the frames' stats added up as oit-core's [`oit_core::msaa::SupersampleTotals`] says.
-    fn supersampled(&mut self, camera: &Camera, settings: &Settings, readback: bool) -> Result<Frame, OitError> {
+    fn supersampled(
+        &mut self,
+        camera: &Camera,
+        settings: &Settings,
+        readback: bool,
+    ) -> Result<Frame, OitError> {
         let path = WgpuBackend::path_of(settings);
         oit_core::plan::refuse_supersampled_hardware("wgpu", path, settings)?;
         let (single, cameras) = oit_core::msaa::supersample_frames(camera, settings);
@@ -468,7 +473,8 @@ impl WgpuPrepared<'_> {
         *self.supersample.borrow_mut() = None;
         self.pool.give_back([sums]);
         result?;
-        let image = last.map(|f| f.image).unwrap_or(oit_core::Image { width: 0, height: 0, pixels: Vec::new() });
+        let image =
+            last.map(|f| f.image).unwrap_or(oit_core::Image { width: 0, height: 0, pixels: Vec::new() });
         Ok(Frame { image, layers: totals.layers, lost_pixels: totals.lost_pixels, stats: totals.stats })
     }
 

@@ -307,17 +307,26 @@ fn fabs_tail_at_samples_merges_behind_the_k() {
         let base = Settings { samples, ..settings(96, "reference") };
         let cam = camera(&scene, &base, View::default());
         let reference = render(&cpu, &scene, &cam, &base);
-        let drop = render(&cpu, &scene, &cam, &Settings { technique: "fabs:2".parse().unwrap(), ..base.clone() });
-        let tail_settings =
-            Settings { technique: "fabs:2".parse().unwrap(), overflow: oit_core::Overflow::Tail, ..base.clone() };
+        let drop =
+            render(&cpu, &scene, &cam, &Settings { technique: "fabs:2".parse().unwrap(), ..base.clone() });
+        let tail_settings = Settings {
+            technique: "fabs:2".parse().unwrap(),
+            overflow: oit_core::Overflow::Tail,
+            ..base.clone()
+        };
         let tail = render(&cpu, &scene, &cam, &tail_settings);
         let what = format!("fabs:2 on {name} at {samples}×");
         checks::accounting(&tail).unwrap_or_else(|e| panic!("{what}: {e}"));
         assert!(drop.stats.lost > 0, "{what}: overflows");
-        assert_eq!((tail.stats.lost, tail.stats.merged), (0, drop.stats.lost), "{what}: every fragment past K merged");
+        assert_eq!(
+            (tail.stats.lost, tail.stats.merged),
+            (0, drop.stats.lost),
+            "{what}: every fragment past K merged"
+        );
         assert_eq!(tail.stats.geometry_passes, drop.stats.geometry_passes + 1, "{what}: one tail pass");
         let (ed, et) = (mean_error(&reference.image, &drop.image), mean_error(&reference.image, &tail.image));
-        let (ad, at) = (accuracy(&reference, &drop.image).unwrap(), accuracy(&reference, &tail.image).unwrap());
+        let (ad, at) =
+            (accuracy(&reference, &drop.image).unwrap(), accuracy(&reference, &tail.image).unwrap());
         eprintln!(
             "{what}: mean error {ed:.3} dropped, {et:.3} with the tail; EPR {:.1}% and {:.1}%",
             100.0 * ad.epr,
@@ -392,7 +401,6 @@ fn refusals_name_what_is_not_done() {
     let scene = scene_of("knot");
     let cpu = CpuBackend::default();
     let base = Settings { samples: 4, ..settings(32, "reference") };
-    let cam = camera(&scene, &base, View::default());
     // kbuf: its interlock wraps the single-sample fragment stage only
     for backend in ["cpu", "vulkan"] {
         let s = Settings { technique: "kbuf:4".parse().unwrap(), ..base.clone() };
@@ -430,9 +438,13 @@ fn refusals_name_what_is_not_done() {
         assert!(oit_core::plan::Plan::new(backend, &scene, &compute).is_ok(), "{backend} compute");
         // the supersampled reference: on the compute paths (`gpu_supersampled_reference_equals_the_cpus`);
         // the hardware paths refuse it by name
-        assert!(oit_core::plan::Plan::new(backend, &scene, &Settings { supersample: true, ..compute }).is_ok());
-        let hardware = Settings { supersample: true, raster: Some(oit_core::RasterPath::Hardware), ..base.clone() };
-        match oit_core::plan::refuse_supersampled_hardware(backend, oit_core::RasterPath::Hardware, &hardware) {
+        assert!(
+            oit_core::plan::Plan::new(backend, &scene, &Settings { supersample: true, ..compute }).is_ok()
+        );
+        let hardware =
+            Settings { supersample: true, raster: Some(oit_core::RasterPath::Hardware), ..base.clone() };
+        match oit_core::plan::refuse_supersampled_hardware(backend, oit_core::RasterPath::Hardware, &hardware)
+        {
             Err(OitError::Unsupported { what, .. }) => assert!(what.contains("--supersample"), "{what}"),
             other => panic!("{backend} --supersample on the hardware path: {other:?}"),
         }
@@ -723,7 +735,10 @@ fn gpu_supersampled_reference_equals_the_cpus() {
             let (gd, cd) = (render(backend.as_ref(), &scene, &cam, &dfb), render(&cpu, &scene, &cam, &dfb));
             assert_eq!(accuracy(&msaa, &gd.image).unwrap().error_pixels, 0, "{what}: dfb per sample");
             let (ge, ce) = (accuracy(&g, &gd.image).unwrap(), accuracy(&c, &cd.image).unwrap());
-            eprintln!("{what}: dfb against it: {} error pixels (oit-cpu: {})", ge.error_pixels, ce.error_pixels);
+            eprintln!(
+                "{what}: dfb against it: {} error pixels (oit-cpu: {})",
+                ge.error_pixels, ce.error_pixels
+            );
             if effect == oit_core::Effect::Transparency {
                 // (translucency's flat colours absorb alike at every sample of a quad: equal there)
                 assert!(ge.error_pixels > 0, "{what}: MSAA is not supersampling");
@@ -783,7 +798,11 @@ fn hardware_at_samples(backend: &dyn Backend, cpu: &CpuBackend) -> usize {
             Settings { technique: Technique::Fabs { k: None }, ..base.clone() },
             Settings { technique: Technique::Fabs { k: Some(2) }, ..base.clone() },
             Settings { technique: Technique::Ll, pixel_coverage: true, ..base.clone() },
-            Settings { technique: Technique::Fabs { k: Some(2) }, overflow: oit_core::Overflow::Tail, ..base.clone() },
+            Settings {
+                technique: Technique::Fabs { k: Some(2) },
+                overflow: oit_core::Overflow::Tail,
+                ..base.clone()
+            },
             // the techniques that keep no mask (alpha weighted by coverage; plain's blender is refused)
             Settings { technique: Technique::Dp, ..base.clone() },
             Settings { technique: Technique::WeightedAverage, ..base.clone() },
