@@ -8,7 +8,7 @@
 
 use serde::Serialize;
 
-use crate::{Effect, OitError, Settings, Technique};
+use crate::{Camera, Effect, OitError, Settings, Stats, Technique};
 
 /// The sample counts `--samples` takes.
 pub const SAMPLE_COUNTS: [u32; 3] = [1, 4, 8];
@@ -134,6 +134,84 @@ pub fn coverage(settings: &Settings) -> Option<Coverage> {
 #[inline]
 pub fn fraction_alpha(alpha: f32, mask: u8, samples: u32) -> f32 {
     alpha * (mask.count_ones() as f32 / samples as f32)
+}
+
+/// The supersampled reference (`Settings::supersample`, docs/msaa.md), made alike on every
+/// backend: one single-sample reference frame a sample position ([`supersample_frames`]), each
+/// rasterized and shaded at its pixels' centres under a projection moved so that the sample's
+/// position falls on them, the frames' linear colours averaged. Whether a frame of `settings` is
+/// one: the reference with `--supersample` at several samples (other techniques ignore it).
+pub fn is_supersampled(settings: &Settings) -> bool {
+    settings.supersample && settings.samples > 1 && settings.technique == Technique::Reference
+}
+
+/// The frames of the supersampled reference of `settings` seen by `camera`: the settings of each
+/// (one sample, the reference, the rest as given: the same size and window), and per sample
+/// position ([`positions_f32`]) the camera whose projection moves that position of every pixel
+/// onto the pixel's centre: screen x by ½ − sx, which is NDC x by 2(½ − sx)/W of the full frame's
+/// width (a window's frame moves as the full frame does); screen y grows down, NDC y up. The
+/// positions lie on the 1/16-pixel grid, so the move is a whole number of the rasterizer's
+/// 1/256-pixel fixed-point steps up to the projection's f32 rounding.
+pub fn supersample_frames(camera: &Camera, settings: &Settings) -> (Settings, Vec<Camera>) {
+    let single =
+        Settings { samples: 1, supersample: false, technique: Technique::Reference, ..settings.clone() };
+    let (full_w, full_h) = match settings.region {
+        Some(r) => (r.full_width as f32, r.full_height as f32),
+        None => (settings.width as f32, settings.height as f32),
+    };
+    let cameras = positions_f32(settings.samples)
+        .into_iter()
+        .map(|(sx, sy)| {
+            let (dx, dy) = (2.0 * (0.5 - sx) / full_w, -2.0 * (0.5 - sy) / full_h);
+            let mut moved = *camera;
+            moved.proj = glam::Mat4::from_translation(glam::Vec3::new(dx, dy, 0.0)) * camera.proj;
+            moved
+        })
+        .collect();
+    (single, cameras)
+}
+
+/// What the frames of a supersampled reference add up to, alike on every backend: the geometry
+/// passes, fragments, captured and lost fragments of every frame summed (each sample's frame is
+/// a frame of its own fragments), the largest frame's storage (the frames run one after the
+/// other), and per pixel the most fragments one frame gave it (the frame's `layers`, whose
+/// nonzero pixels are the covered ones) and the fragments lost in all.
+#[derive(Clone, Debug, Default)]
+pub struct SupersampleTotals {
+    /// The summed stats.
+    pub stats: Stats,
+    /// Per pixel, the most fragments one frame gave it.
+    pub layers: Option<Vec<u32>>,
+    /// Per pixel, the fragments lost in all frames.
+    pub lost_pixels: Option<Vec<u32>>,
+}
+
+impl SupersampleTotals {
+    /// Adds one sample's frame: its `stats`, and its per-pixel `layers` and `lost_pixels` where
+    /// it has them.
+    pub fn add(&mut self, stats: &Stats, layers: Option<&[u32]>, lost_pixels: Option<&[u32]>) {
+        let t = &mut self.stats;
+        t.geometry_passes += stats.geometry_passes;
+        t.fragments += stats.fragments;
+        t.captured += stats.captured;
+        t.lost += stats.lost;
+        t.storage_bytes = t.storage_bytes.max(stats.storage_bytes);
+        t.max_layers = t.max_layers.max(stats.max_layers);
+        t.wall_ms += stats.wall_ms;
+        if let Some(ms) = stats.gpu_ms {
+            t.gpu_ms = Some(t.gpu_ms.unwrap_or(0.0) + ms);
+        }
+        let fold = |into: &mut Option<Vec<u32>>, from: Option<&[u32]>, f: fn(u32, u32) -> u32| {
+            if let Some(from) = from {
+                match into {
+                    Some(v) => v.iter_mut().zip(from).for_each(|(a, &b)| *a = f(*a, b)),
+                    None => *into = Some(from.to_vec()),
+                }
+            }
+        };
+        fold(&mut self.layers, layers, u32::max);
+        fold(&mut self.lost_pixels, lost_pixels, u32::saturating_add);
+    }
 }
 
 #[cfg(test)]

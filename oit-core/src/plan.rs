@@ -714,12 +714,13 @@ impl Plan {
 
 /// What several samples a pixel (`Settings::samples` above 1, docs/msaa.md) are not yet done
 /// for, refused by name alike on every backend: `kbuf` (its interlock wraps the single-sample
-/// fragment stage); fabs's `--overflow tail`; the supersampled reference (`--supersample`) of a
-/// scene with opaque objects, and on the GPU backends any supersampled reference. (The opaque
-/// pass itself is multisampled: its depth and colour are kept a sample, [`Plan::opaque_bytes`].)
-/// (A hardware raster path refuses a sample count its device does not draw where it starts a
-/// frame, and its own captures, [`refuse_multisampled_own_capture`].) The techniques that keep
-/// no mask take the samples by their coverage fraction ([`crate::msaa::coverage`]).
+/// fragment stage); the supersampled reference (`--supersample`) of a scene with opaque objects;
+/// the techniques that keep no mask over opaque objects. (The opaque pass itself is multisampled:
+/// its depth and colour are kept a sample, [`Plan::opaque_bytes`].) (A hardware raster path
+/// refuses a sample count its device does not draw where it starts a frame, its own captures,
+/// [`refuse_multisampled_own_capture`], and the supersampled reference,
+/// [`refuse_supersampled_hardware`].) The techniques that keep no mask take the samples by their
+/// coverage fraction ([`crate::msaa::coverage`]).
 fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<(), OitError> {
     let samples = settings.samples;
     if samples <= 1 {
@@ -733,9 +734,6 @@ fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<()
              fragment stage only; docs/msaa.md)"
         ));
     }
-    if matches!(technique, Technique::Fabs { .. }) && settings.overflow == crate::Overflow::Tail {
-        return refuse(format!("fabs with --overflow tail at --samples {samples}: not yet done"));
-    }
     if scene.has_opaque() && !crate::msaa::keeps_masks(technique) {
         return refuse(format!(
             "{technique} at --samples {samples} with opaque objects: not yet done (the opaque cut \
@@ -743,17 +741,19 @@ fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<()
              by it; reference, dfb, ll and fabs do: docs/msaa.md)"
         ));
     }
+    if scene.has_opaque()
+        && settings.overflow == crate::Overflow::Tail
+        && technique.kind() == crate::TechniqueKind::Fabs
+    {
+        return refuse(format!(
+            "fabs with --overflow tail over opaque objects at --samples {samples}: not yet done \
+             (the one tail a pixel is composited over one background, not each sample's opaque colour)"
+        ));
+    }
     if scene.has_opaque() && settings.supersample {
         return refuse(format!(
             "--supersample with opaque objects at --samples {samples}: the supersampled reference \
              does not yet draw the opaque pass (compare against the per-sample reference)"
-        ));
-    }
-    if backend != "cpu" && settings.supersample {
-        return refuse(format!(
-            "--supersample on {backend}: the supersampled reference is not yet done on the GPU \
-             backends (their reference would be the per-sample one, in silence); compare with \
-             --backend cpu"
         ));
     }
     Ok(())
@@ -773,6 +773,28 @@ pub fn refuse_multisampled_own_capture(backend: &str, settings: &Settings) -> Re
              yet multisampled; use --raster compute (docs/msaa.md)",
             settings.technique, settings.samples
         ),
+    })
+}
+
+/// The refusal of the supersampled reference (`--supersample`) on a GPU backend's hardware raster
+/// path (`Ok` on the others, and where the frame is not one, [`crate::msaa::is_supersampled`]):
+/// its frames would be the compute path's, one a sample under a moved projection, but the
+/// device's rasterizer snaps the moved vertices in its own precision, and nothing compares those
+/// frames with oit-cpu's yet.
+pub fn refuse_supersampled_hardware(
+    backend: &str,
+    path: crate::RasterPath,
+    settings: &Settings,
+) -> Result<(), OitError> {
+    if path != crate::RasterPath::Hardware || !crate::msaa::is_supersampled(settings) {
+        return Ok(());
+    }
+    Err(OitError::Unsupported {
+        backend: backend.into(),
+        what: "--supersample on the hardware raster path: not yet done (the device snaps each sample's \
+               moved projection in its own precision, not yet compared with oit-cpu's); use --raster compute \
+               (docs/msaa.md)"
+            .into(),
     })
 }
 

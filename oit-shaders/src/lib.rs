@@ -70,6 +70,7 @@ files!(
     "core/resolve.wgsl",
     "core/setup.wgsl",
     "core/softfloat.wgsl",
+    "core/supersample.wgsl",
     "core/texture.wgsl",
     "technique/adp.wgsl",
     "technique/bdp.wgsl",
@@ -297,6 +298,8 @@ const COVERAGE: &str = "technique/coverage.wgsl";
 pub const MODULES: &[Module] = &[
     m("fill", &["core/fill.wgsl"], Kernels),
     m("finish", &["core/finish.wgsl"], Kernels),
+    // the supersampled reference's end of each frame, instead of finish's `finish_main`
+    m("supersample", &["core/supersample.wgsl"], Kernels),
     m("gate", &["core/gate.wgsl"], Kernels),
     m("count", &["technique/count.wgsl"], Raster),
     // the opaque pass's two geometry passes (oit-gpu's `technique::opaque_pass`)

@@ -38,6 +38,11 @@ pub struct BufferPool {
 }
 
 impl BufferPool {
+    /// Gives a buffer taken apart from a frame ([`BufferPool::take`]) back for the next.
+    pub(crate) fn give_back(&self, buffer: Rc<Buffer>) {
+        self.free.borrow_mut().push(buffer);
+    }
+
     /// Buffers created so far.
     pub fn allocations(&self) -> u64 {
         self.allocations.get()
@@ -45,7 +50,12 @@ impl BufferPool {
 
     /// A device-local buffer of `size` bytes and `usage`, free or new; its contents are whatever
     /// the last frame left.
-    fn take(&self, gpu: &Gpu, size: u64, usage: vk::BufferUsageFlags) -> Result<Rc<Buffer>, OitError> {
+    pub(crate) fn take(
+        &self,
+        gpu: &Gpu,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+    ) -> Result<Rc<Buffer>, OitError> {
         let mut free = self.free.borrow_mut();
         if let Some(i) = free.iter().position(|b| b.size == size && b.usage == usage) {
             return Ok(free.swap_remove(i));
@@ -210,6 +220,9 @@ pub(crate) struct VkCtx<'a> {
     gated_counter: Rc<Buffer>,
     /// Words 0 that must pass their test at the frame's end ([`VkCtx::check_at_end`]).
     end_checks: Vec<EndCheck>,
+    /// Where the frame is sample i of n's frame of the supersampled reference: the running sums
+    /// (`supersample.wgsl`), i and n; its end adds its colours there instead of writing its own.
+    pub(crate) supersample: Option<(Rc<Buffer>, u32, u32)>,
 }
 
 impl Drop for VkCtx<'_> {
@@ -292,6 +305,7 @@ impl<'a> VkCtx<'a> {
             gated_counter,
             layers_from: None,
             end_checks: Vec::new(),
+            supersample: None,
         };
         let (acct, gated_counter) = (ctx.acct.clone(), ctx.gated_counter.clone());
         ctx.rec.fill(&acct, 0);
@@ -1031,7 +1045,18 @@ impl<'a> VkCtx<'a> {
         self.rec.fill(&totals, 0);
         let px = u64::from(self.pixels);
         self.kernel_over("finish", "totals_main", &[&image_buf, &totals], px, 0, 0, "resolve")?;
-        self.kernel_over("finish", "finish_main", &[&image_buf, &totals], px, 0, 0, "resolve")?;
+        match self.supersample.clone() {
+            Some((sums, i, n)) => self.kernel_over(
+                "supersample",
+                "supersample_main",
+                &[&image_buf, &totals, &sums],
+                px,
+                n,
+                i,
+                "resolve",
+            )?,
+            None => self.kernel_over("finish", "finish_main", &[&image_buf, &totals], px, 0, 0, "resolve")?,
+        }
         let acct_buf = self.acct.clone();
         let first_count = self.first_count.clone();
         if let Some(count) = self.opaque_from.take() {

@@ -209,6 +209,7 @@ impl Backend for VulkanBackend {
             layers: oit_core::LayersCache::default(),
             gpu_setup: self.gpu_setup,
             read_back: Default::default(),
+            supersample: RefCell::new(None),
         }))
     }
 }
@@ -241,6 +242,9 @@ pub struct VulkanPrepared<'s> {
     /// pass (`VkCtx::deepest`) and its fragment arrays from that total
     /// (`VkCtx::fragment_capacity`); each checked at its end.
     read_back: RefCell<std::collections::HashMap<String, ReadBack>>,
+    /// While a supersampled reference runs ([`VulkanPrepared::supersampled`]): its running sums,
+    /// and which sample's frame of how many is being made.
+    supersample: RefCell<Option<(std::rc::Rc<crate::device::Buffer>, u32, u32)>>,
 }
 
 impl<'s> VulkanPrepared<'s> {
@@ -298,6 +302,10 @@ impl Prepared for VulkanPrepared<'_> {
         done: &mut dyn FnMut(usize, oit_core::Stats),
     ) -> Result<(), OitError> {
         settings.validate()?;
+        if oit_core::msaa::is_supersampled(settings) {
+            // several frames each, one after the other
+            return oit_core::frames_one_at_a_time(self, cameras, settings, done);
+        }
         let this = &*self;
         let end = oit_core::frames_in_flight(
             cameras,
@@ -332,6 +340,9 @@ impl VulkanPrepared<'_> {
         settings: &Settings,
         readback: bool,
     ) -> Result<Frame, OitError> {
+        if oit_core::msaa::is_supersampled(settings) {
+            return self.supersampled(camera, settings, readback);
+        }
         // a frame whose GPU setup outgrew the kept buffers (seen at its end) runs again: its
         // setup then reads the counters first and grows them
         match self.frame_once(camera, settings, readback)? {
@@ -340,6 +351,52 @@ impl VulkanPrepared<'_> {
                 OitError::Device("the compute path's setup outgrew its buffers twice in a row".into())
             }),
         }
+    }
+
+    /// The supersampled reference (`--supersample`, docs/msaa.md) of a frame or window, as
+    /// oit-wgpu makes it: oit-core's frames ([`oit_core::msaa::supersample_frames`]: one
+    /// single-sample reference frame a sample position, under a projection moved so that the
+    /// position falls on the pixels' centres), each on the compute path, each frame's end adding
+    /// its linear colours into running sums on the device instead of writing its own
+    /// (`supersample.wgsl`), the last frame's image their mean; the frames' stats added up as
+    /// [`oit_core::msaa::SupersampleTotals`] says.
+    fn supersampled(
+        &mut self,
+        camera: &Camera,
+        settings: &Settings,
+        readback: bool,
+    ) -> Result<Frame, OitError> {
+        let path = settings.raster.unwrap_or(RasterPath::Compute);
+        oit_core::plan::refuse_supersampled_hardware("vulkan", path, settings)?;
+        let (single, cameras) = oit_core::msaa::supersample_frames(camera, settings);
+        let single = Settings { raster: Some(path), ..single };
+        // two running sums of linear RGB a pixel
+        let bytes = u64::from(settings.width * settings.height).max(1) * 24;
+        self.gpu.check_storage("the supersampled reference's running sums", bytes)?;
+        let sums = self.pool.take(self.gpu, bytes, crate::device::storage_usage())?;
+        let n = cameras.len() as u32;
+        let mut totals = oit_core::msaa::SupersampleTotals::default();
+        let mut last = None;
+        let mut result = Ok(());
+        for (i, sample_camera) in cameras.iter().enumerate() {
+            *self.supersample.borrow_mut() = Some((sums.clone(), i as u32, n));
+            match self.frame_whole(sample_camera, &single, readback) {
+                Ok(frame) => {
+                    totals.add(&frame.stats, frame.layers.as_deref(), frame.lost_pixels.as_deref());
+                    last = Some(frame);
+                }
+                Err(e) => {
+                    result = Err(e);
+                    break;
+                }
+            }
+        }
+        *self.supersample.borrow_mut() = None;
+        self.pool.give_back(sums);
+        result?;
+        let image =
+            last.map(|f| f.image).unwrap_or(oit_core::Image { width: 0, height: 0, pixels: Vec::new() });
+        Ok(Frame { image, layers: totals.layers, lost_pixels: totals.lost_pixels, stats: totals.stats })
     }
 
     /// [`VulkanPrepared::frame_whole`] once: `None` where the setup did not fit.
@@ -467,6 +524,7 @@ impl VulkanPrepared<'_> {
         let key = format!("{settings:?}");
         ctx.speculated = this.read_back.borrow().get(&key).copied().unwrap_or_default();
         run_technique(&mut ctx, &drivers)?;
+        ctx.supersample = this.supersample.borrow().clone();
         let finishing = ctx.finish_start(readback)?;
         Ok(InFlight { finishing, start, read_back: (&this.read_back, key) })
     }

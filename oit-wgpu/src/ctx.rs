@@ -127,6 +127,7 @@ const FRAGMENTS_WORD: u64 = 4;
 pub const TECHNIQUE_PRELUDE: &str = oit_shaders::PRELUDE;
 
 const FINISH_WGSL: &str = oit_shaders::text("core/finish.wgsl");
+const SUPERSAMPLE_WGSL: &str = oit_shaders::text("core/supersample.wgsl");
 const FILL_WGSL: &str = oit_shaders::text("core/fill.wgsl");
 
 use oit_gpu::{ACCT_BINDING, MIN_BUFFER_WORDS, OPAQUE_KEYS_BINDING, OPAQUE_RGB_BINDING, STATE_WORDS};
@@ -303,6 +304,9 @@ pub struct GpuCtx<'a> {
     /// Per-pixel fragment counts the frame hands the caller as its `layers` (the reference's),
     /// read back with the image at the end.
     pub(crate) layers_from: Option<wgpu::Buffer>,
+    /// Where the frame is sample i of n's frame of the supersampled reference: the running sums
+    /// (`supersample.wgsl`), i and n; its end adds its colours there instead of writing its own.
+    pub(crate) supersample: Option<(wgpu::Buffer, u32, u32)>,
     /// When the frame began on the host (for `OIT_HOST_TIMES`).
     started: std::time::Instant,
 }
@@ -482,6 +486,7 @@ impl<'a> GpuCtx<'a> {
             gated_pass: false,
             merged_from: None,
             layers_from: None,
+            supersample: None,
             ring_full: false,
             started: std::time::Instant::now(),
         };
@@ -1183,7 +1188,18 @@ impl<'a> GpuCtx<'a> {
         }
         let pixels = u64::from(self.pixels);
         self.kernel_over(FINISH_WGSL, "totals_main", &[&image, &totals], pixels, 0, 0, "resolve")?;
-        self.kernel_over(FINISH_WGSL, "finish_main", &[&image, &totals], pixels, 0, 0, "resolve")
+        match self.supersample.clone() {
+            Some((sums, i, n)) => self.kernel_over(
+                SUPERSAMPLE_WGSL,
+                "supersample_main",
+                &[&image, &totals, &sums],
+                pixels,
+                n,
+                i,
+                "resolve",
+            ),
+            None => self.kernel_over(FINISH_WGSL, "finish_main", &[&image, &totals], pixels, 0, 0, "resolve"),
+        }
     }
 
     /// Ends a frame recorded into the caller's encoder ([`GpuCtx::recording`]): its last kernels

@@ -152,6 +152,7 @@ impl WgpuBackend {
             compute_opaque: RefCell::new(None),
             layers: oit_core::LayersCache::default(),
             deepest: RefCell::default(),
+            supersample: RefCell::new(None),
         })
     }
 }
@@ -271,6 +272,9 @@ pub struct WgpuPrepared<'s> {
     /// (key + " peels") the passes its peel loop ran, which the next frame records without a
     /// round trip between them ([`GpuCtx::speculated_peels`]).
     deepest: RefCell<std::collections::HashMap<String, u32>>,
+    /// While a supersampled reference runs ([`WgpuPrepared::supersampled`]): its running sums,
+    /// and which sample's frame of how many is being made.
+    supersample: RefCell<Option<(wgpu::Buffer, u32, u32)>>,
 }
 
 impl<'s> WgpuPrepared<'s> {
@@ -347,6 +351,10 @@ impl Prepared for WgpuPrepared<'_> {
         done: &mut dyn FnMut(usize, oit_core::Stats),
     ) -> Result<(), OitError> {
         settings.validate()?;
+        if oit_core::msaa::is_supersampled(settings) {
+            // several frames each, one after the other
+            return oit_core::frames_one_at_a_time(self, cameras, settings, done);
+        }
         let path = WgpuBackend::path_of(settings);
         if path == RasterPath::Hardware {
             self.upload_hardware(settings)?;
@@ -388,6 +396,9 @@ impl WgpuPrepared<'_> {
         readback: bool,
     ) -> Result<Frame, OitError> {
         settings.validate()?;
+        if oit_core::msaa::is_supersampled(settings) {
+            return self.supersampled(camera, settings, readback);
+        }
         let gpu = self.gpu;
         let start = Instant::now();
         let path = WgpuBackend::path_of(settings);
@@ -419,6 +430,52 @@ impl WgpuPrepared<'_> {
             }
         }
         Err(OitError::Device("the compute path's setup did not fit its buffers twice in a row".into()))
+    }
+
+    /// The supersampled reference (`--supersample`, docs/msaa.md) of a frame or window: oit-core's
+    /// frames ([`oit_core::msaa::supersample_frames`]: one single-sample reference frame a sample
+    /// position, under a projection moved so that the position falls on the pixels' centres),
+    /// each on the compute path, each frame's end adding its linear colours into running sums on
+    /// the device instead of writing its own (`supersample.wgsl`), the last frame's image their
+    /// mean; the frames' stats added up as oit-core's [`oit_core::msaa::SupersampleTotals`] says.
+    fn supersampled(
+        &mut self,
+        camera: &Camera,
+        settings: &Settings,
+        readback: bool,
+    ) -> Result<Frame, OitError> {
+        let path = WgpuBackend::path_of(settings);
+        oit_core::plan::refuse_supersampled_hardware("wgpu", path, settings)?;
+        let (single, cameras) = oit_core::msaa::supersample_frames(camera, settings);
+        let single = Settings { raster: Some(path), ..single };
+        // two running sums of linear RGB a pixel
+        let bytes = u64::from(settings.width * settings.height).max(1) * 24;
+        self.gpu.check_storage("the supersampled reference's running sums", bytes)?;
+        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+        let sums = self.pool.take(&self.gpu.device, "supersample sums", bytes, usage);
+        let n = cameras.len() as u32;
+        let mut totals = oit_core::msaa::SupersampleTotals::default();
+        let mut last = None;
+        let mut result = Ok(());
+        for (i, sample_camera) in cameras.iter().enumerate() {
+            *self.supersample.borrow_mut() = Some((sums.clone(), i as u32, n));
+            match self.frame_with(sample_camera, &single, readback) {
+                Ok(frame) => {
+                    totals.add(&frame.stats, frame.layers.as_deref(), frame.lost_pixels.as_deref());
+                    last = Some(frame);
+                }
+                Err(e) => {
+                    result = Err(e);
+                    break;
+                }
+            }
+        }
+        *self.supersample.borrow_mut() = None;
+        self.pool.give_back([sums]);
+        result?;
+        let image =
+            last.map(|f| f.image).unwrap_or(oit_core::Image { width: 0, height: 0, pixels: Vec::new() });
+        Ok(Frame { image, layers: totals.layers, lost_pixels: totals.lost_pixels, stats: totals.stats })
     }
 
     /// One attempt at a frame ([`GpuCtx::finish_checked`]): `None` where the setup must run again.
@@ -496,6 +553,7 @@ impl WgpuPrepared<'_> {
         ctx.speculated_peels = this.deepest.borrow().get(&format!("{key} peels")).copied();
         ctx.speculated_fragments = this.deepest.borrow().get(&format!("{key} fragments")).copied();
         technique::run(&mut ctx, &drivers)?;
+        ctx.supersample = this.supersample.borrow().clone();
         let seen = [ctx.deepest_seen, ctx.peels_seen, ctx.fragments_seen];
         let finishing = ctx.finish_start(path, readback)?;
         Ok(InFlight { finishing, key, seen, start })

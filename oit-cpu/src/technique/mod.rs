@@ -343,6 +343,33 @@ impl<'a> Ctx<'a> {
         self.merged = sums.iter().skip(4).step_by(5).map(|c| c.load(Relaxed)).sum();
     }
 
+    /// [`Ctx::tail_pass`] over the multisampled fragments (`Settings::samples` above 1, fabs's
+    /// `--overflow tail`; docs/msaa.md): `behind` gives the RGBA8 colour of each fragment (with
+    /// its coverage mask) behind its pixel's K-th nearest, its alpha already weighted by its
+    /// coverage fraction; the same integer sums, the same move from `lost` to merged.
+    pub fn tail_pass_masked<F: Fn(&Fragment<'_>, u8) -> Option<u32> + Sync>(
+        &mut self,
+        sums: &[AtomicU64],
+        behind: F,
+    ) {
+        let lost = &self.lost;
+        self.raster.for_each_masked_fragment(self.settings.samples, |f, mask| {
+            if let Some(c) = behind(f, mask) {
+                let px = f.pixel as usize;
+                let a = u64::from(c >> 24);
+                let base = px * 5;
+                sums[base].fetch_add(a * u64::from(c & 0xff), Relaxed);
+                sums[base + 1].fetch_add(a * u64::from(c >> 8 & 0xff), Relaxed);
+                sums[base + 2].fetch_add(a * u64::from(c >> 16 & 0xff), Relaxed);
+                sums[base + 3].fetch_add(a, Relaxed);
+                sums[base + 4].fetch_add(1, Relaxed);
+                lost[px].fetch_sub(1, Relaxed);
+            }
+        });
+        self.passes += 1;
+        self.merged = sums.iter().skip(4).step_by(5).map(|c| c.load(Relaxed)).sum();
+    }
+
     /// Per-pixel resolve state.
     pub fn states(&self) -> Pooled<'a, PixelState> {
         self.pool.states(self.pixels)

@@ -23,8 +23,9 @@
 //! - `dfb` and `ll`: their single-sample passes (a counting pass and a fill), each entry with its
 //!   mask, resolved per sample through the f32 resolve.
 //! - `fabs`: K slots a pixel, each with its mask; the pixels that overflow keep their K nearest
-//!   by (depth, primitive id), as single-sample's (two more passes). `--overflow tail` is not yet
-//!   done at several samples.
+//!   by (depth, primitive id), as single-sample's (two more passes). `--overflow tail` merges
+//!   what lies behind the K into one tail a pixel, each fragment's alpha weighted by its coverage
+//!   fraction, and each sample composites its covering slots over that tail.
 //!
 //! With `Settings::pixel_coverage` (`--coverage pixel`) every technique here but the reference
 //! keeps each fragment's mask as the full mask: the per-pixel capture baseline.
@@ -33,9 +34,9 @@
 //! ([`crate::raster::Rasterizer::cover`]), each over its whole pixel with its alpha weighted by
 //! its coverage fraction, or at full alpha with `--coverage pixel` (`oit_core::msaa::coverage`).
 
-use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
 
-use glam::{DVec3, Mat4, Vec3};
+use glam::{DVec3, Vec3};
 use oit_core::composite::heat_f64;
 use oit_core::plan::Counted;
 use oit_core::rules::{depth_bits, depth_from_bits};
@@ -172,50 +173,47 @@ fn reference(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
 
 /// The supersampled reference: a single-sample reference frame a sample position, the
 /// projection moved so that the position falls on the pixels' centres, the frames' linear
-/// colours averaged (every sample rasterized and shaded as a pixel of its own).
+/// colours averaged (every sample rasterized and shaded as a pixel of its own); the frames and
+/// their totals are oit-core's, alike on every backend ([`oit_core::msaa::supersample_frames`]).
 fn supersampled(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let settings = ctx.settings;
-    let single =
-        Settings { samples: 1, supersample: false, technique: Technique::Reference, ..settings.clone() };
-    let (full_w, full_h) = match settings.region {
-        Some(r) => (r.full_width as f32, r.full_height as f32),
-        None => (settings.width as f32, settings.height as f32),
-    };
+    let (single, cameras) = oit_core::msaa::supersample_frames(ctx.camera, settings);
     let mut sum = vec![DVec3::ZERO; ctx.pixels];
-    let mut stats = oit_core::Stats::default();
-    let mut counts = vec![0u32; ctx.pixels];
-    for (sx, sy) in oit_core::msaa::positions_f32(settings.samples) {
-        // the sample at (x + sx, y + sy) moved onto the centre (x + ½, y + ½): screen x by
-        // ½ − sx, which is NDC x by 2(½ − sx)/W; screen y grows down, NDC y up
-        let (dx, dy) = (2.0 * (0.5 - sx) / full_w, -2.0 * (0.5 - sy) / full_h);
-        let mut camera = *ctx.camera;
-        camera.proj = Mat4::from_translation(Vec3::new(dx, dy, 0.0)) * camera.proj;
-        let raster = crate::raster::Rasterizer::new(ctx.scene, &camera, &single);
+    let mut totals = oit_core::msaa::SupersampleTotals::default();
+    for camera in &cameras {
+        let raster = crate::raster::Rasterizer::new(ctx.scene, camera, &single);
         let plan = oit_core::plan::Plan::new("cpu", ctx.scene, &single)?.on_path(oit_core::RasterPath::Cpu);
-        let mut inner = Ctx::new(ctx.scene, &camera, &single, &raster, ctx.pool, plan, ctx.per_length, None);
+        let mut inner = Ctx::new(ctx.scene, camera, &single, &raster, ctx.pool, plan, ctx.per_length, None);
         let (linear, layer_counts, fragments) = super::reference::linear(&mut inner)?;
         for (s, c) in sum.iter_mut().zip(linear) {
             *s += c;
         }
-        for (n, c) in counts.iter_mut().zip(layer_counts) {
-            *n = (*n).max(c);
-        }
-        stats.geometry_passes += inner.passes;
-        stats.fragments += fragments;
-        stats.captured += fragments;
-        stats.storage_bytes = stats.storage_bytes.max(inner.storage_bytes);
+        let stats = oit_core::Stats {
+            geometry_passes: inner.passes,
+            fragments,
+            captured: fragments,
+            storage_bytes: inner.storage_bytes,
+            max_layers: layer_counts.iter().copied().max().unwrap_or(0),
+            ..Default::default()
+        };
+        totals.add(&stats, Some(&layer_counts), Some(&vec![0; ctx.pixels]));
     }
     let n = f64::from(settings.samples);
     let pixels = sum.into_iter().map(|c| srgb8_f64(c / n)).collect();
     let image = Image { width: settings.width, height: settings.height, pixels };
-    stats.max_layers = counts.iter().copied().max().unwrap_or(0);
-    let lost_pixels = vec![0; ctx.pixels];
-    Ok(Frame { image, layers: Some(counts), lost_pixels: Some(lost_pixels), stats })
+    Ok(Frame { image, layers: totals.layers, lost_pixels: totals.lost_pixels, stats: totals.stats })
 }
 
 /// The f32 per-sample resolve of every pixel's entries, gathered by `gather(px, list)` (which
-/// clears and fills `list`); sorted here.
-fn resolve_entries(ctx: &Ctx<'_>, gather: impl Fn(usize, &mut Vec<Entry>) + Sync) -> Frame {
+/// clears and fills `list`); sorted here. With `tail` (fabs's `--overflow tail` sums, 5 a pixel)
+/// each sample composites its entries over the pixel's tail ([`crate::resolve::Resolve::tail`]:
+/// one tail a pixel, its fragments' alpha weighted by their coverage fractions) instead of the
+/// background.
+fn resolve_entries(
+    ctx: &Ctx<'_>,
+    tail: Option<&[AtomicU64]>,
+    gather: impl Fn(usize, &mut Vec<Entry>) + Sync,
+) -> Frame {
     let samples = ctx.settings.samples;
     let full = oit_core::msaa::full_mask(samples);
     let resolve = &ctx.resolve;
@@ -238,6 +236,14 @@ fn resolve_entries(ctx: &Ctx<'_>, gather: impl Fn(usize, &mut Vec<Entry>) + Sync
             resolve.push(s, depth_from_bits((e.0 >> 32) as u32), e.1);
         }
     };
+    // a sample's state: nothing pushed, the pixel's tail behind (where it has one)
+    let fresh = |px: usize| {
+        let mut s = PixelState::default();
+        if let Some(t) = tail {
+            resolve.tail(&mut s, &t[px * 5..px * 5 + 5], px);
+        }
+        s
+    };
     super::finish_pixels(ctx, |px| {
         let mut list = Vec::new();
         gather(px, &mut list);
@@ -249,14 +255,14 @@ fn resolve_entries(ctx: &Ctx<'_>, gather: impl Fn(usize, &mut Vec<Entry>) + Sync
                 oit_core::composite::heat(list.len() as f32 / deepest as f32)
             }
         } else if resolve.opaque_uniform(px) && list.iter().all(|e| e.2 == full) {
-            let mut s = PixelState::default();
+            let mut s = fresh(px);
             push_all(&mut s, &mut list.iter());
             resolve.finish_over(&mut s, resolve.background_at_sample(px, 0))
         } else {
             // each sample over its own opaque colour (the background where none covers it)
             let mut sum = Vec3::ZERO;
             for i in 0..samples {
-                let mut s = PixelState::default();
+                let mut s = fresh(px);
                 push_all(&mut s, &mut list.iter().filter(|e| e.2 >> i & 1 == 1));
                 sum += resolve.finish_over(&mut s, resolve.background_at_sample(px, i as usize));
             }
@@ -296,7 +302,7 @@ fn dfb(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     });
     ctx.ran_pass(n);
     let (keys, payloads, masks, counted) = (&*keys, &*payloads, &*masks, &*counted);
-    Ok(resolve_entries(ctx, |px, list| {
+    Ok(resolve_entries(ctx, None, |px, list| {
         let unfilled = (counted[px].load(Relaxed) as i32).max(0) as usize;
         list.clear();
         list.extend(
@@ -338,7 +344,7 @@ fn ll(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     });
     ctx.ran_pass(n);
     let (heads, keys, payloads, masks, links) = (&*heads, &*keys, &*payloads, &*masks, &*links);
-    Ok(resolve_entries(ctx, |px, list| {
+    Ok(resolve_entries(ctx, None, |px, list| {
         list.clear();
         let mut node = heads[px].load(Relaxed);
         while node != END {
@@ -369,6 +375,7 @@ fn fabs(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let slots = ctx.scratch64(k)?;
     let payloads = ctx.scratch32(k)?;
     let masks = ctx.scratch_bytes((ctx.pixels as u64).saturating_mul(k as u64))?;
+    let tail = ctx.tail_sums()?;
     let shared = &*ctx;
     let kept = coverage(shared.settings);
     let n = shared.raster.for_each_masked_fragment(shared.settings.samples, |f, mask| {
@@ -409,9 +416,27 @@ fn fabs(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
             }
         });
         ctx.passes += 2;
+        if let Some(sums) = &tail {
+            // `--overflow tail`: every fragment behind an overflowing pixel's K nearest (sorted
+            // now: the last is the largest) merged into the pixel's one tail, its alpha weighted
+            // by its coverage fraction, as the techniques without a mask weigh theirs
+            let samples = ctx.settings.samples;
+            let kept = coverage(ctx.settings);
+            let nearest = &nearest;
+            ctx.tail_pass_masked(sums, |f, mask| {
+                let px = f.pixel as usize;
+                let behind = list.overflowed(px)
+                    && oit_core::AtomicFragmentList::last(nearest, px).is_some_and(|last| key(f) > last);
+                behind.then(|| {
+                    let mut color = f.color();
+                    color.w = oit_core::msaa::fraction_alpha(color.w, kept(mask), samples);
+                    oit_core::rules::pack_rgba8(color)
+                })
+            });
+        }
     }
     let (counters, slots, payloads, masks) = (&*counters, &*slots, &*payloads, &*masks);
-    Ok(resolve_entries(ctx, |px, list| {
+    Ok(resolve_entries(ctx, tail.as_deref().map(|t| &t[..]), |px, list| {
         list.clear();
         let n = (counters[px].load(Relaxed) as usize).min(k);
         list.extend(

@@ -21,7 +21,9 @@
 //
 // `--overflow tail` (tail.wgsl, appended): after those passes an overflowing pixel's slots hold
 // its K smallest keys sorted, and FABS_TAIL adds every fragment whose key is larger than the last
-// into the pixel's tail; the resolve (pass_index FABS_WITH_TAIL) puts the tail behind the K.
+// into the pixel's tail; the resolve (pass_index FABS_WITH_TAIL) puts the tail behind the K. Above
+// one sample the tail is one a pixel, each fragment's alpha weighted by its coverage fraction, and
+// each sample composites the slots that cover it over it.
 //
 // The counters are reached only through fabs_counters.wgsl's fabs_count_add and fabs_count
 // (storage buffer); oit-vulkan's `--atomic-storage image` defines them over a storage image.
@@ -65,7 +67,13 @@ fn capture(f: Fragment) {
     }
     if (fu.pass_index == FABS_TAIL) {
         if (key > atomicLoad(&slots[(k - 1u) * stride + f.pixel])) {
-            tail_add(f.pixel, pack_rgba8(f.color));
+            var c = f.color;
+            if (fu.msaa.x > 1u) {
+                // one tail a pixel: the fragment's alpha weighted by its coverage fraction
+                // (oit-core's msaa::fraction_alpha, as coverage_weighted)
+                c.a = f.color.a * (f32(countOneBits(kept_mask(f))) / f32(fu.msaa.x));
+            }
+            tail_add(f.pixel, pack_rgba8(c));
         }
         return;
     }
@@ -117,7 +125,16 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         if (n > 1u) {
             fabs_heapsort(px, stride, n);
         }
-        resolve_masked(px, px, n);
+        var bg = background_at(px);
+        if (fu.pass_index == FABS_WITH_TAIL) {
+            // each sample over the pixel's one tail (oit-cpu's Resolve::tail: transparency's back
+            // colour, which the other effects do not composite over); its merged counted alike
+            let back = tail_back(px, bg);
+            if (fu.effect == EFFECT_TRANSPARENCY) {
+                bg = back;
+            }
+        }
+        resolve_masked_over(px, px, n, bg);
         return;
     }
     if (n <= LOCAL_SLOTS) {

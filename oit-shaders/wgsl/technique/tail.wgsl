@@ -21,13 +21,13 @@ fn tail_add(px: u32, c: u32) {
     atomicSub(&acct[3u * px], 1u);
 }
 
-// The pixel's tail behind what was pushed into `s` (composite::weighted_average over the
-// background, as the back colour the front composites over); counts its fragments merged.
-fn tail_resolve(s: ptr<function, PixelState>, px: u32) {
+// The pixel's tail over `bg` (composite::weighted_average), or `bg` where it has none; counts its
+// fragments merged (call it once a pixel).
+fn tail_back(px: u32, bg: vec3<f32>) -> vec3<f32> {
     let base = px * 5u;
     let count = u32(atomicLoad(&tail_sums[base + 4u]));
     if (count == 0u) {
-        return;
+        return bg;
     }
     let premultiplied = vec3<f32>(
         f32(atomicLoad(&tail_sums[base])),
@@ -35,7 +35,6 @@ fn tail_resolve(s: ptr<function, PixelState>, px: u32) {
         f32(atomicLoad(&tail_sums[base + 2u])),
     ) / (255.0 * 255.0);
     let alpha = f32(atomicLoad(&tail_sums[base + 3u])) / 255.0;
-    let bg = background_at(px);
     var back = bg;
     if (alpha > 0.0) {
         let mean_color = premultiplied / alpha;
@@ -43,9 +42,19 @@ fn tail_resolve(s: ptr<function, PixelState>, px: u32) {
         let t = powi_rust(1.0 - mean_alpha, count);
         back = mean_color * (1.0 - t) + bg * t;
     }
+    atomicAdd(&tail_words[1], count);
+    return back;
+}
+
+// The pixel's tail behind what was pushed into `s` (composite::weighted_average over the
+// background, as the back colour the front composites over); counts its fragments merged.
+fn tail_resolve(s: ptr<function, PixelState>, px: u32) {
+    if (u32(atomicLoad(&tail_sums[px * 5u + 4u])) == 0u) {
+        return;
+    }
+    let back = tail_back(px, background_at(px));
     (*s).br = back.x;
     (*s).bg = back.y;
     (*s).bb = back.z;
     (*s).has_back = 1u;
-    atomicAdd(&tail_words[1], count);
 }
