@@ -914,7 +914,7 @@ impl Rasterizer {
             let offsets = sample_offsets(covered.samples);
             let mut n = 0u64;
             for i in order {
-                n += self.walk_masked(i, &offsets, rows, |frag, mask| {
+                n += self.walk_masked(i, &offsets, rows, &|_| true, |frag, mask| {
                     if covered.fraction {
                         let mut color = frag.color();
                         color.w = oit_core::msaa::fraction_alpha(color.w, mask, covered.samples);
@@ -973,14 +973,25 @@ impl Rasterizer {
     /// first pass after the cut, as the single-sample walks count theirs. The pass still returns
     /// every fragment drawn.
     pub fn for_each_masked_fragment<F: Fn(&Fragment<'_>, u8) + Sync>(&self, samples: u32, f: F) -> u64 {
+        self.for_each_masked_fragment_where(samples, &|_| true, f)
+    }
+
+    /// [`Rasterizer::for_each_masked_fragment`] over the pixels `keep` keeps only: a pixel it
+    /// turns down costs its walk, not its samples' tests (fabs's passes over the pixels that
+    /// overflowed). Returns the fragments of the pixels kept.
+    pub fn for_each_masked_fragment_where<K, F>(&self, samples: u32, keep: &K, f: F) -> u64
+    where
+        K: Fn(u32) -> bool + Sync,
+        F: Fn(&Fragment<'_>, u8) + Sync,
+    {
         let Some(cut) = &self.cut else {
-            return self.masked_walk(samples, &f);
+            return self.masked_walk(samples, keep, &f);
         };
         let counting = cut.occluded.get().is_none();
         let pass = COUNTING_PASS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let (depth, per) = (&*cut.depth, samples as usize);
         debug_assert_eq!(depth.len(), self.setup.width as usize * self.setup.height as usize * per);
-        let n = self.masked_walk(samples, &|frag: &Fragment<'_>, mask: u8| {
+        let n = self.masked_walk(samples, keep, &|frag: &Fragment<'_>, mask: u8| {
             let opaque = &depth[frag.pixel as usize * per..][..per];
             let mut kept = 0u8;
             for (i, &d) in opaque.iter().enumerate() {
@@ -1001,19 +1012,25 @@ impl Rasterizer {
     }
 
     /// [`Rasterizer::for_each_masked_fragment`]'s walk, without the cut.
-    fn masked_walk<F: Fn(&Fragment<'_>, u8) + Sync>(&self, samples: u32, f: &F) -> u64 {
+    fn masked_walk<K, F>(&self, samples: u32, keep: &K, f: &F) -> u64
+    where
+        K: Fn(u32) -> bool + Sync,
+        F: Fn(&Fragment<'_>, u8) + Sync,
+    {
         let offsets = sample_offsets(samples);
-        self.scatter_tasks(|run| run.map(|i| self.walk_masked(i, &offsets, ALL_ROWS, f)).sum())
+        self.scatter_tasks(|run| run.map(|i| self.walk_masked(i, &offsets, ALL_ROWS, keep, f)).sum())
     }
 
     /// The multisampled walk of triangle `i` in the rows `rows` (inclusive), the samples at
     /// `offsets` from the pixel's centre ([`sample_offsets`]): `f` gets each fragment with its
-    /// mask ([`Rasterizer::for_each_masked_fragment`]); returns the fragments.
+    /// mask in the pixels `keep` keeps ([`Rasterizer::for_each_masked_fragment_where`]);
+    /// returns those fragments.
     fn walk_masked(
         &self,
         i: usize,
         offsets: &[(i64, i64)],
         rows: [u32; 2],
+        keep: &impl Fn(u32) -> bool,
         mut f: impl FnMut(&Fragment<'_>, u8),
     ) -> u64 {
         use oit_core::setup::{HALF_PIXEL, SUBPIXEL, edge};
@@ -1031,6 +1048,14 @@ impl Rasterizer {
             *d = e.map(|(_, step_x, step_y, _)| step_x / SUBPIXEL * ox + step_y / SUBPIXEL * oy);
         }
         let at_sample = &deltas[..offsets.len()];
+        // each edge's least and greatest sample offset: a pixel every sample of which lies
+        // outside one edge has no fragment, one every sample of which lies inside all three is
+        // covered whole, both decided without testing the samples one by one (the same masks)
+        let reach = |pick: fn(i64, i64) -> i64| {
+            [0, 1, 2].map(|k| at_sample.iter().map(|d| d[k]).reduce(pick).unwrap_or(0))
+        };
+        let (least, most) = (reach(i64::min), reach(i64::max));
+        let full = ((1u16 << offsets.len()) - 1) as u8;
         let mut row = e.map(|e| e.0);
         let mut n = 0u64;
         for y in y0..=y1 {
@@ -1038,9 +1063,15 @@ impl Rasterizer {
                 let mut c = row;
                 for x in x0..=x1 {
                     let mut mask = 0u8;
-                    for (j, d) in at_sample.iter().enumerate() {
-                        let inside = (0..3).all(|k| c[k] + d[k] > e[k].3);
-                        mask |= u8::from(inside) << j;
+                    if keep(y * self.setup.width + x) && (0..3).all(|k| c[k] + most[k] > e[k].3) {
+                        if (0..3).all(|k| c[k] + least[k] > e[k].3) {
+                            mask = full;
+                        } else {
+                            for (j, d) in at_sample.iter().enumerate() {
+                                let inside = (0..3).all(|k| c[k] + d[k] > e[k].3);
+                                mask |= u8::from(inside) << j;
+                            }
+                        }
                     }
                     if mask != 0 {
                         f(&self.on_demand_fragment(t, s, x, y, c), mask);

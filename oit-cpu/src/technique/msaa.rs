@@ -396,23 +396,20 @@ fn fabs(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         // count stays what the capture counted: the fragments past K), then each kept key's
         // payload and mask written beside it
         let nearest = list.nearest();
-        ctx.raster.for_each_masked_fragment(ctx.settings.samples, |f, _| {
-            let px = f.pixel as usize;
-            if list.overflowed(px) {
-                oit_core::AtomicFragmentList::insert(&nearest, px, key(f));
-            }
+        // the other pixels cost these passes their walk only, not their samples' tests
+        let overflowed = |px: u32| list.overflowed(px as usize);
+        ctx.raster.for_each_masked_fragment_where(ctx.settings.samples, &overflowed, |f, _| {
+            oit_core::AtomicFragmentList::insert(&nearest, f.pixel as usize, key(f));
         });
         let shared = &*ctx;
         let kept = coverage(shared.settings);
-        shared.raster.for_each_masked_fragment(shared.settings.samples, |f, mask| {
+        shared.raster.for_each_masked_fragment_where(shared.settings.samples, &overflowed, |f, mask| {
             let px = f.pixel as usize;
-            if list.overflowed(px) {
-                let word = key(f);
-                let at = (px * k..px * k + k).find(|&i| slots[i].load(Relaxed) == word);
-                if let Some(i) = at {
-                    payloads[i].store(shared.payload(f), Relaxed);
-                    masks[i].store(kept(mask), Relaxed);
-                }
+            let word = key(f);
+            let at = (px * k..px * k + k).find(|&i| slots[i].load(Relaxed) == word);
+            if let Some(i) = at {
+                payloads[i].store(shared.payload(f), Relaxed);
+                masks[i].store(kept(mask), Relaxed);
             }
         });
         ctx.passes += 2;
