@@ -1232,7 +1232,7 @@ impl Gpu {
     }
 
     /// [`Gpu::render_pipeline`]'s draw `fs` over the opaque depth, at one sample, in
-    /// [`early_pass_key`]'s pass (`core/raster_hardware_early.wgsl`): `depth_fs` fills the depth
+    /// `early_pass_key`'s pass (`core/raster_hardware_early.wgsl`): `depth_fs` fills the depth
     /// attachment (its vertex stage `depth_vs`, no colour), `hw_fs_count` counts untested,
     /// `hw_fs_early` captures behind the LESS_OR_EQUAL test.
     pub fn early_pipeline(
