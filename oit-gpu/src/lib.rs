@@ -53,6 +53,37 @@ use oit_core::{Camera, Effect, GpuFragments, OitError, Scene, Settings};
 /// Group 0's binding of the loss accounting (`acct` in prelude.wgsl).
 pub const ACCT_BINDING: u32 = 15;
 
+/// Bytes a pixel of the GPU supersampled reference's running sums (`core/supersample.wgsl`): two
+/// sums of linear RGB in f32, used in turn, so a frame that runs again after a wrong guess at its
+/// sizes does not add its colour twice.
+pub const SUPERSAMPLE_SUM_BYTES: u64 = 24;
+
+/// The GPU backends' supersampled reference (`--supersample`, docs/msaa.md), written once: oit-core's
+/// frames ([`oit_core::msaa::supersample_frames`]: one single-sample reference frame a sample
+/// position, under a moved projection), each rendered by `frame(i, n, camera, single)` (the
+/// backend adds the frame's linear colours into its running sums and the last, `i + 1 == n`,
+/// writes their mean), their stats added up as [`oit_core::msaa::SupersampleTotals`] says; the
+/// image is the last frame's. Stops at the first frame that fails.
+pub fn supersampled(
+    camera: &Camera,
+    settings: &Settings,
+    single_path: oit_core::RasterPath,
+    mut frame: impl FnMut(u32, u32, &Camera, &Settings) -> Result<oit_core::Frame, OitError>,
+) -> Result<oit_core::Frame, OitError> {
+    let (single, cameras) = oit_core::msaa::supersample_frames(camera, settings);
+    let single = Settings { raster: Some(single_path), ..single };
+    let n = cameras.len() as u32;
+    let mut totals = oit_core::msaa::SupersampleTotals::default();
+    let mut last = None;
+    for (i, sample_camera) in cameras.iter().enumerate() {
+        let f = frame(i as u32, n, sample_camera, &single)?;
+        totals.add(&f.stats, f.layers.as_deref(), f.lost_pixels.as_deref());
+        last = Some(f);
+    }
+    let image = last.map(|f| f.image).unwrap_or(oit_core::Image { width: 0, height: 0, pixels: Vec::new() });
+    Ok(oit_core::Frame { image, layers: totals.layers, lost_pixels: totals.lost_pixels, stats: totals.stats })
+}
+
 /// Group 0's binding of the opaque pass's keys (`opaque_keys` in prelude.wgsl): each sample's
 /// nearest opaque `depth bits << 32 | primitive id` as one u64 (one sample a pixel at
 /// `--samples 1`; sample i of pixel p at p · samples + i), all ones where none fell.

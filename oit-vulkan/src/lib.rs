@@ -368,35 +368,16 @@ impl VulkanPrepared<'_> {
     ) -> Result<Frame, OitError> {
         let path = settings.raster.unwrap_or(RasterPath::Compute);
         oit_core::plan::refuse_supersampled_hardware("vulkan", path, settings)?;
-        let (single, cameras) = oit_core::msaa::supersample_frames(camera, settings);
-        let single = Settings { raster: Some(path), ..single };
-        // two running sums of linear RGB a pixel
-        let bytes = u64::from(settings.width * settings.height).max(1) * 24;
+        let bytes = u64::from(settings.width * settings.height).max(1) * oit_gpu::SUPERSAMPLE_SUM_BYTES;
         self.gpu.check_storage("the supersampled reference's running sums", bytes)?;
         let sums = self.pool.take(self.gpu, bytes, crate::device::storage_usage())?;
-        let n = cameras.len() as u32;
-        let mut totals = oit_core::msaa::SupersampleTotals::default();
-        let mut last = None;
-        let mut result = Ok(());
-        for (i, sample_camera) in cameras.iter().enumerate() {
-            *self.supersample.borrow_mut() = Some((sums.clone(), i as u32, n));
-            match self.frame_whole(sample_camera, &single, readback) {
-                Ok(frame) => {
-                    totals.add(&frame.stats, frame.layers.as_deref(), frame.lost_pixels.as_deref());
-                    last = Some(frame);
-                }
-                Err(e) => {
-                    result = Err(e);
-                    break;
-                }
-            }
-        }
+        let result = oit_gpu::supersampled(camera, settings, path, |i, n, sample_camera, single| {
+            *self.supersample.borrow_mut() = Some((sums.clone(), i, n));
+            self.frame_whole(sample_camera, single, readback)
+        });
         *self.supersample.borrow_mut() = None;
         self.pool.give_back(sums);
-        result?;
-        let image =
-            last.map(|f| f.image).unwrap_or(oit_core::Image { width: 0, height: 0, pixels: Vec::new() });
-        Ok(Frame { image, layers: totals.layers, lost_pixels: totals.lost_pixels, stats: totals.stats })
+        result
     }
 
     /// [`VulkanPrepared::frame_whole`] once: `None` where the setup did not fit.

@@ -446,36 +446,17 @@ impl WgpuPrepared<'_> {
     ) -> Result<Frame, OitError> {
         let path = WgpuBackend::path_of(settings);
         oit_core::plan::refuse_supersampled_hardware("wgpu", path, settings)?;
-        let (single, cameras) = oit_core::msaa::supersample_frames(camera, settings);
-        let single = Settings { raster: Some(path), ..single };
-        // two running sums of linear RGB a pixel
-        let bytes = u64::from(settings.width * settings.height).max(1) * 24;
+        let bytes = u64::from(settings.width * settings.height).max(1) * oit_gpu::SUPERSAMPLE_SUM_BYTES;
         self.gpu.check_storage("the supersampled reference's running sums", bytes)?;
         let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
         let sums = self.pool.take(&self.gpu.device, "supersample sums", bytes, usage);
-        let n = cameras.len() as u32;
-        let mut totals = oit_core::msaa::SupersampleTotals::default();
-        let mut last = None;
-        let mut result = Ok(());
-        for (i, sample_camera) in cameras.iter().enumerate() {
-            *self.supersample.borrow_mut() = Some((sums.clone(), i as u32, n));
-            match self.frame_with(sample_camera, &single, readback) {
-                Ok(frame) => {
-                    totals.add(&frame.stats, frame.layers.as_deref(), frame.lost_pixels.as_deref());
-                    last = Some(frame);
-                }
-                Err(e) => {
-                    result = Err(e);
-                    break;
-                }
-            }
-        }
+        let result = oit_gpu::supersampled(camera, settings, path, |i, n, sample_camera, single| {
+            *self.supersample.borrow_mut() = Some((sums.clone(), i, n));
+            self.frame_with(sample_camera, single, readback)
+        });
         *self.supersample.borrow_mut() = None;
         self.pool.give_back([sums]);
-        result?;
-        let image =
-            last.map(|f| f.image).unwrap_or(oit_core::Image { width: 0, height: 0, pixels: Vec::new() });
-        Ok(Frame { image, layers: totals.layers, lost_pixels: totals.lost_pixels, stats: totals.stats })
+        result
     }
 
     /// One attempt at a frame ([`GpuCtx::finish_checked`]): `None` where the setup must run again.

@@ -37,6 +37,17 @@ pub fn accounting(f: &Frame) -> Result<(), String> {
     Ok(())
 }
 
+/// A GPU hardware path's `occluded` against oit-cpu's: within 1 % of the frame's fragments (the
+/// device's rasterizer places fragments where a surface meets the opaque depth a little
+/// differently from oit-cpu's fixed-point rule).
+pub fn occluded_near(gpu: &Frame, cpu: &Frame) -> Result<(), String> {
+    let slack = cpu.stats.fragments / 100;
+    if gpu.stats.occluded.abs_diff(cpu.stats.occluded) <= slack {
+        return Ok(());
+    }
+    Err(format!("occluded {} vs the CPU's {} (slack {slack})", gpu.stats.occluded, cpu.stats.occluded))
+}
+
 /// An exact technique's frame against the reference of the same backend: the same fragments,
 /// none lost or tied, and not one error pixel over a measured (covered) frame.
 pub fn exact(reference: &Frame, f: &Frame) -> Result<(), String> {

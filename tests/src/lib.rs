@@ -65,6 +65,11 @@ pub fn backends_for(test: &str) -> Vec<Box<dyn Backend>> {
         .collect()
 }
 
+/// [`backends_for`]'s GPU backends (every one but oit-cpu), for tests that hold them to it.
+pub fn gpu_backends_for(test: &str) -> Vec<Box<dyn Backend>> {
+    backends_for(test).into_iter().filter(|b| b.name() != "cpu").collect()
+}
+
 /// `backend`'s name and raster path, as tests print them (`wgpu/hardware`).
 pub fn label(backend: &dyn Backend) -> String {
     format!("{}/{}", backend.name(), backend.raster_path(&Settings::default()))

@@ -328,19 +328,10 @@ impl<'a> Ctx<'a> {
         let lost = &self.lost;
         self.raster.for_each_fragment(|f| {
             if let Some(c) = behind(f) {
-                let px = f.pixel as usize;
-                let a = u64::from(c >> 24);
-                let base = px * 5;
-                sums[base].fetch_add(a * u64::from(c & 0xff), Relaxed);
-                sums[base + 1].fetch_add(a * u64::from(c >> 8 & 0xff), Relaxed);
-                sums[base + 2].fetch_add(a * u64::from(c >> 16 & 0xff), Relaxed);
-                sums[base + 3].fetch_add(a, Relaxed);
-                sums[base + 4].fetch_add(1, Relaxed);
-                lost[px].fetch_sub(1, Relaxed);
+                tail_add(sums, lost, f.pixel as usize, c);
             }
         });
-        self.passes += 1;
-        self.merged = sums.iter().skip(4).step_by(5).map(|c| c.load(Relaxed)).sum();
+        self.end_tail_pass(sums);
     }
 
     /// [`Ctx::tail_pass`] over the multisampled fragments (`Settings::samples` above 1, fabs's
@@ -355,17 +346,14 @@ impl<'a> Ctx<'a> {
         let lost = &self.lost;
         self.raster.for_each_masked_fragment(self.settings.samples, |f, mask| {
             if let Some(c) = behind(f, mask) {
-                let px = f.pixel as usize;
-                let a = u64::from(c >> 24);
-                let base = px * 5;
-                sums[base].fetch_add(a * u64::from(c & 0xff), Relaxed);
-                sums[base + 1].fetch_add(a * u64::from(c >> 8 & 0xff), Relaxed);
-                sums[base + 2].fetch_add(a * u64::from(c >> 16 & 0xff), Relaxed);
-                sums[base + 3].fetch_add(a, Relaxed);
-                sums[base + 4].fetch_add(1, Relaxed);
-                lost[px].fetch_sub(1, Relaxed);
+                tail_add(sums, lost, f.pixel as usize, c);
             }
         });
+        self.end_tail_pass(sums);
+    }
+
+    /// A tail pass counted, and the fragments merged in all read from the sums' counts.
+    fn end_tail_pass(&mut self, sums: &[AtomicU64]) {
         self.passes += 1;
         self.merged = sums.iter().skip(4).step_by(5).map(|c| c.load(Relaxed)).sum();
     }
@@ -570,4 +558,17 @@ pub(crate) fn finish<'a>(ctx: &Ctx<'a>, mut states: Pooled<'a, PixelState>) -> o
     frame.stats.tied = tied;
     frame.stats.max_layers = deepest;
     frame
+}
+
+/// Adds RGBA8 colour `c` to pixel `px`'s tail sums (Σα·r, Σα·g, Σα·b, Σα, count) and moves the
+/// fragment from `lost` (where the capture counted it) to merged.
+fn tail_add(sums: &[AtomicU64], lost: &[AtomicU32], px: usize, c: u32) {
+    let a = u64::from(c >> 24);
+    let base = px * 5;
+    sums[base].fetch_add(a * u64::from(c & 0xff), Relaxed);
+    sums[base + 1].fetch_add(a * u64::from(c >> 8 & 0xff), Relaxed);
+    sums[base + 2].fetch_add(a * u64::from(c >> 16 & 0xff), Relaxed);
+    sums[base + 3].fetch_add(a, Relaxed);
+    sums[base + 4].fetch_add(1, Relaxed);
+    lost[px].fetch_sub(1, Relaxed);
 }

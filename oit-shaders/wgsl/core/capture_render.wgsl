@@ -36,6 +36,12 @@ fn oit_capture_masked(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, normal:
 // a fragment at `pixel_xy` and `depth` (prelude.wgsl's `opaque_kept`, counted where the pass
 // counts): 0 where it holds the fragment back at all of them.
 fn oit_kept(pixel_xy: vec2<f32>, depth: f32, mask: u32) -> u32 {
+    return oit_opaque_front(pixel_xy, depth, mask, true);
+}
+
+// `oit_kept`, counted only where `count` (`opaque_kept`), else not (`opaque_front`); a fragment
+// outside the target keeps its mask.
+fn oit_opaque_front(pixel_xy: vec2<f32>, depth: f32, mask: u32, count: bool) -> u32 {
     let xy = vec2<u32>(max(floor(pixel_xy), vec2<f32>(0.0)));
     if (xy.x >= fu.width || xy.y >= fu.height) {
         return mask;
@@ -44,7 +50,10 @@ fn oit_kept(pixel_xy: vec2<f32>, depth: f32, mask: u32) -> u32 {
     f.pixel = xy.y * fu.width + xy.x;
     f.depth = clamp(depth, 0.0, 1.0);
     f.mask = mask;
-    return opaque_kept(f);
+    if (count) {
+        return opaque_kept(f);
+    }
+    return opaque_front(f);
 }
 
 // What a fragment of a multisampled pass writes (an embedding user's pipeline at
@@ -70,14 +79,7 @@ fn oit_capture_samples(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, normal
 // where the pass counts): oit's hardware raster asks before it shades, so a fragment behind the
 // opaque depth costs no shading (as oit-cpu's and the compute path's).
 fn oit_held_back(pixel_xy: vec2<f32>, depth: f32) -> bool {
-    let xy = vec2<u32>(max(floor(pixel_xy), vec2<f32>(0.0)));
-    if (xy.x >= fu.width || xy.y >= fu.height) {
-        return false;
-    }
-    var f: Fragment;
-    f.pixel = xy.y * fu.width + xy.x;
-    f.depth = clamp(depth, 0.0, 1.0);
-    return opaque_cut(f);
+    return oit_kept(pixel_xy, depth, (1u << opaque_samples()) - 1u) == 0u;
 }
 
 // Captures a fragment `oit_held_back` did not hold back; returns what it adds to the count target.

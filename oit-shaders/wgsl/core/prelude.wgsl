@@ -31,10 +31,9 @@ fn opaque_counter(i: u32) -> u32 {
 
 // The samples of `f.mask` the opaque pass leaves to `f` (oit-cpu's cut in
 // `Rasterizer::for_each_masked_fragment`): where the frame has an opaque part, those where `f`
-// (its one depth, the pixel centre's) lies strictly in front of that sample's opaque depth. A
-// fragment left with none is held back; the frame's first scene pass counts it. `f.mask` is 1 at
-// one sample.
-fn opaque_kept(f: Fragment) -> u32 {
+// (its one depth, the pixel centre's) lies strictly in front of that sample's opaque depth.
+// `f.mask` is 1 at one sample. Counts nothing (`opaque_kept` counts).
+fn opaque_front(f: Fragment) -> u32 {
     if (fu.opaque.x == 0u) {
         return f.mask;
     }
@@ -46,6 +45,13 @@ fn opaque_kept(f: Fragment) -> u32 {
             kept |= 1u << i;
         }
     }
+    return kept;
+}
+
+// `opaque_front`, a fragment left with no sample held back and counted by the frame's first
+// scene pass.
+fn opaque_kept(f: Fragment) -> u32 {
+    let kept = opaque_front(f);
     if (kept == 0u && fu.opaque.y != 0u) {
         atomicAdd(&opaque_rgb[opaque_counter(1u)], 1u);
     }

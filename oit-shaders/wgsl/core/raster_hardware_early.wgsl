@@ -12,24 +12,13 @@
 // (`hw_fs_count`), drawn first, without the test, in the frame's first scene pass: it counts
 // every fragment and those the cut holds back (`occluded`), as `hw_fs` does.
 
-// Whether the fragment at `pixel_xy`, `depth` lies at the opaque depth or behind it, uncounted
-// (`opaque_cut` without its count: the count-only draw counted it).
-fn oit_at_or_behind_opaque(pixel_xy: vec2<f32>, depth: f32) -> bool {
-    let xy = vec2<u32>(max(floor(pixel_xy), vec2<f32>(0.0)));
-    if (fu.opaque.x == 0u || xy.x >= fu.width || xy.y >= fu.height) {
-        return false;
-    }
-    let nearest = u32(atomicLoad(&opaque_keys[xy.y * fu.width + xy.x]) >> 32u);
-    return depth_bits(clamp(depth, 0.0, 1.0)) >= nearest;
-}
-
 // The capture behind the fixed-function test: what `hw_fs` does with the fragments the test
 // passed. It adds 1 to the count target in a pass that is not the frame's first (those counts
 // are not read) and 0 in the first, whose count-only draw counted the fragments.
 @fragment
 @early_depth_test(force)
 fn hw_fs_early(in: HwOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
-    if (!hw_culled(in, front) && !oit_at_or_behind_opaque(in.position.xy, in.position.z)) {
+    if (!hw_culled(in, front) && oit_opaque_front(in.position.xy, in.position.z, 1u, false) != 0u) {
         _ = oit_capture_shaded(in.position.xy, in.position.z, hw_color(in), in.normal, in.prim, in.cutoff, 1u);
     }
     return vec4<f32>(f32(1u - min(fu.opaque.y, 1u)), 0.0, 0.0, 0.0);
@@ -66,6 +55,7 @@ fn depth_fs(@builtin(position) position: vec4<f32>) -> @builtin(frag_depth) f32 
     if (xy.x >= fu.width || xy.y >= fu.height) {
         return 1.0;
     }
+    // one sample a pixel: a pixel's one key
     let key = atomicLoad(&opaque_keys[xy.y * fu.width + xy.x]);
     if (key == OPAQUE_NONE) {
         return 1.0;
