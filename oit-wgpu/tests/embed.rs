@@ -787,6 +787,58 @@ fn user_masked_pipeline(
     })
 }
 
+/// The caller's own multisampled stage ([`USER_MASKED_WGSL`], through `oit_capture_samples`)
+/// counts each fragment once: its output sample mask writes the count target at one covered
+/// sample, so the target's samples add up to the fragments (`count_sum_texture_ms.wgsl`). On the
+/// knot at 64² most fragments cover several samples, so a stage that wrote every covered sample
+/// would count more fragments than the internal hardware path and fail the frame's accounting.
+/// (`multisampled_pass_matches_backend_render`'s spheres at 64×48 do not tell the two apart:
+/// their triangles are smaller than the samples' spacing, so each fragment covers one sample and
+/// writing every covered sample changed no count, on lavapipe or on an H100.) Mutation tried:
+/// `written = mask` in `oit_capture_samples`.
+#[test]
+fn callers_masked_stage_counts_each_fragment_once() {
+    let Some(backend) = oit_wgpu::backend_or_skip("callers_masked_stage_counts_each_fragment_once") else {
+        return;
+    };
+    let gpu = backend.gpu().unwrap();
+    let scene = oit_core::load_scene("knot").unwrap();
+    let (w, h) = (64, 64);
+    let camera = oit_core::Camera::orbit_scene(&scene, oit_core::View::default(), 1.0).unwrap();
+    let geometry = oit_wgpu::embed::SceneGeometry::new(&gpu.device, &gpu.queue, &scene).unwrap();
+    for technique in [Technique::Reference, Technique::Ll] {
+        let settings = Settings {
+            width: w,
+            height: h,
+            technique,
+            samples: 4,
+            raster: Some(RasterPath::Hardware),
+            ..Settings::default()
+        };
+        let own = backend.render(&scene, &camera, &settings).unwrap();
+        let pass = oit_wgpu::OitPass::new(&gpu.device, &gpu.queue, settings.clone(), camera)
+            .unwrap()
+            .with_scene_geometry(&geometry);
+        geometry.write_frame(&scene, &camera, &settings);
+        let user = pass.frame(
+            None,
+            |capture| user_masked_pipeline(&gpu.device, &geometry, capture),
+            |rpass, _| {
+                rpass.set_bind_group(1, geometry.bind_group(), &[]);
+                rpass.draw(0..geometry.vertex_count(), 0..1);
+            },
+        );
+        let user = user.unwrap_or_else(|e| panic!("{technique}: the caller's stage: {e}"));
+        println!(
+            "{technique} on the knot at 4 samples: fragments {} (the caller's stage), {} (oit's)",
+            user.stats.fragments, own.stats.fragments
+        );
+        assert_eq!(user.stats.fragments, own.stats.fragments, "{technique}: fragments");
+        assert_eq!(user.stats.captured, own.stats.captured, "{technique}: captured");
+        assert_eq!(worst_difference(&user.image, &own.image), 0, "{technique}: the image");
+    }
+}
+
 /// The embedded pass at several samples a pixel (issue 40.5): a multisampled count target, the
 /// capture's multisample state in the caller's pipeline, and `hw_fs_masked` handing the capture
 /// each fragment's `sample_mask`. At `--samples 4` the frame equals `Backend::render`'s on the
