@@ -5,8 +5,8 @@ use std::path::PathBuf;
 use clap::Args;
 use oit_bench::experiment::{Experiment, Measured, Measurement, Step};
 use oit_bench::present::{SheetEntry, annotate_frame, contact_sheet};
-use oit_core::metrics::error_image;
-use oit_core::{Effect, Frame, Image, OitError, Stats, Technique};
+use oit_core::metrics::{Accuracy, accuracy, error_image};
+use oit_core::{Effect, Frame, Image, OitError, RasterPath, Settings, Stats, Technique};
 use serde::Serialize;
 
 use crate::Outcome;
@@ -32,7 +32,11 @@ use crate::output::{self, Table};
         when none ran. With --json, prints one JSON array of objects with the keys technique, backend, \
         raster, width, height, geometry_passes, fragments, captured, merged, lost, occluded, opaque_fragments, masked, tied, quantized, storage_bytes, \
         tiles, wall_ms, gpu_ms, epr, psnr, max_error (epr a fraction in [0, 1], not per cent; gpu_ms \
-        null when not measured, psnr null when identical); failures go to stderr."
+        null when not measured, psnr null when identical); failures go to stderr. With --samples \
+        4|8 --supersample the EPR and PSNR are against the supersampled reference, a column `EPR \
+        MSAA (%)` (JSON `epr_msaa`) gives each technique's error against the per-sample reference \
+        (MSAA's target), and a row `msaa-ref` gives the per-sample reference's own error against \
+        supersampling."
 )]
 pub struct CompareArgs {
     /// Comma-separated techniques (e.g. dp,bdp2,fabs:16), or all (every technique but the
@@ -71,6 +75,10 @@ struct CompareJson<'a> {
     epr: f64,
     psnr: Option<f64>,
     max_error: f64,
+    /// With `--supersample`: the error pixel rate against the per-sample (MSAA) reference, where
+    /// `epr` is against the supersampled one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    epr_msaa: Option<f64>,
 }
 
 const HEADERS: [(&str, usize); 16] = [
@@ -116,6 +124,14 @@ pub fn check(args: &CompareArgs) -> Result<(Vec<Technique>, Prepared), OitError>
 pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
     let (techniques, prepared) = check(args)?;
     let (width, height) = (prepared.settings.width, prepared.settings.height);
+    // with --supersample the baseline is the supersampled reference; the per-sample one is
+    // rendered too, so that each technique's error against MSAA's target and MSAA's own error
+    // against supersampling come in one table
+    let supersampled = oit_core::msaa::is_supersampled(&Settings {
+        technique: Technique::Reference,
+        ..prepared.settings.clone()
+    });
+    let per_sample = if supersampled { msaa_references(&prepared, &args.scene.scene)? } else { Vec::new() };
     let experiment = Experiment {
         backends: &prepared.backends,
         settings: &prepared.settings,
@@ -123,10 +139,14 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
         warmup: 0,
         warmup_ms: 0,
         frames: 1,
-        keep_images: args.sheet.is_some(),
+        keep_images: args.sheet.is_some() || supersampled,
     };
 
-    let (table, header) = Table::new(&HEADERS, 2);
+    let mut headers = HEADERS.to_vec();
+    if supersampled {
+        headers.push(("EPR MSAA (%)", 12));
+    }
+    let (table, header) = Table::new(&headers, 2);
     if !args.json {
         output::print(&header)?;
     }
@@ -161,11 +181,22 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
                 return;
             }
         };
+        let msaa = per_sample.get(m.backend_index).and_then(Option::as_ref);
+        if m.baseline && !args.json && printed.is_ok() {
+            // the per-sample reference against the supersampled one: MSAA's own error
+            if let (Some(r), Some(ss)) = (msaa, result.frame()) {
+                printed = match accuracy(&ss, &r.image) {
+                    Ok(acc) => output::print(&table.row(&msaa_row(r, &m.backend, m.raster, acc))),
+                    Err(e) => Err(e),
+                };
+            }
+        }
         let Some(acc) = result.accuracy else { return };
         ran += 1;
         let s = &result.stats;
+        let epr_msaa = msaa.and_then(|r| Some(accuracy(r, result.image.as_ref()?).ok()?.epr));
         if !args.json && printed.is_ok() {
-            printed = output::print(&table.row(&[
+            let mut cells = vec![
                 technique,
                 m.backend.clone(),
                 m.raster.to_string(),
@@ -182,7 +213,11 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
                 s.gpu_ms.map_or_else(|| "-".to_string(), |g| format!("{g:.2}")),
                 output::percent(acc.epr),
                 output::psnr(acc.psnr),
-            ]));
+            ];
+            if supersampled {
+                cells.push(epr_msaa.map_or_else(|| "-".to_string(), output::percent));
+            }
+            printed = output::print(&table.row(&cells));
         }
     })?;
     printed?;
@@ -203,6 +238,10 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
                     epr: acc.epr,
                     psnr: acc.psnr.is_finite().then_some(acc.psnr),
                     max_error: acc.max_error,
+                    epr_msaa: per_sample
+                        .get(m.backend_index)
+                        .and_then(Option::as_ref)
+                        .and_then(|msaa| Some(accuracy(msaa, r.image.as_ref()?).ok()?.epr)),
                 })
             })
             .collect();
@@ -236,6 +275,53 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
         return Ok(Outcome::Failed);
     }
     Ok(Outcome::Success)
+}
+
+/// The per-sample reference (the MSAA target) of each backend of `prepared`, where the table's
+/// baseline is the supersampled reference (`--supersample`); `None` where a backend could not
+/// render it (its supersampled baseline then fails alike and says why).
+fn msaa_references(prepared: &Prepared, scene: &str) -> Result<Vec<Option<Frame>>, OitError> {
+    let settings = Settings { supersample: false, ..prepared.settings.clone() };
+    let experiment = Experiment {
+        backends: &prepared.backends,
+        settings: &settings,
+        techniques: &[],
+        warmup: 0,
+        warmup_ms: 0,
+        frames: 1,
+        keep_images: true,
+    };
+    let measured = experiment.run(scene, &prepared.scene, &[prepared.view], &mut |_| {})?;
+    let mut frames = vec![None; prepared.backends.len()];
+    for m in measured.iter().filter(|m| m.baseline) {
+        frames[m.backend_index] = m.result.as_ref().ok().and_then(Measured::frame);
+    }
+    Ok(frames)
+}
+
+/// The table's row of the per-sample reference `r` measured against the supersampled one: its
+/// EPR and PSNR are MSAA's own error, and it is its own MSAA target (0).
+fn msaa_row(r: &Frame, backend: &str, raster: RasterPath, acc: Accuracy) -> Vec<String> {
+    let s = &r.stats;
+    vec![
+        "msaa-ref".to_string(),
+        backend.to_string(),
+        raster.to_string(),
+        s.geometry_passes.to_string(),
+        s.fragments.to_string(),
+        s.captured.to_string(),
+        s.merged.to_string(),
+        s.lost.to_string(),
+        s.occluded.to_string(),
+        s.tied.to_string(),
+        s.quantized.to_string(),
+        output::bytes(s.storage_bytes),
+        format!("{:.2}", s.wall_ms),
+        s.gpu_ms.map_or_else(|| "-".to_string(), |g| format!("{g:.2}")),
+        output::percent(acc.epr),
+        output::psnr(acc.psnr),
+        output::percent(0.0),
+    ]
 }
 
 /// The contact sheet's rows: per backend, its reference, then each technique beside its error

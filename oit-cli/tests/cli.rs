@@ -290,6 +290,49 @@ fn compare_table_shows_every_technique() {
     }
 }
 
+/// Issue 40 item 3: with `--supersample` one table gives each technique's error against the
+/// per-sample reference (MSAA's target: 0 for the exact dfb) beside its error against the
+/// supersampled one, and the per-sample reference's own error against supersampling (its row,
+/// `msaa-ref`, equal to dfb's, which is its image). Mutation tried: `epr_msaa` measured against
+/// the supersampled baseline (dfb's `epr_msaa` then is not 0).
+#[test]
+fn compare_supersampled_reports_both_references() {
+    let args = [
+        "compare",
+        "--scene",
+        "bunny",
+        "--size",
+        "64x64",
+        "--samples",
+        "4",
+        "--supersample",
+        "--techniques",
+        "dfb,fabs:2",
+    ];
+    let out = oit(&[&args[..], &["--json"]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let rows: Vec<serde_json::Value> = serde_json::from_slice(&out.stdout).expect("JSON rows");
+    let field = |t: &str, f: &str| {
+        rows.iter()
+            .find(|r| r["technique"] == t)
+            .and_then(|r| r[f].as_f64())
+            .unwrap_or_else(|| panic!("{t} {f}: {rows:?}"))
+    };
+    assert_eq!(field("dfb", "epr_msaa"), 0.0, "dfb is the per-sample reference's image");
+    assert!(field("dfb", "epr") > 0.01, "MSAA errs against supersampling along the edges");
+    assert!(field("fabs:2", "epr_msaa") > 0.0 && field("fabs:2", "epr_msaa") < 1.0);
+    let text = stdout(&oit(&args));
+    let msaa = text.lines().find(|l| l.starts_with("msaa-ref")).unwrap_or_else(|| panic!("{text}"));
+    let dfb = text.lines().find(|l| l.starts_with("dfb")).unwrap_or_else(|| panic!("{text}"));
+    let last3 = |l: &str| l.split_whitespace().rev().take(3).map(str::to_string).collect::<Vec<_>>();
+    assert_eq!(last3(msaa), last3(dfb), "the per-sample reference's errors are dfb's\n{text}");
+    assert!(text.contains("EPR MSAA (%)"), "{text}");
+    // without --supersample the table has no second reference
+    let without: Vec<&str> = args.iter().copied().filter(|a| *a != "--supersample").collect();
+    let plain = stdout(&oit(&without));
+    assert!(!plain.contains("msaa-ref") && !plain.contains("EPR MSAA"), "{plain}");
+}
+
 #[test]
 fn compare_goes_on_past_a_failing_technique() {
     // The weighted techniques never order fragments, so they cannot absorb through a thickness.
