@@ -382,8 +382,9 @@ pub struct Side<'a> {
 /// The conformance bounds of the cross-backend matrix (as the suite holds them in
 /// `tests/tests/wgpu.rs`): two paths that share oit's fixed-point rules (oit-cpu, a compute
 /// path) produce the same fragments, so no channel may differ by more than 1 (float order); a
-/// hardware path may differ only on pixels within a pixel of a projected edge (`edges`, from
-/// [`oit_core::metrics::edge_mask`]), and off them by at most 1. Not held: a technique that keeps
+/// hardware path may differ only on pixels within a pixel of a projected edge or of a line where
+/// a transparent surface crosses an opaque one (`edges`, from [`oit_core::metrics::edge_mask`]
+/// and [`oit_core::metrics::crossing_mask`]), and off them by at most 1. Not held: a technique that keeps
 /// fragments in arrival order when it overflows (`fabs:K` with losses), whose survivors depend on
 /// the device's scheduling, nor a pair of different `--blend-targets`. Returns (largest
 /// difference off the edges, a note, failed).
@@ -936,7 +937,11 @@ pub fn run_bench_with(config: &Config, on_step: &mut dyn FnMut(&str)) -> Result<
         }
 
         // the matrix: every pair of backend/paths, per technique, held to the conformance bounds
-        let edges = oit_core::metrics::edge_mask(&scene, &camera, base.width, base.height, 1.0);
+        // and the lines where a transparent surface crosses an opaque one, where the paths'
+        // depths may fall either side of the opaque depth
+        let mut edges = oit_core::metrics::edge_mask(&scene, &camera, base.width, base.height, 1.0);
+        let crossings = oit_core::metrics::crossing_mask(&scene, &camera, base.width, base.height, 1.0);
+        edges.iter_mut().zip(crossings).for_each(|(e, c)| *e |= c);
         let mut names: Vec<String> = vec!["reference".into()];
         names.extend(config.techniques.iter().map(ToString::to_string));
         for technique in names {

@@ -144,45 +144,197 @@ pub fn error_image(reference: &Frame, image: &Image) -> Image {
 /// (its projected edges are not segments): the scenes of the suite are fitted by the camera and
 /// never have one.
 pub fn edge_mask(scene: &crate::Scene, camera: &crate::Camera, width: u32, height: u32, r: f32) -> Vec<bool> {
-    use glam::Vec2;
     let vp = camera.view_proj();
-    let (w, h) = (width as f32, height as f32);
     let mut mask = vec![false; (width * height) as usize];
     for inst in &scene.instances {
         let (_, mesh) = scene.instance_parts(inst);
         let clip: Vec<glam::Vec4> =
             mesh.positions.iter().map(|p| vp * inst.transform.transform_point3(*p).extend(1.0)).collect();
         for t in &mesh.indices {
-            let c = t.map(|i| clip[i as usize]);
-            if c.iter().any(|v| v.w <= 0.0) {
+            let Some(s) = screen(t.map(|i| clip[i as usize]), width, height) else {
                 mask.fill(true);
                 return mask;
-            }
-            let s = c.map(|v| {
-                let n = v.truncate() / v.w;
-                Vec2::new((n.x * 0.5 + 0.5) * w, (0.5 - n.y * 0.5) * h)
-            });
+            };
             for k in 0..3 {
-                let (a, b) = (s[k], s[(k + 1) % 3]);
-                // the pixels of the segment's bounding box grown by r
-                let lo = a.min(b) - Vec2::splat(r + 0.5);
-                let hi = a.max(b) + Vec2::splat(r + 0.5);
-                let (x0, y0) = (lo.x.max(0.0) as u32, lo.y.max(0.0) as u32);
-                let (x1, y1) = (hi.x.min(w - 1.0).max(0.0) as u32, hi.y.min(h - 1.0).max(0.0) as u32);
-                let ab = b - a;
-                for y in y0..=y1 {
-                    for x in x0..=x1 {
-                        let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-                        let t = ((p - a).dot(ab) / ab.length_squared().max(1e-12)).clamp(0.0, 1.0);
-                        if (a + ab * t - p).length() < r {
-                            mask[(y * width + x) as usize] = true;
-                        }
+                mark_segment(&mut mask, width, height, s[k], s[(k + 1) % 3], r);
+            }
+        }
+    }
+    mask
+}
+
+/// Pixels whose centre lies within `r` pixels of a line where a transparent triangle of `scene`
+/// passes through an opaque one (a surface crossing a wall), under `camera`, in a
+/// `width`×`height` image. On those pixels a transparent fragment's depth lies within rounding of
+/// the opaque depth, so two rasterizers that interpolate depth each its own way may cut it apart
+/// (one keeps it, the other holds it back); elsewhere the cut is the same on both. Empty (all
+/// `false`) where the scene has no opaque part (a masked object counts as opaque: its texels
+/// are not read, so the mask may mark more than is cut); a triangle with a vertex behind the eye marks the
+/// whole image, as in [`edge_mask`]. Coplanar pairs mark nothing (their ties are broken by
+/// primitive id alike on every path). The opaque triangles are binned into screen cells by their
+/// projected bounds, so a transparent triangle is tested only against those it may overlap.
+pub fn crossing_mask(
+    scene: &crate::Scene,
+    camera: &crate::Camera,
+    width: u32,
+    height: u32,
+    r: f32,
+) -> Vec<bool> {
+    use glam::Vec3;
+    let vp = camera.view_proj();
+    let mut mask = vec![false; (width * height) as usize];
+    // world-space triangles and their screen bounds, opaque and transparent
+    let mut opaque: Vec<([Vec3; 3], [f32; 4])> = Vec::new();
+    let mut transparent: Vec<([Vec3; 3], [f32; 4])> = Vec::new();
+    for inst in &scene.instances {
+        let (object, mesh) = scene.instance_parts(inst);
+        let world: Vec<Vec3> = mesh.positions.iter().map(|p| inst.transform.transform_point3(*p)).collect();
+        for t in &mesh.indices {
+            let w = t.map(|i| world[i as usize]);
+            let Some(s) = screen(w.map(|p| vp * p.extend(1.0)), width, height) else {
+                mask.fill(true);
+                return mask;
+            };
+            let bounds = [
+                s.iter().map(|v| v.x).fold(f32::INFINITY, f32::min) - r,
+                s.iter().map(|v| v.y).fold(f32::INFINITY, f32::min) - r,
+                s.iter().map(|v| v.x).fold(f32::NEG_INFINITY, f32::max) + r,
+                s.iter().map(|v| v.y).fold(f32::NEG_INFINITY, f32::max) + r,
+            ];
+            if object.is_opaque_pass() { opaque.push((w, bounds)) } else { transparent.push((w, bounds)) }
+        }
+    }
+    if opaque.is_empty() || transparent.is_empty() {
+        return mask;
+    }
+    // the opaque triangles binned into CELL-pixel cells by their bounds
+    const CELL: f32 = 32.0;
+    let (cols, rows) =
+        ((width as f32 / CELL).ceil().max(1.0) as usize, (height as f32 / CELL).ceil().max(1.0) as usize);
+    let cell_range = |b: &[f32; 4]| -> Option<(usize, usize, usize, usize)> {
+        if b[2] < 0.0 || b[3] < 0.0 || b[0] >= width as f32 || b[1] >= height as f32 {
+            return None;
+        }
+        let c = |v: f32, n: usize| ((v.max(0.0) / CELL) as usize).min(n - 1);
+        Some((c(b[0], cols), c(b[1], rows), c(b[2], cols), c(b[3], rows)))
+    };
+    let mut cells: Vec<Vec<u32>> = vec![Vec::new(); cols * rows];
+    for (i, (_, b)) in opaque.iter().enumerate() {
+        if let Some((x0, y0, x1, y1)) = cell_range(b) {
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    cells[y * cols + x].push(i as u32);
+                }
+            }
+        }
+    }
+    let overlap = |a: &[f32; 4], b: &[f32; 4]| a[0] <= b[2] && b[0] <= a[2] && a[1] <= b[3] && b[1] <= a[3];
+    // the last transparent triangle each opaque one was tested against
+    let mut seen = vec![u32::MAX; opaque.len()];
+    for (ti, (t, tb)) in transparent.iter().enumerate() {
+        let Some((x0, y0, x1, y1)) = cell_range(tb) else { continue };
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                for &oi in &cells[y * cols + x] {
+                    let (o, ob) = &opaque[oi as usize];
+                    if seen[oi as usize] == ti as u32 || !overlap(tb, ob) {
+                        continue;
+                    }
+                    seen[oi as usize] = ti as u32;
+                    let Some((p, q)) = triangles_cross(t, o) else { continue };
+                    let ends = [p, q].map(|e| vp * e.extend(1.0));
+                    if let Some([a, b, _]) = screen([ends[0], ends[1], ends[1]], width, height) {
+                        mark_segment(&mut mask, width, height, a, b, r);
                     }
                 }
             }
         }
     }
     mask
+}
+
+/// A triangle's clip-space vertices in pixels (x right, y down); `None` where one lies behind
+/// the eye.
+fn screen(clip: [glam::Vec4; 3], width: u32, height: u32) -> Option<[glam::Vec2; 3]> {
+    if clip.iter().any(|v| v.w <= 0.0) {
+        return None;
+    }
+    let (w, h) = (width as f32, height as f32);
+    Some(clip.map(|v| {
+        let n = v.truncate() / v.w;
+        glam::Vec2::new((n.x * 0.5 + 0.5) * w, (0.5 - n.y * 0.5) * h)
+    }))
+}
+
+/// Marks the pixels of `mask` whose centre lies within `r` of the segment `a`–`b` (pixels).
+fn mark_segment(mask: &mut [bool], width: u32, height: u32, a: glam::Vec2, b: glam::Vec2, r: f32) {
+    use glam::Vec2;
+    let (w, h) = (width as f32, height as f32);
+    // the pixels of the segment's bounding box grown by r
+    let lo = a.min(b) - Vec2::splat(r + 0.5);
+    let hi = a.max(b) + Vec2::splat(r + 0.5);
+    if hi.x < 0.0 || hi.y < 0.0 || lo.x >= w || lo.y >= h {
+        return;
+    }
+    let (x0, y0) = (lo.x.max(0.0) as u32, lo.y.max(0.0) as u32);
+    let (x1, y1) = (hi.x.min(w - 1.0).max(0.0) as u32, hi.y.min(h - 1.0).max(0.0) as u32);
+    let ab = b - a;
+    for y in y0..=y1 {
+        for x in x0..=x1 {
+            let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            let t = ((p - a).dot(ab) / ab.length_squared().max(1e-12)).clamp(0.0, 1.0);
+            if (a + ab * t - p).length() < r {
+                mask[(y * width + x) as usize] = true;
+            }
+        }
+    }
+}
+
+/// The segment where triangles `a` and `b` pass through each other, if they do (not where they
+/// only lie in one plane): the part of the line where their planes meet that lies in both.
+fn triangles_cross(a: &[glam::Vec3; 3], b: &[glam::Vec3; 3]) -> Option<(glam::Vec3, glam::Vec3)> {
+    let na = (a[1] - a[0]).cross(a[2] - a[0]);
+    let nb = (b[1] - b[0]).cross(b[2] - b[0]);
+    let dir = na.cross(nb);
+    if dir.length_squared() <= f32::EPSILON * na.length_squared() * nb.length_squared() {
+        return None; // parallel or coplanar
+    }
+    let (p0, p1) = plane_crossing(a, nb, b[0])?;
+    let (q0, q1) = plane_crossing(b, na, a[0])?;
+    // both segments lie on the line along `dir`: their overlap
+    let along = |p: glam::Vec3| p.dot(dir);
+    let (p0, p1) = if along(p0) <= along(p1) { (p0, p1) } else { (p1, p0) };
+    let (q0, q1) = if along(q0) <= along(q1) { (q0, q1) } else { (q1, q0) };
+    let start = if along(p0) >= along(q0) { p0 } else { q0 };
+    let end = if along(p1) <= along(q1) { p1 } else { q1 };
+    (along(start) <= along(end)).then_some((start, end))
+}
+
+/// Where triangle `t` crosses the plane through `origin` with normal `n`: the segment between
+/// the two points its edges meet the plane at; `None` where it lies on one side.
+fn plane_crossing(
+    t: &[glam::Vec3; 3],
+    n: glam::Vec3,
+    origin: glam::Vec3,
+) -> Option<(glam::Vec3, glam::Vec3)> {
+    let d = t.map(|p| n.dot(p - origin));
+    if d.iter().all(|&x| x > 0.0) || d.iter().all(|&x| x < 0.0) || d.iter().all(|&x| x == 0.0) {
+        return None;
+    }
+    let mut points = Vec::with_capacity(3);
+    for k in 0..3 {
+        let (i, j) = (k, (k + 1) % 3);
+        if d[i] == 0.0 {
+            points.push(t[i]);
+        } else if (d[i] < 0.0) != (d[j] < 0.0) && d[j] != 0.0 {
+            points.push(t[i] + (t[j] - t[i]) * (d[i] / (d[i] - d[j])));
+        }
+    }
+    match points.as_slice() {
+        [p] => Some((*p, *p)),
+        [p, q, ..] => Some((*p, *q)),
+        [] => None,
+    }
 }
 
 /// Over the pixels `mask` leaves out: the worst channel difference (RGB) between `a` and `b`, and
@@ -483,5 +635,40 @@ mod tests {
         let mut short = reference();
         short.layers = Some(vec![1; 3]);
         assert!(accuracy(&short, &short.image).is_err());
+    }
+
+    /// Two triangles passing through each other meet on the overlap of their two crossings of
+    /// each other's planes; parallel ones and ones whose crossings do not overlap do not meet.
+    /// Mutation caught: the overlap taken as the union (the ends ±1 instead of ±½).
+    #[test]
+    fn triangles_cross_on_the_overlap() {
+        use glam::Vec3;
+        let a = [Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
+        let b = [Vec3::new(0.0, -0.5, -1.0), Vec3::new(0.0, -0.5, 1.0), Vec3::new(0.0, 0.5, 0.0)];
+        let (p, q) = super::triangles_cross(&a, &b).expect("they cross");
+        let (lo, hi) = if p.y < q.y { (p, q) } else { (q, p) };
+        assert!((lo - Vec3::new(0.0, -0.5, 0.0)).length() < 1e-6, "{lo}");
+        assert!((hi - Vec3::new(0.0, 0.5, 0.0)).length() < 1e-6, "{hi}");
+        let lifted = a.map(|v| v + Vec3::Z);
+        assert_eq!(super::triangles_cross(&a, &lifted), None, "parallel");
+        let above = b.map(|v| v + Vec3::new(0.0, 2.0, 0.0));
+        assert_eq!(super::triangles_cross(&a, &above), None, "their crossings do not overlap");
+    }
+
+    /// A wall through the planes marks the lines where the planes cross it, a thin share of the
+    /// image, and so does the masked wall of `nowall:` (a masked object is drawn in the opaque
+    /// pass; the mask reads geometry, not texels or alpha, so it marks alike); planes alone mark
+    /// nothing.
+    #[test]
+    fn crossing_mask_marks_where_surfaces_cross_the_wall() {
+        let marked = |name: &str| {
+            let scene = crate::load_scene(name).unwrap();
+            let camera = crate::Camera::orbit_scene(&scene, crate::View::default(), 1.0).unwrap();
+            super::crossing_mask(&scene, &camera, 128, 128, 1.0).iter().filter(|&&m| m).count()
+        };
+        let wall = marked("wall:0.5:planes:4");
+        assert!(wall > 64 && wall < 128 * 128 / 8, "{wall} pixels marked");
+        assert_eq!(marked("nowall:0.5:planes:4"), wall);
+        assert_eq!(marked("planes:4"), 0);
     }
 }
