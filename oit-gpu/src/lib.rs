@@ -96,13 +96,22 @@ pub const OPAQUE_RGB_BINDING: u32 = 17;
 /// Counters after the opaque colours: [masked, occluded].
 pub const OPAQUE_COUNTER_WORDS: u64 = 2;
 
-/// Words of the opaque keys' buffer of a frame of `pixels` pixels at `samples` samples a pixel
-/// (2 a sample), and of its colours' (3 a sample and the counters): together
-/// [`oit_core::plan::OPAQUE_BYTES`] a sample ([`Plan::opaque_bytes`] a pixel), and the counters
-/// (bookkeeping).
-pub fn opaque_words(pixels: u64, samples: u32) -> (u64, u64) {
-    let samples = pixels * u64::from(samples.max(1));
-    (samples.max(1) * 2, samples * 3 + OPAQUE_COUNTER_WORDS)
+/// Words of the opaque keys' buffer of a `width`×`height` frame at `samples` samples a pixel (2 a
+/// sample), and of its colours' (3 a sample, the counters, then a word a [`TILE`]×[`TILE`] tile:
+/// [`opaque_tiles`]): together [`oit_core::plan::OPAQUE_BYTES`] a sample ([`Plan::opaque_bytes`]
+/// a pixel), and the counters and tiles (bookkeeping: a word for 64 pixels).
+pub fn opaque_words(width: u32, height: u32, samples: u32) -> (u64, u64) {
+    let samples = u64::from(width) * u64::from(height) * u64::from(samples.max(1));
+    (samples.max(1) * 2, samples * 3 + OPAQUE_COUNTER_WORDS + opaque_tiles(width, height))
+}
+
+/// The compute rasterizer's tiles of a `width`×`height` frame ([`TILE`] pixels a side), each with
+/// a word after the opaque colours' counters: the complement of the farthest opaque depth (its
+/// bits) of any sample of the tile, written after the opaque pass (`opaque_tiles_main` of
+/// opaque.wgsl), so that a work item whose triangle lies wholly behind it is skipped
+/// (raster_compute.wgsl; 0, the buffer's clear value, skips nothing).
+pub fn opaque_tiles(width: u32, height: u32) -> u64 {
+    u64::from(width.div_ceil(TILE)) * u64::from(height.div_ceil(TILE))
 }
 
 /// The byte offset of the opaque colours' counters ([`OPAQUE_COUNTER_WORDS`]) in their buffer:

@@ -62,10 +62,19 @@ pub fn opaque_pass<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<()
     ctx.cut(false);
     let count = ctx.geometry_pass_counted(raster, "opaque", &[], 0, 0)?;
     ctx.geometry_pass(raster, "opaque", &[], 1, 0)?;
+    // each compute-raster tile's farthest opaque depth, for the passes that follow to skip the
+    // work items wholly behind it
+    let tiles = oit_gpu_tiles(ctx.settings());
+    ctx.kernel_over("opaque", "opaque_tiles_main", &[], tiles, 0, 0, "opaque tiles")?;
     ctx.set_fragments(fragments);
     ctx.note_opaque(&count);
     ctx.cut(true);
     Ok(())
+}
+
+/// The compute rasterizer's tiles of the frame of `settings` ([`crate::opaque_tiles`]).
+fn oit_gpu_tiles(settings: &oit_core::Settings) -> u64 {
+    crate::opaque_tiles(settings.width, settings.height)
 }
 
 /// A frame's storage as its plan names it ([`Plan::arrays`](oit_core::plan::Plan::arrays)): a

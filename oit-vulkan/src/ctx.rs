@@ -265,7 +265,7 @@ impl<'a> VkCtx<'a> {
         let has_opaque = plan.opaque;
         let opaque = if has_opaque {
             gpu.check_storage("the opaque pass's image", opaque_bytes)?;
-            let (keys, rgb) = oit_gpu::opaque_words(u64::from(pixels), settings.samples);
+            let (keys, rgb) = oit_gpu::opaque_words(settings.width, settings.height, settings.samples);
             (take(keys * 4)?, take(rgb * 4)?)
         } else {
             (take(16)?, take(16)?)

@@ -442,7 +442,7 @@ impl<'a> GpuCtx<'a> {
         let has_opaque = plan.opaque;
         let opaque = if has_opaque {
             gpu.check_storage("the opaque pass's image", opaque_bytes)?;
-            let (keys, rgb) = oit_gpu::opaque_words(u64::from(pixels), settings.samples);
+            let (keys, rgb) = oit_gpu::opaque_words(settings.width, settings.height, settings.samples);
             (make("opaque keys", keys * 4, storage), make("opaque colours", rgb * 4, storage))
         } else {
             (make("unused binding", 16, storage), make("unused binding", 16, storage))

@@ -31,3 +31,28 @@ fn capture(f: Fragment) {
         }
     }
 }
+
+// After the opaque pass: each 8×8 tile of the compute rasterizer (raster_compute.wgsl's `TILE`)
+// keeps the farthest opaque depth of its samples (the high word of their keys: all ones where a
+// sample has none, which skips nothing), complemented, so that a pass may skip a work item whose
+// triangle lies wholly behind it.
+@compute @workgroup_size(64)
+fn opaque_tiles_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let t = kernel_pixel(gid, groups);
+    let tiles_x = (fu.width + 7u) / 8u;
+    if (t >= tiles_x * ((fu.height + 7u) / 8u)) {
+        return;
+    }
+    let x0 = (t % tiles_x) * 8u;
+    let y0 = (t / tiles_x) * 8u;
+    let n = opaque_samples();
+    var far = 0u;
+    for (var y = y0; y < min(y0 + 8u, fu.height); y++) {
+        for (var x = x0; x < min(x0 + 8u, fu.width); x++) {
+            for (var i = 0u; i < n; i++) {
+                far = max(far, u32(atomicLoad(&opaque_keys[(y * fu.width + x) * n + i]) >> 32u));
+            }
+        }
+    }
+    atomicStore(&opaque_rgb[opaque_tile_word(t)], ~far);
+}

@@ -29,6 +29,12 @@ fn opaque_counter(i: u32) -> u32 {
     return 3u * fu.pixel_count * opaque_samples() + i;
 }
 
+// The word of opaque_rgb holding compute-raster tile t's farthest opaque depth bits, complemented
+// (0: unknown, nothing skipped), after the counters (oit-gpu's `opaque_tiles`).
+fn opaque_tile_word(t: u32) -> u32 {
+    return opaque_counter(2u) + t;
+}
+
 // The samples of `f.mask` the opaque pass leaves to `f` (oit-cpu's cut in
 // `Rasterizer::for_each_masked_fragment`): where the frame has an opaque part, those where `f`
 // (its one depth, the pixel centre's) lies strictly in front of that sample's opaque depth.

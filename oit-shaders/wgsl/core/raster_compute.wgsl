@@ -79,9 +79,27 @@ fn load_tri(i: u32) -> Tri {
 const SUBPIXEL: i64 = 256li;
 const HALF_PIXEL: i64 = 128li;
 
-// The fragment of `t` at pixel (x, y), captured if the pixel's centre is inside (with several
-// samples a pixel, if any of its samples is: `fu.msaa`); returns 1 then.
-fn raster_pixel(t: Tri, x: u32, y: u32) -> u32 {
+// Whether every fragment of `t` in compute-raster tile `tile` lies at or behind the opaque depth
+// at every sample of the tile (the tile's farthest, opaque.wgsl's `opaque_tiles_main`), so that
+// the opaque cut holds back each one: the triangle's nearest vertex depth, less more than its
+// interpolation's rounding can take off (the barycentric weights' few ulps times the depths'
+// spread, and the depths' own), is not in front of it. One sample a pixel only: above one a
+// fragment's depth is extrapolated to the pixel centre, which may lie outside the triangle.
+fn behind_tile(t: Tri, tile: u32) -> bool {
+    if (fu.opaque.x == 0u || fu.msaa.x > 1u) {
+        return false;
+    }
+    let far = ~atomicLoad(&opaque_rgb[opaque_tile_word(tile)]);
+    let lo = min(t.z[0], min(t.z[1], t.z[2]));
+    let hi = max(t.z[0], max(t.z[1], t.z[2]));
+    return depth_bits(clamp(lo - (hi - lo) * 1e-5 - 1e-6, 0.0, 1.0)) >= far;
+}
+
+// What the fragment of `t` at pixel (x, y) is: 0 none (the pixel's centre outside; with several
+// samples a pixel, each of its samples: `fu.msaa`), 2 held back by the opaque depth at every
+// sample it covers (counted, neither shaded nor captured; at once where `behind`: `behind_tile`),
+// 1 captured.
+fn raster_pixel(t: Tri, x: u32, y: u32, behind: bool) -> u32 {
     if (x < t.bbox[0] || x > t.bbox[2] || y < t.bbox[1] || y > t.bbox[3]) {
         return 0u;
     }
@@ -128,6 +146,9 @@ fn raster_pixel(t: Tri, x: u32, y: u32) -> u32 {
     if (!inside) {
         return 0u;
     }
+    if (behind) {
+        return 2u;
+    }
     let b = vec3<f32>(f32(e[0]) * t.inv_area, f32(e[1]) * t.inv_area, f32(e[2]) * t.inv_area);
     let depth = clamp(t.z[0] + b.y * (t.z[1] - t.z[0]) + b.z * (t.z[2] - t.z[0]), 0.0, 1.0);
     var f: Fragment;
@@ -136,9 +157,9 @@ fn raster_pixel(t: Tri, x: u32, y: u32) -> u32 {
     // the samples in front of the opaque pass's depth; behind at every one: generated (counted),
     // neither shaded nor captured (oit-cpu tests the cut before it shades too)
     f.mask = mask;
-    f.mask = opaque_kept(f);
+    f.mask = opaque_front(f);
     if (f.mask == 0u) {
-        return 1u;
+        return 2u;
     }
     let q = vec3<f32>(b.x * t.inv_w[0], b.y * t.inv_w[1], b.z * t.inv_w[2]);
     let inv_q = 1.0 / (q.x + q.y + q.z);
@@ -177,14 +198,30 @@ fn raster_pixel(t: Tri, x: u32, y: u32) -> u32 {
 }
 
 var<workgroup> wg_count: atomic<u32>;
+var<workgroup> wg_occluded: atomic<u32>;
 
-// Adds the workgroup's fragment count to `generated` (called in uniform control flow).
-fn count_fragments(lid: u32, count: u32) {
+// Adds the workgroup's fragments to `generated`, and those the opaque cut held back to the
+// occluded counter where the pass counts them (the frame's first scene pass: `fu.opaque.y`), one
+// atomic each a workgroup (called in uniform control flow).
+fn count_fragments(lid: u32, count: u32, occluded: u32) {
     atomicAdd(&wg_count, count);
+    if (occluded != 0u) {
+        atomicAdd(&wg_occluded, occluded);
+    }
     workgroupBarrier();
     if (lid == 0u) {
         atomicAdd(&generated[0], atomicLoad(&wg_count));
+        let held = atomicLoad(&wg_occluded);
+        if (held != 0u && fu.opaque.y != 0u) {
+            atomicAdd(&opaque_rgb[opaque_counter(1u)], held);
+        }
     }
+}
+
+// The compute-raster tile of work item `item` (its tile's column and row), as opaque.wgsl's
+// `opaque_tiles_main` numbers them.
+fn item_tile(item: vec2<u32>) -> u32 {
+    return (item.y >> 16u) * ((ru.width + TILE - 1u) / TILE) + (item.y & 0xffffu);
 }
 
 // GPUs: one workgroup per work item (a triangle and one 8×8 tile of its box), one invocation per
@@ -197,17 +234,23 @@ fn raster_main(
 ) {
     if (lid == 0u) {
         atomicStore(&wg_count, 0u);
+        atomicStore(&wg_occluded, 0u);
     }
     workgroupBarrier();
     let i = wid.x + wid.y * groups.x;
-    var count = 0u;
+    var code = 0u;
     if (i < ru.item_count) {
         let item = items[i];
-        let x = (item.y & 0xffffu) * TILE + lid % TILE;
-        let y = (item.y >> 16u) * TILE + lid / TILE;
-        count = raster_pixel(load_tri(item.x), x, y);
+        let t = load_tri(item.x);
+        let behind = behind_tile(t, item_tile(item));
+        // wholly behind the opaque depth: only the frame's first scene pass counts its fragments
+        if (!behind || fu.opaque.y != 0u) {
+            let x = (item.y & 0xffffu) * TILE + lid % TILE;
+            let y = (item.y >> 16u) * TILE + lid / TILE;
+            code = raster_pixel(t, x, y, behind);
+        }
     }
-    count_fragments(lid, count);
+    count_fragments(lid, u32(code != 0u), u32(code == 2u));
 }
 
 // CPU devices (lavapipe): one invocation per work item, walking its tile; a workgroup of 64
@@ -220,22 +263,30 @@ fn raster_loop_main(
 ) {
     if (lid == 0u) {
         atomicStore(&wg_count, 0u);
+        atomicStore(&wg_occluded, 0u);
     }
     workgroupBarrier();
     let i = gid.x + gid.y * groups.x * 64u;
     var count = 0u;
+    var occluded = 0u;
     if (i < ru.item_count) {
         let item = items[i];
         let t = load_tri(item.x);
+        let behind = behind_tile(t, item_tile(item));
         let x0 = max(t.bbox[0], (item.y & 0xffffu) * TILE);
         let y0 = max(t.bbox[1], (item.y >> 16u) * TILE);
         let x1 = min(t.bbox[2], (item.y & 0xffffu) * TILE + TILE - 1u);
         let y1 = min(t.bbox[3], (item.y >> 16u) * TILE + TILE - 1u);
-        for (var y = y0; y <= y1; y++) {
-            for (var x = x0; x <= x1; x++) {
-                count += raster_pixel(t, x, y);
+        // wholly behind the opaque depth: only the frame's first scene pass counts its fragments
+        if (!behind || fu.opaque.y != 0u) {
+            for (var y = y0; y <= y1; y++) {
+                for (var x = x0; x <= x1; x++) {
+                    let code = raster_pixel(t, x, y, behind);
+                    count += u32(code != 0u);
+                    occluded += u32(code == 2u);
+                }
             }
         }
     }
-    count_fragments(lid, count);
+    count_fragments(lid, count, occluded);
 }
