@@ -78,7 +78,10 @@ impl Stats {
             _ => false,
         };
         self.quantized = if packs { self.captured } else { 0 };
-        self.coverage = crate::msaa::coverage(settings);
+        // a frame of `plain` that says it composited each sample (a GPU's blender at several
+        // samples: docs/msaa.md) keeps it; the settings say every other frame's
+        let own = self.coverage.filter(|_| settings.technique == crate::Technique::Plain);
+        self.coverage = own.or_else(|| crate::msaa::coverage(settings));
     }
 
     /// The frame's own check, where its losses were counted as they happened: every fragment the

@@ -718,7 +718,7 @@ impl Plan {
 /// the techniques that keep no mask over opaque objects. (The opaque pass itself is multisampled:
 /// its depth and colour are kept a sample, [`Plan::opaque_bytes`].) (A hardware raster path
 /// refuses a sample count its device does not draw where it starts a frame, its own captures,
-/// [`refuse_multisampled_own_capture`], and the supersampled reference,
+/// [`refuse_multisampled_own_capture`] for those not yet done, and the supersampled reference,
 /// [`refuse_supersampled_hardware`].) The techniques that keep no mask take the samples by their
 /// coverage fraction ([`crate::msaa::coverage`]).
 fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<(), OitError> {
@@ -759,21 +759,42 @@ fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<()
     Ok(())
 }
 
-/// The refusal of a hardware path's own capture of `technique` (plain's blender, the blend
-/// captures) at several samples a pixel (`Ok` at one): their colour targets are not
-/// multisampled. Each GPU backend asks where it would run one.
-pub fn refuse_multisampled_own_capture(backend: &str, settings: &Settings) -> Result<(), OitError> {
-    if settings.samples <= 1 {
+/// The refusal of a hardware path's own capture of `settings.technique` (plain's blender, the
+/// blend captures) at several samples a pixel where it is not done (`Ok` at one, and for those
+/// that are; docs/msaa.md, "The blend captures at several samples"). `wavg`, `wsum` and `bdp`
+/// blend into multisampled targets, each fragment at one of its samples, combined by the blend's
+/// own operator; `plain` blends each sample (per-sample coverage, the one its blender can give:
+/// a fragment cannot write the samples it does not cover, so neither `--coverage pixel` nor
+/// `--coverage fraction`), over no opaque objects yet (`opaque`: the frame has some; its resolve
+/// takes the mean of the samples' composites over one background); `dp` and `ddp` (`--hardware-
+/// capture blend`) do not peel each sample yet. Each GPU backend asks where it would run one.
+pub fn refuse_multisampled_own_capture(
+    backend: &str,
+    settings: &Settings,
+    opaque: bool,
+) -> Result<(), OitError> {
+    let samples = settings.samples;
+    if samples <= 1 {
         return Ok(());
     }
-    Err(OitError::Unsupported {
-        backend: backend.into(),
-        what: format!(
-            "{} on the hardware path at --samples {}: its graphics-pipeline capture (the blender) is not \
-             yet multisampled; use --raster compute (docs/msaa.md)",
-            settings.technique, settings.samples
+    let technique = settings.technique;
+    let what = match technique {
+        Technique::Dp | Technique::Ddp => format!(
+            "{technique} with --hardware-capture blend at --samples {samples}: not yet done (its peels \
+             are not yet kept a sample); use --hardware-capture atomics or --raster compute (docs/msaa.md)"
         ),
-    })
+        Technique::Plain if settings.pixel_coverage || settings.fraction_coverage => format!(
+            "plain on the hardware path at --samples {samples} with --coverage {}: its blender composites \
+             each sample, and a fragment writes only the samples it covers; use --raster compute (docs/msaa.md)",
+            if settings.pixel_coverage { "pixel" } else { "fraction" }
+        ),
+        Technique::Plain if opaque => format!(
+            "plain on the hardware path at --samples {samples} with opaque objects: not yet done (its \
+             samples are composited over one background); use --raster compute (docs/msaa.md)"
+        ),
+        _ => return Ok(()),
+    };
+    Err(OitError::Unsupported { backend: backend.into(), what })
 }
 
 /// The refusal of the supersampled reference (`--supersample`) on a GPU backend's hardware raster

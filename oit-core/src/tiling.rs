@@ -597,6 +597,8 @@ pub fn merge<'a>(stats: impl Iterator<Item = &'a Stats>) -> Stats {
             }
         }
         out.tiles += s.tiles.max(1);
+        // what a tile says it did with the samples (`Stats::count_packing` keeps plain's)
+        out.coverage = out.coverage.or(s.coverage);
     }
     out
 }

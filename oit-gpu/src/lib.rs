@@ -53,6 +53,21 @@ use oit_core::{Camera, Effect, GpuFragments, OitError, Scene, Settings};
 /// Group 0's binding of the loss accounting (`acct` in prelude.wgsl).
 pub const ACCT_BINDING: u32 = 15;
 
+/// A blend capture's entry point (oit-shaders' `technique/blend.wgsl`, `technique/bdp_blend.wgsl`:
+/// `..._fs`, `..._resolve_main`) for a frame of `samples` samples a pixel: above one, its
+/// multisampled twin, `_ms` before that ending (`plain_blend_ms_fs`, `bdp_blend_ms_resolve_main`;
+/// docs/msaa.md, "The blend captures at several samples"). Both GPU backends run them.
+pub fn blend_entry(entry: &str, samples: u32) -> String {
+    if samples > 1 {
+        for end in ["_fs", "_resolve_main"] {
+            if let Some(stem) = entry.strip_suffix(end) {
+                return format!("{stem}_ms{end}");
+            }
+        }
+    }
+    entry.into()
+}
+
 /// Bytes a pixel of the GPU supersampled reference's running sums (`core/supersample.wgsl`): two
 /// sums of linear RGB in f32, used in turn, so a frame that runs again after a wrong guess at its
 /// sizes does not add its colour twice.

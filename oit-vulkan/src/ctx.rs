@@ -67,7 +67,7 @@ impl BufferPool {
     /// A free image of `size`, `layers`, `format` and `usage`, else a new one from `make`.
     fn take_image_with(
         &self,
-        (size, layers, format, usage): ((u32, u32), u32, vk::Format, vk::ImageUsageFlags),
+        (size, layers, format, usage, samples): ((u32, u32), u32, vk::Format, vk::ImageUsageFlags, u32),
         make: impl FnOnce() -> Result<GpuImage, OitError>,
     ) -> Result<Rc<GpuImage>, OitError> {
         let mut free = self.free_images.borrow_mut();
@@ -76,6 +76,7 @@ impl BufferPool {
                 && i.layers == layers.max(1)
                 && i.format == format
                 && i.usage == usage
+                && i.samples == samples.max(1)
         };
         if let Some(i) = free.iter().position(fits) {
             return Ok(free.swap_remove(i));
@@ -91,8 +92,11 @@ impl BufferPool {
         size: (u32, u32),
         format: vk::Format,
         usage: vk::ImageUsageFlags,
+        samples: u32,
     ) -> Result<Rc<GpuImage>, OitError> {
-        self.take_image_with((size, 1, format, usage), || gpu.image(size, format, usage))
+        self.take_image_with((size, 1, format, usage, samples), || {
+            gpu.image_sampled(size, format, usage, samples)
+        })
     }
 
     /// A storage image of `size`, `layers` and `format` ([`Gpu::storage_image`]), free or new.
@@ -104,7 +108,7 @@ impl BufferPool {
         layers: u32,
         format: vk::Format,
     ) -> Result<Rc<GpuImage>, OitError> {
-        self.take_image_with((size, layers, format, crate::device::STORAGE_IMAGE_USAGE), || {
+        self.take_image_with((size, layers, format, crate::device::STORAGE_IMAGE_USAGE, 1), || {
             gpu.storage_image(what, size, layers, format)
         })
     }
@@ -176,6 +180,10 @@ pub(crate) struct VkCtx<'a> {
     /// oit-wgpu: the blend unit returns no previous value to count by), and their `lost` is
     /// `fragments − captured`.
     pub(crate) counts_losses: bool,
+    /// Whether the frame composited each sample where its settings alone say the coverage
+    /// fraction (plain's blender at several samples, `technique::blend`): its
+    /// `Stats::coverage` says `sample`.
+    pub(crate) per_sample_blend: bool,
     uniform: FrameUniform,
     state: Rc<Buffer>,
     image: Rc<Buffer>,
@@ -282,6 +290,7 @@ impl<'a> VkCtx<'a> {
             storage_bytes: if has_opaque { opaque_bytes } else { 0 },
             merged: 0,
             counts_losses: true,
+            per_sample_blend: false,
             uniform,
             state,
             image,
@@ -907,16 +916,28 @@ impl<'a> VkCtx<'a> {
         texel: u64,
         depth: bool,
     ) -> Result<Rc<GpuImage>, OitError> {
+        self.target_sampled(format, texel, depth, 1)
+    }
+
+    /// [`VkCtx::target`] of `samples` samples a pixel (a multisampled blend capture's colour
+    /// target; `texel` bytes a sample).
+    pub(crate) fn target_sampled(
+        &mut self,
+        format: vk::Format,
+        texel: u64,
+        depth: bool,
+        samples: u32,
+    ) -> Result<Rc<GpuImage>, OitError> {
         let attachment = if depth {
             vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
         } else {
             vk::ImageUsageFlags::COLOR_ATTACHMENT
         };
         let usage = attachment | vk::ImageUsageFlags::SAMPLED;
-        let image =
-            self.pool.take_image(self.gpu, (self.settings.width, self.settings.height), format, usage)?;
+        let size = (self.settings.width, self.settings.height);
+        let image = self.pool.take_image(self.gpu, size, format, usage, samples)?;
         self.lent_images.push(image.clone());
-        self.storage_bytes += u64::from(self.pixels) * texel;
+        self.storage_bytes += u64::from(self.pixels) * texel * u64::from(samples);
         Ok(image)
     }
 
@@ -948,7 +969,8 @@ impl<'a> VkCtx<'a> {
             colors,
             depth: pass.depth.then(|| pass.targets.last().map(|i| i.format)).flatten(),
             final_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-            samples: 1,
+            // the targets' own (a multisampled blend capture's: all alike)
+            samples: pass.targets.first().map_or(1, |i| i.samples),
         };
         let bindings = self.image_bindings();
         let mut kinds = vec![SetKind::Frame(buffers.len(), bindings), SetKind::HwRaster];
@@ -1259,8 +1281,9 @@ impl VkCtx<'_> {
                 opaque_fragments: opaque_word(1),
                 masked: opaque_word(2),
                 occluded: opaque_word(3),
-                // set where the frame ends (`Stats::count_packing`)
-                coverage: None,
+                // set where the frame ends (`Stats::count_packing`), kept there where it is
+                // plain's blender's
+                coverage: self.per_sample_blend.then_some(oit_core::msaa::Coverage::Sample),
             },
         };
         if self.counts_losses {

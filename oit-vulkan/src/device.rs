@@ -157,6 +157,9 @@ pub struct DeviceInfo {
     /// The float formats the blend captures blend into that the device can blend into (optimal
     /// tiling, `COLOR_ATTACHMENT_BLEND` and `SAMPLED_IMAGE`).
     pub blendable: Vec<vk::Format>,
+    /// The sample counts each of [`DeviceInfo::blendable`] takes as a sampled colour attachment
+    /// (optimal tiling, 2D; the blend captures' multisampled targets: [`Gpu::takes_samples`]).
+    pub multisampled: Vec<(vk::Format, vk::SampleCountFlags)>,
     /// Why the hardware-raster path cannot run here (`None`: it can): it needs a graphics queue,
     /// `fragmentStoresAndAtomics` and a blendable `R32_SFLOAT` colour attachment (the counter).
     pub hardware_missing: Option<String>,
@@ -263,6 +266,8 @@ pub struct GpuImage {
     pub format: vk::Format,
     /// How it may be used.
     pub usage: vk::ImageUsageFlags,
+    /// Samples a pixel (1 but for the multisampled targets).
+    pub samples: u32,
 }
 
 impl Drop for GpuImage {
@@ -756,7 +761,7 @@ impl Gpu {
         let hardware_missing = (!hardware_missing.is_empty()).then(|| hardware_missing.join(", "));
         let blend_needs =
             vk::FormatFeatureFlags::COLOR_ATTACHMENT_BLEND | vk::FormatFeatureFlags::SAMPLED_IMAGE;
-        let blendable = [
+        let blendable: Vec<vk::Format> = [
             vk::Format::R32G32B32A32_SFLOAT,
             vk::Format::R32G32_SFLOAT,
             vk::Format::R32_SFLOAT,
@@ -770,6 +775,23 @@ impl Gpu {
             props.optimal_tiling_features.contains(blend_needs)
         })
         .collect();
+        let multisampled = blendable
+            .iter()
+            .map(|&f| {
+                // SAFETY: a plain query of a physical device of this instance.
+                let props = unsafe {
+                    instance.get_physical_device_image_format_properties(
+                        physical,
+                        f,
+                        vk::ImageType::TYPE_2D,
+                        vk::ImageTiling::OPTIMAL,
+                        vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
+                        vk::ImageCreateFlags::empty(),
+                    )
+                };
+                (f, props.map_or(vk::SampleCountFlags::TYPE_1, |p| p.sample_counts))
+            })
+            .collect();
         let props = props2.properties;
         let names: Vec<String> = extensions.iter().map(|e| c_name(e.extension_name_as_c_str())).collect();
         let device_heap = memory.memory_heaps[..memory.memory_heap_count as usize]
@@ -804,6 +826,7 @@ impl Gpu {
             independent_blend: features.independent_blend == vk::TRUE,
             hardware_missing,
             blendable,
+            multisampled,
             image_atomics_32: atomic_format(vk::Format::R32_UINT),
             image_atomics_64: image_int64_feature && atomic_format(vk::Format::R64_UINT),
             interlock: interlock_feature && hardware_missing_none,
@@ -815,6 +838,18 @@ impl Gpu {
     /// Whether the device blends into `format` (one of [`DeviceInfo::blendable`]'s candidates).
     pub fn blendable(&self, format: vk::Format) -> bool {
         self.info.blendable.contains(&format)
+    }
+
+    /// Whether a blend capture's target of `format` takes `samples` samples a pixel (always at
+    /// one): the hardware raster's own limits ([`Gpu::check_samples`]) and the format's.
+    pub(crate) fn takes_samples(&self, format: vk::Format, samples: u32) -> bool {
+        samples <= 1
+            || (self.check_samples(samples).is_ok()
+                && self
+                    .info
+                    .multisampled
+                    .iter()
+                    .any(|&(f, counts)| f == format && counts.contains(sample_count_flags(samples))))
     }
 
     /// Waits until the queue has nothing in flight: before a kept buffer that a frame in flight
@@ -1113,6 +1148,7 @@ impl Gpu {
             layers,
             format,
             usage,
+            samples: samples.max(1),
         })
     }
 

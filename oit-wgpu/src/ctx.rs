@@ -257,6 +257,10 @@ pub struct GpuCtx<'a> {
     /// Whether the technique's capture counts its losses; the `--hardware-capture blend` captures
     /// do not yet (issue 16), and their `lost` is `fragments − captured`.
     pub counts_losses: bool,
+    /// Whether the frame composited each sample where its settings alone say the coverage
+    /// fraction (plain's blender at several samples, `technique::blend`): its
+    /// `Stats::coverage` says `sample`.
+    pub per_sample_blend: bool,
     /// The setup checks the frame's drivers left to its end.
     checks: Vec<SetupCheck>,
     /// The deepest pixel an earlier frame of this prepared scene counted at this size and
@@ -467,6 +471,7 @@ impl<'a> GpuCtx<'a> {
             opaque,
             opaque_from: None,
             counts_losses: true,
+            per_sample_blend: false,
             checks: Vec::new(),
             speculated_deepest: None,
             deepest_seen: None,
@@ -1242,6 +1247,8 @@ impl<'a> GpuCtx<'a> {
             lost,
             gpu_ms: self.timestamps.is_some().then_some(self.gpu_ms),
             gpu_pass_ms: self.pass_ms,
+            // kept where the frame ends (`Stats::count_packing`)
+            coverage: self.per_sample_blend.then_some(oit_core::msaa::Coverage::Sample),
             ..totals_stats(t, self.passes - self.gated_passes, reported_storage(self.storage_bytes))
         };
         let frame = Frame { image, layers: None, lost_pixels, stats };

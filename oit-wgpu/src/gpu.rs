@@ -43,6 +43,16 @@ pub(crate) fn count_format(features: wgpu::Features) -> wgpu::TextureFormat {
     }
 }
 
+/// The formats of the blend captures' render targets (`technique/`), whose sample counts an
+/// adapter is asked for where oit opens the device ([`Gpu::takes_samples`]).
+const BLEND_FORMATS: [wgpu::TextureFormat; 5] = [
+    wgpu::TextureFormat::Rgba32Float,
+    wgpu::TextureFormat::Rgba16Float,
+    wgpu::TextureFormat::Rgba8Unorm,
+    wgpu::TextureFormat::R32Float,
+    wgpu::TextureFormat::R16Float,
+];
+
 /// The most storage buffers one of oit's pipelines binds in a shader stage: group 0's resolve
 /// state, up to 6 technique arrays, the loss counts and the opaque image's key and colour (10),
 /// and group 1's geometry (3: the compute rasterizer's triangles, work items and count, the
@@ -67,6 +77,11 @@ pub struct Gpu {
     /// features, where the device has `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES`; false for a
     /// device oit did not open).
     pub eight_samples: bool,
+    /// The sample counts the blend captures' target formats take as multisampled render targets
+    /// (the adapter's format features, where the device has
+    /// `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES`; empty for a device oit did not open, which then
+    /// gets WebGPU's guarantees: [`Gpu::takes_samples`]).
+    multisampled: Vec<(wgpu::TextureFormat, wgpu::TextureFormatFeatureFlags)>,
     pipelines: Mutex<HashMap<u64, Arc<wgpu::ComputePipeline>>>,
     render_pipelines: Mutex<HashMap<u64, Arc<wgpu::RenderPipeline>>>,
     /// Mappable readback buffers, kept for the next readback of the same size.
@@ -144,6 +159,10 @@ impl Gpu {
             && adapter.get_texture_format_features(count_format(features)).flags.sample_count_supported(8);
         let mut gpu = Gpu::wrap(device, queue, info, features, limits);
         gpu.eight_samples = eight_samples;
+        if features.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES) {
+            gpu.multisampled =
+                BLEND_FORMATS.iter().map(|&f| (f, adapter.get_texture_format_features(f).flags)).collect();
+        }
         Ok(gpu)
     }
 
@@ -162,12 +181,26 @@ impl Gpu {
             features,
             limits,
             eight_samples: false,
+            multisampled: Vec::new(),
             pipelines: Mutex::new(HashMap::new()),
             render_pipelines: Mutex::new(HashMap::new()),
             staging: Mutex::new(Vec::new()),
             queries: Mutex::new(Vec::new()),
             readbacks: Default::default(),
             layouts: Mutex::new(HashMap::new()),
+        }
+    }
+
+    /// Whether `format` takes `samples` samples a pixel as a render target (always at one): the
+    /// adapter's format features where oit opened the device, else WebGPU's guarantee (4 samples
+    /// for the formats it lists as multisampled: not `Rgba32Float`).
+    pub(crate) fn takes_samples(&self, format: wgpu::TextureFormat, samples: u32) -> bool {
+        if samples <= 1 {
+            return true;
+        }
+        match self.multisampled.iter().find(|(f, _)| *f == format) {
+            Some((_, flags)) => flags.sample_count_supported(samples),
+            None => samples == 4 && format != wgpu::TextureFormat::Rgba32Float,
         }
     }
 

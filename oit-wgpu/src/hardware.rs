@@ -949,7 +949,7 @@ pub(crate) fn scene_pipeline(
 
 /// [`scene_pipeline`] at `samples` samples a pixel.
 #[expect(clippy::too_many_arguments, reason = "a render pipeline's state is that many things")]
-fn scene_pipeline_with(
+pub(crate) fn scene_pipeline_with(
     device: &wgpu::Device,
     label: &str,
     source: &str,

@@ -22,8 +22,8 @@ pub struct SceneStage {
     pub(crate) occlusion: Rc<RefCell<Option<Occlusion>>>,
 }
 
-/// A render target a [`SceneStage`] keeps: its label, format and view.
-type KeptTarget = (&'static str, wgpu::TextureFormat, wgpu::TextureView);
+/// A render target a [`SceneStage`] keeps: its label, format, samples a pixel and view.
+type KeptTarget = (&'static str, wgpu::TextureFormat, u32, wgpu::TextureView);
 
 impl SceneStage {
     /// raster_hardware.wgsl without its fragment entry point (`hw_fs`, which calls the atomics
@@ -46,8 +46,20 @@ impl SceneStage {
         label: &'static str,
         format: wgpu::TextureFormat,
     ) -> wgpu::TextureView {
+        self.target_sampled(device, label, format, 1)
+    }
+
+    /// [`SceneStage::target`] of `samples` samples a pixel (a multisampled blend capture's).
+    pub(crate) fn target_sampled(
+        &self,
+        device: &wgpu::Device,
+        label: &'static str,
+        format: wgpu::TextureFormat,
+        samples: u32,
+    ) -> wgpu::TextureView {
         let mut targets = self.targets.borrow_mut();
-        if let Some((.., view)) = targets.iter().find(|(l, f, _)| (*l, *f) == (label, format)) {
+        if let Some((.., view)) = targets.iter().find(|(l, f, n, _)| (*l, *f, *n) == (label, format, samples))
+        {
             return view.clone();
         }
         let (width, height) = self.size;
@@ -55,14 +67,14 @@ impl SceneStage {
             label: Some(label),
             size: wgpu::Extent3d { width: width.max(1), height: height.max(1), depth_or_array_layers: 1 },
             mip_level_count: 1,
-            sample_count: 1,
+            sample_count: samples,
             dimension: wgpu::TextureDimension::D2,
             format,
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
             view_formats: &[],
         });
         let view = texture.create_view(&Default::default());
-        targets.push((label, format, view.clone()));
+        targets.push((label, format, samples, view.clone()));
         view
     }
 

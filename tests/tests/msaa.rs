@@ -416,16 +416,40 @@ fn refusals_name_what_is_not_done() {
             other => panic!("{backend} kbuf at 4 samples: {:?}", other.is_ok()),
         }
     }
-    // a hardware path's own captures (plain's blender, `--hardware-capture blend`): not yet
-    // multisampled, refused where a backend would run one
-    let own = Settings { technique: Technique::Plain, ..base.clone() };
-    match oit_core::plan::refuse_multisampled_own_capture("wgpu", &own) {
-        Err(OitError::Unsupported { what, .. }) => {
-            assert!(what.contains("not") && what.contains("plain"), "{what}")
-        }
-        other => panic!("plain's blender at 4 samples: {other:?}"),
+    // a hardware path's own captures not yet done at several samples (dp's and ddp's peels with
+    // `--hardware-capture blend`), and plain's blender where it cannot give what is asked (it
+    // blends each sample: no `--coverage pixel` or `fraction`; no opaque objects yet), refused
+    // where a backend would run one; wavg, wsum, bdp and plain itself run
+    // (`hardware_blend_captures_at_samples`)
+    let refused =
+        |s: &Settings, opaque: bool| match oit_core::plan::refuse_multisampled_own_capture("wgpu", s, opaque)
+        {
+            Err(OitError::Unsupported { what, .. }) => what,
+            Ok(()) => panic!(
+                "{} at 4 samples (coverage pixel {}, opaque {opaque}): not refused",
+                s.technique, s.pixel_coverage
+            ),
+            Err(e) => panic!("{e}"),
+        };
+    for t in [Technique::Dp, Technique::Ddp] {
+        let what = refused(&Settings { technique: t, ..base.clone() }, false);
+        assert!(what.contains("not yet done") && what.contains(&t.to_string()), "{what}");
     }
-    assert!(oit_core::plan::refuse_multisampled_own_capture("wgpu", &Settings { samples: 1, ..own }).is_ok());
+    let plain = Settings { technique: Technique::Plain, ..base.clone() };
+    assert!(refused(&Settings { pixel_coverage: true, ..plain.clone() }, false).contains("--coverage pixel"));
+    assert!(
+        refused(&Settings { fraction_coverage: true, ..plain.clone() }, false)
+            .contains("--coverage fraction")
+    );
+    assert!(refused(&plain, true).contains("opaque"));
+    for t in ["plain", "wavg", "wsum", "bdp"] {
+        let s = Settings { technique: t.parse().unwrap(), ..base.clone() };
+        assert!(oit_core::plan::refuse_multisampled_own_capture("wgpu", &s, false).is_ok(), "{t}");
+    }
+    assert!(
+        oit_core::plan::refuse_multisampled_own_capture("wgpu", &Settings { samples: 1, ..plain }, true)
+            .is_ok()
+    );
     // opaque objects (an opaque wall behind the knot) render at 4 samples (the opaque pass is
     // multisampled), but not the supersampled reference, which does not draw the opaque pass yet
     let walled = scene_of("wall:1:knot");
@@ -841,6 +865,138 @@ fn hardware_at_samples(backend: &dyn Backend, cpu: &CpuBackend) -> usize {
         }
     }
     compared
+}
+
+/// The hardware paths' own captures at several samples (docs/msaa.md, "The blend captures at
+/// several samples"), on each GPU backend's hardware path at 4 samples (8 where the device has
+/// 8-sample targets, else skipped with its reason):
+///
+/// - `wavg`, `wsum` and `bdp` (`--hardware-capture blend`: additive and MAX blending, each
+///   fragment written at one of its samples, the samples combined by the blend's own operator):
+///   the same image as the atomics capture of the same path, bit for bit (the same device
+///   fragments and masks, so no snapping to step around: the integer sums are exact in any order,
+///   MAX is MAX), with the same fragments, captured and coverage; so they are the coverage
+///   fraction the compute paths and oit-cpu take (`hardware_at_samples` holds the atomics
+///   capture to oit-cpu off the snapped edges). `wavg` under `--coverage pixel` alike.
+/// - `plain` (its blender composites each sample, `coverage: sample`): on `planes:6` seen from
+///   behind, where every sample's fragments come in primitive order back to front, equal to the
+///   path's own per-sample reference (the MSAA target) within 1 of 8 bits on every pixel (the
+///   blender's f32 over operator back to front against the reference's f64 front to back), the
+///   edges and the quads' shared diagonals included, and its count (split over the samples)
+///   equal to the fragments. Against oit-cpu's `plain`, which weighs each fragment by its
+///   coverage fraction over the whole pixel, it differs only where several fragments of one pixel
+///   cover some of its samples each: measured on the bunny, and held below the seam that
+///   per-pixel coverage leaves (`plain --coverage pixel` against the fraction on oit-cpu), the
+///   error both coverage-aware forms remove.
+///
+/// Mutations tried (on wgpu, each failing this test): the weighted blend writing every kept
+/// sample instead of the first (the frame's own accounting refuses it: its count 34 fragments
+/// over), `hw_blend_packed` without the coverage weight (`wavg`: 1236 pixels off the atomics
+/// capture), the bdp resolve taking sample 0 only instead of the MAX over the samples (`bdp`'s
+/// captured off the atomics capture's), the plain resolve's mean taken of sample 0 alone (`plain`
+/// 79 levels off the reference on the planes' edges). A first version that weighed plain's
+/// alpha by its coverage as well was off by 37 levels there.
+#[test]
+fn hardware_blend_captures_at_samples() {
+    use oit_core::HardwareCapture;
+    let cpu = CpuBackend::default();
+    let mut compared = 0;
+    for backend in gpu_backends_for("hardware_blend_captures_at_samples") {
+        let backend = backend.as_ref();
+        if backend.raster_path(&Settings::default()) != oit_core::RasterPath::Hardware {
+            continue;
+        }
+        let on = label(backend);
+        'samples: for samples in [4, 8] {
+            let scene = scene_of("bunny");
+            let base = Settings { samples, hardware_capture: HardwareCapture::Blend, ..settings(64, "wavg") };
+            let cam = camera(&scene, &base, View::default());
+            let cases = [
+                Settings { technique: Technique::WeightedAverage, ..base.clone() },
+                Settings { technique: Technique::WeightedSum, ..base.clone() },
+                Settings { technique: "bdp".parse().unwrap(), ..base.clone() },
+                Settings { technique: Technique::WeightedAverage, pixel_coverage: true, ..base.clone() },
+            ];
+            for s in cases {
+                let what = format!(
+                    "{on}: {} blend at {samples}×{}",
+                    s.technique,
+                    if s.pixel_coverage { " (pixel)" } else { "" }
+                );
+                let blend = match backend.render(&scene, &cam, &s) {
+                    Ok(f) => f,
+                    Err(OitError::Unsupported { what: why, .. }) if samples == 8 => {
+                        eprintln!("{what}: {why}");
+                        continue 'samples;
+                    }
+                    Err(e) => panic!("{what}: {e}"),
+                };
+                let atomics = render(
+                    backend,
+                    &scene,
+                    &cam,
+                    &Settings { hardware_capture: HardwareCapture::Atomics, ..s.clone() },
+                );
+                checks::accounting(&blend).unwrap_or_else(|e| panic!("{what}: {e}"));
+                assert_eq!(blend.stats.fragments, atomics.stats.fragments, "{what}");
+                assert_eq!(blend.stats.captured, atomics.stats.captured, "{what}");
+                assert_eq!(blend.stats.coverage, atomics.stats.coverage, "{what}");
+                assert!(blend.stats.coverage.is_some(), "{what}");
+                let differ =
+                    blend.image.pixels.iter().zip(&atomics.image.pixels).filter(|(a, b)| a != b).count();
+                assert_eq!(differ, 0, "{what}: {differ} pixels off the atomics capture");
+                compared += 1;
+            }
+
+            // plain: per sample, equal to the per-sample reference where primitive order is depth order
+            let planes = scene_of("planes:6");
+            let p = Settings { samples, ..settings(64, "plain") };
+            let behind = camera(&planes, &p, View { azimuth: 200.0, elevation: 25.0, ..View::default() });
+            let what = format!("{on}: plain on planes:6 from behind at {samples}×");
+            let plain = render(backend, &planes, &behind, &p);
+            let reference =
+                render(backend, &planes, &behind, &Settings { technique: Technique::Reference, ..p.clone() });
+            checks::accounting(&plain).unwrap_or_else(|e| panic!("{what}: {e}"));
+            assert_eq!(plain.stats.coverage, Some(Coverage::Sample), "{what}");
+            assert_eq!(plain.stats.fragments, reference.stats.fragments, "{what}");
+            assert_eq!(plain.stats.captured, reference.stats.captured, "{what}");
+            let worst =
+                plain.image.pixels.iter().zip(&reference.image.pixels).map(|(&a, &b)| diff(a, b)).max();
+            assert!(worst <= Some(1), "{what}: {worst:?} levels off the per-sample reference");
+            // the planes' edges at partial coverage, overlapping: where the fraction differs
+            let cpu_plain = render(&cpu, &planes, &behind, &p);
+            let fraction_error = mean_error(&reference.image, &cpu_plain.image);
+            eprintln!(
+                "{what}: mean error of oit-cpu's fraction {fraction_error:.4}, of the blender's samples {:.4}",
+                mean_error(&reference.image, &plain.image)
+            );
+
+            // the bunny: against oit-cpu's fraction, bounded by per-pixel coverage's seam
+            let p = Settings { samples, ..settings(96, "plain") };
+            let cam = camera(&scene, &p, View::default());
+            let plain = render(backend, &scene, &cam, &p);
+            assert_eq!(plain.stats.coverage, Some(Coverage::Sample), "{on}");
+            let fraction = render(&cpu, &scene, &cam, &p);
+            let pixel = render(&cpu, &scene, &cam, &Settings { pixel_coverage: true, ..p.clone() });
+            let reference =
+                render(&cpu, &scene, &cam, &Settings { technique: Technique::Reference, ..p.clone() });
+            let (apart, seam) =
+                (mean_error(&plain.image, &fraction.image), mean_error(&pixel.image, &fraction.image));
+            eprintln!(
+                "{on}: plain on the bunny at {samples}×: per sample against the fraction {apart:.4} (mean 8-bit levels a pixel), \
+                 per-pixel coverage against it {seam:.4}; against the per-sample reference: per sample {:.4}, fraction {:.4}, pixel {:.4}",
+                mean_error(&plain.image, &reference.image),
+                mean_error(&fraction.image, &reference.image),
+                mean_error(&pixel.image, &reference.image)
+            );
+            assert!(
+                apart > 0.0 && apart < seam,
+                "{on}: plain per sample {apart:.4} off the fraction, the seam {seam:.4}"
+            );
+            compared += 1;
+        }
+    }
+    eprintln!("{compared} blend captures at several samples compared");
 }
 
 /// The techniques that keep no coverage mask, at `--samples 4` on oit-cpu: each fragment over the

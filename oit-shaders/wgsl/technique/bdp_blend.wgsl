@@ -32,6 +32,15 @@
 @group(1) @binding(8) var bucket5: texture_2d<f32>;
 @group(1) @binding(9) var bucket6: texture_2d<f32>;
 @group(1) @binding(10) var bucket7: texture_2d<f32>;
+// The same targets multisampled (`fu.msaa.x` samples a pixel): `bdp_blend_ms_fs` and its resolve.
+@group(1) @binding(11) var bucket0_ms: texture_multisampled_2d<f32>;
+@group(1) @binding(12) var bucket1_ms: texture_multisampled_2d<f32>;
+@group(1) @binding(13) var bucket2_ms: texture_multisampled_2d<f32>;
+@group(1) @binding(14) var bucket3_ms: texture_multisampled_2d<f32>;
+@group(1) @binding(15) var bucket4_ms: texture_multisampled_2d<f32>;
+@group(1) @binding(16) var bucket5_ms: texture_multisampled_2d<f32>;
+@group(1) @binding(17) var bucket6_ms: texture_multisampled_2d<f32>;
+@group(1) @binding(18) var bucket7_ms: texture_multisampled_2d<f32>;
 
 struct BucketsOut {
     @location(0) t0: vec4<f32>,
@@ -56,13 +65,19 @@ fn bdp_blend_fs(in: HwOut, @builtin(front_facing) front: bool) -> BucketsOut {
     if (xy.x >= fu.width || xy.y >= fu.height) {
         return out;
     }
+    let packed = bdp_pack_color(pack_rgba8(clamp(hw_color(in), vec4<f32>(0.0), vec4<f32>(1.0))));
+    return bdp_blend_lanes(in, xy, packed);
+}
+
+// The 8 targets' outputs of a fragment at `xy` whose packed colour is `packed`: its bucket's
+// channel holds it, every other 0.
+fn bdp_blend_lanes(in: HwOut, xy: vec2<u32>, packed: u32) -> BucketsOut {
+    var out: BucketsOut;
     let px = xy.y * fu.width + xy.x;
-    let color = hw_color(in);
     let depth = clamp(in.position.z, 0.0, 1.0);
     let zn = bitcast<f32>(bounds[2u * px]);
     let zf = bitcast<f32>(bounds[2u * px + 1u]);
     let k = bucket_index(depth, zn, zf, BDP_COLOR_SUBINTERVALS);
-    let packed = bdp_pack_color(pack_rgba8(clamp(color, vec4<f32>(0.0), vec4<f32>(1.0))));
     var lanes = vec4<f32>(0.0);
     lanes[k % 4u] = bitcast<f32>(packed);
     switch (k / 4u) {
@@ -76,6 +91,33 @@ fn bdp_blend_fs(in: HwOut, @builtin(front_facing) front: bool) -> BucketsOut {
         default: { out.t7 = lanes; }
     }
     return out;
+}
+
+struct BucketsMsOut {
+    @location(0) t0: vec4<f32>,
+    @location(1) t1: vec4<f32>,
+    @location(2) t2: vec4<f32>,
+    @location(3) t3: vec4<f32>,
+    @location(4) t4: vec4<f32>,
+    @location(5) t5: vec4<f32>,
+    @location(6) t6: vec4<f32>,
+    @location(7) t7: vec4<f32>,
+    @builtin(sample_mask) written: u32,
+}
+
+// At several samples a pixel (docs/msaa.md): the fragment's samples less those the opaque pass
+// holds back (`hw_kept`), its colour weighted as the atomics capture's (`hw_blend_packed`: full
+// alpha unless `--coverage fraction`), written at its first kept sample only; the resolve takes
+// the MAX of each bucket over the samples, which is the one target's MAX over the fragments.
+@fragment
+fn bdp_blend_ms_fs(in: HwOut, @builtin(front_facing) front: bool, @builtin(sample_mask) covered: u32) -> BucketsMsOut {
+    let kept = hw_kept(in, front, covered);
+    if (kept == 0u) {
+        discard;
+    }
+    let xy = vec2<u32>(max(floor(in.position.xy), vec2<f32>(0.0)));
+    let o = bdp_blend_lanes(in, xy, bdp_pack_color(hw_blend_packed(in, kept)));
+    return BucketsMsOut(o.t0, o.t1, o.t2, o.t3, o.t4, o.t5, o.t6, o.t7, first_sample(kept));
 }
 
 // Bucket k of the pixel at xy, as the u32 the storage path would hold.
@@ -101,13 +143,58 @@ fn bdp_blend_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
     if (px >= fu.pixel_count) {
         return;
     }
-    var s = state[px];
     let xy = vec2<i32>(i32(px % fu.width), i32(px / fu.width));
+    var buckets: array<u32, BDP_COLOR_SUBINTERVALS>;
+    for (var k = 0u; k < BDP_COLOR_SUBINTERVALS; k++) {
+        buckets[k] = bdp_blend_bucket(k, xy);
+    }
+    bdp_blend_push(px, &buckets);
+}
+
+// Bucket k of the pixel at xy in the multisampled targets: the largest over its samples (as u32,
+// which orders the packed colours as float MAX does: bdp_blend.wgsl's header).
+fn bdp_blend_bucket_ms(k: u32, xy: vec2<i32>) -> u32 {
+    var m = 0u;
+    for (var i = 0u; i < fu.msaa.x; i++) {
+        var v: vec4<f32>;
+        switch (k / 4u) {
+            case 0u: { v = textureLoad(bucket0_ms, xy, i32(i)); }
+            case 1u: { v = textureLoad(bucket1_ms, xy, i32(i)); }
+            case 2u: { v = textureLoad(bucket2_ms, xy, i32(i)); }
+            case 3u: { v = textureLoad(bucket3_ms, xy, i32(i)); }
+            case 4u: { v = textureLoad(bucket4_ms, xy, i32(i)); }
+            case 5u: { v = textureLoad(bucket5_ms, xy, i32(i)); }
+            case 6u: { v = textureLoad(bucket6_ms, xy, i32(i)); }
+            default: { v = textureLoad(bucket7_ms, xy, i32(i)); }
+        }
+        m = max(m, bitcast<u32>(v[k % 4u]));
+    }
+    return m;
+}
+
+// `bdp_blend_resolve_main` over the multisampled targets.
+@compute @workgroup_size(64)
+fn bdp_blend_ms_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let px = kernel_pixel(gid, groups);
+    if (px >= fu.pixel_count) {
+        return;
+    }
+    let xy = vec2<i32>(i32(px % fu.width), i32(px / fu.width));
+    var buckets: array<u32, BDP_COLOR_SUBINTERVALS>;
+    for (var k = 0u; k < BDP_COLOR_SUBINTERVALS; k++) {
+        buckets[k] = bdp_blend_bucket_ms(k, xy);
+    }
+    bdp_blend_push(px, &buckets);
+}
+
+// Pushes the pixel's non-empty buckets in order, each at its subinterval's midpoint.
+fn bdp_blend_push(px: u32, buckets: ptr<function, array<u32, BDP_COLOR_SUBINTERVALS>>) {
+    var s = state[px];
     let zn = bitcast<f32>(bounds[2u * px]);
     let zf = bitcast<f32>(bounds[2u * px + 1u]);
     let n = BDP_COLOR_SUBINTERVALS;
     for (var k = 0u; k < n; k++) {
-        let v = bdp_blend_bucket(k, xy);
+        let v = (*buckets)[k];
         if (v != 0u) {
             let d = zn + (f32(k) + 0.5) / f32(n) * (zf - zn);
             push_local(&s, d, bdp_unpack_color(v));

@@ -23,6 +23,9 @@
 
 @group(1) @binding(8) var blend_color: texture_2d<f32>;
 @group(1) @binding(9) var blend_count: texture_2d<f32>;
+// The same targets multisampled (`fu.msaa.x` samples a pixel): the `_ms` entry points below.
+@group(1) @binding(10) var blend_color_ms: texture_multisampled_2d<f32>;
+@group(1) @binding(11) var blend_count_ms: texture_multisampled_2d<f32>;
 
 struct BlendOut {
     @location(0) color: vec4<f32>,
@@ -99,6 +102,109 @@ fn weighted_blend_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @b
     let xy = blend_texel(px);
     let sums = textureLoad(blend_color, xy, 0);
     let count = u32(textureLoad(blend_count, xy, 0).x + 0.5);
+    if ((fu.param & 2u) != 0u) {
+        weighted_composite(px, sums.xyz, sums.w, count);
+    } else {
+        weighted_composite(px, sums.xyz / (255.0 * 255.0), sums.w / 255.0, count);
+    }
+}
+
+// At several samples a pixel (docs/msaa.md, "The blend captures at several samples"): one draw
+// into multisampled targets, each fragment given the samples it covers less those the opaque pass
+// holds back (`hw_kept`).
+
+struct BlendMsOut {
+    @location(0) color: vec4<f32>,
+    @location(1) count: vec4<f32>,
+    @builtin(sample_mask) written: u32,
+}
+
+// A fragment's count at each sample it writes where it writes `k` of them: 1/k of a fragment, in
+// units of 1/840 (840 is divisible by every k from 1 to 8, so each addend is an integer and the
+// sums are exact in f32 up to 2^24 / 840, about 19,900 fragments a pixel).
+const PLAIN_COUNT_UNIT: f32 = 840.0;
+
+// plain per sample: the blender composites each sample's fragments in primitive order, each at
+// its full alpha (not weighted by its coverage: the samples it misses are its coverage) at every
+// sample it keeps (the MSAA colour buffer); the resolve takes the mean of the samples. A
+// fragment's count is split over the samples it writes (PLAIN_COUNT_UNIT).
+@fragment
+fn plain_blend_ms_fs(in: HwOut, @builtin(front_facing) front: bool, @builtin(sample_mask) covered: u32) -> BlendMsOut {
+    let kept = hw_kept(in, front, covered);
+    if (kept == 0u) {
+        discard;
+    }
+    var out: BlendMsOut;
+    out.written = kept;
+    let c = unpack_rgba8(pack_rgba8(clamp(hw_color(in), vec4<f32>(0.0), vec4<f32>(1.0))));
+    out.color = vec4<f32>(c.xyz * c.w, c.w);
+    out.count = vec4<f32>(PLAIN_COUNT_UNIT / f32(countOneBits(kept)), 0.0, 0.0, 0.0);
+    return out;
+}
+
+// wavg and wsum at several samples: the fragment's sums (its alpha weighted by the coverage of
+// the samples it keeps, as the atomics captures take it) and its count written at its first kept
+// sample only, so that the samples' sums, added by the resolve, are the single target's: the
+// same integers in another order (exact below 2^24, as one target's), or the same f16 addends.
+@fragment
+fn weighted_blend_ms_fs(in: HwOut, @builtin(front_facing) front: bool, @builtin(sample_mask) covered: u32) -> BlendMsOut {
+    let kept = hw_kept(in, front, covered);
+    if (kept == 0u) {
+        discard;
+    }
+    var out: BlendMsOut;
+    out.written = first_sample(kept);
+    let c = hw_blend_color(in, kept);
+    out.count = vec4<f32>(1.0, 0.0, 0.0, 0.0);
+    if ((fu.param & 2u) != 0u) {
+        out.color = vec4<f32>(c.xyz * c.w, c.w);
+    } else {
+        let q = round(c * 255.0);
+        out.color = vec4<f32>(q.xyz * q.w, q.w);
+    }
+    return out;
+}
+
+// The mean of the pixel's samples' (premultiplied colour, transmittance): summed in sample order,
+// then times 1/N (exact for 4 and 8), the mean of the samples' composites over one background.
+@compute @workgroup_size(64)
+fn plain_blend_ms_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let px = kernel_pixel(gid, groups);
+    if (px >= fu.pixel_count) {
+        return;
+    }
+    let xy = blend_texel(px);
+    var c = vec4<f32>(0.0);
+    var count = 0.0;
+    for (var i = 0u; i < fu.msaa.x; i++) {
+        c += textureLoad(blend_color_ms, xy, i32(i));
+        count += textureLoad(blend_count_ms, xy, i32(i)).x;
+    }
+    c *= 1.0 / f32(fu.msaa.x);
+    var s = state[px];
+    s.fr = c.x;
+    s.fg = c.y;
+    s.fb = c.z;
+    s.transmittance = c.w;
+    s.captured = u32(count / PLAIN_COUNT_UNIT + 0.5);
+    state[px] = s;
+}
+
+// The weighted sums of the pixel's samples added up: each fragment wrote one sample.
+@compute @workgroup_size(64)
+fn weighted_blend_ms_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let px = kernel_pixel(gid, groups);
+    if (px >= fu.pixel_count) {
+        return;
+    }
+    let xy = blend_texel(px);
+    var sums = vec4<f32>(0.0);
+    var n = 0.0;
+    for (var i = 0u; i < fu.msaa.x; i++) {
+        sums += textureLoad(blend_color_ms, xy, i32(i));
+        n += textureLoad(blend_count_ms, xy, i32(i)).x;
+    }
+    let count = u32(n + 0.5);
     if ((fu.param & 2u) != 0u) {
         weighted_composite(px, sums.xyz, sums.w, count);
     } else {

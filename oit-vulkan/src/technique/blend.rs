@@ -17,6 +17,10 @@
 //!   `R32G32B32A32_UINT` (the HPG 2009 paper's capture), copied into the storage histogram; the
 //!   bucket passes are the atomics capture's.
 //!
+//! At several samples a pixel `plain`, `wavg`/`wsum` and `bdp` draw multisampled targets
+//! (oit-wgpu's, the same `_ms` entry points: docs/msaa.md, "The blend captures at several
+//! samples"); `dp` and `ddp` are refused there (`oit_core::plan::refuse_multisampled_own_capture`).
+//!
 //! The blend unit returns no previous value, so these captures cannot count where they lose a
 //! fragment: their `lost` is `fragments − captured − occluded` (as on oit-wgpu); adp's is still
 //! counted (its bucket passes are atomics).
@@ -60,6 +64,18 @@ fn hardware_raster(raster: &Raster) -> Result<&HardwareRaster, OitError> {
     }
 }
 
+/// Refuses a sample count one of the blend targets' `formats` does not take (nothing at one).
+fn check_samples(ctx: &VkCtx<'_>, formats: &[vk::Format]) -> Result<(), OitError> {
+    let samples = ctx.settings.samples;
+    match formats.iter().find(|&&f| !ctx.gpu.takes_samples(f, samples)) {
+        None => Ok(()),
+        Some(f) => Err(unsupported(format!(
+            "{} on the hardware path at --samples {samples}: '{}' has no {samples}-sample {f:?} render target; use --raster compute",
+            ctx.settings.technique, ctx.gpu.info.name
+        ))),
+    }
+}
+
 /// Refuses a target format the device cannot blend into (or render to) before anything is made.
 fn check_blendable(ctx: &VkCtx<'_>, format: vk::Format, what: &str) -> Result<(), OitError> {
     if ctx.gpu.blendable(format) {
@@ -80,6 +96,8 @@ fn clear_f(v: [f32; 4]) -> vk::ClearValue {
 pub(crate) fn plain(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     let colour = colour_target(ctx.settings.blend_target);
     check_blendable(ctx, colour.0, "plain's blending")?;
+    // at several samples each sample blended (`plain_blend_ms_fs`)
+    ctx.per_sample_blend = ctx.settings.samples > 1;
     draw_and_resolve(
         ctx,
         drivers,
@@ -130,8 +148,12 @@ fn draw_and_resolve(
     param: u32,
 ) -> Result<(), OitError> {
     let raster = hardware(drivers)?;
-    let color_target = ctx.target(colour.0, colour.1, false)?;
-    let count_target = ctx.target(R32F, 4, false)?;
+    let samples = ctx.settings.samples;
+    check_samples(ctx, &[colour.0, R32F])?;
+    // at several samples the `_ms` entry points (blend.wgsl), into multisampled targets
+    let entries = (oit_gpu::blend_entry(entries.0, samples), oit_gpu::blend_entry(entries.1, samples));
+    let color_target = ctx.target_sampled(colour.0, colour.1, false, samples)?;
+    let count_target = ctx.target_sampled(R32F, 4, false, samples)?;
     // the frame's fragments counted apart from the blender's count (`captured`, losses counted
     // as 0): the count-only draw the other blend captures run, so that the frame's accounting
     // check can fail where the two disagree (issue 41.10), not `fragments := captured`
@@ -140,7 +162,7 @@ fn draw_and_resolve(
         raster,
         BlendPass {
             module: "blend",
-            fs: entries.0,
+            fs: &entries.0,
             targets: &[&color_target, &count_target],
             blends: &[color, Blend::AddRed],
             clears: &[clear_f(clear), clear_f([0.0; 4])],
@@ -153,7 +175,15 @@ fn draw_and_resolve(
         },
         &[],
     )?;
-    ctx.image_kernel("blend", entries.1, &[], &[(8, &color_target), (9, &count_target)], 0, param)
+    let first = if samples > 1 { 10 } else { 8 };
+    ctx.image_kernel(
+        "blend",
+        &entries.1,
+        &[],
+        &[(first, &color_target), (first + 1, &count_target)],
+        0,
+        param,
+    )
 }
 
 /// `bdp`'s colour mode by MAX blending into 8 × `R32G32B32A32_SFLOAT` (`bdp_blend.wgsl`).
@@ -176,14 +206,19 @@ pub(crate) fn bdp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
     // the plan's colour buckets, in the targets (counted as each target is made)
     storage.attachments("colour buckets", 8 * 16)?;
     storage.finish()?;
+    let samples = ctx.settings.samples;
+    check_samples(ctx, &[RGBA32F])?;
+    // at several samples each fragment at its first sample, the buckets' MAX over the samples
+    // taken by the resolve (`bdp_blend_ms_fs`)
     let targets: Vec<Rc<GpuImage>> =
-        (0..8).map(|_| ctx.target(RGBA32F, 16, false)).collect::<Result<_, _>>()?;
+        (0..8).map(|_| ctx.target_sampled(RGBA32F, 16, false, samples)).collect::<Result<_, _>>()?;
     let views: Vec<&GpuImage> = targets.iter().map(|t| &**t).collect();
+    let fs = oit_gpu::blend_entry("bdp_blend_fs", samples);
     ctx.blend_pass(
         raster,
         BlendPass {
             module: "bdp_blend",
-            fs: "bdp_blend_fs",
+            fs: &fs,
             targets: &views,
             blends: &[Blend::Max; 8],
             clears: &[clear_f([0.0; 4]); 8],
@@ -196,8 +231,11 @@ pub(crate) fn bdp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
         },
         &[&bounds],
     )?;
-    let images: Vec<(u32, &GpuImage)> = views.iter().enumerate().map(|(i, t)| (3 + i as u32, *t)).collect();
-    ctx.image_kernel("bdp_blend", "bdp_blend_resolve_main", &[&bounds], &images, 0, 0)
+    let first = if samples > 1 { 11 } else { 3 };
+    let images: Vec<(u32, &GpuImage)> =
+        views.iter().enumerate().map(|(i, t)| (first + i as u32, *t)).collect();
+    let resolve = oit_gpu::blend_entry("bdp_blend_resolve_main", samples);
+    ctx.image_kernel("bdp_blend", &resolve, &[&bounds], &images, 0, 0)
 }
 
 /// The pass count of the occlusion-query peel loops (dp, ddp), as oit-wgpu's `OcclusionPeel`:

@@ -23,7 +23,7 @@ use oit_core::OitError;
 
 use crate::ctx::{Drivers, GpuCtx, TECHNIQUE_PRELUDE};
 use crate::gpu::COMMON_WGSL;
-use crate::hardware::scene_pipeline;
+use crate::hardware::scene_pipeline_with;
 use crate::stage::SceneStage;
 
 const WGSL: &str = oit_shaders::text("technique/bdp_blend.wgsl");
@@ -54,6 +54,8 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         )));
     }
     check_texture_size(ctx, "the bdp bucket targets")?;
+    let samples = ctx.settings.samples;
+    super::blend::check_samples(ctx, &[FORMAT])?;
     let mut storage = oit_gpu::technique::Storage::new(ctx, 0);
     let bounds = oit_gpu::technique::depth_bounds(ctx, drivers, &mut storage)?;
     if ctx.fragments == crate::ctx::Fragments::Unset {
@@ -68,7 +70,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
                 label: Some(&format!("bdp bucket target {i}")),
                 size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
                 mip_level_count: 1,
-                sample_count: 1,
+                sample_count: samples,
                 dimension: wgpu::TextureDimension::D2,
                 format: FORMAT,
                 usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
@@ -76,10 +78,15 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
             })
         })
         .collect();
-    // the plan's colour buckets, in the targets
+    // the plan's colour buckets, in the targets (a pixel's, times its samples: each sample holds
+    // the buckets of the fragments written there)
     storage.attachments("colour buckets", u64::from(per_sample))?;
     storage.finish()?;
-    ctx.storage_bytes += u64::from(ctx.pixels) * u64::from(per_sample);
+    ctx.storage_bytes += u64::from(ctx.pixels) * u64::from(per_sample) * u64::from(samples);
+    let (fs, resolve) = (
+        oit_gpu::blend_entry("bdp_blend_fs", samples),
+        oit_gpu::blend_entry("bdp_blend_resolve_main", samples),
+    );
     let views: Vec<wgpu::TextureView> = targets.iter().map(|t| t.create_view(&Default::default())).collect();
 
     // the geometry pass
@@ -95,19 +102,21 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         blend: Some(wgpu::BlendState { color: max, alpha: max }),
         write_mask: wgpu::ColorWrites::ALL,
     };
-    let pipeline = ctx.gpu.render_pipeline(key(&module_source, "bdp blend"), "bdp blend", || {
-        let targets: Vec<Option<wgpu::ColorTargetState>> =
-            (0..TARGETS).map(|_| Some(target.clone())).collect();
-        scene_pipeline(
-            device,
-            "bdp blend",
-            &module_source,
-            &[&layout0, stage.layout()],
-            "bdp_blend_fs",
-            &targets,
-            None,
-        )
-    })?;
+    let pipeline =
+        ctx.gpu.render_pipeline(key(&module_source, &format!("bdp blend {samples}")), "bdp blend", || {
+            let targets: Vec<Option<wgpu::ColorTargetState>> =
+                (0..TARGETS).map(|_| Some(target.clone())).collect();
+            scene_pipeline_with(
+                device,
+                "bdp blend",
+                &module_source,
+                &[&layout0, stage.layout()],
+                &fs,
+                &targets,
+                None,
+                samples,
+            )
+        })?;
     let mut encoder = ctx.take_encoder();
     {
         let attachments: Vec<Option<wgpu::RenderPassColorAttachment<'_>>> = views
@@ -141,13 +150,19 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     ctx.passes += 1;
 
     // the resolve, reading the targets
-    let (layout1, group1) =
-        super::targets_group(device, "bdp bucket targets", 3, &views.iter().collect::<Vec<_>>());
+    let first = if samples > 1 { 11 } else { 3 };
+    let (layout1, group1) = super::targets_group(
+        device,
+        "bdp bucket targets",
+        first,
+        &views.iter().collect::<Vec<_>>(),
+        samples > 1,
+    );
     let (layout0, group0) = ctx.group0(&[&bounds], 0, 0);
     let source = format!("{TECHNIQUE_PRELUDE}{WGSL}\n{}", stage.wgsl());
-    let pipeline = ctx.gpu.compute_pipeline(&source, "bdp_blend_resolve_main", &[&layout0, &layout1])?;
+    let pipeline = ctx.gpu.compute_pipeline(&source, &resolve, &[&layout0, &layout1])?;
     let (x, y) = crate::ctx::dispatch_size(u64::from(ctx.pixels));
-    ctx.timed("bdp_blend_resolve_main", |encoder, timestamps| {
+    ctx.timed(&resolve, |encoder, timestamps| {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("bdp blend resolve"),
             timestamp_writes: timestamps,

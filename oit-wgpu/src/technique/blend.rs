@@ -23,6 +23,13 @@
 //!   target of McGuire & Bavoil's weighted blended OIT (JCGT 2013): a relative error below
 //!   n · 2^-11 a sum.
 //!
+//! At several samples a pixel (`--samples 4|8`; docs/msaa.md, "The blend captures at several
+//! samples") the targets are multisampled and blend.wgsl's `_ms` entry points run
+//! ([`oit_gpu::blend_entry`]): `wavg`/`wsum` write each fragment at the first sample it keeps and
+//! the resolve sums the samples (the single target's sums: the coverage fraction exactly);
+//! `plain` blends each sample at full alpha and the resolve takes the samples' mean
+//! (`coverage: sample`).
+//!
 //! Storage per pixel: the two targets (20 bytes in f32; 8 + 4 with RGBA16F or RGBA8 colour). The blender loses no
 //! fragment: every fragment drawn is counted in the count target and composited (`captured`,
 //! losses counted as 0). The frame's fragments are counted apart from it, by the hardware
@@ -37,7 +44,7 @@ use oit_core::{BlendTarget, OitError, Technique};
 
 use crate::ctx::{GpuCtx, TECHNIQUE_PRELUDE};
 use crate::gpu::COMMON_WGSL;
-use crate::hardware::scene_pipeline;
+use crate::hardware::scene_pipeline_with;
 use crate::stage::SceneStage;
 use crate::technique::bdp_blend::{check_texture_size, key, unsupported};
 
@@ -76,6 +83,15 @@ pub(crate) fn plain(ctx: &mut GpuCtx<'_>, stage: &SceneStage) -> Result<(), OitE
         },
     };
     let clear = wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: 1.0 };
+    if ctx.settings.samples > 1 {
+        // each sample blended (`plain_blend_ms_fs`), its count split over the samples in f32
+        if !ctx.gpu.features.contains(wgpu::Features::FLOAT32_BLENDABLE) {
+            return Err(unsupported(
+                "plain's blender at several samples counts into an R32Float target: the device lacks FLOAT32_BLENDABLE; use --raster compute",
+            ));
+        }
+        ctx.per_sample_blend = true;
+    }
     draw_and_resolve(ctx, stage, formats, over, clear, ("plain_blend_fs", "plain_blend_resolve_main"), 0)
 }
 
@@ -134,7 +150,20 @@ pub(crate) fn weighted(ctx: &mut GpuCtx<'_>, stage: &SceneStage) -> Result<(), O
     )
 }
 
-/// The draw into the colour and count targets, and the resolve `entries.1` reading them.
+/// Refuses a sample count one of the blend targets' `formats` does not take (nothing at one).
+pub(crate) fn check_samples(ctx: &GpuCtx<'_>, formats: &[wgpu::TextureFormat]) -> Result<(), OitError> {
+    let samples = ctx.settings.samples;
+    match formats.iter().find(|&&f| !ctx.gpu.takes_samples(f, samples)) {
+        None => Ok(()),
+        Some(f) => Err(unsupported(&format!(
+            "{} on the hardware path at --samples {samples}: '{}' has no {samples}-sample {f:?} render target; use --raster compute",
+            ctx.settings.technique, ctx.gpu.info.name
+        ))),
+    }
+}
+
+/// The draw into the colour and count targets, and the resolve `entries.1` reading them; at
+/// several samples a pixel, `entries`' `_ms` twins into multisampled targets (blend.wgsl).
 fn draw_and_resolve(
     ctx: &mut GpuCtx<'_>,
     stage: &SceneStage,
@@ -145,11 +174,15 @@ fn draw_and_resolve(
     param: u32,
 ) -> Result<(), OitError> {
     check_texture_size(ctx, "the blend targets")?;
+    let samples = ctx.settings.samples;
+    check_samples(ctx, &[formats.0, formats.1])?;
+    // at several samples the `_ms` entry points (blend.wgsl): multisampled targets
+    let entries = (oit_gpu::blend_entry(entries.0, samples), oit_gpu::blend_entry(entries.1, samples));
     let device = ctx.gpu.device.clone();
-    let color = stage.target(&device, "blend colour", formats.0);
-    let count = stage.target(&device, "blend count", formats.1);
+    let color = stage.target_sampled(&device, "blend colour", formats.0, samples);
+    let count = stage.target_sampled(&device, "blend count", formats.1, samples);
     let texel = |f: wgpu::TextureFormat| u64::from(f.block_copy_size(None).unwrap_or(16));
-    ctx.storage_bytes += u64::from(ctx.pixels) * (texel(formats.0) + texel(formats.1));
+    ctx.storage_bytes += u64::from(ctx.pixels) * u64::from(samples) * (texel(formats.0) + texel(formats.1));
 
     let (layout0, group0) = ctx.group0(&[], 0, param);
     let body = format!("{TECHNIQUE_PRELUDE}{WEIGHTED_WGSL}\n{}\n{}", blend_wgsl(), stage.wgsl());
@@ -173,16 +206,17 @@ fn draw_and_resolve(
             write_mask: wgpu::ColorWrites::RED,
         }),
     ];
-    let name = format!("{} {:?} {:?}", entries.0, formats.0, formats.1);
+    let name = format!("{} {:?} {:?} {samples}", entries.0, formats.0, formats.1);
     let pipeline = ctx.gpu.render_pipeline(key(&module_source, &name), "blend capture", || {
-        scene_pipeline(
+        scene_pipeline_with(
             &device,
             "blend capture",
             &module_source,
             &[&layout0, stage.layout()],
-            entries.0,
+            &entries.0,
             &targets,
             None,
+            samples,
         )
     })?;
     let mut encoder = ctx.take_encoder();
@@ -212,11 +246,13 @@ fn draw_and_resolve(
     ctx.passes += 1;
 
     // the resolve, reading the targets
-    let (layout1, group1) = super::targets_group(&device, "blend targets", 8, &[&color, &count]);
+    let first = if samples > 1 { 10 } else { 8 };
+    let (layout1, group1) =
+        super::targets_group(&device, "blend targets", first, &[&color, &count], samples > 1);
     let (layout0, group0) = ctx.group0(&[], 0, param);
-    let pipeline = ctx.gpu.compute_pipeline(&body, entries.1, &[&layout0, &layout1])?;
+    let pipeline = ctx.gpu.compute_pipeline(&body, &entries.1, &[&layout0, &layout1])?;
     let (x, y) = crate::ctx::dispatch_size(u64::from(ctx.pixels));
-    ctx.timed(entries.1, |encoder, timestamps| {
+    ctx.timed(&entries.1, |encoder, timestamps| {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("blend resolve"),
             timestamp_writes: timestamps,

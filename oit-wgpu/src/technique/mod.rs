@@ -33,7 +33,7 @@ pub(crate) fn run(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), Oit
     if !own {
         return oit_gpu::technique::render(ctx, drivers);
     }
-    oit_core::plan::refuse_multisampled_own_capture("wgpu", ctx.settings)?;
+    oit_core::plan::refuse_multisampled_own_capture("wgpu", ctx.settings, drivers.opaque.is_some())?;
     // the opaque pass first, as every frame: the captures' fragment stages cut at its depth
     oit_gpu::technique::opaque_first(ctx, drivers)?;
     match ctx.settings.technique {
@@ -134,12 +134,13 @@ impl OcclusionPeel {
 
 /// Group 1 of a resolve that reads a blend capture's render targets: `views` as unfilterable
 /// float textures at bindings `first`, `first + 1`, ... (bdp's 8 bucket targets, plain's and the
-/// weighted blends' colour and count targets).
+/// weighted blends' colour and count targets), multisampled textures where `multisampled`.
 pub(crate) fn targets_group(
     device: &wgpu::Device,
     label: &str,
     first: u32,
     views: &[&wgpu::TextureView],
+    multisampled: bool,
 ) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
     let entries: Vec<wgpu::BindGroupLayoutEntry> = (0..views.len() as u32)
         .map(|i| wgpu::BindGroupLayoutEntry {
@@ -148,7 +149,7 @@ pub(crate) fn targets_group(
             ty: wgpu::BindingType::Texture {
                 sample_type: wgpu::TextureSampleType::Float { filterable: false },
                 view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
+                multisampled,
             },
             count: None,
         })
