@@ -88,6 +88,22 @@ pub fn keeps_masks(technique: Technique) -> bool {
     matches!(technique, Technique::Reference | Technique::Dfb | Technique::Ll | Technique::Fabs { .. })
 }
 
+/// Whether `technique` peels per sample above one sample (dp, ddp: docs/msaa.md): each peel
+/// finds a pixel's next layer by its (depth, primitive id) key, keeps the peeled fragment's mask
+/// and composites it into per-sample accumulators. Where [`coverage`] says
+/// [`Coverage::Sample`] for it ([`peels_per_sample`]).
+pub fn peels_masks(technique: Technique) -> bool {
+    matches!(technique, Technique::Dp | Technique::Ddp)
+}
+
+/// Whether a frame under `settings` peels per sample ([`peels_masks`]: dp or ddp, several
+/// samples, [`Coverage::Sample`]); `--coverage pixel`, `--coverage fraction` and translucency
+/// (whose per-sample state the accumulators do not keep) leave them by coverage fraction or per
+/// pixel as the techniques without a mask.
+pub fn peels_per_sample(settings: &Settings) -> bool {
+    peels_masks(settings.technique) && coverage(settings) == Some(Coverage::Sample)
+}
+
 /// What a frame under `settings` does with its fragments' coverage masks; `None` at one sample.
 /// The reference is per sample always (the MSAA target); a technique that keeps masks is per
 /// sample unless `--coverage pixel`; every other technique weighs a fragment's alpha by its
@@ -106,6 +122,11 @@ pub fn coverage(settings: &Settings) -> Option<Coverage> {
     } else if settings.pixel_coverage {
         Coverage::Pixel
     } else if keeps_masks(technique) {
+        Coverage::Sample
+    } else if peels_masks(technique) && !settings.fraction_coverage && settings.effect != Effect::Translucency {
+        // the peels keep the peeled layer's mask and composite it per sample (transparency,
+        // Fresnel's transmittance, the heat map's counts); `--coverage fraction` keeps the
+        // coverage-fraction peel to measure it against
         Coverage::Sample
     } else if matches!(settings.effect, Effect::Fresnel | Effect::Translucency)
         || matches!(technique, Technique::Mdts { .. })

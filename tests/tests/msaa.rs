@@ -153,8 +153,11 @@ fn exact_techniques_equal_the_per_sample_reference() {
                 Technique::Ll,
                 Technique::Fabs { k: None },
                 Technique::Fabs { k: Some(deepest + 2) },
+                Technique::Dp,
+                Technique::Ddp,
             ] {
                 let f = render(&cpu, &scene, &cam, &Settings { technique: t, ..s.clone() });
+                assert_eq!(f.stats.coverage, Some(Coverage::Sample), "{t}");
                 let a = accuracy(&r, &f.image).unwrap();
                 let what = format!("{t} on {name} at {samples}×");
                 assert!(a.is_measured(), "{what}");
