@@ -134,15 +134,13 @@ fn render_samples(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let near = ctx.alloc64(1, EMPTY_MIN)?;
     let far = ctx.alloc64(1, 0)?;
     // per pixel (lo, hi): k lies inside where k + 1 > lo and k < hi; the near layer the last
-    // pass peeled is lo − 1, the far one hi (where it peeled two)
+    // pass peeled is lo − 1, the far one hi (where it peeled two; one where hi + 1 = lo)
     let mut range: Vec<(u64, u64)> = vec![(0, u64::MAX); ctx.pixels];
     ctx.storage_bytes += ctx.pixels as u64 * 16;
     // the peeled layers' payloads and masks: near, then far
     let layers = ctx.alloc32(4, 0)?;
     let mut acc = super::msaa::SampleAccumulators::new(ctx, 2)?;
     let mut captured = vec![0u32; ctx.pixels];
-    // layers the last pass peeled a pixel: 0, 1 (near and far one fragment) or 2
-    let mut peeled_at = vec![0u8; ctx.pixels];
     let limit = ctx.plan.peel_limit.saturating_add(1);
     let mut passes = 0;
     while passes < limit {
@@ -176,23 +174,28 @@ fn render_samples(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         let peeled: u64 = range
             .par_iter_mut()
             .zip(acc.pixels_mut())
-            .zip(captured.par_iter_mut().zip(peeled_at.par_iter_mut()))
+            .zip(captured.par_iter_mut())
             .enumerate()
-            .map(|(px, ((range, a), (n, at)))| {
+            .map(|(px, ((range, a), n))| {
                 if *range == DONE {
                     return 0;
                 }
-                for (i, back) in [(0, false), (2, true)].into_iter().take(usize::from(*at)) {
+                // layers the last pass peeled: none before the first, one where near was far
+                let at = match *range {
+                    (0, u64::MAX) => 0,
+                    (lo, hi) if hi.wrapping_add(1) == lo => 1,
+                    _ => 2,
+                };
+                for (i, back) in [(0, false), (2, true)].into_iter().take(at) {
                     let (payload, mask) = (layers[4 * px + i].load(Relaxed), layers[4 * px + i + 1].load(Relaxed));
                     accumulate(shared, a, 2, payload, mask as u8, back);
                     *n += 1;
                 }
                 let (kn, kf) = (take_u64(&near[px], EMPTY_MIN), take_u64(&far[px], 0));
                 if kn == EMPTY_MIN {
-                    (*range, *at) = (DONE, 0);
+                    *range = DONE;
                     return 0;
                 }
-                *at = if kf != kn { 2 } else { 1 };
                 *range = (kn + 1, kf);
                 1
             })
