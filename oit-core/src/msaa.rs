@@ -123,7 +123,8 @@ pub fn coverage(settings: &Settings) -> Option<Coverage> {
         Coverage::Pixel
     } else if keeps_masks(technique) {
         Coverage::Sample
-    } else if peels_masks(technique) && !settings.fraction_coverage && settings.effect != Effect::Translucency {
+    } else if peels_masks(technique) && !settings.fraction_coverage && settings.effect != Effect::Translucency
+    {
         // the peels keep the peeled layer's mask and composite it per sample (transparency,
         // Fresnel's transmittance, the heat map's counts); `--coverage fraction` keeps the
         // coverage-fraction peel to measure it against

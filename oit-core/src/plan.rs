@@ -630,7 +630,9 @@ impl Plan {
             Technique::Reference | Technique::Dfb | Technique::Ll => passes.push((PassKind::Fill, 1)),
             // per sample: every peel, then one pass that fetches the last peeled layer's
             // payload and mask (the pass that finds nothing where the peels ran out first)
-            Technique::Dp if self.sample_peel => passes.push((PassKind::Peel, peels(layers).saturating_add(1))),
+            Technique::Dp if self.sample_peel => {
+                passes.push((PassKind::Peel, peels(layers).saturating_add(1)))
+            }
             Technique::Ddp if self.sample_peel => {
                 passes.push((PassKind::Peel, peels(layers.div_ceil(2)).saturating_add(1)))
             }
@@ -763,7 +765,8 @@ fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<()
              fragment stage only; docs/msaa.md)"
         ));
     }
-    if scene.has_opaque() && !crate::msaa::keeps_masks(technique) && !crate::msaa::peels_per_sample(settings) {
+    if scene.has_opaque() && !crate::msaa::keeps_masks(technique) && !crate::msaa::peels_per_sample(settings)
+    {
         return refuse(format!(
             "{technique} at --samples {samples} with opaque objects: not yet done (the opaque cut \
              is per sample, and the techniques that keep no mask do not yet reduce their coverage \

@@ -187,7 +187,8 @@ fn render_samples(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
                     _ => 2,
                 };
                 for (i, back) in [(0, false), (2, true)].into_iter().take(at) {
-                    let (payload, mask) = (layers[4 * px + i].load(Relaxed), layers[4 * px + i + 1].load(Relaxed));
+                    let (payload, mask) =
+                        (layers[4 * px + i].load(Relaxed), layers[4 * px + i + 1].load(Relaxed));
                     accumulate(shared, a, 2, payload, mask as u8, back);
                     *n += 1;
                 }

@@ -474,7 +474,14 @@ impl SampleAccumulators {
 /// Composites one layer (payload `payload`, coverage mask `mask`) into the accumulators `acc`
 /// of a pixel (`halves` a sample): into each covered sample's front (`back` false), nearest
 /// first, or its back (`back` true, ddp), farthest first.
-pub(crate) fn accumulate(ctx: &Ctx<'_>, acc: &mut [[f32; 4]], halves: usize, payload: u32, mask: u8, back: bool) {
+pub(crate) fn accumulate(
+    ctx: &Ctx<'_>,
+    acc: &mut [[f32; 4]],
+    halves: usize,
+    payload: u32,
+    mask: u8,
+    back: bool,
+) {
     let effect = ctx.settings.effect;
     let (colour, factor) = match effect {
         Effect::Transparency => {
