@@ -71,11 +71,13 @@ pub fn full_mask(samples: u32) -> u8 {
 #[serde(rename_all = "lowercase")]
 pub enum Coverage {
     /// Per sample: the mask kept beside each entry's key, each sample compositing the entries
-    /// that cover it, the pixel the mean of its samples (reference, dfb, ll, fabs).
+    /// that cover it, the pixel the mean of its samples (reference, dfb, ll, fabs); or each
+    /// peeled layer's mask, composited into per-sample accumulators (dp, ddp: [`peels_masks`]).
     Sample,
     /// The fragment composited over the whole pixel, its alpha scaled by the fraction of the
     /// pixel's samples it covers (popcount(mask) / samples): the techniques without room for the
-    /// mask (the fixed packings, the weighted sums, the peels, the merges).
+    /// mask (the fixed packings, the weighted sums, the bucket peels, the merges), and dp and ddp
+    /// under `--coverage fraction`.
     Fraction,
     /// The fragment composited over the whole pixel at full alpha, whatever its mask: the
     /// per-pixel capture baseline (`--coverage pixel`), and what a technique does under an
@@ -106,7 +108,8 @@ pub fn peels_per_sample(settings: &Settings) -> bool {
 
 /// What a frame under `settings` does with its fragments' coverage masks; `None` at one sample.
 /// The reference is per sample always (the MSAA target); a technique that keeps masks is per
-/// sample unless `--coverage pixel`; every other technique weighs a fragment's alpha by its
+/// sample unless `--coverage pixel`, and so are dp and ddp unless `--coverage pixel` or
+/// `--coverage fraction` or translucency; every other technique weighs a fragment's alpha by its
 /// coverage fraction (measured to err less than per-pixel coverage against the per-sample
 /// reference on each but bdp's colour mode, which takes it whole: docs/msaa.md), or takes it at
 /// full alpha under `--coverage pixel` and under the effects whose payload has no alpha

@@ -955,7 +955,8 @@ fn mean_error(a: &oit_core::Image, b: &oit_core::Image) -> f64 {
 /// mask) — the two errors a technique that keeps no mask adds to the per-sample reference, by the
 /// triangle inequality where the two add independently; a technique below it loses no more at the
 /// edges than per-pixel capture does. Mutation tried: the alpha weight dropped in oit-cpu's
-/// covered walk (every fragment at full alpha: "dp on bunny: the choice 12.6825 against 12.6825").
+/// covered walk (every fragment at full alpha: "dp on bunny: the choice 12.6825 against 12.6825",
+/// when dp was among them; dp and ddp now peel per sample: `peels_per_sample_equal_the_reference`).
 #[test]
 fn techniques_without_masks_weigh_alpha_by_coverage() {
     let cpu = CpuBackend::default();
