@@ -180,7 +180,11 @@ fn exact_techniques_equal_the_per_sample_reference() {
 /// Fresnel (the transmittances per sample) they are exact too, and the heat map is the
 /// reference's. Under `--max-peels 2` one more pass fetches the last layer and what lies behind
 /// is counted lost. `--coverage fraction` keeps the former peel (each layer over the whole pixel,
-/// alpha × covered fraction), which errs where the per-sample peel does not.
+/// alpha × covered fraction), which errs where the per-sample peel does not. Mutations tried:
+/// oit-cpu's `accumulate` compositing each layer into every sample, its mask ignored ("dp on
+/// bunny at 4×: max error 0.29", 2732 error pixels); the same in the GPU's `peel_samples.wgsl`,
+/// caught by `gpu_paths_equal_the_cpu_at_samples` ("wgpu/hardware: dp on bunny at 4×: 1236 error
+/// pixels").
 #[test]
 fn peels_per_sample_equal_the_reference() {
     let cpu = CpuBackend::default();
