@@ -1025,6 +1025,43 @@ mod tests {
         assert!("merge".parse::<crate::Overflow>().is_err());
     }
 
+    /// dp and ddp above one sample peel per sample (docs/msaa.md): one pass past their peels,
+    /// 16 bytes a sample a half of accumulators; `--coverage fraction` and one sample keep the
+    /// single-sample schedule and arrays. Mutation caught: the per-sample schedule without its
+    /// fetching pass (the first assertion gives 5).
+    #[test]
+    fn peels_per_sample_plan() {
+        let four = |t: &str, f: fn(&mut Settings)| {
+            plan(t, |s| {
+                s.samples = 4;
+                f(s)
+            })
+            .unwrap()
+        };
+        let total = |p: &Plan, layers: u32| p.schedule(layers, layers).iter().map(|(_, n)| n).sum::<u32>();
+        let dp = four("dp", |_| {});
+        assert!(dp.sample_peel);
+        assert_eq!(total(&dp, 5), 6);
+        assert_eq!(total(&four("dp", |s| s.max_peels = Some(2)), 5), 3);
+        assert_eq!(total(&four("ddp", |_| {}), 5), 4);
+        assert_eq!(total(&four("ddp", |s| s.max_peels = Some(2)), 9), 3);
+        let accumulators = |p: &Plan| {
+            p.arrays(Counted::default())
+                .iter()
+                .find(|a| a.name.starts_with("sample accumulators"))
+                .map(|a| a.element_bytes * a.per_pixel)
+        };
+        assert_eq!(accumulators(&dp), Some(64));
+        assert_eq!(accumulators(&four("ddp", |_| {})), Some(128));
+        for p in [four("dp", |s| s.fraction_coverage = true), plan("dp", |_| {}).unwrap()] {
+            assert!(!p.sample_peel);
+            assert_eq!(accumulators(&p), None);
+            assert_eq!(total(&p, 5), 6);
+            assert_eq!(total(&Plan { peel_limit: 2, ..p }, 5), 2);
+        }
+        assert!(!four("dp", |s| s.effect = Effect::Translucency).sample_peel);
+    }
+
     #[test]
     fn sizing_and_alpha() {
         assert_eq!(plan("fabs", |_| {}).unwrap().slots(0), 1);

@@ -213,6 +213,17 @@ fn peels_per_sample_equal_the_reference() {
                     .unwrap();
                 let scheduled: u32 = plan.schedule(layers, layers).iter().map(|p| p.1).sum();
                 assert_eq!(f.stats.geometry_passes, scheduled, "{what}: the plan's schedule");
+                // the per-sample accumulators are the plan's, to the byte
+                let pixels = u64::from(s.width) * u64::from(s.height);
+                let arrays = plan.storage_bytes(pixels, oit_core::plan::Counted::default())
+                    - pixels * oit_core::plan::RESOLVE_STATE_BYTES;
+                assert_eq!(f.stats.storage_bytes, arrays, "{what}: storage");
+                assert!(
+                    plan.arrays(Default::default())
+                        .iter()
+                        .any(|a| a.name.starts_with("sample accumulators")
+                            && a.per_pixel == u64::from(samples))
+                );
                 // the peel limit: two peels and the pass that fetches the second
                 let limited = at(Settings { max_peels: Some(2), ..s.clone() });
                 checks::accounting(&limited).unwrap_or_else(|e| panic!("{what} --max-peels 2: {e}"));
