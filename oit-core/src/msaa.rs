@@ -71,11 +71,13 @@ pub fn full_mask(samples: u32) -> u8 {
 #[serde(rename_all = "lowercase")]
 pub enum Coverage {
     /// Per sample: the mask kept beside each entry's key, each sample compositing the entries
-    /// that cover it, the pixel the mean of its samples (reference, dfb, ll, fabs).
+    /// that cover it, the pixel the mean of its samples (reference, dfb, ll, fabs); or each
+    /// peeled layer's mask, composited into per-sample accumulators (dp, ddp: [`peels_masks`]).
     Sample,
     /// The fragment composited over the whole pixel, its alpha scaled by the fraction of the
     /// pixel's samples it covers (popcount(mask) / samples): the techniques without room for the
-    /// mask (the fixed packings, the weighted sums, the peels, the merges).
+    /// mask (the fixed packings, the weighted sums, the bucket peels, the merges), and dp and ddp
+    /// under `--coverage fraction`.
     Fraction,
     /// The fragment composited over the whole pixel at full alpha, whatever its mask: the
     /// per-pixel capture baseline (`--coverage pixel`), and what a technique does under an
@@ -88,9 +90,26 @@ pub fn keeps_masks(technique: Technique) -> bool {
     matches!(technique, Technique::Reference | Technique::Dfb | Technique::Ll | Technique::Fabs { .. })
 }
 
+/// Whether `technique` peels per sample above one sample (dp, ddp: docs/msaa.md): each peel
+/// finds a pixel's next layer by its (depth, primitive id) key, keeps the peeled fragment's mask
+/// and composites it into per-sample accumulators. Where [`coverage`] says
+/// [`Coverage::Sample`] for it ([`peels_per_sample`]).
+pub fn peels_masks(technique: Technique) -> bool {
+    matches!(technique, Technique::Dp | Technique::Ddp)
+}
+
+/// Whether a frame under `settings` peels per sample ([`peels_masks`]: dp or ddp, several
+/// samples, [`Coverage::Sample`]); `--coverage pixel`, `--coverage fraction` and translucency
+/// (whose per-sample state the accumulators do not keep) leave them by coverage fraction or per
+/// pixel as the techniques without a mask.
+pub fn peels_per_sample(settings: &Settings) -> bool {
+    peels_masks(settings.technique) && coverage(settings) == Some(Coverage::Sample)
+}
+
 /// What a frame under `settings` does with its fragments' coverage masks; `None` at one sample.
 /// The reference is per sample always (the MSAA target); a technique that keeps masks is per
-/// sample unless `--coverage pixel`; every other technique weighs a fragment's alpha by its
+/// sample unless `--coverage pixel`, and so are dp and ddp unless `--coverage pixel` or
+/// `--coverage fraction` or translucency; every other technique weighs a fragment's alpha by its
 /// coverage fraction (measured to err less than per-pixel coverage against the per-sample
 /// reference on each but bdp's colour mode, which takes it whole: docs/msaa.md), or takes it at
 /// full alpha under `--coverage pixel` and under the effects whose payload has no alpha
@@ -106,6 +125,12 @@ pub fn coverage(settings: &Settings) -> Option<Coverage> {
     } else if settings.pixel_coverage {
         Coverage::Pixel
     } else if keeps_masks(technique) {
+        Coverage::Sample
+    } else if peels_masks(technique) && !settings.fraction_coverage && settings.effect != Effect::Translucency
+    {
+        // the peels keep the peeled layer's mask and composite it per sample (transparency,
+        // Fresnel's transmittance, the heat map's counts); `--coverage fraction` keeps the
+        // coverage-fraction peel to measure it against
         Coverage::Sample
     } else if matches!(settings.effect, Effect::Fresnel | Effect::Translucency)
         || matches!(technique, Technique::Mdts { .. })

@@ -165,6 +165,11 @@ pub struct Plan {
     /// Samples a pixel (`Settings::samples`): above 1 each entry of `reference`, `dfb`, `ll` and
     /// `fabs` carries its coverage mask beside it, a byte ([`Plan::arrays`]; docs/msaa.md).
     pub samples: u32,
+    /// `dp` or `ddp` peeling per sample ([`crate::msaa::peels_per_sample`]): its keys are
+    /// (depth, primitive id), the peeled layer's payload and mask are fetched by the next pass,
+    /// and each sample composites into accumulators of its own ([`Plan::arrays`]); one pass more
+    /// than its peels ([`Plan::schedule`]).
+    pub sample_peel: bool,
     /// Whether the backend sizes the per-fragment arrays (`dfb`'s, `ll`'s, the reference's) in
     /// size classes ([`Plan::fragment_capacity`]): the GPU backends (`wgpu`, `vulkan`), whose
     /// buffers come from a pool that nearby views share. oit-cpu allocates exactly.
@@ -277,6 +282,7 @@ impl Plan {
         };
         Ok(Plan {
             samples: settings.samples,
+            sample_peel: crate::msaa::peels_per_sample(settings),
             pooled: matches!(backend, "wgpu" | "vulkan"),
             technique,
             bounds_pass: matches!(technique, Technique::Bdp { .. } | Technique::Adp),
@@ -429,7 +435,24 @@ impl Plan {
         bounds: Array,
     ) -> Vec<Array> {
         use crate::rules::{BDP_COLOR_SUBINTERVALS, BDP_DEPTH_SUBINTERVALS, BUCKETS, HISTOGRAM_WORDS};
+        let samples = u64::from(self.samples);
         match self.technique {
+            // per sample (docs/msaa.md): the keys are (depth, primitive id), the layer the last
+            // pass peeled waits for its payload and mask, which the next pass fetches, and each
+            // sample composites into its own (premultiplied RGB, transmittance)
+            Technique::Dp if self.sample_peel => vec![
+                per_pixel("nearest (depth key, primitive id)", 8, 1),
+                per_pixel("previous peel's key", 8, 1),
+                per_pixel("peeled layer (colour, mask)", 8, 1),
+                per_pixel("sample accumulators (RGB, transmittance)", 16, samples),
+            ],
+            Technique::Ddp if self.sample_peel => vec![
+                per_pixel("near (depth key, primitive id)", 8, 1),
+                per_pixel("far (depth key, primitive id)", 8, 1),
+                per_pixel("open key range", 16, 1),
+                per_pixel("peeled layers (colours, masks)", 16, 1),
+                per_pixel("sample accumulators (front and back RGB, transmittance)", 32, samples),
+            ],
             Technique::Reference => vec![
                 Array { name: "offsets", element_bytes: 4, per_pixel: 1, per_fragment: 0, fixed: 1 },
                 per_pixel("fill cursors", 4, 1),
@@ -605,6 +628,14 @@ impl Plan {
         }
         match self.technique {
             Technique::Reference | Technique::Dfb | Technique::Ll => passes.push((PassKind::Fill, 1)),
+            // per sample: every peel, then one pass that fetches the last peeled layer's
+            // payload and mask (the pass that finds nothing where the peels ran out first)
+            Technique::Dp if self.sample_peel => {
+                passes.push((PassKind::Peel, peels(layers).saturating_add(1)))
+            }
+            Technique::Ddp if self.sample_peel => {
+                passes.push((PassKind::Peel, peels(layers.div_ceil(2)).saturating_add(1)))
+            }
             Technique::Dp => passes.push((PassKind::Peel, peels(layers.saturating_add(1)))),
             Technique::Ddp => passes.push((PassKind::Peel, peels(layers.div_ceil(2).saturating_add(1)))),
             Technique::Mlp { m } => passes.push((PassKind::Peel, peels(layers.div_ceil(m.max(1)).max(1)))),
@@ -734,11 +765,12 @@ fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<()
              fragment stage only; docs/msaa.md)"
         ));
     }
-    if scene.has_opaque() && !crate::msaa::keeps_masks(technique) {
+    if scene.has_opaque() && !crate::msaa::keeps_masks(technique) && !crate::msaa::peels_per_sample(settings)
+    {
         return refuse(format!(
             "{technique} at --samples {samples} with opaque objects: not yet done (the opaque cut \
              is per sample, and the techniques that keep no mask do not yet reduce their coverage \
-             by it; reference, dfb, ll and fabs do: docs/msaa.md)"
+             by it; reference, dfb, ll, fabs, and dp and ddp per sample do: docs/msaa.md)"
         ));
     }
     if scene.has_opaque()
@@ -1012,6 +1044,43 @@ mod tests {
         }
         assert_eq!("TAIL".parse::<crate::Overflow>().unwrap(), crate::Overflow::Tail);
         assert!("merge".parse::<crate::Overflow>().is_err());
+    }
+
+    /// dp and ddp above one sample peel per sample (docs/msaa.md): one pass past their peels,
+    /// 16 bytes a sample a half of accumulators; `--coverage fraction` and one sample keep the
+    /// single-sample schedule and arrays. Mutation caught: the per-sample schedule without its
+    /// fetching pass (the first assertion gives 5).
+    #[test]
+    fn peels_per_sample_plan() {
+        let four = |t: &str, f: fn(&mut Settings)| {
+            plan(t, |s| {
+                s.samples = 4;
+                f(s)
+            })
+            .unwrap()
+        };
+        let total = |p: &Plan, layers: u32| p.schedule(layers, layers).iter().map(|(_, n)| n).sum::<u32>();
+        let dp = four("dp", |_| {});
+        assert!(dp.sample_peel);
+        assert_eq!(total(&dp, 5), 6);
+        assert_eq!(total(&four("dp", |s| s.max_peels = Some(2)), 5), 3);
+        assert_eq!(total(&four("ddp", |_| {}), 5), 4);
+        assert_eq!(total(&four("ddp", |s| s.max_peels = Some(2)), 9), 3);
+        let accumulators = |p: &Plan| {
+            p.arrays(Counted::default())
+                .iter()
+                .find(|a| a.name.starts_with("sample accumulators"))
+                .map(|a| a.element_bytes * a.per_pixel)
+        };
+        assert_eq!(accumulators(&dp), Some(64));
+        assert_eq!(accumulators(&four("ddp", |_| {})), Some(128));
+        for p in [four("dp", |s| s.fraction_coverage = true), plan("dp", |_| {}).unwrap()] {
+            assert!(!p.sample_peel);
+            assert_eq!(accumulators(&p), None);
+            assert_eq!(total(&p, 5), 6);
+            assert_eq!(total(&Plan { peel_limit: 2, ..p }, 5), 2);
+        }
+        assert!(!four("dp", |s| s.effect = Effect::Translucency).sample_peel);
     }
 
     #[test]

@@ -319,7 +319,11 @@ fn peel<R: ?Sized, F: Frame<R>>(
     param: u32,
     resolve_step: u32,
 ) -> Result<(), OitError> {
-    let limit = ctx.plan().peel_limit;
+    // per sample, one pass past the peels fetches the last layer peeled (`Plan::schedule`)
+    let limit = match ctx.plan() {
+        p if p.sample_peel => p.peel_limit.saturating_add(1),
+        p => p.peel_limit,
+    };
     let speculated = ctx.take_speculated_peels(raster)?.filter(|&s| s >= 1).map(|s| s.min(limit));
     let previous = match speculated {
         Some(_) => Some(ctx.scratch("peel gate", 1, Init::Zero)?),
@@ -492,6 +496,9 @@ fn mboit<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R, m: u32) -> Result<(), 
 
 /// Depth peeling: one layer a pass, front to back, until a pass peels nothing ([`peel`]).
 fn dp<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> {
+    if ctx.plan().sample_peel {
+        return dp_samples(ctx, raster);
+    }
     let mut storage = Storage::new(ctx, 0);
     let nearest = storage.buffer(ctx, "nearest", Init::Fill(u32::MAX))?;
     // the previous pass's depth buffer (oit-cpu counts 4 bytes a pixel too)
@@ -499,6 +506,38 @@ fn dp<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> {
     let peeled = ctx.scratch("dp peeled count", 1, Init::Zero)?;
     let buffers = [&nearest, &previous, &peeled];
     peel(ctx, raster, "dp", &buffers, &peeled, 0, 0)?;
+    storage.finish()
+}
+
+/// Depth peeling per sample (several samples, `dp_samples.wgsl`; docs/msaa.md): (depth,
+/// primitive id) peels, each peeled layer's payload and mask fetched by the next pass and
+/// composited into the covered samples' accumulators ([`peel`], one pass past the peels).
+fn dp_samples<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> {
+    let mut storage = Storage::new(ctx, 0);
+    let nearest = storage.buffer(ctx, "nearest", Init::Fill(u32::MAX))?;
+    let previous = storage.buffer(ctx, "previous peel's key", Init::Zero)?;
+    let layer = storage.buffer(ctx, "peeled layer", Init::Zero)?;
+    // set by the first pass's resolve
+    let acc = storage.buffer(ctx, "sample accumulators", Init::Zero)?;
+    let peeled = ctx.scratch("dp peeled count", 1, Init::Zero)?;
+    let buffers = [&nearest, &previous, &layer, &acc, &peeled];
+    peel(ctx, raster, "dp_samples", &buffers, &peeled, 0, 0)?;
+    storage.finish()
+}
+
+/// Dual depth peeling per sample (several samples, `ddp_samples.wgsl`; docs/msaa.md): as
+/// [`dp_samples`], the near layer into each covered sample's front, the far one into its back.
+fn ddp_samples<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> {
+    let mut storage = Storage::new(ctx, 0);
+    let near = storage.buffer(ctx, "near", Init::Fill(u32::MAX))?;
+    let far = storage.buffer(ctx, "far", Init::Zero)?;
+    // (lo, !hi): zeroed is the first pass's open range
+    let range = storage.buffer(ctx, "open key range", Init::Zero)?;
+    let acc = storage.buffer(ctx, "sample accumulators", Init::Zero)?;
+    let layers = storage.buffer(ctx, "peeled layers", Init::Zero)?;
+    let peeled = ctx.scratch("ddp peeled count", 1, Init::Zero)?;
+    let buffers = [&near, &far, &range, &acc, &layers, &peeled];
+    peel(ctx, raster, "ddp_samples", &buffers, &peeled, 0, 0)?;
     storage.finish()
 }
 
@@ -532,6 +571,9 @@ pub fn ddp_state<R: ?Sized, F: Frame<R>>(ctx: &mut F) -> Result<[F::Buffer; 4], 
 
 /// Dual depth peeling: the nearest and farthest layer a pass ([`peel`]).
 fn ddp<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> {
+    if ctx.plan().sample_peel {
+        return ddp_samples(ctx, raster);
+    }
     check_ddp_effect(ctx.backend(), ctx.settings().effect)?;
     let [near, far, range, peeled] = ddp_state(ctx)?;
     peel(ctx, raster, "ddp", &[&near, &far, &range, &peeled], &peeled, 0, 0)

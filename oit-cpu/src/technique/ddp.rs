@@ -23,6 +23,9 @@ use super::Ctx;
 use crate::storage::{take_u32, take_u64};
 
 pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
+    if ctx.plan.sample_peel {
+        return render_samples(ctx);
+    }
     const EMPTY_MIN: u64 = u64::MAX;
     let near = ctx.alloc64(1, EMPTY_MIN)?;
     let far = ctx.alloc64(1, 0)?;
@@ -112,4 +115,96 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         peels += 1;
     }
     Ok(super::finish(ctx, states))
+}
+
+/// `ddp` per sample (several samples, docs/msaa.md): each pass walks the multisampled fragments
+/// and keeps, per pixel, the smallest and the largest (depth bits, primitive id) key strictly
+/// inside the open range the pass before left, so every fragment is one layer and ties come in
+/// the reference's order (none lost). The peeled layers' payloads and coverage masks are fetched
+/// by the next pass (the fragments whose keys are the ones peeled) and composited into the
+/// covered samples' front and back accumulators ([`super::msaa::SampleAccumulators`]); the pass
+/// that finds nothing fetches the last ones. Where the peel limit stops it first, one more pass
+/// fetches the last layers and counts what lies between them lost.
+fn render_samples(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
+    use super::msaa::{accumulate, finish_accumulated, key};
+    const EMPTY_MIN: u64 = u64::MAX;
+    // nothing left: no key k has k + 1 > lo or k == hi
+    const DONE: (u64, u64) = (u64::MAX, u64::MAX);
+    let samples = ctx.settings.samples;
+    let near = ctx.alloc64(1, EMPTY_MIN)?;
+    let far = ctx.alloc64(1, 0)?;
+    // per pixel (lo, hi): k lies inside where k + 1 > lo and k < hi; the near layer the last
+    // pass peeled is lo − 1, the far one hi (where it peeled two; one where hi + 1 = lo)
+    let mut range: Vec<(u64, u64)> = vec![(0, u64::MAX); ctx.pixels];
+    ctx.storage_bytes += ctx.pixels as u64 * 16;
+    // the peeled layers' payloads and masks: near, then far
+    let layers = ctx.alloc32(4, 0)?;
+    let mut acc = super::msaa::SampleAccumulators::new(ctx, 2)?;
+    let mut captured = vec![0u32; ctx.pixels];
+    let limit = ctx.plan.peel_limit.saturating_add(1);
+    let mut passes = 0;
+    while passes < limit {
+        let last = passes + 1 == limit;
+        let (r, shared) = (&range, &*ctx);
+        let generated = shared.raster.for_each_masked_fragment(samples, |f, mask| {
+            let px = f.pixel as usize;
+            let k = key(f);
+            let (lo, hi) = r[px];
+            let slot = if k + 1 > lo && k < hi {
+                if last {
+                    // between the last layers the limit allows
+                    shared.lose(px);
+                } else {
+                    near[px].fetch_min(k, Relaxed);
+                    far[px].fetch_max(k, Relaxed);
+                }
+                return;
+            } else if k + 1 == lo {
+                0
+            } else if k == hi {
+                2
+            } else {
+                return;
+            };
+            layers[4 * px + slot].store(shared.payload(f), Relaxed);
+            layers[4 * px + slot + 1].store(u32::from(mask), Relaxed);
+        });
+        ctx.ran_pass(generated);
+        let shared = &*ctx;
+        let peeled: u64 = range
+            .par_iter_mut()
+            .zip(acc.pixels_mut())
+            .zip(captured.par_iter_mut())
+            .enumerate()
+            .map(|(px, ((range, a), n))| {
+                if *range == DONE {
+                    return 0;
+                }
+                // layers the last pass peeled: none before the first, one where near was far
+                let at = match *range {
+                    (0, u64::MAX) => 0,
+                    (lo, hi) if hi.wrapping_add(1) == lo => 1,
+                    _ => 2,
+                };
+                for (i, back) in [(0, false), (2, true)].into_iter().take(at) {
+                    let (payload, mask) =
+                        (layers[4 * px + i].load(Relaxed), layers[4 * px + i + 1].load(Relaxed));
+                    accumulate(shared, a, 2, payload, mask as u8, back);
+                    *n += 1;
+                }
+                let (kn, kf) = (take_u64(&near[px], EMPTY_MIN), take_u64(&far[px], 0));
+                if kn == EMPTY_MIN {
+                    *range = DONE;
+                    return 0;
+                }
+                *range = (kn + 1, kf);
+                1
+            })
+            .sum();
+        passes += 1;
+        if peeled == 0 {
+            break;
+        }
+    }
+    Ok(finish_accumulated(ctx, &acc, &captured))
 }

@@ -19,6 +19,9 @@ use rayon::prelude::*;
 use super::Ctx;
 
 pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
+    if ctx.plan.sample_peel {
+        return render_samples(ctx);
+    }
     const EMPTY: u64 = u64::MAX;
     let nearest = ctx.alloc64(1, EMPTY)?;
     // Depth bits of the last peeled layer; u64 so "nothing peeled yet" sits below every depth.
@@ -95,4 +98,78 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         peels += 1;
     }
     Ok(super::finish(ctx, states))
+}
+
+/// `dp` per sample (several samples, docs/msaa.md): each pass walks the multisampled fragments
+/// and keeps, per pixel, the smallest (depth bits, primitive id) key strictly behind the layer the
+/// pass before peeled, so every fragment is one layer and ties come in the reference's order
+/// (none lost). The peeled layer's payload and coverage mask are fetched by the next pass (its
+/// one fragment whose key is the one peeled) and composited into the covered samples'
+/// accumulators ([`super::msaa::SampleAccumulators`]); the pass that finds nothing fetches the
+/// last layer, so the passes are the layers and one. Where the peel limit stops it first, one
+/// more pass fetches the last layer and counts what lies behind it lost.
+fn render_samples(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
+    use super::msaa::{accumulate, finish_accumulated, key};
+    const EMPTY: u64 = u64::MAX;
+    // key + 1 of the layer the last pass peeled: 0 none yet, DONE nothing left
+    const DONE: u64 = u64::MAX;
+    let samples = ctx.settings.samples;
+    let nearest = ctx.alloc64(1, EMPTY)?;
+    let mut previous = vec![0u64; ctx.pixels];
+    ctx.storage_bytes += ctx.pixels as u64 * 8;
+    // the peeled layer's payload and mask
+    let layer = ctx.alloc32(2, 0)?;
+    let mut acc = super::msaa::SampleAccumulators::new(ctx, 1)?;
+    let mut captured = vec![0u32; ctx.pixels];
+    let limit = ctx.plan.peel_limit.saturating_add(1);
+    let mut passes = 0;
+    while passes < limit {
+        let last = passes + 1 == limit;
+        let (prev, shared) = (&previous, &*ctx);
+        let generated = shared.raster.for_each_masked_fragment(samples, |f, mask| {
+            let px = f.pixel as usize;
+            let k = key(f) + 1;
+            if k > prev[px] {
+                if last {
+                    // behind the last layer the limit allows
+                    shared.lose(px);
+                } else {
+                    nearest[px].fetch_min(k - 1, Relaxed);
+                }
+            } else if k == prev[px] {
+                layer[2 * px].store(shared.payload(f), Relaxed);
+                layer[2 * px + 1].store(u32::from(mask), Relaxed);
+            }
+        });
+        ctx.ran_pass(generated);
+        let shared = &*ctx;
+        let peeled: u64 = previous
+            .par_iter_mut()
+            .zip(acc.pixels_mut())
+            .zip(captured.par_iter_mut())
+            .enumerate()
+            .map(|(px, ((prev, a), n))| {
+                if *prev == DONE {
+                    return 0;
+                }
+                if *prev != 0 {
+                    let (payload, mask) = (layer[2 * px].load(Relaxed), layer[2 * px + 1].load(Relaxed));
+                    accumulate(shared, a, 1, payload, mask as u8, false);
+                    *n += 1;
+                }
+                let k = crate::storage::take_u64(&nearest[px], EMPTY);
+                if k == EMPTY {
+                    *prev = DONE;
+                    return 0;
+                }
+                *prev = k + 1;
+                1
+            })
+            .sum();
+        passes += 1;
+        if peeled == 0 {
+            break;
+        }
+    }
+    Ok(finish_accumulated(ctx, &acc, &captured))
 }

@@ -67,7 +67,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>, technique: Technique) -> Result<Frame, O
 
 /// A fragment's key: depth bits above the primitive id.
 #[inline]
-fn key(f: &Fragment<'_>) -> u64 {
+pub(crate) fn key(f: &Fragment<'_>) -> u64 {
     u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim)
 }
 
@@ -441,4 +441,111 @@ fn fabs(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
                 .map(|i| (slots[i].load(Relaxed), payloads[i].load(Relaxed), masks[i].load(Relaxed))),
         );
     }))
+}
+
+/// The per-sample accumulators of the peels that composite per sample (`dp`, `ddp`;
+/// docs/msaa.md): `halves` (1 for dp, 2 for ddp) `[f32; 4]` a sample, each (RGB, transmittance)
+/// from (0, 1): the front composited nearest first (premultiplied colour under what is in front,
+/// as `FrontToBack::under`), and ddp's back farthest first, kept without what lies behind it (its
+/// colour and the transmittance to the background), so sample `i` finishes to
+/// front.rgb + front.t · (back.rgb + back.t · behind(i)). Fresnel multiplies the transmittances
+/// only; the heat map counts layers a pixel. The GPU's `technique/peel_samples.wgsl` keeps the same.
+pub(crate) struct SampleAccumulators {
+    words: Vec<[f32; 4]>,
+    samples: usize,
+    halves: usize,
+}
+
+impl SampleAccumulators {
+    /// `halves` accumulators a sample of every pixel, counted in the frame's storage.
+    pub fn new(ctx: &mut Ctx<'_>, halves: usize) -> Result<Self, OitError> {
+        let samples = ctx.settings.samples as usize;
+        let n = (ctx.pixels as u64).saturating_mul((samples * halves) as u64);
+        let len = ctx.checked(n, 16)?;
+        Ok(SampleAccumulators { words: vec![[0.0, 0.0, 0.0, 1.0]; len], samples, halves })
+    }
+
+    /// Each pixel's accumulators, in parallel with `other`.
+    pub fn pixels_mut(&mut self) -> rayon::slice::ChunksMut<'_, [f32; 4]> {
+        self.words.par_chunks_mut(self.samples * self.halves)
+    }
+}
+
+/// Composites one layer (payload `payload`, coverage mask `mask`) into the accumulators `acc`
+/// of a pixel (`halves` a sample): into each covered sample's front (`back` false), nearest
+/// first, or its back (`back` true, ddp), farthest first.
+pub(crate) fn accumulate(
+    ctx: &Ctx<'_>,
+    acc: &mut [[f32; 4]],
+    halves: usize,
+    payload: u32,
+    mask: u8,
+    back: bool,
+) {
+    let effect = ctx.settings.effect;
+    let (colour, factor) = match effect {
+        Effect::Transparency => {
+            let c = oit_core::rules::unpack_rgba8(payload);
+            (c, 1.0 - c.w)
+        }
+        Effect::Fresnel => {
+            let n = oit_core::rules::unpack_normal(payload);
+            (glam::Vec4::ZERO, oit_core::composite::schlick_transmittance(n.dot(ctx.camera.forward)))
+        }
+        _ => return,
+    };
+    let rgb = colour.truncate();
+    for (i, sample) in acc.chunks_mut(halves).enumerate() {
+        if mask >> i & 1 == 0 {
+            continue;
+        }
+        let a = &mut sample[usize::from(back)];
+        let (c, t) = (Vec3::new(a[0], a[1], a[2]), a[3]);
+        let c = if effect != Effect::Transparency {
+            c
+        } else if back {
+            colour.w * rgb + (1.0 - colour.w) * c
+        } else {
+            c + t * colour.w * rgb
+        };
+        *a = [c.x, c.y, c.z, t * factor];
+    }
+}
+
+/// The linear colour of a pixel from its accumulators `acc` (`halves` a sample): each sample
+/// finished over what lies behind it (its opaque colour, or the background), summed in sample
+/// order, times 1/N.
+pub(crate) fn accumulated(ctx: &Ctx<'_>, acc: &[[f32; 4]], halves: usize, px: usize) -> Vec3 {
+    let mut sum = Vec3::ZERO;
+    for (i, sample) in acc.chunks(halves).enumerate() {
+        let behind = ctx.resolve.background_at_sample(px, i);
+        let back = match sample.get(1) {
+            Some(b) => Vec3::new(b[0], b[1], b[2]) + b[3] * behind,
+            None => behind,
+        };
+        let f = sample[0];
+        sum += Vec3::new(f[0], f[1], f[2]) + f[3] * back;
+    }
+    sum * (1.0 / ctx.settings.samples as f32)
+}
+
+/// The frame of a peel composited per sample: each pixel's colour from its accumulators (or the
+/// mean of its samples' backgrounds where it captured nothing, the heat map under complexity),
+/// `captured[px]` layers a pixel.
+pub(crate) fn finish_accumulated(ctx: &Ctx<'_>, acc: &SampleAccumulators, captured: &[u32]) -> Frame {
+    let resolve = &ctx.resolve;
+    let per = acc.samples * acc.halves;
+    let deepest = captured.iter().copied().max().unwrap_or(0).max(1);
+    let complexity = ctx.settings.effect == Effect::Complexity;
+    super::finish_pixels(ctx, |px| {
+        let n = captured[px];
+        let c = if n == 0 {
+            resolve.background_mean(px)
+        } else if complexity {
+            oit_core::composite::heat(n as f32 / deepest as f32)
+        } else {
+            accumulated(ctx, &acc.words[px * per..px * per + per], acc.halves, px)
+        };
+        (crate::resolve::srgb(c), n)
+    })
 }
