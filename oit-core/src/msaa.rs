@@ -85,7 +85,10 @@ pub enum Coverage {
 
 /// Whether `technique` keeps each fragment's mask beside its key and composites per sample.
 pub fn keeps_masks(technique: Technique) -> bool {
-    matches!(technique, Technique::Reference | Technique::Dfb | Technique::Ll | Technique::Fabs { .. })
+    matches!(
+        technique,
+        Technique::Reference | Technique::Dfb | Technique::Ll | Technique::Fabs { .. } | Technique::Kbuf { .. }
+    )
 }
 
 /// What a frame under `settings` does with its fragments' coverage masks; `None` at one sample.
