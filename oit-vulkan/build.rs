@@ -151,7 +151,9 @@ fn interlock(words: &[u32], entries: &[&str]) -> Result<Vec<u32>, String> {
         .map(|entry| {
             list.iter()
                 .find(|&&(at, o, count)| {
-                    o == op::ENTRY_POINT && count >= 4 && literal(&words[at + 3..at + count]) == entry.as_bytes()
+                    o == op::ENTRY_POINT
+                        && count >= 4
+                        && literal(&words[at + 3..at + count]) == entry.as_bytes()
                 })
                 .map(|&(at, _, _)| words[at + 2])
                 .ok_or_else(|| format!("no entry point '{entry}'"))

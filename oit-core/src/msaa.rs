@@ -87,7 +87,11 @@ pub enum Coverage {
 pub fn keeps_masks(technique: Technique) -> bool {
     matches!(
         technique,
-        Technique::Reference | Technique::Dfb | Technique::Ll | Technique::Fabs { .. } | Technique::Kbuf { .. }
+        Technique::Reference
+            | Technique::Dfb
+            | Technique::Ll
+            | Technique::Fabs { .. }
+            | Technique::Kbuf { .. }
     )
 }
 

@@ -60,8 +60,7 @@ fn kbuf_interlocks_both_fragment_entry_points() {
     const END: u32 = 5365;
     const ORDERED: u32 = 5366;
     for (name, bytes, _) in oit_vulkan::spirv_modules() {
-        let words: Vec<u32> =
-            bytes.chunks(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+        let words: Vec<u32> = bytes.chunks(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
         // (opcode, operands) of each instruction after the header
         let mut list = Vec::new();
         let mut at = 5;
@@ -78,8 +77,11 @@ fn kbuf_interlocks_both_fragment_entry_points() {
                 (o == ENTRY_POINT && text == wanted.as_bytes()).then_some(w[1])
             })
         };
-        let ordered: Vec<u32> =
-            list.iter().filter(|&&(o, w)| o == EXECUTION_MODE && w[1] == ORDERED).map(|&(_, w)| w[0]).collect();
+        let ordered: Vec<u32> = list
+            .iter()
+            .filter(|&&(o, w)| o == EXECUTION_MODE && w[1] == ORDERED)
+            .map(|&(_, w)| w[0])
+            .collect();
         // (begins, ends) in function `f`'s body
         let section = |f: u32| {
             let mut inside = false;

@@ -117,7 +117,10 @@ fn kbuf_at_samples_equals_fabs_and_the_per_sample_reference() {
             let on = format!("{name} at {samples} samples, {}", label(b));
             if !runs {
                 let s = Settings { technique: Technique::Kbuf { k: Some(3) }, ..base.clone() };
-                let e = b.render(&scene, &cam, &s).err().unwrap_or_else(|| panic!("{on}: ran without an interlock"));
+                let e = b
+                    .render(&scene, &cam, &s)
+                    .err()
+                    .unwrap_or_else(|| panic!("{on}: ran without an interlock"));
                 assert!(e.to_string().contains("VK_EXT_fragment_shader_interlock"), "{on}: {e}");
                 continue;
             }
@@ -136,7 +139,8 @@ fn kbuf_at_samples_equals_fabs_and_the_per_sample_reference() {
                 let what = format!("{technique} on {on}");
                 let s = Settings { technique, ..base.clone() };
                 let kbuf = render(b, &scene, &cam, &s);
-                let fabs = render(b, &scene, &cam, &Settings { technique: Technique::Fabs { k }, ..s.clone() });
+                let fabs =
+                    render(b, &scene, &cam, &Settings { technique: Technique::Fabs { k }, ..s.clone() });
                 let key = |f: &oit_core::Frame| (f.stats.fragments, f.stats.captured, f.stats.lost);
                 assert_eq!(key(&kbuf), key(&fabs), "{what}: (fragments, captured, lost) vs fabs");
                 let differ = kbuf.image.pixels.iter().zip(&fabs.image.pixels).filter(|(a, b)| a != b).count();
@@ -154,7 +158,11 @@ fn kbuf_at_samples_equals_fabs_and_the_per_sample_reference() {
                 assert!(plan.arrays(counted).iter().any(|a| a.name == "coverage masks"), "{what}");
                 if k != Some(2) {
                     let a = accuracy(&reference, &kbuf.image).expect("same size");
-                    assert_eq!((kbuf.stats.lost, a.epr), (0, 0.0), "{what}: against the per-sample reference");
+                    assert_eq!(
+                        (kbuf.stats.lost, a.epr),
+                        (0, 0.0),
+                        "{what}: against the per-sample reference"
+                    );
                 }
             }
             ran.push(on);
@@ -168,6 +176,10 @@ fn kbuf_at_samples_equals_fabs_and_the_per_sample_reference() {
              VK_EXT_fragment_shader_interlock); it ran against fabs and the per-sample reference on none"
         )
     } else {
-        writeln!(std::io::stderr(), "kbuf at samples: ran against fabs and the per-sample reference on {}", ran.join("; "))
+        writeln!(
+            std::io::stderr(),
+            "kbuf at samples: ran against fabs and the per-sample reference on {}",
+            ran.join("; ")
+        )
     };
 }
