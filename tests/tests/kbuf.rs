@@ -121,7 +121,10 @@ fn kbuf_at_samples_equals_fabs_and_the_per_sample_reference() {
                     .render(&scene, &cam, &s)
                     .err()
                     .unwrap_or_else(|| panic!("{on}: ran without an interlock"));
-                assert!(e.to_string().contains("VK_EXT_fragment_shader_interlock"), "{on}: {e}");
+                // 8 samples: a hardware path whose count target takes none refuses them first
+                let e = e.to_string();
+                let samples_first = samples == 8 && e.contains("--samples 8");
+                assert!(e.contains("VK_EXT_fragment_shader_interlock") || samples_first, "{on}: {e}");
                 continue;
             }
             let reference = match b.render(&scene, &cam, &base) {
