@@ -4,7 +4,7 @@
 //! The modules and their texts are oit-shaders' (`oit_shaders::MODULES`, the one manifest oit-wgpu
 //! builds its pipelines from at run time): `Module::compute_text` for each, and for a module
 //! with a rasterizer also its hardware-raster twin, `Module::hardware_text`, as `<module>_hw`
-//! (entry points `hw_vs` and `hw_fs`). One SPIR-V module per name holds every entry point: the
+//! (entry points `hw_vs`, `hw_fs` and the multisampled `hw_fs_masked`). One SPIR-V module per name holds every entry point: the
 //! rasterizer's (`raster_main`, `raster_loop_main`) and the technique's kernels. What only raw
 //! Vulkan needs is done here, on the SPIR-V: the image atomics' results (`atomic_results`), the
 //! ordered interlock (`interlock`) and `sample_mask` as the array Vulkan requires
@@ -17,9 +17,12 @@
 
 use std::path::PathBuf;
 
-/// Hardware-raster modules whose fragment entry point `hw_fs` runs in an ordered interlock
-/// ([`interlock`]).
+/// Hardware-raster modules whose fragment entry points run in an ordered interlock
+/// ([`interlock`]): the single-sample `hw_fs` and the multisampled `hw_fs_masked` (docs/msaa.md).
 const INTERLOCKED: &[&str] = &["kbuf_hw"];
+
+/// The fragment entry points of an [`INTERLOCKED`] module that [`interlock`] wraps.
+const INTERLOCKED_ENTRIES: &[&str] = &["hw_fs", "hw_fs_masked"];
 
 /// SPIR-V opcodes (and the two operand values) `atomic_results` and `interlock` read and write.
 mod op {
@@ -133,23 +136,29 @@ fn atomic_results(words: &mut [u32]) -> Result<usize, String> {
     Ok(copied)
 }
 
-/// Puts fragment entry point `entry`'s whole body in `VK_EXT_fragment_shader_interlock`'s ordered
-/// per-pixel critical section, which WGSL cannot express: the capability
-/// `FragmentShaderPixelInterlockEXT`, the extension, the execution mode
-/// `PixelInterlockOrderedEXT`, `OpBeginInvocationInterlockEXT` after the entry's first block's
-/// variables and `OpEndInvocationInterlockEXT` before its one return, so each is executed once,
-/// in the entry function's outermost control flow (the shape GLSL's `beginInvocationInterlockARB`
-/// requires). Fails on an entry with no body, more than one return, or a discard (a fragment
-/// discarded inside the section would never end it).
-fn interlock(words: &[u32], entry: &str) -> Result<Vec<u32>, String> {
+/// Puts each fragment entry point of `entries` whole body in `VK_EXT_fragment_shader_interlock`'s
+/// ordered per-pixel critical section, which WGSL cannot express: the capability
+/// `FragmentShaderPixelInterlockEXT` and the extension (once), the execution mode
+/// `PixelInterlockOrderedEXT` for each entry, `OpBeginInvocationInterlockEXT` after the entry's
+/// first block's variables and `OpEndInvocationInterlockEXT` before its one return, so each is
+/// executed once, in the entry function's outermost control flow (the shape GLSL's
+/// `beginInvocationInterlockARB` requires). Fails on an entry missing, one with no body, more than
+/// one return, or a discard (a fragment discarded inside the section would never end it).
+fn interlock(words: &[u32], entries: &[&str]) -> Result<Vec<u32>, String> {
     let list = instructions(words)?;
-    let function = list
+    let functions = entries
         .iter()
-        .find(|&&(at, o, count)| {
-            o == op::ENTRY_POINT && count >= 4 && literal(&words[at + 3..at + count]) == entry.as_bytes()
+        .map(|entry| {
+            list.iter()
+                .find(|&&(at, o, count)| {
+                    o == op::ENTRY_POINT
+                        && count >= 4
+                        && literal(&words[at + 3..at + count]) == entry.as_bytes()
+                })
+                .map(|&(at, _, _)| words[at + 2])
+                .ok_or_else(|| format!("no entry point '{entry}'"))
         })
-        .map(|&(at, _, _)| words[at + 2])
-        .ok_or_else(|| format!("no entry point '{entry}'"))?;
+        .collect::<Result<Vec<u32>, String>>()?;
     let last_of = |o: u32| list.iter().rposition(|&(_, x, _)| x == o);
     let capability_at = last_of(op::CAPABILITY).ok_or("no OpCapability")?;
     let mode_at = last_of(op::EXECUTION_MODE).or(last_of(op::ENTRY_POINT)).ok_or("no OpEntryPoint")?;
@@ -162,27 +171,30 @@ fn interlock(words: &[u32], entry: &str) -> Result<Vec<u32>, String> {
         w
     };
     let mut out = words[..HEADER].to_vec();
-    let (mut in_entry, mut begun, mut returns) = (false, false, 0);
+    // per entry: body begun, returns
+    let mut seen = vec![(false, 0); entries.len()];
+    let mut in_entry: Option<usize> = None;
     for (i, &(at, o, count)) in list.iter().enumerate() {
-        if in_entry {
-            if !begun && !matches!(o, op::LABEL | op::VARIABLE | op::LINE | op::NO_LINE) {
+        if let Some(e) = in_entry {
+            let (begun, returns) = &mut seen[e];
+            if !*begun && !matches!(o, op::LABEL | op::VARIABLE | op::LINE | op::NO_LINE) {
                 out.push((1 << 16) | op::BEGIN_INTERLOCK);
-                begun = true;
+                *begun = true;
             }
             match o {
                 op::RETURN | op::RETURN_VALUE => {
                     out.push((1 << 16) | op::END_INTERLOCK);
-                    returns += 1;
+                    *returns += 1;
                 }
                 op::KILL | op::TERMINATE_INVOCATION => {
-                    return Err(format!("'{entry}' discards inside its interlocked body"));
+                    return Err(format!("'{}' discards inside its interlocked body", entries[e]));
                 }
-                op::FUNCTION_END => in_entry = false,
+                op::FUNCTION_END => in_entry = None,
                 _ => {}
             }
         }
-        if o == op::FUNCTION && count >= 3 && words[at + 2] == function {
-            in_entry = true;
+        if o == op::FUNCTION && count >= 3 {
+            in_entry = functions.iter().position(|&f| f == words[at + 2]);
         }
         out.extend_from_slice(&words[at..at + count]);
         if i == capability_at {
@@ -190,11 +202,15 @@ fn interlock(words: &[u32], entry: &str) -> Result<Vec<u32>, String> {
             out.extend(&extension);
         }
         if i == mode_at {
-            out.extend([(3 << 16) | op::EXECUTION_MODE, function, op::PIXEL_INTERLOCK_ORDERED]);
+            for &function in &functions {
+                out.extend([(3 << 16) | op::EXECUTION_MODE, function, op::PIXEL_INTERLOCK_ORDERED]);
+            }
         }
     }
-    if !begun || returns != 1 {
-        return Err(format!("'{entry}': {returns} returns (one is needed), body begun: {begun}"));
+    for (entry, &(begun, returns)) in entries.iter().zip(&seen) {
+        if !begun || returns != 1 {
+            return Err(format!("'{entry}': {returns} returns (one is needed), body begun: {begun}"));
+        }
     }
     Ok(out)
 }
@@ -351,7 +367,7 @@ fn main() {
             panic!("{name}: calls vk_atomic_result but no call was rewritten");
         }
         if INTERLOCKED.contains(&name) {
-            words = interlock(&words, "hw_fs").unwrap_or_else(|e| panic!("{name}: {e}"));
+            words = interlock(&words, INTERLOCKED_ENTRIES).unwrap_or_else(|e| panic!("{name}: {e}"));
         }
         let (arrays, rewritten) = sample_mask_arrays(&words).unwrap_or_else(|e| panic!("{name}: {e}"));
         if text.contains("@builtin(sample_mask)") && rewritten == 0 {

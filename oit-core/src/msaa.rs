@@ -87,7 +87,14 @@ pub enum Coverage {
 
 /// Whether `technique` keeps each fragment's mask beside its key and composites per sample.
 pub fn keeps_masks(technique: Technique) -> bool {
-    matches!(technique, Technique::Reference | Technique::Dfb | Technique::Ll | Technique::Fabs { .. })
+    matches!(
+        technique,
+        Technique::Reference
+            | Technique::Dfb
+            | Technique::Ll
+            | Technique::Fabs { .. }
+            | Technique::Kbuf { .. }
+    )
 }
 
 /// Whether `technique` peels per sample above one sample (dp, ddp: docs/msaa.md): each peel

@@ -413,7 +413,7 @@ impl Plan {
             // the coverage mask of each entry, a byte beside it (8 samples at most)
             let masks = "coverage masks";
             match self.technique {
-                Technique::Fabs { .. } => arrays.push(per_pixel(masks, 1, k)),
+                Technique::Fabs { .. } | Technique::Kbuf { .. } => arrays.push(per_pixel(masks, 1, k)),
                 Technique::Reference | Technique::Dfb | Technique::Ll => arrays.push(Array {
                     name: masks,
                     element_bytes: 1,
@@ -744,8 +744,7 @@ impl Plan {
 }
 
 /// What several samples a pixel (`Settings::samples` above 1, docs/msaa.md) are not yet done
-/// for, refused by name alike on every backend: `kbuf` (its interlock wraps the single-sample
-/// fragment stage); the supersampled reference (`--supersample`) of a scene with opaque objects;
+/// for, refused by name alike on every backend: the supersampled reference (`--supersample`) of a scene with opaque objects;
 /// the techniques that keep no mask over opaque objects. (The opaque pass itself is multisampled:
 /// its depth and colour are kept a sample, [`Plan::opaque_bytes`].) (A hardware raster path
 /// refuses a sample count its device does not draw where it starts a frame, its own captures,
@@ -759,12 +758,6 @@ fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<()
     }
     let technique = settings.technique;
     let refuse = |what: String| Err(OitError::Unsupported { backend: backend.into(), what });
-    if matches!(technique, Technique::Kbuf { .. }) {
-        return refuse(format!(
-            "kbuf at --samples {samples}: not yet done (its ordered interlock wraps the single-sample \
-             fragment stage only; docs/msaa.md)"
-        ));
-    }
     if scene.has_opaque() && !crate::msaa::keeps_masks(technique) && !crate::msaa::peels_per_sample(settings)
     {
         return refuse(format!(

@@ -912,19 +912,15 @@ impl Rasterizer {
     ) -> u64 {
         if let Some(covered) = self.covered {
             let offsets = sample_offsets(covered.samples);
-            let mut n = 0u64;
-            for i in order {
-                n += self.walk_masked(i, &offsets, rows, &|_| true, |frag, mask| {
-                    if covered.fraction {
-                        let mut color = frag.color();
-                        color.w = oit_core::msaa::fraction_alpha(color.w, mask, covered.samples);
-                        f(&Fragment { color: Some(color), ..*frag });
-                    } else {
-                        f(frag);
-                    }
-                });
-            }
-            return n;
+            return self.masked_task(kernel, shade, order, rows, &offsets, &|_| true, &|frag, mask| {
+                if covered.fraction {
+                    let mut color = frag.color();
+                    color.w = oit_core::msaa::fraction_alpha(color.w, mask, covered.samples);
+                    f(&Fragment { color: Some(color), ..*frag });
+                } else {
+                    f(frag);
+                }
+            });
         }
         #[cfg(target_arch = "x86_64")]
         if kernel == Kernel::Avx2 {
@@ -973,7 +969,20 @@ impl Rasterizer {
     /// first pass after the cut, as the single-sample walks count theirs. The pass still returns
     /// every fragment drawn.
     pub fn for_each_masked_fragment<F: Fn(&Fragment<'_>, u8) + Sync>(&self, samples: u32, f: F) -> u64 {
-        self.for_each_masked_fragment_where(samples, &|_| true, f)
+        self.masked_pass(samples, Shade::OnDemand, &|_| true, f)
+    }
+
+    /// [`Rasterizer::for_each_masked_fragment`] shaded as `shade` says: with [`Shade::Color`]
+    /// every fragment's colour is made before `f` sees it, the same colours bit for bit, shaded
+    /// several at once where the walk batches them (AVX2), for a pass that reads every
+    /// fragment's colour.
+    pub fn for_each_masked_fragment_with<F: Fn(&Fragment<'_>, u8) + Sync>(
+        &self,
+        samples: u32,
+        shade: Shade,
+        f: F,
+    ) -> u64 {
+        self.masked_pass(samples, shade, &|_| true, f)
     }
 
     /// [`Rasterizer::for_each_masked_fragment`] over the pixels `keep` keeps only: a pixel it
@@ -984,14 +993,23 @@ impl Rasterizer {
         K: Fn(u32) -> bool + Sync,
         F: Fn(&Fragment<'_>, u8) + Sync,
     {
+        self.masked_pass(samples, Shade::OnDemand, keep, f)
+    }
+
+    /// The masked passes: [`Rasterizer::for_each_masked_fragment_where`] shaded as `shade` says.
+    fn masked_pass<K, F>(&self, samples: u32, shade: Shade, keep: &K, f: F) -> u64
+    where
+        K: Fn(u32) -> bool + Sync,
+        F: Fn(&Fragment<'_>, u8) + Sync,
+    {
         let Some(cut) = &self.cut else {
-            return self.masked_walk(samples, keep, &f);
+            return self.masked_walk(samples, shade, keep, &f);
         };
         let counting = cut.occluded.get().is_none();
         let pass = COUNTING_PASS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let (depth, per) = (&*cut.depth, samples as usize);
         debug_assert_eq!(depth.len(), self.setup.width as usize * self.setup.height as usize * per);
-        let n = self.masked_walk(samples, keep, &|frag: &Fragment<'_>, mask: u8| {
+        let n = self.masked_walk(samples, shade, keep, &|frag: &Fragment<'_>, mask: u8| {
             let opaque = &depth[frag.pixel as usize * per..][..per];
             let mut kept = 0u8;
             for (i, &d) in opaque.iter().enumerate() {
@@ -1011,14 +1029,59 @@ impl Rasterizer {
         n
     }
 
-    /// [`Rasterizer::for_each_masked_fragment`]'s walk, without the cut.
-    fn masked_walk<K, F>(&self, samples: u32, keep: &K, f: &F) -> u64
+    /// [`Rasterizer::for_each_masked_fragment`]'s walk, without the cut, in Scatter's tasks.
+    fn masked_walk<K, F>(&self, samples: u32, shade: Shade, keep: &K, f: &F) -> u64
     where
         K: Fn(u32) -> bool + Sync,
         F: Fn(&Fragment<'_>, u8) + Sync,
     {
         let offsets = sample_offsets(samples);
-        self.scatter_tasks(|run| run.map(|i| self.walk_masked(i, &offsets, ALL_ROWS, keep, f)).sum())
+        let kernel = Kernel::detect();
+        self.scatter_tasks(|run| self.masked_task(kernel, shade, run, ALL_ROWS, &offsets, keep, f))
+    }
+
+    /// One task of the multisampled walk: the triangles of `order` in the rows `rows`, the
+    /// samples at `offsets` from the centre, the pixels `keep` keeps, each fragment handed to `f`
+    /// with its mask in the order walked: in AVX2 where `kernel` is [`Kernel::Avx2`]
+    /// (`avx2::masked_task`, shaded in batches where `shade` is [`Shade::Color`]), else the
+    /// portable per-pixel walk with colours made where `f` asks ([`Rasterizer::walk_masked`]).
+    /// The same fragments and masks either way, bit for bit (`masked_kernels_agree`); returns
+    /// them.
+    #[expect(clippy::too_many_arguments, reason = "the walk's inputs, passed through to the kernel")]
+    fn masked_task<K, F>(
+        &self,
+        kernel: Kernel,
+        shade: Shade,
+        order: impl Iterator<Item = usize>,
+        rows: [u32; 2],
+        offsets: &[(i64, i64)],
+        keep: &K,
+        f: &F,
+    ) -> u64
+    where
+        K: Fn(u32) -> bool,
+        F: Fn(&Fragment<'_>, u8),
+    {
+        #[cfg(target_arch = "x86_64")]
+        if kernel == Kernel::Avx2 {
+            let (setup, records) = (&self.setup, self.records());
+            #[expect(unsafe_code, reason = "the one call into code compiled for AVX2")]
+            // SAFETY: `Kernel::Avx2` is made only where the host has AVX2 and popcnt
+            // (`Kernel::detect`), all that `masked_task` is compiled to need
+            let n = unsafe {
+                match shade {
+                    Shade::Color => {
+                        avx2::masked_task::<true, K, F>(setup, records, order, rows, offsets, keep, f)
+                    }
+                    Shade::OnDemand => {
+                        avx2::masked_task::<false, K, F>(setup, records, order, rows, offsets, keep, f)
+                    }
+                }
+            };
+            return n;
+        }
+        let _ = (kernel, shade);
+        order.map(|i| self.walk_masked(i, offsets, rows, keep, |frag, mask| f(frag, mask))).sum()
     }
 
     /// The multisampled walk of triangle `i` in the rows `rows` (inclusive), the samples at
@@ -1033,59 +1096,12 @@ impl Rasterizer {
         keep: &impl Fn(u32) -> bool,
         mut f: impl FnMut(&Fragment<'_>, u8),
     ) -> u64 {
-        use oit_core::setup::{HALF_PIXEL, SUBPIXEL, edge};
         let (t, s) = (&self.setup.triangles[i], &self.edges[i]);
-        let [x0, y0, x1, y1] = t.bbox;
-        // The edge functions stepped across the box from the first pixel's centre, and
-        // each sample's as the centre's plus a constant: the plain rule
-        // (`setup::sample_mask` and `setup::centre_edges` at every pixel) in integers,
-        // so the same values (`masked_walk_is_the_plain_rule`).
-        let (cx, cy) = (i64::from(x0) * SUBPIXEL + HALF_PIXEL, i64::from(y0) * SUBPIXEL + HALF_PIXEL);
-        let e = [0, 1, 2].map(|k| edge(t, k, cx, cy));
-        // sample j's three edge values less the centre's (no allocation a triangle)
-        let mut deltas = [[0i64; 3]; 8];
-        for (d, &(ox, oy)) in deltas.iter_mut().zip(offsets) {
-            *d = e.map(|(_, step_x, step_y, _)| step_x / SUBPIXEL * ox + step_y / SUBPIXEL * oy);
-        }
-        let at_sample = &deltas[..offsets.len()];
-        // each edge's least and greatest sample offset: a pixel every sample of which lies
-        // outside one edge has no fragment, one every sample of which lies inside all three is
-        // covered whole, both decided without testing the samples one by one (the same masks)
-        let reach = |pick: fn(i64, i64) -> i64| {
-            [0, 1, 2].map(|k| at_sample.iter().map(|d| d[k]).reduce(pick).unwrap_or(0))
-        };
-        let (least, most) = (reach(i64::min), reach(i64::max));
-        let full = ((1u16 << offsets.len()) - 1) as u8;
-        let mut row = e.map(|e| e.0);
         let mut n = 0u64;
-        for y in y0..=y1 {
-            if y >= rows[0] && y <= rows[1] {
-                let mut c = row;
-                for x in x0..=x1 {
-                    let mut mask = 0u8;
-                    if keep(y * self.setup.width + x) && (0..3).all(|k| c[k] + most[k] > e[k].3) {
-                        if (0..3).all(|k| c[k] + least[k] > e[k].3) {
-                            mask = full;
-                        } else {
-                            for (j, d) in at_sample.iter().enumerate() {
-                                let inside = (0..3).all(|k| c[k] + d[k] > e[k].3);
-                                mask |= u8::from(inside) << j;
-                            }
-                        }
-                    }
-                    if mask != 0 {
-                        f(&self.on_demand_fragment(t, s, x, y, c), mask);
-                        n += 1;
-                    }
-                    for k in 0..3 {
-                        c[k] += e[k].1;
-                    }
-                }
-            }
-            for k in 0..3 {
-                row[k] += e[k].2;
-            }
-        }
+        masked_pixels(t, self.setup.width, offsets, rows, keep, |x, y, c, mask| {
+            f(&self.on_demand_fragment(t, s, x, y, c), mask);
+            n += 1;
+        });
         n
     }
 
@@ -1313,6 +1329,70 @@ fn walk(t: &Triangle, rect: [u32; 4], mut visit: impl FnMut(u32, u32, [i64; 3]))
         }
         for k in 0..3 {
             row[k] += edges[k].2;
+        }
+    }
+}
+
+/// The multisampled walk of `t` in the rows `rows` (inclusive), the samples at `offsets` from
+/// the pixel's centre ([`sample_offsets`]): `visit(x, y, e, mask)` for each pixel `keep` keeps
+/// (by index `y · width + x`) where the triangle covers any sample, with the centre's edge functions `e` and the
+/// coverage mask (bit `j`: sample `j`), row by row.
+fn masked_pixels(
+    t: &Triangle,
+    width: u32,
+    offsets: &[(i64, i64)],
+    rows: [u32; 2],
+    keep: &impl Fn(u32) -> bool,
+    mut visit: impl FnMut(u32, u32, [i64; 3], u8),
+) {
+    use oit_core::setup::{HALF_PIXEL, SUBPIXEL, edge};
+    let [x0, y0, x1, y1] = t.bbox;
+    // The edge functions stepped across the box from the first pixel's centre, and
+    // each sample's as the centre's plus a constant: the plain rule
+    // (`setup::sample_mask` and `setup::centre_edges` at every pixel) in integers,
+    // so the same values (`masked_walk_is_the_plain_rule`).
+    let (cx, cy) = (i64::from(x0) * SUBPIXEL + HALF_PIXEL, i64::from(y0) * SUBPIXEL + HALF_PIXEL);
+    let e = [0, 1, 2].map(|k| edge(t, k, cx, cy));
+    // sample j's three edge values less the centre's (no allocation a triangle)
+    let mut deltas = [[0i64; 3]; 8];
+    for (d, &(ox, oy)) in deltas.iter_mut().zip(offsets) {
+        *d = e.map(|(_, step_x, step_y, _)| step_x / SUBPIXEL * ox + step_y / SUBPIXEL * oy);
+    }
+    let at_sample = &deltas[..offsets.len()];
+    // each edge's least and greatest sample offset: a pixel every sample of which lies
+    // outside one edge has no fragment, one every sample of which lies inside all three is
+    // covered whole, both decided without testing the samples one by one (the same masks)
+    let reach = |pick: fn(i64, i64) -> i64| {
+        [0, 1, 2].map(|k| at_sample.iter().map(|d| d[k]).reduce(pick).unwrap_or(0))
+    };
+    let (least, most) = (reach(i64::min), reach(i64::max));
+    let full = ((1u16 << offsets.len()) - 1) as u8;
+    let mut row = e.map(|e| e.0);
+    for y in y0..=y1 {
+        if y >= rows[0] && y <= rows[1] {
+            let mut c = row;
+            for x in x0..=x1 {
+                let mut mask = 0u8;
+                if keep(y * width + x) && (0..3).all(|k| c[k] + most[k] > e[k].3) {
+                    if (0..3).all(|k| c[k] + least[k] > e[k].3) {
+                        mask = full;
+                    } else {
+                        for (j, d) in at_sample.iter().enumerate() {
+                            let inside = (0..3).all(|k| c[k] + d[k] > e[k].3);
+                            mask |= u8::from(inside) << j;
+                        }
+                    }
+                }
+                if mask != 0 {
+                    visit(x, y, c, mask);
+                }
+                for k in 0..3 {
+                    c[k] += e[k].1;
+                }
+            }
+        }
+        for k in 0..3 {
+            row[k] += e[k].2;
         }
     }
 }
@@ -2116,6 +2196,79 @@ mod tests {
                     all == orders[0],
                     "{shading:?} {kernel:?} on demand: not the shaded pass's fragments"
                 );
+            }
+        }
+    }
+
+    /// The multisampled walk of each kernel ([`Rasterizer::masked_task`]: the portable
+    /// per-pixel walk and the AVX2 lanes), shaded ahead and on demand, at 4 and 8 samples, on
+    /// the kernel probe (triangles at the small walk's limit and just past it, thin, tiny and
+    /// both windings) under every shading: each gives the plain rule's fragments
+    /// (`setup::sample_mask` and the centre's barycentrics afresh at every pixel), masks, depths,
+    /// colours and normals bit for bit; and over half the pixels only (`keep`) the same
+    /// fragments of those pixels, counted alike. Where the host lacks AVX2 only the portable
+    /// kernel is checked.
+    #[test]
+    fn masked_kernels_agree() {
+        let (w, h) = (128u32, 96u32);
+        let cam = camera(w, h);
+        let scene = scene_of(kernel_probe_meshes(&cam));
+        let kernels = if Kernel::detect() == Kernel::Portable {
+            eprintln!("no AVX2 on this host: the portable kernel alone");
+            vec![Kernel::Portable]
+        } else {
+            vec![Kernel::Portable, Kernel::detect()]
+        };
+        let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        for samples in [4, 8] {
+            for shading in [Shading::Headlight, Shading::Vertex, Shading::Flat, Shading::Normal] {
+                let s = Settings { shading, samples, ..settings(w, h) };
+                let r = Rasterizer::new(&scene, &cam, &s);
+                let mut plain = Vec::new();
+                for t in &r.setup.triangles {
+                    let [x0, y0, x1, y1] = t.bbox;
+                    for y in y0..=y1 {
+                        for x in x0..=x1 {
+                            let mask = oit_core::setup::sample_mask(t, x, y, samples);
+                            if mask != 0 {
+                                let f = r.setup.fragment(t, x, y, oit_core::setup::centre_edges(t, x, y));
+                                plain.push((key(&f), mask));
+                            }
+                        }
+                    }
+                }
+                plain.sort_unstable();
+                let full = oit_core::msaa::full_mask(samples);
+                assert!(
+                    plain.len() > 10_000 && plain.iter().any(|f| f.1 != full),
+                    "{} fragments",
+                    plain.len()
+                );
+                let offsets = sample_offsets(samples);
+                let n = r.setup.triangles.len();
+                for &kernel in &kernels {
+                    for shade in [Shade::OnDemand, Shade::Color] {
+                        let what = format!("{samples} samples, {shading:?}, {kernel:?}, {shade:?}");
+                        for half in [false, true] {
+                            let keep = |px: u32| !half || px % 2 == 1;
+                            let all = Mutex::new(Vec::new());
+                            let walked = one_thread.install(|| {
+                                r.masked_task(kernel, shade, 0..n, ALL_ROWS, &offsets, &keep, &|f, mask| {
+                                    assert_eq!(
+                                        f.color.is_some(),
+                                        shade == Shade::Color && kernel != Kernel::Portable
+                                    );
+                                    all.lock().unwrap().push((key(&f.full()), mask));
+                                })
+                            });
+                            let mut all = all.into_inner().unwrap();
+                            all.sort_unstable();
+                            let expected: Vec<_> = plain.iter().filter(|f| keep(f.0.0)).copied().collect();
+                            assert_eq!(walked, all.len() as u64, "{what}, half {half}");
+                            assert!(all == expected, "{what}, half {half}: not the plain rule's fragments");
+                        }
+                    }
+                }
             }
         }
     }

@@ -791,7 +791,8 @@ fn ll<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> {
     storage.finish()
 }
 
-/// The ordered k-buffer: K sorted (depth, primitive id) slots and their payloads, kept by a
+/// The ordered k-buffer: K sorted (depth, primitive id) slots and their payloads (and, at several
+/// samples, their coverage masks), kept by a
 /// read-modify-write inside the fragment shader's ordered interlock (oit-vulkan's hardware path;
 /// the plan refuses it elsewhere, `Plan::refuse_interlock`).
 fn kbuf<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> {
@@ -800,7 +801,8 @@ fn kbuf<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError>
     let mut storage = Storage::new(ctx, deepest);
     let slots = storage.buffer(ctx, "sorted slots", Init::Fill(u32::MAX))?;
     let payloads = storage.buffer(ctx, "payloads", Init::Zero)?;
-    let buffers = [&slots, &payloads];
+    let masks = storage.masks(ctx)?;
+    let buffers = [&slots, &payloads, &masks];
     ctx.geometry_pass(raster, "kbuf", &buffers, 0, k)?;
     ctx.pixel_kernel("kbuf", "resolve_main", &buffers, 0, k)?;
     storage.finish()

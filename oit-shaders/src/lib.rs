@@ -379,7 +379,7 @@ pub const MODULES: &[Module] = &[
     // kbuf (oit-vulkan): its hardware twin's fragment stage runs in an ordered interlock (the
     // build script's rewrite); the compute twin is only its resolve (the compute path refuses
     // kbuf)
-    m("kbuf", &["vulkan/kbuf.wgsl"], Raster),
+    m("kbuf", &["vulkan/kbuf.wgsl", COVERAGE], Raster),
     m("count_sum", &["vulkan/count_sum.wgsl"], Kernels),
     // the same over a multisampled count image (several samples a pixel)
     m("count_sum_ms", &["vulkan/count_sum_ms.wgsl"], Kernels),

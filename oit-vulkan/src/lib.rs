@@ -25,7 +25,8 @@
 //! `R32G32B32A32_UINT`. `plain` always blends on the hardware path (the over operator in one draw).
 //! Beyond the papers and wgpu, `kbuf[:K]` on the hardware path (oit-gpu's kbuf frame; its interlock is `build.rs`'s rewrite): the ordered
 //! k-buffer, whose fragment stage runs in `VK_EXT_fragment_shader_interlock`'s ordered per-pixel
-//! critical section (WGSL cannot say it: `build.rs` adds it to the SPIR-V of `kbuf_hw`'s `hw_fs`).
+//! critical section (WGSL cannot say it: `build.rs` adds it to the SPIR-V of `kbuf_hw`'s `hw_fs` and
+//! `hw_fs_masked`, the multisampled capture).
 //!
 //! **GPU time.** Where the device has timestamps ([`Gpu::has_timestamps`]: not on a CPU device
 //! such as lavapipe unless `OIT_GPU_TIMESTAMPS=1`, as on oit-wgpu) every dispatch and draw is

@@ -34,6 +34,21 @@ struct Batch {
     b: [[f32; CAP]; 3],
     /// RGBA after one another.
     color: [f32; 4 * CAP],
+    /// The coverage mask of each, in the multisampled walk ([`masked_task`]).
+    mask: [u32; CAP],
+}
+
+impl Batch {
+    fn new() -> Batch {
+        Batch {
+            tri: [0; CAP],
+            pixel: [0; CAP],
+            depth: [0.0; CAP],
+            b: [[0.0; CAP]; 3],
+            color: [0.0; 4 * CAP],
+            mask: [0; CAP],
+        }
+    }
 }
 
 /// For each 8-bit coverage mask, the lanes that are set, in order, a byte each (the first
@@ -98,13 +113,7 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
     cut: Option<EarlyCut<'_>>,
 ) -> u64 {
     let width = setup.width;
-    let mut batch = Batch {
-        tri: [0; CAP],
-        pixel: [0; CAP],
-        depth: [0.0; CAP],
-        b: [[0.0; CAP]; 3],
-        color: [0.0; 4 * CAP],
-    };
+    let mut batch = Batch::new();
     let (mut len, mut n) = (0usize, 0u64);
     // lane i of each layout: its column and row in the box
     let columns = [
@@ -223,6 +232,184 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
     n
 }
 
+/// The multisampled walk ([`Rasterizer::for_each_masked_fragment`](super::Rasterizer::for_each_masked_fragment))
+/// of one task: the triangles of `order` in the rows `window` (inclusive), each pixel where the
+/// triangle covers any of the samples at `offsets` from the centre (in 1/256 pixel,
+/// [`super::sample_offsets`]) handed to `f` with its coverage mask, shaded where `SHADE` (else
+/// colours made where `f` asks); returns the fragments. The same fragments, masks, depths and
+/// barycentrics as the portable walk ([`super::Rasterizer::walk_masked`]'s `masked_pixels`),
+/// bit for bit: a small triangle's box is tested eight pixels at a time in the layouts of
+/// [`scatter_task`], each sample's three edge functions as the centre's lanes plus a constant (the
+/// sample's offset along the edge's steps, exact in 32 bits: a small triangle's edge functions
+/// within a pixel of its box stay below 2^30), a sample inside where the OR of its three lanes
+/// has the sign bit clear; the mask is made in the lanes (bit j of lane i: sample j of pixel i),
+/// the pixels with a mask packed to the front as the single-sample walk packs its covered ones.
+/// Larger triangles take the portable per-pixel test into the same batch. The centre's
+/// barycentrics and depth are made in the lanes whether or not the centre is covered
+/// (extrapolated, as the portable walk's).
+#[target_feature(enable = "avx2,popcnt")]
+pub(super) fn masked_task<const SHADE: bool, K: Fn(u32) -> bool, F: Fn(&Fragment<'_>, u8)>(
+    setup: &TriangleSetup,
+    (tris, edges, shades): (&[Triangle], &[SmallEdges], &[ShadeRecord]),
+    order: impl Iterator<Item = usize>,
+    window: [u32; 2],
+    offsets: &[(i64, i64)],
+    keep: &K,
+    f: &F,
+) -> u64 {
+    let width = setup.width;
+    let mut batch = Batch::new();
+    let (mut len, mut n) = (0usize, 0u64);
+    // the batch handed over in the order walked, the pixels `keep` turns down left out (and
+    // not counted); returns the fragments handed over
+    let flush = |batch: &mut Batch, len: usize| {
+        if SHADE {
+            shade(setup, (tris, edges, shades), batch, len);
+        }
+        let mut kept = 0u64;
+        for i in 0..len {
+            if keep(batch.pixel[i]) {
+                f(&batch.fragment::<SHADE>(setup, (tris, edges), i), batch.mask[i] as u8);
+                kept += 1;
+            }
+        }
+        kept
+    };
+    let columns = [
+        _mm256_setr_epi32(0, 1, 0, 1, 0, 1, 0, 1),
+        _mm256_setr_epi32(0, 1, 2, 3, 0, 1, 2, 3),
+        _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
+    ];
+    let rows = [
+        _mm256_setr_epi32(0, 0, 1, 1, 2, 2, 3, 3),
+        _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1),
+        _mm256_setzero_si256(),
+    ];
+    let pixel_offsets = std::array::from_fn::<_, 3, _>(|l| {
+        _mm256_add_epi32(columns[l], _mm256_mullo_epi32(rows[l], _mm256_set1_epi32(width as i32)))
+    });
+    let (zero, one) = (_mm256_setzero_ps(), _mm256_set1_ps(1.0));
+    let samples = offsets.len().min(8);
+    let bits: [__m256i; 8] = std::array::from_fn(|j| _mm256_set1_epi32(1 << j));
+    for i in order {
+        let (t, s) = (&tris[i], &edges[i]);
+        let box_y0 = s.bbox[1];
+        let [x0, y0, x1, y1] = in_rows(s.bbox, window);
+        if !s.small {
+            super::masked_pixels(t, width, offsets, window, keep, |x, y, e, mask| {
+                if len == CAP {
+                    n += flush(&mut batch, len);
+                    len = 0;
+                }
+                let b = s.plane.barycentrics(e);
+                batch.tri[len] = i as u32;
+                batch.pixel[len] = y * width + x;
+                batch.depth[len] = s.plane.depth(b);
+                for (lanes, b) in batch.b.iter_mut().zip(b) {
+                    lanes[len] = b;
+                }
+                batch.mask[len] = u32::from(mask);
+                len += 1;
+            });
+            continue;
+        }
+        if x0 > x1 || y0 > y1 {
+            continue;
+        }
+        let (w, h) = (x1 - x0 + 1, y1 - y0 + 1);
+        let l = layout(w);
+        let (lanes_x, lanes_y) = (COLUMNS[l], 8 / COLUMNS[l]);
+        // as in walk_small: the lanes hold e − (above + 1), inside where the sign bit is clear
+        let bias: [i32; 3] = std::array::from_fn(|k| s.above[k] + 1);
+        let lane_offsets: [__m256i; 3] = std::array::from_fn(|k| {
+            _mm256_add_epi32(
+                _mm256_mullo_epi32(columns[l], _mm256_set1_epi32(s.step_x[k])),
+                _mm256_mullo_epi32(rows[l], _mm256_set1_epi32(s.step_y[k])),
+            )
+        });
+        // sample j's three edge values less the centre's (walk_masked's deltas, in 32 bits)
+        let deltas: [[__m256i; 3]; 8] = std::array::from_fn(|j| {
+            let (ox, oy) = offsets.get(j).copied().unwrap_or_default();
+            std::array::from_fn(|k| {
+                let d = i64::from(s.step_x[k]) / oit_core::setup::SUBPIXEL * ox
+                    + i64::from(s.step_y[k]) / oit_core::setup::SUBPIXEL * oy;
+                _mm256_set1_epi32(d as i32)
+            })
+        });
+        let bias_lanes = bias.map(|v| _mm256_set1_epi32(v));
+        let column_step: [i32; 3] = std::array::from_fn(|k| s.step_x[k].wrapping_mul(lanes_x as i32));
+        let row_step: [i32; 3] = std::array::from_fn(|k| s.step_y[k].wrapping_mul(lanes_y as i32));
+        let inv_area = _mm256_set1_ps(s.plane.inv_area);
+        let (z0, dz1, dz2) =
+            (_mm256_set1_ps(s.plane.z0), _mm256_set1_ps(s.plane.dz1), _mm256_set1_ps(s.plane.dz2));
+        let tri = _mm256_set1_epi32(i as i32);
+        let skipped = (y0 - box_y0) as i32;
+        let mut row: [i32; 3] = std::array::from_fn(|k| {
+            s.origin[k].wrapping_add(s.step_y[k].wrapping_mul(skipped)).wrapping_sub(bias[k])
+        });
+        let mut row_pixel = y0 * width + x0;
+        let mut by = 0;
+        while by < h {
+            let rows_valid = (1u32 << (lanes_x * (h - by).min(lanes_y))) - 1;
+            let mut base = row;
+            let mut bx = 0;
+            while bx < w {
+                let valid = (((1u32 << (w - bx).min(lanes_x)) - 1) * ROW_PATTERN[l]) & rows_valid;
+                if len > CAP - 8 {
+                    n += flush(&mut batch, len);
+                    len = 0;
+                }
+                let e: [__m256i; 3] =
+                    std::array::from_fn(|k| _mm256_add_epi32(_mm256_set1_epi32(base[k]), lane_offsets[k]));
+                // each sample's bit where its three edge functions are all inside
+                let mut mask = _mm256_setzero_si256();
+                for (d, bit) in deltas.iter().zip(&bits).take(samples) {
+                    let sign = _mm256_or_si256(
+                        _mm256_or_si256(_mm256_add_epi32(e[0], d[0]), _mm256_add_epi32(e[1], d[1])),
+                        _mm256_add_epi32(e[2], d[2]),
+                    );
+                    mask = _mm256_or_si256(mask, _mm256_andnot_si256(_mm256_srai_epi32::<31>(sign), *bit));
+                }
+                let empty =
+                    _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(mask, _mm256_setzero_si256())));
+                let covered = !(empty as u32) & valid;
+                if covered != 0 {
+                    let pack = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(PACK[covered as usize] as i64));
+                    let pixel =
+                        _mm256_add_epi32(_mm256_set1_epi32((row_pixel + bx) as i32), pixel_offsets[l]);
+                    store_u32(&mut batch.pixel, len, _mm256_permutevar8x32_epi32(pixel, pack));
+                    store_u32(&mut batch.tri, len, tri);
+                    store_u32(&mut batch.mask, len, _mm256_permutevar8x32_epi32(mask, pack));
+                    // DepthPlane::barycentrics of the centre's edge functions (exact in the
+                    // lanes, outside the triangle too), then DepthPlane::depth
+                    let b: [__m256; 3] = std::array::from_fn(|k| {
+                        _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_add_epi32(e[k], bias_lanes[k])), inv_area)
+                    });
+                    for (lanes, b) in batch.b.iter_mut().zip(b) {
+                        store_f32(lanes, len, _mm256_permutevar8x32_ps(b, pack));
+                    }
+                    let d =
+                        _mm256_add_ps(_mm256_add_ps(z0, _mm256_mul_ps(b[1], dz1)), _mm256_mul_ps(b[2], dz2));
+                    let d = _mm256_blendv_ps(d, zero, _mm256_cmp_ps::<_CMP_LT_OQ>(d, zero));
+                    let d = _mm256_blendv_ps(d, one, _mm256_cmp_ps::<_CMP_GT_OQ>(d, one));
+                    store_f32(&mut batch.depth, len, _mm256_permutevar8x32_ps(d, pack));
+                    len += covered.count_ones() as usize;
+                }
+                bx += lanes_x;
+                for k in 0..3 {
+                    base[k] = base[k].wrapping_add(column_step[k]);
+                }
+            }
+            by += lanes_y;
+            row_pixel += lanes_y * width;
+            for k in 0..3 {
+                row[k] = row[k].wrapping_add(row_step[k]);
+            }
+        }
+    }
+    n + flush(&mut batch, len)
+}
+
 /// Shades the first `len` fragments of `batch` [`SHADE_LANES`] at a time (where `SHADE`), then
 /// hands each to `f` in the order walked.
 #[inline]
@@ -255,34 +442,10 @@ fn flush<const SHADE: bool, F: Fn(&Fragment<'_>)>(
             kept
         }
     };
-    // a short last group shades what the lanes past `len` hold from before (a triangle of the
-    // task, its colour not read)
-    let shaded = if SHADE { len } else { 0 };
-    for at in (0..shaded).step_by(SHADE_LANES) {
-        let lane = |k: usize| -> [f32; SHADE_LANES] { std::array::from_fn(|i| batch.b[k][at + i]) };
-        let b = [lane(0), lane(1), lane(2)];
-        let tri: [usize; SHADE_LANES] = std::array::from_fn(|i| batch.tri[at + i] as usize);
-        let colors: [f32; 4 * SHADE_LANES] = if setup.shading == Shading::Headlight && !setup.has_textures() {
-            headlight(tri.map(|t| &shades[t]), b.map(bytemuck::cast), setup.forward)
-        } else {
-            let colors =
-                setup.colors_at(tri.map(|t| &tris[t]), std::array::from_fn(|i| [b[0][i], b[1][i], b[2][i]]));
-            bytemuck::cast(colors.map(|c| c.to_array()))
-        };
-        batch.color[4 * at..4 * (at + SHADE_LANES)].copy_from_slice(&colors);
+    if SHADE {
+        shade(setup, (tris, edges, shades), batch, len);
     }
-    let emit = |i: usize| {
-        let tri = batch.tri[i] as usize;
-        f(&Fragment {
-            pixel: batch.pixel[i],
-            depth: batch.depth[i],
-            prim: edges[tri].prim,
-            b: [batch.b[0][i], batch.b[1][i], batch.b[2][i]],
-            t: &tris[tri],
-            setup,
-            color: SHADE.then(|| Vec4::from_slice(&batch.color[4 * i..4 * i + 4])),
-        });
-    };
+    let emit = |i: usize| f(&batch.fragment::<SHADE>(setup, (tris, edges), i));
     let pixels = &batch.pixel[..len];
     match ahead {
         Some(ahead) => {
@@ -296,6 +459,54 @@ fn flush<const SHADE: bool, F: Fn(&Fragment<'_>)>(
             }
         }
         None => (0..len).for_each(emit),
+    }
+}
+
+impl Batch {
+    /// Fragment `i` of the batch (its colour where `SHADE`, else made where the shader asks).
+    #[inline]
+    fn fragment<'a, const SHADE: bool>(
+        &self,
+        setup: &'a TriangleSetup,
+        (tris, edges): (&'a [Triangle], &[SmallEdges]),
+        i: usize,
+    ) -> Fragment<'a> {
+        let tri = self.tri[i] as usize;
+        Fragment {
+            pixel: self.pixel[i],
+            depth: self.depth[i],
+            prim: edges[tri].prim,
+            b: [self.b[0][i], self.b[1][i], self.b[2][i]],
+            t: &tris[tri],
+            setup,
+            color: SHADE.then(|| Vec4::from_slice(&self.color[4 * i..4 * i + 4])),
+        }
+    }
+}
+
+/// Colours the first `len` fragments of `batch`, [`SHADE_LANES`] at a time.
+#[inline]
+#[target_feature(enable = "avx2,popcnt")]
+fn shade(
+    setup: &TriangleSetup,
+    (tris, _, shades): (&[Triangle], &[SmallEdges], &[ShadeRecord]),
+    batch: &mut Batch,
+    len: usize,
+) {
+    // a short last group shades what the lanes past `len` hold from before (a triangle of the
+    // task, its colour not read)
+    for at in (0..len).step_by(SHADE_LANES) {
+        let lane = |k: usize| -> [f32; SHADE_LANES] { std::array::from_fn(|i| batch.b[k][at + i]) };
+        let b = [lane(0), lane(1), lane(2)];
+        let tri: [usize; SHADE_LANES] = std::array::from_fn(|i| batch.tri[at + i] as usize);
+        let colors: [f32; 4 * SHADE_LANES] = if setup.shading == Shading::Headlight && !setup.has_textures() {
+            headlight(tri.map(|t| &shades[t]), b.map(bytemuck::cast), setup.forward)
+        } else {
+            let colors =
+                setup.colors_at(tri.map(|t| &tris[t]), std::array::from_fn(|i| [b[0][i], b[1][i], b[2][i]]));
+            bytemuck::cast(colors.map(|c| c.to_array()))
+        };
+        batch.color[4 * at..4 * (at + SHADE_LANES)].copy_from_slice(&colors);
     }
 }
 

@@ -118,13 +118,17 @@ fn reference(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let payloads = ctx.scratch_words32(total as u64)?;
     let masks = ctx.scratch_bytes(total as u64)?;
     let shared = &*ctx;
-    let n = shared.raster.for_each_masked_fragment(shared.settings.samples, |f, mask| {
-        let px = f.pixel as usize;
-        let slot = offsets[px] + cursor[px].fetch_add(1, Relaxed) as usize;
-        keys[slot].store(key(f), Relaxed);
-        payloads[slot].store(shared.payload(f), Relaxed);
-        masks[slot].store(mask, Relaxed);
-    });
+    let n = shared.raster.for_each_masked_fragment_with(
+        shared.settings.samples,
+        shared.payload_shade(),
+        |f, mask| {
+            let px = f.pixel as usize;
+            let slot = offsets[px] + cursor[px].fetch_add(1, Relaxed) as usize;
+            keys[slot].store(key(f), Relaxed);
+            payloads[slot].store(shared.payload(f), Relaxed);
+            masks[slot].store(mask, Relaxed);
+        },
+    );
     ctx.ran_pass(n);
     drop(cursor);
     let counts: Vec<u32> = counted.iter().map(|c| c.load(Relaxed)).collect();
@@ -244,31 +248,60 @@ fn resolve_entries(
         }
         s
     };
+    thread_local! {
+        // each thread's list of a pixel's entries, kept from pixel to pixel
+        static LIST: std::cell::RefCell<Vec<Entry>> = const { std::cell::RefCell::new(Vec::new()) };
+    }
     super::finish_pixels(ctx, |px| {
-        let mut list = Vec::new();
-        gather(px, &mut list);
-        list.sort_unstable();
-        let c: Vec3 = if complexity {
-            if list.is_empty() {
-                resolve.background_mean(px)
-            } else {
-                oit_core::composite::heat(list.len() as f32 / deepest as f32)
-            }
-        } else if resolve.opaque_uniform(px) && list.iter().all(|e| e.2 == full) {
-            let mut s = fresh(px);
-            push_all(&mut s, &mut list.iter());
-            resolve.finish_over(&mut s, resolve.background_at_sample(px, 0))
-        } else {
-            // each sample over its own opaque colour (the background where none covers it)
-            let mut sum = Vec3::ZERO;
-            for i in 0..samples {
+        LIST.with_borrow_mut(|list| {
+            gather(px, list);
+            list.sort_unstable();
+            let c: Vec3 = if complexity {
+                if list.is_empty() {
+                    resolve.background_mean(px)
+                } else {
+                    oit_core::composite::heat(list.len() as f32 / deepest as f32)
+                }
+            } else if resolve.opaque_uniform(px) && list.iter().all(|e| e.2 == full) {
                 let mut s = fresh(px);
-                push_all(&mut s, &mut list.iter().filter(|e| e.2 >> i & 1 == 1));
-                sum += resolve.finish_over(&mut s, resolve.background_at_sample(px, i as usize));
-            }
-            sum / samples as f32
-        };
-        (crate::resolve::srgb(c), list.len() as u32)
+                push_all(&mut s, &mut list.iter());
+                resolve.finish_over(&mut s, resolve.background_at_sample(px, 0))
+            } else {
+                // each sample over its own opaque colour (the background where none covers it),
+                // the samples' colours summed in sample order; a sample that composites the same
+                // entries over the same colour as an earlier one takes its colour (the same
+                // bits: the same pushes over the same state)
+                let mut seen = [(0u64, [0u32; 3], Vec3::ZERO); 8];
+                let mut distinct = 0;
+                let mut sum = Vec3::ZERO;
+                for i in 0..samples {
+                    let bg = resolve.background_at_sample(px, i as usize);
+                    let bits = bg.to_array().map(f32::to_bits);
+                    // the entries covering sample i, a bit each (none kept past 64 entries)
+                    let covering = (list.len() <= 64).then(|| {
+                        list.iter().enumerate().fold(0u64, |m, (k, e)| m | u64::from(e.2 >> i & 1) << k)
+                    });
+                    let known =
+                        covering.and_then(|set| seen[..distinct].iter().find(|s| s.0 == set && s.1 == bits));
+                    let c = match known {
+                        Some(s) => s.2,
+                        None => {
+                            let mut s = fresh(px);
+                            push_all(&mut s, &mut list.iter().filter(|e| e.2 >> i & 1 == 1));
+                            let c = resolve.finish_over(&mut s, bg);
+                            if let Some(set) = covering {
+                                seen[distinct] = (set, bits, c);
+                                distinct += 1;
+                            }
+                            c
+                        }
+                    };
+                    sum += c;
+                }
+                sum / samples as f32
+            };
+            (crate::resolve::srgb(c), list.len() as u32)
+        })
     })
 }
 
@@ -288,18 +321,22 @@ fn dfb(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let masks = ctx.scratch_bytes(u64::from(total))?;
     let shared = &*ctx;
     let kept = coverage(shared.settings);
-    let n = shared.raster.for_each_masked_fragment(shared.settings.samples, |f, mask| {
-        let px = f.pixel as usize;
-        let left = counted[px].fetch_sub(1, Relaxed);
-        if left as i32 <= 0 {
-            shared.lose(px);
-            return;
-        }
-        let entry = offsets[px] + left as usize - 1;
-        keys[entry].store(key(f), Relaxed);
-        payloads[entry].store(shared.payload(f), Relaxed);
-        masks[entry].store(kept(mask), Relaxed);
-    });
+    let n = shared.raster.for_each_masked_fragment_with(
+        shared.settings.samples,
+        shared.payload_shade(),
+        |f, mask| {
+            let px = f.pixel as usize;
+            let left = counted[px].fetch_sub(1, Relaxed);
+            if left as i32 <= 0 {
+                shared.lose(px);
+                return;
+            }
+            let entry = offsets[px] + left as usize - 1;
+            keys[entry].store(key(f), Relaxed);
+            payloads[entry].store(shared.payload(f), Relaxed);
+            masks[entry].store(kept(mask), Relaxed);
+        },
+    );
     ctx.ran_pass(n);
     let (keys, payloads, masks, counted) = (&*keys, &*payloads, &*masks, &*counted);
     Ok(resolve_entries(ctx, None, |px, list| {
@@ -329,19 +366,23 @@ fn ll(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let links = ctx.words32(u64::from(nodes), END)?;
     let shared = &*ctx;
     let kept = coverage(shared.settings);
-    let n = shared.raster.for_each_masked_fragment(shared.settings.samples, |f, mask| {
-        let px = f.pixel as usize;
-        let node = counter[0].fetch_add(1, Relaxed);
-        if node >= nodes {
-            shared.lose(px);
-            return;
-        }
-        let i = node as usize;
-        keys[i].store(key(f), Relaxed);
-        payloads[i].store(shared.payload(f), Relaxed);
-        masks[i].store(kept(mask), Relaxed);
-        links[i].store(heads[px].swap(node, Relaxed), Relaxed);
-    });
+    let n = shared.raster.for_each_masked_fragment_with(
+        shared.settings.samples,
+        shared.payload_shade(),
+        |f, mask| {
+            let px = f.pixel as usize;
+            let node = counter[0].fetch_add(1, Relaxed);
+            if node >= nodes {
+                shared.lose(px);
+                return;
+            }
+            let i = node as usize;
+            keys[i].store(key(f), Relaxed);
+            payloads[i].store(shared.payload(f), Relaxed);
+            masks[i].store(kept(mask), Relaxed);
+            links[i].store(heads[px].swap(node, Relaxed), Relaxed);
+        },
+    );
     ctx.ran_pass(n);
     let (heads, keys, payloads, masks, links) = (&*heads, &*keys, &*payloads, &*masks, &*links);
     Ok(resolve_entries(ctx, None, |px, list| {
@@ -378,17 +419,21 @@ fn fabs(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let tail = ctx.tail_sums()?;
     let shared = &*ctx;
     let kept = coverage(shared.settings);
-    let n = shared.raster.for_each_masked_fragment(shared.settings.samples, |f, mask| {
-        let px = f.pixel as usize;
-        let i = counters[px].fetch_add(1, Relaxed) as usize;
-        if i < k {
-            slots[px * k + i].store(key(f), Relaxed);
-            payloads[px * k + i].store(shared.payload(f), Relaxed);
-            masks[px * k + i].store(kept(mask), Relaxed);
-        } else {
-            shared.lose(px);
-        }
-    });
+    let n = shared.raster.for_each_masked_fragment_with(
+        shared.settings.samples,
+        shared.payload_shade(),
+        |f, mask| {
+            let px = f.pixel as usize;
+            let i = counters[px].fetch_add(1, Relaxed) as usize;
+            if i < k {
+                slots[px * k + i].store(key(f), Relaxed);
+                payloads[px * k + i].store(shared.payload(f), Relaxed);
+                masks[px * k + i].store(kept(mask), Relaxed);
+            } else {
+                shared.lose(px);
+            }
+        },
+    );
     ctx.ran_pass(n);
     let list = crate::storage::CountedList::new(&counters, &slots, &payloads, k);
     if !ctx.plan.needs_count() && list.empty_overflowing() {

@@ -14,11 +14,18 @@
 // order: the same K nearest fragments as fabs:K keeps, sorted by (depth, primitive id) as the
 // reference sorts them, and the resolve walks them without sorting.
 //
+// Multisampled (`fu.msaa.x` samples above 1; docs/msaa.md): each slot's coverage mask, a byte
+// (coverage.wgsl, appended), slot-major as the slots, carried with its key, so the slots keep
+// fabs:K's K nearest fragments with their masks; the resolve composites them per sample. The
+// multisampled capture `hw_fs_masked` runs inside the same interlock (build.rs wraps both entry
+// points). A placeholder at one sample.
+//
 // The words are read and written by atomic loads and stores: plain in effect (no other invocation
 // touches the pixel inside the section) but coherent at device scope, so the pixel's next
 // fragment sees what the last one wrote.
 @group(0) @binding(2) var<storage, read_write> kbuf_slots: array<atomic<u64>>;
 @group(0) @binding(3) var<storage, read_write> kbuf_payloads: array<atomic<u32>>;
+@group(0) @binding(4) var<storage, read_write> masks: array<atomic<u32>>;
 
 const KBUF_EMPTY: u64 = 0xfffffffffffffffflu;
 
@@ -26,12 +33,17 @@ fn capture(f: Fragment) {
     let stride = fu.pixel_count;
     var key = (u64(depth_bits(f.depth)) << 32u) | u64(f.prim);
     var pay = payload(f, fu.effect);
+    let masked = fu.msaa.x > 1u;
+    var mask = kept_mask(f);
     for (var i = 0u; i < fu.param; i++) {
         let at = i * stride + f.pixel;
         let old = atomicLoad(&kbuf_slots[at]);
         if (old == KBUF_EMPTY) {
             atomicStore(&kbuf_slots[at], key);
             atomicStore(&kbuf_payloads[at], pay);
+            if (masked) {
+                mask_put(at, mask);
+            }
             return;
         }
         if (key < old) {
@@ -40,6 +52,11 @@ fn capture(f: Fragment) {
             atomicStore(&kbuf_payloads[at], pay);
             key = old;
             pay = old_pay;
+            if (masked) {
+                let old_mask = mask_at(at);
+                mask_put(at, mask);
+                mask = old_mask;
+            }
         }
     }
     // the largest of K + 1 keys carried off the full array
@@ -52,6 +69,15 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if (px >= fu.pixel_count) {
         return;
     }
+    if (fu.msaa.x > 1u) {
+        // the slots are sorted: the per-sample resolve over the n filled
+        var n = 0u;
+        while (n < fu.param && atomicLoad(&kbuf_slots[n * fu.pixel_count + px]) != KBUF_EMPTY) {
+            n++;
+        }
+        resolve_masked(px, px, n);
+        return;
+    }
     var s = state[px];
     for (var i = 0u; i < fu.param; i++) {
         let at = i * fu.pixel_count + px;
@@ -62,4 +88,17 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         push_local(&s, bitcast<f32>(u32(key >> 32u)), atomicLoad(&kbuf_payloads[at]));
     }
     state[px] = s;
+}
+
+// coverage.wgsl's view of the slots: slot i of pixel px at i · pixels + px
+fn msaa_key(e: u32) -> u64 {
+    return atomicLoad(&kbuf_slots[e]);
+}
+
+fn msaa_payload(e: u32) -> u32 {
+    return atomicLoad(&kbuf_payloads[e]);
+}
+
+fn msaa_next(e: u32) -> u32 {
+    return e + fu.pixel_count;
 }
