@@ -205,7 +205,10 @@ pub fn supersample_frames(camera: &Camera, settings: &Settings) -> (Settings, Ve
 
 /// What the frames of a supersampled reference add up to, alike on every backend: the geometry
 /// passes, fragments, captured and lost fragments of every frame summed (each sample's frame is
-/// a frame of its own fragments), the largest frame's storage (the frames run one after the
+/// a frame of its own fragments), and in a scene with opaque objects (each frame draws its own
+/// opaque pass, at one sample) the occluded fragments and the opaque pass's fragments and masked
+/// ones summed alike, so that a frame's accounting (`captured + merged + lost + occluded =
+/// fragments`) holds of the sums; the largest frame's storage (the frames run one after the
 /// other), and per pixel the most fragments one frame gave it (the frame's `layers`, whose
 /// nonzero pixels are the covered ones) and the fragments lost in all.
 #[derive(Clone, Debug, Default)]
@@ -227,6 +230,9 @@ impl SupersampleTotals {
         t.fragments += stats.fragments;
         t.captured += stats.captured;
         t.lost += stats.lost;
+        t.occluded += stats.occluded;
+        t.opaque_fragments += stats.opaque_fragments;
+        t.masked += stats.masked;
         t.storage_bytes = t.storage_bytes.max(stats.storage_bytes);
         t.max_layers = t.max_layers.max(stats.max_layers);
         t.wall_ms += stats.wall_ms;

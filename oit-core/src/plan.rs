@@ -186,7 +186,6 @@ impl Plan {
     /// every backend; `backend` names the one asking, for the message).
     pub fn new(backend: &str, scene: &Scene, settings: &Settings) -> Result<Plan, OitError> {
         let technique = settings.technique;
-        check_samples(backend, scene, settings)?;
         if matches!(technique, Technique::Mdts { .. }) && settings.effect == Effect::Fresnel {
             return Err(OitError::Unsupported {
                 backend: backend.into(),
@@ -741,47 +740,6 @@ impl Plan {
     pub fn adp_batches(&self, bins: u32) -> u32 {
         bins.div_ceil(crate::rules::BUCKETS as u32).min(self.peel_limit)
     }
-}
-
-/// What several samples a pixel (`Settings::samples` above 1, docs/msaa.md) are not yet done
-/// for, refused by name alike on every backend: the supersampled reference (`--supersample`) of a scene with opaque objects;
-/// the techniques that keep no mask over opaque objects. (The opaque pass itself is multisampled:
-/// its depth and colour are kept a sample, [`Plan::opaque_bytes`].) (A hardware raster path
-/// refuses a sample count its device does not draw where it starts a frame, its own captures,
-/// [`refuse_multisampled_own_capture`] for those not yet done, and the supersampled reference,
-/// [`refuse_supersampled_hardware`].) The techniques that keep no mask take the samples by their
-/// coverage fraction ([`crate::msaa::coverage`]).
-fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<(), OitError> {
-    let samples = settings.samples;
-    if samples <= 1 {
-        return Ok(());
-    }
-    let technique = settings.technique;
-    let refuse = |what: String| Err(OitError::Unsupported { backend: backend.into(), what });
-    if scene.has_opaque() && !crate::msaa::keeps_masks(technique) && !crate::msaa::peels_per_sample(settings)
-    {
-        return refuse(format!(
-            "{technique} at --samples {samples} with opaque objects: not yet done (the opaque cut \
-             is per sample, and the techniques that keep no mask do not yet reduce their coverage \
-             by it; reference, dfb, ll, fabs, and dp and ddp per sample do: docs/msaa.md)"
-        ));
-    }
-    if scene.has_opaque()
-        && settings.overflow == crate::Overflow::Tail
-        && technique.kind() == crate::TechniqueKind::Fabs
-    {
-        return refuse(format!(
-            "fabs with --overflow tail over opaque objects at --samples {samples}: not yet done \
-             (the one tail a pixel is composited over one background, not each sample's opaque colour)"
-        ));
-    }
-    if scene.has_opaque() && settings.supersample {
-        return refuse(format!(
-            "--supersample with opaque objects at --samples {samples}: the supersampled reference \
-             does not yet draw the opaque pass (compare against the per-sample reference)"
-        ));
-    }
-    Ok(())
 }
 
 /// The refusal of a hardware path's own capture of `settings.technique` (plain's blender, the

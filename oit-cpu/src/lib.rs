@@ -221,13 +221,21 @@ impl<'s> CpuPrepared<'s> {
         if let Some(mode) = self.backend.mode.filter(|&m| m != raster.mode()) {
             raster = raster.with_mode(mode);
         }
-        // opaque first: its depth holds back the transparent fragments behind it
-        let opaque = layers.opaque.as_ref().map(|o| opaque::draw(o, camera, &drawn));
+        // opaque first: its depth holds back the transparent fragments behind it (the
+        // supersampled reference draws it in each of its frames, under each frame's camera)
+        let supersampled = oit_core::msaa::is_supersampled(settings);
+        let opaque = match &layers.opaque {
+            Some(o) if !supersampled => Some(opaque::draw(o, camera, &drawn)),
+            _ => None,
+        };
         raster.cut_at(opaque.as_ref().map(|o| o.depth.clone()));
         // above one sample, a technique that keeps no mask walks the multisampled fragments
         raster.cover(technique::covered(&drawn));
         let mut ctx =
             Ctx::new(scene, camera, &drawn, &raster, &self.pool, plan, self.per_length, opaque.as_ref());
+        if supersampled {
+            ctx.opaque_part = layers.opaque.as_ref();
+        }
         let frame = technique::render(&mut ctx, settings.technique);
         drop(ctx);
         let occluded = raster.occluded().unwrap_or_else(|| {

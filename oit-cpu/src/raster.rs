@@ -380,9 +380,11 @@ impl Bands {
 
 /// Runs `$pass` with `$g` bound to the pass's shader: `$f` itself, or, where the rasterizer has a
 /// cut ([`Rasterizer::cut_at`]), `$f` behind the opaque depth test, counting what it holds back
-/// where this is the first pass after the cut. A macro, not a function taking the pass as a
-/// closure, so that each shader stays a concrete type the walks inline (a `dyn` call a fragment
-/// costs every pass, cut or not).
+/// where this is the first pass after the cut. Where the pass walks the multisampled fragments
+/// ([`Rasterizer::cover`]) the cut is a sample's, made by the walk itself
+/// ([`Rasterizer::task`]): `$f` is not wrapped, the pass only counts. A macro, not a function
+/// taking the pass as a closure, so that each shader stays a concrete type the walks inline (a
+/// `dyn` call a fragment costs every pass, cut or not).
 macro_rules! behind_cut {
     ($self:ident, $f:ident, $g:ident => $pass:expr) => {{
         match &$self.cut {
@@ -396,8 +398,10 @@ macro_rules! behind_cut {
                 let id = if counting { pass } else { u64::MAX };
                 cut.counting.store(id, std::sync::atomic::Ordering::Relaxed);
                 let depth = &*cut.depth;
+                // above one sample the covered walk cuts each sample (`Rasterizer::task`)
+                let per_sample = $self.covered.is_some();
                 let wrapped = |frag: &Fragment<'_>| {
-                    if frag.depth < depth[frag.pixel as usize] {
+                    if per_sample || frag.depth < depth[frag.pixel as usize] {
                         $f(frag)
                     } else if counting {
                         occlude(pass)
@@ -444,6 +448,10 @@ pub struct Rasterizer {
 /// pixel's `samples` samples, shaded at the centre as [`Rasterizer::for_each_masked_fragment`]'s,
 /// its alpha weighted by its coverage fraction where `fraction`
 /// ([`oit_core::msaa::Coverage::Fraction`]), else left whole ([`oit_core::msaa::Coverage::Pixel`]).
+/// Where the rasterizer has a cut ([`Rasterizer::cut_at`], one depth a sample) its mask is first
+/// reduced to the samples it lies in front of, as [`Rasterizer::for_each_masked_fragment`]'s: the
+/// fraction is of the samples it covers in front of each sample's opaque depth, and a fragment
+/// left with none is held back.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Covered {
     /// Samples a pixel (4 or 8).
@@ -484,6 +492,30 @@ impl EarlyCut<'_> {
         }
         behind
     }
+
+    /// The samples of `mask` a multisampled fragment of `pixel` at `depth` keeps: those where it
+    /// lies in front of the sample's opaque depth (the cut kept a sample, `samples` a pixel,
+    /// [`front_samples`]); one that keeps none is counted where the pass counts.
+    #[inline]
+    fn kept(&self, pixel: u32, depth: f32, mask: u8, samples: usize) -> u8 {
+        let kept = front_samples(&self.depth[pixel as usize * samples..][..samples], depth, mask);
+        if kept == 0 && self.counting != u64::MAX {
+            occlude(self.counting);
+        }
+        kept
+    }
+}
+
+/// The samples of `mask` where a fragment at `depth` (its one depth, the pixel centre's) lies
+/// strictly in front of the sample's opaque depth in `opaque` (one a sample of its pixel): the
+/// cut of a multisampled fragment (docs/msaa.md). Strictly less: a NaN depth counts as behind.
+#[inline]
+fn front_samples(opaque: &[f32], depth: f32, mask: u8) -> u8 {
+    let mut kept = 0u8;
+    for (i, &d) in opaque.iter().enumerate() {
+        kept |= u8::from(depth < d) << i;
+    }
+    kept & mask
 }
 
 thread_local! {
@@ -561,9 +593,11 @@ impl Rasterizer {
     }
 
     /// Tests every fragment of the passes that follow against `depth` (one value a pixel, the
-    /// opaque pass's; one a sample for [`Rasterizer::for_each_masked_fragment`]'s passes at
-    /// several samples): a fragment reaches the shader only where its depth is strictly less than
-    /// its pixel's, and [`Rasterizer::occluded`] counts those held back. `None` lifts the test.
+    /// opaque pass's; one a sample at several samples, for [`Rasterizer::for_each_masked_fragment`]'s
+    /// passes and those of [`Rasterizer::cover`]'s walk, which reduce each fragment's mask to the
+    /// samples it lies in front of): a fragment reaches the shader only where its depth is
+    /// strictly less than its pixel's (a sample's), and [`Rasterizer::occluded`] counts those held
+    /// back. `None` lifts the test.
     /// The passes still return (and [`Rasterizer::fragment_count`] still counts) every fragment
     /// drawn, those held back included.
     pub fn cut_at(&mut self, depth: Option<std::sync::Arc<[f32]>>) {
@@ -791,10 +825,12 @@ impl Rasterizer {
         cut.counting.store(if counting { pass } else { u64::MAX }, std::sync::atomic::Ordering::Relaxed);
         let depth = &*cut.depth;
         let make = &make;
+        // above one sample the covered walk cuts each sample (`Rasterizer::task`)
+        let per_sample = self.covered.is_some();
         let per_band = self.by_band(Kernel::detect(), shade, move |b| {
             let f = make(b);
             move |frag: &Fragment<'_>| {
-                if frag.depth < depth[frag.pixel as usize] {
+                if per_sample || frag.depth < depth[frag.pixel as usize] {
                     f(frag)
                 } else if counting {
                     occlude(pass)
@@ -912,7 +948,19 @@ impl Rasterizer {
     ) -> u64 {
         if let Some(covered) = self.covered {
             let offsets = sample_offsets(covered.samples);
+            // the cut a sample (docs/msaa.md): each fragment's mask reduced to the samples it lies
+            // in front of, as `for_each_masked_fragment`'s, before its coverage weighs its alpha;
+            // one left with none held back (counted where the pass counts, `behind_cut!`)
+            let cut = self.early_cut();
+            let per = covered.samples as usize;
             return self.masked_task(kernel, shade, order, rows, &offsets, &|_| true, &|frag, mask| {
+                let mask = match &cut {
+                    Some(cut) => cut.kept(frag.pixel, frag.depth, mask, per),
+                    None => mask,
+                };
+                if mask == 0 {
+                    return;
+                }
                 if covered.fraction {
                     let mut color = frag.color();
                     color.w = oit_core::msaa::fraction_alpha(color.w, mask, covered.samples);
@@ -1010,13 +1058,7 @@ impl Rasterizer {
         let (depth, per) = (&*cut.depth, samples as usize);
         debug_assert_eq!(depth.len(), self.setup.width as usize * self.setup.height as usize * per);
         let n = self.masked_walk(samples, shade, keep, &|frag: &Fragment<'_>, mask: u8| {
-            let opaque = &depth[frag.pixel as usize * per..][..per];
-            let mut kept = 0u8;
-            for (i, &d) in opaque.iter().enumerate() {
-                // in front only where strictly less (a NaN depth would count as behind)
-                kept |= u8::from(frag.depth < d) << i;
-            }
-            let kept = kept & mask;
+            let kept = front_samples(&depth[frag.pixel as usize * per..][..per], frag.depth, mask);
             if kept != 0 {
                 f(frag, kept);
             } else if counting {

@@ -181,9 +181,10 @@ impl<'a> Resolve<'a> {
         self.opaque_uniform.is_none_or(|u| u[px])
     }
 
-    /// What a multisampled pixel with nothing captured shows: the mean of its samples'
-    /// backgrounds (summed in sample order, then times 1/N, as `background_at` in prelude.wgsl),
-    /// the one background where they are alike.
+    /// What a multisampled pixel with nothing captured shows, and what a technique that keeps no
+    /// mask composites a multisampled pixel over: the mean of its samples' backgrounds (summed in
+    /// sample order, then times 1/N, as `background_at` in prelude.wgsl), the one background
+    /// where they are alike.
     pub fn background_mean(&self, px: usize) -> Vec3 {
         if self.samples <= 1 || self.opaque_uniform(px) {
             return self.background_at_sample(px, 0);
@@ -193,10 +194,14 @@ impl<'a> Resolve<'a> {
     }
 
     /// What pixel `px` composites over: its opaque colour, or the background where no opaque
-    /// fragment fell (or the frame has no opaque parts).
+    /// fragment fell (or the frame has no opaque parts). Above one sample, what a technique that
+    /// keeps no mask composites the whole pixel over: the mean of its samples' colours
+    /// ([`Resolve::background_mean`], prelude.wgsl's `background_at`; docs/msaa.md).
     #[inline]
     pub fn background_at(&self, px: usize) -> Vec3 {
-        debug_assert_eq!(self.samples, 1, "a multisampled frame's background is a sample's");
+        if self.samples > 1 {
+            return self.background_mean(px);
+        }
         match self.opaque {
             Some(o) => o[px].unwrap_or(self.background),
             None => self.background,
@@ -209,6 +214,13 @@ impl<'a> Resolve<'a> {
     /// the background becomes what the front composites over, as dual depth peeling's back half
     /// does. Transparency only (the plan refuses the tail with other effects).
     pub fn tail(&self, s: &mut PixelState, sums: &[std::sync::atomic::AtomicU64], px: usize) {
+        self.tail_over(s, sums, self.background_at(px));
+    }
+
+    /// [`Resolve::tail`] over `behind` instead of the pixel's background: a multisampled pixel's
+    /// one tail put behind each of its samples, over that sample's own opaque colour
+    /// ([`Resolve::background_at_sample`]; docs/msaa.md).
+    pub fn tail_over(&self, s: &mut PixelState, sums: &[std::sync::atomic::AtomicU64], behind: Vec3) {
         use std::sync::atomic::Ordering::Relaxed;
         let l = |i: usize| sums[i].load(Relaxed) as f32;
         let count = sums[4].load(Relaxed) as u32;
@@ -220,7 +232,7 @@ impl<'a> Resolve<'a> {
             alpha: l(3) / 255.0,
             count,
         };
-        s.back = Some(oit_core::composite::weighted_average(&w, self.background_at(px)));
+        s.back = Some(oit_core::composite::weighted_average(&w, behind));
     }
 
     /// Finishes every pixel into an sRGB image; returns it, the fragments captured in all and

@@ -2,7 +2,9 @@
 //! covers each sample of a surface once, `--samples 1` as before, the exact techniques equal to
 //! the per-sample reference, no seam along the shared edges of a tessellated surface where
 //! per-pixel coverage shows one, the supersampled reference against the MSAA one, the GPU
-//! backends' compute paths equal to oit-cpu at several samples, and the refusals.
+//! backends' compute paths equal to oit-cpu at several samples, opaque objects (the opaque pass a
+//! sample; the techniques without a mask and fabs's tail over an opaque edge held to their
+//! definitions; the supersampled reference's opaque pass a frame), and the refusals.
 
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
@@ -374,6 +376,11 @@ fn no_seam_along_shared_edges() {
 /// plus the coverage fraction's where the tail's fragments cover different samples (measured:
 /// mean error 2.0 levels a pixel with the tail, 15.8 dropped, fabs:2 on the bunny at 4×). The GPU
 /// paths make the same frames (`gpu_paths_equal_the_cpu_at_samples`, `hardware_at_samples`).
+/// Over opaque objects (the wall through `planes:16` and through the default scene) the tail is
+/// put behind each sample over that sample's own opaque colour (the fragments merged into it
+/// those the cut left in front at some sample, weighted by the fraction they keep): the pixels
+/// that did not overflow are the per-sample reference's (their tail empty), `occluded` is the
+/// reference's, and the tail errs less than dropping.
 /// Mutation tried: oit-cpu's tail weight counted over every sample's bit (`kept(mask) | 0xff`:
 /// "wgpu/compute: fabs:2 on bunny at 4× (Transparency): 1193 pixels off the edges differ, by up
 /// to 69" in `gpu_paths_equal_the_cpu_at_samples`; this test's bound held, the tail still nearer
@@ -381,10 +388,18 @@ fn no_seam_along_shared_edges() {
 #[test]
 fn fabs_tail_at_samples_merges_behind_the_k() {
     let cpu = CpuBackend::default();
-    for (name, samples) in [("bunny", 4), ("knot", 4), ("knot", 8)] {
+    let cases = [
+        ("bunny", 4, View::default()),
+        ("knot", 4, View::default()),
+        ("knot", 8, View::default()),
+        (WALLED[0], 4, oblique()),
+        (WALLED[1], 4, oblique()),
+        (WALLED[0], 8, oblique()),
+    ];
+    for (name, samples, view) in cases {
         let scene = scene_of(name);
         let base = Settings { samples, ..settings(96, "reference") };
-        let cam = camera(&scene, &base, View::default());
+        let cam = camera(&scene, &base, view);
         let reference = render(&cpu, &scene, &cam, &base);
         let drop =
             render(&cpu, &scene, &cam, &Settings { technique: "fabs:2".parse().unwrap(), ..base.clone() });
@@ -403,6 +418,19 @@ fn fabs_tail_at_samples_merges_behind_the_k() {
             "{what}: every fragment past K merged"
         );
         assert_eq!(tail.stats.geometry_passes, drop.stats.geometry_passes + 1, "{what}: one tail pass");
+        assert_eq!(tail.stats.occluded, reference.stats.occluded, "{what}: occluded");
+        // a pixel that did not overflow has an empty tail: each sample over its own colour, exact
+        let dropped = drop.lost_pixels.as_ref().expect("per-pixel losses");
+        let mut whole = 0;
+        for (px, _) in dropped.iter().enumerate().filter(|&(_, &l)| l == 0) {
+            let (got, want) = (tail.image.pixels[px], reference.image.pixels[px]);
+            assert!(
+                diff(got, want) <= 1,
+                "{what}: pixel {px} without a tail is {got:?}, the reference {want:?}"
+            );
+            whole += 1;
+        }
+        assert!(whole > 100, "{what}: {whole} pixels without a tail");
         let (ed, et) = (mean_error(&reference.image, &drop.image), mean_error(&reference.image, &tail.image));
         let (ad, at) =
             (accuracy(&reference, &drop.image).unwrap(), accuracy(&reference, &tail.image).unwrap());
@@ -472,11 +500,11 @@ fn sample_counts_with(scene: &oit_core::Scene, s: &Settings, cam: &oit_core::Cam
     counts.chunks(k).map(|c| c.iter().map(|a| a.load(Relaxed)).collect()).collect()
 }
 
-/// What is not done yet says so by name: the hardware paths' own captures at 4 samples,
-/// the supersampled reference on a GPU backend's hardware path or of a scene with opaque objects,
-/// a technique that keeps no mask over opaque objects; a sample count other than 1, 4 or 8 and
-/// `--supersample` at one sample are
-/// invalid settings.
+/// What is not done yet says so by name: the hardware paths' own captures not yet done at 4
+/// samples, the supersampled reference on a GPU backend's hardware path; a sample count other than
+/// 1, 4 or 8 and `--supersample` at one sample are invalid settings. Scenes with opaque objects
+/// render at 4 samples for every other technique, fabs's tail and the supersampled reference
+/// included.
 #[test]
 fn refusals_name_what_is_not_done() {
     let scene = scene_of("knot");
@@ -528,28 +556,23 @@ fn refusals_name_what_is_not_done() {
             .is_ok()
     );
     // opaque objects (an opaque wall behind the knot) render at 4 samples (the opaque pass is
-    // multisampled), but not the supersampled reference, which does not draw the opaque pass yet
+    // multisampled), for the techniques without a mask too (their coverage cut at each sample's
+    // opaque depth), fabs's tail and the supersampled reference (an opaque pass a frame)
     let walled = scene_of("wall:1:knot");
     assert!(walled.has_opaque());
     let walled_cam = camera(&walled, &base, View::default());
-    assert!(cpu.render(&walled, &walled_cam, &base).is_ok());
-    // a technique that keeps no mask over opaque objects: its coverage is not yet cut per sample
-    // (dp per sample keeps its layers' masks and renders; by coverage fraction it is refused)
-    assert!(cpu.render(&walled, &walled_cam, &Settings { technique: Technique::Dp, ..base.clone() }).is_ok());
-    let dp_fraction = Settings { technique: Technique::Dp, fraction_coverage: true, ..base.clone() };
-    match cpu.render(&walled, &walled_cam, &dp_fraction) {
-        Err(OitError::Unsupported { what, .. }) => assert!(what.contains("opaque"), "{what}"),
-        other => panic!("dp over opaque objects at 4 samples: {:?}", other.map(|f| f.stats)),
-    }
-    // fabs's one tail a pixel over opaque objects: not yet composited over each sample's colour
     let tail = Settings { overflow: oit_core::Overflow::Tail, samples: 4, ..settings(32, "fabs:2") };
-    match cpu.render(&walled, &walled_cam, &tail) {
-        Err(OitError::Unsupported { what, .. }) => assert!(what.contains("tail"), "{what}"),
-        other => panic!("fabs's tail over opaque objects at 4 samples: {:?}", other.map(|f| f.stats)),
-    }
-    match cpu.render(&walled, &walled_cam, &Settings { supersample: true, ..base.clone() }) {
-        Err(OitError::Unsupported { what, .. }) => assert!(what.contains("opaque"), "{what}"),
-        other => panic!("opaque with --supersample: {:?}", other.map(|f| f.stats)),
+    for s in [
+        base.clone(),
+        Settings { technique: Technique::Dp, ..base.clone() },
+        Settings { technique: Technique::Dp, fraction_coverage: true, ..base.clone() },
+        tail,
+        Settings { supersample: true, ..base.clone() },
+    ] {
+        let f = cpu
+            .render(&walled, &walled_cam, &s)
+            .unwrap_or_else(|e| panic!("{} over a wall: {e}", s.technique));
+        checks::accounting(&f).unwrap_or_else(|e| panic!("{} over a wall: {e}", s.technique));
     }
     // the GPU backends' plans take the samples on either path (oit-vulkan's hardware path
     // refuses them where it starts a frame: `gpu_paths_equal_the_cpu_at_samples`)
@@ -817,8 +840,9 @@ fn gpu_paths_equal_the_cpu_at_samples() {
 /// translucency, and a tiled frame equal to the whole. It is not the per-sample reference: the
 /// exact `dfb` equals the per-sample reference (EPR 0) and errs against the supersampled one on
 /// the edge pixels (MSAA's own error, what `oit compare --supersample` reports), by as many
-/// pixels as on oit-cpu. The hardware paths refuse it by name. (The textured scenes of the set
-/// all have opaque or masked parts, refused at several samples.) Mutations tried: the kernel's
+/// pixels as on oit-cpu. With opaque objects (the wall through the default scene) each sample's
+/// frame draws its own opaque pass: `occluded`, the opaque fragments and the passes are oit-cpu's,
+/// summed over the frames. The hardware paths refuse it by name. Mutations tried: the kernel's
 /// sum of the earlier frames dropped (the last sample's frame alone, times n: "bunny at 4×: 802
 /// pixels off the edges differ, by up to 86"); oit-wgpu's frames all under the unmoved camera
 /// (shaded at the pixels' centres: "bunny at 4×: fragments: 9760 vs 9800").
@@ -831,14 +855,16 @@ fn gpu_supersampled_reference_equals_the_cpus() {
         let on = label(backend.as_ref());
         let path = backend.raster_path(&Settings::default());
         let cases = [
-            ("bunny", 64, 4, Settings::default().shading, oit_core::Effect::Transparency),
-            ("knot", 48, 8, Shading::Headlight, oit_core::Effect::Transparency),
-            ("planes:6", 40, 4, Settings::default().shading, oit_core::Effect::Translucency),
+            ("bunny", 64, 4, Settings::default().shading, oit_core::Effect::Transparency, View::default()),
+            ("knot", 48, 8, Shading::Headlight, oit_core::Effect::Transparency, View::default()),
+            ("planes:6", 40, 4, Settings::default().shading, oit_core::Effect::Translucency, View::default()),
+            // opaque objects: an opaque pass in each sample's frame
+            (WALLED[1], 48, 4, Settings::default().shading, oit_core::Effect::Transparency, oblique()),
         ];
-        for (name, size, samples, shading, effect) in cases {
+        for (name, size, samples, shading, effect, view) in cases {
             let scene = scene_of(name);
             let s = Settings { samples, supersample: true, shading, effect, ..settings(size, "reference") };
-            let cam = camera(&scene, &s, View::default());
+            let cam = camera(&scene, &s, view);
             let what = format!("{on}: the supersampled reference of {name} at {samples}×");
             if path == oit_core::RasterPath::Hardware {
                 match backend.render(&scene, &cam, &s) {
@@ -853,11 +879,18 @@ fn gpu_supersampled_reference_equals_the_cpus() {
             let g = render(backend.as_ref(), &scene, &cam, &s);
             let c = render(&cpu, &scene, &cam, &s);
             checks::same_fragments_as_cpu(&g, &c, s.technique).unwrap_or_else(|e| panic!("{what}: {e}"));
+            checks::accounting(&g).unwrap_or_else(|e| panic!("{what}: {e}"));
             assert_eq!(
-                g.stats.geometry_passes,
-                2 * samples,
-                "{what}: a counting pass and a fill a sample's frame"
+                (g.stats.occluded, g.stats.opaque_fragments, g.stats.masked),
+                (c.stats.occluded, c.stats.opaque_fragments, c.stats.masked),
+                "{what}: occluded, opaque, masked"
             );
+            // a counting pass and a fill a sample's frame, and two opaque passes where it has some
+            let opaque = if scene.has_opaque() { 2 } else { 0 };
+            assert_eq!(g.stats.geometry_passes, (2 + opaque) * samples, "{what}: passes");
+            if scene.has_opaque() {
+                assert!(g.stats.occluded > 0, "{what}: the wall holds fragments back");
+            }
             // MSAA's own error: the exact dfb against the per-sample reference and against this
             let msaa = render(backend.as_ref(), &scene, &cam, &Settings { supersample: false, ..s.clone() });
             let dfb = Settings { technique: Technique::Dfb, supersample: false, ..s.clone() };
@@ -1116,8 +1149,14 @@ fn mean_error(a: &oit_core::Image, b: &oit_core::Image) -> f64 {
 /// Issue 40 item 2 for the techniques without room for a mask: at 4 samples each composites a
 /// fragment over its whole pixel, its alpha weighted by the fraction of the pixel's samples it
 /// covers (`coverage: fraction` in the frame's stats), which errs less than compositing it at full
-/// alpha (`--coverage pixel`) against the per-sample reference, on the bunny and on a tessellated
-/// sphere. The bound, in mean 8-bit levels a pixel: no more than the technique's own error at one
+/// alpha (`--coverage pixel`) against the per-sample reference, on the bunny, on a tessellated
+/// sphere and over opaque objects (the wall through `planes:16` and through the default scene,
+/// the fraction that of the samples in front of each sample's opaque depth, the same fragments
+/// `occluded` as the per-sample reference's; [`techniques_without_masks_over_an_opaque_edge`]
+/// holds the opaque edge itself; the choice between fraction and pixel is made on the meshes,
+/// and over the walls the fraction, where it is the default, errs less too; bdp's colour mode
+/// keeps its choice, per pixel, which errs less through the default scene and more through the
+/// planes, whose quads split few edges). The bound, in mean 8-bit levels a pixel: no more than the technique's own error at one
 /// sample against the one-sample reference (what its approximation costs without the samples)
 /// plus the coverage error of an exact technique composited per pixel (`dfb --coverage pixel`
 /// against the per-sample reference: what MSAA's edge fragments cost a technique that ignores the
@@ -1129,11 +1168,23 @@ fn mean_error(a: &oit_core::Image, b: &oit_core::Image) -> f64 {
 #[test]
 fn techniques_without_masks_weigh_alpha_by_coverage() {
     let cpu = CpuBackend::default();
-    for (name, size, alpha) in [("bunny", 160, None), ("spheres:1", 64, Some(0.4))] {
+    let cases = [
+        ("bunny", 160, None, View::default()),
+        ("spheres:1", 64, Some(0.4), View::default()),
+        // opaque objects: the wall through 16 planes and through the default scene, their coverage
+        // cut at each sample's opaque depth, composited over the mean of the samples' colours (the
+        // default scene at one alpha, as the others have: mdts's word keeps one alpha for every
+        // fragment, an error of its own that grows with the fragments the samples add, not the
+        // coverage's)
+        (WALLED[0], 96, None, oblique()),
+        (WALLED[1], 96, Some(0.4), oblique()),
+    ];
+    for (name, size, alpha, view) in cases {
         let scene = scene_of(name);
+        let walled = scene.has_opaque();
         let one = Settings { alpha, shading: Shading::Flat, ..settings(size, "reference") };
         let four = Settings { samples: 4, ..one.clone() };
-        let cam = camera(&scene, &one, View::default());
+        let cam = camera(&scene, &one, view);
         let (r1, r4) = (render(&cpu, &scene, &cam, &one), render(&cpu, &scene, &cam, &four));
         let seam = mean_error(
             &r4.image,
@@ -1159,9 +1210,11 @@ fn techniques_without_masks_weigh_alpha_by_coverage() {
             let asked = if weighs { Coverage::Fraction } else { Coverage::Pixel };
             assert_eq!(fraction.stats.coverage, Some(asked), "{t}");
             assert_eq!(pixel.stats.coverage, Some(Coverage::Pixel), "{t}");
-            // the multisampled fragments, the reference's, in each
+            // the multisampled fragments, the reference's, in each, and as many held back by the
+            // opaque cut a sample
             for f in [&chosen, &fraction, &pixel] {
                 assert_eq!(f.stats.fragments, r4.stats.fragments, "{t} on {name}");
+                assert_eq!(f.stats.occluded, r4.stats.occluded, "{t} on {name}: occluded");
                 checks::accounting(f).unwrap_or_else(|e| panic!("{t} on {name}: {e}"));
             }
             let own = mean_error(&r1.image, &single.image);
@@ -1172,11 +1225,16 @@ fn techniques_without_masks_weigh_alpha_by_coverage() {
                  ({:?}); at 1 sample {own:.4}; per-pixel dfb {seam:.4}",
                 chosen.stats.coverage
             );
-            // the choice is the one that errs least, and within the bound
-            if weighs {
+            // the choice is the one that errs least (made on the meshes; over the walls, where
+            // the fraction is the default, it errs less there too), and within the bound
+            if weighs && !walled {
                 let (best, worse) = if f <= p { (Coverage::Fraction, p) } else { (Coverage::Pixel, f) };
                 assert_eq!(chosen.stats.coverage, Some(best), "{t} on {name}: fraction {f:.4}, pixel {p:.4}");
                 assert!(c < worse, "{t} on {name}: the choice {c:.4} against {worse:.4}");
+            } else if weighs {
+                if chosen.stats.coverage == Some(Coverage::Fraction) {
+                    assert!(f < p, "{t} on {name}: fraction {f:.4} against pixel {p:.4}");
+                }
             } else {
                 assert_eq!((&chosen.image, &fraction.image), (&pixel.image, &pixel.image), "{t} on {name}");
             }
@@ -1226,12 +1284,10 @@ fn plain_fragments(
     out
 }
 
-/// What the multisampled opaque pass should leave, worked out by hand from the plain rule: each
-/// sample's nearest opaque depth (the smallest `depth bits << 32 | id` of the opaque fragments
-/// whose mask covers it), the transparent fragments held back (behind or at that depth at every
-/// sample they cover: `occluded`), the transparent fragments drawn, and per pixel how many of its
-/// samples an opaque fragment covers.
-fn opaque_by_hand(scene: &oit_core::Scene, cam: &oit_core::Camera, s: &Settings) -> (u64, u64, Vec<u32>) {
+/// Each sample's nearest opaque key worked out by hand from the plain rule (sample `i` of pixel
+/// `px` at `px · samples + i`): the smallest `depth bits << 32 | id` of the opaque fragments
+/// whose mask covers it, `u64::MAX` where none does.
+fn opaque_keys_by_hand(scene: &oit_core::Scene, cam: &oit_core::Camera, s: &Settings) -> Vec<u64> {
     let layers = scene.layers(s.alpha);
     let drawn = layers.settings(s);
     let n = s.samples as usize;
@@ -1242,11 +1298,27 @@ fn opaque_by_hand(scene: &oit_core::Scene, cam: &oit_core::Camera, s: &Settings)
             keys[px * n + i] = keys[px * n + i].min(key);
         }
     }
-    let depth = |k: u64| if k == u64::MAX { f32::INFINITY } else { f32::from_bits((k >> 32) as u32) };
+    keys
+}
+
+/// The depth of an opaque key ([`opaque_keys_by_hand`]): infinite where none.
+fn key_depth(k: u64) -> f32 {
+    if k == u64::MAX { f32::INFINITY } else { f32::from_bits((k >> 32) as u32) }
+}
+
+/// What the multisampled opaque pass should leave, worked out by hand from the plain rule: each
+/// sample's nearest opaque depth ([`opaque_keys_by_hand`]), the transparent fragments held back
+/// (behind or at that depth at every sample they cover: `occluded`), the transparent fragments
+/// drawn, and per pixel how many of its samples an opaque fragment covers.
+fn opaque_by_hand(scene: &oit_core::Scene, cam: &oit_core::Camera, s: &Settings) -> (u64, u64, Vec<u32>) {
+    let layers = scene.layers(s.alpha);
+    let drawn = layers.settings(s);
+    let n = s.samples as usize;
+    let keys = opaque_keys_by_hand(scene, cam, s);
     let transparent = plain_fragments(&layers.transparent, cam, &drawn);
     let occluded = transparent
         .iter()
-        .filter(|&&(px, _, mask, d)| (0..n).all(|i| mask >> i & 1 == 0 || d >= depth(keys[px * n + i])))
+        .filter(|&&(px, _, mask, d)| (0..n).all(|i| mask >> i & 1 == 0 || d >= key_depth(keys[px * n + i])))
         .count() as u64;
     let covered = keys.chunks(n).map(|k| k.iter().filter(|&&k| k != u64::MAX).count() as u32).collect();
     (occluded, transparent.len() as u64, covered)
@@ -1350,7 +1422,10 @@ fn srgb(v: f32) -> u8 {
 /// oit-cpu and on every GPU path; a hardware path's rasterizer snaps on its own, so there a pixel
 /// whose samples lie within a snap of the wall's edge may count one sample otherwise: it is held
 /// to the bound on 90 % of the edge pixels, and none of them may be all one or the other where
-/// the count by hand says 2 of 4.
+/// the count by hand says 2 of 4. The supersampled reference (`--supersample`, on oit-cpu and the
+/// compute paths), whose frames each draw the opaque pass at one sample under their moved
+/// camera, antialiases the edge alike (held as the hardware paths, its frames snapping the moved
+/// vertices anew).
 /// Mutation caught: the opaque pass writing every sample of a pixel a fragment covers any of (the
 /// opaque image kept a pixel) makes the edge all or nothing.
 #[test]
@@ -1360,8 +1435,18 @@ fn the_opaque_edge_is_antialiased() {
     for backend in backends_for("the_opaque_edge_is_antialiased") {
         let on = label(backend.as_ref());
         let hardware = backend.raster_path(&Settings::default()) == oit_core::RasterPath::Hardware;
-        for t in ["reference", "dfb", "ll", "fabs"] {
-            let s = Settings { samples: 4, shading: Shading::Flat, alpha: Some(0.0), ..settings(64, t) };
+        let cases =
+            [("reference", false), ("dfb", false), ("ll", false), ("fabs", false), ("reference", true)];
+        // (the hardware paths refuse the supersampled reference: `refuse_supersampled_hardware`)
+        for (t, supersample) in cases.into_iter().filter(|&(_, ss)| !(ss && hardware)) {
+            let s = Settings {
+                samples: 4,
+                shading: Shading::Flat,
+                alpha: Some(0.0),
+                supersample,
+                ..settings(64, t)
+            };
+            let t = if supersample { "reference --supersample" } else { t };
             let cam = camera(&scene, &s, oblique());
             let (_, _, covered) = opaque_by_hand(&scene, &cam, &s);
             let f = render(backend.as_ref(), &scene, &cam, &s);
@@ -1388,12 +1473,296 @@ fn the_opaque_edge_is_antialiased() {
                 }
             }
             assert!(edge > 40 && halves > 5, "{on} {t}: {edge} edge pixels, {halves} halves");
-            let needed = if hardware { edge * 9 / 10 } else { edge };
+            // (the supersampled reference's frames snap their moved vertices anew)
+            let needed = if hardware || supersample { edge * 9 / 10 } else { edge };
             assert!(within >= needed, "{on} {t}: {within} of {edge} edge pixels the mean of their samples");
             checked += 1;
         }
     }
     assert!(checked >= 4);
+}
+
+/// The scene of [`techniques_without_masks_over_an_opaque_edge`]: one transparent quad
+/// (`planes:1`) behind an opaque wall (`wall:0`: in front of everything), seen from [`beside`],
+/// so that the quad shows beside one edge of the wall, which crosses the quad's interior.
+const EDGE_SCENE: &str = "wall:0:planes:1";
+
+/// What a technique that keeps no coverage mask composites at several samples over opaque
+/// objects (docs/msaa.md, "The techniques without a mask over opaque objects"), held to its
+/// definition on the edge of an opaque wall in front of one transparent quad ([`EDGE_SCENE`] seen
+/// from [`beside`], flat shaded, the quad at alpha α = 0.4, 4 and 8 samples), on every path: each fragment over
+/// the pixel's **mean opaque colour** B̄ (the mean of its samples' opaque colours, the background
+/// where none covers a sample), its alpha times the fraction f of the pixel's samples it covers
+/// **in front of each sample's opaque depth** (`coverage: fraction`), or at full alpha where it
+/// keeps any sample (`coverage: pixel`: `mdts`, bdp's colour mode). On each pixel the quad covers
+/// whole and the wall partly: the quad's colour c (straight alpha), the wall's W and the
+/// background's bg read back from the reference's pixels, the fraction's pixel is
+/// α·f·c + (1 − α·f)·B̄, within 2 levels of 8 bits (the colours read back from 8-bit pixels, the
+/// alpha's 8 bits, the encoding; a hardware path, whose rasterizer snaps its own edges, on 90 % of
+/// the pixels). The per-sample reference's is the mean over the samples of α·c + (1 − α)·Bᵢ where
+/// the quad is kept and Bᵢ where the wall hides it: the two differ by α·f(1 − f)·(bg − W), at
+/// most α/4 of the wall's contrast with what lies beside it (at f = ½), the cost of the mean
+/// background against the per-sample reference, which this test holds on the measured pixels
+/// (3/255 of slack in linear light for the 8-bit reads). The accounting holds and `occluded` is
+/// the reference's. Mutations caught (each tried): oit-cpu's covered walk weighing the fraction of
+/// every sample the fragment covers, not of those it keeps in front ("cpu/cpu: dp on
+/// wall:0:planes:1 at 4×: 0 of 33 edge pixels its definition"); oit-cpu's background the first
+/// sample's colour instead of the mean (0 of 33 alike); the GPU's opaque pass taking its
+/// fragments weighted by their fraction, which discards a wall's edge fragments under the cutoff
+/// ("wgpu/compute: dp …: 15 of 29 edge pixels").
+#[test]
+fn techniques_without_masks_over_an_opaque_edge() {
+    let scene = scene_of(EDGE_SCENE);
+    let mut checked = 0;
+    for backend in backends_for("techniques_without_masks_over_an_opaque_edge") {
+        let on = label(backend.as_ref());
+        let hardware = backend.raster_path(&Settings::default()) == oit_core::RasterPath::Hardware;
+        for samples in [4, 8] {
+            let base =
+                Settings { samples, shading: Shading::Flat, alpha: Some(0.4), ..settings(128, "reference") };
+            let cam = camera(&scene, &base, beside());
+            let (n, full) = (samples as usize, full_mask(samples));
+            let reference = match backend.render(&scene, &cam, &base) {
+                Ok(f) => f,
+                Err(OitError::Unsupported { what, .. }) if hardware && samples == 8 => {
+                    eprintln!("{on} at {samples}×: {what}");
+                    continue;
+                }
+                Err(e) => panic!("{on} at {samples}×: {e}"),
+            };
+            // by hand: each sample's opaque key, and per pixel the quad's fragments (how many, the
+            // last one's mask and depth)
+            let keys = opaque_keys_by_hand(&scene, &cam, &base);
+            let layers = scene.layers(base.alpha);
+            let drawn = layers.settings(&base);
+            let mut quad = vec![(0u32, 0u8, 0f32); base.pixel_count()];
+            for (px, _, mask, d) in plain_fragments(&layers.transparent, &cam, &drawn) {
+                quad[px] = (quad[px].0 + 1, mask, d);
+            }
+            let wall_of =
+                |px: usize| (0..n).fold(0u8, |m, i| m | u8::from(keys[px * n + i] != u64::MAX) << i);
+            let kept_of = |px: usize| {
+                (0..n).fold(0u8, |m, i| m | u8::from(quad[px].2 < key_depth(keys[px * n + i])) << i)
+                    & quad[px].1
+            };
+            let whole = |px: usize| quad[px].0 == 1 && quad[px].1 == full;
+            // the colours, read back from the reference's pixels (flat shading: one each)
+            let pixels = 0..base.pixel_count();
+            let find = |what: &str, pick: &dyn Fn(usize) -> bool| {
+                let px =
+                    pixels.clone().find(|&px| pick(px)).unwrap_or_else(|| panic!("{on}: a pixel {what}"));
+                glam::Vec3::from_array(std::array::from_fn(|c| linear(reference.image.pixels[px][c])))
+            };
+            let wall = find("all wall", &|px| wall_of(px) == full);
+            let bg = find("of background", &|px| quad[px].0 == 0 && wall_of(px) == 0);
+            let over_bg = find("of the quad alone", &|px| whole(px) && wall_of(px) == 0);
+            let alpha = (0.4f32 * 255.0).round() / 255.0;
+            let ac = over_bg - (1.0 - alpha) * bg;
+            assert!((wall - bg).abs().max_element() > 0.1, "{on}: the wall {wall} against {bg}");
+            // the pixels of the wall's edge over the quad's interior, their per-sample reference
+            let edge: Vec<(usize, glam::Vec3, f32, glam::Vec3)> = pixels
+                .clone()
+                .filter(|&px| whole(px) && wall_of(px) != 0 && wall_of(px) != full)
+                .map(|px| {
+                    let (w, kept) = (wall_of(px), kept_of(px));
+                    let b = |i: usize| if w >> i & 1 == 1 { wall } else { bg };
+                    let mean = (0..n).map(b).sum::<glam::Vec3>() / n as f32;
+                    let per_sample = (0..n)
+                        .map(|i| if kept >> i & 1 == 1 { ac + (1.0 - alpha) * b(i) } else { b(i) })
+                        .sum::<glam::Vec3>()
+                        / n as f32;
+                    (px, mean, kept.count_ones() as f32 / n as f32, per_sample)
+                })
+                .collect();
+            // (the pixels whose fraction kept is near ½, where the mean background errs most)
+            let halves = edge.iter().filter(|e| (0.25..=0.75).contains(&e.2)).count();
+            assert!(
+                edge.len() > 20 && halves > 4,
+                "{on} at {samples}×: {} edge pixels, {halves} halves",
+                edge.len()
+            );
+            let srgb3 = |c: glam::Vec3| [srgb(c.x), srgb(c.y), srgb(c.z), 255];
+            let near = |got: [u8; 4], want: glam::Vec3| diff(got, srgb3(want)) <= 2;
+            let within = |n: usize| if hardware { n >= edge.len() * 9 / 10 } else { n == edge.len() };
+            let good = edge.iter().filter(|e| near(reference.image.pixels[e.0], e.3)).count();
+            let contrast = diff(srgb3(wall), srgb3(bg));
+            eprintln!(
+                "{on} at {samples}×: {} edge pixels, the wall {contrast} levels from the background",
+                edge.len()
+            );
+            assert!(
+                within(good),
+                "{on} at {samples}×: the reference on {good} of {} edge pixels",
+                edge.len()
+            );
+            let bound = alpha / 4.0 * (wall - bg).abs() + glam::Vec3::splat(3.0 / 255.0);
+            for t in FRACTION_TECHNIQUES {
+                let s = Settings { technique: t.parse().unwrap(), ..base.clone() };
+                let what = format!("{on}: {t} on {EDGE_SCENE} at {samples}×");
+                let f = match backend.render(&scene, &cam, &s) {
+                    Ok(f) => f,
+                    // plain's blender on a hardware path (`refuse_multisampled_own_capture`)
+                    Err(OitError::Unsupported { what: why, .. })
+                        if hardware && s.technique == Technique::Plain =>
+                    {
+                        eprintln!("{what}: {why}");
+                        continue;
+                    }
+                    Err(e) => panic!("{what}: {e}"),
+                };
+                checks::accounting(&f).unwrap_or_else(|e| panic!("{what}: {e}"));
+                if hardware {
+                    checks::occluded_near(&f, &reference).unwrap_or_else(|e| panic!("{what}: {e}"));
+                } else {
+                    assert_eq!(f.stats.occluded, reference.stats.occluded, "{what}: occluded");
+                }
+                let fraction = f.stats.coverage == Some(Coverage::Fraction);
+                let (mut good, mut bounded) = (0, 0);
+                for &(px, mean, kept, per_sample) in &edge {
+                    let a = if fraction {
+                        alpha * kept
+                    } else if kept > 0.0 {
+                        alpha
+                    } else {
+                        0.0
+                    };
+                    // (a technique that comes to keep masks composites per sample: the reference's)
+                    let want = if f.stats.coverage == Some(Coverage::Sample) {
+                        per_sample
+                    } else {
+                        a / alpha * ac + (1.0 - a) * mean
+                    };
+                    let got = f.image.pixels[px];
+                    good += usize::from(near(got, want));
+                    let got = glam::Vec3::from_array(std::array::from_fn(|c| linear(got[c])));
+                    bounded += usize::from(((got - per_sample).abs() - bound).max_element() <= 0.0);
+                }
+                let worst = edge.iter().map(|e| diff(f.image.pixels[e.0], reference.image.pixels[e.0])).max();
+                eprintln!(
+                    "{what}: {good} of {} edge pixels its definition; off the reference by up to {worst:?} levels",
+                    edge.len()
+                );
+                assert!(within(good), "{what}: {good} of {} edge pixels its definition", edge.len());
+                if fraction {
+                    assert!(
+                        within(bounded),
+                        "{what}: {bounded} of {} edge pixels within α/4 of the contrast",
+                        edge.len()
+                    );
+                }
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked >= 2 * FRACTION_TECHNIQUES.len());
+}
+
+/// The view of the opaque-edge tests ([`techniques_without_masks_over_an_opaque_edge`],
+/// [`fabs_tail_over_an_opaque_edge`]): turned 65° from the default the other way from [`oblique`],
+/// so that the planes behind a wall in front of everything (`wall:0`) show beside its edge, which
+/// crosses them, the two quads of `planes:2` overlapping there.
+fn beside() -> View {
+    View { azimuth: View::default().azimuth - 65.0, ..View::default() }
+}
+
+/// fabs's one tail a pixel over opaque objects, held to its definition (docs/msaa.md, "The tail of
+/// `fabs` over opaque objects") on the edge of an opaque wall in front of two transparent quads
+/// (`wall:0:planes:2`, seen from [`beside`], flat shaded, alpha α = 0.4, 4 samples), with one
+/// slot (`fabs:1 --overflow tail`): on each pixel both quads cover whole and the wall partly, the
+/// nearer quad (α·c₁ premultiplied) takes the slot and the farther (α·c₂) the tail, both kept at
+/// the samples S the wall leaves (f = |S|/N). Each sample composites the slot where it covers
+/// the sample over the tail put over **that sample's own opaque colour** Bᵢ; the tail is one
+/// fragment weighted by its fraction, f·α·c₂ + (1 − α·f)·Bᵢ, so a sample in S is
+/// α·c₁ + (1 − α)·(f·α·c₂ + (1 − α·f)·Bᵢ) and one the wall hides f·α·c₂ + (1 − α·f)·W: the pixel
+/// their mean, within 2 levels of 8 bits (each α·c read back from a pixel its quad covers alone
+/// beside the wall, W and the background from theirs; a hardware path on 90 % of the pixels).
+/// Against the per-sample reference it errs by the tail's fraction only (the wall's samples
+/// dimmed by the tail they do not see, the samples in S by less than its full alpha), not by
+/// dropping the tail nor by putting it over the background. The accounting holds and every
+/// fragment past the slot is merged. Mutation caught: oit-cpu's tail put over the pixel's mean
+/// colour instead of each sample's ("cpu/cpu: …: 0 of 41 edge pixels its definition").
+#[test]
+fn fabs_tail_over_an_opaque_edge() {
+    let scene = scene_of("wall:0:planes:2");
+    let mut checked = 0;
+    for backend in backends_for("fabs_tail_over_an_opaque_edge") {
+        let on = label(backend.as_ref());
+        let hardware = backend.raster_path(&Settings::default()) == oit_core::RasterPath::Hardware;
+        let samples = 4;
+        let base =
+            Settings { samples, shading: Shading::Flat, alpha: Some(0.4), ..settings(256, "reference") };
+        let cam = camera(&scene, &base, beside());
+        let (n, full) = (samples as usize, full_mask(samples));
+        let reference = render(backend.as_ref(), &scene, &cam, &base);
+        let tail = Settings {
+            technique: Technique::Fabs { k: Some(1) },
+            overflow: oit_core::Overflow::Tail,
+            ..base.clone()
+        };
+        let f = render(backend.as_ref(), &scene, &cam, &tail);
+        let what = format!("{on}: fabs:1 --overflow tail on wall:0:planes:2 at {samples}×");
+        checks::accounting(&f).unwrap_or_else(|e| panic!("{what}: {e}"));
+        assert!(
+            f.stats.merged > 0 && f.stats.lost == 0,
+            "{what}: merged {}, lost {}",
+            f.stats.merged,
+            f.stats.lost
+        );
+        // by hand: each sample's opaque key; per pixel the quads' fragments (depth, primitive,
+        // mask), nearest first
+        let keys = opaque_keys_by_hand(&scene, &cam, &base);
+        let layers = scene.layers(base.alpha);
+        let drawn = layers.settings(&base);
+        let mut quads = vec![Vec::new(); base.pixel_count()];
+        for (px, prim, mask, d) in plain_fragments(&layers.transparent, &cam, &drawn) {
+            quads[px].push((d, prim, mask));
+        }
+        quads.iter_mut().for_each(|q| q.sort_by(|a, b| a.0.total_cmp(&b.0)));
+        let wall_of = |px: usize| (0..n).fold(0u8, |m, i| m | u8::from(keys[px * n + i] != u64::MAX) << i);
+        let whole = |px: usize, k: usize| quads[px].len() == k && quads[px].iter().all(|q| q.2 == full);
+        let read = |px: usize| {
+            glam::Vec3::from_array(std::array::from_fn(|c| linear(reference.image.pixels[px][c])))
+        };
+        let pixels = 0..base.pixel_count();
+        let wall = read(pixels.clone().find(|&px| wall_of(px) == full).expect("a pixel all wall"));
+        let bg =
+            read(pixels.clone().find(|&px| quads[px].is_empty() && wall_of(px) == 0).expect("background"));
+        let alpha = (0.4f32 * 255.0).round() / 255.0;
+        // each quad's α·c (by its triangles' primitives), from a pixel it covers alone
+        let mut ac = std::collections::HashMap::new();
+        for px in pixels.clone().filter(|&px| whole(px, 1) && wall_of(px) == 0) {
+            ac.entry(quads[px][0].1).or_insert_with(|| read(px) - (1.0 - alpha) * bg);
+        }
+        let srgb3 = |c: glam::Vec3| [srgb(c.x), srgb(c.y), srgb(c.z), 255];
+        let (mut edge, mut good) = (0, 0);
+        for px in pixels.clone().filter(|&px| whole(px, 2) && wall_of(px) != 0 && wall_of(px) != full) {
+            let w = wall_of(px);
+            let kept = |q: &(f32, u32, u8)| {
+                (0..n).fold(0u8, |m, i| m | u8::from(q.0 < key_depth(keys[px * n + i])) << i) & q.2
+            };
+            let (front, back) = (&quads[px][0], &quads[px][1]);
+            let (Some(&c1), Some(&c2)) = (ac.get(&front.1), ac.get(&back.1)) else { continue };
+            // both behind the wall: kept where it is not
+            assert_eq!((kept(front), kept(back)), (!w & full, !w & full), "{what}: pixel {px}");
+            let frac = (!w & full).count_ones() as f32 / n as f32;
+            let b = |i: usize| if w >> i & 1 == 1 { wall } else { bg };
+            let want = (0..n)
+                .map(|i| {
+                    let behind = frac * c2 + (1.0 - alpha * frac) * b(i);
+                    if w >> i & 1 == 1 { behind } else { c1 + (1.0 - alpha) * behind }
+                })
+                .sum::<glam::Vec3>()
+                / n as f32;
+            edge += 1;
+            good += usize::from(diff(f.image.pixels[px], srgb3(want)) <= 2);
+        }
+        eprintln!("{what}: {good} of {edge} edge pixels its definition");
+        assert!(edge > 20, "{what}: {edge} edge pixels");
+        let needed = if hardware { edge * 9 / 10 } else { edge };
+        assert!(good >= needed, "{what}: {good} of {edge} edge pixels its definition");
+        checked += 1;
+    }
+    assert!(checked >= 1);
 }
 
 /// The multisampled opaque pass on the GPU backends, written once (`core/opaque.wgsl` over the
@@ -1404,7 +1773,16 @@ fn the_opaque_edge_is_antialiased() {
 /// the hardware paths (`@builtin(sample_mask)` reduced at the cut, `hw_fs_masked`) the accounting
 /// holds and the opaque and occluded counts are the CPU's within a hundredth of the fragments
 /// (the device snaps its own edges). On every path the exact techniques equal the path's own
-/// per-sample reference, the effects included.
+/// per-sample reference, the effects included. The same for fabs's tail (one a pixel, put behind
+/// each sample over its own opaque colour) and every technique that keeps no mask (its coverage
+/// cut at each sample's opaque depth, composited over the samples' mean colour; plain's blender is
+/// refused on the hardware paths), on the walls and on the quad behind the wall's edge
+/// ([`EDGE_SCENE`]). Mutations caught (each tried): oit-cpu's covered walk weighing the fraction of
+/// every sample a fragment covers ("wgpu/compute: dp (Transparency) on wall:0:planes:1 at 4×: 18
+/// pixels off the edges differ, by up to 20"); oit-cpu's background the first sample's colour
+/// ("… on wall:0.5:planes:16 at 4×: 97 pixels off the edges differ, by up to 88"); the GPU's
+/// opaque pass weighted by the fraction ("… dp … on wall:0.5:planes:16 at 4×: passes: 10 vs 8",
+/// its edge fragments discarded under the cutoff, so more fragments kept to peel).
 #[test]
 fn opaque_pass_at_samples_on_the_gpu() {
     let cpu = CpuBackend::default();
@@ -1413,10 +1791,17 @@ fn opaque_pass_at_samples_on_the_gpu() {
     for backend in gpus {
         let on = label(backend.as_ref());
         let hardware = backend.raster_path(&Settings::default()) == oit_core::RasterPath::Hardware;
-        for (name, samples) in [(WALLED[0], 4), (WALLED[1], 4), (WALLED[0], 8)] {
+        // (and the quad behind the wall's edge, where the cut a sample reduces the masks)
+        let cases = [
+            (WALLED[0], 4, oblique()),
+            (WALLED[1], 4, oblique()),
+            (WALLED[0], 8, oblique()),
+            (EDGE_SCENE, 4, beside()),
+        ];
+        for (name, samples, view) in cases {
             let scene = scene_of(name);
             let base = Settings { samples, ..settings(64, "reference") };
-            let cam = camera(&scene, &base, oblique());
+            let cam = camera(&scene, &base, view);
             let reference = match backend.render(&scene, &cam, &base) {
                 Ok(f) => f,
                 Err(OitError::Unsupported { what, .. }) if hardware && samples == 8 => {
@@ -1433,9 +1818,29 @@ fn opaque_pass_at_samples_on_the_gpu() {
                 cases.push(Settings { effect, technique: Technique::Dfb, ..base.clone() });
             }
             cases.push(Settings { pixel_coverage: true, technique: Technique::Ll, ..base.clone() });
+            // fabs's one tail a pixel over each sample's opaque colour; the techniques that keep no
+            // mask, their coverage cut at each sample's opaque depth, over the samples' mean colour
+            let fabs2 = Technique::Fabs { k: Some(2) };
+            cases.push(Settings { overflow: oit_core::Overflow::Tail, technique: fabs2, ..base.clone() });
+            cases.extend(
+                FRACTION_TECHNIQUES
+                    .iter()
+                    .map(|t| Settings { technique: t.parse().unwrap(), ..base.clone() }),
+            );
+            cases.push(Settings { pixel_coverage: true, technique: Technique::Wboit, ..base.clone() });
             for s in cases {
                 let what = format!("{on}: {} ({:?}) on {name} at {samples}×", s.technique, s.effect);
-                let g = render(backend.as_ref(), &scene, &cam, &s);
+                let g = match backend.render(&scene, &cam, &s) {
+                    Ok(g) => g,
+                    // plain's blender on a hardware path (`refuse_multisampled_own_capture`)
+                    Err(OitError::Unsupported { what: why, .. })
+                        if hardware && s.technique == Technique::Plain =>
+                    {
+                        eprintln!("{what}: {why}");
+                        continue;
+                    }
+                    Err(e) => panic!("{what}: {e}"),
+                };
                 let c = render(&cpu, &scene, &cam, &s);
                 checks::accounting(&g).unwrap_or_else(|e| panic!("{what}: {e}"));
                 if hardware {
@@ -1453,9 +1858,13 @@ fn opaque_pass_at_samples_on_the_gpu() {
                         (c.stats.occluded, c.stats.opaque_fragments, c.stats.masked),
                         "{what}: occluded, opaque, masked"
                     );
-                    checks::same_storage_as_cpu(backend.name(), &g, &c, &scene, &s)
-                        .unwrap_or_else(|e| panic!("{what}: {e}"));
+                    // (plain's storage is the path's: oit-cpu's banded pass keeps none, `Plan::on_path`)
+                    if s.technique != Technique::Plain {
+                        checks::same_storage_as_cpu(backend.name(), &g, &c, &scene, &s)
+                            .unwrap_or_else(|e| panic!("{what}: {e}"));
+                    }
                 }
+                assert_eq!(g.stats.coverage, c.stats.coverage, "{what}: coverage");
                 let exact = matches!(
                     s.technique,
                     Technique::Dfb

@@ -102,6 +102,10 @@ pub(crate) struct Ctx<'a> {
     pub lost: Pooled<'a, AtomicU32>,
     /// Fragments merged into pixels' tails (`--overflow tail`), set by the technique.
     pub merged: u64,
+    /// The scene's opaque part where a technique draws the opaque pass itself: the supersampled
+    /// reference, one opaque pass in each of its frames (docs/msaa.md); `None` elsewhere (the
+    /// frame's opaque pass is drawn before the technique runs).
+    pub opaque_part: Option<&'a Scene>,
 }
 
 impl<'a> Ctx<'a> {
@@ -138,6 +142,7 @@ impl<'a> Ctx<'a> {
             budget,
             lost: pool.u32s(settings.pixel_count(), 0),
             merged: 0,
+            opaque_part: None,
         }
     }
 

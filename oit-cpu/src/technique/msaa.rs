@@ -179,27 +179,42 @@ fn reference(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
 /// projection moved so that the position falls on the pixels' centres, the frames' linear
 /// colours averaged (every sample rasterized and shaded as a pixel of its own); the frames and
 /// their totals are oit-core's, alike on every backend ([`oit_core::msaa::supersample_frames`]).
+/// In a scene with opaque objects ([`Ctx::opaque_part`]) each frame draws its own opaque pass at
+/// one sample under its moved camera, as any single-sample frame: its depth cuts that frame's
+/// transparent fragments, its colour is what they composite over.
 fn supersampled(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let settings = ctx.settings;
     let (single, cameras) = oit_core::msaa::supersample_frames(ctx.camera, settings);
     let mut sum = vec![DVec3::ZERO; ctx.pixels];
     let mut totals = oit_core::msaa::SupersampleTotals::default();
     for camera in &cameras {
-        let raster = crate::raster::Rasterizer::new(ctx.scene, camera, &single);
+        let mut raster = crate::raster::Rasterizer::new(ctx.scene, camera, &single);
+        let opaque = ctx.opaque_part.map(|o| crate::opaque::draw(o, camera, &single));
+        raster.cut_at(opaque.as_ref().map(|o| o.depth.clone()));
         let plan = oit_core::plan::Plan::new("cpu", ctx.scene, &single)?.on_path(oit_core::RasterPath::Cpu);
-        let mut inner = Ctx::new(ctx.scene, camera, &single, &raster, ctx.pool, plan, ctx.per_length, None);
-        let (linear, layer_counts, fragments) = super::reference::linear(&mut inner)?;
+        let mut inner =
+            Ctx::new(ctx.scene, camera, &single, &raster, ctx.pool, plan, ctx.per_length, opaque.as_ref());
+        let (linear, layer_counts, captured) = super::reference::linear(&mut inner)?;
         for (s, c) in sum.iter_mut().zip(linear) {
             *s += c;
         }
-        let stats = oit_core::Stats {
+        let mut stats = oit_core::Stats {
             geometry_passes: inner.passes,
-            fragments,
-            captured: fragments,
+            fragments: inner.fragments.unwrap_or(0),
+            captured,
             storage_bytes: inner.storage_bytes,
             max_layers: layer_counts.iter().copied().max().unwrap_or(0),
             ..Default::default()
         };
+        drop(inner);
+        if let Some(o) = &opaque {
+            // (the reference's counting pass ran behind the cut, so it counted the occluded)
+            stats.occluded = raster.occluded().unwrap_or(0);
+            stats.opaque_fragments = o.fragments;
+            stats.masked = o.masked;
+            stats.geometry_passes += o.passes;
+            stats.storage_bytes += ctx.pixels as u64 * oit_core::plan::OPAQUE_BYTES;
+        }
         totals.add(&stats, Some(&layer_counts), Some(&vec![0; ctx.pixels]));
     }
     let n = f64::from(settings.samples);
@@ -210,9 +225,9 @@ fn supersampled(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
 
 /// The f32 per-sample resolve of every pixel's entries, gathered by `gather(px, list)` (which
 /// clears and fills `list`); sorted here. With `tail` (fabs's `--overflow tail` sums, 5 a pixel)
-/// each sample composites its entries over the pixel's tail ([`crate::resolve::Resolve::tail`]:
-/// one tail a pixel, its fragments' alpha weighted by their coverage fractions) instead of the
-/// background.
+/// each sample composites its entries over the pixel's tail ([`crate::resolve::Resolve::tail_over`]:
+/// one tail a pixel, its fragments' alpha weighted by their coverage fractions), put over that
+/// sample's own opaque colour (the background where none covers it).
 fn resolve_entries(
     ctx: &Ctx<'_>,
     tail: Option<&[AtomicU64]>,
@@ -240,11 +255,12 @@ fn resolve_entries(
             resolve.push(s, depth_from_bits((e.0 >> 32) as u32), e.1);
         }
     };
-    // a sample's state: nothing pushed, the pixel's tail behind (where it has one)
-    let fresh = |px: usize| {
+    // sample i's state: nothing pushed, the pixel's tail behind (where it has one) over the
+    // sample's own opaque colour
+    let fresh = |px: usize, i: usize| {
         let mut s = PixelState::default();
         if let Some(t) = tail {
-            resolve.tail(&mut s, &t[px * 5..px * 5 + 5], px);
+            resolve.tail_over(&mut s, &t[px * 5..px * 5 + 5], resolve.background_at_sample(px, i));
         }
         s
     };
@@ -263,7 +279,7 @@ fn resolve_entries(
                     oit_core::composite::heat(list.len() as f32 / deepest as f32)
                 }
             } else if resolve.opaque_uniform(px) && list.iter().all(|e| e.2 == full) {
-                let mut s = fresh(px);
+                let mut s = fresh(px, 0);
                 push_all(&mut s, &mut list.iter());
                 resolve.finish_over(&mut s, resolve.background_at_sample(px, 0))
             } else {
@@ -286,7 +302,7 @@ fn resolve_entries(
                     let c = match known {
                         Some(s) => s.2,
                         None => {
-                            let mut s = fresh(px);
+                            let mut s = fresh(px, i as usize);
                             push_all(&mut s, &mut list.iter().filter(|e| e.2 >> i & 1 == 1));
                             let c = resolve.finish_over(&mut s, bg);
                             if let Some(set) = covering {

@@ -94,7 +94,7 @@ fn oit_capture_shaded(pixel_xy: vec2<f32>, depth: f32, color: vec4<f32>, normal:
         f.normal = normalize_or_zero(normal);
         f.cutoff = cutoff;
         f.mask = mask;
-        capture(coverage_weighted(f, fu.msaa));
+        capture(coverage_weighted(f, fu.msaa, fu.opaque));
     }
     return vec4<f32>(1.0, 0.0, 0.0, 0.0);
 }

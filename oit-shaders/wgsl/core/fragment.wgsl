@@ -47,10 +47,17 @@ const MSAA_FRACTION: u32 = 256u;
 // `f` as a technique that keeps no coverage mask captures it above one sample (oit-core's
 // `msaa::Coverage::Fraction`, `fu.msaa.y` holding MSAA_FRACTION): its alpha times the fraction
 // of its pixel's samples its mask covers (oit-core's `msaa::fraction_alpha`: k/4 and k/8 exact,
-// one rounding, the product's, as oit-cpu's); else `f` as it is.
-fn coverage_weighted(f: Fragment, msaa: vec4<u32>) -> Fragment {
+// one rounding, the product's, as oit-cpu's); else `f` as it is. `msaa` and `opaque` are the
+// frame uniform's. The passes of a frame with an opaque image that do not cut at it (`opaque.z`
+// without `opaque.x`: the opaque pass, oit-gpu's `opaque_pass`, and the instances' bounding
+// boxes) take `f` as it is: the opaque pass tests a fragment's own alpha against its cutoff
+// and writes every sample it covers, as oit-cpu's `opaque::draw` (weighted, an opaque wall's edge
+// fragment covering one sample of four would fall under the cutoff of one half an untextured
+// object gets and be discarded).
+fn coverage_weighted(f: Fragment, msaa: vec4<u32>, opaque: vec4<u32>) -> Fragment {
     var g = f;
-    if ((msaa.y & MSAA_FRACTION) != 0u) {
+    let opaque_pass = opaque.z != 0u && opaque.x == 0u;
+    if ((msaa.y & MSAA_FRACTION) != 0u && !opaque_pass) {
         g.color.a = f.color.a * (f32(countOneBits(f.mask)) / f32(msaa.x));
     }
     return g;

@@ -193,7 +193,7 @@ fn raster_pixel(t: Tri, x: u32, y: u32, behind: bool) -> u32 {
     f.color = color;
     f.normal = normalize_or_zero(normal);
     f.cutoff = cutoff;
-    capture(coverage_weighted(f, fu.msaa));
+    capture(coverage_weighted(f, fu.msaa, fu.opaque));
     return 1u;
 }
 

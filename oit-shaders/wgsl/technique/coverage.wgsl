@@ -65,22 +65,20 @@ fn composite_covering(first: u32, n: u32, bits: u32, bg: vec3<f32>) -> vec3<f32>
 // pixel is the mean of its samples. The colour goes into the state as resolved (`state_resolved`), with n
 // captured and no ties counted (as oit-cpu's).
 fn resolve_masked(px: u32, first: u32, n: u32) {
-    resolve_masked_over(px, first, n, background_at(px));
+    resolve_masked_over(px, first, n, vec4<f32>(0.0, 0.0, 0.0, 1.0));
 }
 
-// What sample `j` of pixel `px` composites over: its own opaque colour (the background where none
-// covers it) in a frame with an opaque part, else `bg` (the background, or fabs's tail over it:
-// the plan refuses the tail over opaque objects above one sample).
-fn masked_background(px: u32, j: u32, bg: vec3<f32>) -> vec3<f32> {
-    if (fu.opaque.z != 0u) {
-        return background_at_sample(px, j);
-    }
-    return bg;
+// What sample `j` of pixel `px` composites over: the layer `back` (xyz premultiplied colour, w
+// transmittance: fabs's one tail a pixel, `tail_layer`; (0, 0, 0, 1) for none) over the sample's
+// own opaque colour (the background where none covers it, or in a frame without an opaque part):
+// oit-cpu's `Resolve::tail_over` of `background_at_sample`.
+fn masked_background(px: u32, j: u32, back: vec4<f32>) -> vec3<f32> {
+    return back.xyz + background_at_sample(px, j) * back.w;
 }
 
-// `resolve_masked` with every sample composited over `bg` (fabs's tail, where it has one) instead
-// of the pixel's background.
-fn resolve_masked_over(px: u32, first: u32, n: u32, bg: vec3<f32>) {
+// `resolve_masked` with every sample composited over the layer `back` (fabs's tail, where it has
+// one) put over the sample's own colour (`masked_background`).
+fn resolve_masked_over(px: u32, first: u32, n: u32, back: vec4<f32>) {
     let samples = fu.msaa.x;
     let full = (1u << samples) - 1u;
     var all = full;
@@ -94,12 +92,12 @@ fn resolve_masked_over(px: u32, first: u32, n: u32, bg: vec3<f32>) {
     if (fu.effect != EFFECT_COMPLEXITY) {
         var c: vec3<f32>;
         if (all == full && opaque_uniform(px)) {
-            c = composite_covering(first, n, full, masked_background(px, 0u, bg));
+            c = composite_covering(first, n, full, masked_background(px, 0u, back));
         } else {
             // each sample over its own opaque colour (the background where none covers it)
             var sum = vec3<f32>(0.0);
             for (var j = 0u; j < samples; j++) {
-                sum += composite_covering(first, n, 1u << j, masked_background(px, j, bg));
+                sum += composite_covering(first, n, 1u << j, masked_background(px, j, back));
             }
             // 4 or 8 samples: exact, as oit-cpu's division
             c = sum * (1.0 / f32(samples));

@@ -125,16 +125,17 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         if (n > 1u) {
             fabs_heapsort(px, stride, n);
         }
-        var bg = background_at(px);
+        var back = vec4<f32>(0.0, 0.0, 0.0, 1.0);
         if (fu.pass_index == FABS_WITH_TAIL) {
-            // each sample over the pixel's one tail (oit-cpu's Resolve::tail: transparency's back
-            // colour, which the other effects do not composite over); its merged counted alike
-            let back = tail_back(px, bg);
+            // each sample over the pixel's one tail put over the sample's own opaque colour
+            // (oit-cpu's Resolve::tail_over: transparency's back colour, which the other effects
+            // do not composite over); its merged counted alike
+            let layer = tail_layer(px);
             if (fu.effect == EFFECT_TRANSPARENCY) {
-                bg = back;
+                back = layer;
             }
         }
-        resolve_masked_over(px, px, n, bg);
+        resolve_masked_over(px, px, n, back);
         return;
     }
     if (n <= LOCAL_SLOTS) {

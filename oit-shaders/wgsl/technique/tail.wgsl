@@ -21,13 +21,14 @@ fn tail_add(px: u32, c: u32) {
     atomicSub(&acct[3u * px], 1u);
 }
 
-// The pixel's tail over `bg` (composite::weighted_average), or `bg` where it has none; counts its
-// fragments merged (call it once a pixel).
-fn tail_back(px: u32, bg: vec3<f32>) -> vec3<f32> {
+// The pixel's tail as a layer (composite::weighted_average): xyz its colour, premultiplied
+// (the mean colour times 1 − t), w its transmittance t, so that the tail over a colour `bg` is
+// xyz + bg · w; (0, 0, 0, 1) where it has none. Counts its fragments merged (call it once a pixel).
+fn tail_layer(px: u32) -> vec4<f32> {
     let base = px * 5u;
     let count = u32(atomicLoad(&tail_sums[base + 4u]));
     if (count == 0u) {
-        return bg;
+        return vec4<f32>(0.0, 0.0, 0.0, 1.0);
     }
     let premultiplied = vec3<f32>(
         f32(atomicLoad(&tail_sums[base])),
@@ -35,15 +36,22 @@ fn tail_back(px: u32, bg: vec3<f32>) -> vec3<f32> {
         f32(atomicLoad(&tail_sums[base + 2u])),
     ) / (255.0 * 255.0);
     let alpha = f32(atomicLoad(&tail_sums[base + 3u])) / 255.0;
-    var back = bg;
+    var layer = vec4<f32>(0.0, 0.0, 0.0, 1.0);
     if (alpha > 0.0) {
         let mean_color = premultiplied / alpha;
         let mean_alpha = min(alpha / f32(count), 1.0);
         let t = powi_rust(1.0 - mean_alpha, count);
-        back = mean_color * (1.0 - t) + bg * t;
+        layer = vec4<f32>(mean_color * (1.0 - t), t);
     }
     atomicAdd(&tail_words[1], count);
-    return back;
+    return layer;
+}
+
+// The pixel's tail over `bg` (composite::weighted_average), or `bg` where it has none; counts its
+// fragments merged (call it once a pixel).
+fn tail_back(px: u32, bg: vec3<f32>) -> vec3<f32> {
+    let layer = tail_layer(px);
+    return layer.xyz + bg * layer.w;
 }
 
 // The pixel's tail behind what was pushed into `s` (composite::weighted_average over the
