@@ -748,10 +748,9 @@ impl Plan {
 /// fragment stage); the supersampled reference (`--supersample`) of a scene with opaque objects;
 /// the techniques that keep no mask over opaque objects. (The opaque pass itself is multisampled:
 /// its depth and colour are kept a sample, [`Plan::opaque_bytes`].) (A hardware raster path
-/// refuses a sample count its device does not draw where it starts a frame, its own captures,
-/// [`refuse_multisampled_own_capture`] for those not yet done, and the supersampled reference,
-/// [`refuse_supersampled_hardware`].) The techniques that keep no mask take the samples by their
-/// coverage fraction ([`crate::msaa::coverage`]).
+/// refuses a sample count its device does not draw where it starts a frame, and its own captures
+/// not yet done, [`refuse_multisampled_own_capture`].) The techniques that keep no mask take the
+/// samples by their coverage fraction ([`crate::msaa::coverage`]).
 fn check_samples(backend: &str, scene: &Scene, settings: &Settings) -> Result<(), OitError> {
     let samples = settings.samples;
     if samples <= 1 {
@@ -827,28 +826,6 @@ pub fn refuse_multisampled_own_capture(
         _ => return Ok(()),
     };
     Err(OitError::Unsupported { backend: backend.into(), what })
-}
-
-/// The refusal of the supersampled reference (`--supersample`) on a GPU backend's hardware raster
-/// path (`Ok` on the others, and where the frame is not one, [`crate::msaa::is_supersampled`]):
-/// its frames would be the compute path's, one a sample under a moved projection, but the
-/// device's rasterizer snaps the moved vertices in its own precision, and nothing compares those
-/// frames with oit-cpu's yet.
-pub fn refuse_supersampled_hardware(
-    backend: &str,
-    path: crate::RasterPath,
-    settings: &Settings,
-) -> Result<(), OitError> {
-    if path != crate::RasterPath::Hardware || !crate::msaa::is_supersampled(settings) {
-        return Ok(());
-    }
-    Err(OitError::Unsupported {
-        backend: backend.into(),
-        what: "--supersample on the hardware raster path: not yet done (the device snaps each sample's \
-               moved projection in its own precision, not yet compared with oit-cpu's); use --raster compute \
-               (docs/msaa.md)"
-            .into(),
-    })
 }
 
 /// Checks `needed` bytes of a frame's storage (`what`) against `budget`; see [`Plan::check_budget`].
