@@ -140,7 +140,8 @@ pub struct Plan {
     /// entries carry it likewise; not the colour mode of `bdp` nor the order-free `wavg`/`wsum`.
     pub count_ties: bool,
     /// `plain` composited as its fragments arrive, by a rasterizer that hands each pixel its
-    /// fragments in submission order ([`Plan::on_path`]): a hardware path's blender (one draw,
+    /// fragments in submission order ([`Plan::on_path`]; at several samples [`Plan::new`] knows
+    /// the hardware path from its name, [`Plan::blend_targets`]): a hardware path's blender (one draw,
     /// back to front) or oit-cpu's banded pass (each pixel's fragments from one thread, highest
     /// primitive first, front to back). Per pixel a running colour and transmittance and a
     /// fragment count; one geometry pass, no counting pass. Elsewhere (a compute rasterizer,
@@ -170,6 +171,15 @@ pub struct Plan {
     /// and each sample composites into accumulators of its own ([`Plan::arrays`]); one pass more
     /// than its peels ([`Plan::schedule`]).
     pub sample_peel: bool,
+    /// Samples a pixel of the multisampled render targets a GPU hardware path's own capture
+    /// blends into, and the colour target's bytes a sample: plain's blender, and `wavg`, `wsum`
+    /// and `bdp`'s colour mode under `--hardware-capture blend`, on a GPU backend's hardware
+    /// raster path at several samples (docs/msaa.md, "The blend captures at several samples";
+    /// there the path is always named, `Settings::raster`: at several samples the GPU backends'
+    /// default is the compute path). Their arrays are those targets, each sample counted
+    /// ([`Plan::arrays`]), so the budget and `--memory`'s tiles count them. `None` elsewhere (at
+    /// one sample a target is a pixel's, the arrays as they were).
+    pub blend_targets: Option<(u32, u64)>,
     /// Whether the backend sizes the per-fragment arrays (`dfb`'s, `ll`'s, the reference's) in
     /// size classes ([`Plan::fragment_capacity`]): the GPU backends (`wgpu`, `vulkan`), whose
     /// buffers come from a pool that nearby views share. oit-cpu allocates exactly.
@@ -280,17 +290,36 @@ impl Plan {
                 sum / n.max(1) as f32
             }
         };
+        // the hardware path's own captures into multisampled targets (docs/msaa.md)
+        let blend_targets = (settings.samples > 1
+            && matches!(backend, "wgpu" | "vulkan")
+            && settings.raster == Some(crate::RasterPath::Hardware)
+            && (technique == Technique::Plain
+                || settings.hardware_capture == crate::HardwareCapture::Blend
+                    && (matches!(technique, Technique::WeightedAverage | Technique::WeightedSum)
+                        || bdp_color)))
+            .then(|| {
+                let colour = match settings.blend_target {
+                    crate::BlendTarget::F32 => 16,
+                    crate::BlendTarget::F16 => 8,
+                    crate::BlendTarget::Unorm8 => 4,
+                };
+                (settings.samples, colour)
+            });
+        // plain's blender (as `Plan::on_path` makes it on a hardware path)
+        let in_order = technique == Technique::Plain && blend_targets.is_some();
         Ok(Plan {
+            blend_targets,
+            in_order,
             samples: settings.samples,
             sample_peel: crate::msaa::peels_per_sample(settings),
             pooled: matches!(backend, "wgpu" | "vulkan"),
             technique,
             bounds_pass: matches!(technique, Technique::Bdp { .. } | Technique::Adp),
             bdp_color,
-            sizing,
+            sizing: if in_order { Sizing::None } else { sizing },
             peel_limit: settings.max_peels.unwrap_or(u32::MAX),
             mdts_alpha8: (alpha.clamp(0.0, 1.0) * 255.0 + 0.5) as u32,
-            in_order: false,
             tail: fixed_k && settings.overflow == crate::Overflow::Tail,
             image_atomics: settings.atomic_storage == crate::AtomicStorage::Image
                 && matches!(
@@ -436,6 +465,9 @@ impl Plan {
     ) -> Vec<Array> {
         use crate::rules::{BDP_COLOR_SUBINTERVALS, BDP_DEPTH_SUBINTERVALS, BUCKETS, HISTOGRAM_WORDS};
         let samples = u64::from(self.samples);
+        // the multisampled targets of a hardware path's own capture: samples and the colour
+        // target's bytes a sample (one sample of RGBA32F where there are none)
+        let (targets, colour) = self.blend_targets.map_or((1, 16), |(t, c)| (u64::from(t), c));
         match self.technique {
             // per sample (docs/msaa.md): the keys are (depth, primitive id), the layer the last
             // pass peeled waits for its payload and mask, which the next pass fetches, and each
@@ -468,9 +500,11 @@ impl Plan {
             // pass): the running premultiplied colour and transmittance, 32-bit floats (the
             // blender's colour target; a device without 32-bit float blending gets 16-bit ones,
             // half the bytes), and the fragment count (the blender's count target)
+            // (the hardware path's blender at several samples: each sample's, the colour target
+            // of `--blend-target`, the count an R32Float; `Plan::blend_targets`)
             Technique::Plain if self.in_order => vec![
-                per_pixel("colour and transmittance (RGBA float)", 16, 1),
-                per_pixel("fragment count", 4, 1),
+                per_pixel("colour and transmittance (RGBA float)", colour, targets),
+                per_pixel("fragment count", 4, targets),
             ],
             // where no rasterizer keeps submission order (a compute rasterizer): a counter and
             // K slots of (primitive id, payload), sorted by id
@@ -485,6 +519,12 @@ impl Plan {
                 per_pixel("far (depth key, colour)", 8, 1),
                 per_pixel("open depth range", 8, 1),
             ],
+            // `--hardware-capture blend` at several samples: the sums in a colour target
+            // (`--blend-target`) and the count in an R32Float one, a sample each
+            Technique::WeightedAverage | Technique::WeightedSum if self.blend_targets.is_some() => vec![
+                per_pixel("blended sums (colour target)", colour, targets),
+                per_pixel("fragment count", 4, targets),
+            ],
             Technique::WeightedAverage | Technique::WeightedSum => vec![per_pixel("weighted sums", 8, 5)],
             // Σ α·w·r, Σ α·w·g, Σ α·w·b, Σ α·w, Σ −ln(1 − α) and the count, u64 each
             Technique::Wboit => vec![per_pixel("weighted blended sums", 8, 6)],
@@ -493,8 +533,9 @@ impl Plan {
             Technique::Mboit { m } => {
                 vec![per_pixel("moments and transmittance-weighted sums", 8, u64::from(m) + 6)]
             }
+            // (in `--hardware-capture blend`'s multisampled targets, a pixel's buckets a sample)
             Technique::Bdp { .. } if self.bdp_color => {
-                vec![bounds, per_pixel("colour buckets", 4, u64::from(BDP_COLOR_SUBINTERVALS))]
+                vec![bounds, per_pixel("colour buckets", 4, u64::from(BDP_COLOR_SUBINTERVALS) * targets)]
             }
             Technique::Bdp { .. } => vec![
                 bounds,

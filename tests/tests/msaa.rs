@@ -1120,6 +1120,8 @@ fn hardware_blend_captures_at_samples() {
                     &Settings { hardware_capture: HardwareCapture::Atomics, ..s.clone() },
                 );
                 checks::accounting(&blend).unwrap_or_else(|e| panic!("{what}: {e}"));
+                blend_storage_is_the_plans(backend, &scene, &s, &blend)
+                    .unwrap_or_else(|e| panic!("{what}: {e}"));
                 assert_eq!(blend.stats.fragments, atomics.stats.fragments, "{what}");
                 assert_eq!(blend.stats.captured, atomics.stats.captured, "{what}");
                 assert_eq!(blend.stats.coverage, atomics.stats.coverage, "{what}");
@@ -1139,6 +1141,8 @@ fn hardware_blend_captures_at_samples() {
             let reference =
                 render(backend, &planes, &behind, &Settings { technique: Technique::Reference, ..p.clone() });
             checks::accounting(&plain).unwrap_or_else(|e| panic!("{what}: {e}"));
+            blend_storage_is_the_plans(backend, &planes, &p, &plain)
+                .unwrap_or_else(|e| panic!("{what}: {e}"));
             assert_eq!(plain.stats.coverage, Some(Coverage::Sample), "{what}");
             assert_eq!(plain.stats.fragments, reference.stats.fragments, "{what}");
             assert_eq!(plain.stats.captured, reference.stats.captured, "{what}");
@@ -1179,6 +1183,33 @@ fn hardware_blend_captures_at_samples() {
         }
     }
     eprintln!("{compared} blend captures at several samples compared");
+}
+
+/// A hardware path's own capture at several samples (`backend`, `settings` on `scene`): the
+/// storage its `frame` reports, its multisampled targets each sample counted, is the plan's
+/// (`Plan::blend_targets`: the arrays the budget and `--memory`'s tiles count; the resolve state,
+/// counted once in the plan's figure, is not in `Stats::storage_bytes`). Mutation tried: the
+/// plan counting the targets a pixel, as it did (fails: the frame's storage is 4 or 8 times the
+/// plan's targets).
+fn blend_storage_is_the_plans(
+    backend: &dyn Backend,
+    scene: &oit_core::Scene,
+    settings: &Settings,
+    frame: &Frame,
+) -> Result<(), String> {
+    use oit_core::plan::{Counted, Plan, RESOLVE_STATE_BYTES};
+    // (the backend runs it on its path: `Settings::raster` named, as oit-core's `OnPath` names it)
+    let s = Settings { raster: Some(backend.raster_path(settings)), ..settings.clone() };
+    let plan = Plan::new(backend.name(), scene, &s).map_err(|e| e.to_string())?;
+    if plan.blend_targets != Some((s.samples, 16)) {
+        return Err(format!("the plan's blend targets: {:?}", plan.blend_targets));
+    }
+    let pixels = s.pixel_count() as u64;
+    let planned = plan.storage_bytes(pixels, Counted::default()) - pixels * RESOLVE_STATE_BYTES;
+    if frame.stats.storage_bytes != planned {
+        return Err(format!("storage {} bytes, the plan's {planned}", frame.stats.storage_bytes));
+    }
+    Ok(())
 }
 
 /// The techniques that keep no coverage mask, at `--samples 4` on oit-cpu: each fragment over the
