@@ -140,8 +140,7 @@ pub struct Plan {
     /// entries carry it likewise; not the colour mode of `bdp` nor the order-free `wavg`/`wsum`.
     pub count_ties: bool,
     /// `plain` composited as its fragments arrive, by a rasterizer that hands each pixel its
-    /// fragments in submission order ([`Plan::on_path`]; at several samples [`Plan::new`] knows
-    /// the hardware path from its name, [`Plan::blend_targets`]): a hardware path's blender (one draw,
+    /// fragments in submission order ([`Plan::on_path`]): a hardware path's blender (one draw,
     /// back to front) or oit-cpu's banded pass (each pixel's fragments from one thread, highest
     /// primitive first, front to back). Per pixel a running colour and transmittance and a
     /// fragment count; one geometry pass, no counting pass. Elsewhere (a compute rasterizer,
@@ -306,18 +305,16 @@ impl Plan {
                 };
                 (settings.samples, colour)
             });
-        // plain's blender (as `Plan::on_path` makes it on a hardware path)
-        let in_order = technique == Technique::Plain && blend_targets.is_some();
         Ok(Plan {
             blend_targets,
-            in_order,
+            in_order: false,
             samples: settings.samples,
             sample_peel: crate::msaa::peels_per_sample(settings),
             pooled: matches!(backend, "wgpu" | "vulkan"),
             technique,
             bounds_pass: matches!(technique, Technique::Bdp { .. } | Technique::Adp),
             bdp_color,
-            sizing: if in_order { Sizing::None } else { sizing },
+            sizing,
             peel_limit: settings.max_peels.unwrap_or(u32::MAX),
             mdts_alpha8: (alpha.clamp(0.0, 1.0) * 255.0 + 0.5) as u32,
             tail: fixed_k && settings.overflow == crate::Overflow::Tail,
@@ -501,8 +498,9 @@ impl Plan {
             // blender's colour target; a device without 32-bit float blending gets 16-bit ones,
             // half the bytes), and the fragment count (the blender's count target)
             // (the hardware path's blender at several samples: each sample's, the colour target
-            // of `--blend-target`, the count an R32Float; `Plan::blend_targets`)
-            Technique::Plain if self.in_order => vec![
+            // of `--blend-target`, the count an R32Float; `Plan::blend_targets`, which
+            // `Plan::new` knows from the named path where `Plan::on_path` has not run)
+            Technique::Plain if self.in_order || self.blend_targets.is_some() => vec![
                 per_pixel("colour and transmittance (RGBA float)", colour, targets),
                 per_pixel("fragment count", 4, targets),
             ],
