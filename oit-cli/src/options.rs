@@ -143,7 +143,7 @@ pub struct SceneArgs {
     /// With --samples 4 or 8: the reference becomes the supersampled reference (every sample
     /// rasterized and shaded as a pixel of its own), so that `oit compare` reports MSAA's own
     /// error against supersampling (its `msaa-ref` row) beside each technique's error against
-    /// both references (cpu, and the GPU backends' compute paths). Other techniques ignore it.
+    /// both references (cpu, and both raster paths of the GPU backends). Other techniques ignore it.
     #[arg(long)]
     pub supersample: bool,
 

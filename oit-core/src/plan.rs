@@ -170,6 +170,15 @@ pub struct Plan {
     /// and each sample composites into accumulators of its own ([`Plan::arrays`]); one pass more
     /// than its peels ([`Plan::schedule`]).
     pub sample_peel: bool,
+    /// Samples a pixel of the multisampled render targets a GPU hardware path's own capture
+    /// blends into, and the colour target's bytes a sample: plain's blender, and `wavg`, `wsum`
+    /// and `bdp`'s colour mode under `--hardware-capture blend`, on a GPU backend's hardware
+    /// raster path at several samples (docs/msaa.md, "The blend captures at several samples";
+    /// there the path is always named, `Settings::raster`: at several samples the GPU backends'
+    /// default is the compute path). Their arrays are those targets, each sample counted
+    /// ([`Plan::arrays`]), so the budget and `--memory`'s tiles count them. `None` elsewhere (at
+    /// one sample a target is a pixel's, the arrays as they were).
+    pub blend_targets: Option<(u32, u64)>,
     /// Whether the backend sizes the per-fragment arrays (`dfb`'s, `ll`'s, the reference's) in
     /// size classes ([`Plan::fragment_capacity`]): the GPU backends (`wgpu`, `vulkan`), whose
     /// buffers come from a pool that nearby views share. oit-cpu allocates exactly.
@@ -279,7 +288,25 @@ impl Plan {
                 sum / n.max(1) as f32
             }
         };
+        // the hardware path's own captures into multisampled targets (docs/msaa.md)
+        let blend_targets = (settings.samples > 1
+            && matches!(backend, "wgpu" | "vulkan")
+            && settings.raster == Some(crate::RasterPath::Hardware)
+            && (technique == Technique::Plain
+                || settings.hardware_capture == crate::HardwareCapture::Blend
+                    && (matches!(technique, Technique::WeightedAverage | Technique::WeightedSum)
+                        || bdp_color)))
+            .then(|| {
+                let colour = match settings.blend_target {
+                    crate::BlendTarget::F32 => 16,
+                    crate::BlendTarget::F16 => 8,
+                    crate::BlendTarget::Unorm8 => 4,
+                };
+                (settings.samples, colour)
+            });
         Ok(Plan {
+            blend_targets,
+            in_order: false,
             samples: settings.samples,
             sample_peel: crate::msaa::peels_per_sample(settings),
             pooled: matches!(backend, "wgpu" | "vulkan"),
@@ -289,7 +316,6 @@ impl Plan {
             sizing,
             peel_limit: settings.max_peels.unwrap_or(u32::MAX),
             mdts_alpha8: (alpha.clamp(0.0, 1.0) * 255.0 + 0.5) as u32,
-            in_order: false,
             tail: fixed_k && settings.overflow == crate::Overflow::Tail,
             image_atomics: settings.atomic_storage == crate::AtomicStorage::Image
                 && matches!(
@@ -435,6 +461,9 @@ impl Plan {
     ) -> Vec<Array> {
         use crate::rules::{BDP_COLOR_SUBINTERVALS, BDP_DEPTH_SUBINTERVALS, BUCKETS, HISTOGRAM_WORDS};
         let samples = u64::from(self.samples);
+        // the multisampled targets of a hardware path's own capture: samples and the colour
+        // target's bytes a sample (one sample of RGBA32F where there are none)
+        let (targets, colour) = self.blend_targets.map_or((1, 16), |(t, c)| (u64::from(t), c));
         match self.technique {
             // per sample (docs/msaa.md): the keys are (depth, primitive id), the layer the last
             // pass peeled waits for its payload and mask, which the next pass fetches, and each
@@ -467,9 +496,12 @@ impl Plan {
             // pass): the running premultiplied colour and transmittance, 32-bit floats (the
             // blender's colour target; a device without 32-bit float blending gets 16-bit ones,
             // half the bytes), and the fragment count (the blender's count target)
-            Technique::Plain if self.in_order => vec![
-                per_pixel("colour and transmittance (RGBA float)", 16, 1),
-                per_pixel("fragment count", 4, 1),
+            // (the hardware path's blender at several samples: each sample's, the colour target
+            // of `--blend-target`, the count an R32Float; `Plan::blend_targets`, which
+            // `Plan::new` knows from the named path where `Plan::on_path` has not run)
+            Technique::Plain if self.in_order || self.blend_targets.is_some() => vec![
+                per_pixel("colour and transmittance (RGBA float)", colour, targets),
+                per_pixel("fragment count", 4, targets),
             ],
             // where no rasterizer keeps submission order (a compute rasterizer): a counter and
             // K slots of (primitive id, payload), sorted by id
@@ -484,6 +516,12 @@ impl Plan {
                 per_pixel("far (depth key, colour)", 8, 1),
                 per_pixel("open depth range", 8, 1),
             ],
+            // `--hardware-capture blend` at several samples: the sums in a colour target
+            // (`--blend-target`) and the count in an R32Float one, a sample each
+            Technique::WeightedAverage | Technique::WeightedSum if self.blend_targets.is_some() => vec![
+                per_pixel("blended sums (colour target)", colour, targets),
+                per_pixel("fragment count", 4, targets),
+            ],
             Technique::WeightedAverage | Technique::WeightedSum => vec![per_pixel("weighted sums", 8, 5)],
             // Σ α·w·r, Σ α·w·g, Σ α·w·b, Σ α·w, Σ −ln(1 − α) and the count, u64 each
             Technique::Wboit => vec![per_pixel("weighted blended sums", 8, 6)],
@@ -492,8 +530,9 @@ impl Plan {
             Technique::Mboit { m } => {
                 vec![per_pixel("moments and transmittance-weighted sums", 8, u64::from(m) + 6)]
             }
+            // (in `--hardware-capture blend`'s multisampled targets, a pixel's buckets a sample)
             Technique::Bdp { .. } if self.bdp_color => {
-                vec![bounds, per_pixel("colour buckets", 4, u64::from(BDP_COLOR_SUBINTERVALS))]
+                vec![bounds, per_pixel("colour buckets", 4, u64::from(BDP_COLOR_SUBINTERVALS) * targets)]
             }
             Technique::Bdp { .. } => vec![
                 bounds,
@@ -778,28 +817,6 @@ pub fn refuse_multisampled_own_capture(
         _ => return Ok(()),
     };
     Err(OitError::Unsupported { backend: backend.into(), what })
-}
-
-/// The refusal of the supersampled reference (`--supersample`) on a GPU backend's hardware raster
-/// path (`Ok` on the others, and where the frame is not one, [`crate::msaa::is_supersampled`]):
-/// its frames would be the compute path's, one a sample under a moved projection, but the
-/// device's rasterizer snaps the moved vertices in its own precision, and nothing compares those
-/// frames with oit-cpu's yet.
-pub fn refuse_supersampled_hardware(
-    backend: &str,
-    path: crate::RasterPath,
-    settings: &Settings,
-) -> Result<(), OitError> {
-    if path != crate::RasterPath::Hardware || !crate::msaa::is_supersampled(settings) {
-        return Ok(());
-    }
-    Err(OitError::Unsupported {
-        backend: backend.into(),
-        what: "--supersample on the hardware raster path: not yet done (the device snaps each sample's \
-               moved projection in its own precision, not yet compared with oit-cpu's); use --raster compute \
-               (docs/msaa.md)"
-            .into(),
-    })
 }
 
 /// Checks `needed` bytes of a frame's storage (`what`) against `budget`; see [`Plan::check_budget`].

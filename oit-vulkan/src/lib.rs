@@ -357,7 +357,8 @@ impl VulkanPrepared<'_> {
     /// The supersampled reference (`--supersample`, docs/msaa.md) of a frame or window, as
     /// oit-wgpu makes it: oit-core's frames ([`oit_core::msaa::supersample_frames`]: one
     /// single-sample reference frame a sample position, under a projection moved so that the
-    /// position falls on the pixels' centres), each on the compute path, each frame's end adding
+    /// position falls on the pixels' centres), each on the frame's raster path (the hardware
+    /// path's rasterizer snaps the moved vertices in its own precision), each frame's end adding
     /// its linear colours into running sums on the device instead of writing its own
     /// (`supersample.wgsl`), the last frame's image their mean; the frames' stats added up as
     /// [`oit_core::msaa::SupersampleTotals`] says.
@@ -368,7 +369,6 @@ impl VulkanPrepared<'_> {
         readback: bool,
     ) -> Result<Frame, OitError> {
         let path = settings.raster.unwrap_or(RasterPath::Compute);
-        oit_core::plan::refuse_supersampled_hardware("vulkan", path, settings)?;
         let bytes = u64::from(settings.width * settings.height).max(1) * oit_gpu::SUPERSAMPLE_SUM_BYTES;
         self.gpu.check_storage("the supersampled reference's running sums", bytes)?;
         let sums = self.pool.take(self.gpu, bytes, crate::device::storage_usage())?;

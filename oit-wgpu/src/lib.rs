@@ -435,9 +435,10 @@ impl WgpuPrepared<'_> {
     /// The supersampled reference (`--supersample`, docs/msaa.md) of a frame or window: oit-core's
     /// frames ([`oit_core::msaa::supersample_frames`]: one single-sample reference frame a sample
     /// position, under a projection moved so that the position falls on the pixels' centres),
-    /// each on the compute path, each frame's end adding its linear colours into running sums on
-    /// the device instead of writing its own (`supersample.wgsl`), the last frame's image their
-    /// mean; the frames' stats added up as oit-core's [`oit_core::msaa::SupersampleTotals`] says.
+    /// each on the frame's raster path (the hardware path's rasterizer snaps the moved vertices in
+    /// its own precision), each frame's end adding its linear colours into running sums on the
+    /// device instead of writing its own (`supersample.wgsl`), the last frame's image their mean;
+    /// the frames' stats added up as oit-core's [`oit_core::msaa::SupersampleTotals`] says.
     fn supersampled(
         &mut self,
         camera: &Camera,
@@ -445,7 +446,6 @@ impl WgpuPrepared<'_> {
         readback: bool,
     ) -> Result<Frame, OitError> {
         let path = WgpuBackend::path_of(settings);
-        oit_core::plan::refuse_supersampled_hardware("wgpu", path, settings)?;
         let bytes = u64::from(settings.width * settings.height).max(1) * oit_gpu::SUPERSAMPLE_SUM_BYTES;
         self.gpu.check_storage("the supersampled reference's running sums", bytes)?;
         let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;

@@ -203,10 +203,11 @@ pub(crate) fn bdp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
     let mut storage = oit_gpu::technique::Storage::new(ctx, 0);
     let bounds = oit_gpu::technique::depth_bounds(ctx, drivers, &mut storage)?;
     ctx.count_fragments(&drivers.scene)?;
-    // the plan's colour buckets, in the targets (counted as each target is made)
-    storage.attachments("colour buckets", 8 * 16)?;
-    storage.finish()?;
+    // the plan's colour buckets, in the targets (counted as each target is made, a sample each:
+    // `Plan::blend_targets`)
     let samples = ctx.settings.samples;
+    storage.attachments("colour buckets", 8 * 16 * u64::from(samples))?;
+    storage.finish()?;
     check_samples(ctx, &[RGBA32F])?;
     // at several samples each fragment at its first sample, the buckets' MAX over the samples
     // taken by the resolve (`bdp_blend_ms_fs`)

@@ -79,10 +79,11 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         })
         .collect();
     // the plan's colour buckets, in the targets (a pixel's, times its samples: each sample holds
-    // the buckets of the fragments written there)
-    storage.attachments("colour buckets", u64::from(per_sample))?;
+    // the buckets of the fragments written there; `Plan::blend_targets`)
+    let bytes = u64::from(per_sample) * u64::from(samples);
+    storage.attachments("colour buckets", bytes)?;
     storage.finish()?;
-    ctx.storage_bytes += u64::from(ctx.pixels) * u64::from(per_sample) * u64::from(samples);
+    ctx.storage_bytes += u64::from(ctx.pixels) * bytes;
     let (fs, resolve) = (
         oit_gpu::blend_entry("bdp_blend_fs", samples),
         oit_gpu::blend_entry("bdp_blend_resolve_main", samples),
