@@ -1551,7 +1551,8 @@ fn the_opaque_edge_is_antialiased() {
         let hardware = backend.raster_path(&Settings::default()) == oit_core::RasterPath::Hardware;
         let cases =
             [("reference", false), ("dfb", false), ("ll", false), ("fabs", false), ("reference", true)];
-        // (the hardware paths refuse the supersampled reference: `refuse_supersampled_hardware`)
+        // (the hardware paths' supersampled frames snap their moved edges in the device's own precision,
+        // held to oit-cpu off those edges by `gpu_supersampled_reference_equals_the_cpus`)
         for (t, supersample) in cases.into_iter().filter(|&(_, ss)| !(ss && hardware)) {
             let s = Settings {
                 samples: 4,
