@@ -49,7 +49,7 @@ fn hw_blend_packed(in: HwOut, kept: u32) -> u32 {
     var f: Fragment;
     f.color = clamp(hw_color(in), vec4<f32>(0.0), vec4<f32>(1.0));
     f.mask = kept;
-    return pack_rgba8(coverage_weighted(f, fu.msaa).color);
+    return pack_rgba8(coverage_weighted(f, fu.msaa, fu.opaque).color);
 }
 
 // `hw_blend_packed` unpacked: the 8-bit colour the blender adds.
