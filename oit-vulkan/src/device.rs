@@ -158,7 +158,7 @@ pub struct DeviceInfo {
     /// tiling, `COLOR_ATTACHMENT_BLEND` and `SAMPLED_IMAGE`).
     pub blendable: Vec<vk::Format>,
     /// The sample counts each of [`DeviceInfo::blendable`] takes as a sampled colour attachment
-    /// (optimal tiling, 2D; the blend captures' multisampled targets: [`Gpu::takes_samples`]).
+    /// (optimal tiling, 2D; the blend captures' multisampled targets: `Gpu::takes_samples`).
     pub multisampled: Vec<(vk::Format, vk::SampleCountFlags)>,
     /// Why the hardware-raster path cannot run here (`None`: it can): it needs a graphics queue,
     /// `fragmentStoresAndAtomics` and a blendable `R32_SFLOAT` colour attachment (the counter).
