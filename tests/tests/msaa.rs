@@ -1169,6 +1169,33 @@ fn hardware_blend_captures_at_samples() {
                 compared += 1;
             }
 
+            // over an opaque wall: each fragment at its first sample in front of the wall, the
+            // samples' sums over the mean of their opaque colours, as the atomics capture's
+            let walled = scene_of("wall:0.5:planes:16");
+            let wall_cam = camera(&walled, &base, View::default());
+            for t in ["wavg", "wsum", "bdp"] {
+                let s = Settings { technique: t.parse().unwrap(), ..base.clone() };
+                let what = format!("{on}: {t} blend over a wall at {samples}×");
+                let blend = render(backend, &walled, &wall_cam, &s);
+                let atomics = render(
+                    backend,
+                    &walled,
+                    &wall_cam,
+                    &Settings { hardware_capture: HardwareCapture::Atomics, ..s.clone() },
+                );
+                checks::accounting(&blend).unwrap_or_else(|e| panic!("{what}: {e}"));
+                assert!(blend.stats.occluded > 0, "{what}: the wall holds back nothing");
+                assert_eq!(
+                    (blend.stats.fragments, blend.stats.captured, blend.stats.occluded),
+                    (atomics.stats.fragments, atomics.stats.captured, atomics.stats.occluded),
+                    "{what}"
+                );
+                let differ =
+                    blend.image.pixels.iter().zip(&atomics.image.pixels).filter(|(a, b)| a != b).count();
+                assert_eq!(differ, 0, "{what}: {differ} pixels off the atomics capture");
+                compared += 1;
+            }
+
             // plain: per sample, equal to the per-sample reference where primitive order is depth order
             let planes = scene_of("planes:6");
             let p = Settings { samples, ..settings(64, "plain") };
