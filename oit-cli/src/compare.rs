@@ -196,24 +196,7 @@ pub fn run(args: &CompareArgs) -> Result<Outcome, OitError> {
         let s = &result.stats;
         let epr_msaa = msaa.and_then(|r| Some(accuracy(r, result.image.as_ref()?).ok()?.epr));
         if !args.json && printed.is_ok() {
-            let mut cells = vec![
-                technique,
-                m.backend.clone(),
-                m.raster.to_string(),
-                s.geometry_passes.to_string(),
-                s.fragments.to_string(),
-                s.captured.to_string(),
-                s.merged.to_string(),
-                s.lost.to_string(),
-                s.occluded.to_string(),
-                s.tied.to_string(),
-                s.quantized.to_string(),
-                output::bytes(s.storage_bytes),
-                format!("{:.2}", s.wall_ms),
-                s.gpu_ms.map_or_else(|| "-".to_string(), |g| format!("{g:.2}")),
-                output::percent(acc.epr),
-                output::psnr(acc.psnr),
-            ];
+            let mut cells = row_cells(technique, &m.backend, m.raster, s, acc);
             if supersampled {
                 cells.push(epr_msaa.map_or_else(|| "-".to_string(), output::percent));
             }
@@ -302,9 +285,15 @@ fn msaa_references(prepared: &Prepared, scene: &str) -> Result<Vec<Option<Frame>
 /// The table's row of the per-sample reference `r` measured against the supersampled one: its
 /// EPR and PSNR are MSAA's own error, and it is its own MSAA target (0).
 fn msaa_row(r: &Frame, backend: &str, raster: RasterPath, acc: Accuracy) -> Vec<String> {
-    let s = &r.stats;
+    let mut cells = row_cells("msaa-ref".to_string(), backend, raster, &r.stats, acc);
+    cells.push(output::percent(0.0));
+    cells
+}
+
+/// A row's cells under [`HEADERS`]: what ran, its counters, its times and its accuracy.
+fn row_cells(label: String, backend: &str, raster: RasterPath, s: &Stats, acc: Accuracy) -> Vec<String> {
     vec![
-        "msaa-ref".to_string(),
+        label,
         backend.to_string(),
         raster.to_string(),
         s.geometry_passes.to_string(),
@@ -320,7 +309,6 @@ fn msaa_row(r: &Frame, backend: &str, raster: RasterPath, acc: Accuracy) -> Vec<
         s.gpu_ms.map_or_else(|| "-".to_string(), |g| format!("{g:.2}")),
         output::percent(acc.epr),
         output::psnr(acc.psnr),
-        output::percent(0.0),
     ]
 }
 
