@@ -1081,6 +1081,20 @@ impl TriangleSetup {
         self.shading.shade(base, normal, vertex_color, self.forward)
     }
 
+    /// `record` (of `t`) with its base multiplied by `t`'s texture's sample at barycentrics `b`,
+    /// as [`TriangleSetup::color_at`] multiplies it before shading: the same product, so headlight
+    /// lanes ([`headlight_colors`], which read no vertex colour) shading the returned record give
+    /// `color_at`'s bits for a textured triangle too. `record` unchanged where `t` has no texture.
+    #[inline]
+    pub fn textured(&self, t: &Triangle, b: [f32; 3], mut record: ShadeRecord) -> ShadeRecord {
+        if let Some(texture) = self.textures.get(t.texture as usize) {
+            let p = perspective(t, b);
+            let uv = t.uv[0] * p[0] + t.uv[1] * p[1] + t.uv[2] * p[2];
+            record.base *= texture.sample(t.lod, uv);
+        }
+        record
+    }
+
     /// Whether any triangle may be textured: shading then looks at each triangle's texture
     /// ([`TriangleSetup::color_at`]) rather than running [`headlight_colors`]' lanes.
     #[inline]
@@ -1089,16 +1103,17 @@ impl TriangleSetup {
     }
     /// [`TriangleSetup::color_at`] of [`SHADE_LANES`] fragments at once, bit for bit: lane `i` is
     /// the colour of the fragment of `tris[i]` with barycentrics `b[i]`. The headlight shading
-    /// (the default) of an untextured setup runs in lanes ([`headlight_colors`]); the others call
-    /// [`TriangleSetup::color_at`] per lane.
+    /// (the default) runs in lanes ([`headlight_colors`]), a textured triangle's base multiplied
+    /// by its texture's sample first; the other shadings call [`TriangleSetup::color_at`] per lane.
     #[inline]
     pub fn colors_at(
         &self,
         tris: [&Triangle; SHADE_LANES],
         b: [[f32; 3]; SHADE_LANES],
     ) -> [Vec4; SHADE_LANES] {
-        if self.shading == Shading::Headlight && !self.has_textures() {
-            let records = tris.map(ShadeRecord::new);
+        if self.shading == Shading::Headlight {
+            let records: [ShadeRecord; SHADE_LANES] =
+                std::array::from_fn(|i| self.textured(tris[i], b[i], ShadeRecord::new(tris[i])));
             headlight_colors(std::array::from_fn(|i| &records[i]), b, self.forward)
         } else {
             std::array::from_fn(|i| self.color_at(tris[i], b[i]))
@@ -1378,19 +1393,36 @@ mod tests {
         for case in 0..4000 {
             let shading = [Shading::Headlight, Shading::Flat, Shading::Vertex, Shading::Normal][case % 4];
             let forward = vec3(&mut rng, false).normalize_or(Vec3::NEG_Z);
-            let setup = TriangleSetup {
-                triangles: Vec::new(),
-                width: 1,
-                height: 1,
-                shading,
-                forward,
-                textures: Vec::new(),
+            // every other set of cases textured: a random texture, most lanes' triangles sampling
+            // it at random coordinates (wrapping) and levels, the others untextured
+            let textured = case % 8 >= 4;
+            let textures = if textured {
+                let (w, h) = (1 + (rng.next_u64() % 9) as u32, 1 + (rng.next_u64() % 9) as u32);
+                let texels =
+                    (0..w * h).map(|_| rng.next_u64().to_le_bytes()[..4].try_into().unwrap()).collect();
+                let wrap = crate::texture::Wrap::Repeat;
+                vec![crate::Texture::new("lanes", w, h, texels, [wrap, wrap]).unwrap()]
+            } else {
+                Vec::new()
             };
-            let tris: [Triangle; SHADE_LANES] = std::array::from_fn(|_| triangle(&mut rng));
+            let setup =
+                TriangleSetup { triangles: Vec::new(), width: 1, height: 1, shading, forward, textures };
+            let tris: [Triangle; SHADE_LANES] = std::array::from_fn(|_| {
+                let mut t = triangle(&mut rng);
+                if textured && !rng.next_u64().is_multiple_of(4) {
+                    t.texture = 0;
+                    t.uv = std::array::from_fn(|_| {
+                        Vec2::new(rng.next_f32() * 5.0 - 2.0, rng.next_f32() * 5.0 - 2.0)
+                    });
+                    t.lod = (rng.next_u64() % 5) as u32;
+                }
+                t
+            });
             let b: [[f32; 3]; SHADE_LANES] = std::array::from_fn(|_| barycentrics(&mut rng));
             let refs = std::array::from_fn(|i| &tris[i]);
             let got = setup.colors_at(refs, b);
-            let records = tris.map(|t| ShadeRecord::new(&t));
+            let records: [ShadeRecord; SHADE_LANES] =
+                std::array::from_fn(|i| setup.textured(&tris[i], b[i], ShadeRecord::new(&tris[i])));
             let lanes = headlight_colors(std::array::from_fn(|i| &records[i]), b, forward);
             for i in 0..SHADE_LANES {
                 let want = setup.color_at(&tris[i], b[i]).to_array().map(f32::to_bits);

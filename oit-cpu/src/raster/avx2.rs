@@ -501,6 +501,13 @@ fn shade(
         let tri: [usize; SHADE_LANES] = std::array::from_fn(|i| batch.tri[at + i] as usize);
         let colors: [f32; 4 * SHADE_LANES] = if setup.shading == Shading::Headlight && !setup.has_textures() {
             headlight(tri.map(|t| &shades[t]), b.map(bytemuck::cast), setup.forward)
+        } else if setup.shading == Shading::Headlight {
+            // textured: each lane's base times its texture's sample, then the same lanes
+            let records: [ShadeRecord; SHADE_LANES] = std::array::from_fn(|i| {
+                let t = tri[i];
+                setup.textured(&tris[t], [b[0][i], b[1][i], b[2][i]], shades[t])
+            });
+            headlight(std::array::from_fn(|i| &records[i]), b.map(bytemuck::cast), setup.forward)
         } else {
             let colors =
                 setup.colors_at(tri.map(|t| &tris[t]), std::array::from_fn(|i| [b[0][i], b[1][i], b[2][i]]));
