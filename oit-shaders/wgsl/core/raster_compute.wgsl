@@ -79,20 +79,57 @@ fn load_tri(i: u32) -> Tri {
 const SUBPIXEL: i64 = 256li;
 const HALF_PIXEL: i64 = 128li;
 
-// Whether every fragment of `t` in compute-raster tile `tile` lies at or behind the opaque depth
-// at every sample of the tile (the tile's farthest, opaque.wgsl's `opaque_tiles_main`), so that
-// the opaque cut holds back each one: the triangle's nearest vertex depth, less more than its
+// A floor under the depth of any fragment of `t` whose pixel centre lies in the rectangle of
+// pixels whose corners include (x, y), from the triangle's depth plane at (x, y)'s centre: the
+// plane is what `raster_pixel` interpolates (`z0 + b1·(z1 − z0) + b2·(z2 − z0)` with the same
+// integer edge functions and f32 weights), affine in the pixel, so over a rectangle it is least at
+// a corner. Less the rounding of both evaluations: a few ulps of each term (the weights at a
+// corner outside the triangle may be large) and of a fragment's own sum (its weights in [0, 1]).
+fn plane_floor(t: Tri, x: u32, y: u32) -> f32 {
+    let py = i64(y) * SUBPIXEL + HALF_PIXEL;
+    let px = i64(x) * SUBPIXEL + HALF_PIXEL;
+    var w: array<f32, 3>;
+    for (var k = 1u; k < 3u; k++) {
+        let a = (k + 1u) % 3u;
+        let b = (k + 2u) % 3u;
+        let ax = i64(t.x[a]);
+        let ay = i64(t.y[a]);
+        let e = (i64(t.x[b]) - ax) * (py - ay) - (i64(t.y[b]) - ay) * (px - ax);
+        w[k] = f32(e) * t.inv_area;
+    }
+    let d1 = w[1] * (t.z[1] - t.z[0]);
+    let d2 = w[2] * (t.z[2] - t.z[0]);
+    let err = (abs(t.z[0]) + 2.0 * abs(d1) + 2.0 * abs(d2)) * 4e-7 + 2e-6;
+    return t.z[0] + d1 + d2 - err;
+}
+
+// Whether every fragment of `t` in the compute-raster tile of work item `item` lies at or behind
+// the opaque depth at every sample of the tile (the tile's farthest, opaque.wgsl's
+// `opaque_tiles_main`), so that the opaque cut holds back each one. The floor under the
+// fragments' depths is the larger of two: the triangle's nearest vertex depth, less more than its
 // interpolation's rounding can take off (the barycentric weights' few ulps times the depths'
-// spread, and the depths' own), is not in front of it. One sample a pixel only: above one a
-// fragment's depth is extrapolated to the pixel centre, which may lie outside the triangle.
-fn behind_tile(t: Tri, tile: u32) -> bool {
+// spread, and the depths' own), and the least of its depth plane at the corners of the pixels
+// the item walks (`plane_floor`: a large triangle that slopes away, a floor or a long plane, is
+// behind the opaque depth in a tile far from its nearest vertex). One sample a pixel only: above
+// one a fragment's depth is extrapolated to the pixel centre, which may lie outside the triangle.
+fn behind_tile(t: Tri, item: vec2<u32>) -> bool {
     if (fu.opaque.x == 0u || fu.msaa.x > 1u) {
         return false;
     }
-    let far = ~atomicLoad(&opaque_rgb[opaque_tile_word(tile)]);
+    let far = ~atomicLoad(&opaque_rgb[opaque_tile_word(item_tile(item))]);
     let lo = min(t.z[0], min(t.z[1], t.z[2]));
     let hi = max(t.z[0], max(t.z[1], t.z[2]));
-    return depth_bits(clamp(lo - (hi - lo) * 1e-5 - 1e-6, 0.0, 1.0)) >= far;
+    var least = lo - (hi - lo) * 1e-5 - 1e-6;
+    let x0 = max(t.bbox[0], (item.y & 0xffffu) * TILE);
+    let y0 = max(t.bbox[1], (item.y >> 16u) * TILE);
+    let x1 = min(t.bbox[2], (item.y & 0xffffu) * TILE + TILE - 1u);
+    let y1 = min(t.bbox[3], (item.y >> 16u) * TILE + TILE - 1u);
+    let plane = min(min(plane_floor(t, x0, y0), plane_floor(t, x1, y0)), min(plane_floor(t, x0, y1), plane_floor(t, x1, y1)));
+    // a degenerate plane (a weight that overflows) gives no floor
+    if (plane == plane && abs(plane) < 1e30) {
+        least = max(least, plane);
+    }
+    return depth_bits(clamp(least, 0.0, 1.0)) >= far;
 }
 
 // What the fragment of `t` at pixel (x, y) is: 0 none (the pixel's centre outside; with several
@@ -242,7 +279,7 @@ fn raster_main(
     if (i < ru.item_count) {
         let item = items[i];
         let t = load_tri(item.x);
-        let behind = behind_tile(t, item_tile(item));
+        let behind = behind_tile(t, item);
         // wholly behind the opaque depth: only the frame's first scene pass counts its fragments
         if (!behind || fu.opaque.y != 0u) {
             let x = (item.y & 0xffffu) * TILE + lid % TILE;
@@ -272,7 +309,7 @@ fn raster_loop_main(
     if (i < ru.item_count) {
         let item = items[i];
         let t = load_tri(item.x);
-        let behind = behind_tile(t, item_tile(item));
+        let behind = behind_tile(t, item);
         let x0 = max(t.bbox[0], (item.y & 0xffffu) * TILE);
         let y0 = max(t.bbox[1], (item.y >> 16u) * TILE);
         let x1 = min(t.bbox[2], (item.y & 0xffffu) * TILE + TILE - 1u);
