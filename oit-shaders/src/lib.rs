@@ -87,6 +87,7 @@ files!(
     "technique/dp.wgsl",
     "technique/dp_samples.wgsl",
     "technique/dp_depth.wgsl",
+    "technique/dp_depth_samples.wgsl",
     "technique/fabs.wgsl",
     "technique/fabs_counters.wgsl",
     "technique/fabs_counters_image.wgsl",
@@ -391,6 +392,9 @@ pub const MODULES: &[Module] = &[
     m("blend", &["technique/weighted.wgsl", "technique/blend.wgsl"], Stage),
     m("bdp_blend", &["technique/bdp_blend.wgsl"], Stage),
     m("dp_depth", &["technique/dp_depth.wgsl"], Stage),
+    // dp's depth peel at several samples: a depth a sample, each sample's layer into its own
+    // accumulator
+    m("dp_depth_samples", &["technique/peel_samples.wgsl", "technique/dp_depth_samples.wgsl"], Stage),
     m("ddp_blend", &["technique/ddp_blend.wgsl"], Stage),
     m("adp_logic", &["technique/adp.wgsl", "vulkan/adp_logic.wgsl"], Stage),
 ];
