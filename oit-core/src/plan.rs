@@ -171,8 +171,9 @@ pub struct Plan {
     /// than its peels ([`Plan::schedule`]).
     pub sample_peel: bool,
     /// Samples a pixel of the multisampled render targets a GPU hardware path's own capture
-    /// blends into, and the colour target's bytes a sample: plain's blender, and `wavg`, `wsum`
-    /// and `bdp`'s colour mode under `--hardware-capture blend`, on a GPU backend's hardware
+    /// blends into, and the colour target's bytes a sample: plain's blender, and `wavg`, `wsum`,
+    /// `bdp`'s colour mode and `dp` (per sample; its layer target's bytes, beside its two depth
+    /// targets and its accumulators) under `--hardware-capture blend`, on a GPU backend's hardware
     /// raster path at several samples (docs/msaa.md, "The blend captures at several samples";
     /// there the path is always named, `Settings::raster`: at several samples the GPU backends'
     /// default is the compute path). Their arrays are those targets, each sample counted
@@ -801,9 +802,11 @@ impl Plan {
 /// over the whole pixel in submission order (at full alpha, or at alpha times the fraction of the
 /// samples it keeps), so every fragment must reach one common accumulation, while a fragment of a
 /// multisampled pass writes only samples it covers (its output sample mask narrows its coverage,
-/// never widens it) and two fragments that share no sample never meet in the blender; and `dp` and
-/// `ddp` (`--hardware-capture blend`) where their peels are not yet kept a sample. Each GPU
-/// backend asks where it would run one.
+/// never widens it) and two fragments that share no sample never meet in the blender; `dp`'s
+/// depth peel (`--hardware-capture blend`), which peels each sample (a depth target a sample),
+/// under the coverages that peel the pixel (`--coverage pixel`, `--coverage fraction`,
+/// translucency: [`crate::msaa::peels_per_sample`]); and `ddp`'s, whose peels are not yet kept a
+/// sample. Each GPU backend asks where it would run one.
 pub fn refuse_multisampled_own_capture(backend: &str, settings: &Settings) -> Result<(), OitError> {
     let samples = settings.samples;
     if samples <= 1 {

@@ -521,11 +521,12 @@ fn refusals_name_what_is_not_done() {
         }
         other => panic!("cpu kbuf at 4 samples: {:?}", other.map(|f| f.stats)),
     }
-    // a hardware path's own captures not yet done at several samples (dp's and ddp's peels with
-    // `--hardware-capture blend`), and plain's blender where it cannot give what is asked (it
-    // blends each sample: no `--coverage pixel` or `fraction`, each message saying why and what
-    // to use), refused where a backend would run one; wavg, wsum, bdp and plain itself run, plain
-    // over opaque objects too (`hardware_blend_captures_at_samples`)
+    // a hardware path's own captures not yet done at several samples (ddp's peel with
+    // `--hardware-capture blend`), and those that cannot give what is asked (dp's, which peels
+    // each sample, under the coverages that peel the pixel; plain's blender, which blends each
+    // sample, under `--coverage pixel` or `fraction`; each message saying why and what to use),
+    // refused where a backend would run one; wavg, wsum, bdp, dp and plain itself run, plain and
+    // dp over opaque objects too (`hardware_blend_captures_at_samples`)
     let refused = |s: &Settings| match oit_core::plan::refuse_multisampled_own_capture("wgpu", s) {
         Err(OitError::Unsupported { what, .. }) => what,
         Ok(()) => panic!("{} at 4 samples (coverage pixel {}): not refused", s.technique, s.pixel_coverage),
@@ -1117,7 +1118,14 @@ fn hardware_at_samples(backend: &dyn Backend, cpu: &CpuBackend) -> usize {
 ///   coverage fraction over the whole pixel, it differs only where several fragments of one pixel
 ///   cover some of its samples each: measured on the bunny, and held below the seam that
 ///   per-pixel coverage leaves (`plain --coverage pixel` against the fraction on oit-cpu), the
-///   error both coverage-aware forms remove.
+///   error both coverage-aware forms remove. Over an opaque wall (`wall:0.5:planes:16` seen from
+///   behind, the wall's edges crossing the planes) each sample's blend is cut at its opaque depth
+///   and put over its own opaque colour: the per-sample reference within the same 1 of 8 bits,
+///   with its fragments and captured counts and something occluded.
+/// - `dp` (`--hardware-capture blend`: each sample peels its own layers into multisampled depth
+///   and layer targets): the per-sample reference exactly (EPR 0, nothing lost) on the bunny and
+///   on the wall through `planes:16`, with the atomics capture's fragments, captured and
+///   occluded, and the plan's storage.
 ///
 /// Mutations tried (on wgpu, each failing this test): the weighted blend writing every kept
 /// sample instead of the first (the frame's own accounting refuses it: its count 34 fragments
@@ -1125,7 +1133,13 @@ fn hardware_at_samples(backend: &dyn Backend, cpu: &CpuBackend) -> usize {
 /// capture), the bdp resolve taking sample 0 only instead of the MAX over the samples (`bdp`'s
 /// captured off the atomics capture's), the plain resolve's mean taken of sample 0 alone (`plain`
 /// 79 levels off the reference on the planes' edges). A first version that weighed plain's
-/// alpha by its coverage as well was off by 37 levels there.
+/// alpha by its coverage as well was off by 37 levels there. Over opaque objects (wgpu): plain's
+/// resolve putting each sample over the samples' mean opaque colour (`background_at`) instead of
+/// its own (5 levels off the reference over the wall); dp's peel reading the previous depth of
+/// sample 0 for every sample (its accounting refuses it: 11253 captured of 9766 fragments on the
+/// bunny), its composite counting a fragment at every sample it is peeled (9800 captured of
+/// 9766), and its composite putting each sample's layer into every sample the fragment keeps
+/// (24 pixels off the reference on the bunny).
 #[test]
 fn hardware_blend_captures_at_samples() {
     use oit_core::HardwareCapture;
