@@ -172,8 +172,9 @@ pub struct Plan {
     pub sample_peel: bool,
     /// Samples a pixel of the multisampled render targets a GPU hardware path's own capture
     /// blends into, and the colour target's bytes a sample: plain's blender, and `wavg`, `wsum`,
-    /// `bdp`'s colour mode and `dp` (per sample; its layer target's bytes, beside its two depth
-    /// targets and its accumulators) under `--hardware-capture blend`, on a GPU backend's hardware
+    /// `bdp`'s colour mode, `dp` and `ddp` (per sample: dp's layer target's bytes, beside its two
+    /// depth targets and its accumulators; ddp's range target's, two of them, beside its hand-overs
+    /// and accumulators) under `--hardware-capture blend`, on a GPU backend's hardware
     /// raster path at several samples (docs/msaa.md, "The blend captures at several samples";
     /// there the path is always named, `Settings::raster`: at several samples the GPU backends'
     /// default is the compute path). Their arrays are those targets, each sample counted
@@ -297,11 +298,12 @@ impl Plan {
                 || settings.hardware_capture == crate::HardwareCapture::Blend
                     && (matches!(technique, Technique::WeightedAverage | Technique::WeightedSum)
                         || bdp_color
-                        || technique == Technique::Dp && crate::msaa::peels_per_sample(settings))))
+                        || matches!(technique, Technique::Dp | Technique::Ddp)
+                            && crate::msaa::peels_per_sample(settings))))
         .then(|| {
             let colour = match settings.blend_target {
-                // dp's layer target: (payload, mask), two u32
-                _ if technique == Technique::Dp => 8,
+                // dp's layer target, (payload, mask) in two u32; ddp's range, two f32
+                _ if matches!(technique, Technique::Dp | Technique::Ddp) => 8,
                 crate::BlendTarget::F32 => 16,
                 crate::BlendTarget::F16 => 8,
                 crate::BlendTarget::Unorm8 => 4,
@@ -478,6 +480,15 @@ impl Plan {
                 per_pixel("peel depths (two Depth32Float targets)", 4, 2 * targets),
                 per_pixel("peeled layer (colour, mask)", colour, targets),
                 per_pixel("sample accumulators (RGB, transmittance)", 16, samples),
+            ],
+            // ddp per sample on the blender: two range targets a sample, each sample's near and
+            // far hand-overs and accumulators, and the fragments handed over
+            Technique::Ddp if self.blend_targets.is_some() => vec![
+                per_pixel("range targets (two Rg32Float)", colour, 2 * targets),
+                per_pixel("near hand-overs (depth key, colour)", 8, samples),
+                per_pixel("far hand-overs (depth key, colour)", 8, samples),
+                per_pixel("fragments handed over", 4, 1),
+                per_pixel("sample accumulators (front and back RGB, transmittance)", 32, samples),
             ],
             Technique::Dp if self.sample_peel => vec![
                 per_pixel("nearest (depth key, primitive id)", 8, 1),
@@ -802,11 +813,11 @@ impl Plan {
 /// over the whole pixel in submission order (at full alpha, or at alpha times the fraction of the
 /// samples it keeps), so every fragment must reach one common accumulation, while a fragment of a
 /// multisampled pass writes only samples it covers (its output sample mask narrows its coverage,
-/// never widens it) and two fragments that share no sample never meet in the blender; `dp`'s
-/// depth peel (`--hardware-capture blend`), which peels each sample (a depth target a sample),
-/// under the coverages that peel the pixel (`--coverage pixel`, `--coverage fraction`,
-/// translucency: [`crate::msaa::peels_per_sample`]); and `ddp`'s, whose peels are not yet kept a
-/// sample. Each GPU backend asks where it would run one.
+/// never widens it) and two fragments that share no sample never meet in the blender; and `dp`'s
+/// and `ddp`'s blend captures (`--hardware-capture blend`), which peel each sample (a depth or a
+/// range target a sample), under the coverages that peel the pixel (`--coverage pixel`,
+/// `--coverage fraction`, translucency: [`crate::msaa::peels_per_sample`]). Each GPU backend asks
+/// where it would run one.
 pub fn refuse_multisampled_own_capture(backend: &str, settings: &Settings) -> Result<(), OitError> {
     let samples = settings.samples;
     if samples <= 1 {
@@ -814,14 +825,10 @@ pub fn refuse_multisampled_own_capture(backend: &str, settings: &Settings) -> Re
     }
     let technique = settings.technique;
     let what = match technique {
-        Technique::Dp if !crate::msaa::peels_per_sample(settings) => format!(
-            "dp with --hardware-capture blend at --samples {samples} under --coverage pixel, --coverage \
-             fraction or translucency: its depth peel peels each sample; use --hardware-capture atomics \
-             or --raster compute (docs/msaa.md)"
-        ),
-        Technique::Ddp => format!(
-            "{technique} with --hardware-capture blend at --samples {samples}: not yet done (its peels \
-             are not yet kept a sample); use --hardware-capture atomics or --raster compute (docs/msaa.md)"
+        Technique::Dp | Technique::Ddp if !crate::msaa::peels_per_sample(settings) => format!(
+            "{technique} with --hardware-capture blend at --samples {samples} under --coverage pixel, \
+             --coverage fraction or translucency: its blend capture peels each sample; use \
+             --hardware-capture atomics or --raster compute (docs/msaa.md)"
         ),
         Technique::Plain if settings.pixel_coverage || settings.fraction_coverage => format!(
             "plain on the hardware path at --samples {samples} with --coverage {}: its blender composites \

@@ -82,6 +82,7 @@ files!(
     "technique/ddp.wgsl",
     "technique/ddp_samples.wgsl",
     "technique/ddp_blend.wgsl",
+    "technique/ddp_blend_samples.wgsl",
     "technique/dfb.wgsl",
     "technique/dfb_count.wgsl",
     "technique/dp.wgsl",
@@ -396,6 +397,9 @@ pub const MODULES: &[Module] = &[
     // accumulator
     m("dp_depth_samples", &["technique/peel_samples.wgsl", "technique/dp_depth_samples.wgsl"], Stage),
     m("ddp_blend", &["technique/ddp_blend.wgsl"], Stage),
+    // ddp's dual peel at several samples: a range a sample, each sample's layers into its own
+    // accumulators
+    m("ddp_blend_samples", &["technique/peel_samples.wgsl", "technique/ddp_blend_samples.wgsl"], Stage),
     m("adp_logic", &["technique/adp.wgsl", "vulkan/adp_logic.wgsl"], Stage),
 ];
 

@@ -521,28 +521,31 @@ fn refusals_name_what_is_not_done() {
         }
         other => panic!("cpu kbuf at 4 samples: {:?}", other.map(|f| f.stats)),
     }
-    // a hardware path's own captures not yet done at several samples (ddp's peel with
-    // `--hardware-capture blend`), and those that cannot give what is asked (dp's, which peels
-    // each sample, under the coverages that peel the pixel; plain's blender, which blends each
-    // sample, under `--coverage pixel` or `fraction`; each message saying why and what to use),
-    // refused where a backend would run one; wavg, wsum, bdp, dp and plain itself run, plain and
-    // dp over opaque objects too (`hardware_blend_captures_at_samples`)
+    // a hardware path's own captures where they cannot give what is asked (dp's and ddp's, which
+    // peel each sample, under the coverages that peel the pixel; plain's blender, which blends
+    // each sample, under `--coverage pixel` or `fraction`; each message saying why and what to
+    // use), refused where a backend would run one; wavg, wsum, bdp, dp, ddp and plain themselves
+    // run, over opaque objects too (`hardware_blend_captures_at_samples`)
     let refused = |s: &Settings| match oit_core::plan::refuse_multisampled_own_capture("wgpu", s) {
         Err(OitError::Unsupported { what, .. }) => what,
         Ok(()) => panic!("{} at 4 samples (coverage pixel {}): not refused", s.technique, s.pixel_coverage),
         Err(e) => panic!("{e}"),
     };
-    let what = refused(&Settings { technique: Technique::Ddp, ..base.clone() });
-    assert!(what.contains("not yet done") && what.contains("ddp"), "{what}");
-    // dp's depth peel peels each sample: the coverages that are not per sample are refused
-    let dp = Settings { technique: Technique::Dp, ..base.clone() };
-    for s in [
-        Settings { pixel_coverage: true, ..dp.clone() },
-        Settings { fraction_coverage: true, ..dp.clone() },
-        Settings { effect: oit_core::Effect::Translucency, ..dp.clone() },
-    ] {
-        let what = refused(&s);
-        assert!(what.contains("peels each sample") && what.contains("--hardware-capture atomics"), "{what}");
+    // dp's and ddp's blend captures peel each sample: the coverages that are not per sample are
+    // refused
+    for t in [Technique::Dp, Technique::Ddp] {
+        let peel = Settings { technique: t, ..base.clone() };
+        for s in [
+            Settings { pixel_coverage: true, ..peel.clone() },
+            Settings { fraction_coverage: true, ..peel.clone() },
+            Settings { effect: oit_core::Effect::Translucency, ..peel.clone() },
+        ] {
+            let what = refused(&s);
+            assert!(
+                what.contains("peels each sample") && what.contains("--hardware-capture atomics"),
+                "{what}"
+            );
+        }
     }
     let plain = Settings { technique: Technique::Plain, ..base.clone() };
     for (what, named) in [
@@ -556,7 +559,7 @@ fn refusals_name_what_is_not_done() {
             "{what}"
         );
     }
-    for t in ["plain", "wavg", "wsum", "bdp", "dp"] {
+    for t in ["plain", "wavg", "wsum", "bdp", "dp", "ddp"] {
         let s = Settings { technique: t.parse().unwrap(), ..base.clone() };
         assert!(oit_core::plan::refuse_multisampled_own_capture("wgpu", &s).is_ok(), "{t}");
     }
@@ -1221,13 +1224,15 @@ fn hardware_blend_captures_at_samples() {
                 compared += 1;
             }
 
-            // dp's depth peel a sample: the per-sample reference exactly (EPR 0), through the
-            // bunny and over the wall, with the atomics capture's fragments, captured and occluded
-            for (name, view) in [("bunny", View::default()), ("wall:0.5:planes:16", View::default())] {
+            // dp's depth peel and ddp's dual peel a sample: the per-sample reference exactly (EPR
+            // 0), through the bunny and over the wall, with the atomics capture's fragments,
+            // captured and occluded
+            let peels = [Technique::Dp, Technique::Ddp];
+            for (name, t) in ["bunny", "wall:0.5:planes:16"].into_iter().flat_map(|n| peels.map(|t| (n, t))) {
                 let peeled = scene_of(name);
-                let s = Settings { technique: Technique::Dp, ..base.clone() };
-                let cam = camera(&peeled, &s, view);
-                let what = format!("{on}: dp blend on {name} at {samples}×");
+                let s = Settings { technique: t, ..base.clone() };
+                let cam = camera(&peeled, &s, View::default());
+                let what = format!("{on}: {t} blend on {name} at {samples}×");
                 let blend = render(backend, &peeled, &cam, &s);
                 let atomics = render(
                     backend,
@@ -1361,8 +1366,9 @@ fn blend_storage_is_the_plans(
     // (the backend runs it on its path: `Settings::raster` named, as oit-core's `OnPath` names it)
     let s = Settings { raster: Some(backend.raster_path(settings)), ..settings.clone() };
     let plan = Plan::new(backend.name(), scene, &s).map_err(|e| e.to_string())?;
-    // (the colour target's bytes a sample: RGBA32F's; dp's (payload, mask) layer, two u32)
-    let colour = if s.technique == Technique::Dp { 8 } else { 16 };
+    // (the colour target's bytes a sample: RGBA32F's; dp's (payload, mask) layer, two u32;
+    // ddp's range, two f32)
+    let colour = if matches!(s.technique, Technique::Dp | Technique::Ddp) { 8 } else { 16 };
     if plan.blend_targets != Some((s.samples, colour)) {
         return Err(format!("the plan's blend targets: {:?}", plan.blend_targets));
     }

@@ -19,8 +19,8 @@
 //!
 //! At several samples a pixel `plain`, `wavg`/`wsum` and `bdp` draw multisampled targets
 //! (oit-wgpu's, the same `_ms` entry points: docs/msaa.md, "The blend captures at several
-//! samples"), and `dp` peels each sample into multisampled depth and layer targets (its own
-//! `dp_depth_samples.wgsl`); `ddp` is refused there (`oit_core::plan::refuse_multisampled_own_capture`).
+//! samples"), and `dp` and `ddp` peel each sample into multisampled depth, layer and range
+//! targets (their own `dp_depth_samples.wgsl`, `ddp_blend_samples.wgsl`).
 //!
 //! The blend unit returns no previous value, so these captures cannot count where they lose a
 //! fragment: their `lost` is `fragments − captured − occluded` (as on oit-wgpu); adp's is still
@@ -403,15 +403,45 @@ fn check_peel_samples(ctx: &VkCtx<'_>) -> Result<(), OitError> {
 /// `ddp` by MAX blending of (−d, d) and occlusion queries (`ddp_blend.wgsl`), its layers
 /// composited by `ddp.wgsl`'s resolve; the loop ends after the first pass whose query sees
 /// nothing, or after pass `limit` ([`OcclusionPeel`]).
+///
+/// At several samples a pixel (per-sample coverage) the range targets are multisampled and
+/// `ddp_blend_samples.wgsl` peels each sample (oit-wgpu's `ddp_blend`, the same WGSL): each
+/// sample's two layers handed over a sample and composited into its own accumulators, every
+/// pixel finished after the last pass.
 pub(crate) fn ddp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     ctx.counts_losses = false;
     oit_gpu::technique::check_ddp_effect("vulkan", ctx.settings.effect)?;
     check_blendable(ctx, RG32F, "ddp's MAX blending")?;
     let raster = hardware(drivers)?;
     ctx.count_fragments(&drivers.scene)?;
-    let [near, far, range, peeled] = oit_gpu::technique::ddp_state(ctx)?;
-    let buffers: [&crate::device::Buffer; 4] = [&near, &far, &range, &peeled];
-    let ranges = [ctx.target(RG32F, 8, false)?, ctx.target(RG32F, 8, false)?];
+    let samples = ctx.settings.samples;
+    let ms = samples > 1;
+    let owned: Vec<Rc<Buffer>> = if ms {
+        // per sample: the hand-overs a sample, the count a pixel, the accumulators a sample (the
+        // plan's arrays; the range targets counted as each is made)
+        check_samples(ctx, &[RG32F])?;
+        let mut storage = oit_gpu::technique::Storage::new(ctx, 0);
+        storage.attachments("range targets", 16 * u64::from(samples))?;
+        let near = storage.buffer(ctx, "near hand-overs", Init::Fill(u32::MAX))?;
+        let far = storage.buffer(ctx, "far hand-overs", Init::Zero)?;
+        let handed = storage.buffer(ctx, "fragments handed over", Init::Zero)?;
+        let acc = storage.buffer(ctx, "sample accumulators", Init::Zero)?;
+        storage.finish()?;
+        vec![near, far, handed, acc]
+    } else {
+        oit_gpu::technique::ddp_state(ctx)?.into()
+    };
+    let buffers: Vec<&Buffer> = owned.iter().map(|b| &**b).collect();
+    let (module, peel_fs, resolve) = if ms {
+        ("ddp_blend_samples", "ddp_peel_ms_fs", "ddp_resolve_ms_main")
+    } else {
+        ("ddp_blend", "ddp_peel_fs", "resolve_main")
+    };
+    if ms {
+        ctx.pixel_kernel(module, "ddp_init_ms_main", &buffers, 0, 0)?;
+    }
+    let ranges =
+        [ctx.target_sampled(RG32F, 8, false, samples)?, ctx.target_sampled(RG32F, 8, false, samples)?];
     ctx.make_readable(&ranges[1]);
     let limit = ctx.plan.peel_limit;
     let control = OcclusionPeel::new(ctx, limit.saturating_add(1))?;
@@ -422,8 +452,8 @@ pub(crate) fn ddp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
         ctx.blend_pass(
             raster,
             BlendPass {
-                module: "ddp_blend",
-                fs: "ddp_peel_fs",
+                module,
+                fs: peel_fs,
                 targets: &[&ranges[slot]],
                 blends: &[Blend::Max],
                 clears: &[clear_f([-2.0, -2.0, 0.0, 0.0])],
@@ -437,12 +467,16 @@ pub(crate) fn ddp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
             &buffers,
         )?;
         if pass > 0 {
-            ctx.pixel_kernel("ddp", "resolve_main", &buffers, pass, 0)?;
+            ctx.pixel_kernel(if ms { module } else { "ddp" }, resolve, &buffers, pass, 0)?;
         }
         if !control.go_on(ctx, pass + 1)? {
             break;
         }
         pass += 1;
+    }
+    if ms {
+        // every pixel's samples finished over what lies behind them
+        ctx.pixel_kernel(module, "ddp_finish_ms_main", &buffers, pass, 0)?;
     }
     Ok(())
 }
