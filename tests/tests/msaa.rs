@@ -1125,10 +1125,11 @@ fn hardware_at_samples(backend: &dyn Backend, cpu: &CpuBackend) -> usize {
 ///   behind, the wall's edges crossing the planes) each sample's blend is cut at its opaque depth
 ///   and put over its own opaque colour: the per-sample reference within the same 1 of 8 bits,
 ///   with its fragments and captured counts and something occluded.
-/// - `dp` (`--hardware-capture blend`: each sample peels its own layers into multisampled depth
-///   and layer targets): the per-sample reference exactly (EPR 0, nothing lost) on the bunny and
-///   on the wall through `planes:16`, with the atomics capture's fragments, captured and
-///   occluded, and the plan's storage.
+/// - `dp` and `ddp` (`--hardware-capture blend`: each sample peels its own layers, into
+///   multisampled depth and layer targets, or its own pairs, through multisampled range targets):
+///   the per-sample reference exactly (EPR 0, nothing lost) on the bunny and on the wall through
+///   `planes:16`, with the atomics capture's fragments, captured and occluded, and the plan's
+///   storage. (8 samples where the device's targets take them: lavapipe's take 4.)
 ///
 /// Mutations tried (on wgpu, each failing this test): the weighted blend writing every kept
 /// sample instead of the first (the frame's own accounting refuses it: its count 34 fragments
@@ -1142,7 +1143,10 @@ fn hardware_at_samples(backend: &dyn Backend, cpu: &CpuBackend) -> usize {
 /// sample 0 for every sample (its accounting refuses it: 11253 captured of 9766 fragments on the
 /// bunny), its composite counting a fragment at every sample it is peeled (9800 captured of
 /// 9766), and its composite putting each sample's layer into every sample the fragment keeps
-/// (24 pixels off the reference on the bunny).
+/// (24 pixels off the reference on the bunny); ddp's resolve putting each sample's far layer into
+/// its front instead of its back (46 pixels off), its hand-overs counted at every sample (9800
+/// captured of 9766), its peel reading the previous range of sample 0 for every sample (its
+/// captured off the atomics capture's).
 #[test]
 fn hardware_blend_captures_at_samples() {
     use oit_core::HardwareCapture;
