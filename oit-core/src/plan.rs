@@ -171,8 +171,10 @@ pub struct Plan {
     /// than its peels ([`Plan::schedule`]).
     pub sample_peel: bool,
     /// Samples a pixel of the multisampled render targets a GPU hardware path's own capture
-    /// blends into, and the colour target's bytes a sample: plain's blender, and `wavg`, `wsum`
-    /// and `bdp`'s colour mode under `--hardware-capture blend`, on a GPU backend's hardware
+    /// blends into, and the colour target's bytes a sample: plain's blender, and `wavg`, `wsum`,
+    /// `bdp`'s colour mode, `dp` and `ddp` (per sample: dp's layer target's bytes, beside its two
+    /// depth targets and its accumulators; ddp's range target's, two of them, beside its hand-overs
+    /// and accumulators) under `--hardware-capture blend`, on a GPU backend's hardware
     /// raster path at several samples (docs/msaa.md, "The blend captures at several samples";
     /// there the path is always named, `Settings::raster`: at several samples the GPU backends'
     /// default is the compute path). Their arrays are those targets, each sample counted
@@ -295,15 +297,19 @@ impl Plan {
             && (technique == Technique::Plain
                 || settings.hardware_capture == crate::HardwareCapture::Blend
                     && (matches!(technique, Technique::WeightedAverage | Technique::WeightedSum)
-                        || bdp_color)))
-            .then(|| {
-                let colour = match settings.blend_target {
-                    crate::BlendTarget::F32 => 16,
-                    crate::BlendTarget::F16 => 8,
-                    crate::BlendTarget::Unorm8 => 4,
-                };
-                (settings.samples, colour)
-            });
+                        || bdp_color
+                        || matches!(technique, Technique::Dp | Technique::Ddp)
+                            && crate::msaa::peels_per_sample(settings))))
+        .then(|| {
+            let colour = match settings.blend_target {
+                // dp's layer target, (payload, mask) in two u32; ddp's range, two f32
+                _ if matches!(technique, Technique::Dp | Technique::Ddp) => 8,
+                crate::BlendTarget::F32 => 16,
+                crate::BlendTarget::F16 => 8,
+                crate::BlendTarget::Unorm8 => 4,
+            };
+            (settings.samples, colour)
+        });
         Ok(Plan {
             blend_targets,
             in_order: false,
@@ -468,6 +474,22 @@ impl Plan {
             // per sample (docs/msaa.md): the keys are (depth, primitive id), the layer the last
             // pass peeled waits for its payload and mask, which the next pass fetches, and each
             // sample composites into its own (premultiplied RGB, transmittance)
+            // per sample on the blender (`--hardware-capture blend`): two depth targets and the
+            // layer (colour, mask) a sample, and each sample's accumulator
+            Technique::Dp if self.blend_targets.is_some() => vec![
+                per_pixel("peel depths (two Depth32Float targets)", 4, 2 * targets),
+                per_pixel("peeled layer (colour, mask)", colour, targets),
+                per_pixel("sample accumulators (RGB, transmittance)", 16, samples),
+            ],
+            // ddp per sample on the blender: two range targets a sample, each sample's near and
+            // far hand-overs and accumulators, and the fragments handed over
+            Technique::Ddp if self.blend_targets.is_some() => vec![
+                per_pixel("range targets (two Rg32Float)", colour, 2 * targets),
+                per_pixel("near hand-overs (depth key, colour)", 8, samples),
+                per_pixel("far hand-overs (depth key, colour)", 8, samples),
+                per_pixel("fragments handed over", 4, 1),
+                per_pixel("sample accumulators (front and back RGB, transmittance)", 32, samples),
+            ],
             Technique::Dp if self.sample_peel => vec![
                 per_pixel("nearest (depth key, primitive id)", 8, 1),
                 per_pixel("previous peel's key", 8, 1),
@@ -785,34 +807,35 @@ impl Plan {
 /// blend captures) at several samples a pixel where it is not done (`Ok` at one, and for those
 /// that are; docs/msaa.md, "The blend captures at several samples"). `wavg`, `wsum` and `bdp`
 /// blend into multisampled targets, each fragment at one of its samples, combined by the blend's
-/// own operator; `plain` blends each sample (per-sample coverage, the one its blender can give:
-/// a fragment cannot write the samples it does not cover, so neither `--coverage pixel` nor
-/// `--coverage fraction`), over no opaque objects yet (`opaque`: the frame has some; its resolve
-/// takes the mean of the samples' composites over one background); `dp` and `ddp` (`--hardware-
-/// capture blend`) do not peel each sample yet. Each GPU backend asks where it would run one.
-pub fn refuse_multisampled_own_capture(
-    backend: &str,
-    settings: &Settings,
-    opaque: bool,
-) -> Result<(), OitError> {
+/// own operator; `plain` blends each sample (per-sample coverage), over opaque objects too (each
+/// sample's composite over that sample's opaque colour). Refused: `plain` under `--coverage
+/// pixel` or `--coverage fraction`, which its blender cannot give: both composite every fragment
+/// over the whole pixel in submission order (at full alpha, or at alpha times the fraction of the
+/// samples it keeps), so every fragment must reach one common accumulation, while a fragment of a
+/// multisampled pass writes only samples it covers (its output sample mask narrows its coverage,
+/// never widens it) and two fragments that share no sample never meet in the blender; and `dp`'s
+/// and `ddp`'s blend captures (`--hardware-capture blend`), which peel each sample (a depth or a
+/// range target a sample), under the coverages that peel the pixel (`--coverage pixel`,
+/// `--coverage fraction`, translucency: [`crate::msaa::peels_per_sample`]). Each GPU backend asks
+/// where it would run one.
+pub fn refuse_multisampled_own_capture(backend: &str, settings: &Settings) -> Result<(), OitError> {
     let samples = settings.samples;
     if samples <= 1 {
         return Ok(());
     }
     let technique = settings.technique;
     let what = match technique {
-        Technique::Dp | Technique::Ddp => format!(
-            "{technique} with --hardware-capture blend at --samples {samples}: not yet done (its peels \
-             are not yet kept a sample); use --hardware-capture atomics or --raster compute (docs/msaa.md)"
+        Technique::Dp | Technique::Ddp if !crate::msaa::peels_per_sample(settings) => format!(
+            "{technique} with --hardware-capture blend at --samples {samples} under --coverage pixel, \
+             --coverage fraction or translucency: its blend capture peels each sample; use \
+             --hardware-capture atomics or --raster compute (docs/msaa.md)"
         ),
         Technique::Plain if settings.pixel_coverage || settings.fraction_coverage => format!(
             "plain on the hardware path at --samples {samples} with --coverage {}: its blender composites \
-             each sample, and a fragment writes only the samples it covers; use --raster compute (docs/msaa.md)",
+             each sample (--coverage sample), and a fragment writes only the samples it covers, so it \
+             cannot weigh a fragment by its pixel's coverage; drop --coverage for the blender's per-sample \
+             composite, or use --raster compute for this coverage (docs/msaa.md)",
             if settings.pixel_coverage { "pixel" } else { "fraction" }
-        ),
-        Technique::Plain if opaque => format!(
-            "plain on the hardware path at --samples {samples} with opaque objects: not yet done (its \
-             samples are composited over one background); use --raster compute (docs/msaa.md)"
         ),
         _ => return Ok(()),
     };

@@ -82,11 +82,13 @@ files!(
     "technique/ddp.wgsl",
     "technique/ddp_samples.wgsl",
     "technique/ddp_blend.wgsl",
+    "technique/ddp_blend_samples.wgsl",
     "technique/dfb.wgsl",
     "technique/dfb_count.wgsl",
     "technique/dp.wgsl",
     "technique/dp_samples.wgsl",
     "technique/dp_depth.wgsl",
+    "technique/dp_depth_samples.wgsl",
     "technique/fabs.wgsl",
     "technique/fabs_counters.wgsl",
     "technique/fabs_counters_image.wgsl",
@@ -391,7 +393,13 @@ pub const MODULES: &[Module] = &[
     m("blend", &["technique/weighted.wgsl", "technique/blend.wgsl"], Stage),
     m("bdp_blend", &["technique/bdp_blend.wgsl"], Stage),
     m("dp_depth", &["technique/dp_depth.wgsl"], Stage),
+    // dp's depth peel at several samples: a depth a sample, each sample's layer into its own
+    // accumulator
+    m("dp_depth_samples", &["technique/peel_samples.wgsl", "technique/dp_depth_samples.wgsl"], Stage),
     m("ddp_blend", &["technique/ddp_blend.wgsl"], Stage),
+    // ddp's dual peel at several samples: a range a sample, each sample's layers into its own
+    // accumulators
+    m("ddp_blend_samples", &["technique/peel_samples.wgsl", "technique/ddp_blend_samples.wgsl"], Stage),
     m("adp_logic", &["technique/adp.wgsl", "vulkan/adp_logic.wgsl"], Stage),
 ];
 

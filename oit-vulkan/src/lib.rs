@@ -565,7 +565,7 @@ fn run_technique(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitEr
     if !own {
         return oit_gpu::technique::render(ctx, drivers);
     }
-    oit_core::plan::refuse_multisampled_own_capture("vulkan", ctx.settings, drivers.opaque.is_some())?;
+    oit_core::plan::refuse_multisampled_own_capture("vulkan", ctx.settings)?;
     // the opaque pass first, as every frame: the captures' fragment stages cut at its depth
     oit_gpu::technique::opaque_first(ctx, drivers)?;
     match ctx.settings.technique {

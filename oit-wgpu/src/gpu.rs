@@ -44,13 +44,16 @@ pub(crate) fn count_format(features: wgpu::Features) -> wgpu::TextureFormat {
 }
 
 /// The formats of the blend captures' render targets (`technique/`), whose sample counts an
-/// adapter is asked for where oit opens the device ([`Gpu::takes_samples`]).
-const BLEND_FORMATS: [wgpu::TextureFormat; 5] = [
+/// adapter is asked for where oit opens the device ([`Gpu::takes_samples`]): dp's depth peel's
+/// layer and depth targets among them.
+const BLEND_FORMATS: [wgpu::TextureFormat; 7] = [
     wgpu::TextureFormat::Rgba32Float,
     wgpu::TextureFormat::Rgba16Float,
     wgpu::TextureFormat::Rgba8Unorm,
     wgpu::TextureFormat::R32Float,
     wgpu::TextureFormat::R16Float,
+    wgpu::TextureFormat::Rg32Uint,
+    wgpu::TextureFormat::Depth32Float,
 ];
 
 /// The most storage buffers one of oit's pipelines binds in a shader stage: group 0's resolve

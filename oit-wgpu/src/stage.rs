@@ -16,7 +16,7 @@ pub struct SceneStage {
     pub(crate) group: wgpu::BindGroup,
     pub(crate) vertex_count: u32,
     /// The image size of the rasterizer this stage belongs to, and the render targets its
-    /// captures drew into, kept for the next frame of that size ([`SceneStage::target`]).
+    /// captures drew into, kept for the next frame of that size ([`SceneStage::target_sampled`]).
     pub(crate) size: (u32, u32),
     pub(crate) targets: Rc<RefCell<Vec<KeptTarget>>>,
     pub(crate) occlusion: Rc<RefCell<Option<Occlusion>>>,
@@ -38,18 +38,9 @@ impl SceneStage {
         &self.layout
     }
 
-    /// The render target `label` of `format` at this rasterizer's image size (sampled by a
-    /// resolve as well), made on first use and kept: a frame of a size seen before makes none.
-    pub(crate) fn target(
-        &self,
-        device: &wgpu::Device,
-        label: &'static str,
-        format: wgpu::TextureFormat,
-    ) -> wgpu::TextureView {
-        self.target_sampled(device, label, format, 1)
-    }
-
-    /// [`SceneStage::target`] of `samples` samples a pixel (a multisampled blend capture's).
+    /// The render target `label` of `format` and `samples` samples a pixel (one but for a
+    /// multisampled blend capture's) at this rasterizer's image size (sampled by a resolve as
+    /// well), made on first use and kept: a frame of a size seen before makes none.
     pub(crate) fn target_sampled(
         &self,
         device: &wgpu::Device,

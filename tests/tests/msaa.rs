@@ -521,39 +521,54 @@ fn refusals_name_what_is_not_done() {
         }
         other => panic!("cpu kbuf at 4 samples: {:?}", other.map(|f| f.stats)),
     }
-    // a hardware path's own captures not yet done at several samples (dp's and ddp's peels with
-    // `--hardware-capture blend`), and plain's blender where it cannot give what is asked (it
-    // blends each sample: no `--coverage pixel` or `fraction`; no opaque objects yet), refused
-    // where a backend would run one; wavg, wsum, bdp and plain itself run
-    // (`hardware_blend_captures_at_samples`)
-    let refused =
-        |s: &Settings, opaque: bool| match oit_core::plan::refuse_multisampled_own_capture("wgpu", s, opaque)
-        {
-            Err(OitError::Unsupported { what, .. }) => what,
-            Ok(()) => panic!(
-                "{} at 4 samples (coverage pixel {}, opaque {opaque}): not refused",
-                s.technique, s.pixel_coverage
-            ),
-            Err(e) => panic!("{e}"),
-        };
+    // a hardware path's own captures where they cannot give what is asked (dp's and ddp's, which
+    // peel each sample, under the coverages that peel the pixel; plain's blender, which blends
+    // each sample, under `--coverage pixel` or `fraction`; each message saying why and what to
+    // use), refused where a backend would run one; wavg, wsum, bdp, dp, ddp and plain themselves
+    // run, over opaque objects too (`hardware_blend_captures_at_samples`)
+    let refused = |s: &Settings| match oit_core::plan::refuse_multisampled_own_capture("wgpu", s) {
+        Err(OitError::Unsupported { what, .. }) => what,
+        Ok(()) => panic!("{} at 4 samples (coverage pixel {}): not refused", s.technique, s.pixel_coverage),
+        Err(e) => panic!("{e}"),
+    };
+    // dp's and ddp's blend captures peel each sample: the coverages that are not per sample are
+    // refused
     for t in [Technique::Dp, Technique::Ddp] {
-        let what = refused(&Settings { technique: t, ..base.clone() }, false);
-        assert!(what.contains("not yet done") && what.contains(&t.to_string()), "{what}");
+        let peel = Settings { technique: t, ..base.clone() };
+        for s in [
+            Settings { pixel_coverage: true, ..peel.clone() },
+            Settings { fraction_coverage: true, ..peel.clone() },
+            Settings { effect: oit_core::Effect::Translucency, ..peel.clone() },
+        ] {
+            let what = refused(&s);
+            assert!(
+                what.contains("peels each sample") && what.contains("--hardware-capture atomics"),
+                "{what}"
+            );
+        }
     }
     let plain = Settings { technique: Technique::Plain, ..base.clone() };
-    assert!(refused(&Settings { pixel_coverage: true, ..plain.clone() }, false).contains("--coverage pixel"));
-    assert!(
-        refused(&Settings { fraction_coverage: true, ..plain.clone() }, false)
-            .contains("--coverage fraction")
-    );
-    assert!(refused(&plain, true).contains("opaque"));
-    for t in ["plain", "wavg", "wsum", "bdp"] {
+    for (what, named) in [
+        (refused(&Settings { pixel_coverage: true, ..plain.clone() }), "--coverage pixel"),
+        (refused(&Settings { fraction_coverage: true, ..plain.clone() }), "--coverage fraction"),
+    ] {
+        assert!(
+            what.contains(named)
+                && what.contains("only the samples it covers")
+                && what.contains("--raster compute"),
+            "{what}"
+        );
+    }
+    for t in ["plain", "wavg", "wsum", "bdp", "dp", "ddp"] {
         let s = Settings { technique: t.parse().unwrap(), ..base.clone() };
-        assert!(oit_core::plan::refuse_multisampled_own_capture("wgpu", &s, false).is_ok(), "{t}");
+        assert!(oit_core::plan::refuse_multisampled_own_capture("wgpu", &s).is_ok(), "{t}");
     }
     assert!(
-        oit_core::plan::refuse_multisampled_own_capture("wgpu", &Settings { samples: 1, ..plain }, true)
-            .is_ok()
+        oit_core::plan::refuse_multisampled_own_capture(
+            "wgpu",
+            &Settings { samples: 1, pixel_coverage: true, ..plain }
+        )
+        .is_ok()
     );
     // opaque objects (an opaque wall behind the knot) render at 4 samples (the opaque pass is
     // multisampled), for the techniques without a mask too (their coverage cut at each sample's
@@ -1106,7 +1121,15 @@ fn hardware_at_samples(backend: &dyn Backend, cpu: &CpuBackend) -> usize {
 ///   coverage fraction over the whole pixel, it differs only where several fragments of one pixel
 ///   cover some of its samples each: measured on the bunny, and held below the seam that
 ///   per-pixel coverage leaves (`plain --coverage pixel` against the fraction on oit-cpu), the
-///   error both coverage-aware forms remove.
+///   error both coverage-aware forms remove. Over an opaque wall (`wall:0.5:planes:16` seen from
+///   behind, the wall's edges crossing the planes) each sample's blend is cut at its opaque depth
+///   and put over its own opaque colour: the per-sample reference within the same 1 of 8 bits,
+///   with its fragments and captured counts and something occluded.
+/// - `dp` and `ddp` (`--hardware-capture blend`: each sample peels its own layers, into
+///   multisampled depth and layer targets, or its own pairs, through multisampled range targets):
+///   the per-sample reference exactly (EPR 0, nothing lost) on the bunny and on the wall through
+///   `planes:16`, with the atomics capture's fragments, captured and occluded, and the plan's
+///   storage. (8 samples where the device's targets take them: lavapipe's take 4.)
 ///
 /// Mutations tried (on wgpu, each failing this test): the weighted blend writing every kept
 /// sample instead of the first (the frame's own accounting refuses it: its count 34 fragments
@@ -1114,7 +1137,16 @@ fn hardware_at_samples(backend: &dyn Backend, cpu: &CpuBackend) -> usize {
 /// capture), the bdp resolve taking sample 0 only instead of the MAX over the samples (`bdp`'s
 /// captured off the atomics capture's), the plain resolve's mean taken of sample 0 alone (`plain`
 /// 79 levels off the reference on the planes' edges). A first version that weighed plain's
-/// alpha by its coverage as well was off by 37 levels there.
+/// alpha by its coverage as well was off by 37 levels there. Over opaque objects (wgpu): plain's
+/// resolve putting each sample over the samples' mean opaque colour (`background_at`) instead of
+/// its own (5 levels off the reference over the wall); dp's peel reading the previous depth of
+/// sample 0 for every sample (its accounting refuses it: 11253 captured of 9766 fragments on the
+/// bunny), its composite counting a fragment at every sample it is peeled (9800 captured of
+/// 9766), and its composite putting each sample's layer into every sample the fragment keeps
+/// (24 pixels off the reference on the bunny); ddp's resolve putting each sample's far layer into
+/// its front instead of its back (46 pixels off), its hand-overs counted at every sample (9800
+/// captured of 9766), its peel reading the previous range of sample 0 for every sample (its
+/// captured off the atomics capture's).
 #[test]
 fn hardware_blend_captures_at_samples() {
     use oit_core::HardwareCapture;
@@ -1196,6 +1228,42 @@ fn hardware_blend_captures_at_samples() {
                 compared += 1;
             }
 
+            // dp's depth peel and ddp's dual peel a sample: the per-sample reference exactly (EPR
+            // 0), through the bunny and over the wall, with the atomics capture's fragments,
+            // captured and occluded
+            let peels = [Technique::Dp, Technique::Ddp];
+            for (name, t) in ["bunny", "wall:0.5:planes:16"].into_iter().flat_map(|n| peels.map(|t| (n, t))) {
+                let peeled = scene_of(name);
+                let s = Settings { technique: t, ..base.clone() };
+                let cam = camera(&peeled, &s, View::default());
+                let what = format!("{on}: {t} blend on {name} at {samples}×");
+                let blend = render(backend, &peeled, &cam, &s);
+                let atomics = render(
+                    backend,
+                    &peeled,
+                    &cam,
+                    &Settings { hardware_capture: HardwareCapture::Atomics, ..s.clone() },
+                );
+                let reference = render(
+                    backend,
+                    &peeled,
+                    &cam,
+                    &Settings { technique: Technique::Reference, ..s.clone() },
+                );
+                checks::accounting(&blend).unwrap_or_else(|e| panic!("{what}: {e}"));
+                blend_storage_is_the_plans(backend, &peeled, &s, &blend)
+                    .unwrap_or_else(|e| panic!("{what}: {e}"));
+                assert_eq!(blend.stats.coverage, Some(Coverage::Sample), "{what}");
+                assert_eq!(
+                    (blend.stats.fragments, blend.stats.captured, blend.stats.occluded),
+                    (atomics.stats.fragments, atomics.stats.captured, atomics.stats.occluded),
+                    "{what}"
+                );
+                assert_eq!(blend.stats.occluded > 0, peeled.has_opaque(), "{what}: occluded");
+                checks::exact(&reference, &blend).unwrap_or_else(|e| panic!("{what}: {e}"));
+                compared += 1;
+            }
+
             // plain: per sample, equal to the per-sample reference where primitive order is depth order
             let planes = scene_of("planes:6");
             let p = Settings { samples, ..settings(64, "plain") };
@@ -1213,6 +1281,43 @@ fn hardware_blend_captures_at_samples() {
             let worst =
                 plain.image.pixels.iter().zip(&reference.image.pixels).map(|(&a, &b)| diff(a, b)).max();
             assert!(worst <= Some(1), "{what}: {worst:?} levels off the per-sample reference");
+            // over an opaque wall: each sample's blend cut at that sample's opaque depth and put
+            // over that sample's opaque colour, the per-sample reference's within the same level
+            // (the wall through the middle of the planes, their submission order depth order from
+            // behind; its edges cross the planes)
+            let walled = scene_of("wall:0.5:planes:16");
+            let behind_wall =
+                camera(&walled, &p, View { azimuth: 200.0, elevation: 25.0, ..View::default() });
+            let over_what = format!("{on}: plain over wall:0.5:planes:16 from behind at {samples}×");
+            let over = render(backend, &walled, &behind_wall, &p);
+            let walled_reference = render(
+                backend,
+                &walled,
+                &behind_wall,
+                &Settings { technique: Technique::Reference, ..p.clone() },
+            );
+            checks::accounting(&over).unwrap_or_else(|e| panic!("{over_what}: {e}"));
+            blend_storage_is_the_plans(backend, &walled, &p, &over)
+                .unwrap_or_else(|e| panic!("{over_what}: {e}"));
+            assert!(over.stats.occluded > 0, "{over_what}: the wall holds back nothing");
+            assert_eq!(over.stats.coverage, Some(Coverage::Sample), "{over_what}");
+            assert_eq!(
+                (over.stats.fragments, over.stats.captured),
+                (walled_reference.stats.fragments, walled_reference.stats.captured),
+                "{over_what}"
+            );
+            let worst =
+                over.image.pixels.iter().zip(&walled_reference.image.pixels).map(|(&a, &b)| diff(a, b)).max();
+            // (the wall's edge pixels, where the samples' opaque colours differ: what the mean of
+            // the samples' composites over one colour would miss)
+            let walled_fraction = render(&cpu, &walled, &behind_wall, &p);
+            eprintln!(
+                "{over_what}: {worst:?} levels off the per-sample reference at worst; mean error {:.4} (oit-cpu's fraction {:.4})",
+                mean_error(&walled_reference.image, &over.image),
+                mean_error(&walled_reference.image, &walled_fraction.image)
+            );
+            assert!(worst <= Some(1), "{over_what}: {worst:?} levels off the per-sample reference");
+
             // the planes' edges at partial coverage, overlapping: where the fraction differs
             let cpu_plain = render(&cpu, &planes, &behind, &p);
             let fraction_error = mean_error(&reference.image, &cpu_plain.image);
@@ -1265,7 +1370,10 @@ fn blend_storage_is_the_plans(
     // (the backend runs it on its path: `Settings::raster` named, as oit-core's `OnPath` names it)
     let s = Settings { raster: Some(backend.raster_path(settings)), ..settings.clone() };
     let plan = Plan::new(backend.name(), scene, &s).map_err(|e| e.to_string())?;
-    if plan.blend_targets != Some((s.samples, 16)) {
+    // (the colour target's bytes a sample: RGBA32F's; dp's (payload, mask) layer, two u32;
+    // ddp's range, two f32)
+    let colour = if matches!(s.technique, Technique::Dp | Technique::Ddp) { 8 } else { 16 };
+    if plan.blend_targets != Some((s.samples, colour)) {
         return Err(format!("the plan's blend targets: {:?}", plan.blend_targets));
     }
     let pixels = s.pixel_count() as u64;
@@ -1741,17 +1849,9 @@ fn techniques_without_masks_over_an_opaque_edge() {
             for t in FRACTION_TECHNIQUES {
                 let s = Settings { technique: t.parse().unwrap(), ..base.clone() };
                 let what = format!("{on}: {t} on {EDGE_SCENE} at {samples}×");
-                let f = match backend.render(&scene, &cam, &s) {
-                    Ok(f) => f,
-                    // plain's blender on a hardware path (`refuse_multisampled_own_capture`)
-                    Err(OitError::Unsupported { what: why, .. })
-                        if hardware && s.technique == Technique::Plain =>
-                    {
-                        eprintln!("{what}: {why}");
-                        continue;
-                    }
-                    Err(e) => panic!("{what}: {e}"),
-                };
+                // (plain's blender on a hardware path composites each sample over its own opaque
+                // colour: `coverage: sample`, held to the per-sample definition below)
+                let f = render(backend.as_ref(), &scene, &cam, &s);
                 checks::accounting(&f).unwrap_or_else(|e| panic!("{what}: {e}"));
                 if hardware {
                     checks::occluded_near(&f, &reference).unwrap_or_else(|e| panic!("{what}: {e}"));
@@ -1972,17 +2072,7 @@ fn opaque_pass_at_samples_on_the_gpu() {
             cases.push(Settings { pixel_coverage: true, technique: Technique::Wboit, ..base.clone() });
             for s in cases {
                 let what = format!("{on}: {} ({:?}) on {name} at {samples}×", s.technique, s.effect);
-                let g = match backend.render(&scene, &cam, &s) {
-                    Ok(g) => g,
-                    // plain's blender on a hardware path (`refuse_multisampled_own_capture`)
-                    Err(OitError::Unsupported { what: why, .. })
-                        if hardware && s.technique == Technique::Plain =>
-                    {
-                        eprintln!("{what}: {why}");
-                        continue;
-                    }
-                    Err(e) => panic!("{what}: {e}"),
-                };
+                let g = render(backend.as_ref(), &scene, &cam, &s);
                 let c = render(&cpu, &scene, &cam, &s);
                 checks::accounting(&g).unwrap_or_else(|e| panic!("{what}: {e}"));
                 if hardware {
@@ -2006,7 +2096,12 @@ fn opaque_pass_at_samples_on_the_gpu() {
                             .unwrap_or_else(|e| panic!("{what}: {e}"));
                     }
                 }
-                assert_eq!(g.stats.coverage, c.stats.coverage, "{what}: coverage");
+                if hardware && s.technique == Technique::Plain {
+                    // plain's blender composites each sample (`hardware_blend_captures_at_samples`)
+                    assert_eq!(g.stats.coverage, Some(Coverage::Sample), "{what}: coverage");
+                } else {
+                    assert_eq!(g.stats.coverage, c.stats.coverage, "{what}: coverage");
+                }
                 let exact = matches!(
                     s.technique,
                     Technique::Dfb

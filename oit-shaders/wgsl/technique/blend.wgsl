@@ -167,6 +167,11 @@ fn weighted_blend_ms_fs(in: HwOut, @builtin(front_facing) front: bool, @builtin(
 
 // The mean of the pixel's samples' (premultiplied colour, transmittance): summed in sample order,
 // then times 1/N (exact for 4 and 8), the mean of the samples' composites over one background.
+// Over opaque objects (`fu.opaque.z`) each sample's composite is put over that sample's own opaque
+// colour first (`background_at_sample`: C + T·B a sample, as the per-sample reference composites
+// each sample over its own), and the pixel is the mean of those, composited (`state_resolved`);
+// the composite is affine in what lies behind it, so where every sample holds one opaque colour
+// this is the composite over the mean.
 @compute @workgroup_size(64)
 fn plain_blend_ms_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let px = kernel_pixel(gid, groups);
@@ -175,18 +180,25 @@ fn plain_blend_ms_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @b
     }
     let xy = blend_texel(px);
     var c = vec4<f32>(0.0);
+    var over = vec3<f32>(0.0);
     var count = 0.0;
     for (var i = 0u; i < fu.msaa.x; i++) {
-        c += textureLoad(blend_color_ms, xy, i32(i));
+        let sample = textureLoad(blend_color_ms, xy, i32(i));
+        c += sample;
+        over += sample.xyz + sample.w * background_at_sample(px, i);
         count += textureLoad(blend_count_ms, xy, i32(i)).x;
     }
-    c *= 1.0 / f32(fu.msaa.x);
+    let mean = 1.0 / f32(fu.msaa.x);
+    c *= mean;
     var s = state[px];
     s.fr = c.x;
     s.fg = c.y;
     s.fb = c.z;
     s.transmittance = c.w;
     s.captured = u32(count / PLAIN_COUNT_UNIT + 0.5);
+    if (fu.opaque.z != 0u && s.captured != 0u && fu.effect == EFFECT_TRANSPARENCY) {
+        state_resolved(&s, over * mean);
+    }
     state[px] = s;
 }
 

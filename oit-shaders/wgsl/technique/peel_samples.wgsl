@@ -21,6 +21,12 @@ fn accumulate(px: u32, halves: u32, payload: u32, mask: u32, half: u32) {
     var s = state[px];
     s.captured += 1u;
     state[px] = s;
+    accumulate_samples(px, halves, payload, mask, half);
+}
+
+// `accumulate` without the count: the samples of `mask` only (dp_depth_samples.wgsl composites
+// each sample's own layer, a fragment counted once at the lowest sample it keeps).
+fn accumulate_samples(px: u32, halves: u32, payload: u32, mask: u32, half: u32) {
     var c = vec4<f32>(0.0);
     var factor = 1.0;
     if (fu.effect == EFFECT_TRANSPARENCY) {

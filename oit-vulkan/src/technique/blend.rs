@@ -19,7 +19,8 @@
 //!
 //! At several samples a pixel `plain`, `wavg`/`wsum` and `bdp` draw multisampled targets
 //! (oit-wgpu's, the same `_ms` entry points: docs/msaa.md, "The blend captures at several
-//! samples"); `dp` and `ddp` are refused there (`oit_core::plan::refuse_multisampled_own_capture`).
+//! samples"), and `dp` and `ddp` peel each sample into multisampled depth, layer and range
+//! targets (their own `dp_depth_samples.wgsl`, `ddp_blend_samples.wgsl`).
 //!
 //! The blend unit returns no previous value, so these captures cannot count where they lose a
 //! fragment: their `lost` is `fragments − captured − occluded` (as on oit-wgpu); adp's is still
@@ -308,12 +309,36 @@ impl OcclusionPeel {
 /// `dp` by Everitt's depth peeling: a depth test into `D32_SFLOAT` against the previous peel's
 /// depth (read by pixel, `dp_depth.wgsl`), the layer composited by a kernel; the loop ends at the
 /// first peel whose occlusion query sees nothing ([`OcclusionPeel`]).
+///
+/// At several samples a pixel (per-sample coverage) the targets are multisampled and
+/// `dp_depth_samples.wgsl` peels each sample (oit-wgpu's `dp_depth`, the same WGSL): each
+/// sample's layer composited into its own accumulator, every pixel finished after the last peel.
 pub(crate) fn dp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     ctx.counts_losses = false;
     let raster = hardware(drivers)?;
     ctx.count_fragments(&drivers.scene)?;
-    let depths = [ctx.target(DEPTH, 4, true)?, ctx.target(DEPTH, 4, true)?];
-    let layer = ctx.target(RG32U, 8, false)?;
+    let samples = ctx.settings.samples;
+    let ms = samples > 1;
+    // at several samples: the targets a sample (counted as each is made) and each sample's
+    // accumulator, at peel_samples.wgsl's binding 5 (2 to 4 unused), the plan's arrays
+    let mut buffers: Vec<Rc<Buffer>> = Vec::new();
+    if ms {
+        check_peel_samples(ctx)?;
+        let mut storage = oit_gpu::technique::Storage::new(ctx, 0);
+        storage.attachments("peel depths", 8 * u64::from(samples))?;
+        storage.attachments("peeled layer", 8 * u64::from(samples))?;
+        let acc = storage.buffer(ctx, "sample accumulators", Init::Zero)?;
+        storage.finish()?;
+        buffers = vec![ctx.placeholder()?, ctx.placeholder()?, ctx.placeholder()?, acc];
+    }
+    let buffers: Vec<&Buffer> = buffers.iter().map(|b| &**b).collect();
+    let (module, peel_fs, composite) = if ms {
+        ("dp_depth_samples", "dp_peel_ms_fs", "dp_composite_ms_main")
+    } else {
+        ("dp_depth", "dp_peel_fs", "dp_composite_main")
+    };
+    let depths = [ctx.target_sampled(DEPTH, 4, true, samples)?, ctx.target_sampled(DEPTH, 4, true, samples)?];
+    let layer = ctx.target_sampled(RG32U, 8, false, samples)?;
     // the first peel's "previous" depth is never read, but is bound: readable, if undefined
     ctx.make_readable(&depths[1]);
     let limit = ctx.plan.peel_limit;
@@ -325,8 +350,8 @@ pub(crate) fn dp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitEr
         ctx.blend_pass(
             raster,
             BlendPass {
-                module: "dp_depth",
-                fs: "dp_peel_fs",
+                module,
+                fs: peel_fs,
                 targets: &[&layer, &depths[slot]],
                 blends: &[Blend::Replace],
                 clears: &[vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } }],
@@ -337,30 +362,86 @@ pub(crate) fn dp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitEr
                 pass_index: run,
                 param: 0,
             },
-            &[],
+            &buffers,
         )?;
         // a peel that drew nothing left its layer clear: its composite adds nothing
-        ctx.image_kernel("dp_depth", "dp_composite_main", &[], &[(3, &layer), (4, &depths[slot])], run, 0)?;
+        ctx.image_kernel(module, composite, &buffers, &[(3, &layer), (4, &depths[slot])], run, 0)?;
         run += 1;
         if !control.go_on(ctx, run)? {
             break;
         }
     }
+    if ms {
+        // every pixel's samples finished over what lies behind them
+        ctx.pixel_kernel(module, "dp_finish_ms_main", &buffers, run, 0)?;
+    }
     Ok(())
+}
+
+/// Refuses a sample count dp's multisampled depth peel cannot take: its `D32_SFLOAT` depth
+/// targets and `R32G32_UINT` layer, attached and read back as sampled images (the device's
+/// framebuffer and sampled-image sample counts).
+fn check_peel_samples(ctx: &VkCtx<'_>) -> Result<(), OitError> {
+    let samples = ctx.settings.samples;
+    let limits = &ctx.gpu.info.limits;
+    let flag = crate::device::sample_count_flags(samples);
+    let counts = [
+        ("depth attachment", limits.framebuffer_depth_sample_counts),
+        ("colour attachment", limits.framebuffer_color_sample_counts),
+        ("sampled depth image", limits.sampled_image_depth_sample_counts),
+        ("sampled integer image", limits.sampled_image_integer_sample_counts),
+    ];
+    match counts.iter().find(|(_, c)| !c.contains(flag)) {
+        None => Ok(()),
+        Some((what, _)) => Err(unsupported(format!(
+            "dp with --hardware-capture blend at --samples {samples}: '{}' has no {samples}-sample {what}; use --hardware-capture atomics or --raster compute",
+            ctx.gpu.info.name
+        ))),
+    }
 }
 
 /// `ddp` by MAX blending of (−d, d) and occlusion queries (`ddp_blend.wgsl`), its layers
 /// composited by `ddp.wgsl`'s resolve; the loop ends after the first pass whose query sees
 /// nothing, or after pass `limit` ([`OcclusionPeel`]).
+///
+/// At several samples a pixel (per-sample coverage) the range targets are multisampled and
+/// `ddp_blend_samples.wgsl` peels each sample (oit-wgpu's `ddp_blend`, the same WGSL): each
+/// sample's two layers handed over a sample and composited into its own accumulators, every
+/// pixel finished after the last pass.
 pub(crate) fn ddp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     ctx.counts_losses = false;
     oit_gpu::technique::check_ddp_effect("vulkan", ctx.settings.effect)?;
     check_blendable(ctx, RG32F, "ddp's MAX blending")?;
     let raster = hardware(drivers)?;
     ctx.count_fragments(&drivers.scene)?;
-    let [near, far, range, peeled] = oit_gpu::technique::ddp_state(ctx)?;
-    let buffers: [&crate::device::Buffer; 4] = [&near, &far, &range, &peeled];
-    let ranges = [ctx.target(RG32F, 8, false)?, ctx.target(RG32F, 8, false)?];
+    let samples = ctx.settings.samples;
+    let ms = samples > 1;
+    let owned: Vec<Rc<Buffer>> = if ms {
+        // per sample: the hand-overs a sample, the count a pixel, the accumulators a sample (the
+        // plan's arrays; the range targets counted as each is made)
+        check_samples(ctx, &[RG32F])?;
+        let mut storage = oit_gpu::technique::Storage::new(ctx, 0);
+        storage.attachments("range targets", 16 * u64::from(samples))?;
+        let near = storage.buffer(ctx, "near hand-overs", Init::Fill(u32::MAX))?;
+        let far = storage.buffer(ctx, "far hand-overs", Init::Zero)?;
+        let handed = storage.buffer(ctx, "fragments handed over", Init::Zero)?;
+        let acc = storage.buffer(ctx, "sample accumulators", Init::Zero)?;
+        storage.finish()?;
+        vec![near, far, handed, acc]
+    } else {
+        oit_gpu::technique::ddp_state(ctx)?.into()
+    };
+    let buffers: Vec<&Buffer> = owned.iter().map(|b| &**b).collect();
+    let (module, peel_fs, resolve) = if ms {
+        ("ddp_blend_samples", "ddp_peel_ms_fs", "ddp_resolve_ms_main")
+    } else {
+        ("ddp_blend", "ddp_peel_fs", "resolve_main")
+    };
+    if ms {
+        ctx.pixel_kernel(module, "ddp_init_ms_main", &buffers, 0, 0)?;
+    }
+    let ranges =
+        [ctx.target_sampled(RG32F, 8, false, samples)?, ctx.target_sampled(RG32F, 8, false, samples)?];
     ctx.make_readable(&ranges[1]);
     let limit = ctx.plan.peel_limit;
     let control = OcclusionPeel::new(ctx, limit.saturating_add(1))?;
@@ -371,8 +452,8 @@ pub(crate) fn ddp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
         ctx.blend_pass(
             raster,
             BlendPass {
-                module: "ddp_blend",
-                fs: "ddp_peel_fs",
+                module,
+                fs: peel_fs,
                 targets: &[&ranges[slot]],
                 blends: &[Blend::Max],
                 clears: &[clear_f([-2.0, -2.0, 0.0, 0.0])],
@@ -386,12 +467,16 @@ pub(crate) fn ddp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
             &buffers,
         )?;
         if pass > 0 {
-            ctx.pixel_kernel("ddp", "resolve_main", &buffers, pass, 0)?;
+            ctx.pixel_kernel(if ms { module } else { "ddp" }, resolve, &buffers, pass, 0)?;
         }
         if !control.go_on(ctx, pass + 1)? {
             break;
         }
         pass += 1;
+    }
+    if ms {
+        // every pixel's samples finished over what lies behind them
+        ctx.pixel_kernel(module, "ddp_finish_ms_main", &buffers, pass, 0)?;
     }
     Ok(())
 }

@@ -38,7 +38,7 @@
 //! fragment stage discards uncounted), so `captured + lost + occluded = fragments` is a check the
 //! frame can fail (issue 41.10), not `fragments := captured`; both are read with the totals at
 //! the end of the frame (no readback between the draws and the resolve). The targets are kept by
-//! the frame's rasterizer ([`SceneStage::target`]), made once per image size.
+//! the frame's rasterizer ([`SceneStage::target_sampled`]), made once per image size.
 
 use oit_core::{BlendTarget, OitError, Technique};
 

@@ -14,12 +14,21 @@
 //!
 //! Storage per pixel: the atomics capture's 24 bytes (near and far keys, range) and the two
 //! Rg32Float targets, 16 bytes.
+//!
+//! At several samples a pixel (`--samples 4|8`, per-sample coverage; docs/msaa.md, "The blend
+//! captures at several samples") the same loop peels each sample: the range targets are
+//! multisampled, `ddp_blend_samples.wgsl`'s `ddp_peel_ms_fs` blends each fragment at the samples
+//! it keeps inside that sample's previous range and hands it over where it lies on one of the
+//! sample's ends, and its resolve composites each sample's two layers into that sample's front
+//! and back accumulators; a last kernel finishes every pixel's samples over their opaque colours.
+//! Storage: the plan's (`Plan::blend_targets`): the two range targets a sample, the near and far
+//! hand-overs and the accumulators a sample, and a count a pixel.
 
 use oit_core::OitError;
 
-use crate::ctx::{Drivers, GpuCtx, TECHNIQUE_PRELUDE};
+use crate::ctx::{Drivers, GpuCtx, Init, TECHNIQUE_PRELUDE};
 use crate::gpu::COMMON_WGSL;
-use crate::hardware::scene_pipeline;
+use crate::hardware::scene_pipeline_with;
 use crate::stage::PassTarget;
 use crate::technique::OcclusionPeel;
 use crate::technique::bdp_blend::{check_texture_size, count_fragments, key, scene_stage, unsupported};
@@ -27,6 +36,9 @@ use crate::technique::bdp_blend::{check_texture_size, count_fragments, key, scen
 const WGSL: &str = oit_shaders::text("technique/ddp_blend.wgsl");
 /// ddp.wgsl, whose resolve composites the layers the blend capture peels.
 const DDP_WGSL: &str = oit_shaders::text("technique/ddp.wgsl");
+/// At several samples: the per-sample accumulators, then the per-sample dual peel.
+const SAMPLES_WGSL: [&str; 2] =
+    [oit_shaders::text("technique/peel_samples.wgsl"), oit_shaders::text("technique/ddp_blend_samples.wgsl")];
 const RANGE: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
@@ -41,14 +53,39 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     if ctx.fragments == crate::ctx::Fragments::Unset {
         count_fragments(ctx, drivers)?;
     }
-    let [near, far, range, peeled] = oit_gpu::technique::ddp_state(ctx)?;
-    let buffers = [&near, &far, &range, &peeled];
+    let samples = ctx.settings.samples;
+    let ms = samples > 1;
+    let owned: Vec<wgpu::Buffer> = if ms {
+        // per sample: the hand-overs a sample, the count a pixel, the accumulators a sample
+        // (the plan's arrays; the range targets counted below)
+        super::blend::check_samples(ctx, &[RANGE])?;
+        let mut storage = oit_gpu::technique::Storage::new(ctx, 0);
+        storage.attachments("range targets", 16 * u64::from(samples))?;
+        let near = storage.buffer(ctx, "near hand-overs", Init::Fill(u32::MAX))?;
+        let far = storage.buffer(ctx, "far hand-overs", Init::Zero)?;
+        let handed = storage.buffer(ctx, "fragments handed over", Init::Zero)?;
+        let acc = storage.buffer(ctx, "sample accumulators", Init::Zero)?;
+        storage.finish()?;
+        vec![near, far, handed, acc]
+    } else {
+        oit_gpu::technique::ddp_state(ctx)?.into()
+    };
+    let buffers: Vec<&wgpu::Buffer> = owned.iter().collect();
     let px = u64::from(ctx.pixels);
+    let technique = if ms { SAMPLES_WGSL.join("\n") } else { WGSL.to_string() };
+    // the kernels' text: the technique's and the vertex stage's (`hw_kept` is the stage's)
+    let kernels = format!("{technique}\n{}", stage.wgsl());
+    if ms {
+        ctx.pixel_kernel(&kernels, "ddp_init_ms_main", &buffers, 0, 0)?;
+    }
 
     let device = ctx.gpu.device.clone();
     // kept by the stage: a frame of a size seen before makes none
-    let views = [stage.target(&device, "ddp range 0", RANGE), stage.target(&device, "ddp range 1", RANGE)];
-    ctx.storage_bytes += px * 16;
+    let views = [
+        stage.target_sampled(&device, "ddp range 0", RANGE, samples),
+        stage.target_sampled(&device, "ddp range 1", RANGE, samples),
+    ];
+    ctx.storage_bytes += px * 16 * u64::from(samples);
     let occlusion = stage.occlusion(&device);
     // group 2: the previous pass's range; pass p renders into views[p % 2] and reads the other
     let previous_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -59,7 +96,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
             ty: wgpu::BindingType::Texture {
                 sample_type: wgpu::TextureSampleType::Float { filterable: false },
                 view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
+                multisampled: ms,
             },
             count: None,
         }],
@@ -77,7 +114,9 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         })
         .collect();
 
-    let module_source = format!("{COMMON_WGSL}\n{TECHNIQUE_PRELUDE}{WGSL}\n{}", stage.wgsl());
+    let module_source = format!("{COMMON_WGSL}\n{TECHNIQUE_PRELUDE}{technique}\n{}", stage.wgsl());
+    let (peel_fs, resolve) =
+        if ms { ("ddp_peel_ms_fs", "ddp_resolve_ms_main") } else { ("ddp_peel_fs", "resolve_main") };
     let max = wgpu::BlendComponent {
         src_factor: wgpu::BlendFactor::One,
         dst_factor: wgpu::BlendFactor::One,
@@ -90,21 +129,26 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     loop {
         let slot = (pass % 2) as usize;
         let (layout0, group0) = ctx.group0(&buffers, pass, 0);
-        let pipeline = ctx.gpu.render_pipeline(key(&module_source, "ddp blend"), "ddp blend", || {
-            scene_pipeline(
-                &device,
-                "ddp blend",
-                &module_source,
-                &[&layout0, stage.layout(), &previous_layout],
-                "ddp_peel_fs",
-                &[Some(wgpu::ColorTargetState {
-                    format: RANGE,
-                    blend: Some(wgpu::BlendState { color: max, alpha: max }),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-                None,
-            )
-        })?;
+        let pipeline = ctx.gpu.render_pipeline(
+            key(&module_source, &format!("ddp blend {samples}")),
+            "ddp blend",
+            || {
+                scene_pipeline_with(
+                    &device,
+                    "ddp blend",
+                    &module_source,
+                    &[&layout0, stage.layout(), &previous_layout],
+                    peel_fs,
+                    &[Some(wgpu::ColorTargetState {
+                        format: RANGE,
+                        blend: Some(wgpu::BlendState { color: max, alpha: max }),
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                    None,
+                    samples,
+                )
+            },
+        )?;
         let gated = control.gate(ctx, pass)?;
         super::occlusion_pass(
             stage,
@@ -122,12 +166,17 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         )?;
         if pass > 0 {
             // the pair the previous pass found, handed over in this one
-            ctx.pixel_kernel(DDP_WGSL, "resolve_main", &buffers, pass, 0)?;
+            let source = if ms { kernels.as_str() } else { DDP_WGSL };
+            ctx.pixel_kernel(source, resolve, &buffers, pass, 0)?;
         }
         if !control.go_on(ctx, &occlusion, pass + 1)? {
             break;
         }
         pass += 1;
+    }
+    if ms {
+        // every pixel's samples finished over what lies behind them
+        ctx.pixel_kernel(&kernels, "ddp_finish_ms_main", &buffers, pass, 0)?;
     }
     Ok(())
 }

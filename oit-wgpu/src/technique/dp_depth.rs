@@ -18,17 +18,28 @@
 //!
 //! Storage per pixel: two Depth32Float textures and the Rg32Uint layer, 16 bytes (the atomics
 //! capture and oit-cpu count 12: an 8-byte nearest key and a 4-byte previous depth).
+//!
+//! At several samples a pixel (`--samples 4|8`, per-sample coverage; docs/msaa.md, "Depth
+//! peeling per sample on the blender") the same loop peels each sample: the depth textures and
+//! the layer are multisampled, `dp_depth_samples.wgsl`'s `dp_peel_ms_fs` writes the fragment's
+//! one depth to the samples it keeps behind the previous peel's depth there, the composite puts
+//! each sample's layer into that sample's accumulator (the plan's "sample accumulators") and a
+//! last kernel finishes every pixel's samples over their opaque colours. Storage: the targets a
+//! sample and the accumulators (`Plan::blend_targets`).
 
 use oit_core::OitError;
 
-use crate::ctx::{Drivers, GpuCtx, TECHNIQUE_PRELUDE};
+use crate::ctx::{Drivers, GpuCtx, Init, TECHNIQUE_PRELUDE};
 use crate::gpu::COMMON_WGSL;
-use crate::hardware::scene_pipeline;
+use crate::hardware::scene_pipeline_with;
 use crate::stage::PassTarget;
 use crate::technique::OcclusionPeel;
 use crate::technique::bdp_blend::{check_texture_size, count_fragments, key, scene_stage};
 
 const WGSL: &str = oit_shaders::text("technique/dp_depth.wgsl");
+/// At several samples: the per-sample accumulators, then the per-sample peel.
+const SAMPLES_WGSL: [&str; 2] =
+    [oit_shaders::text("technique/peel_samples.wgsl"), oit_shaders::text("technique/dp_depth_samples.wgsl")];
 const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 const LAYER: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
 
@@ -41,12 +52,37 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         count_fragments(ctx, drivers)?;
     }
     let device = ctx.gpu.device.clone();
+    let samples = ctx.settings.samples;
+    let ms = samples > 1;
+    // at several samples: the targets a sample and each sample's accumulator (the plan's arrays)
+    let acc = if ms {
+        super::blend::check_samples(ctx, &[DEPTH, LAYER])?;
+        let mut storage = oit_gpu::technique::Storage::new(ctx, 0);
+        storage.attachments("peel depths", 8 * u64::from(samples))?;
+        storage.attachments("peeled layer", 8 * u64::from(samples))?;
+        // set by the first peel's composite
+        let acc = storage.buffer(ctx, "sample accumulators", Init::Zero)?;
+        storage.finish()?;
+        Some(acc)
+    } else {
+        None
+    };
     // kept by the stage: a frame of a size seen before makes none
-    let depth_views =
-        [stage.target(&device, "dp depth 0", DEPTH), stage.target(&device, "dp depth 1", DEPTH)];
-    let layer_view = stage.target(&device, "dp layer", LAYER);
-    ctx.storage_bytes += u64::from(ctx.pixels) * (4 + 4 + 8);
+    let depth_views = [
+        stage.target_sampled(&device, "dp depth 0", DEPTH, samples),
+        stage.target_sampled(&device, "dp depth 1", DEPTH, samples),
+    ];
+    let layer_view = stage.target_sampled(&device, "dp layer", LAYER, samples);
+    ctx.storage_bytes += u64::from(ctx.pixels) * (4 + 4 + 8) * u64::from(samples);
     let occlusion = stage.occlusion(&device);
+    // group 0's buffers: the accumulators at peel_samples.wgsl's binding 5 (2 to 4 unused)
+    let buffers: Vec<wgpu::Buffer> = match &acc {
+        Some(acc) => vec![ctx.placeholder(), ctx.placeholder(), ctx.placeholder(), acc.clone()],
+        None => Vec::new(),
+    };
+    let buffers: Vec<&wgpu::Buffer> = buffers.iter().collect();
+    let (peel_fs, composite_entry) =
+        if ms { ("dp_peel_ms_fs", "dp_composite_ms_main") } else { ("dp_peel_fs", "dp_composite_main") };
 
     let depth_entry = |binding: u32, visibility| wgpu::BindGroupLayoutEntry {
         binding,
@@ -54,7 +90,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         ty: wgpu::BindingType::Texture {
             sample_type: wgpu::TextureSampleType::Depth,
             view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
+            multisampled: ms,
         },
         count: None,
     };
@@ -85,7 +121,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
                 ty: wgpu::BindingType::Texture {
                     sample_type: wgpu::TextureSampleType::Uint,
                     view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
+                    multisampled: ms,
                 },
                 count: None,
             },
@@ -111,8 +147,9 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         })
         .collect();
 
-    let module_source = format!("{COMMON_WGSL}\n{TECHNIQUE_PRELUDE}{WGSL}\n{}", stage.wgsl());
-    let composite_source = format!("{TECHNIQUE_PRELUDE}{WGSL}\n{}", stage.wgsl());
+    let technique = if ms { SAMPLES_WGSL.join("\n") } else { WGSL.to_string() };
+    let module_source = format!("{COMMON_WGSL}\n{TECHNIQUE_PRELUDE}{technique}\n{}", stage.wgsl());
+    let composite_source = format!("{TECHNIQUE_PRELUDE}{technique}\n{}", stage.wgsl());
     let (x, y) = crate::ctx::dispatch_size(u64::from(ctx.pixels));
     // the loop ends at the first peel that draws nothing (N + 1 passes), or at the limit
     let limit = ctx.plan.peel_limit;
@@ -120,15 +157,17 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     let mut run = 0;
     loop {
         let slot = (run % 2) as usize;
-        let (layout0, group0) = ctx.group0(&[], run, 0);
-        let pipeline =
-            ctx.gpu.render_pipeline(key(&module_source, "dp depth peel"), "dp depth peel", || {
-                scene_pipeline(
+        let (layout0, group0) = ctx.group0(&buffers, run, 0);
+        let pipeline = ctx.gpu.render_pipeline(
+            key(&module_source, &format!("dp depth peel {samples}")),
+            "dp depth peel",
+            || {
+                scene_pipeline_with(
                     &device,
                     "dp depth peel",
                     &module_source,
                     &[&layout0, stage.layout(), &previous_layout],
-                    "dp_peel_fs",
+                    peel_fs,
                     &[Some(wgpu::ColorTargetState {
                         format: LAYER,
                         blend: None,
@@ -141,8 +180,10 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
                         stencil: Default::default(),
                         bias: Default::default(),
                     }),
+                    samples,
                 )
-            })?;
+            },
+        )?;
         let gated = control.gate(ctx, run)?;
         super::occlusion_pass(
             stage,
@@ -160,14 +201,11 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         )?;
         run += 1;
         // a peel that drew nothing left its layer clear: its composite adds nothing
-        let (layout0, group0) = ctx.group0(&[], run - 1, 0);
-        let composite = ctx.gpu.compute_pipeline(
-            &composite_source,
-            "dp_composite_main",
-            &[&layout0, &composite_layout],
-        )?;
+        let (layout0, group0) = ctx.group0(&buffers, run - 1, 0);
+        let composite =
+            ctx.gpu.compute_pipeline(&composite_source, composite_entry, &[&layout0, &composite_layout])?;
         let group1 = &composite_groups[slot];
-        ctx.timed("dp_composite_main", |encoder, timestamps| {
+        ctx.timed(composite_entry, |encoder, timestamps| {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("dp composite"),
                 timestamp_writes: timestamps,
@@ -180,6 +218,20 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         if !control.go_on(ctx, &occlusion, run)? {
             break;
         }
+    }
+    if ms {
+        // every pixel's samples finished over what lies behind them
+        let (layout0, group0) = ctx.group0(&buffers, run, 0);
+        let finish = ctx.gpu.compute_pipeline(&composite_source, "dp_finish_ms_main", &[&layout0])?;
+        ctx.timed("dp_finish_ms_main", |encoder, timestamps| {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("dp finish"),
+                timestamp_writes: timestamps,
+            });
+            pass.set_pipeline(&finish);
+            pass.set_bind_group(0, &group0, &[]);
+            pass.dispatch_workgroups(x, y, 1);
+        })?;
     }
     Ok(())
 }

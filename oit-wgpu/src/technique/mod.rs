@@ -33,7 +33,7 @@ pub(crate) fn run(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), Oit
     if !own {
         return oit_gpu::technique::render(ctx, drivers);
     }
-    oit_core::plan::refuse_multisampled_own_capture("wgpu", ctx.settings, drivers.opaque.is_some())?;
+    oit_core::plan::refuse_multisampled_own_capture("wgpu", ctx.settings)?;
     // the opaque pass first, as every frame: the captures' fragment stages cut at its depth
     oit_gpu::technique::opaque_first(ctx, drivers)?;
     match ctx.settings.technique {

@@ -1,0 +1,102 @@
+// dp through the graphics pipeline at several samples a pixel (`--hardware-capture blend`,
+// `--samples 4|8`; docs/msaa.md, "Depth peeling per sample on the blender"): dp_depth.wgsl's
+// depth peel with its depth kept a sample. Each peel renders the scene into a fresh multisampled
+// Depth32Float attachment (LESS_EQUAL, cleared to 1) and a multisampled Rg32Uint layer; the
+// fragment stage writes its one depth (the pixel centre's, `frag_depth`, so every sample it
+// covers tests the depth oit's other captures key it by) to the samples it keeps (`hw_kept`: those
+// it covers in front of their opaque depths) that lie strictly behind the previous peel's depth
+// at that sample (read a sample from the other of two ping-ponged depth targets), so each sample
+// peels its own nearest remaining fragment, as the per-sample reference composites each sample's
+// fragments in depth order. The layer holds (payload, kept mask): a compute step composites each
+// sample's layer into that sample's accumulator (peel_samples.wgsl), counting a fragment once, at
+// the lowest sample it keeps (where it is peeled once); after the last peel every pixel's samples
+// are finished over their own opaque colours (`accumulated`).
+//
+// Equal depths at one sample keep the last drawn and lose the other, as dp_depth.wgsl at one
+// sample (the blender orders no primitive ids).
+//
+// Module: COMMON_WGSL, TECHNIQUE_PRELUDE (group 0: fu, state), peel_samples.wgsl (group 0 binding
+// 5: the accumulators), this, then the hardware raster's vertex stage (group 1 bindings 0..4) and
+// blend_stage.wgsl (`hw_kept`).
+
+// The previous peel's depth, a sample (render pipeline, group 2; unused on the first peel).
+@group(2) @binding(0) var dps_previous: texture_depth_multisampled_2d;
+
+// This peel's layer and depth, a sample (compute pipeline, group 1, after the vertex stage's).
+@group(1) @binding(3) var dps_layer: texture_multisampled_2d<u32>;
+@group(1) @binding(4) var dps_layer_depth: texture_depth_multisampled_2d;
+
+struct DpPeelMsOut {
+    @location(0) layer: vec2<u32>,
+    @builtin(frag_depth) depth: f32,
+    @builtin(sample_mask) written: u32,
+}
+
+@fragment
+fn dp_peel_ms_fs(in: HwOut, @builtin(front_facing) front: bool, @builtin(sample_mask) covered: u32) -> DpPeelMsOut {
+    let kept = hw_kept(in, front, covered);
+    let xy = vec2<u32>(max(floor(in.position.xy), vec2<f32>(0.0)));
+    let depth = clamp(in.position.z, 0.0, 1.0);
+    var behind = kept;
+    if (fu.pass_index > 0u) {
+        for (var i = 0u; i < fu.msaa.x; i++) {
+            if (((behind >> i) & 1u) != 0u) {
+                let previous = clamp(textureLoad(dps_previous, vec2<i32>(xy), i32(i)), 0.0, 1.0);
+                if (depth <= previous) {
+                    behind &= ~(1u << i);
+                }
+            }
+        }
+    }
+    if (behind == 0u) {
+        discard;
+    }
+    var f: Fragment;
+    f.pixel = xy.y * fu.width + xy.x;
+    f.depth = depth;
+    f.prim = in.prim;
+    f.color = clamp(hw_color(in), vec4<f32>(0.0), vec4<f32>(1.0));
+    f.normal = normalize_or_zero(in.normal);
+    return DpPeelMsOut(vec2<u32>(payload(f, fu.effect), kept), depth, behind);
+}
+
+// Composites this peel's layer, each sample's into that sample's accumulator (one invocation a
+// pixel); the first peel sets the accumulators first.
+@compute @workgroup_size(64)
+fn dp_composite_ms_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let px = kernel_pixel(gid, groups);
+    if (px >= fu.pixel_count) {
+        return;
+    }
+    if (fu.pass_index == 0u) {
+        accumulators_init(px, 1u);
+    }
+    let xy = vec2<i32>(i32(px % fu.width), i32(px / fu.width));
+    var counted = 0u;
+    for (var i = 0u; i < fu.msaa.x; i++) {
+        let layer = textureLoad(dps_layer, xy, i32(i)).xy;
+        if (layer.y == 0u) {
+            continue;
+        }
+        // a fragment once, at the lowest sample it keeps
+        if ((layer.y & (0u - layer.y)) == (1u << i)) {
+            counted += 1u;
+        }
+        accumulate_samples(px, 1u, layer.x, 1u << i, 0u);
+    }
+    if (counted != 0u) {
+        var s = state[px];
+        s.captured += counted;
+        state[px] = s;
+    }
+}
+
+// After the last peel: every pixel's samples finished over what lies behind them.
+@compute @workgroup_size(64)
+fn dp_finish_ms_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let px = kernel_pixel(gid, groups);
+    if (px >= fu.pixel_count) {
+        return;
+    }
+    accumulated(px, 1u);
+}
