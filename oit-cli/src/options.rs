@@ -134,9 +134,9 @@ pub struct SceneArgs {
     /// covers a pixel where its triangle covers any sample, carries its coverage mask, and is
     /// composited per sample (MSAA: one shading a fragment); on every backend and raster path
     /// (the GPU backends' default at several samples: compute): per sample with reference, dfb,
-    /// ll, fabs and kbuf (where it runs); every other technique composites each fragment over its
-    /// pixel with its alpha weighted by its coverage fraction (the report's `coverage`;
-    /// docs/msaa.md).
+    /// ll, fabs, the peels (dp, ddp, mlp) and kbuf (where it runs); every other technique
+    /// composites each fragment over its pixel with its alpha weighted by its coverage fraction
+    /// (the report's `coverage`; docs/msaa.md).
     #[arg(long, value_name = "N", default_value_t = 1)]
     pub samples: u32,
 
