@@ -127,11 +127,12 @@ fn render_samples(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
     let layers = ctx.alloc32(2 * m, 0)?;
     let mut acc = super::msaa::SampleAccumulators::new(ctx, 1)?;
     let mut captured = vec![0u32; ctx.pixels];
+    let (list, previous, layers) = (&list, &*previous, &*layers);
     let limit = ctx.plan.peel_limit.saturating_add(1);
     let mut passes = 0;
     while passes < limit {
         let (first, last) = (passes == 0, passes + 1 == limit);
-        let (list, previous, layers, shared) = (&list, &*previous, &*layers, &*ctx);
+        let shared = &*ctx;
         let generated = shared.raster.for_each_masked_fragment(samples, |f, mask| {
             let px = f.pixel as usize;
             let k = key(f);
@@ -160,7 +161,6 @@ fn render_samples(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
         });
         ctx.ran_pass(generated);
         let shared = &*ctx;
-        let (list, previous, layers) = (&list, &*previous, &*layers);
         let peeled: u64 = acc
             .pixels_mut()
             .zip(captured.par_iter_mut())
