@@ -103,7 +103,11 @@ fn reported_storage_is_the_plans_arrays() {
 }
 
 /// The techniques that peel per sample above one sample (`oit_core::msaa::peels_masks`), with
-/// M = 1 and 3 for mlp.
+/// M = 1 and 3 for mlp. Mutations caught: oit-cpu's mlp per sample keeping the previous pass's
+/// keys in an allocation it does not count (`reported_storage_is_the_plans_arrays`: "cpu/cpu
+/// mlp:1 at 4 samples on knot"), and running no pass past its peel limit
+/// (`geometry_passes_follow_the_plans_schedule`: "mlp:1 at 4 samples --max-peels Some(2) on
+/// knot (24 layers): schedule [(Peel, 3)]").
 const PER_SAMPLE_PEELS: [Technique; 4] =
     [Technique::Dp, Technique::Ddp, Technique::Mlp { m: 1 }, Technique::Mlp { m: 3 }];
 
