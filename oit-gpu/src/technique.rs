@@ -606,9 +606,10 @@ fn mlp<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R, m: u32) -> Result<(), Oi
 fn mlp_samples<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R, m: u32) -> Result<(), OitError> {
     let mut storage = Storage::new(ctx, 0);
     let slots = storage.buffer(ctx, "sorted slots", Init::Fill(u32::MAX))?;
-    // set by the first pass's resolve
+    // written by each pass's resolve (the first pass reads none)
     let previous = storage.buffer(ctx, "previous pass's keys", Init::Fill(u32::MAX))?;
     let layers = storage.buffer(ctx, "peeled layers", Init::Zero)?;
+    // set by the first pass's resolve
     let acc = storage.buffer(ctx, "sample accumulators", Init::Zero)?;
     let peeled = ctx.scratch("mlp peeled count", 1, Init::Zero)?;
     let buffers = [&slots, &previous, &layers, &acc, &peeled];

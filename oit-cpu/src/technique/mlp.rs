@@ -7,6 +7,10 @@
 //! Ties within a pass: the insertion is atomic min on one 64-bit word, depth bits above the
 //! payload, with no room for the primitive id the reference orders equal depths by, so equal
 //! depths of a pass come out by colour; the resolve counts every fragment of such a run in `tied`.
+//!
+//! Above one sample (`Plan::sample_peel`) the keys are (depth, primitive id) instead, so nothing
+//! ties or is lost, and each layer is composited into the samples its mask covers
+//! (`render_samples`; docs/msaa.md).
 
 use oit_core::Compositor as _;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
