@@ -72,11 +72,12 @@ pub fn full_mask(samples: u32) -> u8 {
 pub enum Coverage {
     /// Per sample: the mask kept beside each entry's key, each sample compositing the entries
     /// that cover it, the pixel the mean of its samples (reference, dfb, ll, fabs); or each
-    /// peeled layer's mask, composited into per-sample accumulators (dp, ddp: [`peels_masks`]).
+    /// peeled layer's mask, composited into per-sample accumulators (dp, ddp, mlp:
+    /// [`peels_masks`]).
     Sample,
     /// The fragment composited over the whole pixel, its alpha scaled by the fraction of the
     /// pixel's samples it covers (popcount(mask) / samples): the techniques without room for the
-    /// mask (the fixed packings, the weighted sums, the bucket peels, the merges), and dp and ddp
+    /// mask (the fixed packings, the weighted sums, the bucket peels, the merges), and dp, ddp and mlp
     /// under `--coverage fraction`.
     Fraction,
     /// The fragment composited over the whole pixel at full alpha, whatever its mask: the
@@ -97,15 +98,15 @@ pub fn keeps_masks(technique: Technique) -> bool {
     )
 }
 
-/// Whether `technique` peels per sample above one sample (dp, ddp: docs/msaa.md): each peel
-/// finds a pixel's next layer by its (depth, primitive id) key, keeps the peeled fragment's mask
-/// and composites it into per-sample accumulators. Where [`coverage`] says
-/// [`Coverage::Sample`] for it ([`peels_per_sample`]).
+/// Whether `technique` peels per sample above one sample (dp, ddp, mlp: docs/msaa.md): each
+/// peel finds a pixel's next layers by their (depth, primitive id) keys (mlp's M a pass), keeps
+/// the peeled fragments' masks and composites them into per-sample accumulators. Where
+/// [`coverage`] says [`Coverage::Sample`] for it ([`peels_per_sample`]).
 pub fn peels_masks(technique: Technique) -> bool {
-    matches!(technique, Technique::Dp | Technique::Ddp)
+    matches!(technique, Technique::Dp | Technique::Ddp | Technique::Mlp { .. })
 }
 
-/// Whether a frame under `settings` peels per sample ([`peels_masks`]: dp or ddp, several
+/// Whether a frame under `settings` peels per sample ([`peels_masks`]: dp, ddp or mlp, several
 /// samples, [`Coverage::Sample`]); `--coverage pixel`, `--coverage fraction` and translucency
 /// (whose per-sample state the accumulators do not keep) leave them by coverage fraction or per
 /// pixel as the techniques without a mask.
@@ -115,7 +116,7 @@ pub fn peels_per_sample(settings: &Settings) -> bool {
 
 /// What a frame under `settings` does with its fragments' coverage masks; `None` at one sample.
 /// The reference is per sample always (the MSAA target); a technique that keeps masks is per
-/// sample unless `--coverage pixel`, and so are dp and ddp unless `--coverage pixel` or
+/// sample unless `--coverage pixel`, and so are dp, ddp and mlp unless `--coverage pixel` or
 /// `--coverage fraction` or translucency; every other technique weighs a fragment's alpha by its
 /// coverage fraction (measured to err less than per-pixel coverage against the per-sample
 /// reference on each but bdp's colour mode, which takes it whole: docs/msaa.md), or takes it at

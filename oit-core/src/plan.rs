@@ -165,8 +165,8 @@ pub struct Plan {
     /// Samples a pixel (`Settings::samples`): above 1 each entry of `reference`, `dfb`, `ll` and
     /// `fabs` carries its coverage mask beside it, a byte ([`Plan::arrays`]; docs/msaa.md).
     pub samples: u32,
-    /// `dp` or `ddp` peeling per sample ([`crate::msaa::peels_per_sample`]): its keys are
-    /// (depth, primitive id), the peeled layer's payload and mask are fetched by the next pass,
+    /// `dp`, `ddp` or `mlp` peeling per sample ([`crate::msaa::peels_per_sample`]): its keys are
+    /// (depth, primitive id), the peeled layers' payloads and masks are fetched by the next pass,
     /// and each sample composites into accumulators of its own ([`Plan::arrays`]); one pass more
     /// than its peels ([`Plan::schedule`]).
     pub sample_peel: bool,
@@ -496,6 +496,15 @@ impl Plan {
                 per_pixel("peeled layer (colour, mask)", 8, 1),
                 per_pixel("sample accumulators (RGB, transmittance)", 16, samples),
             ],
+            // mlp:M per sample: the M slots a pass inserts into, the M keys the pass before kept
+            // (whose payloads and masks this pass fetches; the deepest of them is where the pass
+            // starts), those payloads and masks
+            Technique::Mlp { .. } if self.sample_peel => vec![
+                per_pixel("sorted slots (depth key, primitive id)", 8, k),
+                per_pixel("previous pass's keys", 8, k),
+                per_pixel("peeled layers (colours, masks)", 8, k),
+                per_pixel("sample accumulators (RGB, transmittance)", 16, samples),
+            ],
             Technique::Ddp if self.sample_peel => vec![
                 per_pixel("near (depth key, primitive id)", 8, 1),
                 per_pixel("far (depth key, primitive id)", 8, 1),
@@ -695,6 +704,10 @@ impl Plan {
             }
             Technique::Ddp if self.sample_peel => {
                 passes.push((PassKind::Peel, peels(layers.div_ceil(2)).saturating_add(1)))
+            }
+            // per sample: M layers a pass, then the pass that fetches the last pass's M
+            Technique::Mlp { m } if self.sample_peel => {
+                passes.push((PassKind::Peel, peels(layers.div_ceil(m.max(1))).saturating_add(1)))
             }
             Technique::Dp => passes.push((PassKind::Peel, peels(layers.saturating_add(1)))),
             Technique::Ddp => passes.push((PassKind::Peel, peels(layers.div_ceil(2).saturating_add(1)))),
@@ -1072,6 +1085,45 @@ mod tests {
             assert_eq!(total(&Plan { peel_limit: 2, ..p }, 5), 2);
         }
         assert!(!four("dp", |s| s.effect = Effect::Translucency).sample_peel);
+    }
+
+    /// `mlp:M` above one sample peels per sample (docs/msaa.md): ⌈layers / M⌉ passes and the one
+    /// that fetches the last pass's layers; per pixel the M slots, the M keys the pass before
+    /// kept, their M payloads and masks (8 bytes each) and 16 bytes a sample. `--coverage
+    /// fraction` and one sample keep the single-sample schedule and arrays (8 bytes a slot and
+    /// a count). Mutations caught: the per-sample schedule without its fetching pass (the first
+    /// assertion gives 3), the previous pass's keys left out of the arrays (96 bytes, not 112).
+    #[test]
+    fn mlp_per_sample_plan() {
+        let at = |t: &str, samples: u32, f: fn(&mut Settings)| {
+            plan(t, |s| {
+                s.samples = samples;
+                f(s)
+            })
+            .unwrap()
+        };
+        let total = |p: &Plan, layers: u32| p.schedule(layers, layers).iter().map(|(_, n)| n).sum::<u32>();
+        let per_pixel = |p: &Plan| {
+            p.arrays(Counted::default()).iter().map(|a| a.element_bytes * a.per_pixel).sum::<u64>()
+        };
+        let mlp2 = at("mlp:2", 4, |_| {});
+        assert!(mlp2.sample_peel);
+        assert_eq!(total(&mlp2, 5), 4);
+        assert_eq!(total(&mlp2, 4), 3);
+        assert_eq!(total(&mlp2, 0), 1);
+        assert_eq!(total(&at("mlp:2", 4, |s| s.max_peels = Some(2)), 9), 3);
+        assert_eq!(total(&at("mlp:1", 8, |_| {}), 5), 6);
+        // 3 × 8 bytes a slot, 16 a sample
+        assert_eq!(per_pixel(&mlp2), 3 * 8 * 2 + 16 * 4);
+        assert_eq!(per_pixel(&at("mlp:4", 8, |_| {})), 3 * 8 * 4 + 16 * 8);
+        for p in [at("mlp:2", 4, |s| s.fraction_coverage = true), at("mlp:2", 1, |_| {})] {
+            assert!(!p.sample_peel);
+            assert_eq!(per_pixel(&p), 8 * 2 + 4);
+            assert_eq!(total(&p, 5), 3);
+            assert_eq!(total(&p, 0), 1);
+        }
+        assert!(!at("mlp:2", 4, |s| s.pixel_coverage = true).sample_peel);
+        assert!(!at("mlp:2", 4, |s| s.effect = Effect::Translucency).sample_peel);
     }
 
     #[test]

@@ -586,6 +586,9 @@ fn mlp<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R, m: u32) -> Result<(), Oi
         // every fragment would overflow an empty array, every pass
         return Err(OitError::InvalidSettings("mlp:0 holds no layer: use mlp:M with M ≥ 1".into()));
     }
+    if ctx.plan().sample_peel {
+        return mlp_samples(ctx, raster, m);
+    }
     let mut storage = Storage::new(ctx, 0);
     let slots = storage.buffer(ctx, "sorted slots", Init::Fill(u32::MAX))?;
     // the previous pass's deepest depth (oit-cpu counts 4 bytes a pixel too)
@@ -593,6 +596,24 @@ fn mlp<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R, m: u32) -> Result<(), Oi
     let overflowed = ctx.scratch("mlp overflowed", 1, Init::Zero)?;
     let buffers = [&slots, &deepest, &overflowed];
     peel(ctx, raster, "mlp", &buffers, &overflowed, m, 1)?;
+    storage.finish()
+}
+
+/// Multi-layer peeling per sample (several samples, `mlp_samples.wgsl`; docs/msaa.md): the M
+/// nearest (depth, primitive id) keys behind the pass before's a pass, their payloads and masks
+/// fetched by the next pass and composited into the covered samples' accumulators ([`peel`],
+/// one pass past the peels).
+fn mlp_samples<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R, m: u32) -> Result<(), OitError> {
+    let mut storage = Storage::new(ctx, 0);
+    let slots = storage.buffer(ctx, "sorted slots", Init::Fill(u32::MAX))?;
+    // written by each pass's resolve (the first pass reads none)
+    let previous = storage.buffer(ctx, "previous pass's keys", Init::Fill(u32::MAX))?;
+    let layers = storage.buffer(ctx, "peeled layers", Init::Zero)?;
+    // set by the first pass's resolve
+    let acc = storage.buffer(ctx, "sample accumulators", Init::Zero)?;
+    let peeled = ctx.scratch("mlp peeled count", 1, Init::Zero)?;
+    let buffers = [&slots, &previous, &layers, &acc, &peeled];
+    peel(ctx, raster, "mlp_samples", &buffers, &peeled, m, 0)?;
     storage.finish()
 }
 

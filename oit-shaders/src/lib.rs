@@ -101,6 +101,7 @@ files!(
     "technique/mdts_words.wgsl",
     "technique/mdts_words_image.wgsl",
     "technique/mlp.wgsl",
+    "technique/mlp_samples.wgsl",
     "technique/peel_samples.wgsl",
     "technique/plain.wgsl",
     "technique/reference.wgsl",
@@ -371,6 +372,8 @@ pub const MODULES: &[Module] = &[
     m("dp_samples", &["technique/peel_samples.wgsl", "technique/dp_samples.wgsl"], Raster),
     m("ddp_samples", &["technique/peel_samples.wgsl", "technique/ddp_samples.wgsl"], Raster),
     m("mlp", &["technique/mlp.wgsl"], Raster),
+    // mlp per sample: M (depth, primitive id) keys a pass into per-sample accumulators
+    m("mlp_samples", &["technique/peel_samples.wgsl", "technique/mlp_samples.wgsl"], Raster),
     m("bounds", &["technique/bounds.wgsl"], Raster),
     m("bdp", &["technique/bdp.wgsl"], Raster),
     m("adp", &["technique/adp.wgsl"], Raster),

@@ -80,9 +80,36 @@ fn reported_storage_is_the_plans_arrays() {
                     label(b)
                 );
             }
+            // the peels per sample at 4 samples (docs/msaa.md): their keys, the peeled layers'
+            // payloads and masks and the per-sample accumulators
+            for technique in PER_SAMPLE_PEELS {
+                let s = Settings { technique, samples: 4, ..base.clone() };
+                let plan = Plan::new(b.name(), &scene, &s)
+                    .unwrap_or_else(|e| panic!("{technique}: {e}"))
+                    .on_path(b.raster_path(&s));
+                assert!(plan.sample_peel, "{technique}");
+                let frame = render(b, &scene, &cam, &s);
+                let pixels = u64::from(s.width) * u64::from(s.height);
+                assert_eq!(
+                    frame.stats.storage_bytes,
+                    plan.storage_bytes(pixels, Counted::default()) - pixels * RESOLVE_STATE_BYTES,
+                    "{} {technique} at 4 samples on {name}: the plan's arrays {:?}",
+                    label(b),
+                    plan.arrays(Counted::default())
+                );
+            }
         }
     }
 }
+
+/// The techniques that peel per sample above one sample (`oit_core::msaa::peels_masks`), with
+/// M = 1 and 3 for mlp. Mutations caught: oit-cpu's mlp per sample keeping the previous pass's
+/// keys in an allocation it does not count (`reported_storage_is_the_plans_arrays`: "cpu/cpu
+/// mlp:1 at 4 samples on knot"), and running no pass past its peel limit
+/// (`geometry_passes_follow_the_plans_schedule`: "mlp:1 at 4 samples --max-peels Some(2) on
+/// knot (24 layers): schedule [(Peel, 3)]").
+const PER_SAMPLE_PEELS: [Technique; 4] =
+    [Technique::Dp, Technique::Ddp, Technique::Mlp { m: 1 }, Technique::Mlp { m: 3 }];
 
 /// A rule the plan holds for every backend: the weighted blends never order fragments, so the
 /// effects that need the order (translucency, Fresnel) are refused, not run wrong.
@@ -110,7 +137,8 @@ fn weighted_blends_refuse_ordered_effects_everywhere() {
 /// equal the schedule's total for every technique, with and without a peel limit, on scenes whose
 /// pixels hold no two equal depths (so a pixel's layers are its fragments: the reference's
 /// deepest count). adp's bins are at most the layers and these scenes stay under 32 layers, so
-/// one batch either way.
+/// one batch either way. The peels per sample (dp, ddp, mlp:1, mlp:3) at 4 samples too, their
+/// layers the fragments (every fragment its own (depth, primitive id) key).
 #[test]
 fn geometry_passes_follow_the_plans_schedule() {
     let mut techniques = vec![Technique::Reference];
@@ -145,6 +173,27 @@ fn geometry_passes_follow_the_plans_schedule() {
                         frame.stats.geometry_passes,
                         schedule.iter().map(|(_, n)| n).sum::<u32>(),
                         "{} {technique} {overflow:?} --max-peels {max_peels:?} on {name} ({layers} layers): schedule {schedule:?}",
+                        label(b)
+                    );
+                }
+            }
+            // the peels per sample at 4 samples: a pixel's layers its fragments (each its own
+            // (depth, primitive id) key), the reference's deepest count at 4 samples
+            let four = Settings { samples: 4, ..base.clone() };
+            let reference = render(b, &scene, &cam, &four);
+            let layers = reference.layers.as_ref().and_then(|l| l.iter().copied().max()).unwrap_or(0);
+            for technique in PER_SAMPLE_PEELS {
+                for max_peels in [None, Some(2)] {
+                    let s = Settings { technique, max_peels, ..four.clone() };
+                    let plan = Plan::new(b.name(), &scene, &s)
+                        .unwrap_or_else(|e| panic!("{technique}: {e}"))
+                        .on_path(b.raster_path(&s));
+                    let schedule = plan.schedule(layers, layers);
+                    let frame = render(b, &scene, &cam, &s);
+                    assert_eq!(
+                        frame.stats.geometry_passes,
+                        schedule.iter().map(|(_, n)| n).sum::<u32>(),
+                        "{} {technique} at 4 samples --max-peels {max_peels:?} on {name} ({layers} layers): schedule {schedule:?}",
                         label(b)
                     );
                 }

@@ -7,6 +7,10 @@
 //! Ties within a pass: the insertion is atomic min on one 64-bit word, depth bits above the
 //! payload, with no room for the primitive id the reference orders equal depths by, so equal
 //! depths of a pass come out by colour; the resolve counts every fragment of such a run in `tied`.
+//!
+//! Above one sample (`Plan::sample_peel`) the keys are (depth, primitive id) instead, so nothing
+//! ties or is lost, and each layer is composited into the samples its mask covers
+//! (`render_samples`; docs/msaa.md).
 
 use oit_core::Compositor as _;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
@@ -21,6 +25,9 @@ use super::Ctx;
 use crate::storage::MinList;
 
 pub(crate) fn render(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
+    if ctx.plan.sample_peel {
+        return render_samples(ctx, m);
+    }
     let m = m as usize;
     let slots = ctx.alloc64(m, MinList::<AtomicU64>::EMPTY)?;
     render_over(ctx, &MinList::new(&slots, m))
@@ -99,4 +106,94 @@ pub(crate) fn render_over<L: AtomicFragmentList<Key = u64>>(
         }
     }
     Ok(super::finish(ctx, states))
+}
+
+/// `mlp:M` per sample (several samples, docs/msaa.md): each pass walks the multisampled
+/// fragments and inserts, per pixel, the (depth bits, primitive id) keys strictly behind the
+/// deepest key the pass before kept into M slots by atomic min, so every fragment is one layer
+/// and ties come in the reference's order (none lost). The next pass fetches the payloads and
+/// coverage masks of the keys the pass before kept (the fragments whose keys are among them),
+/// and its resolve composites them, nearest first, into the covered samples' accumulators
+/// ([`super::msaa::SampleAccumulators`]); the pass that keeps nothing fetches the last ones, so
+/// the passes are ⌈layers / M⌉ and one. Where the peel limit stops it first, one more pass
+/// fetches the last pass's layers and counts what lies behind them lost.
+fn render_samples(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
+    use super::msaa::{accumulate, finish_accumulated, key};
+    const EMPTY: u64 = MinList::<AtomicU64>::EMPTY;
+    let samples = ctx.settings.samples;
+    let m = m.max(1) as usize;
+    let slots = ctx.alloc64(m, EMPTY)?;
+    let list = MinList::new(&slots, m);
+    // the keys the pass before kept, sorted, all ones past them; a pixel whose keys are all
+    // ones after the first pass is done (nothing lies behind the deepest)
+    let previous = ctx.alloc64(m, EMPTY)?;
+    // the payload and mask of each of those keys, fetched by this pass
+    let layers = ctx.alloc32(2 * m, 0)?;
+    let mut acc = super::msaa::SampleAccumulators::new(ctx, 1)?;
+    let mut captured = vec![0u32; ctx.pixels];
+    let (list, previous, layers) = (&list, &*previous, &*layers);
+    let limit = ctx.plan.peel_limit.saturating_add(1);
+    let mut passes = 0;
+    while passes < limit {
+        let (first, last) = (passes == 0, passes + 1 == limit);
+        let shared = &*ctx;
+        let generated = shared.raster.for_each_masked_fragment(samples, |f, mask| {
+            let px = f.pixel as usize;
+            let k = key(f);
+            let prev = &previous[px * m..px * m + m];
+            if !first {
+                let nearest = prev[0].load(Relaxed);
+                if nearest == EMPTY {
+                    // done
+                    return;
+                }
+                let deepest = prev.iter().map(|p| p.load(Relaxed)).take_while(|&p| p != EMPTY).last();
+                if deepest.is_some_and(|d| k <= d) {
+                    if let Some(i) = prev.iter().position(|p| p.load(Relaxed) == k) {
+                        layers[2 * (px * m + i)].store(shared.payload(f), Relaxed);
+                        layers[2 * (px * m + i) + 1].store(u32::from(mask), Relaxed);
+                    }
+                    return;
+                }
+            }
+            if last {
+                // behind the last layers the limit allows
+                shared.lose(px);
+            } else {
+                list.insert(px, k);
+            }
+        });
+        ctx.ran_pass(generated);
+        let shared = &*ctx;
+        let peeled: u64 = acc
+            .pixels_mut()
+            .zip(captured.par_iter_mut())
+            .enumerate()
+            .map_init(Vec::new, |keys, (px, (a, n))| {
+                let prev = &previous[px * m..px * m + m];
+                if !first && prev[0].load(Relaxed) == EMPTY {
+                    return 0;
+                }
+                for (i, p) in prev.iter().enumerate() {
+                    if p.load(Relaxed) == EMPTY {
+                        break;
+                    }
+                    let (payload, mask) =
+                        (layers[2 * (px * m + i)].load(Relaxed), layers[2 * (px * m + i) + 1].load(Relaxed));
+                    accumulate(shared, a, 1, payload, mask as u8, false);
+                    *n += 1;
+                }
+                list.take_sorted(px, keys);
+                for (i, p) in prev.iter().enumerate() {
+                    p.store(keys.get(i).copied().unwrap_or(EMPTY), Relaxed);
+                }
+                u64::from(!keys.is_empty())
+            })
+            .sum();
+        passes += 1;
+        if peeled == 0 {
+            break;
+        }
+    }
+    Ok(finish_accumulated(ctx, &acc, &captured))
 }
