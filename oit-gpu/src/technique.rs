@@ -554,6 +554,22 @@ pub fn check_ddp_effect(backend: &str, effect: Effect) -> Result<(), OitError> {
     })
 }
 
+/// ddp's state on a GPU's blender per sample (`--hardware-capture blend` at several samples; each
+/// backend's own capture): the plan's arrays, its two multisampled range targets (which the
+/// backend makes as render targets) checked against them, then each sample's near and far
+/// hand-overs, the fragments handed over a pixel and each sample's accumulators.
+pub fn ddp_blend_sample_state<R: ?Sized, F: Frame<R>>(ctx: &mut F) -> Result<[F::Buffer; 4], OitError> {
+    let samples = u64::from(ctx.settings().samples);
+    let mut storage = Storage::new(ctx, 0);
+    storage.attachments("range targets", 16 * samples)?;
+    let near = storage.buffer(ctx, "near hand-overs", Init::Fill(u32::MAX))?;
+    let far = storage.buffer(ctx, "far hand-overs", Init::Zero)?;
+    let handed = storage.buffer(ctx, "fragments handed over", Init::Zero)?;
+    let acc = storage.buffer(ctx, "sample accumulators", Init::Zero)?;
+    storage.finish()?;
+    Ok([near, far, handed, acc])
+}
+
 /// `ddp.wgsl`'s storage, allocated and initialised by its `ddp_init_main`: the near and far
 /// (depth key, colour) words, the open depth range the previous pass left (oit-cpu counts 8 bytes
 /// a pixel too), and the count of pixels that peeled a layer in the last pass (bookkeeping).

@@ -420,14 +420,7 @@ pub(crate) fn ddp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
         // per sample: the hand-overs a sample, the count a pixel, the accumulators a sample (the
         // plan's arrays; the range targets counted as each is made)
         check_samples(ctx, &[RG32F])?;
-        let mut storage = oit_gpu::technique::Storage::new(ctx, 0);
-        storage.attachments("range targets", 16 * u64::from(samples))?;
-        let near = storage.buffer(ctx, "near hand-overs", Init::Fill(u32::MAX))?;
-        let far = storage.buffer(ctx, "far hand-overs", Init::Zero)?;
-        let handed = storage.buffer(ctx, "fragments handed over", Init::Zero)?;
-        let acc = storage.buffer(ctx, "sample accumulators", Init::Zero)?;
-        storage.finish()?;
-        vec![near, far, handed, acc]
+        oit_gpu::technique::ddp_blend_sample_state(ctx)?.into()
     } else {
         oit_gpu::technique::ddp_state(ctx)?.into()
     };

@@ -26,7 +26,7 @@
 
 use oit_core::OitError;
 
-use crate::ctx::{Drivers, GpuCtx, Init, TECHNIQUE_PRELUDE};
+use crate::ctx::{Drivers, GpuCtx, TECHNIQUE_PRELUDE};
 use crate::gpu::COMMON_WGSL;
 use crate::hardware::scene_pipeline_with;
 use crate::stage::PassTarget;
@@ -59,14 +59,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         // per sample: the hand-overs a sample, the count a pixel, the accumulators a sample
         // (the plan's arrays; the range targets counted below)
         super::blend::check_samples(ctx, &[RANGE])?;
-        let mut storage = oit_gpu::technique::Storage::new(ctx, 0);
-        storage.attachments("range targets", 16 * u64::from(samples))?;
-        let near = storage.buffer(ctx, "near hand-overs", Init::Fill(u32::MAX))?;
-        let far = storage.buffer(ctx, "far hand-overs", Init::Zero)?;
-        let handed = storage.buffer(ctx, "fragments handed over", Init::Zero)?;
-        let acc = storage.buffer(ctx, "sample accumulators", Init::Zero)?;
-        storage.finish()?;
-        vec![near, far, handed, acc]
+        oit_gpu::technique::ddp_blend_sample_state(ctx)?.into()
     } else {
         oit_gpu::technique::ddp_state(ctx)?.into()
     };
