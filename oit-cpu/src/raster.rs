@@ -1132,22 +1132,30 @@ impl Rasterizer {
             // one left with none held back (counted where the pass counts, `behind_cut!`)
             let cut = self.early_cut();
             let per = covered.samples as usize;
-            return self.masked_task(kernel, shade, order, rows, &offsets, &|_| true, &|frag, mask| {
-                let mask = match &cut {
-                    Some(cut) => cut.kept(frag.pixel, frag.depth, mask, per),
-                    None => mask,
-                };
-                if mask == 0 {
-                    return;
-                }
-                if covered.fraction {
-                    let mut color = frag.color();
-                    color.w = oit_core::msaa::fraction_alpha(color.w, mask, covered.samples);
-                    f(&Fragment { color: Some(color), ..*frag });
-                } else {
-                    f(frag);
-                }
-            });
+            return self.masked_task(
+                kernel,
+                shade,
+                order,
+                rows,
+                &offsets,
+                (&|_| true, None),
+                &|frag, mask| {
+                    let mask = match &cut {
+                        Some(cut) => cut.kept(frag.pixel, frag.depth, mask, per),
+                        None => mask,
+                    };
+                    if mask == 0 {
+                        return;
+                    }
+                    if covered.fraction {
+                        let mut color = frag.color();
+                        color.w = oit_core::msaa::fraction_alpha(color.w, mask, covered.samples);
+                        f(&Fragment { color: Some(color), ..*frag });
+                    } else {
+                        f(frag);
+                    }
+                },
+            );
         }
         let skip = self.tile_skip();
         #[cfg(target_arch = "x86_64")]
@@ -1209,7 +1217,7 @@ impl Rasterizer {
     /// first pass after the cut, as the single-sample walks count theirs. The pass still returns
     /// every fragment drawn.
     pub fn for_each_masked_fragment<F: Fn(&Fragment<'_>, u8) + Sync>(&self, samples: u32, f: F) -> u64 {
-        self.masked_pass(samples, Shade::OnDemand, &|_| true, f)
+        self.masked_pass(samples, Shade::OnDemand, (&|_| true, None), f)
     }
 
     /// [`Rasterizer::for_each_masked_fragment`] shaded as `shade` says: with [`Shade::Color`]
@@ -1222,7 +1230,22 @@ impl Rasterizer {
         shade: Shade,
         f: F,
     ) -> u64 {
-        self.masked_pass(samples, shade, &|_| true, f)
+        self.masked_pass(samples, shade, (&|_| true, None), f)
+    }
+
+    /// [`Rasterizer::for_each_masked_fragment_with`] that calls `ahead(pixel)` a few fragments
+    /// before each fragment of `pixel` reaches `f`, where the walk knows them that early (the
+    /// AVX2 walk's batches), as [`Rasterizer::for_each_shaded_fragment_ahead`] does: for a capture
+    /// whose stores go all over large arrays, `ahead` asks for the pixel's words. The same
+    /// fragments and masks in the same order.
+    pub fn for_each_masked_fragment_ahead<F: Fn(&Fragment<'_>, u8) + Sync>(
+        &self,
+        samples: u32,
+        shade: Shade,
+        ahead: &(dyn Fn(u32) + Sync),
+        f: F,
+    ) -> u64 {
+        self.masked_pass(samples, shade, (&|_| true, Some(ahead)), f)
     }
 
     /// [`Rasterizer::for_each_masked_fragment`] over the pixels `keep` keeps only: a pixel it
@@ -1233,11 +1256,12 @@ impl Rasterizer {
         K: Fn(u32) -> bool + Sync,
         F: Fn(&Fragment<'_>, u8) + Sync,
     {
-        self.masked_pass(samples, Shade::OnDemand, keep, f)
+        self.masked_pass(samples, Shade::OnDemand, (keep, None), f)
     }
 
-    /// The masked passes: [`Rasterizer::for_each_masked_fragment_where`] shaded as `shade` says.
-    fn masked_pass<K, F>(&self, samples: u32, shade: Shade, keep: &K, f: F) -> u64
+    /// The masked passes: [`Rasterizer::for_each_masked_fragment_where`] shaded as `shade` says,
+    /// the pixels' words asked for ahead where `ahead` is given.
+    fn masked_pass<K, F>(&self, samples: u32, shade: Shade, keep: (&K, Ahead<'_>), f: F) -> u64
     where
         K: Fn(u32) -> bool + Sync,
         F: Fn(&Fragment<'_>, u8) + Sync,
@@ -1264,7 +1288,7 @@ impl Rasterizer {
     }
 
     /// [`Rasterizer::for_each_masked_fragment`]'s walk, without the cut, in Scatter's tasks.
-    fn masked_walk<K, F>(&self, samples: u32, shade: Shade, keep: &K, f: &F) -> u64
+    fn masked_walk<K, F>(&self, samples: u32, shade: Shade, keep: (&K, Ahead<'_>), f: &F) -> u64
     where
         K: Fn(u32) -> bool + Sync,
         F: Fn(&Fragment<'_>, u8) + Sync,
@@ -1289,7 +1313,7 @@ impl Rasterizer {
         order: impl Iterator<Item = usize>,
         rows: [u32; 2],
         offsets: &[(i64, i64)],
-        keep: &K,
+        (keep, ahead): (&K, Ahead<'_>),
         f: &F,
     ) -> u64
     where
@@ -1304,17 +1328,30 @@ impl Rasterizer {
             // (`Kernel::detect`), all that `masked_task` is compiled to need
             let n = unsafe {
                 match shade {
-                    Shade::Color => {
-                        avx2::masked_task::<true, K, F>(setup, records, order, rows, offsets, keep, f)
-                    }
-                    Shade::OnDemand => {
-                        avx2::masked_task::<false, K, F>(setup, records, order, rows, offsets, keep, f)
-                    }
+                    Shade::Color => avx2::masked_task::<true, K, F>(
+                        setup,
+                        records,
+                        order,
+                        rows,
+                        offsets,
+                        (keep, ahead),
+                        f,
+                    ),
+                    Shade::OnDemand => avx2::masked_task::<false, K, F>(
+                        setup,
+                        records,
+                        order,
+                        rows,
+                        offsets,
+                        (keep, ahead),
+                        f,
+                    ),
                 }
             };
             return n;
         }
-        let _ = (kernel, shade);
+        // the portable walk hands each fragment over as it is found: nothing to ask for ahead
+        let _ = (kernel, shade, ahead);
         order.map(|i| self.walk_masked(i, offsets, rows, keep, |frag, mask| f(frag, mask))).sum()
     }
 
@@ -2614,13 +2651,21 @@ mod tests {
                             let keep = |px: u32| !half || px % 2 == 1;
                             let all = Mutex::new(Vec::new());
                             let walked = one_thread.install(|| {
-                                r.masked_task(kernel, shade, 0..n, ALL_ROWS, &offsets, &keep, &|f, mask| {
-                                    assert_eq!(
-                                        f.color.is_some(),
-                                        shade == Shade::Color && kernel != Kernel::Portable
-                                    );
-                                    all.lock().unwrap().push((key(&f.full()), mask));
-                                })
+                                r.masked_task(
+                                    kernel,
+                                    shade,
+                                    0..n,
+                                    ALL_ROWS,
+                                    &offsets,
+                                    (&keep, None),
+                                    &|f, mask| {
+                                        assert_eq!(
+                                            f.color.is_some(),
+                                            shade == Shade::Color && kernel != Kernel::Portable
+                                        );
+                                        all.lock().unwrap().push((key(&f.full()), mask));
+                                    },
+                                )
                             });
                             let mut all = all.into_inner().unwrap();
                             all.sort_unstable();

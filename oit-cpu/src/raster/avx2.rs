@@ -265,7 +265,8 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
 /// the pixels with a mask packed to the front as the single-sample walk packs its covered ones.
 /// Larger triangles take the portable per-pixel test into the same batch. The centre's
 /// barycentrics and depth are made in the lanes whether or not the centre is covered
-/// (extrapolated, as the portable walk's).
+/// (extrapolated, as the portable walk's). Where `ahead` is given, each pixel is asked for a
+/// few fragments before its turn, as [`scatter_task`]'s batches do.
 #[target_feature(enable = "avx2,popcnt")]
 pub(super) fn masked_task<const SHADE: bool, K: Fn(u32) -> bool, F: Fn(&Fragment<'_>, u8)>(
     setup: &TriangleSetup,
@@ -273,20 +274,29 @@ pub(super) fn masked_task<const SHADE: bool, K: Fn(u32) -> bool, F: Fn(&Fragment
     order: impl Iterator<Item = usize>,
     window: [u32; 2],
     offsets: &[(i64, i64)],
-    keep: &K,
+    (keep, ahead): (&K, Ahead<'_>),
     f: &F,
 ) -> u64 {
     let width = setup.width;
     let mut batch = Batch::new();
     let (mut len, mut n) = (0usize, 0u64);
     // the batch handed over in the order walked, the pixels `keep` turns down left out (and
-    // not counted); returns the fragments handed over
+    // not counted), each pixel asked for `AHEAD` fragments before its turn where `ahead` is
+    // given (as `flush`); returns the fragments handed over
     let flush = |batch: &mut Batch, len: usize| {
         if SHADE {
             shade(setup, (tris, edges, shades), batch, len);
         }
+        if let Some(ahead) = ahead {
+            batch.pixel[..len].iter().take(AHEAD).for_each(|&p| ahead(p));
+        }
         let mut kept = 0u64;
         for i in 0..len {
+            if let Some(ahead) = ahead
+                && i + AHEAD < len
+            {
+                ahead(batch.pixel[i + AHEAD]);
+            }
             if keep(batch.pixel[i]) {
                 f(&batch.fragment::<SHADE>(setup, (tris, edges), i), batch.mask[i] as u8);
                 kept += 1;
