@@ -740,7 +740,7 @@ impl Rasterizer {
     ///
     /// With a depth a pixel the cut keeps each small tile's farthest opaque depth, and the
     /// single-sample walks pass over a triangle's part of a tile that lies behind it without
-    /// testing or handing on its fragments, counting them ([`TileSkip`]): the same fragments
+    /// testing or handing on its fragments, counting them (the tile skip): the same fragments
     /// reach the shader, the same are counted.
     pub fn cut_at(&mut self, depth: Option<std::sync::Arc<[f32]>>) {
         let (width, height) = (self.setup.width, self.setup.height);
