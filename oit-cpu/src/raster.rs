@@ -113,7 +113,8 @@ impl Kernel {
 type Records<'a> = (&'a [Triangle], &'a [SmallEdges], &'a [ShadeRecord]);
 
 /// `avx2::scatter_task` over the triangles of `order` in the rows `rows` (shading them where
-/// `SHADE`), where `kernel` is [`Kernel::Avx2`]; `None` elsewhere.
+/// `SHADE`), behind the early cut and the tile skip where given, where `kernel` is
+/// [`Kernel::Avx2`]; `None` elsewhere.
 #[cfg(target_arch = "x86_64")]
 #[expect(clippy::too_many_arguments, reason = "the walk's inputs, passed through to the AVX2 task")]
 fn avx2_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
@@ -124,7 +125,7 @@ fn avx2_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
     rows: [u32; 2],
     f: &F,
     ahead: Ahead<'_>,
-    cut: Option<EarlyCut<'_>>,
+    (cut, skip): (Option<EarlyCut<'_>>, Option<TileSkip<'_>>),
 ) -> Option<u64> {
     if kernel != Kernel::Avx2 {
         return None;
@@ -132,7 +133,7 @@ fn avx2_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
     #[expect(unsafe_code, reason = "the one call into code compiled for AVX2")]
     // SAFETY: `Kernel::Avx2` is made only where the host has AVX2 and popcnt (`Kernel::detect`),
     // all that `scatter_task` is compiled to need
-    let n = unsafe { avx2::scatter_task::<SHADE, F>(setup, records, order, rows, f, ahead, cut) };
+    let n = unsafe { avx2::scatter_task::<SHADE, F>(setup, records, order, rows, f, ahead, cut, skip) };
     Some(n)
 }
 
@@ -441,6 +442,9 @@ pub struct Rasterizer {
     cut: Option<Cut>,
     /// Where every pass walks the multisampled fragments ([`Rasterizer::cover`]).
     covered: Option<Covered>,
+    /// Whether the passes behind a cut skip the tiles it lies in front of
+    /// ([`Rasterizer::skip_tiles`]).
+    skip_tiles: bool,
 }
 
 /// The multisampled fragments of a technique that keeps no coverage mask (docs/msaa.md): every
@@ -470,6 +474,132 @@ struct Cut {
     /// does not count: the shaded walks test the cut before they shade ([`Rasterizer::early_cut`])
     /// and count what they drop themselves.
     counting: std::sync::atomic::AtomicU64,
+    /// Each [`SKIP_TILE`]-pixel square tile's farthest opaque depth ([`farthest_by_tile`]),
+    /// row-major, `tiles_x` a row: kept where the depth is one a pixel, empty above one sample.
+    far: Vec<f32>,
+    tiles_x: u32,
+}
+
+/// Side of the square tiles over which the cut keeps its farthest opaque depth, in pixels: a
+/// triangle whose nearest depth lies behind a tile's farthest is walked there without its
+/// fragments' depth tests ([`TileSkip`]).
+const SKIP_TILE: u32 = 8;
+
+/// The farthest of the opaque depths `depth` (one a pixel of a `width` × `height` image) in each
+/// [`SKIP_TILE`]-pixel tile, row-major, with the tiles a row: `f32::INFINITY` in a tile where any
+/// pixel has no opaque fragment.
+fn farthest_by_tile(depth: &[f32], width: u32, height: u32) -> (Vec<f32>, u32) {
+    let tiles_x = width.div_ceil(SKIP_TILE);
+    let tiles_y = height.div_ceil(SKIP_TILE);
+    let mut far = vec![f32::NEG_INFINITY; tiles_x as usize * tiles_y as usize];
+    if tiles_x == 0 {
+        return (far, tiles_x);
+    }
+    far.par_chunks_mut(tiles_x as usize).enumerate().for_each(|(ty, tiles)| {
+        let y0 = ty as u32 * SKIP_TILE;
+        for y in y0..(y0 + SKIP_TILE).min(height) {
+            let line = &depth[(y * width) as usize..][..width as usize];
+            for (far, pixels) in tiles.iter_mut().zip(line.chunks(SKIP_TILE as usize)) {
+                // opaque depths are never NaN (a key's bits, or infinity where none fell)
+                *far = pixels.iter().fold(*far, |a, &d| a.max(d));
+            }
+        }
+    });
+    (far, tiles_x)
+}
+
+/// A pass's view of the cut's tiles ([`Rasterizer::tile_skip`]): where a triangle's nearest
+/// depth over its part of a tile ([`DepthBound`]) is not in front of the tile's farthest opaque
+/// depth, every fragment of it there fails the depth test, so the walk counts them from coverage alone
+/// (a row's span cut at the tile's columns, a small triangle's coverage lanes) and hands none of
+/// them on: they are counted occluded where the pass counts (`counting`, as [`EarlyCut`]'s), and
+/// in the fragments the pass returns. The same fragments reach the shader as without the skip.
+#[derive(Clone, Copy)]
+pub(crate) struct TileSkip<'a> {
+    far: &'a [f32],
+    tiles_x: u32,
+    counting: u64,
+}
+
+/// Fragments the tile skip took off the walks (tests only: `tile_skip_changes_nothing` checks
+/// that its scene exercises the skip).
+#[cfg(test)]
+static SKIPPED: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// A triangle's depth as the tile skip bounds it: [`DepthPlane::depth`] before its roundings, as
+/// a function of the exact edge functions `e1`, `e2` (`z0 + e1·inv_area·dz1 + e2·inv_area·dz2`,
+/// affine in the pixel, in f64), and the most those roundings take off it. Inside the triangle
+/// the barycentrics lie in [0, 1], each made by three roundings (the integer to f32, `inv_area`,
+/// the product), and the depth adds two rounded products to `z0`: the errors come to a few units
+/// in the last place of `|z0| + |dz1| + |dz2|` (six at most), and `margin`, 2^-20 of it, is
+/// sixteen (the clamp to [0, 1] only moves a depth towards an opaque one, itself in [0, 1]). NaN
+/// where the plane is: then no tile is behind it.
+#[derive(Clone, Copy)]
+struct DepthBound {
+    z0: f64,
+    k1: f64,
+    k2: f64,
+    margin: f64,
+}
+
+impl DepthBound {
+    #[inline]
+    fn new(plane: &DepthPlane) -> DepthBound {
+        let (z0, dz1, dz2) = (f64::from(plane.z0), f64::from(plane.dz1), f64::from(plane.dz2));
+        let inv_area = f64::from(plane.inv_area);
+        let margin = (z0.abs() + dz1.abs() + dz2.abs()) / f64::from(1u32 << 20);
+        DepthBound { z0, k1: inv_area * dz1, k2: inv_area * dz2, margin }
+    }
+
+    /// The depth before rounding where the edge functions are `e` (outside the triangle too).
+    #[inline]
+    fn at(&self, e: [i64; 3]) -> f64 {
+        self.z0 + e[1] as f64 * self.k1 + e[2] as f64 * self.k2
+    }
+}
+
+impl TileSkip<'_> {
+    /// Whether tile (`tx`, `ty`) lies wholly in front of depth `near`: its farthest opaque depth
+    /// not behind it (false where `near` is NaN).
+    #[inline]
+    fn behind(&self, tx: u32, ty: u32, near: f64) -> bool {
+        f64::from(self.far[(ty * self.tiles_x + tx) as usize]) <= near
+    }
+
+    /// Whether the covered pixels of the small triangle `s` in the pixel rectangle `rect` (not
+    /// empty, inside its box) all lie behind the opaque depth: in each tile `rect` reaches into,
+    /// the least of the plane's depth over the part of `rect` in it (an affine function's least
+    /// over a rectangle is at a corner), less the rounding, not in front of the tile's farthest.
+    #[inline]
+    fn small_behind(&self, s: &SmallEdges, [x0, y0, x1, y1]: [u32; 4]) -> bool {
+        let bound = DepthBound::new(&s.plane);
+        let [bx, by] = [s.bbox[0], s.bbox[1]];
+        // the depth at the box's first pixel and its steps a pixel
+        let origin = bound.at(s.origin.map(i64::from));
+        let step = |d: [i32; 3]| d[1] as f64 * bound.k1 + d[2] as f64 * bound.k2;
+        let (gx, gy) = (step(s.step_x), step(s.step_y));
+        let least =
+            |a: u32, b: u32, first: u32, g: f64| (f64::from(a - first) * g).min(f64::from(b - first) * g);
+        (y0 / SKIP_TILE..=y1 / SKIP_TILE).all(|ty| {
+            let (ty0, ty1) = ((ty * SKIP_TILE).max(y0), (ty * SKIP_TILE + SKIP_TILE - 1).min(y1));
+            let dy = least(ty0, ty1, by, gy);
+            (x0 / SKIP_TILE..=x1 / SKIP_TILE).all(|tx| {
+                let (tx0, tx1) = ((tx * SKIP_TILE).max(x0), (tx * SKIP_TILE + SKIP_TILE - 1).min(x1));
+                let near = origin + least(tx0, tx1, bx, gx) + dy - bound.margin;
+                self.behind(tx, ty, near)
+            })
+        })
+    }
+
+    /// Counts `n` fragments the walk skipped as occluded, where the pass counts.
+    #[inline]
+    fn count(&self, n: u64) {
+        #[cfg(test)]
+        SKIPPED.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
+        if n != 0 && self.counting != u64::MAX {
+            occlude_n(self.counting, n);
+        }
+    }
 }
 
 /// A shaded walk's view of the cut: the opaque depth, and the counting pass to count the
@@ -534,11 +664,17 @@ static COUNTING_PASS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU6
 /// Counts one fragment occluded in counting pass `pass` on this thread ([`OCCLUDED`]).
 #[inline]
 fn occlude(pass: u64) {
+    occlude_n(pass, 1);
+}
+
+/// Counts `count` fragments occluded in counting pass `pass` on this thread ([`OCCLUDED`]).
+#[inline]
+fn occlude_n(pass: u64, count: u64) {
     OCCLUDED.with(|c| {
         let mut c = c.borrow_mut();
         match c.iter_mut().rev().find(|(p, _)| *p == pass) {
-            Some((_, n)) => *n += 1,
-            None => c.push((pass, 1)),
+            Some((_, n)) => *n += count,
+            None => c.push((pass, count)),
         }
     });
 }
@@ -574,6 +710,7 @@ impl Rasterizer {
             fragments: OnceLock::new(),
             cut: None,
             covered: None,
+            skip_tiles: true,
         };
         r.derive();
         r
@@ -600,12 +737,47 @@ impl Rasterizer {
     /// back. `None` lifts the test.
     /// The passes still return (and [`Rasterizer::fragment_count`] still counts) every fragment
     /// drawn, those held back included.
+    ///
+    /// With a depth a pixel the cut keeps each small tile's farthest opaque depth, and the
+    /// single-sample walks pass over a triangle's part of a tile that lies behind it without
+    /// testing or handing on its fragments, counting them (the tile skip): the same fragments
+    /// reach the shader, the same are counted.
     pub fn cut_at(&mut self, depth: Option<std::sync::Arc<[f32]>>) {
-        self.cut = depth.map(|depth| Cut {
-            depth,
-            occluded: OnceLock::new(),
-            counting: std::sync::atomic::AtomicU64::new(u64::MAX),
+        let (width, height) = (self.setup.width, self.setup.height);
+        self.cut = depth.map(|depth| {
+            let (far, tiles_x) = if depth.len() == width as usize * height as usize {
+                farthest_by_tile(&depth, width, height)
+            } else {
+                (Vec::new(), 0)
+            };
+            Cut {
+                depth,
+                occluded: OnceLock::new(),
+                counting: std::sync::atomic::AtomicU64::new(u64::MAX),
+                far,
+                tiles_x,
+            }
         });
+    }
+
+    /// The cut's tiles as a pass's walks skip them ([`TileSkip`]): where the rasterizer has a cut
+    /// kept a pixel and walks the single-sample fragments (not [`Rasterizer::cover`]'s, whose
+    /// depth is extrapolated at the pixel's centre, outside the triangle too), and the skip is on
+    /// ([`Rasterizer::skip_tiles`]).
+    fn tile_skip(&self) -> Option<TileSkip<'_>> {
+        let cut = self.cut.as_ref()?;
+        (self.skip_tiles && self.covered.is_none() && !cut.far.is_empty()).then(|| TileSkip {
+            far: &cut.far,
+            tiles_x: cut.tiles_x,
+            counting: cut.counting.load(std::sync::atomic::Ordering::Relaxed),
+        })
+    }
+
+    /// Turns the tile skip of the passes behind a cut on (as a rasterizer starts) or off
+    /// ([`Rasterizer::cut_at`]): the same fragments and counts either way, so this is for
+    /// checking that and for timing it.
+    pub fn skip_tiles(&mut self, on: bool) {
+        self.skip_tiles = on;
     }
 
     /// The cut as the shaded walks test it, before they shade: a fragment behind the opaque
@@ -884,6 +1056,13 @@ impl Rasterizer {
         per_band
     }
 
+    /// [`Rasterizer::for_each_fragment_with`]'s Scatter pass on `kernel`, behind the cut (tests:
+    /// the portable kernel where the host has AVX2).
+    #[cfg(test)]
+    fn for_each_fragment_on<F: Fn(&Fragment<'_>) + Sync>(&self, kernel: Kernel, shade: Shade, f: F) -> u64 {
+        behind_cut!(self, f, g => self.scatter_tasks(|run| self.task(kernel, shade, run, ALL_ROWS, g, None)))
+    }
+
     /// [`Rasterizer::for_each_fragment`], shading as `shade` says.
     pub fn for_each_fragment_with<F: Fn(&Fragment<'_>) + Sync>(&self, shade: Shade, f: F) -> u64 {
         let n = behind_cut!(self, f, g => match (self.pass_mode(), shade) {
@@ -953,32 +1132,50 @@ impl Rasterizer {
             // one left with none held back (counted where the pass counts, `behind_cut!`)
             let cut = self.early_cut();
             let per = covered.samples as usize;
-            return self.masked_task(kernel, shade, order, rows, &offsets, &|_| true, &|frag, mask| {
-                let mask = match &cut {
-                    Some(cut) => cut.kept(frag.pixel, frag.depth, mask, per),
-                    None => mask,
-                };
-                if mask == 0 {
-                    return;
-                }
-                if covered.fraction {
-                    let mut color = frag.color();
-                    color.w = oit_core::msaa::fraction_alpha(color.w, mask, covered.samples);
-                    f(&Fragment { color: Some(color), ..*frag });
-                } else {
-                    f(frag);
-                }
-            });
+            return self.masked_task(
+                kernel,
+                shade,
+                order,
+                rows,
+                &offsets,
+                (&|_| true, None),
+                &|frag, mask| {
+                    let mask = match &cut {
+                        Some(cut) => cut.kept(frag.pixel, frag.depth, mask, per),
+                        None => mask,
+                    };
+                    if mask == 0 {
+                        return;
+                    }
+                    if covered.fraction {
+                        let mut color = frag.color();
+                        color.w = oit_core::msaa::fraction_alpha(color.w, mask, covered.samples);
+                        f(&Fragment { color: Some(color), ..*frag });
+                    } else {
+                        f(frag);
+                    }
+                },
+            );
         }
+        let skip = self.tile_skip();
         #[cfg(target_arch = "x86_64")]
         if kernel == Kernel::Avx2 {
             let (setup, records) = (&self.setup, self.records());
             // only a shaded walk has work to save by testing the cut first
             let n = match shade {
-                Shade::Color => {
-                    avx2_task::<true, F>(kernel, setup, records, order, rows, f, ahead, self.early_cut())
+                Shade::Color => avx2_task::<true, F>(
+                    kernel,
+                    setup,
+                    records,
+                    order,
+                    rows,
+                    f,
+                    ahead,
+                    (self.early_cut(), skip),
+                ),
+                Shade::OnDemand => {
+                    avx2_task::<false, F>(kernel, setup, records, order, rows, f, ahead, (None, skip))
                 }
-                Shade::OnDemand => avx2_task::<false, F>(kernel, setup, records, order, rows, f, ahead, None),
             };
             return n.unwrap_or(0);
         }
@@ -987,15 +1184,18 @@ impl Rasterizer {
         if shade == Shade::Color {
             return self.portable_shaded(order, rows, f);
         }
-        let mut n = 0u64;
+        let (mut n, mut skipped) = (0u64, 0u64);
         for i in order {
             let (t, s) = (&self.setup.triangles[i], &self.edges[i]);
-            walk_tile(t, s, in_rows(s.bbox, rows), |x, y, e| {
+            skipped += walk_tile_skipping(t, s, in_rows(s.bbox, rows), skip.as_ref(), |x, y, e| {
                 f(&self.on_demand_fragment(t, s, x, y, e));
                 n += 1;
             });
         }
-        n
+        if let Some(skip) = &skip {
+            skip.count(skipped);
+        }
+        n + skipped
     }
 
     /// The multisampled geometry pass ([`oit_core::msaa`], `Settings::samples` above 1): calls
@@ -1017,7 +1217,7 @@ impl Rasterizer {
     /// first pass after the cut, as the single-sample walks count theirs. The pass still returns
     /// every fragment drawn.
     pub fn for_each_masked_fragment<F: Fn(&Fragment<'_>, u8) + Sync>(&self, samples: u32, f: F) -> u64 {
-        self.masked_pass(samples, Shade::OnDemand, &|_| true, f)
+        self.masked_pass(samples, Shade::OnDemand, (&|_| true, None), f)
     }
 
     /// [`Rasterizer::for_each_masked_fragment`] shaded as `shade` says: with [`Shade::Color`]
@@ -1030,7 +1230,22 @@ impl Rasterizer {
         shade: Shade,
         f: F,
     ) -> u64 {
-        self.masked_pass(samples, shade, &|_| true, f)
+        self.masked_pass(samples, shade, (&|_| true, None), f)
+    }
+
+    /// [`Rasterizer::for_each_masked_fragment_with`] that calls `ahead(pixel)` a few fragments
+    /// before each fragment of `pixel` reaches `f`, where the walk knows them that early (the
+    /// AVX2 walk's batches), as [`Rasterizer::for_each_shaded_fragment_ahead`] does: for a capture
+    /// whose stores go all over large arrays, `ahead` asks for the pixel's words. The same
+    /// fragments and masks in the same order.
+    pub fn for_each_masked_fragment_ahead<F: Fn(&Fragment<'_>, u8) + Sync>(
+        &self,
+        samples: u32,
+        shade: Shade,
+        ahead: &(dyn Fn(u32) + Sync),
+        f: F,
+    ) -> u64 {
+        self.masked_pass(samples, shade, (&|_| true, Some(ahead)), f)
     }
 
     /// [`Rasterizer::for_each_masked_fragment`] over the pixels `keep` keeps only: a pixel it
@@ -1041,11 +1256,12 @@ impl Rasterizer {
         K: Fn(u32) -> bool + Sync,
         F: Fn(&Fragment<'_>, u8) + Sync,
     {
-        self.masked_pass(samples, Shade::OnDemand, keep, f)
+        self.masked_pass(samples, Shade::OnDemand, (keep, None), f)
     }
 
-    /// The masked passes: [`Rasterizer::for_each_masked_fragment_where`] shaded as `shade` says.
-    fn masked_pass<K, F>(&self, samples: u32, shade: Shade, keep: &K, f: F) -> u64
+    /// The masked passes: [`Rasterizer::for_each_masked_fragment_where`] shaded as `shade` says,
+    /// the pixels' words asked for ahead where `ahead` is given.
+    fn masked_pass<K, F>(&self, samples: u32, shade: Shade, keep: (&K, Ahead<'_>), f: F) -> u64
     where
         K: Fn(u32) -> bool + Sync,
         F: Fn(&Fragment<'_>, u8) + Sync,
@@ -1072,7 +1288,7 @@ impl Rasterizer {
     }
 
     /// [`Rasterizer::for_each_masked_fragment`]'s walk, without the cut, in Scatter's tasks.
-    fn masked_walk<K, F>(&self, samples: u32, shade: Shade, keep: &K, f: &F) -> u64
+    fn masked_walk<K, F>(&self, samples: u32, shade: Shade, keep: (&K, Ahead<'_>), f: &F) -> u64
     where
         K: Fn(u32) -> bool + Sync,
         F: Fn(&Fragment<'_>, u8) + Sync,
@@ -1097,7 +1313,7 @@ impl Rasterizer {
         order: impl Iterator<Item = usize>,
         rows: [u32; 2],
         offsets: &[(i64, i64)],
-        keep: &K,
+        (keep, ahead): (&K, Ahead<'_>),
         f: &F,
     ) -> u64
     where
@@ -1112,17 +1328,30 @@ impl Rasterizer {
             // (`Kernel::detect`), all that `masked_task` is compiled to need
             let n = unsafe {
                 match shade {
-                    Shade::Color => {
-                        avx2::masked_task::<true, K, F>(setup, records, order, rows, offsets, keep, f)
-                    }
-                    Shade::OnDemand => {
-                        avx2::masked_task::<false, K, F>(setup, records, order, rows, offsets, keep, f)
-                    }
+                    Shade::Color => avx2::masked_task::<true, K, F>(
+                        setup,
+                        records,
+                        order,
+                        rows,
+                        offsets,
+                        (keep, ahead),
+                        f,
+                    ),
+                    Shade::OnDemand => avx2::masked_task::<false, K, F>(
+                        setup,
+                        records,
+                        order,
+                        rows,
+                        offsets,
+                        (keep, ahead),
+                        f,
+                    ),
                 }
             };
             return n;
         }
-        let _ = (kernel, shade);
+        // the portable walk hands each fragment over as it is found: nothing to ask for ahead
+        let _ = (kernel, shade, ahead);
         order.map(|i| self.walk_masked(i, offsets, rows, keep, |frag, mask| f(frag, mask))).sum()
     }
 
@@ -1214,9 +1443,11 @@ impl Rasterizer {
         let mut batch = [Candidate::default(); BATCH];
         let (mut len, mut n) = (0usize, 0u64);
         let cut = self.early_cut();
+        let skip = self.tile_skip();
+        let mut skipped = 0u64;
         for i in order {
             let (t, s) = (&tris[i], &edges[i]);
-            walk_tile(t, s, in_rows(s.bbox, rows), |x, y, e| {
+            skipped += walk_tile_skipping(t, s, in_rows(s.bbox, rows), skip.as_ref(), |x, y, e| {
                 n += 1;
                 let pixel = y * setup.width + x;
                 // behind the opaque depth: dropped before it is shaded
@@ -1234,7 +1465,10 @@ impl Rasterizer {
             });
         }
         flush(&batch[..len]);
-        n
+        if let Some(skip) = &skip {
+            skip.count(skipped);
+        }
+        n + skipped
     }
 
     /// The coverage pass under [`Rasterizer::for_each_fragment`], before any interpolation;
@@ -1339,10 +1573,25 @@ impl Rasterizer {
 /// the three edge functions ([`edge`]) at each pixel centre. Each row's covered span is found
 /// exactly by integer division: edge k is covered at column offset n when
 /// `e + step·n > inside_above`.
-fn walk(t: &Triangle, rect: [u32; 4], mut visit: impl FnMut(u32, u32, [i64; 3])) {
+fn walk(t: &Triangle, rect: [u32; 4], visit: impl FnMut(u32, u32, [i64; 3])) {
+    walk_spans(t, rect, None, visit);
+}
+
+/// [`walk`], skipping where `skip` holds the cut's tiles and the triangle's depth
+/// ([`DepthBound`]): each row's span is cut at the tiles' columns, and a piece whose least depth
+/// (at one of its ends, less the rounding) is [`TileSkip::behind`] its tile's farthest opaque
+/// depth is counted, not visited. Returns the pixels skipped (the
+/// covered pixels are those visited and those skipped, in the same order as [`walk`]'s).
+fn walk_spans(
+    t: &Triangle,
+    rect: [u32; 4],
+    skip: Option<(&TileSkip<'_>, DepthBound)>,
+    mut visit: impl FnMut(u32, u32, [i64; 3]),
+) -> u64 {
     let [x0, y0, x1, y1] = rect;
+    let mut skipped = 0u64;
     if x0 > x1 || y0 > y1 {
-        return;
+        return skipped;
     }
     let (px, py) = (i64::from(x0) * SUBPIXEL + HALF_PIXEL, i64::from(y0) * SUBPIXEL + HALF_PIXEL);
     let edges = [0, 1, 2].map(|k| edge(t, k, px, py));
@@ -1362,10 +1611,39 @@ fn walk(t: &Triangle, rect: [u32; 4], mut visit: impl FnMut(u32, u32, [i64; 3]))
         }
         if lo <= hi {
             let mut e = [0, 1, 2].map(|k| row[k] + edges[k].1 * lo);
-            for n in lo..=hi {
-                visit(x0 + n as u32, y, e);
-                for k in 0..3 {
-                    e[k] += edges[k].1;
+            match skip {
+                None => {
+                    for n in lo..=hi {
+                        visit(x0 + n as u32, y, e);
+                        for k in 0..3 {
+                            e[k] += edges[k].1;
+                        }
+                    }
+                }
+                Some((tiles, bound)) => {
+                    // the span a tile at a time: columns `n..=end` lie in tile `x / SKIP_TILE`
+                    let mut n = lo;
+                    while n <= hi {
+                        let x = x0 + n as u32;
+                        let end = (i64::from((x / SKIP_TILE + 1) * SKIP_TILE) - 1 - i64::from(x0)).min(hi);
+                        let run = end - n + 1;
+                        let last = [0, 1, 2].map(|k| e[k] + edges[k].1 * (run - 1));
+                        let near = bound.at(e).min(bound.at(last)) - bound.margin;
+                        if tiles.behind(x / SKIP_TILE, y / SKIP_TILE, near) {
+                            skipped += run as u64;
+                            for k in 0..3 {
+                                e[k] += edges[k].1 * run;
+                            }
+                        } else {
+                            for m in n..=end {
+                                visit(x0 + m as u32, y, e);
+                                for k in 0..3 {
+                                    e[k] += edges[k].1;
+                                }
+                            }
+                        }
+                        n = end + 1;
+                    }
                 }
             }
         }
@@ -1373,6 +1651,7 @@ fn walk(t: &Triangle, rect: [u32; 4], mut visit: impl FnMut(u32, u32, [i64; 3]))
             row[k] += edges[k].2;
         }
     }
+    skipped
 }
 
 /// The multisampled walk of `t` in the rows `rows` (inclusive), the samples at `offsets` from
@@ -1502,6 +1781,35 @@ fn walk_tile(t: &Triangle, edges: &SmallEdges, rect: [u32; 4], visit: impl FnMut
     } else {
         walk(t, rect, visit);
     }
+}
+
+/// [`walk_tile`] behind the cut's tiles where `skip` has them: a small triangle whose rect lies
+/// behind the opaque depth in every tile it reaches into ([`TileSkip::small_behind`]) is walked
+/// for its count alone, a larger one skips the pieces of its spans that lie behind their tile's
+/// ([`walk_spans`]). Returns the
+/// covered pixels skipped (not visited), counted occluded ([`TileSkip::count`]) by the caller.
+#[inline]
+fn walk_tile_skipping(
+    t: &Triangle,
+    edges: &SmallEdges,
+    rect: [u32; 4],
+    skip: Option<&TileSkip<'_>>,
+    visit: impl FnMut(u32, u32, [i64; 3]),
+) -> u64 {
+    let Some(tiles) = skip else {
+        walk_tile(t, edges, rect, visit);
+        return 0;
+    };
+    if !edges.small {
+        return walk_spans(t, rect, Some((tiles, DepthBound::new(&edges.plane))), visit);
+    }
+    if rect[0] > rect[2] || rect[1] > rect[3] || !tiles.small_behind(edges, rect) {
+        walk_small(edges, [edges.bbox[0], edges.bbox[1]], rect, visit);
+        return 0;
+    }
+    let mut skipped = 0u64;
+    walk_small(edges, [edges.bbox[0], edges.bbox[1]], rect, |_, _, _| skipped += 1);
+    skipped
 }
 
 /// [`walk`] for a triangle at most [`SMALL_EXTENT`] across, whose box starts at pixel `origin`:
@@ -1760,6 +2068,54 @@ mod tests {
                         assert_eq!(c, 0, "pixel ({x}, {y}) outside but covered ({mode:?})");
                     }
                 }
+            }
+        }
+    }
+
+    /// The tile skip behind the opaque depth ([`TileSkip`]) hands the shader the same fragments,
+    /// bit for bit, returns the same fragment count and counts the same fragments occluded as
+    /// the per-fragment test alone: on walled scenes of large triangles (planes, the span walk)
+    /// and of small ones (spheres, the lanes), images whose sizes are no multiple of the tiles',
+    /// every pass over the cut (each the frame's counting pass) on this host's kernel and on the
+    /// portable one; and the skip takes fragments off the walks there.
+    #[test]
+    fn tile_skip_changes_nothing() {
+        // the planes' triangles larger than a small one at this size, the spheres' small
+        for (name, w, h) in [("wall:0.4:planes:8", 403, 301), ("wall:0.5:spheres:3", 203, 150)] {
+            let scene = oit_core::builtin_scene(name).unwrap().unwrap();
+            let settings = settings(w, h);
+            let camera = Camera::orbit_scene(&scene, oit_core::View::default(), w as f32 / h as f32).unwrap();
+            let layers = scene.layers(None);
+            let opaque = crate::opaque::draw(layers.opaque.as_ref().unwrap(), &camera, &settings);
+            let run = |skip: bool, pass: usize| {
+                let mut r = Rasterizer::new(&layers.transparent, &camera, &settings);
+                r.cut_at(Some(opaque.depth.clone()));
+                r.skip_tiles(skip);
+                let seen = Mutex::new(Vec::new());
+                let f = |frag: &Fragment<'_>| seen.lock().unwrap().push(key(&frag.full()));
+                let n = match pass {
+                    0 => r.for_each_fragment(f),
+                    1 => r.for_each_shaded_fragment(f),
+                    2 => r.for_each_fragment_in_order(Shade::Color, f),
+                    3 => r.for_each_fragment_by_band(Shade::OnDemand, |_| &f).iter().sum(),
+                    4 => r.for_each_fragment_on(Kernel::Portable, Shade::Color, f),
+                    _ => r.for_each_fragment_on(Kernel::Portable, Shade::OnDemand, f),
+                };
+                let mut seen = seen.into_inner().unwrap();
+                seen.sort_unstable();
+                (seen, n, r.occluded())
+            };
+            for pass in 0..6 {
+                let without = run(false, pass);
+                // (other tests' cuts may add to the count as well: the check only needs it to grow)
+                let before = SKIPPED.load(std::sync::atomic::Ordering::Relaxed);
+                let with = run(true, pass);
+                let skipped = SKIPPED.load(std::sync::atomic::Ordering::Relaxed) - before;
+                assert!(!without.0.is_empty() && without.2.is_some_and(|o| o > 0), "{name}: nothing to test");
+                assert!(skipped > 0, "{name}, pass {pass}: the skip took nothing off");
+                assert_eq!(with.1, without.1, "{name}, pass {pass}: fragments");
+                assert_eq!(with.2, without.2, "{name}, pass {pass}: occluded");
+                assert!(with.0 == without.0, "{name}, pass {pass}: the fragments that reach the shader");
             }
         }
     }
@@ -2295,13 +2651,21 @@ mod tests {
                             let keep = |px: u32| !half || px % 2 == 1;
                             let all = Mutex::new(Vec::new());
                             let walked = one_thread.install(|| {
-                                r.masked_task(kernel, shade, 0..n, ALL_ROWS, &offsets, &keep, &|f, mask| {
-                                    assert_eq!(
-                                        f.color.is_some(),
-                                        shade == Shade::Color && kernel != Kernel::Portable
-                                    );
-                                    all.lock().unwrap().push((key(&f.full()), mask));
-                                })
+                                r.masked_task(
+                                    kernel,
+                                    shade,
+                                    0..n,
+                                    ALL_ROWS,
+                                    &offsets,
+                                    (&keep, None),
+                                    &|f, mask| {
+                                        assert_eq!(
+                                            f.color.is_some(),
+                                            shade == Shade::Color && kernel != Kernel::Portable
+                                        );
+                                        all.lock().unwrap().push((key(&f.full()), mask));
+                                    },
+                                )
                             });
                             let mut all = all.into_inner().unwrap();
                             all.sort_unstable();

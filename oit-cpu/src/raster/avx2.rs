@@ -20,7 +20,7 @@ use glam::Vec4;
 use oit_core::Shading;
 use oit_core::setup::{SHADE_LANES, ShadeRecord, Triangle, TriangleSetup};
 
-use super::{AHEAD, Ahead, EarlyCut, Fragment, SmallEdges, in_rows, walk};
+use super::{AHEAD, Ahead, DepthBound, EarlyCut, Fragment, SmallEdges, TileSkip, in_rows, walk_spans};
 
 /// Fragments a batch holds (a multiple of [`SHADE_LANES`]).
 const CAP: usize = 128;
@@ -102,7 +102,11 @@ fn store_f32(dst: &mut [f32; CAP], at: usize, v: __m256) {
 /// fragments. A Scatter task is a run of triangles over every row; a band of
 /// [`Rasterizer::for_each_fragment_in_order`](super::Rasterizer::for_each_fragment_in_order) is
 /// the band's triangles, highest primitive first, over the band's rows.
+/// Where `skip` holds the cut's tiles, a triangle's fragments where it lies behind a tile's
+/// farthest opaque depth are counted, not batched ([`TileSkip`]; a small triangle's where its
+/// whole box does, by its coverage lanes alone), and counted occluded where the pass counts.
 #[target_feature(enable = "avx2,popcnt")]
+#[expect(clippy::too_many_arguments, reason = "the walk's inputs, the cut's two tests among them")]
 pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
     setup: &TriangleSetup,
     (tris, edges, shades): (&[Triangle], &[SmallEdges], &[ShadeRecord]),
@@ -111,10 +115,11 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
     f: &F,
     ahead: Ahead<'_>,
     cut: Option<EarlyCut<'_>>,
+    skip: Option<TileSkip<'_>>,
 ) -> u64 {
     let width = setup.width;
     let mut batch = Batch::new();
-    let (mut len, mut n) = (0usize, 0u64);
+    let (mut len, mut n, mut behind) = (0usize, 0u64, 0u64);
     // lane i of each layout: its column and row in the box
     let columns = [
         _mm256_setr_epi32(0, 1, 0, 1, 0, 1, 0, 1),
@@ -136,7 +141,8 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
         // the box's rows inside the task's
         let [x0, y0, x1, y1] = in_rows(s.bbox, window);
         if !s.small {
-            walk(t, [x0, y0, x1, y1], |x, y, e| {
+            let bound = skip.as_ref().map(|tiles| (tiles, DepthBound::new(&s.plane)));
+            behind += walk_spans(t, [x0, y0, x1, y1], bound, |x, y, e| {
                 if len == CAP {
                     flush::<SHADE, F>(setup, (tris, edges, shades), &mut batch, len, f, ahead, cut);
                     len = 0;
@@ -156,6 +162,8 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
         if x0 > x1 || y0 > y1 {
             continue;
         }
+        // the whole box behind the opaque depth: its coverage counted, nothing batched
+        let hidden = skip.as_ref().is_some_and(|tiles| tiles.small_behind(s, [x0, y0, x1, y1]));
         let (w, h) = (x1 - x0 + 1, y1 - y0 + 1);
         let l = layout(w);
         let (lanes_x, lanes_y) = (COLUMNS[l], 8 / COLUMNS[l]);
@@ -196,6 +204,14 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
                     std::array::from_fn(|k| _mm256_add_epi32(_mm256_set1_epi32(base[k]), offsets[k]));
                 let sign = _mm256_or_si256(_mm256_or_si256(e[0], e[1]), e[2]);
                 let covered = !(_mm256_movemask_ps(_mm256_castsi256_ps(sign)) as u32) & valid;
+                if hidden {
+                    behind += u64::from(covered.count_ones());
+                    bx += lanes_x;
+                    for k in 0..3 {
+                        base[k] = base[k].wrapping_add(column_step[k]);
+                    }
+                    continue;
+                }
                 let pack = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(PACK[covered as usize] as i64));
                 let pixel = _mm256_add_epi32(_mm256_set1_epi32((row_pixel + bx) as i32), pixel_offsets[l]);
                 store_u32(&mut batch.pixel, len, _mm256_permutevar8x32_epi32(pixel, pack));
@@ -229,7 +245,10 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
         }
     }
     flush::<SHADE, F>(setup, (tris, edges, shades), &mut batch, len, f, ahead, cut);
-    n
+    if let Some(tiles) = &skip {
+        tiles.count(behind);
+    }
+    n + behind
 }
 
 /// The multisampled walk ([`Rasterizer::for_each_masked_fragment`](super::Rasterizer::for_each_masked_fragment))
@@ -246,7 +265,8 @@ pub(super) fn scatter_task<const SHADE: bool, F: Fn(&Fragment<'_>)>(
 /// the pixels with a mask packed to the front as the single-sample walk packs its covered ones.
 /// Larger triangles take the portable per-pixel test into the same batch. The centre's
 /// barycentrics and depth are made in the lanes whether or not the centre is covered
-/// (extrapolated, as the portable walk's).
+/// (extrapolated, as the portable walk's). Where `ahead` is given, each pixel is asked for a
+/// few fragments before its turn, as [`scatter_task`]'s batches do.
 #[target_feature(enable = "avx2,popcnt")]
 pub(super) fn masked_task<const SHADE: bool, K: Fn(u32) -> bool, F: Fn(&Fragment<'_>, u8)>(
     setup: &TriangleSetup,
@@ -254,20 +274,29 @@ pub(super) fn masked_task<const SHADE: bool, K: Fn(u32) -> bool, F: Fn(&Fragment
     order: impl Iterator<Item = usize>,
     window: [u32; 2],
     offsets: &[(i64, i64)],
-    keep: &K,
+    (keep, ahead): (&K, Ahead<'_>),
     f: &F,
 ) -> u64 {
     let width = setup.width;
     let mut batch = Batch::new();
     let (mut len, mut n) = (0usize, 0u64);
     // the batch handed over in the order walked, the pixels `keep` turns down left out (and
-    // not counted); returns the fragments handed over
+    // not counted), each pixel asked for `AHEAD` fragments before its turn where `ahead` is
+    // given (as `flush`); returns the fragments handed over
     let flush = |batch: &mut Batch, len: usize| {
         if SHADE {
             shade(setup, (tris, edges, shades), batch, len);
         }
+        if let Some(ahead) = ahead {
+            batch.pixel[..len].iter().take(AHEAD).for_each(|&p| ahead(p));
+        }
         let mut kept = 0u64;
         for i in 0..len {
+            if let Some(ahead) = ahead
+                && i + AHEAD < len
+            {
+                ahead(batch.pixel[i + AHEAD]);
+            }
             if keep(batch.pixel[i]) {
                 f(&batch.fragment::<SHADE>(setup, (tris, edges), i), batch.mask[i] as u8);
                 kept += 1;

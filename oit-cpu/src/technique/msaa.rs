@@ -45,7 +45,7 @@ use rayon::prelude::*;
 
 use super::Ctx;
 use super::reference::{composite_f64, srgb8_f64};
-use crate::raster::Fragment;
+use crate::raster::{Fragment, prefetch};
 use crate::resolve::PixelState;
 
 /// One captured entry: the key (depth bits above the primitive id), the payload, the mask.
@@ -93,16 +93,48 @@ fn counts(ctx: &mut Ctx<'_>, counts: &[AtomicU32]) {
     });
 }
 
-/// Exclusive prefix sum of `counts` into `offsets` (one longer), the total returned.
+/// Counts a task of [`offsets_of`]'s and [`deepest_and_total`]'s sweeps takes.
+const SCAN_CHUNK: usize = 1 << 14;
+
+/// Exclusive prefix sum of `counts` into `offsets` (one longer), the total returned: each chunk's
+/// sum in parallel, the chunks' starts in order, then each chunk's offsets from its start in
+/// parallel (the same offsets as one serial sum: integers).
 fn offsets_of(counts: &[AtomicU32]) -> (Vec<usize>, usize) {
-    let mut offsets = Vec::with_capacity(counts.len() + 1);
+    let sums: Vec<usize> =
+        counts.par_chunks(SCAN_CHUNK).map(|c| c.iter().map(|v| v.load(Relaxed) as usize).sum()).collect();
     let mut total = 0usize;
-    for c in counts {
-        offsets.push(total);
-        total += c.load(Relaxed) as usize;
-    }
-    offsets.push(total);
+    let starts: Vec<usize> = sums
+        .iter()
+        .map(|&s| {
+            let start = total;
+            total += s;
+            start
+        })
+        .collect();
+    let mut offsets = vec![0usize; counts.len() + 1];
+    offsets[..counts.len()]
+        .par_chunks_mut(SCAN_CHUNK)
+        .zip(counts.par_chunks(SCAN_CHUNK))
+        .zip(starts)
+        .for_each(|((out, counts), start)| {
+            let mut at = start;
+            for (o, c) in out.iter_mut().zip(counts) {
+                *o = at;
+                at += c.load(Relaxed) as usize;
+            }
+        });
+    offsets[counts.len()] = total;
     (offsets, total)
+}
+
+/// The largest of `counts` and their sum, in one parallel sweep.
+fn deepest_and_total(counts: &[AtomicU32]) -> (u32, u64) {
+    counts
+        .par_chunks(SCAN_CHUNK)
+        .map(|c| {
+            c.iter().map(|v| v.load(Relaxed)).fold((0u32, 0u64), |(m, t), v| (m.max(v), t + u64::from(v)))
+        })
+        .reduce(|| (0, 0), |a, b| (a.0.max(b.0), a.1 + b.1))
 }
 
 /// The per-sample exact reference.
@@ -330,16 +362,28 @@ fn dfb(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let (offsets, total) = offsets_of(&counted[..ctx.pixels]);
     ctx.storage_bytes += entries * 4;
     let total = ctx.plan.check_fragments(total as u64)?;
-    let deepest = counted.iter().map(|c| c.load(Relaxed)).max().unwrap_or(0);
+    let (deepest, _) = deepest_and_total(&counted);
     ctx.check_counted(Counted { deepest, fragments: u64::from(total) })?;
     let keys = ctx.words64(u64::from(total), 0)?;
     let payloads = ctx.words32(u64::from(total), 0)?;
     let masks = ctx.scratch_bytes(u64::from(total))?;
     let shared = &*ctx;
     let kept = coverage(shared.settings);
-    let n = shared.raster.for_each_masked_fragment_with(
+    // the pixel's count and the line its entries end in asked for ahead (filled from the end)
+    let ahead = |p: u32| {
+        let px = p as usize;
+        prefetch(&counted[px]);
+        let last = offsets[px + 1].saturating_sub(1).min(keys.len().saturating_sub(1));
+        if let Some(key) = keys.get(last) {
+            prefetch(key);
+            prefetch(&payloads[last]);
+            prefetch(&masks[last]);
+        }
+    };
+    let n = shared.raster.for_each_masked_fragment_ahead(
         shared.settings.samples,
         shared.payload_shade(),
+        &ahead,
         |f, mask| {
             let px = f.pixel as usize;
             let left = counted[px].fetch_sub(1, Relaxed);
@@ -382,9 +426,12 @@ fn ll(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let links = ctx.words32(u64::from(nodes), END)?;
     let shared = &*ctx;
     let kept = coverage(shared.settings);
-    let n = shared.raster.for_each_masked_fragment_with(
+    // the pixel's head asked for ahead (the nodes come in order from the counter)
+    let ahead = |p: u32| prefetch(&heads[p as usize]);
+    let n = shared.raster.for_each_masked_fragment_ahead(
         shared.settings.samples,
         shared.payload_shade(),
+        &ahead,
         |f, mask| {
             let px = f.pixel as usize;
             let node = counter[0].fetch_add(1, Relaxed);
@@ -420,8 +467,7 @@ fn fabs(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         let counted = ctx.alloc32(1, 0)?;
         counts(ctx, &counted);
         ctx.storage_bytes -= ctx.pixels as u64 * 4;
-        let deepest = counted.iter().map(|c| c.load(Relaxed)).max().unwrap_or(0);
-        let fragments = counted.iter().map(|c| u64::from(c.load(Relaxed))).sum();
+        let (deepest, fragments) = deepest_and_total(&counted);
         ctx.check_counted(Counted { deepest, fragments })?;
         deepest
     } else {
@@ -435,9 +481,20 @@ fn fabs(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let tail = ctx.tail_sums()?;
     let shared = &*ctx;
     let kept = coverage(shared.settings);
-    let n = shared.raster.for_each_masked_fragment_with(
+    // the pixel's counter and the line of its first slot, payload and mask asked for ahead
+    let ahead = |p: u32| {
+        let px = p as usize;
+        prefetch(&counters[px]);
+        if k > 0 {
+            prefetch(&slots[px * k]);
+            prefetch(&payloads[px * k]);
+            prefetch(&masks[px * k]);
+        }
+    };
+    let n = shared.raster.for_each_masked_fragment_ahead(
         shared.settings.samples,
         shared.payload_shade(),
+        &ahead,
         |f, mask| {
             let px = f.pixel as usize;
             let i = counters[px].fetch_add(1, Relaxed) as usize;
