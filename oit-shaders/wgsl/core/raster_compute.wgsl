@@ -236,6 +236,10 @@ fn raster_pixel(t: Tri, x: u32, y: u32, behind: bool) -> u32 {
 
 var<workgroup> wg_count: atomic<u32>;
 var<workgroup> wg_occluded: atomic<u32>;
+// whether the workgroup's work item lies behind its tile's opaque depth (`behind_tile`), found
+// once by its first invocation: the test's 64-bit plane arithmetic 64 times over cost the H100
+// more than the skip saved
+var<workgroup> wg_behind: u32;
 
 // Adds the workgroup's fragments to `generated`, and those the opaque cut held back to the
 // occluded counter where the pass counts them (the frame's first scene pass: `fu.opaque.y`), one
@@ -269,17 +273,18 @@ fn raster_main(
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
 ) {
+    let i = wid.x + wid.y * groups.x;
     if (lid == 0u) {
         atomicStore(&wg_count, 0u);
         atomicStore(&wg_occluded, 0u);
+        wg_behind = select(0u, 1u, i < ru.item_count && behind_tile(load_tri(items[i].x), items[i]));
     }
     workgroupBarrier();
-    let i = wid.x + wid.y * groups.x;
+    let behind = wg_behind != 0u;
     var code = 0u;
     if (i < ru.item_count) {
         let item = items[i];
         let t = load_tri(item.x);
-        let behind = behind_tile(t, item);
         // wholly behind the opaque depth: only the frame's first scene pass counts its fragments
         if (!behind || fu.opaque.y != 0u) {
             let x = (item.y & 0xffffu) * TILE + lid % TILE;
