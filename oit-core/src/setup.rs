@@ -1072,9 +1072,7 @@ impl TriangleSetup {
         let normal = interpolated_normal(t, p);
         let mut vertex_color = t.has_color.then(|| t.color[0] * p[0] + t.color[1] * p[1] + t.color[2] * p[2]);
         let mut base = t.base;
-        if let Some(texture) = self.textures.get(t.texture as usize) {
-            let uv = t.uv[0] * p[0] + t.uv[1] * p[1] + t.uv[2] * p[2];
-            let sample = texture.sample(t.lod, uv);
+        if let Some(sample) = self.texture_sample(t, p) {
             base *= sample;
             vertex_color = vertex_color.map(|c| c * sample.truncate());
         }
@@ -1087,12 +1085,20 @@ impl TriangleSetup {
     /// `color_at`'s bits for a textured triangle too. `record` unchanged where `t` has no texture.
     #[inline]
     pub fn textured(&self, t: &Triangle, b: [f32; 3], mut record: ShadeRecord) -> ShadeRecord {
-        if let Some(texture) = self.textures.get(t.texture as usize) {
-            let p = perspective(t, b);
-            let uv = t.uv[0] * p[0] + t.uv[1] * p[1] + t.uv[2] * p[2];
-            record.base *= texture.sample(t.lod, uv);
+        if let Some(sample) = self.texture_sample(t, perspective(t, b)) {
+            record.base *= sample;
         }
         record
+    }
+
+    /// The sample of `t`'s texture (none where it has none) at its texture coordinates
+    /// interpolated as its vertex colours are, `(uv0·p0 + uv1·p1) + uv2·p2` per component, with the
+    /// perspective-correct weights `p`, at the triangle's level.
+    #[inline]
+    fn texture_sample(&self, t: &Triangle, p: [f32; 3]) -> Option<Vec4> {
+        let texture = self.textures.get(t.texture as usize)?;
+        let uv = t.uv[0] * p[0] + t.uv[1] * p[1] + t.uv[2] * p[2];
+        Some(texture.sample(t.lod, uv))
     }
 
     /// Whether any triangle may be textured: shading then looks at each triangle's texture

@@ -103,6 +103,14 @@ fn plane_floor(t: Tri, x: u32, y: u32) -> f32 {
     return t.z[0] + d1 + d2 - err;
 }
 
+// The pixels work item `item` of `t` walks: its 8×8 tile within the triangle's box, inclusive
+// (x0, y0, x1, y1).
+fn item_rect(t: Tri, item: vec2<u32>) -> vec4<u32> {
+    let tx = (item.y & 0xffffu) * TILE;
+    let ty = (item.y >> 16u) * TILE;
+    return vec4<u32>(max(t.bbox[0], tx), max(t.bbox[1], ty), min(t.bbox[2], tx + TILE - 1u), min(t.bbox[3], ty + TILE - 1u));
+}
+
 // Whether every fragment of `t` in the compute-raster tile of work item `item` lies at or behind
 // the opaque depth at every sample of the tile (the tile's farthest, opaque.wgsl's
 // `opaque_tiles_main`), so that the opaque cut holds back each one. The floor under the
@@ -120,11 +128,8 @@ fn behind_tile(t: Tri, item: vec2<u32>) -> bool {
     let lo = min(t.z[0], min(t.z[1], t.z[2]));
     let hi = max(t.z[0], max(t.z[1], t.z[2]));
     var least = lo - (hi - lo) * 1e-5 - 1e-6;
-    let x0 = max(t.bbox[0], (item.y & 0xffffu) * TILE);
-    let y0 = max(t.bbox[1], (item.y >> 16u) * TILE);
-    let x1 = min(t.bbox[2], (item.y & 0xffffu) * TILE + TILE - 1u);
-    let y1 = min(t.bbox[3], (item.y >> 16u) * TILE + TILE - 1u);
-    let plane = min(min(plane_floor(t, x0, y0), plane_floor(t, x1, y0)), min(plane_floor(t, x0, y1), plane_floor(t, x1, y1)));
+    let r = item_rect(t, item);
+    let plane = min(min(plane_floor(t, r.x, r.y), plane_floor(t, r.z, r.y)), min(plane_floor(t, r.x, r.w), plane_floor(t, r.z, r.w)));
     // a degenerate plane (a weight that overflows) gives no floor
     if (plane == plane && abs(plane) < 1e30) {
         least = max(least, plane);
@@ -315,14 +320,11 @@ fn raster_loop_main(
         let item = items[i];
         let t = load_tri(item.x);
         let behind = behind_tile(t, item);
-        let x0 = max(t.bbox[0], (item.y & 0xffffu) * TILE);
-        let y0 = max(t.bbox[1], (item.y >> 16u) * TILE);
-        let x1 = min(t.bbox[2], (item.y & 0xffffu) * TILE + TILE - 1u);
-        let y1 = min(t.bbox[3], (item.y >> 16u) * TILE + TILE - 1u);
+        let r = item_rect(t, item);
         // wholly behind the opaque depth: only the frame's first scene pass counts its fragments
         if (!behind || fu.opaque.y != 0u) {
-            for (var y = y0; y <= y1; y++) {
-                for (var x = x0; x <= x1; x++) {
+            for (var y = r.y; y <= r.w; y++) {
+                for (var x = r.x; x <= r.z; x++) {
                     let code = raster_pixel(t, x, y, behind);
                     count += u32(code != 0u);
                     occluded += u32(code == 2u);
