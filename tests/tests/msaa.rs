@@ -1272,7 +1272,18 @@ fn hardware_blend_captures_at_samples() {
                 let s = Settings { technique: t, ..base.clone() };
                 let cam = camera(&peeled, &s, View::default());
                 let what = format!("{on}: {t} blend on {name} at {samples}×");
-                let blend = render(backend, &peeled, &cam, &s);
+                let blend = match backend.render(&peeled, &cam, &s) {
+                    Ok(f) => f,
+                    // 8 samples where the device's range or layer target takes none (the H200
+                    // has no 8-sample Rg32Float target); the refusal names the compute path
+                    Err(OitError::Unsupported { what: why, .. })
+                        if samples == 8 && why.contains("8-sample") && why.contains("--raster compute") =>
+                    {
+                        eprintln!("{what}: {why}");
+                        continue;
+                    }
+                    Err(e) => panic!("{what}: {e}"),
+                };
                 let atomics = render(
                     backend,
                     &peeled,

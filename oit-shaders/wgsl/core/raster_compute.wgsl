@@ -79,30 +79,6 @@ fn load_tri(i: u32) -> Tri {
 const SUBPIXEL: i64 = 256li;
 const HALF_PIXEL: i64 = 128li;
 
-// A floor under the depth of any fragment of `t` whose pixel centre lies in the rectangle of
-// pixels whose corners include (x, y), from the triangle's depth plane at (x, y)'s centre: the
-// plane is what `raster_pixel` interpolates (`z0 + b1·(z1 − z0) + b2·(z2 − z0)` with the same
-// integer edge functions and f32 weights), affine in the pixel, so over a rectangle it is least at
-// a corner. Less the rounding of both evaluations: a few ulps of each term (the weights at a
-// corner outside the triangle may be large) and of a fragment's own sum (its weights in [0, 1]).
-fn plane_floor(t: Tri, x: u32, y: u32) -> f32 {
-    let py = i64(y) * SUBPIXEL + HALF_PIXEL;
-    let px = i64(x) * SUBPIXEL + HALF_PIXEL;
-    var w: array<f32, 3>;
-    for (var k = 1u; k < 3u; k++) {
-        let a = (k + 1u) % 3u;
-        let b = (k + 2u) % 3u;
-        let ax = i64(t.x[a]);
-        let ay = i64(t.y[a]);
-        let e = (i64(t.x[b]) - ax) * (py - ay) - (i64(t.y[b]) - ay) * (px - ax);
-        w[k] = f32(e) * t.inv_area;
-    }
-    let d1 = w[1] * (t.z[1] - t.z[0]);
-    let d2 = w[2] * (t.z[2] - t.z[0]);
-    let err = (abs(t.z[0]) + 2.0 * abs(d1) + 2.0 * abs(d2)) * 4e-7 + 2e-6;
-    return t.z[0] + d1 + d2 - err;
-}
-
 // The pixels work item `item` of `t` walks: its 8×8 tile within the triangle's box, inclusive
 // (x0, y0, x1, y1).
 fn item_rect(t: Tri, item: vec2<u32>) -> vec4<u32> {
@@ -113,13 +89,14 @@ fn item_rect(t: Tri, item: vec2<u32>) -> vec4<u32> {
 
 // Whether every fragment of `t` in the compute-raster tile of work item `item` lies at or behind
 // the opaque depth at every sample of the tile (the tile's farthest, opaque.wgsl's
-// `opaque_tiles_main`), so that the opaque cut holds back each one. The floor under the
-// fragments' depths is the larger of two: the triangle's nearest vertex depth, less more than its
-// interpolation's rounding can take off (the barycentric weights' few ulps times the depths'
-// spread, and the depths' own), and the least of its depth plane at the corners of the pixels
-// the item walks (`plane_floor`: a large triangle that slopes away, a floor or a long plane, is
-// behind the opaque depth in a tile far from its nearest vertex). One sample a pixel only: above
-// one a fragment's depth is extrapolated to the pixel centre, which may lie outside the triangle.
+// `opaque_tiles_main`), so that the opaque cut holds back each one: the triangle's nearest vertex
+// depth, less more than its interpolation's rounding can take off (the barycentric weights' few
+// ulps times the depths' spread, and the depths' own), is not in front of it. One sample a pixel
+// only: above one a fragment's depth is extrapolated to the pixel centre, which may lie outside
+// the triangle. (A floor from the triangle's depth plane at the item's corners skips more tiles of
+// a sloping triangle, but its 64-bit edge arithmetic made every compute pass 1.1-1.6x slower on
+// the H100 and the H200, done by each invocation or once a workgroup behind a barrier, even where
+// no opaque object lets it skip anything: bench/results/h200/tile-skip-workgroup-1024.)
 fn behind_tile(t: Tri, item: vec2<u32>) -> bool {
     if (fu.opaque.x == 0u || fu.msaa.x > 1u) {
         return false;
@@ -127,14 +104,7 @@ fn behind_tile(t: Tri, item: vec2<u32>) -> bool {
     let far = ~atomicLoad(&opaque_rgb[opaque_tile_word(item_tile(item))]);
     let lo = min(t.z[0], min(t.z[1], t.z[2]));
     let hi = max(t.z[0], max(t.z[1], t.z[2]));
-    var least = lo - (hi - lo) * 1e-5 - 1e-6;
-    let r = item_rect(t, item);
-    let plane = min(min(plane_floor(t, r.x, r.y), plane_floor(t, r.z, r.y)), min(plane_floor(t, r.x, r.w), plane_floor(t, r.z, r.w)));
-    // a degenerate plane (a weight that overflows) gives no floor
-    if (plane == plane && abs(plane) < 1e30) {
-        least = max(least, plane);
-    }
-    return depth_bits(clamp(least, 0.0, 1.0)) >= far;
+    return depth_bits(clamp(lo - (hi - lo) * 1e-5 - 1e-6, 0.0, 1.0)) >= far;
 }
 
 // What the fragment of `t` at pixel (x, y) is: 0 none (the pixel's centre outside; with several
@@ -241,10 +211,6 @@ fn raster_pixel(t: Tri, x: u32, y: u32, behind: bool) -> u32 {
 
 var<workgroup> wg_count: atomic<u32>;
 var<workgroup> wg_occluded: atomic<u32>;
-// whether the workgroup's work item lies behind its tile's opaque depth (`behind_tile`), found
-// once by its first invocation: the test's 64-bit plane arithmetic 64 times over cost the H100
-// more than the skip saved
-var<workgroup> wg_behind: u32;
 
 // Adds the workgroup's fragments to `generated`, and those the opaque cut held back to the
 // occluded counter where the pass counts them (the frame's first scene pass: `fu.opaque.y`), one
@@ -278,18 +244,17 @@ fn raster_main(
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
 ) {
-    let i = wid.x + wid.y * groups.x;
     if (lid == 0u) {
         atomicStore(&wg_count, 0u);
         atomicStore(&wg_occluded, 0u);
-        wg_behind = select(0u, 1u, i < ru.item_count && behind_tile(load_tri(items[i].x), items[i]));
     }
     workgroupBarrier();
-    let behind = wg_behind != 0u;
+    let i = wid.x + wid.y * groups.x;
     var code = 0u;
     if (i < ru.item_count) {
         let item = items[i];
         let t = load_tri(item.x);
+        let behind = behind_tile(t, item);
         // wholly behind the opaque depth: only the frame's first scene pass counts its fragments
         if (!behind || fu.opaque.y != 0u) {
             let x = (item.y & 0xffffu) * TILE + lid % TILE;
