@@ -326,6 +326,22 @@ pub fn triangle_levels(
     out
 }
 
+/// Whether the compute rasterizer runs a workgroup a work item and an invocation a pixel
+/// (`raster_main`: GPUs, where it spreads a large triangle over the device) rather than an
+/// invocation a work item walking its tile (`raster_loop_main`: CPU devices, where 64 invocations
+/// of one small triangle mostly test nothing). `OIT_RASTER_PER_PIXEL=1` (or `true`) forces the
+/// first and `0` (or `false`) the second on any device, so that a CPU device's tests run the
+/// GPUs' kernel (tests/tests/raster_kernels.rs); otherwise the device type decides.
+pub fn raster_per_pixel(cpu_device: bool) -> bool {
+    match std::env::var("OIT_RASTER_PER_PIXEL").as_deref() {
+        Ok("1") => true,
+        Ok("0") => false,
+        Ok(v) if v.eq_ignore_ascii_case("true") => true,
+        Ok(v) if v.eq_ignore_ascii_case("false") => false,
+        _ => !cpu_device,
+    }
+}
+
 /// Workgroups of 64 for `invocations` invocations, as (x, y) with x ≤ 65535 (a kernel finds its
 /// invocation's index from both: `kernel_pixel` in prelude.wgsl).
 pub fn dispatch_size(invocations: u64) -> (u32, u32) {

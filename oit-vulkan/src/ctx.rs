@@ -689,7 +689,7 @@ impl<'a> VkCtx<'a> {
     ) -> Result<&'r Buffer, OitError> {
         // as oit-wgpu: a workgroup per (triangle, tile) item on GPUs, an invocation per item on a
         // CPU device (lavapipe), where 64 invocations of one small triangle mostly test nothing
-        let per_pixel = !self.gpu.is_cpu();
+        let per_pixel = oit_gpu::raster_per_pixel(self.gpu.is_cpu());
         let entry = if per_pixel { "raster_main" } else { "raster_loop_main" };
         let bindings = self.image_bindings();
         let pipeline = self.gpu.pipeline(module, entry, buffers.len(), &bindings)?;

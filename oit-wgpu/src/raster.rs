@@ -590,7 +590,7 @@ impl Driver for ComputeRaster {
         // against 10.9 ms with one invocation walking each 16×16 tile); on a CPU device (lavapipe)
         // it tests 64 pixels for each small triangle and ran the conformance tests 7× slower, so
         // there one invocation walks an item.
-        let per_pixel = ctx.gpu.info.device_type != wgpu::DeviceType::Cpu;
+        let per_pixel = oit_gpu::raster_per_pixel(ctx.gpu.info.device_type == wgpu::DeviceType::Cpu);
         let entry = if per_pixel { "raster_main" } else { "raster_loop_main" };
         let pipeline =
             ctx.gpu.compute_pipeline(&format!("{source}\n{RASTER_WGSL}"), entry, &[layout0, &self.layout])?;

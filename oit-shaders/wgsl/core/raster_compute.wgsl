@@ -97,13 +97,16 @@ fn item_rect(t: Tri, item: vec2<u32>) -> vec4<u32> {
 // a sloping triangle, but its 64-bit edge arithmetic made every compute pass 1.1-1.6x slower on
 // the H100 and the H200, done by each invocation or once a workgroup behind a barrier, even where
 // no opaque object lets it skip anything: bench/results/h200/tile-skip-workgroup-1024.)
-fn behind_tile(t: Tri, item: vec2<u32>) -> bool {
+// It reads the triangle's three depths alone, so that an item held back loads nothing more.
+fn behind_tile(item: vec2<u32>) -> bool {
     if (fu.opaque.x == 0u || fu.msaa.x > 1u) {
         return false;
     }
     let far = ~atomicLoad(&opaque_rgb[opaque_tile_word(item_tile(item))]);
-    let lo = min(t.z[0], min(t.z[1], t.z[2]));
-    let hi = max(t.z[0], max(t.z[1], t.z[2]));
+    let o = item.x * TRI_WORDS + 6u;
+    let z = vec3<f32>(tri_f32(o), tri_f32(o + 1u), tri_f32(o + 2u));
+    let lo = min(z.x, min(z.y, z.z));
+    let hi = max(z.x, max(z.y, z.z));
     return depth_bits(clamp(lo - (hi - lo) * 1e-5 - 1e-6, 0.0, 1.0)) >= far;
 }
 
@@ -214,7 +217,9 @@ var<workgroup> wg_occluded: atomic<u32>;
 
 // Adds the workgroup's fragments to `generated`, and those the opaque cut held back to the
 // occluded counter where the pass counts them (the frame's first scene pass: `fu.opaque.y`), one
-// atomic each a workgroup (called in uniform control flow).
+// atomic each a workgroup (called in uniform control flow), none where the workgroup has none: a
+// pass's items are millions of workgroups on a large scene, most of them with nothing to add
+// where an opaque object holds their tiles back, all adding to one word.
 fn count_fragments(lid: u32, count: u32, occluded: u32) {
     atomicAdd(&wg_count, count);
     if (occluded != 0u) {
@@ -222,7 +227,10 @@ fn count_fragments(lid: u32, count: u32, occluded: u32) {
     }
     workgroupBarrier();
     if (lid == 0u) {
-        atomicAdd(&generated[0], atomicLoad(&wg_count));
+        let n = atomicLoad(&wg_count);
+        if (n != 0u) {
+            atomicAdd(&generated[0], n);
+        }
         let held = atomicLoad(&wg_occluded);
         if (held != 0u && fu.opaque.y != 0u) {
             atomicAdd(&opaque_rgb[opaque_counter(1u)], held);
@@ -253,10 +261,10 @@ fn raster_main(
     var code = 0u;
     if (i < ru.item_count) {
         let item = items[i];
-        let t = load_tri(item.x);
-        let behind = behind_tile(t, item);
+        let behind = behind_tile(item);
         // wholly behind the opaque depth: only the frame's first scene pass counts its fragments
         if (!behind || fu.opaque.y != 0u) {
+            let t = load_tri(item.x);
             let x = (item.y & 0xffffu) * TILE + lid % TILE;
             let y = (item.y >> 16u) * TILE + lid / TILE;
             code = raster_pixel(t, x, y, behind);
@@ -283,11 +291,11 @@ fn raster_loop_main(
     var occluded = 0u;
     if (i < ru.item_count) {
         let item = items[i];
-        let t = load_tri(item.x);
-        let behind = behind_tile(t, item);
-        let r = item_rect(t, item);
+        let behind = behind_tile(item);
         // wholly behind the opaque depth: only the frame's first scene pass counts its fragments
         if (!behind || fu.opaque.y != 0u) {
+            let t = load_tri(item.x);
+            let r = item_rect(t, item);
             for (var y = r.y; y <= r.w; y++) {
                 for (var x = r.x; x <= r.z; x++) {
                     let code = raster_pixel(t, x, y, behind);
