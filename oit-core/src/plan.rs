@@ -474,11 +474,13 @@ impl Plan {
             // per sample (docs/msaa.md): the keys are (depth, primitive id), the layer the last
             // pass peeled waits for its payload and mask, which the next pass fetches, and each
             // sample composites into its own (premultiplied RGB, transmittance)
-            // per sample on the blender (`--hardware-capture blend`): two depth targets and the
-            // layer (colour, mask) a sample, and each sample's accumulator
+            // per sample on the blender (`--hardware-capture blend`): two depth targets, the
+            // layer (colour, mask) and two primitive targets (ties peeled in primitive order) a
+            // sample, and each sample's accumulator
             Technique::Dp if self.blend_targets.is_some() => vec![
                 per_pixel("peel depths (two Depth32Float targets)", 4, 2 * targets),
                 per_pixel("peeled layer (colour, mask)", colour, targets),
+                per_pixel("peeled primitives (two R32Uint targets)", 4, 2 * targets),
                 per_pixel("sample accumulators (RGB, transmittance)", 16, samples),
             ],
             // ddp per sample on the blender: two range targets a sample, each sample's near and

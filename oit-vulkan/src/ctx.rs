@@ -147,8 +147,9 @@ pub(crate) struct BlendPass<'b> {
     pub blends: &'b [Blend],
     /// One per colour target.
     pub clears: &'b [vk::ClearValue],
-    /// A depth test (LESS_OR_EQUAL, writing) against the last target, cleared to 1.
-    pub depth: bool,
+    /// A depth test ([`DepthTest::Write`] or [`DepthTest::WriteLess`]) against the last target,
+    /// cleared to 1; [`DepthTest::Off`]: none.
+    pub depth: DepthTest,
     /// Images the fragment stage reads, as group 2.
     pub previous: &'b [(u32, &'b GpuImage)],
     /// Whether to count the samples that pass in the recorder's occlusion query, for
@@ -949,7 +950,7 @@ impl<'a> VkCtx<'a> {
 
     /// One geometry pass of a blend capture: `pass.fs` of `pass.module` over the scene (the
     /// hardware raster's vertex stage) into `pass.targets` (colour attachments, then the depth
-    /// attachment when `pass.depth`), with `pass.blends`, group 0's `buffers` and, as group 2,
+    /// attachment when `pass.depth` is a test), with `pass.blends`, group 0's `buffers` and, as group 2,
     /// `pass.previous` (images the fragment stage reads); inside an occlusion query when
     /// `pass.occlusion`. Counted as a geometry pass. Returns the samples that passed (a wait),
     /// or `None` without the query.
@@ -959,15 +960,12 @@ impl<'a> VkCtx<'a> {
         pass: BlendPass<'_>,
         buffers: &[&Buffer],
     ) -> Result<(), OitError> {
-        let colors: Vec<vk::Format> = pass
-            .targets
-            .iter()
-            .take(pass.targets.len() - usize::from(pass.depth))
-            .map(|i| i.format)
-            .collect();
+        let has_depth = pass.depth != DepthTest::Off;
+        let colors: Vec<vk::Format> =
+            pass.targets.iter().take(pass.targets.len() - usize::from(has_depth)).map(|i| i.format).collect();
         let key = PassKey {
             colors,
-            depth: pass.depth.then(|| pass.targets.last().map(|i| i.format)).flatten(),
+            depth: has_depth.then(|| pass.targets.last().map(|i| i.format)).flatten(),
             final_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
             // the targets' own (a multisampled blend capture's: all alike)
             samples: pass.targets.first().map_or(1, |i| i.samples),
@@ -983,7 +981,7 @@ impl<'a> VkCtx<'a> {
             sets: &kinds,
             pass: &key,
             blends: pass.blends,
-            depth: if pass.depth { DepthTest::Write } else { DepthTest::Off },
+            depth: pass.depth,
         })?;
         let render_pass = self.gpu.render_pass(&key)?;
         let framebuffer = self.pool.framebuffer(self.gpu, render_pass, pass.targets)?;
@@ -1002,7 +1000,7 @@ impl<'a> VkCtx<'a> {
             sets.push(SetData::Images(pass.previous));
         }
         let mut clear: Vec<vk::ClearValue> = pass.clears.to_vec();
-        if pass.depth {
+        if has_depth {
             clear.push(vk::ClearValue {
                 depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 },
             });

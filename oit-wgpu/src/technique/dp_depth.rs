@@ -42,6 +42,8 @@ const SAMPLES_WGSL: [&str; 2] =
     [oit_shaders::text("technique/peel_samples.wgsl"), oit_shaders::text("technique/dp_depth_samples.wgsl")];
 const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 const LAYER: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
+/// At several samples: the peeled fragment's primitive id + 1 a sample (0: none).
+const PRIM: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
     // NOT COUNTED yet (issue 16): the blend unit returns no previous value to count losses by
@@ -56,10 +58,11 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     let ms = samples > 1;
     // at several samples: the targets a sample and each sample's accumulator (the plan's arrays)
     let acc = if ms {
-        super::blend::check_samples(ctx, &[DEPTH, LAYER])?;
+        super::blend::check_samples(ctx, &[DEPTH, LAYER, PRIM])?;
         let mut storage = oit_gpu::technique::Storage::new(ctx, 0);
         storage.attachments("peel depths", 8 * u64::from(samples))?;
         storage.attachments("peeled layer", 8 * u64::from(samples))?;
+        storage.attachments("peeled primitives", 8 * u64::from(samples))?;
         // set by the first peel's composite
         let acc = storage.buffer(ctx, "sample accumulators", Init::Zero)?;
         storage.finish()?;
@@ -73,7 +76,15 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         stage.target_sampled(&device, "dp depth 1", DEPTH, samples),
     ];
     let layer_view = stage.target_sampled(&device, "dp layer", LAYER, samples);
-    ctx.storage_bytes += u64::from(ctx.pixels) * (4 + 4 + 8) * u64::from(samples);
+    // at several samples: the peeled primitive a sample, ping-ponged as the depths are
+    let prim_views = ms.then(|| {
+        [
+            stage.target_sampled(&device, "dp prim 0", PRIM, samples),
+            stage.target_sampled(&device, "dp prim 1", PRIM, samples),
+        ]
+    });
+    let prim_bytes = if ms { 4 + 4 } else { 0 };
+    ctx.storage_bytes += u64::from(ctx.pixels) * (4 + 4 + 8 + prim_bytes) * u64::from(samples);
     let occlusion = stage.occlusion(&device);
     // group 0's buffers: the accumulators at peel_samples.wgsl's binding 5 (2 to 4 unused)
     let buffers: Vec<wgpu::Buffer> = match &acc {
@@ -94,20 +105,39 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         },
         count: None,
     };
-    // group 2 of the peel: the previous depth; peel p renders into depths[p % 2] and reads the other
+    // group 2 of the peel: the previous depth (and at several samples the previous primitive);
+    // peel p renders into depths[p % 2] and reads the other
+    let prim_entry = wgpu::BindGroupLayoutEntry {
+        binding: 1,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Uint,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: true,
+        },
+        count: None,
+    };
+    let previous_entries = [depth_entry(0, wgpu::ShaderStages::FRAGMENT), prim_entry];
     let previous_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("dp previous depth"),
-        entries: &[depth_entry(0, wgpu::ShaderStages::FRAGMENT)],
+        entries: &previous_entries[..if ms { 2 } else { 1 }],
     });
     let previous_groups: Vec<wgpu::BindGroup> = (0..2)
         .map(|p| {
+            let mut entries = vec![wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&depth_views[(p + 1) % 2]),
+            }];
+            if let Some(prims) = &prim_views {
+                entries.push(wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&prims[(p + 1) % 2]),
+                });
+            }
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("dp previous depth"),
                 layout: &previous_layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&depth_views[(p + 1) % 2]),
-                }],
+                entries: &entries,
             })
         })
         .collect();
@@ -168,15 +198,28 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
                     &module_source,
                     &[&layout0, stage.layout(), &previous_layout],
                     peel_fs,
-                    &[Some(wgpu::ColorTargetState {
-                        format: LAYER,
-                        blend: None,
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
+                    &[
+                        Some(wgpu::ColorTargetState {
+                            format: LAYER,
+                            blend: None,
+                            write_mask: wgpu::ColorWrites::ALL,
+                        }),
+                        Some(wgpu::ColorTargetState {
+                            format: PRIM,
+                            blend: None,
+                            write_mask: wgpu::ColorWrites::ALL,
+                        }),
+                    ][..if ms { 2 } else { 1 }],
                     Some(wgpu::DepthStencilState {
                         format: DEPTH,
                         depth_write_enabled: Some(true),
-                        depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                        // at several samples the first drawn of equal depths, the smallest
+                        // primitive id: ties peeled in primitive order
+                        depth_compare: Some(if ms {
+                            wgpu::CompareFunction::Less
+                        } else {
+                            wgpu::CompareFunction::LessEqual
+                        }),
                         stencil: Default::default(),
                         bias: Default::default(),
                     }),
@@ -194,6 +237,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
                 label: "dp depth peel",
                 color: &layer_view,
                 clear: wgpu::Color::TRANSPARENT,
+                second: prim_views.as_ref().map(|prims| &prims[slot]),
                 depth: Some(&depth_views[slot]),
             },
             &occlusion,
