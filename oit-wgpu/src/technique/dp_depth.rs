@@ -24,8 +24,15 @@
 //! the layer are multisampled, `dp_depth_samples.wgsl`'s `dp_peel_ms_fs` writes the fragment's
 //! one depth to the samples it keeps behind the previous peel's depth there, the composite puts
 //! each sample's layer into that sample's accumulator (the plan's "sample accumulators") and a
-//! last kernel finishes every pixel's samples over their opaque colours. Storage: the targets a
-//! sample and the accumulators (`Plan::blend_targets`).
+//! last kernel finishes every pixel's samples over their opaque colours. Ties are peeled in
+//! primitive order there: the depth test is LESS (of equal depths the first drawn, the smallest
+//! primitive id), and a multisampled R32Uint target, ping-ponged as the depths are, keeps each
+//! sample's peeled primitive id + 1, so the next peel keeps a fragment at a sample where its
+//! (depth, primitive id) lies strictly behind the previous peel's: a tie is two layers, none lost,
+//! the per-sample reference exactly (`blend_peels_count_coplanar_ties`, tests/tests/ties.rs). At one
+//! sample the tie keeps the last drawn and the other is never peeled: `lost`, derived as fragments
+//! less captured and occluded, counts it. Storage: the targets a sample and the accumulators
+//! (`Plan::blend_targets`).
 
 use oit_core::OitError;
 
