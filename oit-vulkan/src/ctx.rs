@@ -229,6 +229,9 @@ pub(crate) struct VkCtx<'a> {
     gated_counter: Rc<Buffer>,
     /// Words 0 that must pass their test at the frame's end ([`VkCtx::check_at_end`]).
     end_checks: Vec<EndCheck>,
+    /// Flags whose word 0 must be 0 at the frame's end, else the frame fails with
+    /// [`OitError::Unsupported`] saying the text ([`VkCtx::refuse_at_end`]).
+    refusals: Vec<(Rc<Buffer>, String)>,
     /// Where the frame is sample i of n's frame of the supersampled reference: the running sums
     /// (`supersample.wgsl`), i and n; its end adds its colours there instead of writing its own.
     pub(crate) supersample: Option<(Rc<Buffer>, u32, u32)>,
@@ -315,6 +318,7 @@ impl<'a> VkCtx<'a> {
             gated_counter,
             layers_from: None,
             end_checks: Vec::new(),
+            refusals: Vec::new(),
             supersample: None,
         };
         let (acct, gated_counter) = (ctx.acct.clone(), ctx.gated_counter.clone());
@@ -580,6 +584,13 @@ impl<'a> VkCtx<'a> {
     /// on a wrong speculation and must run again ([`Ended::missed`]).
     pub(crate) fn check_at_end(&mut self, flag: &Rc<Buffer>) {
         self.end_checks.push((flag.clone(), Box::new(|word| word == 0)));
+    }
+
+    /// Leaves word 0 of `flag` to be checked at the frame's end: where it is not 0 the frame met
+    /// what its capture cannot render honestly, and it fails with [`OitError::Unsupported`]
+    /// saying `what` (`oit_gpu::Frame::refuse_at_end`).
+    pub(crate) fn refuse_at_end(&mut self, flag: &Rc<Buffer>, what: String) {
+        self.refusals.push((flag.clone(), what));
     }
 
     /// The deepest pixel of a counting pass whose count lies in word 0 of `max` (as
@@ -1093,6 +1104,8 @@ impl<'a> VkCtx<'a> {
         read.extend(capacities.iter().map(|(b, _, _)| &**b));
         let merged_from = self.merged_from.take();
         read.extend(merged_from.as_deref());
+        let refusals = std::mem::take(&mut self.refusals);
+        read.extend(refusals.iter().map(|(b, _)| &**b));
         read.extend(checks.iter().map(|c| &*c.counters));
         let layers_buf = self.layers_from.clone();
         if readback {
@@ -1104,7 +1117,8 @@ impl<'a> VkCtx<'a> {
         let end_checks = end_checks.into_iter().map(|(_, test)| test).collect();
         let capacities = capacities.into_iter().map(|(_, capacity, bytes)| (capacity, bytes)).collect();
         let merged = merged_from.is_some();
-        Ok(Finishing { ctx: self, reading, checks, end_checks, capacities, merged, readback })
+        let refusals = refusals.into_iter().map(|(_, what)| what).collect();
+        Ok(Finishing { ctx: self, reading, checks, end_checks, capacities, merged, refusals, readback })
     }
 }
 
@@ -1167,6 +1181,9 @@ pub(crate) struct Finishing<'a> {
     capacities: Vec<(u32, u64)>,
     /// Whether [`VkCtx::note_merged`]'s words are read, after the capacities.
     merged: bool,
+    /// What the frame refuses where a flag [`VkCtx::refuse_at_end`] left is set, read after the
+    /// merged words.
+    refusals: Vec<String>,
     readback: bool,
 }
 
@@ -1176,10 +1193,11 @@ impl Finishing<'_> {
     /// the buffers the frame was set up into (the frame is incomplete; the caller runs it again,
     /// and its setup then sizes first).
     pub(crate) fn wait(self) -> Result<Ended, OitError> {
-        let Finishing { mut ctx, reading, checks, end_checks, capacities, merged, readback } = self;
+        let Finishing { mut ctx, reading, checks, end_checks, capacities, merged, refusals, readback } = self;
         let mut words = ctx.rec.read_wait(reading)?;
         ctx.check_validation()?;
-        // totals, first count, gated counter, the end checks, then the rest in order
+        // totals, first count, gated counter, the end checks, the capacities, the merged words,
+        // the refusals' flags, then the rest in order
         let flags: Vec<Vec<u32>> = words.drain(3..3 + end_checks.len()).collect();
         let mut missed = flags.iter().zip(&end_checks).any(|(f, test)| f.first().is_none_or(|&w| !test(w)));
         for (counted, &(capacity, _)) in words.drain(3..3 + capacities.len()).zip(&capacities) {
@@ -1189,6 +1207,13 @@ impl Finishing<'_> {
         if merged {
             let words = words.remove(3);
             ctx.merged = u64::from(words.get(1).copied().unwrap_or(0));
+        }
+        // a frame its capture cannot render honestly fails, whether or not it fitted (what it met
+        // lies in the scene, and a rerun meets it again)
+        for (flag, what) in words.drain(3..3 + refusals.len()).zip(refusals) {
+            if flag.first().is_none_or(|&w| w != 0) {
+                return Err(OitError::Unsupported { backend: "vulkan".into(), what });
+            }
         }
         let gated_ran = words[2].get(5).copied().unwrap_or(0);
         words.remove(2);
