@@ -179,7 +179,7 @@ pub(crate) struct VkCtx<'a> {
     pub(crate) merged: u64,
     /// Whether the technique's capture counts its losses; the blend captures do not (as on
     /// oit-wgpu: the blend unit returns no previous value to count by), and their `lost` is
-    /// `fragments − captured`.
+    /// `fragments − captured − occluded`, with no per-pixel losses.
     pub(crate) counts_losses: bool,
     /// Whether the frame composited each sample where its settings alone say the coverage
     /// fraction (plain's blender at several samples, `technique::blend`): its
@@ -1271,7 +1271,7 @@ impl VkCtx<'_> {
         // words 1-3 of the first count are the opaque pass's, where the frame has one
         let opaque_word =
             |w: usize| if self.plan.opaque { first.get(w).copied().map_or(0, u64::from) } else { 0 };
-        // NOT COUNTED where `counts_losses` is off: the blend captures
+        // derived where `counts_losses` is off (the blend captures): `oit_core::GpuTotals`
         let (fragments, lost, lost_pixels) = oit_core::GpuTotals {
             fragments: self.fragments,
             on_device: u64::from(first[0]),

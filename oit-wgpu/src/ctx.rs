@@ -254,8 +254,9 @@ pub struct GpuCtx<'a> {
     opaque: (wgpu::Buffer, wgpu::Buffer),
     /// Where the opaque pass counted its fragments ([`GpuCtx::note_opaque`]).
     opaque_from: Option<wgpu::Buffer>,
-    /// Whether the technique's capture counts its losses; the `--hardware-capture blend` captures
-    /// do not yet (issue 16), and their `lost` is `fragments − captured`.
+    /// Whether the technique's capture counts its losses where they happen; the
+    /// `--hardware-capture blend` captures do not (the blend unit returns no previous value): their
+    /// `lost` is `fragments − captured − occluded`, with no per-pixel losses.
     pub counts_losses: bool,
     /// Whether the frame composited each sample where its settings alone say the coverage
     /// fraction (plain's blender at several samples, `technique::blend`): its
@@ -1250,7 +1251,7 @@ impl<'a> GpuCtx<'a> {
     /// The frame of `image`, the totals `t` and the per-pixel loss accounting (read back where
     /// the technique counts its losses and the caller wants them).
     fn frame_of(self, image: Image, t: &[u32], acct: Option<Vec<u32>>) -> Result<Frame, OitError> {
-        // NOT COUNTED (issue 16) where `counts_losses` is off: the blend captures
+        // derived where `counts_losses` is off (the blend captures): `oit_core::GpuTotals`
         let (fragments, lost, lost_pixels) = oit_core::GpuTotals {
             fragments: self.fragments,
             on_device: u64::from(t[FRAGMENTS_WORD as usize]),

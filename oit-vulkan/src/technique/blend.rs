@@ -24,7 +24,10 @@
 //!
 //! The blend unit returns no previous value, so these captures cannot count where they lose a
 //! fragment: their `lost` is `fragments − captured − occluded` (as on oit-wgpu); adp's is still
-//! counted (its bucket passes are atomics).
+//! counted (its bucket passes are atomics). Where that count could be wrong they refuse the frame,
+//! as oit-wgpu does: `dp` and `ddp` at several samples under `--max-peels` before they run, and
+//! `ddp` at several samples at the frame's end where two fragments met at one end of a sample's
+//! range (`oit_gpu::technique::ddp_blend_sample_state`).
 //!
 //! Every one of them runs after the opaque pass (`oit_gpu::technique::opaque_first`), and its
 //! fragment stage first drops what `hw_dropped` drops (oit-shaders' `core/blend_stage.wgsl`: back

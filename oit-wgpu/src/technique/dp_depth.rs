@@ -53,7 +53,11 @@ const LAYER: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
 const PRIM: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
-    // NOT COUNTED yet (issue 16): the blend unit returns no previous value to count losses by
+    // the blend unit returns no previous value to count a loss by where it happens: `lost` is
+    // derived, fragments − captured − occluded, and says nothing of where (no `lost_pixels`).
+    // Exact, as a fragment counts itself captured where it is peeled (at several samples, once,
+    // at its lowest kept sample, and `--max-peels` there is refused before this runs:
+    // `oit_core::plan::refuse_multisampled_own_capture`)
     ctx.counts_losses = false;
     let stage = scene_stage(drivers)?;
     check_texture_size(ctx, "the dp depth and layer textures")?;
