@@ -474,11 +474,13 @@ impl Plan {
             // per sample (docs/msaa.md): the keys are (depth, primitive id), the layer the last
             // pass peeled waits for its payload and mask, which the next pass fetches, and each
             // sample composites into its own (premultiplied RGB, transmittance)
-            // per sample on the blender (`--hardware-capture blend`): two depth targets and the
-            // layer (colour, mask) a sample, and each sample's accumulator
+            // per sample on the blender (`--hardware-capture blend`): two depth targets, the
+            // layer (colour, mask) and two primitive targets (ties peeled in primitive order) a
+            // sample, and each sample's accumulator
             Technique::Dp if self.blend_targets.is_some() => vec![
                 per_pixel("peel depths (two Depth32Float targets)", 4, 2 * targets),
                 per_pixel("peeled layer (colour, mask)", colour, targets),
+                per_pixel("peeled primitives (two R32Uint targets)", 4, 2 * targets),
                 per_pixel("sample accumulators (RGB, transmittance)", 16, samples),
             ],
             // ddp per sample on the blender: two range targets a sample, each sample's near and
@@ -829,8 +831,11 @@ impl Plan {
 /// never widens it) and two fragments that share no sample never meet in the blender; and `dp`'s
 /// and `ddp`'s blend captures (`--hardware-capture blend`), which peel each sample (a depth or a
 /// range target a sample), under the coverages that peel the pixel (`--coverage pixel`,
-/// `--coverage fraction`, translucency: [`crate::msaa::peels_per_sample`]). Each GPU backend asks
-/// where it would run one.
+/// `--coverage fraction`, translucency: [`crate::msaa::peels_per_sample`]) and under `--max-peels`
+/// (each sample peels its own layers, so the limit cuts a fragment off at one sample while
+/// another peeled it, and the count, made once a fragment at its lowest sample, calls it captured
+/// where it is missing). Each GPU backend asks where it would run one, before the capture's
+/// passes.
 pub fn refuse_multisampled_own_capture(backend: &str, settings: &Settings) -> Result<(), OitError> {
     let samples = settings.samples;
     if samples <= 1 {
@@ -842,6 +847,12 @@ pub fn refuse_multisampled_own_capture(backend: &str, settings: &Settings) -> Re
             "{technique} with --hardware-capture blend at --samples {samples} under --coverage pixel, \
              --coverage fraction or translucency: its blend capture peels each sample; use \
              --hardware-capture atomics or --raster compute (docs/msaa.md)"
+        ),
+        Technique::Dp | Technique::Ddp if settings.max_peels.is_some() => format!(
+            "{technique} with --hardware-capture blend at --samples {samples} under --max-peels: its blend \
+             capture peels each sample, so the limit cuts a fragment off at one sample while another \
+             peeled it, which its count (a fragment once) cannot see; use --hardware-capture atomics, \
+             which counts what the limit cuts at each sample (docs/msaa.md)"
         ),
         Technique::Plain if settings.pixel_coverage || settings.fraction_coverage => format!(
             "plain on the hardware path at --samples {samples} with --coverage {}: its blender composites \

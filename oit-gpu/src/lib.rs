@@ -635,6 +635,11 @@ pub trait Frame<R: ?Sized> {
     /// Word 0 of `flag` must be 0 at the frame's end; where it is not, the frame ran on a wrong
     /// speculation and runs again.
     fn check_at_end(&mut self, flag: &Self::Buffer);
+    /// Word 0 of `flag` must be 0 at the frame's end (read back with the frame's totals); where
+    /// it is not, the frame met what its capture cannot render honestly and fails with
+    /// [`OitError::Unsupported`] saying `what` (ddp's blend capture at several samples, which
+    /// cannot order equal depths at a sample's range end: [`technique::ddp_blend_sample_state`]).
+    fn refuse_at_end(&mut self, flag: &Self::Buffer, what: String);
     /// Where a tail pass counts the fragments it merged (word 1 of `words`), read with the
     /// frame's end.
     fn note_merged(&mut self, words: &Self::Buffer);

@@ -557,8 +557,13 @@ pub fn check_ddp_effect(backend: &str, effect: Effect) -> Result<(), OitError> {
 /// ddp's state on a GPU's blender per sample (`--hardware-capture blend` at several samples; each
 /// backend's own capture): the plan's arrays, its two multisampled range targets (which the
 /// backend makes as render targets) checked against them, then each sample's near and far
-/// hand-overs, the fragments handed over a pixel and each sample's accumulators.
-pub fn ddp_blend_sample_state<R: ?Sized, F: Frame<R>>(ctx: &mut F) -> Result<[F::Buffer; 4], OitError> {
+/// hand-overs, the fragments handed over a pixel and each sample's accumulators; and a flag word
+/// (bookkeeping) that `ddp_blend_samples.wgsl` sets where two fragments or more arrive at one end
+/// of a sample's range in one pass, which the frame's end refuses ([`Frame::refuse_at_end`]): the
+/// range targets hold depths, not primitive ids, so the capture keeps one of such a tie and counts
+/// both handed over, or composites two on a collapsed range in key order, wrong where nothing
+/// says so.
+pub fn ddp_blend_sample_state<R: ?Sized, F: Frame<R>>(ctx: &mut F) -> Result<[F::Buffer; 5], OitError> {
     let samples = u64::from(ctx.settings().samples);
     let mut storage = Storage::new(ctx, 0);
     storage.attachments("range targets", 16 * samples)?;
@@ -567,7 +572,18 @@ pub fn ddp_blend_sample_state<R: ?Sized, F: Frame<R>>(ctx: &mut F) -> Result<[F:
     let handed = storage.buffer(ctx, "fragments handed over", Init::Zero)?;
     let acc = storage.buffer(ctx, "sample accumulators", Init::Zero)?;
     storage.finish()?;
-    Ok([near, far, handed, acc])
+    let ties = ctx.scratch("ddp ties at a sample", 1, Init::Zero)?;
+    let samples = ctx.settings().samples;
+    ctx.refuse_at_end(
+        &ties,
+        format!(
+            "ddp with --hardware-capture blend at --samples {samples} on coplanar fragments: two or more \
+             met at equal depths at one end of a sample's depth range, which its range targets (depths, \
+             no primitive ids) cannot order, so it would keep one and count both, in silence; use \
+             --hardware-capture atomics, which orders ties by primitive id (docs/msaa.md)"
+        ),
+    );
+    Ok([near, far, handed, acc, ties])
 }
 
 /// `ddp.wgsl`'s storage, allocated and initialised by its `ddp_init_main`: the near and far
@@ -967,6 +983,7 @@ mod tests {
         }
         fn note_peels(&mut self, _: u32) {}
         fn check_at_end(&mut self, _: &()) {}
+        fn refuse_at_end(&mut self, _: &(), _: String) {}
         fn note_merged(&mut self, _: &()) {}
         fn note_layers(&mut self, _: &()) {}
     }

@@ -147,8 +147,9 @@ pub(crate) struct BlendPass<'b> {
     pub blends: &'b [Blend],
     /// One per colour target.
     pub clears: &'b [vk::ClearValue],
-    /// A depth test (LESS_OR_EQUAL, writing) against the last target, cleared to 1.
-    pub depth: bool,
+    /// A depth test ([`DepthTest::Write`] or [`DepthTest::WriteLess`]) against the last target,
+    /// cleared to 1; [`DepthTest::Off`]: none.
+    pub depth: DepthTest,
     /// Images the fragment stage reads, as group 2.
     pub previous: &'b [(u32, &'b GpuImage)],
     /// Whether to count the samples that pass in the recorder's occlusion query, for
@@ -178,7 +179,7 @@ pub(crate) struct VkCtx<'a> {
     pub(crate) merged: u64,
     /// Whether the technique's capture counts its losses; the blend captures do not (as on
     /// oit-wgpu: the blend unit returns no previous value to count by), and their `lost` is
-    /// `fragments − captured`.
+    /// `fragments − captured − occluded`, with no per-pixel losses.
     pub(crate) counts_losses: bool,
     /// Whether the frame composited each sample where its settings alone say the coverage
     /// fraction (plain's blender at several samples, `technique::blend`): its
@@ -228,6 +229,9 @@ pub(crate) struct VkCtx<'a> {
     gated_counter: Rc<Buffer>,
     /// Words 0 that must pass their test at the frame's end ([`VkCtx::check_at_end`]).
     end_checks: Vec<EndCheck>,
+    /// Flags whose word 0 must be 0 at the frame's end, else the frame fails with
+    /// [`OitError::Unsupported`] saying the text ([`VkCtx::refuse_at_end`]).
+    refusals: Vec<(Rc<Buffer>, String)>,
     /// Where the frame is sample i of n's frame of the supersampled reference: the running sums
     /// (`supersample.wgsl`), i and n; its end adds its colours there instead of writing its own.
     pub(crate) supersample: Option<(Rc<Buffer>, u32, u32)>,
@@ -314,6 +318,7 @@ impl<'a> VkCtx<'a> {
             gated_counter,
             layers_from: None,
             end_checks: Vec::new(),
+            refusals: Vec::new(),
             supersample: None,
         };
         let (acct, gated_counter) = (ctx.acct.clone(), ctx.gated_counter.clone());
@@ -579,6 +584,13 @@ impl<'a> VkCtx<'a> {
     /// on a wrong speculation and must run again ([`Ended::missed`]).
     pub(crate) fn check_at_end(&mut self, flag: &Rc<Buffer>) {
         self.end_checks.push((flag.clone(), Box::new(|word| word == 0)));
+    }
+
+    /// Leaves word 0 of `flag` to be checked at the frame's end: where it is not 0 the frame met
+    /// what its capture cannot render honestly, and it fails with [`OitError::Unsupported`]
+    /// saying `what` (`oit_gpu::Frame::refuse_at_end`).
+    pub(crate) fn refuse_at_end(&mut self, flag: &Rc<Buffer>, what: String) {
+        self.refusals.push((flag.clone(), what));
     }
 
     /// The deepest pixel of a counting pass whose count lies in word 0 of `max` (as
@@ -949,7 +961,7 @@ impl<'a> VkCtx<'a> {
 
     /// One geometry pass of a blend capture: `pass.fs` of `pass.module` over the scene (the
     /// hardware raster's vertex stage) into `pass.targets` (colour attachments, then the depth
-    /// attachment when `pass.depth`), with `pass.blends`, group 0's `buffers` and, as group 2,
+    /// attachment when `pass.depth` is a test), with `pass.blends`, group 0's `buffers` and, as group 2,
     /// `pass.previous` (images the fragment stage reads); inside an occlusion query when
     /// `pass.occlusion`. Counted as a geometry pass. Returns the samples that passed (a wait),
     /// or `None` without the query.
@@ -959,15 +971,12 @@ impl<'a> VkCtx<'a> {
         pass: BlendPass<'_>,
         buffers: &[&Buffer],
     ) -> Result<(), OitError> {
-        let colors: Vec<vk::Format> = pass
-            .targets
-            .iter()
-            .take(pass.targets.len() - usize::from(pass.depth))
-            .map(|i| i.format)
-            .collect();
+        let has_depth = pass.depth != DepthTest::Off;
+        let colors: Vec<vk::Format> =
+            pass.targets.iter().take(pass.targets.len() - usize::from(has_depth)).map(|i| i.format).collect();
         let key = PassKey {
             colors,
-            depth: pass.depth.then(|| pass.targets.last().map(|i| i.format)).flatten(),
+            depth: has_depth.then(|| pass.targets.last().map(|i| i.format)).flatten(),
             final_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
             // the targets' own (a multisampled blend capture's: all alike)
             samples: pass.targets.first().map_or(1, |i| i.samples),
@@ -983,7 +992,7 @@ impl<'a> VkCtx<'a> {
             sets: &kinds,
             pass: &key,
             blends: pass.blends,
-            depth: if pass.depth { DepthTest::Write } else { DepthTest::Off },
+            depth: pass.depth,
         })?;
         let render_pass = self.gpu.render_pass(&key)?;
         let framebuffer = self.pool.framebuffer(self.gpu, render_pass, pass.targets)?;
@@ -1002,7 +1011,7 @@ impl<'a> VkCtx<'a> {
             sets.push(SetData::Images(pass.previous));
         }
         let mut clear: Vec<vk::ClearValue> = pass.clears.to_vec();
-        if pass.depth {
+        if has_depth {
             clear.push(vk::ClearValue {
                 depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 },
             });
@@ -1095,6 +1104,8 @@ impl<'a> VkCtx<'a> {
         read.extend(capacities.iter().map(|(b, _, _)| &**b));
         let merged_from = self.merged_from.take();
         read.extend(merged_from.as_deref());
+        let refusals = std::mem::take(&mut self.refusals);
+        read.extend(refusals.iter().map(|(b, _)| &**b));
         read.extend(checks.iter().map(|c| &*c.counters));
         let layers_buf = self.layers_from.clone();
         if readback {
@@ -1106,7 +1117,8 @@ impl<'a> VkCtx<'a> {
         let end_checks = end_checks.into_iter().map(|(_, test)| test).collect();
         let capacities = capacities.into_iter().map(|(_, capacity, bytes)| (capacity, bytes)).collect();
         let merged = merged_from.is_some();
-        Ok(Finishing { ctx: self, reading, checks, end_checks, capacities, merged, readback })
+        let refusals = refusals.into_iter().map(|(_, what)| what).collect();
+        Ok(Finishing { ctx: self, reading, checks, end_checks, capacities, merged, refusals, readback })
     }
 }
 
@@ -1169,6 +1181,9 @@ pub(crate) struct Finishing<'a> {
     capacities: Vec<(u32, u64)>,
     /// Whether [`VkCtx::note_merged`]'s words are read, after the capacities.
     merged: bool,
+    /// What the frame refuses where a flag [`VkCtx::refuse_at_end`] left is set, read after the
+    /// merged words.
+    refusals: Vec<String>,
     readback: bool,
 }
 
@@ -1178,10 +1193,11 @@ impl Finishing<'_> {
     /// the buffers the frame was set up into (the frame is incomplete; the caller runs it again,
     /// and its setup then sizes first).
     pub(crate) fn wait(self) -> Result<Ended, OitError> {
-        let Finishing { mut ctx, reading, checks, end_checks, capacities, merged, readback } = self;
+        let Finishing { mut ctx, reading, checks, end_checks, capacities, merged, refusals, readback } = self;
         let mut words = ctx.rec.read_wait(reading)?;
         ctx.check_validation()?;
-        // totals, first count, gated counter, the end checks, then the rest in order
+        // totals, first count, gated counter, the end checks, the capacities, the merged words,
+        // the refusals' flags, then the rest in order
         let flags: Vec<Vec<u32>> = words.drain(3..3 + end_checks.len()).collect();
         let mut missed = flags.iter().zip(&end_checks).any(|(f, test)| f.first().is_none_or(|&w| !test(w)));
         for (counted, &(capacity, _)) in words.drain(3..3 + capacities.len()).zip(&capacities) {
@@ -1191,6 +1207,13 @@ impl Finishing<'_> {
         if merged {
             let words = words.remove(3);
             ctx.merged = u64::from(words.get(1).copied().unwrap_or(0));
+        }
+        // a frame its capture cannot render honestly fails, whether or not it fitted (what it met
+        // lies in the scene, and a rerun meets it again)
+        for (flag, what) in words.drain(3..3 + refusals.len()).zip(refusals) {
+            if flag.first().is_none_or(|&w| w != 0) {
+                return Err(OitError::Unsupported { backend: "vulkan".into(), what });
+            }
         }
         let gated_ran = words[2].get(5).copied().unwrap_or(0);
         words.remove(2);
@@ -1248,7 +1271,7 @@ impl VkCtx<'_> {
         // words 1-3 of the first count are the opaque pass's, where the frame has one
         let opaque_word =
             |w: usize| if self.plan.opaque { first.get(w).copied().map_or(0, u64::from) } else { 0 };
-        // NOT COUNTED where `counts_losses` is off: the blend captures
+        // derived where `counts_losses` is off (the blend captures): `oit_core::GpuTotals`
         let (fragments, lost, lost_pixels) = oit_core::GpuTotals {
             fragments: self.fragments,
             on_device: u64::from(first[0]),

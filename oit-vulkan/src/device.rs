@@ -381,8 +381,12 @@ pub(crate) struct GraphicsDesc<'a> {
 pub(crate) enum DepthTest {
     /// None.
     Off,
-    /// LESS_OR_EQUAL, writing (the blend captures' depth peels).
+    /// LESS_OR_EQUAL, writing (the blend captures' depth peel at one sample: of equal depths,
+    /// the last drawn).
     Write,
+    /// LESS, writing (the depth peel at several samples: of equal depths, the first drawn, the
+    /// smallest primitive id).
+    WriteLess,
     /// LESS_OR_EQUAL, read only (the capture over the opaque depth: `hw_fs_early`).
     ReadOnly,
     /// ALWAYS, writing: the draw that fills the opaque depth (`depth_vs`/`depth_fs`).
@@ -1360,6 +1364,7 @@ impl Gpu {
         let (test, write, compare) = match desc.depth {
             DepthTest::Off => (false, false, vk::CompareOp::ALWAYS),
             DepthTest::Write => (true, true, vk::CompareOp::LESS_OR_EQUAL),
+            DepthTest::WriteLess => (true, true, vk::CompareOp::LESS),
             DepthTest::ReadOnly => (true, false, vk::CompareOp::LESS_OR_EQUAL),
             DepthTest::Fill => (true, true, vk::CompareOp::ALWAYS),
         };

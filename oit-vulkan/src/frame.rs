@@ -193,6 +193,10 @@ impl Frame<Raster> for VkCtx<'_> {
         VkCtx::check_at_end(self, flag);
     }
 
+    fn refuse_at_end(&mut self, flag: &Rc<Buffer>, what: String) {
+        VkCtx::refuse_at_end(self, flag, what);
+    }
+
     fn note_merged(&mut self, words: &Rc<Buffer>) {
         VkCtx::note_merged(self, words);
     }

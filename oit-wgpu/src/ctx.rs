@@ -254,8 +254,9 @@ pub struct GpuCtx<'a> {
     opaque: (wgpu::Buffer, wgpu::Buffer),
     /// Where the opaque pass counted its fragments ([`GpuCtx::note_opaque`]).
     opaque_from: Option<wgpu::Buffer>,
-    /// Whether the technique's capture counts its losses; the `--hardware-capture blend` captures
-    /// do not yet (issue 16), and their `lost` is `fragments − captured`.
+    /// Whether the technique's capture counts its losses where they happen; the
+    /// `--hardware-capture blend` captures do not (the blend unit returns no previous value): their
+    /// `lost` is `fragments − captured − occluded`, with no per-pixel losses.
     pub counts_losses: bool,
     /// Whether the frame composited each sample where its settings alone say the coverage
     /// fraction (plain's blender at several samples, `technique::blend`): its
@@ -286,6 +287,9 @@ pub struct GpuCtx<'a> {
     /// Capacities to check at the end ([`GpuCtx::fragment_capacity`]): the buffer holding the
     /// count, the capacity allocated, and the bytes a counted element takes.
     capacity_checks: Vec<(wgpu::Buffer, u32, u64)>,
+    /// Flags to check at the end ([`GpuCtx::refuse_at_end`]): where word 0 of the buffer is not
+    /// 0, the frame fails with [`OitError::Unsupported`] saying the text.
+    refusals: Vec<(wgpu::Buffer, String)>,
     gpu_ms: f64,
     pass_ms: Vec<(String, f64)>,
     lent: Lent<'a>,
@@ -481,6 +485,7 @@ impl<'a> GpuCtx<'a> {
             speculated_fragments: None,
             fragments_seen: None,
             capacity_checks: Vec::new(),
+            refusals: Vec::new(),
             gpu_ms: 0.0,
             pass_ms: Vec::new(),
             lent,
@@ -952,6 +957,13 @@ impl<'a> GpuCtx<'a> {
         self.sizing_checks.push((buffer.clone(), Box::new(move |counted| counted == expected)));
     }
 
+    /// Word 0 of `flag` must be 0 at the frame's end (read back with the totals); where it is
+    /// not, the frame met what its capture cannot render honestly, and it fails with
+    /// [`OitError::Unsupported`] saying `what` (`oit_gpu::Frame::refuse_at_end`).
+    pub fn refuse_at_end(&mut self, flag: &wgpu::Buffer, what: String) {
+        self.refusals.push((flag.clone(), what));
+    }
+
     /// Keeps the first scene pass's count of generated fragments: copied on the device into the
     /// frame's totals, read back with them when the frame ends.
     pub fn note_generated(&mut self, generated: &Generated) {
@@ -1151,6 +1163,8 @@ impl<'a> GpuCtx<'a> {
         read.extend(sizing.iter().map(|(b, _)| b));
         let capacities = std::mem::take(&mut self.capacity_checks);
         read.extend(capacities.iter().map(|(b, _, _)| b));
+        let refusals = std::mem::take(&mut self.refusals);
+        read.extend(refusals.iter().map(|(b, _)| b));
         let layers_buf = self.layers_from.clone();
         if readback {
             read.push(&image_buf);
@@ -1169,6 +1183,7 @@ impl<'a> GpuCtx<'a> {
             checks,
             speculated,
             capacities: capacities.into_iter().map(|(_, capacity, bytes)| (capacity, bytes)).collect(),
+            refusals: refusals.into_iter().map(|(_, what)| what).collect(),
             readback,
             recorded,
         })
@@ -1211,6 +1226,11 @@ impl<'a> GpuCtx<'a> {
     /// recorded, nothing submitted. The image (one sRGB8 RGBA word a pixel) and the totals stay on
     /// the device in the returned buffers, to be drawn or copied by commands recorded after these.
     pub fn finish_recorded(mut self) -> Result<RecordedBuffers, OitError> {
+        if let Some((_, what)) = self.refusals.first() {
+            // a recorded frame reads nothing back, so its flag would go unseen: refused whatever
+            // the scene (`OitPass::record` takes no technique that leaves one)
+            return Err(OitError::Unsupported { backend: "wgpu".into(), what: what.clone() });
+        }
         self.record_finish()?;
         if self.ring_full {
             return Err(OitError::Device(format!(
@@ -1231,7 +1251,7 @@ impl<'a> GpuCtx<'a> {
     /// The frame of `image`, the totals `t` and the per-pixel loss accounting (read back where
     /// the technique counts its losses and the caller wants them).
     fn frame_of(self, image: Image, t: &[u32], acct: Option<Vec<u32>>) -> Result<Frame, OitError> {
-        // NOT COUNTED (issue 16) where `counts_losses` is off: the blend captures
+        // derived where `counts_losses` is off (the blend captures): `oit_core::GpuTotals`
         let (fragments, lost, lost_pixels) = oit_core::GpuTotals {
             fragments: self.fragments,
             on_device: u64::from(t[FRAGMENTS_WORD as usize]),
@@ -1271,6 +1291,9 @@ pub struct Finishing<'a> {
     /// The capacities the frame's counted totals took and the bytes an element takes, in the
     /// order of their counts in the readback, after the sizes'.
     capacities: Vec<(u32, u64)>,
+    /// What the frame refuses where a flag [`GpuCtx::refuse_at_end`] left is set, in the order of
+    /// the flags in the readback, after the capacities'.
+    refusals: Vec<String>,
     readback: bool,
     /// Host time from the frame's start to its last submission.
     recorded: std::time::Duration,
@@ -1280,8 +1303,17 @@ impl Finishing<'_> {
     /// Waits for the frame's readback and makes the frame, or `None` where a check left to the
     /// end failed ([`GpuCtx::finish_checked`]).
     pub fn wait(self) -> Result<Option<Frame>, OitError> {
-        let Finishing { mut ctx, reading, stamped, checks, speculated, capacities, readback, recorded } =
-            self;
+        let Finishing {
+            mut ctx,
+            reading,
+            stamped,
+            checks,
+            speculated,
+            capacities,
+            refusals,
+            readback,
+            recorded,
+        } = self;
         let waiting = std::time::Instant::now();
         let mut words = reading.wait(ctx.gpu)?.into_iter();
         if host_times() {
@@ -1312,6 +1344,13 @@ impl Finishing<'_> {
         for &(capacity, _) in &capacities {
             let counted = words.next().unwrap_or_default().first().copied().unwrap_or(u32::MAX);
             fits &= counted <= capacity;
+        }
+        // a frame its capture cannot render honestly fails, whether or not it fitted (what it met
+        // lies in the scene, and a rerun meets it again)
+        for what in refusals {
+            if words.next().unwrap_or_default().first().is_none_or(|&w| w != 0) {
+                return Err(OitError::Unsupported { backend: "wgpu".into(), what });
+            }
         }
         if !fits {
             return Ok(None);

@@ -179,6 +179,10 @@ impl<'d> Frame<dyn Driver + 'd> for GpuCtx<'_> {
         GpuCtx::check_at_end(self, flag, 0);
     }
 
+    fn refuse_at_end(&mut self, flag: &wgpu::Buffer, what: String) {
+        GpuCtx::refuse_at_end(self, flag, what);
+    }
+
     fn note_merged(&mut self, words: &wgpu::Buffer) {
         GpuCtx::note_merged(self, words);
     }

@@ -90,6 +90,8 @@ pub(crate) struct PassTarget<'a> {
     pub label: &'a str,
     pub color: &'a wgpu::TextureView,
     pub clear: wgpu::Color,
+    /// A second colour attachment, cleared to 0 (dp's per-sample primitive target).
+    pub second: Option<&'a wgpu::TextureView>,
     pub depth: Option<&'a wgpu::TextureView>,
 }
 

@@ -519,7 +519,10 @@ fn sample_counts_with(scene: &oit_core::Scene, s: &Settings, cam: &oit_core::Cam
 }
 
 /// What is not done yet says so by name: the hardware paths' own captures not yet done at 4
-/// samples, the supersampled reference on a GPU backend's hardware path; a sample count other than
+/// samples (dp's and ddp's blend captures under `--max-peels` among them, refused on each GPU
+/// backend's hardware path before the capture runs; mutations tried: the refusal's `--max-peels`
+/// arm removed; oit-vulkan's call of the refusal removed, and vulkan renders it), the
+/// supersampled reference on a GPU backend's hardware path; a sample count other than
 /// 1, 4 or 8 and `--supersample` at one sample are invalid settings. Scenes with opaque objects
 /// render at 4 samples for every other technique, fabs's tail and the supersampled reference
 /// included.
@@ -564,6 +567,52 @@ fn refusals_name_what_is_not_done() {
                 "{what}"
             );
         }
+        // and under a peel limit, which would cut a fragment off at one sample while another
+        // peeled it, where the count (a fragment once) calls it captured
+        let limited = Settings { max_peels: Some(2), ..peel.clone() };
+        let what = refused(&limited);
+        assert!(what.contains("--max-peels") && what.contains("--hardware-capture atomics"), "{what}");
+        assert!(
+            oit_core::plan::refuse_multisampled_own_capture("wgpu", &Settings { samples: 1, ..limited })
+                .is_ok(),
+            "{t} --max-peels at one sample"
+        );
+    }
+    // on each GPU backend's hardware path, where it starts the capture: refused by name, not
+    // rendered (the atomics capture renders it)
+    let mut limited_on = 0;
+    for backend in gpu_backends_for("refusals_name_what_is_not_done") {
+        let backend = backend.as_ref();
+        if backend.raster_path(&Settings::default()) != oit_core::RasterPath::Hardware {
+            continue;
+        }
+        for t in [Technique::Dp, Technique::Ddp] {
+            let s = Settings {
+                technique: t,
+                max_peels: Some(2),
+                hardware_capture: oit_core::HardwareCapture::Blend,
+                ..base.clone()
+            };
+            let cam = camera(&scene, &s, View::default());
+            let on = format!("{} {t} blend --max-peels 2 at 4 samples", label(backend));
+            match backend.render(&scene, &cam, &s) {
+                Err(OitError::Unsupported { what, .. }) => {
+                    assert!(
+                        what.contains("--max-peels") && what.contains("--hardware-capture atomics"),
+                        "{on}: {what}"
+                    )
+                }
+                other => panic!("{on}: {:?}", other.map(|f| f.stats)),
+            }
+            let atomics = Settings { hardware_capture: oit_core::HardwareCapture::Atomics, ..s.clone() };
+            let f = render(backend, &scene, &cam, &atomics);
+            checks::accounting(&f).unwrap_or_else(|e| panic!("{on}, atomics: {e}"));
+            limited_on += 1;
+        }
+    }
+    if std::env::var_os("OIT_REQUIRE_GPU").is_some() {
+        // wgpu's and vulkan's hardware paths, dp and ddp
+        assert!(limited_on >= 4, "{limited_on} GPU refusals checked");
     }
     let plain = Settings { technique: Technique::Plain, ..base.clone() };
     for (what, named) in [

@@ -156,3 +156,239 @@ fn mdts_counts_what_its_depth_bits_merge() {
         }
     }
 }
+
+/// The hardware paths' own depth peels (`--hardware-capture blend`) on `coplanar`, in both
+/// primitive orders and both views, count what a tie loses, at one sample and at four:
+/// - `dp` at one sample keeps one of two equal depths a peel (the last drawn) and never peels the
+///   other: `lost` is the pixels where the reference holds two layers, each lost fragment an
+///   error pixel at most, as the atomics capture's `dp` (`coplanar_tie_is_counted_lost`). Seen
+///   face-on every overlapping pixel ties; seen at an angle some depths of the overlap are an ulp
+///   apart (ordered, not tied), and the count is the atomics capture's, which keys every depth.
+/// - `dp` at four samples peels each sample's ties in primitive order (the depth test keeps the
+///   first drawn, the previous peel's primitive a sample): the per-sample reference exactly, none
+///   lost, though the scene ties at a hundred pixels and more.
+/// - `ddp` at one sample hands both ends of a collapsed range over: both fragments of a tie are
+///   composited, in key order, and counted `tied` (face-on: both fragments of every overlapping
+///   pixel); nothing lost, never silent, the atomics capture's image and counts.
+/// - `ddp` at four samples cannot order a tie at a sample (its range targets hold depths, no
+///   primitive ids): the frame that meets one at a sample's range end is refused by name, naming
+///   `--hardware-capture atomics` (face-on always; at an angle, where no depth ties exactly, the
+///   frame must equal the reference instead). Mutations tried: the tie flag never set (both
+///   backends render face-on: 400 error pixels, nothing counted, on the reversed scene), the end
+///   check dropped from the frame's end on one backend (that backend renders).
+///
+/// Mutation tried: the per-sample peel's behind-test ignoring the primitive (`depth <=
+/// previous`, the tie's loser never peeled): 400 error pixels, 420 lost face-on at 4 samples.
+/// Writing the primitive as `prim` instead of `prim + 1` peels the same winner again forever: a
+/// hang, not a failure.
+#[test]
+fn blend_peels_count_coplanar_ties() {
+    let mut ran = 0;
+    for backend in backends_for("blend_peels_count_coplanar_ties") {
+        let b = backend.as_ref();
+        if b.raster_path(&Settings::default()) != oit_core::RasterPath::Hardware {
+            continue;
+        }
+        for scene in [scene("coplanar"), reversed(&scene("coplanar"))] {
+            for view in VIEWS {
+                for samples in [1, 4] {
+                    let s = Settings { samples, ..settings(64, "reference") };
+                    let cam = camera(&scene, &s, view);
+                    let r = render(b, &scene, &cam, &s);
+                    // the pixels where the two quads overlap: a tie of two fragments each
+                    let overlap = r
+                        .layers
+                        .as_ref()
+                        .expect("the reference's layers")
+                        .iter()
+                        .filter(|&&l| l == 2)
+                        .count() as u64;
+                    assert!(overlap > 100, "{} {} at {samples}: {overlap} pixels tie", label(b), scene.name);
+                    for t in [Technique::Dp, Technique::Ddp] {
+                        let blend =
+                            Settings { technique: t, hardware_capture: HardwareCapture::Blend, ..s.clone() };
+                        let on = format!("{} {t} blend on {} ({view:?}) at {samples}", label(b), scene.name);
+                        if t == Technique::Ddp && samples > 1 {
+                            // the range targets order no primitive ids: the frame that meets a tie
+                            // at a sample's range end is refused by name, where it would be wrong
+                            match b.render(&scene, &cam, &blend) {
+                                Err(oit_core::OitError::Unsupported { what, .. }) => assert!(
+                                    what.contains("coplanar") && what.contains("--hardware-capture atomics"),
+                                    "{on}: {what}"
+                                ),
+                                // seen at an angle some depths of the overlap are an ulp apart:
+                                // where none ties at a sample's end the frame must be right
+                                Ok(f) if view != FRONT => {
+                                    oit_tests::checks::exact(&r, &f).unwrap_or_else(|e| panic!("{on}: {e}"))
+                                }
+                                other => panic!("{on}: {:?}", other.map(|f| f.stats)),
+                            }
+                            ran += 1;
+                            continue;
+                        }
+                        let f = render(b, &scene, &cam, &blend);
+                        let atomics = render(
+                            b,
+                            &scene,
+                            &cam,
+                            &Settings { hardware_capture: HardwareCapture::Atomics, ..blend.clone() },
+                        );
+                        let a = accuracy(&r, &f.image).expect("same size");
+                        let what = format!(
+                            "{} {t} blend on {} ({view:?}) at {samples}: {} error pixels, captured {}, lost {}, tied {}",
+                            label(b),
+                            scene.name,
+                            a.error_pixels,
+                            f.stats.captured,
+                            f.stats.lost,
+                            f.stats.tied
+                        );
+                        oit_tests::checks::accounting(&f).unwrap_or_else(|e| panic!("{what}: {e}"));
+                        oit_tests::checks::never_silent(&r, &f).unwrap_or_else(|e| panic!("{what}: {e}"));
+                        assert_eq!(f.stats.fragments, r.stats.fragments, "{what}");
+                        match (t, samples) {
+                            (Technique::Dp, 1) => {
+                                if view == FRONT {
+                                    assert_eq!(f.stats.lost, overlap, "{what}: one of each tie lost");
+                                }
+                                assert!(a.error_pixels <= f.stats.lost, "{what}");
+                                assert_eq!(
+                                    (f.stats.captured, f.stats.lost),
+                                    (atomics.stats.captured, atomics.stats.lost),
+                                    "{what}: the atomics capture's"
+                                );
+                            }
+                            (Technique::Dp, _) => {
+                                oit_tests::checks::exact(&r, &f).unwrap_or_else(|e| panic!("{what}: {e}"));
+                            }
+                            _ => {
+                                assert_eq!(f.stats.lost, 0, "{what}: both ends of each tie handed over");
+                                if view == FRONT {
+                                    assert_eq!(
+                                        f.stats.tied,
+                                        2 * overlap,
+                                        "{what}: each tie's two fragments tied"
+                                    );
+                                }
+                                assert_eq!(f.stats.tied, atomics.stats.tied, "{what}: the atomics capture's");
+                                assert_eq!(f.image, atomics.image, "{what}: the atomics capture's");
+                            }
+                        }
+                        ran += 1;
+                    }
+                }
+            }
+        }
+    }
+    // wgpu and vulkan hardware: 2 scenes × 2 views × (dp and ddp at 1 and 4)
+    if std::env::var_os("OIT_REQUIRE_GPU").is_some() {
+        assert!(ran >= 2 * 2 * 2 * 4, "{ran} runs");
+    }
+}
+
+/// ddp's blend capture at several samples refuses only the frames that tie at a sample's range
+/// end (`blend_peels_count_coplanar_ties`): `planes:6`, whose quads overlap apart in depth, in both
+/// primitive orders and both views, renders on each GPU backend's hardware path at 4 samples, the
+/// per-sample reference exactly, with the atomics capture's counts (the bunny and the wall through
+/// `planes:16` in `hardware_blend_captures_at_samples`, tests/tests/msaa.rs, likewise). Mutation
+/// tried: the flag set by every hand-over, tie or not: refused here.
+#[test]
+fn ddp_blend_at_samples_renders_what_does_not_tie() {
+    let mut ran = 0;
+    for backend in backends_for("ddp_blend_at_samples_renders_what_does_not_tie") {
+        let b = backend.as_ref();
+        if b.raster_path(&Settings::default()) != oit_core::RasterPath::Hardware {
+            continue;
+        }
+        for scene in [scene("planes:6"), reversed(&scene("planes:6"))] {
+            for view in VIEWS {
+                let s = Settings { samples: 4, ..settings(64, "reference") };
+                let cam = camera(&scene, &s, view);
+                let r = render(b, &scene, &cam, &s);
+                let blend = Settings {
+                    technique: Technique::Ddp,
+                    hardware_capture: HardwareCapture::Blend,
+                    ..s.clone()
+                };
+                let on = format!("{} ddp blend on {} ({view:?}) at 4", label(b), scene.name);
+                let f = b.render(&scene, &cam, &blend).unwrap_or_else(|e| panic!("{on}: {e}"));
+                let atomics = render(
+                    b,
+                    &scene,
+                    &cam,
+                    &Settings { hardware_capture: HardwareCapture::Atomics, ..blend.clone() },
+                );
+                oit_tests::checks::accounting(&f).unwrap_or_else(|e| panic!("{on}: {e}"));
+                oit_tests::checks::exact(&r, &f).unwrap_or_else(|e| panic!("{on}: {e}"));
+                assert_eq!(
+                    (f.stats.fragments, f.stats.captured, f.stats.tied),
+                    (atomics.stats.fragments, atomics.stats.captured, atomics.stats.tied),
+                    "{on}: the atomics capture's"
+                );
+                // the quads overlap: pixels of several layers, so the ranges' two ends both hand over
+                assert!(r.stats.max_layers >= 2, "{on}: {} layers", r.stats.max_layers);
+                ran += 1;
+            }
+        }
+    }
+    if std::env::var_os("OIT_REQUIRE_GPU").is_some() {
+        // wgpu and vulkan hardware: 2 orders × 2 views
+        assert!(ran >= 2 * 2 * 2, "{ran} runs");
+    }
+}
+
+/// ddp's blend capture at several samples sees a tie at either end of an open range, not only on
+/// a collapsed one: `coplanar` with a copy of its right quad, three times as wide, 0.3 in front of
+/// the plane, then 0.3 behind it, so that where the three overlap the two coplanar fragments are one sample's far
+/// end in one scene and its near end in the other. Each frame is refused by name on each GPU
+/// backend's hardware path at 4 samples, both views. Mutations tried: the hand-over's tie test
+/// kept on the near end alone (the scene with the copy in front renders: one of the two tied
+/// fragments kept, both counted captured), on the far end alone (the other scene renders).
+#[test]
+fn ddp_blend_at_samples_refuses_ties_at_either_end() {
+    let mut ran = 0;
+    for backend in backends_for("ddp_blend_at_samples_refuses_ties_at_either_end") {
+        let b = backend.as_ref();
+        if b.raster_path(&Settings::default()) != oit_core::RasterPath::Hardware {
+            continue;
+        }
+        for dz in [0.3f32, -0.3] {
+            let mut scene = scene("coplanar");
+            let right = scene.instances[1].clone();
+            scene.instances.push(oit_core::Instance {
+                // three times as wide, so that behind the plane too it covers the whole overlap
+                // (where it did not, two coplanar fragments alone would make a collapsed range)
+                transform: glam::Mat4::from_translation(glam::Vec3::new(0.0, 0.0, dz))
+                    * glam::Mat4::from_scale(glam::Vec3::new(3.0, 3.0, 1.0))
+                    * right.transform,
+                ..right
+            });
+            scene.name = format!("coplanar with its right quad, scaled, again at z = {dz}");
+            for view in VIEWS {
+                let s = Settings { samples: 4, ..settings(64, "reference") };
+                let cam = camera(&scene, &s, view);
+                let r = render(b, &scene, &cam, &s);
+                // three layers where the quads overlap (more on a pixel the quads' diagonals cross)
+                assert!(r.stats.max_layers >= 3, "{}: {} layers", scene.name, r.stats.max_layers);
+                let blend = Settings {
+                    technique: Technique::Ddp,
+                    hardware_capture: HardwareCapture::Blend,
+                    ..s.clone()
+                };
+                let on = format!("{} ddp blend on {} ({view:?}) at 4", label(b), scene.name);
+                match b.render(&scene, &cam, &blend) {
+                    Err(oit_core::OitError::Unsupported { what, .. }) => assert!(
+                        what.contains("coplanar") && what.contains("--hardware-capture atomics"),
+                        "{on}: {what}"
+                    ),
+                    other => panic!("{on}: {:?}", other.map(|f| f.stats)),
+                }
+                ran += 1;
+            }
+        }
+    }
+    if std::env::var_os("OIT_REQUIRE_GPU").is_some() {
+        // wgpu and vulkan hardware: 2 copies × 2 views
+        assert!(ran >= 2 * 2 * 2, "{ran} runs");
+    }
+}

@@ -11,9 +11,18 @@
 // accumulator and its far one into its back (peel_samples.wgsl); after the last pass every pixel's
 // samples are finished over their own opaque colours (`accumulated`).
 //
-// Equal depths on one sample's end hand over one payload (the smallest or largest key) and lose
-// the other, as ddp_blend.wgsl at one sample; both count themselves handed over (the count is
-// made before the atomics pick one), so there `captured` counts the lost one too.
+// Equal depths on one sample's end cannot be ordered here: the range targets hold depths, not
+// primitive ids, and a fragment can win a tie at one sample and lose it at another in different
+// passes. Two or more on one end would hand over one payload (the smallest or largest key) and
+// lose the rest while each counts itself handed over, and two on a collapsed range would be
+// composited in key order with nothing counted `tied`. So the hand-over's atomics say whether
+// another fragment reached the same end of the same sample in this pass (the hand-overs start
+// every pass empty: the previous value holds this depth only where one did), and such a pass sets
+// `ddps_ties`, which the frame's end refuses by name (`oit_gpu::technique::ddp_blend_sample_state`:
+// use the atomics capture, whose keys order ties by primitive id). Exact: a previous near value
+// is empty (all ones, no depth's bits) or a fragment's key; a previous far value is empty (0) or a
+// key whose depth lies beyond the sample's near end, so above 0, or on a collapsed range, where
+// the near end's test already sees the tie.
 //
 // Module: COMMON_WGSL, TECHNIQUE_PRELUDE (group 0: fu, state), peel_samples.wgsl (group 0 binding
 // 5: the accumulators), this, then the hardware raster's vertex stage (group 1 bindings 0..4) and
@@ -24,6 +33,8 @@
 @group(0) @binding(2) var<storage, read_write> ddps_near_key: array<atomic<u64>>;
 @group(0) @binding(3) var<storage, read_write> ddps_far_key: array<atomic<u64>>;
 @group(0) @binding(4) var<storage, read_write> ddps_handed: array<atomic<u32>>;
+// Set where two fragments or more reached one end of one sample's range in a pass (word 0).
+@group(0) @binding(6) var<storage, read_write> ddps_ties: array<atomic<u32>>;
 
 // (−near, far) of the previous pass a sample (unused by the first); nothing left: (−2, −2).
 @group(2) @binding(0) var ddps_previous: texture_multisampled_2d<f32>;
@@ -69,11 +80,18 @@ fn ddp_peel_ms_fs(in: HwOut, @builtin(front_facing) front: bool, @builtin(sample
             let near = depth_bits(-previous.x);
             let far = depth_bits(previous.y);
             if (d == near || d == far) {
+                // another fragment at this end of this sample in this pass: a tie
+                var tie = false;
                 if (d == near) {
-                    atomicMin(&ddps_near_key[px * n + i], key);
+                    let was = atomicMin(&ddps_near_key[px * n + i], key);
+                    tie = tie || (was != DDPS_NONE && u32(was >> 32u) == d);
                 }
                 if (d == far) {
-                    atomicMax(&ddps_far_key[px * n + i], key);
+                    let was = atomicMax(&ddps_far_key[px * n + i], key);
+                    tie = tie || (was != 0lu && u32(was >> 32u) == d);
+                }
+                if (tie) {
+                    atomicStore(&ddps_ties[0], 1u);
                 }
                 if ((1u << i) == lowest) {
                     atomicAdd(&ddps_handed[px], 1u);

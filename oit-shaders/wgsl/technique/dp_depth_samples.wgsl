@@ -1,26 +1,34 @@
 // dp through the graphics pipeline at several samples a pixel (`--hardware-capture blend`,
 // `--samples 4|8`; docs/msaa.md, "Depth peeling per sample on the blender"): dp_depth.wgsl's
-// depth peel with its depth kept a sample. Each peel renders the scene into a fresh multisampled
-// Depth32Float attachment (LESS_EQUAL, cleared to 1) and a multisampled Rg32Uint layer; the
-// fragment stage writes its one depth (the pixel centre's, `frag_depth`, so every sample it
-// covers tests the depth oit's other captures key it by) to the samples it keeps (`hw_kept`: those
-// it covers in front of their opaque depths) that lie strictly behind the previous peel's depth
-// at that sample (read a sample from the other of two ping-ponged depth targets), so each sample
-// peels its own nearest remaining fragment, as the per-sample reference composites each sample's
-// fragments in depth order. The layer holds (payload, kept mask): a compute step composites each
+// depth peel with its depth kept a sample, and its ties peeled in primitive order. Each peel
+// renders the scene into a fresh multisampled Depth32Float attachment (LESS, cleared to 1), a
+// multisampled Rg32Uint layer and a multisampled R32Uint primitive target; the fragment stage
+// writes its one depth (the pixel centre's, `frag_depth`, so every sample it covers tests the
+// depth oit's other captures key it by) to the samples it keeps (`hw_kept`: those it covers in
+// front of their opaque depths) whose key (depth, primitive id) lies strictly behind the key the
+// previous peel left at that sample (its depth and its primitive id + 1, read a sample from the
+// other of two ping-ponged depth and primitive targets). The LESS test keeps, of equal depths,
+// the first drawn, which is the smallest primitive id (the hardware path draws triangle t as
+// primitive t, and the depth test runs in primitive order), so each sample peels its fragments
+// in (depth, primitive id) order, one a peel, as the per-sample reference composites them and
+// the atomics capture's per-sample peel (dp_samples.wgsl) keys them: a tie at a sample is two
+// layers, none lost. The layer holds (payload, kept mask): a compute step composites each
 // sample's layer into that sample's accumulator (peel_samples.wgsl), counting a fragment once, at
 // the lowest sample it keeps (where it is peeled once); after the last peel every pixel's samples
 // are finished over their own opaque colours (`accumulated`).
 //
-// Equal depths at one sample keep the last drawn and lose the other, as dp_depth.wgsl at one
-// sample (the blender orders no primitive ids).
+// A fragment at depth 1 exactly never passes LESS against the cleared attachment: it is never
+// peeled, so never counted captured, and the frame's `lost` (fragments less captured and
+// occluded) holds it.
 //
 // Module: COMMON_WGSL, TECHNIQUE_PRELUDE (group 0: fu, state), peel_samples.wgsl (group 0 binding
 // 5: the accumulators), this, then the hardware raster's vertex stage (group 1 bindings 0..4) and
 // blend_stage.wgsl (`hw_kept`).
 
-// The previous peel's depth, a sample (render pipeline, group 2; unused on the first peel).
+// The previous peel's depth and primitive id + 1 (0: none peeled), a sample (render pipeline,
+// group 2; unused on the first peel).
 @group(2) @binding(0) var dps_previous: texture_depth_multisampled_2d;
+@group(2) @binding(1) var dps_previous_prim: texture_multisampled_2d<u32>;
 
 // This peel's layer and depth, a sample (compute pipeline, group 1, after the vertex stage's).
 @group(1) @binding(3) var dps_layer: texture_multisampled_2d<u32>;
@@ -28,6 +36,7 @@
 
 struct DpPeelMsOut {
     @location(0) layer: vec2<u32>,
+    @location(1) prim: u32,
     @builtin(frag_depth) depth: f32,
     @builtin(sample_mask) written: u32,
 }
@@ -42,7 +51,9 @@ fn dp_peel_ms_fs(in: HwOut, @builtin(front_facing) front: bool, @builtin(sample_
         for (var i = 0u; i < fu.msaa.x; i++) {
             if (((behind >> i) & 1u) != 0u) {
                 let previous = clamp(textureLoad(dps_previous, vec2<i32>(xy), i32(i)), 0.0, 1.0);
-                if (depth <= previous) {
+                let previous_prim = textureLoad(dps_previous_prim, vec2<i32>(xy), i32(i)).x;
+                // strictly behind by (depth, primitive id): at the previous depth, a later primitive
+                if (depth < previous || (depth == previous && in.prim + 1u <= previous_prim)) {
                     behind &= ~(1u << i);
                 }
             }
@@ -57,7 +68,7 @@ fn dp_peel_ms_fs(in: HwOut, @builtin(front_facing) front: bool, @builtin(sample_
     f.prim = in.prim;
     f.color = clamp(hw_color(in), vec4<f32>(0.0), vec4<f32>(1.0));
     f.normal = normalize_or_zero(in.normal);
-    return DpPeelMsOut(vec2<u32>(payload(f, fu.effect), kept), depth, behind);
+    return DpPeelMsOut(vec2<u32>(payload(f, fu.effect), kept), in.prim + 1u, depth, behind);
 }
 
 // Composites this peel's layer, each sample's into that sample's accumulator (one invocation a

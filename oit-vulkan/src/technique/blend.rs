@@ -24,7 +24,10 @@
 //!
 //! The blend unit returns no previous value, so these captures cannot count where they lose a
 //! fragment: their `lost` is `fragments − captured − occluded` (as on oit-wgpu); adp's is still
-//! counted (its bucket passes are atomics).
+//! counted (its bucket passes are atomics). Where that count could be wrong they refuse the frame,
+//! as oit-wgpu does: `dp` and `ddp` at several samples under `--max-peels` before they run, and
+//! `ddp` at several samples at the frame's end where two fragments met at one end of a sample's
+//! range (`oit_gpu::technique::ddp_blend_sample_state`).
 //!
 //! Every one of them runs after the opaque pass (`oit_gpu::technique::opaque_first`), and its
 //! fragment stage first drops what `hw_dropped` drops (oit-shaders' `core/blend_stage.wgsl`: back
@@ -37,7 +40,7 @@ use ash::vk;
 use oit_core::{BlendTarget, OitError};
 
 use crate::ctx::{BlendPass, Init, VkCtx};
-use crate::device::{Blend, Buffer, GpuImage};
+use crate::device::{Blend, Buffer, DepthTest, GpuImage};
 use crate::hardware::HardwareRaster;
 use crate::raster::{Drivers, Raster};
 
@@ -46,6 +49,7 @@ const RGBA32U: vk::Format = vk::Format::R32G32B32A32_UINT;
 const RG32F: vk::Format = vk::Format::R32G32_SFLOAT;
 const RG32U: vk::Format = vk::Format::R32G32_UINT;
 const R32F: vk::Format = vk::Format::R32_SFLOAT;
+const R32U: vk::Format = vk::Format::R32_UINT;
 const DEPTH: vk::Format = vk::Format::D32_SFLOAT;
 
 fn unsupported(what: String) -> OitError {
@@ -167,7 +171,7 @@ fn draw_and_resolve(
             targets: &[&color_target, &count_target],
             blends: &[color, Blend::AddRed],
             clears: &[clear_f(clear), clear_f([0.0; 4])],
-            depth: false,
+            depth: DepthTest::Off,
             previous: &[],
             occlusion: false,
             gated: false,
@@ -224,7 +228,7 @@ pub(crate) fn bdp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
             targets: &views,
             blends: &[Blend::Max; 8],
             clears: &[clear_f([0.0; 4]); 8],
-            depth: false,
+            depth: DepthTest::Off,
             previous: &[],
             occlusion: false,
             gated: false,
@@ -327,6 +331,7 @@ pub(crate) fn dp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitEr
         let mut storage = oit_gpu::technique::Storage::new(ctx, 0);
         storage.attachments("peel depths", 8 * u64::from(samples))?;
         storage.attachments("peeled layer", 8 * u64::from(samples))?;
+        storage.attachments("peeled primitives", 8 * u64::from(samples))?;
         let acc = storage.buffer(ctx, "sample accumulators", Init::Zero)?;
         storage.finish()?;
         buffers = vec![ctx.placeholder()?, ctx.placeholder()?, ctx.placeholder()?, acc];
@@ -339,24 +344,45 @@ pub(crate) fn dp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitEr
     };
     let depths = [ctx.target_sampled(DEPTH, 4, true, samples)?, ctx.target_sampled(DEPTH, 4, true, samples)?];
     let layer = ctx.target_sampled(RG32U, 8, false, samples)?;
+    // at several samples: the peeled primitive a sample, ping-ponged as the depths are
+    let prims = if ms {
+        Some([ctx.target_sampled(R32U, 4, false, samples)?, ctx.target_sampled(R32U, 4, false, samples)?])
+    } else {
+        None
+    };
     // the first peel's "previous" depth is never read, but is bound: readable, if undefined
     ctx.make_readable(&depths[1]);
+    if let Some(prims) = &prims {
+        ctx.make_readable(&prims[1]);
+    }
     let limit = ctx.plan.peel_limit;
     let control = OcclusionPeel::new(ctx, limit)?;
     let mut run = 0;
     loop {
         let slot = (run % 2) as usize;
         let gated = control.gate(ctx, raster, run)?;
+        let clear = vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } };
+        // at several samples the primitive targets beside the layer, and the depth test that
+        // keeps the first drawn of equal depths (ties peeled in primitive order)
+        let (targets, previous, depth) = match &prims {
+            Some(p) => (
+                vec![&*layer, &*p[slot], &*depths[slot]],
+                vec![(0, &*depths[1 - slot]), (1, &*p[1 - slot])],
+                DepthTest::WriteLess,
+            ),
+            None => (vec![&*layer, &*depths[slot]], vec![(0, &*depths[1 - slot])], DepthTest::Write),
+        };
+        let colours = targets.len() - 1;
         ctx.blend_pass(
             raster,
             BlendPass {
                 module,
                 fs: peel_fs,
-                targets: &[&layer, &depths[slot]],
-                blends: &[Blend::Replace],
-                clears: &[vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } }],
-                depth: true,
-                previous: &[(0, &depths[1 - slot])],
+                targets: &targets,
+                blends: &[Blend::Replace, Blend::Replace][..colours],
+                clears: &[clear, clear][..colours],
+                depth,
+                previous: &previous,
                 occlusion: true,
                 gated,
                 pass_index: run,
@@ -450,7 +476,7 @@ pub(crate) fn ddp(ctx: &mut VkCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitE
                 targets: &[&ranges[slot]],
                 blends: &[Blend::Max],
                 clears: &[clear_f([-2.0, -2.0, 0.0, 0.0])],
-                depth: false,
+                depth: DepthTest::Off,
                 previous: &[(0, &ranges[1 - slot])],
                 occlusion: true,
                 gated,
@@ -510,7 +536,7 @@ pub(crate) fn adp_histogram(
             targets: &views,
             blends: &[Blend::LogicOr; 8],
             clears: &[vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } }; 8],
-            depth: false,
+            depth: DepthTest::Off,
             previous: &[],
             occlusion: false,
             gated: false,

@@ -31,7 +31,9 @@ const TARGETS: u32 = 8;
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
-    // NOT COUNTED yet (issue 16): the blend unit returns no previous value to count losses by
+    // the blend unit returns no previous value to count a collision by where it happens: `lost`
+    // is derived, fragments − captured − occluded (the resolve counts the buckets it composites),
+    // and says nothing of where (no `lost_pixels`)
     ctx.counts_losses = false;
     let oit_core::Technique::Bdp { passes } = ctx.settings.technique else {
         return Err(OitError::InvalidSettings(format!("{} is not bdp", ctx.settings.technique)));

@@ -42,7 +42,12 @@ const SAMPLES_WGSL: [&str; 2] =
 const RANGE: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
-    // NOT COUNTED yet (issue 16): the blend unit returns no previous value to count losses by
+    // the blend unit returns no previous value to count a loss by where it happens: `lost` is
+    // derived, fragments − captured − occluded, and says nothing of where (no `lost_pixels`).
+    // Exact, as the resolve counts what it composites; at several samples each fragment counts
+    // itself handed over, which a tie at a sample's range end would make wrong, so a frame that
+    // meets one fails at its end (`oit_gpu::technique::ddp_blend_sample_state`), and
+    // `--max-peels` there is refused before this runs
     ctx.counts_losses = false;
     oit_gpu::technique::check_ddp_effect("wgpu", ctx.settings.effect)?;
     let stage = scene_stage(drivers)?;
@@ -152,6 +157,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
                 label: "ddp blend pass",
                 color: &views[slot],
                 clear: wgpu::Color { r: -2.0, g: -2.0, b: 0.0, a: 0.0 },
+                second: None,
                 depth: None,
             },
             &occlusion,

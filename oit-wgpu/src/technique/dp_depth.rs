@@ -24,8 +24,15 @@
 //! the layer are multisampled, `dp_depth_samples.wgsl`'s `dp_peel_ms_fs` writes the fragment's
 //! one depth to the samples it keeps behind the previous peel's depth there, the composite puts
 //! each sample's layer into that sample's accumulator (the plan's "sample accumulators") and a
-//! last kernel finishes every pixel's samples over their opaque colours. Storage: the targets a
-//! sample and the accumulators (`Plan::blend_targets`).
+//! last kernel finishes every pixel's samples over their opaque colours. Ties are peeled in
+//! primitive order there: the depth test is LESS (of equal depths the first drawn, the smallest
+//! primitive id), and a multisampled R32Uint target, ping-ponged as the depths are, keeps each
+//! sample's peeled primitive id + 1, so the next peel keeps a fragment at a sample where its
+//! (depth, primitive id) lies strictly behind the previous peel's: a tie is two layers, none lost,
+//! the per-sample reference exactly (`blend_peels_count_coplanar_ties`, tests/tests/ties.rs). At one
+//! sample the tie keeps the last drawn and the other is never peeled: `lost`, derived as fragments
+//! less captured and occluded, counts it. Storage: the targets a sample and the accumulators
+//! (`Plan::blend_targets`).
 
 use oit_core::OitError;
 
@@ -42,9 +49,15 @@ const SAMPLES_WGSL: [&str; 2] =
     [oit_shaders::text("technique/peel_samples.wgsl"), oit_shaders::text("technique/dp_depth_samples.wgsl")];
 const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 const LAYER: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
+/// At several samples: the peeled fragment's primitive id + 1 a sample (0: none).
+const PRIM: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
-    // NOT COUNTED yet (issue 16): the blend unit returns no previous value to count losses by
+    // the blend unit returns no previous value to count a loss by where it happens: `lost` is
+    // derived, fragments − captured − occluded, and says nothing of where (no `lost_pixels`).
+    // Exact, as a fragment counts itself captured where it is peeled (at several samples, once,
+    // at its lowest kept sample, and `--max-peels` there is refused before this runs:
+    // `oit_core::plan::refuse_multisampled_own_capture`)
     ctx.counts_losses = false;
     let stage = scene_stage(drivers)?;
     check_texture_size(ctx, "the dp depth and layer textures")?;
@@ -56,10 +69,11 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     let ms = samples > 1;
     // at several samples: the targets a sample and each sample's accumulator (the plan's arrays)
     let acc = if ms {
-        super::blend::check_samples(ctx, &[DEPTH, LAYER])?;
+        super::blend::check_samples(ctx, &[DEPTH, LAYER, PRIM])?;
         let mut storage = oit_gpu::technique::Storage::new(ctx, 0);
         storage.attachments("peel depths", 8 * u64::from(samples))?;
         storage.attachments("peeled layer", 8 * u64::from(samples))?;
+        storage.attachments("peeled primitives", 8 * u64::from(samples))?;
         // set by the first peel's composite
         let acc = storage.buffer(ctx, "sample accumulators", Init::Zero)?;
         storage.finish()?;
@@ -73,7 +87,15 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         stage.target_sampled(&device, "dp depth 1", DEPTH, samples),
     ];
     let layer_view = stage.target_sampled(&device, "dp layer", LAYER, samples);
-    ctx.storage_bytes += u64::from(ctx.pixels) * (4 + 4 + 8) * u64::from(samples);
+    // at several samples: the peeled primitive a sample, ping-ponged as the depths are
+    let prim_views = ms.then(|| {
+        [
+            stage.target_sampled(&device, "dp prim 0", PRIM, samples),
+            stage.target_sampled(&device, "dp prim 1", PRIM, samples),
+        ]
+    });
+    let prim_bytes = if ms { 4 + 4 } else { 0 };
+    ctx.storage_bytes += u64::from(ctx.pixels) * (4 + 4 + 8 + prim_bytes) * u64::from(samples);
     let occlusion = stage.occlusion(&device);
     // group 0's buffers: the accumulators at peel_samples.wgsl's binding 5 (2 to 4 unused)
     let buffers: Vec<wgpu::Buffer> = match &acc {
@@ -94,20 +116,39 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         },
         count: None,
     };
-    // group 2 of the peel: the previous depth; peel p renders into depths[p % 2] and reads the other
+    // group 2 of the peel: the previous depth (and at several samples the previous primitive);
+    // peel p renders into depths[p % 2] and reads the other
+    let prim_entry = wgpu::BindGroupLayoutEntry {
+        binding: 1,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Uint,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: true,
+        },
+        count: None,
+    };
+    let previous_entries = [depth_entry(0, wgpu::ShaderStages::FRAGMENT), prim_entry];
     let previous_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("dp previous depth"),
-        entries: &[depth_entry(0, wgpu::ShaderStages::FRAGMENT)],
+        entries: &previous_entries[..if ms { 2 } else { 1 }],
     });
     let previous_groups: Vec<wgpu::BindGroup> = (0..2)
         .map(|p| {
+            let mut entries = vec![wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&depth_views[(p + 1) % 2]),
+            }];
+            if let Some(prims) = &prim_views {
+                entries.push(wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&prims[(p + 1) % 2]),
+                });
+            }
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("dp previous depth"),
                 layout: &previous_layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&depth_views[(p + 1) % 2]),
-                }],
+                entries: &entries,
             })
         })
         .collect();
@@ -168,15 +209,28 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
                     &module_source,
                     &[&layout0, stage.layout(), &previous_layout],
                     peel_fs,
-                    &[Some(wgpu::ColorTargetState {
-                        format: LAYER,
-                        blend: None,
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
+                    &[
+                        Some(wgpu::ColorTargetState {
+                            format: LAYER,
+                            blend: None,
+                            write_mask: wgpu::ColorWrites::ALL,
+                        }),
+                        Some(wgpu::ColorTargetState {
+                            format: PRIM,
+                            blend: None,
+                            write_mask: wgpu::ColorWrites::ALL,
+                        }),
+                    ][..if ms { 2 } else { 1 }],
                     Some(wgpu::DepthStencilState {
                         format: DEPTH,
                         depth_write_enabled: Some(true),
-                        depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                        // at several samples the first drawn of equal depths, the smallest
+                        // primitive id: ties peeled in primitive order
+                        depth_compare: Some(if ms {
+                            wgpu::CompareFunction::Less
+                        } else {
+                            wgpu::CompareFunction::LessEqual
+                        }),
                         stencil: Default::default(),
                         bias: Default::default(),
                     }),
@@ -194,6 +248,7 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
                 label: "dp depth peel",
                 color: &layer_view,
                 clear: wgpu::Color::TRANSPARENT,
+                second: prim_views.as_ref().map(|prims| &prims[slot]),
                 depth: Some(&depth_views[slot]),
             },
             &occlusion,
