@@ -300,60 +300,55 @@ fn resolve_entries(
         }
         s
     };
-    thread_local! {
-        // each thread's list of a pixel's entries, kept from pixel to pixel
-        static LIST: std::cell::RefCell<Vec<Entry>> = const { std::cell::RefCell::new(Vec::new()) };
-    }
-    super::finish_pixels(ctx, |px| {
-        LIST.with_borrow_mut(|list| {
-            gather(px, list);
-            list.sort_unstable();
-            let c: Vec3 = if complexity {
-                if list.is_empty() {
-                    resolve.background_mean(px)
-                } else {
-                    oit_core::composite::heat(list.len() as f32 / deepest as f32)
-                }
-            } else if resolve.opaque_uniform(px) && list.iter().all(|e| e.2 == full) {
-                let mut s = fresh(px, 0);
-                push_all(&mut s, &mut list.iter());
-                resolve.finish_over(&mut s, resolve.background_at_sample(px, 0))
+    // each task's list of a pixel's entries, kept from pixel to pixel
+    super::finish_pixels_with(ctx, Vec::new, |list: &mut Vec<Entry>, px| {
+        gather(px, list);
+        list.sort_unstable();
+        let c: Vec3 = if complexity {
+            if list.is_empty() {
+                resolve.background_mean(px)
             } else {
-                // each sample over its own opaque colour (the background where none covers it),
-                // the samples' colours summed in sample order; a sample that composites the same
-                // entries over the same colour as an earlier one takes its colour (the same
-                // bits: the same pushes over the same state)
-                let mut seen = [(0u64, [0u32; 3], Vec3::ZERO); 8];
-                let mut distinct = 0;
-                let mut sum = Vec3::ZERO;
-                for i in 0..samples {
-                    let bg = resolve.background_at_sample(px, i as usize);
-                    let bits = bg.to_array().map(f32::to_bits);
-                    // the entries covering sample i, a bit each (none kept past 64 entries)
-                    let covering = (list.len() <= 64).then(|| {
-                        list.iter().enumerate().fold(0u64, |m, (k, e)| m | u64::from(e.2 >> i & 1) << k)
-                    });
-                    let known =
-                        covering.and_then(|set| seen[..distinct].iter().find(|s| s.0 == set && s.1 == bits));
-                    let c = match known {
-                        Some(s) => s.2,
-                        None => {
-                            let mut s = fresh(px, i as usize);
-                            push_all(&mut s, &mut list.iter().filter(|e| e.2 >> i & 1 == 1));
-                            let c = resolve.finish_over(&mut s, bg);
-                            if let Some(set) = covering {
-                                seen[distinct] = (set, bits, c);
-                                distinct += 1;
-                            }
-                            c
+                oit_core::composite::heat(list.len() as f32 / deepest as f32)
+            }
+        } else if resolve.opaque_uniform(px) && list.iter().all(|e| e.2 == full) {
+            let mut s = fresh(px, 0);
+            push_all(&mut s, &mut list.iter());
+            resolve.finish_over(&mut s, resolve.background_at_sample(px, 0))
+        } else {
+            // each sample over its own opaque colour (the background where none covers it),
+            // the samples' colours summed in sample order; a sample that composites the same
+            // entries over the same colour as an earlier one takes its colour (the same
+            // bits: the same pushes over the same state)
+            let mut seen = [(0u64, [0u32; 3], Vec3::ZERO); 8];
+            let mut distinct = 0;
+            let mut sum = Vec3::ZERO;
+            for i in 0..samples {
+                let bg = resolve.background_at_sample(px, i as usize);
+                let bits = bg.to_array().map(f32::to_bits);
+                // the entries covering sample i, a bit each (none kept past 64 entries)
+                let covering = (list.len() <= 64).then(|| {
+                    list.iter().enumerate().fold(0u64, |m, (k, e)| m | u64::from(e.2 >> i & 1) << k)
+                });
+                let known =
+                    covering.and_then(|set| seen[..distinct].iter().find(|s| s.0 == set && s.1 == bits));
+                let c = match known {
+                    Some(s) => s.2,
+                    None => {
+                        let mut s = fresh(px, i as usize);
+                        push_all(&mut s, &mut list.iter().filter(|e| e.2 >> i & 1 == 1));
+                        let c = resolve.finish_over(&mut s, bg);
+                        if let Some(set) = covering {
+                            seen[distinct] = (set, bits, c);
+                            distinct += 1;
                         }
-                    };
-                    sum += c;
-                }
-                sum / samples as f32
-            };
-            (crate::resolve::srgb(c), list.len() as u32)
-        })
+                        c
+                    }
+                };
+                sum += c;
+            }
+            sum / samples as f32
+        };
+        (crate::resolve::srgb(c), list.len() as u32)
     })
 }
 
