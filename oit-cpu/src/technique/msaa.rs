@@ -712,6 +712,8 @@ mod tests {
     /// fragments than the sizing pass) loses exactly the fragments past it, each counted at its
     /// pixel; and a band whose block is short of its fragments loses its own excess, counted at
     /// its own pixels, never taking another band's nodes (the pool's spare nodes left unused).
+    /// Mutations caught: the loss not counted (a fragment past its block dropped in silence),
+    /// each band sized by the next band's count.
     #[test]
     fn ll_pool_or_block_too_small_counts_what_it_loses() {
         let scene = load_scene("planes:4").unwrap();
