@@ -1023,6 +1023,18 @@ impl Rasterizer {
         shade: Shade,
         make: impl Fn(usize) -> F + Sync,
     ) -> Vec<u64> {
+        let per_band = self.bands_run(|b, rows, tris| {
+            self.task(kernel, shade, self.band_order(tris, shade), rows, &make(b), None)
+        });
+        self.fragments.get_or_init(|| per_band.iter().sum());
+        per_band
+    }
+
+    /// The banded passes' tasks: `walk(b, rows, tris)` for each band `b`, one rayon task a band,
+    /// `rows` the band's rows (inclusive) and `tris` its triangles ([`Bands`], made by the first
+    /// banded pass of a frame); returns what each band's walk returns (its fragments), top band
+    /// first.
+    fn bands_run(&self, walk: impl Fn(usize, [u32; 2], &[u32]) -> u64 + Sync) -> Vec<u64> {
         let height = self.setup.height;
         let bands = self.bands.get_or_init(|| {
             let mut bands = std::mem::take(
@@ -1031,29 +1043,30 @@ impl Rasterizer {
             bands.make(&self.edges, height, rayon::current_num_threads());
             bands
         });
-        let per_band: Vec<u64> = (0..bands.start.len() - 1)
+        (0..bands.start.len() - 1)
             .into_par_iter()
             .map(|b| {
                 let (rows, tris) = bands.band(b, height);
-                // highest primitive first; a band's triangles lie all over the frame's records
-                // (every row of a grid of meshes is in every band's list), so each record (and
-                // its shading record, where the pass shades by the headlight) is asked for from
-                // memory a few triangles ahead of its walk
-                let shaded = shade == Shade::Color && self.setup.shading == Shading::Headlight;
-                let order = (0..tris.len()).rev().map(|k| {
-                    if let Some(&ahead) = k.checked_sub(PREFETCH).and_then(|a| tris.get(a)) {
-                        prefetch(&self.edges[ahead as usize]);
-                        if shaded {
-                            prefetch(&self.shades[ahead as usize]);
-                        }
-                    }
-                    tris[k] as usize
-                });
-                self.task(kernel, shade, order, rows, &make(b), None)
+                walk(b, rows, tris)
             })
-            .collect();
-        self.fragments.get_or_init(|| per_band.iter().sum());
-        per_band
+            .collect()
+    }
+
+    /// A band's triangles `tris` in the order its walk takes them: highest primitive first. A
+    /// band's triangles lie all over the frame's records (every row of a grid of meshes is in
+    /// every band's list), so each record (and its shading record, where the pass shades by the
+    /// headlight, `shade`) is asked for from memory a few triangles ahead of its walk.
+    fn band_order<'a>(&'a self, tris: &'a [u32], shade: Shade) -> impl Iterator<Item = usize> + 'a {
+        let shaded = shade == Shade::Color && self.setup.shading == Shading::Headlight;
+        (0..tris.len()).rev().map(move |k| {
+            if let Some(&ahead) = k.checked_sub(PREFETCH).and_then(|a| tris.get(a)) {
+                prefetch(&self.edges[ahead as usize]);
+                if shaded {
+                    prefetch(&self.shades[ahead as usize]);
+                }
+            }
+            tris[k] as usize
+        })
     }
 
     /// [`Rasterizer::for_each_fragment_with`]'s Scatter pass on `kernel`, behind the cut (tests:
@@ -1257,6 +1270,67 @@ impl Rasterizer {
         F: Fn(&Fragment<'_>, u8) + Sync,
     {
         self.masked_pass(samples, Shade::OnDemand, (keep, None), f)
+    }
+
+    /// The banded pass ([`Rasterizer::for_each_fragment_by_band`]) over the multisampled
+    /// fragments: each of [`Rasterizer::for_each_masked_fragment`]'s fragments with its mask
+    /// (the same fragments and masks bit for bit, the cut a sample's as that pass's), walked by
+    /// bands of rows, each band by one task with the shader `make(b)` gives it, its triangles
+    /// highest primitive first. No other task writes a fragment to the band's pixels, so a
+    /// shader may update its pixels' words by plain loads and stores and keep counts of its own
+    /// (`ll`'s nodes at several samples, a band's block at a time). Where `ahead` is given each
+    /// pixel is asked for a few fragments before its turn, as
+    /// [`Rasterizer::for_each_masked_fragment_ahead`] does. Returns each band's fragments (every
+    /// fragment drawn, those the cut holds back included), top band first; the bands are those
+    /// of every banded pass of the frame.
+    pub fn for_each_masked_fragment_by_band<F: Fn(&Fragment<'_>, u8)>(
+        &self,
+        samples: u32,
+        shade: Shade,
+        ahead: Option<&(dyn Fn(u32) + Sync)>,
+        make: impl Fn(usize) -> F + Sync,
+    ) -> Vec<u64> {
+        let kernel = Kernel::detect();
+        let Some(cut) = &self.cut else {
+            return self.masked_by_band(kernel, samples, shade, ahead, make);
+        };
+        let counting = cut.occluded.get().is_none();
+        let pass = COUNTING_PASS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let (depth, per) = (&*cut.depth, samples as usize);
+        debug_assert_eq!(depth.len(), self.setup.width as usize * self.setup.height as usize * per);
+        let make = &make;
+        let per_band = self.masked_by_band(kernel, samples, shade, ahead, move |b| {
+            let f = make(b);
+            move |frag: &Fragment<'_>, mask: u8| {
+                let kept = front_samples(&depth[frag.pixel as usize * per..][..per], frag.depth, mask);
+                if kept != 0 {
+                    f(frag, kept);
+                } else if counting {
+                    occlude(pass);
+                }
+            }
+        });
+        if counting {
+            let _ = cut.occluded.set(take_occluded(pass));
+        }
+        per_band
+    }
+
+    /// [`Rasterizer::for_each_masked_fragment_by_band`] on `kernel`, without the cut.
+    fn masked_by_band<F: Fn(&Fragment<'_>, u8)>(
+        &self,
+        kernel: Kernel,
+        samples: u32,
+        shade: Shade,
+        ahead: Ahead<'_>,
+        make: impl Fn(usize) -> F + Sync,
+    ) -> Vec<u64> {
+        let offsets = sample_offsets(samples);
+        let keep = |_: u32| true;
+        self.bands_run(|b, rows, tris| {
+            let order = self.band_order(tris, shade);
+            self.masked_task(kernel, shade, order, rows, &offsets, (&keep, ahead), &make(b))
+        })
     }
 
     /// The masked passes: [`Rasterizer::for_each_masked_fragment_where`] shaded as `shade` says,
@@ -2741,6 +2815,137 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    /// The masked banded pass ([`Rasterizer::for_each_masked_fragment_by_band`]) on each kernel,
+    /// shaded ahead and on demand, at 4 and 8 samples, on 1 and 3 threads (bands of 16 and 8
+    /// rows, which cut the large and the small triangles): the masked walk's fragments and masks
+    /// over every row (`masked_kernels_agree`'s), bit for bit; each band's count the fragments
+    /// its own shader got; each pixel's fragments from one band, highest primitive first.
+    /// Mutations caught: the masked walk's rows left at every row (each band walking whole
+    /// boxes: "not the masked walk's fragments and masks"), a band's triangles in primitive
+    /// order.
+    #[test]
+    fn masked_band_pass_gives_the_masked_fragments_by_band() {
+        let (scene, cam, w, h) = random_view();
+        let kernels = if Kernel::detect() == Kernel::Portable {
+            eprintln!("no AVX2 on this host: the portable kernel alone");
+            vec![Kernel::Portable]
+        } else {
+            vec![Kernel::Portable, Kernel::detect()]
+        };
+        for samples in [4, 8] {
+            let s = Settings { samples, ..settings(w, h) };
+            for threads in [1, 3] {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                // set up and binned on the pool, so the bands are cut for its threads
+                let r = pool.install(|| Rasterizer::new(&scene, &cam, &s));
+                let offsets = sample_offsets(samples);
+                let whole = Mutex::new(Vec::new());
+                let n = r.setup.triangles.len();
+                let keep = |_: u32| true;
+                r.masked_task(
+                    Kernel::Portable,
+                    Shade::OnDemand,
+                    0..n,
+                    ALL_ROWS,
+                    &offsets,
+                    (&keep, None),
+                    &|f, m| {
+                        whole.lock().unwrap().push((key(&f.full()), m));
+                    },
+                );
+                let mut expected = whole.into_inner().unwrap();
+                expected.sort_unstable();
+                let full = oit_core::msaa::full_mask(samples);
+                assert!(expected.len() > 1000 && expected.iter().any(|f| f.1 != full), "{}", expected.len());
+                for &kernel in &kernels {
+                    for shade in [Shade::Color, Shade::OnDemand] {
+                        let what = format!("{samples} samples, {threads} threads, {kernel:?}, {shade:?}");
+                        let all = Mutex::new(Vec::new());
+                        let per_band = pool.install(|| {
+                            r.masked_by_band(kernel, samples, shade, None, |b| {
+                                let (all, what) = (&all, &what);
+                                move |f: &Fragment<'_>, mask: u8| {
+                                    let made = shade == Shade::Color && kernel != Kernel::Portable;
+                                    assert_eq!(f.color.is_some(), made, "{what}");
+                                    all.lock().unwrap().push((key(&f.full()), mask, b));
+                                }
+                            })
+                        });
+                        let all = all.into_inner().unwrap();
+                        assert!(per_band.len() > 1, "{what}: {} bands", per_band.len());
+                        for (b, &count) in per_band.iter().enumerate() {
+                            let got = all.iter().filter(|a| a.2 == b).count() as u64;
+                            assert_eq!(count, got, "{what}: band {b}'s count");
+                        }
+                        let mut sorted: Vec<(Key, u8)> = all.iter().map(|a| (a.0, a.1)).collect();
+                        sorted.sort_unstable();
+                        assert!(sorted == expected, "{what}: not the masked walk's fragments and masks");
+                        // per pixel, in arrival order: one band, descending primitive ids (a
+                        // clipped triangle's pieces may each cover some samples of one pixel:
+                        // one id twice)
+                        let mut last: std::collections::HashMap<u32, (u32, usize)> =
+                            std::collections::HashMap::new();
+                        let mut deep = 0;
+                        for (k, _, b) in &all {
+                            if let Some(&(prim, band)) = last.get(&k.0) {
+                                assert!(k.1 <= prim, "{what}: pixel {} got {} after {prim}", k.0, k.1);
+                                assert_eq!(*b, band, "{what}: pixel {} from two bands", k.0);
+                                deep += 1;
+                            }
+                            last.insert(k.0, (k.1, *b));
+                        }
+                        assert!(deep > 500, "{what}: only {deep} fragments behind another");
+                    }
+                }
+            }
+        }
+    }
+
+    /// Behind a cut a sample (an opaque wall drawn at 4 samples, seen from beside so that its
+    /// edge crosses the two quads behind it), the masked banded pass hands its shaders the
+    /// fragments and reduced masks of [`Rasterizer::for_each_masked_fragment`]'s cut, returns the
+    /// same fragments drawn, counts the same held back, and with a request ahead asks for every
+    /// pixel it hands over. Mutation caught: the band's shader given the uncut mask.
+    #[test]
+    fn masked_band_pass_cuts_as_the_masked_pass() {
+        let (w, h) = (160u32, 120u32);
+        let scene = oit_core::builtin_scene("wall:0:planes:2").unwrap().unwrap();
+        let settings = Settings { samples: 4, ..settings(w, h) };
+        let view = oit_core::View { azimuth: oit_core::View::default().azimuth - 65.0, ..Default::default() };
+        let camera = Camera::orbit_scene(&scene, view, w as f32 / h as f32).unwrap();
+        let layers = scene.layers(None);
+        let opaque = crate::opaque::draw(layers.opaque.as_ref().unwrap(), &camera, &settings);
+        let run = |banded: bool, cut: bool| {
+            let mut r = Rasterizer::new(&layers.transparent, &camera, &settings);
+            r.cut_at(cut.then(|| opaque.depth.clone()));
+            let seen = Mutex::new(Vec::new());
+            let asked = Mutex::new(std::collections::HashSet::new());
+            let ahead = |p: u32| {
+                asked.lock().unwrap().insert(p);
+            };
+            let f = |frag: &Fragment<'_>, mask: u8| seen.lock().unwrap().push((key(&frag.full()), mask));
+            let n = if banded {
+                r.for_each_masked_fragment_by_band(4, Shade::Color, Some(&ahead), |_| f).iter().sum()
+            } else {
+                r.for_each_masked_fragment(4, f)
+            };
+            let mut seen = seen.into_inner().unwrap();
+            seen.sort_unstable();
+            (seen, n, r.occluded(), asked.into_inner().unwrap())
+        };
+        // the cut reduces some masks short of nothing (the wall's edge, a sample at a time)
+        let uncut: std::collections::HashMap<Key, u8> = run(false, false).0.into_iter().collect();
+        let (plain, banded) = (run(false, true), run(true, true));
+        assert!(plain.2.is_some_and(|o| o > 0), "nothing held back");
+        let reduced = plain.0.iter().filter(|f| uncut[&f.0] != f.1).count();
+        assert!(reduced > 10, "{reduced} masks reduced by the cut");
+        assert_eq!((banded.1, banded.2), (plain.1, plain.2), "fragments drawn, occluded");
+        assert!(banded.0 == plain.0, "the fragments and masks that reach the shader");
+        if Kernel::detect() != Kernel::Portable {
+            assert!(banded.0.iter().all(|f| banded.3.contains(&f.0.0)), "a pixel not asked for ahead");
         }
     }
 

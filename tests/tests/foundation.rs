@@ -417,6 +417,20 @@ fn exact_techniques_do_not_depend_on_thread_count() {
         assert_eq!(one.image, many.image, "{t}");
         assert_eq!(one.stats.lost, many.stats.lost, "{t}");
     }
+    // at 4 samples: the masked passes (ll's by bands of rows, cut by the thread count)
+    for t in ["reference", "dfb", "ll", "fabs"] {
+        let s = Settings { samples: 4, ..settings(96, t) };
+        let cam = camera(&scene, &s, View::default());
+        let one = render(cpu_with_threads(1).as_ref(), &scene, &cam, &s);
+        let many = render(cpu_with_threads(4).as_ref(), &scene, &cam, &s);
+        assert!(one.stats.fragments > 0, "{t} at 4×");
+        assert_eq!(one.image, many.image, "{t} at 4×");
+        assert_eq!(
+            (one.stats.lost, one.stats.captured, &one.lost_pixels),
+            (many.stats.lost, many.stats.captured, &many.lost_pixels),
+            "{t} at 4×"
+        );
+    }
 }
 
 #[test]

@@ -469,14 +469,25 @@ pub(crate) fn finish_pixels(
     ctx: &Ctx<'_>,
     pixel: impl Fn(usize) -> ([u8; 4], u32) + Sync,
 ) -> oit_core::Frame {
+    finish_pixels_with(ctx, || (), |_, px| pixel(px))
+}
+
+/// [`finish_pixels`] with a scratch each task of the parallel sweep makes once by `init` and
+/// hands to `pixel(scratch, px)` for each of its pixels (a list of a pixel's entries kept from
+/// pixel to pixel: a thread-local's lookup a pixel cost as much as a pixel's sort).
+pub(crate) fn finish_pixels_with<T>(
+    ctx: &Ctx<'_>,
+    init: impl Fn() -> T + Sync + Send,
+    pixel: impl Fn(&mut T, usize) -> ([u8; 4], u32) + Sync,
+) -> oit_core::Frame {
     use rayon::prelude::*;
     let mut image = oit_core::Image::new(ctx.settings.width, ctx.settings.height, [0, 0, 0, 255]);
     let (captured, deepest) = image
         .pixels
         .par_iter_mut()
         .enumerate()
-        .map(|(px, out)| {
-            let (colour, n) = pixel(px);
+        .map_init(init, |scratch, (px, out)| {
+            let (colour, n) = pixel(scratch, px);
             *out = colour;
             (u64::from(n), n)
         })

@@ -21,7 +21,10 @@
 //!   position, the camera moved by the position's offset from the centre, averaged in linear
 //!   light.
 //! - `dfb` and `ll`: their single-sample passes (a counting pass and a fill), each entry with its
-//!   mask, resolved per sample through the f32 resolve.
+//!   mask, resolved per sample through the f32 resolve. `ll`'s run by bands of rows as
+//!   single-sample's do
+//!   ([`Rasterizer::for_each_masked_fragment_by_band`](crate::raster::Rasterizer::for_each_masked_fragment_by_band):
+//!   the same fragments and masks), each band taking its block of nodes by one atomic add.
 //! - `fabs`: K slots a pixel, each with its mask; the pixels that overflow keep their K nearest
 //!   by (depth, primitive id), as single-sample's (two more passes). `--overflow tail` merges
 //!   what lies behind the K into one tail a pixel, each fragment's alpha weighted by its coverage
@@ -34,6 +37,7 @@
 //! ([`crate::raster::Rasterizer::cover`]), each over its whole pixel with its alpha weighted by
 //! its coverage fraction, or at full alpha with `--coverage pixel` (`oit_core::msaa::coverage`).
 
+use std::cell::Cell;
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
 
 use glam::{DVec3, Vec3};
@@ -45,7 +49,7 @@ use rayon::prelude::*;
 
 use super::Ctx;
 use super::reference::{composite_f64, srgb8_f64};
-use crate::raster::{Fragment, prefetch};
+use crate::raster::{Fragment, Shade, prefetch};
 use crate::resolve::PixelState;
 
 /// One captured entry: the key (depth bits above the primitive id), the payload, the mask.
@@ -296,60 +300,55 @@ fn resolve_entries(
         }
         s
     };
-    thread_local! {
-        // each thread's list of a pixel's entries, kept from pixel to pixel
-        static LIST: std::cell::RefCell<Vec<Entry>> = const { std::cell::RefCell::new(Vec::new()) };
-    }
-    super::finish_pixels(ctx, |px| {
-        LIST.with_borrow_mut(|list| {
-            gather(px, list);
-            list.sort_unstable();
-            let c: Vec3 = if complexity {
-                if list.is_empty() {
-                    resolve.background_mean(px)
-                } else {
-                    oit_core::composite::heat(list.len() as f32 / deepest as f32)
-                }
-            } else if resolve.opaque_uniform(px) && list.iter().all(|e| e.2 == full) {
-                let mut s = fresh(px, 0);
-                push_all(&mut s, &mut list.iter());
-                resolve.finish_over(&mut s, resolve.background_at_sample(px, 0))
+    // each task's list of a pixel's entries, kept from pixel to pixel
+    super::finish_pixels_with(ctx, Vec::new, |list: &mut Vec<Entry>, px| {
+        gather(px, list);
+        list.sort_unstable();
+        let c: Vec3 = if complexity {
+            if list.is_empty() {
+                resolve.background_mean(px)
             } else {
-                // each sample over its own opaque colour (the background where none covers it),
-                // the samples' colours summed in sample order; a sample that composites the same
-                // entries over the same colour as an earlier one takes its colour (the same
-                // bits: the same pushes over the same state)
-                let mut seen = [(0u64, [0u32; 3], Vec3::ZERO); 8];
-                let mut distinct = 0;
-                let mut sum = Vec3::ZERO;
-                for i in 0..samples {
-                    let bg = resolve.background_at_sample(px, i as usize);
-                    let bits = bg.to_array().map(f32::to_bits);
-                    // the entries covering sample i, a bit each (none kept past 64 entries)
-                    let covering = (list.len() <= 64).then(|| {
-                        list.iter().enumerate().fold(0u64, |m, (k, e)| m | u64::from(e.2 >> i & 1) << k)
-                    });
-                    let known =
-                        covering.and_then(|set| seen[..distinct].iter().find(|s| s.0 == set && s.1 == bits));
-                    let c = match known {
-                        Some(s) => s.2,
-                        None => {
-                            let mut s = fresh(px, i as usize);
-                            push_all(&mut s, &mut list.iter().filter(|e| e.2 >> i & 1 == 1));
-                            let c = resolve.finish_over(&mut s, bg);
-                            if let Some(set) = covering {
-                                seen[distinct] = (set, bits, c);
-                                distinct += 1;
-                            }
-                            c
+                oit_core::composite::heat(list.len() as f32 / deepest as f32)
+            }
+        } else if resolve.opaque_uniform(px) && list.iter().all(|e| e.2 == full) {
+            let mut s = fresh(px, 0);
+            push_all(&mut s, &mut list.iter());
+            resolve.finish_over(&mut s, resolve.background_at_sample(px, 0))
+        } else {
+            // each sample over its own opaque colour (the background where none covers it),
+            // the samples' colours summed in sample order; a sample that composites the same
+            // entries over the same colour as an earlier one takes its colour (the same
+            // bits: the same pushes over the same state)
+            let mut seen = [(0u64, [0u32; 3], Vec3::ZERO); 8];
+            let mut distinct = 0;
+            let mut sum = Vec3::ZERO;
+            for i in 0..samples {
+                let bg = resolve.background_at_sample(px, i as usize);
+                let bits = bg.to_array().map(f32::to_bits);
+                // the entries covering sample i, a bit each (none kept past 64 entries)
+                let covering = (list.len() <= 64).then(|| {
+                    list.iter().enumerate().fold(0u64, |m, (k, e)| m | u64::from(e.2 >> i & 1) << k)
+                });
+                let known =
+                    covering.and_then(|set| seen[..distinct].iter().find(|s| s.0 == set && s.1 == bits));
+                let c = match known {
+                    Some(s) => s.2,
+                    None => {
+                        let mut s = fresh(px, i as usize);
+                        push_all(&mut s, &mut list.iter().filter(|e| e.2 >> i & 1 == 1));
+                        let c = resolve.finish_over(&mut s, bg);
+                        if let Some(set) = covering {
+                            seen[distinct] = (set, bits, c);
+                            distinct += 1;
                         }
-                    };
-                    sum += c;
-                }
-                sum / samples as f32
-            };
-            (crate::resolve::srgb(c), list.len() as u32)
-        })
+                        c
+                    }
+                };
+                sum += c;
+            }
+            sum / samples as f32
+        };
+        (crate::resolve::srgb(c), list.len() as u32)
     })
 }
 
@@ -412,12 +411,32 @@ fn dfb(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
 /// The end of a list and the head of an empty one.
 const END: u32 = u32::MAX;
 
-/// `ll` per sample: a sizing pass, then a node a fragment by atomic increment of one counter,
-/// linked in front of its pixel's list by atomic exchange of the head, each node with its mask.
+/// `ll` per sample: single-sample `ll`'s passes ([`super::ll`]) over the masked fragments, each
+/// node with its mask. The sizing pass counts each band's fragments
+/// ([`Rasterizer::for_each_masked_fragment_by_band`](crate::raster::Rasterizer::for_each_masked_fragment_by_band));
+/// the pool has exactly the frame's fragments.
 fn ll(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
-    let fragments = pass(ctx, |_, _| {});
+    let samples = ctx.settings.samples;
+    let per_band = ctx
+        .raster
+        .for_each_masked_fragment_by_band(samples, Shade::OnDemand, None, |_| |_: &Fragment<'_>, _: u8| {});
+    let fragments = per_band.iter().sum();
+    ctx.ran_pass(fragments);
     let nodes = ctx.plan.check_fragments(fragments)?;
     ctx.check_counted(Counted { deepest: 0, fragments: u64::from(nodes) })?;
+    ll_capture_and_resolve(ctx, &per_band, nodes)
+}
+
+/// `ll`'s capture into a pool of `nodes` nodes by bands of rows (`per_band`: each band's
+/// fragments, as the sizing pass counted them), and the resolve. Each band takes its block of
+/// nodes from the counter by one atomic add and links them into its own pixels' lists, which no
+/// other task writes, by a plain load and store of the head: a locked increment of one shared
+/// counter a fragment (and an exchange of the head) had both threads of a 2-core VM fight over
+/// the counter's line, the bunny's 4-sample frame at 1024² taking twice as long in some
+/// processes as in others (issue 40), as single-sample's did before its bands (issue 12). A
+/// fragment past its band's block or the pool (a fill pass meeting more fragments than the
+/// sizing pass, which oit's repeatable rasterizers never do) is counted lost at its pixel.
+fn ll_capture_and_resolve(ctx: &mut Ctx<'_>, per_band: &[u64], nodes: u32) -> Result<Frame, OitError> {
     let heads = ctx.alloc32(1, END)?;
     let counter = ctx.words32(1, 0)?;
     let keys = ctx.words64(u64::from(nodes), 0)?;
@@ -426,28 +445,40 @@ fn ll(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     let links = ctx.words32(u64::from(nodes), END)?;
     let shared = &*ctx;
     let kept = coverage(shared.settings);
-    // the pixel's head asked for ahead (the nodes come in order from the counter)
+    let (heads, counter, keys, payloads, masks, links) = (&heads, &counter, &keys, &payloads, &masks, &links);
+    // the pixel's head asked for ahead (a band's nodes come in order from its block)
     let ahead = |p: u32| prefetch(&heads[p as usize]);
-    let n = shared.raster.for_each_masked_fragment_ahead(
+    let generated = shared.raster.for_each_masked_fragment_by_band(
         shared.settings.samples,
         shared.payload_shade(),
-        &ahead,
-        |f, mask| {
-            let px = f.pixel as usize;
-            let node = counter[0].fetch_add(1, Relaxed);
-            if node >= nodes {
-                shared.lose(px);
-                return;
+        Some(&ahead),
+        |b| {
+            let want = u32::try_from(per_band.get(b).copied().unwrap_or(0)).unwrap_or(u32::MAX);
+            // (saturating: a block past the counter's range is past the pool, its fragments lost)
+            let first = counter[0].fetch_update(Relaxed, Relaxed, |c| Some(c.saturating_add(want)));
+            let first = first.unwrap_or(u32::MAX);
+            let end = first.saturating_add(want).min(nodes);
+            let next = Cell::new(first);
+            move |f: &Fragment<'_>, mask: u8| {
+                let px = f.pixel as usize;
+                let node = next.get();
+                if node >= end {
+                    // the band's block, or the pool, is used up: no node for this fragment
+                    shared.lose(px);
+                    return;
+                }
+                next.set(node + 1);
+                let i = node as usize;
+                keys[i].store(key(f), Relaxed);
+                payloads[i].store(shared.payload(f), Relaxed);
+                masks[i].store(kept(mask), Relaxed);
+                // the band's own pixel: no other thread writes this head during the pass
+                links[i].store(heads[px].load(Relaxed), Relaxed);
+                heads[px].store(node, Relaxed);
             }
-            let i = node as usize;
-            keys[i].store(key(f), Relaxed);
-            payloads[i].store(shared.payload(f), Relaxed);
-            masks[i].store(kept(mask), Relaxed);
-            links[i].store(heads[px].swap(node, Relaxed), Relaxed);
         },
     );
-    ctx.ran_pass(n);
-    let (heads, keys, payloads, masks, links) = (&*heads, &*keys, &*payloads, &*masks, &*links);
+    ctx.ran_pass(generated.iter().sum());
     Ok(resolve_entries(ctx, None, |px, list| {
         list.clear();
         let mut node = heads[px].load(Relaxed);
@@ -666,4 +697,74 @@ pub(crate) fn finish_accumulated(ctx: &Ctx<'_>, acc: &SampleAccumulators, captur
         };
         (crate::resolve::srgb(c), n)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use oit_core::plan::Plan;
+    use oit_core::{Camera, Technique, View, load_scene};
+
+    use super::*;
+    use crate::pool::Pool;
+    use crate::raster::Rasterizer;
+
+    /// `ll` at 4 samples with a pool smaller than the frame's fragments (a fill pass meeting more
+    /// fragments than the sizing pass) loses exactly the fragments past it, each counted at its
+    /// pixel; and a band whose block is short of its fragments loses its own excess, counted at
+    /// its own pixels, never taking another band's nodes (the pool's spare nodes left unused).
+    /// Mutations caught: the loss not counted (a fragment past its block dropped in silence),
+    /// each band sized by the next band's count.
+    #[test]
+    fn ll_pool_or_block_too_small_counts_what_it_loses() {
+        let scene = load_scene("planes:4").unwrap();
+        let settings =
+            Settings { width: 16, height: 16, technique: Technique::Ll, samples: 4, ..Settings::default() };
+        let camera = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();
+        let raster = Rasterizer::new(&scene, &camera, &settings);
+        let pool = Pool::default();
+        let per_band = raster
+            .for_each_masked_fragment_by_band(4, Shade::OnDemand, None, |_| |_: &Fragment<'_>, _: u8| {});
+        assert!(per_band.len() > 1, "the case wants several bands, each taking its block");
+        let total: u64 = per_band.iter().sum();
+        let run = |per_band: &[u64], nodes: u32| {
+            let plan = Plan::new("cpu", &scene, &settings).unwrap();
+            let mut ctx = Ctx::new(
+                &scene,
+                &camera,
+                &settings,
+                &raster,
+                &pool,
+                plan,
+                scene.absorption_per_length(),
+                None,
+            );
+            ll_capture_and_resolve(&mut ctx, per_band, nodes).unwrap()
+        };
+        let frame = run(&per_band, 40);
+        let s = &frame.stats;
+        assert!(s.fragments > 200, "the case needs far more fragments than nodes: {}", s.fragments);
+        assert_eq!(s.fragments, total);
+        assert_eq!((s.captured, s.lost), (40, s.fragments - 40));
+        let per_pixel: u64 = frame.lost_pixels.unwrap().iter().map(|&l| u64::from(l)).sum();
+        assert_eq!(per_pixel, s.lost);
+        // the exact pool loses nothing
+        let exact = run(&per_band, u32::try_from(total).unwrap());
+        assert_eq!((exact.stats.captured, exact.stats.lost), (total, 0));
+        // the first band's block 5 short, the pool whole: its 5 are lost, in its rows
+        let short = 5;
+        assert!(per_band[0] > short, "the first band has {} fragments", per_band[0]);
+        let mut less = per_band.clone();
+        less[0] -= short;
+        let frame = run(&less, u32::try_from(total).unwrap());
+        assert_eq!((frame.stats.captured, frame.stats.lost), (total - short, short));
+        let lost = frame.lost_pixels.unwrap();
+        // (16 rows: bands of 8 rows, the fewest a band takes, whatever the threads)
+        assert_eq!(per_band.len(), 2);
+        let band_pixels = 8 * 16;
+        assert_eq!(lost.iter().map(|&l| u64::from(l)).sum::<u64>(), short);
+        assert!(
+            lost.iter().enumerate().all(|(px, &l)| l == 0 || px < band_pixels),
+            "a loss outside the first band's rows"
+        );
+    }
 }
