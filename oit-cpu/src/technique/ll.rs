@@ -27,7 +27,7 @@
 
 use oit_core::Compositor as _;
 use std::cell::Cell;
-use std::sync::atomic::Ordering::Relaxed;
+use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
 use oit_core::plan::Counted;
 use oit_core::rules::{depth_bits, depth_from_bits};
@@ -51,6 +51,35 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
     capture_and_resolve(ctx, &per_band, nodes)
 }
 
+/// A band's block of a pool's nodes: as many as the sizing pass counted in the band, taken from
+/// the pool's counter by one atomic add (saturating: a block past the counter's range lies past
+/// the pool), then handed out one a fragment by the band's one task; `None` past the block or
+/// past the pool's `nodes`, where the fragment is lost. Single-sample `ll` and `ll` at several
+/// samples (`msaa.rs`) take their nodes so.
+pub(crate) struct BandBlock {
+    next: Cell<u32>,
+    end: u32,
+}
+
+impl BandBlock {
+    /// The block of `want` nodes from `counter`, in a pool of `nodes`.
+    pub(crate) fn take(counter: &AtomicU32, want: u64, nodes: u32) -> BandBlock {
+        let want = u32::try_from(want).unwrap_or(u32::MAX);
+        let first =
+            counter.fetch_update(Relaxed, Relaxed, |c| Some(c.saturating_add(want))).unwrap_or_else(|c| c);
+        BandBlock { next: Cell::new(first), end: first.saturating_add(want).min(nodes) }
+    }
+
+    /// The block's next node, if any is left.
+    pub(crate) fn next(&self) -> Option<u32> {
+        let node = self.next.get();
+        (node < self.end).then(|| {
+            self.next.set(node + 1);
+            node
+        })
+    }
+}
+
 /// The capture into a pool of `nodes` nodes, band by band (`per_band`: each band's fragments,
 /// as the sizing pass counted them), and the resolve.
 fn capture_and_resolve(ctx: &mut Ctx<'_>, per_band: &[u64], nodes: u32) -> Result<Frame, OitError> {
@@ -70,19 +99,14 @@ fn capture_and_resolve(ctx: &mut Ctx<'_>, per_band: &[u64], nodes: u32) -> Resul
     // VM of issue 12 the armadillo's frame ran 11–13 ms in one process and 23–24 ms in another,
     // the same binary. Past its block (or the pool) a fragment is counted lost.
     let generated = raster.for_each_fragment_by_band(shade, |b| {
-        let want = u32::try_from(per_band.get(b).copied().unwrap_or(0)).unwrap_or(u32::MAX);
-        let first = counter[0].fetch_add(want, Relaxed);
-        let end = first.saturating_add(want).min(nodes);
-        let next = Cell::new(first);
+        let block = BandBlock::take(&counter[0], per_band.get(b).copied().unwrap_or(0), nodes);
         move |f: &Fragment<'_>| {
             let px = f.pixel as usize;
-            let node = next.get();
-            if node >= end {
+            let Some(node) = block.next() else {
                 // the band's block, or the pool, is used up: no node for this fragment
                 shared.lose(px);
                 return;
-            }
-            next.set(node + 1);
+            };
             let n = node as usize;
             keys[n].store(u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim), Relaxed);
             payloads[n].store(shared.payload(f), Relaxed);

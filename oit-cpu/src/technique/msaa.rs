@@ -37,7 +37,6 @@
 //! ([`crate::raster::Rasterizer::cover`]), each over its whole pixel with its alpha weighted by
 //! its coverage fraction, or at full alpha with `--coverage pixel` (`oit_core::msaa::coverage`).
 
-use std::cell::Cell;
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
 
 use glam::{DVec3, Vec3};
@@ -453,21 +452,14 @@ fn ll_capture_and_resolve(ctx: &mut Ctx<'_>, per_band: &[u64], nodes: u32) -> Re
         shared.payload_shade(),
         Some(&ahead),
         |b| {
-            let want = u32::try_from(per_band.get(b).copied().unwrap_or(0)).unwrap_or(u32::MAX);
-            // (saturating: a block past the counter's range is past the pool, its fragments lost)
-            let first = counter[0].fetch_update(Relaxed, Relaxed, |c| Some(c.saturating_add(want)));
-            let first = first.unwrap_or(u32::MAX);
-            let end = first.saturating_add(want).min(nodes);
-            let next = Cell::new(first);
+            let block = super::ll::BandBlock::take(&counter[0], per_band.get(b).copied().unwrap_or(0), nodes);
             move |f: &Fragment<'_>, mask: u8| {
                 let px = f.pixel as usize;
-                let node = next.get();
-                if node >= end {
+                let Some(node) = block.next() else {
                     // the band's block, or the pool, is used up: no node for this fragment
                     shared.lose(px);
                     return;
-                }
-                next.set(node + 1);
+                };
                 let i = node as usize;
                 keys[i].store(key(f), Relaxed);
                 payloads[i].store(shared.payload(f), Relaxed);
