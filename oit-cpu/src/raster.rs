@@ -2800,22 +2800,37 @@ mod tests {
                         sorted.sort_unstable();
                         assert!(sorted == expected, "{what}: not the setup's fragments");
                         // per pixel, in arrival order: one thread, descending primitive ids
-                        let mut last: std::collections::HashMap<u32, (u32, Option<usize>)> =
-                            std::collections::HashMap::new();
-                        let mut deep = 0;
-                        for (k, thread) in &all {
-                            if let Some(&(prim, t)) = last.get(&k.0) {
-                                assert!(k.1 < prim, "{what}: pixel {} got {} after {prim}", k.0, k.1);
-                                assert_eq!(*thread, t, "{what}: pixel {} from two threads", k.0);
-                                deep += 1;
-                            }
-                            last.insert(k.0, (k.1, *thread));
-                        }
+                        let deep =
+                            one_source_descending(&what, all.iter().map(|(k, t)| (k.0, k.1, *t)), true);
                         assert!(deep > 500, "{what}: only {deep} fragments behind another");
                     }
                 }
             }
         }
+    }
+
+    /// Checks that each pixel's fragments, in arrival order (`arrivals`: pixel, primitive id,
+    /// source: the thread or band that handed it over), come from one source in descending
+    /// primitive order (`strict`: no id twice); returns how many arrived behind another.
+    fn one_source_descending<S: PartialEq + Copy + std::fmt::Debug>(
+        what: &str,
+        arrivals: impl Iterator<Item = (u32, u32, S)>,
+        strict: bool,
+    ) -> usize {
+        let mut last: std::collections::HashMap<u32, (u32, S)> = std::collections::HashMap::new();
+        let mut deep = 0;
+        for (px, id, source) in arrivals {
+            if let Some(&(prim, from)) = last.get(&px) {
+                assert!(
+                    if strict { id < prim } else { id <= prim },
+                    "{what}: pixel {px} got {id} after {prim}"
+                );
+                assert_eq!(source, from, "{what}: pixel {px} from two sources");
+                deep += 1;
+            }
+            last.insert(px, (id, source));
+        }
+        deep
     }
 
     /// The masked banded pass ([`Rasterizer::for_each_masked_fragment_by_band`]) on each kernel,
@@ -2886,17 +2901,8 @@ mod tests {
                         // per pixel, in arrival order: one band, descending primitive ids (a
                         // clipped triangle's pieces may each cover some samples of one pixel:
                         // one id twice)
-                        let mut last: std::collections::HashMap<u32, (u32, usize)> =
-                            std::collections::HashMap::new();
-                        let mut deep = 0;
-                        for (k, _, b) in &all {
-                            if let Some(&(prim, band)) = last.get(&k.0) {
-                                assert!(k.1 <= prim, "{what}: pixel {} got {} after {prim}", k.0, k.1);
-                                assert_eq!(*b, band, "{what}: pixel {} from two bands", k.0);
-                                deep += 1;
-                            }
-                            last.insert(k.0, (k.1, *b));
-                        }
+                        let deep =
+                            one_source_descending(&what, all.iter().map(|(k, _, b)| (k.0, k.1, *b)), false);
                         assert!(deep > 500, "{what}: only {deep} fragments behind another");
                     }
                 }

@@ -122,20 +122,8 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         })?;
     let mut encoder = ctx.take_encoder();
     {
-        let attachments: Vec<Option<wgpu::RenderPassColorAttachment<'_>>> = views
-            .iter()
-            .map(|view| {
-                Some(wgpu::RenderPassColorAttachment {
-                    view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })
-            })
-            .collect();
+        let attachments: Vec<Option<wgpu::RenderPassColorAttachment<'_>>> =
+            views.iter().map(|view| Some(super::cleared(view, wgpu::Color::TRANSPARENT))).collect();
         let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("bdp blend"),
             color_attachments: &attachments,

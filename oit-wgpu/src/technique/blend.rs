@@ -221,14 +221,7 @@ fn draw_and_resolve(
     })?;
     let mut encoder = ctx.take_encoder();
     {
-        let attachment = |view, clear| {
-            Some(wgpu::RenderPassColorAttachment {
-                view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(clear), store: wgpu::StoreOp::Store },
-            })
-        };
+        let attachment = |view, clear| Some(super::cleared(view, clear));
         let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("blend capture"),
             color_attachments: &[attachment(&color, clear), attachment(&count, wgpu::Color::TRANSPARENT)],

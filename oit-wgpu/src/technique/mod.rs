@@ -171,6 +171,16 @@ pub(crate) fn targets_group(
     (layout, group)
 }
 
+/// A colour attachment of a blend capture's pass: `view`, cleared to `clear`, stored.
+pub(crate) fn cleared(view: &wgpu::TextureView, clear: wgpu::Color) -> wgpu::RenderPassColorAttachment<'_> {
+    wgpu::RenderPassColorAttachment {
+        view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: wgpu::Operations { load: wgpu::LoadOp::Clear(clear), store: wgpu::StoreOp::Store },
+    }
+}
+
 /// One geometry pass of a blend capture (`technique::{dp_depth, ddp_blend}`): `pipeline`
 /// draws the scene into `target` with `groups` set as groups 0 and 2, inside `occlusion`'s
 /// query, resolved into its buffer; timed and counted as a geometry pass. `gated`: the draw's
@@ -189,24 +199,8 @@ pub(crate) fn occlusion_pass(
         let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(target.label),
             color_attachments: &[
-                Some(wgpu::RenderPassColorAttachment {
-                    view: target.color,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(target.clear),
-                        store: wgpu::StoreOp::Store,
-                    },
-                }),
-                target.second.map(|view| wgpu::RenderPassColorAttachment {
-                    view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                }),
+                Some(cleared(target.color, target.clear)),
+                target.second.map(|view| cleared(view, wgpu::Color::TRANSPARENT)),
             ][..1 + usize::from(target.second.is_some())],
             depth_stencil_attachment: target.depth.map(|view| wgpu::RenderPassDepthStencilAttachment {
                 view,
