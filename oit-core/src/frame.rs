@@ -87,8 +87,9 @@ impl Stats {
     /// The frame's own check, where its losses were counted as they happened: every fragment the
     /// first geometry pass generated was either composited, merged into a tail or counted lost. A device that stops
     /// a kernel early (lavapipe ends a shader invocation's loops after 65,535 iterations in all)
-    /// breaks it, and the frame is refused with an error rather than shown with fragments
-    /// missing and `lost` silent.
+    /// breaks it, and so would a technique that drops a fragment without counting it (the
+    /// per-sample peels did, before `msaa::peel_key`); the frame is refused with an error rather
+    /// than shown with fragments missing and `lost` silent.
     pub fn check_accounting(&self, backend: &str) -> Result<(), OitError> {
         if self.captured + self.merged + self.lost + self.occluded == self.fragments
             && self.masked <= self.opaque_fragments
@@ -99,8 +100,10 @@ impl Stats {
             "{backend}: {} fragments composited + {} merged + {} counted lost + {} occluded ≠ {} generated (or \
              {} masked of {} opaque): the device did not \
              run every step of the frame to the end (lavapipe, for one, ends a shader's loops after \
-             65,535 iterations, which a pixel of thousands of layers can need); the frame is refused \
-             rather than shown wrong. Use fewer layers, another raster path or the cpu backend",
+             65,535 iterations, which a pixel of thousands of layers can need), or the technique \
+             dropped a fragment without counting it (a bug in oit: please report the scene and \
+             settings); the frame is refused rather than shown wrong. Use fewer layers, another \
+             raster path or the cpu backend",
             self.captured,
             self.merged,
             self.lost,

@@ -106,6 +106,26 @@ pub fn peels_masks(technique: Technique) -> bool {
     matches!(technique, Technique::Dp | Technique::Ddp | Technique::Mlp { .. })
 }
 
+/// The most primitives a scene may have where the frame peels per sample ([`peels_per_sample`]):
+/// a peel's key holds the primitive id (below this) in 29 bits, above 3 bits of [`peel_key`]'s
+/// sample.
+pub const PEEL_KEY_PRIMITIVES: u32 = 1 << 29;
+
+/// A fragment's key in the per-sample peels (dp, ddp and mlp above one sample; oit-cpu's and the
+/// compute and hardware paths' atomics captures alike): its depth bits, then its primitive id,
+/// then the lowest sample its coverage `mask` holds. The sample tells apart the pieces of one
+/// triangle: clipped at the near or the far plane, a triangle is fan-triangulated into pieces
+/// that keep its primitive id ([`crate::setup`]), and above one sample two pieces may cover one
+/// pixel at the same depth, though never one sample (the fill rule gives a sample on their shared
+/// edge to one of them). A peel keeps one fragment a key, so with the primitive id alone it kept
+/// one piece and lost the other without a count. Between primitive ids the order is the ids', as
+/// the reference's; within one it is the pieces' samples', which no sample sees twice. The id must
+/// be below [`PEEL_KEY_PRIMITIVES`] (the plan refuses scenes of more primitives).
+#[inline]
+pub fn peel_key(depth_bits: u32, prim: u32, mask: u8) -> u64 {
+    u64::from(depth_bits) << 32 | u64::from(prim) << 3 | u64::from(mask.trailing_zeros() & 7)
+}
+
 /// Whether a frame under `settings` peels per sample ([`peels_masks`]: dp, ddp or mlp, several
 /// samples, [`Coverage::Sample`]); `--coverage pixel`, `--coverage fraction` and translucency
 /// (whose per-sample state the accumulators do not keep) leave them by coverage fraction or per

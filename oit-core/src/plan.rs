@@ -310,11 +310,27 @@ impl Plan {
             };
             (settings.samples, colour)
         });
+        let sample_peel = crate::msaa::peels_per_sample(settings);
+        if sample_peel {
+            let primitives = scene.primitive_bases().1;
+            if primitives > crate::msaa::PEEL_KEY_PRIMITIVES {
+                return Err(OitError::Unsupported {
+                    backend: backend.into(),
+                    what: format!(
+                        "{technique} at {} samples keys each fragment by its primitive id in 29 bits, and the \
+                         scene has {primitives} triangles (at most {} fit); use --coverage fraction, or \
+                         another technique",
+                        settings.samples,
+                        crate::msaa::PEEL_KEY_PRIMITIVES
+                    ),
+                });
+            }
+        }
         Ok(Plan {
             blend_targets,
             in_order: false,
             samples: settings.samples,
-            sample_peel: crate::msaa::peels_per_sample(settings),
+            sample_peel,
             pooled: matches!(backend, "wgpu" | "vulkan"),
             technique,
             bounds_pass: matches!(technique, Technique::Bdp { .. } | Technique::Adp),
@@ -936,6 +952,42 @@ pub fn size_class(n: u32) -> u32 {
 mod tests {
     use super::*;
     use crate::load_scene;
+
+    /// The per-sample peels' key holds a primitive id in 29 bits (`msaa::peel_key`): a scene of
+    /// 2²⁹ triangles (ids up to 2²⁹ − 1) is planned, one of 2²⁹ + 2²¹ is refused by name there,
+    /// and one sample or a technique that keeps no such key takes it. (One mesh of 2²¹ triangles,
+    /// instanced.) Mutations caught: the limit tested with `>=` (the scene of exactly 2²⁹
+    /// refused), the check left out.
+    #[test]
+    fn per_sample_peels_refuse_ids_past_their_key() {
+        let mut scene = load_scene("planes:1").unwrap();
+        let tris = 1usize << 21;
+        let object = scene.instances[0].object;
+        let mesh = scene.objects[object].mesh;
+        scene.meshes[mesh].indices = vec![[0, 1, 2]; tris];
+        let one = scene.instances[0].clone();
+        let at = |scene: &Scene, t: &str, samples: u32| {
+            let s = Settings { technique: t.parse().unwrap(), samples, ..Settings::default() };
+            Plan::new("test", scene, &s)
+        };
+        let limit = crate::msaa::PEEL_KEY_PRIMITIVES as usize;
+        scene.instances = vec![one.clone(); limit / tris];
+        assert_eq!(scene.primitive_bases().1 as usize, limit);
+        for t in ["dp", "ddp", "mlp:2"] {
+            assert!(at(&scene, t, 4).unwrap().sample_peel, "{t}");
+        }
+        scene.instances = vec![one; limit / tris + 1];
+        for t in ["dp", "ddp", "mlp:2"] {
+            match at(&scene, t, 4) {
+                Err(OitError::Unsupported { what, .. }) => {
+                    assert!(what.contains("29 bits") && what.contains("--coverage fraction"), "{t}: {what}")
+                }
+                other => panic!("{t}: {:?}", other.map(|p| p.sample_peel)),
+            }
+            assert!(at(&scene, t, 1).is_ok(), "{t} at one sample");
+        }
+        assert!(at(&scene, "ll", 4).is_ok());
+    }
 
     fn plan(technique: &str, f: impl FnOnce(&mut Settings)) -> Result<Plan, OitError> {
         let mut s = Settings { technique: technique.parse().unwrap(), ..Settings::default() };

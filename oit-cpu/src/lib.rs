@@ -262,6 +262,9 @@ impl<'s> CpuPrepared<'s> {
             frame.stats.storage_bytes += pixels * plan_opaque_bytes;
         }
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
+        // every fragment composited, merged, counted lost or held back, as on the GPUs: a
+        // fragment a technique drops without a count is an error, never a frame
+        frame.stats.check_accounting("cpu")?;
         Ok(frame)
     }
 }

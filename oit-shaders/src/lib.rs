@@ -172,8 +172,11 @@ pub const PRELUDE: &str =
 pub const TEXTURE: &str = include_str!("../wgsl/core/texture.wgsl");
 
 /// The compute rasterizer (the papers' "CUDA rasterizer"), appended to a technique module: the
-/// sampler ([`TEXTURE`]), then the rasterizer.
+/// integer f32 of `softfloat.wgsl` (a fragment's depth, as oit-core computes it), the sampler
+/// ([`TEXTURE`]), then the rasterizer.
 pub const COMPUTE_RASTER: &str = concat!(
+    include_str!("../wgsl/core/softfloat.wgsl"),
+    "\n",
     include_str!("../wgsl/core/texture.wgsl"),
     "\n",
     include_str!("../wgsl/core/raster_compute.wgsl")

@@ -2220,3 +2220,67 @@ fn opaque_pass_at_samples_on_the_gpu() {
     }
     eprintln!("{compared} multisampled GPU frames with opaque parts compared");
 }
+
+/// A triangle clipped at the far plane is fan-triangulated into pieces that keep its primitive
+/// id, and above one sample two pieces may cover one pixel at the same depth (never one sample).
+/// The per-sample peels keep one fragment a key: keyed by (depth, primitive id) alone, `dp` and
+/// `ddp` kept one piece and dropped the other without a count on oit-cpu (the GPUs' frame check
+/// refused the frame), and `mlp:M` composited one over both's samples, an error pixel with
+/// nothing counted. `planes:1` seen from above with the far plane through it, at 4 and 8
+/// samples: the plain rule finds such a pair of pieces, and every peel on every backend and path
+/// equals the per-sample reference with nothing lost (`msaa::peel_key` adds the lowest sample of
+/// the mask). Mutation caught: `peel_key` without the sample (oit-core's, which oit-cpu takes, and
+/// peel_samples.wgsl's): oit-cpu's dp refused by its frame check (`Stats::check_accounting`);
+/// by hand with the CLI, oit-cpu's and the compute paths' dp and ddp fail that check, and mlp
+/// on each one error pixel with nothing counted.
+#[test]
+fn clipped_pieces_peel_apart() {
+    let scene = scene_of("planes:1");
+    let view = View { azimuth: 30.0, elevation: 60.0, far: Some(4.0), ..View::default() };
+    let mut compared = 0;
+    for samples in [4, 8] {
+        let base = Settings { samples, ..settings(64, "reference") };
+        let cam = camera(&scene, &base, view);
+        // the case itself: two fragments of one primitive on one pixel, their masks disjoint
+        let mut seen = std::collections::HashMap::new();
+        let mut pairs = 0;
+        for (px, prim, mask, _) in plain_fragments(&scene, &cam, &base) {
+            if let Some(other) = seen.insert((px, prim), mask) {
+                assert_eq!(other & mask, 0, "pieces of one triangle share a sample");
+                pairs += 1;
+            }
+        }
+        assert!(pairs > 0, "the far plane cuts no triangle into pieces on one pixel at {samples}×");
+        for backend in backends_for("clipped_pieces_peel_apart") {
+            let b = backend.as_ref();
+            // a device without 8-sample targets says so by name (wgpu's hardware path on lavapipe
+            // and on the H200)
+            let render_or_skip = |s: &Settings, what: &str| match b.render(&scene, &cam, s) {
+                Ok(f) => Some(f),
+                Err(OitError::Unsupported { what: why, .. })
+                    if samples == 8
+                        && ["--samples 8", "8-sample", "8 samples"].iter().any(|n| why.contains(n)) =>
+                {
+                    eprintln!("{what}: {why}");
+                    None
+                }
+                Err(e) => panic!("{what}: {e}"),
+            };
+            let Some(reference) = render_or_skip(&base, &format!("{}: reference at {samples}×", label(b)))
+            else {
+                continue;
+            };
+            for t in ["dp", "ddp", "mlp:2", "mlp:4"] {
+                let s = Settings { technique: t.parse().unwrap(), ..base.clone() };
+                let what = format!("{}: {t} at {samples}× on the far plane's pieces", label(b));
+                let Some(f) = render_or_skip(&s, &what) else { continue };
+                assert_eq!(f.stats.coverage, Some(Coverage::Sample), "{what}");
+                checks::accounting(&f).unwrap_or_else(|e| panic!("{what}: {e}"));
+                assert_eq!((f.stats.lost, f.stats.fragments), (0, reference.stats.fragments), "{what}");
+                checks::exact(&reference, &f).unwrap_or_else(|e| panic!("{what}: {e}"));
+                compared += 1;
+            }
+        }
+    }
+    assert!(compared >= 8, "{compared} frames compared");
+}

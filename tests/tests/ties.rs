@@ -341,7 +341,8 @@ fn ddp_blend_at_samples_renders_what_does_not_tie() {
 /// a collapsed one: `coplanar` with a copy of its right quad, three times as wide, 0.3 in front of
 /// the plane, then 0.3 behind it, so that where the three overlap the two coplanar fragments are one sample's far
 /// end in one scene and its near end in the other. Each frame is refused by name on each GPU
-/// backend's hardware path at 4 samples, both views. Mutations tried: the hand-over's tie test
+/// backend's hardware path at 4 samples, both views (at an angle, a device whose interpolated
+/// depths do not tie renders the frame, and then it must equal the reference). Mutations tried: the hand-over's tie test
 /// kept on the near end alone (the scene with the copy in front renders: one of the two tied
 /// fragments kept, both counted captured), on the far end alone (the other scene renders).
 #[test]
@@ -381,6 +382,15 @@ fn ddp_blend_at_samples_refuses_ties_at_either_end() {
                         what.contains("coplanar") && what.contains("--hardware-capture atomics"),
                         "{on}: {what}"
                     ),
+                    // Seen at an angle, the two coplanar quads' depths at a pixel are each
+                    // triangle's own interpolation, which a GPU need not make bit-equal (an NVIDIA
+                    // H200 does not, lavapipe does): where nothing ties, the frame renders, and
+                    // then it must be the reference's. Face on, every device's depths tie.
+                    Ok(f) if view != FRONT => {
+                        oit_tests::checks::accounting(&f).unwrap_or_else(|e| panic!("{on}: {e}"));
+                        oit_tests::checks::exact(&r, &f).unwrap_or_else(|e| panic!("{on}: {e}"));
+                        eprintln!("{on}: no tie at an angle on this device; equal to the reference");
+                    }
                     other => panic!("{on}: {:?}", other.map(|f| f.stats)),
                 }
                 ran += 1;

@@ -118,7 +118,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
 }
 
 /// `ddp` per sample (several samples, docs/msaa.md): each pass walks the multisampled fragments
-/// and keeps, per pixel, the smallest and the largest (depth bits, primitive id) key strictly
+/// and keeps, per pixel, the smallest and the largest (depth bits, primitive id, lowest sample) key (`msaa::peel_key`) strictly
 /// inside the open range the pass before left, so every fragment is one layer and ties come in
 /// the reference's order (none lost). The peeled layers' payloads and coverage masks are fetched
 /// by the next pass (the fragments whose keys are the ones peeled) and composited into the
@@ -126,7 +126,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
 /// that finds nothing fetches the last ones. Where the peel limit stops it first, one more pass
 /// fetches the last layers and counts what lies between them lost.
 fn render_samples(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
-    use super::msaa::{accumulate, finish_accumulated, key};
+    use super::msaa::{accumulate, finish_accumulated, peel_key};
     const EMPTY_MIN: u64 = u64::MAX;
     // nothing left: no key k has k + 1 > lo or k == hi
     const DONE: (u64, u64) = (u64::MAX, u64::MAX);
@@ -148,7 +148,7 @@ fn render_samples(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         let (r, shared) = (&range, &*ctx);
         let generated = shared.raster.for_each_masked_fragment(samples, |f, mask| {
             let px = f.pixel as usize;
-            let k = key(f);
+            let k = peel_key(f, mask);
             let (lo, hi) = r[px];
             let slot = if k + 1 > lo && k < hi {
                 if last {

@@ -101,7 +101,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
 }
 
 /// `dp` per sample (several samples, docs/msaa.md): each pass walks the multisampled fragments
-/// and keeps, per pixel, the smallest (depth bits, primitive id) key strictly behind the layer the
+/// and keeps, per pixel, the smallest (depth bits, primitive id, lowest sample) key (`msaa::peel_key`) strictly behind the layer the
 /// pass before peeled, so every fragment is one layer and ties come in the reference's order
 /// (none lost). The peeled layer's payload and coverage mask are fetched by the next pass (its
 /// one fragment whose key is the one peeled) and composited into the covered samples'
@@ -109,7 +109,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
 /// last layer, so the passes are the layers and one. Where the peel limit stops it first, one
 /// more pass fetches the last layer and counts what lies behind it lost.
 fn render_samples(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
-    use super::msaa::{accumulate, finish_accumulated, key};
+    use super::msaa::{accumulate, finish_accumulated, peel_key};
     const EMPTY: u64 = u64::MAX;
     // key + 1 of the layer the last pass peeled: 0 none yet, DONE nothing left
     const DONE: u64 = u64::MAX;
@@ -128,7 +128,7 @@ fn render_samples(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         let (prev, shared) = (&previous, &*ctx);
         let generated = shared.raster.for_each_masked_fragment(samples, |f, mask| {
             let px = f.pixel as usize;
-            let k = key(f) + 1;
+            let k = peel_key(f, mask) + 1;
             if k > prev[px] {
                 if last {
                     // behind the last layer the limit allows

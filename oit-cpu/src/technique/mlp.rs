@@ -109,7 +109,7 @@ pub(crate) fn render_over<L: AtomicFragmentList<Key = u64>>(
 }
 
 /// `mlp:M` per sample (several samples, docs/msaa.md): each pass walks the multisampled
-/// fragments and inserts, per pixel, the (depth bits, primitive id) keys strictly behind the
+/// fragments and inserts, per pixel, the (depth bits, primitive id, lowest sample) keys strictly behind the
 /// deepest key the pass before kept into M slots by atomic min, so every fragment is one layer
 /// and ties come in the reference's order (none lost). The next pass fetches the payloads and
 /// coverage masks of the keys the pass before kept (the fragments whose keys are among them),
@@ -118,7 +118,7 @@ pub(crate) fn render_over<L: AtomicFragmentList<Key = u64>>(
 /// the passes are ⌈layers / M⌉ and one. Where the peel limit stops it first, one more pass
 /// fetches the last pass's layers and counts what lies behind them lost.
 fn render_samples(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
-    use super::msaa::{accumulate, finish_accumulated, key};
+    use super::msaa::{accumulate, finish_accumulated, peel_key};
     const EMPTY: u64 = MinList::<AtomicU64>::EMPTY;
     let samples = ctx.settings.samples;
     let m = m.max(1) as usize;
@@ -139,7 +139,7 @@ fn render_samples(ctx: &mut Ctx<'_>, m: u32) -> Result<Frame, OitError> {
         let shared = &*ctx;
         let generated = shared.raster.for_each_masked_fragment(samples, |f, mask| {
             let px = f.pixel as usize;
-            let k = key(f);
+            let k = peel_key(f, mask);
             let prev = &previous[px * m..px * m + m];
             if !first {
                 let nearest = prev[0].load(Relaxed);

@@ -74,6 +74,13 @@ pub(crate) fn key(f: &Fragment<'_>) -> u64 {
     u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim)
 }
 
+/// A fragment's key in the per-sample peels, its coverage `mask`'s lowest sample below its
+/// primitive id ([`oit_core::msaa::peel_key`]: a clipped triangle's pieces apart).
+#[inline]
+pub(crate) fn peel_key(f: &Fragment<'_>, mask: u8) -> u64 {
+    oit_core::msaa::peel_key(depth_bits(f.depth), f.prim, mask)
+}
+
 /// The mask a technique keeps of a fragment's `mask`: the mask itself, or every sample of the
 /// pixel with `--coverage pixel` (the per-pixel capture baseline).
 fn coverage(settings: &Settings) -> impl Fn(u8) -> u8 + Sync + Copy {

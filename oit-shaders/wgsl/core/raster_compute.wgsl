@@ -110,6 +110,20 @@ fn behind_tile(item: vec2<u32>) -> bool {
     return depth_bits(clamp(lo - (hi - lo) * 1e-5 - 1e-6, 0.0, 1.0)) >= far;
 }
 
+// oit-core's `DepthPlane::depth` of `t` at barycentrics `b`, operation for operation in the
+// integer f32 of softfloat.wgsl. In float hardware a driver may contract the products and sums
+// into fused multiply-adds (naga emits no NoContraction), which moves a depth by an ulp now and
+// then; equal depths are the ties the techniques order and count, and the depth bins' edges are
+// exact, so an ulp changes counts (an NVIDIA H200 counted two ties fewer than oit-cpu on planes:6
+// at 4 samples, and adp two losses more).
+fn plane_depth(t: Tri, b: vec3<f32>) -> f32 {
+    let z0 = bitcast<u32>(t.z[0]);
+    let dz1 = sf_sub(bitcast<u32>(t.z[1]), z0);
+    let dz2 = sf_sub(bitcast<u32>(t.z[2]), z0);
+    let d = sf_add(sf_add(z0, sf_mul(bitcast<u32>(b.y), dz1)), sf_mul(bitcast<u32>(b.z), dz2));
+    return clamp(bitcast<f32>(d), 0.0, 1.0);
+}
+
 // What the fragment of `t` at pixel (x, y) is: 0 none (the pixel's centre outside; with several
 // samples a pixel, each of its samples: `fu.msaa`), 2 held back by the opaque depth at every
 // sample it covers (counted, neither shaded nor captured; at once where `behind`: `behind_tile`),
@@ -165,7 +179,7 @@ fn raster_pixel(t: Tri, x: u32, y: u32, behind: bool) -> u32 {
         return 2u;
     }
     let b = vec3<f32>(f32(e[0]) * t.inv_area, f32(e[1]) * t.inv_area, f32(e[2]) * t.inv_area);
-    let depth = clamp(t.z[0] + b.y * (t.z[1] - t.z[0]) + b.z * (t.z[2] - t.z[0]), 0.0, 1.0);
+    let depth = plane_depth(t, b);
     var f: Fragment;
     f.pixel = y * ru.width + x;
     f.depth = depth;

@@ -1,5 +1,5 @@
 // ddp per sample (several samples; oit-cpu's `ddp::render_samples`, docs/msaa.md): each geometry
-// pass keeps, per pixel, the smallest and the largest (depth bits, primitive id) key strictly
+// pass keeps, per pixel, the smallest and the largest (depth bits, primitive id, lowest sample: `peel_key`) key strictly
 // inside the open range the pass before left (u64 atomicMin / atomicMax), so every fragment is
 // one layer, ties in the reference's order; the fragments whose keys are the layers peeled write
 // their payloads and coverage masks, which the resolve composites into the covered samples' front
@@ -22,7 +22,7 @@ const DDPS_ALL: u64 = 0xfffffffffffffffflu;
 
 fn capture(f: Fragment) {
     let px = f.pixel;
-    let k = (u64(depth_bits(f.depth)) << 32u) | u64(f.prim);
+    let k = peel_key(f);
     let lo = ddps_range[2u * px];
     let hi = ~ddps_range[2u * px + 1u];
     var slot = 0u;

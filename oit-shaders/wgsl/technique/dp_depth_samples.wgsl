@@ -3,8 +3,8 @@
 // depth peel with its depth kept a sample, and its ties peeled in primitive order. Each peel
 // renders the scene into a fresh multisampled Depth32Float attachment (LESS, cleared to 1), a
 // multisampled Rg32Uint layer and a multisampled R32Uint primitive target; the fragment stage
-// writes its one depth (the pixel centre's, `frag_depth`, so every sample it covers tests the
-// depth oit's other captures key it by) to the samples it keeps (`hw_kept`: those it covers in
+// writes its one depth (the pixel centre's, as `frag_depth` halved, so every sample it covers
+// tests the depth oit's other captures key it by) to the samples it keeps (`hw_kept`: those it covers in
 // front of their opaque depths) whose key (depth, primitive id) lies strictly behind the key the
 // previous peel left at that sample (its depth and its primitive id + 1, read a sample from the
 // other of two ping-ponged depth and primitive targets). The LESS test keeps, of equal depths,
@@ -17,9 +17,12 @@
 // the lowest sample it keeps (where it is peeled once); after the last peel every pixel's samples
 // are finished over their own opaque colours (`accumulated`).
 //
-// A fragment at depth 1 exactly never passes LESS against the cleared attachment: it is never
-// peeled, so never counted captured, and the frame's `lost` (fragments less captured and
-// occluded) holds it.
+// The attachment holds half the depth (`frag_depth` d/2, exact for every depth above 2^-125, so
+// the order and the ties of depths stay as they were), so that a fragment at depth 1 exactly
+// passes LESS against the attachment's clear value of 1. Above one sample a fragment's depth is
+// its plane's at the pixel centre, which may lie outside the triangle and clamp to 1: an edge
+// fragment of the bunny at 8 samples did, on an NVIDIA H100 and H200, and was never peeled
+// while the depth itself was kept.
 //
 // Module: COMMON_WGSL, TECHNIQUE_PRELUDE (group 0: fu, state), peel_samples.wgsl (group 0 binding
 // 5: the accumulators), this, then the hardware raster's vertex stage (group 1 bindings 0..4) and
@@ -46,14 +49,16 @@ fn dp_peel_ms_fs(in: HwOut, @builtin(front_facing) front: bool, @builtin(sample_
     let kept = hw_kept(in, front, covered);
     let xy = vec2<u32>(max(floor(in.position.xy), vec2<f32>(0.0)));
     let depth = clamp(in.position.z, 0.0, 1.0);
+    // what the attachment holds: half the depth, exactly
+    let half_depth = depth * 0.5;
     var behind = kept;
     if (fu.pass_index > 0u) {
         for (var i = 0u; i < fu.msaa.x; i++) {
             if (((behind >> i) & 1u) != 0u) {
-                let previous = clamp(textureLoad(dps_previous, vec2<i32>(xy), i32(i)), 0.0, 1.0);
+                let previous = textureLoad(dps_previous, vec2<i32>(xy), i32(i));
                 let previous_prim = textureLoad(dps_previous_prim, vec2<i32>(xy), i32(i)).x;
                 // strictly behind by (depth, primitive id): at the previous depth, a later primitive
-                if (depth < previous || (depth == previous && in.prim + 1u <= previous_prim)) {
+                if (half_depth < previous || (half_depth == previous && in.prim + 1u <= previous_prim)) {
                     behind &= ~(1u << i);
                 }
             }
@@ -68,7 +73,7 @@ fn dp_peel_ms_fs(in: HwOut, @builtin(front_facing) front: bool, @builtin(sample_
     f.prim = in.prim;
     f.color = clamp(hw_color(in), vec4<f32>(0.0), vec4<f32>(1.0));
     f.normal = normalize_or_zero(in.normal);
-    return DpPeelMsOut(vec2<u32>(payload(f, fu.effect), kept), in.prim + 1u, depth, behind);
+    return DpPeelMsOut(vec2<u32>(payload(f, fu.effect), kept), in.prim + 1u, half_depth, behind);
 }
 
 // Composites this peel's layer, each sample's into that sample's accumulator (one invocation a

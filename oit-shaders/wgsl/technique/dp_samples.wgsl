@@ -1,5 +1,5 @@
 // dp per sample (several samples; oit-cpu's `dp::render_samples`, docs/msaa.md): each geometry
-// pass keeps, per pixel, the smallest (depth bits, primitive id) key strictly behind the layer
+// pass keeps, per pixel, the smallest (depth bits, primitive id, lowest sample: `peel_key`) key strictly behind the layer
 // the pass before peeled (u64 atomicMin), so every fragment is one layer, ties in the reference's
 // order; the one fragment whose key is the layer peeled writes its payload and coverage mask,
 // which the resolve composites into the covered samples' accumulators (peel_samples.wgsl). The
@@ -17,7 +17,7 @@ const DPS_EMPTY: u64 = 0xfffffffffffffffflu;
 const DPS_DONE: u64 = 0xfffffffffffffffflu;
 
 fn capture(f: Fragment) {
-    let k = ((u64(depth_bits(f.depth)) << 32u) | u64(f.prim)) + 1lu;
+    let k = peel_key(f) + 1lu;
     let prev = previous[f.pixel];
     if (k > prev) {
         if (last_pass()) {

@@ -1,5 +1,5 @@
 // mlp:M per sample (several samples; oit-cpu's `mlp::render_samples`, docs/msaa.md): each geometry
-// pass inserts, per pixel, the (depth bits, primitive id) keys strictly behind the deepest key the
+// pass inserts, per pixel, the (depth bits, primitive id, lowest sample: `peel_key`) keys strictly behind the deepest key the
 // pass before kept into M u64 slots by repeated atomicMin (as mlp.wgsl), so every fragment is one
 // layer, ties in the reference's order. The fragments whose keys are among those the pass before
 // kept write their payloads and coverage masks, which the resolve composites, nearest first, into
@@ -30,7 +30,7 @@ fn mlps_insert(base: u32, key: u64) {
 
 fn capture(f: Fragment) {
     let base = f.pixel * fu.param;
-    let k = (u64(depth_bits(f.depth)) << 32u) | u64(f.prim);
+    let k = peel_key(f);
     if (fu.pass_index != 0u) {
         if (mlps_previous[base] == MLPS_EMPTY) {
             // done

@@ -7,6 +7,13 @@
 // transmittances only; the heat map counts layers a pixel (the state's `captured`).
 @group(0) @binding(5) var<storage, read_write> acc: array<vec4<f32>>;
 
+// A fragment's key in the per-sample peels (oit-core's `msaa::peel_key`): depth bits, primitive
+// id, and the lowest sample of its coverage mask, which tells apart two pieces of one clipped
+// triangle on one pixel (they share the id and the depth, never a sample).
+fn peel_key(f: Fragment) -> u64 {
+    return (u64(depth_bits(f.depth)) << 32u) | (u64(f.prim) << 3u) | u64(countTrailingZeros(f.mask) & 7u);
+}
+
 // Every sample's accumulators of pixel px set to (0, 0, 0, 1): before its first layer.
 fn accumulators_init(px: u32, halves: u32) {
     let n = fu.msaa.x * halves;
