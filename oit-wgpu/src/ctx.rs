@@ -575,6 +575,27 @@ impl<'a> GpuCtx<'a> {
         self.make_buffer(label, words, init, false)
     }
 
+    /// A render target of the frame's size and `samples`, kept by `stage` for the next frame of
+    /// that size ([`SceneStage::target_sampled`](crate::stage::SceneStage::target_sampled)), its
+    /// bytes counted in `storage_bytes` as a buffer's are (the blend captures' targets: what
+    /// oit-vulkan's `VkCtx::target` counts for its own).
+    pub(crate) fn target(
+        &mut self,
+        stage: &crate::stage::SceneStage,
+        label: &'static str,
+        format: wgpu::TextureFormat,
+        samples: u32,
+    ) -> Result<wgpu::TextureView, OitError> {
+        let texel = format
+            .block_copy_size(None)
+            .or_else(|| format.block_copy_size(Some(wgpu::TextureAspect::DepthOnly)))
+            .ok_or_else(|| {
+                OitError::Device(format!("internal: no texel size for the target '{label}' ({format:?})"))
+            })?;
+        self.storage_bytes += u64::from(self.pixels) * u64::from(texel) * u64::from(samples);
+        Ok(stage.target_sampled(&self.gpu.device, label, format, samples))
+    }
+
     /// [`GpuCtx::buffer`] (`counted`) or [`GpuCtx::scratch`].
     fn make_buffer(
         &mut self,

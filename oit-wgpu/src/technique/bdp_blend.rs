@@ -28,6 +28,18 @@ use crate::stage::SceneStage;
 
 const WGSL: &str = oit_shaders::text("technique/bdp_blend.wgsl");
 const TARGETS: u32 = 8;
+
+/// The targets' labels (the stage keeps a target by its label).
+const LABELS: [&str; TARGETS as usize] = [
+    "bdp bucket target 0",
+    "bdp bucket target 1",
+    "bdp bucket target 2",
+    "bdp bucket target 3",
+    "bdp bucket target 4",
+    "bdp bucket target 5",
+    "bdp bucket target 6",
+    "bdp bucket target 7",
+];
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), OitError> {
@@ -64,33 +76,19 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         count_fragments(ctx, drivers)?;
     }
 
-    let device = &ctx.gpu.device;
-    let (w, h) = (ctx.settings.width, ctx.settings.height);
-    let targets: Vec<wgpu::Texture> = (0..TARGETS)
-        .map(|i| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(&format!("bdp bucket target {i}")),
-                size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
-                mip_level_count: 1,
-                sample_count: samples,
-                dimension: wgpu::TextureDimension::D2,
-                format: FORMAT,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
-        })
-        .collect();
     // the plan's colour buckets, in the targets (a pixel's, times its samples: each sample holds
-    // the buckets of the fragments written there; `Plan::blend_targets`)
+    // the buckets of the fragments written there; `Plan::blend_targets`), kept by the stage: a
+    // frame of a size seen before makes none
     let bytes = u64::from(per_sample) * u64::from(samples);
     storage.attachments("colour buckets", bytes)?;
     storage.finish()?;
-    ctx.storage_bytes += u64::from(ctx.pixels) * bytes;
+    let views =
+        LABELS.iter().map(|l| ctx.target(stage, l, FORMAT, samples)).collect::<Result<Vec<_>, _>>()?;
+    let device = &ctx.gpu.device;
     let (fs, resolve) = (
         oit_gpu::blend_entry("bdp_blend_fs", samples),
         oit_gpu::blend_entry("bdp_blend_resolve_main", samples),
     );
-    let views: Vec<wgpu::TextureView> = targets.iter().map(|t| t.create_view(&Default::default())).collect();
 
     // the geometry pass
     let (layout0, group0) = ctx.group0(&[&bounds], 0, 0);

@@ -179,10 +179,8 @@ fn draw_and_resolve(
     // at several samples the `_ms` entry points (blend.wgsl): multisampled targets
     let entries = (oit_gpu::blend_entry(entries.0, samples), oit_gpu::blend_entry(entries.1, samples));
     let device = ctx.gpu.device.clone();
-    let color = stage.target_sampled(&device, "blend colour", formats.0, samples);
-    let count = stage.target_sampled(&device, "blend count", formats.1, samples);
-    let texel = |f: wgpu::TextureFormat| u64::from(f.block_copy_size(None).unwrap_or(16));
-    ctx.storage_bytes += u64::from(ctx.pixels) * u64::from(samples) * (texel(formats.0) + texel(formats.1));
+    let color = ctx.target(stage, "blend colour", formats.0, samples)?;
+    let count = ctx.target(stage, "blend count", formats.1, samples)?;
 
     let (layout0, group0) = ctx.group0(&[], 0, param);
     let body = format!("{TECHNIQUE_PRELUDE}{WEIGHTED_WGSL}\n{}\n{}", blend_wgsl(), stage.wgsl());

@@ -69,7 +69,6 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         oit_gpu::technique::ddp_state(ctx)?.into()
     };
     let buffers: Vec<&wgpu::Buffer> = owned.iter().collect();
-    let px = u64::from(ctx.pixels);
     let technique = if ms { SAMPLES_WGSL.join("\n") } else { WGSL.to_string() };
     // the kernels' text: the technique's and the vertex stage's (`hw_kept` is the stage's)
     let kernels = format!("{technique}\n{}", stage.wgsl());
@@ -80,10 +79,9 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
     let device = ctx.gpu.device.clone();
     // kept by the stage: a frame of a size seen before makes none
     let views = [
-        stage.target_sampled(&device, "ddp range 0", RANGE, samples),
-        stage.target_sampled(&device, "ddp range 1", RANGE, samples),
+        ctx.target(stage, "ddp range 0", RANGE, samples)?,
+        ctx.target(stage, "ddp range 1", RANGE, samples)?,
     ];
-    ctx.storage_bytes += px * 16 * u64::from(samples);
     let occlusion = stage.occlusion(&device);
     // group 2: the previous pass's range; pass p renders into views[p % 2] and reads the other
     let previous_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {

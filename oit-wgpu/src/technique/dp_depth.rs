@@ -82,20 +82,17 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         None
     };
     // kept by the stage: a frame of a size seen before makes none
-    let depth_views = [
-        stage.target_sampled(&device, "dp depth 0", DEPTH, samples),
-        stage.target_sampled(&device, "dp depth 1", DEPTH, samples),
-    ];
-    let layer_view = stage.target_sampled(&device, "dp layer", LAYER, samples);
+    let depth_views =
+        [ctx.target(stage, "dp depth 0", DEPTH, samples)?, ctx.target(stage, "dp depth 1", DEPTH, samples)?];
+    let layer_view = ctx.target(stage, "dp layer", LAYER, samples)?;
     // at several samples: the peeled primitive a sample, ping-ponged as the depths are
-    let prim_views = ms.then(|| {
-        [
-            stage.target_sampled(&device, "dp prim 0", PRIM, samples),
-            stage.target_sampled(&device, "dp prim 1", PRIM, samples),
-        ]
-    });
-    let prim_bytes = if ms { 4 + 4 } else { 0 };
-    ctx.storage_bytes += u64::from(ctx.pixels) * (4 + 4 + 8 + prim_bytes) * u64::from(samples);
+    let prim_views = match ms {
+        true => Some([
+            ctx.target(stage, "dp prim 0", PRIM, samples)?,
+            ctx.target(stage, "dp prim 1", PRIM, samples)?,
+        ]),
+        false => None,
+    };
     let occlusion = stage.occlusion(&device);
     // group 0's buffers: the accumulators at peel_samples.wgsl's binding 5 (2 to 4 unused)
     let buffers: Vec<wgpu::Buffer> = match &acc {
