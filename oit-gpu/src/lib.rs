@@ -349,6 +349,16 @@ pub fn dispatch_size(invocations: u64) -> (u32, u32) {
     if groups <= 65_535 { (groups as u32, 1) } else { (65_535, groups.div_ceil(65_535) as u32) }
 }
 
+/// The compute raster's indirect arguments for `items` work items, as the GPU setup's arguments
+/// kernel writes them (`oit_core::gpu_setup::ARGS_WORDS`): the per-pixel dispatch, the per-item
+/// one and the item count. A frame set up on the host (a textured one) uploads them, so that its
+/// geometry passes dispatch and gate (`geometry_pass_if`) as a GPU-set-up frame's do.
+pub fn raster_args(items: u64) -> [u32; oit_core::gpu_setup::ARGS_WORDS] {
+    let (px, py) = dispatch_size(items * 64);
+    let (ix, iy) = dispatch_size(items);
+    [px, py, 1, 0, ix, iy, 1, 0, items as u32, 0, 0, 0]
+}
+
 impl FrameUniform {
     /// The uniform of a frame of `settings` seen by `camera` under `plan` (pass 0, parameter 0):
     /// the same on every GPU backend.

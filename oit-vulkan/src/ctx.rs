@@ -517,8 +517,8 @@ impl<'a> VkCtx<'a> {
     /// A geometry pass that has work only where word 0 of `flag` (written by the frame's earlier
     /// passes) is not zero, with no round trip: `gate.wgsl` copies the raster's arguments into
     /// their gated copy (zeros where the flag is clear) and counts the pass on the device where it
-    /// runs; the pass dispatches or draws from the gated copy. Only for a raster with a gate
-    /// ([`Raster::gate`]); the first geometry pass of a frame is never gated.
+    /// runs; the pass dispatches or draws from the gated copy ([`Raster::gate`]); the first
+    /// geometry pass of a frame is never gated.
     pub(crate) fn geometry_pass_if(
         &mut self,
         raster: &Raster,
@@ -528,13 +528,7 @@ impl<'a> VkCtx<'a> {
         param: u32,
         flag: &Buffer,
     ) -> Result<(), OitError> {
-        let Some((from, to, words)) = raster.gate() else {
-            // the host's setup: its work list cannot be gated, so the flag is read back
-            if self.read_u32(flag)?[0] != 0 {
-                self.geometry_pass(raster, module, buffers, pass_index, param)?;
-            }
-            return Ok(());
-        };
+        let (from, to, words) = raster.gate();
         debug_assert_ne!(self.fragments, Fragments::Unset, "the first pass is ungated");
         let counter = self.gated_counter.clone();
         self.kernel_over("gate", "gate_main", &[flag, &counter, from, to], 64, 0, words, "gate")?;

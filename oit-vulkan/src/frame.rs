@@ -173,13 +173,11 @@ impl Frame<Raster> for VkCtx<'_> {
         VkCtx::fragment_capacity(self, count, bytes)
     }
 
-    /// A raster without a gate (the host's setup) reads every peel back: nothing to speculate.
-    /// Where the frame reads back but the raster gates, the gate's pipeline is made now, so the
-    /// next frame, which gates, creates none.
-    fn take_speculated_peels(&mut self, raster: &Raster) -> Result<Option<u32>, OitError> {
-        let gate = raster.gate().is_some();
-        let speculated = self.speculated.peels.take().filter(|_| gate);
-        if speculated.is_none() && gate {
+    /// Where the frame reads back (nothing speculated yet), the gate's pipeline is made now, so
+    /// the next frame, which gates, creates none.
+    fn take_speculated_peels(&mut self, _raster: &Raster) -> Result<Option<u32>, OitError> {
+        let speculated = self.speculated.peels.take();
+        if speculated.is_none() {
             self.make_gate_pipeline()?;
         }
         Ok(speculated)

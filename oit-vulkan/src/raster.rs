@@ -62,15 +62,14 @@ pub(crate) enum Raster {
 
 impl Raster {
     /// Where this frame's gated geometry passes take their arguments: (the ungated pass's
-    /// arguments, their gated copy, words), copied by `gate.wgsl` (zeros where the gate is closed);
-    /// `None` where the work is counted on the host (the host's setup), so a pass cannot be gated
-    /// on the device.
-    pub(crate) fn gate(&self) -> Option<(&Buffer, &Buffer, u32)> {
+    /// arguments, their gated copy, words), copied by `gate.wgsl` (zeros where the gate is
+    /// closed). A compute raster set up on the host (a textured frame) uploads its arguments
+    /// (`oit_gpu::raster_args`), so its passes gate on the device too, as oit-wgpu's do (they
+    /// read each peel back before, about a millisecond a frame of dp on an H200).
+    pub(crate) fn gate(&self) -> (&Buffer, &Buffer, u32) {
         match self {
-            Raster::Compute(r) => {
-                matches!(r.work, Work::Indirect).then(|| (&*r.args, &*r.gated, ARGS_WORDS as u32))
-            }
-            Raster::Hardware(r) => Some(r.gate()),
+            Raster::Compute(r) => (&*r.args, &*r.gated, ARGS_WORDS as u32),
+            Raster::Hardware(r) => r.gate(),
         }
     }
 }
@@ -99,8 +98,9 @@ impl SetupCheck {
 
 /// What the first geometry pass of a frame records before its dispatch.
 enum Pending {
-    /// The host's triangle words, work items and raster uniform, to upload.
-    Host([Vec<u8>; 3]),
+    /// The host's triangle words, work items, raster uniform and indirect arguments
+    /// (`oit_gpu::raster_args`), to upload.
+    Host([Vec<u8>; 4]),
     /// The GPU's setup: the instance table and the raster uniform to upload, the setup's uniform.
     Gpu {
         instances: Vec<u8>,
@@ -108,15 +108,6 @@ enum Pending {
         setup_uniform: [u32; oit_core::gpu_setup::SETUP_UNIFORM_WORDS],
         check: Option<SetupCheck>,
     },
-}
-
-/// How many work items a geometry pass dispatches.
-#[derive(Clone, Copy)]
-enum Work {
-    /// Known on the host.
-    Items(u64),
-    /// Written by the GPU's setup into the indirect arguments.
-    Indirect,
 }
 
 /// One frame's triangles and work list, on the GPU once the first geometry pass sets them up or
@@ -129,7 +120,6 @@ pub(crate) struct ComputeRaster {
     args: Rc<Buffer>,
     gated: Rc<Buffer>,
     setup: Option<Rc<SetupBuffers>>,
-    work: Work,
     pending: RefCell<Option<Pending>>,
 }
 
@@ -143,10 +133,11 @@ impl ComputeRaster {
     /// the GPU's setup. Returns the setup's end-of-frame check, where it left one.
     pub(crate) fn upload(&self, rec: &mut Recorder<'_>) -> Result<Option<SetupCheck>, OitError> {
         match self.pending.borrow_mut().take() {
-            Some(Pending::Host([tris, items, uniform])) => {
+            Some(Pending::Host([tris, items, uniform, args])) => {
                 rec.upload(&self.tris, &tris)?;
                 rec.upload(&self.item_list, &items)?;
                 rec.upload(&self.uniform, &uniform)?;
+                rec.upload(&self.args, &args)?;
                 Ok(None)
             }
             Some(Pending::Gpu { instances, raster_uniform, setup_uniform, check }) => {
@@ -171,19 +162,13 @@ impl ComputeRaster {
         per_pixel: bool,
         gated: bool,
     ) -> Result<(), OitError> {
-        match self.work {
-            Work::Items(items) => {
-                let groups = dispatch_size(if per_pixel { items * 64 } else { items });
-                rec.dispatch("geometry", pipeline, sets, groups)
-            }
-            Work::Indirect => rec.dispatch_indirect(
-                "geometry",
-                pipeline,
-                sets,
-                if gated { &self.gated } else { &self.args },
-                if per_pixel { 0 } else { ARGS_PER_ITEM },
-            ),
-        }
+        rec.dispatch_indirect(
+            "geometry",
+            pipeline,
+            sets,
+            if gated { &self.gated } else { &self.args },
+            if per_pixel { 0 } else { ARGS_PER_ITEM },
+        )
     }
 }
 
@@ -391,7 +376,6 @@ impl ComputeBuffers {
             generated: self.generated.clone(),
             args: self.args.clone(),
             gated: self.gated.clone(),
-            work: Work::Indirect,
             pending: RefCell::new(Some(Pending::Gpu {
                 instances,
                 raster_uniform: raster_uniform(0),
@@ -463,11 +447,11 @@ impl ComputeBuffers {
             args: self.args.clone(),
             gated: self.gated.clone(),
             setup: None,
-            work: Work::Items(items.len() as u64),
             pending: RefCell::new(Some(Pending::Host([
                 bytemuck::cast_slice(&words).to_vec(),
                 bytemuck::cast_slice(&items).to_vec(),
                 raster_uniform(items.len() as u32),
+                bytemuck::cast_slice(&oit_gpu::raster_args(items.len() as u64)).to_vec(),
             ]))),
         })
     }

@@ -1455,11 +1455,7 @@ pub(crate) fn totals_stats(t: &[u32], passes: u32, storage_bytes: u64) -> Stats 
 /// The gate kernel of [`GpuCtx::geometry_pass_if`].
 const GATE_WGSL: &str = oit_shaders::text("core/gate.wgsl");
 
-/// Workgroups of 64 for `invocations`, as (x, y) with x ≤ 65535.
-pub fn dispatch_size(invocations: u64) -> (u32, u32) {
-    let groups = invocations.div_ceil(64);
-    if groups <= 65_535 { (groups as u32, 1) } else { (65_535, groups.div_ceil(65_535) as u32) }
-}
+pub use oit_gpu::dispatch_size;
 
 /// A speculated size's check at the end of its frame: true where the count the frame made
 /// sizes it as the speculated value did.

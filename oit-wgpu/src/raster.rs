@@ -240,11 +240,6 @@ fn bind(gpu: &Gpu, layout: &wgpu::BindGroupLayout, buffers: &[&wgpu::Buffer]) ->
 
 /// The raster kernel's indirect arguments for `items` work items, as `setup_finish_main` writes
 /// them: per-pixel dispatch, per-item dispatch, the item count.
-fn raster_args(items: u64) -> [u32; 12] {
-    let (px, py) = dispatch_size(items * 64);
-    let (ix, iy) = dispatch_size(items);
-    [px, py, 1, 0, ix, iy, 1, 0, items as u32, 0, 0, 0]
-}
 
 impl ComputeBuffers {
     /// Empty buffers (grown by the first frame that needs more); `made` counts the buffers created.
@@ -385,7 +380,7 @@ impl ComputeBuffers {
             queue.write_buffer(&self.items, 0, bytemuck::cast_slice(&items));
         }
         self.write_uniform(gpu, camera, settings, items.len() as u32);
-        queue.write_buffer(&self.args, 0, bytemuck::cast_slice(&raster_args(items.len() as u64)));
+        queue.write_buffer(&self.args, 0, bytemuck::cast_slice(&oit_gpu::raster_args(items.len() as u64)));
         Ok(())
     }
 
