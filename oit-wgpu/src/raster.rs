@@ -238,9 +238,6 @@ fn bind(gpu: &Gpu, layout: &wgpu::BindGroupLayout, buffers: &[&wgpu::Buffer]) ->
     })
 }
 
-/// The raster kernel's indirect arguments for `items` work items, as `setup_finish_main` writes
-/// them: per-pixel dispatch, per-item dispatch, the item count.
-
 impl ComputeBuffers {
     /// Empty buffers (grown by the first frame that needs more); `made` counts the buffers created.
     pub(crate) fn new(gpu: &Gpu, made: &Cell<u64>) -> ComputeBuffers {
