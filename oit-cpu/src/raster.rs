@@ -480,6 +480,47 @@ struct Cut {
     tiles_x: u32,
 }
 
+impl Cut {
+    /// Runs a masked pass `walk` over `samples` samples a pixel of `pixels` pixels behind the
+    /// cut: `walk` passes its fragments through the [`MaskedCut`] it is given, which hands a
+    /// shader each fragment with the samples of its mask in front of the opaque depth there, and
+    /// counts it occluded where none is (in the frame's first masked pass only, whose count is
+    /// kept).
+    fn masked<R>(&self, samples: u32, pixels: usize, walk: impl FnOnce(&MaskedCut<'_>) -> R) -> R {
+        let counting = self.occluded.get().is_none();
+        let pass = COUNTING_PASS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let per = samples as usize;
+        debug_assert_eq!(self.depth.len(), pixels * per);
+        let r = walk(&MaskedCut { depth: &self.depth, per, counting, pass });
+        if counting {
+            let _ = self.occluded.set(take_occluded(pass));
+        }
+        r
+    }
+}
+
+/// A masked pass behind the cut ([`Cut::masked`]).
+struct MaskedCut<'a> {
+    depth: &'a [f32],
+    per: usize,
+    counting: bool,
+    pass: u64,
+}
+
+impl MaskedCut<'_> {
+    /// Hands `f` the fragment with its samples in front of the opaque depth, or counts it
+    /// occluded where none is.
+    #[inline]
+    fn pass_on(&self, f: &impl Fn(&Fragment<'_>, u8), frag: &Fragment<'_>, mask: u8) {
+        let kept = front_samples(&self.depth[frag.pixel as usize * self.per..][..self.per], frag.depth, mask);
+        if kept != 0 {
+            f(frag, kept);
+        } else if self.counting {
+            occlude(self.pass);
+        }
+    }
+}
+
 /// Side of the square tiles over which the cut keeps its farthest opaque depth, in pixels: a
 /// triangle whose nearest depth lies behind a tile's farthest is walked there without its
 /// fragments' depth tests ([`TileSkip`]).
@@ -1294,26 +1335,13 @@ impl Rasterizer {
         let Some(cut) = &self.cut else {
             return self.masked_by_band(kernel, samples, shade, ahead, make);
         };
-        let counting = cut.occluded.get().is_none();
-        let pass = COUNTING_PASS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let (depth, per) = (&*cut.depth, samples as usize);
-        debug_assert_eq!(depth.len(), self.setup.width as usize * self.setup.height as usize * per);
-        let make = &make;
-        let per_band = self.masked_by_band(kernel, samples, shade, ahead, move |b| {
-            let f = make(b);
-            move |frag: &Fragment<'_>, mask: u8| {
-                let kept = front_samples(&depth[frag.pixel as usize * per..][..per], frag.depth, mask);
-                if kept != 0 {
-                    f(frag, kept);
-                } else if counting {
-                    occlude(pass);
-                }
-            }
-        });
-        if counting {
-            let _ = cut.occluded.set(take_occluded(pass));
-        }
-        per_band
+        let pixels = self.setup.width as usize * self.setup.height as usize;
+        cut.masked(samples, pixels, |at| {
+            self.masked_by_band(kernel, samples, shade, ahead, |b| {
+                let f = make(b);
+                move |frag: &Fragment<'_>, mask: u8| at.pass_on(&f, frag, mask)
+            })
+        })
     }
 
     /// [`Rasterizer::for_each_masked_fragment_by_band`] on `kernel`, without the cut.
@@ -1343,22 +1371,12 @@ impl Rasterizer {
         let Some(cut) = &self.cut else {
             return self.masked_walk(samples, shade, keep, &f);
         };
-        let counting = cut.occluded.get().is_none();
-        let pass = COUNTING_PASS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let (depth, per) = (&*cut.depth, samples as usize);
-        debug_assert_eq!(depth.len(), self.setup.width as usize * self.setup.height as usize * per);
-        let n = self.masked_walk(samples, shade, keep, &|frag: &Fragment<'_>, mask: u8| {
-            let kept = front_samples(&depth[frag.pixel as usize * per..][..per], frag.depth, mask);
-            if kept != 0 {
-                f(frag, kept);
-            } else if counting {
-                occlude(pass);
-            }
-        });
-        if counting {
-            let _ = cut.occluded.set(take_occluded(pass));
-        }
-        n
+        let pixels = self.setup.width as usize * self.setup.height as usize;
+        cut.masked(samples, pixels, |at| {
+            self.masked_walk(samples, shade, keep, &|frag: &Fragment<'_>, mask: u8| {
+                at.pass_on(&f, frag, mask)
+            })
+        })
     }
 
     /// [`Rasterizer::for_each_masked_fragment`]'s walk, without the cut, in Scatter's tasks.
