@@ -1079,6 +1079,21 @@ impl TriangleSetup {
         self.shading.shade(base, normal, vertex_color, self.forward)
     }
 
+    /// [`TriangleSetup::color_at`]'s alpha, the same bits, without shading or the texture's
+    /// colour channels: the base alpha times the texture's filtered alpha, clamped to [0, 1].
+    /// What the opaque pass's alpha test reads.
+    #[inline]
+    pub fn alpha_at(&self, t: &Triangle, b: [f32; 3]) -> f32 {
+        let mut alpha = t.base.w;
+        if let Some(texture) = self.textures.get(t.texture as usize) {
+            let p = perspective(t, b);
+            let uv = t.uv[0] * p[0] + t.uv[1] * p[1] + t.uv[2] * p[2];
+            // as `decode` divides it, and `Vec4 *=` multiplies lane by lane
+            alpha *= f32::from(texture.sample_alpha8(t.lod, uv)) / 255.0;
+        }
+        alpha.clamp(0.0, 1.0)
+    }
+
     /// `record` (of `t`) with its base multiplied by `t`'s texture's sample at barycentrics `b`,
     /// as [`TriangleSetup::color_at`] multiplies it before shading: the same product, so headlight
     /// lanes ([`headlight_colors`], which read no vertex colour) shading the returned record give
@@ -1391,7 +1406,8 @@ mod tests {
     /// ordinary triangles and for the ones where the rules branch: zero and cancelling normals,
     /// normals whose squared length underflows or overflows, colours and alphas outside [0, 1],
     /// fragments on an edge or a vertex. A sum regrouped, or `is_finite` dropped from the
-    /// normalization's test, fails it (both tried).
+    /// normalization's test, fails it (both tried). [`TriangleSetup::alpha_at`] gives the
+    /// colour's alpha bits on the same fragments.
     #[test]
     fn lanes_give_color_at_bits() {
         let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
@@ -1433,6 +1449,7 @@ mod tests {
             for i in 0..SHADE_LANES {
                 let want = setup.color_at(&tris[i], b[i]).to_array().map(f32::to_bits);
                 assert_eq!(got[i].to_array().map(f32::to_bits), want, "case {case} lane {i} ({shading:?})");
+                assert_eq!(setup.alpha_at(&tris[i], b[i]).to_bits(), want[3], "case {case} lane {i} alpha");
                 if shading == Shading::Headlight {
                     assert_eq!(lanes[i].to_array().map(f32::to_bits), want, "case {case} lane {i}");
                     checked += 1;

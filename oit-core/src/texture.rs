@@ -156,16 +156,25 @@ impl Texture {
     /// (the module's rule).
     #[inline]
     pub fn sample_rgba8(&self, level: u32, uv: Vec2) -> [u8; 4] {
+        let taps = self.taps(level, uv);
+        std::array::from_fn(|c| taps.channel(c))
+    }
+
+    /// [`Texture::sample_rgba8`]'s alpha alone, the same bits: what an alpha test needs.
+    #[inline]
+    pub fn sample_alpha8(&self, level: u32, uv: Vec2) -> u8 {
+        self.taps(level, uv).channel(3)
+    }
+
+    /// The four texels the filter reads at `uv` on level `level` (clamped to the chain), and
+    /// their weights.
+    #[inline]
+    fn taps(&self, level: u32, uv: Vec2) -> Taps {
         let l = &self.levels[(level as usize).min(self.levels.len() - 1)];
         let (x0, x1, fx) = axis(uv.x, l.width, self.wrap[0]);
         let (y0, y1, fy) = axis(uv.y, l.height, self.wrap[1]);
         let at = |x: u32, y: u32| l.texels[y as usize * l.width as usize + x as usize];
-        let (t00, t10, t01, t11) = (at(x0, y0), at(x1, y0), at(x0, y1), at(x1, y1));
-        std::array::from_fn(|c| {
-            let top = u32::from(t00[c]) * (256 - fx) + u32::from(t10[c]) * fx;
-            let bottom = u32::from(t01[c]) * (256 - fx) + u32::from(t11[c]) * fx;
-            ((top * (256 - fy) + bottom * fy + (1 << 15)) >> 16) as u8
-        })
+        Taps { texels: [at(x0, y0), at(x1, y0), at(x0, y1), at(x1, y1)], fx, fy }
     }
 
     /// The sample of level `level` at `uv`, linear RGBA: [`Texture::sample_rgba8`], RGB decoded
@@ -173,6 +182,26 @@ impl Texture {
     #[inline]
     pub fn sample(&self, level: u32, uv: Vec2) -> Vec4 {
         decode(self.sample_rgba8(level, uv))
+    }
+}
+
+/// The four texels of a bilinear sample (top left, top right, bottom left, bottom right) and the
+/// right and bottom ones' weights in 1/256.
+struct Taps {
+    texels: [[u8; 4]; 4],
+    fx: u32,
+    fy: u32,
+}
+
+impl Taps {
+    /// Channel `c` filtered: rows first, then columns, rounded half up once.
+    #[inline]
+    fn channel(&self, c: usize) -> u8 {
+        let [t00, t10, t01, t11] = self.texels.map(|t| u32::from(t[c]));
+        let (fx, fy) = (self.fx, self.fy);
+        let top = t00 * (256 - fx) + t10 * fx;
+        let bottom = t01 * (256 - fx) + t11 * fx;
+        ((top * (256 - fy) + bottom * fy + (1 << 15)) >> 16) as u8
     }
 }
 

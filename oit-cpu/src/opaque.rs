@@ -56,7 +56,8 @@ pub(crate) fn draw(scene: &Scene, camera: &Camera, settings: &Settings) -> Opaqu
     let masks = scene.objects.iter().any(|o| matches!(o.alpha_mode, AlphaMode::Mask { .. }));
     let key_of = |f: &crate::raster::Fragment<'_>| u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim);
     let first = |f: &crate::raster::Fragment<'_>, mask: u8| {
-        if masks && f.color().w < f.cutoff() {
+        // alpha is never below a cutoff of 0 (an opaque object's): those skip the texture
+        if masks && f.cutoff() > 0.0 && f.alpha() < f.cutoff() {
             masked.fetch_add(1, Relaxed);
             return;
         }

@@ -201,6 +201,13 @@ impl Fragment<'_> {
         self.color.unwrap_or_else(|| self.setup.color_at(self.t, self.b))
     }
 
+    /// Shaded alpha, [`Fragment::color`]'s, the same bits; from the colour where the pass made
+    /// it, else without shading ([`TriangleSetup::alpha_at`]).
+    #[inline]
+    pub fn alpha(&self) -> f32 {
+        self.color.map_or_else(|| self.setup.alpha_at(self.t, self.b), |c| c.w)
+    }
+
     /// The alpha below which the opaque pass discards it ([`Triangle::cutoff`]).
     #[inline]
     pub fn cutoff(&self) -> f32 {
