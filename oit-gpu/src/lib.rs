@@ -354,9 +354,18 @@ pub fn dispatch_size(invocations: u64) -> (u32, u32) {
 /// one and the item count. A frame set up on the host (a textured one) uploads them, so that its
 /// geometry passes dispatch and gate (`geometry_pass_if`) as a GPU-set-up frame's do.
 pub fn raster_args(items: u64) -> [u32; oit_core::gpu_setup::ARGS_WORDS] {
-    let (px, py) = dispatch_size(items * 64);
-    let (ix, iy) = dispatch_size(items);
-    [px, py, 1, 0, ix, iy, 1, 0, items as u32, 0, 0, 0]
+    use oit_core::gpu_setup::{ARGS_ITEMS, ARGS_PER_ITEM, ARGS_WORDS};
+    let dispatch = |invocations: u64| {
+        let (x, y) = dispatch_size(invocations);
+        [x, y, 1, 0]
+    };
+    let mut args = [0; ARGS_WORDS];
+    // raster_main: a workgroup of TILE × TILE invocations an item; raster_loop_main: one an item
+    args[..4].copy_from_slice(&dispatch(items * u64::from(TILE * TILE)));
+    let per_item = (ARGS_PER_ITEM / 4) as usize;
+    args[per_item..per_item + 4].copy_from_slice(&dispatch(items));
+    args[(ARGS_ITEMS / 4) as usize] = items as u32;
+    args
 }
 
 impl FrameUniform {
@@ -639,7 +648,7 @@ pub trait Frame<R: ?Sized> {
     fn fragment_capacity(&mut self, count: &Self::Buffer, bytes: u64) -> Result<u32, OitError>;
     /// The passes an earlier frame's peel loop ran at this view's kind, where this frame may
     /// record that many without reading back in between (taken: the next call gives `None`).
-    fn take_speculated_peels(&mut self, raster: &R) -> Result<Option<u32>, OitError>;
+    fn take_speculated_peels(&mut self) -> Result<Option<u32>, OitError>;
     /// The passes this frame's peel loop ran reading back, kept for the next frame.
     fn note_peels(&mut self, peels: u32);
     /// Word 0 of `flag` must be 0 at the frame's end; where it is not, the frame ran on a wrong
@@ -680,6 +689,17 @@ pub trait Rasters<R: ?Sized> {
 
 #[cfg(test)]
 mod tests {
+    /// A host-set-up frame's indirect arguments are those `setup_finish_main` (setup.wgsl) writes
+    /// for the same item count: a workgroup an item for `raster_main` (x capped at 65,535, the
+    /// rest in y), a workgroup of 64 items for `raster_loop_main` at `ARGS_PER_ITEM`, the count at
+    /// `ARGS_ITEMS`.
+    #[test]
+    fn host_raster_args_are_the_setups() {
+        assert_eq!(super::raster_args(0), [0, 1, 1, 0, 0, 1, 1, 0, 0, 0, 0, 0]);
+        assert_eq!(super::raster_args(3), [3, 1, 1, 0, 1, 1, 1, 0, 3, 0, 0, 0]);
+        assert_eq!(super::raster_args(100_000), [65_535, 2, 1, 0, 1563, 1, 1, 0, 100_000, 0, 0, 0]);
+    }
+
     /// Whether a scene draws a textured object: the particles do, their untextured twin does not.
     #[test]
     fn textured_scenes_are_told_apart() {

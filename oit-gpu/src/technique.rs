@@ -324,7 +324,7 @@ fn peel<R: ?Sized, F: Frame<R>>(
         p if p.sample_peel => p.peel_limit.saturating_add(1),
         p => p.peel_limit,
     };
-    let speculated = ctx.take_speculated_peels(raster)?.filter(|&s| s >= 1).map(|s| s.min(limit));
+    let speculated = ctx.take_speculated_peels()?.filter(|&s| s >= 1).map(|s| s.min(limit));
     let previous = match speculated {
         Some(_) => Some(ctx.scratch("peel gate", 1, Init::Zero)?),
         None => None,
@@ -978,7 +978,7 @@ mod tests {
         fn fragment_capacity(&mut self, _: &(), _: u64) -> Result<u32, OitError> {
             unreachable!("not a pass")
         }
-        fn take_speculated_peels(&mut self, _: &()) -> Result<Option<u32>, OitError> {
+        fn take_speculated_peels(&mut self) -> Result<Option<u32>, OitError> {
             Ok(None)
         }
         fn note_peels(&mut self, _: u32) {}

@@ -175,7 +175,7 @@ impl Frame<Raster> for VkCtx<'_> {
 
     /// Where the frame reads back (nothing speculated yet), the gate's pipeline is made now, so
     /// the next frame, which gates, creates none.
-    fn take_speculated_peels(&mut self, _raster: &Raster) -> Result<Option<u32>, OitError> {
+    fn take_speculated_peels(&mut self) -> Result<Option<u32>, OitError> {
         let speculated = self.speculated.peels.take();
         if speculated.is_none() {
             self.make_gate_pipeline()?;

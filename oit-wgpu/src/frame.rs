@@ -167,7 +167,7 @@ impl<'d> Frame<dyn Driver + 'd> for GpuCtx<'_> {
     /// A driver without a gate (the user's draws, in the embedded pass) still speculates: its
     /// gated passes read their flag back, or, in a recorded frame, run whatever the flag
     /// ([`GpuCtx::geometry_pass_if`]).
-    fn take_speculated_peels(&mut self, _raster: &(dyn Driver + 'd)) -> Result<Option<u32>, OitError> {
+    fn take_speculated_peels(&mut self) -> Result<Option<u32>, OitError> {
         Ok(self.speculated_peels.take())
     }
 

@@ -515,7 +515,8 @@ fn vertex_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     verts[o + 11u] = test.p.inv_w;
 }
 
-// Workgroups of 64 for `invocations` as (x, y) with x ≤ 65535 (oit-wgpu's `dispatch_size`).
+// Workgroups of 64 for `invocations` as (x, y) with x ≤ 65535 (oit-gpu's `dispatch_size`; its
+// `raster_args` writes these arguments for a frame set up on the host).
 fn write_dispatch(at: u32, groups: u32) {
     if (groups <= 65535u) {
         args[at] = groups;

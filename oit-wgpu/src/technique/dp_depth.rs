@@ -86,12 +86,10 @@ pub(crate) fn render(ctx: &mut GpuCtx<'_>, drivers: &Drivers<'_>) -> Result<(), 
         [ctx.target(stage, "dp depth 0", DEPTH, samples)?, ctx.target(stage, "dp depth 1", DEPTH, samples)?];
     let layer_view = ctx.target(stage, "dp layer", LAYER, samples)?;
     // at several samples: the peeled primitive a sample, ping-ponged as the depths are
-    let prim_views = match ms {
-        true => Some([
-            ctx.target(stage, "dp prim 0", PRIM, samples)?,
-            ctx.target(stage, "dp prim 1", PRIM, samples)?,
-        ]),
-        false => None,
+    let prim_views = if ms {
+        Some([ctx.target(stage, "dp prim 0", PRIM, samples)?, ctx.target(stage, "dp prim 1", PRIM, samples)?])
+    } else {
+        None
     };
     let occlusion = stage.occlusion(&device);
     // group 0's buffers: the accumulators at peel_samples.wgsl's binding 5 (2 to 4 unused)
