@@ -259,7 +259,7 @@ impl ComputeBuffers {
             label: Some("compute raster"),
             entries: &[
                 layout_entry(0, wgpu::BufferBindingType::Storage { read_only: true }),
-                layout_entry(1, wgpu::BufferBindingType::Storage { read_only: true }),
+                layout_entry(1, wgpu::BufferBindingType::Storage { read_only: false }),
                 layout_entry(2, wgpu::BufferBindingType::Uniform),
                 layout_entry(3, wgpu::BufferBindingType::Storage { read_only: false }),
             ],

@@ -37,12 +37,38 @@ struct RasterUniform {
 // texture coordinates, 6 f32; its level's descriptor; its cutoff, f32; the texture region's
 // first word) and the texture region (texture.wgsl)
 @group(1) @binding(0) var<storage, read> tris: array<u32>;
-@group(1) @binding(1) var<storage, read> items: array<vec2<u32>>;
+// (triangle, tile: row << 16 | column), the tile's bit 31 set by the frame's first scene pass on
+// an item that captured nothing (`ITEM_SPENT`)
+@group(1) @binding(1) var<storage, read_write> items: array<vec2<u32>>;
 @group(1) @binding(2) var<uniform> ru: RasterUniform;
 @group(1) @binding(3) var<storage, read_write> generated: array<atomic<u32>>;
 
 const TILE: u32 = 8u;
 const TRI_WORDS: u32 = 44u;
+// A work item's mark, in its tile word's top bit (a tile's row takes at most 11 bits of the 16
+// above its column): in a frame with an opaque cut, the frame's first scene pass (`fu.opaque.y`)
+// writes it on every item, set where the item captured no fragment, and the scene's later passes
+// skip the items marked. The cut is the same in every pass of a frame, so an item with no
+// fragment in front of the opaque depth in the first pass has none in any other: the peels and
+// the second passes of two-pass captures then walk only the items with something to capture
+// (oit-cpu skips the same fragments by testing them). The setup (or the host's upload) writes
+// every item afresh each frame, and a pass without the cut neither reads nor writes the mark.
+const ITEM_SPENT: u32 = 0x80000000u;
+
+// Work item `i` (its tile without the mark) and whether this pass skips it (`ITEM_SPENT`).
+fn load_item(i: u32) -> vec3<u32> {
+    let raw = items[i];
+    let spent = fu.opaque.x != 0u && fu.opaque.y == 0u && (raw.y & ITEM_SPENT) != 0u;
+    return vec3<u32>(raw.x, raw.y & ~ITEM_SPENT, u32(spent));
+}
+
+// The frame's first scene pass under the opaque cut: marks item `i` (`item`, unmarked) spent where
+// it captured nothing, and clears a mark an earlier frame left.
+fn mark_item(i: u32, item: vec2<u32>, captured: u32) {
+    if (fu.opaque.x != 0u && fu.opaque.y != 0u) {
+        items[i] = vec2<u32>(item.x, item.y | select(0u, ITEM_SPENT, captured == 0u));
+    }
+}
 
 fn tex_word(i: u32) -> u32 {
     return tris[i];
@@ -234,12 +260,14 @@ var<workgroup> wg_occluded: atomic<u32>;
 // atomic each a workgroup (called in uniform control flow), none where the workgroup has none: a
 // pass's items are millions of workgroups on a large scene, most of them with nothing to add
 // where an opaque object holds their tiles back, all adding to one word.
-fn count_fragments(lid: u32, count: u32, occluded: u32) {
+// Returns, to invocation 0, the workgroup's fragments in front of the cut (captured).
+fn count_fragments(lid: u32, count: u32, occluded: u32) -> u32 {
     atomicAdd(&wg_count, count);
     if (occluded != 0u) {
         atomicAdd(&wg_occluded, occluded);
     }
     workgroupBarrier();
+    var captured = 0u;
     if (lid == 0u) {
         let n = atomicLoad(&wg_count);
         if (n != 0u) {
@@ -249,7 +277,9 @@ fn count_fragments(lid: u32, count: u32, occluded: u32) {
         if (held != 0u && fu.opaque.y != 0u) {
             atomicAdd(&opaque_rgb[opaque_counter(1u)], held);
         }
+        captured = n - held;
     }
+    return captured;
 }
 
 // The compute-raster tile of work item `item` (its tile's column and row), as opaque.wgsl's
@@ -273,18 +303,25 @@ fn raster_main(
     workgroupBarrier();
     let i = wid.x + wid.y * groups.x;
     var code = 0u;
+    var item = vec2<u32>();
     if (i < ru.item_count) {
-        let item = items[i];
-        let behind = behind_tile(item);
+        let loaded = load_item(i);
+        item = loaded.xy;
         // wholly behind the opaque depth: only the frame's first scene pass counts its fragments
-        if (!behind || fu.opaque.y != 0u) {
-            let t = load_tri(item.x);
-            let x = (item.y & 0xffffu) * TILE + lid % TILE;
-            let y = (item.y >> 16u) * TILE + lid / TILE;
-            code = raster_pixel(t, x, y, behind);
+        if (loaded.z == 0u) {
+            let behind = behind_tile(item);
+            if (!behind || fu.opaque.y != 0u) {
+                let t = load_tri(item.x);
+                let x = (item.y & 0xffffu) * TILE + lid % TILE;
+                let y = (item.y >> 16u) * TILE + lid / TILE;
+                code = raster_pixel(t, x, y, behind);
+            }
         }
     }
-    count_fragments(lid, u32(code != 0u), u32(code == 2u));
+    let captured = count_fragments(lid, u32(code != 0u), u32(code == 2u));
+    if (lid == 0u && i < ru.item_count) {
+        mark_item(i, item, captured);
+    }
 }
 
 // CPU devices (lavapipe): one invocation per work item, walking its tile; a workgroup of 64
@@ -304,10 +341,11 @@ fn raster_loop_main(
     var count = 0u;
     var occluded = 0u;
     if (i < ru.item_count) {
-        let item = items[i];
-        let behind = behind_tile(item);
+        let loaded = load_item(i);
+        let item = loaded.xy;
+        let behind = loaded.z == 0u && behind_tile(item);
         // wholly behind the opaque depth: only the frame's first scene pass counts its fragments
-        if (!behind || fu.opaque.y != 0u) {
+        if (loaded.z == 0u && (!behind || fu.opaque.y != 0u)) {
             let t = load_tri(item.x);
             let r = item_rect(t, item);
             for (var y = r.y; y <= r.w; y++) {
@@ -318,6 +356,7 @@ fn raster_loop_main(
                 }
             }
         }
+        mark_item(i, item, count - occluded);
     }
     count_fragments(lid, count, occluded);
 }
