@@ -329,8 +329,9 @@ impl<'a> VkCtx<'a> {
             ctx.rec.fill(&keys, u32::MAX);
             ctx.rec.fill(&rgb, 0);
         }
-        let (image, totals) = (ctx.image.clone(), ctx.totals.clone());
-        ctx.kernel_over("finish", "init_main", &[&image, &totals], u64::from(pixels), 0, 0, "init")?;
+        // all zeros is a pixel's starting resolve state (resolve.wgsl's `PixelState`)
+        let state = ctx.state.clone();
+        ctx.rec.fill(&state, 0);
         Ok(ctx)
     }
 
@@ -851,7 +852,7 @@ impl<'a> VkCtx<'a> {
     }
 
     /// Runs compute `entry` of `module` over `invocations` (in 2D rows of 64 × 65535 when needed),
-    /// its GPU time under `label` (oit-wgpu's labels: the entry, or "init", "resolve"...).
+    /// its GPU time under `label` (oit-wgpu's labels: the entry, or "resolve"...).
     #[expect(clippy::too_many_arguments, reason = "a dispatch is that many things, as on oit-wgpu")]
     pub(crate) fn kernel_over(
         &mut self,
@@ -1332,8 +1333,8 @@ mod tests {
         let (image, totals) = (ctx.image.clone(), ctx.totals.clone());
         let n = 2 * crate::record::SLOTS + 44;
         for _ in 0..n {
-            // the frame's init again: idempotent, so the frame stays an empty one
-            ctx.kernel_over("finish", "init_main", &[&image, &totals], 64, 0, 0, "again").unwrap();
+            // the frame's totals of an empty state: adds nothing, so the frame stays an empty one
+            ctx.kernel_over("finish", "totals_main", &[&image, &totals], 64, 0, 0, "again").unwrap();
         }
         let stats = ctx.finish_with(true).unwrap().stats;
         assert_eq!((stats.fragments, stats.captured, stats.lost), (0, 0, 0));
@@ -1343,7 +1344,7 @@ mod tests {
             let sum: f64 = stats.gpu_pass_ms.iter().map(|(_, ms)| ms).sum();
             assert!(total > 0.0 && (total - sum).abs() <= 1e-9 * total, "{total} vs {sum}");
             let labels: Vec<&str> = stats.gpu_pass_ms.iter().map(|(l, _)| l.as_str()).collect();
-            assert_eq!(labels, ["init", "again", "resolve"]);
+            assert_eq!(labels, ["again", "resolve"]);
         } else {
             assert_eq!(stats.gpu_ms, None);
             assert!(stats.gpu_pass_ms.is_empty());

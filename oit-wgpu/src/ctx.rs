@@ -415,7 +415,7 @@ impl<'a> GpuCtx<'a> {
             UNIFORM_SLOTS * UNIFORM_STRIDE,
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
-        // the resolve state is initialized by `init_main` below, pooled or not
+        // the resolve state is cleared below (all zeros is a pixel's starting state), pooled or not
         let state = make(
             "resolve state",
             state_bytes.max(4),
@@ -500,7 +500,7 @@ impl<'a> GpuCtx<'a> {
             ring_full: false,
             started: std::time::Instant::now(),
         };
-        let (image, totals) = (ctx.image.clone(), ctx.totals.clone());
+        let totals = ctx.totals.clone();
         let acct = ctx.acct.clone();
         ctx.fill(&acct, 0)?;
         ctx.fill(&totals, 0)?;
@@ -513,7 +513,9 @@ impl<'a> GpuCtx<'a> {
         // first speculated frame (its second) then creates no pipeline (tests/tests/prepared.rs)
         let gate_layout = ctx.layout0(4);
         gpu.compute_pipeline(&format!("{TECHNIQUE_PRELUDE}{GATE_WGSL}"), "gate_main", &[&gate_layout])?;
-        ctx.kernel_over(FINISH_WGSL, "init_main", &[&image, &totals], u64::from(pixels), 0, 0, "init")?;
+        // all zeros is a pixel's starting resolve state (resolve.wgsl's `PixelState`)
+        let state = ctx.state.clone();
+        ctx.fill(&state, 0)?;
         Ok(ctx)
     }
 

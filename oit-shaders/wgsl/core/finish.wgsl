@@ -33,12 +33,3 @@ fn finish_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     }
     image[px] = srgb_pixel(finish_color(px, atomicLoad(&totals[1])));
 }
-
-@compute @workgroup_size(64)
-fn init_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let px = kernel_pixel(gid, groups);
-    if (px >= fu.pixel_count) {
-        return;
-    }
-    state_init(px);
-}

@@ -46,8 +46,6 @@ fn mask_swap(a: u32, b: u32) {
 // share a bit with `bits`, composited over `bg` from a fresh state.
 fn composite_covering(first: u32, n: u32, bits: u32, bg: vec3<f32>) -> vec3<f32> {
     var t: PixelState;
-    t.transmittance = 1.0;
-    t.fresnel = 1.0;
     var e = first;
     for (var i = 0u; i < n; i++) {
         if ((mask_at(e) & bits) != 0u) {
