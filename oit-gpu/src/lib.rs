@@ -689,6 +689,19 @@ pub trait Rasters<R: ?Sized> {
 
 #[cfg(test)]
 mod tests {
+    /// The setup kernel's spread pieces are oit-core's (`gpu_setup::SPREAD_PIECES`, which sizes
+    /// the counters' buffer and the dispatch of `setup_items_main` on both backends).
+    #[test]
+    fn spread_pieces_are_the_setups() {
+        use oit_core::gpu_setup::{COUNTER_WORDS, SPREAD_ITEMS, SPREAD_PIECES};
+        for (name, value) in [("SPREAD_PIECES", SPREAD_PIECES), ("SPREAD_ITEMS", SPREAD_ITEMS)] {
+            let line = format!("const {name}: u32 = {value}u;");
+            assert!(oit_shaders::SETUP.contains(&line), "setup.wgsl has no `{line}`");
+        }
+        assert!(oit_shaders::SETUP.contains("const SPREAD_FIRST: u32 = 4u;"));
+        assert_eq!(COUNTER_WORDS, 4 + 2 * SPREAD_PIECES);
+    }
+
     /// A host-set-up frame's indirect arguments are those `setup_finish_main` (setup.wgsl) writes
     /// for the same item count: a workgroup an item for `raster_main` (x capped at 65,535, the
     /// rest in y), a workgroup of 64 items for `raster_loop_main` at `ARGS_PER_ITEM`, the count at

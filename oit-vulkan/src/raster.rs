@@ -25,7 +25,9 @@ use std::cell::{Cell, RefCell};
 use std::rc::Rc;
 
 use ash::vk;
-use oit_core::gpu_setup::{ARGS_ITEMS, ARGS_PER_ITEM, ARGS_WORDS, COUNTER_WORDS, SetupGeometry, VERT_WORDS};
+use oit_core::gpu_setup::{
+    ARGS_ITEMS, ARGS_PER_ITEM, ARGS_WORDS, COUNTER_WORDS, SPREAD_PIECES, SetupGeometry, VERT_WORDS,
+};
 use oit_core::setup::TRIANGLE_WORDS;
 use oit_core::{Camera, OitError, Scene, Settings};
 
@@ -184,7 +186,7 @@ struct SetupBuffers {
 }
 
 /// Records the setup kernels into `rec`: the instance table's upload, the counters cleared, then
-/// `vertex_main` (with the vertex cache), `setup_main` and `setup_finish_main`, each behind the
+/// `vertex_main` (with the vertex cache), `setup_main`, `setup_items_main` and `setup_finish_main`, each behind the
 /// recorder's barrier. Binding order is setup.wgsl's group 0.
 fn record_setup(
     rec: &mut Recorder<'_>,
@@ -219,6 +221,9 @@ fn record_setup(
     }
     let pipeline = gpu.compute("setup", "setup_main", &kinds)?;
     rec.dispatch("setup", &pipeline, &sets, dispatch_size(u64::from(s.layout.tasks)))?;
+    // the large pieces' work items, a workgroup a piece
+    let pipeline = gpu.compute("setup", "setup_items_main", &kinds)?;
+    rec.dispatch("setup", &pipeline, &sets, (SPREAD_PIECES as u32, 1))?;
     let pipeline = gpu.compute("setup", "setup_finish_main", &kinds)?;
     rec.dispatch("setup", &pipeline, &sets, (1, 1))
 }

@@ -8,7 +8,8 @@
 //! uploads its world-space geometry once ([`GpuGeometry`]: positions, normals, colours and
 //! indices of each mesh, and for the bounds passes each instance's box corners), and a frame
 //! writes only the per-instance matrices and colours and a uniform, then records the setup kernel
-//! (transform, clip, snap, set up, bin into 8×8 tiles) and a one-invocation kernel that writes the
+//! (transform, clip, snap, set up, bin into 8×8 tiles), a kernel that writes the work items of the
+//! large pieces a workgroup each (`setup_items_main`), and a one-invocation kernel that writes the
 //! raster kernel's indirect dispatch arguments and item count. Every float operation of the setup
 //! kernel is done in integers (softfloat.wgsl says why), so its triangles equal
 //! `TriangleSetup::triangle_words`' bit for bit; `tests/gpu_setup.rs` checks that on several scenes.
@@ -32,7 +33,9 @@
 
 use std::cell::Cell;
 
-use oit_core::gpu_setup::{ARGS_ITEMS, ARGS_PER_ITEM, ARGS_WORDS, SetupGeometry, VERT_WORDS};
+use oit_core::gpu_setup::{
+    ARGS_ITEMS, ARGS_PER_ITEM, ARGS_WORDS, COUNTER_WORDS, SPREAD_PIECES, SetupGeometry, VERT_WORDS,
+};
 use oit_core::setup::{TRIANGLE_WORDS, TriangleSetup};
 use oit_core::{Camera, OitError, RasterPath, Scene, Settings};
 
@@ -429,7 +432,13 @@ impl ComputeBuffers {
                     U::UNIFORM | U::COPY_DST,
                     made,
                 ),
-                counters: buffer(gpu, "setup counters", 16, U::STORAGE | U::COPY_SRC | U::COPY_DST, made),
+                counters: buffer(
+                    gpu,
+                    "setup counters",
+                    COUNTER_WORDS as u64 * 4,
+                    U::STORAGE | U::COPY_SRC | U::COPY_DST,
+                    made,
+                ),
                 layout,
                 group: None,
                 verts,
@@ -448,6 +457,10 @@ impl ComputeBuffers {
         let setup_pipeline = {
             let s = self.setup.as_ref().expect("made above");
             gpu.compute_pipeline(SETUP_WGSL, "setup_main", &[&s.layout])?
+        };
+        let items_pipeline = {
+            let s = self.setup.as_ref().expect("made above");
+            gpu.compute_pipeline(SETUP_WGSL, "setup_items_main", &[&s.layout])?
         };
         let finish_pipeline = {
             let s = self.setup.as_ref().expect("made above");
@@ -510,6 +523,9 @@ impl ComputeBuffers {
                 if x > 0 {
                     pass.set_pipeline(&setup_pipeline);
                     pass.dispatch_workgroups(x, y, 1);
+                    // the large pieces' work items, a workgroup a piece
+                    pass.set_pipeline(&items_pipeline);
+                    pass.dispatch_workgroups(SPREAD_PIECES as u32, 1, 1);
                 }
                 pass.set_pipeline(&finish_pipeline);
                 pass.dispatch_workgroups(1, 1, 1);

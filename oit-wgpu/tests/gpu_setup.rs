@@ -84,6 +84,9 @@ fn gpu_setup_equals_host_setup() {
         "scale:1e-20:planes:8".into(),
         "scale:1e20:knot".into(),
         "scale:1e-30:spheres:3".into(),
+        // more large pieces than `setup_items_main` spreads (oit-core's `SPREAD_PIECES`): the
+        // rest write their own work items
+        "planes:1100".into(),
     ];
     scenes.push(BUNNY.into());
     scenes.push(format!("grid:2x2:{BUNNY}"));

@@ -12,6 +12,7 @@
 // an order of the GPU's choosing: nothing reads the triangle order (the raster kernel runs its
 // work items concurrently and every capture is an atomic update; exact techniques sort by
 // (depth, primitive id)), so only the set of pieces matters, and it is the host's.
+// `setup_items_main`: a workgroup per large piece, its work items (`SPREAD_PIECES`).
 // `setup_finish_main`: one invocation; the raster kernel's indirect dispatch arguments and item
 // count from the counters.
 //
@@ -66,6 +67,14 @@ const I_FIRST_VERT: u32 = 39u;    // vertex-cache records of the instances befor
 
 const TRI_WORDS: u32 = 44u;
 const SETUP_TILE: u32 = 8u;
+// A piece of more than SPREAD_ITEMS work items (one of the first SPREAD_PIECES such) leaves them to
+// `setup_items_main`, a workgroup a piece (oit-core's `gpu_setup::SPREAD_PIECES`, `SPREAD_ITEMS`):
+// one invocation writing a large triangle's thousands of tiles, while a frame of a few such
+// triangles keeps a few invocations of the whole GPU busy, took 0.26 ms of an H100's frame for the
+// two triangles of a wall behind `particles:256` at 1024².
+const SPREAD_PIECES: u32 = 2048u;
+const SPREAD_ITEMS: u32 = 16u;
+const SPREAD_FIRST: u32 = 4u;
 const GUARD_BAND_BITS: u32 = 0x42800000u; // 64.0
 const SUBPIXEL_F: u32 = 0x43800000u;      // 256.0
 const COORD_LIMIT_BITS: u32 = 0x4e000000u; // 2^29
@@ -75,7 +84,8 @@ const COORD_LIMIT_BITS: u32 = 0x4e000000u; // 2^29
 @group(0) @binding(2) var<storage, read> geometry: array<u32>;
 @group(0) @binding(3) var<storage, read_write> out_tris: array<u32>;
 @group(0) @binding(4) var<storage, read_write> out_items: array<vec2<u32>>;
-// 0: pieces, 1: work items (both counted past the capacities, so the host sees what is needed)
+// 0: pieces, 1: work items (both counted past the capacities, so the host sees what is needed),
+// 2: pieces spread (`SPREAD_PIECES`); from 4, each spread piece's slot and first work item
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>>;
 // 0..3: per-pixel raster dispatch, 4..7: per-item raster dispatch, 8: work items in the list
 @group(0) @binding(6) var<storage, read_write> args: array<u32>;
@@ -354,6 +364,14 @@ fn piece_projected(i: u32, v_in: array<ClipVertex, 3>, p_in: array<Projected, 3>
     if (base >= su.item_capacity || su.item_capacity - base < n) {
         return;
     }
+    if (n > SPREAD_ITEMS) {
+        let j = atomicAdd(&counters[2], 1u);
+        if (j < SPREAD_PIECES) {
+            atomicStore(&counters[SPREAD_FIRST + 2u * j], slot);
+            atomicStore(&counters[SPREAD_FIRST + 2u * j + 1u], base);
+            return;
+        }
+    }
     var k = base;
     for (var ty = ty0; ty <= ty1; ty++) {
         for (var tx = tx0; tx <= tx1; tx++) {
@@ -513,6 +531,27 @@ fn vertex_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     verts[o + 9u] = bitcast<u32>(test.p.y);
     verts[o + 10u] = test.p.z;
     verts[o + 11u] = test.p.inv_w;
+}
+
+// The work items of the spread pieces (`SPREAD_PIECES`): workgroup j writes piece j's, its tiles row
+// by row as `piece_projected` writes a small piece's, its 64 invocations side by side. Dispatched
+// SPREAD_PIECES workgroups after `setup_main`; those past the pieces spread end at once.
+@compute @workgroup_size(64)
+fn setup_items_main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let j = wid.x;
+    if (j >= min(atomicLoad(&counters[2]), SPREAD_PIECES)) {
+        return;
+    }
+    let slot = atomicLoad(&counters[SPREAD_FIRST + 2u * j]);
+    let base = atomicLoad(&counters[SPREAD_FIRST + 2u * j + 1u]);
+    let o = slot * TRI_WORDS;
+    let tx0 = out_tris[o + 37u] / SETUP_TILE;
+    let ty0 = out_tris[o + 38u] / SETUP_TILE;
+    let w = out_tris[o + 39u] / SETUP_TILE - tx0 + 1u;
+    let n = w * (out_tris[o + 40u] / SETUP_TILE - ty0 + 1u);
+    for (var k = lid; k < n; k += 64u) {
+        out_items[base + k] = vec2<u32>(slot, ((ty0 + k / w) << 16u) | (tx0 + k % w));
+    }
 }
 
 // Workgroups of 64 for `invocations` as (x, y) with x ≤ 65535 (oit-gpu's `dispatch_size`; its
