@@ -186,8 +186,8 @@ struct SetupBuffers {
 }
 
 /// Records the setup kernels into `rec`: the instance table's upload, the counters cleared, then
-/// `vertex_main` (with the vertex cache), `setup_main`, `setup_items_main` and `setup_finish_main`, each behind the
-/// recorder's barrier. Binding order is setup.wgsl's group 0.
+/// `vertex_main` (with the vertex cache), `setup_main`, `setup_items_main` and
+/// `setup_finish_main`, each behind the recorder's barrier. Binding order is setup.wgsl's group 0.
 fn record_setup(
     rec: &mut Recorder<'_>,
     s: &SetupBuffers,
