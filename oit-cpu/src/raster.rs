@@ -808,12 +808,6 @@ impl Rasterizer {
         });
     }
 
-    /// The opaque depth the passes are cut at ([`Rasterizer::cut_at`]), kept a sample; `None`
-    /// without a cut.
-    pub fn cut_depth(&self) -> Option<&[f32]> {
-        self.cut.as_ref().map(|c| &c.depth[..])
-    }
-
     /// The cut's tiles as a pass's walks skip them ([`TileSkip`]): where the rasterizer has a cut
     /// kept a pixel and walks the single-sample fragments (not [`Rasterizer::cover`]'s, whose
     /// depth is extrapolated at the pixel's centre, outside the triangle too), and the skip is on

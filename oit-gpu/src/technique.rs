@@ -667,8 +667,7 @@ pub fn depth_bounds<R: ?Sized, F: Frame<R>>(
         BoundsMode::Exact => ctx.geometry_pass(rasters.scene(), "bounds", &[&bounds], 0, 0)?,
         BoundsMode::Boxes => {
             let fragments = ctx.fragments();
-            // the boxes are not cut at the opaque depth (nor are they on the CPU): bounds_finish_main
-            // clamps their far end to it
+            // the boxes are not cut at the opaque depth (nor are they on the CPU)
             ctx.cut(false);
             rasters.with_boxes(&mut |boxes| ctx.geometry_pass(boxes, "bounds", &[&bounds], 0, 0))?;
             ctx.cut(true);

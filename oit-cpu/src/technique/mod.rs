@@ -402,10 +402,7 @@ impl<'a> Ctx<'a> {
 
     /// Per-pixel depth range [zNear, zFar] for the bucket techniques, from the instances'
     /// bounding boxes (HPG 2009's default) or from the fragments themselves; one geometry pass.
-    /// Behind an opaque part, zFar is no farther than the pixel's farthest opaque depth (over its
-    /// samples): no fragment in front of the cut lies past it, and the boxes, which the cut does
-    /// not reach, would otherwise spread the buckets over what the opaque surface hides (the GPUs'
-    /// `bounds_finish_main` does the same). Pixels nothing reached get [0, 1].
+    /// Pixels nothing reached get [0, 1].
     pub fn depth_bounds(&mut self) -> Result<Vec<(f32, f32)>, OitError> {
         let lo = self.alloc32(1, u32::MAX)?;
         let hi = self.alloc32(1, 0)?;
@@ -425,21 +422,11 @@ impl<'a> Ctx<'a> {
                 self.passes += 1;
             }
         }
-        let samples = self.settings.samples.max(1) as usize;
-        let opaque = self.raster.cut_depth();
         Ok(lo
             .iter()
             .zip(hi.iter())
-            .enumerate()
-            .map(|(px, (l, h))| {
-                let (l, mut h) = (l.load(Relaxed), h.load(Relaxed));
-                if let Some(depth) = opaque {
-                    // the farthest sample's opaque depth; one with none (infinite) clamps nothing
-                    let far = depth[px * samples..(px + 1) * samples].iter().fold(0.0f32, |a, &d| a.max(d));
-                    if far <= 1.0 {
-                        h = h.min(depth_bits(far));
-                    }
-                }
+            .map(|(l, h)| {
+                let (l, h) = (l.load(Relaxed), h.load(Relaxed));
                 if l > h { (0.0, 1.0) } else { (f32::from_bits(l), f32::from_bits(h)) }
             })
             .collect())

@@ -1,7 +1,6 @@
 // Per-pixel depth range [zNear, zFar] for bdp and adp (oit-cpu's `Ctx::depth_bounds`): one
 // geometry pass over the scene or its bounding boxes, u32 atomicMin/atomicMax of `depth_bits`.
-// bounds[2·px] = zNear, bounds[2·px + 1] = zFar (depth bits), zFar no farther than the pixel's
-// farthest opaque depth where the frame has an opaque part; pixels nothing reached get [0, 1].
+// bounds[2·px] = zNear, bounds[2·px + 1] = zFar (depth bits); pixels nothing reached get [0, 1].
 @group(0) @binding(2) var<storage, read_write> bounds: array<atomic<u32>>;
 
 fn capture(f: Fragment) {
@@ -25,18 +24,6 @@ fn bounds_finish_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
     let px = kernel_pixel(gid, groups);
     if (px >= fu.pixel_count) {
         return;
-    }
-    if (fu.opaque.z != 0u) {
-        // the farthest opaque depth of the pixel's samples (all ones where a sample has none):
-        // no fragment in front of the cut lies past it, and the boxes, which the cut does not
-        // reach, would spread the range over what the opaque surface hides (oit-cpu's
-        // `Ctx::depth_bounds`)
-        let n = opaque_samples();
-        var far = 0u;
-        for (var i = 0u; i < n; i++) {
-            far = max(far, u32(atomicLoad(&opaque_keys[px * n + i]) >> 32u));
-        }
-        atomicMin(&bounds[2u * px + 1u], far);
     }
     if (atomicLoad(&bounds[2u * px]) > atomicLoad(&bounds[2u * px + 1u])) {
         atomicStore(&bounds[2u * px], 0u);
