@@ -50,6 +50,13 @@ use bytemuck::{Pod, Zeroable};
 use oit_core::plan::Plan;
 use oit_core::{Camera, Effect, GpuFragments, OitError, Scene, Settings};
 
+/// [`FrameUniform::opaque`]'s w in a frame's first scene pass: the compute rasterizer marks each
+/// work item that captured nothing (raster_compute.wgsl's `mark_item`).
+pub const MARKS_WRITE: u32 = 1;
+/// [`FrameUniform::opaque`]'s w in a frame's later scene passes: the compute rasterizer skips the
+/// marked work items (raster_compute.wgsl's `load_item`).
+pub const MARKS_READ: u32 = 2;
+
 /// Group 0's binding of the loss accounting (`acct` in prelude.wgsl).
 pub const ACCT_BINDING: u32 = 15;
 
@@ -176,7 +183,9 @@ pub struct FrameUniform {
     /// The opaque pass ([`oit_core::Scene::layers`]): x 1 where the frame has its image and the
     /// pass's transparent fragments are cut at its depth (`opaque_cut` in prelude.wgsl); y 1 in
     /// the pass that counts the fragments the cut holds back (the frame's first scene pass);
-    /// z, w unused.
+    /// z 1 where the frame has an opaque part (its colour composited behind); w the compute
+    /// rasterizer's work-item marks: [`MARKS_WRITE`] in the frame's first scene pass,
+    /// [`MARKS_READ`] in its later ones, 0 elsewhere (raster_compute.wgsl's `ITEM_SPENT`).
     pub opaque: [u32; 4],
     /// Multisampling ([`oit_core::msaa`], docs/msaa.md): x the samples a pixel (1, 4 or 8); y the
     /// mask every kept coverage mask is ORed with (every sample under `--coverage pixel`, else

@@ -679,11 +679,16 @@ impl<'a> VkCtx<'a> {
     ) -> Result<&'r Buffer, OitError> {
         self.uniform.pass_index = pass_index;
         self.uniform.param = param;
+        // the compute rasterizer's work-item marks: written by the frame's first scene pass, read
+        // by the later ones (raster_compute.wgsl's `ITEM_SPENT`)
+        self.uniform.opaque[3] =
+            if self.fragments == Fragments::Unset { oit_gpu::MARKS_WRITE } else { oit_gpu::MARKS_READ };
         let generated = match raster {
-            Raster::Compute(r) => self.compute_pass(r, module, buffers)?,
-            Raster::Hardware(r) => self.hardware_pass(r, module, buffers, count)?,
+            Raster::Compute(r) => self.compute_pass(r, module, buffers),
+            Raster::Hardware(r) => self.hardware_pass(r, module, buffers, count),
         };
-        Ok(generated)
+        self.uniform.opaque[3] = 0;
+        generated
     }
 
     /// Records a geometry pass through the compute rasterizer; returns the word that counts its

@@ -871,9 +871,12 @@ impl<'a> GpuCtx<'a> {
         pass_index: u32,
         param: u32,
     ) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
-        self.uniform.opaque[1] = u32::from(self.uniform.opaque[0] != 0 && self.fragments == Fragments::Unset);
+        let first = self.fragments == Fragments::Unset;
+        self.uniform.opaque[1] = u32::from(self.uniform.opaque[0] != 0 && first);
+        self.uniform.opaque[3] = if first { oit_gpu::MARKS_WRITE } else { oit_gpu::MARKS_READ };
         let group = self.group0(buffers, pass_index, param);
         self.uniform.opaque[1] = 0;
+        self.uniform.opaque[3] = 0;
         group
     }
 

@@ -46,26 +46,28 @@ struct RasterUniform {
 const TILE: u32 = 8u;
 const TRI_WORDS: u32 = 44u;
 // A work item's mark, in its tile word's top bit (a tile's row takes at most 11 bits of the 16
-// above its column): in a frame with an opaque cut, the frame's first scene pass (`fu.opaque.y`)
-// writes it on every item, set where the item captured no fragment, and the scene's later passes
-// skip the items marked. The cut is the same in every pass of a frame, so an item with no
-// fragment in front of the opaque depth in the first pass has none in any other: the peels and
-// the second passes of two-pass captures then walk only the items with something to capture
-// (oit-cpu skips the same fragments by testing them). The setup (or the host's upload) writes
-// every item afresh each frame, and a pass without the cut neither reads nor writes the mark.
+// above its column). The frame's first scene pass (`fu.opaque.w`, oit-gpu's `MARKS_WRITE`) writes
+// it on every item, set where the item captured no fragment: none of its pixels covered (the tiles
+// of a triangle's box that miss the triangle), or every one behind the opaque depth. The frame's
+// later passes (`MARKS_READ`) skip the items marked. Coverage and the opaque cut are the same in
+// every pass of a frame, so an item with nothing to capture in the first pass has nothing in any
+// other: the peels and the second passes of two-pass captures walk only the items with something
+// to capture (oit-cpu skips the same fragments by testing them). The setup (or the host's upload)
+// writes every item afresh each frame, so a rasterizer whose first pass of the frame was not the
+// writing one (the boxes', the opaque pass's) reads no mark.
 const ITEM_SPENT: u32 = 0x80000000u;
 
 // Work item `i` (its tile without the mark) and whether this pass skips it (`ITEM_SPENT`).
 fn load_item(i: u32) -> vec3<u32> {
     let raw = items[i];
-    let spent = fu.opaque.x != 0u && fu.opaque.y == 0u && (raw.y & ITEM_SPENT) != 0u;
+    let spent = fu.opaque.w == 2u && (raw.y & ITEM_SPENT) != 0u;
     return vec3<u32>(raw.x, raw.y & ~ITEM_SPENT, u32(spent));
 }
 
-// The frame's first scene pass under the opaque cut: marks item `i` (`item`, unmarked) spent where
-// it captured nothing, and clears a mark an earlier frame left.
+// The frame's first scene pass (`fu.opaque.w` 1): marks item `i` (`item`, unmarked) spent where it
+// captured nothing, and clears a mark an earlier frame left.
 fn mark_item(i: u32, item: vec2<u32>, captured: u32) {
-    if (fu.opaque.x != 0u && fu.opaque.y != 0u) {
+    if (fu.opaque.w == 1u) {
         items[i] = vec2<u32>(item.x, item.y | select(0u, ITEM_SPENT, captured == 0u));
     }
 }
