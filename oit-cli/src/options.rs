@@ -78,9 +78,10 @@ pub struct SceneArgs {
     pub effect: String,
 
     /// How bucket techniques (bdp, adp) find each pixel's depth range: boxes (the rendered depths
-    /// of the objects' bounding boxes) or exact (the fragments' own min and max, one more geometry
-    /// pass).
-    #[arg(long, value_name = "MODE", default_value = "boxes")]
+    /// of the objects' bounding boxes), exact (the fragments' own min and max, one more geometry
+    /// pass), or auto (exact where the scene has an opaque part, whose depth the boxes are not cut
+    /// at; boxes elsewhere).
+    #[arg(long, value_name = "MODE", default_value = "auto")]
     pub bounds: String,
 
     /// What single-pass bdp stores: color (32 packed colours), depth (16 min/max pairs) or auto

@@ -120,6 +120,10 @@ pub struct Plan {
     pub technique: Technique,
     /// Whether a bounds pass gives each pixel's depth range first (bdp, adp).
     pub bounds_pass: bool,
+    /// Where that pass takes the range from: the settings' [`BoundsMode`](crate::BoundsMode)
+    /// resolved for the scene ([`BoundsMode::resolve`](crate::BoundsMode::resolve): exact where
+    /// the frame has an opaque part, unless the settings name the boxes); never `Auto`.
+    pub bounds: crate::BoundsMode,
     /// bdp only: the one-pass colour mode (32 packed colours) instead of the depth mode.
     pub bdp_color: bool,
     /// How the per-pixel arrays are sized.
@@ -334,6 +338,7 @@ impl Plan {
             pooled: matches!(backend, "wgpu" | "vulkan"),
             technique,
             bounds_pass: matches!(technique, Technique::Bdp { .. } | Technique::Adp),
+            bounds: settings.bounds.resolve(scene.has_opaque()),
             bdp_color,
             sizing,
             peel_limit: settings.max_peels.unwrap_or(u32::MAX),

@@ -386,7 +386,7 @@ impl Default for Settings {
             max_peels: None,
             shading: Shading::Headlight,
             effect: Effect::Transparency,
-            bounds: BoundsMode::Boxes,
+            bounds: BoundsMode::Auto,
             raster: None,
             bdp_mode: BdpMode::Auto,
             hardware_capture: HardwareCapture::Atomics,

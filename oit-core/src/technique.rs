@@ -359,20 +359,46 @@ impl FromStr for Effect {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum BoundsMode {
-    /// The rendered depths of the instances' bounding boxes (the HPG 2009 paper's default).
+    /// [`BoundsMode::Exact`] where the frame has an opaque part, else [`BoundsMode::Boxes`]
+    /// ([`BoundsMode::resolve`]): the boxes' faces are not cut at the opaque depth, so behind an
+    /// opaque surface their range runs on over what it hides (docs/opaque.md).
     #[default]
+    Auto,
+    /// The rendered depths of the instances' bounding boxes (the HPG 2009 paper's default).
     Boxes,
     /// The fragments' true min and max, from an extra geometry pass.
     Exact,
+}
+
+impl BoundsMode {
+    /// The mode a frame runs: [`BoundsMode::Auto`] made [`BoundsMode::Exact`] where the frame has
+    /// an opaque part (`opaque`), [`BoundsMode::Boxes`] elsewhere; the others as they are.
+    ///
+    /// ```
+    /// use oit_core::BoundsMode;
+    /// assert_eq!(BoundsMode::Auto.resolve(true), BoundsMode::Exact);
+    /// assert_eq!(BoundsMode::Auto.resolve(false), BoundsMode::Boxes);
+    /// assert_eq!(BoundsMode::Boxes.resolve(true), BoundsMode::Boxes);
+    /// ```
+    pub fn resolve(self, opaque: bool) -> BoundsMode {
+        match self {
+            BoundsMode::Auto if opaque => BoundsMode::Exact,
+            BoundsMode::Auto => BoundsMode::Boxes,
+            other => other,
+        }
+    }
 }
 
 impl FromStr for BoundsMode {
     type Err = OitError;
     fn from_str(s: &str) -> Result<BoundsMode, OitError> {
         match s.trim().to_ascii_lowercase().as_str() {
+            "auto" => Ok(BoundsMode::Auto),
             "boxes" | "box" => Ok(BoundsMode::Boxes),
             "exact" => Ok(BoundsMode::Exact),
-            other => Err(OitError::InvalidSettings(format!("unknown bounds '{other}': use boxes or exact"))),
+            other => {
+                Err(OitError::InvalidSettings(format!("unknown bounds '{other}': use auto, boxes or exact")))
+            }
         }
     }
 }

@@ -280,7 +280,7 @@ pub fn values(option: &str) -> &'static [&'static str] {
         ],
         "shading" => &["headlight", "flat", "vertex", "normal", "Flat", "", "nosuch"],
         "effect" => &["transparency", "translucency", "fresnel", "complexity", "", "heat", "FRESNEL"],
-        "bounds" => &["boxes", "exact", "", "box"],
+        "bounds" => &["auto", "boxes", "exact", "", "box"],
         "bdp-mode" => &["color", "depth", "auto", "colour", ""],
         "hardware-capture" => &["atomics", "blend", "", "both"],
         "overflow" => &["drop", "tail", "", "Tail", "merge"],

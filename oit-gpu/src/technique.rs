@@ -663,9 +663,9 @@ pub fn depth_bounds<R: ?Sized, F: Frame<R>>(
 ) -> Result<F::Buffer, OitError> {
     let bounds = storage.buffer(ctx, "depth bounds", Init::Zero)?;
     ctx.pixel_kernel("bounds", "bounds_init_main", &[&bounds], 0, 0)?;
-    match ctx.settings().bounds {
+    match ctx.plan().bounds {
         BoundsMode::Exact => ctx.geometry_pass(rasters.scene(), "bounds", &[&bounds], 0, 0)?,
-        BoundsMode::Boxes => {
+        BoundsMode::Boxes | BoundsMode::Auto => {
             let fragments = ctx.fragments();
             // the boxes are not cut at the opaque depth (nor are they on the CPU)
             ctx.cut(false);

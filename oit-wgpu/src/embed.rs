@@ -41,7 +41,8 @@
 //!   stage, through `camera.view_proj()` (so the camera must be the one the user's draws use).
 //!   Without boxes they fail with [`OitError::Unsupported`] naming that method, as `mdts` does
 //!   without an alpha (or set `Settings::bounds` to `BoundsMode::Exact`: then the bounds pass
-//!   draws the user's geometry like any other pass).
+//!   draws the user's geometry like any other pass; the default, `BoundsMode::Auto`, is exact
+//!   where the pass has the caller's opaque depth).
 //!
 //! - The caller's opaque geometry: [`OitPass::with_opaque`] takes the caller's depth buffer
 //!   (read, not written) and colour target; every geometry pass cuts the fragments not strictly
@@ -318,7 +319,8 @@ impl OitPass {
     }
 
     /// The world-space bounding boxes of the user's instances, for the bounds pass of `bdp` and
-    /// `adp` (with `Settings::bounds` at its default, `BoundsMode::Boxes`): uploaded once, and
+    /// `adp` (with `Settings::bounds` at `BoundsMode::Boxes`, or at its default, `BoundsMode::Auto`,
+    /// without the caller's opaque depth): uploaded once, and
     /// drawn by oit in each frame of those techniques with `camera.view_proj()`, box `i`'s 12
     /// triangles as primitives `12·i ..` (`Aabb::TRIANGLES`), as `Backend::render` draws an oit
     /// scene's `Scene::instance_bounds` on the hardware path. A box must hold finite corners,
@@ -765,7 +767,7 @@ impl OitPass {
             });
         }
         if self.boxes.is_none()
-            && self.settings.bounds == BoundsMode::Boxes
+            && self.settings.bounds.resolve(self.scene.has_opaque()) == BoundsMode::Boxes
             && matches!(self.settings.technique, Technique::Bdp { .. } | Technique::Adp)
         {
             return Err(self.no_boxes());

@@ -411,9 +411,9 @@ impl<'a> Ctx<'a> {
             lo[f.pixel as usize].fetch_min(b, Relaxed);
             hi[f.pixel as usize].fetch_max(b, Relaxed);
         };
-        match self.settings.bounds {
+        match self.plan.bounds {
             oit_core::BoundsMode::Exact => self.pass(shader),
-            oit_core::BoundsMode::Boxes => {
+            oit_core::BoundsMode::Boxes | oit_core::BoundsMode::Auto => {
                 let mut boxes = Rasterizer::bounding_boxes(self.scene, self.camera, self.settings);
                 // the boxes' multisampled fragments where the frame's are (the GPU's box raster
                 // runs the same masked rule), so every pixel a fragment reaches has bounds
