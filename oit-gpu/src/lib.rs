@@ -57,6 +57,14 @@ pub const MARKS_WRITE: u32 = 1;
 /// marked work items (raster_compute.wgsl's `load_item`).
 pub const MARKS_READ: u32 = 2;
 
+/// [`FrameUniform::opaque`]'s w for a geometry pass: [`MARKS_WRITE`] where it is the frame's
+/// first scene pass (`first`: no pass has counted the frame's fragments yet), else
+/// [`MARKS_READ`]. Both backends set it so; a rasterizer whose items no writing pass marked in the
+/// frame reads none (its setup writes them afresh).
+pub fn item_marks(first: bool) -> u32 {
+    if first { MARKS_WRITE } else { MARKS_READ }
+}
+
 /// Group 0's binding of the loss accounting (`acct` in prelude.wgsl).
 pub const ACCT_BINDING: u32 = 15;
 
@@ -709,6 +717,19 @@ mod tests {
         }
         assert!(oit_shaders::SETUP.contains("const SPREAD_FIRST: u32 = 4u;"));
         assert_eq!(COUNTER_WORDS, 4 + 2 * SPREAD_PIECES);
+    }
+
+    /// The work-item marks' modes are raster_compute.wgsl's, and its mark bit lies above every
+    /// tile row a frame of the largest size has (a row takes the tile word's upper 16 bits).
+    #[test]
+    fn item_marks_are_the_rasters() {
+        for (name, value) in [("MARKS_WRITE", super::MARKS_WRITE), ("MARKS_READ", super::MARKS_READ)] {
+            let line = format!("const {name}: u32 = {value}u;");
+            assert!(oit_shaders::COMPUTE_RASTER.contains(&line), "raster_compute.wgsl has no `{line}`");
+        }
+        assert!(oit_shaders::COMPUTE_RASTER.contains("const ITEM_SPENT: u32 = 0x80000000u;"));
+        let rows = oit_core::MAX_SIZE.div_ceil(super::TILE);
+        assert!(rows < 1 << 15, "{rows} tile rows reach the mark bit");
     }
 
     /// A host-set-up frame's indirect arguments are those `setup_finish_main` (setup.wgsl) writes

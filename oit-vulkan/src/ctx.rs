@@ -681,8 +681,7 @@ impl<'a> VkCtx<'a> {
         self.uniform.param = param;
         // the compute rasterizer's work-item marks: written by the frame's first scene pass, read
         // by the later ones (raster_compute.wgsl's `ITEM_SPENT`)
-        self.uniform.opaque[3] =
-            if self.fragments == Fragments::Unset { oit_gpu::MARKS_WRITE } else { oit_gpu::MARKS_READ };
+        self.uniform.opaque[3] = oit_gpu::item_marks(self.fragments == Fragments::Unset);
         let generated = match raster {
             Raster::Compute(r) => self.compute_pass(r, module, buffers),
             Raster::Hardware(r) => self.hardware_pass(r, module, buffers, count),

@@ -873,7 +873,7 @@ impl<'a> GpuCtx<'a> {
     ) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
         let first = self.fragments == Fragments::Unset;
         self.uniform.opaque[1] = u32::from(self.uniform.opaque[0] != 0 && first);
-        self.uniform.opaque[3] = if first { oit_gpu::MARKS_WRITE } else { oit_gpu::MARKS_READ };
+        self.uniform.opaque[3] = oit_gpu::item_marks(first);
         let group = self.group0(buffers, pass_index, param);
         self.uniform.opaque[1] = 0;
         self.uniform.opaque[3] = 0;

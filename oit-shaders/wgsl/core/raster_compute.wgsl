@@ -56,18 +56,21 @@ const TRI_WORDS: u32 = 44u;
 // writes every item afresh each frame, so a rasterizer whose first pass of the frame was not the
 // writing one (the boxes', the opaque pass's) reads no mark.
 const ITEM_SPENT: u32 = 0x80000000u;
+// `fu.opaque.w`: oit-gpu's `MARKS_WRITE` and `MARKS_READ`
+const MARKS_WRITE: u32 = 1u;
+const MARKS_READ: u32 = 2u;
 
 // Work item `i` (its tile without the mark) and whether this pass skips it (`ITEM_SPENT`).
 fn load_item(i: u32) -> vec3<u32> {
     let raw = items[i];
-    let spent = fu.opaque.w == 2u && (raw.y & ITEM_SPENT) != 0u;
+    let spent = fu.opaque.w == MARKS_READ && (raw.y & ITEM_SPENT) != 0u;
     return vec3<u32>(raw.x, raw.y & ~ITEM_SPENT, u32(spent));
 }
 
-// The frame's first scene pass (`fu.opaque.w` 1): marks item `i` (`item`, unmarked) spent where it
+// The frame's first scene pass (`MARKS_WRITE`): marks item `i` (`item`, unmarked) spent where it
 // captured nothing, and clears a mark an earlier frame left.
 fn mark_item(i: u32, item: vec2<u32>, captured: u32) {
-    if (fu.opaque.w == 1u) {
+    if (fu.opaque.w == MARKS_WRITE) {
         items[i] = vec2<u32>(item.x, item.y | select(0u, ITEM_SPENT, captured == 0u));
     }
 }

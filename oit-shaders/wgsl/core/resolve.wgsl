@@ -10,7 +10,7 @@
 
 // All zeros is the state a pixel starts in (nothing captured, transmittance 1, Fresnel product
 // 1), so a frame starts from a cleared buffer: the transmittance and the Fresnel product are kept
-// as their bits XORed with 1.0's (`state_t`, `t_bits`), which gives back every value bit for bit.
+// as their bits XORed with 1.0's (`state_t`, `one_xor`), which gives back every value bit for bit.
 // (A kernel that wrote this 92-byte struct a pixel took about 0.4 ms of a 1024² frame on an H100,
 // a buffer clear of the same bytes a tenth of that.)
 struct PixelState {
@@ -105,8 +105,8 @@ fn state_fresnel(s: PixelState) -> f32 {
     return bitcast<f32>(s.fresnel_x ^ ONE_BITS);
 }
 
-fn t_bits(t: f32) -> u32 {
-    return bitcast<u32>(t) ^ ONE_BITS;
+fn one_xor(v: f32) -> u32 {
+    return bitcast<u32>(v) ^ ONE_BITS;
 }
 
 // Sets a pixel's state to a colour composited in one go (the weighted techniques: wavg, wsum,
@@ -116,7 +116,7 @@ fn state_composited(px: u32, c: vec3<f32>, count: u32) {
     s.fr = c.x;
     s.fg = c.y;
     s.fb = c.z;
-    s.transmittance_x = t_bits(0.0);
+    s.transmittance_x = one_xor(0.0);
     s.captured = count;
     state[px] = s;
 }
@@ -148,10 +148,10 @@ fn push_local(s: ptr<function, PixelState>, depth: f32, payload: u32) {
         (*s).fr += add.x;
         (*s).fg += add.y;
         (*s).fb += add.z;
-        (*s).transmittance_x = t_bits(state_t(*s) * (1.0 - c.w));
+        (*s).transmittance_x = one_xor(state_t(*s) * (1.0 - c.w));
     } else if (fu.effect == EFFECT_FRESNEL) {
         let n = unpack_normal(payload);
-        (*s).fresnel_x = t_bits(state_fresnel(*s) * schlick_transmittance(dot(n, fu.forward.xyz)));
+        (*s).fresnel_x = one_xor(state_fresnel(*s) * schlick_transmittance(dot(n, fu.forward.xyz)));
     } else if (fu.effect == EFFECT_TRANSLUCENCY) {
         let dist = linear_depth(depth);
         if ((*s).has_entry == 0u) {

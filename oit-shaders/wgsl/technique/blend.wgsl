@@ -88,7 +88,7 @@ fn plain_blend_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @buil
     s.fr = c.x;
     s.fg = c.y;
     s.fb = c.z;
-    s.transmittance_x = t_bits(c.w);
+    s.transmittance_x = one_xor(c.w);
     s.captured = u32(textureLoad(blend_count, xy, 0).x + 0.5);
     state[px] = s;
 }
@@ -194,7 +194,7 @@ fn plain_blend_ms_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @b
     s.fr = c.x;
     s.fg = c.y;
     s.fb = c.z;
-    s.transmittance_x = t_bits(c.w);
+    s.transmittance_x = one_xor(c.w);
     s.captured = u32(count / PLAIN_COUNT_UNIT + 0.5);
     if (fu.opaque.z != 0u && s.captured != 0u && fu.effect == EFFECT_TRANSPARENCY) {
         state_resolved(&s, over * mean);
