@@ -39,6 +39,10 @@ pub(crate) struct OpaqueImage {
     pub passes: u32,
 }
 
+/// The opaque fragments a pixel (on average over the frame) up to which the colour pass shades
+/// every fragment in lanes rather than only the winners on demand.
+const SHADE_ALL_LAYERS: u64 = 4;
+
 /// Draws `scene` (a frame's opaque part) seen by `camera` under `settings` (the layers'
 /// settings: a tile's region included). Above one sample (docs/msaa.md) the z-buffer is kept a
 /// sample: a fragment (one a pixel a triangle where it covers any sample, its depth the pixel
@@ -90,7 +94,13 @@ pub(crate) fn draw(scene: &Scene, camera: &Camera, settings: &Settings) -> Opaqu
     if samples > 1 {
         raster.for_each_masked_fragment(samples, second);
     } else {
-        raster.for_each_fragment_with(Shade::OnDemand, |f| second(f, 1));
+        // shaded in lanes before the test ([`Shade::Color`]) where the opaque part is shallow: a
+        // lane's shading costs a fraction of one fragment's on demand, so shading every fragment
+        // costs less than shading the winners one by one while the fragments are few to a pixel
+        // (a wall over the default scene at 512²: fabs's frame 10.3–11.9 ms on demand, 8.7–9.4 in
+        // lanes, bench/results/cpu/opaque-lanes-512); a deep opaque part shades its winners alone
+        let shallow = fragments <= SHADE_ALL_LAYERS * pixels as u64;
+        raster.for_each_fragment_with(if shallow { Shade::Color } else { Shade::OnDemand }, |f| second(f, 1));
     }
     let depth: Arc<[f32]> = keys
         .iter()
