@@ -65,6 +65,16 @@ pub fn item_marks(first: bool) -> u32 {
     if first { MARKS_WRITE } else { MARKS_READ }
 }
 
+/// Whether a compute-raster geometry pass with `uniform` first runs raster_compute.wgsl's
+/// `classify_main` over its work items (one invocation an item, as `raster_loop_main`): in the
+/// frame's first scene pass ([`MARKS_WRITE`]) over an opaque part whose cut it counts, at one
+/// sample a pixel. That kernel counts the fragments of the items wholly behind the opaque depth
+/// and wholly inside their triangles without the pass walking their pixels. Both backends ask
+/// here.
+pub fn classifies_items(uniform: &FrameUniform) -> bool {
+    uniform.opaque[1] != 0 && uniform.opaque[3] == MARKS_WRITE && uniform.msaa[0] <= 1
+}
+
 /// Group 0's binding of the loss accounting (`acct` in prelude.wgsl).
 pub const ACCT_BINDING: u32 = 15;
 
@@ -728,8 +738,9 @@ mod tests {
             assert!(oit_shaders::COMPUTE_RASTER.contains(&line), "raster_compute.wgsl has no `{line}`");
         }
         assert!(oit_shaders::COMPUTE_RASTER.contains("const ITEM_SPENT: u32 = 0x80000000u;"));
+        assert!(oit_shaders::COMPUTE_RASTER.contains("const ITEM_COUNTED: u32 = 0x40000000u;"));
         let rows = oit_core::MAX_SIZE.div_ceil(super::TILE);
-        assert!(rows < 1 << 15, "{rows} tile rows reach the mark bit");
+        assert!(rows < 1 << 14, "{rows} tile rows reach the mark bits");
     }
 
     /// A host-set-up frame's indirect arguments are those `setup_finish_main` (setup.wgsl) writes

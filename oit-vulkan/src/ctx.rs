@@ -704,6 +704,11 @@ impl<'a> VkCtx<'a> {
         let entry = if per_pixel { "raster_main" } else { "raster_loop_main" };
         let bindings = self.image_bindings();
         let pipeline = self.gpu.pipeline(module, entry, buffers.len(), &bindings)?;
+        let classify = if oit_gpu::classifies_items(&self.uniform) {
+            Some(self.gpu.pipeline(module, "classify_main", buffers.len(), &bindings)?)
+        } else {
+            None
+        };
         if let Some(check) = raster.upload(&mut self.rec)? {
             self.setup_checks.push(check);
         }
@@ -712,20 +717,15 @@ impl<'a> VkCtx<'a> {
         let storage = Self::storage(&held, buffers);
         let raster_set = raster.bindings();
         let uniform = self.uniform;
-        raster.dispatch(
-            &mut self.rec,
-            &pipeline,
-            &[
-                SetData::Frame {
-                    uniform: bytemuck::bytes_of(&uniform),
-                    storage: &storage,
-                    images: &self.images,
-                },
-                SetData::Raster { storage: &raster_set, uniform: &raster.uniform },
-            ],
-            per_pixel,
-            self.gated_pass,
-        )?;
+        let sets = [
+            SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage, images: &self.images },
+            SetData::Raster { storage: &raster_set, uniform: &raster.uniform },
+        ];
+        if let Some(classify) = &classify {
+            // an invocation an item, before the pass (`oit_gpu::classifies_items`)
+            raster.dispatch(&mut self.rec, classify, &sets, false, false)?;
+        }
+        raster.dispatch(&mut self.rec, &pipeline, &sets, per_pixel, self.gated_pass)?;
         Ok(&raster.generated)
     }
 

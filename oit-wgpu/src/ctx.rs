@@ -307,6 +307,9 @@ pub struct GpuCtx<'a> {
     /// Whether the geometry pass being recorded is gated: its driver draws or dispatches from
     /// its gated arguments.
     pub gated_pass: bool,
+    /// Whether the compute raster's pass being recorded runs `classify_main` first
+    /// ([`oit_gpu::classifies_items`], set with the scene pass's group 0).
+    pub classify_items: bool,
     /// Where the frame's tail pass left the merged count, copied into the totals at the end.
     merged_from: Option<wgpu::Buffer>,
     /// Per-pixel fragment counts the frame hands the caller as its `layers` (the reference's),
@@ -494,6 +497,7 @@ impl<'a> GpuCtx<'a> {
             uniform_slot: 0,
             gated_passes: 0,
             gated_pass: false,
+            classify_items: false,
             merged_from: None,
             layers_from: None,
             supersample: None,
@@ -874,6 +878,7 @@ impl<'a> GpuCtx<'a> {
         let first = self.fragments == Fragments::Unset;
         self.uniform.opaque[1] = u32::from(self.uniform.opaque[0] != 0 && first);
         self.uniform.opaque[3] = oit_gpu::item_marks(first);
+        self.classify_items = oit_gpu::classifies_items(&self.uniform);
         let group = self.group0(buffers, pass_index, param);
         self.uniform.opaque[1] = 0;
         self.uniform.opaque[3] = 0;

@@ -600,8 +600,13 @@ impl Driver for ComputeRaster {
         // there one invocation walks an item.
         let per_pixel = oit_gpu::raster_per_pixel(ctx.gpu.info.device_type == wgpu::DeviceType::Cpu);
         let entry = if per_pixel { "raster_main" } else { "raster_loop_main" };
-        let pipeline =
-            ctx.gpu.compute_pipeline(&format!("{source}\n{RASTER_WGSL}"), entry, &[layout0, &self.layout])?;
+        let module = format!("{source}\n{RASTER_WGSL}");
+        let pipeline = ctx.gpu.compute_pipeline(&module, entry, &[layout0, &self.layout])?;
+        let classify = if ctx.classify_items {
+            Some(ctx.gpu.compute_pipeline(&module, "classify_main", &[layout0, &self.layout])?)
+        } else {
+            None
+        };
         let args = if ctx.gated_pass { &self.gated } else { &self.args };
         let mut encoder = ctx.take_encoder();
         encoder.clear_buffer(&self.generated, 0, None);
@@ -615,11 +620,15 @@ impl Driver for ComputeRaster {
                 label: Some("geometry"),
                 timestamp_writes: writes,
             });
-            pass.set_pipeline(&pipeline);
             pass.set_bind_group(0, group0, &[]);
             pass.set_bind_group(1, &self.group, &[]);
             // arguments written by the setup (or the host's): the per-pixel dispatch, then the
-            // per-item one
+            // per-item one (`classify_main`'s too)
+            if let Some(classify) = &classify {
+                pass.set_pipeline(classify);
+                pass.dispatch_workgroups_indirect(args, ARGS_PER_ITEM);
+            }
+            pass.set_pipeline(&pipeline);
             pass.dispatch_workgroups_indirect(args, if per_pixel { 0 } else { ARGS_PER_ITEM });
         }
         ctx.finish_timed("geometry", encoder)?;

@@ -59,12 +59,17 @@ const ITEM_SPENT: u32 = 0x80000000u;
 // `fu.opaque.w`: oit-gpu's `MARKS_WRITE` and `MARKS_READ`
 const MARKS_WRITE: u32 = 1u;
 const MARKS_READ: u32 = 2u;
+// A work item's other mark, the bit below `ITEM_SPENT`: `classify_main` counted its fragments
+// before the frame's first scene pass (every one held back by the opaque depth), so that pass
+// skips it as the later ones skip a spent item, and marks it spent.
+const ITEM_COUNTED: u32 = 0x40000000u;
 
-// Work item `i` (its tile without the mark) and whether this pass skips it (`ITEM_SPENT`).
+// Work item `i` (its tile without the marks) and whether this pass skips it (`ITEM_SPENT` in a
+// later pass, `ITEM_COUNTED` in any).
 fn load_item(i: u32) -> vec3<u32> {
     let raw = items[i];
-    let spent = fu.opaque.w == MARKS_READ && (raw.y & ITEM_SPENT) != 0u;
-    return vec3<u32>(raw.x, raw.y & ~ITEM_SPENT, u32(spent));
+    let spent = (fu.opaque.w == MARKS_READ && (raw.y & ITEM_SPENT) != 0u) || (raw.y & ITEM_COUNTED) != 0u;
+    return vec3<u32>(raw.x, raw.y & ~(ITEM_SPENT | ITEM_COUNTED), u32(spent));
 }
 
 // The frame's first scene pass (`MARKS_WRITE`): marks item `i` (`item`, unmarked) spent where it
@@ -127,18 +132,51 @@ fn item_rect(t: Tri, item: vec2<u32>) -> vec4<u32> {
 // the triangle. (A floor from the triangle's depth plane at the item's corners skips more tiles of
 // a sloping triangle, but its 64-bit edge arithmetic made every compute pass 1.1-1.6x slower on
 // the H100 and the H200, done by each invocation or once a workgroup behind a barrier, even where
-// no opaque object lets it skip anything: bench/results/h200/tile-skip-workgroup-1024.)
+// no opaque object lets it skip anything: bench/results/h200/tile-skip-workgroup-1024. The
+// frame's first scene pass has that floor, `depth_floor`, from `classify_main`, once an item.)
 // It reads the triangle's three depths alone, so that an item held back loads nothing more.
 fn behind_tile(item: vec2<u32>) -> bool {
     if (fu.opaque.x == 0u || fu.msaa.x > 1u) {
         return false;
     }
-    let far = ~atomicLoad(&opaque_rgb[opaque_tile_word(item_tile(item))]);
+    let far = tile_far(item);
     let o = item.x * TRI_WORDS + 6u;
     let z = vec3<f32>(tri_f32(o), tri_f32(o + 1u), tri_f32(o + 2u));
     let lo = min(z.x, min(z.y, z.z));
     let hi = max(z.x, max(z.y, z.z));
     return depth_bits(clamp(lo - (hi - lo) * 1e-5 - 1e-6, 0.0, 1.0)) >= far;
+}
+
+// The farthest opaque depth's bits over work item `item`'s tile (all ones where a pixel of it has
+// no opaque fragment, or the frame no opaque part: nothing is behind it).
+fn tile_far(item: vec2<u32>) -> u32 {
+    return ~atomicLoad(&opaque_rgb[opaque_tile_word(item_tile(item))]);
+}
+
+// A floor of the depths `raster_pixel` gives `t` at the pixel centres of rect `r` (inclusive):
+// `plane_depth` at the barycentrics of the edge values, of those the rect's corners take, that
+// give the least depth. An edge value is affine in the pixel, so over the rect it lies between
+// its corners' values; and the depth is monotone in each of the two edge values it reads, each
+// operation (the f32 conversion, the products, the sums, the clamp) being a rounding of a
+// monotone function. Taking each edge's value at its own worst corner floors every pixel's.
+fn depth_floor(t: Tri, r: vec4<u32>) -> f32 {
+    var lo = vec2<i64>(0x7fffffffffffffffli, 0x7fffffffffffffffli);
+    var hi = -lo;
+    for (var c = 0u; c < 4u; c++) {
+        let px = i64(select(r.x, r.z, (c & 1u) != 0u)) * SUBPIXEL + HALF_PIXEL;
+        let py = i64(select(r.y, r.w, (c & 2u) != 0u)) * SUBPIXEL + HALF_PIXEL;
+        let e = vec2<i64>(edge_at(t, 1u, px, py).x, edge_at(t, 2u, px, py).x);
+        lo = min(lo, e);
+        hi = max(hi, e);
+    }
+    let z0 = bitcast<u32>(t.z[0]);
+    let dz = vec2<u32>(sf_sub(bitcast<u32>(t.z[1]), z0), sf_sub(bitcast<u32>(t.z[2]), z0));
+    // the depth grows with an edge's value where its weight's factor (the inverse area) and its
+    // depth difference have one sign
+    let area_up = (bitcast<u32>(t.inv_area) >> 31u) == 0u;
+    let e1 = select(hi.x, lo.x, area_up == ((dz.x >> 31u) == 0u));
+    let e2 = select(hi.y, lo.y, area_up == ((dz.y >> 31u) == 0u));
+    return plane_depth(t, vec3<f32>(0.0, f32(e1) * t.inv_area, f32(e2) * t.inv_area));
 }
 
 // oit-core's `DepthPlane::depth` of `t` at barycentrics `b`, operation for operation in the
@@ -153,6 +191,20 @@ fn plane_depth(t: Tri, b: vec3<f32>) -> f32 {
     let dz2 = sf_sub(bitcast<u32>(t.z[2]), z0);
     let d = sf_add(sf_add(z0, sf_mul(bitcast<u32>(b.y), dz1)), sf_mul(bitcast<u32>(b.z), dz2));
     return clamp(bitcast<f32>(d), 0.0, 1.0);
+}
+
+// Edge k of `t` (from vertex k+1 to k+2) at the subpixel point (px, py): its function's value,
+// its steps along x and y, and the value it must exceed to cover the point (-1 on a top or left
+// edge, whose points belong to the triangle, else 0).
+fn edge_at(t: Tri, k: u32, px: i64, py: i64) -> vec4<i64> {
+    let a = (k + 1u) % 3u;
+    let b = (k + 2u) % 3u;
+    let ax = i64(t.x[a]);
+    let ay = i64(t.y[a]);
+    let dx = i64(t.x[b]) - ax;
+    let dy = i64(t.y[b]) - ay;
+    let top_left = dy < 0li || (dy == 0li && dx > 0li);
+    return vec4<i64>(dx * (py - ay) - dy * (px - ax), -dy, dx, select(0li, -1li, top_left));
 }
 
 // What the fragment of `t` at pixel (x, y) is: 0 none (the pixel's centre outside; with several
@@ -172,17 +224,11 @@ fn raster_pixel(t: Tri, x: u32, y: u32, behind: bool) -> u32 {
     var above: array<i64, 3>;
     var inside = true;
     for (var k = 0u; k < 3u; k++) {
-        let a = (k + 1u) % 3u;
-        let b = (k + 2u) % 3u;
-        let ax = i64(t.x[a]);
-        let ay = i64(t.y[a]);
-        let dx = i64(t.x[b]) - ax;
-        let dy = i64(t.y[b]) - ay;
-        let top_left = dy < 0li || (dy == 0li && dx > 0li);
-        e[k] = dx * (py - ay) - dy * (px - ax);
-        step_x[k] = -dy;
-        step_y[k] = dx;
-        above[k] = select(0li, -1li, top_left);
+        let edge = edge_at(t, k, px, py);
+        e[k] = edge.x;
+        step_x[k] = edge.y;
+        step_y[k] = edge.z;
+        above[k] = edge.w;
         inside = inside && e[k] > above[k];
     }
     var mask = 1u;
@@ -327,6 +373,63 @@ fn raster_main(
     if (lid == 0u && i < ru.item_count) {
         mark_item(i, item, captured);
     }
+}
+
+// The pixels of work item `item` of `t` (its rect: `item_rect`) where every one is covered at its
+// centre (one sample a pixel), else 0. An edge function is affine in the pixel and exact in 64
+// bits, so a rect whose four corners an edge covers is covered by it throughout.
+fn interior_pixels(t: Tri, item: vec2<u32>) -> u32 {
+    let r = item_rect(t, item);
+    if (r.x > r.z || r.y > r.w) {
+        return 0u;
+    }
+    for (var c = 0u; c < 4u; c++) {
+        let px = i64(select(r.x, r.z, (c & 1u) != 0u)) * SUBPIXEL + HALF_PIXEL;
+        let py = i64(select(r.y, r.w, (c & 2u) != 0u)) * SUBPIXEL + HALF_PIXEL;
+        for (var k = 0u; k < 3u; k++) {
+            let edge = edge_at(t, k, px, py);
+            if (edge.x <= edge.w) {
+                return 0u;
+            }
+        }
+    }
+    return (r.z - r.x + 1u) * (r.w - r.y + 1u);
+}
+
+// Before the frame's first scene pass over an opaque part, at one sample a pixel (oit-gpu's
+// `classifies_items`), one invocation a work item: an item wholly behind the opaque depth
+// (`behind_tile`) whose rect its triangle covers throughout has each of its pixels' fragments
+// held back, so this counts them (`generated`, and `occluded` as the pass counts them) without
+// the pass walking the pixels, and marks the item `ITEM_COUNTED` for every pass of the frame to
+// skip. Behind a wall most items of a large triangle are such; the pass walks the rest (a
+// triangle's edges, the tiles it only partly hides) as before, so the counts are the same.
+@compute @workgroup_size(64)
+fn classify_main(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    if (lid == 0u) {
+        atomicStore(&wg_count, 0u);
+        atomicStore(&wg_occluded, 0u);
+    }
+    workgroupBarrier();
+    let i = gid.x + gid.y * groups.x * 64u;
+    var held = 0u;
+    if (i < ru.item_count) {
+        let raw = items[i];
+        let item = vec2<u32>(raw.x, raw.y & ~(ITEM_SPENT | ITEM_COUNTED));
+        let far = tile_far(item);
+        if (far != 0xffffffffu) {
+            let t = load_tri(item.x);
+            let n = interior_pixels(t, item);
+            if (n != 0u && (behind_tile(item) || depth_bits(depth_floor(t, item_rect(t, item))) >= far)) {
+                held = n;
+                items[i] = vec2<u32>(item.x, item.y | ITEM_COUNTED);
+            }
+        }
+    }
+    count_fragments(lid, held, held);
 }
 
 // CPU devices (lavapipe): one invocation per work item, walking its tile; a workgroup of 64
