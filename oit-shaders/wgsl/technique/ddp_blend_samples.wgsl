@@ -141,9 +141,9 @@ fn ddp_resolve_ms_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(n
     }
     let handed = atomicExchange(&ddps_handed[px], 0u);
     if (handed != 0u) {
-        var s = load_state(px);
+        var s = state[px];
         s.captured += handed;
-        store_state(px, s);
+        state[px] = s;
     }
 }
 

@@ -101,9 +101,9 @@ fn dp_composite_ms_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(
         accumulate_samples(px, 1u, layer.x, 1u << i, 0u);
     }
     if (counted != 0u) {
-        var s = load_state(px);
+        var s = state[px];
         s.captured += counted;
-        store_state(px, s);
+        state[px] = s;
     }
 }
 
