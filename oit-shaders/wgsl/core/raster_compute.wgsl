@@ -147,8 +147,11 @@ fn behind_tile(item: vec2<u32>) -> bool {
     return depth_bits(clamp(lo - (hi - lo) * 1e-5 - 1e-6, 0.0, 1.0)) >= far;
 }
 
-// The farthest opaque depth's bits over work item `item`'s tile (all ones where a pixel of it has
-// no opaque fragment, or the frame no opaque part: nothing is behind it).
+// `tile_far` of a tile with a pixel that no opaque fragment covers: nothing lies behind it.
+const FAR_NONE: u32 = 0xffffffffu;
+
+// The farthest opaque depth's bits over work item `item`'s tile (`FAR_NONE` where a pixel of it
+// has no opaque fragment, or the frame no opaque part).
 fn tile_far(item: vec2<u32>) -> u32 {
     return ~atomicLoad(&opaque_rgb[opaque_tile_word(item_tile(item))]);
 }
@@ -163,9 +166,8 @@ fn depth_floor(t: Tri, r: vec4<u32>) -> f32 {
     var lo = vec2<i64>(0x7fffffffffffffffli, 0x7fffffffffffffffli);
     var hi = -lo;
     for (var c = 0u; c < 4u; c++) {
-        let px = i64(select(r.x, r.z, (c & 1u) != 0u)) * SUBPIXEL + HALF_PIXEL;
-        let py = i64(select(r.y, r.w, (c & 2u) != 0u)) * SUBPIXEL + HALF_PIXEL;
-        let e = vec2<i64>(edge_at(t, 1u, px, py).x, edge_at(t, 2u, px, py).x);
+        let p = rect_corner(r, c);
+        let e = vec2<i64>(edge_at(t, 1u, p.x, p.y).x, edge_at(t, 2u, p.x, p.y).x);
         lo = min(lo, e);
         hi = max(hi, e);
     }
@@ -306,6 +308,21 @@ fn raster_pixel(t: Tri, x: u32, y: u32, behind: bool) -> u32 {
 var<workgroup> wg_count: atomic<u32>;
 var<workgroup> wg_occluded: atomic<u32>;
 
+// Clears the workgroup's counts for `count_fragments` (called first, in uniform control flow).
+fn start_counts(lid: u32) {
+    if (lid == 0u) {
+        atomicStore(&wg_count, 0u);
+        atomicStore(&wg_occluded, 0u);
+    }
+    workgroupBarrier();
+}
+
+// The work item of an invocation of a kernel run an invocation an item (`raster_loop_main`,
+// `classify_main`: workgroups of 64 from the per-item arguments, y above x's limit).
+fn item_index(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
+    return gid.x + gid.y * groups.x * 64u;
+}
+
 // Adds the workgroup's fragments to `generated`, and those the opaque cut held back to the
 // occluded counter where the pass counts them (the frame's first scene pass: `fu.opaque.y`), one
 // atomic each a workgroup (called in uniform control flow), none where the workgroup has none: a
@@ -347,11 +364,7 @@ fn raster_main(
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
 ) {
-    if (lid == 0u) {
-        atomicStore(&wg_count, 0u);
-        atomicStore(&wg_occluded, 0u);
-    }
-    workgroupBarrier();
+    start_counts(lid);
     let i = wid.x + wid.y * groups.x;
     var code = 0u;
     var item = vec2<u32>();
@@ -375,19 +388,24 @@ fn raster_main(
     }
 }
 
-// The pixels of work item `item` of `t` (its rect: `item_rect`) where every one is covered at its
+// The subpixel centre of corner c (0 to 3) of rect `r` (inclusive pixels x0, y0, x1, y1).
+fn rect_corner(r: vec4<u32>, c: u32) -> vec2<i64> {
+    let x = select(r.x, r.z, (c & 1u) != 0u);
+    let y = select(r.y, r.w, (c & 2u) != 0u);
+    return vec2<i64>(i64(x) * SUBPIXEL + HALF_PIXEL, i64(y) * SUBPIXEL + HALF_PIXEL);
+}
+
+// The pixels of rect `r` of `t` (a work item's: `item_rect`) where every one is covered at its
 // centre (one sample a pixel), else 0. An edge function is affine in the pixel and exact in 64
 // bits, so a rect whose four corners an edge covers is covered by it throughout.
-fn interior_pixels(t: Tri, item: vec2<u32>) -> u32 {
-    let r = item_rect(t, item);
+fn interior_pixels(t: Tri, r: vec4<u32>) -> u32 {
     if (r.x > r.z || r.y > r.w) {
         return 0u;
     }
     for (var c = 0u; c < 4u; c++) {
-        let px = i64(select(r.x, r.z, (c & 1u) != 0u)) * SUBPIXEL + HALF_PIXEL;
-        let py = i64(select(r.y, r.w, (c & 2u) != 0u)) * SUBPIXEL + HALF_PIXEL;
+        let p = rect_corner(r, c);
         for (var k = 0u; k < 3u; k++) {
-            let edge = edge_at(t, k, px, py);
+            let edge = edge_at(t, k, p.x, p.y);
             if (edge.x <= edge.w) {
                 return 0u;
             }
@@ -409,21 +427,18 @@ fn classify_main(
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
 ) {
-    if (lid == 0u) {
-        atomicStore(&wg_count, 0u);
-        atomicStore(&wg_occluded, 0u);
-    }
-    workgroupBarrier();
-    let i = gid.x + gid.y * groups.x * 64u;
+    start_counts(lid);
+    let i = item_index(gid, groups);
     var held = 0u;
     if (i < ru.item_count) {
-        let raw = items[i];
-        let item = vec2<u32>(raw.x, raw.y & ~(ITEM_SPENT | ITEM_COUNTED));
+        // the frame's first scene pass is yet to run: no item is marked
+        let item = load_item(i).xy;
         let far = tile_far(item);
-        if (far != 0xffffffffu) {
+        if (far != FAR_NONE) {
             let t = load_tri(item.x);
-            let n = interior_pixels(t, item);
-            if (n != 0u && (behind_tile(item) || depth_bits(depth_floor(t, item_rect(t, item))) >= far)) {
+            let r = item_rect(t, item);
+            let n = interior_pixels(t, r);
+            if (n != 0u && (behind_tile(item) || depth_bits(depth_floor(t, r)) >= far)) {
                 held = n;
                 items[i] = vec2<u32>(item.x, item.y | ITEM_COUNTED);
             }
@@ -440,12 +455,8 @@ fn raster_loop_main(
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
 ) {
-    if (lid == 0u) {
-        atomicStore(&wg_count, 0u);
-        atomicStore(&wg_occluded, 0u);
-    }
-    workgroupBarrier();
-    let i = gid.x + gid.y * groups.x * 64u;
+    start_counts(lid);
+    let i = item_index(gid, groups);
     var count = 0u;
     var occluded = 0u;
     if (i < ru.item_count) {
