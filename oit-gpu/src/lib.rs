@@ -133,8 +133,15 @@ pub const OPAQUE_KEYS_BINDING: u32 = 16;
 /// sample (the winner's linear RGB, f32 bits), then [`OPAQUE_COUNTER_WORDS`] counters.
 pub const OPAQUE_RGB_BINDING: u32 = 17;
 
-/// Counters after the opaque colours: [masked, occluded].
-pub const OPAQUE_COUNTER_WORDS: u64 = 2;
+/// Counters after the opaque colours: [masked, occluded, drawn] (drawn: the fragments the hardware
+/// path's count-only draw counted, [`OPAQUE_DRAWN_OFFSET`]).
+pub const OPAQUE_COUNTER_WORDS: u64 = 3;
+
+/// The byte offset, from [`opaque_counters_offset`], of the counter in which the hardware path's
+/// count-only draw (`core/raster_hardware_early.wgsl`'s `hw_fs_count`) counts the fragments of a
+/// frame's first scene pass: its pass copies it to its fragment count instead of summing its
+/// count target, which that draw does not write.
+pub const OPAQUE_DRAWN_OFFSET: u64 = 8;
 
 /// Words of the opaque keys' buffer of a `width`×`height` frame at `samples` samples a pixel (2 a
 /// sample), and of its colours' (3 a sample, the counters, then a word a [`TILE`]×[`TILE`] tile:

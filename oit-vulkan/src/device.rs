@@ -1273,7 +1273,8 @@ impl Gpu {
 
     /// [`Gpu::render_pipeline`]'s draw `fs` over the opaque depth, at one sample, in
     /// `early_pass_key`'s pass (`core/raster_hardware_early.wgsl`): `depth_fs` fills the depth
-    /// attachment (its vertex stage `depth_vs`, no colour), `hw_fs_count` counts untested,
+    /// attachment (its vertex stage `depth_vs`, no colour), `hw_fs_count` counts untested (by
+    /// atomic adds, no colour),
     /// `hw_fs_early` captures behind the LESS_OR_EQUAL test.
     pub fn early_pipeline(
         &self,
@@ -1285,6 +1286,9 @@ impl Gpu {
         let (blend, depth) = match fs {
             "depth_fs" => (Blend::Nothing, DepthTest::Fill),
             "hw_fs_early" => (Blend::AddRed, DepthTest::ReadOnly),
+            // counts by atomic adds (`oit_gpu::OPAQUE_DRAWN_OFFSET`'s counter), not into the
+            // count image
+            "hw_fs_count" => (Blend::Nothing, DepthTest::Off),
             _ => (Blend::AddRed, DepthTest::Off),
         };
         self.graphics(&GraphicsDesc {

@@ -704,6 +704,14 @@ impl<'a> GpuCtx<'a> {
         self.uniform.opaque[0] != 0
     }
 
+    /// Where the hardware path's count-only draw counts a first scene pass's fragments (in place
+    /// of its count target): the opaque colours' buffer and the counter's byte offset in it
+    /// ([`oit_gpu::OPAQUE_DRAWN_OFFSET`]).
+    pub(crate) fn drawn_counter(&self) -> (wgpu::Buffer, u64) {
+        let counters = oit_gpu::opaque_counters_offset(u64::from(self.pixels), self.settings.samples);
+        (self.opaque.1.clone(), counters + oit_gpu::OPAQUE_DRAWN_OFFSET)
+    }
+
     /// The frame's opaque image (keys, colours and counters), for the embedded pass to load the
     /// caller's depth and colour into ([`crate::OitPass::with_opaque`]): placeholders where the
     /// plan has no opaque part.

@@ -303,7 +303,9 @@ fn count_target(format: wgpu::TextureFormat) -> wgpu::ColorTargetState {
 /// `LessEqual` against it before the fragment stage, so a fragment behind the opaque depth is
 /// neither shaded nor captured; the stage holds back the ties itself, the cut being strict. The
 /// frame's first scene pass draws a count-only draw (`hw_fs_count`, untested) between the two,
-/// which counts every fragment and those the cut holds back, as `hw_fs` does. The depths are
+/// which counts every fragment and those the cut holds back, as `hw_fs` does, by atomic adds to
+/// counters of the opaque colours' buffer ([`GpuCtx::drawn_counter`]) and not into the count
+/// target, whose blending of every fragment was the dearer part of it. The depths are
 /// the keys' high words, the bits of the depth the opaque pass kept, so the test and
 /// `opaque_cut` compare the same numbers.
 pub(crate) struct EarlyDepth {
@@ -415,6 +417,9 @@ impl Driver for RenderDriver<'_> {
         // fragment stage; the frame's first scene pass draws its count-only draw first
         let early = self.early.as_ref().filter(|_| ctx.cuts_at_opaque() && self.target.samples == 1);
         let mut pipelines = Vec::new();
+        // whether the pass draws the count-only draw, which counts its fragments in a counter
+        // of the opaque colours' buffer rather than in the count target
+        let mut drawn = false;
         match early {
             None => {
                 pipelines.push(ctx.gpu.render_pipeline(h.finish(), self.salt, || {
@@ -426,6 +431,7 @@ impl Driver for RenderDriver<'_> {
                 let mut entries = vec!["depth_fs", "hw_fs_early"];
                 if ctx.fragments == Fragments::Unset {
                     entries.insert(1, "hw_fs_count");
+                    drawn = true;
                 }
                 for entry in entries {
                     let mut e = DefaultHasher::new();
@@ -483,6 +489,15 @@ impl Driver for RenderDriver<'_> {
             }
         }
         ctx.finish_timed("geometry", encoder)?;
+        if drawn {
+            // the count target holds nothing of this pass (its capture adds 0 in a frame's first
+            // pass): the count-only draw's counter is the pass's count
+            let (rgb, offset) = ctx.drawn_counter();
+            let encoder = ctx.encoder();
+            encoder.clear_buffer(&self.target.total, 0, None);
+            encoder.copy_buffer_to_buffer(&rgb, offset, &self.target.total, 0, 4);
+            return Ok(Generated(self.target.total.clone()));
+        }
         let sum_wgsl = if self.target.samples > 1 { COUNT_SUM_MS_WGSL } else { COUNT_SUM_WGSL };
         let sum = ctx.gpu.compute_pipeline(sum_wgsl, "count_sum_main", &[&self.target.sum_layout])?;
         let encoder = ctx.encoder();
@@ -831,13 +846,18 @@ impl HwGeometry {
                         capture.count_target.clone(),
                     );
                 }
+                // the count-only draw counts by atomic adds, not into the count target
+                let mut target = capture.count_target.clone();
+                if entry == "hw_fs_count" {
+                    target.write_mask = wgpu::ColorWrites::empty();
+                }
                 scene_pipeline_with(
                     &device,
                     "hardware raster over the opaque depth",
                     &source,
                     &[capture.bind_group_layout, &layout1],
                     entry,
-                    &[Some(capture.count_target.clone())],
+                    &[Some(target)],
                     Some(EarlyDepth::state(entry)),
                     1,
                 )

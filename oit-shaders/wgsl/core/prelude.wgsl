@@ -24,7 +24,8 @@ fn opaque_samples() -> u32 {
     return max(fu.msaa.x, 1u);
 }
 
-// The word of opaque_rgb's counter i (0 masked, 1 occluded), after every sample's colour.
+// The word of opaque_rgb's counter i (0 masked, 1 occluded, 2 the fragments the hardware path's
+// count-only draw counted: raster_hardware_early.wgsl), after every sample's colour.
 fn opaque_counter(i: u32) -> u32 {
     return 3u * fu.pixel_count * opaque_samples() + i;
 }
@@ -32,7 +33,7 @@ fn opaque_counter(i: u32) -> u32 {
 // The word of opaque_rgb holding compute-raster tile t's farthest opaque depth bits, complemented
 // (0: unknown, nothing skipped), after the counters (oit-gpu's `opaque_tiles`).
 fn opaque_tile_word(t: u32) -> u32 {
-    return opaque_counter(2u) + t;
+    return opaque_counter(3u) + t;
 }
 
 // The samples of `f.mask` the opaque pass leaves to `f` (oit-cpu's cut in
