@@ -167,7 +167,8 @@ pub fn opaque_counters_offset(pixels: u64, samples: u32) -> u64 {
     pixels * u64::from(samples.max(1)) * 12
 }
 
-/// Words of one `PixelState` (resolve.wgsl): 16 for the composite, 7 for the ties.
+/// Words of one `PixelState` (resolve.wgsl): 16 for the composite, 7 for the ties; the state
+/// buffer keeps them as this many planes of a word a pixel (`load_state`/`store_state`).
 pub const STATE_WORDS: u64 = 23;
 
 /// The fewest words a storage buffer holds: 64 bytes, one of the widest elements any technique

@@ -9,7 +9,7 @@ fn totals_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     if (px >= fu.pixel_count) {
         return;
     }
-    let s = state[px];
+    let s = load_state(px);
     let c = s.captured;
     if (c > 0u) {
         atomicAdd(&totals[0], c);

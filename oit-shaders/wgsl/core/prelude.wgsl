@@ -1,7 +1,8 @@
 // Group 0 of every technique module: the frame uniform and the per-pixel resolve state, then the
 // technique's own buffers from binding 2 on.
 @group(0) @binding(0) var<uniform> fu: FrameUniform;
-@group(0) @binding(1) var<storage, read_write> state: array<PixelState>;
+// (resolve.wgsl's `PixelState` a pixel, a plane a field: `load_state`, `store_state`)
+@group(0) @binding(1) var<storage, read_write> state: array<u32>;
 
 // Loss accounting, 3 words a pixel (oit-wgpu's `GpuCtx::acct`): [lost, seen, taken]. `lost`
 // counts fragments where each is lost; `seen` the fragments of a peel pass at the depths the pass

@@ -76,7 +76,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if (px >= fu.pixel_count) {
         return;
     }
-    var s = state[px];
+    var s = load_state(px);
     for (var b = 0u; b < BUCKETS; b++) {
         let key = atomicExchange(&buckets[px * BUCKETS + b], 0lu);
         let near = atomicExchange(&nearest[px * BUCKETS + b], 0xfffffffffffffffflu);
@@ -90,5 +90,5 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
             push_local(&s, bitcast<f32>(u32(k >> 32u)), u32(k & 0xfffffffflu));
         }
     }
-    state[px] = s;
+    store_state(px, s);
 }

@@ -82,7 +82,7 @@ fn color_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
     if (px >= fu.pixel_count) {
         return;
     }
-    var s = state[px];
+    var s = load_state(px);
     let zn = bdp_z_near(px);
     let zf = bdp_z_far(px);
     let n = BDP_COLOR_SUBINTERVALS;
@@ -93,7 +93,7 @@ fn color_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
             push_local(&s, d, bdp_unpack_color(v));
         }
     }
-    state[px] = s;
+    store_state(px, s);
 }
 
 // Depth mode's resolve; param = arrays captured. Subinterval k reads min₁ … min_P, max_P … max₁
@@ -104,7 +104,7 @@ fn depth_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
     if (px >= fu.pixel_count) {
         return;
     }
-    var s = state[px];
+    var s = load_state(px);
     let arrays_used = fu.param;
     for (var k = 0u; k < BDP_DEPTH_SUBINTERVALS; k++) {
         let slot = px * 2u * BDP_DEPTH_SUBINTERVALS + 2u * k;
@@ -126,7 +126,7 @@ fn depth_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
             }
         }
     }
-    state[px] = s;
+    store_state(px, s);
 }
 
 // Fragments array `p` kept for pixel `px`: a min, and a max unless it is the same key.

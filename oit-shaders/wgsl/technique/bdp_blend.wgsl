@@ -189,7 +189,7 @@ fn bdp_blend_ms_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @bui
 
 // Pushes the pixel's non-empty buckets in order, each at its subinterval's midpoint.
 fn bdp_blend_push(px: u32, buckets: ptr<function, array<u32, BDP_COLOR_SUBINTERVALS>>) {
-    var s = state[px];
+    var s = load_state(px);
     let zn = bitcast<f32>(bounds[2u * px]);
     let zf = bitcast<f32>(bounds[2u * px + 1u]);
     let n = BDP_COLOR_SUBINTERVALS;
@@ -200,5 +200,5 @@ fn bdp_blend_push(px: u32, buckets: ptr<function, array<u32, BDP_COLOR_SUBINTERV
             push_local(&s, d, bdp_unpack_color(v));
         }
     }
-    state[px] = s;
+    store_state(px, s);
 }

@@ -84,13 +84,13 @@ fn plain_blend_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @buil
     }
     let xy = blend_texel(px);
     let c = textureLoad(blend_color, xy, 0);
-    var s = state[px];
+    var s = load_state(px);
     s.fr = c.x;
     s.fg = c.y;
     s.fb = c.z;
     s.transmittance_x = one_xor(c.w);
     s.captured = u32(textureLoad(blend_count, xy, 0).x + 0.5);
-    state[px] = s;
+    store_state(px, s);
 }
 
 @compute @workgroup_size(64)
@@ -190,7 +190,7 @@ fn plain_blend_ms_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @b
     }
     let mean = 1.0 / f32(fu.msaa.x);
     c *= mean;
-    var s = state[px];
+    var s = load_state(px);
     s.fr = c.x;
     s.fg = c.y;
     s.fb = c.z;
@@ -199,7 +199,7 @@ fn plain_blend_ms_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @b
     if (fu.opaque.z != 0u && s.captured != 0u && fu.effect == EFFECT_TRANSPARENCY) {
         state_resolved(&s, over * mean);
     }
-    state[px] = s;
+    store_state(px, s);
 }
 
 // The weighted sums of the pixel's samples added up: each fragment wrote one sample.

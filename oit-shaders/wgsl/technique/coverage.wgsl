@@ -85,7 +85,7 @@ fn resolve_masked_over(px: u32, first: u32, n: u32, back: vec4<f32>) {
         all &= mask_at(e);
         e = msaa_next(e);
     }
-    var s = state[px];
+    var s = load_state(px);
     s.captured = n;
     if (fu.effect != EFFECT_COMPLEXITY) {
         var c: vec3<f32>;
@@ -102,5 +102,5 @@ fn resolve_masked_over(px: u32, first: u32, n: u32, back: vec4<f32>) {
         }
         state_resolved(&s, c);
     }
-    state[px] = s;
+    store_state(px, s);
 }

@@ -141,9 +141,9 @@ fn ddp_resolve_ms_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(n
     }
     let handed = atomicExchange(&ddps_handed[px], 0u);
     if (handed != 0u) {
-        var s = state[px];
+        var s = load_state(px);
         s.captured += handed;
-        state[px] = s;
+        store_state(px, s);
     }
 }
 

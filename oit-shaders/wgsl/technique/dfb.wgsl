@@ -44,7 +44,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if (px >= fu.pixel_count) {
         return;
     }
-    var s = state[px];
+    var s = load_state(px);
     // entries the fill did not reach (a count it did not spend, at the end) are left out
     let lo = offsets[px];
     let hi = offsets[px + 1u] - u32(max(bitcast<i32>(atomicLoad(&counts[px])), 0));
@@ -73,7 +73,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         for (var i = 0u; i < n; i++) {
             push_local(&s, bitcast<f32>(u32(list[i] >> 32u)), list_payloads[i]);
         }
-        state[px] = s;
+        store_state(px, s);
         return;
     }
     // longer: in place (sort_entries.wgsl)
@@ -81,5 +81,5 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     for (var i = lo; i < hi; i++) {
         push_local(&s, bitcast<f32>(u32(keys[i] >> 32u)), payloads[i]);
     }
-    state[px] = s;
+    store_state(px, s);
 }

@@ -101,9 +101,9 @@ fn dp_composite_ms_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(
         accumulate_samples(px, 1u, layer.x, 1u << i, 0u);
     }
     if (counted != 0u) {
-        var s = state[px];
+        var s = load_state(px);
         s.captured += counted;
-        state[px] = s;
+        store_state(px, s);
     }
 }
 

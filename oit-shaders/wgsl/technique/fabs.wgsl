@@ -118,7 +118,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if (px >= fu.pixel_count) {
         return;
     }
-    var s = state[px];
+    var s = load_state(px);
     let n = min(fabs_count(px), fu.param);
     let stride = fu.pixel_count;
     if (fu.msaa.x > 1u) {
@@ -159,7 +159,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         if (fu.pass_index == FABS_WITH_TAIL) {
             tail_resolve(&s, px);
         }
-        state[px] = s;
+        store_state(px, s);
         return;
     }
     // longer: heapsort in place (O(n log n) loops; an in-place insertion sort composited only
@@ -172,7 +172,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if (fu.pass_index == FABS_WITH_TAIL) {
         tail_resolve(&s, px);
     }
-    state[px] = s;
+    store_state(px, s);
 }
 
 // Pixel `px`'s n slots (n at least 2) sorted by key in place: heapsort.

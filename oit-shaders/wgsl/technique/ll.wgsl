@@ -55,7 +55,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if (px >= fu.pixel_count) {
         return;
     }
-    var s = state[px];
+    var s = load_state(px);
     let head = atomicLoad(&heads[px]);
     let masked = fu.msaa.x > 1u;
     if (masked && head == LL_END) {
@@ -84,7 +84,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         for (var i = n; i > 0u; i--) {
             push_local(&s, bitcast<f32>(u32(list[i - 1u] >> 32u)), list_payloads[i - 1u]);
         }
-        state[px] = s;
+        store_state(px, s);
         return;
     }
     // longer than the private array: merge sort along the links, in place (S. Tatham's
@@ -144,5 +144,5 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     for (var a = first; a != LL_END; a = links[a]) {
         push_local(&s, bitcast<f32>(u32(keys[a] >> 32u)), payloads[a]);
     }
-    state[px] = s;
+    store_state(px, s);
 }

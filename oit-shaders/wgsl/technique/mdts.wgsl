@@ -107,7 +107,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if (px >= fu.pixel_count) {
         return;
     }
-    var s = state[px];
+    var s = load_state(px);
     let mode = fu.pass_index & 0xffu;
     if (mode == MDTS_64) {
         for (var i = 0u; i < fu.param; i++) {
@@ -120,7 +120,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         if ((fu.pass_index & MDTS_WITH_TAIL) != 0u) {
             tail_resolve(&s, px);
         }
-        state[px] = s;
+        store_state(px, s);
         return;
     }
     let alpha8 = (fu.pass_index >> 8u) & 0xffu;
@@ -136,5 +136,5 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if ((fu.pass_index & MDTS_WITH_TAIL) != 0u) {
         tail_resolve(&s, px);
     }
-    state[px] = s;
+    store_state(px, s);
 }

@@ -46,7 +46,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if (px >= fu.pixel_count) {
         return;
     }
-    var s = state[px];
+    var s = load_state(px);
     let base = px * fu.param;
     settle(px, atomicLoad(&acct[3u * px + 2u]));
     var at = 0u;
@@ -67,5 +67,5 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     }
     mlp_deepest[px] = deep;
     atomicStore(&acct[3u * px + 2u], at);
-    state[px] = s;
+    store_state(px, s);
 }

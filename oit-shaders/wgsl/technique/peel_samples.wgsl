@@ -25,9 +25,9 @@ fn accumulators_init(px: u32, halves: u32) {
 // Composites one layer (its payload, its coverage mask) into the covered samples' front (half 0,
 // nearest first) or back (half 1, farthest first) of pixel px; counts it in the state.
 fn accumulate(px: u32, halves: u32, payload: u32, mask: u32, half: u32) {
-    var s = state[px];
+    var s = load_state(px);
     s.captured += 1u;
-    state[px] = s;
+    store_state(px, s);
     accumulate_samples(px, halves, payload, mask, half);
 }
 
@@ -67,7 +67,7 @@ fn accumulate_samples(px: u32, halves: u32, payload: u32, mask: u32, half: u32) 
 // opaque colour, or the background), summed in sample order, times 1/N, into the state as
 // resolved; a pixel that captured nothing (or the heat map) is left to `finish_color`.
 fn accumulated(px: u32, halves: u32) {
-    var s = state[px];
+    var s = load_state(px);
     if (s.captured == 0u || fu.effect == EFFECT_COMPLEXITY) {
         return;
     }
@@ -85,5 +85,5 @@ fn accumulated(px: u32, halves: u32) {
         sum += f.xyz + f.w * back;
     }
     state_resolved(&s, sum * (1.0 / f32(n)));
-    state[px] = s;
+    store_state(px, s);
 }

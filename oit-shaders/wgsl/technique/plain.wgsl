@@ -26,7 +26,7 @@ fn plain_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
     if (px >= fu.pixel_count) {
         return;
     }
-    var s = state[px];
+    var s = load_state(px);
     let n = min(atomicLoad(&plain_counters[px]), fu.param);
     let stride = fu.pixel_count;
     if (n <= PLAIN_LOCAL) {
@@ -43,7 +43,7 @@ fn plain_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
         for (var i = 0u; i < n; i++) {
             push_local(&s, 0.0, u32(list[i] & 0xfffffffflu));
         }
-        state[px] = s;
+        store_state(px, s);
         return;
     }
     for (var i = n / 2u; i > 0u; i--) {
@@ -56,7 +56,7 @@ fn plain_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
     for (var i = 0u; i < n; i++) {
         push_local(&s, 0.0, u32(plain_slots[i * stride + px] & 0xfffffffflu));
     }
-    state[px] = s;
+    store_state(px, s);
 }
 
 fn plain_swap(px: u32, stride: u32, a: u32, b: u32) {

@@ -23,7 +23,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if (px >= fu.pixel_count) {
         return;
     }
-    var s = state[px];
+    var s = load_state(px);
     let lo = offsets[px];
     let hi = offsets[px + 1u];
     sort_entries(lo, hi - lo);
@@ -35,5 +35,5 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     for (var i = lo; i < hi; i++) {
         push_local(&s, bitcast<f32>(u32(keys[i] >> 32u)), payloads[i]);
     }
-    state[px] = s;
+    store_state(px, s);
 }

@@ -78,7 +78,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         resolve_masked(px, px, n);
         return;
     }
-    var s = state[px];
+    var s = load_state(px);
     for (var i = 0u; i < fu.param; i++) {
         let at = i * fu.pixel_count + px;
         let key = atomicLoad(&kbuf_slots[at]);
@@ -87,7 +87,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         }
         push_local(&s, bitcast<f32>(u32(key >> 32u)), atomicLoad(&kbuf_payloads[at]));
     }
-    state[px] = s;
+    store_state(px, s);
 }
 
 // coverage.wgsl's view of the slots: slot i of pixel px at i · pixels + px
