@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
-"""Side by side: each wall pair's ratio (steady wall median with the wall over without it) in
-each report named, and the walled frame's steady wall and GPU medians (ms).
-Usage: summary.py DIR... (each DIR holding a report.json of oit bench)"""
+"""Issue 38's wall pairs of several `oit bench` runs side by side (alternated binaries, rounds):
+for each pair, in each run, the ratio (steady wall median with the wall over without it, as
+opaque_ratio.py) and the walled frame's steady wall and GPU medians (ms).
+
+Usage: wall_pairs.py DIR... (each DIR holding a report.json of oit bench)"""
 import json
 import sys
 
