@@ -29,7 +29,8 @@ for k in keys:
     for p in data:
         if k in p:
             ratio, w, g = p[k]
-            cells.append(f"{ratio:6.3f} {w:6.2f} {g if g is None else round(g, 2):>7}")
+            gpu = "-" if g is None else f"{g:.2f}"
+            cells.append(f"{ratio:6.3f} {w:6.2f} {gpu:>7}")
         else:
             cells.append(" " * 22)
     print(f"{k[0]:22} {k[1]:10}" + "".join(f" {c:>22}" for c in cells))
