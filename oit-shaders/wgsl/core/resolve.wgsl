@@ -46,7 +46,7 @@ struct PixelState {
 // sectors as invocations: on an H100 the planes took wavg's walled 1024² frame from 1.65 to 1.32
 // ms of GPU time and every compute-path frame measured down by 0.1-0.3 ms
 // (bench/results/h100/count-draw-soa-1024); on lavapipe, whose invocations are CPU lanes, they
-// cost a few per cent (bench/results/cpu-lavapipe/classify-soa-512).
+// cost about a tenth of a hardware-path frame at 512² (bench/results/cpu-lavapipe/count-draw-soa-512).
 fn load_state(px: u32) -> PixelState {
     let n = fu.pixel_count;
     var s: PixelState;
