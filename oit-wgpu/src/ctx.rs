@@ -140,7 +140,9 @@ pub trait Driver {
     /// Which path this is.
     fn path(&self) -> oit_core::RasterPath;
     /// Runs one geometry pass (submitted, not waited for); returns where it counted the
-    /// fragments it generated.
+    /// fragments it generated. A render-pipeline pass counts them only where the count is read
+    /// (a frame's first scene pass, [`GpuCtx::count_wanted`]); elsewhere word 0 of what it
+    /// returns is left as it was.
     fn geometry_pass(
         &self,
         ctx: &mut GpuCtx<'_>,
@@ -310,6 +312,10 @@ pub struct GpuCtx<'a> {
     /// Whether the compute raster's pass being recorded runs `classify_main` first
     /// ([`oit_gpu::classifies_items`], set with the scene pass's group 0).
     pub classify_items: bool,
+    /// Whether the geometry pass being recorded must leave its fragment count in its counter
+    /// ([`GpuCtx::geometry_pass_with_count`]), as a frame's first scene pass always does: a
+    /// render-pipeline pass sums its count target only then ([`Driver::geometry_pass`]).
+    pub(crate) count_wanted: bool,
     /// Where the frame's tail pass left the merged count, copied into the totals at the end.
     merged_from: Option<wgpu::Buffer>,
     /// Per-pixel fragment counts the frame hands the caller as its `layers` (the reference's),
@@ -498,6 +504,7 @@ impl<'a> GpuCtx<'a> {
             gated_passes: 0,
             gated_pass: false,
             classify_items: false,
+            count_wanted: false,
             merged_from: None,
             layers_from: None,
             supersample: None,
@@ -801,7 +808,10 @@ impl<'a> GpuCtx<'a> {
         pass_index: u32,
         param: u32,
     ) -> Result<wgpu::Buffer, OitError> {
-        let generated = self.run_geometry_pass(driver, source, buffers, pass_index, param)?;
+        self.count_wanted = true;
+        let generated = self.run_geometry_pass(driver, source, buffers, pass_index, param);
+        self.count_wanted = false;
+        let generated = generated?;
         self.note_generated(&generated);
         let count = self.scratch("fragment count", 1, Init::Zero)?;
         self.encoder().copy_buffer_to_buffer(&generated.0, 0, &count, 0, 4);

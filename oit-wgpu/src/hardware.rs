@@ -489,6 +489,11 @@ impl Driver for RenderDriver<'_> {
             }
         }
         ctx.finish_timed("geometry", encoder)?;
+        if ctx.fragments != Fragments::Unset && !ctx.count_wanted {
+            // nothing reads this pass's count (a later pass of the frame, not sized from it): its
+            // counter is left as it was, unsummed, as oit-vulkan's passes leave theirs
+            return Ok(Generated(self.target.total.clone()));
+        }
         if drawn {
             // the count target holds nothing of this pass (its capture adds 0 in a frame's first
             // pass): the count-only draw's counter is the pass's count
