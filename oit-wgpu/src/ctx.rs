@@ -141,8 +141,8 @@ pub trait Driver {
     fn path(&self) -> oit_core::RasterPath;
     /// Runs one geometry pass (submitted, not waited for); returns where it counted the
     /// fragments it generated. A render-pipeline pass counts them only where the count is read
-    /// (a frame's first scene pass, [`GpuCtx::count_wanted`]); elsewhere word 0 of what it
-    /// returns is left as it was.
+    /// (a frame's first scene pass, a pass of [`GpuCtx::geometry_pass_with_count`]); elsewhere
+    /// word 0 of what it returns is left as it was.
     fn geometry_pass(
         &self,
         ctx: &mut GpuCtx<'_>,
