@@ -134,14 +134,8 @@ pub const OPAQUE_KEYS_BINDING: u32 = 16;
 pub const OPAQUE_RGB_BINDING: u32 = 17;
 
 /// Counters after the opaque colours: [masked, occluded, drawn] (drawn: the fragments the hardware
-/// path's count-only draw counted, [`OPAQUE_DRAWN_OFFSET`]).
+/// path's count-only draw counted, [`opaque_drawn_offset`]).
 pub const OPAQUE_COUNTER_WORDS: u64 = 3;
-
-/// The byte offset, from [`opaque_counters_offset`], of the counter in which the hardware path's
-/// count-only draw (`core/raster_hardware_early.wgsl`'s `hw_fs_count`) counts the fragments of a
-/// frame's first scene pass: its pass copies it to its fragment count instead of summing its
-/// count target, which that draw does not write.
-pub const OPAQUE_DRAWN_OFFSET: u64 = 8;
 
 /// Words of the opaque keys' buffer of a `width`×`height` frame at `samples` samples a pixel (2 a
 /// sample), and of its colours' (3 a sample, the counters, then a word a [`TILE`]×[`TILE`] tile:
@@ -165,6 +159,14 @@ pub fn opaque_tiles(width: u32, height: u32) -> u64 {
 /// after 3 words a sample (`opaque_counter` in prelude.wgsl).
 pub fn opaque_counters_offset(pixels: u64, samples: u32) -> u64 {
     pixels * u64::from(samples.max(1)) * 12
+}
+
+/// The byte offset in the opaque colours' buffer of the counter in which the hardware path's
+/// count-only draw (`core/raster_hardware_early.wgsl`'s `hw_fs_count`, `opaque_counter(2u)`)
+/// counts the fragments of a frame's first scene pass: its pass copies it to its fragment count
+/// instead of summing its count target, which that draw does not write.
+pub fn opaque_drawn_offset(pixels: u64, samples: u32) -> u64 {
+    opaque_counters_offset(pixels, samples) + 2 * 4
 }
 
 /// Words of one `PixelState` (resolve.wgsl): 16 for the composite, 7 for the ties; the state

@@ -747,7 +747,7 @@ impl<'a> VkCtx<'a> {
         let early = self.uniform.opaque[0] != 0 && samples == 1 && module != "kbuf";
         let mut draws = Vec::new();
         // whether the pass draws the count-only draw, which counts its fragments in a counter of
-        // the opaque colours' buffer (`oit_gpu::OPAQUE_DRAWN_OFFSET`), not in the count image
+        // the opaque colours' buffer (`oit_gpu::opaque_drawn_offset`), not in the count image
         let drawn = early && self.uniform.opaque[1] != 0;
         let (render_pass, framebuffer, clear) = if early {
             draws.push((
@@ -811,8 +811,7 @@ impl<'a> VkCtx<'a> {
             // the count image holds nothing of this pass (its capture adds 0 in a frame's first
             // pass): the count-only draw's counter is the pass's count
             let rgb = self.opaque.1.clone();
-            let offset = oit_gpu::opaque_counters_offset(u64::from(self.pixels), self.settings.samples)
-                + oit_gpu::OPAQUE_DRAWN_OFFSET;
+            let offset = oit_gpu::opaque_drawn_offset(u64::from(self.pixels), self.settings.samples);
             self.rec.fill(generated, 0);
             self.rec.copy_at(&rgb, offset, generated, 0, 4);
             return Ok(generated);

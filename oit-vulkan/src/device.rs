@@ -1286,7 +1286,7 @@ impl Gpu {
         let (blend, depth) = match fs {
             "depth_fs" => (Blend::Nothing, DepthTest::Fill),
             "hw_fs_early" => (Blend::AddRed, DepthTest::ReadOnly),
-            // counts by atomic adds (`oit_gpu::OPAQUE_DRAWN_OFFSET`'s counter), not into the
+            // counts by atomic adds (`oit_gpu::opaque_drawn_offset`'s counter), not into the
             // count image
             "hw_fs_count" => (Blend::Nothing, DepthTest::Off),
             _ => (Blend::AddRed, DepthTest::Off),

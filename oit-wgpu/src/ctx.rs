@@ -713,10 +713,9 @@ impl<'a> GpuCtx<'a> {
 
     /// Where the hardware path's count-only draw counts a first scene pass's fragments (in place
     /// of its count target): the opaque colours' buffer and the counter's byte offset in it
-    /// ([`oit_gpu::OPAQUE_DRAWN_OFFSET`]).
+    /// ([`oit_gpu::opaque_drawn_offset`]).
     pub(crate) fn drawn_counter(&self) -> (wgpu::Buffer, u64) {
-        let counters = oit_gpu::opaque_counters_offset(u64::from(self.pixels), self.settings.samples);
-        (self.opaque.1.clone(), counters + oit_gpu::OPAQUE_DRAWN_OFFSET)
+        (self.opaque.1.clone(), oit_gpu::opaque_drawn_offset(u64::from(self.pixels), self.settings.samples))
     }
 
     /// The frame's opaque image (keys, colours and counters), for the embedded pass to load the

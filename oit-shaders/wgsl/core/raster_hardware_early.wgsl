@@ -29,9 +29,9 @@ fn hw_fs_early(in: HwOut, @builtin(front_facing) front: bool) -> @location(0) ve
 // back face of a single-sided object excepted, as `hw_fs`) adds 1 to opaque_rgb's counter 2,
 // which the pass then copies to its fragment count in place of the count target's sum, and
 // `oit_held_back` counts those the cut holds back (`occluded`). Its pipeline writes no colour:
-// blending every fragment into the float count target cost the H100 about as much as the rest of
-// a walled frame's geometry (bench/results/h100/classify-plane-1024), where the adds to one word
-// cost next to nothing. No test, no shading, no capture.
+// blending every fragment into the float count target cost an H100 about a millisecond of each
+// 1024² hardware frame of `planes:64`, with the wall or without, where the adds to one word cost
+// next to nothing (bench/results/h100/count-draw-soa-1024). No test, no shading, no capture.
 @fragment
 fn hw_fs_count(in: HwOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     if (!hw_culled(in, front)) {
