@@ -75,6 +75,19 @@ pub fn classifies_items(uniform: &FrameUniform) -> bool {
     uniform.opaque[1] != 0 && uniform.opaque[3] == MARKS_WRITE && uniform.msaa[0] <= 1
 }
 
+/// The opaque pass's module (`opaque.wgsl`), whose passes time under their own label
+/// ([`geometry_label`]).
+pub const OPAQUE_MODULE: &str = "opaque";
+
+/// The GPU time label of a geometry pass of `module`: `"opaque"` for the opaque pass's two
+/// passes (`opaque.wgsl`, [`technique::opaque_pass`]), so a frame's pass times show what drawing
+/// its opaque part costs apart from the transparent capture; `"geometry"` for every other.
+/// Both backends label by it (oit-vulkan also times `classify_main` apart, as `"classify"`; in
+/// oit-wgpu it shares its pass's compute pass and label).
+pub fn geometry_label(module: &str) -> &'static str {
+    if module == OPAQUE_MODULE { "opaque" } else { "geometry" }
+}
+
 /// Group 0's binding of the loss accounting (`acct` in prelude.wgsl).
 pub const ACCT_BINDING: u32 = 15;
 

@@ -60,12 +60,12 @@ pub fn opaque_first<R: ?Sized, F: Frame<R>>(ctx: &mut F, rasters: &impl Rasters<
 pub fn opaque_pass<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> {
     let fragments = ctx.fragments();
     ctx.cut(false);
-    let count = ctx.geometry_pass_counted(raster, "opaque", &[], 0, 0)?;
-    ctx.geometry_pass(raster, "opaque", &[], 1, 0)?;
+    let count = ctx.geometry_pass_counted(raster, crate::OPAQUE_MODULE, &[], 0, 0)?;
+    ctx.geometry_pass(raster, crate::OPAQUE_MODULE, &[], 1, 0)?;
     // each compute-raster tile's farthest opaque depth, for the passes that follow to skip the
     // work items wholly behind it
     let tiles = oit_gpu_tiles(ctx.settings());
-    ctx.kernel_over("opaque", "opaque_tiles_main", &[], tiles, 0, 0, "opaque tiles")?;
+    ctx.kernel_over(crate::OPAQUE_MODULE, "opaque_tiles_main", &[], tiles, 0, 0, "opaque tiles")?;
     ctx.set_fragments(fragments);
     ctx.note_opaque(&count);
     ctx.cut(true);

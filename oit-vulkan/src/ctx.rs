@@ -723,9 +723,10 @@ impl<'a> VkCtx<'a> {
         ];
         if let Some(classify) = &classify {
             // an invocation an item, before the pass (`oit_gpu::classifies_items`)
-            raster.dispatch(&mut self.rec, classify, &sets, false, false)?;
+            raster.dispatch(&mut self.rec, "classify", classify, &sets, false, false)?;
         }
-        raster.dispatch(&mut self.rec, &pipeline, &sets, per_pixel, self.gated_pass)?;
+        let label = oit_gpu::geometry_label(module);
+        raster.dispatch(&mut self.rec, label, &pipeline, &sets, per_pixel, self.gated_pass)?;
         Ok(&raster.generated)
     }
 
@@ -788,7 +789,7 @@ impl<'a> VkCtx<'a> {
         let raster_set = raster.bindings();
         let uniform = self.uniform;
         self.rec.draws(
-            "geometry",
+            oit_gpu::geometry_label(module),
             render_pass,
             framebuffer,
             &clear,

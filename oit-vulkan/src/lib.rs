@@ -31,8 +31,10 @@
 //! **GPU time.** Where the device has timestamps ([`Gpu::has_timestamps`]: not on a CPU device
 //! such as lavapipe unless `OIT_GPU_TIMESTAMPS=1`, as on oit-wgpu) every dispatch and draw is
 //! timed by a pair of timestamp queries, and a frame's `gpu_ms` is their sum, `gpu_pass_ms` the
-//! same by label (oit-wgpu's: "geometry", the kernel's entry point, "resolve"; a blend
-//! capture's draw under its fragment entry point); fills, copies and uploads are not timed.
+//! same by label (oit-wgpu's: "geometry", the kernel's entry point, "resolve"; the opaque
+//! pass's two geometry passes under "opaque" and `classify_main` under "classify",
+//! `oit_gpu::geometry_label`; a blend capture's draw under its fragment entry point); fills,
+//! copies and uploads are not timed.
 //!
 //! **What is refused** (`OitError::Unsupported`, naming what is missing): the hardware path on a
 //! device without what it needs; a blend capture into a format the device cannot blend into, or

@@ -155,17 +155,19 @@ impl ComputeRaster {
     }
 
     /// Records the geometry pass's dispatch of `pipeline` (`raster_main`, a workgroup per item,
-    /// where `per_pixel`; else `raster_loop_main`, an invocation per item) with `sets`.
+    /// where `per_pixel`; else `raster_loop_main`, an invocation per item) with `sets`, its GPU
+    /// time under `label`.
     pub(crate) fn dispatch(
         &self,
         rec: &mut Recorder<'_>,
+        label: &str,
         pipeline: &crate::device::Pipeline,
         sets: &[SetData<'_>],
         per_pixel: bool,
         gated: bool,
     ) -> Result<(), OitError> {
         rec.dispatch_indirect(
-            "geometry",
+            label,
             pipeline,
             sets,
             if gated { &self.gated } else { &self.args },

@@ -50,3 +50,48 @@ fn gpu_ms_is_the_sum_of_the_passes() {
         assert_eq!(unique.len(), labels.len(), "{t}: {labels:?}");
     }
 }
+
+/// A frame with an opaque part times the opaque pass apart (`oit_gpu::geometry_label`):
+/// `opaque` beside `geometry` on both raster paths, `classify` before the compute path's first
+/// scene pass over it, and the labels still sum to `gpu_ms`.
+#[test]
+fn the_opaque_pass_is_timed_apart() {
+    let Some(vk) = oit_vulkan::backend_or_skip("the_opaque_pass_is_timed_apart") else { return };
+    if !vk.gpu().unwrap().has_timestamps() {
+        if std::env::var_os("OIT_GPU_TIMESTAMPS").is_none() {
+            let exe = std::env::current_exe().expect("the test binary");
+            let status = std::process::Command::new(exe)
+                .args(["the_opaque_pass_is_timed_apart", "--exact", "--test-threads=1"])
+                .env("OIT_GPU_TIMESTAMPS", "1")
+                .status()
+                .expect("the test binary runs again");
+            assert!(status.success(), "the_opaque_pass_is_timed_apart with OIT_GPU_TIMESTAMPS=1 failed");
+        }
+        return;
+    }
+    let scene = load_scene("wall:0.4:planes:4").unwrap();
+    let cam = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();
+    for raster in [oit_core::RasterPath::Compute, oit_core::RasterPath::Hardware] {
+        let s = Settings {
+            width: 32,
+            height: 32,
+            technique: Technique::Fabs { k: None },
+            raster: Some(raster),
+            ..Settings::default()
+        };
+        let stats = vk.render(&scene, &cam, &s).unwrap_or_else(|e| panic!("{raster}: {e}")).stats;
+        let labels: Vec<&str> = stats.gpu_pass_ms.iter().map(|(l, _)| l.as_str()).collect();
+        println!("{raster}: {:?}", stats.gpu_pass_ms);
+        assert!(stats.occluded > 0, "{raster}: the wall holds nothing back");
+        let mut wanted = vec!["opaque", "geometry"];
+        if raster == oit_core::RasterPath::Compute {
+            wanted.push("classify");
+        }
+        for label in wanted {
+            assert!(labels.contains(&label), "{raster}: no '{label}' in {labels:?}");
+        }
+        let total = stats.gpu_ms.unwrap_or_else(|| panic!("{raster}: timestamps but no gpu_ms"));
+        let sum: f64 = stats.gpu_pass_ms.iter().map(|(_, ms)| ms).sum();
+        assert!((total - sum).abs() <= 1e-9 * total, "{raster}: gpu_ms {total} but the passes sum to {sum}");
+    }
+}

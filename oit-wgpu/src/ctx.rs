@@ -309,6 +309,9 @@ pub struct GpuCtx<'a> {
     /// Whether the geometry pass being recorded is gated: its driver draws or dispatches from
     /// its gated arguments.
     pub gated_pass: bool,
+    /// The GPU time label of the geometry pass being recorded ([`oit_gpu::geometry_label`]:
+    /// `"opaque"` for the opaque pass's, else `"geometry"`).
+    pub geometry_label: &'static str,
     /// Whether the compute raster's pass being recorded runs `classify_main` first
     /// ([`oit_gpu::classifies_items`], set with the scene pass's group 0).
     pub classify_items: bool,
@@ -503,6 +506,7 @@ impl<'a> GpuCtx<'a> {
             uniform_slot: 0,
             gated_passes: 0,
             gated_pass: false,
+            geometry_label: "geometry",
             classify_items: false,
             count_wanted: false,
             merged_from: None,

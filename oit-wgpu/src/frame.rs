@@ -105,7 +105,8 @@ impl<'d> Frame<dyn Driver + 'd> for GpuCtx<'_> {
         pass: u32,
         param: u32,
     ) -> Result<(), OitError> {
-        GpuCtx::geometry_pass(self, raster, module_source(module)?, buffers, pass, param)
+        let source = module_source(module)?;
+        labelled(self, module, |ctx| GpuCtx::geometry_pass(ctx, raster, source, buffers, pass, param))
     }
 
     fn geometry_pass_counted(
@@ -116,7 +117,8 @@ impl<'d> Frame<dyn Driver + 'd> for GpuCtx<'_> {
         pass: u32,
         param: u32,
     ) -> Result<wgpu::Buffer, OitError> {
-        self.geometry_pass_with_count(raster, module_source(module)?, buffers, pass, param)
+        let source = module_source(module)?;
+        labelled(self, module, |ctx| ctx.geometry_pass_with_count(raster, source, buffers, pass, param))
     }
 
     fn geometry_pass_if(
@@ -128,7 +130,10 @@ impl<'d> Frame<dyn Driver + 'd> for GpuCtx<'_> {
         param: u32,
         flag: &wgpu::Buffer,
     ) -> Result<(), OitError> {
-        GpuCtx::geometry_pass_if(self, raster, module_source(module)?, buffers, pass, param, flag)
+        let source = module_source(module)?;
+        labelled(self, module, |ctx| {
+            GpuCtx::geometry_pass_if(ctx, raster, source, buffers, pass, param, flag)
+        })
     }
 
     fn fragments(&self) -> GpuFragments {
@@ -190,4 +195,13 @@ impl<'d> Frame<dyn Driver + 'd> for GpuCtx<'_> {
     fn note_layers(&mut self, counts: &wgpu::Buffer) {
         self.layers_from = Some(counts.clone());
     }
+}
+
+/// Runs `pass` (a geometry pass of `module`) with its GPU time labelled as
+/// [`oit_gpu::geometry_label`] names it, then puts the default label back.
+fn labelled<T>(ctx: &mut GpuCtx<'_>, module: &str, pass: impl FnOnce(&mut GpuCtx<'_>) -> T) -> T {
+    ctx.geometry_label = oit_gpu::geometry_label(module);
+    let out = pass(ctx);
+    ctx.geometry_label = "geometry";
+    out
 }

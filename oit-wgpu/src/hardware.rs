@@ -446,10 +446,11 @@ impl Driver for RenderDriver<'_> {
         let depth = early.and_then(|_| self.target.depth.get());
         let index = ctx.passes;
         let indirect = if ctx.gated_pass { self.gate.as_ref().map(|g| &g.to) } else { None };
+        let label = ctx.geometry_label;
         let mut encoder = ctx.take_encoder();
         {
             let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("geometry"),
+                label: Some(label),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                     view: &self.target.count_view,
                     depth_slice: None,
@@ -488,7 +489,7 @@ impl Driver for RenderDriver<'_> {
                 (self.draw.borrow_mut())(&mut rpass, &GeometryPass { index, bind_group: group0, indirect });
             }
         }
-        ctx.finish_timed("geometry", encoder)?;
+        ctx.finish_timed(label, encoder)?;
         if ctx.fragments != Fragments::Unset && !ctx.count_wanted {
             // nothing reads this pass's count (a later pass of the frame, not sized from it): its
             // counter is left as it was, unsummed, as oit-vulkan's passes leave theirs

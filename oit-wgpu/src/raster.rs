@@ -608,6 +608,7 @@ impl Driver for ComputeRaster {
             None
         };
         let args = if ctx.gated_pass { &self.gated } else { &self.args };
+        let label = ctx.geometry_label;
         let mut encoder = ctx.take_encoder();
         encoder.clear_buffer(&self.generated, 0, None);
         let writes = ctx.render_timestamps().map(|w| wgpu::ComputePassTimestampWrites {
@@ -617,7 +618,7 @@ impl Driver for ComputeRaster {
         });
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("geometry"),
+                label: Some(label),
                 timestamp_writes: writes,
             });
             pass.set_bind_group(0, group0, &[]);
@@ -631,7 +632,7 @@ impl Driver for ComputeRaster {
             pass.set_pipeline(&pipeline);
             pass.dispatch_workgroups_indirect(args, if per_pixel { 0 } else { ARGS_PER_ITEM });
         }
-        ctx.finish_timed("geometry", encoder)?;
+        ctx.finish_timed(label, encoder)?;
         Ok(Generated(self.generated.clone()))
     }
 }
