@@ -40,7 +40,8 @@ use crate::output::{self, Table};
 )]
 pub struct CompareArgs {
     /// Comma-separated techniques (e.g. dp,bdp2,fabs:16), or all (every technique but the
-    /// reference, in catalogue order). Names: reference, plain, dp, ddp, wavg, wsum, bdp, bdp:P, bdp2,
+    /// reference, in catalogue order). Names: reference, plain, dp, ddp, wavg, wsum, wboit, mboit,
+    /// bdp, bdp:P, bdp2,
     /// adp, mdts[:K], mdts64[:K], fabs[:K], mlp:M, dfb, ll, kbuf[:K] (vulkan's hardware path on a
     /// device with fragment shader interlock; not in all).
     #[arg(short, long, value_name = "LIST|all", default_value = "all")]

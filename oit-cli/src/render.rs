@@ -41,7 +41,8 @@ use crate::output::{self, CameraJson};
 )]
 pub struct RenderArgs {
     /// The technique: reference, plain (unsorted alpha blending in primitive order, the
-    /// baseline), dp, ddp, wavg, wsum, bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K],
+    /// baseline), dp, ddp, wavg, wsum, wboit (weighted blended, McGuire & Bavoil 2013), mboit
+    /// or mboit:4 (moment-based, Münstermann et al. 2018), bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K],
     /// fabs[:K], mlp:M, dfb (dynamic fragment buffer, Maule et al. 2012), ll (per-pixel linked
     /// lists, Yang et al. 2010) or kbuf[:K] (the ordered k-buffer: --backend vulkan --raster
     /// hardware on a device with fragment shader interlock) (K, M, P from 1 to 65536; K left out is sized from the scene; dfb

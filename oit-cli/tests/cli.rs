@@ -564,6 +564,23 @@ fn sweep_summary_table() {
     }
 }
 
+/// Every technique of the catalogue is named where a user picks one: `render --technique`'s and
+/// `compare --techniques`' help (wboit and mboit were missing from both after they were added).
+#[test]
+fn help_names_every_technique() {
+    for command in ["render", "compare"] {
+        let out = oit(&[command, "--help"]);
+        assert!(out.status.success());
+        let text = stdout(&out);
+        for kind in oit_core::TechniqueKind::ALL {
+            let name = serde_json::to_value(kind).expect("a kind serializes");
+            let name = name.as_str().expect("a kind serializes as its name");
+            let named = text.split(|c: char| !c.is_ascii_alphanumeric()).any(|word| word == name);
+            assert!(named, "`oit {command} --help` does not name {name}");
+        }
+    }
+}
+
 #[test]
 fn help_mentions_every_option() {
     let shared = [
