@@ -294,13 +294,7 @@ pub fn epr_bound(plan: &Plan, stats: &SceneStats) -> (f64, String) {
                 if fixed.is_some_and(|k| k < n) { ", and layers past K lost" } else { "" }
             ),
         ),
-        Technique::WeightedAverage
-        | Technique::WeightedSum
-        | Technique::Wboit
-        | Technique::Mboit { .. }
-        | Technique::Plain => {
-            (two, "order ignored: exact at one fragment, any pixel of 2 or more can differ".into())
-        }
+        Technique::Plain => (two, ORDER_IGNORED.into()),
         // the colour mode keeps alpha in 7 bits (counted as `quantized`): a pixel of one fragment
         // can differ too
         Technique::Bdp { .. } if plan.bdp_color => (
@@ -322,8 +316,19 @@ pub fn epr_bound(plan: &Plan, stats: &SceneStats) -> (f64, String) {
              can differ"
                 .into(),
         ),
+        // the order-free sums (`Technique::sums`): exact at a pixel of one fragment, as plain;
+        // a technique with no arm here and no sums gets no bound (any covered pixel can differ)
+        t if t.sums().is_some() => (two, ORDER_IGNORED.into()),
+        t => (
+            if covered(stats) > 0 { 1.0 } else { 0.0 },
+            format!("no bound known for {t}: any covered pixel can differ"),
+        ),
     }
 }
+
+/// Why a technique that ignores order (plain, and the order-free sums) is bounded by the share of
+/// pixels of two fragments or more.
+const ORDER_IGNORED: &str = "order ignored: exact at one fragment, any pixel of 2 or more can differ";
 
 /// The calibrated technique whose model predicts `technique`: itself, or its family sized from the
 /// count (`fabs:K` → `fabs`, `mdts64:K` → `mdts64`); `None` for parameters never calibrated.

@@ -91,7 +91,7 @@ mod scene;
 pub mod scene_set;
 mod settings;
 pub mod setup;
-mod technique;
+pub mod technique;
 pub mod texture;
 pub mod tiling;
 
@@ -114,7 +114,8 @@ pub use settings::{
     check_threads, max_threads, parse_memory, parse_rgb, parse_size,
 };
 pub use technique::{
-    BoundsMode, Effect, KNOWN_TECHNIQUES, MAX_PARAMETER, MBOIT_MOMENTS, RasterPath, Technique, TechniqueKind,
+    BoundsMode, Effect, KNOWN_TECHNIQUES, MAX_PARAMETER, MBOIT_MOMENTS, RasterPath, Sums, Technique,
+    TechniqueKind,
 };
 pub use texture::{Texture, Wrap};
 

@@ -108,10 +108,15 @@ impl Array {
     }
 }
 
-/// The most triangles a scene `mboit` renders may have: its i64 moment sums hold 2²² fragments a
-/// pixel, with four moments or six (every power of the warped depth is at most 2²⁰ units, so
-/// z⁶'s sum needs no more headroom than z's).
-pub const MBOIT_MAX_TRIANGLES: u64 = 1 << 22;
+/// How `technique` runs as an order-free sum: the plan's matches over the techniques list every
+/// other technique by name and leave these to their one entry ([`Technique::sums`]), so a
+/// technique of that family is not listed here. A technique that is neither is a bug that every
+/// plan test finds (`every_technique_has_a_plan`).
+fn sums_of(technique: Technique) -> crate::Sums {
+    technique
+        .sums()
+        .unwrap_or_else(|| panic!("{technique} has no arm in the plan and is not an order-free sum"))
+}
 
 /// The plan of one frame: see the module docs.
 #[derive(Clone, Debug, PartialEq)]
@@ -224,18 +229,18 @@ impl Plan {
                 ),
             });
         }
-        // mboit's moment sums are i64 integers, |a·zᵏ| < 2⁴¹ a fragment (a < 2²¹, |zᵏ| ≤ 2²⁰
-        // units for every k ≤ 6, so mboit:6 as mboit:4): 2²² fragments fit, and a
-        // pixel holds at most one fragment a triangle, so a scene of more triangles could wrap a
-        // sum in silence and is refused (wboit's u64 sums, α·w·c < 2³⁵ a fragment, hold 2²⁹:
-        // above `Scene::MAX_TRIANGLES`, which scenes are held to)
-        if matches!(technique, Technique::Mboit { .. }) && scene.triangle_count() > MBOIT_MAX_TRIANGLES {
+        // an order-free sum technique's integer sums hold so many fragments a pixel, and a pixel
+        // holds at most one fragment a triangle: a scene of more triangles could wrap a sum in
+        // silence, and is refused (`Sums::max_triangles`)
+        if let Some(limit) = technique.sums().and_then(|s| s.max_triangles)
+            && scene.triangle_count() > limit
+        {
             return Err(OitError::Unsupported {
                 backend: backend.into(),
                 what: format!(
-                    "{technique} on a scene of {} triangles: its per-pixel moment sums hold \
-                     {MBOIT_MAX_TRIANGLES} fragments a pixel, and a pixel can take one a triangle; \
-                     use an exact technique (ll, dfb) or split the scene",
+                    "{technique} on a scene of {} triangles: its per-pixel sums hold {limit} fragments \
+                     a pixel, and a pixel can take one a triangle; use an exact technique (ll, dfb) or \
+                     split the scene",
                     scene.triangle_count()
                 ),
             });
@@ -576,14 +581,6 @@ impl Plan {
                 per_pixel("blended sums (colour target)", colour, targets),
                 per_pixel("fragment count", 4, targets),
             ],
-            Technique::WeightedAverage | Technique::WeightedSum => vec![per_pixel("weighted sums", 8, 5)],
-            // Σ α·w·r, Σ α·w·g, Σ α·w·b, Σ α·w, Σ −ln(1 − α) and the count, u64 each
-            Technique::Wboit => vec![per_pixel("weighted blended sums", 8, 6)],
-            // the optical depth and m moments (first pass; m = 4 or 6), Σ T·α·r, g, b, Σ T·α and
-            // the count (second pass), u64 each: 10 or 12 words a pixel
-            Technique::Mboit { m } => {
-                vec![per_pixel("moments and transmittance-weighted sums", 8, u64::from(m) + 6)]
-            }
             // (in `--hardware-capture blend`'s multisampled targets, a pixel's buckets a sample)
             Technique::Bdp { .. } if self.bdp_color => {
                 vec![bounds, per_pixel("colour buckets", 4, u64::from(BDP_COLOR_SUBINTERVALS) * targets)]
@@ -638,6 +635,8 @@ impl Plan {
                     fixed: 0,
                 },
             ],
+            // the order-free sums (`Technique::sums`): their one array of u64 sums
+            t => vec![per_pixel(sums_of(t).array, 8, sums_of(t).words)],
         }
     }
 
@@ -736,19 +735,13 @@ impl Plan {
             Technique::Ddp => passes.push((PassKind::Peel, peels(layers.div_ceil(2).saturating_add(1)))),
             Technique::Mlp { m } => passes.push((PassKind::Peel, peels(layers.div_ceil(m.max(1)).max(1)))),
             Technique::Bdp { .. } => passes.push((PassKind::Capture, self.bdp_capture_passes().max(1))),
-            // the moments, then the transmittance-weighted colours
-            Technique::Mboit { .. } => passes.push((PassKind::Capture, 2)),
             Technique::Adp => {
                 passes.push((PassKind::Histogram, 1));
                 passes.push((PassKind::Batch, self.adp_batches(bins)));
             }
-            Technique::Plain
-            | Technique::WeightedAverage
-            | Technique::WeightedSum
-            | Technique::Wboit
-            | Technique::Mdts { .. }
-            | Technique::Mdts64 { .. }
-            | Technique::Kbuf { .. } => passes.push((PassKind::Capture, 1)),
+            Technique::Plain | Technique::Mdts { .. } | Technique::Mdts64 { .. } | Technique::Kbuf { .. } => {
+                passes.push((PassKind::Capture, 1))
+            }
             Technique::Fabs { .. } => {
                 passes.push((PassKind::Capture, 1));
                 // a pixel past K keeps its K nearest by (depth, primitive id): two more passes,
@@ -757,6 +750,9 @@ impl Plan {
                     passes.push((PassKind::Overflow, 2));
                 }
             }
+            // the order-free sums (`Technique::sums`): their passes (mboit's moments, then its
+            // weighted colours)
+            t => passes.push((PassKind::Capture, sums_of(t).passes)),
         }
         // the tail: one pass over the fragments behind each overflowing pixel's K-th nearest, run
         // where some pixel holds more than K
@@ -1000,6 +996,30 @@ mod tests {
         Plan::new("test", &load_scene("planes:4").unwrap(), &s)
     }
 
+    /// Every technique, the reference and kbuf included, has arrays and a schedule: the order-free
+    /// sums through their one entry (`Technique::sums`: its array and passes), every other through
+    /// its own arm (a technique in neither panics in `sums_of`). Fails when a sums technique's
+    /// array or pass count stops being the entry's.
+    #[test]
+    fn every_technique_has_a_plan() {
+        let mut all = Technique::all();
+        all.extend([Technique::Reference, Technique::Kbuf { k: Some(4) }, Technique::Mboit { m: 6 }]);
+        for t in all {
+            let p = plan(&t.to_string(), |_| {}).unwrap_or_else(|e| panic!("{t}: {e}"));
+            let arrays = p.arrays(Counted { deepest: 4, fragments: 100 });
+            let schedule = p.schedule(4, 4);
+            assert!(!arrays.is_empty() && !schedule.is_empty(), "{t}");
+            if let Some(sums) = t.sums() {
+                assert_eq!(arrays.len(), 1, "{t}: one array of sums");
+                assert_eq!(
+                    (arrays[0].name, arrays[0].element_bytes, arrays[0].per_pixel),
+                    (sums.array, 8, sums.words)
+                );
+                assert_eq!(schedule, [(PassKind::Capture, sums.passes)], "{t}");
+            }
+        }
+    }
+
     #[test]
     fn refusals_are_the_same_for_every_backend() {
         assert!(plan("mdts", |s| s.effect = Effect::Fresnel).is_err());
@@ -1234,8 +1254,10 @@ mod tests {
             );
             crate::Scene::from_meshes("many", vec![mesh], glam::Vec4::ONE)
         };
-        let e = Plan::new("test", &scene(MBOIT_MAX_TRIANGLES + 1), &s).unwrap_err().to_string();
-        assert!(e.contains("moment sums") && e.contains("4194305 triangles"), "{e}");
-        assert!(Plan::new("test", &scene(MBOIT_MAX_TRIANGLES), &s).is_ok());
+        let e = Plan::new("test", &scene(crate::technique::mboit::MBOIT_MAX_TRIANGLES + 1), &s)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("per-pixel sums hold 4194304") && e.contains("4194305 triangles"), "{e}");
+        assert!(Plan::new("test", &scene(crate::technique::mboit::MBOIT_MAX_TRIANGLES), &s).is_ok());
     }
 }

@@ -8,6 +8,9 @@ use serde::Serialize;
 
 use crate::OitError;
 
+pub mod mboit;
+pub mod wboit;
+
 /// A technique and its parameters.
 ///
 /// Parameters left out (`fabs`, `mdts`, `mdts64`) are sized from the scene: a counting pass
@@ -144,6 +147,31 @@ impl TechniqueKind {
     }
 }
 
+/// An order-free sum technique's frame ([`Technique::sums`]): one per-pixel array of `words` u64
+/// sums, zeroed; `passes` geometry passes of `module`'s `capture` (pass index 0, 1, ...), each over
+/// every fragment the frame keeps, adding into the sums with integer atomics, so that no sum
+/// depends on the order fragments arrive in; then `module`'s `composite_main`, a pixel an
+/// invocation, composites each pixel's sums over what lies behind it. Such a technique never
+/// orders fragments: it is refused with the effects that need an order (translucency, Fresnel),
+/// and it is exact only at a pixel of one fragment. oit-cpu runs the same sums in its capture
+/// (`technique/<name>.rs`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Sums {
+    /// The array's name in [`Plan::arrays`](crate::plan::Plan::arrays).
+    pub array: &'static str,
+    /// u64 words a pixel.
+    pub words: u64,
+    /// Geometry passes a frame.
+    pub passes: u32,
+    /// The WGSL module of oit-shaders the passes and the composite run.
+    pub module: &'static str,
+    /// What the passes and the composite get as their parameter (`fu.param`).
+    pub param: u32,
+    /// The most triangles a scene may have for the sums not to wrap (a pixel takes at most a
+    /// fragment a triangle); a larger scene is refused. `None`: any scene oit loads.
+    pub max_triangles: Option<u64>,
+}
+
 /// The names `parse` accepts, for messages.
 pub const KNOWN_TECHNIQUES: &str = "reference, plain, dp, ddp, wavg, wsum, wboit, mboit[:4|6], bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K], fabs[:K], mlp:M, dfb, ll, kbuf[:K]";
 
@@ -196,6 +224,36 @@ impl Technique {
             });
         }
         Ok(out)
+    }
+
+    /// How the technique runs where it is an order-free sum ([`Sums`]): `wavg`, `wsum`, `wboit`
+    /// and `mboit`; `None` for the others. What the plan allocates and schedules, the scenes it
+    /// refuses, the error bound `--technique auto` gives it and both GPU backends' frame come from
+    /// this one entry, so a technique of this family is registered here and nowhere else outside
+    /// its own files (docs/architecture.md, "Adding a technique").
+    pub fn sums(&self) -> Option<Sums> {
+        let sums = |array, words, passes, module, param| Sums {
+            array,
+            words,
+            passes,
+            module,
+            param,
+            max_triangles: None,
+        };
+        match *self {
+            // Σα·r, Σα·g, Σα·b, Σα and the count; param bit 0: average (1) or sum (0)
+            Technique::WeightedAverage => Some(sums("weighted sums", 5, 1, "weighted", 1)),
+            Technique::WeightedSum => Some(sums("weighted sums", 5, 1, "weighted", 0)),
+            // Σ α·w·r, Σ α·w·g, Σ α·w·b, Σ α·w, Σ −ln(1 − α) and the count
+            Technique::Wboit => Some(sums("weighted blended sums", 6, 1, "wboit", 0)),
+            // the optical depth and m moments (first pass), Σ T·α·r, g, b, Σ T·α and the count
+            // (second pass): m + 6 words; param: m
+            Technique::Mboit { m } => Some(Sums {
+                max_triangles: Some(mboit::MBOIT_MAX_TRIANGLES),
+                ..sums("moments and transmittance-weighted sums", u64::from(m) + 6, 2, "mboit", m)
+            }),
+            _ => None,
+        }
     }
 
     /// The kind, parameters dropped.

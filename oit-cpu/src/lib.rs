@@ -279,10 +279,7 @@ impl<'s> CpuPrepared<'s> {
 pub(crate) fn state_array_extra(settings: &Settings) -> u64 {
     let extra = (std::mem::size_of::<resolve::PixelState>() as u64)
         .saturating_sub(oit_core::plan::RESOLVE_STATE_BYTES);
-    let weighted = matches!(
-        settings.technique,
-        Technique::WeightedAverage | Technique::WeightedSum | Technique::Wboit | Technique::Mboit { .. }
-    );
+    let weighted = settings.technique.sums().is_some();
     let lends = match settings.technique {
         Technique::Reference | Technique::Plain | Technique::Fabs { .. } | Technique::Kbuf { .. } => false,
         // their sums resolve in place, but for the heat map, whose counts go into states

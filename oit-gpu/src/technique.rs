@@ -23,10 +23,6 @@ pub fn render<R: ?Sized, F: Frame<R>>(ctx: &mut F, rasters: &impl Rasters<R>) ->
         Technique::Fabs { .. } => fabs(ctx, rasters.scene()),
         Technique::Dp => dp(ctx, rasters.scene()),
         Technique::Ddp => ddp(ctx, rasters.scene()),
-        Technique::WeightedAverage => weighted(ctx, rasters.scene(), true),
-        Technique::WeightedSum => weighted(ctx, rasters.scene(), false),
-        Technique::Wboit => wboit(ctx, rasters.scene()),
-        Technique::Mboit { m } => mboit(ctx, rasters.scene(), m),
         Technique::Bdp { .. } => bdp(ctx, rasters),
         Technique::Adp => adp(ctx, rasters),
         Technique::Mdts { .. } => mdts(ctx, rasters.scene(), false),
@@ -35,6 +31,8 @@ pub fn render<R: ?Sized, F: Frame<R>>(ctx: &mut F, rasters: &impl Rasters<R>) ->
         Technique::Dfb => dfb(ctx, rasters.scene()),
         Technique::Ll => ll(ctx, rasters.scene()),
         Technique::Kbuf { .. } => kbuf(ctx, rasters.scene()),
+        // the order-free sums, one frame for all ([`Technique::sums`])
+        t => sums(ctx, rasters.scene(), t),
     }
 }
 
@@ -458,39 +456,24 @@ fn fabs<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError>
     storage.finish()
 }
 
-/// `wavg` (`average`) and `wsum`: one pass summing each pixel's premultiplied colour, alpha and
-/// count in 64-bit integers (5 u64 a pixel), composited by the weighted formula. Translucency and
-/// Fresnel are refused by the plan.
-fn weighted<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R, average: bool) -> Result<(), OitError> {
+/// An order-free sum technique's frame, as its entry says ([`Technique::sums`]: `wavg`, `wsum`,
+/// `wboit`, `mboit`): the plan's one array of u64 sums, zeroed; the entry's geometry passes of its
+/// module (pass index 0, 1, ...: mboit's moments, then its transmittance-weighted colours); its
+/// `composite_main` over every pixel. The sums are integers added by atomics, so the frame is the
+/// same whatever order fragments arrive in. Translucency and Fresnel are refused by the plan.
+fn sums<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R, technique: Technique) -> Result<(), OitError> {
+    let Some(entry) = technique.sums() else {
+        return Err(OitError::Unsupported {
+            backend: "the GPU layer".into(),
+            what: format!("{technique}: it has no GPU frame"),
+        });
+    };
     let mut storage = Storage::new(ctx, 0);
-    let sums = storage.buffer(ctx, "weighted sums", Init::Zero)?;
-    ctx.geometry_pass(raster, "weighted", &[&sums], 0, 0)?;
-    ctx.pixel_kernel("weighted", "composite_main", &[&sums], 0, u32::from(average))?;
-    storage.finish()
-}
-
-/// Weighted blended OIT (McGuire & Bavoil 2013): one pass summing each pixel's Σ α·w·c, Σ α·w,
-/// optical depth and count in 64-bit integers (6 u64 a pixel), composited as the weighted mean
-/// colour under the exact coverage. Translucency and Fresnel are refused by the plan.
-fn wboit<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> {
-    let mut storage = Storage::new(ctx, 0);
-    let sums = storage.buffer(ctx, "weighted blended sums", Init::Zero)?;
-    ctx.geometry_pass(raster, "wboit", &[&sums], 0, 0)?;
-    ctx.pixel_kernel("wboit", "composite_main", &[&sums], 0, 0)?;
-    storage.finish()
-}
-
-/// Moment-based OIT (Münstermann et al. 2018) with `m` = 4 or 6 power moments (the WGSL's
-/// `fu.param`): a first pass sums each pixel's optical depth and its moments, a second weighs each
-/// fragment by the transmittance the moments bound in front of it and sums Σ T·α·c, Σ T·α and the
-/// count (m + 6 u64 a pixel, one array); composited as the weighted colours under the exact total coverage. Translucency and
-/// Fresnel are refused by the plan.
-fn mboit<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R, m: u32) -> Result<(), OitError> {
-    let mut storage = Storage::new(ctx, 0);
-    let sums = storage.buffer(ctx, "moments and transmittance-weighted sums", Init::Zero)?;
-    ctx.geometry_pass(raster, "mboit", &[&sums], 0, m)?;
-    ctx.geometry_pass(raster, "mboit", &[&sums], 1, m)?;
-    ctx.pixel_kernel("mboit", "composite_main", &[&sums], 0, m)?;
+    let sums = storage.buffer(ctx, entry.array, Init::Zero)?;
+    for pass in 0..entry.passes {
+        ctx.geometry_pass(raster, entry.module, &[&sums], pass, entry.param)?;
+    }
+    ctx.pixel_kernel(entry.module, "composite_main", &[&sums], 0, entry.param)?;
     storage.finish()
 }
 

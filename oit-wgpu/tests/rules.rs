@@ -4,6 +4,7 @@
 
 use oit_core::composite::linear_to_srgb8;
 use oit_core::rules::*;
+use oit_core::technique::wboit::{WBOIT_OPTICAL_DEPTH, wboit_weight};
 
 const KERNEL: &str = r#"
 @group(0) @binding(0) var<storage, read_write> cases: array<vec4<u32>>;
@@ -256,7 +257,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
 }
 
 /// wboit's per-fragment integers: `wboit_weight` of `wboit.wgsl` and the optical-depth table of
-/// `wboit_table.wgsl` (the text itself, cut from the file) against `oit_core::rules::wboit_weight` and
+/// `wboit_table.wgsl` (the text itself, cut from the file) against `oit_core::technique::wboit::wboit_weight` and
 /// `WBOIT_OPTICAL_DEPTH`, over every table entry and depths at and around the 10-bit steps, the
 /// planes, −0, NaN and beyond [0, 1]. Fails when an entry of either table or the weight's formula
 /// on either side is changed.
@@ -307,15 +308,15 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
 }
 
 /// mboit's per-fragment arithmetic: `mboit_power` and `mboit_share_in_front` of `mboit.wgsl`
-/// (the text itself, cut from the file) against `oit_core::rules::mboit_powers` and
-/// `oit_core::composite::mboit_share_in_front`, on one- and two-atom moments and moments of
+/// (the text itself, cut from the file) against `oit_core::technique::mboit::mboit_powers` and
+/// `oit_core::technique::mboit::mboit_share_in_front`, on one- and two-atom moments and moments of
 /// random depth sets, at depths across [−1, 1]. The powers must be equal; the share within 10⁻⁴
 /// (a device may fuse the bound's multiply-adds, f32 rounding apart; one 16-bit transmittance
 /// step is 1.5·10⁻⁵ of e⁻ˢ, so this allows a few). Fails when the bias, the overestimation, the
 /// substitutions or the roots differ on one side, or the powers round differently.
 #[test]
 fn wgsl_mboit_bound_equals_rust() {
-    use oit_core::composite::mboit_share_in_front;
+    use oit_core::technique::mboit::mboit_share_in_front;
     let Some(backend) = oit_wgpu::backend_or_skip("wgsl_mboit_bound_equals_rust") else { return };
     let gpu = backend.gpu().expect("opened by backend_or_skip");
     let mboit = oit_shaders::text("technique/mboit.wgsl");
@@ -380,12 +381,12 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
         let want = mboit_share_in_front(*m, *z);
         assert!((share - want).abs() <= 1e-4, "moments {m:?} at {z}: wgsl {share}, rust {want}");
         let p = i64::from(got[3 * i + 1]) | i64::from(got[3 * i + 2] as i32) << 32;
-        assert_eq!(p, oit_core::rules::mboit_powers(*z)[2], "z³ at {z}");
+        assert_eq!(p, oit_core::technique::mboit::mboit_powers(*z)[2], "z³ at {z}");
     }
 }
 
 /// mboit:6's bound: `mboit6_share_in_front` and `mboit_cubic_roots` of `mboit.wgsl` (the text
-/// itself) against `oit_core::composite::mboit6_share_in_front`, on one-, two- and three-atom
+/// itself) against `oit_core::technique::mboit::mboit6_share_in_front`, on one-, two- and three-atom
 /// moments and moments of random depth sets (as mboit:4's above, at the same depths), and the
 /// powers z⁵ and z⁶ as the capture forms them (z⁴·z, z³·z³) against `mboit_powers`. The powers
 /// must be equal; the share within 10⁻³: the roots of the cubic go through `acos`, `cos` and a
@@ -396,7 +397,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
 /// the interpolation differ on one side, or a power rounds differently.
 #[test]
 fn wgsl_mboit6_bound_equals_rust() {
-    use oit_core::composite::mboit6_share_in_front;
+    use oit_core::technique::mboit::mboit6_share_in_front;
     let Some(backend) = oit_wgpu::backend_or_skip("wgsl_mboit6_bound_equals_rust") else { return };
     let gpu = backend.gpu().expect("opened by backend_or_skip");
     let mboit = oit_shaders::text("technique/mboit.wgsl");
@@ -474,7 +475,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
         worst = worst.max((share - rust).abs());
         assert!((share - rust).abs() <= 1e-3, "moments {m:?} at {z}: wgsl {share}, rust {rust}");
         let word = |j: usize| i64::from(got[5 * i + j]) | i64::from(got[5 * i + j + 1] as i32) << 32;
-        let powers = oit_core::rules::mboit_powers(*z);
+        let powers = oit_core::technique::mboit::mboit_powers(*z);
         assert_eq!(word(1), powers[4], "z⁵ at {z}");
         assert_eq!(word(3), powers[5], "z⁶ at {z}");
     }

@@ -1,21 +1,22 @@
 //! `mboit:M`: moment-based OIT (Münstermann et al., HPG 2018) with M = 4 or 6 power moments, two
 //! geometry passes, no ordering. The first pass sums each pixel's optical depth Σ a (a = −ln(1 − α),
 //! the table `WBOIT_OPTICAL_DEPTH`) and its moments Σ a·zᵏ, k = 1..M, of the warped depth z
-//! (`oit_core::rules::mboit_depth`); the second weighs each fragment by the transmittance in front
-//! of it, e^(−Σa · share), where `oit_core::composite::mboit_share_in_front` (four moments) or
+//! (`oit_core::technique::mboit::mboit_depth`); the second weighs each fragment by the transmittance in front
+//! of it, e^(−Σa · share), where `oit_core::technique::mboit::mboit_share_in_front` (four moments) or
 //! `mboit6_share_in_front` (six) bounds the share from the moments, and sums Σ T·α·c, Σ T·α and
 //! the count. Every sum is an integer (the powers in
 //! units of 2⁻²⁰, T in 16 bits), so none depends on the order threads add in;
-//! `oit_core::composite::mboit` composites them.
+//! `oit_core::technique::mboit::mboit` composites them.
 
 use std::sync::atomic::Ordering::Relaxed;
 
 use glam::Vec3;
-use oit_core::composite::{MboitSums, mboit, mboit_share_in_front, mboit6_share_in_front};
-use oit_core::rules::{
-    MBOIT_POWER_UNIT, WBOIT_OPTICAL_DEPTH, WBOIT_OPTICAL_UNIT, mboit_depth, mboit_powers, mboit_weight16,
-    pack_rgba8,
+use oit_core::rules::pack_rgba8;
+use oit_core::technique::mboit::{
+    MBOIT_POWER_UNIT, MboitSums, mboit, mboit_depth, mboit_powers, mboit_share_in_front, mboit_weight16,
+    mboit6_share_in_front,
 };
+use oit_core::technique::wboit::{WBOIT_OPTICAL_DEPTH, WBOIT_OPTICAL_UNIT};
 use oit_core::{Frame, OitError, Technique};
 
 use super::Ctx;

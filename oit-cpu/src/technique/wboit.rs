@@ -1,15 +1,15 @@
 //! `wboit`: weighted blended OIT (McGuire & Bavoil, JCGT 2013), one geometry pass, no ordering.
 //! Each pixel accumulates Σ α·w·c, Σ α·w (w: the depth weight of the paper's eq. 10,
-//! `oit_core::rules::wboit_weight`), the optical depth Σ −ln(1 − α) (the table
+//! `oit_core::technique::wboit::wboit_weight`), the optical depth Σ −ln(1 − α) (the table
 //! `WBOIT_OPTICAL_DEPTH`: the paper's revealage Π(1 − α) as a sum, so that atomics can keep it)
 //! and the count, all as u64 integers of the 8-bit colour, so the sums do not depend on the
-//! order threads add them in; `oit_core::composite::wboit` composites them.
+//! order threads add them in; `oit_core::technique::wboit::wboit` composites them.
 
 use std::sync::atomic::Ordering::Relaxed;
 
 use glam::Vec3;
-use oit_core::composite::{WboitSums, wboit};
-use oit_core::rules::{WBOIT_OPTICAL_DEPTH, WBOIT_OPTICAL_UNIT, pack_rgba8, wboit_weight};
+use oit_core::rules::pack_rgba8;
+use oit_core::technique::wboit::{WBOIT_OPTICAL_DEPTH, WBOIT_OPTICAL_UNIT, WboitSums, wboit, wboit_weight};
 use oit_core::{Frame, OitError};
 
 use super::Ctx;

@@ -13,7 +13,7 @@ const MBOIT_BIAS: f32 = 5e-6;
 const MBOIT6_BIAS: f32 = 5e-5;
 const MBOIT_OVERESTIMATION: f32 = 0.25;
 
-// oit_core::rules::mboit_depth (fu.lens.x, fu.lens.y: near, far)
+// oit_core::technique::mboit::mboit_depth (fu.lens.x, fu.lens.y: near, far)
 fn mboit_depth(depth: f32) -> f32 {
     let d = min(bitcast<f32>(depth_bits(depth)), 1.0);
     let r = fu.lens.x / fu.lens.y;
@@ -23,7 +23,7 @@ fn mboit_depth(depth: f32) -> f32 {
     return clamp(2.0 * log(1.0 - d * (1.0 - r)) / log(r) - 1.0, -1.0, 1.0);
 }
 
-// oit_core::rules::mboit_powers: the power in units of 2⁻²⁰, half away from zero
+// oit_core::technique::mboit::mboit_powers: the power in units of 2⁻²⁰, half away from zero
 fn mboit_power(p: f32) -> i64 {
     let v = p * 1048576.0;
     return i64(floor(abs(v) + 0.5) * sign(v));
@@ -38,7 +38,7 @@ fn mboit_div(a: f32, b: f32) -> f32 {
     return a / d;
 }
 
-// oit_core::composite::mboit_share_in_front: the share of the optical depth in front of z that
+// oit_core::technique::mboit::mboit_share_in_front: the share of the optical depth in front of z that
 // the four normalized moments m bound (see there)
 fn mboit_share_in_front(m: vec4<f32>, z: f32) -> f32 {
     let b = m * (1.0 - MBOIT_BIAS) + vec4<f32>(0.0, 0.375, 0.0, 0.375) * MBOIT_BIAS;
@@ -110,7 +110,7 @@ fn mboit_cubic_roots(c: vec4<f32>) -> vec3<f32> {
     return vec3<f32>(mboit_div(k0, h), mboit_div(h, k2), r);
 }
 
-// oit_core::composite::mboit6_share_in_front: the share of the optical depth in front of z that
+// oit_core::technique::mboit::mboit6_share_in_front: the share of the optical depth in front of z that
 // six normalized moments (m0 = z¹..z⁴, m1 = z⁵, z⁶) bound (see there)
 fn mboit6_share_in_front(m0: vec4<f32>, m1: vec2<f32>, z: f32) -> f32 {
     // the bias towards (0, 7/16, 0, 19/64, 0, 67/256)
@@ -159,7 +159,7 @@ fn capture(f: Fragment) {
     let z = mboit_depth(f.depth);
     if (fu.pass_index == 0u) {
         atomicAdd(&mb_sums[base], u64(a));
-        // oit_core::rules::mboit_powers: each power from the same two factors
+        // oit_core::technique::mboit::mboit_powers: each power from the same two factors
         let z2 = z * z;
         let z3 = z2 * z;
         let z4 = z2 * z2;
@@ -196,7 +196,7 @@ fn capture(f: Fragment) {
         }
         t = exp(-(b0 / 65536.0) * share);
     }
-    // oit_core::rules::mboit_weight16
+    // oit_core::technique::mboit::mboit_weight16
     let w = u64(clamp(t, 0.0, 1.0) * 65536.0 + 0.5);
     let wa = w * u64(alpha);
     let sums = base + moments + 1u;
@@ -207,7 +207,7 @@ fn capture(f: Fragment) {
     atomicAdd(&mb_sums[sums + 4u], 1lu);
 }
 
-// oit_core::composite::mboit
+// oit_core::technique::mboit::mboit
 @compute @workgroup_size(64)
 fn composite_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let px = kernel_pixel(gid, groups);

@@ -7,7 +7,7 @@
 @group(0) @binding(2) var<storage, read_write> wb_sums: array<atomic<u64>>;
 
 
-// oit_core::rules::wboit_weight: max(1, 300000·q³/1023³) with q = 1023 − ⌊d·1024⌋
+// oit_core::technique::wboit::wboit_weight: max(1, 300000·q³/1023³) with q = 1023 − ⌊d·1024⌋
 fn wboit_weight(depth: f32) -> u64 {
     let d = min(bitcast<f32>(depth_bits(depth)), 1.0);
     let q = u64(1023u - min(u32(d * 1024.0), 1023u));
@@ -27,7 +27,7 @@ fn capture(f: Fragment) {
     atomicAdd(&wb_sums[base + 5u], 1lu);
 }
 
-// oit_core::composite::wboit: the weighted mean colour under the exact coverage
+// oit_core::technique::wboit::wboit: the weighted mean colour under the exact coverage
 @compute @workgroup_size(64)
 fn composite_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let px = kernel_pixel(gid, groups);

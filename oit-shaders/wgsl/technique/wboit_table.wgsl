@@ -1,6 +1,6 @@
 // −ln(1 − a/255) in units of 1/65536 for each 8-bit alpha a, 255 capped at 32: the optical depth a
 // fragment adds in wboit and mboit (before their techniques' files).
-// oit_core::rules::WBOIT_OPTICAL_DEPTH, entry for entry (oit-gpu's tests compare the two)
+// oit_core::technique::wboit::WBOIT_OPTICAL_DEPTH, entry for entry (oit-gpu's tests compare the two)
 const WBOIT_OPTICAL_DEPTH = array<u32, 256>(
     0u, 258u, 516u, 776u, 1036u, 1298u, 1560u, 1824u,
     2089u, 2355u, 2622u, 2890u, 3159u, 3429u, 3701u, 3973u,
