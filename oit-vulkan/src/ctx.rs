@@ -762,7 +762,13 @@ impl<'a> VkCtx<'a> {
                 ));
             }
             draws.push((
-                self.gpu.early_pipeline(module, buffers.len(), &bindings, "hw_fs_early")?,
+                // its count is read only where the pass wants one and has no count-only draw
+                self.gpu.early_pipeline(
+                    module,
+                    buffers.len(),
+                    &bindings,
+                    if count && !drawn { "hw_fs_early_counted" } else { "hw_fs_early" },
+                )?,
                 self.scene_vertices(raster),
             ));
             let depth_clear =

@@ -1275,7 +1275,8 @@ impl Gpu {
     /// `early_pass_key`'s pass (`core/raster_hardware_early.wgsl`): `depth_fs` fills the depth
     /// attachment (its vertex stage `depth_vs`, no colour), `hw_fs_count` counts untested (by
     /// atomic adds, no colour),
-    /// `hw_fs_early` captures behind the LESS_OR_EQUAL test.
+    /// `hw_fs_early` captures behind the LESS_OR_EQUAL test (no colour; `hw_fs_early_counted`
+    /// the same, counting into the count image).
     pub fn early_pipeline(
         &self,
         module: &'static str,
@@ -1285,7 +1286,10 @@ impl Gpu {
     ) -> Result<Pipeline, OitError> {
         let (blend, depth) = match fs {
             "depth_fs" => (Blend::Nothing, DepthTest::Fill),
-            "hw_fs_early" => (Blend::AddRed, DepthTest::ReadOnly),
+            // the capture behind the test: no colour (its count is the count-only draw's, or
+            // not read), or counted where a pass's count is read without one
+            "hw_fs_early" => (Blend::Nothing, DepthTest::ReadOnly),
+            "hw_fs_early_counted" => (Blend::AddRed, DepthTest::ReadOnly),
             // counts by atomic adds (`oit_gpu::opaque_drawn_offset`'s counter), not into the
             // count image
             "hw_fs_count" => (Blend::Nothing, DepthTest::Off),

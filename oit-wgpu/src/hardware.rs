@@ -333,7 +333,7 @@ impl EarlyDepth {
     /// count-only draw's none, the depth draw's write.
     fn state(entry: &str) -> wgpu::DepthStencilState {
         let (write, compare) = match entry {
-            "hw_fs_early" => (false, wgpu::CompareFunction::LessEqual),
+            "hw_fs_early" | "hw_fs_early_counted" => (false, wgpu::CompareFunction::LessEqual),
             "depth_fs" => (true, wgpu::CompareFunction::Always),
             _ => (false, wgpu::CompareFunction::Always),
         };
@@ -428,11 +428,14 @@ impl Driver for RenderDriver<'_> {
             }
             Some(early) => {
                 let early_wgsl = format!("{wgsl}\n{}", oit_shaders::HARDWARE_RASTER_EARLY);
-                let mut entries = vec!["depth_fs", "hw_fs_early"];
+                let mut entries = vec!["depth_fs"];
                 if ctx.fragments == Fragments::Unset {
-                    entries.insert(1, "hw_fs_count");
+                    entries.push("hw_fs_count");
                     drawn = true;
                 }
+                // the capture writes its count only where the pass's count is read and no
+                // count-only draw counted it
+                entries.push(if ctx.count_wanted && !drawn { "hw_fs_early_counted" } else { "hw_fs_early" });
                 for entry in entries {
                     let mut e = DefaultHasher::new();
                     (h.finish(), entry).hash(&mut e);
@@ -852,9 +855,10 @@ impl HwGeometry {
                         capture.count_target.clone(),
                     );
                 }
-                // the count-only draw counts by atomic adds, not into the count target
+                // the count-only draw counts by atomic adds, not into the count target, and the
+                // capture's count is that draw's (or not read) unless it is the counted one
                 let mut target = capture.count_target.clone();
-                if entry == "hw_fs_count" {
+                if entry == "hw_fs_count" || entry == "hw_fs_early" {
                     target.write_mask = wgpu::ColorWrites::empty();
                 }
                 scene_pipeline_with(

@@ -14,15 +14,27 @@
 // to two words rather than by blending into the count target, which it does not write.
 
 // The capture behind the fixed-function test: what `hw_fs` does with the fragments the test
-// passed. It adds 1 to the count target in a pass that is not the frame's first (those counts
-// are not read) and 0 in the first, whose count-only draw counted the fragments.
-@fragment
-@early_depth_test(force)
-fn hw_fs_early(in: HwOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+// passed. Its pipeline writes no colour: the first scene pass's count-only draw counts that pass's
+// fragments, and nothing reads a later pass's count. `hw_fs_early_counted` is the same capture
+// adding 1 to the count target, for a pass whose count is read without a count-only draw.
+fn hw_early_capture(in: HwOut, front: bool) {
     if (!hw_culled(in, front) && oit_opaque_front(in.position.xy, in.position.z, 1u, false) != 0u) {
         _ = oit_capture_shaded(in.position.xy, in.position.z, hw_color(in), in.normal, in.prim, in.cutoff, 1u);
     }
-    return vec4<f32>(f32(1u - min(fu.opaque.y, 1u)), 0.0, 0.0, 0.0);
+}
+
+@fragment
+@early_depth_test(force)
+fn hw_fs_early(in: HwOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    hw_early_capture(in, front);
+    return vec4<f32>(0.0);
+}
+
+@fragment
+@early_depth_test(force)
+fn hw_fs_early_counted(in: HwOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    hw_early_capture(in, front);
+    return vec4<f32>(1.0, 0.0, 0.0, 0.0);
 }
 
 // The count-only draw of a frame's first scene pass over the opaque depth: every fragment (a
