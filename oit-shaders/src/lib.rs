@@ -18,7 +18,10 @@
 //!   ordered k-buffer inside the fragment shader interlock).
 //!
 //! [`MODULES`] lists every module: its sources, in the order they are joined, and what follows
-//! them ([`Tail`]). A module's full text is [`Module::compute_text`] (or, for its hardware-raster
+//! them ([`Tail`]). A module is declared once, by a line of the WGSL file it is about, which the
+//! build script reads (`// module fabs (raster): technique/fabs_counters.wgsl technique/fabs.wgsl
+//! ...`); [`FILES`] is every file of `wgsl/`. A new technique's WGSL file is thus its own entry:
+//! nothing here is edited to add one. A module's full text is [`Module::compute_text`] (or, for its hardware-raster
 //! twin, [`Module::hardware_text`]); oit-wgpu builds its pipelines from exactly these, and
 //! oit-vulkan's build script compiles exactly these.
 //!
@@ -40,83 +43,9 @@
 #[doc = include_str!("../README.md")]
 pub struct ReadmeDoctests;
 
-/// `(path under wgsl/, text)` of every file of the tree.
-macro_rules! files {
-    ($($path:literal),* $(,)?) => {
-        /// Every WGSL file of the tree: its path under `wgsl/` and its text.
-        pub const FILES: &[(&str, &str)] = &[$(($path, include_str!(concat!("../wgsl/", $path)))),*];
-    };
-}
-
-files!(
-    "core/atomic_result.wgsl",
-    "core/blend_stage.wgsl",
-    "core/blit.wgsl",
-    "core/capture_render.wgsl",
-    "core/common.wgsl",
-    "core/count_sum_texture.wgsl",
-    "core/count_sum_texture_ms.wgsl",
-    "core/fill.wgsl",
-    "core/finish.wgsl",
-    "core/fragment.wgsl",
-    "core/gate.wgsl",
-    "core/opaque.wgsl",
-    "core/opaque_load.wgsl",
-    "core/prelude.wgsl",
-    "core/raster_compute.wgsl",
-    "core/raster_hardware.wgsl",
-    "core/raster_hardware_masked.wgsl",
-    "core/raster_hardware_early.wgsl",
-    "core/resolve.wgsl",
-    "core/setup.wgsl",
-    "core/softfloat.wgsl",
-    "core/supersample.wgsl",
-    "core/texture.wgsl",
-    "technique/adp.wgsl",
-    "technique/bdp.wgsl",
-    "technique/bdp_blend.wgsl",
-    "technique/blend.wgsl",
-    "technique/bounds.wgsl",
-    "technique/count.wgsl",
-    "technique/coverage.wgsl",
-    "technique/ddp.wgsl",
-    "technique/ddp_samples.wgsl",
-    "technique/ddp_blend.wgsl",
-    "technique/ddp_blend_samples.wgsl",
-    "technique/dfb.wgsl",
-    "technique/dfb_count.wgsl",
-    "technique/dp.wgsl",
-    "technique/dp_samples.wgsl",
-    "technique/dp_depth.wgsl",
-    "technique/dp_depth_samples.wgsl",
-    "technique/fabs.wgsl",
-    "technique/fabs_counters.wgsl",
-    "technique/fabs_counters_image.wgsl",
-    "technique/ll.wgsl",
-    "technique/ll_size.wgsl",
-    "technique/mboit.wgsl",
-    "technique/mdts.wgsl",
-    "technique/mdts_keys.wgsl",
-    "technique/mdts_keys_image.wgsl",
-    "technique/mdts_words.wgsl",
-    "technique/mdts_words_image.wgsl",
-    "technique/mlp.wgsl",
-    "technique/mlp_samples.wgsl",
-    "technique/peel_samples.wgsl",
-    "technique/plain.wgsl",
-    "technique/reference.wgsl",
-    "technique/scan.wgsl",
-    "technique/sort_entries.wgsl",
-    "technique/tail.wgsl",
-    "technique/wboit.wgsl",
-    "technique/wboit_table.wgsl",
-    "technique/weighted.wgsl",
-    "vulkan/adp_logic.wgsl",
-    "vulkan/count_sum.wgsl",
-    "vulkan/count_sum_ms.wgsl",
-    "vulkan/kbuf.wgsl",
-    "vulkan/no_capture.wgsl",
-);
+// `FILES` and `MODULES`, from the tree (the build script: every file of `wgsl/`, and every
+// module its `// module NAME (TAIL): SOURCES` lines declare)
+include!(concat!(env!("OUT_DIR"), "/tree.rs"));
 
 /// The text of the tree's file at `path` (under `wgsl/`), if there is one.
 pub fn file(path: &str) -> Option<&'static str> {
@@ -293,130 +222,14 @@ pub fn module(name: &str) -> Option<&'static Module> {
     MODULES.iter().find(|m| m.name == name)
 }
 
-const fn m(name: &'static str, sources: &'static [&'static str], tail: Tail) -> Module {
-    Module { name, sources, tail }
-}
-
-use Tail::{Alone, Kernels, Raster, Stage};
-
-/// The coverage masks and the per-sample resolve of multisampled frames, appended to the modules
-/// of the techniques that keep masks.
-const COVERAGE: &str = "technique/coverage.wgsl";
-
-/// Every module both GPU backends build, each written once.
-pub const MODULES: &[Module] = &[
-    m("fill", &["core/fill.wgsl"], Kernels),
-    m("finish", &["core/finish.wgsl"], Kernels),
-    // the supersampled reference's end of each frame, instead of finish's `finish_main`
-    m("supersample", &["core/supersample.wgsl"], Kernels),
-    m("gate", &["core/gate.wgsl"], Kernels),
-    m("count", &["technique/count.wgsl"], Raster),
-    // the opaque pass's two geometry passes (oit-gpu's `technique::opaque_pass`)
-    m("opaque", &["core/opaque.wgsl"], Raster),
-    m("reference", &["technique/reference.wgsl", "technique/sort_entries.wgsl", COVERAGE], Raster),
-    m(
-        "fabs",
-        &["technique/fabs_counters.wgsl", "technique/fabs.wgsl", "technique/tail.wgsl", COVERAGE],
-        Raster,
-    ),
-    // `--atomic-storage image`: the same technique over the storage-image accessor
-    m(
-        "fabs_image",
-        &[
-            "core/atomic_result.wgsl",
-            "technique/fabs_counters_image.wgsl",
-            "technique/fabs.wgsl",
-            "technique/tail.wgsl",
-            COVERAGE,
-        ],
-        Raster,
-    ),
-    m("weighted", &["technique/weighted.wgsl"], Raster),
-    m("wboit", &["technique/wboit_table.wgsl", "technique/wboit.wgsl"], Raster),
-    // the same optical depths as wboit's
-    m("mboit", &["technique/wboit_table.wgsl", "technique/mboit.wgsl"], Raster),
-    m("plain", &["technique/plain.wgsl"], Raster),
-    m(
-        "mdts",
-        &[
-            "technique/mdts_words.wgsl",
-            "technique/mdts_keys.wgsl",
-            "technique/mdts.wgsl",
-            "technique/tail.wgsl",
-        ],
-        Raster,
-    ),
-    m(
-        "mdts_image",
-        &[
-            "core/atomic_result.wgsl",
-            "technique/mdts_words_image.wgsl",
-            "technique/mdts_keys.wgsl",
-            "technique/mdts.wgsl",
-            "technique/tail.wgsl",
-        ],
-        Raster,
-    ),
-    m(
-        "mdts64_image",
-        &[
-            "core/atomic_result.wgsl",
-            "technique/mdts_words.wgsl",
-            "technique/mdts_keys_image.wgsl",
-            "technique/mdts.wgsl",
-            "technique/tail.wgsl",
-        ],
-        Raster,
-    ),
-    m("dp", &["technique/dp.wgsl"], Raster),
-    m("ddp", &["technique/ddp.wgsl"], Raster),
-    // dp and ddp per sample (several samples): (depth, primitive id) peels into per-sample
-    // accumulators
-    m("dp_samples", &["technique/peel_samples.wgsl", "technique/dp_samples.wgsl"], Raster),
-    m("ddp_samples", &["technique/peel_samples.wgsl", "technique/ddp_samples.wgsl"], Raster),
-    m("mlp", &["technique/mlp.wgsl"], Raster),
-    // mlp per sample: M (depth, primitive id) keys a pass into per-sample accumulators
-    m("mlp_samples", &["technique/peel_samples.wgsl", "technique/mlp_samples.wgsl"], Raster),
-    m("bounds", &["technique/bounds.wgsl"], Raster),
-    m("bdp", &["technique/bdp.wgsl"], Raster),
-    m("adp", &["technique/adp.wgsl"], Raster),
-    m("dfb_count", &["technique/dfb_count.wgsl"], Raster),
-    m("dfb", &["technique/dfb.wgsl", "technique/sort_entries.wgsl", COVERAGE], Raster),
-    m("ll_size", &["technique/ll_size.wgsl"], Raster),
-    m("ll", &["technique/ll.wgsl", COVERAGE], Raster),
-    // kbuf (oit-vulkan): its hardware twin's fragment stage runs in an ordered interlock (the
-    // build script's rewrite); the compute twin is only its resolve (the compute path refuses
-    // kbuf)
-    m("kbuf", &["vulkan/kbuf.wgsl", COVERAGE], Raster),
-    m("count_sum", &["vulkan/count_sum.wgsl"], Kernels),
-    // the same over a multisampled count image (several samples a pixel)
-    m("count_sum_ms", &["vulkan/count_sum_ms.wgsl"], Kernels),
-    m("setup", &["core/softfloat.wgsl", "core/setup.wgsl"], Alone),
-    m("scan", &["technique/scan.wgsl"], Kernels),
-    m("nothing", &["vulkan/no_capture.wgsl"], Raster),
-    // the blend captures: fragment stages of their own after the hardware raster's vertex stage
-    // (each drops first what `hw_dropped`, core/blend_stage.wgsl, drops)
-    m("blend", &["technique/weighted.wgsl", "technique/blend.wgsl"], Stage),
-    m("bdp_blend", &["technique/bdp_blend.wgsl"], Stage),
-    m("dp_depth", &["technique/dp_depth.wgsl"], Stage),
-    // dp's depth peel at several samples: a depth a sample, each sample's layer into its own
-    // accumulator
-    m("dp_depth_samples", &["technique/peel_samples.wgsl", "technique/dp_depth_samples.wgsl"], Stage),
-    m("ddp_blend", &["technique/ddp_blend.wgsl"], Stage),
-    // ddp's dual peel at several samples: a range a sample, each sample's layers into its own
-    // accumulators
-    m("ddp_blend_samples", &["technique/peel_samples.wgsl", "technique/ddp_blend_samples.wgsl"], Stage),
-    m("adp_logic", &["technique/adp.wgsl", "vulkan/adp_logic.wgsl"], Stage),
-];
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// Every source a module names is a file of the tree, every file of the tree is on disk
-    /// under `wgsl/` and listed, and no module name repeats. Fails when a module names a
-    /// misspelt path, a file is added to `wgsl/` without a `files!` line, or a module is listed
-    /// twice.
+    /// Every source a module names is a file of the tree, no module name repeats, every module
+    /// is declared in one of its own sources (the file it is about: `fabs_image` in `fabs.wgsl`),
+    /// and the modules the backends ask for by name are there. Fails when a declaration moves to
+    /// an unrelated file, names a file twice over, or a module a backend needs is lost.
     #[test]
     fn manifest_names_the_tree() {
         for m in MODULES {
@@ -424,21 +237,35 @@ mod tests {
                 assert!(file(s).is_some(), "module {} names {s}, which is not in FILES", m.name);
             }
             assert_eq!(MODULES.iter().filter(|n| n.name == m.name).count(), 1, "{} twice", m.name);
+            let declaration = format!("// module {} (", m.name);
+            let homes: Vec<&str> = FILES
+                .iter()
+                .filter(|(_, text)| text.lines().any(|l| l.starts_with(&declaration)))
+                .map(|f| f.0)
+                .collect();
+            assert_eq!(homes.len(), 1, "{} declared in {homes:?}", m.name);
+            assert!(
+                m.sources.contains(&homes[0]),
+                "{} declared in {}, not one of its sources",
+                m.name,
+                homes[0]
+            );
+            let mut sorted = m.sources.to_vec();
+            sorted.sort_unstable();
+            sorted.dedup();
+            assert_eq!(sorted.len(), m.sources.len(), "{} names a source twice", m.name);
+        }
+        for name in [
+            "fill", "finish", "gate", "opaque", "setup", "fabs", "wboit", "mboit", "weighted", "blend",
+            "kbuf",
+        ] {
+            assert!(module(name).is_some(), "no module {name}");
         }
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("wgsl");
-        let mut on_disk = Vec::new();
-        for dir in std::fs::read_dir(&root).expect("wgsl/") {
-            let dir = dir.expect("entry").path();
-            for f in std::fs::read_dir(&dir).expect("a folder of wgsl/") {
-                let f = f.expect("entry").path();
-                let rel = f.strip_prefix(&root).expect("under wgsl/").to_string_lossy().replace('\\', "/");
-                on_disk.push(rel);
-            }
+        for (path, text) in FILES {
+            let on_disk = std::fs::read_to_string(root.join(path)).expect("a file of the tree");
+            assert_eq!(&on_disk, text, "{path} changed since the build");
         }
-        on_disk.sort();
-        let mut listed: Vec<String> = FILES.iter().map(|(p, _)| p.to_string()).collect();
-        listed.sort();
-        assert_eq!(on_disk, listed, "wgsl/ and FILES differ");
     }
 
     /// The two storage kinds of an accessor define the same functions: every `fn` of the buffer

@@ -1,3 +1,4 @@
+// module fill (kernels): core/fill.wgsl
 // Fills a buffer with one 32-bit pattern (param), 64 words per invocation-group row.
 @group(0) @binding(2) var<storage, read_write> target_words: array<u32>;
 

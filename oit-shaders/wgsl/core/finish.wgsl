@@ -1,3 +1,4 @@
+// module finish (kernels): core/finish.wgsl
 // The last kernels of every frame: the state becomes sRGB8 pixels; totals for the stats.
 @group(0) @binding(2) var<storage, read_write> image: array<u32>;
 // [captured total, max captured, tied total, lost total]

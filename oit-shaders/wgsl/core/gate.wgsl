@@ -1,3 +1,4 @@
+// module gate (kernels): core/gate.wgsl
 // The gate of a geometry pass that has work only where word 0 of `gate_flag` is set (fabs's
 // overflow passes, the tails' pass): the driver's arguments copied from `gate_from` to `gate_to`
 // (param words; zeros when the flag is clear, so the dispatch or draw does nothing), and the pass

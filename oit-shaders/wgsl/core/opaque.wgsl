@@ -1,3 +1,5 @@
+// the opaque pass's two geometry passes (oit-gpu's `technique::opaque_pass`)
+// module opaque (raster): core/opaque.wgsl
 // The opaque pass (oit-gpu's `technique::opaque_pass`; oit-cpu's `opaque::draw`): a frame's
 // opaque and masked geometry drawn into its opaque image (prelude.wgsl's `opaque_keys` and
 // `opaque_rgb`) before the technique runs. Pass 0: each pixel keeps the smallest

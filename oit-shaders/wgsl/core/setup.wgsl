@@ -1,3 +1,4 @@
+// module setup (alone): core/softfloat.wgsl core/setup.wgsl
 // The compute path's triangle setup on the GPU: oit-core's `setup` (crates' oit-core/src/setup.rs)
 // rule for rule, every float operation in softfloat.wgsl's integer f32 (so in the host's order and
 // rounding, bit for bit, whatever the driver does with float math), writing the 44-word triangles

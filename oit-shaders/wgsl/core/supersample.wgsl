@@ -1,3 +1,5 @@
+// the supersampled reference's end of each frame, instead of finish's `finish_main`
+// module supersample (kernels): core/supersample.wgsl
 // The supersampled reference (`--supersample`, docs/msaa.md): one single-sample reference frame a
 // sample position, each frame's linear colours added up on the device across the frames, the
 // last frame's image the mean. This kernel replaces `finish_main` (finish.wgsl) at the end of

@@ -1,3 +1,4 @@
+// module adp (raster): technique/adp.wgsl
 // adp (Liu et al., HPG 2009, section 3.3), as oit-cpu's `technique/adp.rs`.
 // pass_index 0: histogram pass; pass_index 1: bucket pass of batch `param`.
 @group(0) @binding(2) var<storage, read_write> bounds: array<u32>;

@@ -1,3 +1,4 @@
+// module bdp (raster): technique/bdp.wgsl
 // bdp and bdp:P (Liu et al., HPG 2009, section 3.2), as oit-cpu's `technique/bdp.rs`.
 // bounds: [zNear, zFar] bits per pixel (bounds.wgsl). pass_index 0 with param 0: colour mode;
 // otherwise depth mode, pass `pass_index` of `bdp:P` (see bdp.rs).

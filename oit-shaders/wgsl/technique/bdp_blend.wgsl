@@ -1,3 +1,4 @@
+// module bdp_blend (stage): technique/bdp_blend.wgsl
 // bdp's colour mode through the graphics pipeline (Liu et al., HPG 2009, section 3.2): one
 // geometry pass, each fragment's packed colour (bdp_pack_color) written as float bits to the
 // channel of its subinterval, MAX-blended into 8 Rgba32Float targets (32 buckets = 8 × 4), then a

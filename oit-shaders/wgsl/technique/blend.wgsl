@@ -1,3 +1,5 @@
+// the blend captures: fragment stages of their own after the hardware raster's vertex stage (each drops first what `hw_dropped`, core/blend_stage.wgsl, drops)
+// module blend (stage): technique/weighted.wgsl technique/blend.wgsl
 // plain, wavg and wsum through the blend unit (hardware path): one draw of oit's scene vertex
 // stage into two float targets, then a compute resolve reading them into the resolve state, as
 // the storage captures leave it (front colour, transmittance, captured), for the common finish.

@@ -1,3 +1,4 @@
+// module bounds (raster): technique/bounds.wgsl
 // Per-pixel depth range [zNear, zFar] for bdp and adp (oit-cpu's `Ctx::depth_bounds`): one
 // geometry pass over the scene or its bounding boxes, u32 atomicMin/atomicMax of `depth_bits`.
 // bounds[2·px] = zNear, bounds[2·px + 1] = zFar (depth bits); pixels nothing reached get [0, 1].

@@ -1,3 +1,4 @@
+// module count (raster): technique/count.wgsl
 // A counting pass: fragments per pixel (sizes arrays from the scene, and the reference's lists).
 @group(0) @binding(2) var<storage, read_write> counts: array<atomic<u32>>;
 

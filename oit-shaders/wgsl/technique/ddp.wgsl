@@ -1,3 +1,4 @@
+// module ddp (raster): technique/ddp.wgsl
 // ddp: dual depth peeling (Bavoil & Myers 2008), as oit-cpu's `technique/ddp.rs`. Each geometry
 // pass takes, per pixel, the nearest and the farthest fragment strictly inside the open range the
 // previous pass left (u64 atomicMin / atomicMax of depth bits << 32 | payload); the resolve pushes

@@ -1,3 +1,4 @@
+// module ddp_blend (stage): technique/ddp_blend.wgsl
 // ddp through the graphics pipeline (Bavoil & Myers 2008): each pass MAX-blends (−d, d) of the
 // fragments strictly inside the previous pass's range into an Rg32Float target, so the target
 // ends the pass holding (−nearest, farthest) of what is left; the fragments lying exactly on the

@@ -1,3 +1,5 @@
+// ddp's dual peel at several samples: a range a sample, each sample's layers into its own accumulators
+// module ddp_blend_samples (stage): technique/peel_samples.wgsl technique/ddp_blend_samples.wgsl
 // ddp through the blend unit at several samples a pixel (`--hardware-capture blend`, `--samples
 // 4|8`; docs/msaa.md, "The blend captures at several samples"): ddp_blend.wgsl's dual peel with
 // its range kept a sample. Each pass MAX-blends (−d, d) of a fragment into a multisampled Rg32Float

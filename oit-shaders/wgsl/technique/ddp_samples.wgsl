@@ -1,3 +1,4 @@
+// module ddp_samples (raster): technique/peel_samples.wgsl technique/ddp_samples.wgsl
 // ddp per sample (several samples; oit-cpu's `ddp::render_samples`, docs/msaa.md): each geometry
 // pass keeps, per pixel, the smallest and the largest (depth bits, primitive id, lowest sample: `peel_key`) key strictly
 // inside the open range the pass before left (u64 atomicMin / atomicMax), so every fragment is

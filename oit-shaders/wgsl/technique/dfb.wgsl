@@ -1,3 +1,4 @@
+// module dfb (raster): technique/dfb.wgsl technique/sort_entries.wgsl technique/coverage.wgsl
 // dfb, the dynamic fragment buffer (Maule et al. 2012), as oit-cpu's `technique/dfb.rs`: after
 // the counting pass (dfb_count.wgsl) and the prefix sum (scan.wgsl), `offsets[px]` is pixel px's
 // first entry and `offsets[pixels]` the total; the fill (this capture) takes each fragment's

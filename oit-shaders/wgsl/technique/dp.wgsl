@@ -1,3 +1,4 @@
+// module dp (raster): technique/dp.wgsl
 // dp: classical depth peeling (Everitt 2001), as oit-cpu's `technique/dp.rs`. Each geometry pass
 // keeps, per pixel, the nearest fragment strictly behind the previous peeled layer (u64 atomicMin
 // of depth bits << 32 | payload); the resolve kernel composites it under the layers before and

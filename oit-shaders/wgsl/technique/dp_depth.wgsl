@@ -1,3 +1,4 @@
+// module dp_depth (stage): technique/dp_depth.wgsl
 // dp through the graphics pipeline (Everitt 2001): each peel renders the scene with a depth test
 // (LESS_EQUAL, cleared to 1) into a fresh Depth32Float attachment, while the fragment stage
 // discards fragments at or in front of the previous peel's depth (read by pixel from the other

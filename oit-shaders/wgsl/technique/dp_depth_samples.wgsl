@@ -1,3 +1,5 @@
+// dp's depth peel at several samples: a depth a sample, each sample's layer into its own accumulator
+// module dp_depth_samples (stage): technique/peel_samples.wgsl technique/dp_depth_samples.wgsl
 // dp through the graphics pipeline at several samples a pixel (`--hardware-capture blend`,
 // `--samples 4|8`; docs/msaa.md, "Depth peeling per sample on the blender"): dp_depth.wgsl's
 // depth peel with its depth kept a sample, and its ties peeled in primitive order. Each peel

@@ -1,3 +1,5 @@
+// dp and ddp per sample (several samples): (depth, primitive id) peels into per-sample accumulators
+// module dp_samples (raster): technique/peel_samples.wgsl technique/dp_samples.wgsl
 // dp per sample (several samples; oit-cpu's `dp::render_samples`, docs/msaa.md): each geometry
 // pass keeps, per pixel, the smallest (depth bits, primitive id, lowest sample: `peel_key`) key strictly behind the layer
 // the pass before peeled (u64 atomicMin), so every fragment is one layer, ties in the reference's

@@ -1,3 +1,6 @@
+// module fabs (raster): technique/fabs_counters.wgsl technique/fabs.wgsl technique/tail.wgsl technique/coverage.wgsl
+// `--atomic-storage image`: the same technique over the storage-image accessor
+// module fabs_image (raster): core/atomic_result.wgsl technique/fabs_counters_image.wgsl technique/fabs.wgsl technique/tail.wgsl technique/coverage.wgsl
 // fabs:K (Huang et al. 2011, section 4): counter + K slots per pixel by atomic increment; the
 // resolve sorts each pixel's n ≤ K slots (insertion sort up to LOCAL_SLOTS, heapsort beyond) and
 // composites them. param = K. A slot is a key, depth bits << 32 | primitive id, and the payload

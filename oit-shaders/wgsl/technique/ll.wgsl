@@ -1,3 +1,4 @@
+// module ll (raster): technique/ll.wgsl technique/coverage.wgsl
 // ll, per-pixel linked lists (Yang et al. 2010), as oit-cpu's `technique/ll.rs`: a head per
 // pixel (LL_END when empty), a pool of fu.param nodes sized by the sizing pass (ll_size.wgsl), a
 // node counter. The capture takes a node by atomicAdd on the counter (past the pool: lost, where

@@ -1,3 +1,5 @@
+// the same optical depths as wboit's
+// module mboit (raster): technique/wboit_table.wgsl technique/mboit.wgsl
 // mboit:M: moment-based OIT (Münstermann et al., HPG 2018) with M = fu.param = 4 or 6 power
 // moments, as oit-cpu's `technique/mboit.rs`. Pass 0 adds each pixel's optical depth Σa
 // (a = −ln(1 − α), wboit.wgsl's table) and the moments Σa·zᵏ of the warped depth z (k = 1..M, the

@@ -1,3 +1,6 @@
+// module mdts (raster): technique/mdts_words.wgsl technique/mdts_keys.wgsl technique/mdts.wgsl technique/tail.wgsl
+// module mdts_image (raster): core/atomic_result.wgsl technique/mdts_words_image.wgsl technique/mdts_keys.wgsl technique/mdts.wgsl technique/tail.wgsl
+// module mdts64_image (raster): core/atomic_result.wgsl technique/mdts_words.wgsl technique/mdts_keys_image.wgsl technique/mdts.wgsl technique/tail.wgsl
 // mdts:K and mdts64:K (Liu et al. 2009; Huang et al. 2011, section 3), as oit-cpu's
 // `technique/mdts.rs`: K words per pixel start at all ones; each fragment is inserted by repeated
 // atomicMin carrying the larger value on to the next word, so each array stays sorted whatever the

@@ -1,3 +1,4 @@
+// module mlp (raster): technique/mlp.wgsl
 // mlp:M: extended multi-layer peeling (Huang et al. 2011, section 3.3), as oit-cpu's
 // `technique/mlp.rs`. Each geometry pass inserts, per pixel, the fragments strictly behind the
 // deepest one the previous pass captured into M u64 words by repeated atomicMin (as mdts64), and

@@ -1,3 +1,5 @@
+// mlp per sample: M (depth, primitive id) keys a pass into per-sample accumulators
+// module mlp_samples (raster): technique/peel_samples.wgsl technique/mlp_samples.wgsl
 // mlp:M per sample (several samples; oit-cpu's `mlp::render_samples`, docs/msaa.md): each geometry
 // pass inserts, per pixel, the (depth bits, primitive id, lowest sample: `peel_key`) keys strictly behind the deepest key the
 // pass before kept into M u64 slots by repeated atomicMin (as mlp.wgsl), so every fragment is one

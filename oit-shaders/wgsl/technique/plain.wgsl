@@ -1,3 +1,4 @@
+// module plain (raster): technique/plain.wgsl
 // plain (unsorted alpha blending in submission order) where no blender keeps that order: the
 // compute rasterizer, and the embedded pass. As oit-cpu's `technique/plain.rs`: a counter and K
 // slots a pixel (K = the deepest pixel's count from a counting pass), a slot one u64 word,

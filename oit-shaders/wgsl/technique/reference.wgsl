@@ -1,3 +1,4 @@
+// module reference (raster): technique/reference.wgsl technique/sort_entries.wgsl technique/coverage.wgsl
 // reference: every fragment in a per-pixel list (offsets from a counting pass and a prefix sum),
 // sorted by (depth, primitive id), composited front to back (in f32 on the GPU; oit-cpu's
 // reference composites in f64).

@@ -1,3 +1,4 @@
+// module scan (kernels): technique/scan.wgsl
 // An exclusive prefix sum (scan) of `fu.param` 32-bit words, in place, in blocks of SCAN_BLOCK
 // (64 invocations × 4 words). `scan_main` scans each block within its workgroup and writes the
 // block's total to `block_sums`; the host scans `block_sums` the same way (one level per 256×

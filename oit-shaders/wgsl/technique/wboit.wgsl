@@ -1,3 +1,4 @@
+// module wboit (raster): technique/wboit_table.wgsl technique/wboit.wgsl
 // wboit: weighted blended OIT (McGuire & Bavoil, JCGT 2013), as oit-cpu's `technique/wboit.rs`:
 // one geometry pass adds, per pixel, Σα·w·r, Σα·w·g, Σα·w·b, Σα·w (w: the depth weight of the
 // paper's eq. 10 in hundredths, `wboit_weight`), the optical depth Σ−ln(1 − α) (in 1/65536, from

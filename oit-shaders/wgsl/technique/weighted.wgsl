@@ -1,3 +1,4 @@
+// module weighted (raster): technique/weighted.wgsl
 // wavg and wsum (Bavoil & Myers 2008; Meshkin 2007), as oit-cpu's `technique/weighted.rs`: one
 // geometry pass adds, per pixel, Σα·r, Σα·g, Σα·b (in units of 1/255²), Σα (in units of 1/255) and
 // the count, as u64 integers of the RGBA8 colour, so the sums do not depend on arrival order; the

@@ -1,3 +1,4 @@
+// module adp_logic (stage): technique/adp.wgsl vulkan/adp_logic.wgsl
 // adp's histogram pass as the HPG 2009 paper builds it (Liu et al., section 3.3): the 1024 bins
 // of a pixel's depth range are 1024 bits in 8 R32G32B32A32_UINT colour targets, and each fragment
 // sets its bin's bit through the logic op OR (which replaces blending on every attachment: a

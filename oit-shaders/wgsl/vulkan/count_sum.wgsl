@@ -1,3 +1,4 @@
+// module count_sum (kernels): vulkan/count_sum.wgsl
 // Sums a hardware-raster geometry pass's fragment counts into one word: oit-wgpu's count_sum.wgsl
 // over the count target copied into a buffer (one f32 per pixel, row by row), so the kernel binds
 // buffers only. Group 0 as every module's: bindings 2 and 3 are the counts and the total.

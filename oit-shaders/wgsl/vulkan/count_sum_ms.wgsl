@@ -1,3 +1,5 @@
+// the same over a multisampled count image (several samples a pixel)
+// module count_sum_ms (kernels): vulkan/count_sum_ms.wgsl
 // Sums a multisampled hardware-raster geometry pass's count image into one word (oit-vulkan at
 // several samples a pixel; count_sum.wgsl at one): a multisampled pass's fragment adds 1 at one
 // sample, the first it covers (raster_hardware.wgsl's `hw_fs_masked`), so every sample of every

@@ -1,3 +1,5 @@
+// kbuf (oit-vulkan): its hardware twin's fragment stage runs in an ordered interlock (the build script's rewrite); the compute twin is only its resolve (the compute path refuses kbuf)
+// module kbuf (raster): vulkan/kbuf.wgsl technique/coverage.wgsl
 // kbuf:K, the ordered k-buffer (oit-vulkan only). The k-buffer (Bavoil et al. 2007) keeps K
 // fragments a pixel sorted by a read-modify-write in the fragment shader; without ordering, two
 // fragments of one pixel in flight at once read the same array and one write is lost (the
