@@ -39,12 +39,8 @@ use crate::output::{self, Table};
         supersampling."
 )]
 pub struct CompareArgs {
-    /// Comma-separated techniques (e.g. dp,bdp2,fabs:16), or all (every technique but the
-    /// reference, in catalogue order). Names: reference, plain, dp, ddp, wavg, wsum, wboit, mboit,
-    /// bdp, bdp:P, bdp2,
-    /// adp, mdts[:K], mdts64[:K], fabs[:K], mlp:M, dfb, ll, kbuf[:K] (vulkan's hardware path on a
-    /// device with fragment shader interlock; not in all).
-    #[arg(short, long, value_name = "LIST|all", default_value = "all")]
+    /// Comma-separated techniques (e.g. dp,bdp2,fabs:16), or all (`--help` lists the names).
+    #[arg(short, long, value_name = "LIST|all", default_value = "all", long_help = techniques_help())]
     pub techniques: String,
 
     /// Print one JSON array of results instead of the table.
@@ -361,4 +357,14 @@ fn sheet_rows(measurements: &[Measurement], width: u32, height: u32, effect: Eff
         });
     }
     rows
+}
+
+/// `--techniques`' long help, its names from the catalogue ([`oit_core::KNOWN_TECHNIQUES`]).
+fn techniques_help() -> String {
+    format!(
+        "Comma-separated techniques (e.g. dp,bdp2,fabs:16), or all (every technique but the \
+         reference and kbuf, in catalogue order). Names: {} (kbuf: vulkan's hardware path on a \
+         device with fragment shader interlock)",
+        oit_core::KNOWN_TECHNIQUES
+    )
 }

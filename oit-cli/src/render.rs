@@ -40,15 +40,8 @@ use crate::output::{self, CameraJson};
         --no-output writes no image, for runs that only want the numbers."
 )]
 pub struct RenderArgs {
-    /// The technique: reference, plain (unsorted alpha blending in primitive order, the
-    /// baseline), dp, ddp, wavg, wsum, wboit (weighted blended, McGuire & Bavoil 2013), mboit
-    /// or mboit:4 (moment-based, Münstermann et al. 2018), bdp, bdp:P, bdp2, adp, mdts[:K], mdts64[:K],
-    /// fabs[:K], mlp:M, dfb (dynamic fragment buffer, Maule et al. 2012), ll (per-pixel linked
-    /// lists, Yang et al. 2010) or kbuf[:K] (the ordered k-buffer: --backend vulkan --raster
-    /// hardware on a device with fragment shader interlock) (K, M, P from 1 to 65536; K left out is sized from the scene; dfb
-    /// and ll allocate exactly the frame's fragments, counted first), or auto (chosen for this
-    /// scene and device under --max-epr and --memory).
-    #[arg(short, long, value_name = "T", default_value = "reference")]
+    /// The technique, by name (`--help` lists them), or auto.
+    #[arg(short, long, value_name = "T", default_value = "reference", long_help = technique_help())]
     pub technique: String,
 
     /// With --technique auto: the largest error pixel rate allowed, a fraction from 0 to 1 (0.001)
@@ -375,4 +368,17 @@ mod tests {
             .map(PathBuf::from)
         );
     }
+}
+
+/// `--technique`'s long help, its names from the catalogue ([`oit_core::KNOWN_TECHNIQUES`]), so a
+/// technique added there is listed here without an edit.
+fn technique_help() -> String {
+    format!(
+        "The technique: {} (K, M, P from 1 to 65536; K left out is sized from the scene; dfb and \
+         ll allocate exactly the frame's fragments, counted first; plain is unsorted alpha \
+         blending in primitive order, the baseline; kbuf runs on --backend vulkan --raster \
+         hardware on a device with fragment shader interlock), or auto (chosen for this scene and \
+         device under --max-epr and --memory)",
+        oit_core::KNOWN_TECHNIQUES
+    )
 }
