@@ -346,6 +346,19 @@ fn depth_complexity(
     Ok(DepthComplexity::from_layers(&layers))
 }
 
+/// `--technique`'s long help, its names from the catalogue ([`oit_core::KNOWN_TECHNIQUES`]), so a
+/// technique added there is listed here without an edit.
+fn technique_help() -> String {
+    format!(
+        "The technique: {} (K, M, P from 1 to 65536; K left out is sized from the scene; dfb and \
+         ll allocate exactly the frame's fragments, counted first; plain is unsorted alpha \
+         blending in primitive order, the baseline; kbuf runs on --backend vulkan --raster \
+         hardware on a device with fragment shader interlock), or auto (chosen for this scene and \
+         device under --max-epr and --memory)",
+        oit_core::KNOWN_TECHNIQUES
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -368,17 +381,4 @@ mod tests {
             .map(PathBuf::from)
         );
     }
-}
-
-/// `--technique`'s long help, its names from the catalogue ([`oit_core::KNOWN_TECHNIQUES`]), so a
-/// technique added there is listed here without an edit.
-fn technique_help() -> String {
-    format!(
-        "The technique: {} (K, M, P from 1 to 65536; K left out is sized from the scene; dfb and \
-         ll allocate exactly the frame's fragments, counted first; plain is unsorted alpha \
-         blending in primitive order, the baseline; kbuf runs on --backend vulkan --raster \
-         hardware on a device with fragment shader interlock), or auto (chosen for this scene and \
-         device under --max-epr and --memory)",
-        oit_core::KNOWN_TECHNIQUES
-    )
 }
