@@ -34,7 +34,7 @@ pub const MBOIT_POWER_UNIT: f32 = 1_048_576.0;
 
 /// The warped depth's powers z, z², …, z⁶ in units of 2⁻²⁰ (rounded to nearest, half away from
 /// zero): what a fragment adds to the moment sums, times its optical depth
-/// ([`WBOIT_OPTICAL_DEPTH`]), in integers, so the sums do not depend on the order they are added
+/// ([`super::wboit::WBOIT_OPTICAL_DEPTH`]), in integers, so the sums do not depend on the order they are added
 /// in (`mboit:4` adds the first four, `mboit:6` all six). The powers are products of f32s, never
 /// fused, each from the same two factors on every backend (z⁵ = z⁴·z, z⁶ = z³·z³), so every
 /// backend finds the same integers. As |z| ≤ 1, every power is at most 2²⁰ units whatever M is:
