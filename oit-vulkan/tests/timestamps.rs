@@ -6,18 +6,27 @@
 
 use oit_core::{Backend, Camera, Settings, Technique, View, load_scene};
 
+/// On a device without timestamps, runs test `name` again in a child process with
+/// `OIT_GPU_TIMESTAMPS=1` (once: the child has the variable) and requires it to pass.
+fn again_with_timestamps(name: &str) {
+    if std::env::var_os("OIT_GPU_TIMESTAMPS").is_some() {
+        return;
+    }
+    let exe = std::env::current_exe().expect("the test binary");
+    let status = std::process::Command::new(exe)
+        .args([name, "--exact", "--test-threads=1"])
+        .env("OIT_GPU_TIMESTAMPS", "1")
+        .status()
+        .expect("the test binary runs again");
+    assert!(status.success(), "{name} with OIT_GPU_TIMESTAMPS=1 failed");
+}
+
 #[test]
 fn gpu_ms_is_the_sum_of_the_passes() {
     let Some(vk) = oit_vulkan::backend_or_skip("gpu_ms_is_the_sum_of_the_passes") else { return };
     let timed = vk.gpu().unwrap().has_timestamps();
-    if !timed && std::env::var_os("OIT_GPU_TIMESTAMPS").is_none() {
-        let exe = std::env::current_exe().expect("the test binary");
-        let status = std::process::Command::new(exe)
-            .args(["gpu_ms_is_the_sum_of_the_passes", "--exact", "--test-threads=1"])
-            .env("OIT_GPU_TIMESTAMPS", "1")
-            .status()
-            .expect("the test binary runs again");
-        assert!(status.success(), "gpu_ms_is_the_sum_of_the_passes with OIT_GPU_TIMESTAMPS=1 failed");
+    if !timed {
+        again_with_timestamps("gpu_ms_is_the_sum_of_the_passes");
     }
     let scene = load_scene("planes:4").unwrap();
     let cam = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();
@@ -58,15 +67,7 @@ fn gpu_ms_is_the_sum_of_the_passes() {
 fn the_opaque_pass_is_timed_apart() {
     let Some(vk) = oit_vulkan::backend_or_skip("the_opaque_pass_is_timed_apart") else { return };
     if !vk.gpu().unwrap().has_timestamps() {
-        if std::env::var_os("OIT_GPU_TIMESTAMPS").is_none() {
-            let exe = std::env::current_exe().expect("the test binary");
-            let status = std::process::Command::new(exe)
-                .args(["the_opaque_pass_is_timed_apart", "--exact", "--test-threads=1"])
-                .env("OIT_GPU_TIMESTAMPS", "1")
-                .status()
-                .expect("the test binary runs again");
-            assert!(status.success(), "the_opaque_pass_is_timed_apart with OIT_GPU_TIMESTAMPS=1 failed");
-        }
+        again_with_timestamps("the_opaque_pass_is_timed_apart");
         return;
     }
     let scene = load_scene("wall:0.4:planes:4").unwrap();
