@@ -389,6 +389,9 @@ pub(crate) enum DepthTest {
     WriteLess,
     /// LESS_OR_EQUAL, read only (the capture over the opaque depth: `hw_fs_early`).
     ReadOnly,
+    /// GREATER, read only: the fragments behind the opaque depth, which the capture's test drops
+    /// (the count-only draw, `hw_fs_count`).
+    Behind,
     /// ALWAYS, writing: the draw that fills the opaque depth (`depth_vs`/`depth_fs`).
     Fill,
 }
@@ -1273,7 +1276,7 @@ impl Gpu {
 
     /// [`Gpu::render_pipeline`]'s draw `fs` over the opaque depth, at one sample, in
     /// `early_pass_key`'s pass (`core/raster_hardware_early.wgsl`): `depth_fs` fills the depth
-    /// attachment (its vertex stage `depth_vs`, no colour), `hw_fs_count` counts untested (by
+    /// attachment (its vertex stage `depth_vs`, no colour), `hw_fs_count` counts what lies behind (GREATER; by
     /// atomic adds, no colour),
     /// `hw_fs_early` captures behind the LESS_OR_EQUAL test (no colour; `hw_fs_early_counted`
     /// the same, counting into the count image).
@@ -1291,8 +1294,8 @@ impl Gpu {
             "hw_fs_early" => (Blend::Nothing, DepthTest::ReadOnly),
             "hw_fs_early_counted" => (Blend::AddRed, DepthTest::ReadOnly),
             // counts by atomic adds (`oit_gpu::opaque_drawn_offset`'s counter), not into the
-            // count image
-            "hw_fs_count" => (Blend::Nothing, DepthTest::Off),
+            // count image, the fragments the capture's test drops
+            "hw_fs_count" => (Blend::Nothing, DepthTest::Behind),
             _ => (Blend::AddRed, DepthTest::Off),
         };
         self.graphics(&GraphicsDesc {
@@ -1374,6 +1377,7 @@ impl Gpu {
             DepthTest::Write => (true, true, vk::CompareOp::LESS_OR_EQUAL),
             DepthTest::WriteLess => (true, true, vk::CompareOp::LESS),
             DepthTest::ReadOnly => (true, false, vk::CompareOp::LESS_OR_EQUAL),
+            DepthTest::Behind => (true, false, vk::CompareOp::GREATER),
             DepthTest::Fill => (true, true, vk::CompareOp::ALWAYS),
         };
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()

@@ -302,10 +302,11 @@ fn count_target(format: wgpu::TextureFormat) -> wgpu::ColorTargetState {
 /// opaque fragment fell), then its capture (`hw_fs_early`, `@early_depth_test(force)`) tests
 /// `LessEqual` against it before the fragment stage, so a fragment behind the opaque depth is
 /// neither shaded nor captured; the stage holds back the ties itself, the cut being strict. The
-/// frame's first scene pass draws a count-only draw (`hw_fs_count`, untested) between the two,
-/// which counts every fragment and those the cut holds back, as `hw_fs` does, by atomic adds to
-/// counters of the opaque colours' buffer ([`GpuCtx::drawn_counter`]) and not into the count
-/// target, whose blending of every fragment was the dearer part of it. The depths are
+/// frame's first scene pass draws a count-only draw (`hw_fs_count`, behind the opposite test,
+/// `Greater`) between the two: it counts the fragments the capture's test drops, and the capture
+/// those it passes, each fragment once, with those the cut holds back, by atomic adds to counters
+/// of the opaque colours' buffer ([`GpuCtx::drawn_counter`]) and not into the count target,
+/// whose blending of every fragment was the dearer part of it. The depths are
 /// the keys' high words, the bits of the depth the opaque pass kept, so the test and
 /// `opaque_cut` compare the same numbers.
 pub(crate) struct EarlyDepth {
@@ -334,6 +335,8 @@ impl EarlyDepth {
     fn state(entry: &str) -> wgpu::DepthStencilState {
         let (write, compare) = match entry {
             "hw_fs_early" | "hw_fs_early_counted" => (false, wgpu::CompareFunction::LessEqual),
+            // the count-only draw: what the capture's test drops
+            "hw_fs_count" => (false, wgpu::CompareFunction::Greater),
             "depth_fs" => (true, wgpu::CompareFunction::Always),
             _ => (false, wgpu::CompareFunction::Always),
         };

@@ -286,3 +286,58 @@ fn hardware_paths_differ_from_the_cpu_only_near_edges_and_crossings() {
         }
     }
 }
+
+/// A transparent square coplanar with an opaque one: every fragment of it ties with the opaque
+/// depth, which the cut holds back (it is strict), while a square in front of both is kept. On
+/// both GPU backends and both raster paths each such fragment is counted once and held back:
+/// `fragments` is the transparent part's alone (the frame without the opaque square), `occluded`
+/// is the coplanar square's fragments (that square drawn alone), and the accounting holds. On the
+/// hardware path the tie passes the capture's LESS_OR_EQUAL test and its stage holds it back,
+/// and the count-only draw's GREATER test leaves it to the capture: testing GREATER_OR_EQUAL
+/// there would count it twice.
+#[test]
+fn a_transparent_surface_on_the_opaque_depth_is_held_back_once() {
+    use glam::{Mat4, Vec3, Vec4};
+    use oit_core::{Instance, Mesh, Object, Scene};
+    let Some(gpus) = gpu_backends("a_transparent_surface_on_the_opaque_depth_is_held_back_once") else {
+        return;
+    };
+    let quad = |z: f32, s: f32| {
+        let p = vec![Vec3::new(-s, -s, z), Vec3::new(s, -s, z), Vec3::new(s, s, z), Vec3::new(-s, s, z)];
+        Mesh::new("q", p, vec![[0, 1, 2], [0, 2, 3]])
+    };
+    // (mesh, object): the opaque square, the transparent one on it, one in front
+    let build = |parts: &[usize]| {
+        let mut scene = Scene { name: "tie".into(), ..Scene::default() };
+        let all = [
+            (quad(0.0, 1.0), Object::new("wall", 0, Vec4::new(0.5, 0.5, 0.5, 1.0)).opaque()),
+            // the opaque square's own triangles: the same depths at every pixel
+            (quad(0.0, 1.0), Object::new("on it", 1, Vec4::new(1.0, 0.0, 0.0, 0.5))),
+            (quad(0.3, 0.4), Object::new("in front", 2, Vec4::new(0.0, 0.0, 1.0, 0.5))),
+        ];
+        for (i, &k) in parts.iter().enumerate() {
+            let (mesh, mut object) = all[k].clone();
+            object.mesh = i;
+            scene.meshes.push(mesh);
+            scene.objects.push(object);
+            scene.instances.push(Instance { object: i, transform: Mat4::IDENTITY });
+        }
+        scene
+    };
+    let (tied, transparent, on_it) = (build(&[0, 1, 2]), build(&[1, 2]), build(&[1]));
+    for path in [RasterPath::Hardware, RasterPath::Compute] {
+        let base = Settings { raster: Some(path), ..settings(48, "fabs") };
+        // one camera for all three (the tied scene's), looking down −z
+        let cam = camera(&tied, &base, View { azimuth: 0.0, elevation: 0.0, ..View::default() });
+        for (label, g) in &gpus {
+            let what = format!("{label} {path}");
+            let f = render(g.as_ref(), &tied, &cam, &base);
+            let whole = render(g.as_ref(), &transparent, &cam, &base).stats.fragments;
+            let held = render(g.as_ref(), &on_it, &cam, &base).stats.fragments;
+            assert!(held > 0 && whole > held, "{what}: the squares cover pixels ({held} of {whole})");
+            checks::accounting(&f).unwrap_or_else(|e| panic!("{what}: {e}"));
+            assert_eq!(f.stats.fragments, whole, "{what}: each fragment counted once");
+            assert_eq!(f.stats.occluded, held, "{what}: the square on the opaque depth held back whole");
+        }
+    }
+}

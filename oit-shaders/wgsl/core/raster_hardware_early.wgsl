@@ -8,17 +8,27 @@
 // tests LESS_OR_EQUAL against it, without writing, before the fragment stage runs, so a fragment
 // behind the opaque depth costs neither shading nor capture. The test keeps ties (a fragment at
 // exactly the opaque depth, which the cut holds back: `opaque_cut` is strict); this stage holds
-// them back itself. The fragments the test drops are counted by the frame's count-only draw
-// (`hw_fs_count`), drawn first, without the test, in the frame's first scene pass: it counts
-// every fragment and those the cut holds back (`occluded`), as `hw_fs` does, but by atomic adds
-// to two words rather than by blending into the count target, which it does not write.
+// them back itself. The frame's first scene pass counts every fragment once: the capture counts
+// those its test passes, and the count-only draw (`hw_fs_count`), drawn first behind the opposite
+// test (GREATER), counts those the capture's test drops. Both count by atomic adds to two words
+// (the fragments, and those the cut holds back: `occluded`); neither writes the count target.
+// Each also holds its fragments to the stage's own comparison with the opaque key, so a fixed-
+// function test that disagreed with it would leave a fragment counted but neither captured nor
+// held back, which the frame's accounting check refuses.
 
 // The capture behind the fixed-function test: what `hw_fs` does with the fragments the test
-// passed. Its pipeline writes no colour: the first scene pass's count-only draw counts that pass's
-// fragments, and nothing reads a later pass's count. `hw_fs_early_counted` is the same capture
-// adding 1 to the count target, for a pass whose count is read without a count-only draw.
+// passed. In the frame's first scene pass (`fu.opaque.y`) it counts each of them, and the ties
+// the cut holds back (`opaque_kept` counts only there). Its pipeline writes no colour: nothing
+// reads a later pass's count target. `hw_fs_early_counted` is the same capture adding 1 to the
+// count target, for a pass whose count is read without a count-only draw.
 fn hw_early_capture(in: HwOut, front: bool) {
-    if (!hw_culled(in, front) && oit_opaque_front(in.position.xy, in.position.z, 1u, false) != 0u) {
+    if (hw_culled(in, front)) {
+        return;
+    }
+    if (fu.opaque.y != 0u) {
+        atomicAdd(&opaque_rgb[opaque_counter(2u)], 1u);
+    }
+    if (oit_opaque_front(in.position.xy, in.position.z, 1u, true) != 0u) {
         _ = oit_capture_shaded(in.position.xy, in.position.z, hw_color(in), in.normal, in.prim, in.cutoff, 1u);
     }
 }
@@ -37,14 +47,17 @@ fn hw_fs_early_counted(in: HwOut, @builtin(front_facing) front: bool) -> @locati
     return vec4<f32>(1.0, 0.0, 0.0, 0.0);
 }
 
-// The count-only draw of a frame's first scene pass over the opaque depth: every fragment (a
-// back face of a single-sided object excepted, as `hw_fs`) adds 1 to opaque_rgb's counter 2,
-// which the pass then copies to its fragment count in place of the count target's sum, and
-// `oit_held_back` counts those the cut holds back (`occluded`). Its pipeline writes no colour:
-// blending every fragment into the float count target cost an H100 about a millisecond of each
-// 1024² hardware frame of `planes:64`, with the wall or without, where the adds to one word cost
-// next to nothing (bench/results/h100/count-draw-soa-1024). No test, no shading, no capture.
+// The count-only draw of a frame's first scene pass over the opaque depth, behind the test
+// GREATER: the fragments the capture's test drops (a back face of a single-sided object excepted,
+// as `hw_fs`). Each adds 1 to opaque_rgb's counter 2 (the pass's fragments, with the capture's;
+// the pass copies it to its fragment count in place of the count target's sum), and
+// `oit_held_back` counts it as `occluded`. Its pipeline writes no colour: blending every fragment
+// into the float count target cost an H100 about a millisecond of each 1024² hardware frame of
+// `planes:64` (bench/results/h100/count-draw-soa-1024). Drawn untested, it shaded every fragment
+// of the scene, those in front of the opaque depth too, in every frame with an opaque part; behind
+// the test it shades only those held back. No shading, no capture.
 @fragment
+@early_depth_test(force)
 fn hw_fs_count(in: HwOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     if (!hw_culled(in, front)) {
         atomicAdd(&opaque_rgb[opaque_counter(2u)], 1u);
