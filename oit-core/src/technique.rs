@@ -244,7 +244,9 @@ impl Technique {
             // Σα·r, Σα·g, Σα·b, Σα and the count; param bit 0: average (1) or sum (0)
             Technique::WeightedAverage => Some(sums("weighted sums", 5, 1, "weighted", 1)),
             Technique::WeightedSum => Some(sums("weighted sums", 5, 1, "weighted", 0)),
-            // Σ α·w·r, Σ α·w·g, Σ α·w·b, Σ α·w, Σ −ln(1 − α) and the count
+            // Σ α·w·r, Σ α·w·g, Σ α·w·b, Σ α·w, Σ −ln(1 − α) and the count; no triangle limit:
+            // α·w·c < 2³⁵ a fragment, so the u64 sums hold 2²⁹ fragments a pixel, above
+            // `Scene::MAX_TRIANGLES`, which every scene is held to
             Technique::Wboit => Some(sums("weighted blended sums", 6, 1, "wboit", 0)),
             // the optical depth and m moments (first pass), Σ T·α·r, g, b, Σ T·α and the count
             // (second pass): m + 6 words; param: m
