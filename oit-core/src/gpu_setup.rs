@@ -30,12 +30,12 @@ pub const ARGS_ITEMS: u64 = 32;
 /// than the piece's own invocation in `setup_main` (setup.wgsl's `SPREAD_PIECES`): those with more
 /// than [`SPREAD_ITEMS`] items, the first this many of them.
 pub const SPREAD_PIECES: usize = 2048;
-/// Work items above which a piece's are written by a workgroup of `setup_items_main` (setup.wgsl's
-/// `SPREAD_ITEMS`).
+/// Tiles of its box above which a piece's work items are written by a workgroup of
+/// `setup_items_main` (setup.wgsl's `SPREAD_ITEMS`).
 pub const SPREAD_ITEMS: usize = 16;
 /// Words of the setup's counters: pieces kept, work items, pieces spread, a spare, then each
-/// spread piece's slot and first work item.
-pub const COUNTER_WORDS: usize = 4 + 2 * SPREAD_PIECES;
+/// spread piece's slot.
+pub const COUNTER_WORDS: usize = 4 + SPREAD_PIECES;
 
 /// Where one instance's mesh lies in [`SetupGeometry::words`], and its primitive ids.
 #[derive(Clone, Copy, Debug)]

@@ -1174,6 +1174,50 @@ impl TriangleSetup {
     pub fn triangle_boxes(&self) -> impl Iterator<Item = [u32; 4]> + '_ {
         self.triangles.iter().map(|t| t.bbox)
     }
+
+    /// The compute path's work list: (triangle, `tile`-pixel square as row << 16 | column) for
+    /// each square of each triangle's box that [`Triangle::may_cover`] keeps, triangle by
+    /// triangle, row by row. What the GPU setup bins (setup.wgsl), in another order.
+    pub fn work_items(&self, tile: u32) -> Vec<[u32; 2]> {
+        let mut items = Vec::new();
+        for (i, t) in self.triangles.iter().enumerate() {
+            let [x0, y0, x1, y1] = t.bbox;
+            for ty in y0 / tile..=y1 / tile {
+                for tx in x0 / tile..=x1 / tile {
+                    if t.may_cover(tx, ty, tile) {
+                        items.push([i as u32, ty << 16 | tx]);
+                    }
+                }
+            }
+        }
+        items
+    }
+}
+
+impl Triangle {
+    /// Whether the `tile`-pixel square (column `tx`, row `ty`) may hold a sample the triangle
+    /// covers: false only where one edge leaves every point of the square's part of the box
+    /// outside. An edge function is affine and exact in 64 bits, so its largest value over the
+    /// rectangle of subpixel points from the first pixel's corner to the last's lies at a corner
+    /// of it; every sample position of every sample count lies in that rectangle. So a square
+    /// this drops has no covered sample; one it keeps may still have none (near a corner).
+    pub fn may_cover(&self, tx: u32, ty: u32, tile: u32) -> bool {
+        let [bx0, by0, bx1, by1] = self.bbox;
+        let (x0, y0) = ((tx * tile).max(bx0), (ty * tile).max(by0));
+        let (x1, y1) = ((tx * tile + tile - 1).min(bx1), (ty * tile + tile - 1).min(by1));
+        if x0 > x1 || y0 > y1 {
+            return false;
+        }
+        let xs = [i64::from(x0) * SUBPIXEL, i64::from(x1) * SUBPIXEL + SUBPIXEL - 1];
+        let ys = [i64::from(y0) * SUBPIXEL, i64::from(y1) * SUBPIXEL + SUBPIXEL - 1];
+        (0..3).all(|k| {
+            let corners = xs.iter().flat_map(|&x| ys.iter().map(move |&y| (x, y)));
+            corners.into_iter().any(|(x, y)| {
+                let (value, _, _, above) = edge(self, k, x, y);
+                value > above
+            })
+        })
+    }
 }
 
 /// The screen-space barycentrics of a fragment of `t` from its edge functions `e` ([`edge`]).
@@ -1329,6 +1373,46 @@ mod tests {
         assert_eq!(reach(1), (128, 128));
         assert_eq!(reach(4), (32, 224));
         assert_eq!(reach(8), (16, 240));
+    }
+
+    /// A work list keeps every tile with a covered sample, at every sample count, and drops the
+    /// tiles of a triangle's box that it misses: `planes` halves each quad's box along its
+    /// diagonal, seen square on and turned.
+    #[test]
+    fn work_items_keep_every_covered_tile() {
+        for name in ["planes:4", "spheres:3", "knot", "coplanar"] {
+            let scene = crate::load_scene(name).unwrap();
+            for azimuth in [0.0, 37.0] {
+                let view = crate::View { azimuth, elevation: 20.0, ..Default::default() };
+                let camera = Camera::orbit_scene(&scene, view, 1.0).unwrap();
+                for samples in crate::msaa::SAMPLE_COUNTS {
+                    let settings = Settings { width: 96, height: 96, samples, ..Default::default() };
+                    let setup = TriangleSetup::new(&scene, &camera, &settings);
+                    let items: std::collections::HashSet<[u32; 2]> =
+                        setup.work_items(8).into_iter().collect();
+                    let mut boxed = 0;
+                    for (i, t) in setup.triangles.iter().enumerate() {
+                        let [x0, y0, x1, y1] = t.bbox;
+                        boxed += (x1 / 8 - x0 / 8 + 1) * (y1 / 8 - y0 / 8 + 1);
+                        for y in y0..=y1 {
+                            for x in x0..=x1 {
+                                if sample_mask(t, x, y, samples) != 0 {
+                                    let item = [i as u32, ((y / 8) << 16) | (x / 8)];
+                                    assert!(
+                                        items.contains(&item),
+                                        "{name}, {samples} samples: pixel ({x}, {y}) of triangle {i} is covered, its tile dropped"
+                                    );
+                                }
+                            }
+                        }
+                    }
+                    if name == "planes:4" {
+                        let kept = items.len() as f64 / f64::from(boxed);
+                        assert!(kept < 0.8, "{name} at {azimuth}°: {kept:.2} of the boxes' tiles kept");
+                    }
+                }
+            }
+        }
     }
 
     use crate::rng::Rng;

@@ -453,8 +453,8 @@ impl FrameUniform {
 
 /// The host's setup of the compute path, set up and binned: the scene's (or, with `boxes`, its
 /// instances' bounding boxes') triangle words (`oit_core::setup`), and the work list of the compute
-/// rasterizer, one (triangle, tile) item for each [`TILE`]² tile a triangle's pixel box touches,
-/// the tile as `ty << 16 | tx`. Both GPU backends upload these where the device sets up on the
+/// rasterizer, one (triangle, tile) item for each [`TILE`]² tile of a triangle's pixel box that
+/// it may cover (`TriangleSetup::work_items`), the tile as `ty << 16 | tx`. Both GPU backends upload these where the device sets up on the
 /// host, as every textured frame does ([`is_textured`]): after the triangles, the textured
 /// triangles' records and the texture region ([`TextureRegion`]; raster_compute.wgsl reads them).
 pub fn host_setup(
@@ -473,15 +473,7 @@ pub fn host_setup(
     if r.has_textures() {
         pack_textures(&r, &mut words);
     }
-    let mut items: Vec<[u32; 2]> = Vec::new();
-    for (i, [x0, y0, x1, y1]) in r.triangle_boxes().enumerate() {
-        for ty in y0 / TILE..=y1 / TILE {
-            for tx in x0 / TILE..=x1 / TILE {
-                items.push([i as u32, ty << 16 | tx]);
-            }
-        }
-    }
-    (words, items)
+    (words, r.work_items(TILE))
 }
 
 /// Appends to a textured setup's triangle words (`words`) each textured triangle's record
@@ -749,7 +741,7 @@ mod tests {
             assert!(oit_shaders::SETUP.contains(&line), "setup.wgsl has no `{line}`");
         }
         assert!(oit_shaders::SETUP.contains("const SPREAD_FIRST: u32 = 4u;"));
-        assert_eq!(COUNTER_WORDS, 4 + 2 * SPREAD_PIECES);
+        assert_eq!(COUNTER_WORDS, 4 + SPREAD_PIECES);
     }
 
     /// The work-item marks' modes are raster_compute.wgsl's, and its mark bit lies above every

@@ -112,9 +112,9 @@ fn gpu_setup_frames_equal_host_setup() {
 #[test]
 fn outgrown_setup_buffers_run_the_frame_again() {
     let Some((gpu, host)) = backends() else { return };
-    // two quads: a first guess of 2 items a triangle and 4096 spare, against up to 4096 tiles a
-    // triangle once they fill the view
-    let scene = load_scene("planes:2").unwrap();
+    // four quads: a first guess of 2 items a triangle and 4096 spare, against about 5,000 work
+    // items once they fill the view (each triangle keeps the half of its box it covers)
+    let scene = load_scene("planes:4").unwrap();
     let s = Settings {
         width: 512,
         height: 512,

@@ -48,19 +48,6 @@ fn canonical(words: &[u32], items: &[[u32; 2]]) -> (Vec<Vec<u32>>, Vec<Item>) {
     (tris, list)
 }
 
-/// The host's work list, as the compute path bins (every 8×8 tile of each triangle's box).
-fn host_items(setup: &TriangleSetup) -> Vec<[u32; 2]> {
-    let mut items = Vec::new();
-    for (i, [x0, y0, x1, y1]) in setup.triangle_boxes().enumerate() {
-        for ty in y0 / 8..=y1 / 8 {
-            for tx in x0 / 8..=x1 / 8 {
-                items.push([i as u32, ty << 16 | tx]);
-            }
-        }
-    }
-    items
-}
-
 /// Scene `name` with every object single-sided and its second instance mirrored in x: the
 /// setup drops back faces by the sign of the snapped area, turned over under the mirror
 /// (`oit_core::setup::back_face_sign`).
@@ -111,7 +98,7 @@ fn gpu_setup_equals_host_setup() {
                 } else {
                     TriangleSetup::new(scene, &camera, &s)
                 };
-                let (host_tris, host_list) = canonical(&host.triangle_words(), &host_items(&host));
+                let (host_tris, host_list) = canonical(&host.triangle_words(), &host.work_items(8));
                 // through the vertex cache (each vertex transformed once) and without it
                 for cache in [true, false] {
                     let view = format!("{view}, region {:?}, vertex cache {cache}", s.region);

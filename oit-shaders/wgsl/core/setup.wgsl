@@ -86,7 +86,7 @@ const COORD_LIMIT_BITS: u32 = 0x4e000000u; // 2^29
 @group(0) @binding(3) var<storage, read_write> out_tris: array<u32>;
 @group(0) @binding(4) var<storage, read_write> out_items: array<vec2<u32>>;
 // 0: pieces, 1: work items (both counted past the capacities, so the host sees what is needed),
-// 2: pieces spread (`SPREAD_PIECES`); from 4, each spread piece's slot and first work item
+// 2: pieces spread (`SPREAD_PIECES`); from 4, each spread piece's slot
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>>;
 // 0..3: per-pixel raster dispatch, 4..7: per-item raster dispatch, 8: work items in the list
 @group(0) @binding(6) var<storage, read_write> args: array<u32>;
@@ -327,15 +327,17 @@ fn piece_projected(i: u32, v_in: array<ClipVertex, 3>, p_in: array<Projected, 3>
     if (!rx.ok || !ry.ok) {
         return;
     }
-    // binning: the piece's 8×8 tiles, row by row, counted even when the piece does not fit
+    // binning: the piece's 8×8 tiles that it may cover (`may_cover`), row by row
     let tx0 = rx.first / SETUP_TILE;
     let tx1 = rx.last / SETUP_TILE;
     let ty0 = ry.first / SETUP_TILE;
     let ty1 = ry.last / SETUP_TILE;
     let n = (tx1 - tx0 + 1u) * (ty1 - ty0 + 1u);
-    let base = atomicAdd(&counters[1], n);
     let slot = atomicAdd(&counters[0], 1u);
     if (slot >= su.tri_capacity) {
+        // counted, as every tile of its box (more than it needs), so that the host grows the
+        // buffers for it and sets up again
+        atomicAdd(&counters[1], n);
         return;
     }
     let o = slot * TRI_WORDS;
@@ -362,24 +364,72 @@ fn piece_projected(i: u32, v_in: array<ClipVertex, 3>, p_in: array<Projected, 3>
     out_tris[o + 41u] = 0u;
     out_tris[o + 42u] = 0u;
     out_tris[o + 43u] = 0u;
-    if (base >= su.item_capacity || su.item_capacity - base < n) {
-        return;
-    }
     if (n > SPREAD_ITEMS) {
         let j = atomicAdd(&counters[2], 1u);
         if (j < SPREAD_PIECES) {
-            atomicStore(&counters[SPREAD_FIRST + 2u * j], slot);
-            atomicStore(&counters[SPREAD_FIRST + 2u * j + 1u], base);
+            atomicStore(&counters[SPREAD_FIRST + j], slot);
             return;
         }
     }
-    var k = base;
-    for (var ty = ty0; ty <= ty1; ty++) {
-        for (var tx = tx0; tx <= tx1; tx++) {
-            out_items[k] = vec2<u32>(slot, (ty << 16u) | tx);
-            k += 1u;
+    // counted first (a mask of the first 32 tiles, tested again past them), then written
+    let w = tx1 - tx0 + 1u;
+    var mask = 0u;
+    var m = 0u;
+    for (var k = 0u; k < n; k++) {
+        let keep = may_cover(o, tx0 + k % w, ty0 + k / w);
+        m += u32(keep);
+        if (keep && k < 32u) {
+            mask |= 1u << k;
         }
     }
+    let base = atomicAdd(&counters[1], m);
+    if (base >= su.item_capacity || su.item_capacity - base < m) {
+        return;
+    }
+    var at = base;
+    for (var k = 0u; k < n; k++) {
+        let tx = tx0 + k % w;
+        let ty = ty0 + k / w;
+        if (select(may_cover(o, tx, ty), (mask & (1u << k)) != 0u, k < 32u)) {
+            out_items[at] = vec2<u32>(slot, (ty << 16u) | tx);
+            at += 1u;
+        }
+    }
+}
+
+// oit-core's `Triangle::may_cover` of the piece at word `o` of `out_tris`: whether its tile
+// (tx, ty) may hold a sample it covers. False only where one edge leaves outside every subpixel
+// point from the first pixel's corner to the last's of the tile's part of the box: an edge
+// function is affine and exact in 64 bits, so its largest value over them is at a corner.
+fn may_cover(o: u32, tx: u32, ty: u32) -> bool {
+    let x0 = max(tx * SETUP_TILE, out_tris[o + 37u]);
+    let y0 = max(ty * SETUP_TILE, out_tris[o + 38u]);
+    let x1 = min(tx * SETUP_TILE + SETUP_TILE - 1u, out_tris[o + 39u]);
+    let y1 = min(ty * SETUP_TILE + SETUP_TILE - 1u, out_tris[o + 40u]);
+    if (x0 > x1 || y0 > y1) {
+        return false;
+    }
+    let xs = vec2<i64>(i64(x0) * 256li, i64(x1) * 256li + 255li);
+    let ys = vec2<i64>(i64(y0) * 256li, i64(y1) * 256li + 255li);
+    for (var k = 0u; k < 3u; k++) {
+        let a = (k + 1u) % 3u;
+        let b = (k + 2u) % 3u;
+        let ax = i64(bitcast<i32>(out_tris[o + a]));
+        let ay = i64(bitcast<i32>(out_tris[o + 3u + a]));
+        let dx = i64(bitcast<i32>(out_tris[o + b])) - ax;
+        let dy = i64(bitcast<i32>(out_tris[o + 3u + b])) - ay;
+        let above = select(0li, -1li, dy < 0li || (dy == 0li && dx > 0li));
+        var inside = false;
+        for (var c = 0u; c < 4u; c++) {
+            let x = select(xs.x, xs.y, (c & 1u) != 0u);
+            let y = select(ys.x, ys.y, (c & 2u) != 0u);
+            inside = inside || dx * (y - ay) - dy * (x - ax) > above;
+        }
+        if (!inside) {
+            return false;
+        }
+    }
+    return true;
 }
 
 // The instance whose tasks include `task`: the last with first task ≤ `task`.
@@ -534,24 +584,55 @@ fn vertex_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     verts[o + 11u] = test.p.inv_w;
 }
 
-// The work items of the spread pieces (`SPREAD_PIECES`): workgroup j writes piece j's, its tiles row
-// by row as `piece_projected` writes a small piece's, its 64 invocations side by side. Dispatched
-// SPREAD_PIECES workgroups after `setup_main`; those past the pieces spread end at once.
+// The work items of the spread pieces (`SPREAD_PIECES`): workgroup j writes piece j's, the tiles
+// of its box that it may cover (`may_cover`), 64 at a time side by side, each 64 taking their
+// places in the list with one atomic. Dispatched SPREAD_PIECES workgroups after `setup_main`;
+// those past the pieces spread end at once.
+var<workgroup> spread_tiles: u32;
+var<workgroup> spread_kept: atomic<u32>;
+var<workgroup> spread_base: u32;
+
 @compute @workgroup_size(64)
 fn setup_items_main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let j = wid.x;
-    if (j >= min(atomicLoad(&counters[2]), SPREAD_PIECES)) {
-        return;
+    let spread = j < min(atomicLoad(&counters[2]), SPREAD_PIECES);
+    var slot = 0u;
+    var tx0 = 0u;
+    var ty0 = 0u;
+    var w = 1u;
+    var tiles = 0u;
+    if (spread) {
+        slot = atomicLoad(&counters[SPREAD_FIRST + j]);
+        let o = slot * TRI_WORDS;
+        tx0 = out_tris[o + 37u] / SETUP_TILE;
+        ty0 = out_tris[o + 38u] / SETUP_TILE;
+        w = out_tris[o + 39u] / SETUP_TILE - tx0 + 1u;
+        tiles = w * (out_tris[o + 40u] / SETUP_TILE - ty0 + 1u);
     }
-    let slot = atomicLoad(&counters[SPREAD_FIRST + 2u * j]);
-    let base = atomicLoad(&counters[SPREAD_FIRST + 2u * j + 1u]);
+    if (lid == 0u) {
+        spread_tiles = tiles;
+        atomicStore(&spread_kept, 0u);
+    }
+    let n = workgroupUniformLoad(&spread_tiles);
     let o = slot * TRI_WORDS;
-    let tx0 = out_tris[o + 37u] / SETUP_TILE;
-    let ty0 = out_tris[o + 38u] / SETUP_TILE;
-    let w = out_tris[o + 39u] / SETUP_TILE - tx0 + 1u;
-    let n = w * (out_tris[o + 40u] / SETUP_TILE - ty0 + 1u);
-    for (var k = lid; k < n; k += 64u) {
-        out_items[base + k] = vec2<u32>(slot, ((ty0 + k / w) << 16u) | (tx0 + k % w));
+    for (var first = 0u; first < n; first += 64u) {
+        let k = first + lid;
+        let tx = tx0 + k % w;
+        let ty = ty0 + k / w;
+        let keep = k < n && may_cover(o, tx, ty);
+        var at = 0u;
+        if (keep) {
+            at = atomicAdd(&spread_kept, 1u);
+        }
+        workgroupBarrier();
+        if (lid == 0u) {
+            spread_base = atomicAdd(&counters[1], atomicLoad(&spread_kept));
+            atomicStore(&spread_kept, 0u);
+        }
+        at += workgroupUniformLoad(&spread_base);
+        if (keep && at < su.item_capacity) {
+            out_items[at] = vec2<u32>(slot, (ty << 16u) | tx);
+        }
     }
 }
 
