@@ -68,7 +68,7 @@ const I_FIRST_VERT: u32 = 39u;    // vertex-cache records of the instances befor
 
 const TRI_WORDS: u32 = 44u;
 const SETUP_TILE: u32 = 8u;
-// A piece of more than SPREAD_ITEMS work items (one of the first SPREAD_PIECES such) leaves them to
+// A piece of more than SPREAD_ITEMS tiles in its box (one of the first SPREAD_PIECES such) leaves them to
 // `setup_items_main`, a workgroup a piece (oit-core's `gpu_setup::SPREAD_PIECES`, `SPREAD_ITEMS`):
 // one invocation writing a large triangle's thousands of tiles, while a frame of a few such
 // triangles keeps a few invocations of the whole GPU busy, took 0.26 ms of an H100's frame for the
@@ -328,7 +328,7 @@ fn piece_projected(i: u32, v_in: array<ClipVertex, 3>, p_in: array<Projected, 3>
     if (!rx.ok || !ry.ok) {
         return;
     }
-    // binning: the piece's 8×8 tiles that it may cover (`may_cover`), row by row
+    // binning: the piece's 8×8 tiles that it may cover (`row_run`), row by row
     let tx0 = rx.first / SETUP_TILE;
     let tx1 = rx.last / SETUP_TILE;
     let ty0 = ry.first / SETUP_TILE;
@@ -372,65 +372,86 @@ fn piece_projected(i: u32, v_in: array<ClipVertex, 3>, p_in: array<Projected, 3>
             return;
         }
     }
-    // counted first (a mask of the first 32 tiles, tested again past them), then written
-    let w = tx1 - tx0 + 1u;
-    var mask = 0u;
+    // counted, then written, row by row
     var m = 0u;
-    for (var k = 0u; k < n; k++) {
-        let keep = may_cover(o, tx0 + k % w, ty0 + k / w);
-        m += u32(keep);
-        if (keep && k < 32u) {
-            mask |= 1u << k;
-        }
+    for (var ty = ty0; ty <= ty1; ty++) {
+        let run = row_run(o, ty, tx0, tx1);
+        m += run.y - run.x;
     }
     let base = atomicAdd(&counters[1], m);
     if (base >= su.item_capacity || su.item_capacity - base < m) {
         return;
     }
     var at = base;
-    for (var k = 0u; k < n; k++) {
-        let tx = tx0 + k % w;
-        let ty = ty0 + k / w;
-        if (select(may_cover(o, tx, ty), (mask & (1u << k)) != 0u, k < 32u)) {
+    for (var ty = ty0; ty <= ty1; ty++) {
+        let run = row_run(o, ty, tx0, tx1);
+        for (var tx = run.x; tx < run.y; tx++) {
             out_items[at] = vec2<u32>(slot, (ty << 16u) | tx);
             at += 1u;
         }
     }
 }
 
-// oit-core's `Triangle::may_cover` of the piece at word `o` of `out_tris`: whether its tile
-// (tx, ty) may hold a sample it covers. False only where one edge leaves outside every subpixel
-// point from the first pixel's corner to the last's of the tile's part of the box: an edge
-// function is affine and exact in 64 bits, so its largest value over them is at a corner.
-fn may_cover(o: u32, tx: u32, ty: u32) -> bool {
+// Whether edge k of the piece at word `o` of `out_tris` leaves some subpixel point of tile
+// (tx, ty)'s part of the piece's box inside (from the first pixel's corner to the last's): an
+// edge function is affine and exact in 64 bits, so its largest value over them is at a corner.
+fn edge_keeps(o: u32, k: u32, tx: u32, ty: u32) -> bool {
     let x0 = max(tx * SETUP_TILE, out_tris[o + 37u]);
     let y0 = max(ty * SETUP_TILE, out_tris[o + 38u]);
     let x1 = min(tx * SETUP_TILE + SETUP_TILE - 1u, out_tris[o + 39u]);
     let y1 = min(ty * SETUP_TILE + SETUP_TILE - 1u, out_tris[o + 40u]);
-    if (x0 > x1 || y0 > y1) {
-        return false;
-    }
     let xs = vec2<i64>(i64(x0) * 256li, i64(x1) * 256li + 255li);
     let ys = vec2<i64>(i64(y0) * 256li, i64(y1) * 256li + 255li);
+    let a = (k + 1u) % 3u;
+    let b = (k + 2u) % 3u;
+    let ax = i64(bitcast<i32>(out_tris[o + a]));
+    let ay = i64(bitcast<i32>(out_tris[o + 3u + a]));
+    let dx = i64(bitcast<i32>(out_tris[o + b])) - ax;
+    let dy = i64(bitcast<i32>(out_tris[o + 3u + b])) - ay;
+    let above = select(0li, -1li, dy < 0li || (dy == 0li && dx > 0li));
+    var inside = false;
+    for (var c = 0u; c < 4u; c++) {
+        let x = select(xs.x, xs.y, (c & 1u) != 0u);
+        let y = select(ys.x, ys.y, (c & 2u) != 0u);
+        inside = inside || dx * (y - ay) - dy * (x - ax) > above;
+    }
+    return inside;
+}
+
+// The tiles of row `ty` of the piece at word `o` (its box's columns tx0 to tx1) that oit-core's
+// `Triangle::may_cover` keeps (each of the three edges keeps the tile), as the columns [x, y),
+// empty where y is x. Along a row an edge's largest value over a tile moves one way (the tile's
+// part of the box moves right, its corners' rows stay), so each edge keeps a prefix or a suffix
+// of the row, or all or none of it: its ends say which, and a bisection finds the boundary.
+fn row_run(o: u32, ty: u32, tx0: u32, tx1: u32) -> vec2<u32> {
+    var lo = tx0;
+    var end = tx1 + 1u;
     for (var k = 0u; k < 3u; k++) {
-        let a = (k + 1u) % 3u;
-        let b = (k + 2u) % 3u;
-        let ax = i64(bitcast<i32>(out_tris[o + a]));
-        let ay = i64(bitcast<i32>(out_tris[o + 3u + a]));
-        let dx = i64(bitcast<i32>(out_tris[o + b])) - ax;
-        let dy = i64(bitcast<i32>(out_tris[o + 3u + b])) - ay;
-        let above = select(0li, -1li, dy < 0li || (dy == 0li && dx > 0li));
-        var inside = false;
-        for (var c = 0u; c < 4u; c++) {
-            let x = select(xs.x, xs.y, (c & 1u) != 0u);
-            let y = select(ys.x, ys.y, (c & 2u) != 0u);
-            inside = inside || dx * (y - ay) - dy * (x - ax) > above;
+        let first = edge_keeps(o, k, tx0, ty);
+        let last = edge_keeps(o, k, tx1, ty);
+        if (!first && !last) {
+            return vec2<u32>(tx0, tx0);
         }
-        if (!inside) {
-            return false;
+        if (first != last) {
+            // keeps(l) is `first`, keeps(r) is `last`, until they are neighbours
+            var l = tx0;
+            var r = tx1;
+            while (r - l > 1u) {
+                let mid = l + (r - l) / 2u;
+                if (edge_keeps(o, k, mid, ty) == first) {
+                    l = mid;
+                } else {
+                    r = mid;
+                }
+            }
+            if (first) {
+                end = min(end, r);
+            } else {
+                lo = max(lo, r);
+            }
         }
     }
-    return true;
+    return vec2<u32>(lo, max(lo, end));
 }
 
 // The instance whose tasks include `task`: the last with first task ≤ `task`.
@@ -586,10 +607,10 @@ fn vertex_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
 }
 
 // The work items of the spread pieces (`SPREAD_PIECES`): workgroup j writes piece j's, the tiles
-// of its box that it may cover (`may_cover`), 64 at a time side by side, each 64 taking their
-// places in the list with one atomic. Dispatched SPREAD_PIECES workgroups after `setup_main`;
-// those past the pieces spread end at once.
-var<workgroup> spread_tiles: u32;
+// of its box that it may cover (`row_run`), a row an invocation at a time; the piece takes its
+// place in the list with one atomic, so its items lie together as a small piece's do. Dispatched
+// SPREAD_PIECES workgroups after `setup_main`; those past the pieces spread end at once.
+var<workgroup> spread_rows: u32;
 var<workgroup> spread_kept: atomic<u32>;
 var<workgroup> spread_base: u32;
 
@@ -599,40 +620,42 @@ fn setup_items_main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invoca
     let spread = j < min(atomicLoad(&counters[2]), SPREAD_PIECES);
     var slot = 0u;
     var tx0 = 0u;
+    var tx1 = 0u;
     var ty0 = 0u;
-    var w = 1u;
-    var tiles = 0u;
+    var rows = 0u;
     if (spread) {
         slot = atomicLoad(&counters[SPREAD_FIRST + j]);
         let o = slot * TRI_WORDS;
         tx0 = out_tris[o + 37u] / SETUP_TILE;
         ty0 = out_tris[o + 38u] / SETUP_TILE;
-        w = out_tris[o + 39u] / SETUP_TILE - tx0 + 1u;
-        tiles = w * (out_tris[o + 40u] / SETUP_TILE - ty0 + 1u);
+        tx1 = out_tris[o + 39u] / SETUP_TILE;
+        rows = out_tris[o + 40u] / SETUP_TILE - ty0 + 1u;
     }
     if (lid == 0u) {
-        spread_tiles = tiles;
+        spread_rows = rows;
         atomicStore(&spread_kept, 0u);
     }
-    let n = workgroupUniformLoad(&spread_tiles);
+    let n = workgroupUniformLoad(&spread_rows);
     let o = slot * TRI_WORDS;
-    for (var first = 0u; first < n; first += 64u) {
-        let k = first + lid;
-        let tx = tx0 + k % w;
-        let ty = ty0 + k / w;
-        let keep = k < n && may_cover(o, tx, ty);
-        var at = 0u;
-        if (keep) {
-            at = atomicAdd(&spread_kept, 1u);
-        }
-        workgroupBarrier();
-        if (lid == 0u) {
-            spread_base = atomicAdd(&counters[1], atomicLoad(&spread_kept));
-            atomicStore(&spread_kept, 0u);
-        }
-        at += workgroupUniformLoad(&spread_base);
-        if (keep && at < su.item_capacity) {
-            out_items[at] = vec2<u32>(slot, (ty << 16u) | tx);
+    var mine = 0u;
+    for (var row = lid; row < n; row += 64u) {
+        let run = row_run(o, ty0 + row, tx0, tx1);
+        mine += run.y - run.x;
+    }
+    var at = atomicAdd(&spread_kept, mine);
+    workgroupBarrier();
+    if (lid == 0u) {
+        spread_base = atomicAdd(&counters[1], atomicLoad(&spread_kept));
+    }
+    at += workgroupUniformLoad(&spread_base);
+    for (var row = lid; row < n; row += 64u) {
+        let ty = ty0 + row;
+        let run = row_run(o, ty, tx0, tx1);
+        for (var tx = run.x; tx < run.y; tx++) {
+            if (at < su.item_capacity) {
+                out_items[at] = vec2<u32>(slot, (ty << 16u) | tx);
+            }
+            at += 1u;
         }
     }
 }
