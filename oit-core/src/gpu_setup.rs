@@ -20,17 +20,12 @@ pub const INSTANCE_WORDS: usize = 40;
 /// Words of one vertex-cache record (setup.wgsl's `VERT_WORDS`).
 pub const VERT_WORDS: usize = 12;
 /// Words of the setup's indirect arguments, as `setup_finish_main` writes them: the per-pixel
-/// raster dispatch (4 words), the per-item one (4), the item count (word 8) and the list's first
-/// item (word 9), padded to 12.
+/// raster dispatch (4 words), the per-item one (4) and the item count (word 8, padded to 12).
 pub const ARGS_WORDS: usize = 12;
 /// Byte offset of the per-item raster dispatch in the arguments.
 pub const ARGS_PER_ITEM: u64 = 16;
 /// Byte offset of the item count in the arguments (copied into the raster uniform's word 0).
 pub const ARGS_ITEMS: u64 = 32;
-/// Byte offset of the work list's first item in its buffer in the arguments (0 from the setup;
-/// raster_compute.wgsl's `classify_finish_main` moves the list behind the opaque cut's count;
-/// copied into the raster uniform's word 7).
-pub const ARGS_BASE: u64 = 36;
 /// The most pieces a frame whose work items `setup_items_main` writes, a workgroup a piece, rather
 /// than the piece's own invocation in `setup_main` (setup.wgsl's `SPREAD_PIECES`): those with more
 /// than [`SPREAD_ITEMS`] items, the first this many of them.

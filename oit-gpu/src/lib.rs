@@ -75,28 +75,6 @@ pub fn classifies_items(uniform: &FrameUniform) -> bool {
     uniform.opaque[1] != 0 && uniform.opaque[3] == MARKS_WRITE && uniform.msaa[0] <= 1
 }
 
-/// Whether the compute rasterizer of `part` (a layer of `scene`: `Scene::layers`) keeps room
-/// behind its work list in a frame with `settings`: the transparent part's (and its boxes') in a
-/// frame whose first scene pass classifies the items over an opaque part ([`classifies_items`]:
-/// one sample a pixel). `classify_main` copies the items it keeps there, and the frame's passes
-/// dispatch the copy alone (raster_compute.wgsl's `classify_finish_main`).
-pub fn keeps_room(scene: &Scene, part: &Scene, settings: &Settings) -> bool {
-    scene.has_opaque() && !part.has_opaque() && settings.samples <= 1
-}
-
-/// The work items a compute frame's list buffer of `bytes` lets the setup write: half of them
-/// where the frame keeps room ([`keeps_room`]), all of them in a buffer at the device's `limit`
-/// (which holds a list first, room or not) or where it keeps none.
-pub fn item_capacity(bytes: u64, limit: u64, room: bool) -> u64 {
-    if room && bytes < limit { bytes / 16 } else { bytes / 8 }
-}
-
-/// The bytes a work list of `items` asks of its buffer ([`item_capacity`]'s inverse): twice the
-/// list's where the frame keeps room, less at the device's `limit`, never less than the list's.
-pub fn work_list_bytes(items: u64, limit: u64, room: bool) -> u64 {
-    if room { (items * 16).min(limit).max(items * 8) } else { items * 8 }
-}
-
 /// The opaque pass's module (`opaque.wgsl`), whose passes time under their own label
 /// ([`geometry_label`]).
 pub const OPAQUE_MODULE: &str = "opaque";

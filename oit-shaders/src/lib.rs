@@ -101,13 +101,10 @@ pub const PRELUDE: &str =
 pub const TEXTURE: &str = include_str!("../wgsl/core/texture.wgsl");
 
 /// The compute rasterizer (the papers' "CUDA rasterizer"), appended to a technique module: the
-/// integer f32 of `softfloat.wgsl` (a fragment's depth, as oit-core computes it), the indirect
-/// dispatch words of `dispatch.wgsl`, the sampler
+/// integer f32 of `softfloat.wgsl` (a fragment's depth, as oit-core computes it), the sampler
 /// ([`TEXTURE`]), then the rasterizer.
 pub const COMPUTE_RASTER: &str = concat!(
     include_str!("../wgsl/core/softfloat.wgsl"),
-    "\n",
-    include_str!("../wgsl/core/dispatch.wgsl"),
     "\n",
     include_str!("../wgsl/core/texture.wgsl"),
     "\n",
@@ -134,16 +131,10 @@ pub const HARDWARE_RASTER_EARLY: &str = include_str!("../wgsl/core/raster_hardwa
 /// The fragment contract of a render pipeline's capture (what `hw_fs` hands `capture`).
 pub const CAPTURE_RENDER: &str = include_str!("../wgsl/core/capture_render.wgsl");
 
-/// The compute path's setup kernels: the integer f32 of `softfloat.wgsl`, `dispatch.wgsl`, then
-/// `setup.wgsl`.
+/// The compute path's setup kernels: the integer f32 of `softfloat.wgsl`, then `setup.wgsl`.
 /// They bind a group 0 of their own: nothing goes before them.
-pub const SETUP: &str = concat!(
-    include_str!("../wgsl/core/softfloat.wgsl"),
-    "\n",
-    include_str!("../wgsl/core/dispatch.wgsl"),
-    "\n",
-    include_str!("../wgsl/core/setup.wgsl")
-);
+pub const SETUP: &str =
+    concat!(include_str!("../wgsl/core/softfloat.wgsl"), "\n", include_str!("../wgsl/core/setup.wgsl"));
 
 /// [`HARDWARE_RASTER`]'s vertex stage alone (up to its fragment entry point).
 pub fn vertex_stage() -> &'static str {

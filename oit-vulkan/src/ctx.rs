@@ -705,11 +705,7 @@ impl<'a> VkCtx<'a> {
         let bindings = self.image_bindings();
         let pipeline = self.gpu.pipeline(module, entry, buffers.len(), &bindings)?;
         let classify = if oit_gpu::classifies_items(&self.uniform) {
-            let finish = [SetKind::Frame(buffers.len(), bindings.clone()), SetKind::RasterWide];
-            Some((
-                self.gpu.pipeline(module, "classify_main", buffers.len(), &bindings)?,
-                self.gpu.compute(module, "classify_finish_main", &finish)?,
-            ))
+            Some(self.gpu.pipeline(module, "classify_main", buffers.len(), &bindings)?)
         } else {
             None
         };
@@ -725,16 +721,9 @@ impl<'a> VkCtx<'a> {
             SetData::Frame { uniform: bytemuck::bytes_of(&uniform), storage: &storage, images: &self.images },
             SetData::Raster { storage: &raster_set, uniform: &raster.uniform },
         ];
-        if let Some((classify, finish)) = &classify {
-            // an invocation an item, before the pass (`oit_gpu::classifies_items`); then the
-            // pass and the frame's later ones dispatch the items it kept alone
+        if let Some(classify) = &classify {
+            // an invocation an item, before the pass (`oit_gpu::classifies_items`)
             raster.dispatch(&mut self.rec, "classify", classify, &sets, false, false)?;
-            let frame = SetData::Frame {
-                uniform: bytemuck::bytes_of(&uniform),
-                storage: &storage,
-                images: &self.images,
-            };
-            raster.point_at_kept(&mut self.rec, finish, frame)?;
         }
         let label = oit_gpu::geometry_label(module);
         raster.dispatch(&mut self.rec, label, &pipeline, &sets, per_pixel, self.gated_pass)?;
@@ -1011,7 +1000,7 @@ impl<'a> VkCtx<'a> {
             samples: pass.targets.first().map_or(1, |i| i.samples),
         };
         let bindings = self.image_bindings();
-        let mut kinds = vec![SetKind::Frame(buffers.len(), bindings), SetKind::RasterWide];
+        let mut kinds = vec![SetKind::Frame(buffers.len(), bindings), SetKind::HwRaster];
         if !pass.previous.is_empty() {
             kinds.push(SetKind::Images(pass.previous.iter().map(|(b, _)| *b).collect()));
         }

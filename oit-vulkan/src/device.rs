@@ -311,10 +311,9 @@ pub(crate) enum SetKind {
     /// rasterizer's triangles, work list and counter; the hardware raster's vertices, triangles
     /// and instances).
     Raster,
-    /// [`SetKind::Raster`]'s, and storage at 4: the hardware raster's textures
-    /// (raster_hardware.wgsl's `hw_tex`), or the compute raster's indirect arguments for
-    /// `classify_finish_main` (raster_compute.wgsl's `raster_args`).
-    RasterWide,
+    /// Group 1 of the hardware raster: [`SetKind::Raster`]'s, and its textures at 4
+    /// (raster_hardware.wgsl's `hw_tex`).
+    HwRaster,
     /// Sampled images (read with `textureLoad`) at these bindings: a blend capture's targets.
     Images(Vec<u32>),
 }
@@ -1268,7 +1267,7 @@ impl Gpu {
             module: &format!("{module}_hw"),
             // a multisampled pass's fragments carry the samples they cover (docs/msaa.md)
             fs: if samples > 1 { "hw_fs_masked" } else { "hw_fs" },
-            sets: &[SetKind::Frame(n, images.to_vec()), SetKind::RasterWide],
+            sets: &[SetKind::Frame(n, images.to_vec()), SetKind::HwRaster],
             pass: &count_pass_key(samples),
             blends: &[Blend::AddRed],
             depth: DepthTest::Off,
@@ -1302,7 +1301,7 @@ impl Gpu {
         self.graphics(&GraphicsDesc {
             module: &format!("{module}_hw"),
             fs,
-            sets: &[SetKind::Frame(n, images.to_vec()), SetKind::RasterWide],
+            sets: &[SetKind::Frame(n, images.to_vec()), SetKind::HwRaster],
             pass: &early_pass_key(),
             blends: &[blend],
             depth,
@@ -1512,7 +1511,7 @@ impl Gpu {
                             (2, vk::DescriptorType::UNIFORM_BUFFER),
                             (3, vk::DescriptorType::STORAGE_BUFFER),
                         ],
-                        SetKind::RasterWide => vec![
+                        SetKind::HwRaster => vec![
                             (0, vk::DescriptorType::STORAGE_BUFFER),
                             (1, vk::DescriptorType::STORAGE_BUFFER),
                             (2, vk::DescriptorType::UNIFORM_BUFFER),

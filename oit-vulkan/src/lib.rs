@@ -269,7 +269,6 @@ impl<'s> VulkanPrepared<'s> {
             *kept = Some(ComputeBuffers::new(self.gpu, self.gpu_setup, &self.geometry_made)?);
         }
         let buffers = kept.as_mut().expect("just made");
-        buffers.room = oit_gpu::keeps_room(self.scene, scene, settings);
         buffers.frame(self.gpu, scene, camera, settings, boxes, &self.geometry_made)
     }
 }

@@ -26,7 +26,7 @@ use std::rc::Rc;
 
 use ash::vk;
 use oit_core::gpu_setup::{
-    ARGS_BASE, ARGS_ITEMS, ARGS_PER_ITEM, ARGS_WORDS, COUNTER_WORDS, SPREAD_PIECES, SetupGeometry, VERT_WORDS,
+    ARGS_ITEMS, ARGS_PER_ITEM, ARGS_WORDS, COUNTER_WORDS, SPREAD_PIECES, SetupGeometry, VERT_WORDS,
 };
 use oit_core::setup::TRIANGLE_WORDS;
 use oit_core::{Camera, OitError, Scene, Settings};
@@ -174,25 +174,6 @@ impl ComputeRaster {
             if per_pixel { 0 } else { ARGS_PER_ITEM },
         )
     }
-
-    /// Records what follows `classify_main` (raster_compute.wgsl) in a frame's first scene pass:
-    /// `classify_finish_main` (`pipeline`, its group 1 with the arguments at binding 4), which
-    /// points the arguments at the copy of the items classify kept where the work list had room
-    /// for it, then the arguments' item count and first item into the raster uniform (words 0
-    /// and 7), for every pass of the frame. `frame` is the pass's group 0.
-    pub(crate) fn point_at_kept(
-        &self,
-        rec: &mut Recorder<'_>,
-        pipeline: &crate::device::Pipeline,
-        frame: SetData<'_>,
-    ) -> Result<(), OitError> {
-        let storage = [(0, &*self.tris), (1, &*self.item_list), (3, &*self.generated), (4, &*self.args)];
-        let sets = [frame, SetData::Raster { storage: &storage, uniform: &self.uniform }];
-        rec.dispatch("classify", pipeline, &sets, (1, 1))?;
-        rec.copy_at(&self.args, ARGS_ITEMS, &self.uniform, 0, 4);
-        rec.copy_at(&self.args, ARGS_BASE, &self.uniform, 28, 4);
-        Ok(())
-    }
 }
 
 /// What the GPU setup keeps besides its outputs: the geometry (uploaded once), the instance
@@ -263,8 +244,6 @@ pub(crate) struct ComputeBuffers {
     /// Whether an earlier frame's setup was seen to fit these buffers: then a frame does not read
     /// the counters before its passes but checks them at its end.
     trusted: Rc<Cell<bool>>,
-    /// Whether the next frame keeps room behind its work list ([`oit_gpu::keeps_room`]).
-    pub(crate) room: bool,
 }
 
 fn geometry_usage() -> vk::BufferUsageFlags {
@@ -293,7 +272,6 @@ impl ComputeBuffers {
             setup: None,
             on_gpu: setup_on_gpu(gpu, choice),
             trusted: Rc::new(Cell::new(false)),
-            room: false,
         })
     }
 
@@ -373,10 +351,7 @@ impl ComputeBuffers {
         }
         let s = self.setup.clone().expect("made above");
         let instances = bytemuck::cast_slice(&s.layout.instance_words(scene, camera, settings)).to_vec();
-        let (room, limit) = (self.room, u64::from(gpu.info.limits.max_storage_buffer_range));
-        let capacities = |b: &Self| {
-            (b.tris.size / (TRIANGLE_WORDS as u64 * 4), oit_gpu::item_capacity(b.items.size, limit, room))
-        };
+        let capacities = |b: &Self| (b.tris.size / (TRIANGLE_WORDS as u64 * 4), b.items.size / 8);
         // until these buffers were seen to fit, set up and read the counters before the frame:
         // one round trip, grown and set up again while short
         while !self.trusted.get() {
@@ -388,12 +363,7 @@ impl ComputeBuffers {
             let (pieces, items) = (u64::from(counts[0]), u64::from(counts[1]));
             if pieces <= tri_capacity && items <= item_capacity {
                 self.trusted.set(true);
-            } else if !self.reserve(
-                gpu,
-                pieces * TRIANGLE_WORDS as u64 * 4,
-                oit_gpu::work_list_bytes(items, limit, room),
-                made,
-            )? {
+            } else if !self.reserve(gpu, pieces * TRIANGLE_WORDS as u64 * 4, items * 8, made)? {
                 return Err(OitError::Device(format!(
                     "the compute path's setup needs {pieces} triangles and {items} work items, more than its buffers hold"
                 )));
@@ -475,9 +445,7 @@ impl ComputeBuffers {
         raster_uniform: impl Fn(u32) -> Vec<u8>,
     ) -> Result<ComputeRaster, OitError> {
         let (words, items) = oit_gpu::host_setup(scene, camera, settings, boxes);
-        let limit = u64::from(gpu.info.limits.max_storage_buffer_range);
-        let item_bytes = oit_gpu::work_list_bytes(items.len() as u64, limit, self.room);
-        self.reserve(gpu, words.len() as u64 * 4, item_bytes, made)?;
+        self.reserve(gpu, words.len() as u64 * 4, items.len() as u64 * 8, made)?;
         Ok(ComputeRaster {
             tris: self.tris.clone(),
             item_list: self.items.clone(),

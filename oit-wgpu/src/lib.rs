@@ -316,7 +316,6 @@ impl<'s> WgpuPrepared<'s> {
     ) -> Result<ComputeRaster, OitError> {
         let mut kept = cell.borrow_mut();
         let buffers = kept.get_or_insert_with(|| ComputeBuffers::new(self.gpu, &self.geometry_made));
-        buffers.room = oit_gpu::keeps_room(self.scene, scene, settings);
         buffers.frame(self.gpu, scene, camera, settings, boxes, &self.geometry_made)
     }
 }

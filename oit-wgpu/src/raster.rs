@@ -34,7 +34,7 @@
 use std::cell::Cell;
 
 use oit_core::gpu_setup::{
-    ARGS_BASE, ARGS_ITEMS, ARGS_PER_ITEM, ARGS_WORDS, COUNTER_WORDS, SPREAD_PIECES, SetupGeometry, VERT_WORDS,
+    ARGS_ITEMS, ARGS_PER_ITEM, ARGS_WORDS, COUNTER_WORDS, SPREAD_PIECES, SetupGeometry, VERT_WORDS,
 };
 use oit_core::setup::{TRIANGLE_WORDS, TriangleSetup};
 use oit_core::{Camera, OitError, RasterPath, Scene, Settings};
@@ -68,11 +68,6 @@ pub fn setup_on_gpu(gpu: &Gpu) -> bool {
 pub struct ComputeRaster {
     layout: wgpu::BindGroupLayout,
     group: wgpu::BindGroup,
-    /// Group 1 with the arguments at binding 4, for `classify_finish_main` (raster_compute.wgsl)
-    /// alone: a dispatch that reads them as its arguments may not bind them for writing.
-    wide_layout: wgpu::BindGroupLayout,
-    wide_group: wgpu::BindGroup,
-    uniform: wgpu::Buffer,
     generated: wgpu::Buffer,
     args: wgpu::Buffer,
     /// The gated copy of `args`, for gated passes.
@@ -170,9 +165,6 @@ pub(crate) struct ComputeBuffers {
     gated: wgpu::Buffer,
     layout: wgpu::BindGroupLayout,
     group: wgpu::BindGroup,
-    /// [`ComputeRaster`]'s `wide_layout` and `wide_group`.
-    wide_layout: wgpu::BindGroupLayout,
-    wide_group: wgpu::BindGroup,
     setup: Option<SetupBuffers>,
     /// Whether the GPU setup may use its vertex cache (`SetupBuffers::use_verts`): on unless
     /// `OIT_SETUP_VERTS=0`.
@@ -180,8 +172,6 @@ pub(crate) struct ComputeBuffers {
     /// Whether an earlier frame's setup fitted these buffers: then a frame does not wait for the
     /// setup's counters before its passes but checks them at its end (`SetupCheck`).
     pub(crate) trusted: bool,
-    /// Whether the next frame keeps room behind its work list ([`oit_gpu::keeps_room`]).
-    pub(crate) room: bool,
 }
 
 /// What the GPU setup keeps besides the outputs.
@@ -225,12 +215,8 @@ fn buffer(gpu: &Gpu, label: &str, size: u64, usage: wgpu::BufferUsages, made: &C
 /// that views needing a little more each time do not create a buffer each frame, but never over
 /// the device's limit (`needed` was checked against it).
 fn grown(gpu: &Gpu, old: u64, needed: u64) -> u64 {
-    needed.max(old.saturating_mul(2).min(buffer_limit(gpu))).next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT)
-}
-
-/// The most bytes a buffer of the compute path may hold and bind.
-fn buffer_limit(gpu: &Gpu) -> u64 {
-    gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size)
+    let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+    needed.max(old.saturating_mul(2).min(limit)).next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT)
 }
 
 fn layout_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
@@ -272,23 +258,16 @@ impl ComputeBuffers {
             made,
         );
         let gated = buffer(gpu, "gated raster dispatch", ARGS_BYTES, U::STORAGE | U::INDIRECT, made);
-        let entries = [
-            layout_entry(0, wgpu::BufferBindingType::Storage { read_only: true }),
-            layout_entry(1, wgpu::BufferBindingType::Storage { read_only: false }),
-            layout_entry(2, wgpu::BufferBindingType::Uniform),
-            layout_entry(3, wgpu::BufferBindingType::Storage { read_only: false }),
-            layout_entry(4, wgpu::BufferBindingType::Storage { read_only: false }),
-        ];
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("compute raster"),
-            entries: &entries[..4],
-        });
-        let wide_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("compute raster with its arguments"),
-            entries: &entries,
+            entries: &[
+                layout_entry(0, wgpu::BufferBindingType::Storage { read_only: true }),
+                layout_entry(1, wgpu::BufferBindingType::Storage { read_only: false }),
+                layout_entry(2, wgpu::BufferBindingType::Uniform),
+                layout_entry(3, wgpu::BufferBindingType::Storage { read_only: false }),
+            ],
         });
         let group = bind(gpu, &layout, &[&tris, &items, &uniform, &generated]);
-        let wide_group = bind(gpu, &wide_layout, &[&tris, &items, &uniform, &generated, &args]);
         let vertex_cache =
             !std::env::var("OIT_SETUP_VERTS").is_ok_and(|v| v == "0" || v.eq_ignore_ascii_case("false"));
         ComputeBuffers {
@@ -300,12 +279,9 @@ impl ComputeBuffers {
             gated,
             layout,
             group,
-            wide_layout,
-            wide_group,
             setup: None,
             vertex_cache,
             trusted: false,
-            room: false,
         }
     }
 
@@ -331,8 +307,6 @@ impl ComputeBuffers {
         }
         if rebind {
             self.group = bind(gpu, &self.layout, &[&self.tris, &self.items, &self.uniform, &self.generated]);
-            let wide = [&self.tris, &self.items, &self.uniform, &self.generated, &self.args];
-            self.wide_group = bind(gpu, &self.wide_layout, &wide);
             if let Some(s) = &mut self.setup {
                 s.group = None;
             }
@@ -378,9 +352,6 @@ impl ComputeBuffers {
         Ok(ComputeRaster {
             layout: self.layout.clone(),
             group: self.group.clone(),
-            wide_layout: self.wide_layout.clone(),
-            wide_group: self.wide_group.clone(),
-            uniform: self.uniform.clone(),
             generated: self.generated.clone(),
             args: self.args.clone(),
             gated: self.gated.clone(),
@@ -400,8 +371,7 @@ impl ComputeBuffers {
         made: &Cell<u64>,
     ) -> Result<(), OitError> {
         let (words, items) = oit_gpu::host_setup(scene, camera, settings, boxes);
-        let item_bytes = oit_gpu::work_list_bytes(items.len() as u64, buffer_limit(gpu), self.room);
-        self.reserve(gpu, words.len() as u64 * 4, item_bytes, made)?;
+        self.reserve(gpu, words.len() as u64 * 4, items.len() as u64 * 8, made)?;
         let queue = &gpu.queue;
         if !words.is_empty() {
             queue.write_buffer(&self.tris, 0, bytemuck::cast_slice(&words));
@@ -446,7 +416,7 @@ impl ComputeBuffers {
                 ],
             });
             // a first guess at the room the pieces and the work list need (grown if short)
-            let limit = buffer_limit(gpu);
+            let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
             let (guess_tris, guess_items) = geometry.layout.first_guess(limit);
             let vert_bytes = geometry.layout.vertex_total() * VERT_BYTES;
             let use_verts = self.vertex_cache && vert_bytes > 0 && vert_bytes <= limit;
@@ -506,10 +476,9 @@ impl ComputeBuffers {
             gpu.queue.write_buffer(&s.instances, 0, bytemuck::cast_slice(&words));
         }
         self.write_uniform(gpu, camera, settings, 0);
-        let (room, limit) = (self.room, buffer_limit(gpu));
         loop {
             let tri_capacity = self.tris.size() / (TRIANGLE_WORDS as u64 * 4);
-            let item_capacity = oit_gpu::item_capacity(self.items.size(), limit, room);
+            let item_capacity = self.items.size() / 8;
             let s = self.setup.as_mut().expect("made above");
             let uniform = s.geometry.layout.uniform_words(settings, tri_capacity, item_capacity, s.use_verts);
             gpu.queue.write_buffer(&s.uniform, 0, bytemuck::cast_slice(&uniform));
@@ -589,8 +558,7 @@ impl ComputeBuffers {
                 let ms = words.get(1).map(|t| gpu.pair_ms(t, 0));
                 return Ok((ms, None));
             }
-            let item_bytes = oit_gpu::work_list_bytes(items, limit, room);
-            let grew = self.reserve(gpu, pieces * TRIANGLE_WORDS as u64 * 4, item_bytes, made)?;
+            let grew = self.reserve(gpu, pieces * TRIANGLE_WORDS as u64 * 4, items * 8, made)?;
             if !grew {
                 return Err(OitError::Device(format!(
                     "the compute path's setup needs {pieces} triangles and {items} work items, more than its buffers hold"
@@ -635,11 +603,7 @@ impl Driver for ComputeRaster {
         let module = format!("{source}\n{RASTER_WGSL}");
         let pipeline = ctx.gpu.compute_pipeline(&module, entry, &[layout0, &self.layout])?;
         let classify = if ctx.classify_items {
-            let wide = [layout0, &self.wide_layout];
-            Some((
-                ctx.gpu.compute_pipeline(&module, "classify_main", &[layout0, &self.layout])?,
-                ctx.gpu.compute_pipeline(&module, "classify_finish_main", &wide)?,
-            ))
+            Some(ctx.gpu.compute_pipeline(&module, "classify_main", &[layout0, &self.layout])?)
         } else {
             None
         };
@@ -647,49 +611,24 @@ impl Driver for ComputeRaster {
         let label = ctx.geometry_label;
         let mut encoder = ctx.take_encoder();
         encoder.clear_buffer(&self.generated, 0, None);
-        let writes = ctx.render_timestamps();
-        let (first, last) = match &writes {
-            Some(w) => (w.beginning_of_pass_write_index, w.end_of_pass_write_index),
-            None => (None, None),
-        };
-        let stamps = |beginning, end| {
-            writes.as_ref().map(|w| wgpu::ComputePassTimestampWrites {
-                query_set: w.query_set,
-                beginning_of_pass_write_index: beginning,
-                end_of_pass_write_index: end,
-            })
-        };
-        if let Some((classify, finish)) = &classify {
-            // an invocation an item (the per-item arguments), before the pass
-            // (`oit_gpu::classifies_items`); then the pass and the frame's later ones dispatch the
-            // items it kept alone: the arguments' count and first item go to the raster uniform
-            // between the two compute passes
-            {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some(label),
-                    timestamp_writes: stamps(first, None),
-                });
-                pass.set_bind_group(0, group0, &[]);
-                pass.set_bind_group(1, &self.group, &[]);
-                pass.set_pipeline(classify);
-                pass.dispatch_workgroups_indirect(&self.args, ARGS_PER_ITEM);
-                pass.set_bind_group(1, &self.wide_group, &[]);
-                pass.set_pipeline(finish);
-                pass.dispatch_workgroups(1, 1, 1);
-            }
-            encoder.copy_buffer_to_buffer(&self.args, ARGS_ITEMS, &self.uniform, 0, 4);
-            encoder.copy_buffer_to_buffer(&self.args, ARGS_BASE, &self.uniform, 28, 4);
-        }
+        let writes = ctx.render_timestamps().map(|w| wgpu::ComputePassTimestampWrites {
+            query_set: w.query_set,
+            beginning_of_pass_write_index: w.beginning_of_pass_write_index,
+            end_of_pass_write_index: w.end_of_pass_write_index,
+        });
         {
-            let beginning = if classify.is_some() { None } else { first };
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some(label),
-                timestamp_writes: stamps(beginning, last),
+                timestamp_writes: writes,
             });
             pass.set_bind_group(0, group0, &[]);
             pass.set_bind_group(1, &self.group, &[]);
-            // arguments written by the setup (or the host's), or by `classify_finish_main`: the
-            // per-pixel dispatch, or the per-item one
+            // arguments written by the setup (or the host's): the per-pixel dispatch, then the
+            // per-item one (`classify_main`'s too)
+            if let Some(classify) = &classify {
+                pass.set_pipeline(classify);
+                pass.dispatch_workgroups_indirect(args, ARGS_PER_ITEM);
+            }
             pass.set_pipeline(&pipeline);
             pass.dispatch_workgroups_indirect(args, if per_pixel { 0 } else { ARGS_PER_ITEM });
         }

@@ -30,9 +30,7 @@ struct RasterUniform {
     width: u32,
     height: u32,
     shading: u32,
-    forward: vec3<f32>,
-    // where the work list starts in `items` (0 from the setup; `classify_finish_main` moves it)
-    item_base: u32,
+    forward: vec4<f32>,
 }
 
 // TRI_WORDS words a triangle (`TriangleSetup::triangle_words`), then, in a frame with textures
@@ -44,11 +42,7 @@ struct RasterUniform {
 // an item that captured nothing (`ITEM_SPENT`)
 @group(1) @binding(1) var<storage, read_write> items: array<vec2<u32>>;
 @group(1) @binding(2) var<uniform> ru: RasterUniform;
-// 0: fragments; 1: the work items `classify_main` keeps
 @group(1) @binding(3) var<storage, read_write> generated: array<atomic<u32>>;
-// The raster's indirect arguments (oit-core's `gpu_setup::ARGS_WORDS`), bound for
-// `classify_finish_main` alone: the passes dispatch from them.
-@group(1) @binding(4) var<storage, read_write> raster_args: array<u32>;
 
 const TILE: u32 = 8u;
 const TRI_WORDS: u32 = 44u;
@@ -74,7 +68,7 @@ const ITEM_COUNTED: u32 = 0x40000000u;
 // Work item `i` (its tile without the marks) and whether this pass skips it (`ITEM_SPENT` in a
 // later pass, `ITEM_COUNTED` in any).
 fn load_item(i: u32) -> vec3<u32> {
-    let raw = items[ru.item_base + i];
+    let raw = items[i];
     let spent = (fu.opaque.w == MARKS_READ && (raw.y & ITEM_SPENT) != 0u) || (raw.y & ITEM_COUNTED) != 0u;
     return vec3<u32>(raw.x, raw.y & ~(ITEM_SPENT | ITEM_COUNTED), u32(spent));
 }
@@ -83,7 +77,7 @@ fn load_item(i: u32) -> vec3<u32> {
 // captured nothing, and clears a mark an earlier frame left.
 fn mark_item(i: u32, item: vec2<u32>, captured: u32) {
     if (fu.opaque.w == MARKS_WRITE) {
-        items[ru.item_base + i] = vec2<u32>(item.x, item.y | select(0u, ITEM_SPENT, captured == 0u));
+        items[i] = vec2<u32>(item.x, item.y | select(0u, ITEM_SPENT, captured == 0u));
     }
 }
 
@@ -303,7 +297,7 @@ fn raster_pixel(t: Tri, x: u32, y: u32, behind: bool) -> u32 {
         vcolor = vcolor * s.xyz;
         cutoff = tri_f32(r + 7u);
     }
-    let color = shade(ru.shading, base, normal, vcolor, t.has_color != 0u, ru.forward);
+    let color = shade(ru.shading, base, normal, vcolor, t.has_color != 0u, ru.forward.xyz);
     f.prim = t.prim;
     f.color = color;
     f.normal = normalize_or_zero(normal);
@@ -428,80 +422,30 @@ fn interior_pixels(t: Tri, r: vec4<u32>) -> u32 {
 // the pass walking the pixels, and marks the item `ITEM_COUNTED` for every pass of the frame to
 // skip. Behind a wall most items of a large triangle are such; the pass walks the rest (a
 // triangle's edges, the tiles it only partly hides) as before, so the counts are the same.
-// The items it keeps it also copies behind the list, where the buffer has room, so that
-// `classify_finish_main` can point the frame's passes at the copy: a pass then launches no
-// workgroup for an item counted here.
-var<workgroup> wg_kept: atomic<u32>;
-var<workgroup> wg_kept_at: u32;
-
 @compute @workgroup_size(64)
 fn classify_main(
     @builtin(global_invocation_id) gid: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
 ) {
-    if (lid == 0u) {
-        atomicStore(&wg_kept, 0u);
-    }
     start_counts(lid);
     let i = item_index(gid, groups);
     var held = 0u;
-    var kept = false;
-    var item = vec2<u32>();
     if (i < ru.item_count) {
         // the frame's first scene pass is yet to run: no item is marked
-        item = load_item(i).xy;
+        let item = load_item(i).xy;
         let far = tile_far(item);
-        kept = true;
         if (far != FAR_NONE) {
             let t = load_tri(item.x);
             let r = item_rect(t, item);
             let n = interior_pixels(t, r);
             if (n != 0u && (behind_tile(item) || depth_bits(depth_floor(t, r)) >= far)) {
                 held = n;
-                kept = false;
-                items[ru.item_base + i] = vec2<u32>(item.x, item.y | ITEM_COUNTED);
+                items[i] = vec2<u32>(item.x, item.y | ITEM_COUNTED);
             }
         }
     }
-    // (`count_fragments` begins with the workgroup's adds and its barrier)
-    var at = 0u;
-    if (kept) {
-        at = atomicAdd(&wg_kept, 1u);
-    }
     count_fragments(lid, held, held);
-    if (lid == 0u) {
-        wg_kept_at = atomicAdd(&generated[1], atomicLoad(&wg_kept));
-    }
-    at += workgroupUniformLoad(&wg_kept_at);
-    let copy = ru.item_base + ru.item_count + at;
-    if (kept && copy < arrayLength(&items)) {
-        items[copy] = item;
-    }
-}
-
-// One invocation after `classify_main`: where it held some items back and the buffer had room
-// for every item it kept (oit-gpu's `keeps_room`: the host sizes the list's buffer so), the
-// raster's arguments now dispatch those alone, at the copy (`raster_args`' words 8 and 9 go to
-// the raster uniform's `item_count` and `item_base`: oit-core's `gpu_setup::ARGS_ITEMS` and
-// `ARGS_BASE`), else they stay as they were and the passes skip the items marked.
-@compute @workgroup_size(1)
-fn classify_finish_main() {
-    let kept = atomicLoad(&generated[1]);
-    let first = ru.item_base + ru.item_count;
-    if (kept < ru.item_count && kept <= arrayLength(&items) - first) {
-        let per_pixel = dispatch_words(kept);
-        let per_item = dispatch_words((kept + 63u) / 64u);
-        for (var k = 0u; k < 4u; k++) {
-            raster_args[k] = per_pixel[k];
-            raster_args[4u + k] = per_item[k];
-        }
-        raster_args[8u] = kept;
-        raster_args[9u] = first;
-    } else {
-        raster_args[8u] = ru.item_count;
-        raster_args[9u] = ru.item_base;
-    }
 }
 
 // CPU devices (lavapipe): one invocation per work item, walking its tile; a workgroup of 64

@@ -1,4 +1,4 @@
-// module setup (alone): core/softfloat.wgsl core/dispatch.wgsl core/setup.wgsl
+// module setup (alone): core/softfloat.wgsl core/setup.wgsl
 // The compute path's triangle setup on the GPU: oit-core's `setup` (crates' oit-core/src/setup.rs)
 // rule for rule, every float operation in softfloat.wgsl's integer f32 (so in the host's order and
 // rounding, bit for bit, whatever the driver does with float math), writing the 44-word triangles
@@ -88,8 +88,7 @@ const COORD_LIMIT_BITS: u32 = 0x4e000000u; // 2^29
 // 0: pieces, 1: work items (both counted past the capacities, so the host sees what is needed),
 // 2: pieces spread (`SPREAD_PIECES`); from 4, each spread piece's slot
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>>;
-// 0..3: per-pixel raster dispatch, 4..7: per-item raster dispatch, 8: work items in the list,
-// 9: where the list starts in the work-list buffer (0 here)
+// 0..3: per-pixel raster dispatch, 4..7: per-item raster dispatch, 8: work items in the list
 @group(0) @binding(6) var<storage, read_write> args: array<u32>;
 // the vertex cache: VERT_WORDS words per (instance, vertex)
 @group(0) @binding(7) var<storage, read_write> verts: array<u32>;
@@ -660,12 +659,18 @@ fn setup_items_main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invoca
     }
 }
 
-// The raster kernels' dispatches (`dispatch_words`).
+// Workgroups of 64 for `invocations` as (x, y) with x ≤ 65535 (oit-gpu's `dispatch_size`; its
+// `raster_args` writes these arguments for a frame set up on the host).
 fn write_dispatch(at: u32, groups: u32) {
-    let words = dispatch_words(groups);
-    for (var k = 0u; k < 4u; k++) {
-        args[at + k] = words[k];
+    if (groups <= 65535u) {
+        args[at] = groups;
+        args[at + 1u] = 1u;
+    } else {
+        args[at] = 65535u;
+        args[at + 1u] = (groups + 65534u) / 65535u;
     }
+    args[at + 2u] = 1u;
+    args[at + 3u] = 0u;
 }
 
 @compute @workgroup_size(1)
@@ -675,6 +680,4 @@ fn setup_finish_main() {
     write_dispatch(0u, items);
     write_dispatch(4u, (items + 63u) / 64u);
     args[8u] = items;
-    // where the list starts (raster_compute.wgsl's `classify_finish_main` moves it)
-    args[9u] = 0u;
 }
