@@ -454,8 +454,8 @@ impl FrameUniform {
 /// The host's setup of the compute path, set up and binned: the scene's (or, with `boxes`, its
 /// instances' bounding boxes') triangle words (`oit_core::setup`), and the work list of the compute
 /// rasterizer, one (triangle, tile) item for each [`TILE`]² tile of a triangle's pixel box that
-/// it may cover (`TriangleSetup::work_items`), the tile as `ty << 16 | tx`. Both GPU backends upload these where the device sets up on the
-/// host, as every textured frame does ([`is_textured`]): after the triangles, the textured
+/// it may cover (`TriangleSetup::work_items`), the tile as `ty << 16 | tx`. Both GPU backends
+/// upload these where the device sets up on the host, as every textured frame does ([`is_textured`]): after the triangles, the textured
 /// triangles' records and the texture region ([`TextureRegion`]; raster_compute.wgsl reads them).
 pub fn host_setup(
     scene: &Scene,

@@ -1276,8 +1276,8 @@ impl Gpu {
 
     /// [`Gpu::render_pipeline`]'s draw `fs` over the opaque depth, at one sample, in
     /// `early_pass_key`'s pass (`core/raster_hardware_early.wgsl`): `depth_fs` fills the depth
-    /// attachment (its vertex stage `depth_vs`, no colour), `hw_fs_count` counts what lies behind (GREATER; by
-    /// atomic adds, no colour),
+    /// attachment (its vertex stage `depth_vs`, no colour), `hw_fs_count` counts what lies
+    /// behind (GREATER; by atomic adds, no colour),
     /// `hw_fs_early` captures behind the LESS_OR_EQUAL test (no colour; `hw_fs_early_counted`
     /// the same, counting into the count image).
     pub fn early_pipeline(

@@ -3,7 +3,7 @@
 // covered pixels are the same by construction; this kernel tests coverage with the same integer
 // edge functions and interpolates with the same f32 formula, then calls the technique's
 // `capture`. Work items are (triangle, 8×8 tile of its box that it may cover: oit-core's
-// `Triangle::may_cover`, setup.wgsl's `may_cover`): `raster_main` runs one
+// `Triangle::may_cover`, setup.wgsl's `row_run`): `raster_main` runs one
 // workgroup per item and one invocation per pixel (GPUs), `raster_loop_main` one invocation per
 // item walking its tile (CPU devices).
 

@@ -643,7 +643,7 @@ fn setup_items_main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invoca
     }
     var at = atomicAdd(&spread_kept, mine);
     workgroupBarrier();
-    if (lid == 0u) {
+    if (lid == 0u && n != 0u) {
         spread_base = atomicAdd(&counters[1], atomicLoad(&spread_kept));
     }
     at += workgroupUniformLoad(&spread_base);
