@@ -506,15 +506,34 @@ pub enum Init {
     Zero,
     /// Every 32-bit word set to this.
     Fill(u32),
+    /// None the frame relies on: every word the frame reads, it wrote first (an array whose
+    /// entries are taken by a counter and written whole before any is read: fabs's slots, a
+    /// linked list's nodes, dfb's entries). A buffer reused from an earlier frame is left as that
+    /// frame left it, which saves a pass over the whole array every frame; a new one is set to
+    /// [`UNWRITTEN`], so a frame that reads a word it did not write shows it in its image on
+    /// the first frame (and fails the conformance bodies, which compare it with the reference).
+    Unwritten,
 }
 
+/// Every word of a new [`Init::Unwritten`] buffer: as a depth key (high word), a negative depth in
+/// front of every fragment; as a colour payload, a half-transparent purple; as a link or an
+/// index, far past any array's end.
+pub const UNWRITTEN: u32 = 0xa5a5_a5a5;
+
 impl Init {
-    /// The word every 32-bit word of the buffer starts as.
+    /// The word every 32-bit word of a new buffer starts as.
     pub fn word(self) -> u32 {
         match self {
             Init::Zero => 0,
             Init::Fill(v) => v,
+            Init::Unwritten => UNWRITTEN,
         }
+    }
+
+    /// The word every 32-bit word of a buffer is set to before the frame uses it: `fresh` is
+    /// whether the buffer is new (else reused from an earlier frame). `None`: left as it is.
+    pub fn fill(self, fresh: bool) -> Option<u32> {
+        (fresh || self != Init::Unwritten).then(|| self.word())
     }
 }
 

@@ -383,7 +383,8 @@ fn reference<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitE
     let total = ctx.fragment_capacity(&total, 12)?;
     storage.hold(u64::from(ctx.plan().check_fragments(u64::from(total))?));
     let cursor = storage.buffer(ctx, "fill cursors", Init::Zero)?;
-    let [keys, payloads] = storage.buffers(ctx, "entries", [(8, Init::Zero), (4, Init::Zero)])?;
+    // each pixel's range is filled whole before the resolve reads it
+    let [keys, payloads] = storage.buffers(ctx, "entries", [(8, Init::Unwritten), (4, Init::Unwritten)])?;
     let masks = storage.masks(ctx)?;
     let buffers = [&offsets, &cursor, &keys, &payloads, &masks];
     ctx.geometry_pass(raster, "reference", &buffers, 0, 0)?;
@@ -432,8 +433,10 @@ fn fabs<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError>
     } else {
         ("fabs", storage.buffer(ctx, "counter", Init::Zero)?)
     };
-    let slots = storage.buffer(ctx, "slots", Init::Zero)?;
-    let payloads = storage.buffer(ctx, "payloads", Init::Zero)?;
+    // slot i of a pixel is written (FABS_CAPTURE, or emptied by overflow_main) before any pass
+    // reads it, and the resolve reads the first min(count, K)
+    let slots = storage.buffer(ctx, "slots", Init::Unwritten)?;
+    let payloads = storage.buffer(ctx, "payloads", Init::Unwritten)?;
     let overflowed = ctx.scratch("fabs overflowed", 1, Init::Zero)?;
     let (tail, tail_words) = tail_buffers(ctx, &mut storage)?;
     let masks = storage.masks(ctx)?;
@@ -795,7 +798,8 @@ fn dfb<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> 
     // a u64 key and a u32 payload a fragment
     let total = ctx.fragment_capacity(&total, 12)?;
     storage.hold(u64::from(ctx.plan().check_fragments(u64::from(total))?));
-    let [keys, payloads] = storage.buffers(ctx, "entries", [(8, Init::Zero), (4, Init::Zero)])?;
+    // each pixel's range is filled whole before the resolve reads it
+    let [keys, payloads] = storage.buffers(ctx, "entries", [(8, Init::Unwritten), (4, Init::Unwritten)])?;
     let masks = storage.masks(ctx)?;
     let buffers = [&counts, &offsets, &keys, &payloads, &masks];
     ctx.geometry_pass(raster, "dfb", &buffers, 0, 0)?;
@@ -818,7 +822,9 @@ fn ll<R: ?Sized, F: Frame<R>>(ctx: &mut F, raster: &R) -> Result<(), OitError> {
     storage.hold(u64::from(nodes));
     let heads = storage.buffer(ctx, "heads", Init::Fill(LL_END))?;
     let counter = storage.buffer(ctx, "node counter", Init::Zero)?;
-    let fields = [(8, Init::Zero), (4, Init::Zero), (4, Init::Fill(LL_END))];
+    // a node is written whole (key, payload, link) when the counter hands it out, before any
+    // list reaches it
+    let fields = [(8, Init::Unwritten), (4, Init::Unwritten), (4, Init::Unwritten)];
     let [keys, payloads, links] = storage.buffers(ctx, "nodes", fields)?;
     let masks = storage.masks(ctx)?;
     let buffers = [&heads, &counter, &keys, &payloads, &links, &masks];

@@ -56,12 +56,22 @@ impl BufferPool {
         size: u64,
         usage: vk::BufferUsageFlags,
     ) -> Result<Rc<Buffer>, OitError> {
+        Ok(self.take_marked(gpu, size, usage)?.0)
+    }
+
+    /// [`BufferPool::take`], and whether the buffer is new (its contents undefined).
+    pub(crate) fn take_marked(
+        &self,
+        gpu: &Gpu,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+    ) -> Result<(Rc<Buffer>, bool), OitError> {
         let mut free = self.free.borrow_mut();
         if let Some(i) = free.iter().position(|b| b.size == size && b.usage == usage) {
-            return Ok(free.swap_remove(i));
+            return Ok((free.swap_remove(i), false));
         }
         self.allocations.set(self.allocations.get() + 1);
-        Ok(Rc::new(gpu.buffer(size, usage, false)?))
+        Ok((Rc::new(gpu.buffer(size, usage, false)?), true))
     }
 
     /// A free image of `size`, `layers`, `format` and `usage`, else a new one from `make`.
@@ -376,10 +386,13 @@ impl<'a> VkCtx<'a> {
             self.check_budget(bytes)?;
             self.storage_bytes += words * 4;
         }
-        let buffer = self.pool.take(self.gpu, bytes, storage_usage())?;
+        let (buffer, fresh) = self.pool.take_marked(self.gpu, bytes, storage_usage())?;
         self.lent.push(buffer.clone());
-        // a pooled buffer holds the last frame's words, a new one garbage: always initialise
-        self.rec.fill(&buffer, init.word());
+        // a pooled buffer holds the last frame's words, a new one garbage: initialise, unless
+        // the frame writes every word it reads (`Init::Unwritten`, a new one marked)
+        if let Some(word) = init.fill(fresh) {
+            self.rec.fill(&buffer, word);
+        }
         Ok(buffer)
     }
 

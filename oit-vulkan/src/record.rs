@@ -1,16 +1,21 @@
-//! Command recording: one command buffer at a time, every command followed by a memory barrier,
-//! submitted and waited for when the host needs a result (a readback) or when the frame ends.
+//! Command recording: one command buffer at a time, submitted and waited for when the host needs
+//! a result (a readback) or when the frame ends.
 //!
-//! Synchronization: after every dispatch, draw, fill and copy, one `VkMemoryBarrier` from every
-//! stage's writes to every stage's (and the host's) reads and writes. A
-//! global memory barrier covers every buffer the previous command touched (Khronos recommends it
-//! over per-buffer barriers when many buffers are involved); it orders read-after-write,
-//! write-after-write and (by its execution dependency) write-after-read. The host writes
-//! uniforms and staging buffers before the submission that reads them (made visible by the
-//! submission itself) and reads results only after the fence, behind the barrier's `HOST_READ`.
+//! Synchronization: one `VkMemoryBarrier` from every stage's writes to every stage's (and the
+//! host's) reads and writes, recorded before a command that may race with what came since the
+//! last one. A global memory barrier covers every buffer the commands before it touched (Khronos
+//! recommends it over per-buffer barriers when many buffers are involved); it orders
+//! read-after-write, write-after-write and (by its execution dependency) write-after-read.
+//! Before every dispatch and draw there is one when anything was recorded since the last (a
+//! kernel's buffers are all read-write, so any earlier command may race with it); fills and copies
+//! name the buffers they read and write ([`Pending`]), so a run of them on distinct buffers (a
+//! frame's clears, its readback copies) shares one. Every submission ends with one, behind which
+//! the host reads results after the fence (its `HOST_READ`). The host writes uniforms and staging
+//! buffers before the submission that reads them (made visible by the submission itself).
+//! On a GPU each barrier drains the whole device.
 //!
 //! A hardware-raster geometry pass is one render pass (its own dependencies order it after and
-//! before everything, `Gpu::count_pass`) holding one draw, followed by the same barrier.
+//! before everything, `Gpu::count_pass`) holding one draw, with the same barriers around it.
 //!
 //! GPU time: where the device has timestamps ([`Gpu::has_timestamps`]) a query pool of two
 //! timestamps per uniform slot, reset at the start of every recording (outside any render pass)
@@ -87,6 +92,44 @@ impl Timestamps {
     }
 }
 
+/// What the commands recorded since the last barrier touched: the buffers fills and copies read
+/// and wrote, or anything at all (`all`: a dispatch, a draw, an image command, whose accesses
+/// are not tracked). A command that may race with them needs a barrier first.
+#[derive(Debug, Default)]
+struct Pending {
+    all: bool,
+    reads: Vec<vk::Buffer>,
+    writes: Vec<vk::Buffer>,
+}
+
+impl Pending {
+    /// Nothing recorded since the last barrier.
+    fn is_empty(&self) -> bool {
+        !self.all && self.reads.is_empty() && self.writes.is_empty()
+    }
+
+    /// Whether a transfer reading `reads` and writing `writes` may race with what is pending: it
+    /// reads what they write, writes what they read or write, or they are not tracked.
+    fn conflicts(&self, reads: &[vk::Buffer], writes: &[vk::Buffer]) -> bool {
+        self.all
+            || reads.iter().any(|b| self.writes.contains(b))
+            || writes.iter().any(|b| self.writes.contains(b) || self.reads.contains(b))
+    }
+
+    /// Adds a transfer's buffers.
+    fn add(&mut self, reads: &[vk::Buffer], writes: &[vk::Buffer]) {
+        self.reads.extend_from_slice(reads);
+        self.writes.extend_from_slice(writes);
+    }
+
+    /// After a barrier: nothing.
+    fn clear(&mut self) {
+        self.all = false;
+        self.reads.clear();
+        self.writes.clear();
+    }
+}
+
 /// Spare host buffers a recorder's parts keep at most.
 const MAX_SPARE: usize = 32;
 
@@ -106,6 +149,8 @@ pub(crate) struct Recorder<'g> {
     timestamps: Option<Timestamps>,
     /// A submission is on the queue that no wait has collected (`submit` without `wait`).
     submitted: bool,
+    /// What the commands since the last barrier touched.
+    pending: Pending,
     /// The full frame's viewport `[x, y, width, height]` where the frame is a window of it
     /// ([`oit_core::Region::viewport`]), for every draw.
     pub(crate) window: Option<[f32; 4]>,
@@ -180,6 +225,7 @@ impl<'g> Recorder<'g> {
             keep: Vec::new(),
             timestamps,
             submitted: false,
+            pending: Pending::default(),
             window: None,
         };
         r.begin()?;
@@ -292,8 +338,10 @@ impl<'g> Recorder<'g> {
         self.timestamps.as_ref().map(|ts| (ts.total_ms, ts.pass_ms.as_slice()))
     }
 
-    /// The barrier after every command (see the module docs).
-    fn barrier(&self) {
+    /// The barrier (see the module docs): everything recorded before it is done and visible to
+    /// everything after, and to the host.
+    fn barrier(&mut self) {
+        self.pending.clear();
         let barrier =
             vk::MemoryBarrier::default().src_access_mask(vk::AccessFlags::MEMORY_WRITE).dst_access_mask(
                 vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE | vk::AccessFlags::HOST_READ,
@@ -313,6 +361,23 @@ impl<'g> Recorder<'g> {
         }
     }
 
+    /// A barrier where anything was recorded since the last: before a command whose accesses
+    /// are not tracked (a dispatch, a draw), and at the end of a submission.
+    fn settle(&mut self) {
+        if !self.pending.is_empty() {
+            self.barrier();
+        }
+    }
+
+    /// Before a fill or copy that reads `reads` and writes `writes`: a barrier where it may race
+    /// with what is pending, then it joins what is pending.
+    fn transfer(&mut self, reads: &[vk::Buffer], writes: &[vk::Buffer]) {
+        if self.pending.conflicts(reads, writes) {
+            self.barrier();
+        }
+        self.pending.add(reads, writes);
+    }
+
     /// Submits what was recorded, waits for it, and starts recording again.
     pub(crate) fn flush(&mut self) -> Result<(), OitError> {
         self.submit()?;
@@ -322,6 +387,8 @@ impl<'g> Recorder<'g> {
     /// Ends recording and submits what was recorded, without waiting for it: [`Recorder::wait`]
     /// does (a frame in flight is a recorder submitted and not yet waited for).
     fn submit(&mut self) -> Result<(), OitError> {
+        // the host reads results behind it, and the next submission's commands start after it
+        self.settle();
         let d = &self.gpu.raw.device;
         self.p.uniforms.write(&self.uniform_bytes[..(u64::from(self.slot) * SLOT_BYTES) as usize])?;
         let cmds = [self.p.cmd];
@@ -468,7 +535,7 @@ impl<'g> Recorder<'g> {
 
     /// Records `image` (a storage image of the frame) taken to `GENERAL`, its contents
     /// discarded, then every texel of every layer set to `value` in each 32 bits (all ones or
-    /// zero: the same in any texel width); a barrier follows.
+    /// zero: the same in any texel width); a barrier comes before what may race with it.
     pub(crate) fn clear_image(&mut self, image: &GpuImage, value: u32) {
         let range = vk::ImageSubresourceRange::default()
             .aspect_mask(vk::ImageAspectFlags::COLOR)
@@ -500,7 +567,7 @@ impl<'g> Recorder<'g> {
             );
             d.cmd_clear_color_image(self.p.cmd, image.image, vk::ImageLayout::GENERAL, &color, &[range]);
         }
-        self.barrier();
+        self.pending.all = true;
     }
 
     /// Allocates and writes a command's descriptor sets, one per entry of `sets`, in set order
@@ -584,7 +651,7 @@ impl<'g> Recorder<'g> {
     }
 
     /// Records one dispatch of `pipeline` with `sets`. With timestamps, its time counts under
-    /// `label`. A barrier follows.
+    /// `label`. A barrier comes before what may race with it.
     pub(crate) fn dispatch(
         &mut self,
         label: &str,
@@ -593,6 +660,7 @@ impl<'g> Recorder<'g> {
         groups: (u32, u32),
     ) -> Result<(), OitError> {
         let sets = self.sets(pipeline, sets)?;
+        self.settle();
         let timed = self.timed(label);
         self.stamp(timed, 0);
         let d = &self.gpu.raw.device;
@@ -613,13 +681,13 @@ impl<'g> Recorder<'g> {
             }
         }
         self.stamp(timed, 1);
-        self.barrier();
+        self.pending.all = true;
         Ok(())
     }
 
     /// Records one dispatch of `pipeline` with `sets` whose group counts the device reads from
     /// `args` at byte `offset` (three u32, written by an earlier command: the compute path's
-    /// setup). With timestamps, its time counts under `label`. A barrier follows.
+    /// setup). With timestamps, its time counts under `label`. A barrier comes before what may race with it.
     pub(crate) fn dispatch_indirect(
         &mut self,
         label: &str,
@@ -629,6 +697,7 @@ impl<'g> Recorder<'g> {
         offset: u64,
     ) -> Result<(), OitError> {
         let sets = self.sets(pipeline, sets)?;
+        self.settle();
         let timed = self.timed(label);
         self.stamp(timed, 0);
         let d = &self.gpu.raw.device;
@@ -650,7 +719,7 @@ impl<'g> Recorder<'g> {
             d.cmd_dispatch_indirect(self.p.cmd, args.buffer, offset);
         }
         self.stamp(timed, 1);
-        self.barrier();
+        self.pending.all = true;
         Ok(())
     }
 
@@ -658,7 +727,7 @@ impl<'g> Recorder<'g> {
     /// `render_pass`) into `target`, its attachments cleared to `clear`, with `sets`, inside the
     /// recorder's occlusion query when `occlusion` (read by [`Recorder::occlusion`] after a
     /// flush); the viewport has a negative height, so row 0 is the top as on wgpu (NDC y up).
-    /// With timestamps, its time counts under `label`. A barrier follows.
+    /// With timestamps, its time counts under `label`. A barrier comes before what may race with it.
     #[expect(clippy::too_many_arguments, reason = "a draw is that many things")]
     pub(crate) fn draw(
         &mut self,
@@ -692,6 +761,7 @@ impl<'g> Recorder<'g> {
         };
         debug_assert!(draws.iter().all(|(p, _)| p.layout == pipeline.layout), "one layout");
         let sets = self.sets(pipeline, sets)?;
+        self.settle();
         let timed = self.timed(label);
         self.stamp(timed, 0);
         let (w, h) = target.extent;
@@ -751,7 +821,7 @@ impl<'g> Recorder<'g> {
             d.cmd_end_render_pass(self.p.cmd);
         }
         self.stamp(timed, 1);
-        self.barrier();
+        self.pending.all = true;
         Ok(())
     }
 
@@ -807,8 +877,10 @@ impl<'g> Recorder<'g> {
 
     /// Records a copy of the occlusion query's 64-bit result (the last draw with `occlusion` began
     /// and ended it, earlier in this recorder's order) into the first 8 bytes of `dst`, waiting on
-    /// the device for it to be available; a barrier follows. No host wait.
+    /// the device for it to be available; a barrier comes before what may race with it. No host
+    /// wait.
     pub(crate) fn copy_occlusion(&mut self, dst: &Buffer) {
+        self.transfer(&[], &[dst.buffer]);
         // SAFETY: recording, outside a render pass; the query of this recorder's pool was reset,
         // begun and ended by an earlier command; dst has TRANSFER_DST usage and holds 8 bytes.
         unsafe {
@@ -823,11 +895,10 @@ impl<'g> Recorder<'g> {
                 vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
             );
         }
-        self.barrier();
     }
 
     /// Records a copy of `image` (in `TRANSFER_SRC_OPTIMAL`, one 32-bit texel per pixel) into the
-    /// start of `dst`, row by row; a barrier follows.
+    /// start of `dst`, row by row; a barrier comes before what may race with it.
     pub(crate) fn copy_image(&mut self, image: &GpuImage, dst: &Buffer) {
         let (width, height) = image.extent;
         let region = [vk::BufferImageCopy::default()
@@ -835,6 +906,8 @@ impl<'g> Recorder<'g> {
                 vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
             )
             .image_extent(vk::Extent3D { width, height, depth: 1 })];
+        // the image was last written by a draw, which is not tracked: a barrier comes first
+        self.transfer(&[], &[dst.buffer]);
         // SAFETY: recording, outside a render pass; the image has TRANSFER_SRC usage and is in
         // that layout (its render pass's final layout); `dst` has TRANSFER_DST usage and holds
         // width × height × 4 bytes.
@@ -847,29 +920,30 @@ impl<'g> Recorder<'g> {
                 &region,
             );
         }
-        self.barrier();
     }
 
-    /// Records setting every word of `buffer` to `value`; a barrier follows.
+    /// Records setting every word of `buffer` to `value`; a barrier comes before what may race
+    /// with it.
     pub(crate) fn fill(&mut self, buffer: &Buffer, value: u32) {
+        self.transfer(&[], &[buffer.buffer]);
         // SAFETY: recording; the buffer has TRANSFER_DST usage and a size that is a multiple of 4.
         unsafe { self.gpu.raw.device.cmd_fill_buffer(self.p.cmd, buffer.buffer, 0, vk::WHOLE_SIZE, value) };
-        self.barrier();
     }
 
-    /// Records a copy of `bytes` from the start of `src` to the start of `dst`; a barrier follows.
+    /// Records a copy of `bytes` from the start of `src` to the start of `dst`; a barrier comes
+    /// before what may race with it.
     pub(crate) fn copy(&mut self, src: &Buffer, dst: &Buffer, bytes: u64) {
         if bytes == 0 {
             return;
         }
+        self.transfer(&[src.buffer], &[dst.buffer]);
         let region = [vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes }];
         // SAFETY: recording; src has TRANSFER_SRC, dst TRANSFER_DST usage, both hold `bytes`.
         unsafe { self.gpu.raw.device.cmd_copy_buffer(self.p.cmd, src.buffer, dst.buffer, &region) };
-        self.barrier();
     }
 
     /// Records a copy of `bytes` from byte `src_offset` of `src` to byte `dst_offset` of `dst`;
-    /// a barrier follows.
+    /// a barrier comes before what may race with it.
     pub(crate) fn copy_at(
         &mut self,
         src: &Buffer,
@@ -878,11 +952,11 @@ impl<'g> Recorder<'g> {
         dst_offset: u64,
         bytes: u64,
     ) {
+        self.transfer(&[src.buffer], &[dst.buffer]);
         let region = [vk::BufferCopy { src_offset, dst_offset, size: bytes }];
         // SAFETY: recording; src has TRANSFER_SRC, dst TRANSFER_DST usage, and each holds the
         // range copied (the callers' offsets are within their fixed layouts).
         unsafe { self.gpu.raw.device.cmd_copy_buffer(self.p.cmd, src.buffer, dst.buffer, &region) };
-        self.barrier();
     }
 
     /// Records an upload of `bytes` into `dst` through a staging buffer kept until the flush.
@@ -967,4 +1041,47 @@ pub(crate) enum Vertices<'b> {
 /// and how many bytes of each were copied.
 pub(crate) struct Reading {
     staging: Vec<(Rc<Buffer>, u64)>,
+}
+
+#[cfg(test)]
+mod tests {
+    use ash::vk::Handle;
+
+    use super::*;
+
+    fn buffers() -> [vk::Buffer; 3] {
+        [1, 2, 3].map(vk::Buffer::from_raw)
+    }
+
+    #[test]
+    fn transfers_on_distinct_buffers_share_a_barrier() {
+        let [a, b, c] = buffers();
+        let mut p = Pending::default();
+        assert!(p.is_empty());
+        // a frame's clears: each writes its own buffer
+        for w in [a, b, c] {
+            assert!(!p.conflicts(&[], &[w]));
+            p.add(&[], &[w]);
+        }
+        assert!(!p.is_empty());
+        let mut p = Pending::default();
+        p.add(&[a], &[b]);
+        // readback copies out of buffers only read since
+        assert!(!p.conflicts(&[a], &[c]));
+    }
+
+    #[test]
+    fn every_hazard_needs_a_barrier() {
+        let [a, b, c] = buffers();
+        let mut p = Pending::default();
+        p.add(&[a], &[b]);
+        assert!(p.conflicts(&[b], &[c]), "read after write");
+        assert!(p.conflicts(&[], &[b]), "write after write");
+        assert!(p.conflicts(&[c], &[a]), "write after read");
+        p.clear();
+        assert!(p.is_empty() && !p.conflicts(&[b], &[a]), "a barrier settles them");
+        // a dispatch or draw: its accesses are not tracked
+        p.all = true;
+        assert!(p.conflicts(&[], &[c]) && !p.is_empty());
+    }
 }

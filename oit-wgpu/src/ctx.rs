@@ -358,17 +358,26 @@ impl<'a> GpuCtx<'a> {
 
     /// A buffer from the pool (or new without one), given back when the frame ends.
     fn make(&mut self, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
-        let buffer = match self.lent.pool {
-            Some(pool) => pool.take(&self.gpu.device, label, size, usage),
-            None => self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage,
-                mapped_at_creation: false,
-            }),
+        self.make_marked(label, size, usage).0
+    }
+
+    /// [`GpuCtx::make`], and whether the buffer is new (zeroed, as wgpu makes every buffer; else
+    /// it holds an earlier frame's words).
+    fn make_marked(&mut self, label: &str, size: u64, usage: wgpu::BufferUsages) -> (wgpu::Buffer, bool) {
+        let (buffer, fresh) = match self.lent.pool {
+            Some(pool) => pool.take_marked(&self.gpu.device, label, size, usage),
+            None => {
+                let buffer = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size,
+                    usage,
+                    mapped_at_creation: false,
+                });
+                (buffer, true)
+            }
         };
         self.lent.buffers.push(buffer.clone());
-        buffer
+        (buffer, fresh)
     }
 
     /// A 16-byte storage buffer for a binding the frame does not use, from the pool where the
@@ -638,17 +647,16 @@ impl<'a> GpuCtx<'a> {
             )?;
             self.storage_bytes += words * 4;
         }
-        let pooled = self.lent.pool.is_some();
-        let buffer = self.make(
+        let (buffer, fresh) = self.make_marked(
             label,
             bytes,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         );
-        match init {
-            Init::Fill(v) => self.fill(&buffer, v)?,
-            // a new buffer is zeroed; one from the pool holds the last frame's words
-            Init::Zero if pooled => self.fill(&buffer, 0)?,
-            Init::Zero => {}
+        match init.fill(fresh) {
+            // a new buffer is zeroed already; one from the pool holds the last frame's words
+            Some(0) if fresh => {}
+            Some(v) => self.fill(&buffer, v)?,
+            None => {}
         }
         Ok(buffer)
     }

@@ -27,18 +27,30 @@ impl BufferPool {
         size: u64,
         usage: wgpu::BufferUsages,
     ) -> wgpu::Buffer {
+        self.take_marked(device, label, size, usage).0
+    }
+
+    /// [`BufferPool::take`], and whether the buffer is new (zeroed, as wgpu makes every buffer).
+    pub fn take_marked(
+        &self,
+        device: &wgpu::Device,
+        label: &str,
+        size: u64,
+        usage: wgpu::BufferUsages,
+    ) -> (wgpu::Buffer, bool) {
         let found = self.free.lock().ok().and_then(|mut free| {
             let i = free.iter().position(|b| b.size() == size && b.usage() == usage)?;
-            Some(free.swap_remove(i))
+            Some((free.swap_remove(i), false))
         });
         found.unwrap_or_else(|| {
             self.allocations.fetch_add(1, Relaxed);
-            device.create_buffer(&wgpu::BufferDescriptor {
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
                 size,
                 usage,
                 mapped_at_creation: false,
-            })
+            });
+            (buffer, true)
         })
     }
 
