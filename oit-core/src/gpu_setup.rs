@@ -26,16 +26,17 @@ pub const ARGS_WORDS: usize = 12;
 pub const ARGS_PER_ITEM: u64 = 16;
 /// Byte offset of the item count in the arguments (copied into the raster uniform's word 0).
 pub const ARGS_ITEMS: u64 = 32;
-/// The most pieces a frame whose work items `setup_items_main` writes, a workgroup a piece, rather
+/// The most pieces a frame whose work items `setup_count_main` and `setup_items_main` count and
+/// write, a workgroup a piece, rather
 /// than the piece's own invocation in `setup_main` (setup.wgsl's `SPREAD_PIECES`): those with more
 /// than [`SPREAD_ITEMS`] items, the first this many of them.
 pub const SPREAD_PIECES: usize = 2048;
 /// Tiles of its box above which a piece's work items are written by a workgroup of
 /// `setup_items_main` (setup.wgsl's `SPREAD_ITEMS`).
 pub const SPREAD_ITEMS: usize = 16;
-/// Words of the setup's counters: pieces kept, work items, pieces spread, a spare, then each
-/// spread piece's slot.
-pub const COUNTER_WORDS: usize = 4 + SPREAD_PIECES;
+/// Words of the setup's counters: pieces kept, work items, pieces spread, a spare, then two a
+/// spread piece: its slot, and the tiles it keeps.
+pub const COUNTER_WORDS: usize = 4 + 2 * SPREAD_PIECES;
 
 /// Where one instance's mesh lies in [`SetupGeometry::words`], and its primitive ids.
 #[derive(Clone, Copy, Debug)]

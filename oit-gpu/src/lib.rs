@@ -751,7 +751,8 @@ pub trait Rasters<R: ?Sized> {
 #[cfg(test)]
 mod tests {
     /// The setup kernel's spread pieces are oit-core's (`gpu_setup::SPREAD_PIECES`, which sizes
-    /// the counters' buffer and the dispatch of `setup_items_main` on both backends).
+    /// the counters' buffer and the dispatches of `setup_count_main` and `setup_items_main` on both
+    /// backends).
     #[test]
     fn spread_pieces_are_the_setups() {
         use oit_core::gpu_setup::{COUNTER_WORDS, SPREAD_ITEMS, SPREAD_PIECES};
@@ -760,7 +761,7 @@ mod tests {
             assert!(oit_shaders::SETUP.contains(&line), "setup.wgsl has no `{line}`");
         }
         assert!(oit_shaders::SETUP.contains("const SPREAD_FIRST: u32 = 4u;"));
-        assert_eq!(COUNTER_WORDS, 4 + SPREAD_PIECES);
+        assert_eq!(COUNTER_WORDS, 4 + 2 * SPREAD_PIECES);
     }
 
     /// The work-item marks' modes are raster_compute.wgsl's, and its mark bit lies above every

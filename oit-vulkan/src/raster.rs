@@ -188,8 +188,8 @@ struct SetupBuffers {
 }
 
 /// Records the setup kernels into `rec`: the instance table's upload, the counters cleared, then
-/// `vertex_main` (with the vertex cache), `setup_main`, `setup_items_main` and
-/// `setup_finish_main`, each behind the recorder's barrier. Binding order is setup.wgsl's group 0.
+/// `vertex_main` (with the vertex cache), `setup_main`, `setup_count_main`, `setup_items_main`
+/// and `setup_finish_main`, each behind the recorder's barrier. Binding order is setup.wgsl's group 0.
 fn record_setup(
     rec: &mut Recorder<'_>,
     s: &SetupBuffers,
@@ -223,9 +223,11 @@ fn record_setup(
     }
     let pipeline = gpu.compute("setup", "setup_main", &kinds)?;
     rec.dispatch("setup", &pipeline, &sets, dispatch_size(u64::from(s.layout.tasks)))?;
-    // the large pieces' work items, a workgroup a piece
-    let pipeline = gpu.compute("setup", "setup_items_main", &kinds)?;
-    rec.dispatch("setup", &pipeline, &sets, (SPREAD_PIECES as u32, 1))?;
+    // the large pieces' work items, a workgroup a piece: counted, then written in order
+    for entry in ["setup_count_main", "setup_items_main"] {
+        let pipeline = gpu.compute("setup", entry, &kinds)?;
+        rec.dispatch("setup", &pipeline, &sets, (SPREAD_PIECES as u32, 1))?;
+    }
     let pipeline = gpu.compute("setup", "setup_finish_main", &kinds)?;
     rec.dispatch("setup", &pipeline, &sets, (1, 1))
 }

@@ -9,7 +9,8 @@
 //! indices of each mesh, and for the bounds passes each instance's box corners), and a frame
 //! writes only the per-instance matrices and colours and a uniform, then records the setup kernel
 //! (transform, clip, snap, set up, bin into 8×8 tiles), a kernel that writes the work items of the
-//! large pieces a workgroup each (`setup_items_main`), and a one-invocation kernel that writes the
+//! large pieces a workgroup each (`setup_count_main` counts them, `setup_items_main` writes them
+//! in order), and a one-invocation kernel that writes the
 //! raster kernel's indirect dispatch arguments and item count. Every float operation of the setup
 //! kernel is done in integers (softfloat.wgsl says why), so its triangles equal
 //! `TriangleSetup::triangle_words`' bit for bit; `tests/gpu_setup.rs` checks that on several scenes.
@@ -458,6 +459,10 @@ impl ComputeBuffers {
             let s = self.setup.as_ref().expect("made above");
             gpu.compute_pipeline(SETUP_WGSL, "setup_main", &[&s.layout])?
         };
+        let count_pipeline = {
+            let s = self.setup.as_ref().expect("made above");
+            gpu.compute_pipeline(SETUP_WGSL, "setup_count_main", &[&s.layout])?
+        };
         let items_pipeline = {
             let s = self.setup.as_ref().expect("made above");
             gpu.compute_pipeline(SETUP_WGSL, "setup_items_main", &[&s.layout])?
@@ -523,7 +528,10 @@ impl ComputeBuffers {
                 if x > 0 {
                     pass.set_pipeline(&setup_pipeline);
                     pass.dispatch_workgroups(x, y, 1);
-                    // the large pieces' work items, a workgroup a piece
+                    // the large pieces' work items, a workgroup a piece: counted, then written
+                    // in order
+                    pass.set_pipeline(&count_pipeline);
+                    pass.dispatch_workgroups(SPREAD_PIECES as u32, 1, 1);
                     pass.set_pipeline(&items_pipeline);
                     pass.dispatch_workgroups(SPREAD_PIECES as u32, 1, 1);
                 }

@@ -2,8 +2,9 @@
 //! triangles it writes equal `TriangleSetup::triangle_words` bit for bit, and its work list holds
 //! the same (triangle, 8×8 tile) pairs, on the bunny, procedural scenes, tiny and huge scales, and
 //! views whose near and far planes cut through the scene or whose narrow field of view sends the
-//! geometry past the guard band, and single-sided objects (back faces dropped), one mirrored. The GPU writes pieces in an order of its choosing (nothing reads
-//! the order), so both sides are compared as sorted lists.
+//! geometry past the guard band, and single-sided objects (back faces dropped), one mirrored. The GPU writes pieces in an order of its choosing (no result
+//! depends on it), so both sides are compared as sorted lists; each piece's items lie together,
+//! in row-major order (what the resolves' speed depends on).
 
 use glam::Vec3;
 use oit_core::setup::{TRIANGLE_WORDS, TriangleSetup};
@@ -46,6 +47,28 @@ fn canonical(words: &[u32], items: &[[u32; 2]]) -> (Vec<Vec<u32>>, Vec<Item>) {
     tris.sort_unstable();
     list.sort_unstable();
     (tris, list)
+}
+
+/// Whether each piece's work items lie together in the list, its tiles in row-major order: the
+/// raster kernel takes items in list order, so a pixel's fragments then arrive piece by piece,
+/// which the resolves' sorts are fast on (setup.wgsl's `setup_items_main`).
+fn pieces_lie_together(items: &[[u32; 2]]) -> Result<(), String> {
+    let mut seen = std::collections::HashSet::new();
+    for (i, pair) in items.windows(2).enumerate() {
+        let ([t0, tile0], [t1, tile1]) = (pair[0], pair[1]);
+        if t0 == t1 && tile1 <= tile0 {
+            return Err(format!("piece {t0}: tile {tile1:#x} after {tile0:#x} (item {})", i + 1));
+        }
+        if t0 != t1 && !seen.insert(t0) {
+            return Err(format!("piece {t0}'s items are split (item {i})"));
+        }
+    }
+    if let Some(&[t, _]) = items.last()
+        && seen.contains(&t)
+    {
+        return Err(format!("piece {t}'s items are split (the last)"));
+    }
+    Ok(())
 }
 
 /// Scene `name` with every object single-sided and its second instance mirrored in x: the
@@ -105,6 +128,7 @@ fn gpu_setup_equals_host_setup() {
                     let (words, items) =
                         oit_wgpu::ComputeRaster::setup_words(gpu, scene, &camera, &s, boxes, true, cache)
                             .unwrap_or_else(|e| panic!("{name}, {view}: {e}"));
+                    pieces_lie_together(&items).unwrap_or_else(|e| panic!("{name}, {view}, boxes {boxes}: {e}"));
                     let (gpu_tris, gpu_items) = canonical(&words, &items);
                     assert_eq!(
                         gpu_tris.len(),

@@ -13,7 +13,8 @@
 // an order of the GPU's choosing: nothing reads the triangle order (the raster kernel runs its
 // work items concurrently and every capture is an atomic update; exact techniques sort by
 // (depth, primitive id)), so only the set of pieces matters, and it is the host's.
-// `setup_items_main`: a workgroup per large piece, its work items (`SPREAD_PIECES`).
+// `setup_count_main`, `setup_items_main`: a workgroup per large piece, counting then writing its
+// work items in order (`SPREAD_PIECES`).
 // `setup_finish_main`: one invocation; the raster kernel's indirect dispatch arguments and item
 // count from the counters.
 //
@@ -86,7 +87,8 @@ const COORD_LIMIT_BITS: u32 = 0x4e000000u; // 2^29
 @group(0) @binding(3) var<storage, read_write> out_tris: array<u32>;
 @group(0) @binding(4) var<storage, read_write> out_items: array<vec2<u32>>;
 // 0: pieces, 1: work items (both counted past the capacities, so the host sees what is needed),
-// 2: pieces spread (`SPREAD_PIECES`); from 4, each spread piece's slot
+// 2: pieces spread (`SPREAD_PIECES`); from 4, two words a spread piece: its slot, and the tiles
+// it keeps (`setup_count_main`)
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>>;
 // 0..3: per-pixel raster dispatch, 4..7: per-item raster dispatch, 8: work items in the list
 @group(0) @binding(6) var<storage, read_write> args: array<u32>;
@@ -367,7 +369,7 @@ fn piece_projected(i: u32, v_in: array<ClipVertex, 3>, p_in: array<Projected, 3>
     if (n > SPREAD_ITEMS) {
         let j = atomicAdd(&counters[2], 1u);
         if (j < SPREAD_PIECES) {
-            atomicStore(&counters[SPREAD_FIRST + j], slot);
+            atomicStore(&counters[SPREAD_FIRST + 2u * j], slot);
             return;
         }
     }
@@ -605,54 +607,104 @@ fn vertex_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     verts[o + 11u] = test.p.inv_w;
 }
 
-// The work items of the spread pieces (`SPREAD_PIECES`): workgroup j writes piece j's, the tiles
-// of its box that it may cover (`row_run`), a row an invocation at a time; the piece takes its
-// place in the list with one atomic, so its items lie together as a small piece's do. Dispatched
-// SPREAD_PIECES workgroups after `setup_main`; those past the pieces spread end at once.
+// The spread pieces (`SPREAD_PIECES`), a workgroup each, in two kernels after `setup_main`:
+// `setup_count_main` counts the tiles of piece j's box that it may cover (`row_run`), and
+// `setup_items_main` writes them, row-major, behind the small pieces' items and the spread pieces
+// before j, so the list holds the spread pieces in the order they were spread (near the triangles'
+// own) and each one's tiles in order. The raster kernel takes items in list order, so a pixel's
+// fragments arrive near their primitive order, which the resolves' sorts are fast on: placed by
+// an atomic each, in the order workgroups got to it, they came in a shuffled order, and the
+// resolve of `nowall:0.4:planes:64` (64 layers a pixel) took twice as long on an H100. Both
+// dispatch SPREAD_PIECES workgroups; those past the pieces spread end at once.
 var<workgroup> spread_rows: u32;
-var<workgroup> spread_kept: atomic<u32>;
-var<workgroup> spread_base: u32;
+var<workgroup> spread_sum: atomic<u32>;
+var<workgroup> spread_counts: array<u32, 64>;
+
+// Spread piece j: its slot, tile columns (first, last), first tile row and rows; no rows past the
+// pieces spread.
+fn spread_piece(j: u32) -> vec4<u32> {
+    if (j >= min(atomicLoad(&counters[2]), SPREAD_PIECES)) {
+        return vec4<u32>(0u, 0u, 0u, 0u);
+    }
+    let slot = atomicLoad(&counters[SPREAD_FIRST + 2u * j]);
+    let o = slot * TRI_WORDS;
+    let ty0 = out_tris[o + 38u] / SETUP_TILE;
+    return vec4<u32>(slot, ty0, out_tris[o + 40u] / SETUP_TILE - ty0 + 1u, 0u);
+}
+
+// The kept tiles of rows [r0, r1) of the piece at word o, from tile row ty0.
+fn rows_kept(o: u32, ty0: u32, r0: u32, r1: u32) -> u32 {
+    let tx0 = out_tris[o + 37u] / SETUP_TILE;
+    let tx1 = out_tris[o + 39u] / SETUP_TILE;
+    var kept = 0u;
+    for (var row = r0; row < r1; row++) {
+        let run = row_run(o, ty0 + row, tx0, tx1);
+        kept += run.y - run.x;
+    }
+    return kept;
+}
+
+@compute @workgroup_size(64)
+fn setup_count_main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let piece = spread_piece(wid.x);
+    if (lid == 0u) {
+        spread_rows = piece.z;
+        atomicStore(&spread_sum, 0u);
+    }
+    let rows = workgroupUniformLoad(&spread_rows);
+    if (rows == 0u) {
+        return;
+    }
+    let o = piece.x * TRI_WORDS;
+    var mine = 0u;
+    for (var row = lid; row < rows; row += 64u) {
+        mine += rows_kept(o, piece.y, row, row + 1u);
+    }
+    atomicAdd(&spread_sum, mine);
+    workgroupBarrier();
+    if (lid == 0u) {
+        atomicStore(&counters[SPREAD_FIRST + 2u * wid.x + 1u], atomicLoad(&spread_sum));
+    }
+}
 
 @compute @workgroup_size(64)
 fn setup_items_main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let j = wid.x;
-    let spread = j < min(atomicLoad(&counters[2]), SPREAD_PIECES);
-    var slot = 0u;
-    var tx0 = 0u;
-    var tx1 = 0u;
-    var ty0 = 0u;
-    var rows = 0u;
-    if (spread) {
-        slot = atomicLoad(&counters[SPREAD_FIRST + j]);
-        let o = slot * TRI_WORDS;
-        tx0 = out_tris[o + 37u] / SETUP_TILE;
-        ty0 = out_tris[o + 38u] / SETUP_TILE;
-        tx1 = out_tris[o + 39u] / SETUP_TILE;
-        rows = out_tris[o + 40u] / SETUP_TILE - ty0 + 1u;
-    }
+    let piece = spread_piece(j);
     if (lid == 0u) {
-        spread_rows = rows;
-        atomicStore(&spread_kept, 0u);
+        spread_rows = piece.z;
+        atomicStore(&spread_sum, 0u);
     }
-    let n = workgroupUniformLoad(&spread_rows);
-    let o = slot * TRI_WORDS;
-    var mine = 0u;
-    for (var row = lid; row < n; row += 64u) {
-        let run = row_run(o, ty0 + row, tx0, tx1);
-        mine += run.y - run.x;
+    let rows = workgroupUniformLoad(&spread_rows);
+    if (rows == 0u) {
+        return;
     }
-    var at = atomicAdd(&spread_kept, mine);
+    // where piece j starts: the small pieces' items (setup_main's count, final by now), then
+    // those of the spread pieces before it
+    var before = 0u;
+    for (var i = lid; i < j; i += 64u) {
+        before += atomicLoad(&counters[SPREAD_FIRST + 2u * i + 1u]);
+    }
+    atomicAdd(&spread_sum, before);
+    // invocation lid takes a block of consecutive rows; the blocks' counts, scanned, place them
+    let block = (rows + 63u) / 64u;
+    let r0 = min(lid * block, rows);
+    let r1 = min(r0 + block, rows);
+    let o = piece.x * TRI_WORDS;
+    spread_counts[lid] = rows_kept(o, piece.y, r0, r1);
     workgroupBarrier();
-    if (lid == 0u && n != 0u) {
-        spread_base = atomicAdd(&counters[1], atomicLoad(&spread_kept));
+    var at = atomicLoad(&counters[1]) + atomicLoad(&spread_sum);
+    for (var k = 0u; k < lid; k++) {
+        at += spread_counts[k];
     }
-    at += workgroupUniformLoad(&spread_base);
-    for (var row = lid; row < n; row += 64u) {
-        let ty = ty0 + row;
+    let tx0 = out_tris[o + 37u] / SETUP_TILE;
+    let tx1 = out_tris[o + 39u] / SETUP_TILE;
+    for (var row = r0; row < r1; row++) {
+        let ty = piece.y + row;
         let run = row_run(o, ty, tx0, tx1);
         for (var tx = run.x; tx < run.y; tx++) {
             if (at < su.item_capacity) {
-                out_items[at] = vec2<u32>(slot, (ty << 16u) | tx);
+                out_items[at] = vec2<u32>(piece.x, (ty << 16u) | tx);
             }
             at += 1u;
         }
@@ -675,7 +727,12 @@ fn write_dispatch(at: u32, groups: u32) {
 
 @compute @workgroup_size(1)
 fn setup_finish_main() {
-    let items = min(atomicLoad(&counters[1]), su.item_capacity);
+    // the spread pieces' items join the count (past the capacity too: the host reads it)
+    var spread = 0u;
+    for (var j = 0u; j < min(atomicLoad(&counters[2]), SPREAD_PIECES); j++) {
+        spread += atomicLoad(&counters[SPREAD_FIRST + 2u * j + 1u]);
+    }
+    let items = min(atomicAdd(&counters[1], spread) + spread, su.item_capacity);
     // raster_main: a workgroup per item; raster_loop_main: an invocation per item
     write_dispatch(0u, items);
     write_dispatch(4u, (items + 63u) / 64u);
