@@ -34,8 +34,8 @@ pub const SPREAD_PIECES: usize = 2048;
 /// Tiles of its box above which a piece's work items are written by a workgroup of
 /// `setup_items_main` (setup.wgsl's `SPREAD_ITEMS`).
 pub const SPREAD_ITEMS: usize = 16;
-/// Words of the setup's counters: pieces kept, work items, pieces spread, a spare, then two a
-/// spread piece: its slot, and the tiles it keeps.
+/// Words of the setup's counters: pieces kept, work items, pieces spread, their tiles kept, then
+/// two a spread piece: its slot, and the tiles it keeps.
 pub const COUNTER_WORDS: usize = 4 + 2 * SPREAD_PIECES;
 
 /// Where one instance's mesh lies in [`SetupGeometry::words`], and its primitive ids.

@@ -87,8 +87,8 @@ const COORD_LIMIT_BITS: u32 = 0x4e000000u; // 2^29
 @group(0) @binding(3) var<storage, read_write> out_tris: array<u32>;
 @group(0) @binding(4) var<storage, read_write> out_items: array<vec2<u32>>;
 // 0: pieces, 1: work items (both counted past the capacities, so the host sees what is needed),
-// 2: pieces spread (`SPREAD_PIECES`); from 4, two words a spread piece: its slot, and the tiles
-// it keeps (`setup_count_main`)
+// 2: pieces spread (`SPREAD_PIECES`), 3: their tiles kept (`setup_count_main`); from 4, two
+// words a spread piece: its slot, and the tiles it keeps
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>>;
 // 0..3: per-pixel raster dispatch, 4..7: per-item raster dispatch, 8: work items in the list
 @group(0) @binding(6) var<storage, read_write> args: array<u32>;
@@ -663,7 +663,9 @@ fn setup_count_main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invoca
     atomicAdd(&spread_sum, mine);
     workgroupBarrier();
     if (lid == 0u) {
-        atomicStore(&counters[SPREAD_FIRST + 2u * wid.x + 1u], atomicLoad(&spread_sum));
+        let kept = atomicLoad(&spread_sum);
+        atomicStore(&counters[SPREAD_FIRST + 2u * wid.x + 1u], kept);
+        atomicAdd(&counters[3], kept);
     }
 }
 
@@ -727,11 +729,10 @@ fn write_dispatch(at: u32, groups: u32) {
 
 @compute @workgroup_size(1)
 fn setup_finish_main() {
-    // the spread pieces' items join the count (past the capacity too: the host reads it)
-    var spread = 0u;
-    for (var j = 0u; j < min(atomicLoad(&counters[2]), SPREAD_PIECES); j++) {
-        spread += atomicLoad(&counters[SPREAD_FIRST + 2u * j + 1u]);
-    }
+    // the spread pieces' items join the count (past the capacity too: the host reads it); a
+    // loop over each spread piece's count here, one invocation's 2048 loads one after another,
+    // took 0.3 ms of an H100's frame on `cad`
+    let spread = atomicLoad(&counters[3]);
     let items = min(atomicAdd(&counters[1], spread) + spread, su.item_capacity);
     // raster_main: a workgroup per item; raster_loop_main: an invocation per item
     write_dispatch(0u, items);
