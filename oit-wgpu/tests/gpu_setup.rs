@@ -128,7 +128,8 @@ fn gpu_setup_equals_host_setup() {
                     let (words, items) =
                         oit_wgpu::ComputeRaster::setup_words(gpu, scene, &camera, &s, boxes, true, cache)
                             .unwrap_or_else(|e| panic!("{name}, {view}: {e}"));
-                    pieces_lie_together(&items).unwrap_or_else(|e| panic!("{name}, {view}, boxes {boxes}: {e}"));
+                    pieces_lie_together(&items)
+                        .unwrap_or_else(|e| panic!("{name}, {view}, boxes {boxes}: {e}"));
                     let (gpu_tris, gpu_items) = canonical(&words, &items);
                     assert_eq!(
                         gpu_tris.len(),
