@@ -644,13 +644,20 @@ fn rows_kept(o: u32, ty0: u32, r0: u32, r1: u32) -> u32 {
     return kept;
 }
 
-@compute @workgroup_size(64)
-fn setup_count_main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let piece = spread_piece(wid.x);
+// Spread piece j for its workgroup (`spread_piece`): invocation 0 keeps its rows in
+// `spread_rows` (which the caller reads with `workgroupUniformLoad`) and clears `spread_sum`.
+fn spread_begin(j: u32, lid: u32) -> vec4<u32> {
+    let piece = spread_piece(j);
     if (lid == 0u) {
         spread_rows = piece.z;
         atomicStore(&spread_sum, 0u);
     }
+    return piece;
+}
+
+@compute @workgroup_size(64)
+fn setup_count_main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let piece = spread_begin(wid.x, lid);
     let rows = workgroupUniformLoad(&spread_rows);
     if (rows == 0u) {
         return;
@@ -672,11 +679,7 @@ fn setup_count_main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invoca
 @compute @workgroup_size(64)
 fn setup_items_main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let j = wid.x;
-    let piece = spread_piece(j);
-    if (lid == 0u) {
-        spread_rows = piece.z;
-        atomicStore(&spread_sum, 0u);
-    }
+    let piece = spread_begin(j, lid);
     let rows = workgroupUniformLoad(&spread_rows);
     if (rows == 0u) {
         return;
