@@ -12,7 +12,8 @@
 //! frame's clears, its readback copies) shares one. Every submission ends with one, behind which
 //! the host reads results after the fence (its `HOST_READ`). The host writes uniforms and staging
 //! buffers before the submission that reads them (made visible by the submission itself).
-//! On a GPU each barrier drains the whole device.
+//! Each barrier waits for the whole device; recording half as many changed no frame's time on an
+//! H100 (`bench/results/h100/fills-barriers-1024`), so a simpler rule would do as well there.
 //!
 //! A hardware-raster geometry pass is one render pass (its own dependencies order it after and
 //! before everything, `Gpu::count_pass`) holding one draw, with the same barriers around it.
@@ -20,7 +21,7 @@
 //! GPU time: where the device has timestamps ([`Gpu::has_timestamps`]) a query pool of two
 //! timestamps per uniform slot, reset at the start of every recording (outside any render pass)
 //! and written once each per recording, outside render passes: before dispatch or draw `i`
-//! (query `2i`) and after it (query `2i + 1`), before its barrier. The flush reads the pairs written after the fence and adds each one's
+//! (query `2i`) and after it (query `2i + 1`), before any barrier after it. The flush reads the pairs written after the fence and adds each one's
 //! time to its label's total and the frame's, as oit-wgpu's `pass_ms` does.
 
 use std::rc::Rc;
