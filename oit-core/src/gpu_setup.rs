@@ -31,8 +31,8 @@ pub const ARGS_ITEMS: u64 = 32;
 /// than the piece's own invocation in `setup_main` (setup.wgsl's `SPREAD_PIECES`): those with more
 /// than [`SPREAD_ITEMS`] items, the first this many of them.
 pub const SPREAD_PIECES: usize = 2048;
-/// Tiles of its box above which a piece's work items are written by a workgroup of
-/// `setup_items_main` (setup.wgsl's `SPREAD_ITEMS`).
+/// Tiles of its box above which a piece's work items are counted and written by a workgroup of
+/// `setup_count_main` and `setup_items_main` (setup.wgsl's `SPREAD_ITEMS`).
 pub const SPREAD_ITEMS: usize = 16;
 /// Words of the setup's counters: pieces kept, work items, pieces spread, their tiles kept, then
 /// two a spread piece: its slot, and the tiles it keeps.

@@ -455,8 +455,9 @@ impl FrameUniform {
 /// instances' bounding boxes') triangle words (`oit_core::setup`), and the work list of the compute
 /// rasterizer, one (triangle, tile) item for each [`TILE`]² tile of a triangle's pixel box that
 /// it may cover (`TriangleSetup::work_items`), the tile as `ty << 16 | tx`. Both GPU backends
-/// upload these where the device sets up on the host, as every textured frame does ([`is_textured`]): after the triangles, the textured
-/// triangles' records and the texture region ([`TextureRegion`]; raster_compute.wgsl reads them).
+/// upload these where the device sets up on the host, as every textured frame does
+/// ([`is_textured`]): after the triangles, the textured triangles' records and the texture region
+/// ([`TextureRegion`]; raster_compute.wgsl reads them).
 pub fn host_setup(
     scene: &Scene,
     camera: &Camera,

@@ -10,9 +10,10 @@
 // (Sutherland–Hodgman, cut from the inside end), fan triangulation, perspective divide, viewport,
 // snapping by floor(v·256 + 0.5), the area, orientation and pixel box; each piece kept takes a
 // slot by atomic increment and appends its tiles to the work list the same way. Pieces land in
-// an order of the GPU's choosing: nothing reads the triangle order (the raster kernel runs its
-// work items concurrently and every capture is an atomic update; exact techniques sort by
-// (depth, primitive id)), so only the set of pieces matters, and it is the host's.
+// an order of the GPU's choosing: no result depends on the triangle order (the raster kernel runs
+// its work items concurrently and every capture is an atomic update; exact techniques sort by
+// (depth, primitive id)), so only the set of pieces must be the host's. Speed does depend on it:
+// each piece's tiles lie together, in row-major order (see `setup_items_main`).
 // `setup_count_main`, `setup_items_main`: a workgroup per large piece, counting then writing its
 // work items in order (`SPREAD_PIECES`).
 // `setup_finish_main`: one invocation; the raster kernel's indirect dispatch arguments and item
@@ -69,9 +70,9 @@ const I_FIRST_VERT: u32 = 39u;    // vertex-cache records of the instances befor
 
 const TRI_WORDS: u32 = 44u;
 const SETUP_TILE: u32 = 8u;
-// A piece of more than SPREAD_ITEMS tiles in its box (one of the first SPREAD_PIECES such) leaves them to
-// `setup_items_main`, a workgroup a piece (oit-core's `gpu_setup::SPREAD_PIECES`, `SPREAD_ITEMS`):
-// one invocation writing a large triangle's thousands of tiles, while a frame of a few such
+// A piece of more than SPREAD_ITEMS tiles in its box (one of the first SPREAD_PIECES such) leaves
+// them to `setup_count_main` and `setup_items_main`, a workgroup a piece (oit-core's
+// `gpu_setup::SPREAD_PIECES`, `SPREAD_ITEMS`): one invocation writing a large triangle's thousands of tiles, while a frame of a few such
 // triangles keeps a few invocations of the whole GPU busy, took 0.26 ms of an H100's frame for the
 // two triangles of a wall behind `particles:256` at 1024².
 const SPREAD_PIECES: u32 = 2048u;
@@ -614,14 +615,14 @@ fn vertex_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
 // own) and each one's tiles in order. The raster kernel takes items in list order, so a pixel's
 // fragments arrive near their primitive order, which the resolves' sorts are fast on: placed by
 // an atomic each, in the order workgroups got to it, they came in a shuffled order, and the
-// resolve of `nowall:0.4:planes:64` (64 layers a pixel) took twice as long on an H100. Both
+// resolve of `nowall:0.4:planes:64` (64 layers a pixel) took two to three times as long on an H100. Both
 // dispatch SPREAD_PIECES workgroups; those past the pieces spread end at once.
 var<workgroup> spread_rows: u32;
 var<workgroup> spread_sum: atomic<u32>;
 var<workgroup> spread_counts: array<u32, 64>;
 
-// Spread piece j: its slot, tile columns (first, last), first tile row and rows; no rows past the
-// pieces spread.
+// Spread piece j: its slot, its first tile row and its rows of tiles (x, y, z; w unused); no rows
+// past the pieces spread.
 fn spread_piece(j: u32) -> vec4<u32> {
     if (j >= min(atomicLoad(&counters[2]), SPREAD_PIECES)) {
         return vec4<u32>(0u, 0u, 0u, 0u);
