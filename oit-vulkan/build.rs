@@ -21,6 +21,11 @@ use std::path::PathBuf;
 /// ([`interlock`]): the single-sample `hw_fs` and the multisampled `hw_fs_masked` (docs/msaa.md).
 const INTERLOCKED: &[&str] = &["kbuf_hw"];
 
+/// Functions whose private arrays [`uninitialized_arrays`] leaves without WGSL's zero initializer:
+/// each is an insertion sort that writes an element before it reads it (oit-shaders'
+/// technique/short_list.wgsl and plain.wgsl say so where they declare them).
+const WRITTEN_FIRST: &[&str] = &["push_short_list", "plain_push_short"];
+
 /// The fragment entry points of an [`INTERLOCKED`] module that [`interlock`] wraps.
 const INTERLOCKED_ENTRIES: &[&str] = &["hw_fs", "hw_fs_masked"];
 
@@ -32,6 +37,8 @@ mod op {
     pub const ENTRY_POINT: u32 = 15;
     pub const EXECUTION_MODE: u32 = 16;
     pub const CAPABILITY: u32 = 17;
+    pub const TYPE_ARRAY: u32 = 28;
+    pub const TYPE_POINTER: u32 = 32;
     pub const FUNCTION: u32 = 54;
     pub const FUNCTION_END: u32 = 56;
     pub const FUNCTION_CALL: u32 = 57;
@@ -58,6 +65,9 @@ mod op {
 /// Words of a SPIR-V module's header, before its first instruction.
 const HEADER: usize = 5;
 
+/// SPIR-V's `Function` storage class (a function's own variables).
+const STORAGE_FUNCTION: u32 = 7;
+
 /// A module's instructions: (first word, opcode, word count) each; fails on a malformed one.
 fn instructions(words: &[u32]) -> Result<Vec<(usize, u32, usize)>, String> {
     let mut at = HEADER;
@@ -77,6 +87,36 @@ fn instructions(words: &[u32]) -> Result<Vec<(usize, u32, usize)>, String> {
 fn literal(words: &[u32]) -> Vec<u8> {
     let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
     bytes.split(|&b| b == 0).next().unwrap_or_default().to_vec()
+}
+
+/// The most bytes an entry point's private arrays may take. WGSL gives every variable a value, so
+/// naga writes each function variable with a zero initializer at its function's start, and a
+/// driver stores the zeros wherever the function runs: in an entry point, in every invocation. On
+/// an H100 the 768 bytes of a 64-entry list in the per-pixel resolves (fabs, dfb, ll) cost their
+/// frames about 0.3 ms at 1024², list or no list; declared in a function that the pixels with a
+/// list call (`push_short_list`, oit-shaders' technique/short_list.wgsl), only those pay.
+const ENTRY_ARRAY_BYTES: u32 = 256;
+
+/// Fails on an entry point of `module` that declares an array variable of more than `limit` bytes
+/// (see [`ENTRY_ARRAY_BYTES`]), naming it.
+fn entry_arrays(module: &naga::Module, limit: u32) -> Result<(), String> {
+    let mut layouter = naga::proc::Layouter::default();
+    layouter.update(module.to_ctx()).map_err(|e| format!("type layout: {e}"))?;
+    for entry in &module.entry_points {
+        for (_, var) in entry.function.local_variables.iter() {
+            let ty = &module.types[var.ty];
+            let bytes = layouter[var.ty].size;
+            if matches!(ty.inner, naga::TypeInner::Array { .. }) && bytes > limit {
+                return Err(format!(
+                    "entry point {} declares `{}`, an array of {bytes} bytes: every invocation stores its \
+                     zero initializer; declare it in a function called where it is needed",
+                    entry.name,
+                    var.name.as_deref().unwrap_or("?"),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Rewrites every call of `vk_atomic_result` / `vk_atomic_result64` (oit-shaders' wgsl/core/atomic_result.wgsl)
@@ -215,6 +255,63 @@ fn interlock(words: &[u32], entries: &[&str]) -> Result<Vec<u32>, String> {
     Ok(out)
 }
 
+/// Drops the zero initializer (WGSL's default value, which naga writes as `OpConstantNull`) of
+/// every array variable declared in a function named in `functions`, whose code writes each
+/// element before reading it, so the driver stores no zeros first. Returns the module and the
+/// variables rewritten. On an H100 the initializers of `push_short_list`'s two arrays (768 bytes)
+/// cost the resolves of fabs, dfb and ll about 0.1 ms of a walled `planes:64` frame at 1024² and
+/// 0.1 ms on `cad` (bench/results/h100/short-list-1024). wgpu compiles WGSL itself, with the
+/// initializers: there, only the pixels that call the function pay for them.
+fn uninitialized_arrays(words: &[u32], functions: &[&str]) -> Result<(Vec<u32>, usize), String> {
+    let list = instructions(words)?;
+    let mut named = std::collections::HashSet::new();
+    let mut arrays = std::collections::HashSet::new();
+    // the pointer types to arrays in the Function storage class
+    let mut array_pointers = std::collections::HashSet::new();
+    for &(at, opcode, count) in &list {
+        match opcode {
+            op::NAME if count >= 3 => {
+                let name = literal(&words[at + 2..at + count]);
+                if functions.iter().any(|f| f.as_bytes() == name) {
+                    named.insert(words[at + 1]);
+                }
+            }
+            op::TYPE_ARRAY if count >= 2 => {
+                arrays.insert(words[at + 1]);
+            }
+            op::TYPE_POINTER
+                if count == 4 && words[at + 2] == STORAGE_FUNCTION && arrays.contains(&words[at + 3]) =>
+            {
+                array_pointers.insert(words[at + 1]);
+            }
+            _ => {}
+        }
+    }
+    let mut out = words[..HEADER].to_vec();
+    let mut inside = false;
+    let mut rewritten = 0;
+    for &(at, opcode, count) in &list {
+        match opcode {
+            op::FUNCTION if count >= 3 => inside = named.contains(&words[at + 2]),
+            op::FUNCTION_END => inside = false,
+            _ => {}
+        }
+        if inside
+            && opcode == op::VARIABLE
+            && count == 5
+            && words[at + 3] == STORAGE_FUNCTION
+            && array_pointers.contains(&words[at + 1])
+        {
+            out.push((4 << 16) | op::VARIABLE);
+            out.extend_from_slice(&words[at + 1..at + 4]);
+            rewritten += 1;
+        } else {
+            out.extend_from_slice(&words[at..at + count]);
+        }
+    }
+    Ok((out, rewritten))
+}
+
 /// naga declares WGSL's `@builtin(sample_mask)` (the multisampled hardware raster's
 /// `hw_fs_masked`) as a scalar `u32` variable (gfx-rs/wgpu issue 7311), where Vulkan requires an
 /// array of 32-bit integers (VUID-SampleMask-SampleMask-04359; drivers may misread a scalar).
@@ -226,8 +323,7 @@ fn sample_mask_arrays(words: &[u32]) -> Result<(Vec<u32>, usize), String> {
     const BUILT_IN: u32 = 11;
     const SAMPLE_MASK: u32 = 20;
     const TYPE_INT: u32 = 21;
-    const TYPE_ARRAY: u32 = 28;
-    const TYPE_POINTER: u32 = 32;
+    use op::{TYPE_ARRAY, TYPE_POINTER};
     const CONSTANT: u32 = 43;
     const LOAD: u32 = 61;
     const STORE: u32 = 62;
@@ -360,6 +456,9 @@ fn main() {
         let info = Validator::new(ValidationFlags::all(), capabilities)
             .validate(&module)
             .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(text)));
+        if let Err(e) = entry_arrays(&module, ENTRY_ARRAY_BYTES) {
+            panic!("{name}: {e}");
+        }
         let mut words =
             spv::write_vec(&module, &info, &options, None).unwrap_or_else(|e| panic!("{name}: SPIR-V: {e}"));
         let copied = atomic_results(&mut words).unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -372,6 +471,14 @@ fn main() {
         let (arrays, rewritten) = sample_mask_arrays(&words).unwrap_or_else(|e| panic!("{name}: {e}"));
         if text.contains("@builtin(sample_mask)") && rewritten == 0 {
             panic!("{name}: uses sample_mask but no SampleMask variable was rewritten");
+        }
+        words = arrays;
+        let (arrays, rewritten) =
+            uninitialized_arrays(&words, WRITTEN_FIRST).unwrap_or_else(|e| panic!("{name}: {e}"));
+        for f in WRITTEN_FIRST {
+            if text.contains(&format!("fn {f}(")) && rewritten == 0 {
+                panic!("{name}: declares {f} but no array of it lost its initializer");
+            }
         }
         words = arrays;
         let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();

@@ -27,10 +27,17 @@
 //!
 //! ```
 //! let fabs = oit_shaders::module("fabs").expect("a module of the manifest");
-//! // the buffer accessor, the technique, its tail, the coverage masks of multisampled frames
+//! // the buffer accessor, the technique, its tail, the coverage masks of multisampled frames,
+//! // the short lists' sort
 //! assert_eq!(
 //!     fabs.sources,
-//!     ["technique/fabs_counters.wgsl", "technique/fabs.wgsl", "technique/tail.wgsl", "technique/coverage.wgsl"]
+//!     [
+//!         "technique/fabs_counters.wgsl",
+//!         "technique/fabs.wgsl",
+//!         "technique/tail.wgsl",
+//!         "technique/coverage.wgsl",
+//!         "technique/short_list.wgsl",
+//!     ]
 //! );
 //! assert!(fabs.compute_text().contains("fn raster_main"));
 //! ```

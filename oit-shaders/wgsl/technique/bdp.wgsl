@@ -3,7 +3,10 @@
 // bounds: [zNear, zFar] bits per pixel (bounds.wgsl). pass_index 0 with param 0: colour mode;
 // otherwise depth mode, pass `pass_index` of `bdp:P` (see bdp.rs).
 @group(0) @binding(2) var<storage, read_write> bounds: array<u32>;
-// Colour mode: 32 u32 buckets per pixel, integer MAX of bdp_pack_color.
+// Colour mode: 32 u32 buckets per pixel, integer MAX of bdp_pack_color; bucket k of pixel px is
+// colors[k · pixels + px] (bucket-major), so that the resolve's neighbouring invocations read
+// neighbouring words: pixel-major (px · 32 + k), each of its atomic loads touched as many memory
+// sectors as invocations.
 @group(0) @binding(3) var<storage, read_write> colors: array<atomic<u32>>;
 // Depth mode: one array per pass, each 16 × (min, max) u64 keys per pixel, arrays back to back.
 @group(0) @binding(4) var<storage, read_write> arrays: array<atomic<u64>>;
@@ -33,7 +36,7 @@ fn capture(f: Fragment) {
         let k = bucket_index(f.depth, zn, zf, BDP_COLOR_SUBINTERVALS);
         let word = bdp_pack_color(pack_rgba8(f.color));
         // a full bucket: one of the two fragments is gone; a zero word is never read back
-        if (atomicMax(&colors[px * BDP_COLOR_SUBINTERVALS + k], word) != 0u || word == 0u) {
+        if (atomicMax(&colors[k * fu.pixel_count + px], word) != 0u || word == 0u) {
             lose(px);
         }
         return;
@@ -88,7 +91,7 @@ fn color_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
     let zf = bdp_z_far(px);
     let n = BDP_COLOR_SUBINTERVALS;
     for (var k = 0u; k < n; k++) {
-        let v = atomicLoad(&colors[px * n + k]);
+        let v = atomicLoad(&colors[k * fu.pixel_count + px]);
         if (v != 0u) {
             let d = bucket_midpoint(k, n, zn, zf);
             push_local(&s, d, bdp_unpack_color(v));

@@ -145,11 +145,11 @@ fn bdp_blend_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
         return;
     }
     let xy = vec2<i32>(i32(px % fu.width), i32(px / fu.width));
-    var buckets: array<u32, BDP_COLOR_SUBINTERVALS>;
+    var s = load_state(px);
     for (var k = 0u; k < BDP_COLOR_SUBINTERVALS; k++) {
-        buckets[k] = bdp_blend_bucket(k, xy);
+        bdp_blend_push(&s, px, k, bdp_blend_bucket(k, xy));
     }
-    bdp_blend_push(px, &buckets);
+    store_state(px, s);
 }
 
 // Bucket k of the pixel at xy in the multisampled targets: the largest over its samples (as u32,
@@ -181,25 +181,21 @@ fn bdp_blend_ms_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @bui
         return;
     }
     let xy = vec2<i32>(i32(px % fu.width), i32(px / fu.width));
-    var buckets: array<u32, BDP_COLOR_SUBINTERVALS>;
-    for (var k = 0u; k < BDP_COLOR_SUBINTERVALS; k++) {
-        buckets[k] = bdp_blend_bucket_ms(k, xy);
-    }
-    bdp_blend_push(px, &buckets);
-}
-
-// Pushes the pixel's non-empty buckets in order, each at its subinterval's midpoint.
-fn bdp_blend_push(px: u32, buckets: ptr<function, array<u32, BDP_COLOR_SUBINTERVALS>>) {
     var s = load_state(px);
-    let zn = bitcast<f32>(bounds[2u * px]);
-    let zf = bitcast<f32>(bounds[2u * px + 1u]);
-    let n = BDP_COLOR_SUBINTERVALS;
-    for (var k = 0u; k < n; k++) {
-        let v = (*buckets)[k];
-        if (v != 0u) {
-            let d = zn + (f32(k) + 0.5) / f32(n) * (zf - zn);
-            push_local(&s, d, bdp_unpack_color(v));
-        }
+    for (var k = 0u; k < BDP_COLOR_SUBINTERVALS; k++) {
+        bdp_blend_push(&s, px, k, bdp_blend_bucket_ms(k, xy));
     }
     store_state(px, s);
+}
+
+// Pushes bucket k of pixel px, whose word is `v`, at its subinterval's midpoint, unless it is
+// empty. (The resolves read each bucket as they push it: gathered first into a private array,
+// they cost every pixel that array's zero initializer; short_list.wgsl says why.)
+fn bdp_blend_push(s: ptr<function, PixelState>, px: u32, k: u32, v: u32) {
+    if (v != 0u) {
+        let zn = bitcast<f32>(bounds[2u * px]);
+        let zf = bitcast<f32>(bounds[2u * px + 1u]);
+        let n = f32(BDP_COLOR_SUBINTERVALS);
+        push_local(s, zn + (f32(k) + 0.5) / n * (zf - zn), bdp_unpack_color(v));
+    }
 }

@@ -2,8 +2,8 @@
 // oit-cpu's `technique/msaa.rs` keeps them: a byte an entry beside the entry's key and payload
 // (an entry is one fragment whatever its mask), four to a word of `masks`, and the per-sample
 // resolve. Appended to the modules that keep masks (reference, dfb, ll, fabs), which declare
-// `masks: array<atomic<u32>>` and say how their entries are reached: `msaa_key(e)`,
-// `msaa_payload(e)`, and `msaa_next(e)`, the entry after `e` in a pixel's sorted list.
+// `masks: array<atomic<u32>>` and say how their entries are reached: `entry_key(e)`,
+// `entry_payload(e)`, and `entry_next(e)`, the entry after `e` in a pixel's sorted list.
 //
 // A byte is written with atomics (its word holds other entries' bytes, which other invocations
 // write at the same time): cleared, then set.
@@ -49,9 +49,9 @@ fn composite_covering(first: u32, n: u32, bits: u32, bg: vec3<f32>) -> vec3<f32>
     var e = first;
     for (var i = 0u; i < n; i++) {
         if ((mask_at(e) & bits) != 0u) {
-            push_local(&t, bitcast<f32>(u32(msaa_key(e) >> 32u)), msaa_payload(e));
+            push_local(&t, bitcast<f32>(u32(entry_key(e) >> 32u)), entry_payload(e));
         }
-        e = msaa_next(e);
+        e = entry_next(e);
     }
     return finish_over(t, bg);
 }
@@ -83,7 +83,7 @@ fn resolve_masked_over(px: u32, first: u32, n: u32, back: vec4<f32>) {
     var e = first;
     for (var i = 0u; i < n; i++) {
         all &= mask_at(e);
-        e = msaa_next(e);
+        e = entry_next(e);
     }
     var s = load_state(px);
     s.captured = n;

@@ -1,4 +1,4 @@
-// module dfb (raster): technique/dfb.wgsl technique/sort_entries.wgsl technique/coverage.wgsl
+// module dfb (raster): technique/dfb.wgsl technique/sort_entries.wgsl technique/coverage.wgsl technique/short_list.wgsl
 // dfb, the dynamic fragment buffer (Maule et al. 2012), as oit-cpu's `technique/dfb.rs`: after
 // the counting pass (dfb_count.wgsl) and the prefix sum (scan.wgsl), `offsets[px]` is pixel px's
 // first entry and `offsets[pixels]` the total; the fill (this capture) takes each fragment's
@@ -10,7 +10,7 @@
 // range by key, (depth bits << 32 | primitive id), payload beside it, and composites: equal depths
 // in primitive order, as the reference's.
 //
-// A range of up to LOCAL_ENTRIES is sorted in a private array (as fabs.wgsl's lists), a longer
+// A range of up to SHORT_LIST is sorted in private arrays (short_list.wgsl, as fabs's lists), a longer
 // one in place by heapsort, as reference.wgsl and fabs.wgsl do. (An in-place insertion sort composited only
 // part of the list on lavapipe from about 1,000 entries a pixel: 250 of 1,000 on planes:1000 at
 // 8², 1 of 2,000 on planes:2000, the counts and offsets read back correct; heapsort's
@@ -21,8 +21,6 @@
 @group(0) @binding(5) var<storage, read_write> payloads: array<u32>;
 // multisampled: each entry's coverage mask, a byte (coverage.wgsl); a placeholder at one sample
 @group(0) @binding(6) var<storage, read_write> masks: array<atomic<u32>>;
-
-const LOCAL_ENTRIES: u32 = 64u;
 
 fn capture(f: Fragment) {
     let left = atomicSub(&counts[f.pixel], 1u);
@@ -45,7 +43,6 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if (px >= fu.pixel_count) {
         return;
     }
-    var s = load_state(px);
     // entries the fill did not reach (a count it did not spend, at the end) are left out
     let lo = offsets[px];
     let hi = offsets[px + 1u] - u32(max(bitcast<i32>(atomicLoad(&counts[px])), 0));
@@ -55,25 +52,12 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         resolve_masked(px, lo, hi - lo);
         return;
     }
-    if (hi - lo <= LOCAL_ENTRIES) {
-        var list: array<u64, LOCAL_ENTRIES>;
-        var list_payloads: array<u32, LOCAL_ENTRIES>;
-        let n = hi - lo;
-        for (var i = 0u; i < n; i++) {
-            let v = keys[lo + i];
-            let p = payloads[lo + i];
-            var j = i;
-            while (j > 0u && list[j - 1u] > v) {
-                list[j] = list[j - 1u];
-                list_payloads[j] = list_payloads[j - 1u];
-                j -= 1u;
-            }
-            list[j] = v;
-            list_payloads[j] = p;
-        }
-        for (var i = 0u; i < n; i++) {
-            push_local(&s, bitcast<f32>(u32(list[i] >> 32u)), list_payloads[i]);
-        }
+    if (hi == lo) {
+        // nothing captured: the state stays as the frame cleared it
+        return;
+    }
+    var s = load_state(px);
+    if (push_short_list(&s, lo, hi - lo, false)) {
         store_state(px, s);
         return;
     }

@@ -1,16 +1,16 @@
-// module fabs (raster): technique/fabs_counters.wgsl technique/fabs.wgsl technique/tail.wgsl technique/coverage.wgsl
+// module fabs (raster): technique/fabs_counters.wgsl technique/fabs.wgsl technique/tail.wgsl technique/coverage.wgsl technique/short_list.wgsl
 // `--atomic-storage image`: the same technique over the storage-image accessor
-// module fabs_image (raster): core/atomic_result.wgsl technique/fabs_counters_image.wgsl technique/fabs.wgsl technique/tail.wgsl technique/coverage.wgsl
+// module fabs_image (raster): core/atomic_result.wgsl technique/fabs_counters_image.wgsl technique/fabs.wgsl technique/tail.wgsl technique/coverage.wgsl technique/short_list.wgsl
 // fabs:K (Huang et al. 2011, section 4): counter + K slots per pixel by atomic increment; the
-// resolve sorts each pixel's n ≤ K slots (insertion sort up to LOCAL_SLOTS, heapsort beyond) and
+// resolve sorts each pixel's n ≤ K slots (short_list.wgsl up to SHORT_LIST, heapsort beyond) and
 // composites them. param = K. A slot is a key, depth bits << 32 | primitive id, and the payload
 // beside it (in `payloads`, at the same index): sorted by key, equal depths come out in primitive
 // order, as the reference's.
 //
 // Slot i of pixel px is slots[i · pixels + px] (slot-major), so the neighbouring pixels of one
-// workgroup read and write neighbouring words in the resolve; lists of up to LOCAL_SLOTS are sorted
-// in a private array, longer ones in place (heapsort). Measured on the H100 (planes:64 at 1024², 64 layers a
-// pixel): with pixel-major slots sorted in place the capture pass and its sizing pass took 2.8 ms
+// workgroup read and write neighbouring words in the resolve; lists of up to SHORT_LIST are
+// sorted in private arrays, longer ones in place (heapsort). Measured on the H100 (planes:64 at
+// 1024², 64 layers a pixel): with pixel-major slots sorted in place the capture pass and its sizing pass took 2.8 ms
 // and the resolve 4.4; with this layout 1.65 and 4.0; and with the pixel's resolve state kept in
 // a local across the list (`push_local`, one load and one store instead of one per layer) the
 // resolve takes 0.46 ms. Every resolve that walks a list does the same.
@@ -38,7 +38,6 @@
 // keys, then resolved per sample.
 @group(0) @binding(8) var<storage, read_write> masks: array<atomic<u32>>;
 
-const LOCAL_SLOTS: u32 = 64u;
 const FABS_EMPTY: u64 = 0xfffffffffffffffflu;
 const FABS_CAPTURE: u32 = 0u;
 const FABS_KEYS: u32 = 1u;
@@ -121,7 +120,6 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if (px >= fu.pixel_count) {
         return;
     }
-    var s = load_state(px);
     let n = min(fabs_count(px), fu.param);
     let stride = fu.pixel_count;
     if (fu.msaa.x > 1u) {
@@ -141,36 +139,19 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         resolve_masked_over(px, px, n, back);
         return;
     }
-    if (n <= LOCAL_SLOTS) {
-        var list: array<u64, LOCAL_SLOTS>;
-        var list_payloads: array<u32, LOCAL_SLOTS>;
-        for (var i = 0u; i < n; i++) {
-            let v = atomicLoad(&slots[i * stride + px]);
-            let p = payloads[i * stride + px];
-            var j = i;
-            while (j > 0u && list[j - 1u] > v) {
-                list[j] = list[j - 1u];
-                list_payloads[j] = list_payloads[j - 1u];
-                j -= 1u;
-            }
-            list[j] = v;
-            list_payloads[j] = p;
-        }
-        for (var i = 0u; i < n; i++) {
-            push_local(&s, bitcast<f32>(u32(list[i] >> 32u)), list_payloads[i]);
-        }
-        if (fu.pass_index == FABS_WITH_TAIL) {
-            tail_resolve(&s, px);
-        }
-        store_state(px, s);
+    if (n == 0u && fu.pass_index != FABS_WITH_TAIL) {
+        // nothing captured: the state stays as the frame cleared it
         return;
     }
-    // longer: heapsort in place (O(n log n) loops; an in-place insertion sort composited only
-    // part of 2,000-entry lists on lavapipe, see dfb.wgsl)
-    fabs_heapsort(px, stride, n);
-    for (var i = 0u; i < n; i++) {
-        let key = atomicLoad(&slots[i * stride + px]);
-        push_local(&s, bitcast<f32>(u32(key >> 32u)), payloads[i * stride + px]);
+    var s = load_state(px);
+    if (!push_short_list(&s, px, n, false)) {
+        // longer: heapsort in place (O(n log n) loops; an in-place insertion sort composited
+        // only part of 2,000-entry lists on lavapipe, see dfb.wgsl)
+        fabs_heapsort(px, stride, n);
+        for (var i = 0u; i < n; i++) {
+            let key = atomicLoad(&slots[i * stride + px]);
+            push_local(&s, bitcast<f32>(u32(key >> 32u)), payloads[i * stride + px]);
+        }
     }
     if (fu.pass_index == FABS_WITH_TAIL) {
         tail_resolve(&s, px);
@@ -191,15 +172,15 @@ fn fabs_heapsort(px: u32, stride: u32, n: u32) {
 
 // Slot e (i · pixels + px) of a pixel's sorted slots, for coverage.wgsl: its key, its payload,
 // the slot after it.
-fn msaa_key(e: u32) -> u64 {
+fn entry_key(e: u32) -> u64 {
     return atomicLoad(&slots[e]);
 }
 
-fn msaa_payload(e: u32) -> u32 {
+fn entry_payload(e: u32) -> u32 {
     return payloads[e];
 }
 
-fn msaa_next(e: u32) -> u32 {
+fn entry_next(e: u32) -> u32 {
     return e + fu.pixel_count;
 }
 

@@ -1,14 +1,14 @@
-// module ll (raster): technique/ll.wgsl technique/coverage.wgsl
+// module ll (raster): technique/ll.wgsl technique/coverage.wgsl technique/short_list.wgsl
 // ll, per-pixel linked lists (Yang et al. 2010), as oit-cpu's `technique/ll.rs`: a head per
 // pixel (LL_END when empty), a pool of fu.param nodes sized by the sizing pass (ll_size.wgsl), a
 // node counter. The capture takes a node by atomicAdd on the counter (past the pool: lost, where
 // it happens), writes the key (depth bits << 32 | primitive id) and payload into it, and links it
-// in front of its pixel's list by atomicExchange on the head. The resolve walks each list into a
-// private array of up to LOCAL_NODES, sorted as it goes (insertion, farthest first: a list holds
-// its pixel's fragments newest first, so fragments that arrived front to back come out farthest
-// first and each insertion is one comparison, as fabs's are for its slots in arrival order;
-// sorted nearest first, that order was the insertion's worst case), and composites it from the
-// nearest; a longer list is merge-sorted in place along its links.
+// in front of its pixel's list by atomicExchange on the head. The resolve walks each list into
+// private arrays of up to SHORT_LIST (short_list.wgsl), sorted as it goes (insertion, farthest
+// first: a list holds its pixel's fragments newest first, so fragments that arrived front to back
+// come out farthest first and each insertion is one comparison, as fabs's are for its slots in
+// arrival order; sorted nearest first, that order was the insertion's worst case), and
+// composites it from the nearest; a longer list is merge-sorted in place along its links.
 @group(0) @binding(2) var<storage, read_write> heads: array<atomic<u32>>;
 @group(0) @binding(3) var<storage, read_write> counter: array<atomic<u32>>;
 @group(0) @binding(4) var<storage, read_write> keys: array<u64>;
@@ -19,8 +19,8 @@
 // stay where they are), then resolved per sample.
 @group(0) @binding(7) var<storage, read_write> masks: array<atomic<u32>>;
 
-const LL_END: u32 = 0xffffffffu;
-const LOCAL_NODES: u32 = 64u;
+// the end of a list, where short_list.wgsl's walk stops
+const LL_END: u32 = LIST_END;
 
 fn capture(f: Fragment) {
     let node = atomicAdd(&counter[0], 1u);
@@ -38,15 +38,15 @@ fn capture(f: Fragment) {
 }
 
 // Node e of a sorted list, for coverage.wgsl: its key, its payload, the node after it.
-fn msaa_key(e: u32) -> u64 {
+fn entry_key(e: u32) -> u64 {
     return keys[e];
 }
 
-fn msaa_payload(e: u32) -> u32 {
+fn entry_payload(e: u32) -> u32 {
     return payloads[e];
 }
 
-fn msaa_next(e: u32) -> u32 {
+fn entry_next(e: u32) -> u32 {
     return links[e];
 }
 
@@ -56,35 +56,16 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if (px >= fu.pixel_count) {
         return;
     }
-    var s = load_state(px);
     let head = atomicLoad(&heads[px]);
-    let masked = fu.msaa.x > 1u;
-    if (masked && head == LL_END) {
-        // nothing captured: the state as initialized composites the background
+    if (head == LL_END) {
+        // nothing captured: the state stays as the frame cleared it (and composites the
+        // background where multisampled)
         return;
     }
-    var list: array<u64, LOCAL_NODES>;
-    var list_payloads: array<u32, LOCAL_NODES>;
-    var n = 0u;
-    var node = head;
-    while (!masked && node != LL_END && n < LOCAL_NODES) {
-        let v = keys[node];
-        let p = payloads[node];
-        var j = n;
-        while (j > 0u && list[j - 1u] < v) {
-            list[j] = list[j - 1u];
-            list_payloads[j] = list_payloads[j - 1u];
-            j -= 1u;
-        }
-        list[j] = v;
-        list_payloads[j] = p;
-        n += 1u;
-        node = links[node];
-    }
-    if (!masked && node == LL_END) {
-        for (var i = n; i > 0u; i--) {
-            push_local(&s, bitcast<f32>(u32(list[i - 1u] >> 32u)), list_payloads[i - 1u]);
-        }
+    let masked = fu.msaa.x > 1u;
+    var s = load_state(px);
+    // as many entries as the walk finds before LL_END
+    if (!masked && push_short_list(&s, head, 0xffffffffu, true)) {
         store_state(px, s);
         return;
     }

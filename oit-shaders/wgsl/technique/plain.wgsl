@@ -27,23 +27,15 @@ fn plain_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
     if (px >= fu.pixel_count) {
         return;
     }
-    var s = load_state(px);
     let n = min(atomicLoad(&plain_counters[px]), fu.param);
+    if (n == 0u) {
+        // nothing captured: the state stays as the frame cleared it
+        return;
+    }
+    var s = load_state(px);
     let stride = fu.pixel_count;
     if (n <= PLAIN_LOCAL) {
-        var list: array<u64, PLAIN_LOCAL>;
-        for (var i = 0u; i < n; i++) {
-            let v = plain_slots[i * stride + px];
-            var j = i;
-            while (j > 0u && list[j - 1u] > v) {
-                list[j] = list[j - 1u];
-                j -= 1u;
-            }
-            list[j] = v;
-        }
-        for (var i = 0u; i < n; i++) {
-            push_local(&s, 0.0, u32(list[i] & 0xfffffffflu));
-        }
+        plain_push_short(&s, px, n);
         store_state(px, s);
         return;
     }
@@ -58,6 +50,26 @@ fn plain_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
         push_local(&s, 0.0, u32(plain_slots[i * stride + px] & 0xfffffffflu));
     }
     store_state(px, s);
+}
+
+// Pushes pixel `px`'s n ≤ PLAIN_LOCAL words, sorted by insertion in a private array (declared
+// here, not in the resolve, for the reason short_list.wgsl gives: its zero initializer is stored
+// only for the pixels that have a list).
+fn plain_push_short(s: ptr<function, PixelState>, px: u32, n: u32) {
+    let stride = fu.pixel_count;
+    var list: array<u64, PLAIN_LOCAL>;
+    for (var i = 0u; i < n; i++) {
+        let v = plain_slots[i * stride + px];
+        var j = i;
+        while (j > 0u && list[j - 1u] > v) {
+            list[j] = list[j - 1u];
+            j -= 1u;
+        }
+        list[j] = v;
+    }
+    for (var i = 0u; i < n; i++) {
+        push_local(s, 0.0, u32(list[i] & 0xfffffffflu));
+    }
 }
 
 fn plain_swap(px: u32, stride: u32, a: u32, b: u32) {

@@ -44,14 +44,14 @@ fn sift_down(lo: u32, root_in: u32, n: u32) {
 }
 
 // Entry e of a pixel's range, for coverage.wgsl: its key, its payload, the entry after it.
-fn msaa_key(e: u32) -> u64 {
+fn entry_key(e: u32) -> u64 {
     return keys[e];
 }
 
-fn msaa_payload(e: u32) -> u32 {
+fn entry_payload(e: u32) -> u32 {
     return payloads[e];
 }
 
-fn msaa_next(e: u32) -> u32 {
+fn entry_next(e: u32) -> u32 {
     return e + 1u;
 }

@@ -93,14 +93,14 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
 }
 
 // coverage.wgsl's view of the slots: slot i of pixel px at i · pixels + px
-fn msaa_key(e: u32) -> u64 {
+fn entry_key(e: u32) -> u64 {
     return atomicLoad(&kbuf_slots[e]);
 }
 
-fn msaa_payload(e: u32) -> u32 {
+fn entry_payload(e: u32) -> u32 {
     return atomicLoad(&kbuf_payloads[e]);
 }
 
-fn msaa_next(e: u32) -> u32 {
+fn entry_next(e: u32) -> u32 {
     return e + fu.pixel_count;
 }
