@@ -260,8 +260,9 @@ fn interlock(words: &[u32], entries: &[&str]) -> Result<Vec<u32>, String> {
 /// element before reading it, so the driver stores no zeros first. Returns the module and the
 /// variables rewritten. On an H100 the initializers of `push_short_list`'s two arrays (768 bytes)
 /// cost the resolves of fabs, dfb and ll about 0.1 ms of a walled `planes:64` frame at 1024² and
-/// 0.1 ms on `cad` (bench/results/h100/short-list-1024). wgpu compiles WGSL itself, with the
-/// initializers: there, only the pixels that call the function pay for them.
+/// 0.15 ms on `cad`, where without them the resolve takes 0.05 ms
+/// (bench/results/h100/short-list-1024). wgpu compiles WGSL itself, with the initializers: there,
+/// only the pixels that call the function pay for them.
 fn uninitialized_arrays(words: &[u32], functions: &[&str]) -> Result<(Vec<u32>, usize), String> {
     let list = instructions(words)?;
     let mut named = std::collections::HashSet::new();

@@ -54,7 +54,8 @@ fn plain_resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
 
 // Pushes pixel `px`'s n ≤ PLAIN_LOCAL words, sorted by insertion in a private array (declared
 // here, not in the resolve, for the reason short_list.wgsl gives: its zero initializer is stored
-// only for the pixels that have a list).
+// only for the pixels that have a list; no element is read before it is written, so oit-vulkan
+// drops the initializer, as short_list.wgsl's).
 fn plain_push_short(s: ptr<function, PixelState>, px: u32, n: u32) {
     let stride = fu.pixel_count;
     var list: array<u64, PLAIN_LOCAL>;
