@@ -169,6 +169,9 @@ pub struct CpuPrepared<'s> {
     /// The last frame's rasterizer, set up again for the next ([`Rasterizer::rebuild`]) so
     /// steady frames reuse its storage.
     raster: std::sync::Mutex<Option<Rasterizer>>,
+    /// The last frame's opaque image, whose storage the next frame's opaque pass draws into
+    /// ([`opaque::draw_reusing`]).
+    opaque: std::sync::Mutex<Option<opaque::OpaqueImage>>,
 }
 
 impl<'s> CpuPrepared<'s> {
@@ -225,7 +228,10 @@ impl<'s> CpuPrepared<'s> {
         // supersampled reference draws it in each of its frames, under each frame's camera)
         let supersampled = oit_core::msaa::is_supersampled(settings);
         let opaque = match &layers.opaque {
-            Some(o) if !supersampled => Some(opaque::draw(o, camera, &drawn)),
+            Some(o) if !supersampled => {
+                let kept = self.opaque.lock().ok().and_then(|mut k| k.take());
+                Some(opaque::draw_reusing(o, camera, &drawn, kept))
+            }
             _ => None,
         };
         raster.cut_at(opaque.as_ref().map(|o| o.depth.clone()));
@@ -261,6 +267,9 @@ impl<'s> CpuPrepared<'s> {
             frame.stats.geometry_passes += o.passes;
             frame.stats.storage_bytes += pixels * plan_opaque_bytes;
         }
+        if let (Some(o), Ok(mut kept)) = (opaque, self.opaque.lock()) {
+            *kept = Some(o);
+        }
         frame.stats.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         // every fragment composited, merged, counted lost or held back, as on the GPUs: a
         // fragment a technique drops without a count is an error, never a frame
@@ -281,7 +290,17 @@ pub(crate) fn state_array_extra(settings: &Settings) -> u64 {
         .saturating_sub(oit_core::plan::RESOLVE_STATE_BYTES);
     let weighted = settings.technique.sums().is_some();
     let lends = match settings.technique {
-        Technique::Reference | Technique::Plain | Technique::Fabs { .. } | Technique::Kbuf { .. } => false,
+        Technique::Reference
+        | Technique::Plain
+        | Technique::Fabs { .. }
+        | Technique::Kbuf { .. }
+        | Technique::Dfb
+        | Technique::Ll
+        | Technique::Mdts { .. }
+        | Technique::Mdts64 { .. } => false,
+        // the colour mode's buckets are read into states; the depth mode's passes feed the
+        // resolve pixel by pixel
+        Technique::Bdp { passes } => settings.bdp_color_mode(passes).unwrap_or(true),
         // their sums resolve in place, but for the heat map, whose counts go into states
         _ if weighted => settings.effect == oit_core::Effect::Complexity,
         _ => true,
@@ -368,6 +387,7 @@ impl Backend for CpuBackend {
             pool,
             per_length: scene.absorption_per_length_in(&bounds),
             raster: std::sync::Mutex::new(raster),
+            opaque: std::sync::Mutex::default(),
         }))
     }
 

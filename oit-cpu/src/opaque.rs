@@ -11,14 +11,16 @@
 //! alpha 1 or 0 ([`oit_core::Object::effective_alpha`]), a textured one with the factor's alpha
 //! times the texture's, fragment by fragment ([`oit_core::setup::Triangle::cutoff`]).
 
+use std::cell::Cell;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering::Relaxed};
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use oit_core::rules::depth_bits;
 use oit_core::{AlphaMode, Camera, Scene, Settings};
+use rayon::prelude::*;
 
-use crate::raster::{Rasterizer, Shade};
+use crate::raster::{Fragment, Rasterizer, Shade};
 
 /// What the opaque pass leaves for the technique: the depth transparent fragments must be in
 /// front of, and the colour they composite over, each kept a **sample** (`samples` a pixel, sample
@@ -37,6 +39,11 @@ pub(crate) struct OpaqueImage {
     pub masked: u64,
     /// Geometry passes it ran.
     pub passes: u32,
+    /// What the next frame's pass reuses ([`draw_reusing`]): its rasterizer, set up again, and
+    /// the z-buffer's keys and colours, overwritten.
+    raster: Rasterizer,
+    keys: Vec<AtomicU64>,
+    rgb: Vec<[AtomicU32; 3]>,
 }
 
 /// The opaque fragments a pixel (on average over the frame) up to which the colour pass shades
@@ -49,76 +56,149 @@ const SHADE_ALL_LAYERS: u64 = 4;
 /// centre's as every multisampled fragment's) writes the samples its coverage mask holds, and
 /// each sample keeps its own nearest key and that fragment's colour.
 pub(crate) fn draw(scene: &Scene, camera: &Camera, settings: &Settings) -> OpaqueImage {
-    let raster = Rasterizer::new(scene, camera, settings);
+    draw_reusing(scene, camera, settings, None)
+}
+
+/// [`draw`] into the storage of an earlier frame's image (`kept`), where its sizes fit: a steady
+/// frame allocates nothing, so the pass pays no page faults for fresh arrays (at 512², a wall
+/// over the default scene, making the z-buffer and collecting into fresh arrays took 0.5–0.7 ms
+/// of a 3.4 ms pass).
+pub(crate) fn draw_reusing(
+    scene: &Scene,
+    camera: &Camera,
+    settings: &Settings,
+    kept: Option<OpaqueImage>,
+) -> OpaqueImage {
     let samples = settings.samples.max(1);
     let per = samples as usize;
     let pixels = settings.pixel_count();
-    let keys: Vec<AtomicU64> = (0..pixels * per).map(|_| AtomicU64::new(u64::MAX)).collect();
-    let masked = AtomicU64::new(0);
-    // only a scene with a masked object needs a fragment's alpha in the first pass; elsewhere
-    // it tests depth and id alone, unshaded
-    let masks = scene.objects.iter().any(|o| matches!(o.alpha_mode, AlphaMode::Mask { .. }));
-    let key_of = |f: &crate::raster::Fragment<'_>| u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim);
-    let first = |f: &crate::raster::Fragment<'_>, mask: u8| {
-        // alpha is never below a cutoff of 0 (an opaque object's): those skip the texture
-        if masks && f.cutoff() > 0.0 && f.alpha() < f.cutoff() {
-            masked.fetch_add(1, Relaxed);
-            return;
+    let (raster, mut keys, mut rgb, mut depth, mut color) = match kept {
+        Some(k) => {
+            let mut raster = k.raster;
+            raster.rebuild(scene, camera, settings);
+            (raster, k.keys, k.rgb, k.depth, k.color)
         }
-        let key = key_of(f);
-        let base = f.pixel as usize * per;
-        for i in (0..per).filter(|i| mask >> i & 1 == 1) {
-            keys[base + i].fetch_min(key, Relaxed);
-        }
+        None => (Rasterizer::new(scene, camera, settings), Vec::new(), Vec::new(), Arc::from([]), Vec::new()),
     };
-    let fragments = if samples > 1 {
-        raster.for_each_masked_fragment(samples, first)
+    if keys.len() == pixels * per {
+        keys.par_iter_mut().for_each(|k| *k.get_mut() = u64::MAX);
     } else {
-        raster.for_each_fragment(|f| first(f, 1))
+        keys = (0..pixels * per).map(|_| AtomicU64::new(u64::MAX)).collect();
+    }
+    // a colour is read only where a key was set, and the pass that set it wrote the colour
+    rgb.resize_with(pixels * per, Default::default);
+    let masked = AtomicU64::new(0);
+    // only a scene with a masked object needs a fragment's alpha before its depth test;
+    // elsewhere it tests depth and id alone
+    let masks = scene.objects.iter().any(|o| matches!(o.alpha_mode, AlphaMode::Mask { .. }));
+    // alpha is never below a cutoff of 0 (an opaque object's): those skip the texture
+    let masked_away = |f: &Fragment<'_>| masks && f.cutoff() > 0.0 && f.alpha() < f.cutoff();
+    let key_of = |f: &Fragment<'_>| u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim);
+    let store = |slot: &[AtomicU32; 3], c: Vec4| {
+        for (word, v) in slot.iter().zip([c.x, c.y, c.z]) {
+            word.store(v.to_bits(), Relaxed);
+        }
     };
-    // the winner's colour: one fragment a sample matches its key (ids are unique in a pixel)
-    let rgb: Vec<[AtomicU32; 3]> = (0..pixels * per).map(|_| Default::default()).collect();
-    let second = |f: &crate::raster::Fragment<'_>, mask: u8| {
-        let key = key_of(f);
-        let base = f.pixel as usize * per;
-        let mut color = None;
-        for i in (0..per).filter(|i| mask >> i & 1 == 1) {
-            if keys[base + i].load(Relaxed) == key {
-                let c = *color.get_or_insert_with(|| f.color());
-                for (slot, v) in rgb[base + i].iter().zip([c.x, c.y, c.z]) {
-                    slot.store(v.to_bits(), Relaxed);
+    let fragments: u64 = {
+        // In bands of rows, each band's pixels written by its one task: the depth test is a plain
+        // load and store, not a locked MIN (the wall of `wall:0:default` at 512²: 1.1 ms with the
+        // MIN, 0.6 so); the colour pass likewise. Two passes, as the plan's schedule and the GPU
+        // paths: a colour is made only for the fragment that holds a sample's key.
+        let (keys, rgb, masked) = (&keys, &rgb, &masked);
+        let (masked_away, key_of, store) = (&masked_away, &key_of, &store);
+        let first = |_| {
+            let count = BandCount { masked: Cell::new(0), total: masked };
+            move |f: &Fragment<'_>, mask: u8| {
+                if masked_away(f) {
+                    count.masked.set(count.masked.get() + 1);
+                    return;
+                }
+                let (key, base) = (key_of(f), f.pixel as usize * per);
+                for i in (0..per).filter(|i| mask >> i & 1 == 1) {
+                    if key < keys[base + i].load(Relaxed) {
+                        keys[base + i].store(key, Relaxed);
+                    }
                 }
             }
+        };
+        // the winner's colour: one fragment a sample matches its key (ids are unique in a pixel)
+        let second = |_| {
+            move |f: &Fragment<'_>, mask: u8| {
+                let (key, base) = (key_of(f), f.pixel as usize * per);
+                let mut color = None;
+                for i in (0..per).filter(|i| mask >> i & 1 == 1) {
+                    if keys[base + i].load(Relaxed) == key {
+                        store(&rgb[base + i], *color.get_or_insert_with(|| f.color()));
+                    }
+                }
+            }
+        };
+        if samples > 1 {
+            let fragments =
+                raster.for_each_masked_fragment_by_band(samples, Shade::OnDemand, None, first).iter().sum();
+            raster.for_each_masked_fragment_by_band(samples, Shade::OnDemand, None, second);
+            fragments
+        } else {
+            let fragments = raster
+                .for_each_fragment_by_band(Shade::OnDemand, |b| {
+                    let first = first(b);
+                    move |f: &Fragment<'_>| first(f, 1)
+                })
+                .iter()
+                .sum();
+            // shaded in lanes before the test ([`Shade::Color`]) where the opaque part is shallow: a
+            // lane's shading costs a fraction of one fragment's on demand, so shading every fragment
+            // costs less than shading the winners one by one while the fragments are few to a pixel
+            // (a wall over the default scene at 512²: fabs's frame 10.3–11.9 ms on demand, 8.7–9.4 in
+            // lanes, bench/results/cpu/opaque-lanes-512); a deep opaque part shades its winners alone
+            let shallow = fragments <= SHADE_ALL_LAYERS * pixels as u64;
+            raster.for_each_fragment_by_band(if shallow { Shade::Color } else { Shade::OnDemand }, |b| {
+                let second = second(b);
+                move |f: &Fragment<'_>| second(f, 1)
+            });
+            fragments
         }
     };
-    if samples > 1 {
-        raster.for_each_masked_fragment(samples, second);
-    } else {
-        // shaded in lanes before the test ([`Shade::Color`]) where the opaque part is shallow: a
-        // lane's shading costs a fraction of one fragment's on demand, so shading every fragment
-        // costs less than shading the winners one by one while the fragments are few to a pixel
-        // (a wall over the default scene at 512²: fabs's frame 10.3–11.9 ms on demand, 8.7–9.4 in
-        // lanes, bench/results/cpu/opaque-lanes-512); a deep opaque part shades its winners alone
-        let shallow = fragments <= SHADE_ALL_LAYERS * pixels as u64;
-        raster.for_each_fragment_with(if shallow { Shade::Color } else { Shade::OnDemand }, |f| second(f, 1));
+    let depth_of = |k: &AtomicU64| match k.load(Relaxed) {
+        u64::MAX => f32::INFINITY,
+        k => f32::from_bits((k >> 32) as u32),
+    };
+    match Arc::get_mut(&mut depth).filter(|d| d.len() == keys.len()) {
+        Some(d) => d.par_iter_mut().zip(&keys[..]).for_each(|(d, k)| *d = depth_of(k)),
+        None => depth = keys.par_iter().map(depth_of).collect::<Vec<f32>>().into(),
     }
-    let depth: Arc<[f32]> = keys
-        .iter()
-        .map(|k| k.load(Relaxed))
-        .map(|k| if k == u64::MAX { f32::INFINITY } else { f32::from_bits((k >> 32) as u32) })
-        .collect();
-    let color = keys
-        .iter()
-        .zip(&rgb)
-        .map(|(k, c)| {
-            (k.load(Relaxed) != u64::MAX)
-                .then(|| Vec3::from_array(c.each_ref().map(|v| f32::from_bits(v.load(Relaxed)))))
-        })
-        .collect();
+    color.resize(keys.len(), None);
+    color.par_iter_mut().zip(&keys[..]).zip(&rgb[..]).for_each(|((out, k), c)| {
+        *out = (k.load(Relaxed) != u64::MAX)
+            .then(|| Vec3::from_array(c.each_ref().map(|v| f32::from_bits(v.load(Relaxed)))));
+    });
     let uniform = if samples > 1 {
-        keys.chunks(per).map(|k| k.iter().all(|v| v.load(Relaxed) == k[0].load(Relaxed))).collect()
+        keys.par_chunks(per).map(|k| k.iter().all(|v| v.load(Relaxed) == k[0].load(Relaxed))).collect()
     } else {
         Vec::new()
     };
-    OpaqueImage { depth, color, uniform, fragments, masked: masked.into_inner(), passes: 2 }
+    OpaqueImage {
+        depth,
+        color,
+        uniform,
+        fragments,
+        masked: masked.into_inner(),
+        passes: 2,
+        raster,
+        keys,
+        rgb,
+    }
+}
+
+/// A band's count of fragments its mask discarded, kept in the band's task and added to `total`
+/// once, as the task drops its shader.
+struct BandCount<'a> {
+    masked: Cell<u64>,
+    total: &'a AtomicU64,
+}
+
+impl Drop for BandCount<'_> {
+    fn drop(&mut self) {
+        self.total.fetch_add(self.masked.get(), Relaxed);
+    }
 }

@@ -245,19 +245,26 @@ impl<'a> Resolve<'a> {
         use rayon::prelude::*;
         let complexity = self.effect == Effect::Complexity;
         let mut image = Image::new(width, height, [0, 0, 0, 255]);
+        let w = (width as usize).max(1);
         let (captured, tied, deepest) = image
             .pixels
-            .par_iter_mut()
-            .zip(states.par_iter_mut())
+            .par_chunks_mut(w)
+            .zip(states.par_chunks_mut(w))
             .enumerate()
-            .map(|(i, (px, s))| {
-                *px = srgb(self.finish_over(s, self.background_at(i)));
-                let counts = (u64::from(s.captured), u64::from(s.tied()), s.captured);
-                if !complexity {
-                    // reset while in cache: the states go back clean (see the doc)
-                    *s = PixelState::default();
+            .map(|(y, (pixels, states))| {
+                let mut memo = SrgbMemo::default();
+                let mut sums = (0, 0, 0);
+                for (x, (px, s)) in pixels.iter_mut().zip(states).enumerate() {
+                    *px = memo.srgb(self.finish_over(s, self.background_at(y * w + x)));
+                    sums.0 += u64::from(s.captured);
+                    sums.1 += u64::from(s.tied());
+                    sums.2 = sums.2.max(s.captured);
+                    if !complexity {
+                        // reset while in cache: the states go back clean (see the doc)
+                        *s = PixelState::default();
+                    }
                 }
-                counts
+                sums
             })
             .reduce(|| (0, 0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2.max(b.2)));
         if complexity {
@@ -297,34 +304,34 @@ impl Resolve<'_> {
         // a pixel nothing reached finishes to the background under every effect (the heat map's
         // is drawn below): made once, not once per empty pixel
         let empty = srgb(self.finish(&mut PixelState::default()));
-        let sums = |px: usize, scratch: &mut S, out: &mut [u8; 4]| {
-            let mut state = PixelState::default();
-            feed(px, scratch, &mut state);
-            *out = match self.opaque {
-                None if state.is_empty() => empty,
-                _ => srgb(self.finish_over(&mut state, self.background_at(px))),
-            };
-            (u64::from(state.captured), u64::from(state.tied()), state.captured)
-        };
         let add = |a: (u64, u64, u32), b: (u64, u64, u32)| (a.0 + b.0, a.1 + b.1, a.2.max(b.2));
+        // a row at a time, each row's colours converted through one memo
+        let w = width as usize;
+        let row = |scratch: &mut S, y: usize, pixels: &mut [[u8; 4]], mut counts: Option<&mut [u32]>| {
+            let mut memo = SrgbMemo::default();
+            let mut sums = (0, 0, 0);
+            for (x, out) in pixels.iter_mut().enumerate() {
+                let px = y * w + x;
+                let mut state = PixelState::default();
+                feed(px, scratch, &mut state);
+                *out = match self.opaque {
+                    None if state.is_empty() => empty,
+                    _ => memo.srgb(self.finish_over(&mut state, self.background_at(px))),
+                };
+                if let Some(counts) = counts.as_deref_mut() {
+                    counts[x] = state.captured;
+                }
+                sums = add(sums, (u64::from(state.captured), u64::from(state.tied()), state.captured));
+            }
+            sums
+        };
+        let rows = image.pixels.par_chunks_mut(w.max(1)).enumerate();
         let (captured, tied, deepest) = if complexity {
-            image
-                .pixels
-                .par_iter_mut()
-                .zip(counts.par_iter_mut())
-                .enumerate()
-                .map_init(S::default, |scratch, (px, (out, count))| {
-                    let r = sums(px, scratch, out);
-                    *count = r.2;
-                    r
-                })
+            rows.zip(counts.par_chunks_mut(w.max(1)))
+                .map_init(S::default, |scratch, ((y, pixels), counts)| row(scratch, y, pixels, Some(counts)))
                 .reduce(|| (0, 0, 0), add)
         } else {
-            image
-                .pixels
-                .par_iter_mut()
-                .enumerate()
-                .map_init(S::default, |scratch, (px, out)| sums(px, scratch, out))
+            rows.map_init(S::default, |scratch, (y, pixels)| row(scratch, y, pixels, None))
                 .reduce(|| (0, 0, 0), add)
         };
         if complexity {
@@ -420,6 +427,29 @@ impl Resolve<'_> {
 #[inline]
 pub(crate) fn srgb(c: Vec3) -> [u8; 4] {
     [linear_to_srgb8(c.x), linear_to_srgb8(c.y), linear_to_srgb8(c.z), 255]
+}
+
+/// [`srgb`] with the last colour's conversion kept: a run of pixels of one colour (the background
+/// an empty pixel shows where the frame has an opaque part that misses it, row after row; a flat
+/// unlit surface) converts it once. The same bits as [`srgb`]: a colour is reused only where it
+/// is equal (a NaN never is; `-0.0 == 0.0`, both 0).
+#[derive(Default)]
+pub(crate) struct SrgbMemo {
+    last: Option<(Vec3, [u8; 4])>,
+}
+
+impl SrgbMemo {
+    #[inline]
+    pub fn srgb(&mut self, c: Vec3) -> [u8; 4] {
+        match self.last {
+            Some((last, out)) if last == c => out,
+            _ => {
+                let out = srgb(c);
+                self.last = Some((c, out));
+                out
+            }
+        }
+    }
 }
 
 #[cfg(test)]

@@ -150,13 +150,12 @@ fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
         }
         arrays.push(array);
     }
-    let mut states = ctx.states();
     let resolve = &ctx.resolve;
     // one list of back layers per rayon task, not one per pixel and bucket; each pair read is
     // reset to empty while in cache, so the next frame takes the arrays without a sweep (a pass
     // writes a subinterval only where the previous pass's is written (eq. 5), so the first empty
     // pair of the passes ends the written ones)
-    states.par_iter_mut().enumerate().for_each_init(Vec::new, |backs, (px, s)| {
+    let frame = super::finish_with(ctx, |px, backs: &mut Vec<(f32, u32)>, s| {
         for k in 0..n {
             let slot = px * 2 * n + 2 * k;
             backs.clear();
@@ -181,5 +180,5 @@ fn depth(ctx: &mut Ctx<'_>, bounds: &[(f32, f32)]) -> Result<Frame, OitError> {
     for array in &mut arrays {
         array.mark_clean(crate::pool::Clean::EmptyMinMax);
     }
-    Ok(super::finish(ctx, states))
+    Ok(frame)
 }

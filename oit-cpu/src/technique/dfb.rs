@@ -61,9 +61,8 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         keys[entry].store(u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim), Relaxed);
         payloads[entry].store(ctx.payload(f), Relaxed);
     });
-    let mut states = ctx.states();
     let resolve = &ctx.resolve;
-    states.par_iter_mut().enumerate().for_each_init(Vec::new, |list, (px, s)| {
+    Ok(super::finish_with(ctx, |px, list: &mut Vec<u128>, s| {
         // entries the fill did not reach (a count it did not spend) are left out
         let unfilled = (counts[px].load(Relaxed) as i32).max(0) as u32;
         let start = (offsets[px].load(Relaxed) + unfilled) as usize;
@@ -79,8 +78,7 @@ pub(crate) fn render(ctx: &mut Ctx<'_>) -> Result<Frame, OitError> {
         for &key in list.iter() {
             resolve.push(s, depth_from_bits((key >> 64) as u32), key as u32);
         }
-    });
-    Ok(super::finish(ctx, states))
+    }))
 }
 
 /// Writes the exclusive prefix sum of `counts` into `offsets` (the same length) and returns the

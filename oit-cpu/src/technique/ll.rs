@@ -32,7 +32,6 @@ use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 use oit_core::plan::Counted;
 use oit_core::rules::{depth_bits, depth_from_bits};
 use oit_core::{Frame, OitError};
-use rayon::prelude::*;
 
 use super::Ctx;
 use crate::raster::{Fragment, Shade};
@@ -116,11 +115,10 @@ fn capture_and_resolve(ctx: &mut Ctx<'_>, per_band: &[u64], nodes: u32) -> Resul
         }
     });
     ctx.ran_pass(generated.iter().sum());
-    let mut states = ctx.states();
     let resolve = &ctx.resolve;
-    states.par_iter_mut().zip(heads.par_iter()).for_each_init(Vec::new, |list, (s, head)| {
+    Ok(super::finish_with(ctx, |px, list: &mut Vec<u128>, s| {
         list.clear();
-        let mut node = head.load(Relaxed);
+        let mut node = heads[px].load(Relaxed);
         while node != END {
             let n = node as usize;
             // (depth bits, primitive id) above the payload: the payload never decides
@@ -131,8 +129,7 @@ fn capture_and_resolve(ctx: &mut Ctx<'_>, per_band: &[u64], nodes: u32) -> Resul
         for &key in list.iter() {
             resolve.push(s, depth_from_bits((key >> 64) as u32), key as u32);
         }
-    });
-    Ok(super::finish(ctx, states))
+    }))
 }
 
 #[cfg(test)]

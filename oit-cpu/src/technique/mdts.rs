@@ -70,10 +70,9 @@ pub(crate) fn render64_over<L: AtomicFragmentList<Key = u64>>(
             list.last(f.pixel as usize).is_some_and(|last| depth_key64(f.depth, p) > last).then_some(p)
         });
     }
-    let mut states = ctx.states();
     let resolve = &ctx.resolve;
     let tail = tail.as_deref();
-    states.par_iter_mut().enumerate().for_each_init(Vec::new, |keys, (px, s)| {
+    Ok(super::finish_with(ctx, |px, keys: &mut Vec<u64>, s| {
         list.sorted(px, keys);
         for &key in keys.iter() {
             let (d, p) = split_key64(key);
@@ -82,8 +81,7 @@ pub(crate) fn render64_over<L: AtomicFragmentList<Key = u64>>(
         if let Some(t) = tail {
             resolve.tail(s, &t[px * 5..px * 5 + 5], px);
         }
-    });
-    Ok(super::finish(ctx, states))
+    }))
 }
 
 /// The 32-bit words; the plan refuses Fresnel (no room for a normal) and gives the alpha.
@@ -127,24 +125,19 @@ pub(crate) fn render32_over<L: AtomicFragmentList<Key = u32>>(
                 .then(|| pack_rgba8(f.color()) & 0xff_ffff | alpha8 << 24)
         });
     }
-    let mut states = ctx.states();
     let resolve = &ctx.resolve;
     let tail = tail.as_deref();
-    states.par_iter_mut().enumerate().for_each_init(
-        || (Vec::new(), Vec::new()),
-        |(hi, lo), (px, s)| {
-            high.sorted(px, hi);
-            low.sorted(px, lo);
-            // a pixel's two lists hold as many words; the shorter ends the pixel where a word of
-            // the other was all ones
-            for (&h, &l) in hi.iter().zip(lo.iter()) {
-                let (d, rgb) = mdts_unpack([h, l]);
-                resolve.push(s, d, rgb | alpha8 << 24);
-            }
-            if let Some(t) = tail {
-                resolve.tail(s, &t[px * 5..px * 5 + 5], px);
-            }
-        },
-    );
-    Ok(super::finish(ctx, states))
+    Ok(super::finish_with(ctx, |px, (hi, lo): &mut (Vec<u32>, Vec<u32>), s| {
+        high.sorted(px, hi);
+        low.sorted(px, lo);
+        // a pixel's two lists hold as many words; the shorter ends the pixel where a word of
+        // the other was all ones
+        for (&h, &l) in hi.iter().zip(lo.iter()) {
+            let (d, rgb) = mdts_unpack([h, l]);
+            resolve.push(s, d, rgb | alpha8 << 24);
+        }
+        if let Some(t) = tail {
+            resolve.tail(s, &t[px * 5..px * 5 + 5], px);
+        }
+    }))
 }

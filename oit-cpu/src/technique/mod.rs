@@ -534,13 +534,13 @@ pub(crate) fn finish_sums<'a>(
         let zeros = [0u64; MAX_WORDS];
         let empty = crate::resolve::srgb(colour(&zeros[..words], 0, ctx.settings.background));
         let resolve = &ctx.resolve;
-        finish_pixels(ctx, |px| {
+        finish_pixels_with(ctx, crate::resolve::SrgbMemo::default, |memo, px| {
             let (w, count) = take(&sums[words * px..words * px + words]);
             let behind = resolve.background_at(px);
             match (count, resolve.opaque) {
                 (0, None) => (empty, 0),
-                (0, Some(_)) => (crate::resolve::srgb(colour(&zeros[..words], 0, behind)), 0),
-                _ => (crate::resolve::srgb(colour(&w[..words], count, behind)), count),
+                (0, Some(_)) => (memo.srgb(colour(&zeros[..words], 0, behind)), 0),
+                _ => (memo.srgb(colour(&w[..words], count, behind)), count),
             }
         })
     };
