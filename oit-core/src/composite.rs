@@ -202,8 +202,12 @@ pub fn linear_to_srgb8(x: f32) -> u8 {
     let bits = x.min(1.0).to_bits();
     let table = srgb8_table();
     let mut code = table.start[(bits >> 16) as usize];
-    while code < 255 && bits >= table.threshold[usize::from(code) + 1] {
-        code += 1;
+    // as many steps as the widest group needs, each taken or not without a branch: a loop that
+    // stopped at the first threshold above `x` mispredicted its exit where neighbouring values
+    // take different steps (oit-cpu's `srgb` bench, values spread at random: 4.5 → 1.9 ns a
+    // value; on a smooth ramp both 1.9)
+    for _ in 0..table.steps {
+        code += u8::from(bits >= table.threshold[usize::from(code) + 1]);
     }
     code
 }
@@ -223,8 +227,11 @@ struct Srgb8Table {
     /// The code of the float with bits `i << 16`, for `i` up to 1.0's.
     start: Vec<u8>,
     /// `threshold[k]`: the bits of the smallest float in [0, 1] the formula takes to `k` or above
-    /// (`threshold[0] = 0`).
-    threshold: [u32; 256],
+    /// (`threshold[0] = 0`); `threshold[256]` is `u32::MAX`, above every float's bits.
+    threshold: [u32; 257],
+    /// The most codes one group spans past its first float's: the steps that reach any float's
+    /// code from its group's.
+    steps: u8,
 }
 
 fn srgb8_table() -> &'static Srgb8Table {
@@ -232,8 +239,9 @@ fn srgb8_table() -> &'static Srgb8Table {
     TABLE.get_or_init(|| {
         const ONE: u32 = 0x3F80_0000;
         let code = |bits: u32| linear_to_srgb8_formula(f32::from_bits(bits));
-        let mut threshold = [0u32; 256];
-        for (k, t) in threshold.iter_mut().enumerate().skip(1) {
+        let mut threshold = [0u32; 257];
+        threshold[256] = u32::MAX;
+        for (k, t) in threshold.iter_mut().enumerate().take(256).skip(1) {
             // the smallest bits in [0, ONE] whose code is at least k (ONE's is 255)
             let (mut lo, mut hi) = (0u32, ONE);
             while lo < hi {
@@ -242,8 +250,11 @@ fn srgb8_table() -> &'static Srgb8Table {
             }
             *t = lo;
         }
-        let start = (0..=ONE >> 16).map(|i| code(i << 16)).collect();
-        Srgb8Table { start, threshold }
+        let start: Vec<u8> = (0..=ONE >> 16).map(|i| code(i << 16)).collect();
+        // a group's last float is its largest code (the formula rises with the bits)
+        let last = |i: u32| code((i << 16 | 0xffff).min(ONE));
+        let steps = (0..=ONE >> 16).map(|i| last(i) - start[i as usize]).max().unwrap_or(0);
+        Srgb8Table { start, threshold, steps }
     })
 }
 

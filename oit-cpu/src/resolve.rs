@@ -407,6 +407,7 @@ impl Resolve<'_> {
     }
 
     /// [`Compositor::finish`] over `background` (the pixel's [`Resolve::background_at`]).
+    #[inline]
     pub fn finish_over(&self, s: &mut PixelState, background: Vec3) -> Vec3 {
         while let Some((d, p)) = s.back_stack.pop() {
             self.push(s, d, p);
