@@ -52,7 +52,7 @@ pub struct Counted {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PassKind {
     /// The opaque pass ([`crate::Scene::layers`]): the opaque part's nearest (depth, primitive
-    /// id) per pixel by one 64-bit atomic MIN, then the colour of the fragment that holds it.
+    /// id) per pixel (a 64-bit MIN), then the colour of the fragment that holds it.
     Opaque,
     /// Each pixel's depth range, over the instances' bounding boxes or the scene (bdp, adp).
     Bounds,

@@ -3,10 +3,12 @@
 //! opaque geometry first.
 //!
 //! A standard z-buffer with oit's tie rule: each pixel keeps the fragment of the smallest
-//! (depth, primitive id), found by one 64-bit atomic MIN of `depth bits << 32 | id` (a second
-//! geometry pass then shades the one fragment whose key won), so the result does not depend on
-//! the order threads reach a pixel, and two coplanar opaque triangles resolve as they do on the
-//! GPU paths. A masked fragment whose alpha is under its object's cutoff is discarded and
+//! (depth, primitive id), the minimum of `depth bits << 32 | id` (a second geometry pass then
+//! shades the one fragment whose key won), so the result does not depend on the order fragments
+//! reach a pixel, and two coplanar opaque triangles resolve as they do on the GPU paths. Both
+//! passes run in bands of rows ([`Rasterizer::for_each_fragment_by_band`]), each band's pixels
+//! written by one thread, so the minimum is a plain compare and store where the GPUs take an
+//! atomic MIN. A masked fragment whose alpha is under its object's cutoff is discarded and
 //! counted ([`oit_core::Stats::masked`]): an untextured masked object reaches the pass with
 //! alpha 1 or 0 ([`oit_core::Object::effective_alpha`]), a textured one with the factor's alpha
 //! times the texture's, fragment by fragment ([`oit_core::setup::Triangle::cutoff`]).
