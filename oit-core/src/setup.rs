@@ -58,10 +58,8 @@ const COORD_LIMIT: f32 = (1u32 << 29) as f32;
 /// Triangles per task of the setup.
 const SETUP_CHUNK: usize = 1024;
 
-/// Triangles a task of [`TriangleSetup::work_items`] bins: fewer than a setup chunk, as a large
-/// triangle has hundreds of tiles to test (1,200 billboards are two chunks of setup, and 38 of
-/// these).
-#[cfg(feature = "rayon")]
+/// Triangles a task of [`TriangleSetup::work_items`] bins: far fewer than a setup chunk, as a
+/// large triangle has hundreds of tiles to test.
 const ITEM_CHUNK: usize = 64;
 
 /// [`Triangle::texture`] of a triangle without one.
@@ -1196,34 +1194,22 @@ impl TriangleSetup {
                 }
             }
         };
-        // in parallel over chunks of triangles, the chunks' lists joined in order: a tile's test
-        // is tens of nanoseconds, and a textured frame (set up on the host) of large triangles
-        // has hundreds of thousands of tiles (`particles` at 1024²: 115 K items, 4 ms serially on
-        // the 2-core development machine)
-        #[cfg(feature = "rayon")]
-        {
-            let chunks: Vec<Vec<[u32; 2]>> = self
-                .triangles
-                .par_chunks(ITEM_CHUNK)
-                .enumerate()
-                .map(|(c, tris)| {
-                    let mut items = Vec::new();
-                    for (k, t) in tris.iter().enumerate() {
-                        of(c * ITEM_CHUNK + k, t, &mut items);
-                    }
-                    items
-                })
-                .collect();
-            chunks.concat()
-        }
-        #[cfg(not(feature = "rayon"))]
-        {
+        // a chunk of triangles' items: in parallel over chunks, the lists joined in order; a
+        // tile's test is tens of nanoseconds, and a textured frame (set up on the host) of large
+        // triangles has hundreds of thousands of tiles
+        let chunk = |(c, tris): (usize, &[Triangle])| {
             let mut items = Vec::new();
-            for (i, t) in self.triangles.iter().enumerate() {
-                of(i, t, &mut items);
+            for (k, t) in tris.iter().enumerate() {
+                of(c * ITEM_CHUNK + k, t, &mut items);
             }
             items
-        }
+        };
+        #[cfg(feature = "rayon")]
+        let chunks: Vec<Vec<[u32; 2]>> =
+            self.triangles.par_chunks(ITEM_CHUNK).enumerate().map(chunk).collect();
+        #[cfg(not(feature = "rayon"))]
+        let chunks: Vec<Vec<[u32; 2]>> = self.triangles.chunks(ITEM_CHUNK).enumerate().map(chunk).collect();
+        chunks.concat()
     }
 }
 
@@ -1406,6 +1392,28 @@ mod tests {
         assert_eq!(reach(1), (128, 128));
         assert_eq!(reach(4), (32, 224));
         assert_eq!(reach(8), (16, 240));
+    }
+
+    /// The work list comes triangle by triangle, each triangle's tiles row by row, as its doc
+    /// says, across the chunks it is binned in (a chunk's list out of place fails it).
+    #[test]
+    fn work_items_come_triangle_by_triangle_in_rows() {
+        // more triangles than one binning chunk, so the chunks' lists must join in order
+        let scene = crate::load_scene("spheres:3").unwrap();
+        let camera = Camera::orbit_scene(&scene, crate::View::default(), 1.0).unwrap();
+        let settings = Settings { width: 96, height: 96, ..Default::default() };
+        let setup = TriangleSetup::new(&scene, &camera, &settings);
+        assert!(setup.triangles.len() > 4 * ITEM_CHUNK, "{} triangles", setup.triangles.len());
+        let mut expected = Vec::new();
+        for (i, t) in setup.triangles.iter().enumerate() {
+            let [x0, y0, x1, y1] = t.bbox;
+            for ty in y0 / 8..=y1 / 8 {
+                for tx in (x0 / 8..=x1 / 8).filter(|&tx| t.may_cover(tx, ty, 8)) {
+                    expected.push([i as u32, ty << 16 | tx]);
+                }
+            }
+        }
+        assert_eq!(setup.work_items(8), expected);
     }
 
     /// A work list keeps every tile with a covered sample, at every sample count, and drops the

@@ -85,6 +85,10 @@ pub(crate) fn draw_reusing(
     if keys.len() == pixels * per {
         keys.par_iter_mut().for_each(|k| *k.get_mut() = u64::MAX);
     } else {
+        // another window's or sample count's arrays: freed before this frame's are made, so a
+        // tiled frame never holds two windows' at once
+        drop((std::mem::take(&mut keys), std::mem::take(&mut rgb), std::mem::take(&mut color)));
+        depth = Arc::from([]);
         keys = (0..pixels * per).map(|_| AtomicU64::new(u64::MAX)).collect();
     }
     // a colour is read only where a key was set, and the pass that set it wrote the colour

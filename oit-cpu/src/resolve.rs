@@ -256,9 +256,7 @@ impl<'a> Resolve<'a> {
                 let mut sums = (0, 0, 0);
                 for (x, (px, s)) in pixels.iter_mut().zip(states).enumerate() {
                     *px = memo.srgb(self.finish_over(s, self.background_at(y * w + x)));
-                    sums.0 += u64::from(s.captured);
-                    sums.1 += u64::from(s.tied());
-                    sums.2 = sums.2.max(s.captured);
+                    sums = add_counts(sums, (u64::from(s.captured), u64::from(s.tied()), s.captured));
                     if !complexity {
                         // reset while in cache: the states go back clean (see the doc)
                         *s = PixelState::default();
@@ -266,7 +264,7 @@ impl<'a> Resolve<'a> {
                 }
                 sums
             })
-            .reduce(|| (0, 0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2.max(b.2)));
+            .reduce(|| (0, 0, 0), add_counts);
         if complexity {
             let max = deepest.max(1);
             image.pixels.par_iter_mut().zip(states.par_iter_mut()).enumerate().for_each(|(i, (px, s))| {
@@ -304,7 +302,6 @@ impl Resolve<'_> {
         // a pixel nothing reached finishes to the background under every effect (the heat map's
         // is drawn below): made once, not once per empty pixel
         let empty = srgb(self.finish(&mut PixelState::default()));
-        let add = |a: (u64, u64, u32), b: (u64, u64, u32)| (a.0 + b.0, a.1 + b.1, a.2.max(b.2));
         // a row at a time, each row's colours converted through one memo
         let w = width as usize;
         let row = |scratch: &mut S, y: usize, pixels: &mut [[u8; 4]], mut counts: Option<&mut [u32]>| {
@@ -321,7 +318,7 @@ impl Resolve<'_> {
                 if let Some(counts) = counts.as_deref_mut() {
                     counts[x] = state.captured;
                 }
-                sums = add(sums, (u64::from(state.captured), u64::from(state.tied()), state.captured));
+                sums = add_counts(sums, (u64::from(state.captured), u64::from(state.tied()), state.captured));
             }
             sums
         };
@@ -329,10 +326,10 @@ impl Resolve<'_> {
         let (captured, tied, deepest) = if complexity {
             rows.zip(counts.par_chunks_mut(w.max(1)))
                 .map_init(S::default, |scratch, ((y, pixels), counts)| row(scratch, y, pixels, Some(counts)))
-                .reduce(|| (0, 0, 0), add)
+                .reduce(|| (0, 0, 0), add_counts)
         } else {
             rows.map_init(S::default, |scratch, (y, pixels)| row(scratch, y, pixels, None))
-                .reduce(|| (0, 0, 0), add)
+                .reduce(|| (0, 0, 0), add_counts)
         };
         if complexity {
             let max = deepest.max(1);
@@ -422,6 +419,11 @@ impl Resolve<'_> {
             }
         }
     }
+}
+
+/// Two parts' (captured, tied, deepest) of a resolve's sweep, joined.
+fn add_counts(a: (u64, u64, u32), b: (u64, u64, u32)) -> (u64, u64, u32) {
+    (a.0 + b.0, a.1 + b.1, a.2.max(b.2))
 }
 
 /// Linear RGB to an sRGB8 pixel.
