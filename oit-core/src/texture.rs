@@ -52,6 +52,10 @@ impl Wrap {
     /// Texel index `i` of a level `n` texels wide, wrapped into `0..n`.
     #[inline]
     pub fn apply(self, i: i32, n: u32) -> u32 {
+        // inside the level every mode gives `i`: most taps, and no division
+        if (i as u32) < n {
+            return i as u32;
+        }
         let n = n as i32;
         match self {
             Wrap::Repeat => i.rem_euclid(n) as u32,
@@ -220,10 +224,14 @@ const COORD_CLAMP: f32 = (1u32 << 30) as f32;
 /// One axis of the sampler: the two texels (wrapped) and the right one's weight in 1/256.
 #[inline]
 fn axis(u: f32, n: u32, wrap: Wrap) -> (u32, u32, u32) {
-    // one rounding (u times an integer below 2^23), then exact operations
-    let s = (u * (n * 256) as f32).floor();
-    // NaN (which validation keeps out) maps to 0 by `as`
-    let s = s.clamp(-COORD_CLAMP, COORD_CLAMP) as i32 - 128;
+    // one rounding (u times an integer below 2^23), then exact operations: clamped (NaN, which
+    // validation keeps out, stays NaN and maps to 0 by `as`), then floored in integers, as
+    // `f32::floor` is a library call where SSE4.1 is not assumed. The clamp's bounds are integers,
+    // so clamping before the floor is clamping after it; below 2^24 the truncated value is exact
+    // as an f32, above it `s` is an integer already
+    let s = (u * (n * 256) as f32).clamp(-COORD_CLAMP, COORD_CLAMP);
+    let t = s as i32;
+    let s = t - i32::from(t as f32 > s) - 128;
     let (i0, f) = (s >> 8, (s & 255) as u32);
     (wrap.apply(i0, n), wrap.apply(i0 + 1, n), f)
 }
@@ -413,6 +421,73 @@ mod tests {
                 &[0, 0, 0, 0, 0, 0, 1, 2, 3, 3, 3, 3, 3, 3],
             ];
             assert_eq!(applied, want[i], "{w:?}");
+        }
+    }
+
+    #[test]
+    fn integer_floor_is_the_float_floor() {
+        // the sampler's axis as first written: `floor`, then the clamp, then `as`
+        let by_floor = |u: f32, n: u32, wrap: Wrap| {
+            let s = (u * (n * 256) as f32).floor().clamp(-COORD_CLAMP, COORD_CLAMP) as i32 - 128;
+            let (i0, f) = (s >> 8, (s & 255) as u32);
+            let apply = |i: i32| {
+                let n = n as i32;
+                match wrap {
+                    Wrap::Repeat => i.rem_euclid(n) as u32,
+                    Wrap::ClampToEdge => i.clamp(0, n - 1) as u32,
+                    Wrap::MirroredRepeat => {
+                        let m = i.rem_euclid(2 * n);
+                        (if m < n { m } else { 2 * n - 1 - m }) as u32
+                    }
+                }
+            };
+            (apply(i0), apply(i0 + 1), f)
+        };
+        let mut rng = crate::rng::Rng(38);
+        let mut us: Vec<f32> = vec![
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            0.5,
+            -0.5,
+            1e-30,
+            -1e-30,
+            3.9999998,
+            -3.9999998,
+            1e7,
+            -1e7,
+            1e30,
+            -1e30,
+            f32::MAX,
+            f32::MIN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ];
+        // integers and their neighbours around 2^23 and 2^24 texel units, and values spread over
+        // every exponent
+        for k in [1u32 << 22, 1 << 23, 1 << 24, 1 << 25] {
+            for d in [-1.0f32, 0.0, 1.0] {
+                let v = k as f32 + d;
+                us.extend([v / 256.0, -v / 256.0, f32::from_bits(v.to_bits() + 1) / 256.0]);
+            }
+        }
+        for _ in 0..200_000 {
+            us.push(f32::from_bits((rng.next_u64() >> 32) as u32));
+            us.push((rng.next_f32() - 0.5) * 64.0);
+        }
+        for n in [1, 2, 3, 7, 64, 255, 16384] {
+            for wrap in [Wrap::Repeat, Wrap::MirroredRepeat, Wrap::ClampToEdge] {
+                for &u in &us {
+                    assert_eq!(
+                        axis(u, n, wrap),
+                        by_floor(u, n, wrap),
+                        "u {u:e} ({:#x}), n {n}, {wrap:?}",
+                        u.to_bits()
+                    );
+                }
+            }
         }
     }
 

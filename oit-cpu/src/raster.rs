@@ -1982,8 +1982,8 @@ mod tests {
     use std::sync::Mutex;
     use std::sync::atomic::{AtomicU32, Ordering};
 
-    use glam::{Mat4, Vec3, Vec4};
-    use oit_core::{Camera, Instance, Mesh, Object, Scene, Settings, Shading};
+    use glam::{Mat4, Vec2, Vec3, Vec4};
+    use oit_core::{Camera, Instance, Mesh, Object, Scene, Settings, Shading, Texture, Wrap};
 
     use oit_core::setup::covers;
 
@@ -2636,27 +2636,70 @@ mod tests {
         vec![flat, colored]
     }
 
+    /// [`kernel_probe_meshes`] textured: the flat mesh by a 64×48 texture (repeating across,
+    /// mirrored down), the coloured one by a 5×3 texture (clamped across, repeating down), then
+    /// the flat mesh again without a texture, so a group of lanes may mix textures and none.
+    /// Each triangle's texture coordinates span 0.01 to 10 textures from an origin in [-2, 2]
+    /// (every level of both chains, and taps across every border and wrap).
+    fn textured_probe(cam: &Camera) -> Scene {
+        let mut rng = Lcg(38);
+        let mut meshes = kernel_probe_meshes(cam);
+        for mesh in &mut meshes {
+            let mut uvs = Vec::with_capacity(mesh.positions.len());
+            for i in 0..mesh.positions.len() / 3 {
+                let span = [0.01, 0.1, 1.0, 10.0][i % 4];
+                let origin = Vec2::new(rng.next_f32() * 4.0 - 2.0, rng.next_f32() * 4.0 - 2.0);
+                for _ in 0..3 {
+                    uvs.push(origin + Vec2::new(rng.next_f32(), rng.next_f32()) * span);
+                }
+            }
+            mesh.uvs = Some(uvs);
+        }
+        let mut texels = |n: usize| -> Vec<[u8; 4]> {
+            (0..n).map(|_| std::array::from_fn(|_| (rng.next_f32() * 256.0) as u8)).collect()
+        };
+        let textures = vec![
+            Texture::new("a", 64, 48, texels(64 * 48), [Wrap::Repeat, Wrap::MirroredRepeat]).unwrap(),
+            Texture::new("b", 5, 3, texels(15), [Wrap::ClampToEdge, Wrap::Repeat]).unwrap(),
+        ];
+        let color = Vec4::new(0.8, 0.4, 0.2, 0.5);
+        let objects = vec![
+            Object::new("a", 0, color).textured(0),
+            Object::new("b", 1, color).textured(1),
+            Object::new("plain", 0, color),
+        ];
+        let instances = (0..3).map(|object| Instance { object, transform: Mat4::IDENTITY }).collect();
+        let scene =
+            Scene { name: "textured probe".into(), meshes, objects, instances, textures, ..Scene::default() };
+        scene.validate().unwrap();
+        scene
+    }
+
     /// The shaded Scatter pass of each kernel ([`Kernel`]) against the per-pixel rule and
     /// [`TriangleSetup::fragment`], bit for bit (pixel, primitive id, depth, colour, normal), under
     /// every shading, on [`kernel_probe_meshes`]; the two kernels' fragments in the same order
     /// on one thread; and each kernel's pass that shades on demand giving those fragments in that
-    /// order. Where the host lacks AVX2 only the portable kernel is checked.
+    /// order; and the same on the probe textured ([`textured_probe`]). Where the host lacks AVX2
+    /// only the portable kernel is checked.
     /// Mutations caught: the AVX2 walk's mask of valid columns one too wide (fragments past the
-    /// box, at the image's right border), and its depth's sum regrouped.
+    /// box, at the image's right border), and its depth's sum regrouped; in the AVX2 texture
+    /// lanes, the floor's correction left out, the border's lanes not wrapped, and a lane without
+    /// a texture given its neighbour's.
     #[test]
     fn kernels_give_the_setups_fragments() {
         let (w, h) = (128u32, 96u32);
         let cam = camera(w, h);
-        let scene = scene_of(kernel_probe_meshes(&cam));
+        let scenes = [scene_of(kernel_probe_meshes(&cam)), textured_probe(&cam)];
         let kernels = if Kernel::detect() == Kernel::Portable {
             eprintln!("no AVX2 on this host: the portable kernel alone");
             vec![Kernel::Portable]
         } else {
             vec![Kernel::Portable, Kernel::detect()]
         };
-        for shading in [Shading::Headlight, Shading::Vertex, Shading::Flat, Shading::Normal] {
+        let shadings = [Shading::Headlight, Shading::Vertex, Shading::Flat, Shading::Normal];
+        for (scene, shading) in scenes.iter().flat_map(|s| shadings.map(|shading| (s, shading))) {
             let s = Settings { shading, ..settings(w, h) };
-            let r = Rasterizer::new(&scene, &cam, &s);
+            let r = Rasterizer::new(scene, &cam, &s);
             let extents: Vec<(i32, bool)> = r
                 .setup()
                 .triangles
@@ -2676,13 +2719,18 @@ mod tests {
             for &kernel in &kernels {
                 let (n, all) =
                     keys_in_order(&one_thread, true, |sink| r.scatter_shaded(kernel, &|f| sink(f), None));
-                assert_eq!(n, all.len() as u64, "{shading:?} {kernel:?}");
+                let what = format!("{}: {shading:?} {kernel:?}", scene.name);
+                assert_eq!(n, all.len() as u64, "{what}");
                 let mut sorted = all.clone();
                 sorted.sort_unstable();
-                assert!(sorted == expected, "{shading:?} {kernel:?}: not the setup's fragments");
+                assert!(sorted == expected, "{what}: not the setup's fragments");
                 orders.push(all);
             }
-            assert!(orders.windows(2).all(|o| o[0] == o[1]), "{shading:?}: the kernels' orders differ");
+            assert!(
+                orders.windows(2).all(|o| o[0] == o[1]),
+                "{}, {shading:?}: the kernels' orders differ",
+                scene.name
+            );
             // the pass that shades on demand: no colour made ahead, the same fragments (made
             // from the barycentrics it hands out) in the same order
             for &kernel in &kernels {
@@ -2709,7 +2757,7 @@ mod tests {
     fn masked_kernels_agree() {
         let (w, h) = (128u32, 96u32);
         let cam = camera(w, h);
-        let scene = scene_of(kernel_probe_meshes(&cam));
+        let scenes = [scene_of(kernel_probe_meshes(&cam)), textured_probe(&cam)];
         let kernels = if Kernel::detect() == Kernel::Portable {
             eprintln!("no AVX2 on this host: the portable kernel alone");
             vec![Kernel::Portable]
@@ -2717,10 +2765,10 @@ mod tests {
             vec![Kernel::Portable, Kernel::detect()]
         };
         let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-        for samples in [4, 8] {
+        for (scene, samples) in scenes.iter().flat_map(|s| [4, 8].map(|samples| (s, samples))) {
             for shading in [Shading::Headlight, Shading::Vertex, Shading::Flat, Shading::Normal] {
                 let s = Settings { shading, samples, ..settings(w, h) };
-                let r = Rasterizer::new(&scene, &cam, &s);
+                let r = Rasterizer::new(scene, &cam, &s);
                 let mut plain = Vec::new();
                 for t in &r.setup.triangles {
                     let [x0, y0, x1, y1] = t.bbox;
@@ -2745,7 +2793,8 @@ mod tests {
                 let n = r.setup.triangles.len();
                 for &kernel in &kernels {
                     for shade in [Shade::OnDemand, Shade::Color] {
-                        let what = format!("{samples} samples, {shading:?}, {kernel:?}, {shade:?}");
+                        let what =
+                            format!("{}: {samples} samples, {shading:?}, {kernel:?}, {shade:?}", scene.name);
                         for half in [false, true] {
                             let keep = |px: u32| !half || px % 2 == 1;
                             let all = Mutex::new(Vec::new());
