@@ -2,8 +2,8 @@
 """Alternated `oit bench` runs of two binaries (folders A1 B1 A2 B2 ... under one folder, each
 with its report.json): per scene and technique, the least steady-state frame time over all of a
 binary's runs (the frame least disturbed by the rest of a shared machine), B's over A's, and the
-median of the runs' medians; then each binary's `wall:F:SCENE` / `nowall:F:SCENE` ratios by those
-least times.
+median of the runs' medians; then each binary's `wall:F:SCENE` / `nowall:F:SCENE` ratios and
+SCENE / `untextured:SCENE` ratios (issue 38's wall and texture targets) by those least times.
 
     min_pairs.py FOLDER
 """
@@ -39,3 +39,10 @@ for scene in scenes:
     for binary in "AB":
         ratios = " ".join(f"{t} {best[(scene, t, binary)] / best[(twin, t, binary)]:.3f}" for t in techniques)
         print(f"{binary}: {scene} / {twin}: {ratios}")
+for scene in scenes:
+    plain = "untextured:" + scene
+    if scene.startswith("untextured:") or plain not in scenes:
+        continue
+    for binary in "AB":
+        ratios = " ".join(f"{t} {best[(scene, t, binary)] / best[(plain, t, binary)]:.3f}" for t in techniques)
+        print(f"{binary}: {scene} / {plain}: {ratios}")

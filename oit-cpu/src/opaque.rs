@@ -99,6 +99,18 @@ pub(crate) fn draw_reusing(
     let masks = scene.objects.iter().any(|o| matches!(o.alpha_mode, AlphaMode::Mask { .. }));
     // alpha is never below a cutoff of 0 (an opaque object's): those skip the texture
     let masked_away = |f: &Fragment<'_>| masks && f.cutoff() > 0.0 && f.alpha() < f.cutoff();
+    // a textured mask's alpha is its texture's: the depth pass then shades in lanes, where the
+    // texture is sampled eight fragments at once (the alpha of a fragment shaded ahead is its
+    // colour's, the bits `alpha_at` gives), rather than sampling each fragment on its own
+    let first_shade = if scene
+        .objects
+        .iter()
+        .any(|o| matches!(o.alpha_mode, AlphaMode::Mask { .. }) && o.texture.is_some())
+    {
+        Shade::Color
+    } else {
+        Shade::OnDemand
+    };
     let key_of = |f: &Fragment<'_>| u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim);
     let store = |slot: &[AtomicU32; 3], c: Vec4| {
         for (word, v) in slot.iter().zip([c.x, c.y, c.z]) {
@@ -141,12 +153,12 @@ pub(crate) fn draw_reusing(
         };
         if samples > 1 {
             let fragments =
-                raster.for_each_masked_fragment_by_band(samples, Shade::OnDemand, None, first).iter().sum();
+                raster.for_each_masked_fragment_by_band(samples, first_shade, None, first).iter().sum();
             raster.for_each_masked_fragment_by_band(samples, Shade::OnDemand, None, second);
             fragments
         } else {
             let fragments = raster
-                .for_each_fragment_by_band(Shade::OnDemand, |b| {
+                .for_each_fragment_by_band(first_shade, |b| {
                     let first = first(b);
                     move |f: &Fragment<'_>| first(f, 1)
                 })
