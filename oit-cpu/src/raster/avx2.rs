@@ -570,11 +570,11 @@ fn transpose(rows: [__m256; 8]) -> [__m256; 8] {
 /// [`oit_core::setup::headlight_colors`] in AVX2, the same operations in the same order (so the same
 /// bits): lane `i` shaded from `records[i]` at barycentrics `b[k]`'s lane `i`; the colours
 /// RGBA after one another.
-#[inline]
-#[target_feature(enable = "avx2,popcnt")]
 ///
 /// Where `textured` gives the setup and each lane's triangle, a lane's base is multiplied by its
 /// texture's sample first ([`texture_lanes`]), as [`TriangleSetup::textured`] multiplies it.
+#[inline]
+#[target_feature(enable = "avx2,popcnt")]
 fn headlight(
     records: [&ShadeRecord; SHADE_LANES],
     b: [__m256; 3],
