@@ -426,22 +426,12 @@ mod tests {
 
     #[test]
     fn integer_floor_is_the_float_floor() {
-        // the sampler's axis as first written: `floor`, then the clamp, then `as`
+        // the sampler's axis as first written: `floor`, then the clamp, then `as` (the wrap's
+        // shortcut inside the level is held by `wrap_modes`' table)
         let by_floor = |u: f32, n: u32, wrap: Wrap| {
             let s = (u * (n * 256) as f32).floor().clamp(-COORD_CLAMP, COORD_CLAMP) as i32 - 128;
             let (i0, f) = (s >> 8, (s & 255) as u32);
-            let apply = |i: i32| {
-                let n = n as i32;
-                match wrap {
-                    Wrap::Repeat => i.rem_euclid(n) as u32,
-                    Wrap::ClampToEdge => i.clamp(0, n - 1) as u32,
-                    Wrap::MirroredRepeat => {
-                        let m = i.rem_euclid(2 * n);
-                        (if m < n { m } else { 2 * n - 1 - m }) as u32
-                    }
-                }
-            };
-            (apply(i0), apply(i0 + 1), f)
+            (wrap.apply(i0, n), wrap.apply(i0 + 1, n), f)
         };
         let mut rng = crate::rng::Rng(38);
         let mut us: Vec<f32> = vec![
