@@ -156,6 +156,12 @@ impl Texture {
         self.levels.len() as u32
     }
 
+    /// Level `level` of the chain, clamped to its last (the level a sample of `level` reads).
+    #[inline]
+    pub fn level(&self, level: u32) -> &Level {
+        &self.levels[(level as usize).min(self.levels.len() - 1)]
+    }
+
     /// The filtered 8-bit RGBA of level `level` (clamped to the chain) at `uv`, before decoding
     /// (the module's rule).
     #[inline]
@@ -174,7 +180,7 @@ impl Texture {
     /// their weights.
     #[inline]
     fn taps(&self, level: u32, uv: Vec2) -> Taps {
-        let l = &self.levels[(level as usize).min(self.levels.len() - 1)];
+        let l = self.level(level);
         let (x0, x1, fx) = axis(uv.x, l.width, self.wrap[0]);
         let (y0, y1, fy) = axis(uv.y, l.height, self.wrap[1]);
         let at = |x: u32, y: u32| l.texels[y as usize * l.width as usize + x as usize];

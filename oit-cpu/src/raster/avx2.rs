@@ -666,8 +666,7 @@ impl<'a> TexLane<'a> {
     #[inline]
     fn of(setup: &'a TriangleSetup, t: &Triangle) -> Option<TexLane<'a>> {
         let texture = setup.textures.get(t.texture as usize)?;
-        let mips = texture.mips();
-        let level = &mips[(t.lod as usize).min(mips.len() - 1)];
+        let level = texture.level(t.lod);
         Some(TexLane {
             texels: &level.texels,
             size: [level.width, level.height],
