@@ -129,6 +129,15 @@ impl CpuBackend {
         CpuBackend { threads, ..CpuBackend::default() }
     }
 
+    /// Geometry passes the opaque pass runs for `scene` in each frame (of each screen tile):
+    /// none where the scene has no opaque or masked part; two (depth, then the winners'
+    /// colours, as the plan's schedule and the GPU paths) in general; one where a masked object
+    /// is textured, whose depth test shades every fragment ahead in lanes to read its alpha and
+    /// so keeps the winners' colours as it goes (a second pass would shade them all again).
+    pub fn opaque_passes(scene: &Scene) -> u32 {
+        scene.layers(None).opaque.map_or(0, |o| if opaque::fuses(&o) { 1 } else { 2 })
+    }
+
     /// Frees the storage kept from the last dropped prepared scene (see [`CpuBackend`]).
     pub fn release_storage(&self) {
         if let Ok(mut kept) = self.kept.0.lock() {

@@ -39,7 +39,8 @@ pub(crate) struct OpaqueImage {
     pub fragments: u64,
     /// Of those, fragments a mask's cutoff discarded.
     pub masked: u64,
-    /// Geometry passes it ran.
+    /// Geometry passes it ran: 2 (depth, then the winners' colours), or 1 where the depth pass
+    /// shaded every fragment ahead and kept each winner's colour as it went.
     pub passes: u32,
     /// What the next frame's pass reuses ([`draw_reusing`]): its rasterizer, set up again, and
     /// the z-buffer's keys and colours, overwritten.
@@ -51,6 +52,13 @@ pub(crate) struct OpaqueImage {
 /// The opaque fragments a pixel (on average over the frame) up to which the colour pass shades
 /// every fragment in lanes rather than only the winners on demand.
 const SHADE_ALL_LAYERS: u64 = 4;
+
+/// Whether the pass over `scene` (a frame's opaque part) is one geometry pass, not two: where a
+/// masked object is textured, the depth test shades every fragment ahead to read its alpha, and
+/// keeps the winners' colours as it goes ([`draw_reusing`]).
+pub(crate) fn fuses(scene: &Scene) -> bool {
+    scene.objects.iter().any(|o| matches!(o.alpha_mode, AlphaMode::Mask { .. }) && o.texture.is_some())
+}
 
 /// Draws `scene` (a frame's opaque part) seen by `camera` under `settings` (the layers'
 /// settings: a tile's region included). Above one sample (docs/msaa.md) the z-buffer is kept a
@@ -70,6 +78,18 @@ pub(crate) fn draw_reusing(
     camera: &Camera,
     settings: &Settings,
     kept: Option<OpaqueImage>,
+) -> OpaqueImage {
+    draw_passes(scene, camera, settings, kept, fuses(scene))
+}
+
+/// [`draw_reusing`] in one pass or two as `fused` says: one shades every fragment ahead and keeps
+/// each winner's colour as it tests depth, two shade only the winners in a second pass.
+fn draw_passes(
+    scene: &Scene,
+    camera: &Camera,
+    settings: &Settings,
+    kept: Option<OpaqueImage>,
+    fused: bool,
 ) -> OpaqueImage {
     let samples = settings.samples.max(1);
     let per = samples as usize;
@@ -102,15 +122,12 @@ pub(crate) fn draw_reusing(
     // a textured mask's alpha is its texture's: the depth pass then shades in lanes, where the
     // texture is sampled eight fragments at once (the alpha of a fragment shaded ahead is its
     // colour's, the bits `alpha_at` gives), rather than sampling each fragment on its own
-    let first_shade = if scene
-        .objects
-        .iter()
-        .any(|o| matches!(o.alpha_mode, AlphaMode::Mask { .. }) && o.texture.is_some())
-    {
-        Shade::Color
-    } else {
-        Shade::OnDemand
-    };
+    //
+    // A pass that shades every fragment ahead has each one's colour in hand as it tests depth:
+    // it then keeps the colour with the key it wins ([`OpaqueImage::passes`] is 1), and the colour
+    // pass, which would shade them all again, is not run. The colour a sample ends with is that of
+    // the last fragment to win it, the one holding its least key, as the colour pass would find it.
+    let first_shade = if fused { Shade::Color } else { Shade::OnDemand };
     let key_of = |f: &Fragment<'_>| u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim);
     let store = |slot: &[AtomicU32; 3], c: Vec4| {
         for (word, v) in slot.iter().zip([c.x, c.y, c.z]) {
@@ -121,7 +138,8 @@ pub(crate) fn draw_reusing(
         // In bands of rows, each band's pixels written by its one task: the depth test is a plain
         // load and store, not a locked MIN (the wall of `wall:0:default` at 512²: 1.1 ms with the
         // MIN, 0.6 so); the colour pass likewise. Two passes, as the plan's schedule and the GPU
-        // paths: a colour is made only for the fragment that holds a sample's key.
+        // paths: a colour is made only for the fragment that holds a sample's key (unless the
+        // depth pass shades them all anyway: `fused`).
         let (keys, rgb, masked) = (&keys, &rgb, &masked);
         let (masked_away, key_of, store) = (&masked_away, &key_of, &store);
         let first = |_| {
@@ -132,9 +150,13 @@ pub(crate) fn draw_reusing(
                     return;
                 }
                 let (key, base) = (key_of(f), f.pixel as usize * per);
+                let mut color = None;
                 for i in (0..per).filter(|i| mask >> i & 1 == 1) {
                     if key < keys[base + i].load(Relaxed) {
                         keys[base + i].store(key, Relaxed);
+                        if fused {
+                            store(&rgb[base + i], *color.get_or_insert_with(|| f.color()));
+                        }
                     }
                 }
             }
@@ -154,7 +176,9 @@ pub(crate) fn draw_reusing(
         if samples > 1 {
             let fragments =
                 raster.for_each_masked_fragment_by_band(samples, first_shade, None, first).iter().sum();
-            raster.for_each_masked_fragment_by_band(samples, Shade::OnDemand, None, second);
+            if !fused {
+                raster.for_each_masked_fragment_by_band(samples, Shade::OnDemand, None, second);
+            }
             fragments
         } else {
             let fragments = raster
@@ -170,10 +194,12 @@ pub(crate) fn draw_reusing(
             // (a wall over the default scene at 512²: fabs's frame 10.3–11.9 ms on demand, 8.7–9.4 in
             // lanes, bench/results/cpu/opaque-lanes-512); a deep opaque part shades its winners alone
             let shallow = fragments <= SHADE_ALL_LAYERS * pixels as u64;
-            raster.for_each_fragment_by_band(if shallow { Shade::Color } else { Shade::OnDemand }, |b| {
-                let second = second(b);
-                move |f: &Fragment<'_>| second(f, 1)
-            });
+            if !fused {
+                raster.for_each_fragment_by_band(if shallow { Shade::Color } else { Shade::OnDemand }, |b| {
+                    let second = second(b);
+                    move |f: &Fragment<'_>| second(f, 1)
+                });
+            }
             fragments
         }
     };
@@ -201,7 +227,7 @@ pub(crate) fn draw_reusing(
         uniform,
         fragments,
         masked: masked.into_inner(),
-        passes: 2,
+        passes: if fused { 1 } else { 2 },
         raster,
         keys,
         rgb,
@@ -218,5 +244,50 @@ struct BandCount<'a> {
 impl Drop for BandCount<'_> {
     fn drop(&mut self) {
         self.total.fetch_add(self.masked.get(), Relaxed);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use oit_core::{Camera, Settings, View, builtin_scene};
+
+    use super::{draw_passes, fuses};
+
+    /// The one-pass z-buffer (depth test shading ahead, each winner's colour kept as it wins) and
+    /// the two-pass one (the winners shaded in a second pass) leave the same depth, colour and
+    /// counts, bit for bit, at one sample and four, on scenes with textured masks (the fence's holes,
+    /// the foliage's leaves) and without (a wall).
+    #[test]
+    fn one_pass_and_two_leave_the_same_image() {
+        for name in ["fence", "foliage", "wall:0.5:planes:16"] {
+            let scene = builtin_scene(name).unwrap().unwrap();
+            let opaque = scene.layers(None).opaque.unwrap();
+            assert_eq!(fuses(&opaque), name != "wall:0.5:planes:16", "{name}");
+            for samples in [1, 4] {
+                let settings = Settings { width: 96, height: 80, samples, ..Settings::default() };
+                let camera = Camera::orbit_scene(&scene, View::default(), 96.0 / 80.0).unwrap();
+                let [one, two] = [true, false].map(|f| draw_passes(&opaque, &camera, &settings, None, f));
+                let what = format!("{name} at {samples} samples");
+                assert_eq!((one.passes, two.passes), (1, 2), "{what}");
+                assert!(one.fragments > 0 && one.color.iter().any(Option::is_some), "{what}: drew nothing");
+                if name != "wall:0.5:planes:16" {
+                    assert!(one.masked > 0, "{what}: no fragment masked away");
+                }
+                assert_eq!((one.fragments, one.masked), (two.fragments, two.masked), "{what}");
+                let depth = |d: f32| d.to_bits();
+                let rgb = |c: Option<glam::Vec3>| c.map(|v| v.to_array().map(f32::to_bits));
+                let first_off = (0..one.depth.len()).find(|&i| {
+                    depth(one.depth[i]) != depth(two.depth[i]) || rgb(one.color[i]) != rgb(two.color[i])
+                });
+                if let Some(i) = first_off {
+                    panic!(
+                        "{what}: sample {i}: depth {} colour {:?} in one pass, {} {:?} in two",
+                        one.depth[i], one.color[i], two.depth[i], two.color[i]
+                    );
+                }
+                assert_eq!(one.color.len(), two.color.len(), "{what}");
+                assert_eq!(one.uniform, two.uniform, "{what}");
+            }
+        }
     }
 }

@@ -178,6 +178,24 @@ pub fn same_fragments_as_cpu(gpu: &Frame, cpu: &Frame, technique: oit_core::Tech
     same_fragments_but_passes(gpu, cpu, u32::from(technique == oit_core::Technique::Plain))
 }
 
+/// [`same_fragments_as_cpu`] on `scene`, whose opaque pass oit-cpu may run as one geometry pass
+/// where the GPU paths run two ([`oit_cpu::CpuBackend::opaque_passes`]: a textured mask's depth
+/// test shades every fragment ahead, so keeps the winners' colours without a second pass).
+#[cfg(feature = "cpu")]
+pub fn same_fragments_as_cpu_on(
+    scene: &oit_core::Scene,
+    gpu: &Frame,
+    cpu: &Frame,
+    technique: oit_core::Technique,
+) -> Result<(), String> {
+    let opaque_fewer = match oit_cpu::CpuBackend::opaque_passes(scene) {
+        0 => 0,
+        n => 2 - n,
+    };
+    let plain = u32::from(technique == oit_core::Technique::Plain);
+    same_fragments_but_passes(gpu, cpu, plain + opaque_fewer * cpu.stats.tiles.max(1))
+}
+
 /// [`same_fragments`] where `b` runs `fewer` geometry passes than `a`.
 pub fn same_fragments_but_passes(a: &Frame, b: &Frame, fewer: u32) -> Result<(), String> {
     let (x, y) = (&a.stats, &b.stats);

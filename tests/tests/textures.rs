@@ -298,7 +298,8 @@ mod gpu {
                     let g = render(gpu.as_ref(), &scene, &cam, &s);
                     let what = format!("{t} on {name}, {label} compute");
                     checks::accounting(&g).unwrap_or_else(|e| panic!("{what}: {e}"));
-                    checks::same_fragments_as_cpu(&g, &c, t).unwrap_or_else(|e| panic!("{what}: {e}"));
+                    checks::same_fragments_as_cpu_on(&scene, &g, &c, t)
+                        .unwrap_or_else(|e| panic!("{what}: {e}"));
                     same_opaque(&g, &c).unwrap_or_else(|e| panic!("{what}: {e}"));
                     assert_eq!(g.stats.captured, c.stats.captured, "{what}: captured");
                     if t.is_exact() && c.stats.lost == 0 {
