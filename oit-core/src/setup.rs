@@ -1187,11 +1187,7 @@ impl TriangleSetup {
         let of = |i: usize, t: &Triangle, items: &mut Vec<[u32; 2]>| {
             let [x0, y0, x1, y1] = t.bbox;
             for ty in y0 / tile..=y1 / tile {
-                for tx in x0 / tile..=x1 / tile {
-                    if t.may_cover(tx, ty, tile) {
-                        items.push([i as u32, ty << 16 | tx]);
-                    }
-                }
+                items.extend(t.row_run(ty, x0 / tile, x1 / tile, tile).map(|tx| [i as u32, ty << 16 | tx]));
             }
         };
         // a chunk of triangles' items: in parallel over chunks, the lists joined in order; a
@@ -1236,6 +1232,68 @@ impl Triangle {
                 value > above
             })
         })
+    }
+}
+
+impl Triangle {
+    /// Whether edge `k` keeps the `tile`-pixel square (column `tx`, row `ty`) of the triangle's
+    /// box, as [`Triangle::may_cover`] asks of each edge, from one corner: an edge function is
+    /// affine, so its largest value over the square's part of the box lies at the corner its
+    /// steps point to (either corner of a side along which it does not change), and some corner
+    /// exceeds the bound exactly where that one does.
+    fn edge_keeps(&self, k: usize, tx: u32, ty: u32, tile: u32) -> bool {
+        let [bx0, by0, bx1, by1] = self.bbox;
+        let (a, b) = ((k + 1) % 3, (k + 2) % 3);
+        let (dx, dy) =
+            (i64::from(self.x[b]) - i64::from(self.x[a]), i64::from(self.y[b]) - i64::from(self.y[a]));
+        // the value grows with x where −dy > 0, with y where dx > 0 ([`edge`])
+        let x = if dy < 0 {
+            i64::from((tx * tile + tile - 1).min(bx1)) * SUBPIXEL + SUBPIXEL - 1
+        } else {
+            i64::from((tx * tile).max(bx0)) * SUBPIXEL
+        };
+        let y = if dx > 0 {
+            i64::from((ty * tile + tile - 1).min(by1)) * SUBPIXEL + SUBPIXEL - 1
+        } else {
+            i64::from((ty * tile).max(by0)) * SUBPIXEL
+        };
+        let (value, _, _, above) = edge(self, k, x, y);
+        value > above
+    }
+
+    /// The columns of row `ty`, from `tx0` to `tx1` (the triangle's box's), whose squares
+    /// [`Triangle::may_cover`] keeps: a run, found from each edge's ends and a bisection. Along a
+    /// row the square's part of the box only moves right, so an edge's largest value over it only
+    /// grows or only shrinks, and each edge keeps a prefix of the row or a suffix (or all, or
+    /// none); the squares all three keep are where those runs overlap. The GPU's setup finds its
+    /// items the same way (`row_run` in `setup.wgsl`).
+    pub fn row_run(&self, ty: u32, tx0: u32, tx1: u32, tile: u32) -> std::ops::Range<u32> {
+        let (mut lo, mut end) = (tx0, tx1 + 1);
+        for k in 0..3 {
+            let first = self.edge_keeps(k, tx0, ty, tile);
+            let last = self.edge_keeps(k, tx1, ty, tile);
+            if !first && !last {
+                return tx0..tx0;
+            }
+            if first != last {
+                // keeps(l) is `first` and keeps(r) is `last` until they are neighbours
+                let (mut l, mut r) = (tx0, tx1);
+                while r - l > 1 {
+                    let mid = l + (r - l) / 2;
+                    if self.edge_keeps(k, mid, ty, tile) == first {
+                        l = mid;
+                    } else {
+                        r = mid;
+                    }
+                }
+                if first {
+                    end = end.min(r);
+                } else {
+                    lo = lo.max(r);
+                }
+            }
+        }
+        lo..end.max(lo)
     }
 }
 
@@ -1396,24 +1454,38 @@ mod tests {
 
     /// The work list comes triangle by triangle, each triangle's tiles row by row, as its doc
     /// says, across the chunks it is binned in (a chunk's list out of place fails it).
+    ///
+    /// Each row's run ([`Triangle::row_run`]) is the tiles [`Triangle::may_cover`] keeps, tested
+    /// tile by tile at each of the rule's four corners: on small triangles (`spheres:3`), and on
+    /// quads and billboards many tiles wide, seen turned, where the runs end inside rows.
     #[test]
     fn work_items_come_triangle_by_triangle_in_rows() {
-        // more triangles than one binning chunk, so the chunks' lists must join in order
-        let scene = crate::load_scene("spheres:3").unwrap();
-        let camera = Camera::orbit_scene(&scene, crate::View::default(), 1.0).unwrap();
-        let settings = Settings { width: 96, height: 96, ..Default::default() };
-        let setup = TriangleSetup::new(&scene, &camera, &settings);
-        assert!(setup.triangles.len() > 4 * ITEM_CHUNK, "{} triangles", setup.triangles.len());
-        let mut expected = Vec::new();
-        for (i, t) in setup.triangles.iter().enumerate() {
-            let [x0, y0, x1, y1] = t.bbox;
-            for ty in y0 / 8..=y1 / 8 {
-                for tx in (x0 / 8..=x1 / 8).filter(|&tx| t.may_cover(tx, ty, 8)) {
-                    expected.push([i as u32, ty << 16 | tx]);
+        for (name, size, azimuth, tile) in
+            [("spheres:3", 96, 0.0, 8), ("planes:4", 512, 37.0, 16), ("particles:64", 384, 20.0, 8)]
+        {
+            let scene = crate::load_scene(name).unwrap();
+            let view = crate::View { azimuth, elevation: 25.0, ..Default::default() };
+            let camera = Camera::orbit_scene(&scene, view, 1.0).unwrap();
+            let settings = Settings { width: size, height: size, ..Default::default() };
+            let setup = TriangleSetup::new(&scene, &camera, &settings);
+            if name == "spheres:3" {
+                // more triangles than one binning chunk, so the chunks' lists must join in order
+                assert!(setup.triangles.len() > 4 * ITEM_CHUNK, "{} triangles", setup.triangles.len());
+            }
+            let (mut expected, mut cut) = (Vec::new(), 0);
+            for (i, t) in setup.triangles.iter().enumerate() {
+                let [x0, y0, x1, y1] = t.bbox;
+                for ty in y0 / tile..=y1 / tile {
+                    let row: Vec<u32> =
+                        (x0 / tile..=x1 / tile).filter(|&tx| t.may_cover(tx, ty, tile)).collect();
+                    cut += usize::from(row.first().is_some_and(|&f| f > x0 / tile))
+                        + usize::from(row.last().is_some_and(|&l| l < x1 / tile));
+                    expected.extend(row.iter().map(|&tx| [i as u32, ty << 16 | tx]));
                 }
             }
+            assert!(cut > 0, "{name}: no row's run ends inside its box");
+            assert_eq!(setup.work_items(tile), expected, "{name}");
         }
-        assert_eq!(setup.work_items(8), expected);
     }
 
     /// A work list keeps every tile with a covered sample, at every sample count, and drops the
