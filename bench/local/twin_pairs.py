@@ -4,7 +4,7 @@ per backend, raster path, scene and technique, the least steady wall frame over 
 the folder, textured over untextured, and the same for the least device time where the reports
 have it (issue 38's texture target: at most 1.3 on the CPU and the compute paths).
 
-    twin_pairs.py FOLDER
+    twin_pairs.py FOLDER [PREFIX]    (PREFIX: only the reports FOLDER/PREFIX*/report.json)
 """
 import collections
 import glob
@@ -12,9 +12,10 @@ import json
 import sys
 
 folder = sys.argv[1]
+prefix = sys.argv[2] if len(sys.argv) > 2 else ""
 wall = collections.defaultdict(lambda: float("inf"))
 gpu = collections.defaultdict(lambda: float("inf"))
-for path in sorted(glob.glob(f"{folder}/*/report.json")):
+for path in sorted(glob.glob(f"{folder}/{prefix}*/report.json")):
     for row in json.load(open(path))["rows"]:
         key = (row["backend"], row.get("raster") or "-", row["scene"], row["technique"])
         wall[key] = min(wall[key], row["steady_wall_ms"]["min"])
