@@ -1179,6 +1179,21 @@ impl TriangleSetup {
         self.triangles.iter().map(|t| t.bbox)
     }
 
+    /// [`TriangleSetup::work_items`] in its plainest form: every square of every triangle's box
+    /// tested on its own by [`Triangle::may_cover`]. The list the row runs must give, and what
+    /// they are timed against (`cargo bench -p oit-gpu --bench host_setup`).
+    pub fn work_items_tile_by_tile(&self, tile: u32) -> Vec<[u32; 2]> {
+        let mut items = Vec::new();
+        for (i, t) in self.triangles.iter().enumerate() {
+            let [x0, y0, x1, y1] = t.bbox;
+            for ty in y0 / tile..=y1 / tile {
+                let row = (x0 / tile..=x1 / tile).filter(|&tx| t.may_cover(tx, ty, tile));
+                items.extend(row.map(|tx| [i as u32, ty << 16 | tx]));
+            }
+        }
+        items
+    }
+
     /// The compute path's work list: (triangle, `tile`-pixel square as row << 16 | column) for
     /// each square of each triangle's box that [`Triangle::may_cover`] keeps, triangle by
     /// triangle, row by row. What the GPU setup bins (setup.wgsl), in another order.
@@ -1243,22 +1258,15 @@ impl Triangle {
     /// exceeds the bound exactly where that one does.
     fn edge_keeps(&self, k: usize, tx: u32, ty: u32, tile: u32) -> bool {
         let [bx0, by0, bx1, by1] = self.bbox;
-        let (a, b) = ((k + 1) % 3, (k + 2) % 3);
-        let (dx, dy) =
-            (i64::from(self.x[b]) - i64::from(self.x[a]), i64::from(self.y[b]) - i64::from(self.y[a]));
-        // the value grows with x where −dy > 0, with y where dx > 0 ([`edge`])
-        let x = if dy < 0 {
-            i64::from((tx * tile + tile - 1).min(bx1)) * SUBPIXEL + SUBPIXEL - 1
-        } else {
-            i64::from((tx * tile).max(bx0)) * SUBPIXEL
-        };
-        let y = if dx > 0 {
-            i64::from((ty * tile + tile - 1).min(by1)) * SUBPIXEL + SUBPIXEL - 1
-        } else {
-            i64::from((ty * tile).max(by0)) * SUBPIXEL
-        };
-        let (value, _, _, above) = edge(self, k, x, y);
-        value > above
+        let (x0, y0) =
+            (i64::from((tx * tile).max(bx0)) * SUBPIXEL, i64::from((ty * tile).max(by0)) * SUBPIXEL);
+        let x1 = i64::from((tx * tile + tile - 1).min(bx1)) * SUBPIXEL + SUBPIXEL - 1;
+        let y1 = i64::from((ty * tile + tile - 1).min(by1)) * SUBPIXEL + SUBPIXEL - 1;
+        // the value at the low corner, plus what each positive step adds across the square (a
+        // step is per pixel, `SUBPIXEL` units: exactly the coefficient times `SUBPIXEL`)
+        let (value, step_x, step_y, above) = edge(self, k, x0, y0);
+        let rise = |step: i64, span: i64| if step > 0 { step / SUBPIXEL * span } else { 0 };
+        value + rise(step_x, x1 - x0) + rise(step_y, y1 - y0) > above
     }
 
     /// The columns of row `ty`, from `tx0` to `tx1` (the triangle's box's), whose squares
@@ -1472,16 +1480,13 @@ mod tests {
                 // more triangles than one binning chunk, so the chunks' lists must join in order
                 assert!(setup.triangles.len() > 4 * ITEM_CHUNK, "{} triangles", setup.triangles.len());
             }
-            let (mut expected, mut cut) = (Vec::new(), 0);
-            for (i, t) in setup.triangles.iter().enumerate() {
-                let [x0, y0, x1, y1] = t.bbox;
-                for ty in y0 / tile..=y1 / tile {
-                    let row: Vec<u32> =
-                        (x0 / tile..=x1 / tile).filter(|&tx| t.may_cover(tx, ty, tile)).collect();
-                    cut += usize::from(row.first().is_some_and(|&f| f > x0 / tile))
-                        + usize::from(row.last().is_some_and(|&l| l < x1 / tile));
-                    expected.extend(row.iter().map(|&tx| [i as u32, ty << 16 | tx]));
-                }
+            let expected = setup.work_items_tile_by_tile(tile);
+            // rows whose kept tiles stop short of their box's ends (where a bisection ran)
+            let mut cut = 0;
+            for row in expected.chunk_by(|a, b| a[0] == b[0] && a[1] >> 16 == b[1] >> 16) {
+                let [x0, _, x1, _] = setup.triangles[row[0][0] as usize].bbox;
+                let (first, last) = (row[0][1] & 0xffff, row[row.len() - 1][1] & 0xffff);
+                cut += usize::from(first > x0 / tile) + usize::from(last < x1 / tile);
             }
             assert!(cut > 0, "{name}: no row's run ends inside its box");
             assert_eq!(setup.work_items(tile), expected, "{name}");

@@ -54,8 +54,11 @@ pub(crate) struct OpaqueImage {
 const SHADE_ALL_LAYERS: u64 = 4;
 
 /// Whether the pass over `scene` (a frame's opaque part) is one geometry pass, not two: where a
-/// masked object is textured, the depth test shades every fragment ahead to read its alpha, and
-/// keeps the winners' colours as it goes ([`draw_reusing`]).
+/// masked object is textured, its alpha is its texture's, so the depth test shades every fragment
+/// ahead in lanes, the texture sampled eight fragments at once (a fragment's alpha is then its
+/// colour's, the bits `alpha_at` gives), rather than sampling each fragment on its own. With every
+/// colour in hand it keeps the winners' as it goes, and the colour pass, which would shade them
+/// all again, is not run ([`draw_passes`]).
 pub(crate) fn fuses(scene: &Scene) -> bool {
     scene.objects.iter().any(|o| matches!(o.alpha_mode, AlphaMode::Mask { .. }) && o.texture.is_some())
 }
@@ -119,14 +122,9 @@ fn draw_passes(
     let masks = scene.objects.iter().any(|o| matches!(o.alpha_mode, AlphaMode::Mask { .. }));
     // alpha is never below a cutoff of 0 (an opaque object's): those skip the texture
     let masked_away = |f: &Fragment<'_>| masks && f.cutoff() > 0.0 && f.alpha() < f.cutoff();
-    // a textured mask's alpha is its texture's: the depth pass then shades in lanes, where the
-    // texture is sampled eight fragments at once (the alpha of a fragment shaded ahead is its
-    // colour's, the bits `alpha_at` gives), rather than sampling each fragment on its own
-    //
-    // A pass that shades every fragment ahead has each one's colour in hand as it tests depth:
-    // it then keeps the colour with the key it wins ([`OpaqueImage::passes`] is 1), and the colour
-    // pass, which would shade them all again, is not run. The colour a sample ends with is that of
-    // the last fragment to win it, the one holding its least key, as the colour pass would find it.
+    // fused: the depth pass shades in lanes (see `fuses`) and keeps the colour with each key it
+    // wins; the colour a sample ends with is that of the last fragment to win it, the one holding
+    // its least key, as the colour pass would find it
     let first_shade = if fused { Shade::Color } else { Shade::OnDemand };
     let key_of = |f: &Fragment<'_>| u64::from(depth_bits(f.depth)) << 32 | u64::from(f.prim);
     let store = |slot: &[AtomicU32; 3], c: Vec4| {

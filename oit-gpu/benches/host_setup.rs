@@ -3,7 +3,7 @@
 //! `particles` (1,200 billboards) at 1024×1024, and the binning alone two ways side by side:
 //! `row runs` ([`TriangleSetup::work_items`]: each row of a triangle's box a run of tiles, from
 //! each edge's ends and a bisection) and `tile by tile` (every tile of the box tested at the
-//! rule's four corners, [`oit_core::setup::Triangle::may_cover`], as the work list was binned
+//! rule's four corners, [`TriangleSetup::work_items_tile_by_tile`], as the work list was binned
 //! before the runs).
 //!
 //! Before timing, the two binnings are checked to give the same work list. Single-threaded here
@@ -20,20 +20,6 @@ use oit_gpu::TILE;
 
 const SIZE: u32 = 1024;
 
-/// Every tile of every triangle's box tested on its own.
-fn tile_by_tile(setup: &TriangleSetup) -> Vec<[u32; 2]> {
-    let mut items = Vec::new();
-    for (i, t) in setup.triangles.iter().enumerate() {
-        let [x0, y0, x1, y1] = t.bbox;
-        for ty in y0 / TILE..=y1 / TILE {
-            for tx in (x0 / TILE..=x1 / TILE).filter(|&tx| t.may_cover(tx, ty, TILE)) {
-                items.push([i as u32, ty << 16 | tx]);
-            }
-        }
-    }
-    items
-}
-
 fn setup(c: &mut Criterion) {
     let scene = load_scene("particles").expect("the scene set's particles load");
     let settings = Settings { width: SIZE, height: SIZE, ..Settings::default() };
@@ -48,13 +34,15 @@ fn setup(c: &mut Criterion) {
         runs.len(),
         set_up.triangles.len()
     );
-    assert_eq!(runs, tile_by_tile(&set_up), "the row runs bin other tiles than the rule");
+    assert_eq!(runs, set_up.work_items_tile_by_tile(TILE), "the row runs bin other tiles than the rule");
     let mut group = c.benchmark_group("host_setup/particles");
     group.bench_function("whole", |b| {
         b.iter(|| black_box(oit_gpu::host_setup(transparent, &camera, &settings, false)))
     });
     group.bench_function("binning: row runs", |b| b.iter(|| black_box(set_up.work_items(TILE))));
-    group.bench_function("binning: tile by tile", |b| b.iter(|| black_box(tile_by_tile(&set_up))));
+    group.bench_function("binning: tile by tile", |b| {
+        b.iter(|| black_box(set_up.work_items_tile_by_tile(TILE)))
+    });
     group.finish();
 }
 
