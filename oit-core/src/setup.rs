@@ -560,11 +560,14 @@ impl Snap {
             }
         };
         #[cfg(feature = "rayon")]
-        out.par_chunks_mut(SETUP_CHUNK)
-            .zip(mesh.positions.par_chunks(SETUP_CHUNK))
-            .enumerate()
-            .for_each(|(c, (slots, positions))| fill(c * SETUP_CHUNK, slots, positions));
-        #[cfg(not(feature = "rayon"))]
+        if mesh.positions.len() > SETUP_CHUNK {
+            out.par_chunks_mut(SETUP_CHUNK)
+                .zip(mesh.positions.par_chunks(SETUP_CHUNK))
+                .enumerate()
+                .for_each(|(c, (slots, positions))| fill(c * SETUP_CHUNK, slots, positions));
+            return;
+        }
+        // one chunk: here, not handed to the pool (see `for_each_chunk`)
         fill(0, out, &mesh.positions);
     }
 
@@ -610,19 +613,30 @@ impl Snap {
         for_each_chunk(chunks, indices, SETUP_CHUNK, |c, out, chunk| {
             out.clear();
             let first = prim_base.saturating_add(u32::try_from(c * SETUP_CHUNK).unwrap_or(u32::MAX));
-            for (j, tri) in chunk.iter().enumerate() {
-                let (Some(a), Some(b), Some(c)) = (
-                    vertices.get(tri[0] as usize),
-                    vertices.get(tri[1] as usize),
-                    vertices.get(tri[2] as usize),
-                ) else {
-                    continue;
-                };
-                let prim = first.saturating_add(j as u32);
-                self.triangle(out, [a, b, c], material, prim);
-            }
+            self.triangles(out, vertices, chunk, material, first);
         });
         copy_chunks(out, start, chunks, records, record)
+    }
+
+    /// Sets up the triangles `indices` of one instance's `vertices` ([`Snap::vertices`]),
+    /// appending them to `out`; the first has primitive id `first`, each next one more.
+    fn triangles(
+        &self,
+        out: &mut Vec<Triangle>,
+        vertices: &[SetupVertex],
+        indices: &[[u32; 3]],
+        material: &Material,
+        first: u32,
+    ) {
+        for (j, tri) in indices.iter().enumerate() {
+            let (Some(a), Some(b), Some(c)) =
+                (vertices.get(tri[0] as usize), vertices.get(tri[1] as usize), vertices.get(tri[2] as usize))
+            else {
+                continue;
+            };
+            let prim = first.saturating_add(j as u32);
+            self.triangle(out, [a, b, c], material, prim);
+        }
     }
 }
 
@@ -686,6 +700,59 @@ pub fn box_vertices(mesh_bounds: &Aabb, transform: &Mat4) -> ([Vec3; 8], [Vec3; 
     (corners, corners.map(|c| (c - bounds.center()).normalize_or_zero()))
 }
 
+/// The material an instance's triangles are set up with: its object's colour and mesh colours,
+/// the sign of its back faces, its cutoff and its texture (`textures`: the setup's).
+fn instance_material(
+    object: &crate::Object,
+    inst: &crate::Instance,
+    mesh: &crate::Mesh,
+    settings: &Settings,
+    textures: &[crate::Texture],
+) -> Material {
+    let mut material = Material::plain(settings.material_color(object.color), mesh.colors.is_some());
+    material.cull = back_face_sign(object, &inst.transform);
+    // an untextured masked object comes with alpha 1 or 0 (Scene::layers), which one half
+    // splits whatever the cutoff; a textured one with its factor's alpha, which the
+    // texture's multiplies fragment by fragment
+    if let AlphaMode::Mask { cutoff } = object.alpha_mode {
+        material.cutoff = if object.texture.is_some() { cutoff } else { 0.5 };
+    }
+    if let Some((t, texture)) = object.texture.and_then(|t| Some(t).zip(textures.get(t))) {
+        material.texture = u32::try_from(t).unwrap_or(NO_TEXTURE);
+        material.texels = f64::from(texture.width()) * f64::from(texture.height());
+        material.levels = texture.level_count();
+    }
+    material
+}
+
+/// Triangles a batch of small instances holds at most, but for one instance that passes it: a
+/// task's worth of setup ([`SETUP_CHUNK`]'s quarter, so a few hundred small instances still
+/// spread over the cores).
+const SMALL_BATCH: usize = SETUP_CHUNK / 4;
+
+/// `run` (small instances: index, primitive base, small) cut into consecutive batches of about
+/// [`SMALL_BATCH`] triangles, as ranges of `run`, into `batches` (its storage kept).
+fn small_batches<'b>(
+    scene: &Scene,
+    run: &[(usize, u32, bool)],
+    batches: &'b mut Vec<std::ops::Range<usize>>,
+) -> &'b [std::ops::Range<usize>] {
+    batches.clear();
+    let (mut first, mut count) = (0, 0);
+    for (k, &(i, _, _)) in run.iter().enumerate() {
+        let inst = &scene.instances[i];
+        count += scene.meshes[scene.objects[inst.object].mesh].indices.len();
+        if count >= SMALL_BATCH {
+            batches.push(first..k + 1);
+            (first, count) = (k + 1, 0);
+        }
+    }
+    if first < run.len() {
+        batches.push(first..run.len());
+    }
+    batches
+}
+
 /// `f(chunk index, out, chunk)` over the chunks of `items` of `size`, each with its own `out`
 /// (`outs` has one per chunk): in parallel with the `rayon` feature.
 fn for_each_chunk<T: Sync, R: Send>(
@@ -695,11 +762,17 @@ fn for_each_chunk<T: Sync, R: Send>(
     f: impl Fn(usize, &mut R, &[T]) + Sync + Send,
 ) {
     #[cfg(feature = "rayon")]
-    outs.par_iter_mut()
-        .zip(items.par_chunks(size))
-        .enumerate()
-        .for_each(|(c, (out, chunk))| f(c, out, chunk));
-    #[cfg(not(feature = "rayon"))]
+    if items.len() > size {
+        outs.par_iter_mut()
+            .zip(items.par_chunks(size))
+            .enumerate()
+            .for_each(|(c, (out, chunk))| f(c, out, chunk));
+        return;
+    }
+    // one chunk runs on the calling thread: a parallel iterator called from outside the pool
+    // hands its work to a pool thread and sleeps until it is done, a round trip that costs more
+    // than a small mesh's setup (a scene of hundreds of instances of a few triangles each, as
+    // `foliage`, makes three such calls an instance)
     outs.iter_mut().zip(items.chunks(size)).enumerate().for_each(|(c, (out, chunk))| f(c, out, chunk));
 }
 
@@ -723,6 +796,18 @@ fn copy_chunks<T: Send, E: RecordSink<T>>(
 ) -> usize {
     let total: usize = chunks.iter().map(Vec::len).sum();
     let end = start + total;
+    if total <= COPY_PIECE {
+        // one task's worth: here, not handed to the pool (see `for_each_chunk`)
+        out.truncate(start);
+        records.truncate(start);
+        for c in chunks {
+            out.extend_from_slice(c);
+            for t in c {
+                records.push(record(t));
+            }
+        }
+        return end;
+    }
     if out.len() < end || records.slots() < end {
         out.truncate(start);
         records.truncate(start);
@@ -822,6 +907,8 @@ pub trait RecordSink<T: Send>: ExtendRecords<T> + Default + Send {
     fn parts(&mut self, start: usize, lens: &[usize]) -> Vec<Self::Part<'_>>;
     /// Writes `record` to slot `i` of `part`.
     fn put(part: &mut Self::Part<'_>, i: usize, record: T);
+    /// Appends `record` after the last slot.
+    fn push(&mut self, record: T);
 }
 
 impl<T: Send> RecordSink<T> for Vec<T> {
@@ -840,6 +927,9 @@ impl<T: Send> RecordSink<T> for Vec<T> {
     }
     fn put(part: &mut &mut [T], i: usize, record: T) {
         part[i] = record;
+    }
+    fn push(&mut self, record: T) {
+        Vec::push(self, record);
     }
 }
 
@@ -863,6 +953,10 @@ impl<A: Send, B: Send> RecordSink<(A, B)> for (Vec<A>, Vec<B>) {
         part.0[i] = a;
         part.1[i] = b;
     }
+    fn push(&mut self, (a, b): (A, B)) {
+        self.0.push(a);
+        self.1.push(b);
+    }
 }
 
 impl RecordSink<()> for () {
@@ -875,6 +969,7 @@ impl RecordSink<()> for () {
         vec![(); lens.len()]
     }
     fn put(_: &mut (), _: usize, _: ()) {}
+    fn push(&mut self, _: ()) {}
 }
 
 /// What setup keeps from one frame to the next: its per-vertex records and each task's triangle
@@ -885,6 +980,12 @@ impl RecordSink<()> for () {
 pub struct SetupScratch {
     vertices: Vec<SetupVertex>,
     chunks: Vec<Vec<Triangle>>,
+    /// Each instance that references its data: index, primitive id base, whether small.
+    instances: Vec<(usize, u32, bool)>,
+    /// A run of small instances' batches, and each batch's vertices and triangles.
+    batches: Vec<std::ops::Range<usize>>,
+    batch_vertices: Vec<Vec<SetupVertex>>,
+    batch_triangles: Vec<Vec<Triangle>>,
 }
 
 impl TriangleSetup {
@@ -971,31 +1072,63 @@ impl TriangleSetup {
         if scene.objects.iter().any(|o| o.texture.is_some()) {
             self.textures.clone_from(&scene.textures);
         }
+        // each instance's primitive id base (the triangles of the instances before it that
+        // reference their data), and whether it is small (a chunk of triangles, of vertices)
         let mut prim_base = 0u32;
-        for inst in &scene.instances {
-            let Some(object) = scene.objects.get(inst.object) else {
+        scratch.instances.clear();
+        for (i, inst) in scene.instances.iter().enumerate() {
+            let Some(mesh) = scene.objects.get(inst.object).and_then(|o| scene.meshes.get(o.mesh)) else {
                 continue;
             };
-            let Some(mesh) = scene.meshes.get(object.mesh) else {
-                continue;
-            };
-            let base_id = prim_base;
+            let small = mesh.indices.len() <= SETUP_CHUNK && mesh.positions.len() <= SETUP_CHUNK;
+            scratch.instances.push((i, prim_base, small));
             prim_base = prim_base.saturating_add(u32::try_from(mesh.indices.len()).unwrap_or(u32::MAX));
+        }
+        let textures = &self.textures;
+        let instances = std::mem::take(&mut scratch.instances);
+        let mut next = 0;
+        while next < instances.len() {
+            let (i, base_id, small) = instances[next];
+            let run = instances[next..].iter().take_while(|x| x.2).count();
+            if small && run > 1 {
+                // a run of small instances (hundreds of leaves or particles of a few triangles
+                // each): set up in batches of about a chunk's triangles, a batch a task, each
+                // into its own list, copied into place in order
+                let batches = small_batches(scene, &instances[next..next + run], &mut scratch.batches);
+                let n = batches.len();
+                scratch.batch_vertices.resize_with(n.max(scratch.batch_vertices.len()), Vec::new);
+                scratch.batch_triangles.resize_with(n.max(scratch.batch_triangles.len()), Vec::new);
+                let batch = |((vertices, out), range): (
+                    (&mut Vec<SetupVertex>, &mut Vec<Triangle>),
+                    &std::ops::Range<usize>,
+                )| {
+                    out.clear();
+                    for &(i, base_id, _) in &instances[next..][range.clone()] {
+                        let inst = &scene.instances[i];
+                        let object = &scene.objects[inst.object];
+                        let mesh = &scene.meshes[object.mesh];
+                        let mvp = view_proj * inst.transform;
+                        snap.vertices(vertices, &mvp, &normal_matrix(&inst.transform), mesh);
+                        let material = instance_material(object, inst, mesh, settings, textures);
+                        snap.triangles(out, vertices, &mesh.indices, &material, base_id);
+                    }
+                };
+                let (vertices, lists) = (&mut scratch.batch_vertices[..n], &mut scratch.batch_triangles[..n]);
+                #[cfg(feature = "rayon")]
+                vertices.par_iter_mut().zip(lists.par_iter_mut()).zip(batches.par_iter()).for_each(batch);
+                #[cfg(not(feature = "rayon"))]
+                vertices.iter_mut().zip(lists.iter_mut()).zip(batches.iter()).for_each(batch);
+                filled =
+                    copy_chunks(&mut self.triangles, filled, &scratch.batch_triangles[..n], records, &record);
+                next += run;
+                continue;
+            }
+            let inst = &scene.instances[i];
+            let object = &scene.objects[inst.object];
+            let mesh = &scene.meshes[object.mesh];
             let mvp = view_proj * inst.transform;
             snap.vertices(&mut scratch.vertices, &mvp, &normal_matrix(&inst.transform), mesh);
-            let mut material = Material::plain(settings.material_color(object.color), mesh.colors.is_some());
-            material.cull = back_face_sign(object, &inst.transform);
-            // an untextured masked object comes with alpha 1 or 0 (Scene::layers), which one half
-            // splits whatever the cutoff; a textured one with its factor's alpha, which the
-            // texture's multiplies fragment by fragment
-            if let AlphaMode::Mask { cutoff } = object.alpha_mode {
-                material.cutoff = if object.texture.is_some() { cutoff } else { 0.5 };
-            }
-            if let Some((t, texture)) = object.texture.and_then(|t| Some(t).zip(self.textures.get(t))) {
-                material.texture = u32::try_from(t).unwrap_or(NO_TEXTURE);
-                material.texels = f64::from(texture.width()) * f64::from(texture.height());
-                material.levels = texture.level_count();
-            }
+            let material = instance_material(object, inst, mesh, settings, textures);
             filled = snap.instance(
                 (&mut self.triangles, filled, records, &record),
                 &mut scratch.chunks,
@@ -1004,7 +1137,9 @@ impl TriangleSetup {
                 &material,
                 base_id,
             );
+            next += 1;
         }
+        scratch.instances = instances;
         self.triangles.truncate(filled);
         records.truncate(filled);
     }
@@ -1152,26 +1287,41 @@ impl TriangleSetup {
     /// (f32), `base[4]` (f32), `has_color` (u32), `prim` (u32), `bbox[4]` (u32, inclusive x0 y0
     /// x1 y1), 3 words of padding.
     pub fn triangle_words(&self) -> Vec<u32> {
-        let mut out = Vec::with_capacity(self.triangles.len() * TRIANGLE_WORDS);
+        let mut out = Vec::new();
+        self.triangle_words_into(&mut out);
+        out
+    }
+
+    /// [`TriangleSetup::triangle_words`] into `out` (cleared first; its storage kept).
+    pub fn triangle_words_into(&self, out: &mut Vec<u32>) {
+        out.clear();
+        out.reserve(self.triangles.len() * TRIANGLE_WORDS);
         for t in &self.triangles {
-            out.extend(t.x.map(|v| v as u32));
-            out.extend(t.y.map(|v| v as u32));
-            out.extend(t.z.map(f32::to_bits));
-            out.extend(t.inv_w.map(f32::to_bits));
+            // a triangle's words made in place, then appended at once
+            let mut w = [0u32; TRIANGLE_WORDS];
+            let mut at = 0;
+            let mut put = |words: &[u32]| {
+                w[at..at + words.len()].copy_from_slice(words);
+                at += words.len();
+            };
+            put(&t.x.map(|v| v as u32));
+            put(&t.y.map(|v| v as u32));
+            put(&t.z.map(f32::to_bits));
+            put(&t.inv_w.map(f32::to_bits));
             for n in t.normal {
-                out.extend(n.to_array().map(f32::to_bits));
+                put(&n.to_array().map(f32::to_bits));
             }
             for c in t.color {
-                out.extend(c.to_array().map(f32::to_bits));
+                put(&c.to_array().map(f32::to_bits));
             }
-            out.push(t.inv_area.to_bits());
-            out.extend(t.base.to_array().map(f32::to_bits));
-            out.push(u32::from(t.has_color));
-            out.push(t.prim);
-            out.extend(t.bbox);
-            out.extend([0; 3]);
+            put(&[t.inv_area.to_bits()]);
+            put(&t.base.to_array().map(f32::to_bits));
+            put(&[u32::from(t.has_color), t.prim]);
+            put(&t.bbox);
+            // the last 3 words are padding (0)
+            debug_assert_eq!(at, TRIANGLE_WORDS - 3);
+            out.extend_from_slice(&w);
         }
-        out
     }
 
     /// The inclusive pixel boxes of the set-up triangles (x0, y0, x1, y1), in order.
@@ -1198,29 +1348,41 @@ impl TriangleSetup {
     /// each square of each triangle's box that [`Triangle::may_cover`] keeps, triangle by
     /// triangle, row by row. What the GPU setup bins (setup.wgsl), in another order.
     pub fn work_items(&self, tile: u32) -> Vec<[u32; 2]> {
+        let mut items = Vec::new();
+        self.work_items_into(tile, &mut items, &mut Vec::new());
+        items
+    }
+
+    /// [`TriangleSetup::work_items`] into `items` (cleared first), each task's list on the way in
+    /// `chunks`: both keep their storage from one frame to the next.
+    pub fn work_items_into(&self, tile: u32, items: &mut Vec<[u32; 2]>, chunks: &mut Vec<Vec<[u32; 2]>>) {
         // a triangle's items, row-major over its box's tiles
         let of = |i: usize, t: &Triangle, items: &mut Vec<[u32; 2]>| {
             let [x0, y0, x1, y1] = t.bbox;
+            let edges = RowEdges::new(t);
             for ty in y0 / tile..=y1 / tile {
-                items.extend(t.row_run(ty, x0 / tile, x1 / tile, tile).map(|tx| [i as u32, ty << 16 | tx]));
+                items.extend(edges.run(ty, x0 / tile, x1 / tile, tile).map(|tx| [i as u32, ty << 16 | tx]));
             }
         };
         // a chunk of triangles' items: in parallel over chunks, the lists joined in order; a
-        // tile's test is tens of nanoseconds, and a textured frame (set up on the host) of large
-        // triangles has hundreds of thousands of tiles
-        let chunk = |(c, tris): (usize, &[Triangle])| {
-            let mut items = Vec::new();
+        // textured frame (set up on the host) of large triangles has hundreds of thousands of
+        // tiles
+        let n = self.triangles.len().div_ceil(ITEM_CHUNK);
+        if chunks.len() < n {
+            chunks.resize_with(n, Vec::new);
+        }
+        let chunks = &mut chunks[..n];
+        for_each_chunk(chunks, &self.triangles, ITEM_CHUNK, |c, out, tris| {
+            out.clear();
             for (k, t) in tris.iter().enumerate() {
-                of(c * ITEM_CHUNK + k, t, &mut items);
+                of(c * ITEM_CHUNK + k, t, out);
             }
-            items
-        };
-        #[cfg(feature = "rayon")]
-        let chunks: Vec<Vec<[u32; 2]>> =
-            self.triangles.par_chunks(ITEM_CHUNK).enumerate().map(chunk).collect();
-        #[cfg(not(feature = "rayon"))]
-        let chunks: Vec<Vec<[u32; 2]>> = self.triangles.chunks(ITEM_CHUNK).enumerate().map(chunk).collect();
-        chunks.concat()
+        });
+        items.clear();
+        items.reserve(chunks.iter().map(Vec::len).sum());
+        for c in chunks.iter() {
+            items.extend_from_slice(c);
+        }
     }
 }
 
@@ -1251,54 +1413,84 @@ impl Triangle {
 }
 
 impl Triangle {
-    /// Whether edge `k` keeps the `tile`-pixel square (column `tx`, row `ty`) of the triangle's
-    /// box, as [`Triangle::may_cover`] asks of each edge, from one corner: an edge function is
-    /// affine, so its largest value over the square's part of the box lies at the corner its
-    /// steps point to (either corner of a side along which it does not change), and some corner
-    /// exceeds the bound exactly where that one does.
-    fn edge_keeps(&self, k: usize, tx: u32, ty: u32, tile: u32) -> bool {
-        let [bx0, by0, bx1, by1] = self.bbox;
-        let (x0, y0) =
-            (i64::from((tx * tile).max(bx0)) * SUBPIXEL, i64::from((ty * tile).max(by0)) * SUBPIXEL);
-        let x1 = i64::from((tx * tile + tile - 1).min(bx1)) * SUBPIXEL + SUBPIXEL - 1;
-        let y1 = i64::from((ty * tile + tile - 1).min(by1)) * SUBPIXEL + SUBPIXEL - 1;
-        // the value at the low corner, plus what each positive step adds across the square (a
-        // step is per pixel, `SUBPIXEL` units: exactly the coefficient times `SUBPIXEL`)
-        let (value, step_x, step_y, above) = edge(self, k, x0, y0);
-        let rise = |step: i64, span: i64| if step > 0 { step / SUBPIXEL * span } else { 0 };
-        value + rise(step_x, x1 - x0) + rise(step_y, y1 - y0) > above
+    /// The columns of row `ty`, from `tx0` to `tx1` (the triangle's box's), whose squares
+    /// [`Triangle::may_cover`] keeps: a run ([`RowEdges::run`], which a caller asking for many
+    /// rows makes once).
+    pub fn row_run(&self, ty: u32, tx0: u32, tx1: u32, tile: u32) -> std::ops::Range<u32> {
+        RowEdges::new(self).run(ty, tx0, tx1, tile)
+    }
+}
+
+/// A triangle's three edges as its rows' runs read them ([`RowEdges::run`]): each edge's
+/// function `value(x, y) = dx·(y − ay) − dy·(x − ax)` ([`edge`]) and the bound it must exceed,
+/// made once a triangle rather than once a row.
+#[derive(Clone, Copy, Debug)]
+pub struct RowEdges {
+    bbox: [u32; 4],
+    /// Per edge: dx, dy, ax, ay, the bound (`edge`'s `inside_above`).
+    edges: [[i64; 5]; 3],
+}
+
+impl RowEdges {
+    /// The edges of `t`.
+    pub fn new(t: &Triangle) -> RowEdges {
+        let edges = std::array::from_fn(|k| {
+            let (a, b) = ((k + 1) % 3, (k + 2) % 3);
+            let (ax, ay) = (i64::from(t.x[a]), i64::from(t.y[a]));
+            let (_, _, _, above) = edge(t, k, 0, 0);
+            [i64::from(t.x[b]) - ax, i64::from(t.y[b]) - ay, ax, ay, above]
+        });
+        RowEdges { bbox: t.bbox, edges }
     }
 
     /// The columns of row `ty`, from `tx0` to `tx1` (the triangle's box's), whose squares
-    /// [`Triangle::may_cover`] keeps: a run, found from each edge's ends and a bisection. Along a
-    /// row the square's part of the box only moves right, so an edge's largest value over it only
-    /// grows or only shrinks, and each edge keeps a prefix of the row or a suffix (or all, or
-    /// none); the squares all three keep are where those runs overlap. The GPU's setup finds its
-    /// items the same way (`row_run` in `setup.wgsl`).
-    pub fn row_run(&self, ty: u32, tx0: u32, tx1: u32, tile: u32) -> std::ops::Range<u32> {
+    /// [`Triangle::may_cover`] keeps. An edge keeps a square where its largest value over the
+    /// square's part of the box exceeds its bound; an affine function's largest value over a
+    /// rectangle lies at one corner (x̂, ŷ): the right side where it grows with x, the left
+    /// where it falls, the bottom where it grows with y, the top where it falls. Along a row the
+    /// square only moves right, so each edge keeps a prefix of the row or a suffix (or all, or
+    /// none), known from its two ends; the squares all three keep are where those runs overlap.
+    /// Where an edge's ends differ, the column where its verdict turns is solved for: for every
+    /// column but the ends the corner lies on the tiles' grid, not on the box's clamped sides, so
+    /// the verdict `value(x̂, ŷ) > bound` is a linear inequality in the column, solved exactly in
+    /// 64 bits (`div_euclid` floors). The GPU's setup finds the turn by bisection (`row_run` in
+    /// `setup.wgsl`): the same run.
+    pub fn run(&self, ty: u32, tx0: u32, tx1: u32, tile: u32) -> std::ops::Range<u32> {
+        let [bx0, by0, bx1, by1] = self.bbox;
+        let low = |v: u32, lo: u32| i64::from(v.max(lo)) * SUBPIXEL;
+        let high = |v: u32, hi: u32| i64::from((v + tile - 1).min(hi)) * SUBPIXEL + SUBPIXEL - 1;
+        let (top, bottom) = (low(ty * tile, by0), high(ty * tile, by1));
+        let first = (low(tx0 * tile, bx0), high(tx0 * tile, bx1));
+        let last = (low(tx1 * tile, bx0), high(tx1 * tile, bx1));
+        let width = i64::from(tile) * SUBPIXEL;
         let (mut lo, mut end) = (tx0, tx1 + 1);
-        for k in 0..3 {
-            let first = self.edge_keeps(k, tx0, ty, tile);
-            let last = self.edge_keeps(k, tx1, ty, tile);
-            if !first && !last {
+        for [dx, dy, ax, ay, above] in self.edges {
+            // value(x, ŷ) = c − dy·x
+            let y = if dx > 0 { bottom } else { top };
+            let c = dx * (y - ay) + dy * ax;
+            let keeps = |(left, right): (i64, i64)| c - dy * if dy < 0 { right } else { left } > above;
+            let (keeps_first, keeps_last) = (keeps(first), keeps(last));
+            if !keeps_first && !keeps_last {
                 return tx0..tx0;
             }
-            if first != last {
-                // keeps(l) is `first` and keeps(r) is `last` until they are neighbours
-                let (mut l, mut r) = (tx0, tx1);
-                while r - l > 1 {
-                    let mid = l + (r - l) / 2;
-                    if self.edge_keeps(k, mid, ty, tile) == first {
-                        l = mid;
-                    } else {
-                        r = mid;
-                    }
-                }
-                if first {
-                    end = end.min(r);
-                } else {
-                    lo = lo.max(r);
-                }
+            if keeps_first == keeps_last {
+                continue;
+            }
+            // dy ≠ 0 here: with dy = 0 the verdict is the same along the row
+            let turn = if dy < 0 {
+                // kept from the turn on: −dy·x̂ > above − c, x̂ = (column + 1)·width − 1
+                let least = (above - c).div_euclid(-dy) + 1;
+                (least + 1 + width - 1).div_euclid(width) - 1
+            } else {
+                // kept until the turn: dy·x̂ < c − above, x̂ = column·width
+                let most = (c - above - 1).div_euclid(dy);
+                most.div_euclid(width) + 1
+            };
+            let turn = turn.clamp(i64::from(tx0) + 1, i64::from(tx1)) as u32;
+            if keeps_first {
+                end = end.min(turn);
+            } else {
+                lo = lo.max(turn);
             }
         }
         lo..end.max(lo)
@@ -1491,6 +1683,54 @@ mod tests {
             assert!(cut > 0, "{name}: no row's run ends inside its box");
             assert_eq!(setup.work_items(tile), expected, "{name}");
         }
+    }
+
+    /// A row's run is the tiles [`Triangle::may_cover`] keeps, on triangles whose vertices lie
+    /// on or a unit beside the tiles' corners, where an edge's verdict turns exactly at a tile's
+    /// side (the solved turn's floors and ceilings are off by one there if anywhere), and on
+    /// triangles anywhere in a frame, in both windings. Turning either rounding by one fails it.
+    #[test]
+    fn row_runs_turn_where_the_tiles_say() {
+        let mut rng = Rng(0x2545_f491_4f6c_dd1d);
+        let (mut turned, mut rows) = (0, 0);
+        for n in 0..20_000 {
+            let tile = if n % 2 == 0 { 8 } else { 16 };
+            let width = i64::from(tile) * SUBPIXEL;
+            let coordinate = |rng: &mut Rng| -> i32 {
+                if n % 3 == 0 {
+                    (rng.next_u64() % (256 * SUBPIXEL as u64)) as i32
+                } else {
+                    let corner = (rng.next_u64() % (256 / u64::from(tile))) as i64 * width;
+                    (corner + [-1, 0, 0, 1][(rng.next_u64() % 4) as usize]) as i32
+                }
+            };
+            let mut t = triangle(&mut rng);
+            t.x = [0; 3].map(|_| coordinate(&mut rng));
+            t.y = [0; 3].map(|_| coordinate(&mut rng));
+            let pixel = |v: i32| (i64::from(v) - HALF_PIXEL).div_euclid(SUBPIXEL).clamp(0, 255) as u32;
+            let (xs, ys) = (t.x.map(pixel), t.y.map(pixel));
+            t.bbox = [
+                xs[0].min(xs[1]).min(xs[2]),
+                ys[0].min(ys[1]).min(ys[2]),
+                xs[0].max(xs[1]).max(xs[2]),
+                ys[0].max(ys[1]).max(ys[2]),
+            ];
+            let [x0, y0, x1, y1] = t.bbox;
+            for ty in y0 / tile..=y1 / tile {
+                let expected: Vec<u32> =
+                    (x0 / tile..=x1 / tile).filter(|&tx| t.may_cover(tx, ty, tile)).collect();
+                let run: Vec<u32> = t.row_run(ty, x0 / tile, x1 / tile, tile).collect();
+                assert_eq!(
+                    run, expected,
+                    "triangle {n}: {:?} {:?}, box {:?}, row {ty}, tile {tile}",
+                    t.x, t.y, t.bbox
+                );
+                rows += 1;
+                turned +=
+                    usize::from(!run.is_empty() && (run[0] > x0 / tile || run[run.len() - 1] < x1 / tile));
+            }
+        }
+        assert!(turned > 1000, "{turned} of {rows} rows end inside their box");
     }
 
     /// A work list keeps every tile with a covered sample, at every sample count, and drops the

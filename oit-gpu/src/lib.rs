@@ -399,6 +399,22 @@ pub fn dispatch_size(invocations: u64) -> (u32, u32) {
     if groups <= 65_535 { (groups as u32, 1) } else { (65_535, groups.div_ceil(65_535) as u32) }
 }
 
+/// The compute raster's uniform (raster_compute.wgsl's): `items` work items (a GPU setup
+/// overwrites the count), the frame's size, its shading, and the camera's forward direction.
+pub fn raster_uniform(camera: &Camera, settings: &Settings, items: u32) -> [u32; 8] {
+    let forward = camera.forward;
+    [
+        items,
+        settings.width,
+        settings.height,
+        settings.shading.code(),
+        forward.x.to_bits(),
+        forward.y.to_bits(),
+        forward.z.to_bits(),
+        0,
+    ]
+}
+
 /// The compute raster's indirect arguments for `items` work items, as the GPU setup's arguments
 /// kernel writes them (`oit_core::gpu_setup::ARGS_WORDS`): the per-pixel dispatch, the per-item
 /// one and the item count. A frame set up on the host (a textured one) uploads them, so that its
@@ -464,17 +480,54 @@ pub fn host_setup(
     settings: &Settings,
     boxes: bool,
 ) -> (Vec<u32>, Vec<[u32; 2]>) {
-    let r = if boxes {
-        oit_core::setup::TriangleSetup::bounding_boxes(scene, camera, settings)
-    } else {
-        oit_core::setup::TriangleSetup::new(scene, camera, settings)
-    };
-    let mut words = r.triangle_words();
-    debug_assert_eq!(words.len() % oit_core::setup::TRIANGLE_WORDS, 0);
-    if r.has_textures() {
-        pack_textures(&r, &mut words);
+    let mut kept = HostSetup::default();
+    kept.run(scene, camera, settings, boxes);
+    (kept.words, kept.items)
+}
+
+/// [`host_setup`] kept from frame to frame: the setup's triangles, its scratch, the words and
+/// the work list keep their storage, so a steady frame allocates nothing (fresh memory is a
+/// page fault a page, a tenth of a textured frame's host setup where each frame made its own).
+#[derive(Default)]
+pub struct HostSetup {
+    setup: Option<oit_core::setup::TriangleSetup>,
+    scratch: oit_core::setup::SetupScratch,
+    item_chunks: Vec<Vec<[u32; 2]>>,
+    /// The triangle words ([`host_setup`]'s first).
+    pub words: Vec<u32>,
+    /// The work list ([`host_setup`]'s second).
+    pub items: Vec<[u32; 2]>,
+}
+
+impl HostSetup {
+    /// Sets this frame up into the kept storage: [`HostSetup::words`] and [`HostSetup::items`]
+    /// then hold what [`host_setup`] returns.
+    pub fn run(&mut self, scene: &Scene, camera: &Camera, settings: &Settings, boxes: bool) {
+        use oit_core::setup::TriangleSetup;
+        let r = if boxes {
+            self.setup.insert(TriangleSetup::bounding_boxes(scene, camera, settings))
+        } else {
+            let r = self.setup.get_or_insert_with(|| TriangleSetup::empty(camera, settings));
+            r.rebuild(scene, camera, settings, &mut self.scratch);
+            r
+        };
+        r.triangle_words_into(&mut self.words);
+        debug_assert_eq!(self.words.len() % oit_core::setup::TRIANGLE_WORDS, 0);
+        if r.has_textures() {
+            pack_textures(r, &mut self.words);
+        }
+        r.work_items_into(TILE, &mut self.items, &mut self.item_chunks);
     }
-    (words, r.work_items(TILE))
+
+    /// Sets up a frame's two parts at once, each into its own kept setup: its transparent part
+    /// and its opaque part ([`HostSetup::run`] each, without boxes), on two of rayon's threads.
+    /// A textured frame with opaque parts sets both up on the host, and a part of a few hundred
+    /// small instances (`foliage`'s leaves) spreads over few cores: side by side, the frame
+    /// waits for the longer of the two rather than both.
+    pub fn run_both(parts: [(&mut HostSetup, &Scene); 2], camera: &Camera, settings: &Settings) {
+        let [(a, first), (b, second)] = parts;
+        rayon::join(|| a.run(first, camera, settings, false), || b.run(second, camera, settings, false));
+    }
 }
 
 /// Appends to a textured setup's triangle words (`words`) each textured triangle's record

@@ -271,6 +271,42 @@ impl<'s> VulkanPrepared<'s> {
         let buffers = kept.as_mut().expect("just made");
         buffers.frame(self.gpu, scene, camera, settings, boxes, &self.geometry_made)
     }
+
+    /// The compute rasters of a frame's transparent part and of its opaque part, where it has
+    /// one. Where both are set up on the host (a textured scene with opaque parts), the two
+    /// setups run side by side (`oit_gpu::HostSetup::run_both`).
+    fn compute_rasters(
+        &self,
+        part: &Scene,
+        opaque: Option<&Scene>,
+        camera: &Camera,
+        settings: &Settings,
+    ) -> Result<(ComputeRaster, Option<ComputeRaster>), OitError> {
+        let Some(opaque) = opaque else {
+            return Ok((self.compute_raster(&self.compute, part, camera, settings, false)?, None));
+        };
+        let (mut kept, mut kept_opaque) = (self.compute.borrow_mut(), self.compute_opaque.borrow_mut());
+        for k in [&mut kept, &mut kept_opaque] {
+            if k.is_none() {
+                **k = Some(ComputeBuffers::new(self.gpu, self.gpu_setup, &self.geometry_made)?);
+            }
+        }
+        let (buffers, opaque_buffers) =
+            (kept.as_mut().expect("just made"), kept_opaque.as_mut().expect("just made"));
+        let made = &self.geometry_made;
+        if buffers.sets_up_on_host(part) && opaque_buffers.sets_up_on_host(opaque) {
+            let parts = [(buffers.host(), part), (opaque_buffers.host(), opaque)];
+            oit_gpu::HostSetup::run_both(parts, camera, settings);
+            return Ok((
+                buffers.host_set_up(self.gpu, camera, settings, made)?,
+                Some(opaque_buffers.host_set_up(self.gpu, camera, settings, made)?),
+            ));
+        }
+        Ok((
+            buffers.frame(self.gpu, part, camera, settings, false, made)?,
+            Some(opaque_buffers.frame(self.gpu, opaque, camera, settings, false, made)?),
+        ))
+    }
 }
 
 impl Prepared for VulkanPrepared<'_> {
@@ -424,28 +460,22 @@ impl VulkanPrepared<'_> {
         let drawn = layers.settings(settings);
         let (part, drawn): (&Scene, &Settings) = (&layers.transparent, &drawn);
         let drivers = match path {
-            RasterPath::Compute => Drivers {
-                scene: Raster::Compute(this.compute_raster(&this.compute, part, camera, drawn, false)?),
-                boxes: Box::new(move || {
-                    Ok(Raster::Compute(this.compute_raster(
-                        &this.compute_boxes,
-                        part,
-                        camera,
-                        drawn,
-                        true,
-                    )?))
-                }),
-                opaque: match &layers.opaque {
-                    Some(o) => Some(Raster::Compute(this.compute_raster(
-                        &this.compute_opaque,
-                        o,
-                        camera,
-                        drawn,
-                        false,
-                    )?)),
-                    None => None,
-                },
-            },
+            RasterPath::Compute => {
+                let (scene, opaque) = this.compute_rasters(part, layers.opaque.as_ref(), camera, drawn)?;
+                Drivers {
+                    scene: Raster::Compute(scene),
+                    boxes: Box::new(move || {
+                        Ok(Raster::Compute(this.compute_raster(
+                            &this.compute_boxes,
+                            part,
+                            camera,
+                            drawn,
+                            true,
+                        )?))
+                    }),
+                    opaque: opaque.map(Raster::Compute),
+                }
+            }
             RasterPath::Hardware => {
                 this.gpu.check_samples(settings.samples)?;
                 // a window of the frame (tiles) draws the full frame's viewport into its target

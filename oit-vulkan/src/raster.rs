@@ -246,6 +246,8 @@ pub(crate) struct ComputeBuffers {
     /// Whether an earlier frame's setup was seen to fit these buffers: then a frame does not read
     /// the counters before its passes but checks them at its end.
     trusted: Rc<Cell<bool>>,
+    /// The host's setup, kept for the next frame set up on the host.
+    host: oit_gpu::HostSetup,
 }
 
 fn geometry_usage() -> vk::BufferUsageFlags {
@@ -274,6 +276,7 @@ impl ComputeBuffers {
             setup: None,
             on_gpu: setup_on_gpu(gpu, choice),
             trusted: Rc::new(Cell::new(false)),
+            host: oit_gpu::HostSetup::default(),
         })
     }
 
@@ -323,24 +326,10 @@ impl ComputeBuffers {
         boxes: bool,
         made: &Cell<u64>,
     ) -> Result<ComputeRaster, OitError> {
-        let forward = camera.forward;
-        let raster_uniform = |items: u32| -> Vec<u8> {
-            let words: [u32; 8] = [
-                items,
-                settings.width,
-                settings.height,
-                settings.shading.code(),
-                forward.x.to_bits(),
-                forward.y.to_bits(),
-                forward.z.to_bits(),
-                0,
-            ];
-            bytemuck::cast_slice(&words).to_vec()
-        };
-        // a textured frame sets up on the host, which packs the textures after the triangles
-        // (`oit_gpu::host_setup`; oit-wgpu's raster.rs says why)
-        if !self.on_gpu || oit_gpu::is_textured(scene) {
-            return self.host_frame(gpu, scene, camera, settings, boxes, made, raster_uniform);
+        let raster_uniform = raster_uniform(camera, settings);
+        if self.sets_up_on_host(scene) {
+            self.host.run(scene, camera, settings, boxes);
+            return self.host_frame(gpu, made, raster_uniform);
         }
         if self.setup.as_ref().is_none_or(|s| s.layout.boxes != boxes) {
             self.trusted.set(false);
@@ -434,20 +423,41 @@ impl ComputeBuffers {
         })
     }
 
-    /// The host's setup (oit-core's `TriangleSetup`), its words and work list to upload.
-    #[expect(clippy::too_many_arguments, reason = "a frame's inputs and the uniform's maker")]
+    /// Whether a frame of `scene` is set up on the host: where the device's setup is off, and
+    /// for every textured frame, whose textures and levels the host packs after the triangles
+    /// (`oit_gpu::host_setup`; oit-wgpu's raster.rs says why).
+    pub(crate) fn sets_up_on_host(&self, scene: &Scene) -> bool {
+        !self.on_gpu || oit_gpu::is_textured(scene)
+    }
+
+    /// The kept host setup ([`ComputeBuffers::host_frame`] uploads what it holds).
+    pub(crate) fn host(&mut self) -> &mut oit_gpu::HostSetup {
+        &mut self.host
+    }
+
+    /// A frame whose host setup ([`ComputeBuffers::host`]) has run: its words and work list
+    /// to upload.
+    pub(crate) fn host_set_up(
+        &mut self,
+        gpu: &Gpu,
+        camera: &Camera,
+        settings: &Settings,
+        made: &Cell<u64>,
+    ) -> Result<ComputeRaster, OitError> {
+        self.host_frame(gpu, made, raster_uniform(camera, settings))
+    }
+
+    /// The host's setup (oit-core's `TriangleSetup`, run into `self.host`), its words and work
+    /// list to upload.
     fn host_frame(
         &mut self,
         gpu: &Gpu,
-        scene: &Scene,
-        camera: &Camera,
-        settings: &Settings,
-        boxes: bool,
         made: &Cell<u64>,
         raster_uniform: impl Fn(u32) -> Vec<u8>,
     ) -> Result<ComputeRaster, OitError> {
-        let (words, items) = oit_gpu::host_setup(scene, camera, settings, boxes);
-        self.reserve(gpu, words.len() as u64 * 4, items.len() as u64 * 8, made)?;
+        let (word_count, item_count) = (self.host.words.len(), self.host.items.len());
+        self.reserve(gpu, word_count as u64 * 4, item_count as u64 * 8, made)?;
+        let (words, items) = (&self.host.words, &self.host.items);
         Ok(ComputeRaster {
             tris: self.tris.clone(),
             item_list: self.items.clone(),
@@ -457,13 +467,19 @@ impl ComputeBuffers {
             gated: self.gated.clone(),
             setup: None,
             pending: RefCell::new(Some(Pending::Host([
-                bytemuck::cast_slice(&words).to_vec(),
-                bytemuck::cast_slice(&items).to_vec(),
+                bytemuck::cast_slice(words).to_vec(),
+                bytemuck::cast_slice(items).to_vec(),
                 raster_uniform(items.len() as u32),
                 bytemuck::cast_slice(&oit_gpu::raster_args(items.len() as u64)).to_vec(),
             ]))),
         })
     }
+}
+
+/// The raster uniform's maker for a frame of `camera` and `settings`: its bytes for a count of
+/// work items.
+fn raster_uniform<'a>(camera: &'a Camera, settings: &'a Settings) -> impl Fn(u32) -> Vec<u8> + 'a {
+    move |items: u32| bytemuck::cast_slice(&oit_gpu::raster_uniform(camera, settings, items)).to_vec()
 }
 
 /// The rasterizers of one frame: the scene's, and (made on demand) the instances' bounding boxes'.

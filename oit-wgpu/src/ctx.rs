@@ -1456,8 +1456,9 @@ pub struct RecordedBuffers {
 }
 
 /// Whether `OIT_HOST_TIMES=1`: each frame prints its host time to stderr, split into recording
-/// (from the frame's start to its last submission) and the end-of-frame readback's wait.
-fn host_times() -> bool {
+/// (from the frame's start to its last submission) and the end-of-frame readback's wait, and a
+/// compute raster set up on the host its setup and upload ([`crate::raster`]).
+pub(crate) fn host_times() -> bool {
     static ON: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
     *ON.get_or_init(|| std::env::var("OIT_HOST_TIMES").is_ok_and(|v| v == "1"))
 }

@@ -318,6 +318,38 @@ impl<'s> WgpuPrepared<'s> {
         let buffers = kept.get_or_insert_with(|| ComputeBuffers::new(self.gpu, &self.geometry_made));
         buffers.frame(self.gpu, scene, camera, settings, boxes, &self.geometry_made)
     }
+
+    /// The compute rasters of a frame's transparent part and of its opaque part, where it has
+    /// one. Where both are set up on the host (a textured scene with opaque parts), the two
+    /// setups run side by side (`oit_gpu::HostSetup::run_both`).
+    fn compute_rasters(
+        &self,
+        part: &Scene,
+        opaque: Option<&Scene>,
+        camera: &Camera,
+        settings: &Settings,
+    ) -> Result<(ComputeRaster, Option<ComputeRaster>), OitError> {
+        let Some(opaque) = opaque else {
+            return Ok((self.compute_raster(&self.compute, part, camera, settings, false)?, None));
+        };
+        let (gpu, made) = (self.gpu, &self.geometry_made);
+        let (mut kept, mut kept_opaque) = (self.compute.borrow_mut(), self.compute_opaque.borrow_mut());
+        let buffers = kept.get_or_insert_with(|| ComputeBuffers::new(gpu, made));
+        let opaque_buffers = kept_opaque.get_or_insert_with(|| ComputeBuffers::new(gpu, made));
+        if buffers.sets_up_on_host(gpu, part) && opaque_buffers.sets_up_on_host(gpu, opaque) {
+            let started = std::time::Instant::now();
+            let parts = [(buffers.host(), part), (opaque_buffers.host(), opaque)];
+            oit_gpu::HostSetup::run_both(parts, camera, settings);
+            return Ok((
+                buffers.host_set_up(gpu, camera, settings, made, started)?,
+                Some(opaque_buffers.host_set_up(gpu, camera, settings, made, started)?),
+            ));
+        }
+        Ok((
+            buffers.frame(gpu, part, camera, settings, false, made)?,
+            Some(opaque_buffers.frame(gpu, opaque, camera, settings, false, made)?),
+        ))
+    }
 }
 
 impl Prepared for WgpuPrepared<'_> {
@@ -490,19 +522,17 @@ impl WgpuPrepared<'_> {
         let drawn = layers.settings(settings);
         let (part, drawn): (&Scene, &Settings) = (&layers.transparent, &drawn);
         let drivers = match (path, &this.hardware) {
-            (RasterPath::Compute, _) => Drivers {
-                scene: Box::new(this.compute_raster(&this.compute, part, camera, drawn, false)?),
-                boxes: Box::new(move || {
-                    Ok(Box::new(this.compute_raster(&this.compute_boxes, part, camera, drawn, true)?)
-                        as Box<dyn Driver>)
-                }),
-                opaque: match &layers.opaque {
-                    Some(o) => {
-                        Some(Box::new(this.compute_raster(&this.compute_opaque, o, camera, drawn, false)?))
-                    }
-                    None => None,
-                },
-            },
+            (RasterPath::Compute, _) => {
+                let (scene, opaque) = this.compute_rasters(part, layers.opaque.as_ref(), camera, drawn)?;
+                Drivers {
+                    scene: Box::new(scene),
+                    boxes: Box::new(move || {
+                        Ok(Box::new(this.compute_raster(&this.compute_boxes, part, camera, drawn, true)?)
+                            as Box<dyn Driver>)
+                    }),
+                    opaque: opaque.map(|o| Box::new(o) as Box<dyn Driver>),
+                }
+            }
             (RasterPath::Hardware, Some(hw)) => {
                 let made = &this.geometry_made;
                 Drivers {

@@ -116,7 +116,9 @@ impl ComputeRaster {
         if on_gpu {
             buffers.gpu_frame(gpu, scene, camera, settings, boxes, &made)?;
         } else {
-            buffers.host_frame(gpu, scene, camera, settings, boxes, &made)?;
+            let started = std::time::Instant::now();
+            buffers.host.run(scene, camera, settings, boxes);
+            buffers.host_frame(gpu, camera, settings, &made, started)?;
         }
         let args = gpu.read_u32(&buffers.args)?;
         let items = args[8] as usize;
@@ -173,6 +175,8 @@ pub(crate) struct ComputeBuffers {
     /// Whether an earlier frame's setup fitted these buffers: then a frame does not wait for the
     /// setup's counters before its passes but checks them at its end (`SetupCheck`).
     pub(crate) trusted: bool,
+    /// The host's setup, kept for the next frame set up on the host.
+    host: oit_gpu::HostSetup,
 }
 
 /// What the GPU setup keeps besides the outputs.
@@ -283,6 +287,7 @@ impl ComputeBuffers {
             setup: None,
             vertex_cache,
             trusted: false,
+            host: oit_gpu::HostSetup::default(),
         }
     }
 
@@ -317,17 +322,7 @@ impl ComputeBuffers {
 
     /// The raster uniform with `items` work items (the GPU setup overwrites the count).
     fn write_uniform(&self, gpu: &Gpu, camera: &Camera, settings: &Settings, items: u32) {
-        let forward = camera.forward;
-        let uniform: [u32; 8] = [
-            items,
-            settings.width,
-            settings.height,
-            settings.shading.code(),
-            forward.x.to_bits(),
-            forward.y.to_bits(),
-            forward.z.to_bits(),
-            0,
-        ];
+        let uniform = oit_gpu::raster_uniform(camera, settings, items);
         gpu.queue.write_buffer(&self.uniform, 0, bytemuck::cast_slice(&uniform));
     }
 
@@ -342,15 +337,46 @@ impl ComputeBuffers {
         boxes: bool,
         made: &Cell<u64>,
     ) -> Result<ComputeRaster, OitError> {
-        // a textured frame sets up on the host, which packs the textures and each triangle's
-        // level after the triangles (`oit_gpu::host_setup`)
-        let (setup_ms, check) = if setup_on_gpu(gpu) && !oit_gpu::is_textured(scene) {
-            self.gpu_frame(gpu, scene, camera, settings, boxes, made)?
-        } else {
-            self.host_frame(gpu, scene, camera, settings, boxes, made)?;
+        let (setup_ms, check) = if self.sets_up_on_host(gpu, scene) {
+            let started = std::time::Instant::now();
+            self.host.run(scene, camera, settings, boxes);
+            self.host_frame(gpu, camera, settings, made, started)?;
             (None, None)
+        } else {
+            self.gpu_frame(gpu, scene, camera, settings, boxes, made)?
         };
-        Ok(ComputeRaster {
+        Ok(self.raster(setup_ms, check))
+    }
+
+    /// Whether a frame of `scene` is set up on the host: where [`setup_on_gpu`] says no, and for
+    /// every textured frame, whose textures and triangles' levels the host packs after the
+    /// triangles (`oit_gpu::host_setup`).
+    pub(crate) fn sets_up_on_host(&self, gpu: &Gpu, scene: &Scene) -> bool {
+        !setup_on_gpu(gpu) || oit_gpu::is_textured(scene)
+    }
+
+    /// The kept host setup ([`ComputeBuffers::host_set_up`] uploads what it holds).
+    pub(crate) fn host(&mut self) -> &mut oit_gpu::HostSetup {
+        &mut self.host
+    }
+
+    /// The frame whose host setup ([`ComputeBuffers::host`]) has run, `started` at `started`:
+    /// its words and work list uploaded.
+    pub(crate) fn host_set_up(
+        &mut self,
+        gpu: &Gpu,
+        camera: &Camera,
+        settings: &Settings,
+        made: &Cell<u64>,
+        started: std::time::Instant,
+    ) -> Result<ComputeRaster, OitError> {
+        self.host_frame(gpu, camera, settings, made, started)?;
+        Ok(self.raster(None, None))
+    }
+
+    /// This frame's raster through the kept buffers.
+    fn raster(&self, setup_ms: Option<f64>, check: Option<SetupCheck>) -> ComputeRaster {
+        ComputeRaster {
             layout: self.layout.clone(),
             group: self.group.clone(),
             generated: self.generated.clone(),
@@ -358,30 +384,41 @@ impl ComputeBuffers {
             gated: self.gated.clone(),
             setup_ms: Cell::new(setup_ms),
             check: std::cell::RefCell::new(check),
-        })
+        }
     }
 
-    /// The host's setup (oit-core's `TriangleSetup`), its words and work list uploaded.
+    /// The host's setup (oit-core's `TriangleSetup`, run into `self.host` from `started` on):
+    /// its words and work list uploaded.
     fn host_frame(
         &mut self,
         gpu: &Gpu,
-        scene: &Scene,
         camera: &Camera,
         settings: &Settings,
-        boxes: bool,
         made: &Cell<u64>,
+        started: std::time::Instant,
     ) -> Result<(), OitError> {
-        let (words, items) = oit_gpu::host_setup(scene, camera, settings, boxes);
-        self.reserve(gpu, words.len() as u64 * 4, items.len() as u64 * 8, made)?;
+        let set_up = started.elapsed();
+        let (word_count, item_count) = (self.host.words.len(), self.host.items.len());
+        self.reserve(gpu, word_count as u64 * 4, item_count as u64 * 8, made)?;
+        let (words, items) = (&self.host.words, &self.host.items);
         let queue = &gpu.queue;
         if !words.is_empty() {
-            queue.write_buffer(&self.tris, 0, bytemuck::cast_slice(&words));
+            queue.write_buffer(&self.tris, 0, bytemuck::cast_slice(words));
         }
         if !items.is_empty() {
-            queue.write_buffer(&self.items, 0, bytemuck::cast_slice(&items));
+            queue.write_buffer(&self.items, 0, bytemuck::cast_slice(items));
         }
         self.write_uniform(gpu, camera, settings, items.len() as u32);
         queue.write_buffer(&self.args, 0, bytemuck::cast_slice(&oit_gpu::raster_args(items.len() as u64)));
+        if crate::ctx::host_times() {
+            eprintln!(
+                "oit host times: host setup {:.3} ms ({} triangle words, {} items), upload {:.3} ms",
+                set_up.as_secs_f64() * 1e3,
+                words.len(),
+                items.len(),
+                (started.elapsed() - set_up).as_secs_f64() * 1e3
+            );
+        }
         Ok(())
     }
 

@@ -1,0 +1,36 @@
+#!/usr/bin/env python3
+"""Summarizes `OIT_HOST_TIMES=1` output (stderr of `oit bench`/`oit render` on wgpu): per line
+kind, the count, median and least milliseconds. A host setup is keyed by its triangle-word count
+(one key a scene part). Reads plain or .xz files.
+
+    python3 bench/local/host_times.py trace-T.txt.xz [trace-J.txt.xz ...]
+"""
+import lzma
+import re
+import statistics
+import sys
+from collections import defaultdict
+
+SETUP = re.compile(r"oit host times: host setup ([\d.]+) ms \((\d+) triangle words, (\d+) items\), upload ([\d.]+) ms")
+RECORD = re.compile(r"oit host times: (\S+) record\+submit ([\d.]+) ms, end readback ([\d.]+) ms")
+
+for path in sys.argv[1:]:
+    opener = lzma.open if path.endswith(".xz") else open
+    rows = defaultdict(list)
+    with opener(path, "rt") as f:
+        for line in f:
+            m = SETUP.match(line)
+            if m:
+                rows[f"host setup, {m.group(2):>7} words {m.group(3):>7} items"].append(float(m.group(1)))
+                rows["upload"].append(float(m.group(4)))
+                continue
+            m = RECORD.match(line)
+            if m:
+                rows[f"record+submit, {m.group(1)}"].append(float(m.group(2)))
+                rows[f"end readback wait, {m.group(1)}"].append(float(m.group(3)))
+    print(path)
+    for key in sorted(rows):
+        v = rows[key]
+        if len(v) < 5:
+            continue
+        print(f"  {key:<48} {len(v):>5}  median {statistics.median(v):7.3f}  least {min(v):7.3f} ms")
