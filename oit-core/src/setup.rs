@@ -1422,23 +1422,22 @@ impl Triangle {
 }
 
 /// A triangle's three edges as its rows' runs read them ([`RowEdges::run`]): each edge's
-/// function `value(x, y) = dx·(y − ay) − dy·(x − ax)` ([`edge`]) and the bound it must exceed,
-/// made once a triangle rather than once a row.
+/// function ([`edge`]) as `value(x, y) = dx·y − dy·x + value(0, 0)` and the bound it must
+/// exceed, made once a triangle rather than once a row.
 #[derive(Clone, Copy, Debug)]
 pub struct RowEdges {
     bbox: [u32; 4],
-    /// Per edge: dx, dy, ax, ay, the bound (`edge`'s `inside_above`).
-    edges: [[i64; 5]; 3],
+    /// Per edge: dx, dy, value(0, 0), the bound (`edge`'s `inside_above`).
+    edges: [[i64; 4]; 3],
 }
 
 impl RowEdges {
     /// The edges of `t`.
     pub fn new(t: &Triangle) -> RowEdges {
         let edges = std::array::from_fn(|k| {
-            let (a, b) = ((k + 1) % 3, (k + 2) % 3);
-            let (ax, ay) = (i64::from(t.x[a]), i64::from(t.y[a]));
-            let (_, _, _, above) = edge(t, k, 0, 0);
-            [i64::from(t.x[b]) - ax, i64::from(t.y[b]) - ay, ax, ay, above]
+            // edge's per-pixel steps are −dy and dx, times SUBPIXEL exactly
+            let (origin, step_x, step_y, above) = edge(t, k, 0, 0);
+            [step_y / SUBPIXEL, -step_x / SUBPIXEL, origin, above]
         });
         RowEdges { bbox: t.bbox, edges }
     }
@@ -1464,10 +1463,10 @@ impl RowEdges {
         let last = (low(tx1 * tile, bx0), high(tx1 * tile, bx1));
         let width = i64::from(tile) * SUBPIXEL;
         let (mut lo, mut end) = (tx0, tx1 + 1);
-        for [dx, dy, ax, ay, above] in self.edges {
+        for [dx, dy, origin, above] in self.edges {
             // value(x, ŷ) = c − dy·x
             let y = if dx > 0 { bottom } else { top };
-            let c = dx * (y - ay) + dy * ax;
+            let c = dx * y + origin;
             let keeps = |(left, right): (i64, i64)| c - dy * if dy < 0 { right } else { left } > above;
             let (keeps_first, keeps_last) = (keeps(first), keeps(last));
             if !keeps_first && !keeps_last {

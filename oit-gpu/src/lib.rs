@@ -261,6 +261,14 @@ pub fn is_textured(scene: &Scene) -> bool {
     scene.instances.iter().filter_map(|i| scene.objects.get(i.object)).any(|o| o.texture.is_some())
 }
 
+/// Whether a compute frame of `scene` is set up on the host ([`host_setup`]) rather than by the
+/// device's setup kernels: where the device's setup is off (`device_sets_up` false: a CPU
+/// device, or `OIT_HOST_SETUP`), and for every textured scene, whose textures and triangles'
+/// levels (chosen in f64, which the setup kernels do not port) the host packs after the triangles.
+pub fn sets_up_on_host(device_sets_up: bool, scene: &Scene) -> bool {
+    !device_sets_up || is_textured(scene)
+}
+
 /// Words of a textured triangle's record in the compute path's triangle buffer ([`host_setup`]):
 /// its vertices' texture coordinates (6 f32), the word of its level's descriptor in the texture
 /// region, its cutoff (f32, `Triangle::cutoff`), the region's first word (its tables).

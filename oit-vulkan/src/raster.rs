@@ -423,11 +423,9 @@ impl ComputeBuffers {
         })
     }
 
-    /// Whether a frame of `scene` is set up on the host: where the device's setup is off, and
-    /// for every textured frame, whose textures and levels the host packs after the triangles
-    /// (`oit_gpu::host_setup`; oit-wgpu's raster.rs says why).
+    /// Whether a frame of `scene` is set up on the host (`oit_gpu::sets_up_on_host`).
     pub(crate) fn sets_up_on_host(&self, scene: &Scene) -> bool {
-        !self.on_gpu || oit_gpu::is_textured(scene)
+        oit_gpu::sets_up_on_host(self.on_gpu, scene)
     }
 
     /// The kept host setup ([`ComputeBuffers::host_frame`] uploads what it holds).

@@ -348,11 +348,10 @@ impl ComputeBuffers {
         Ok(self.raster(setup_ms, check))
     }
 
-    /// Whether a frame of `scene` is set up on the host: where [`setup_on_gpu`] says no, and for
-    /// every textured frame, whose textures and triangles' levels the host packs after the
-    /// triangles (`oit_gpu::host_setup`).
+    /// Whether a frame of `scene` is set up on the host (`oit_gpu::sets_up_on_host`, the device's
+    /// setup on where [`setup_on_gpu`] says).
     pub(crate) fn sets_up_on_host(&self, gpu: &Gpu, scene: &Scene) -> bool {
-        !setup_on_gpu(gpu) || oit_gpu::is_textured(scene)
+        oit_gpu::sets_up_on_host(setup_on_gpu(gpu), scene)
     }
 
     /// The kept host setup ([`ComputeBuffers::host_set_up`] uploads what it holds).
