@@ -1452,8 +1452,8 @@ impl RowEdges {
     /// Where an edge's ends differ, the column where its verdict turns is solved for: for every
     /// column but the ends the corner lies on the tiles' grid, not on the box's clamped sides, so
     /// the verdict `value(x̂, ŷ) > bound` is a linear inequality in the column, solved exactly in
-    /// 64 bits (`div_euclid` floors). The GPU's setup finds the turn by bisection (`row_run` in
-    /// `setup.wgsl`): the same run.
+    /// 64 bits (`div_euclid` floors). The GPU's setup solves for it alike (`row_run` in
+    /// `setup.wgsl`).
     pub fn run(&self, ty: u32, tx0: u32, tx1: u32, tile: u32) -> std::ops::Range<u32> {
         let [bx0, by0, bx1, by1] = self.bbox;
         let low = |v: u32, lo: u32| i64::from(v.max(lo)) * SUBPIXEL;
@@ -1672,7 +1672,7 @@ mod tests {
                 assert!(setup.triangles.len() > 4 * ITEM_CHUNK, "{} triangles", setup.triangles.len());
             }
             let expected = setup.work_items_tile_by_tile(tile);
-            // rows whose kept tiles stop short of their box's ends (where a bisection ran)
+            // rows whose kept tiles stop short of their box's ends (where a turn was solved for)
             let mut cut = 0;
             for row in expected.chunk_by(|a, b| a[0] == b[0] && a[1] >> 16 == b[1] >> 16) {
                 let [x0, _, x1, _] = setup.triangles[row[0][0] as usize].bbox;

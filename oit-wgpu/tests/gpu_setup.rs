@@ -151,3 +151,155 @@ fn gpu_setup_equals_host_setup() {
     // the views do clip: some triangles came out in more than one piece
     assert!(split > 0, "no triangle was clipped into pieces: the views test nothing of clipping");
 }
+
+/// setup.wgsl's `row_run` (the tiles of a row its work list keeps, on the GPU) against the
+/// host's rule, `Triangle::may_cover` tile by tile, row by row, on 20,000 triangles whose
+/// vertices lie on an 8×8 tile's corner or one 1/256 pixel to either side of it, where the
+/// solved turn's floors are off by one if anywhere, and anywhere in a 256² frame, in both
+/// windings. A scene's work list (above) rarely puts an edge exactly through a tile's corner.
+#[test]
+fn gpu_row_runs_keep_the_tiles_the_host_keeps() {
+    use oit_core::setup::{HALF_PIXEL, SUBPIXEL, Triangle};
+    use wgpu::util::DeviceExt;
+    const TILE: u32 = 8;
+    let Some(backend) = oit_wgpu::backend_or_skip("gpu_row_runs_keep_the_tiles_the_host_keeps") else {
+        return;
+    };
+    let gpu = backend.gpu().expect("opened by backend_or_skip");
+    let mut state = 0x2545_f491_4f6c_dd1d_u64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let (mut words, mut cases, mut expected) = (Vec::new(), Vec::new(), Vec::new());
+    for n in 0..20_000u32 {
+        let width = i64::from(TILE) * SUBPIXEL;
+        let mut coordinate = || -> i32 {
+            if n % 3 == 0 {
+                (next() % (256 * SUBPIXEL as u64)) as i32
+            } else {
+                let corner = (next() % u64::from(256 / TILE)) as i64 * width;
+                (corner + [-1, 0, 0, 1][(next() % 4) as usize]) as i32
+            }
+        };
+        let x = [0; 3].map(|_| coordinate());
+        let y = [0; 3].map(|_| coordinate());
+        let pixel = |v: i32| (i64::from(v) - HALF_PIXEL).div_euclid(SUBPIXEL).clamp(0, 255) as u32;
+        let (xs, ys) = (x.map(pixel), y.map(pixel));
+        let bbox = [
+            xs[0].min(xs[1]).min(xs[2]),
+            ys[0].min(ys[1]).min(ys[2]),
+            xs[0].max(xs[1]).max(xs[2]),
+            ys[0].max(ys[1]).max(ys[2]),
+        ];
+        let t = Triangle {
+            x,
+            y,
+            z: [0.0; 3],
+            inv_w: [1.0; 3],
+            normal: [Vec3::Z; 3],
+            color: [Vec3::ONE; 3],
+            inv_area: 0.0,
+            base: glam::Vec4::ONE,
+            has_color: false,
+            prim: n,
+            bbox,
+            uv: [glam::Vec2::ZERO; 3],
+            texture: oit_core::setup::NO_TEXTURE,
+            lod: 0,
+            cutoff: 0.0,
+        };
+        // row_run reads a piece's snapped x and y (words 0..6) and its box (words 37..41)
+        let mut tri = [0u32; TRIANGLE_WORDS];
+        for k in 0..3 {
+            tri[k] = x[k] as u32;
+            tri[3 + k] = y[k] as u32;
+        }
+        tri[37..41].copy_from_slice(&bbox);
+        words.extend_from_slice(&tri);
+        let [x0, y0, x1, y1] = bbox;
+        for ty in y0 / TILE..=y1 / TILE {
+            cases.push([n, ty, x0 / TILE, x1 / TILE]);
+            let kept: Vec<u32> = (x0 / TILE..=x1 / TILE).filter(|&tx| t.may_cover(tx, ty, TILE)).collect();
+            // a row's kept tiles are one run (`RowEdges::run`)
+            assert!(kept.windows(2).all(|w| w[1] == w[0] + 1), "triangle {n}, row {ty}: {kept:?}");
+            expected.push(kept.first().map_or([0, 0], |&first| [first, first + kept.len() as u32]));
+        }
+    }
+    let kernel = format!(
+        "{}\n{}",
+        oit_shaders::SETUP,
+        r#"
+@compute @workgroup_size(64)
+fn row_runs_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = gid.x + gid.y * groups.x * 64u;
+    if (i >= arrayLength(&out_items)) {
+        return;
+    }
+    // case i: piece, row, the box's first and last tile column (in `instances`, four words)
+    let run = row_run(instances[4u * i] * TRI_WORDS, instances[4u * i + 1u], instances[4u * i + 2u], instances[4u * i + 3u]);
+    // an empty run as [0, 0], as the host's expectation writes it
+    out_items[i] = select(vec2<u32>(0u, 0u), run, run.y > run.x);
+}
+"#
+    );
+    let device = &gpu.device;
+    let buffer = |contents: &[u8], usage| {
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: None, contents, usage })
+    };
+    let input = buffer(bytemuck::cast_slice(&cases), wgpu::BufferUsages::STORAGE);
+    let tris = buffer(bytemuck::cast_slice(&words), wgpu::BufferUsages::STORAGE);
+    let output = device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: (cases.len() * 8) as u64,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let entry = |binding, read_only| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: None,
+        entries: &[entry(1, true), entry(3, false), entry(4, false)],
+    });
+    let pipeline = gpu.compute_pipeline(&kernel, "row_runs_main", &[&layout]).expect("kernel builds");
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &layout,
+        entries: &[
+            wgpu::BindGroupEntry { binding: 1, resource: input.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 3, resource: tris.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 4, resource: output.as_entire_binding() },
+        ],
+    });
+    let (x, y) = oit_gpu::dispatch_size(cases.len() as u64);
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    let got = gpu.read_u32(&output).expect("runs read back");
+    let mut turned = 0;
+    for (i, (case, want)) in cases.iter().zip(&expected).enumerate() {
+        let run = [got[2 * i], got[2 * i + 1]];
+        assert_eq!(
+            run, *want,
+            "case {i}: triangle {} row {}, box columns {}..={}",
+            case[0], case[1], case[2], case[3]
+        );
+        turned += usize::from(want[1] > want[0] && (want[0] > case[2] || want[1] <= case[3]));
+    }
+    assert!(turned > 1000, "{turned} of {} rows end inside their box", cases.len());
+}

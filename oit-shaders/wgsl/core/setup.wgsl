@@ -394,63 +394,68 @@ fn piece_projected(i: u32, v_in: array<ClipVertex, 3>, p_in: array<Projected, 3>
     }
 }
 
-// Whether edge k of the piece at word `o` of `out_tris` leaves some subpixel point of tile
-// (tx, ty)'s part of the piece's box inside (from the first pixel's corner to the last's): an
-// edge function is affine and exact in 64 bits, so its largest value over them is at a corner.
-fn edge_keeps(o: u32, k: u32, tx: u32, ty: u32) -> bool {
-    let x0 = max(tx * SETUP_TILE, out_tris[o + 37u]);
-    let y0 = max(ty * SETUP_TILE, out_tris[o + 38u]);
-    let x1 = min(tx * SETUP_TILE + SETUP_TILE - 1u, out_tris[o + 39u]);
-    let y1 = min(ty * SETUP_TILE + SETUP_TILE - 1u, out_tris[o + 40u]);
-    let xs = vec2<i64>(i64(x0) * 256li, i64(x1) * 256li + 255li);
-    let ys = vec2<i64>(i64(y0) * 256li, i64(y1) * 256li + 255li);
-    let a = (k + 1u) % 3u;
-    let b = (k + 2u) % 3u;
-    let ax = i64(bitcast<i32>(out_tris[o + a]));
-    let ay = i64(bitcast<i32>(out_tris[o + 3u + a]));
-    let dx = i64(bitcast<i32>(out_tris[o + b])) - ax;
-    let dy = i64(bitcast<i32>(out_tris[o + 3u + b])) - ay;
-    let above = select(0li, -1li, dy < 0li || (dy == 0li && dx > 0li));
-    var inside = false;
-    for (var c = 0u; c < 4u; c++) {
-        let x = select(xs.x, xs.y, (c & 1u) != 0u);
-        let y = select(ys.x, ys.y, (c & 2u) != 0u);
-        inside = inside || dx * (y - ay) - dy * (x - ax) > above;
-    }
-    return inside;
+// floor(a / b) for b > 0 (WGSL's `/` truncates toward zero), oit-core's `div_euclid`. Where
+// `row_run` solves for a turn its numerators are not negative (the tiles' corners lie at x ≥ 0),
+// so truncation would agree; the floor keeps the host's rule as written.
+fn floor_div(a: i64, b: i64) -> i64 {
+    let q = a / b;
+    return select(q, q - 1li, q * b > a);
 }
 
 // The tiles of row `ty` of the piece at word `o` (its box's columns tx0 to tx1) that oit-core's
-// `Triangle::may_cover` keeps (each of the three edges keeps the tile), as the columns [x, y),
-// empty where y is x. Along a row an edge's largest value over a tile moves one way (the tile's
-// part of the box moves right, its corners' rows stay), so each edge keeps a prefix or a suffix
-// of the row, or all or none of it: its ends say which, and a bisection finds the boundary.
+// `Triangle::may_cover` keeps, as the columns [x, y), empty where y is x: oit-core's
+// `RowEdges::run` rule for rule. An edge keeps a tile where its largest value over the tile's part
+// of the box (from the first pixel's corner to the last's, in 1/256 pixel) exceeds its bound, and
+// an affine function's largest value over a rectangle lies at a corner. Along a row the tile only
+// moves right, so each edge keeps a prefix or a suffix of the row (or all of it, or none), which
+// its two ends tell; where they differ, the column where the verdict turns is the solution of a
+// linear inequality in the column, exact in 64 bits.
 fn row_run(o: u32, ty: u32, tx0: u32, tx1: u32) -> vec2<u32> {
+    let bx0 = out_tris[o + 37u];
+    let by0 = out_tris[o + 38u];
+    let bx1 = out_tris[o + 39u];
+    let by1 = out_tris[o + 40u];
+    let top = i64(max(ty * SETUP_TILE, by0)) * 256li;
+    let bottom = i64(min(ty * SETUP_TILE + SETUP_TILE - 1u, by1)) * 256li + 255li;
+    // the first and the last tile's left and right sides
+    let first = vec2<i64>(i64(max(tx0 * SETUP_TILE, bx0)) * 256li, i64(min(tx0 * SETUP_TILE + SETUP_TILE - 1u, bx1)) * 256li + 255li);
+    let last = vec2<i64>(i64(max(tx1 * SETUP_TILE, bx0)) * 256li, i64(min(tx1 * SETUP_TILE + SETUP_TILE - 1u, bx1)) * 256li + 255li);
+    let width = i64(SETUP_TILE) * 256li;
     var lo = tx0;
     var end = tx1 + 1u;
     for (var k = 0u; k < 3u; k++) {
-        let first = edge_keeps(o, k, tx0, ty);
-        let last = edge_keeps(o, k, tx1, ty);
-        if (!first && !last) {
+        let a = (k + 1u) % 3u;
+        let b = (k + 2u) % 3u;
+        let ax = i64(bitcast<i32>(out_tris[o + a]));
+        let ay = i64(bitcast<i32>(out_tris[o + 3u + a]));
+        let dx = i64(bitcast<i32>(out_tris[o + b])) - ax;
+        let dy = i64(bitcast<i32>(out_tris[o + 3u + b])) - ay;
+        let above = select(0li, -1li, dy < 0li || (dy == 0li && dx > 0li));
+        // value(x, y) = dx·y − dy·x + value(0, 0), at the row's best y: c − dy·x
+        let c = dx * select(top, bottom, dx > 0li) + dy * ax - dx * ay;
+        let keeps_first = c - dy * select(first.x, first.y, dy < 0li) > above;
+        let keeps_last = c - dy * select(last.x, last.y, dy < 0li) > above;
+        if (!keeps_first && !keeps_last) {
             return vec2<u32>(tx0, tx0);
         }
-        if (first != last) {
-            // keeps(l) is `first`, keeps(r) is `last`, until they are neighbours
-            var l = tx0;
-            var r = tx1;
-            while (r - l > 1u) {
-                let mid = l + (r - l) / 2u;
-                if (edge_keeps(o, k, mid, ty) == first) {
-                    l = mid;
-                } else {
-                    r = mid;
-                }
-            }
-            if (first) {
-                end = min(end, r);
-            } else {
-                lo = max(lo, r);
-            }
+        if (keeps_first == keeps_last) {
+            continue;
+        }
+        // dy ≠ 0 here: with dy = 0 the verdict is the same along the row
+        var turn: i64;
+        if (dy < 0li) {
+            // kept from the turn on: −dy·x̂ > above − c, x̂ = (column + 1)·width − 1
+            let least = floor_div(above - c, -dy) + 1li;
+            turn = floor_div(least + width, width) - 1li;
+        } else {
+            // kept until the turn: dy·x̂ < c − above, x̂ = column·width
+            turn = floor_div(floor_div(c - above - 1li, dy), width) + 1li;
+        }
+        let column = u32(clamp(turn, i64(tx0) + 1li, i64(tx1)));
+        if (keeps_first) {
+            end = min(end, column);
+        } else {
+            lo = max(lo, column);
         }
     }
     return vec2<u32>(lo, max(lo, end));
