@@ -4,7 +4,9 @@
 //! views whose near and far planes cut through the scene or whose narrow field of view sends the
 //! geometry past the guard band, and single-sided objects (back faces dropped), one mirrored. The GPU writes pieces in an order of its choosing (no result
 //! depends on it), so both sides are compared as sorted lists; each piece's items lie together,
-//! in row-major order (what the resolves' speed depends on).
+//! in row-major order (what the resolves' speed depends on). The work list's row runs
+//! (`row_run`) are also held to the host's tile rule directly, on triangles built to put edges
+//! through tiles' corners.
 
 use glam::Vec3;
 use oit_core::setup::{TRIANGLE_WORDS, TriangleSetup};
