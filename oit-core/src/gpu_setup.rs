@@ -31,6 +31,10 @@ pub const ARGS_ITEMS: u64 = 32;
 /// than the piece's own invocation in `setup_main` (setup.wgsl's `SPREAD_PIECES`): those with more
 /// than [`SPREAD_ITEMS`] items, the first this many of them.
 pub const SPREAD_PIECES: usize = 2048;
+/// The most pieces one setup task can leave: a triangle clipped against the near and far planes
+/// and the guard band's four sides gains at most a corner a plane (setup.wgsl's nine-corner
+/// polygon), and its fan of nine corners is seven triangles.
+pub const MAX_PIECES_PER_TASK: u32 = 7;
 /// Tiles of its box above which a piece's work items are counted and written by a workgroup of
 /// `setup_count_main` and `setup_items_main` (setup.wgsl's `SPREAD_ITEMS`).
 pub const SPREAD_ITEMS: usize = 16;
@@ -271,6 +275,14 @@ impl SetupGeometry {
             0,
             0,
         ]
+    }
+
+    /// Workgroups of `setup_count_main` and `setup_items_main`: one a piece that may be spread,
+    /// no more than [`SPREAD_PIECES`] and no more than the tasks can leave
+    /// ([`MAX_PIECES_PER_TASK`]). Those past the pieces spread end at once, but on a CPU
+    /// device (lavapipe) 2,048 of them took milliseconds of a frame of a few triangles.
+    pub fn spread_groups(&self) -> u32 {
+        self.tasks.saturating_mul(MAX_PIECES_PER_TASK).min(SPREAD_PIECES as u32)
     }
 
     /// A first guess at the bytes the set-up triangles and the work list need, each at most

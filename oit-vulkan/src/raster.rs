@@ -25,9 +25,7 @@ use std::cell::{Cell, RefCell};
 use std::rc::Rc;
 
 use ash::vk;
-use oit_core::gpu_setup::{
-    ARGS_ITEMS, ARGS_PER_ITEM, ARGS_WORDS, COUNTER_WORDS, SPREAD_PIECES, SetupGeometry, VERT_WORDS,
-};
+use oit_core::gpu_setup::{ARGS_ITEMS, ARGS_PER_ITEM, ARGS_WORDS, COUNTER_WORDS, SetupGeometry, VERT_WORDS};
 use oit_core::setup::TRIANGLE_WORDS;
 use oit_core::{Camera, OitError, Scene, Settings};
 
@@ -190,6 +188,8 @@ struct SetupBuffers {
 /// Records the setup kernels into `rec`: the instance table's upload, the counters cleared, then
 /// `vertex_main` (with the vertex cache), `setup_main`, `setup_count_main`, `setup_items_main`
 /// and `setup_finish_main`, each behind the recorder's barrier. Binding order is setup.wgsl's group 0.
+/// Their device time counts as one pass, `setup`; with `OIT_SETUP_PASSES=1` each kernel's counts
+/// apart, as `setup <entry point>`.
 fn record_setup(
     rec: &mut Recorder<'_>,
     s: &SetupBuffers,
@@ -217,19 +217,21 @@ fn record_setup(
     let gpu = rec.gpu();
     let sets = [SetData::Frame { uniform: bytemuck::cast_slice(uniform), storage: &storage, images: &[] }];
     let kinds = [SetKind::Frame(6, Vec::new())];
-    if s.use_verts {
-        let pipeline = gpu.compute("setup", "vertex_main", &kinds)?;
-        rec.dispatch("setup", &pipeline, &sets, dispatch_size(s.layout.vertex_total()))?;
-    }
-    let pipeline = gpu.compute("setup", "setup_main", &kinds)?;
-    rec.dispatch("setup", &pipeline, &sets, dispatch_size(u64::from(s.layout.tasks)))?;
-    // the large pieces' work items, a workgroup a piece: counted, then written in order
-    for entry in ["setup_count_main", "setup_items_main"] {
+    let split = std::env::var("OIT_SETUP_PASSES").is_ok_and(|v| v == "1");
+    let mut run = |entry: &str, groups: (u32, u32)| -> Result<(), OitError> {
         let pipeline = gpu.compute("setup", entry, &kinds)?;
-        rec.dispatch("setup", &pipeline, &sets, (SPREAD_PIECES as u32, 1))?;
+        let label = if split { format!("setup {entry}") } else { "setup".to_string() };
+        rec.dispatch(&label, &pipeline, &sets, groups)
+    };
+    if s.use_verts {
+        run("vertex_main", dispatch_size(s.layout.vertex_total()))?;
     }
-    let pipeline = gpu.compute("setup", "setup_finish_main", &kinds)?;
-    rec.dispatch("setup", &pipeline, &sets, (1, 1))
+    run("setup_main", dispatch_size(u64::from(s.layout.tasks)))?;
+    // the large pieces' work items, a workgroup a piece: counted, then written in order
+    let spread = s.layout.spread_groups();
+    run("setup_count_main", (spread, 1))?;
+    run("setup_items_main", (spread, 1))?;
+    run("setup_finish_main", (1, 1))
 }
 
 /// The compute rasterizer's buffers, kept between the frames of a prepared scene.

@@ -96,3 +96,43 @@ fn the_opaque_pass_is_timed_apart() {
         assert!((total - sum).abs() <= 1e-9 * total, "{raster}: gpu_ms {total} but the passes sum to {sum}");
     }
 }
+
+/// `OIT_SETUP_PASSES=1` times the GPU setup's kernels apart (`setup setup_main`, ...), and they
+/// still sum with the rest to `gpu_ms`; run in a child process with the setup forced onto the
+/// GPU (`OIT_HOST_SETUP=0`) and timestamps on, so the variables reach no other test.
+#[test]
+fn the_setup_kernels_are_timed_apart_on_request() {
+    const NAME: &str = "the_setup_kernels_are_timed_apart_on_request";
+    let Some(vk) = oit_vulkan::backend_or_skip(NAME) else { return };
+    if std::env::var_os("OIT_SETUP_PASSES").is_none() {
+        let exe = std::env::current_exe().expect("the test binary");
+        let status = std::process::Command::new(exe)
+            .args([NAME, "--exact", "--test-threads=1"])
+            .envs([("OIT_SETUP_PASSES", "1"), ("OIT_HOST_SETUP", "0"), ("OIT_GPU_TIMESTAMPS", "1")])
+            .status()
+            .expect("the test binary runs again");
+        assert!(status.success(), "{NAME} with OIT_SETUP_PASSES=1 failed");
+        return;
+    }
+    let scene = load_scene("planes:4").unwrap();
+    let cam = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();
+    let s = Settings {
+        width: 32,
+        height: 32,
+        technique: Technique::Fabs { k: None },
+        raster: Some(oit_core::RasterPath::Compute),
+        ..Settings::default()
+    };
+    let stats = vk.render(&scene, &cam, &s).unwrap().stats;
+    let labels: Vec<&str> = stats.gpu_pass_ms.iter().map(|(l, _)| l.as_str()).collect();
+    println!("{:?}", stats.gpu_pass_ms);
+    for label in
+        ["setup setup_main", "setup setup_count_main", "setup setup_items_main", "setup setup_finish_main"]
+    {
+        assert!(labels.contains(&label), "no '{label}' in {labels:?}");
+    }
+    assert!(!labels.contains(&"setup"), "the kernels are also timed together: {labels:?}");
+    let total = stats.gpu_ms.expect("timestamps but no gpu_ms");
+    let sum: f64 = stats.gpu_pass_ms.iter().map(|(_, ms)| ms).sum();
+    assert!((total - sum).abs() <= 1e-9 * total, "gpu_ms {total} but the passes sum to {sum}");
+}

@@ -34,9 +34,7 @@
 
 use std::cell::Cell;
 
-use oit_core::gpu_setup::{
-    ARGS_ITEMS, ARGS_PER_ITEM, ARGS_WORDS, COUNTER_WORDS, SPREAD_PIECES, SetupGeometry, VERT_WORDS,
-};
+use oit_core::gpu_setup::{ARGS_ITEMS, ARGS_PER_ITEM, ARGS_WORDS, COUNTER_WORDS, SetupGeometry, VERT_WORDS};
 use oit_core::setup::{TRIANGLE_WORDS, TriangleSetup};
 use oit_core::{Camera, OitError, RasterPath, Scene, Settings};
 
@@ -566,10 +564,11 @@ impl ComputeBuffers {
                     pass.dispatch_workgroups(x, y, 1);
                     // the large pieces' work items, a workgroup a piece: counted, then written
                     // in order
+                    let spread = s.geometry.layout.spread_groups();
                     pass.set_pipeline(&count_pipeline);
-                    pass.dispatch_workgroups(SPREAD_PIECES as u32, 1, 1);
+                    pass.dispatch_workgroups(spread, 1, 1);
                     pass.set_pipeline(&items_pipeline);
-                    pass.dispatch_workgroups(SPREAD_PIECES as u32, 1, 1);
+                    pass.dispatch_workgroups(spread, 1, 1);
                 }
                 pass.set_pipeline(&finish_pipeline);
                 pass.dispatch_workgroups(1, 1, 1);

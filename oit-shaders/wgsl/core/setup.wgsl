@@ -621,7 +621,8 @@ fn vertex_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
 // fragments arrive near their primitive order, which the resolves' sorts are fast on: placed by
 // an atomic each, in the order workgroups got to it, they came in a shuffled order, and the
 // resolve of `nowall:0.4:planes:64` (64 layers a pixel) took two to three times as long on an H100. Both
-// dispatch SPREAD_PIECES workgroups; those past the pieces spread end at once.
+// dispatch a workgroup for each piece that may be spread, at most SPREAD_PIECES (oit-core's
+// `SetupGeometry::spread_groups`); those past the pieces spread end at once.
 var<workgroup> spread_rows: u32;
 var<workgroup> spread_sum: atomic<u32>;
 var<workgroup> spread_counts: array<u32, 64>;
