@@ -826,6 +826,19 @@ mod tests {
         assert_eq!(COUNTER_WORDS, 4 + 2 * SPREAD_PIECES);
     }
 
+    /// The most pieces a task leaves (`gpu_setup::MAX_PIECES_PER_TASK`, which sizes the spread
+    /// kernels' dispatch) is the fan of setup.wgsl's clip polygon: its corners less two.
+    #[test]
+    fn pieces_per_task_are_the_clip_polygons_fan() {
+        let corners = 3 + 6; // a triangle, and a corner more for each of the six clip planes
+        for poly in
+            ["var<private> poly: array<ClipVertex, 9>;", "var<private> next_poly: array<ClipVertex, 9>;"]
+        {
+            assert!(oit_shaders::SETUP.contains(poly), "setup.wgsl has no `{poly}`");
+        }
+        assert_eq!(oit_core::gpu_setup::MAX_PIECES_PER_TASK, corners - 2);
+    }
+
     /// The work-item marks' modes are raster_compute.wgsl's, and its mark bit lies above every
     /// tile row a frame of the largest size has (a row takes the tile word's upper 16 bits).
     #[test]
