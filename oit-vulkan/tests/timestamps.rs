@@ -12,13 +12,18 @@ fn again_with_timestamps(name: &str) {
     if std::env::var_os("OIT_GPU_TIMESTAMPS").is_some() {
         return;
     }
+    again_with(name, &[("OIT_GPU_TIMESTAMPS", "1")]);
+}
+
+/// Runs test `name` again in a child process with the variables `vars` and requires it to pass.
+fn again_with(name: &str, vars: &[(&str, &str)]) {
     let exe = std::env::current_exe().expect("the test binary");
     let status = std::process::Command::new(exe)
         .args([name, "--exact", "--test-threads=1"])
-        .env("OIT_GPU_TIMESTAMPS", "1")
+        .envs(vars.iter().copied())
         .status()
         .expect("the test binary runs again");
-    assert!(status.success(), "{name} with OIT_GPU_TIMESTAMPS=1 failed");
+    assert!(status.success(), "{name} with {vars:?} failed");
 }
 
 #[test]
@@ -105,13 +110,7 @@ fn the_setup_kernels_are_timed_apart_on_request() {
     const NAME: &str = "the_setup_kernels_are_timed_apart_on_request";
     let Some(vk) = oit_vulkan::backend_or_skip(NAME) else { return };
     if std::env::var_os("OIT_SETUP_PASSES").is_none() {
-        let exe = std::env::current_exe().expect("the test binary");
-        let status = std::process::Command::new(exe)
-            .args([NAME, "--exact", "--test-threads=1"])
-            .envs([("OIT_SETUP_PASSES", "1"), ("OIT_HOST_SETUP", "0"), ("OIT_GPU_TIMESTAMPS", "1")])
-            .status()
-            .expect("the test binary runs again");
-        assert!(status.success(), "{NAME} with OIT_SETUP_PASSES=1 failed");
+        again_with(NAME, &[("OIT_SETUP_PASSES", "1"), ("OIT_HOST_SETUP", "0"), ("OIT_GPU_TIMESTAMPS", "1")]);
         return;
     }
     let scene = load_scene("planes:4").unwrap();

@@ -8,6 +8,8 @@
 //! (`row_run`) are also held to the host's tile rule directly, on triangles built to put edges
 //! through tiles' corners.
 
+mod kernel;
+
 use glam::Vec3;
 use oit_core::setup::{TRIANGLE_WORDS, TriangleSetup};
 use oit_core::{Camera, RasterPath, Scene, Settings, View, load_scene};
@@ -259,16 +261,7 @@ fn row_runs_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     });
-    let entry = |binding, read_only| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
+    let entry = kernel::storage_entry;
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: None,
         entries: &[entry(1, true), entry(3, false), entry(4, false)],
@@ -283,15 +276,7 @@ fn row_runs_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
             wgpu::BindGroupEntry { binding: 4, resource: output.as_entire_binding() },
         ],
     });
-    let (x, y) = oit_gpu::dispatch_size(cases.len() as u64);
-    let mut encoder = device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(x, y, 1);
-    }
-    gpu.queue.submit([encoder.finish()]);
+    kernel::dispatch(gpu, &pipeline, &group, cases.len() as u64);
     let got = gpu.read_u32(&output).expect("runs read back");
     let mut turned = 0;
     for (i, (case, want)) in cases.iter().zip(&expected).enumerate() {

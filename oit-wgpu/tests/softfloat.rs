@@ -6,6 +6,8 @@
 
 use std::hint::black_box;
 
+mod kernel;
+
 const SOFTFLOAT: &str = oit_shaders::text("core/softfloat.wgsl");
 
 const KERNEL: &str = r#"
@@ -50,16 +52,7 @@ fn run(gpu: &oit_wgpu::Gpu, cases: &[[u32; 4]]) -> Vec<u32> {
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     });
-    let entry = |binding| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: false },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
+    let entry = |binding| kernel::storage_entry(binding, false);
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: None,
         entries: &[entry(0), entry(1)],
@@ -74,16 +67,7 @@ fn run(gpu: &oit_wgpu::Gpu, cases: &[[u32; 4]]) -> Vec<u32> {
             wgpu::BindGroupEntry { binding: 1, resource: output.as_entire_binding() },
         ],
     });
-    let groups = (cases.len() as u32).div_ceil(64);
-    let (x, y) = if groups <= 65_535 { (groups, 1) } else { (65_535, groups.div_ceil(65_535)) };
-    let mut encoder = device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(x, y, 1);
-    }
-    gpu.queue.submit([encoder.finish()]);
+    kernel::dispatch(gpu, &pipeline, &group, cases.len() as u64);
     gpu.read_u32(&output).expect("results read back")
 }
 
