@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Summarizes `OIT_HOST_TIMES=1` output (stderr of `oit bench`/`oit render` on wgpu): per line
+"""Summarizes `OIT_HOST_TIMES=1` output (stderr of `oit bench`/`oit render` on wgpu or Vulkan;
+Vulkan's lines add the frame's span on the device and the device's idle time before it): per line
 kind, the count, median and least milliseconds. A host setup is keyed by its triangle-word count
 (one key a scene part). Reads plain or .xz files.
 
@@ -12,7 +13,8 @@ import sys
 from collections import defaultdict
 
 SETUP = re.compile(r"oit host times: host setup ([\d.]+) ms \((\d+) triangle words, (\d+) items\), upload ([\d.]+) ms")
-RECORD = re.compile(r"oit host times: (\S+) record\+submit ([\d.]+) ms, end readback ([\d.]+) ms")
+RECORD = re.compile(r"oit host times: (\S+) record\+submit ([\d.]+) ms, end readback ([\d.]+) ms"
+                    r"(?:, device span ([\d.]+) ms)?(?:, device idle before ([\d.]+) ms)?")
 
 for path in sys.argv[1:]:
     opener = lzma.open if path.endswith(".xz") else open
@@ -28,6 +30,10 @@ for path in sys.argv[1:]:
             if m:
                 rows[f"record+submit, {m.group(1)}"].append(float(m.group(2)))
                 rows[f"end readback wait, {m.group(1)}"].append(float(m.group(3)))
+                if m.group(4):
+                    rows[f"device span, {m.group(1)}"].append(float(m.group(4)))
+                if m.group(5):
+                    rows[f"device idle before, {m.group(1)}"].append(float(m.group(5)))
     print(path)
     for key in sorted(rows):
         v = rows[key]

@@ -1162,6 +1162,9 @@ pub(crate) struct Ended {
     pub(crate) missed: bool,
     /// What the frame read back where it speculated nothing.
     pub(crate) seen: ReadBack,
+    /// Its first timed command's start and last one's end on the device, in nanoseconds, with
+    /// timestamps ([`crate::record::Recorder::gpu_span_ns`]).
+    pub(crate) span_ns: Option<(f64, f64)>,
 }
 
 /// The counts a frame reads back that the next frame of the same settings may take instead of
@@ -1259,7 +1262,7 @@ impl Finishing<'_> {
         } else {
             Some(ctx.resolve_counts(words, checks.len(), readback, gated_ran)?)
         };
-        Ok(Ended { frame, missed, seen })
+        Ok(Ended { frame, missed, seen, span_ns: ctx.rec.gpu_span_ns() })
     }
 }
 

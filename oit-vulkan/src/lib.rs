@@ -540,7 +540,14 @@ impl VulkanPrepared<'_> {
         run_technique(&mut ctx, &drivers)?;
         ctx.supersample = this.supersample.borrow().clone();
         let finishing = ctx.finish_start(readback)?;
-        Ok(InFlight { finishing, start, read_back: (&this.read_back, key) })
+        let technique = settings.technique;
+        Ok(InFlight {
+            finishing,
+            start,
+            recorded: start.elapsed(),
+            technique,
+            read_back: (&this.read_back, key),
+        })
     }
 }
 
@@ -552,6 +559,10 @@ pub const FRAMES_IN_FLIGHT: usize = 2;
 struct InFlight<'c> {
     finishing: ctx::Finishing<'c>,
     start: Instant,
+    /// From `start` to the frame's submission (recording it, its setup on the host included).
+    recorded: std::time::Duration,
+    /// For `OIT_HOST_TIMES`'s line.
+    technique: Technique,
     /// The prepared scene's read-back counts, and this frame's key in them.
     read_back: (&'c RefCell<std::collections::HashMap<String, ReadBack>>, String),
 }
@@ -561,7 +572,11 @@ impl InFlight<'_> {
     /// into (the next setup sizes first), or where it ran too few speculated peels (the next
     /// frame of its settings reads its peels back): the frame must run again.
     fn end(self) -> Result<Option<Frame>, OitError> {
+        let waiting = Instant::now();
         let ended = self.finishing.wait()?;
+        if host_times() {
+            host_times_line(self.technique, self.recorded, waiting.elapsed(), ended.span_ns);
+        }
         let (kept, key) = self.read_back;
         let mut kept = kept.borrow_mut();
         if ended.missed {
@@ -577,6 +592,42 @@ impl InFlight<'_> {
         frame.stats.wall_ms = self.start.elapsed().as_secs_f64() * 1e3;
         Ok(Some(frame))
     }
+}
+
+/// Whether `OIT_HOST_TIMES=1`: each frame prints to stderr where its wall time goes, as oit-wgpu's
+/// does: recording and submitting it (from its start to its submission), the wait at its end, and
+/// with timestamps its span on the device (its first timed command's start to its last one's end)
+/// and the device's idle time before it (from the last frame's span's end to this one's start: a
+/// frame loop that keeps the device busy has little). A diagnostic (issue 38's steady wall over
+/// summed pass times); `bench/local/host_times.py` sums the lines.
+fn host_times() -> bool {
+    static ON: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *ON.get_or_init(|| std::env::var("OIT_HOST_TIMES").is_ok_and(|v| v == "1"))
+}
+
+/// [`host_times`]'s line of one frame.
+fn host_times_line(
+    technique: Technique,
+    recorded: std::time::Duration,
+    waited: std::time::Duration,
+    span_ns: Option<(f64, f64)>,
+) {
+    use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+    // the last frame's span's end (f64 bits; 0 before any)
+    static LAST_END: AtomicU64 = AtomicU64::new(0);
+    let mut line = format!(
+        "oit host times: {technique} record+submit {:.3} ms, end readback {:.3} ms",
+        recorded.as_secs_f64() * 1e3,
+        waited.as_secs_f64() * 1e3
+    );
+    if let Some((start, end)) = span_ns {
+        let last = f64::from_bits(LAST_END.swap(end.to_bits(), Relaxed));
+        line += &format!(", device span {:.3} ms", (end - start) / 1e6);
+        if last > 0.0 && start >= last {
+            line += &format!(", device idle before {:.3} ms", (start - last) / 1e6);
+        }
+    }
+    eprintln!("{line}");
 }
 
 /// Runs the frame's technique (the reference leaves its per-pixel fragment counts to be read with

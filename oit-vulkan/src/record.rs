@@ -74,6 +74,9 @@ struct Timestamps {
     total_ms: f64,
     /// The same by label, in the order the labels were first seen.
     pass_ms: Vec<(String, f64)>,
+    /// The frame's first start and last end so far, in device nanoseconds (`OIT_HOST_TIMES`'s
+    /// span and the device's idle time between frames).
+    span_ns: Option<(f64, f64)>,
 }
 
 impl Timestamps {
@@ -85,6 +88,8 @@ impl Timestamps {
             // a counter that wrapped within its valid bits between the two still subtracts right
             let ms = (end.wrapping_sub(start) & self.mask) as f64 * self.period / NS_PER_MS;
             self.total_ms += ms;
+            let (s, e) = (start as f64 * self.period, end as f64 * self.period);
+            self.span_ns = Some(self.span_ns.map_or((s, e), |(s0, e0)| (s0.min(s), e0.max(e))));
             match self.pass_ms.iter_mut().find(|(l, _)| *l == label) {
                 Some((_, total)) => *total += ms,
                 None => self.pass_ms.push((label, ms)),
@@ -215,6 +220,7 @@ impl<'g> Recorder<'g> {
                 labels: Vec::new(),
                 total_ms: 0.0,
                 pass_ms: Vec::new(),
+                span_ns: None,
             }
         });
         let r = Recorder {
@@ -337,6 +343,13 @@ impl<'g> Recorder<'g> {
     /// timestamps; `None` without. Complete once the last dispatch's submission was flushed.
     pub(crate) fn gpu_times(&self) -> Option<(f64, &[(String, f64)])> {
         self.timestamps.as_ref().map(|ts| (ts.total_ms, ts.pass_ms.as_slice()))
+    }
+
+    /// The device nanoseconds of the frame's first timed command's start and its last one's end,
+    /// with timestamps and once one was read (a counter that wrapped between them is not
+    /// corrected: a diagnostic's, `OIT_HOST_TIMES`).
+    pub(crate) fn gpu_span_ns(&self) -> Option<(f64, f64)> {
+        self.timestamps.as_ref().and_then(|ts| ts.span_ns)
     }
 
     /// The barrier (see the module docs): everything recorded before it is done and visible to
