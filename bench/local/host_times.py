@@ -14,7 +14,7 @@ from collections import defaultdict
 
 SETUP = re.compile(r"oit host times: host setup ([\d.]+) ms \((\d+) triangle words, (\d+) items\), upload ([\d.]+) ms")
 RECORD = re.compile(r"oit host times: (\S+) record\+submit ([\d.]+) ms, end readback ([\d.]+) ms"
-                    r"(?:, device span ([\d.]+) ms)?(?:, device idle before ([\d.]+) ms)?")
+                    r"(?:, (\d+) barriers, (\d+) transfers, (\d+) submissions)?(?:, device span ([\d.]+) ms)?(?:, device idle before ([\d.]+) ms)?")
 
 for path in sys.argv[1:]:
     opener = lzma.open if path.endswith(".xz") else open
@@ -30,10 +30,10 @@ for path in sys.argv[1:]:
             if m:
                 rows[f"record+submit, {m.group(1)}"].append(float(m.group(2)))
                 rows[f"end readback wait, {m.group(1)}"].append(float(m.group(3)))
-                if m.group(4):
-                    rows[f"device span, {m.group(1)}"].append(float(m.group(4)))
-                if m.group(5):
-                    rows[f"device idle before, {m.group(1)}"].append(float(m.group(5)))
+                for k, name in [(4, "barriers"), (5, "transfers"), (6, "submissions"), (7, "device span"),
+                                 (8, "device idle before")]:
+                    if m.group(k):
+                        rows[f"{name}, {m.group(1)}"].append(float(m.group(k)))
     print(path)
     for key in sorted(rows):
         v = rows[key]

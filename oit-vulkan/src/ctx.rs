@@ -1165,6 +1165,8 @@ pub(crate) struct Ended {
     /// Its first timed command's start and last one's end on the device, in nanoseconds, with
     /// timestamps ([`crate::record::Recorder::gpu_span_ns`]).
     pub(crate) span_ns: Option<(f64, f64)>,
+    /// The commands it recorded, by kind.
+    pub(crate) counts: crate::record::CommandCounts,
 }
 
 /// The counts a frame reads back that the next frame of the same settings may take instead of
@@ -1262,7 +1264,7 @@ impl Finishing<'_> {
         } else {
             Some(ctx.resolve_counts(words, checks.len(), readback, gated_ran)?)
         };
-        Ok(Ended { frame, missed, seen, span_ns: ctx.rec.gpu_span_ns() })
+        Ok(Ended { frame, missed, seen, span_ns: ctx.rec.gpu_span_ns(), counts: ctx.rec.counts })
     }
 }
 

@@ -575,7 +575,7 @@ impl InFlight<'_> {
         let waiting = Instant::now();
         let ended = self.finishing.wait()?;
         if host_times() {
-            host_times_line(self.technique, self.recorded, waiting.elapsed(), ended.span_ns);
+            host_times_line(self.technique, self.recorded, waiting.elapsed(), &ended);
         }
         let (kept, key) = self.read_back;
         let mut kept = kept.borrow_mut();
@@ -598,7 +598,8 @@ impl InFlight<'_> {
 /// does: recording and submitting it (from its start to its submission), the wait at its end, and
 /// with timestamps its span on the device (its first timed command's start to its last one's end)
 /// and the device's idle time before it (from the last frame's span's end to this one's start: a
-/// frame loop that keeps the device busy has little). A diagnostic (issue 38's steady wall over
+/// frame loop that keeps the device busy has little); and the barriers, transfers and
+/// submissions it recorded. A diagnostic (issue 38's steady wall over
 /// summed pass times); `bench/local/host_times.py` sums the lines.
 fn host_times() -> bool {
     static ON: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
@@ -610,7 +611,7 @@ fn host_times_line(
     technique: Technique,
     recorded: std::time::Duration,
     waited: std::time::Duration,
-    span_ns: Option<(f64, f64)>,
+    ended: &ctx::Ended,
 ) {
     use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
     // the last frame's span's end (f64 bits; 0 before any)
@@ -620,7 +621,9 @@ fn host_times_line(
         recorded.as_secs_f64() * 1e3,
         waited.as_secs_f64() * 1e3
     );
-    if let Some((start, end)) = span_ns {
+    let c = ended.counts;
+    line += &format!(", {} barriers, {} transfers, {} submissions", c.barriers, c.transfers, c.submissions);
+    if let Some((start, end)) = ended.span_ns {
         let last = f64::from_bits(LAST_END.swap(end.to_bits(), Relaxed));
         line += &format!(", device span {:.3} ms", (end - start) / 1e6);
         if last > 0.0 && start >= last {

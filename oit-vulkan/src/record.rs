@@ -98,6 +98,14 @@ impl Timestamps {
     }
 }
 
+/// Commands of a frame's recordings, by kind ([`Recorder::counts`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct CommandCounts {
+    pub(crate) barriers: u32,
+    pub(crate) transfers: u32,
+    pub(crate) submissions: u32,
+}
+
 /// What the commands recorded since the last barrier touched: the buffers fills and copies read
 /// and wrote, or anything at all (`all`: a dispatch, a draw, an image command, whose accesses
 /// are not tracked). A command that may race with them needs a barrier first.
@@ -157,6 +165,9 @@ pub(crate) struct Recorder<'g> {
     submitted: bool,
     /// What the commands since the last barrier touched.
     pending: Pending,
+    /// The barriers, transfers (fills, copies, uploads, image clears) and submissions recorded
+    /// so far (`OIT_HOST_TIMES`'s counts).
+    pub(crate) counts: CommandCounts,
     /// The full frame's viewport `[x, y, width, height]` where the frame is a window of it
     /// ([`oit_core::Region::viewport`]), for every draw.
     pub(crate) window: Option<[f32; 4]>,
@@ -233,6 +244,7 @@ impl<'g> Recorder<'g> {
             timestamps,
             submitted: false,
             pending: Pending::default(),
+            counts: CommandCounts::default(),
             window: None,
         };
         r.begin()?;
@@ -355,6 +367,7 @@ impl<'g> Recorder<'g> {
     /// The barrier (see the module docs): everything recorded before it is done and visible to
     /// everything after, and to the host.
     fn barrier(&mut self) {
+        self.counts.barriers += 1;
         self.pending.clear();
         let barrier =
             vk::MemoryBarrier::default().src_access_mask(vk::AccessFlags::MEMORY_WRITE).dst_access_mask(
@@ -386,6 +399,7 @@ impl<'g> Recorder<'g> {
     /// Before a fill or copy that reads `reads` and writes `writes`: a barrier where it may race
     /// with what is pending, then it joins what is pending.
     fn transfer(&mut self, reads: &[vk::Buffer], writes: &[vk::Buffer]) {
+        self.counts.transfers += 1;
         if self.pending.conflicts(reads, writes) {
             self.barrier();
         }
@@ -415,6 +429,7 @@ impl<'g> Recorder<'g> {
             d.queue_submit(self.gpu.queue, &submit, self.p.fence).map_err(vk_err("submitting work"))?;
         }
         self.submitted = true;
+        self.counts.submissions += 1;
         self.gpu.count_in_flight(true);
         Ok(())
     }
@@ -551,6 +566,7 @@ impl<'g> Recorder<'g> {
     /// discarded, then every texel of every layer set to `value` in each 32 bits (all ones or
     /// zero: the same in any texel width); a barrier comes before what may race with it.
     pub(crate) fn clear_image(&mut self, image: &GpuImage, value: u32) {
+        self.counts.transfers += 1;
         let range = vk::ImageSubresourceRange::default()
             .aspect_mask(vk::ImageAspectFlags::COLOR)
             .level_count(1)
@@ -565,6 +581,7 @@ impl<'g> Recorder<'g> {
             .image(image.image)
             .subresource_range(range);
         let color = vk::ClearColorValue { uint32: [value; 4] };
+        self.counts.barriers += 1;
         // SAFETY: recording, outside a render pass; the image is alive (the frame's), has
         // TRANSFER_DST usage and is in GENERAL for the clear (the barrier before it, which also
         // orders it after every earlier use of the image: a pooled image's last frame).
@@ -856,6 +873,7 @@ impl<'g> Recorder<'g> {
                     .level_count(1)
                     .layer_count(1),
             );
+        self.counts.barriers += 1;
         // SAFETY: recording, outside a render pass; the image is alive (the frame's) and no
         // command after this reads it before a command that writes it or this transition.
         unsafe {

@@ -135,3 +135,63 @@ fn the_setup_kernels_are_timed_apart_on_request() {
     let sum: f64 = stats.gpu_pass_ms.iter().map(|(_, ms)| ms).sum();
     assert!((total - sum).abs() <= 1e-9 * total, "gpu_ms {total} but the passes sum to {sum}");
 }
+
+/// `OIT_HOST_TIMES=1` prints a line a frame (stderr): its recording and its end's wait, which
+/// the frame's wall time holds, and with timestamps its span on the device, which holds every
+/// pass the frame timed (they run one after another, a barrier between each two), and from the
+/// second frame on the device's idle time before it; and the commands it recorded by kind. Run in a child process with timestamps on,
+/// its output captured. Mutations caught: a span from the last pass's start (under the passes'
+/// sum), the wait left out of the line.
+#[test]
+fn host_times_hold_the_frame_and_its_span_on_the_device() {
+    const NAME: &str = "host_times_hold_the_frame_and_its_span_on_the_device";
+    let Some(vk) = oit_vulkan::backend_or_skip(NAME) else { return };
+    if std::env::var_os("OIT_HOST_TIMES").is_none() {
+        let exe = std::env::current_exe().expect("the test binary");
+        let out = std::process::Command::new(exe)
+            .args([NAME, "--exact", "--test-threads=1", "--nocapture"])
+            .envs([("OIT_HOST_TIMES", "1"), ("OIT_GPU_TIMESTAMPS", "1")])
+            .output()
+            .expect("the test binary runs again");
+        let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+        assert!(out.status.success(), "{NAME} with OIT_HOST_TIMES=1 failed:\n{stdout}\n{stderr}");
+        // each number of a line that follows `key ` and ends at the next space
+        let number = |line: &str, key: &str| -> Option<f64> {
+            let at = line.find(key)? + key.len();
+            line[at..].trim_start().split(' ').next()?.parse().ok()
+        };
+        let frames: Vec<&str> = stdout.lines().filter(|l| l.contains("frame gpu_ms ")).collect();
+        let lines: Vec<&str> = stderr.lines().filter(|l| l.starts_with("oit host times: ")).collect();
+        assert_eq!(lines.len(), frames.len(), "a line a frame:\n{stdout}\n{stderr}");
+        assert_eq!(frames.len(), 2, "{stdout}");
+        for (i, (frame, line)) in frames.iter().zip(&lines).enumerate() {
+            let gpu = number(frame, "gpu_ms").unwrap_or_else(|| panic!("{frame}"));
+            let wall = number(frame, "wall_ms").unwrap_or_else(|| panic!("{frame}"));
+            let recorded = number(line, "record+submit").unwrap_or_else(|| panic!("{line}"));
+            let waited = number(line, "end readback").unwrap_or_else(|| panic!("{line}"));
+            let span = number(line, "device span").unwrap_or_else(|| panic!("{line}"));
+            // the line's figures are rounded to 0.001 ms
+            assert!(recorded + waited <= wall + 0.002, "{line} over the frame's wall {wall} ms");
+            assert!(span + 0.001 >= gpu, "{line}: the span is under the passes' {gpu} ms");
+            assert!(span <= wall + 0.001, "{line}: the span is over the frame's wall {wall} ms");
+            // every frame is submitted, clears its counters and copies its totals back
+            let count = |kind: &str| {
+                line.find(kind).and_then(|at| line[..at].trim_end().rsplit(' ').next()?.parse::<u32>().ok())
+            };
+            for kind in [" submissions", " transfers", " barriers"] {
+                assert!(count(kind).is_some_and(|n| n >= 1), "{line}: no{kind}");
+            }
+            let idle = number(line, "device idle before");
+            assert_eq!(idle.is_some(), i > 0, "{line}: idle time before every frame but the first");
+        }
+        return;
+    }
+    let scene = load_scene("planes:4").unwrap();
+    let cam = Camera::orbit_scene(&scene, View::default(), 1.0).unwrap();
+    let s = Settings { width: 32, height: 32, technique: Technique::Fabs { k: None }, ..Settings::default() };
+    for _ in 0..2 {
+        let stats = vk.render(&scene, &cam, &s).unwrap().stats;
+        let gpu = stats.gpu_ms.expect("timestamps but no gpu_ms");
+        println!("frame gpu_ms {gpu} wall_ms {}", stats.wall_ms);
+    }
+}
