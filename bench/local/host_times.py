@@ -28,8 +28,10 @@ for path in sys.argv[1:]:
                 continue
             m = RECORD.match(line)
             if m:
-                rows[f"record+submit, {m.group(1)}"].append(float(m.group(2)))
-                rows[f"end readback wait, {m.group(1)}"].append(float(m.group(3)))
+                # Vulkan's lines carry the counts or the span (with timestamps), wgpu's neither
+                who = "vulkan" if m.group(4) or m.group(7) else "wgpu"
+                rows[f"record+submit, {m.group(1)} ({who})"].append(float(m.group(2)))
+                rows[f"end readback wait, {m.group(1)} ({who})"].append(float(m.group(3)))
                 for k, name in [(4, "barriers"), (5, "transfers"), (6, "submissions"), (7, "device span"),
                                  (8, "device idle before")]:
                     if m.group(k):
