@@ -400,6 +400,26 @@ pub fn raster_per_pixel(cpu_device: bool) -> bool {
     }
 }
 
+/// Whether a device that can write timestamps times each dispatch and draw (a frame's `gpu_ms` and
+/// `gpu_pass_ms`): on a GPU, not on a CPU device (lavapipe's timestamps cover a sliver of its
+/// frames' wall time). `OIT_GPU_TIMESTAMPS=1` (or `true`) turns them on anywhere, so tests run the
+/// timed path on lavapipe, and `0` (or `false`) off anywhere, so a GPU's frames can be timed by the
+/// wall without a timestamp pair around every pass.
+pub fn timestamps_wanted(cpu_device: bool) -> bool {
+    timestamps_by(std::env::var("OIT_GPU_TIMESTAMPS").ok().as_deref(), cpu_device)
+}
+
+/// [`timestamps_wanted`] with `OIT_GPU_TIMESTAMPS` given (`None`: unset).
+fn timestamps_by(var: Option<&str>, cpu_device: bool) -> bool {
+    match var {
+        Some("1") => true,
+        Some("0") => false,
+        Some(v) if v.eq_ignore_ascii_case("true") => true,
+        Some(v) if v.eq_ignore_ascii_case("false") => false,
+        _ => !cpu_device,
+    }
+}
+
 /// Workgroups of 64 for `invocations` invocations, as (x, y) with x ≤ 65535 (a kernel finds its
 /// invocation's index from both: `kernel_pixel` in prelude.wgsl).
 pub fn dispatch_size(invocations: u64) -> (u32, u32) {
@@ -824,6 +844,22 @@ mod tests {
         }
         assert!(oit_shaders::SETUP.contains("const SPREAD_FIRST: u32 = 4u;"));
         assert_eq!(COUNTER_WORDS, 4 + 2 * SPREAD_PIECES);
+    }
+
+    /// `OIT_GPU_TIMESTAMPS` decides where it is set, in either spelling, and the device type
+    /// where it is not (or is neither): GPUs time their passes, CPU devices do not.
+    #[test]
+    fn timestamps_follow_the_variable_then_the_device() {
+        for cpu in [false, true] {
+            for on in ["1", "true", "TRUE"] {
+                assert!(super::timestamps_by(Some(on), cpu), "{on} on cpu={cpu}");
+            }
+            for off in ["0", "false", "False"] {
+                assert!(!super::timestamps_by(Some(off), cpu), "{off} on cpu={cpu}");
+            }
+            assert_eq!(super::timestamps_by(None, cpu), !cpu);
+            assert_eq!(super::timestamps_by(Some("yes"), cpu), !cpu);
+        }
     }
 
     /// The most pieces a task leaves (`gpu_setup::MAX_PIECES_PER_TASK`, which sizes the spread

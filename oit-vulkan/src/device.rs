@@ -888,12 +888,12 @@ impl Gpu {
     /// True when the queue can write timestamps that mean device time: `timestampValidBits > 0`
     /// and `timestampPeriod > 0`, and not on a CPU device (lavapipe), as oit-wgpu's
     /// `Gpu::has_timestamps`: there the compute passes' timestamps cover a sliver of the frame's
-    /// wall time, so `gpu_ms` would mislead. `OIT_GPU_TIMESTAMPS=1` turns them on there, so tests
-    /// can run the timed path.
+    /// wall time, so `gpu_ms` would mislead. `OIT_GPU_TIMESTAMPS` turns them on or off on any
+    /// device ([`oit_gpu::timestamps_wanted`]).
     pub fn has_timestamps(&self) -> bool {
         self.info.timestamp_valid_bits > 0
             && self.info.limits.timestamp_period > 0.0
-            && (!self.is_cpu() || std::env::var("OIT_GPU_TIMESTAMPS").is_ok_and(|v| v == "1"))
+            && oit_gpu::timestamps_wanted(self.is_cpu())
     }
 
     /// A buffer of `size` bytes with its own memory: device-local, or host-visible and coherent

@@ -29,7 +29,8 @@
 //! `hw_fs_masked`, the multisampled capture).
 //!
 //! **GPU time.** Where the device has timestamps ([`Gpu::has_timestamps`]: not on a CPU device
-//! such as lavapipe unless `OIT_GPU_TIMESTAMPS=1`, as on oit-wgpu) every dispatch and draw is
+//! such as lavapipe unless `OIT_GPU_TIMESTAMPS=1`, and nowhere with `OIT_GPU_TIMESTAMPS=0`, as on
+//! oit-wgpu) every dispatch and draw is
 //! timed by a pair of timestamp queries, and a frame's `gpu_ms` is their sum, `gpu_pass_ms` the
 //! same by label (oit-wgpu's: "geometry", the kernel's entry point, "resolve"; the opaque
 //! pass's two geometry passes under "opaque" and `classify_main` under "classify",

@@ -270,10 +270,9 @@ impl Gpu {
     /// wall time is the measure on such devices.
     pub fn has_timestamps(&self) -> bool {
         // off on CPU devices (lavapipe's timestamps cover under 1 % of a frame's wall time);
-        // OIT_GPU_TIMESTAMPS=1 turns them on there, so tests can run the timed paths
+        // OIT_GPU_TIMESTAMPS turns them on or off anywhere
         self.features.contains(wgpu::Features::TIMESTAMP_QUERY)
-            && (self.info.device_type != wgpu::DeviceType::Cpu
-                || std::env::var("OIT_GPU_TIMESTAMPS").is_ok_and(|v| v == "1"))
+            && oit_gpu::timestamps_wanted(self.info.device_type == wgpu::DeviceType::Cpu)
     }
 
     /// A compute pipeline for `entry` of `COMMON_WGSL + source`, cached by source and entry.
