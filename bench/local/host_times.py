@@ -41,4 +41,5 @@ for path in sys.argv[1:]:
         v = rows[key]
         if len(v) < 5:
             continue
-        print(f"  {key:<48} {len(v):>5}  median {statistics.median(v):7.3f}  least {min(v):7.3f} ms")
+        unit = "" if key.split(",")[0] in ("barriers", "transfers", "submissions") else " ms"
+        print(f"  {key:<48} {len(v):>5}  median {statistics.median(v):7.3f}  least {min(v):7.3f}{unit}")

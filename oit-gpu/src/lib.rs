@@ -261,12 +261,49 @@ pub fn is_textured(scene: &Scene) -> bool {
     scene.instances.iter().filter_map(|i| scene.objects.get(i.object)).any(|o| o.texture.is_some())
 }
 
+/// Where a compute frame's triangles are set up: by the device's setup kernels (setup.wgsl) or by
+/// the host ([`host_setup`]), whose words and work list the frame then uploads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SetupSite {
+    /// On the host, whatever the part: a CPU device (lavapipe), or `OIT_HOST_SETUP=1`.
+    Host,
+    /// On the device, whatever the part's size (textured parts excepted): `OIT_HOST_SETUP=0`, or a
+    /// backend told so, as the setup kernels' tests do.
+    Device,
+    /// On the device, but a part of at most [`HOST_SETUP_TRIANGLES`] triangles on the host: a
+    /// GPU's default.
+    DeviceUnlessSmall,
+}
+
+/// The most triangles a part may have for a GPU to set it up on the host by default
+/// ([`SetupSite::DeviceUnlessSmall`]): a wall's quad, a pedestal's box. The device's setup is five
+/// kernels, each behind a barrier, whose time hardly depends on the count for so few triangles:
+/// 0.19–0.20 ms a part on the H100 (bench/results/h100/setup-split-1024), most of it the vertex
+/// kernel's chain of soft-float steps. The host sets up a handful of triangles in microseconds
+/// and uploads their words and work list (8 bytes a covered 8×8 tile) with the frame.
+pub const HOST_SETUP_TRIANGLES: u64 = 16;
+
+/// Where a compute frame is set up ([`SetupSite`]), from `OIT_HOST_SETUP`'s value `var` (`1` or
+/// `true`: the host; `0` or `false`: the device; case aside) and whether the device is a CPU.
+pub fn setup_site(var: Option<&str>, cpu_device: bool) -> SetupSite {
+    match var {
+        Some(v) if v == "1" || v.eq_ignore_ascii_case("true") => SetupSite::Host,
+        Some(v) if v == "0" || v.eq_ignore_ascii_case("false") => SetupSite::Device,
+        _ if cpu_device => SetupSite::Host,
+        _ => SetupSite::DeviceUnlessSmall,
+    }
+}
+
 /// Whether a compute frame of `scene` is set up on the host ([`host_setup`]) rather than by the
-/// device's setup kernels: where the device's setup is off (`device_sets_up` false: a CPU
-/// device, or `OIT_HOST_SETUP`), and for every textured scene, whose textures and triangles'
-/// levels (chosen in f64, which the setup kernels do not port) the host packs after the triangles.
-pub fn sets_up_on_host(device_sets_up: bool, scene: &Scene) -> bool {
-    !device_sets_up || is_textured(scene)
+/// device's setup kernels: where `site` says the host, for a small part where it says so
+/// ([`HOST_SETUP_TRIANGLES`]), and for every textured scene, whose textures and triangles' levels
+/// (chosen in f64, which the setup kernels do not port) the host packs after the triangles.
+pub fn sets_up_on_host(site: SetupSite, scene: &Scene) -> bool {
+    match site {
+        SetupSite::Host => true,
+        SetupSite::Device => is_textured(scene),
+        SetupSite::DeviceUnlessSmall => scene.triangle_count() <= HOST_SETUP_TRIANGLES || is_textured(scene),
+    }
 }
 
 /// Words of a textured triangle's record in the compute path's triangle buffer ([`host_setup`]):
@@ -859,6 +896,41 @@ mod tests {
             }
             assert_eq!(super::timestamps_by(None, cpu), !cpu);
             assert_eq!(super::timestamps_by(Some("yes"), cpu), !cpu);
+        }
+    }
+
+    /// `OIT_HOST_SETUP` forces the site either way; unset (or neither spelling), a CPU device sets
+    /// up on the host and a GPU on the device, save parts of at most `HOST_SETUP_TRIANGLES`
+    /// triangles (a wall's 2 and a box's 12, not planes:16's 32), and textured parts go to the
+    /// host everywhere.
+    #[test]
+    fn setup_site_follows_the_variable_the_device_and_the_parts_size() {
+        use super::{HOST_SETUP_TRIANGLES, SetupSite, sets_up_on_host, setup_site};
+        for cpu in [false, true] {
+            for host in ["1", "true", "TRUE"] {
+                assert_eq!(setup_site(Some(host), cpu), SetupSite::Host);
+            }
+            for device in ["0", "false", "False"] {
+                assert_eq!(setup_site(Some(device), cpu), SetupSite::Device);
+            }
+        }
+        assert_eq!(setup_site(None, true), SetupSite::Host);
+        assert_eq!(setup_site(Some("yes"), true), SetupSite::Host);
+        assert_eq!(setup_site(None, false), SetupSite::DeviceUnlessSmall);
+        let load = |name: &str| oit_core::load_scene(name).expect("a built-in scene");
+        let (small, planes) = (load("planes:8"), load("planes:16"));
+        assert_eq!(small.triangle_count(), HOST_SETUP_TRIANGLES);
+        assert!(planes.triangle_count() > HOST_SETUP_TRIANGLES);
+        let textured = load("particles");
+        assert!(super::is_textured(&textured));
+        for (site, small_on_host, large_on_host) in [
+            (SetupSite::Host, true, true),
+            (SetupSite::Device, false, false),
+            (SetupSite::DeviceUnlessSmall, true, false),
+        ] {
+            assert_eq!(sets_up_on_host(site, &small), small_on_host, "{site:?}");
+            assert_eq!(sets_up_on_host(site, &planes), large_on_host, "{site:?}");
+            assert!(sets_up_on_host(site, &textured), "{site:?}: textured parts set up on the host");
         }
     }
 

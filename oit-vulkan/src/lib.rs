@@ -110,8 +110,9 @@ use crate::raster::{ComputeBuffers, ComputeRaster, Drivers, Raster};
 pub struct VulkanBackend {
     /// Adapter name filter (substring); `None` reads `OIT_ADAPTER`, else prefers a discrete GPU.
     pub adapter: Option<String>,
-    /// Where the compute path sets triangles up: `Some(true)` on the GPU, `Some(false)` on the
-    /// host; `None` reads `OIT_HOST_SETUP`, else the GPU unless the device is a CPU (lavapipe).
+    /// Where the compute path sets triangles up: `Some(true)` on the GPU (whatever a part's size),
+    /// `Some(false)` on the host; `None` reads `OIT_HOST_SETUP`, else the GPU unless the device is
+    /// a CPU (lavapipe) or the part is small (`oit_gpu::SetupSite`).
     pub gpu_setup: Option<bool>,
     gpu: OnceLock<Result<Gpu, String>>,
 }

@@ -3,8 +3,9 @@
 //! triangle setup, binning into 8×8 tiles) follows oit-core's `setup` rule for rule, so the
 //! triangles are the same bits and the fragments equal oit-cpu's.
 //!
-//! Where setup runs ([`setup_on_gpu`]), as on oit-wgpu:
-//! - **on the GPU** (the default on a GPU): oit-wgpu's `setup.wgsl` over its integer f32
+//! Where setup runs ([`setup_site`], `oit_gpu::SetupSite`), as on oit-wgpu:
+//! - **on the GPU** (the default on a GPU, save parts of at most `oit_gpu::HOST_SETUP_TRIANGLES`
+//!   triangles, such as a wall's quad, whose setup the host does in microseconds): oit-wgpu's `setup.wgsl` over its integer f32
 //!   (`softfloat.wgsl`), compiled to SPIR-V in `build.rs`. A prepared scene uploads its
 //!   world-space geometry once (oit-core's [`SetupGeometry`]: the layout shared with oit-wgpu);
 //!   a frame uploads the instance table and records `vertex_main`, `setup_main` and
@@ -14,7 +15,7 @@
 //!   are read back before the frame's passes only while the kept buffers have not yet been seen
 //!   to fit (a scene's first frame, or after a miss); a later frame reads them with the frame's
 //!   end and runs again with grown buffers the rare time they did not fit ([`SetupCheck`]);
-//! - **on the host** on a CPU device (lavapipe), where the integer f32 costs many times the host's
+//! - **on the host** for those small parts, for textured parts, and on a CPU device (lavapipe), where the integer f32 costs many times the host's
 //!   float unit: oit-core's `TriangleSetup`, its words uploaded through a staging buffer by the
 //!   frame's first geometry pass, behind a barrier. `OIT_HOST_SETUP=1` forces the host's setup,
 //!   `OIT_HOST_SETUP=0` the GPU's, on any device; `VulkanBackend::gpu_setup` says it per backend.
@@ -36,19 +37,14 @@ use oit_gpu::dispatch_size;
 /// Bytes of the smallest triangle and work-list buffers (a binding may not be empty).
 const MIN_BYTES: u64 = 256;
 
-/// Whether the compute path sets triangles up on the GPU: `choice` where the backend says,
-/// else `OIT_HOST_SETUP=1` (or `true`) says no and `OIT_HOST_SETUP=0` (or `false`) yes;
-/// otherwise yes unless the device is a CPU (module docs).
-pub(crate) fn setup_on_gpu(gpu: &Gpu, choice: Option<bool>) -> bool {
-    if let Some(on_gpu) = choice {
-        return on_gpu;
-    }
-    match std::env::var("OIT_HOST_SETUP").as_deref() {
-        Ok("1") => false,
-        Ok("0") => true,
-        Ok(v) if v.eq_ignore_ascii_case("true") => false,
-        Ok(v) if v.eq_ignore_ascii_case("false") => true,
-        _ => !gpu.is_cpu(),
+/// Where the compute path sets triangles up ([`oit_gpu::SetupSite`]): `choice` where the backend
+/// says (`true`: on the GPU, whatever the part), else as `OIT_HOST_SETUP` and the device say
+/// (module docs).
+pub(crate) fn setup_site(gpu: &Gpu, choice: Option<bool>) -> oit_gpu::SetupSite {
+    match choice {
+        Some(true) => oit_gpu::SetupSite::Device,
+        Some(false) => oit_gpu::SetupSite::Host,
+        None => oit_gpu::setup_site(std::env::var("OIT_HOST_SETUP").ok().as_deref(), gpu.is_cpu()),
     }
 }
 
@@ -244,7 +240,7 @@ pub(crate) struct ComputeBuffers {
     /// The gated copy of `args`, for gated passes ([`Raster::gate`]).
     gated: Rc<Buffer>,
     setup: Option<Rc<SetupBuffers>>,
-    on_gpu: bool,
+    site: oit_gpu::SetupSite,
     /// Whether an earlier frame's setup was seen to fit these buffers: then a frame does not read
     /// the counters before its passes but checks them at its end.
     trusted: Rc<Cell<bool>>,
@@ -258,7 +254,7 @@ fn geometry_usage() -> vk::BufferUsageFlags {
 
 impl ComputeBuffers {
     /// Small buffers (grown by the first frame that needs more); `made` counts the buffers.
-    /// Setup runs on the GPU where [`setup_on_gpu`] says (`choice`: the backend's).
+    /// Setup runs where [`setup_site`] says (`choice`: the backend's).
     pub(crate) fn new(gpu: &Gpu, choice: Option<bool>, made: &Cell<u64>) -> Result<ComputeBuffers, OitError> {
         made.set(made.get() + 6);
         let args = || {
@@ -276,7 +272,7 @@ impl ComputeBuffers {
             args: Rc::new(args()?),
             gated: Rc::new(args()?),
             setup: None,
-            on_gpu: setup_on_gpu(gpu, choice),
+            site: setup_site(gpu, choice),
             trusted: Rc::new(Cell::new(false)),
             host: oit_gpu::HostSetup::default(),
         })
@@ -427,7 +423,7 @@ impl ComputeBuffers {
 
     /// Whether a frame of `scene` is set up on the host (`oit_gpu::sets_up_on_host`).
     pub(crate) fn sets_up_on_host(&self, scene: &Scene) -> bool {
-        oit_gpu::sets_up_on_host(self.on_gpu, scene)
+        oit_gpu::sets_up_on_host(self.site, scene)
     }
 
     /// The kept host setup ([`ComputeBuffers::host_frame`] uploads what it holds).

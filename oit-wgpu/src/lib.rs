@@ -77,7 +77,7 @@ pub use crate::gpu::{
 };
 pub use crate::hardware::HardwareRaster;
 pub use crate::pool::BufferPool;
-pub use crate::raster::{ComputeRaster, setup_on_gpu};
+pub use crate::raster::{ComputeRaster, setup_site};
 
 use crate::hardware::HardwareScene;
 use crate::raster::ComputeBuffers;

@@ -20,7 +20,9 @@
 //! of a scene, and a view that needs more room than any before). The raster kernel itself is
 //! dispatched indirectly from the GPU-written arguments.
 //!
-//! Where setup runs ([`setup_on_gpu`]): on the GPU, except on a CPU device (lavapipe), where the
+//! Where setup runs ([`setup_site`], `oit_gpu::SetupSite`): on the GPU, except for a part of at most
+//! `oit_gpu::HOST_SETUP_TRIANGLES` triangles (a wall's quad: the host sets it up in microseconds,
+//! the GPU's five setup kernels take a fixed 0.2 ms), and on a CPU device (lavapipe), where the
 //! "GPU" is the host's own cores and the integer f32 costs many times the host's float unit
 //! (`oit bench --backend wgpu --raster compute --techniques fabs --size 512x512` on lavapipe:
 //! bunny 1,826 ms a frame with the GPU's setup against 750 with the host's, `grid:3x3:bunny`
@@ -50,16 +52,11 @@ const MIN_BYTES: u64 = 256;
 /// each) and the item count.
 const ARGS_BYTES: u64 = ARGS_WORDS as u64 * 4;
 
-/// Whether the compute path sets triangles up on the GPU: `OIT_HOST_SETUP=1` (or `true`) says no,
-/// `OIT_HOST_SETUP=0` (or `false`) yes; otherwise yes unless the device is a CPU (module docs).
-pub fn setup_on_gpu(gpu: &Gpu) -> bool {
-    match std::env::var("OIT_HOST_SETUP").as_deref() {
-        Ok("1") => false,
-        Ok("0") => true,
-        Ok(v) if v.eq_ignore_ascii_case("true") => false,
-        Ok(v) if v.eq_ignore_ascii_case("false") => true,
-        _ => gpu.info.device_type != wgpu::DeviceType::Cpu,
-    }
+/// Where the compute path sets triangles up ([`oit_gpu::SetupSite`]): as `OIT_HOST_SETUP` says,
+/// else on the host on a CPU device and on the GPU (save small parts) on any other (module docs).
+pub fn setup_site(gpu: &Gpu) -> oit_gpu::SetupSite {
+    let cpu = gpu.info.device_type == wgpu::DeviceType::Cpu;
+    oit_gpu::setup_site(std::env::var("OIT_HOST_SETUP").ok().as_deref(), cpu)
 }
 
 /// Triangles on the GPU and the (triangle, tile) work list of the compute rasterizer, for one
@@ -325,7 +322,7 @@ impl ComputeBuffers {
     }
 
     /// Sets up this frame's triangles of the scene (or of its instances' bounding boxes) and their
-    /// work list into the kept buffers: on the GPU, or on the host where [`setup_on_gpu`] says.
+    /// work list into the kept buffers: on the GPU, or on the host where [`setup_site`] says.
     pub(crate) fn frame(
         &mut self,
         gpu: &Gpu,
@@ -346,10 +343,10 @@ impl ComputeBuffers {
         Ok(self.raster(setup_ms, check))
     }
 
-    /// Whether a frame of `scene` is set up on the host (`oit_gpu::sets_up_on_host`, the device's
-    /// setup on where [`setup_on_gpu`] says).
+    /// Whether a frame of `scene` is set up on the host (`oit_gpu::sets_up_on_host`, at the site
+    /// [`setup_site`] says).
     pub(crate) fn sets_up_on_host(&self, gpu: &Gpu, scene: &Scene) -> bool {
-        oit_gpu::sets_up_on_host(setup_on_gpu(gpu), scene)
+        oit_gpu::sets_up_on_host(setup_site(gpu), scene)
     }
 
     /// The kept host setup ([`ComputeBuffers::host_set_up`] uploads what it holds).
