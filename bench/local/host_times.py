@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Summarizes `OIT_HOST_TIMES=1` output (stderr of `oit bench`/`oit render` on wgpu or Vulkan;
-Vulkan's lines add the frame's span on the device and the device's idle time before it): per line
+Vulkan's lines add the frame's span on the device, the device's idle time before it, its untimed
+time within the span and its untimed gaps, by the command after each): per line
 kind, the count, median and least milliseconds. A host setup is keyed by its triangle-word count
 (one key a scene part). Reads plain or .xz files.
 
@@ -14,7 +15,10 @@ from collections import defaultdict
 
 SETUP = re.compile(r"oit host times: host setup ([\d.]+) ms \((\d+) triangle words, (\d+) items\), upload ([\d.]+) ms")
 RECORD = re.compile(r"oit host times: (\S+) record\+submit ([\d.]+) ms, end readback ([\d.]+) ms"
-                    r"(?:, (\d+) barriers, (\d+) transfers, (\d+) submissions)?(?:, device span ([\d.]+) ms)?(?:, device idle before ([\d.]+) ms)?")
+                    r"(?:, (\d+) barriers, (\d+) transfers, (\d+) submissions)?(?:, device span ([\d.]+) ms)?(?:, device idle before ([\d.]+) ms)?"
+                    r"(?:, untimed in span ([\d.]+) ms)?")
+# the untimed gaps of a Vulkan line, each named by the timed command after it
+GAP = re.compile(r", before (.+?) ([\d.]+) ms")
 
 for path in sys.argv[1:]:
     opener = lzma.open if path.endswith(".xz") else open
@@ -33,9 +37,11 @@ for path in sys.argv[1:]:
                 rows[f"record+submit, {m.group(1)} ({who})"].append(float(m.group(2)))
                 rows[f"end readback wait, {m.group(1)} ({who})"].append(float(m.group(3)))
                 for k, name in [(4, "barriers"), (5, "transfers"), (6, "submissions"), (7, "device span"),
-                                 (8, "device idle before")]:
+                                 (8, "device idle before"), (9, "untimed in span")]:
                     if m.group(k):
                         rows[f"{name}, {m.group(1)}"].append(float(m.group(k)))
+                for label, ms in GAP.findall(line[m.end():]):
+                    rows[f"untimed before {label}, {m.group(1)}"].append(float(ms))
     print(path)
     for key in sorted(rows):
         v = rows[key]

@@ -1165,6 +1165,9 @@ pub(crate) struct Ended {
     /// Its first timed command's start and last one's end on the device, in nanoseconds, with
     /// timestamps ([`crate::record::Recorder::gpu_span_ns`]).
     pub(crate) span_ns: Option<(f64, f64)>,
+    /// The device's untimed milliseconds before each timed command, by its label, with
+    /// timestamps ([`crate::record::Recorder::gpu_gaps`]).
+    pub(crate) gaps: Vec<(String, f64)>,
     /// The commands it recorded, by kind.
     pub(crate) counts: crate::record::CommandCounts,
 }
@@ -1264,7 +1267,8 @@ impl Finishing<'_> {
         } else {
             Some(ctx.resolve_counts(words, checks.len(), readback, gated_ran)?)
         };
-        Ok(Ended { frame, missed, seen, span_ns: ctx.rec.gpu_span_ns(), counts: ctx.rec.counts })
+        let gaps = ctx.rec.gpu_gaps().to_vec();
+        Ok(Ended { frame, missed, seen, span_ns: ctx.rec.gpu_span_ns(), gaps, counts: ctx.rec.counts })
     }
 }
 

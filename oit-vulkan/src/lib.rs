@@ -600,8 +600,10 @@ impl InFlight<'_> {
 /// does: recording and submitting it (from its start to its submission), the wait at its end, and
 /// with timestamps its span on the device (its first timed command's start to its last one's end)
 /// and the device's idle time before it (from the last frame's span's end to this one's start: a
-/// frame loop that keeps the device busy has little); and the barriers, transfers and
-/// submissions it recorded. A diagnostic (issue 38's steady wall over
+/// frame loop that keeps the device busy has little), the device's time within the span that no
+/// command timed (fills, copies, barriers: the gaps between one timed command's end and the next
+/// one's start) and those gaps by the label of the command after them; and the
+/// barriers, transfers and submissions it recorded. A diagnostic (issue 38's steady wall over
 /// summed pass times); `bench/local/host_times.py` sums the lines.
 fn host_times() -> bool {
     static ON: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
@@ -630,6 +632,11 @@ fn host_times_line(
         line += &format!(", device span {:.3} ms", (end - start) / 1e6);
         if last > 0.0 && start >= last {
             line += &format!(", device idle before {:.3} ms", (start - last) / 1e6);
+        }
+        let untimed: f64 = ended.gaps.iter().map(|(_, ms)| ms).sum();
+        line += &format!(", untimed in span {untimed:.3} ms");
+        for (label, ms) in &ended.gaps {
+            line += &format!(", before {label} {ms:.3} ms");
         }
     }
     eprintln!("{line}");

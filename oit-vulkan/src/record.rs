@@ -77,23 +77,40 @@ struct Timestamps {
     /// The frame's first start and last end so far, in device nanoseconds (`OIT_HOST_TIMES`'s
     /// span and the device's idle time between frames).
     span_ns: Option<(f64, f64)>,
+    /// Device milliseconds between a timed command's start and the end of the one timed before
+    /// it in the same submission (the untimed fills, copies and barriers recorded between them,
+    /// and the pipeline's drain), by the later one's label, in the order first seen
+    /// (`OIT_HOST_TIMES`'s untimed time within the span).
+    gap_ms: Vec<(String, f64)>,
+}
+
+/// Adds `ms` to `label`'s total in `totals`, a new entry where it has none.
+fn add_to(totals: &mut Vec<(String, f64)>, label: &str, ms: f64) {
+    match totals.iter_mut().find(|(l, _)| l == label) {
+        Some((_, total)) => *total += ms,
+        None => totals.push((label.to_string(), ms)),
+    }
 }
 
 impl Timestamps {
     /// Adds the pairs of the labels recorded (`ticks`: two per label, as read back), and starts
     /// the labels over.
     fn add(&mut self, ticks: &[u64]) {
+        let mut last_end: Option<u64> = None;
         for (label, pair) in self.labels.drain(..).zip(ticks.chunks_exact(2)) {
             let (start, end) = (pair[0] & self.mask, pair[1] & self.mask);
             // a counter that wrapped within its valid bits between the two still subtracts right
-            let ms = (end.wrapping_sub(start) & self.mask) as f64 * self.period / NS_PER_MS;
+            let ticks_ms =
+                |from: u64, to: u64| (to.wrapping_sub(from) & self.mask) as f64 * self.period / NS_PER_MS;
+            let ms = ticks_ms(start, end);
             self.total_ms += ms;
             let (s, e) = (start as f64 * self.period, end as f64 * self.period);
             self.span_ns = Some(self.span_ns.map_or((s, e), |(s0, e0)| (s0.min(s), e0.max(e))));
-            match self.pass_ms.iter_mut().find(|(l, _)| *l == label) {
-                Some((_, total)) => *total += ms,
-                None => self.pass_ms.push((label, ms)),
+            if let Some(before) = last_end {
+                add_to(&mut self.gap_ms, &label, ticks_ms(before, start));
             }
+            last_end = Some(end);
+            add_to(&mut self.pass_ms, &label, ms);
         }
     }
 }
@@ -232,6 +249,7 @@ impl<'g> Recorder<'g> {
                 total_ms: 0.0,
                 pass_ms: Vec::new(),
                 span_ns: None,
+                gap_ms: Vec::new(),
             }
         });
         let r = Recorder {
@@ -362,6 +380,12 @@ impl<'g> Recorder<'g> {
     /// corrected: a diagnostic's, `OIT_HOST_TIMES`).
     pub(crate) fn gpu_span_ns(&self) -> Option<(f64, f64)> {
         self.timestamps.as_ref().and_then(|ts| ts.span_ns)
+    }
+
+    /// The device milliseconds before each timed command that no command timed (see
+    /// `Timestamps::gap_ms`), by its label, with timestamps and once one was read.
+    pub(crate) fn gpu_gaps(&self) -> &[(String, f64)] {
+        self.timestamps.as_ref().map_or(&[], |ts| &ts.gap_ms)
     }
 
     /// The barrier (see the module docs): everything recorded before it is done and visible to

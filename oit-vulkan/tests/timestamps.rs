@@ -139,9 +139,11 @@ fn the_setup_kernels_are_timed_apart_on_request() {
 /// `OIT_HOST_TIMES=1` prints a line a frame (stderr): its recording and its end's wait, which
 /// the frame's wall time holds, and with timestamps its span on the device, which holds every
 /// pass the frame timed (they run one after another, a barrier between each two), and from the
-/// second frame on the device's idle time before it; and the commands it recorded by kind. Run in a child process with timestamps on,
+/// second frame on the device's idle time before it; the untimed gaps between its passes, which
+/// with the passes fit the span; and the commands it recorded by kind. Run in a child process with timestamps on,
 /// its output captured. Mutations caught: a span from the last pass's start (under the passes'
-/// sum), the wait left out of the line.
+/// sum), the wait left out of the line, a gap counted to the later pass's end (passes and gaps
+/// over the span).
 #[test]
 fn host_times_hold_the_frame_and_its_span_on_the_device() {
     const NAME: &str = "host_times_hold_the_frame_and_its_span_on_the_device";
@@ -174,6 +176,12 @@ fn host_times_hold_the_frame_and_its_span_on_the_device() {
             assert!(recorded + waited <= wall + 0.002, "{line} over the frame's wall {wall} ms");
             assert!(span + 0.001 >= gpu, "{line}: the span is under the passes' {gpu} ms");
             assert!(span <= wall + 0.001, "{line}: the span is over the frame's wall {wall} ms");
+            // the passes and the untimed gaps between them lie end to end within the span
+            let untimed = number(line, "untimed in span").unwrap_or_else(|| panic!("{line}"));
+            assert!(
+                untimed >= 0.0 && gpu + untimed <= span + 0.003,
+                "{line}: passes {gpu} ms and gaps over the span"
+            );
             // every frame is submitted, clears its counters and copies its totals back
             let count = |kind: &str| {
                 line.find(kind).and_then(|at| line[..at].trim_end().rsplit(' ').next()?.parse::<u32>().ok())
