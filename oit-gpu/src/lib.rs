@@ -302,8 +302,21 @@ pub fn sets_up_on_host(site: SetupSite, scene: &Scene) -> bool {
     match site {
         SetupSite::Host => true,
         SetupSite::Device => is_textured(scene),
-        SetupSite::DeviceUnlessSmall => scene.triangle_count() <= HOST_SETUP_TRIANGLES || is_textured(scene),
+        SetupSite::DeviceUnlessSmall => is_small(scene) || is_textured(scene),
     }
+}
+
+/// Whether `scene` draws at most [`HOST_SETUP_TRIANGLES`] triangles over all its instances,
+/// counted only until it is over: every frame asks, and a scene may place a million instances.
+fn is_small(scene: &Scene) -> bool {
+    let mut triangles = 0u64;
+    for instance in &scene.instances {
+        triangles += scene.instance_parts(instance).1.indices.len() as u64;
+        if triangles > HOST_SETUP_TRIANGLES {
+            return false;
+        }
+    }
+    true
 }
 
 /// Words of a textured triangle's record in the compute path's triangle buffer ([`host_setup`]):
@@ -921,6 +934,10 @@ mod tests {
         let (small, planes) = (load("planes:8"), load("planes:16"));
         assert_eq!(small.triangle_count(), HOST_SETUP_TRIANGLES);
         assert!(planes.triangle_count() > HOST_SETUP_TRIANGLES);
+        // an instance's triangles count each time it is placed
+        let grid = load("grid:3x3:planes:1");
+        assert!(grid.triangle_count() > HOST_SETUP_TRIANGLES);
+        assert!(!sets_up_on_host(SetupSite::DeviceUnlessSmall, &grid));
         let textured = load("particles");
         assert!(super::is_textured(&textured));
         for (site, small_on_host, large_on_host) in [
