@@ -241,6 +241,17 @@ pub struct FrameUniform {
 /// no coverage mask ([`oit_core::msaa::Coverage::Fraction`]).
 pub const MSAA_FRACTION: u32 = 1 << 8;
 
+/// The kernels of finish.wgsl that end a frame of `effect` (its image and its totals, one after
+/// the other): both in one kernel (`totals_finish_main`, each pixel's state read once), except
+/// for the heat map, whose colours are scaled by the deepest pixel's count, a total of the whole
+/// frame that `totals_main` must finish first.
+pub fn finish_kernels(effect: oit_core::Effect) -> &'static [&'static str] {
+    match effect {
+        oit_core::Effect::Complexity => &["totals_main", "finish_main"],
+        _ => &["totals_finish_main"],
+    }
+}
+
 /// The sample positions of `samples` samples ([`oit_core::msaa::positions`]) as the frame
 /// uniform carries them: sample i's byte (x | y << 4, 1/16 pixel) at bits 8·(i mod 4) of word
 /// i / 4.

@@ -1106,18 +1106,24 @@ impl<'a> VkCtx<'a> {
         let (image_buf, totals) = (self.image.clone(), self.totals.clone());
         self.rec.fill(&totals, 0);
         let px = u64::from(self.pixels);
-        self.kernel_over("finish", "totals_main", &[&image_buf, &totals], px, 0, 0, "resolve")?;
         match self.supersample.clone() {
-            Some((sums, i, n)) => self.kernel_over(
-                "supersample",
-                "supersample_main",
-                &[&image_buf, &totals, &sums],
-                px,
-                n,
-                i,
-                "resolve",
-            )?,
-            None => self.kernel_over("finish", "finish_main", &[&image_buf, &totals], px, 0, 0, "resolve")?,
+            Some((sums, i, n)) => {
+                self.kernel_over("finish", "totals_main", &[&image_buf, &totals], px, 0, 0, "resolve")?;
+                self.kernel_over(
+                    "supersample",
+                    "supersample_main",
+                    &[&image_buf, &totals, &sums],
+                    px,
+                    n,
+                    i,
+                    "resolve",
+                )?;
+            }
+            None => {
+                for entry in oit_gpu::finish_kernels(self.settings.effect) {
+                    self.kernel_over("finish", entry, &[&image_buf, &totals], px, 0, 0, "resolve")?;
+                }
+            }
         }
         let acct_buf = self.acct.clone();
         let first_count = self.first_count.clone();

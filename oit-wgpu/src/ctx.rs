@@ -1267,18 +1267,25 @@ impl<'a> GpuCtx<'a> {
             encoder.copy_buffer_to_buffer(&rgb, counters, &totals, (OPAQUE_WORD + 1) * 4, 8);
         }
         let pixels = u64::from(self.pixels);
-        self.kernel_over(FINISH_WGSL, "totals_main", &[&image, &totals], pixels, 0, 0, "resolve")?;
         match self.supersample.clone() {
-            Some((sums, i, n)) => self.kernel_over(
-                SUPERSAMPLE_WGSL,
-                "supersample_main",
-                &[&image, &totals, &sums],
-                pixels,
-                n,
-                i,
-                "resolve",
-            ),
-            None => self.kernel_over(FINISH_WGSL, "finish_main", &[&image, &totals], pixels, 0, 0, "resolve"),
+            Some((sums, i, n)) => {
+                self.kernel_over(FINISH_WGSL, "totals_main", &[&image, &totals], pixels, 0, 0, "resolve")?;
+                self.kernel_over(
+                    SUPERSAMPLE_WGSL,
+                    "supersample_main",
+                    &[&image, &totals, &sums],
+                    pixels,
+                    n,
+                    i,
+                    "resolve",
+                )
+            }
+            None => {
+                for entry in oit_gpu::finish_kernels(self.settings.effect) {
+                    self.kernel_over(FINISH_WGSL, entry, &[&image, &totals], pixels, 0, 0, "resolve")?;
+                }
+                Ok(())
+            }
         }
     }
 

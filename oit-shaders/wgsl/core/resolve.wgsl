@@ -303,7 +303,11 @@ fn finish_over(s: PixelState, bg: vec3<f32>) -> vec3<f32> {
 
 // The final linear colour; `max_captured` scales the heat map.
 fn finish_color(px: u32, max_captured: u32) -> vec3<f32> {
-    let s = load_state(px);
+    return finish_color_of(px, load_state(px), max_captured);
+}
+
+// `finish_color` of pixel `px` whose state `s` is at hand.
+fn finish_color_of(px: u32, s: PixelState, max_captured: u32) -> vec3<f32> {
     if (s.has_back == STATE_RESOLVED) {
         return vec3<f32>(s.br, s.bg, s.bb);
     }
