@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""One timed label's GPU milliseconds (a row's `gpu_pass_ms`, the median frame's) beside the
-frame's median GPU time, for every row of each `oit bench` report named, one column a report: the
+"""One timed label's GPU milliseconds (a row's `gpu_pass_ms`: the run's last timed frame's) beside
+the frame's median GPU time, for every row of each `oit bench` report named, one column a report: the
 same pass before and after a change, runs alternated.
 
     python3 bench/local/pass_ms.py LABEL DIR [DIR ...]     # DIR holds report.json
@@ -24,7 +24,7 @@ def main(label, dirs):
             ms, gpu = table[key].get(d, (None, None))
             cells.append(f"{ms:8.2f} {gpu:8.1f} " if ms is not None and gpu is not None else f"{'-':>18}")
         print(f"{key[0]:<24} {key[1]:<16} {key[2]:<10} " + " ".join(cells))
-    print(f"\ncells: '{label}' ms, frame GPU ms (medians)")
+    print(f"\ncells: '{label}' ms (the last timed frame's), frame GPU ms (median)")
 
 
 if __name__ == "__main__":

@@ -294,14 +294,20 @@ pub enum SetupSite {
 /// and uploads their words and work list (8 bytes a covered 8×8 tile) with the frame.
 pub const HOST_SETUP_TRIANGLES: u64 = 16;
 
-/// Where a compute frame is set up ([`SetupSite`]), from `OIT_HOST_SETUP`'s value `var` (`1` or
-/// `true`: the host; `0` or `false`: the device; case aside) and whether the device is a CPU.
-pub fn setup_site(var: Option<&str>, cpu_device: bool) -> SetupSite {
-    match var {
-        Some(v) if v == "1" || v.eq_ignore_ascii_case("true") => SetupSite::Host,
-        Some(v) if v == "0" || v.eq_ignore_ascii_case("false") => SetupSite::Device,
-        _ if cpu_device => SetupSite::Host,
-        _ => SetupSite::DeviceUnlessSmall,
+/// Where a compute frame is set up on a device ([`SetupSite`]): as `OIT_HOST_SETUP` says (`1` or
+/// `true`: the host; `0` or `false`: the device, for every part), else on the host on a CPU device
+/// and on the device, small parts aside, on a GPU.
+pub fn setup_site(cpu_device: bool) -> SetupSite {
+    setup_site_by(std::env::var("OIT_HOST_SETUP").ok().as_deref(), cpu_device)
+}
+
+/// [`setup_site`] with `OIT_HOST_SETUP` given (`None`: unset).
+fn setup_site_by(var: Option<&str>, cpu_device: bool) -> SetupSite {
+    match env_flag(var) {
+        Some(true) => SetupSite::Host,
+        Some(false) => SetupSite::Device,
+        None if cpu_device => SetupSite::Host,
+        None => SetupSite::DeviceUnlessSmall,
     }
 }
 
@@ -452,13 +458,29 @@ pub fn triangle_levels(
 /// first and `0` (or `false`) the second on any device, so that a CPU device's tests run the
 /// GPUs' kernel (tests/tests/raster_kernels.rs); otherwise the device type decides.
 pub fn raster_per_pixel(cpu_device: bool) -> bool {
-    match std::env::var("OIT_RASTER_PER_PIXEL").as_deref() {
-        Ok("1") => true,
-        Ok("0") => false,
-        Ok(v) if v.eq_ignore_ascii_case("true") => true,
-        Ok(v) if v.eq_ignore_ascii_case("false") => false,
-        _ => !cpu_device,
+    env_flag(std::env::var("OIT_RASTER_PER_PIXEL").ok().as_deref()).unwrap_or(!cpu_device)
+}
+
+/// A yes-or-no variable's value (`OIT_RASTER_PER_PIXEL`, `OIT_GPU_TIMESTAMPS`, `OIT_HOST_SETUP`):
+/// `1` or `true` (case aside) is yes, `0` or `false` no; unset or anything else says nothing.
+fn env_flag(value: Option<&str>) -> Option<bool> {
+    match value {
+        Some("1") => Some(true),
+        Some("0") => Some(false),
+        Some(v) if v.eq_ignore_ascii_case("true") => Some(true),
+        Some(v) if v.eq_ignore_ascii_case("false") => Some(false),
+        _ => None,
     }
+}
+
+/// Whether `OIT_HOST_TIMES=1`: each GPU frame prints to stderr where its wall time goes, a line
+/// `oit host times: ...` (both backends: recording and submitting, and the end-of-frame
+/// readback's wait; oit-wgpu's compute raster set up on the host also its setup and upload;
+/// oit-vulkan's also its span on the device, idle and untimed device time, and its commands by
+/// kind). `bench/local/host_times.py` sums the lines. Read once.
+pub fn host_times() -> bool {
+    static ON: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *ON.get_or_init(|| std::env::var("OIT_HOST_TIMES").is_ok_and(|v| v == "1"))
 }
 
 /// Whether a device that can write timestamps times each dispatch and draw (a frame's `gpu_ms` and
@@ -472,13 +494,7 @@ pub fn timestamps_wanted(cpu_device: bool) -> bool {
 
 /// [`timestamps_wanted`] with `OIT_GPU_TIMESTAMPS` given (`None`: unset).
 fn timestamps_by(var: Option<&str>, cpu_device: bool) -> bool {
-    match var {
-        Some("1") => true,
-        Some("0") => false,
-        Some(v) if v.eq_ignore_ascii_case("true") => true,
-        Some(v) if v.eq_ignore_ascii_case("false") => false,
-        _ => !cpu_device,
-    }
+    env_flag(var).unwrap_or(!cpu_device)
 }
 
 /// Workgroups of 64 for `invocations` invocations, as (x, y) with x ≤ 65535 (a kernel finds its
@@ -929,7 +945,7 @@ mod tests {
     /// host everywhere.
     #[test]
     fn setup_site_follows_the_variable_the_device_and_the_parts_size() {
-        use super::{HOST_SETUP_TRIANGLES, SetupSite, sets_up_on_host, setup_site};
+        use super::{HOST_SETUP_TRIANGLES, SetupSite, sets_up_on_host, setup_site_by as setup_site};
         for cpu in [false, true] {
             for host in ["1", "true", "TRUE"] {
                 assert_eq!(setup_site(Some(host), cpu), SetupSite::Host);

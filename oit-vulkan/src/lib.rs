@@ -576,7 +576,7 @@ impl InFlight<'_> {
     fn end(self) -> Result<Option<Frame>, OitError> {
         let waiting = Instant::now();
         let ended = self.finishing.wait()?;
-        if host_times() {
+        if oit_gpu::host_times() {
             host_times_line(self.technique, self.recorded, waiting.elapsed(), &ended);
         }
         let (kept, key) = self.read_back;
@@ -596,21 +596,14 @@ impl InFlight<'_> {
     }
 }
 
-/// Whether `OIT_HOST_TIMES=1`: each frame prints to stderr where its wall time goes, as oit-wgpu's
-/// does: recording and submitting it (from its start to its submission), the wait at its end, and
-/// with timestamps its span on the device (its first timed command's start to its last one's end)
-/// and the device's idle time before it (from the last frame's span's end to this one's start: a
-/// frame loop that keeps the device busy has little), the device's time within the span that no
-/// command timed (fills, copies, barriers: the gaps between one timed command's end and the next
-/// one's start) and those gaps by the label of the command after them; and the
-/// barriers, transfers and submissions it recorded. A diagnostic (issue 38's steady wall over
-/// summed pass times); `bench/local/host_times.py` sums the lines.
-fn host_times() -> bool {
-    static ON: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *ON.get_or_init(|| std::env::var("OIT_HOST_TIMES").is_ok_and(|v| v == "1"))
-}
-
-/// [`host_times`]'s line of one frame.
+/// `oit_gpu::host_times`'s line of one Vulkan frame: recording and submitting it (from its start
+/// to its submission), the wait at its end, and with timestamps its span on the device (its first
+/// timed command's start to its last one's end) and the device's idle time before it (from the
+/// last frame's span's end to this one's start: a frame loop that keeps the device busy has
+/// little), the device's time within the span that no command timed (fills, copies, barriers:
+/// the gaps between one timed command's end and the next one's start) and those gaps by the label
+/// of the command after them; and the barriers, transfers and submissions it recorded. A
+/// diagnostic (issue 38's steady wall over summed pass times).
 fn host_times_line(
     technique: Technique,
     recorded: std::time::Duration,

@@ -44,7 +44,7 @@ pub(crate) fn setup_site(gpu: &Gpu, choice: Option<bool>) -> oit_gpu::SetupSite 
     match choice {
         Some(true) => oit_gpu::SetupSite::Device,
         Some(false) => oit_gpu::SetupSite::Host,
-        None => oit_gpu::setup_site(std::env::var("OIT_HOST_SETUP").ok().as_deref(), gpu.is_cpu()),
+        None => oit_gpu::setup_site(gpu.is_cpu()),
     }
 }
 

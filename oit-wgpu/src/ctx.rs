@@ -1383,7 +1383,7 @@ impl Finishing<'_> {
         } = self;
         let waiting = std::time::Instant::now();
         let mut words = reading.wait(ctx.gpu)?.into_iter();
-        if host_times() {
+        if oit_gpu::host_times() {
             // where a frame's host time goes (issue 10's steady/GPU ratio): recording and
             // submitting, then waiting for the end-of-frame readback
             eprintln!(
@@ -1460,14 +1460,6 @@ pub struct RecordedBuffers {
     pub gated_passes: u32,
     /// Bytes of per-pixel storage the frame uses.
     pub storage_bytes: u64,
-}
-
-/// Whether `OIT_HOST_TIMES=1`: each frame prints its host time to stderr, split into recording
-/// (from the frame's start to its last submission) and the end-of-frame readback's wait, and a
-/// compute raster set up on the host its setup and upload ([`crate::raster`]).
-pub(crate) fn host_times() -> bool {
-    static ON: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *ON.get_or_init(|| std::env::var("OIT_HOST_TIMES").is_ok_and(|v| v == "1"))
 }
 
 /// The stats the frame's totals words give (finish.wgsl's four, the first scene pass's fragments,

@@ -55,8 +55,7 @@ const ARGS_BYTES: u64 = ARGS_WORDS as u64 * 4;
 /// Where the compute path sets triangles up ([`oit_gpu::SetupSite`]): as `OIT_HOST_SETUP` says,
 /// else on the host on a CPU device and on the GPU (save small parts) on any other (module docs).
 pub fn setup_site(gpu: &Gpu) -> oit_gpu::SetupSite {
-    let cpu = gpu.info.device_type == wgpu::DeviceType::Cpu;
-    oit_gpu::setup_site(std::env::var("OIT_HOST_SETUP").ok().as_deref(), cpu)
+    oit_gpu::setup_site(gpu.info.device_type == wgpu::DeviceType::Cpu)
 }
 
 /// Triangles on the GPU and the (triangle, tile) work list of the compute rasterizer, for one
@@ -404,7 +403,7 @@ impl ComputeBuffers {
         }
         self.write_uniform(gpu, camera, settings, items.len() as u32);
         queue.write_buffer(&self.args, 0, bytemuck::cast_slice(&oit_gpu::raster_args(items.len() as u64)));
-        if crate::ctx::host_times() {
+        if oit_gpu::host_times() {
             eprintln!(
                 "oit host times: host setup {:.3} ms ({} triangle words, {} items), upload {:.3} ms",
                 set_up.as_secs_f64() * 1e3,
